@@ -1,0 +1,133 @@
+#!/usr/bin/env python3
+"""Command line: parse, call one API function, map errors to exit codes.
+
+Exit status (spec section 1): 0 success; 2 bad input or usage (one line on
+stderr); 1 anything else that failed, or an infeasible plan under --strict.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2
+        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        raise SystemExit(2)
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="cli.py", description="Task planner for a tendon-driven robot hand")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    h = sub.add_parser("hand", help="describe a hand, list hands, write its URDF")
+    h.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
+    h.add_argument("--list", action="store_true", help="list the shipped hands")
+    h.add_argument("--urdf", metavar="PATH", help="write the hand's URDF here ('-' for stdout)")
+
+    pl = sub.add_parser("play", help="plan a MIDI song")
+    pl.add_argument("song", help="MIDI file")
+    pl.add_argument("-o", "--output", default=None, help="trajectory CSV ('-' for stdout; default SONG.csv)")
+    pl.add_argument("--hand", default="default")
+    pl.add_argument("--rate", type=float, default=100.0, help="setpoint rate, Hz (default 100)")
+    pl.add_argument("--track", type=int, default=None, help="only this track (0-based)")
+    pl.add_argument("--channel", type=int, default=None, help="only this channel (0-15)")
+    pl.add_argument("--transpose", action="store_true", help="move notes outside A0-C8 by octaves")
+    pl.add_argument("--strict", action="store_true", help="exit 1 if any note is infeasible")
+    pl.add_argument("--report", metavar="DIR", help="write PNG plots here")
+    pl.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+
+    c = sub.add_parser("catch", help="plan a catch of a thrown ball")
+    c.add_argument("--angle", type=float, required=True, help="launch angle above horizontal, deg")
+    c.add_argument("--dist", type=float, required=True, help="horizontal distance to the hand, m")
+    c.add_argument("--height", type=float, default=0.0, help="hand height above the launch point, m")
+    c.add_argument("--ball", default="tennis", help="ball: tennis, baseball, seed")
+    c.add_argument("--drag", action="store_true", help="model quadratic air drag")
+    c.add_argument("--observations", metavar="CSV", help="fit the flight to t,x,y,z observations")
+    c.add_argument("-o", "--output", default="catch.csv")
+    c.add_argument("--hand", default="default")
+    c.add_argument("--rate", type=float, default=100.0)
+    c.add_argument("--strict", action="store_true")
+    c.add_argument("--report", metavar="DIR")
+    c.add_argument("--html", metavar="FILE")
+
+    k = sub.add_parser("check", help="replay a trajectory and verify it")
+    k.add_argument("trajectory")
+    k.add_argument("song", nargs="?", default=None)
+    k.add_argument("--allow-incomplete", action="store_true")
+    k.add_argument("--min-f1", type=float, default=None)
+    k.add_argument("--json", action="store_true")
+    k.add_argument("--played", metavar="OUT.mid")
+    k.add_argument("--report", metavar="DIR")
+    k.add_argument("--html", metavar="FILE")
+    return p
+
+
+def _cmd_hand(a: argparse.Namespace) -> int:
+    from planner.hand.model import load_hand
+    from planner.hand.spec import list_hands
+
+    if a.list:
+        from planner.hand.spec import load_hand_spec
+
+        for n in list_hands():
+            print(f"{n:10s} {load_hand_spec(n).description}")
+        return 0
+    hand = load_hand(a.hand)
+    if a.urdf:
+        if a.urdf == "-":
+            sys.stdout.write(hand.urdf)
+        else:
+            from planner.trajfile import write_text_atomic
+
+            write_text_atomic(a.urdf, hand.urdf)
+        return 0
+    print(hand.summary())
+    return 0
+
+
+def _cmd_play(a: argparse.Namespace) -> int:
+    from planner.play import play_cli
+
+    return play_cli(a)
+
+
+def _cmd_catch(a: argparse.Namespace) -> int:
+    from planner.catch.plan import catch_cli
+
+    return catch_cli(a)
+
+
+def _cmd_check(a: argparse.Namespace) -> int:
+    from planner.check import check_cli
+
+    return check_cli(a)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _build_parser().parse_args(argv)
+    from planner.errors import InfeasibleError, InputError, PlannerError
+
+    try:
+        return {"hand": _cmd_hand, "play": _cmd_play, "catch": _cmd_catch, "check": _cmd_check}[
+            args.command
+        ](args)
+    except InputError as e:
+        sys.stderr.write(f"error: {e}\n")
+        return 2
+    except InfeasibleError as e:
+        sys.stderr.write(f"infeasible: {e}\n")
+        return 1
+    except PlannerError as e:
+        sys.stderr.write(f"failed: {e}\n")
+        return 1
+    except KeyboardInterrupt:
+        sys.stderr.write("interrupted\n")
+        return 130
+    except BrokenPipeError:
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,297 @@
+"""The hand model the whole planner shares: URDF, Pinocchio kinematics,
+limits, coupling laws and the actuator model.
+
+Built once per run (``load_hand``) and passed down. Joint vectors ``q`` are in
+the hand's joint order (``HandModel.joint_names``: the URDF's movable joints
+in file order), SI units (rad, m). The IK (placo) and the independent check
+both read limits, couplings and actuators from here, never from a copy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import pinocchio as pin
+
+from planner.errors import InputError
+from planner.hand.spec import (
+    FINGERS,
+    PALM_FRAME,
+    HandSpec,
+    LinearCoupling,
+    Mk5Coupling,
+    load_hand_spec,
+)
+from planner.hand.urdf import urdf_sha256, urdf_text
+
+GRAVITY_WORLD = np.array([0.0, 0.0, -9.81])
+
+
+@dataclass(frozen=True)
+class CouplingLaw:
+    """``q[dep] = f(q[src])`` with derivative ``df``; index form of a coupling."""
+
+    dep: int
+    src: int
+    kind: str
+    ratio: float = 0.0
+    offset: float = 0.0
+    mk5: object = None  # Mk5FingerParams for the nonlinear law
+
+    def value(self, q_src):
+        if self.kind == "linear":
+            return self.ratio * q_src + self.offset
+        from planner.hand import mk5
+
+        return mk5.q2_of_q1(self.mk5, q_src) - q_src
+
+    def slope(self, q_src):
+        if self.kind == "linear":
+            return self.ratio + 0.0 * q_src
+        from planner.hand import mk5
+
+        return mk5.dq2_dq1(self.mk5, q_src) - 1.0
+
+
+class HandModel:
+    """A loaded hand: kinematics (Pinocchio), limits, couplings and actuators."""
+
+    def __init__(self, spec: HandSpec) -> None:
+        self.spec = spec
+        self.name = spec.name
+        self.urdf = urdf_text(spec)
+        self.urdf_sha256 = urdf_sha256(self.urdf)
+        mov = spec.movable_joints
+        self.joint_names: tuple[str, ...] = tuple(j.name for j in mov)
+        self.index = {n: i for i, n in enumerate(self.joint_names)}
+        self.n = len(mov)
+        self.lower = np.array([j.lower for j in mov])
+        self.upper = np.array([j.upper for j in mov])
+        self.velocity = np.array([j.velocity for j in mov])
+        self.acceleration = np.array([j.acceleration for j in mov])
+        self.T_world_root = np.array(spec.T_world_root, dtype=float)
+
+        self.pin_model = pin.buildModelFromXML(self.urdf)
+        self.pin_model.gravity.linear = self.T_world_root[:3, :3].T @ GRAVITY_WORLD
+        self.pin_data = self.pin_model.createData()
+        # our order -> pinocchio's q index
+        self._pin_idx = np.array(
+            [self.pin_model.idx_qs[self.pin_model.getJointId(n)] for n in self.joint_names]
+        )
+        self.tip_frames = spec.tip_frames
+        self.fingers = FINGERS
+        self._tip_ids = [self.pin_model.getFrameId(f) for f in self.tip_frames]
+        self._palm_id = self.pin_model.getFrameId(PALM_FRAME)
+
+        # couplings
+        laws = []
+        for c in spec.couplings:
+            if isinstance(c, LinearCoupling):
+                laws.append(CouplingLaw(self.index[c.joint], self.index[c.source], "linear",
+                                        c.ratio, c.offset))
+            elif isinstance(c, Mk5Coupling):
+                from planner.hand import mk5
+
+                laws.append(CouplingLaw(self.index[c.joint], self.index[c.source], "mk5",
+                                        mk5=mk5.MK5_TABLES[c.table][c.finger]))
+        self.couplings: tuple[CouplingLaw, ...] = tuple(laws)
+        dep = {c.dep for c in laws}
+        self.independent = np.array([i for i in range(self.n) if i not in dep])
+        self.dependent = np.array(sorted(dep), dtype=int)
+
+        # actuators
+        self.actuators = spec.actuators
+        self.motor_names = tuple(a.name for a in spec.actuators)
+        self.n_motor = len(self.actuators)
+        self.motor_speed = np.array([a.speed_rad_s for a in self.actuators])
+        self.motor_peak_torque = np.array([a.peak_torque_nm for a in self.actuators])
+        self._drive = np.array([self.index[a.drives] for a in self.actuators])
+        C = np.zeros((self.n_motor, self.n))
+        for m, a in enumerate(self.actuators):
+            for jn, c in a.coefficients:
+                C[m, self.index[jn]] = c
+        self._C = C
+
+        lo = np.where(np.isfinite(self.lower), self.lower, -1.0)
+        hi = np.where(np.isfinite(self.upper), self.upper, 1.0)
+        self.q_neutral = self.apply_couplings(np.clip(np.zeros(self.n), lo, hi))
+
+    # ------------------------------------------------------------ joints
+    def joint_slice(self, finger: str) -> np.ndarray:
+        """Indices of a finger's joints (thumb: cmc_abd, cmc_flex, ip; others: abd, mcp, pip, dip)."""
+        return np.array([self.index[j] for j in self.spec.joints_of(finger)])
+
+    def apply_couplings(self, q: np.ndarray) -> np.ndarray:
+        """A copy of ``q`` with every dependent joint set from its source."""
+        q = np.array(q, dtype=float)
+        for c in self.couplings:
+            q[..., c.dep] = c.value(q[..., c.src])
+        return q
+
+    def coupling_errors(self, q: np.ndarray) -> np.ndarray:
+        """``q[dep] - f(q[src])`` for every coupling (rad); shape (..., n_couplings)."""
+        q = np.asarray(q, dtype=float)
+        return np.stack([q[..., c.dep] - c.value(q[..., c.src]) for c in self.couplings], axis=-1) \
+            if self.couplings else np.zeros(q.shape[:-1] + (0,))
+
+    def coupling_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """d(coupling_errors)/dq, shape (n_couplings, n)."""
+        G = np.zeros((len(self.couplings), self.n))
+        for k, c in enumerate(self.couplings):
+            G[k, c.dep] = 1.0
+            G[k, c.src] = -float(c.slope(q[c.src]))
+        return G
+
+    def dq_dindependent(self, q: np.ndarray) -> np.ndarray:
+        """Map from independent joint velocities to all joint velocities, (n, n_independent)."""
+        S = np.zeros((self.n, len(self.independent)))
+        col = {int(j): k for k, j in enumerate(self.independent)}
+        for j, k in col.items():
+            S[j, k] = 1.0
+        for c in self.couplings:
+            S[c.dep, col[c.src]] = float(c.slope(q[c.src]))
+        return S
+
+    # ------------------------------------------------------------ kinematics
+    def _pin_q(self, q: np.ndarray) -> np.ndarray:
+        qp = np.zeros(self.pin_model.nq)
+        qp[self._pin_idx] = q
+        return qp
+
+    def _update(self, q: np.ndarray) -> None:
+        pin.framesForwardKinematics(self.pin_model, self.pin_data, self._pin_q(q))
+
+    def tip_positions(self, q: np.ndarray) -> np.ndarray:
+        """World positions of the five fingertip pad points, (5, 3) in m, order ``FINGERS``."""
+        self._update(q)
+        R, p = self.T_world_root[:3, :3], self.T_world_root[:3, 3]
+        return np.array([R @ self.pin_data.oMf[i].translation + p for i in self._tip_ids])
+
+    def frame_pose(self, q: np.ndarray, frame: str) -> np.ndarray:
+        """4x4 world pose of a URDF frame."""
+        self._update(q)
+        return self.T_world_root @ self.pin_data.oMf[self.pin_model.getFrameId(frame)].homogeneous
+
+    def palm_pose(self, q: np.ndarray) -> np.ndarray:
+        return self.frame_pose(q, PALM_FRAME)
+
+    def tip_jacobians(self, q: np.ndarray) -> np.ndarray:
+        """World-frame position Jacobians of the fingertips, (5, 3, n) in our joint order."""
+        pin.computeJointJacobians(self.pin_model, self.pin_data, self._pin_q(q))
+        pin.updateFramePlacements(self.pin_model, self.pin_data)
+        R = self.T_world_root[:3, :3]
+        out = np.empty((len(self._tip_ids), 3, self.n))
+        for k, fid in enumerate(self._tip_ids):
+            J = pin.getFrameJacobian(self.pin_model, self.pin_data, fid,
+                                     pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            out[k] = R @ J[:3, self._pin_v_idx]
+        return out
+
+    @property
+    def _pin_v_idx(self) -> np.ndarray:
+        return self._pin_idx  # all joints are 1-DOF: idx_q == idx_v
+
+    def gravity_torques(self, q: np.ndarray) -> np.ndarray:
+        """Joint torques holding the hand still against gravity (N m, N for the rail)."""
+        g = pin.computeGeneralizedGravity(self.pin_model, self.pin_data, self._pin_q(q))
+        return g[self._pin_idx]
+
+    def within_limits(self, q: np.ndarray, tol: float = 1e-9) -> bool:
+        return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
+
+    # ------------------------------------------------------------ actuators
+    def motor_angles(self, q: np.ndarray) -> np.ndarray:
+        """Motor shaft angles (rad) for joint positions ``q``; works on (..., n) arrays."""
+        q = np.asarray(q, dtype=float)
+        qm = q @ self._C.T
+        for m, a in enumerate(self.actuators):
+            if a.mk5 is not None:
+                from planner.hand import mk5
+
+                qm[..., m] = mk5.qmot_of_q1(mk5.MK5_TABLES[a.mk5.table][a.mk5.finger],
+                                            q[..., self.index[a.mk5.source]])
+        return qm
+
+    def motor_ratio(self, q: np.ndarray) -> np.ndarray:
+        """dq_motor / dq_drive for each motor (rad per rad of its driven joint) at ``q``."""
+        S = self.dq_dindependent(q)
+        col = {int(j): k for k, j in enumerate(self.independent)}
+        r = np.empty(self.n_motor)
+        for m, a in enumerate(self.actuators):
+            if a.mk5 is not None:
+                from planner.hand import mk5
+
+                p = mk5.MK5_TABLES[a.mk5.table][a.mk5.finger]
+                r[m] = mk5.dqmot_dq1(p, q[self._drive[m]])
+            else:
+                r[m] = float(self._C[m] @ S[:, col[int(self._drive[m])]])
+        return r
+
+    def motor_velocities(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """Motor shaft speeds (rad/s) for joint speeds ``qd`` at ``q`` (couplings respected)."""
+        return self.motor_ratio(q) * qd[self._drive]
+
+    def motor_torques(self, q: np.ndarray, tau_joint: np.ndarray) -> np.ndarray:
+        """Motor torques (N m) that supply joint torques ``tau_joint`` by virtual work.
+
+        ``tau_m = (dq/dq_m)^T tau_joint / efficiency`` where ``dq/dq_m`` moves
+        the motor's driven joint and every joint coupled to it.
+        """
+        S = self.dq_dindependent(q)
+        col = {int(j): k for k, j in enumerate(self.independent)}
+        ratio = self.motor_ratio(q)
+        out = np.empty(self.n_motor)
+        for m, a in enumerate(self.actuators):
+            dq_ddrive = S[:, col[int(self._drive[m])]]
+            out[m] = float(dq_ddrive @ tau_joint) / ratio[m] / a.efficiency
+        return out
+
+    def press_torques(self, q: np.ndarray, forces_n: dict[str, float]) -> np.ndarray:
+        """Motor torques (N m) holding ``q`` against gravity while the named
+        fingertips push down on keys with the given forces (N)."""
+        tau = self.gravity_torques(q)
+        J = self.tip_jacobians(q)
+        for f, F in forces_n.items():
+            # the key pushes the fingertip up with F: the joints must resist it
+            tau = tau - J[self.fingers.index(f)].T @ np.array([0.0, 0.0, F])
+        return self.motor_torques(q, tau)
+
+    def summary(self) -> str:
+        """A readable description: DOF, joints with limits, couplings, actuators."""
+        hand_dof = sum(1 for n in self.joint_names if n != "rail")
+        lines = [f"hand {self.name}: {self.spec.description}",
+                 f"  {hand_dof} hand joints ({hand_dof - len(self.couplings)} independent)"
+                 + (" + rail" if self.spec.rail_enabled else " (rail off)"),
+                 f"  urdf_sha256 {self.urdf_sha256}",
+                 "  joints (lower..upper, max speed, max acceleration):"]
+        for i, n in enumerate(self.joint_names):
+            if n == "rail":
+                lines.append(f"    {n:16s} {self.lower[i]:+.3f}..{self.upper[i]:+.3f} m"
+                             f"  {self.velocity[i]:.2f} m/s  {self.acceleration[i]:.1f} m/s^2")
+            else:
+                lines.append(f"    {n:16s} {np.degrees(self.lower[i]):+7.1f}..{np.degrees(self.upper[i]):+7.1f} deg"
+                             f"  {self.velocity[i]:6.2f} rad/s  {self.acceleration[i]:.0f} rad/s^2")
+        lines.append("  couplings:")
+        for c in self.spec.couplings:
+            if isinstance(c, LinearCoupling):
+                lines.append(f"    {c.joint} = {c.ratio:g} x {c.source}" + (f" + {c.offset:g}" if c.offset else ""))
+            else:
+                lines.append(f"    {c.joint} = q2({c.source}) - {c.source}  (Mk5 leverism, {c.table} {c.finger})")
+        lines.append("  actuators (kind, drives, max speed, peak torque, efficiency):")
+        for a in self.actuators:
+            lines.append(f"    motor.{a.name:14s} {a.kind:6s} {a.drives:16s} {a.speed_rad_s:6.1f} rad/s"
+                         f"  {a.peak_torque_nm:.2f} N m  {a.efficiency:.0%}")
+        return "\n".join(lines)
+
+
+@lru_cache(maxsize=8)
+def load_hand(name: str = "default") -> HandModel:
+    """The hand model of a shipped hand name or a hand file path (cached per process)."""
+    try:
+        return HandModel(load_hand_spec(name))
+    except InputError:
+        raise
+    except (ValueError, RuntimeError) as e:  # pinocchio refuses the generated URDF
+        raise InputError(f"hand {name!r} cannot be built: {e}") from None
