@@ -1,0 +1,768 @@
+"""Ball flight for the catch planner: throws, drag, and camera observations.
+
+Catch frame (spec section 5): origin at the ball's launch point, +x horizontal
+towards the hand, z up. The ball leaves at t = 0 in the x-z plane at ``angle``
+degrees above horizontal. In flight its acceleration is::
+
+    a = g - k |v| v,   g = (0, 0, -9.81) m/s^2,   k = 0.5 rho_air Cd A / m  [1/m]
+
+with rho_air = 1.204 kg/m^3 (dry air, 20 degC, sea level) and k = 0 in a vacuum.
+
+Vacuum flights are closed form. Drag flights are integrated once with a
+fixed-step RK4 into a table of nodes (position and velocity along the flight);
+``position`` and ``velocity`` interpolate the table with cubic Hermite
+polynomials (positions with the stored velocities, velocities with the stored
+accelerations), so an evaluation costs a few numpy operations. The table grows
+on demand when a time outside it is asked for.
+
+Because the acceleration only has components along v and along z, the
+horizontal direction of the velocity never changes: a flight is a planar
+problem in (s, z), s the horizontal distance travelled along the launch
+direction. The table stores (s, z, ds/dt, dz/dt).
+
+Step of the table: ``min(10 ms, 0.005 / (k * max(v, sqrt(g/k))))`` with v the
+launch speed (for ``predict_throw``, the vacuum speed of the throw). Against
+DOP853 at rtol 1e-13 the interpolated positions are within ~1e-10 m for
+hand-speed throws (4-12 m/s) and ~5e-8 m for a tennis ball at 70-95 m/s;
+tests/test_flight.py holds it to 1e-6 m. ``predict_throw(drag=True)`` shoots on
+the launch speed with these same steps (secant from the vacuum speed, brentq as
+a fallback) and hands its last run to the Flight as its table, so a drag throw
+costs 4-6 integrations of the flight (~0.3-0.5 ms for a 1-3 m throw).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field, replace
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq, least_squares
+
+from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
+
+__all__ = [
+    "BALLS",
+    "GRAVITY",
+    "MAX_HEIGHT",
+    "MAX_LAUNCH_SPEED",
+    "MAX_TIME",
+    "RHO_AIR",
+    "Ball",
+    "FitResult",
+    "Flight",
+    "G",
+    "fit_observations",
+    "flight_time_to",
+    "get_ball",
+    "load_observations_csv",
+    "predict_intercept",
+    "predict_throw",
+]
+
+G = 9.81
+"""Gravity, m/s^2 (down, along -z)."""
+GRAVITY = np.array([0.0, 0.0, -G])
+GRAVITY.setflags(write=False)
+RHO_AIR = 1.204
+"""Density of air, kg/m^3 (20 degC, 101.325 kPa)."""
+MAX_LAUNCH_SPEED = 100.0
+"""Fastest launch speed predict_throw will propose, m/s."""
+MAX_HEIGHT = 10.0
+"""|height| of the target point must be below this, m."""
+MAX_TIME = 100.0
+"""Drag flights are only evaluated for |t| <= MAX_TIME seconds."""
+
+_MAX_STEP = 0.01  # s, coarsest RK4 step of a drag table
+_STEP_SCALE = 0.005  # step <= _STEP_SCALE / (k * speed scale)
+_SHOOT_TOL = 1e-9  # m, height miss accepted by the shooting
+_FD_STEP = 1e-6  # m and m/s, central finite-difference step on [p0, v0]
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _finite(name: str, value: Any) -> float:
+    if isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name} must be a number, got {value!r}")
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise InputError(f"{name} must be finite, got {x}")
+    return x
+
+
+def _vec3(name: str, value: Any) -> np.ndarray:
+    try:
+        a = np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be 3 numbers, got {value!r}") from None
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise InputError(f"{name} must be 3 finite numbers, got {value!r}")
+    a.setflags(write=False)
+    return a
+
+
+# --------------------------------------------------------------------------- balls
+
+
+@dataclass(frozen=True)
+class Ball:
+    """A ball: SI units, ``drag_coefficient`` is the sphere's Cd (0 for a vacuum)."""
+
+    name: str
+    mass_kg: float
+    radius_m: float
+    drag_coefficient: float
+
+    def __post_init__(self) -> None:
+        for attr in ("mass_kg", "radius_m", "drag_coefficient"):
+            value = _finite(f"ball {self.name!r} {attr}", getattr(self, attr))
+            object.__setattr__(self, attr, value)
+        if self.mass_kg <= 0 or self.radius_m <= 0 or self.drag_coefficient < 0:
+            raise InputError(
+                f"ball {self.name!r}: need mass_kg > 0, radius_m > 0, drag_coefficient >= 0 "
+                f"(got {self.mass_kg}, {self.radius_m}, {self.drag_coefficient})"
+            )
+
+    @property
+    def area_m2(self) -> float:
+        """Cross-section, m^2."""
+        return math.pi * self.radius_m**2
+
+    @property
+    def drag_per_m(self) -> float:
+        """k = 0.5 rho_air Cd A / m, 1/m: the drag deceleration is k |v|^2."""
+        return 0.5 * RHO_AIR * self.drag_coefficient * self.area_m2 / self.mass_kg
+
+
+BALLS: dict[str, Ball] = {
+    # ITF ball: 56.0-59.4 g, 6.54-6.86 cm; Cd ~0.55 for a new ball at 10-30 m/s.
+    "tennis": Ball("tennis", 0.057, 0.067 / 2, 0.55),
+    # MLB ball: 142-149 g, 73-75 mm; Cd ~0.35 is a typical value (it ranges 0.3-0.5).
+    "baseball": Ball("baseball", 0.145, 0.074 / 2, 0.35),
+    # The seed's ball: 2.5 in = 63.5 mm diameter. The seed gives no mass: we assume
+    # 57 g (a tennis ball) and Cd 0.5 (a smooth sphere at moderate Re).
+    "seed": Ball("seed", 0.057, 0.0635 / 2, 0.5),
+    # The seed's ball in a vacuum: k = 0.
+    "vacuum": Ball("vacuum", 0.057, 0.0635 / 2, 0.0),
+}
+
+
+def get_ball(ball: Ball | str | None) -> Ball:
+    """A ``Ball`` from a Ball, a name in ``BALLS``, or None (the seed's ball)."""
+    if ball is None:
+        return BALLS["seed"]
+    if isinstance(ball, Ball):
+        return ball
+    if isinstance(ball, str):
+        try:
+            return BALLS[ball]
+        except KeyError:
+            raise InputError(
+                f"unknown ball {ball!r}; valid balls: {', '.join(sorted(BALLS))}"
+            ) from None
+    raise InputError(
+        f"ball must be a Ball or one of {', '.join(sorted(BALLS))}, got {type(ball).__name__}"
+    )
+
+
+def _step_for(k: float, speed: float) -> float:
+    """RK4 step for a drag flight: small against the drag time 1/(k v)."""
+    scale = max(speed, math.sqrt(G / k))
+    return min(_MAX_STEP, _STEP_SCALE / (k * scale))
+
+
+def _rk4_run(S, Z, U, W, k, h, n_steps, s_stop=math.inf, z_floor=-math.inf):
+    """Append up to ``n_steps`` RK4 steps of size ``h`` (may be < 0) to the lists.
+
+    State (s, z, u, w) = horizontal distance, height and their rates;
+    du/dt = -k|v|u, dw/dt = -g - k|v|w. Stops after the step where s >= s_stop,
+    or where the ball descends below z_floor (it never climbs back: w < 0 stays < 0).
+    """
+    g = G
+    s, z, u, w = S[-1], Z[-1], U[-1], W[-1]
+    h2 = 0.5 * h
+    h6 = h / 6.0
+    sqrt = math.sqrt
+    for _ in range(n_steps):
+        sp = sqrt(u * u + w * w)
+        a1u = -k * sp * u
+        a1w = -g - k * sp * w
+        u2 = u + h2 * a1u
+        w2 = w + h2 * a1w
+        sp = sqrt(u2 * u2 + w2 * w2)
+        a2u = -k * sp * u2
+        a2w = -g - k * sp * w2
+        u3 = u + h2 * a2u
+        w3 = w + h2 * a2w
+        sp = sqrt(u3 * u3 + w3 * w3)
+        a3u = -k * sp * u3
+        a3w = -g - k * sp * w3
+        u4 = u + h * a3u
+        w4 = w + h * a3w
+        sp = sqrt(u4 * u4 + w4 * w4)
+        a4u = -k * sp * u4
+        a4w = -g - k * sp * w4
+        s += h6 * (u + 2.0 * (u2 + u3) + u4)
+        z += h6 * (w + 2.0 * (w2 + w3) + w4)
+        u += h6 * (a1u + 2.0 * (a2u + a3u) + a4u)
+        w += h6 * (a1w + 2.0 * (a2w + a3w) + a4w)
+        S.append(s)
+        Z.append(z)
+        U.append(u)
+        W.append(w)
+        if s >= s_stop or (z < z_floor and w < 0.0):
+            break
+
+
+def _hermite(y0: float, y1: float, d0: float, d1: float, h: float, th: float) -> float:
+    """Cubic Hermite on one step: values y0, y1, derivatives d0, d1, fraction th."""
+    m0 = h * d0
+    m1 = h * d1
+    dy = y1 - y0
+    return y0 + th * (m0 + th * ((3.0 * dy - 2.0 * m0 - m1) + th * (m0 + m1 - 2.0 * dy)))
+
+
+def _cross_fraction(s0: float, s1: float, u0: float, u1: float, h: float, target: float) -> float:
+    """Fraction th in [0, 1] of the step where the Hermite s(th) equals ``target``."""
+    m0 = h * u0
+    m1 = h * u1
+    ds = s1 - s0
+    c2 = 3.0 * ds - 2.0 * m0 - m1
+    c3 = m0 + m1 - 2.0 * ds
+    r = target - s0
+    th = r / ds if ds > 0 else 0.0
+    th = min(1.0, max(0.0, th))
+    for _ in range(30):
+        f = th * (m0 + th * (c2 + th * c3)) - r
+        df = m0 + th * (2.0 * c2 + 3.0 * th * c3)
+        if df <= 0:
+            break
+        step = f / df
+        th = min(1.0, max(0.0, th - step))
+        if abs(step) <= 1e-15:
+            break
+    return th
+
+
+class _Table:
+    """RK4 nodes of a drag flight at t = i h (i in [-len(bwd)+1, len(fwd)-1]), grown on demand."""
+
+    def __init__(self, u0: float, w0: float, k: float, h: float) -> None:
+        self.k = k
+        self.h = h
+        self.fwd = ([0.0], [0.0], [u0], [w0])
+        self.bwd = ([0.0], [0.0], [u0], [w0])
+        self._arrays: tuple | None = None
+
+    def _grow(self, lists: tuple, h: float, n: int) -> None:
+        n0 = len(lists[0])
+        _rk4_run(*lists, self.k, h, n)
+        last = (lists[0][-1], lists[1][-1], lists[2][-1], lists[3][-1])
+        if not all(map(math.isfinite, last)) or math.hypot(last[2], last[3]) > 1e6:
+            t_end = h * (len(lists[0]) - 1)
+            for col in lists:  # keep the table as it was
+                del col[n0:]
+            raise InputError(
+                f"the drag flight cannot be integrated to t = {t_end:.3g} s (its speed "
+                "diverges going back in time); ask for later times"
+            )
+        self._arrays = None
+
+    def ensure(self, t_lo: float, t_hi: float) -> None:
+        """Integrate until the nodes bracket [t_lo, t_hi]."""
+        h = self.h
+        need = math.ceil(t_hi / h) + 1 - (len(self.fwd[0]) - 1)
+        if need > 0:
+            self._grow(self.fwd, h, max(need, len(self.fwd[0]) // 2))
+        need = math.ceil(-t_lo / h) + 1 - (len(self.bwd[0]) - 1)
+        if need > 0:
+            self._grow(self.bwd, -h, max(need, len(self.bwd[0]) // 2))
+
+    def arrays(self) -> tuple:
+        """(i_lo, S, Z, U, W, AS, AW) as numpy arrays over all nodes."""
+        if self._arrays is None:
+            cols = []
+            for f, b in zip(self.fwd, self.bwd):
+                cols.append(np.array(b[:0:-1] + f, dtype=float))
+            S, Z, U, W = cols
+            sp = np.hypot(U, W)
+            AS = -self.k * sp * U
+            AW = -G - self.k * sp * W
+            self._arrays = (-(len(self.bwd[0]) - 1), S, Z, U, W, AS, AW)
+        return self._arrays
+
+
+def _hermite_np(y0, y1, d0, d1, h, th):
+    m0 = h * d0
+    m1 = h * d1
+    dy = y1 - y0
+    return y0 + th * (m0 + th * ((3.0 * dy - 2.0 * m0 - m1) + th * (m0 + m1 - 2.0 * dy)))
+
+
+# --------------------------------------------------------------------------- flight
+
+
+@dataclass(frozen=True, eq=False)
+class Flight:
+    """A ball in flight: state (p0, v0) at t = 0 in the catch frame, drag k in 1/m.
+
+    ``drag_per_m`` is the k the flight uses (0 = vacuum), which need not be
+    ``ball.drag_per_m`` (a real ball may be planned in a vacuum). ``step_s`` is
+    the RK4 step of the drag table; None picks one from v0 and k (see module doc).
+    Arrays are read-only copies; equality is identity.
+    """
+
+    p0: np.ndarray
+    v0: np.ndarray
+    ball: Ball
+    drag_per_m: float
+    step_s: float | None = None
+    _table: _Table | None = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "p0", _vec3("p0", self.p0))
+        object.__setattr__(self, "v0", _vec3("v0", self.v0))
+        if not isinstance(self.ball, Ball):
+            raise InputError(f"ball must be a Ball, got {type(self.ball).__name__}")
+        k = _finite("drag_per_m", self.drag_per_m)
+        if k < 0:
+            raise InputError(f"drag_per_m must be >= 0, got {k}")
+        object.__setattr__(self, "drag_per_m", k)
+        if k == 0.0:
+            object.__setattr__(self, "step_s", None)
+            return
+        vx, vy, vz = (float(c) for c in self.v0)
+        u0 = math.hypot(vx, vy)
+        if self.step_s is None:
+            h = _step_for(k, math.hypot(u0, vz))
+        else:
+            h = _finite("step_s", self.step_s)
+            if h <= 0:
+                raise InputError(f"step_s must be > 0, got {h}")
+        object.__setattr__(self, "step_s", h)
+        object.__setattr__(self, "_table", _Table(u0, vz, k, h))
+
+    # -- geometry of the planar solution
+    @property
+    def _dir(self) -> tuple[float, float]:
+        vx, vy = float(self.v0[0]), float(self.v0[1])
+        u = math.hypot(vx, vy)
+        return (vx / u, vy / u) if u > 0 else (1.0, 0.0)
+
+    @property
+    def speed(self) -> float:
+        """Launch speed |v0|, m/s."""
+        return float(np.linalg.norm(self.v0))
+
+    def _times(self, t: Any) -> np.ndarray:
+        try:
+            ta = np.asarray(t, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"t must be a number or an array of numbers, got {t!r}") from None
+        if not np.all(np.isfinite(ta)):
+            raise InputError("t must be finite")
+        if self._table is not None and ta.size and np.max(np.abs(ta)) > MAX_TIME:
+            raise InputError(f"t must be within +-{MAX_TIME:g} s for a drag flight")
+        return ta
+
+    def _lookup(self, ta: np.ndarray) -> tuple:
+        tab = self._table
+        assert tab is not None
+        if ta.size:
+            tab.ensure(float(ta.min()), float(ta.max()))
+        i_lo, S, Z, U, W, AS, AW = tab.arrays()
+        q = ta / tab.h - i_lo
+        j = np.clip(np.floor(q).astype(np.intp), 0, S.size - 2)
+        th = q - j
+        return j, th, tab.h, (S, Z, U, W, AS, AW)
+
+    def position(self, t: Any) -> np.ndarray:
+        """Ball centre at time(s) t, shape t.shape + (3,)."""
+        ta = self._times(t)
+        if self._table is None:
+            tt = ta[..., None]
+            return self.p0 + self.v0 * tt + 0.5 * GRAVITY * tt * tt
+        j, th, h, (S, Z, U, W, _, _) = self._lookup(ta)
+        s = _hermite_np(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = _hermite_np(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        ex, ey = self._dir
+        return self.p0 + np.stack([ex * s, ey * s, z], axis=-1)
+
+    def velocity(self, t: Any) -> np.ndarray:
+        """Ball velocity at time(s) t, shape t.shape + (3,)."""
+        ta = self._times(t)
+        if self._table is None:
+            return self.v0 + GRAVITY * ta[..., None]
+        j, th, h, (_, _, U, W, AS, AW) = self._lookup(ta)
+        u = _hermite_np(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = _hermite_np(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        ex, ey = self._dir
+        return np.stack([ex * u, ey * u, w], axis=-1)
+
+    def time_at_x(self, x: Any) -> Any:
+        """Time t >= 0 at which the ball crosses the plane x = ``x`` (float, or array).
+
+        InfeasibleError if it does not cross it at any t in [0, MAX_TIME].
+        """
+        if np.ndim(x):
+            xa = np.asarray(x, dtype=float)
+            return np.array([self.time_at_x(float(xi)) for xi in xa.reshape(-1)]).reshape(xa.shape)
+        xf = _finite("x", x)
+        dx = xf - float(self.p0[0])
+        vx = float(self.v0[0])
+        if dx == 0.0:
+            return 0.0
+        if vx == 0.0 or (dx > 0) != (vx > 0):
+            raise InfeasibleError(
+                f"the ball never reaches the plane x = {xf:g} m (it starts at "
+                f"x = {self.p0[0]:g} m moving at vx = {vx:g} m/s)"
+            )
+        if self._table is None:
+            return dx / vx
+        tab = self._table
+        s_t = dx / self._dir[0]
+        S, U = tab.fwd[0], tab.fwd[2]
+        while S[-1] < s_t:
+            if (len(S) - 1) * tab.h >= MAX_TIME:
+                raise InfeasibleError(
+                    f"the ball does not reach the plane x = {xf:g} m within {MAX_TIME:g} s"
+                )
+            tab.ensure(0.0, min(MAX_TIME, 2.0 * (len(S) - 1) * tab.h + 1.0))
+        i = int(np.searchsorted(S, s_t, side="left"))
+        i = max(i, 1)
+        th = _cross_fraction(S[i - 1], S[i], U[i - 1], U[i], tab.h, s_t)
+        return (i - 1 + th) * tab.h
+
+    def to_metadata(self) -> dict[str, Any]:
+        """The trajectory file's ``ball`` entry (spec section 4)."""
+        return {
+            "p0": [float(c) for c in self.p0],
+            "v0": [float(c) for c in self.v0],
+            "radius": float(self.ball.radius_m),
+            "mass": float(self.ball.mass_kg),
+            "drag": float(self.drag_per_m),
+        }
+
+
+# --------------------------------------------------------------------------- throws
+
+
+def _check_throw(angle_deg: Any, dist_m: Any, height_m: Any) -> tuple[float, float, float]:
+    a = _finite("angle", angle_deg)
+    if not 0.0 < a < 90.0:
+        raise InputError(f"angle must be strictly between 0 and 90 degrees, got {a:g}")
+    d = _finite("dist", dist_m)
+    if d <= 0.0:
+        raise InputError(f"dist must be > 0 m, got {d:g}")
+    h = _finite("height", height_m)
+    if not abs(h) < MAX_HEIGHT:
+        raise InputError(
+            f"height must be between -{MAX_HEIGHT:g} and {MAX_HEIGHT:g} m (exclusive), got {h:g}"
+        )
+    return a, d, h
+
+
+def _vacuum_speed(a_rad: float, d: float, h: float, angle_deg: float) -> float:
+    rise = d * math.tan(a_rad) - h
+    if rise <= 0.0:
+        raise InfeasibleError(
+            f"no throw at {angle_deg:g} deg passes through ({d:g}, 0, {h:g}) m: the height "
+            f"must be below dist*tan(angle) = {d * math.tan(a_rad):.4g} m"
+        )
+    c = math.cos(a_rad)
+    v = math.sqrt(G * d * d / (2.0 * c * c * rise))
+    if v > MAX_LAUNCH_SPEED:
+        raise InfeasibleError(
+            f"a throw at {angle_deg:g} deg through ({d:g}, 0, {h:g}) m needs {v:.4g} m/s, "
+            f"more than {MAX_LAUNCH_SPEED:g} m/s"
+        )
+    return v
+
+
+def _shoot_drag(a_rad: float, d: float, h: float, k: float, v_vac: float, angle_deg: float):
+    """Launch speed whose drag flight passes through (d, 0, h); returns (v, step, lists)."""
+    ca, sa = math.cos(a_rad), math.sin(a_rad)
+    step = _step_for(k, v_vac)
+    n_max = int(MAX_TIME / step) + 1
+
+    z_floor = h - 1.0
+
+    def run(v: float):
+        """(miss, lists): z - h where the ball crosses x = d. If it sinks 1 m below h
+        first, the miss extrapolated along its path from there (keeps the secant sane)."""
+        lists = ([0.0], [0.0], [v * ca], [v * sa])
+        S, Z, U, W = lists
+        _rk4_run(S, Z, U, W, k, step, n_max, d, z_floor)
+        if S[-1] >= d:
+            th = _cross_fraction(S[-2], S[-1], U[-2], U[-1], step, d)
+            return _hermite(Z[-2], Z[-1], W[-2], W[-1], step, th) - h, lists
+        slope = abs(W[-1]) / max(U[-1], 1e-9)
+        return Z[-1] - h - slope * (d - S[-1]), lists
+
+    # Secant from the vacuum speed; the first step uses the vacuum dz/dv.
+    v1 = v_vac
+    f1, lists = run(v1)
+    if abs(f1) <= _SHOOT_TOL:
+        return v1, step, lists
+    v2 = v1 - f1 / (G * d * d / (v1**3 * ca * ca))
+    for _ in range(12):
+        if not (0.0 < v2 <= 1.5 * MAX_LAUNCH_SPEED and math.isfinite(v2)):
+            break
+        f2, lists = run(v2)
+        if abs(f2) <= _SHOOT_TOL:
+            if v2 > MAX_LAUNCH_SPEED:
+                break
+            return v2, step, lists
+        if f2 == f1:
+            break
+        v1, f1, v2 = v2, f2, v2 - f2 * (v2 - v1) / (f2 - f1)
+
+    # Fallback: bracket [v_vac, MAX_LAUNCH_SPEED] (drag only ever needs more speed).
+    f_hi, _ = run(MAX_LAUNCH_SPEED)
+    if f_hi < 0.0:
+        raise InfeasibleError(
+            f"no throw at {angle_deg:g} deg up to {MAX_LAUNCH_SPEED:g} m/s reaches "
+            f"({d:g}, 0, {h:g}) m with drag k = {k:.4g} 1/m"
+        )
+    f_lo, _ = run(v_vac)
+    if f_lo > 0.0:  # cannot happen with k > 0; guard the bracket anyway
+        raise SolverError("drag shooting lost its bracket", problem=(angle_deg, d, h, k))
+    v = brentq(lambda v: run(v)[0], v_vac, MAX_LAUNCH_SPEED, xtol=1e-13, rtol=1e-15)
+    return v, step, run(v)[1]
+
+
+def predict_throw(
+    angle_deg: float,
+    dist_m: float,
+    height_m: float = 0.0,
+    ball: Ball | str | None = None,
+    drag: bool = False,
+) -> Flight:
+    """The throw leaving the origin at ``angle_deg`` that passes through (dist, 0, height).
+
+    ``ball``: a Ball, a name in BALLS, or None (the seed's ball). ``drag=False``
+    flies it in a vacuum (k = 0, closed form); ``drag=True`` uses the ball's k and
+    shoots for the launch speed. InputError on a bad argument, InfeasibleError
+    when no throw at that angle (at most MAX_LAUNCH_SPEED) reaches the point.
+    """
+    a, d, h = _check_throw(angle_deg, dist_m, height_m)
+    b = get_ball(ball)
+    a_rad = math.radians(a)
+    v = _vacuum_speed(a_rad, d, h, a)
+    k = b.drag_per_m if drag else 0.0
+    if k == 0.0:
+        return Flight(
+            np.zeros(3), np.array([v * math.cos(a_rad), 0.0, v * math.sin(a_rad)]), b, 0.0
+        )
+    v, step, lists = _shoot_drag(a_rad, d, h, k, v, a)
+    flight = Flight(
+        np.zeros(3),
+        np.array([v * math.cos(a_rad), 0.0, v * math.sin(a_rad)]),
+        b,
+        k,
+        step_s=step,
+    )
+    tab = flight._table
+    assert tab is not None
+    tab.fwd = lists  # the shooting's last run is this flight's table
+    return flight
+
+
+def flight_time_to(flight: Flight, dist_m: float) -> float:
+    """Time at which ``flight`` crosses the plane x = dist_m (the seed's "flight time")."""
+    return float(flight.time_at_x(dist_m))
+
+
+# --------------------------------------------------------------------------- observations
+
+
+@dataclass(frozen=True, eq=False)
+class FitResult:
+    """A flight fitted to camera observations.
+
+    ``covariance``: 6x6 of [p0, v0] (m, m/s), from the residuals (noise estimated
+    per axis). ``residual_rms``: rms of the N x 3 residual components, m.
+    ``sigma_axis``: the per-axis noise estimate, m.
+    """
+
+    flight: Flight
+    covariance: np.ndarray
+    residual_rms: float
+    sigma_axis: np.ndarray
+    n_observations: int
+
+
+def _check_observations(ts: Any, ps: Any, min_rows: int) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        t = np.array(ts, dtype=float)
+        p = np.array(ps, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError("observations must be numbers: ts (N,) and ps (N, 3)") from None
+    if t.ndim != 1 or p.shape != (t.size, 3):
+        raise InputError(f"observations must be ts (N,) and ps (N, 3), got {t.shape} and {p.shape}")
+    if t.size < min_rows:
+        raise InputError(f"{t.size} observations, need at least {min_rows}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
+        raise InputError("observations must be finite (no NaN or inf)")
+    if np.any(np.diff(t) <= 0):
+        raise InputError("observation times must be strictly increasing")
+    return t, p
+
+
+def _weighted_cov(J: np.ndarray, res: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Covariance of the parameters from J (3n x 6, rows t-major) and residuals (n, 3)."""
+    sigma = np.sqrt(np.sum(res * res, axis=0) / max(n - 2, 1))
+    w = 1.0 / np.maximum(sigma, 1e-12)
+    Jw = J * np.tile(w, n)[:, None]
+    return np.linalg.pinv(Jw.T @ Jw), sigma
+
+
+def _fd_jacobian(fun, theta: np.ndarray) -> np.ndarray:
+    cols = []
+    for i in range(theta.size):
+        e = np.zeros_like(theta)
+        e[i] = _FD_STEP
+        cols.append((fun(theta + e) - fun(theta - e)) / (2.0 * _FD_STEP))
+    return np.stack(cols, axis=-1)
+
+
+def fit_observations(
+    ts: Any, ps: Any, ball: Ball | str | None = None, drag_per_m: float = 0.0
+) -> FitResult:
+    """Fit (p0, v0) at t = 0 to noisy positions ``ps`` (N, 3) seen at times ``ts`` (N,).
+
+    k = 0: linear least squares of p = p0 + v0 t + g t^2 / 2 (N >= 3).
+    k > 0: least squares on the drag model from the vacuum fit (N >= 6).
+    """
+    b = get_ball(ball)
+    k = _finite("drag_per_m", drag_per_m)
+    if k < 0:
+        raise InputError(f"drag_per_m must be >= 0, got {k}")
+    t, p = _check_observations(ts, ps, 6 if k > 0 else 3)
+    n = t.size
+    A = np.stack([np.ones(n), t], axis=1)
+    y = p - 0.5 * GRAVITY * (t * t)[:, None]
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)  # (2, 3): rows p0, v0
+    theta = np.concatenate([coef[0], coef[1]])
+    if k == 0.0:
+        res = y - A @ coef
+        M = np.linalg.pinv(A.T @ A)
+        sigma = np.sqrt(np.sum(res * res, axis=0) / max(n - 2, 1))
+        cov = np.zeros((6, 6))
+        for ax in range(3):
+            idx = [ax, 3 + ax]
+            cov[np.ix_(idx, idx)] = sigma[ax] ** 2 * M
+        flight = Flight(theta[:3], theta[3:], b, 0.0)
+    else:
+        step = _step_for(k, float(np.linalg.norm(theta[3:])))
+
+        def resid(th: np.ndarray) -> np.ndarray:
+            return (Flight(th[:3], th[3:], b, k, step_s=step).position(t) - p).ravel()
+
+        try:
+            sol = least_squares(
+                resid,
+                theta,
+                jac=lambda th: _fd_jacobian(resid, th),
+                method="lm",
+                xtol=1e-12,
+                ftol=1e-12,
+                gtol=1e-12,
+            )
+        except PlannerError as exc:  # a trial state the drag model cannot run
+            raise SolverError(f"drag fit failed: {exc}", problem=(t, p, k)) from exc
+        if not sol.success:
+            raise SolverError(f"drag fit failed: {sol.message}", problem=(t, p, k))
+        theta = sol.x
+        res = sol.fun.reshape(n, 3)
+        cov, sigma = _weighted_cov(_fd_jacobian(resid, theta), res, n)
+        flight = Flight(theta[:3], theta[3:], b, k, step_s=step)
+    cov = 0.5 * (cov + cov.T)
+    cov.setflags(write=False)
+    sigma.setflags(write=False)
+    rms = float(np.sqrt(np.mean(res * res)))
+    return FitResult(flight, cov, rms, sigma, n)
+
+
+def predict_intercept(
+    fit: FitResult, x_plane: float
+) -> tuple[float, np.ndarray, np.ndarray, float]:
+    """Where and when the fitted ball crosses the plane x = x_plane, with uncertainty.
+
+    Returns (t, p, cov_p, sigma_t): p (3,) with p[0] = x_plane, cov_p (3, 3)
+    (its x row and column are 0: the plane is given), sigma_t in s. The
+    uncertainty is the fit covariance propagated through a central-difference
+    Jacobian of (t, p) with respect to [p0, v0].
+    """
+    x = _finite("x_plane", x_plane)
+    fl = fit.flight
+
+    def crossing(th: np.ndarray) -> np.ndarray:
+        f = replace(fl, p0=th[:3], v0=th[3:])
+        tc = f.time_at_x(x)
+        pc = f.position(tc)
+        return np.array([tc, x, pc[1], pc[2]])
+
+    theta = np.concatenate([fl.p0, fl.v0])
+    c0 = crossing(theta)
+    J = _fd_jacobian(crossing, theta)
+    C = J @ fit.covariance @ J.T
+    cov_p = 0.5 * (C[1:, 1:] + C[1:, 1:].T)
+    return float(c0[0]), c0[1:].copy(), cov_p, float(math.sqrt(max(C[0, 0], 0.0)))
+
+
+def load_observations_csv(
+    path: str | PathLike[str], *, min_rows: int = 3
+) -> tuple[np.ndarray, np.ndarray]:
+    """Read camera observations: header ``t,x,y,z`` then one row per frame.
+
+    Returns (ts (N,), ps (N, 3)). Needs ``min_rows`` rows (3 for a vacuum fit,
+    pass 6 for a drag fit), times strictly increasing, every value finite.
+    InputError with one line on any problem.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{p}: observation file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{p}: cannot read observation file ({exc})") from None
+    lines = [(i, ln) for i, ln in enumerate(text.splitlines(), 1) if ln.strip()]
+    if not lines:
+        raise InputError(f"{p}: empty file, expected a header t,x,y,z")
+    lineno, head = lines[0]
+    header = [c.strip().lower() for c in next(csv.reader([head]))]
+    if header != ["t", "x", "y", "z"]:
+        raise InputError(f"{p}: line {lineno}: header must be t,x,y,z, got {head.strip()!r}")
+    rows = []
+    for lineno, ln in lines[1:]:
+        cells = next(csv.reader([ln]))
+        if len(cells) != 4:
+            raise InputError(f"{p}: line {lineno}: expected 4 values t,x,y,z, got {len(cells)}")
+        vals = []
+        for name, c in zip("txyz", cells):
+            try:
+                v = float(c)
+            except ValueError:
+                raise InputError(
+                    f"{p}: line {lineno}: {name} = {c.strip()!r} is not a number"
+                ) from None
+            if not math.isfinite(v):
+                raise InputError(f"{p}: line {lineno}: {name} = {c.strip()!r} is not finite")
+            vals.append(v)
+        if rows and vals[0] <= rows[-1][0]:
+            raise InputError(
+                f"{p}: line {lineno}: time {vals[0]:g} is not after the previous {rows[-1][0]:g}"
+            )
+        rows.append(vals)
+    if len(rows) < min_rows:
+        raise InputError(f"{p}: {len(rows)} observation rows, need at least {min_rows}")
+    arr = np.array(rows, dtype=float)
+    return arr[:, 0].copy(), arr[:, 1:].copy()

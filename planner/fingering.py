@@ -1,0 +1,209 @@
+"""Fingering by optimisation: a finger for every note, by dynamic programming
+(Viterbi) over the whole song.
+
+Notes that start together (within ``CHORD_WINDOW_S``) form a group. For a
+group of m notes, each candidate assigns m distinct fingers in the order of
+the keys (thumb lowest, pinky highest: the hand does not cross over). A
+candidate implies a rail position: the least-squares fit of the fingers'
+natural lateral offsets (from the hand's rest posture, ``HandReach``) to
+the keys. Its cost is
+
+- stretch: squared distance of every finger from its natural place at that
+  rail position, infinite beyond the finger's reach;
+- the thumb (and, less, the pinky) on a black key;
+and the cost of going from one candidate to the next is
+
+- rail travel, and travel faster than the rail can comfortably go in the
+  time between the groups (infinite above its top speed);
+- a finger reused on a different key with little time between;
+- a finger still holding a note of the previous group that is reassigned,
+  or whose key leaves its reach.
+
+No human annotation is used: all numbers come from the hand's kinematics.
+Notes that no candidate can play (a chord wider than the hand, more than
+five notes at once) are returned as infeasible with the reason.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.music import keyboard as kb
+
+CHORD_WINDOW_S = 0.030
+FINGER_ORDER = ("thumb", "index", "middle", "ring", "pinky")
+
+
+@dataclass(frozen=True)
+class HandReach:
+    """Lateral reach of each finger relative to the rail (m), from the hand's rest posture.
+
+    ``offset_m[f]``: x of finger f's tip minus the rail position, at rest.
+    ``reach_m[f]``: how far (either way) the tip can move sideways from
+    there without moving the rail (abduction and wrist deviation).
+    ``rail_speed_m_s``: the rail's top speed; ``rail_range_m``: its travel.
+    """
+
+    offset_m: dict[str, float]
+    reach_m: dict[str, float]
+    rail_speed_m_s: float
+    rail_range_m: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """A note and the finger that plays it; ``rail_m`` is the planned rail position."""
+
+    note_index: int
+    finger: str
+    rail_m: float
+
+
+@dataclass(frozen=True)
+class Infeasible:
+    note_index: int
+    reason: str
+
+
+def _groups(onsets: list[float]) -> list[list[int]]:
+    groups: list[list[int]] = []
+    for i, t in enumerate(onsets):
+        if groups and t - onsets[groups[-1][0]] <= CHORD_WINDOW_S:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    return groups
+
+
+def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infeasible]]:
+    """Choose a finger for every note of ``notes`` (sorted by onset, then pitch)."""
+    order = sorted(range(len(notes)), key=lambda i: (notes[i].onset_s, notes[i].pitch))
+    groups_local = _groups([notes[i].onset_s for i in order])
+    groups = [[order[k] for k in g] for g in groups_local]
+    infeasible: list[Infeasible] = []
+
+    # candidates per group
+    cands: list[list[tuple[tuple[str, ...], float, float]]] = []  # (fingers, rail, static cost)
+    kept_groups: list[list[int]] = []
+    for g in groups:
+        g = sorted(g, key=lambda i: notes[i].pitch)
+        if len(g) > 5:
+            for i in g[5:]:
+                infeasible.append(Infeasible(i, "more than five notes at once"))
+            g = g[:5]
+        xs = np.array([kb.key(notes[i].pitch).center_x_m for i in g])
+        black = [kb.is_black(notes[i].pitch) for i in g]
+        cs = []
+        for fingers in itertools.combinations(FINGER_ORDER, len(g)):
+            offs = np.array([reach.offset_m[f] for f in fingers])
+            lim = np.array([reach.reach_m[f] for f in fingers])
+            # rail that minimises the normalised stretch, clipped to the rail's travel
+            w = 1.0 / lim**2
+            rail = float(np.sum(w * (xs - offs)) / np.sum(w))
+            rail = min(max(rail, reach.rail_range_m[0]), reach.rail_range_m[1])
+            dev = xs - offs - rail
+            if np.any(np.abs(dev) > lim):
+                continue
+            cost = float(np.sum((dev / lim) ** 2))
+            for f, b in zip(fingers, black):
+                if b and f == "thumb":
+                    cost += 2.0
+                elif b and f == "pinky":
+                    cost += 0.5
+            cs.append((fingers, rail, cost))
+        if not cs:
+            span = (max(xs) - min(xs)) if len(xs) > 1 else 0.0
+            why = (f"chord wider than the hand ({span * 1000:.0f} mm)" if len(g) > 1
+                   else "out of the rail's reach")
+            for i in g:
+                infeasible.append(Infeasible(i, why))
+            continue
+        cands.append(cs)
+        kept_groups.append(g)
+
+    if not kept_groups:
+        return [], infeasible
+
+    # Viterbi
+    n = len(kept_groups)
+    cost = [np.array([c[2] for c in cands[0]])]
+    back: list[np.ndarray] = [np.zeros(len(cands[0]), dtype=int)]
+    for k in range(1, n):
+        prev_g, g = kept_groups[k - 1], kept_groups[k]
+        dt = max(notes[g[0]].onset_s - notes[prev_g[0]].onset_s, 1e-3)
+        held = [i for i in prev_g if notes[i].offset_s > notes[g[0]].onset_s + 1e-6]
+        ck = np.empty(len(cands[k]))
+        bk = np.empty(len(cands[k]), dtype=int)
+        for b, (fb, rb, sb) in enumerate(cands[k]):
+            best, arg = math.inf, 0
+            for a, (fa, ra, _) in enumerate(cands[k - 1]):
+                c = cost[k - 1][a] + _transition(notes, prev_g, fa, ra, g, fb, rb, dt, held, reach)
+                if c < best:
+                    best, arg = c, a
+            ck[b] = best + sb
+            bk[b] = arg
+        cost.append(ck)
+        back.append(bk)
+    # backtrack (ties broken by the lowest index: deterministic)
+    choice = [0] * n
+    choice[-1] = int(np.argmin(cost[-1]))
+    for k in range(n - 1, 0, -1):
+        choice[k - 1] = int(back[k][choice[k]])
+    # Rails: the chosen fingers leave each group an interval of rail positions
+    # that reach all its keys; keep the rail still while the interval allows
+    # (clamped a quarter of the interval inside its ends), so that the hand
+    # only travels when it must.
+    rails: list[float] = []
+    prev = None
+    for k, g in enumerate(kept_groups):
+        fingers, rail, _ = cands[k][choice[k]]
+        lo, hi = -math.inf, math.inf
+        for i, f in zip(g, fingers):
+            c = kb.key(notes[i].pitch).center_x_m - reach.offset_m[f]
+            lo, hi = max(lo, c - reach.reach_m[f]), min(hi, c + reach.reach_m[f])
+        if prev is None or not lo <= hi:
+            r = rail
+        else:
+            m = 0.25 * (hi - lo)
+            r = min(max(prev, lo + m), hi - m)
+        rails.append(r)
+        prev = r
+    out: list[Assignment] = []
+    for k, g in enumerate(kept_groups):
+        fingers, _, _ = cands[k][choice[k]]
+        if not math.isfinite(cost[k][choice[k]]):
+            for i in g:
+                infeasible.append(Infeasible(i, "no fingering reaches it in time"))
+            continue
+        for i, f in zip(g, fingers):
+            out.append(Assignment(i, f, rails[k]))
+    out.sort(key=lambda a: a.note_index)
+    infeasible.sort(key=lambda x: x.note_index)
+    return out, infeasible
+
+
+def _transition(notes, prev_g, fa, ra, g, fb, rb, dt, held, reach: HandReach) -> float:
+    d = abs(rb - ra)
+    v = d / dt
+    if v > reach.rail_speed_m_s:
+        return 1e6 * (1.0 + v)  # effectively infeasible, but keeps a path
+    c = 10.0 * d + 20.0 * max(0.0, v - 0.5 * reach.rail_speed_m_s) ** 2
+    prev_finger = dict(zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa))
+    new_finger = dict(zip(sorted(g, key=lambda i: notes[i].pitch), fb))
+    used_now = {f: notes[i].pitch for i, f in new_finger.items()}
+    for i in held:
+        f = prev_finger[i]
+        if f in used_now:
+            return math.inf  # the finger is still holding its key
+        dev = kb.key(notes[i].pitch).center_x_m - reach.offset_m[f] - rb
+        if abs(dev) > reach.reach_m[f]:
+            return math.inf
+        c += 5.0 * d
+    for i, f in prev_finger.items():
+        if f in used_now and used_now[f] != notes[i].pitch and dt < 0.25:
+            c += 0.5 * (0.25 - dt) / 0.25
+    return c
