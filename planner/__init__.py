@@ -6,4 +6,4 @@ with the hand model and the catch planner beside it. See README.md.
 
 from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
 
-__all__ = ["PlannerError", "InputError", "InfeasibleError", "SolverError"]
+__all__ = ["InfeasibleError", "InputError", "PlannerError", "SolverError"]

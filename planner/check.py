@@ -613,8 +613,8 @@ def _ball_params(meta: dict[str, Any], path: str) -> dict[str, Any]:
     for k, lo, strict in (("radius", 0.0, True), ("mass", 0.0, False), ("drag", 0.0, False)):
         v = b.get(k)
         if not _is_num(v) or not math.isfinite(v) or v < lo or (strict and v == lo):
-            raise InputError(f"{path}: ball {k!r} must be a {'positive' if strict else 'non-negative'}"
-                             f" number, got {v!r}")
+            what = "positive" if strict else "non-negative"
+            raise InputError(f"{path}: ball {k!r} must be a {what} number, got {v!r}")
         out[k] = float(v)
     return out
 

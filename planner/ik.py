@@ -33,7 +33,7 @@ from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 
 PRESS_TOL_M = 1e-3  # seed: precision 1 mm
-PREPARE_HEIGHT_M = 0.008  # a finger about to press waits this far above its key
+PREPARE_HEIGHT_M = 0.004  # a finger about to press waits this far above its key
 HOVER_CLEARANCE_M = 0.007  # spec: 5 mm above the keys, plus 2 mm for linearisation
 _NEAR_M = 0.006  # keys within this distance (x, y) of a hovering tip count as under it
 
@@ -115,20 +115,29 @@ class HandIK:
         self.solver = placo.KinematicsSolver(self.robot)
         self.solver.mask_fbase(True)
         self.solver.enable_joint_limits(True)
+        self._gears: dict[str, object] = {}
         for c in hand.couplings:
             if c.kind == "linear":
-                g = self.solver.add_gear_task()
-                g.set_gear(self._names[c.dep], self._names[c.src], float(c.ratio))
-                g.configure(f"coupling_{self._names[c.dep]}", "hard", 1.0)
+                self._add_gear(c)
         self._nonlinear = [c for c in hand.couplings if c.kind != "linear"]
         self.posture = self.solver.add_joints_task()
-        self.posture.configure("posture", "soft", 1e-3)
-        # the rail holds its planned position unless reaching needs it to move
-        self.rail_task = self.solver.add_joints_task() if "rail" in hand.index else None
-        if self.rail_task is not None:
-            self.rail_task.configure("rail", "soft", 1e-1)
+        self.posture.configure("posture", "soft", 1e-4)
+        # minimal motion: stay near the configuration the hand comes from
+        self.stay = self.solver.add_joints_task()
+        self.stay.configure("stay", "soft", 1e-2)
+        # the arm (rail at its planned position, wrist where it is) moves only
+        # when reaching needs it: the fingers do the local work
+        self._arm = [n for n in ("rail", "wrist_flex", "wrist_dev") if n in hand.index]
+        self.arm_task = self.solver.add_joints_task()
+        self.arm_task.configure("arm", "soft", 1e1)
         self._tasks: dict[str, object] = {}
         self._half = None
+
+    def _add_gear(self, c) -> None:
+        g = self.solver.add_gear_task()
+        g.set_gear(self._names[c.dep], self._names[c.src], float(c.ratio))
+        g.configure(f"coupling_{self._names[c.dep]}", "hard", 1.0)
+        self._gears[self._names[c.dep]] = (g, c)
 
     # -------------------------------------------------------------- state
     def set_q(self, q: np.ndarray) -> None:
@@ -153,7 +162,10 @@ class HandIK:
         """Place the pressing tips on their targets, the others above the keys.
 
         ``q_start``: initial configuration (joint order of the hand).
-        ``posture``: the natural configuration the posture task pulls toward.
+        ``posture``: the natural configuration the posture task pulls toward
+        (weight 1e-4); a second task (1e-2) keeps the joints near ``q_start``
+        and the arm task (10) keeps the rail at ``posture``'s rail and the
+        wrist where it is, so that the hand moves only what the task needs.
         ``hover``: fingers that must clear the keys (default: all not pressing).
         ``prepare``: fingers that wait ``PREPARE_HEIGHT_M`` above the key they
         press next (soft target), so that they can go straight down.
@@ -170,19 +182,20 @@ class HandIK:
             waiting = {p.finger for p in prepare}
             hover = tuple(f for f in fingers if f not in pressing and f not in waiting)
         self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
-        if self.rail_task is not None:
-            self.rail_task.set_joints({"rail": float(posture[self.hand.index["rail"]])})
+        self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
+        self.arm_task.set_joints({n: float((posture if n == "rail" else q_start)[self.hand.index[n]])
+                                  for n in self._arm})
         self.set_q(q_start)
         for f in list(self._tasks):
             self.solver.remove_task(self._tasks.pop(f))
         for p in presses:
             t = self.solver.add_position_task(f"{p.finger}_tip", np.array(p.point_m))
-            t.configure(f"press_{p.finger}", "soft", 1e3)
+            t.configure(f"press_{p.finger}", "soft", 1e5)
             self._tasks[p.finger] = t
         for p in prepare:
             x, y, z = p.point_m
             t = self.solver.add_position_task(f"{p.finger}_tip", np.array([x, y, z + kb.KEY_DIP_M + PREPARE_HEIGHT_M]))
-            t.configure(f"prepare_{p.finger}", "soft", 1e1)
+            t.configure(f"prepare_{p.finger}", "soft", 1e3)
             self._tasks[p.finger] = t
         err = np.inf
         clearance = np.inf
@@ -259,4 +272,98 @@ class HandIK:
             rhs += [val + 1e-9, -val + 1e-9]
         if rows:
             self._half = self.solver.add_joint_space_half_spaces_constraint(np.array(rows), np.array(rhs))
-            self._half.configure("hover", "hard", 1.0)
+            self._half.configure("hover", "soft", 1e4)
+
+    # -------------------------------------------------------------- one finger
+    def solve_finger(self, target: PressTarget, q_base: np.ndarray,
+                     tol_m: float = PRESS_TOL_M) -> IKResult:
+        """Move only ``target.finger``'s joints (rail, wrist and other fingers locked at
+        ``q_base``) to put its tip on the target. The result is ``q_base`` with that
+        finger's joints replaced."""
+        own = set(self.hand.spec.joints_of(target.finger))
+        locked = [n for n in self._names if n not in own]
+        # a hard coupling between two locked joints would be an empty equality row
+        idle = [n for n in self._gears if n not in own]
+        for n in idle:
+            self.solver.remove_task(self._gears.pop(n)[0])
+            self._gears[n] = None
+        for n in locked:
+            self.solver.mask_dof(n)
+        try:
+            r = self.solve([target], q_base, q_base, hover=(), tol_m=tol_m)
+        finally:
+            for n in locked:
+                self.solver.unmask_dof(n)
+            for n in idle:
+                c = next(c for c in self.hand.couplings if self._names[c.dep] == n)
+                del self._gears[n]
+                self._add_gear(c)
+        q = q_base.copy()
+        js = self.hand.joint_slice(target.finger)
+        q[js] = r.q[js]
+        return IKResult(self.hand.apply_couplings(q), r.converged, r.iterations, r.press_error_m,
+                        r.hover_clearance_m)
+
+    # ============================================================== catch: palm pose task
+    # (added for planner.catch; independent of the keyboard machinery above)
+
+    def solve_palm(self, point_m, normal, q_start: np.ndarray, posture: np.ndarray | None = None,
+                   offset_m: float = 0.0, locked: tuple[str, ...] = (), max_iter: int = 20,
+                   tol_m: float = PRESS_TOL_M, tol_rad: float = 0.01,
+                   normal_weight: float = 1e2) -> IKResult:
+        """Put ``palm_center + offset_m * n`` at ``point_m`` with the palm normal n (+z of
+        ``palm_center``) along ``normal`` (world frame of this solver's hand).
+
+        Position task on ``palm_center`` (soft, 1e3) at ``point_m - offset_m * normal``
+        and an axis-align task of its +z on ``normal`` (soft, ``normal_weight``); the
+        posture/stay/rail tasks of ``solve`` stay in place (posture defaults to
+        ``q_start``); ``locked`` joints are masked. No keyboard constraint applies.
+        ``press_error_m`` of the result is the distance of ``palm_center + offset_m * n``
+        from ``point_m`` (``hover_clearance_m`` is inf: nothing hovers); ``converged``
+        also needs the normal within ``tol_rad`` of ``normal``.
+        """
+        point = np.asarray(point_m, dtype=float)
+        nrm = np.asarray(normal, dtype=float)
+        nrm = nrm / np.linalg.norm(nrm)
+        posture = q_start if posture is None else posture
+        self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
+        self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
+        if self.rail_task is not None:
+            self.rail_task.set_joints({"rail": float(posture[self.hand.index["rail"]])})
+        self.set_q(q_start)
+        for f in list(self._tasks):
+            self.solver.remove_task(self._tasks.pop(f))
+        pos = self.solver.add_position_task("palm_center", point - offset_m * nrm)
+        pos.configure("palm_position", "soft", 1e3)
+        ax = self.solver.add_axisalign_task("palm_center", np.array([0.0, 0.0, 1.0]), nrm)
+        ax.configure("palm_normal", "soft", float(normal_weight))
+        for n in locked:
+            self.solver.mask_dof(n)
+
+        def errors() -> tuple[float, float]:
+            T = self.robot.get_T_world_frame("palm_center")
+            z = T[:3, 2]
+            e = float(np.linalg.norm(T[:3, 3] + offset_m * z - point))
+            a = float(np.arccos(np.clip(z @ nrm, -1.0, 1.0)))
+            return e, a
+
+        err, ang = errors()
+        it = 0
+        try:
+            for it in range(1, max_iter + 1):
+                if err <= tol_m and ang <= tol_rad:
+                    it -= 1
+                    break
+                if self._nonlinear:
+                    self._set_half_spaces(())
+                self.solver.solve(True)
+                self.robot.update_kinematics()
+                err, ang = errors()
+        finally:
+            for n in locked:
+                self.solver.unmask_dof(n)
+            self.solver.remove_task(pos)
+            self.solver.remove_task(ax)
+            self._clear_half_spaces()
+        q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
+        return IKResult(q, bool(err <= tol_m and ang <= tol_rad), it, err, float(np.inf))

@@ -15,20 +15,30 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from planner.errors import InputError
-from planner.fingering import FINGER_ORDER, HandReach, assign_fingers
+from planner.fingering import HandReach, assign_fingers
 from planner.hand.model import HandModel, load_hand
-from planner.ik import HandIK, PressTarget, press_target, surface_near
+from planner.ik import HandIK, IKResult, PressTarget, press_target
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
-from planner.targets import KeyState, build_states, descent_time_s, press_intervals
-from planner.trajectory import Phase, build_timing, min_jerk_inverse, phase_duration, sample, solve_timing
+from planner.targets import descent_time_s, press_intervals
+from planner.trajectory import (
+    Phase,
+    build_timing,
+    min_jerk,
+    min_jerk_inverse,
+    phase_duration,
+    sample,
+    solve_timing,
+)
 from planner.trajfile import TrajectoryWriter
 
 TRAVEL_Z_M = kb.BLACK_TOP_Z_M + 0.010  # lifted fingertips clear every key by 10 mm
-DIRECT_MOVE_M = 0.006  # moving tips that shift less than this sideways go straight
+DIRECT_MOVE_M = 0.004  # an arm move shifting no tip more than this sideways is local
 LATE_S = 0.020  # a note whose key goes down later than this is reported
-CHUNK_STATES = 12
+CHUNK_PHASES = 40
 REST_HOVER_Z_M = 0.020
+HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white tops (7.5 mm over black)
+LOW_M = 0.003  # a finger waiting to press (or just released) rests this far above its key
 
 
 @dataclass(frozen=True)
@@ -62,6 +72,9 @@ class Planner:
         self.hand = hand
         self.ik = HandIK(hand)
         self.rail = hand.index.get("rail")
+        self._cache: dict = {}
+        self.bases: list[np.ndarray] = []
+        self.ik_solves = 0
         self.rest = self._rest_posture()
         tips = hand.tip_positions(self.rest)
         rail0 = self.rest[self.rail] if self.rail is not None else 0.0
@@ -124,43 +137,78 @@ class Planner:
             q[self.rail] = min(max(rail_m, self.hand.lower[self.rail]), self.hand.upper[self.rail])
         return q
 
-    # ------------------------------------------------------------ helpers
-    def lift(self, q: np.ndarray, fingers) -> np.ndarray:
-        """``q`` with the named fingertips raised to travel height by their own flexion joints."""
-        h = self.hand
-        q = q.copy()
-        for _ in range(4):
-            tips = h.tip_positions(q)
-            J = h.tip_jacobians(q)
-            S = h.dq_dindependent(q)
-            moved = False
-            for f in fingers:
-                k = h.fingers.index(f)
-                dz = TRAVEL_Z_M - tips[k, 2]
-                if dz <= 1e-4:
-                    continue
-                cols = [c for c in h.joint_slice(f)[1:] if c in set(h.independent.tolist())]
-                ci = [int(np.where(h.independent == c)[0][0]) for c in cols]
-                Jz = (J[k, 2] @ S)[ci]
-                dq = Jz * dz / (Jz @ Jz + 1e-6)
-                q[cols] += dq
-                moved = True
-            q = h.apply_couplings(np.clip(q, h.lower, h.upper))
-            if not moved:
-                break
-        return q
+    # ------------------------------------------------------------ hand positions
+    def anchor(self, targets: list[PressTarget], rail_m: float, q_from: np.ndarray,
+               upcoming: list[PressTarget] = ()) -> int | None:
+        """A new hand position (rail and wrist) for the keys ``targets``: whole-hand IK with
+        those fingers pressing, the fingers that play ``upcoming`` keys next waiting just
+        above them, and the others hovering. Returns its index in ``bases`` (the hand
+        there with every finger up), or None when the IK cannot reach."""
+        posture = self.posture_at(rail_m)
+        r = self.ik.solve(targets, q_from, posture, prepare=upcoming)
+        self.ik_solves += 1
+        if not r.converged:
+            r = self.ik.solve(targets, posture, posture, prepare=upcoming)
+            self.ik_solves += 1
+        if not r.converged and upcoming:
+            r = self.ik.solve(targets, posture, posture)
+            self.ik_solves += 1
+        if not r.converged:
+            return None
+        seg = len(self.bases)
+        self.bases.append(r.q)
+        base = r.q.copy()
+        for t in targets:  # the pressing fingers wait high above their keys
+            self._cache[(t.finger, t.pitch, seg, "press")] = (r.q, r)
+            js = self.hand.joint_slice(t.finger)
+            base[js] = self.above_q(t.finger, t.pitch, seg, HIGH_M)[js]
+        self.bases[seg] = base
+        return seg
 
+    def press_q(self, finger: str, pitch: int, seg: int) -> tuple[np.ndarray, IKResult]:
+        """``finger`` pressing ``pitch`` at full dip, the rest of the hand as in position
+        ``seg`` (only the finger's own joints move); cached."""
+        key = (finger, pitch, seg, "press")
+        if key not in self._cache:
+            r = self.ik.solve_finger(press_target(finger, pitch), self.bases[seg])
+            self._cache[key] = (r.q, r)
+            self.ik_solves += 1
+        return self._cache[key]
 
-def _moving_shift(hand: HandModel, qa: np.ndarray, qb: np.ndarray, fingers) -> float:
-    if not fingers:
-        return 0.0
-    ta, tb = hand.tip_positions(qa), hand.tip_positions(qb)
-    return max(float(np.linalg.norm((tb - ta)[hand.fingers.index(f), :2])) for f in fingers)
+    def above_q(self, finger: str, pitch: int, seg: int, height_m: float) -> np.ndarray:
+        """``finger`` waiting ``height_m`` above the top of ``pitch``, straight above
+        where it presses it, in hand position ``seg``; cached."""
+        key = (finger, pitch, seg, height_m)
+        if key not in self._cache:
+            qp, _ = self.press_q(finger, pitch, seg)
+            tip = self.hand.tip_positions(qp)[self.hand.fingers.index(finger)]
+            z = kb.key(pitch).top_z_m + height_m
+            t = PressTarget(finger, pitch, (float(tip[0]), float(tip[1]), z), (float(tip[1]),) * 2)
+            r = self.ik.solve_finger(t, qp)
+            self._cache[key] = (r.q, r)
+            self.ik_solves += 1
+        return self._cache[key][0]
 
 
 def _crossing_fraction(z_from: float, z_to: float, z_cross: float) -> float:
     s = (z_cross - z_from) / (z_to - z_from) if z_to != z_from else 0.5
     return min_jerk_inverse(min(max(s, 0.0), 1.0))
+
+
+def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int) -> float:
+    """Fraction of the duration of a min-jerk phase from ``qa`` to ``qb`` at which
+    ``finger``'s tip passes the key-down depth of ``pitch`` (FK along the path)."""
+    k = hand.fingers.index(finger)
+    z_cross = kb.key(pitch).top_z_m - kb.DOWN_DEPTH_M
+    u = np.linspace(0.0, 1.0, 17)
+    s = min_jerk(u)
+    z = np.array([hand.tip_positions(qa + (qb - qa) * si)[k, 2] for si in s]) - z_cross
+    for i in range(len(u) - 1):
+        if z[i] == 0.0:
+            return float(u[i])
+        if z[i] * z[i + 1] < 0.0:
+            return float(u[i] + (u[i + 1] - u[i]) * z[i] / (z[i] - z[i + 1]))
+    return 0.5
 
 
 def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0,
@@ -176,16 +224,12 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     finger_of = {a.note_index: a.finger for a in assignments}
     rail_of = {a.note_index: a.rail_m for a in assignments}
     intervals = press_intervals(notes, assignments)
-    states = build_states(intervals, rail_of, float(pl.rest[pl.rail]) if pl.rail is not None else 0.0)
-    if states and states[0].t_s > 0.0:
-        pass
-
     meta = {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
             "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
             "song": song_name, "notes": len(notes)}
     writer = TrajectoryWriter(out_path, meta, hand.joint_names, hand.motor_names)
     try:
-        result = _run(pl, hand, notes, states, writer, rate_hz, reasons, progress, t_start)
+        result = _run(pl, hand, notes, intervals, rail_of, writer, rate_hz, reasons, progress, t_start)
     except BaseException:
         writer.abort()
         raise
@@ -196,145 +240,211 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     return result
 
 
-def _run(pl: Planner, hand: HandModel, notes, states: list[KeyState], writer: TrajectoryWriter,
-         rate_hz: float, reasons: dict[int, str], progress: bool, t_start: float) -> PlayResult:
+class _Timeline:
+    """Builds the phase list in causal order, one finger (or the rail) at a time.
+
+    Every finger is always in one of three places: hovering at rest, waiting
+    ``LOW_M`` above a key, or pressing it. A press is: (if the finger is not
+    already waiting above that key) up to ``HIGH_M`` above where it is, across
+    to ``HIGH_M`` above the key, down to ``LOW_M`` (these three as early as
+    they may), then down onto the key, its key-down moment anchored on the
+    note's onset; the release goes back to ``LOW_M``, anchored on the note's
+    end. A change of hand position (rail) moves the rail alone, after every
+    finger has let go and before any presses again, with all tips at least
+    ``LOW_M`` over the keys.
+    """
+
+    def __init__(self, pl: Planner, hand: HandModel, q0: np.ndarray, seg: int | None, dt: float):
+        self.pl, self.hand, self.dt = pl, hand, dt
+        self.q = q0.copy()  # configuration reached so far (end of all phases)
+        self.seg = seg
+        self.place: dict[str, tuple] = {f: ("rest",) for f in hand.fingers}
+        self.phases: list[tuple[Phase, str, int | None]] = []
+        self.all_joints = np.arange(hand.n)
+
+    def _move(self, q_new: np.ndarray, anchor: float, ideal: float, weight: float, kind: str,
+              note: int | None, min_s: float = 0.0, order=None) -> None:
+        d = q_new - self.q
+        if not np.any(d) and order is None:
+            return
+        T = max(phase_duration(d, self.hand.velocity, self.hand.acceleration), min_s)
+        self.phases.append((Phase(d, T, anchor, ideal, weight, order_joints=order), kind, note))
+        self.q = q_new.copy()
+
+    def _with_finger(self, finger: str, q_src: np.ndarray) -> np.ndarray:
+        js = self.hand.joint_slice(finger)
+        q = self.q.copy()
+        q[js] = q_src[js]
+        return q
+
+    def _tip_z(self, q: np.ndarray, finger: str) -> float:
+        return float(self.hand.tip_positions(q)[self.hand.fingers.index(finger), 2])
+
+    def travel(self, seg: int, t_s: float) -> None:
+        """Go to hand position ``seg``: every finger up, then the whole hand at once."""
+        for f in self.hand.fingers:
+            if self.place[f][0] != "rest":
+                self.go_high(f)
+        # ordered after (and before) every joint's motion: nothing else moves meanwhile
+        self._move(self.pl.bases[seg].copy(), 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
+        self.seg = seg
+        for f in self.hand.fingers:
+            self.place[f] = ("rest",)
+
+    def go_high(self, finger: str) -> None:
+        pl = self.place[finger]
+        if pl[0] == "above" and pl[2] == HIGH_M:
+            return
+        if pl[0] == "rest":
+            return
+        q = self._with_finger(finger, self.pl.above_q(finger, pl[1], self.seg, HIGH_M))
+        self._move(q, 0.5, 0.0, 0.0, "move", None)
+        self.place[finger] = ("above", pl[1], HIGH_M)
+
+    def press(self, finger: str, pitch: int, t_s: float, note: int, velocity: int) -> bool:
+        qp, r = self.pl.press_q(finger, pitch, self.seg)
+        if not r.converged:
+            return False
+        if self.place[finger] != ("above", pitch, LOW_M):
+            self.go_high(finger)
+            self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, HIGH_M)),
+                       0.5, t_s, 0.0, "move", None)
+            self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M)),
+                       0.5, t_s, 0.0, "move", None)
+        q_new = self._with_finger(finger, qp)
+        frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
+        # the key goes down half a frame before the onset, so the onset's frame shows it
+        self._move(q_new, frac, t_s - 0.5 * self.dt, 1.0, "press", note,
+                   min_s=descent_time_s(velocity) * LOW_M / 0.030)
+        self.place[finger] = ("down", pitch)
+        return True
+
+    def release(self, finger: str, pitch: int, t_s: float) -> None:
+        q_new = self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M))
+        frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
+        # up half a frame before the note's end, so its last frame is its own
+        self._move(q_new, frac, t_s - 0.5 * self.dt, 1.0, "release", None)
+        self.place[finger] = ("above", pitch, LOW_M)
+
+    def rest_all(self, t_s: float) -> None:
+        for f in self.hand.fingers:
+            if self.place[f][0] != "rest":
+                self.go_high(f)
+                self._move(self._with_finger(f, self.pl.bases[self.seg]), 0.5, t_s, 0.0, "move", None)
+                self.place[f] = ("rest",)
+
+
+def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, float],
+         writer: TrajectoryWriter, rate_hz: float, reasons: dict[int, str], progress: bool,
+         t_start: float) -> PlayResult:
     dt = 1.0 / rate_hz
     end_song = max((n.offset_s for n in notes), default=0.0)
-    q_prev = pl.posture_at(states[0].rail_hint_m if states else 0.0)
-
-    def prepare_for(k: int) -> list[PressTarget]:
-        """Fingers free in state k that press a new key in state k+1 wait above it."""
-        if k + 1 >= len(states):
-            return []
-        now = {(p.finger, p.pitch) for p in states[k].presses} if k >= 0 else set()
-        busy = {f for f, _ in now}
-        return [press_target(p.finger, p.pitch) for p in states[k + 1].presses
-                if (p.finger, p.pitch) not in now and p.finger not in busy
-                and p.note_index not in dropped]
-
-    # the start: the hand hovering where it will play first (brought there before t = 0)
-    dropped: set[int] = set(reasons)
-    first = pl.ik.solve([], q_prev, q_prev, prepare=prepare_for(-1))
-    q_prev = first.q
-    prev_state = KeyState(0.0, (), states[0].rail_hint_m if states else 0.0)
+    rail0 = rail_of[intervals[0].press.note_index] if intervals else (
+        float(pl.rest[pl.rail]) if pl.rail is not None else 0.0)
+    q_start = pl.posture_at(rail0)
+    tl = _Timeline(pl, hand, q_start, None, dt)
+    seg_rail: dict[int, float] = {}
     next_row = 0
     t_committed = 0.0
     first_row_s = math.nan
-    ik_solves = 1
     late: list[tuple[int, float]] = []
-    pending: list[tuple[Phase, str, int | None]] = []
-    total = len(states)
+    hold = tl.q.copy()
 
-    def flush(phases_meta, hold_q, final_t=None):
-        nonlocal next_row, t_committed, first_row_s
+    def flush(final_t=None):
+        nonlocal next_row, t_committed, first_row_s, hold
+        phases_meta = tl.phases
+        tl.phases = []
         phases = [p for p, _, _ in phases_meta]
-        prob = build_timing(phases, t_committed)
-        starts = solve_timing(prob)
+        starts = solve_timing(build_timing(phases, t_committed))
         for (p, kind, note), s in zip(phases_meta, starts):
             if kind == "press" and note is not None:
                 lateness = s + p.anchor * p.duration_s - p.ideal_s
                 if lateness > LATE_S:
                     late.append((note, lateness))
-        end_t = float(starts[-1] + phases[-1].duration_s) if phases else t_committed
+        end_t = float(max((s + p.duration_s for p, s in zip(phases, starts)), default=t_committed))
         if final_t is not None:
             end_t = max(end_t, final_t)
         n_rows_end = int(math.floor(end_t * rate_hz + 1e-9)) + (1 if final_t is not None else 0)
         if n_rows_end > next_row:
             t = np.arange(next_row, n_rows_end) * dt
-            q = sample(phases, starts, t, hold_q)
-            q = hand.apply_couplings(q)
+            q = hand.apply_couplings(sample(phases, starts, t, hold))
             writer.write_rows(t, q, hand.motor_angles(q))
             if math.isnan(first_row_s):
                 first_row_s = time.perf_counter() - t_start
             next_row = n_rows_end
-        t_committed = max(end_t, next_row * dt - dt)
+        t_committed = max(end_t, t_committed)
+        hold = tl.q.copy()
 
-    hold = q_prev
-    for k, st in enumerate(states):
-        presses = [p for p in st.presses if p.note_index not in dropped]
-        # the rail stays where it is unless a key needs it elsewhere (the IK's
-        # rail task is soft): the hand travels only when it must
-        posture = pl.posture_at(q_prev[pl.rail] if pl.rail is not None else 0.0)
-        targets = [press_target(p.finger, p.pitch) for p in presses]
-        prep = prepare_for(k)
-        r = pl.ik.solve(targets, q_prev, posture, prepare=prep)
-        ik_solves += 1
-        if not r.converged:
-            r = pl.ik.solve(targets, posture, posture, prepare=prep)
-            ik_solves += 1
-        while not r.converged and presses:
-            # drop the press that is new in this state and farthest from the rest of the chord
-            held = {(p.finger, p.pitch) for p in prev_state.presses}
-            cand = [p for p in presses if (p.finger, p.pitch) not in held] or presses
-            worst = cand[-1]
-            reasons[worst.note_index] = f"out of reach (IK error {r.press_error_m * 1000:.1f} mm)"
-            dropped.add(worst.note_index)
-            presses = [p for p in presses if p is not worst]
-            targets = [press_target(p.finger, p.pitch) for p in presses]
-            r = pl.ik.solve(targets, posture, posture, prepare=prep)
-            ik_solves += 1
-        q_next = r.q
-        # torque bound for the press forces
-        if presses:
-            tau = hand.press_torques(q_next, {p.finger: p.force_n for p in presses})
-            over = np.abs(tau) > hand.motor_peak_torque
-            if np.any(over):
-                m = int(np.argmax(np.abs(tau) / hand.motor_peak_torque))
-                for p in presses:
+    # events in time order: releases before presses at the same instant
+    events = []
+    for iv in intervals:
+        events.append((iv.start_s, 1, iv.press.pitch, iv))
+        events.append((iv.end_s, 0, iv.press.pitch, iv))
+    events.sort(key=lambda e: (e[0], e[1], e[2]))
+    down: dict[int, object] = {}
+    total = len(events)
+    for k, (t, is_press, _, iv) in enumerate(events):
+        p = iv.press
+        if is_press:
+            rail = rail_of[p.note_index]
+            ok = False
+            if tl.seg is not None:  # the hand stays where it is if the finger reaches from there
+                ok = tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
+            if not ok and not down:
+                # a new hand position for this note and the notes struck with it
+                group = [e[3].press for e in events if e[1] == 1 and abs(e[0] - t) <= 1e-9]
+                group = [g for g in group if g.note_index not in reasons]
+                # the keys the other fingers play next at this hand position
+                upcoming: dict[str, PressTarget] = {}
+                busy = {g.finger for g in group}
+                for e in events:
+                    if e[1] != 1 or e[0] <= t + 1e-9 or e[3].press.note_index in reasons:
+                        continue
+                    q_ = e[3].press
+                    if abs(rail_of[q_.note_index] - rail) > 1e-9:
+                        break
+                    if q_.finger not in busy and q_.finger not in upcoming:
+                        upcoming[q_.finger] = press_target(q_.finger, q_.pitch)
+                seg = pl.anchor([press_target(g.finger, g.pitch) for g in group], rail, tl.q,
+                                list(upcoming.values()))
+                if seg is None and len(group) > 1:
+                    seg = pl.anchor([press_target(p.finger, p.pitch)], rail, tl.q)
+                if seg is not None:
+                    seg_rail[seg] = rail
+                    if tl.seg is None:  # the hand is brought there before t = 0
+                        tl.q = pl.bases[seg].copy()
+                        tl.seg = seg
+                        for g in group:  # with the first fingers just above their keys
+                            tl.q = tl._with_finger(g.finger, pl.above_q(g.finger, g.pitch, seg, LOW_M))
+                            tl.place[g.finger] = ("above", g.pitch, LOW_M)
+                        hold = tl.q.copy()
+                    else:
+                        tl.travel(seg, t)
+                    ok = tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
+            if ok:
+                down[p.note_index] = iv
+                tau = hand.press_torques(tl.q, {p.finger: p.force_n})
+                ratio = np.abs(tau) / hand.motor_peak_torque
+                if np.any(ratio > 1.0):
+                    m = int(np.argmax(ratio))
                     reasons.setdefault(p.note_index, f"torque above bound (motor.{hand.motor_names[m]} "
                                        f"{abs(tau[m]):.2f} > {hand.motor_peak_torque[m]:.2f} N m)")
-        cur = KeyState(st.t_s, tuple(presses), st.rail_hint_m)
-        pending += _transition(pl, hand, prev_state, q_prev, cur, q_next)
-        prev_state, q_prev = cur, q_next
-        if len(pending) >= CHUNK_STATES * 3 or k == total - 1:
-            flush(pending, hold)
-            hold = q_prev
-            pending = []
-        if progress and total > 200 and k % 50 == 0:
-            sys.stderr.write(f"\rplanning {k}/{total} states ({100 * k // total}%)")
+            else:
+                why = "keys held elsewhere keep the hand away" if down else "out of reach"
+                reasons[p.note_index] = f"{why} (for the {p.finger})"
+        elif p.note_index in down:
+            tl.release(p.finger, p.pitch, t)
+            del down[p.note_index]
+            if not down and len(tl.phases) >= CHUNK_PHASES:
+                flush()
+        if progress and total > 400 and k % 100 == 0:
+            sys.stderr.write(f"\rplanning {k}/{total} key events ({100 * k // total}%)")
             sys.stderr.flush()
-    if progress and total > 200:
-        sys.stderr.write(f"\rplanning {total}/{total} states (100%)\n")
-    # settle and finish
-    flush(pending, hold, final_t=max(end_song + 0.25, t_committed + 0.25))
-    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, ik_solves, late)
-
-
-def _transition(pl: Planner, hand: HandModel, a: KeyState, qa: np.ndarray, b: KeyState,
-                qb: np.ndarray) -> list[tuple[Phase, str, int | None]]:
-    """Phases taking the hand from state ``a`` (at ``qa``) to state ``b`` (at ``qb``) at b.t_s."""
-    pa = {(p.finger, p.pitch) for p in a.presses}
-    pb = {(p.finger, p.pitch) for p in b.presses}
-    releasing = sorted({f for f, k in pa - pb}, key=FINGER_ORDER.index)
-    new = [p for p in b.presses if (p.finger, p.pitch) not in pa]
-    pressing = [p.finger for p in new]
-    v, acc = hand.velocity, hand.acceleration
-    e = b.t_s
-    note = new[0].note_index if new else None
-    vel = max((p.velocity for p in new), default=64)
-    if np.allclose(qa, qb, atol=1e-9):
-        return []
-    low = kb.DOWN_DEPTH_M
-    if _moving_shift(hand, qa, qb, releasing + pressing) <= DIRECT_MOVE_M:
-        T = phase_duration(qb - qa, v, acc)
-        if pressing:
-            T = max(T, 0.5 * descent_time_s(vel))
-        anchor = 0.5
-        return [(Phase(qa, qb, T, anchor, e, 1.0), "press" if pressing else "move", note)]
-    out: list[tuple[Phase, str, int | None]] = []
-    q_up = pl.lift(qa, releasing) if releasing else qa
-    q_over = pl.lift(qb, pressing) if pressing else qb
-    if releasing:
-        z0 = -kb.KEY_DIP_M
-        frac = _crossing_fraction(z0, TRAVEL_Z_M, z0 + low)
-        out.append((Phase(qa, q_up, phase_duration(q_up - qa, v, acc), frac, e, 0.5), "release", None))
-    out.append((Phase(q_up, q_over, phase_duration(q_over - q_up, v, acc), 0.5, e, 0.01), "move", None))
-    if pressing:
-        z1 = -kb.KEY_DIP_M
-        frac = _crossing_fraction(TRAVEL_Z_M, z1, z1 + low)
-        T = max(phase_duration(qb - q_over, v, acc), descent_time_s(vel))
-        out.append((Phase(q_over, qb, T, frac, e, 1.0), "press", note))
-    return out
+    if progress and total > 400:
+        sys.stderr.write(f"\rplanning {total}/{total} key events (100%)\n")
+    tl.rest_all(end_song)
+    flush(final_t=max(end_song + 0.25, t_committed + 0.25))
+    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late)
 
 
 # ---------------------------------------------------------------- CLI glue

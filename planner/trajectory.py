@@ -11,8 +11,9 @@ combination of two configurations inside them; linear couplings hold
 because they are linear.
 
 *When* each phase runs is a quadratic programme (``solve_timing``, OSQP):
-phases run one after the other (start of phase p+1 >= end of phase p), and
-each phase has an anchor (the moment a key goes down or comes up, at a
+phases that move a common joint run one after the other, phases on
+disjoint joints (two fingers) may overlap and their motions add; each
+phase has an anchor (the moment a key goes down or comes up, at a
 known fraction of the phase) that should fall on its ideal time (a note's
 onset or release). Minimising the weighted squared anchor errors gives the
 start times; where the motors are too slow for the song, the QP spreads
@@ -62,87 +63,105 @@ def phase_duration(dq: np.ndarray, v_max: np.ndarray, a_max: np.ndarray, floor_s
 
 @dataclass(frozen=True)
 class Phase:
-    """A move from ``q_a`` to ``q_b`` lasting ``duration_s``; its ``anchor`` fraction
-    of the duration should fall at ``ideal_s`` (weight ``weight``)."""
+    """A move of some joints by ``delta`` (the others do not move) lasting ``duration_s``.
 
-    q_a: np.ndarray
-    q_b: np.ndarray
+    Its ``anchor`` fraction of the duration should fall at ``ideal_s``
+    (weight ``weight``; 0 for a move without a timing wish). Phases that
+    move a common joint run one after the other, in list order; phases on
+    disjoint joints may overlap, and the motion is their sum.
+    """
+
+    delta: np.ndarray
     duration_s: float
     anchor: float
     ideal_s: float
     weight: float = 1.0
     earliest_s: float = 0.0
+    order_joints: np.ndarray | None = None  # joints it is ordered on, if not the ones it moves
+
+    @property
+    def joints(self) -> np.ndarray:
+        return np.flatnonzero(np.abs(self.delta) > 0.0)
 
 
 @dataclass(frozen=True)
 class TimingProblem:
+    """min sum w (x_p + a_p T_p - ideal_p)^2  s.t.  x_p >= earliest_p,
+    x_q - x_p >= T_p for every (p, q) in ``after`` (q moves a joint p moved before)."""
+
     durations: np.ndarray
     anchors: np.ndarray
     ideals: np.ndarray
     weights: np.ndarray
     earliest: np.ndarray
+    after: np.ndarray  # (m, 2) pairs (p, q)
     t0: float
 
 
 def build_timing(phases: list[Phase], t0: float) -> TimingProblem:
+    last: dict[int, int] = {}
+    pairs: set[tuple[int, int]] = set()
+    for q, ph in enumerate(phases):
+        js = ph.joints if ph.order_joints is None else ph.order_joints
+        for j in js.tolist():
+            if j in last:
+                pairs.add((last[j], q))
+            last[j] = q
     return TimingProblem(
         np.array([p.duration_s for p in phases]), np.array([p.anchor for p in phases]),
         np.array([p.ideal_s for p in phases]), np.array([p.weight for p in phases]),
-        np.array([max(p.earliest_s, t0) for p in phases]), t0)
+        np.array([max(p.earliest_s, t0) for p in phases]),
+        np.array(sorted(pairs), dtype=int).reshape(-1, 2), t0)
 
 
 def solve_timing(prob: TimingProblem) -> np.ndarray:
-    """Start times (s) of the phases: min sum w (start + a T - ideal)^2, phases in sequence.
+    """Start times (s) of the phases, by OSQP (tight tolerances, polished).
 
-    Variables x_p = start of phase p. Constraints: x_p >= earliest_p (and
-    >= t0), x_{p+1} - x_p >= T_p. Solved with OSQP (tight tolerances, then
-    polished); the result is made exactly feasible by a forward pass that
-    only ever delays a phase by the solver's residual.
+    Phases with weight 0 get a tiny pull to start as early as they may, so
+    the problem is strictly convex. The solution is then made exactly
+    feasible by a pass in list order (precedence pairs always point forward)
+    that only delays a phase by the solver's residual (~1e-9 s).
     """
     n = len(prob.durations)
     if n == 0:
         return np.zeros(0)
-    target = prob.ideals - prob.anchors * prob.durations
-    P = sp.diags(prob.weights, format="csc")
-    q = -prob.weights * target
+    w = np.maximum(prob.weights, 1e-4)
+    target = np.where(prob.weights > 0, prob.ideals - prob.anchors * prob.durations, prob.earliest)
+    P = sp.diags(w, format="csc")
+    q = -w * target
     rows = [sp.eye(n, format="csc")]
     lo = [prob.earliest]
-    hi = [np.full(n, np.inf)]
-    if n > 1:
-        D = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csc")
-        rows.append(D)
-        lo.append(prob.durations[:-1])
-        hi.append(np.full(n - 1, np.inf))
+    m = len(prob.after)
+    if m:
+        r = np.repeat(np.arange(m), 2)
+        c = prob.after.ravel()
+        v = np.tile([-1.0, 1.0], m)
+        rows.append(sp.csc_matrix((v, (r, c)), shape=(m, n)))
+        lo.append(prob.durations[prob.after[:, 0]])
     A = sp.vstack(rows, format="csc")
+    l_vec = np.concatenate(lo)
     solver = osqp.OSQP()
-    solver.setup(P=P, q=q, A=A, l=np.concatenate(lo), u=np.concatenate(hi), verbose=False,
+    solver.setup(P=P, q=q, A=A, l=l_vec, u=np.full(len(l_vec), np.inf), verbose=False,
                  eps_abs=1e-9, eps_rel=1e-9, max_iter=20000, polishing=True)
     res = solver.solve()
     if res.info.status not in ("solved", "solved inaccurate") or res.x is None:
         raise SolverError(f"timing QP failed: {res.info.status}", problem=prob)
-    x = np.array(res.x, dtype=float)
-    # exact feasibility (the QP is accurate to ~1e-9 s)
-    x[0] = max(x[0], prob.earliest[0])
-    for p in range(1, n):
-        x[p] = max(x[p], x[p - 1] + prob.durations[p - 1], prob.earliest[p])
+    x = np.maximum(np.array(res.x, dtype=float), prob.earliest)
+    for p, qq in prob.after:  # sorted by p, and p < q
+        x[qq] = max(x[qq], x[p] + prob.durations[p])
+    # one more pass in case a delayed phase pushes a later one
+    for p, qq in prob.after:
+        x[qq] = max(x[qq], x[p] + prob.durations[p])
     return x
 
 
 def sample(phases: list[Phase], starts: np.ndarray, t_s: np.ndarray, q_hold: np.ndarray) -> np.ndarray:
-    """Joint positions at times ``t_s``: inside a phase its min-jerk blend, between phases the
-    configuration last reached (``q_hold`` before the first phase)."""
-    out = np.empty((len(t_s), len(q_hold)))
-    if not phases:
-        out[:] = q_hold
-        return out
-    idx = np.searchsorted(starts, t_s, side="right") - 1
-    Qa = np.array([p.q_a for p in phases])
-    Qb = np.array([p.q_b for p in phases])
-    T = np.array([p.duration_s for p in phases])
-    before = idx < 0
-    k = np.clip(idx, 0, len(phases) - 1)
-    u = (t_s - starts[k]) / T[k]
-    s = min_jerk(u)[:, None]
-    out[:] = Qa[k] + (Qb[k] - Qa[k]) * s
-    out[before] = q_hold
+    """Joint positions at times ``t_s``: ``q_hold`` plus every phase's delta times its
+    min-jerk progress (0 before the phase, 1 after it)."""
+    out = np.tile(q_hold, (len(t_s), 1))
+    for ph, x in zip(phases, starts):
+        u = (t_s - x) / ph.duration_s
+        js = ph.joints
+        if js.size:
+            out[:, js] += min_jerk(u)[:, None] * ph.delta[js]
     return out

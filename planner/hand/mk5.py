@@ -601,3 +601,79 @@ def q0_of_qmot(p: Mk5FingerParams, q_mot: ArrayLike) -> ArrayLike:
 def qmot_of_q0(p: Mk5FingerParams, q0: ArrayLike) -> ArrayLike:
     """Motor angle ``q_mot = (r / r_mot) q0`` (rad); inverse of :func:`q0_of_qmot`."""
     return _as_out(np.asarray(q0, dtype=float) * (p.r / _r_mot(p)))
+
+
+# --------------------------------------------------------------------------- q1 -> motor
+_BISECT_ITERS = 60  # halves a <= 45 deg bracket to ~1e-18 rad
+
+
+def _q0_of_q1_exact(p: Mk5FingerParams, q1: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """Invert :func:`q1_of_q0` over the stroke ``[0, q0_max]`` by bisection (vectorised).
+
+    Assumes ``q1(q0)`` is monotonic on the stroke (true for a pivot found by
+    :func:`derive_c_point`). Raises ``ValueError`` for ``q1`` outside
+    ``[q1(0), q1(q0_max)]`` (plus 1e-9 rad).
+    """
+    lo = np.zeros_like(q1)
+    hi = np.full_like(q1, p.q0_max)
+    f_lo = float(q1_of_q0(p, 0.0))
+    f_hi = float(q1_of_q0(p, p.q0_max))
+    a, b = min(f_lo, f_hi), max(f_lo, f_hi)
+    if np.any(q1 < a - 1e-9) or np.any(q1 > b + 1e-9):
+        raise ValueError(
+            f"q1 outside the crank stroke [{math.degrees(a):.4f}, {math.degrees(b):.4f}] deg"
+        )
+    rising = f_hi > f_lo  # q1 as a function of (lo -> hi)
+    for _ in range(_BISECT_ITERS):
+        mid = 0.5 * (lo + hi)
+        below = (np.asarray(q1_of_q0(p, mid)) < q1) == rising
+        lo = np.where(below, mid, lo)
+        hi = np.where(below, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def qmot_of_q1(p: Mk5FingerParams, q1: ArrayLike) -> ArrayLike:
+    """Motor pulley angle ``q_mot`` (rad) from the encoder angle ``q1`` (rad).
+
+    ``q_mot = (r / r_mot) q0(q1)`` (:func:`qmot_of_q0`). The ``q0(q1)`` stage:
+
+    * **Exact** -- if a crank pivot ``C`` is set on ``p`` (``p.c_point``,
+      e.g. by :func:`with_c_point`, which succeeds only where
+      :func:`derive_c_point` does: the Mk5.0 thumb), ``q1(q0)``
+      (:func:`q1_of_q0`) is inverted numerically by bisection over
+      ``[0, q0_max]``; ``q1`` must lie in the stroke's range.
+    * **Stand-in (documented assumption)** -- otherwise. The tables do not
+      give ``C``, and for every 12 deg-stroke finger (all Mk5.1 fingers) no
+      ``C`` can reproduce the 90 deg ``q1`` span (see
+      :func:`derive_c_point`). The stage is then replaced by the *linear map
+      through the table's end points*: ``q1 = 0 <-> q0 = 0`` and
+      ``q1 = q1_max <-> q0 = q0_max``, i.e. ``q0 = q1 q0_max / q1_max``. It
+      is exact at both ends, not in between (the real four-bar is
+      nonlinear), and it extrapolates linearly outside ``[0, q1_max]``.
+      ``q0_max < 0``, so ``q_mot`` decreases as the finger closes.
+
+    Raises ``ValueError`` if ``p.r_mot`` is ``None`` (the Mk5.0 table has no
+    ``r_mot`` row). Vectorised over ``q1``.
+    """
+    _r_mot(p)
+    q1a = np.asarray(q1, dtype=float)
+    if p.c_point is not None:
+        q0 = _q0_of_q1_exact(p, q1a)
+    else:
+        q0 = q1a * (p.q0_max / p.q1_max)
+    return qmot_of_q0(p, q0)
+
+
+def dqmot_dq1(p: Mk5FingerParams, q1: ArrayLike) -> ArrayLike:
+    """``dq_mot / dq1`` (rad/rad) of :func:`qmot_of_q1` (same two cases).
+
+    Stand-in: the constant ``(r / r_mot) q0_max / q1_max`` (negative).
+    Exact (``C`` set): ``(r / r_mot) / dq1_dq0(q0(q1))``. Raises
+    ``ValueError`` if ``p.r_mot`` is ``None``.
+    """
+    k = p.r / _r_mot(p)
+    q1a = np.asarray(q1, dtype=float)
+    if p.c_point is not None:
+        q0 = _q0_of_q1_exact(p, q1a)
+        return _as_out(k / np.asarray(dq1_dq0(p, q0)))
+    return _as_out(np.full_like(q1a, k * p.q0_max / p.q1_max))

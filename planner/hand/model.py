@@ -9,6 +9,7 @@ both read limits, couplings and actuators from here, never from a copy.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -117,6 +118,17 @@ class HandModel:
         lo = np.where(np.isfinite(self.lower), self.lower, -1.0)
         hi = np.where(np.isfinite(self.upper), self.upper, 1.0)
         self.q_neutral = self.apply_couplings(np.clip(np.zeros(self.n), lo, hi))
+
+    def mounted(self, T_world_root: np.ndarray) -> HandModel:
+        """The same hand with its root at another pose in the world (4x4), e.g. the catch frame.
+
+        Shares the spec, URDF and Pinocchio model; has its own data and gravity."""
+        other = copy.copy(self)
+        other.T_world_root = np.array(T_world_root, dtype=float)
+        other.pin_model = self.pin_model.copy()
+        other.pin_model.gravity.linear = other.T_world_root[:3, :3].T @ GRAVITY_WORLD
+        other.pin_data = other.pin_model.createData()
+        return other
 
     # ------------------------------------------------------------ joints
     def joint_slice(self, finger: str) -> np.ndarray:

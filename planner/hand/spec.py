@@ -13,13 +13,13 @@ may give lengths in inches (keys ending ``_in``) and angles in degrees
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import tomllib
 
 from planner.errors import InputError
 
@@ -405,7 +405,8 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
                   _seg_link(f"{n}_top", lt, w * 0.9, _get(ms, "top"))]
         lo_a, hi_a = _range(f, "abd")
         joints.append(Joint(f"{n}_mcp_abd", "revolute", "palm", f"{n}_knuckle",
-                            (_get(f, "mcp_x_m"), p_len, 0.0), axis=(0.0, 0.0, 1.0), lower=lo_a,
+                            (_get(f, "mcp_x_m"), p_len, float(f.get("mcp_z_m", 0.0))),
+                            axis=(0.0, 0.0, 1.0), lower=lo_a,
                             upper=hi_a, velocity=min(v_cap, _get(servo, "speed_rad_s")),
                             acceleration=a_max, effort=_get(servo, "peak_torque_nm")))
         a_mcp, a_pip, a_dip = _get(arm, "mcp"), _get(arm, "pip"), _get(arm, "dip")

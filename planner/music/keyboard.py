@@ -10,7 +10,7 @@ position is typed in.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import numpy as np
 
@@ -75,7 +75,7 @@ def _white_center_x(pitch: int) -> float:
     return white_index(pitch) * WHITE_PITCH_M
 
 
-@lru_cache(maxsize=None)
+@cache
 def key(pitch: int) -> Key:
     """The key of a MIDI pitch in 21..108 (ValueError outside)."""
     if not LOWEST_PITCH <= pitch <= HIGHEST_PITCH:

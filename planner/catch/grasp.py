@@ -1,0 +1,352 @@
+"""Contact forces on a caught ball: a small QP (OSQP) with friction cones and motor limits.
+
+The hand touches the ball at its fingertip pads and at the palm centre. Each
+contact c pushes on the ball with a force ``f_c`` (N, world frame). The QP:
+
+    minimise    sum_c |f_c|^2  +  REG * sum_m (tau_m / peak_m)^2
+    subject to  sum_c f_c = F_req                           (force balance)
+                sum_c (p_c - centre) x f_c = 0              (moment balance, optional)
+                n_c . f_c >= 0                              (contacts push, never pull)
+                (t_k - mu' n_c) . f_c <= 0,  k = 1..FACETS  (linearised friction cone)
+                -peak_m <= tau_m <= peak_m                  (every motor within its peak)
+
+* Friction cone: an inscribed pyramid of ``FACETS`` (8) faces with the rubber
+  pads' coefficient mu = 0.8 (seed, David), mu' = mu cos(pi / FACETS), so a
+  force inside the pyramid is always inside the true cone.
+* Motor torques: with the ball pushing back on the hand with -f_c at p_c, the
+  joints must supply ``tau_joint = g(q) + sum_c J_c^T f_c`` (g = gravity
+  torques, J_c the contact point's position Jacobian), and the motors
+  ``tau_motor = hand.motor_torques(q, tau_joint)`` (virtual work through the
+  couplings, tendon efficiency). That map is linear in f: its matrix is built
+  column by column from unit forces, so the limits are linear constraints.
+* The regularisation (``REG`` = 1e-2) slightly prefers force splits that load
+  the motors less; it does not change feasibility.
+
+Required force (``stop_force`` / ``hold_force``):
+
+* stopping: the ball arrives at speed v and the padded palm gives
+  ``STOP_DISTANCE_M`` (2 cm); a constant deceleration over that distance is
+  a = v^2 / (2 d) against the arrival velocity, so
+  ``F_req = m a (-v/|v|) - m g`` (``g`` the gravity vector). The impact is
+  brief, so the ball may spin: no moment balance.
+* holding: ``F_req = -SAFETY * m g`` with the seed's safety factor 1.5 on the
+  grip (David: "a safety factor of 1.5"), with moment balance.
+
+``build_grasp_problem`` assembles the QP (pure data); ``solve_grasp`` solves it
+and raises ``InfeasibleError`` (primal infeasible: no force split keeps every
+motor within its peak inside the friction cones) or ``SolverError``, both
+carrying the problem. The result reports the torque headroom (min over
+motors of 1 - |tau| / peak) and the motor that limits it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import osqp
+import pinocchio as pin
+import scipy.sparse as sp
+
+from planner.errors import InfeasibleError, InputError, SolverError
+from planner.hand.model import GRAVITY_WORLD, HandModel
+from planner.hand.spec import PALM_FRAME
+
+MU_RUBBER = 0.8  # seed (David): rubber pads
+FACETS = 8
+STOP_DISTANCE_M = 0.02  # give of the padded palm while the ball stops
+HOLD_SAFETY = 1.5  # seed (David): safety factor on the grip
+REG = 1e-2
+_EPS = 1e-7  # OSQP absolute/relative tolerances
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A contact: ``point`` (m, world), unit ``normal`` pointing into the ball (the
+    direction the hand pushes), position Jacobian of the point (3, n)."""
+
+    name: str
+    point: np.ndarray
+    normal: np.ndarray
+    jacobian: np.ndarray
+
+
+@dataclass(frozen=True)
+class GraspProblem:
+    """The QP ``min 1/2 x'Px + c'x  s.t.  l <= A x <= u`` over x = stacked contact forces,
+    and what it was built from (for reports and for errors)."""
+
+    case: str
+    contacts: tuple[Contact, ...]
+    required_force: np.ndarray
+    centre: np.ndarray
+    mu: float
+    facets: int
+    moment_balance: bool
+    tau_offset: np.ndarray  # motor torques with no contact force (gravity), N m
+    tau_map: np.ndarray  # (n_motor, 3 C): motor torques per unit contact force
+    motor_names: tuple[str, ...]
+    peak: np.ndarray
+    P: sp.csc_matrix
+    c: np.ndarray
+    A: sp.csc_matrix
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+@dataclass(frozen=True)
+class GraspResult:
+    problem: GraspProblem
+    forces: np.ndarray  # (C, 3) N, force of each contact on the ball
+    motor_torques: np.ndarray  # (n_motor,) N m
+    headroom: float  # min over motors of 1 - |tau| / peak
+    limiting_motor: str
+    status: str
+
+    @property
+    def total_force(self) -> np.ndarray:
+        return self.forces.sum(axis=0)
+
+    def normal_forces(self) -> np.ndarray:
+        return np.array([f @ c.normal for f, c in zip(self.forces, self.problem.contacts)])
+
+    def cone_margin(self) -> float:
+        """min over contacts of mu |f_n| - |f_t| (N); >= 0 inside every true cone."""
+        m = np.inf
+        for f, c in zip(self.forces, self.problem.contacts):
+            fn = float(f @ c.normal)
+            ft = float(np.linalg.norm(f - fn * c.normal))
+            m = min(m, self.problem.mu * fn - ft)
+        return float(m)
+
+
+# ------------------------------------------------------------------ required forces
+
+
+def stop_force(mass_kg: float, v_arrival: np.ndarray,
+               stop_distance_m: float = STOP_DISTANCE_M) -> np.ndarray:
+    """Total contact force (N) that stops a ball arriving at ``v_arrival`` over
+    ``stop_distance_m`` at constant deceleration, against gravity as well."""
+    v = np.asarray(v_arrival, dtype=float)
+    speed = float(np.linalg.norm(v))
+    if not (mass_kg > 0 and stop_distance_m > 0 and np.isfinite(speed)):
+        raise InputError("stop_force needs mass > 0, stop distance > 0 and a finite velocity")
+    a = -(speed * speed / (2.0 * stop_distance_m)) * (v / speed if speed > 0 else v)
+    return mass_kg * (a - GRAVITY_WORLD)
+
+
+def hold_force(mass_kg: float, safety: float = HOLD_SAFETY) -> np.ndarray:
+    """Total contact force (N) holding a ball still against gravity, times ``safety``."""
+    return -safety * mass_kg * GRAVITY_WORLD
+
+
+def stop_time(v_arrival: np.ndarray, stop_distance_m: float = STOP_DISTANCE_M) -> float:
+    """Duration (s) of the constant deceleration: 2 d / v."""
+    speed = float(np.linalg.norm(v_arrival))
+    return 2.0 * stop_distance_m / speed if speed > 0 else 0.0
+
+
+# ------------------------------------------------------------------ contacts
+
+
+def palm_jacobian(hand: HandModel, q: np.ndarray) -> np.ndarray:
+    """World-frame position Jacobian (3, n) of ``palm_center`` in the hand's joint order."""
+    model, data = hand.pin_model, hand.pin_data
+    qp = np.zeros(model.nq)
+    idx = np.array([model.idx_qs[model.getJointId(n)] for n in hand.joint_names])
+    qp[idx] = q
+    pin.computeJointJacobians(model, data, qp)
+    pin.updateFramePlacements(model, data)
+    J = pin.getFrameJacobian(model, data, model.getFrameId(PALM_FRAME),
+                             pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+    return hand.T_world_root[:3, :3] @ J[:3, idx]
+
+
+def ball_contacts(hand: HandModel, q: np.ndarray, centre: np.ndarray, radius: float,
+                  tip_tol_m: float, palm: bool = True) -> list[Contact]:
+    """Contacts of a ball of ``radius`` centred at ``centre`` with the hand at ``q``:
+    the palm centre (normal = palm +z) and every fingertip within ``radius + tip_tol_m``
+    of the centre (normal from the tip towards the centre)."""
+    centre = np.asarray(centre, dtype=float)
+    out: list[Contact] = []
+    if palm:
+        T = hand.palm_pose(q)
+        out.append(Contact("palm", T[:3, 3].copy(), T[:3, 2].copy(), palm_jacobian(hand, q)))
+    tips = hand.tip_positions(q)
+    J = hand.tip_jacobians(q)
+    for k, f in enumerate(hand.fingers):
+        d = centre - tips[k]
+        dist = float(np.linalg.norm(d))
+        if dist <= radius + tip_tol_m and dist > 1e-9:
+            out.append(Contact(f, tips[k].copy(), d / dist, J[k].copy()))
+    return out
+
+
+_LINEAR_M: dict[str, np.ndarray] = {}
+
+
+def motor_torque_matrix(hand: HandModel, q: np.ndarray) -> np.ndarray:
+    """(n_motor, n): ``hand.motor_torques(q, tau) == M @ tau``, built column by column
+    from unit joint torques. When every coupling and transmission is linear the map
+    does not depend on q and is built once per hand (cached by URDF hash)."""
+    linear = (all(c.kind == "linear" for c in hand.couplings)
+              and all(getattr(a, "mk5", None) is None for a in hand.actuators))
+    if linear and hand.urdf_sha256 in _LINEAR_M:
+        return _LINEAR_M[hand.urdf_sha256]
+    M = np.stack([hand.motor_torques(q, e) for e in np.eye(hand.n)], axis=1)
+    if linear:
+        M.setflags(write=False)
+        _LINEAR_M[hand.urdf_sha256] = M
+    return M
+
+
+def _tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(n, a)
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(n, e1)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+# ------------------------------------------------------------------ the QP
+
+
+def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
+                        required_force: np.ndarray, centre: np.ndarray, case: str = "hold",
+                        mu: float = MU_RUBBER, facets: int = FACETS,
+                        moment_balance: bool = True) -> GraspProblem:
+    """Assemble the force QP (see the module docstring); nothing is solved here."""
+    if not contacts:
+        raise InputError("a grasp needs at least one contact")
+    if not 4 <= facets <= 8:
+        raise InputError(f"friction pyramid facets must be 4..8, got {facets}")
+    if not mu > 0:
+        raise InputError(f"friction coefficient must be > 0, got {mu}")
+    q = np.asarray(q, dtype=float)
+    centre = np.asarray(centre, dtype=float)
+    F = np.asarray(required_force, dtype=float)
+    nc = len(contacts)
+    nx = 3 * nc
+    # motor torques: offset (gravity) and one column per unit contact force
+    M = motor_torque_matrix(hand, q)
+    tau_offset = M @ hand.gravity_torques(q)
+    tau_map = np.empty((hand.n_motor, nx))
+    for c, ct in enumerate(contacts):
+        for a in range(3):  # unit force along axis a at contact c
+            tau_map[:, 3 * c + a] = M @ ct.jacobian[a]
+    peak = np.asarray(hand.motor_peak_torque, dtype=float)
+
+    rows: list[np.ndarray] = []
+    lo: list[float] = []
+    hi: list[float] = []
+    # force balance (equalities)
+    for a in range(3):
+        r = np.zeros(nx)
+        r[a::3] = 1.0
+        rows.append(r)
+        lo.append(F[a])
+        hi.append(F[a])
+    if moment_balance:
+        Mrows = np.zeros((3, nx))
+        for c, ct in enumerate(contacts):
+            Mrows[:, 3 * c:3 * c + 3] = _skew(ct.point - centre)
+        for r in Mrows:
+            rows.append(r)
+            lo.append(0.0)
+            hi.append(0.0)
+    # friction pyramids
+    mu_in = mu * np.cos(np.pi / facets)
+    for c, ct in enumerate(contacts):
+        n = ct.normal / np.linalg.norm(ct.normal)
+        e1, e2 = _tangents(n)
+        r = np.zeros(nx)
+        r[3 * c:3 * c + 3] = n
+        rows.append(r)
+        lo.append(0.0)
+        hi.append(np.inf)
+        for k in range(facets):
+            ang = 2.0 * np.pi * k / facets
+            t = np.cos(ang) * e1 + np.sin(ang) * e2
+            r = np.zeros(nx)
+            r[3 * c:3 * c + 3] = t - mu_in * n
+            rows.append(r)
+            lo.append(-np.inf)
+            hi.append(0.0)
+    A_dense = np.vstack([np.array(rows), tau_map])
+    lower = np.concatenate([lo, -peak - tau_offset])
+    upper = np.concatenate([hi, peak - tau_offset])
+    # objective: |f|^2 + REG sum (tau/peak)^2  (tau affine in f)
+    W = tau_map / peak[:, None]
+    P = 2.0 * (np.eye(nx) + REG * W.T @ W)
+    cvec = 2.0 * REG * W.T @ (tau_offset / peak)
+    return GraspProblem(case, tuple(contacts), F, centre, float(mu), int(facets),
+                        bool(moment_balance), tau_offset, tau_map, tuple(hand.motor_names), peak,
+                        sp.triu(sp.csc_matrix(P), format="csc"), cvec, sp.csc_matrix(A_dense),
+                        lower, upper)
+
+
+def solve_grasp(prob: GraspProblem) -> GraspResult:
+    """Solve the force QP with OSQP; InfeasibleError / SolverError carry ``prob``."""
+    # a motor already past its peak with no contact force at all (gravity alone)
+    over = np.abs(prob.tau_offset) > prob.peak
+    solver = osqp.OSQP()
+    solver.setup(P=prob.P, q=prob.c, A=prob.A, l=prob.lower, u=prob.upper, verbose=False,
+                 eps_abs=_EPS, eps_rel=_EPS, eps_prim_inf=1e-6, eps_dual_inf=1e-6,
+                 max_iter=20000, polishing=True)
+    res = solver.solve()
+    status = res.info.status
+    if status in ("primal infeasible", "primal infeasible inaccurate") or (
+            status not in ("solved", "solved inaccurate") and over.any()):
+        raise InfeasibleError(_infeasible_reason(prob), problem=prob)
+    if status not in ("solved", "solved inaccurate") or res.x is None:
+        raise SolverError(f"grasp QP ({prob.case}) failed: {status}", problem=prob)
+    x = np.array(res.x, dtype=float)
+    tau = prob.tau_offset + prob.tau_map @ x
+    ratio = np.abs(tau) / prob.peak
+    m = int(np.argmax(ratio))
+    if ratio[m] > 1.0 + 1e-4:  # "solved inaccurate" that is not really inside the limits
+        raise InfeasibleError(_infeasible_reason(prob), problem=prob)
+    return GraspResult(prob, x.reshape(-1, 3), tau, float(1.0 - ratio[m]), prob.motor_names[m],
+                       status)
+
+
+def _infeasible_reason(prob: GraspProblem) -> str:
+    """Which motor is short: the motor whose peak is exceeded in the least-torque
+    force split that satisfies the balance and cone constraints alone."""
+    F = np.linalg.norm(prob.required_force)
+    where = ", ".join(c.name for c in prob.contacts)
+    try:
+        nx = prob.A.shape[1]
+        n_motor = len(prob.peak)
+        A = prob.A[:-n_motor]
+        solver = osqp.OSQP()
+        W = prob.tau_map / prob.peak[:, None]
+        P = sp.triu(sp.csc_matrix(2.0 * (W.T @ W + 1e-6 * np.eye(nx))), format="csc")
+        c = 2.0 * W.T @ (prob.tau_offset / prob.peak)
+        solver.setup(P=P, q=c, A=A, l=prob.lower[:-n_motor], u=prob.upper[:-n_motor],
+                     verbose=False, eps_abs=_EPS, eps_rel=_EPS, max_iter=20000)
+        res = solver.solve()
+        if res.info.status not in ("solved", "solved inaccurate") or res.x is None:
+            return (f"{prob.case}: no force split of {F:.1f} N over {where} lies inside the "
+                    f"friction cones (mu {prob.mu:g})")
+        tau = prob.tau_offset + prob.tau_map @ res.x
+        ratio = np.abs(tau) / prob.peak
+        m = int(np.argmax(ratio))
+        return (f"{prob.case}: {F:.1f} N over {where} needs motor.{prob.motor_names[m]} at "
+                f"{abs(tau[m]):.2f} N m > peak {prob.peak[m]:.2f} N m")
+    except (ValueError, RuntimeError):  # pragma: no cover - diagnostics only
+        return f"{prob.case}: {F:.1f} N over {where} exceeds a motor's peak torque"
+
+
+def grasp_forces(hand: HandModel, q: np.ndarray, centre: np.ndarray, radius: float,
+                 required_force: np.ndarray, case: str = "hold", tip_tol_m: float = 0.010,
+                 moment_balance: bool = True, mu: float = MU_RUBBER,
+                 facets: int = FACETS) -> GraspResult:
+    """Contacts at ``q`` (palm + fingertips within ``radius + tip_tol_m``), build, solve."""
+    contacts = ball_contacts(hand, q, centre, radius, tip_tol_m)
+    prob = build_grasp_problem(hand, q, contacts, required_force, centre, case, mu, facets,
+                               moment_balance)
+    return solve_grasp(prob)

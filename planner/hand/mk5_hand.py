@@ -1,0 +1,174 @@
+"""The "Hand Mk5" hand (``kind = "mk5"``): five 2-phalanx fingers coupled by the Mk5 leverism.
+
+Each finger has two revolute joints, both flexing about ``-x`` (positive
+flexion bends the fingertip towards the palm side, ``-z``):
+
+* ``<f>_q1`` -- the first phalanx about ``P0`` (the encoder joint, the one
+  the finger's motor drives), range ``[0, q1_max]`` from the table;
+* ``<f>_q2`` -- the *relative* angle of the second phalanx,
+  ``q2(q1) - q1`` (:class:`~planner.hand.spec.Mk5Coupling`; ``q2`` of the
+  seed is an absolute angle in the palm frame). Its URDF limits are the
+  min/max of that function over ``[0, q1_max]`` widened by ``Q2_MARGIN_RAD``.
+
+One forearm tendon motor per finger drives ``<f>_q1`` through the chain
+motor -> crank ``q0`` -> ``q1`` (``planner.hand.mk5.qmot_of_q1``, which
+for the Mk5 tables uses a documented linear stand-in for ``q0(q1)``).
+
+Sizes (assumptions, stated in ``hands/mk5.toml``): the first phalanx is
+``d = |P1 - P0|`` of the table (true mm, times the file's ``scale``, 1.0),
+placed along the finger's +y axis (the 1.5 mm offset of ``P1`` from the
+phalanx axis, 2.2-2.5 deg, is not modelled in the URDF); the second
+phalanx length is not in the table and is ``second_phalanx_ratio x d``
+(0.8). Mount, rail, forearm, wrist and palm are shared with every hand
+(:func:`planner.hand.spec.build_mount_rail_wrist`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from planner.errors import InputError
+from planner.hand import mk5
+from planner.hand.spec import (
+    FINGERS,
+    TIP_FRAMES,
+    Actuator,
+    HandSpec,
+    Joint,
+    LinearCoupling,
+    Link,
+    Mk5Coupling,
+    _get,
+    _length,
+    _seg_link,
+    _tip,
+    _vec,
+    build_mount_rail_wrist,
+)
+
+Q2_MARGIN_RAD = 1e-4  # widening of the q2 joint range beyond the coupling's min/max
+_SAMPLES = 4001  # grid over [0, q1_max] for the q2 range and the speed bounds
+
+
+def _finger_law(p: mk5.Mk5FingerParams) -> dict[str, float]:
+    """Range and bounds of the coupling and the motor ratio over ``q1 in [0, q1_max]``."""
+    q1 = np.linspace(0.0, p.q1_max, _SAMPLES)
+    rel = np.asarray(mk5.q2_of_q1(p, q1)) - q1
+    slope = np.asarray(mk5.dq2_dq1(p, q1)) - 1.0
+    # d(slope)/dq1 by finite differences of the analytic slope (for the acceleration bound)
+    curv = np.gradient(slope, q1)
+    ratio = np.abs(np.asarray(mk5.dqmot_dq1(p, q1), dtype=float))
+    return {
+        "q2_lo": float(rel.min()) - Q2_MARGIN_RAD,
+        "q2_hi": float(rel.max()) + Q2_MARGIN_RAD,
+        "slope_max": float(np.abs(slope).max()),
+        "curv_max": float(np.abs(curv).max()),
+        "ratio_max": float(ratio.max()),
+    }
+
+
+def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
+    """Build the Mk5 hand from its parsed TOML (see ``hands/mk5.toml``)."""
+    links: list[Link] = []
+    joints: list[Joint] = []
+    actuators: list[Actuator] = []
+    couplings: list[LinearCoupling | Mk5Coupling] = []
+    T_world_root, rail_enabled = build_mount_rail_wrist(data, links, joints, actuators)
+
+    palm = _get(data, "palm", dict)
+    p_len = _length(palm, "length")
+    m5 = _get(data, "mk5", dict)
+    table = _get(m5, "table", str)
+    if table not in mk5.MK5_TABLES:
+        raise InputError(f"mk5 table {table!r} unknown; valid: {', '.join(mk5.MK5_TABLES)}")
+    scale = _get(m5, "scale")
+    ratio2 = _get(m5, "second_phalanx_ratio")
+    if scale <= 0 or ratio2 <= 0:
+        raise InputError("mk5: scale and second_phalanx_ratio must be positive")
+    tendon = _get(data, "tendon", dict)
+    w_motor = _get(tendon, "motor_speed_rad_s")
+    tau_peak = _get(tendon, "motor_peak_torque_nm")
+    eff = _get(tendon, "efficiency")
+    if not 0 < eff <= 1:
+        raise InputError("tendon efficiency must be in (0, 1]")
+    if w_motor <= 0 or tau_peak <= 0:
+        raise InputError("tendon motor speed and peak torque must be positive")
+    fs = _get(data, "finger_speed", dict)
+    v_cap, a_max = _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2")
+
+    fingers = _get(data, "finger", list)
+    names = [f.get("name") for f in fingers]
+    if sorted(names) != sorted(FINGERS[1:]):
+        raise InputError(
+            f"[[finger]] entries must be exactly {', '.join(FINGERS[1:])}; got {names}"
+        )
+    by_name: dict[str, dict[str, Any]] = {f["name"]: f for f in fingers}
+    by_name["thumb"] = _get(data, "thumb", dict)
+
+    finger_joints: list[tuple[str, tuple[str, ...]]] = []
+    for n in FINGERS:
+        fd = by_name[n]
+        p = mk5.MK5_TABLES[table][n]
+        if p.r_mot is None:
+            raise InputError(f"mk5 table {table!r} has no r_mot: the motor map is undefined")
+        law = _finger_law(p)
+        l1 = scale * p.d_geom
+        l2 = ratio2 * l1
+        w = _get(fd, "width_m")
+        ms = _get(fd, "masses_kg", dict)
+        if n == "thumb":
+            xyz = _vec(fd, "base_xyz_m")
+            rpy = tuple(math.radians(a) for a in _vec(fd, "base_rpy_deg"))
+        else:
+            xyz = (_get(fd, "mcp_x_m"), p_len, 0.0)
+            rpy = (0.0, 0.0, 0.0)
+        links += [_seg_link(f"{n}_proximal", l1, w, _get(ms, "proximal")),
+                  _seg_link(f"{n}_distal", l2, 0.9 * w, _get(ms, "distal"))]
+
+        # motor-limited speed of q1 (the motor ratio is largest where the motor
+        # turns fastest per q1 radian), then the mechanical cap
+        v1 = min(v_cap, w_motor / law["ratio_max"])
+        # q2 follows q1: its speed / acceleration limits are those the coupling
+        # induces at the q1 limits (|s| v1 and |s| a1 + |s'| v1^2), so any q1
+        # motion within q1's limits respects q2's
+        v2 = law["slope_max"] * v1
+        a2 = law["slope_max"] * a_max + law["curv_max"] * v1 * v1
+        # effort: joint torque the motor can hold everywhere in the range
+        e1 = tau_peak * eff / law["ratio_max"]
+        e2 = e1 / law["slope_max"]
+        joints += [
+            Joint(f"{n}_q1", "revolute", "palm", f"{n}_proximal", xyz, rpy,
+                  axis=(-1.0, 0.0, 0.0), lower=0.0, upper=p.q1_max, velocity=v1,
+                  acceleration=a_max, effort=e1),
+            Joint(f"{n}_q2", "revolute", f"{n}_proximal", f"{n}_distal", (0.0, l1, 0.0),
+                  axis=(-1.0, 0.0, 0.0), lower=law["q2_lo"], upper=law["q2_hi"], velocity=v2,
+                  acceleration=a2, effort=e2),
+        ]
+        tl, tj = _tip(n, f"{n}_distal", l2, 0.9 * w)
+        links.append(tl)
+        joints.append(tj)
+        c = Mk5Coupling(joint=f"{n}_q2", source=f"{n}_q1", table=table, finger=n)
+        couplings.append(c)
+        actuators.append(Actuator(name=n, kind="tendon", drives=f"{n}_q1", coefficients=(),
+                                  speed_rad_s=w_motor, peak_torque_nm=tau_peak, efficiency=eff,
+                                  radius_m=p.r_mot, mk5=c))
+        finger_joints.append((n, (f"{n}_q1", f"{n}_q2")))
+
+    src = data.get("sources", {})
+    sources = tuple(sorted((str(k), str(v)) for k, v in src.items())) if isinstance(src, dict) else ()
+    return HandSpec(
+        name=_get(data, "name", str),
+        description=str(data.get("description", "")),
+        links=tuple(links),
+        joints=tuple(joints),
+        couplings=tuple(couplings),
+        actuators=tuple(actuators),
+        T_world_root=T_world_root,
+        tip_frames=TIP_FRAMES,
+        rail_enabled=rail_enabled,
+        sources=sources,
+        finger_joints=tuple(finger_joints),
+    )

@@ -1,0 +1,844 @@
+"""Pictures of a checked trajectory: PNG plots and an offline 3D animation.
+
+Two entry points, both fed with a ``CheckReport`` from
+``planner.check.check_trajectory`` (they use its ``replay`` arrays, so the
+pictures show what the independent replay found, not what the planner meant):
+
+* ``write_check_report(report, out_dir) -> list[str]`` writes PNG plots
+  (matplotlib, Agg canvas, fixed file names) and returns their paths:
+
+  - ``play_piano_roll.png``: expected notes as boxes (pitch vs time), the keys
+    really down as bars coloured and numbered by finger (1 thumb .. 5 pinky),
+    missed notes and wrong presses in red;
+  - ``play_fingertip_heights.png``: each fingertip's height above the resting
+    top of the key under it, with the key-down threshold (-5 mm), the full dip
+    (-10 mm) and the key bed (-12 mm);
+  - ``catch_paths.png``: ball and palm paths, side (x-z) and top (x-y) views,
+    whole flight and a zoom on the intercept;
+  - ``catch_closing.png``: fingertip distances to the ball's centre against
+    time, with the radius, radius + 10 mm, ``intercept_t`` and the 150 ms
+    grasp window;
+  - ``joint_positions.png``, ``joint_speeds.png``: one panel per joint against
+    its limits (dashed);
+  - ``motor_angles.png``, ``motor_speeds.png``: motor shaft angles, and motor
+    speeds as a fraction of each motor's speed limit.
+
+* ``write_html(report, out_file) -> str`` writes one self-contained HTML page
+  (meshcat's viewer script inlined, no network access needed) that animates
+  the hand over the plan: a box per hand link, spheres for the fingertips,
+  the 88 keys (going down under the fingers) for ``play``, the ball and its
+  path for ``catch``.
+
+The animation is built with ``meshcat.Visualizer`` on an in-memory window
+(``_SceneRecorder``) instead of meshcat's zmq/websocket server: no process is
+started and no socket opened. The page is byte-identical for the same input
+(object UUIDs are derived from the scene paths).
+
+Motor angles are ``HandModel.motor_angles`` of the replayed joints (the check
+verifies that the file's motor columns equal them within 1e-5 rad).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+import os
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Patch, Rectangle
+
+from planner.check import (
+    GRASP_TOL_M,
+    GRASP_WINDOW_S,
+    CheckReport,
+    LimitCheck,
+    ball_positions,
+    key_contacts,
+    key_episodes,
+    pitch_name,
+)
+from planner.hand.model import HandModel, load_hand
+from planner.hand.spec import FINGERS
+from planner.music.keyboard import (
+    BLACK_TOP_Z_M,
+    DOWN_DEPTH_M,
+    HIGHEST_PITCH,
+    KEY_BED_DEPTH_M,
+    KEY_DIP_M,
+    LOWEST_PITCH,
+    is_black,
+    key,
+)
+
+__all__ = ["write_check_report", "write_html"]
+
+FINGER_COLORS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b")  # never red
+ERROR_COLOR = "#d62728"
+DPI = 100
+HTML_FPS = 25.0
+HTML_MAX_FRAMES = 2000
+TIP_SPHERE_M = 0.006
+KEY_BODY_M = 0.020  # drawn thickness of a key
+PLAY_CAMERA_OFFSET_M = (0.45, -0.30, 0.40)  # camera from its target (world frame)
+CATCH_CAMERA_OFFSET_M = (-0.35, -0.75, 0.25)
+
+
+# ====================================================================== context
+
+
+@dataclass(frozen=True)
+class _Context:
+    hand: HandModel
+    meta: dict[str, Any]
+    T_world_root: np.ndarray
+    q_motor: np.ndarray
+    ball: dict[str, Any] | None  # p0, v0, radius, drag (catch)
+
+
+def _read_metadata(path: str) -> dict[str, Any]:
+    try:
+        with open(path, encoding="utf-8") as f:
+            line = f.readline()
+        meta = json.loads(line[2:]) if line.startswith("# ") else {}
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        meta = {}
+    return meta if isinstance(meta, dict) else {}
+
+
+def _context(report: CheckReport) -> _Context:
+    if report.replay is None:
+        raise ValueError("the report has no replay arrays (check_trajectory fills them)")
+    meta = _read_metadata(report.trajectory)
+    hand = None
+    for name in (meta.get("hand"), report.hand):
+        if isinstance(name, str) and name:
+            try:
+                h = load_hand(name)
+            except Exception:  # noqa: BLE001 - any hand that loads will do; fall back below
+                continue
+            if h.urdf_sha256 == report.urdf_sha256:
+                hand = h
+                break
+    if hand is None:
+        raise ValueError(f"cannot rebuild hand {report.hand!r} of {report.trajectory}")
+    rp = report.replay
+    # the root pose the replay used: from the palm of the first row (no file needed)
+    P0 = hand.frame_pose(rp.q[0], "palm_center")
+    T = rp.palm[0] @ np.linalg.inv(P0) @ hand.T_world_root
+    T[3] = (0.0, 0.0, 0.0, 1.0)
+    ball = None
+    if report.catch is not None:
+        b = meta.get("ball") if isinstance(meta.get("ball"), dict) else {}
+        try:
+            ball = {"p0": np.array(b["p0"], dtype=float), "v0": np.array(b["v0"], dtype=float),
+                    "drag": float(b.get("drag", 0.0)), "radius": report.catch.radius_m}
+        except (KeyError, TypeError, ValueError):
+            ball = None
+    return _Context(hand, meta, T, hand.motor_angles(rp.q), ball)
+
+
+def _ball_centres(report: CheckReport, ctx: _Context) -> np.ndarray | None:
+    """The ball's centre in every row as the check sees it: in flight before
+    ``intercept_t``, on the palm (palm_center + radius * normal) from it on."""
+    if ctx.ball is None:
+        return None
+    rp, c = report.replay, report.catch
+    t = rp.t_s
+    out = ball_positions(ctx.ball["p0"], ctx.ball["v0"], ctx.ball["drag"], t)
+    after = t >= c.intercept_t
+    out[after] = rp.palm[after, :3, 3] + c.radius_m * rp.palm[after, :3, 2]
+    return out
+
+
+# ====================================================================== PNG plots
+
+
+def write_check_report(report: CheckReport, out_dir: str) -> list[str]:
+    """Write the PNG plots of ``report`` into ``out_dir`` (created if needed).
+
+    Returns the paths written, in a fixed order: the task's plots (play: piano
+    roll, fingertip heights; catch: paths, closing timeline) then joint
+    positions, joint speeds, motor angles, motor speeds.
+    """
+    ctx = _context(report)
+    os.makedirs(out_dir, exist_ok=True)
+    figs: list[tuple[str, Figure]] = []
+    if report.play is not None:
+        figs.append(("play_piano_roll.png", _fig_piano_roll(report)))
+        figs.append(("play_fingertip_heights.png", _fig_tip_heights(report)))
+    if report.catch is not None:
+        figs.append(("catch_paths.png", _fig_catch_paths(report, ctx)))
+        figs.append(("catch_closing.png", _fig_catch_closing(report, ctx)))
+    figs.append(("joint_positions.png", _fig_joint_positions(report, ctx)))
+    figs.append(("joint_speeds.png", _fig_joint_speeds(report, ctx)))
+    figs.append(("motor_angles.png", _fig_motor_angles(report, ctx)))
+    figs.append(("motor_speeds.png", _fig_motor_speeds(report, ctx)))
+    paths = []
+    for name, fig in figs:
+        path = os.path.join(out_dir, name)
+        fig.savefig(path, dpi=DPI, metadata={"Software": None})
+        paths.append(path)
+    return paths
+
+
+def _limit(report: CheckReport, category: str) -> LimitCheck | None:
+    return next((lc for lc in report.limits if lc.category == category), None)
+
+
+def _limit_text(lc: LimitCheck | None) -> str:
+    if lc is None:
+        return ""
+    verdict = "ok" if lc.ok else f"FAIL: {lc.count} samples over"
+    return (f"{verdict}; worst {lc.worst:.4g} / {lc.limit:.4g} {lc.unit} "
+            f"({lc.name} at {lc.time_s:.2f} s)")
+
+
+def _title_file(report: CheckReport) -> str:
+    return os.path.basename(report.trajectory)
+
+
+def _finger_legend() -> list[Patch]:
+    return [Patch(facecolor=c, label=f"{i + 1} {f}") for i, (f, c) in
+            enumerate(zip(FINGERS, FINGER_COLORS))]
+
+
+def _runs(values: np.ndarray) -> list[tuple[int, int, int]]:
+    """(start, stop_exclusive, value) of the runs of equal values >= 0."""
+    out = []
+    n = len(values)
+    i = 0
+    while i < n:
+        v = int(values[i])
+        j = i + 1
+        while j < n and values[j] == v:
+            j += 1
+        if v >= 0:
+            out.append((i, j, v))
+        i = j
+    return out
+
+
+# ---------------------------------------------------------------- play
+
+
+def _song_notes(report: CheckReport) -> list[tuple[float, float, int]]:
+    """(onset, offset, pitch) of the expected notes: the song's, else the
+    ``expected`` array's episodes."""
+    if report.song:
+        try:
+            from planner.music.midi import load_song
+
+            return [(float(n.onset_s), float(n.offset_s), int(n.pitch))
+                    for n in load_song(report.song).notes]
+        except Exception:  # noqa: BLE001 - fall back on the replay's expected keys
+            pass
+    rp = report.replay
+    if rp.expected is None:
+        return []
+    return [(e.start_s, e.end_s, e.pitch) for e in key_episodes(rp.expected, rp.t_s)]
+
+
+def _fig_piano_roll(report: CheckReport) -> Figure:
+    rp, p = report.replay, report.play
+    t = rp.t_s
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.01
+    t_end = np.append(t[1:], t[-1] + dt)
+    notes = _song_notes(report)
+    pitches = {n[2] for n in notes} | {e.pitch for e in p.played} | {m.pitch for m in p.missed}
+    if not pitches:
+        pitches = {60}
+    lo = max(LOWEST_PITCH, min(pitches) - 2)
+    hi = min(HIGHEST_PITCH, max(pitches) + 2)
+    n_rows = hi - lo + 1
+    dur = float(t_end[-1] - t[0])
+    width = float(np.clip(4.0 + 1.1 * dur, 11.0, 26.0))
+    height = float(np.clip(2.2 + 0.28 * n_rows, 4.5, 14.0))
+    fig = Figure(figsize=(width, height), layout="constrained")
+    ax = fig.add_subplot()
+    for q in range(lo, hi + 1):
+        if is_black(q):
+            ax.axhspan(q - 0.5, q + 0.5, color="#ececec", zorder=0, lw=0)
+    for on, off, q in notes:
+        ax.add_patch(Rectangle((on, q - 0.42), off - on, 0.84, facecolor="#f4f4f4",
+                               edgecolor="black", lw=1.0, zorder=1))
+    # keys down, one bar per run of the same finger
+    small_bar = 0.08 * dur / max(width, 1.0)  # below this a bar is too short for its number
+    for k in np.flatnonzero(rp.down.any(axis=0)):
+        q = int(k) + LOWEST_PITCH
+        col = np.where(rp.down[:, k], rp.finger[:, k], -1)
+        for a, b, f in _runs(col):
+            x0, x1 = t[a], t_end[b - 1]
+            ax.add_patch(Rectangle((x0, q - 0.25), x1 - x0, 0.5, facecolor=FINGER_COLORS[f],
+                                   edgecolor="none", zorder=2))
+            if x1 - x0 >= small_bar:
+                ax.text(0.5 * (x0 + x1), q, str(f + 1), ha="center", va="center",
+                        fontsize=8, color="white", fontweight="bold", zorder=4)
+    for w in p.wrong_presses:
+        ax.add_patch(Rectangle((w.start_s, w.pitch - 0.34), w.end_s - w.start_s, 0.68,
+                               facecolor="none", edgecolor=ERROR_COLOR, lw=2.0, zorder=3))
+        ax.plot([w.start_s], [w.pitch + 0.34], marker="v", color=ERROR_COLOR, ms=7, zorder=5)
+    for m in p.missed:
+        ax.add_patch(Rectangle((m.onset_s, m.pitch - 0.42), m.offset_s - m.onset_s, 0.84,
+                               facecolor="none", edgecolor=ERROR_COLOR, lw=2.0, hatch="///",
+                               zorder=3))
+        ax.text(m.onset_s, m.pitch + 0.5, "miss", color=ERROR_COLOR, fontsize=8,
+                va="bottom", ha="left", zorder=5)
+    ax.set_xlim(min(0.0, float(t[0])), float(t_end[-1]))
+    ax.set_ylim(lo - 0.5, hi + 0.5)
+    step = 1 if n_rows <= 40 else 12
+    ticks = [q for q in range(lo, hi + 1) if step == 1 or q % 12 == 0]
+    ax.set_yticks(ticks, [f"{pitch_name(q)} ({q})" for q in ticks], fontsize=8)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("key (MIDI pitch)")
+    ax.grid(axis="x", color="#cccccc", lw=0.5)
+    scores = ""
+    if p.f1 is not None:
+        scores = (f"frame F1 {p.f1:.3f} (precision {p.precision:.3f}, recall {p.recall:.3f}), "
+                  f"notes hit {p.notes_hit}/{p.notes}, ")
+    ax.set_title(f"Piano roll - {_title_file(report)}"
+                 + (f" vs {os.path.basename(report.song)}" if report.song else "")
+                 + f"\n{scores}{len(p.wrong_presses)} wrong presses, {len(p.missed)} missed, "
+                 f"{len(p.key_bed_hits)} key-bed hits", fontsize=11)
+    handles = [Patch(facecolor="#f4f4f4", edgecolor="black", label="expected note"),
+               *_finger_legend(),
+               Patch(facecolor="none", edgecolor=ERROR_COLOR, hatch="///", label="missed note"),
+               Patch(facecolor="none", edgecolor=ERROR_COLOR, lw=2, label="wrong press")]
+    ax.legend(handles=handles, title="key down, by finger", loc="upper left",
+              bbox_to_anchor=(1.005, 1.0), fontsize=8, title_fontsize=8, frameon=False)
+    return fig
+
+
+def _fig_tip_heights(report: CheckReport) -> Figure:
+    rp = report.replay
+    t = rp.t_s
+    kc = key_contacts(rp.tips)
+    over = kc.tip_key >= 0
+    h_mm = np.where(over, -kc.tip_depth, rp.tips[..., 2]) * 1000.0  # (T, 5)
+    top = float(np.clip(np.nanmax(h_mm) + 5.0, 20.0, 60.0))
+    dur = float(t[-1] - t[0]) if len(t) > 1 else 1.0
+    fig = Figure(figsize=(float(np.clip(4.0 + 1.1 * dur, 11.0, 26.0)), 11.0),
+                 layout="constrained")
+    axs = fig.subplots(len(FINGERS), 1, sharex=True)
+    lines = ((0.0, "#888888", "-", "key top (rest)"),
+             (-DOWN_DEPTH_M * 1000, "#ff7f0e", "--", f"key down ({-DOWN_DEPTH_M * 1000:g} mm)"),
+             (-KEY_DIP_M * 1000, "#2ca02c", "--", f"full dip ({-KEY_DIP_M * 1000:g} mm)"),
+             (-KEY_BED_DEPTH_M * 1000, ERROR_COLOR, "--",
+              f"key bed ({-KEY_BED_DEPTH_M * 1000:g} mm)"))
+    pressing = over & (np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)
+    for f, ax in enumerate(axs):
+        for y, c, ls, _ in lines:
+            ax.axhline(y, color=c, ls=ls, lw=1.0, zorder=1)
+        key_id = np.where(pressing[:, f], kc.tip_key[:, f], -1)
+        for a, b, k in _runs(key_id):
+            ax.axvspan(t[a], t[min(b, len(t) - 1)], color=FINGER_COLORS[f], alpha=0.15, lw=0)
+            ax.text(t[a], top - 1.0, pitch_name(k + LOWEST_PITCH), fontsize=7, va="top",
+                    ha="left", color=FINGER_COLORS[f])
+        # over a key: solid; between keys / off the keyboard (height above z = 0): dotted
+        ax.plot(t, np.where(over[:, f], h_mm[:, f], np.nan), color=FINGER_COLORS[f], lw=1.3)
+        ax.plot(t, np.where(over[:, f], np.nan, h_mm[:, f]), color=FINGER_COLORS[f], lw=1.0,
+                ls=":")
+        deep = h_mm[:, f] < -KEY_BED_DEPTH_M * 1000
+        if deep.any():
+            ax.plot(t[deep], h_mm[deep, f], "x", color=ERROR_COLOR, ms=5)
+        ax.set_ylim(-16.0, top)
+        ax.set_ylabel(f"{f + 1} {FINGERS[f]}\nheight (mm)", fontsize=9)
+        ax.grid(axis="x", color="#dddddd", lw=0.5)
+    axs[-1].set_xlabel("time (s)")
+    handles = [Line2D([], [], color=c, ls=ls, label=lab) for _, c, ls, lab in lines]
+    handles += [Line2D([], [], color="black", lw=1.3, label="over a key"),
+                Line2D([], [], color="black", lw=1.0, ls=":", label="over no key (vs z = 0)"),
+                Patch(facecolor="#999999", alpha=0.3, label="holding a key down")]
+    axs[0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=8,
+                  frameon=False)
+    fig.suptitle(f"Fingertip height above the resting top of the key below - "
+                 f"{_title_file(report)} (clipped at {top:.0f} mm)", fontsize=11)
+    return fig
+
+
+# ---------------------------------------------------------------- catch
+
+
+def _fig_catch_paths(report: CheckReport, ctx: _Context) -> Figure:
+    rp, c = report.replay, report.catch
+    t = rp.t_s
+    palm = rp.palm[:, :3, 3]
+    fig = Figure(figsize=(14.0, 10.5), layout="constrained")
+    axs = fig.subplots(2, 2)
+    flight = None
+    if ctx.ball is not None:
+        tf = np.linspace(0.0, c.intercept_t, 300)
+        flight = ball_positions(ctx.ball["p0"], ctx.ball["v0"], ctx.ball["drag"], tf)
+    held = _ball_centres(report, ctx)
+    after = t >= c.intercept_t
+    b_i = np.array(c.ball_at_intercept)
+    target = np.array(c.palm_target)
+    i_row = int(np.argmin(np.abs(t - c.intercept_t)))
+    zoom = 0.15 + c.radius_m
+    for row, zoomed in enumerate((False, True)):
+        for col, (j, name) in enumerate(((2, "side view (x-z)"), (1, "top view (x-y)"))):
+            ax = axs[row, col]
+            if flight is not None:
+                ax.plot(flight[:, 0], flight[:, j], color="#e6a700", lw=1.8,
+                        label="ball centre, flight")
+                ax.plot(*flight[0, [0, j]], "o", color="#e6a700", ms=6, label="launch")
+            if held is not None and after.any():
+                ax.plot(held[after, 0], held[after, j], color="#e6a700", lw=1.5, ls=":",
+                        label="ball centre, held")
+            ax.plot(palm[:, 0], palm[:, j], color="#1f77b4", lw=1.6, label="palm centre")
+            ax.plot(palm[0, 0], palm[0, j], "s", color="#1f77b4", ms=5, label="palm at t=0")
+            ax.plot(palm[i_row, 0], palm[i_row, j], "D", color="#1f77b4", ms=5,
+                    label="palm at intercept")
+            n = rp.palm[i_row, :3, 2]
+            L = 2.0 * c.radius_m
+            ax.annotate("", xy=(palm[i_row, 0] + L * n[0], palm[i_row, j] + L * n[j]),
+                        xytext=(palm[i_row, 0], palm[i_row, j]),
+                        arrowprops={"arrowstyle": "->", "color": "#1f77b4"})
+            ax.add_patch(Circle((b_i[0], b_i[j]), c.radius_m, facecolor="#ffe680", alpha=0.5,
+                                edgecolor="#e6a700"))
+            ax.plot(b_i[0], b_i[j], "*", color=ERROR_COLOR if not c.intercept_ok else "black",
+                    ms=13, label=f"ball at intercept (t={c.intercept_t:.3f} s)")
+            if np.all(np.isfinite(target)):
+                ax.plot(target[0], target[j], "x", color=ERROR_COLOR, ms=9, mew=2,
+                        label="palm target (centre + r n)")
+            if zoomed:
+                tips = rp.tips[i_row]
+                for f in range(len(FINGERS)):
+                    ax.plot(tips[f, 0], tips[f, j], "o", color=FINGER_COLORS[f], ms=5,
+                            label=f"{FINGERS[f]} tip at intercept")
+                ax.set_xlim(b_i[0] - zoom, b_i[0] + zoom)
+                ax.set_ylim(b_i[j] - zoom, b_i[j] + zoom)
+            ax.set_aspect("equal", adjustable="datalim" if not zoomed else "box")
+            ax.set_xlabel("x (m)")
+            ax.set_ylabel(("z" if j == 2 else "y") + " (m)")
+            ax.set_title(("zoom on the intercept, " if zoomed else "") + name, fontsize=10)
+            ax.grid(color="#dddddd", lw=0.5)
+    axs[0, 1].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
+    axs[1, 1].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
+    err = "n/a" if c.intercept_error_m is None else f"{c.intercept_error_m * 1000:.1f} mm"
+    fig.suptitle(f"Catch - {_title_file(report)}: ball and palm paths (catch frame); "
+                 f"intercept error {err}, {'OK' if c.ok else 'FAILED'}", fontsize=11)
+    return fig
+
+
+def _fig_catch_closing(report: CheckReport, ctx: _Context) -> Figure:
+    rp, c = report.replay, report.catch
+    t = rp.t_s
+    fig = Figure(figsize=(12.0, 6.0), layout="constrained")
+    ax = fig.add_subplot()
+    centres = _ball_centres(report, ctx)
+    t0 = max(float(t[0]), c.intercept_t - 0.3)
+    r_mm = c.radius_m * 1000
+    ymax = r_mm + 150.0
+    if centres is not None:
+        d = np.linalg.norm(rp.tips - centres[:, None, :], axis=-1) * 1000
+        shown = t >= t0
+        if shown.any():
+            ymax = float(np.clip(np.max(d[shown]) * 1.05, r_mm + 40.0, max(6 * r_mm, 300.0)))
+        for f in range(len(FINGERS)):
+            ax.plot(t, d[:, f], color=FINGER_COLORS[f], lw=1.5, label=f"{f + 1} {FINGERS[f]}")
+    else:
+        ax.text(0.5, 0.5, "ball parameters unavailable (trajectory file not readable)",
+                transform=ax.transAxes, ha="center")
+    ax.axhline(r_mm, color="black", lw=1.2, label=f"ball radius ({r_mm:g} mm)")
+    ax.axhline(r_mm + GRASP_TOL_M * 1000, color="black", ls="--", lw=1.2,
+               label=f"radius + {GRASP_TOL_M * 1000:g} mm (grasp)")
+    ax.axvline(c.intercept_t, color="#555555", lw=1.2,
+               label=f"intercept_t = {c.intercept_t:.3f} s")
+    ax.axvline(c.intercept_t + GRASP_WINDOW_S, color="#555555", ls="--", lw=1.2,
+               label=f"intercept_t + {GRASP_WINDOW_S * 1000:g} ms")
+    ax.axvspan(c.intercept_t, c.intercept_t + GRASP_WINDOW_S, color="#999999", alpha=0.12, lw=0)
+    if c.grasp_time_s is not None:
+        ax.axvline(c.grasp_time_s, color="#2ca02c", lw=1.5,
+                   label=f"grasp closed ({c.grasp_time_s:.3f} s, {'+'.join(c.grasp_fingers)})")
+    if c.early_touches:
+        et = c.early_touches
+        ax.plot([e.time_s for e in et], [e.distance_m * 1000 for e in et], "x",
+                color=ERROR_COLOR, ms=7, mew=2, label=f"early touches ({len(et)})")
+    ax.set_xlim(t0, float(t[-1]))
+    ax.set_ylim(0.0, ymax)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("fingertip to ball centre (mm)")
+    ax.grid(color="#dddddd", lw=0.5)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    verdict = "grasp held" if c.grasp_held else ("grasp NOT held" if c.grasp_time_s else
+                                                  "no grasp")
+    ax.set_title(f"Closing around the ball - {_title_file(report)}: {verdict}; ball on the palm "
+                 f"from intercept_t (centre = palm_center + r n)", fontsize=11)
+    return fig
+
+
+# ---------------------------------------------------------------- joints and motors
+
+
+def _grid(n: int, ncols: int = 6) -> tuple[int, int]:
+    ncols = min(ncols, max(n, 1))
+    return math.ceil(n / ncols), ncols
+
+
+def _small_multiples(title: str, names, t: np.ndarray, Y: np.ndarray, lo, hi, ylabels,
+                     xlabel: str = "time (s)", band: bool = False) -> Figure:
+    """One panel per column of ``Y`` with dashed lines at ``lo``/``hi`` (None: no line);
+    samples beyond them are marked in red."""
+    n = Y.shape[1]
+    rows, cols = _grid(n)
+    fig = Figure(figsize=(3.1 * cols, 2.3 * rows + 0.8), layout="constrained")
+    axs = np.atleast_1d(fig.subplots(rows, cols, sharex=True, squeeze=False)).ravel()
+    for i in range(n):
+        ax = axs[i]
+        y = Y[:, i]
+        ax.plot(t, y, color="#1f77b4", lw=1.1)
+        bad = np.zeros(len(y), dtype=bool)
+        for b, is_hi in ((lo[i], False), (hi[i], True)):
+            if b is None or not np.isfinite(b):
+                continue
+            ax.axhline(b, color="#d62728" if band else "#444444", ls="--", lw=1.0)
+            bad |= (y > b + 1e-9 * max(1.0, abs(b))) if is_hi else (y < b - 1e-9 * max(1.0, abs(b)))
+        if bad.any():
+            ax.plot(t[bad], y[bad], ".", color=ERROR_COLOR, ms=3)
+        ax.set_title(names[i], fontsize=9, color=ERROR_COLOR if bad.any() else "black")
+        ax.set_ylabel(ylabels[i], fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.grid(color="#eeeeee", lw=0.5)
+        ax.margins(x=0)
+    for ax in axs[n:]:
+        ax.set_visible(False)
+    for ax in axs[max(0, n - cols):n]:
+        ax.set_xlabel(xlabel, fontsize=8)
+        ax.xaxis.set_tick_params(labelbottom=True)
+    fig.suptitle(title, fontsize=11)
+    return fig
+
+
+def _is_prismatic(hand: HandModel, name: str) -> bool:
+    try:
+        return hand.spec.joint(name).kind == "prismatic"
+    except KeyError:
+        return False
+
+
+def _fig_joint_positions(report: CheckReport, ctx: _Context) -> Figure:
+    hand, rp = ctx.hand, report.replay
+    pris = [_is_prismatic(hand, n) for n in hand.joint_names]
+    scale = np.array([1.0 if p else 180.0 / math.pi for p in pris])
+    Y = rp.q * scale
+    lo = [v * s if np.isfinite(v) else None for v, s in zip(hand.lower, scale)]
+    hi = [v * s if np.isfinite(v) else None for v, s in zip(hand.upper, scale)]
+    units = ["m" if p else "deg" for p in pris]
+    return _small_multiples(
+        f"Joint positions and limits (dashed) - {_title_file(report)}\n"
+        f"joint_position: {_limit_text(_limit(report, 'joint_position'))}",
+        hand.joint_names, rp.t_s, Y, lo, hi, units)
+
+
+def _speeds(t: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First differences, reported at the later row of each pair (as the check does)."""
+    if len(t) < 2:
+        return t, np.zeros_like(X)
+    return t[1:], np.diff(X, axis=0) / np.diff(t)[:, None]
+
+
+def _fig_joint_speeds(report: CheckReport, ctx: _Context) -> Figure:
+    hand, rp = ctx.hand, report.replay
+    ts, V = _speeds(rp.t_s, rp.q)
+    pris = [_is_prismatic(hand, n) for n in hand.joint_names]
+    units = ["m/s" if p else "rad/s" for p in pris]
+    return _small_multiples(
+        f"Joint speeds and speed limits (dashed) - {_title_file(report)}\n"
+        f"joint_velocity: {_limit_text(_limit(report, 'joint_velocity'))}",
+        hand.joint_names, ts, V, list(-hand.velocity), list(hand.velocity), units, band=True)
+
+
+def _fig_motor_angles(report: CheckReport, ctx: _Context) -> Figure:
+    hand, rp = ctx.hand, report.replay
+    names = [f"motor.{m}" for m in hand.motor_names]
+    return _small_multiples(
+        f"Motor shaft angles - {_title_file(report)} (motors have no position limit)\n"
+        f"motor_consistency: {_limit_text(_limit(report, 'motor_consistency'))}",
+        names, rp.t_s, ctx.q_motor, [None] * len(names), [None] * len(names),
+        ["rad"] * len(names))
+
+
+def _fig_motor_speeds(report: CheckReport, ctx: _Context) -> Figure:
+    hand, rp = ctx.hand, report.replay
+    ts, V = _speeds(rp.t_s, ctx.q_motor)
+    frac = V / hand.motor_speed
+    names = [f"motor.{m} ({s:g} rad/s)" for m, s in zip(hand.motor_names, hand.motor_speed)]
+    n = len(names)
+    fig = _small_multiples(
+        f"Motor speeds as a fraction of each motor's speed limit (dashed: +/-1) - "
+        f"{_title_file(report)}\nmotor_velocity: {_limit_text(_limit(report, 'motor_velocity'))}",
+        names, ts, frac, [-1.0] * n, [1.0] * n, ["speed / limit"] * n, band=True)
+    for ax, y in zip(fig.axes, frac.T):
+        m = max(1.1, float(np.max(np.abs(y))) * 1.05 if y.size else 1.1)
+        ax.set_ylim(-m, m)
+    return fig
+
+
+# ====================================================================== HTML animation
+
+
+class _SceneRecorder:
+    """Stands in for meshcat's ``ViewerWindow``: records the commands a
+    ``meshcat.Visualizer`` sends, in order, instead of sending them to a zmq
+    server (which meshcat would start as a subprocess with a web server)."""
+
+    def __init__(self) -> None:
+        self.commands: list[bytes] = []
+        self.animation: bytes | None = None
+
+    def send(self, command) -> None:
+        import umsgpack
+
+        data = command.lower()
+        packed = umsgpack.packb(data, force_float_precision="single")
+        if data["type"] == "set_animation":
+            self.animation = packed  # played last, once every object exists
+        else:
+            self.commands.append(packed)
+
+    def close(self) -> None:  # nothing to stop
+        pass
+
+    def get_scene(self) -> str:
+        return "\n".join(self.commands_b64())
+
+    def commands_b64(self) -> list[str]:
+        cmds = self.commands + ([self.animation] if self.animation is not None else [])
+        return [base64.b64encode(c).decode("ascii") for c in cmds]
+
+
+def _uuid(*parts: str) -> str:
+    return str(uuid.uuid5(uuid.NAMESPACE_URL, "hand-planner-report/" + "/".join(parts)))
+
+
+def _mesh(geometry, material, path: str):
+    import meshcat.geometry as g
+
+    geometry.uuid = _uuid(path, "geometry")
+    material.uuid = _uuid(path, "material")
+    m = g.Mesh(geometry, material)
+    m.uuid = _uuid(path, "object")
+    return m
+
+
+def _translation(p) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = p
+    return T
+
+
+def _frame_rows(t: np.ndarray) -> tuple[np.ndarray, float]:
+    """Rows shown by the animation (nearest row to each frame time) and its fps."""
+    dur = float(t[-1] - t[0])
+    fps = HTML_FPS
+    if dur * fps + 1 > HTML_MAX_FRAMES:
+        fps = (HTML_MAX_FRAMES - 1) / dur
+    n = int(math.floor(dur * fps + 1e-9)) + 1
+    times = t[0] + np.arange(n) / fps
+    idx = np.clip(np.searchsorted(t, times), 0, len(t) - 1)
+    prev = np.clip(idx - 1, 0, len(t) - 1)
+    idx = np.where(np.abs(t[prev] - times) <= np.abs(t[idx] - times), prev, idx)
+    return idx, fps
+
+
+def _link_color(name: str) -> int:
+    for f, c in zip(FINGERS, FINGER_COLORS):
+        if name.startswith(f + "_"):
+            return int(c[1:], 16)
+    return 0x9a9a9a if name in ("palm", "wrist") else 0x6f6f6f
+
+
+def write_html(report: CheckReport, out_file: str) -> str:
+    """Write a self-contained HTML animation of the replayed plan; returns ``out_file``.
+
+    meshcat's viewer script is inlined and the scene is encoded in the page,
+    so the file works offline; no server is started.
+    """
+    import meshcat
+    import meshcat.geometry as g
+    from meshcat.animation import Animation
+
+    ctx = _context(report)
+    rp = report.replay
+    hand = ctx.hand.mounted(ctx.T_world_root)  # own Pinocchio data, the file's root pose
+    rec = _SceneRecorder()
+    vis = meshcat.Visualizer(window=rec)
+    rows, fps = _frame_rows(rp.t_s)
+
+    # the hand: one node per link (animated world pose) holding its box or tip sphere
+    links = []
+    for link in ctx.hand.spec.links:
+        if link.name.endswith("_tip"):
+            path = f"hand/{link.name}"
+            geom = _mesh(g.Sphere(TIP_SPHERE_M),
+                         g.MeshPhongMaterial(color=_link_color(link.name)), path)
+            vis[path].set_object(geom)
+            links.append(link.name)
+        elif link.mass_kg > 0:
+            path = f"hand/{link.name}/box"
+            vis[path].set_object(_mesh(g.Box(list(link.size_m)),
+                                       g.MeshPhongMaterial(color=_link_color(link.name)), path))
+            vis[path].set_transform(_translation(link.com_m))
+            links.append(link.name)
+    # the rail (static)
+    if "rail" in ctx.hand.joint_names:
+        i = ctx.hand.index["rail"]
+        lo, hi = float(ctx.hand.lower[i]), float(ctx.hand.upper[i])
+        if np.isfinite(lo) and np.isfinite(hi):
+            vis["rail"].set_object(_mesh(g.Box([hi - lo, 0.012, 0.012]),
+                                         g.MeshPhongMaterial(color=0x444444), "rail"))
+            vis["rail"].set_transform(ctx.T_world_root @ _translation([0.5 * (lo + hi), 0, 0]))
+
+    anim = Animation(default_framerate=fps)
+    poses = {name: [] for name in links}
+    for r in rows:
+        for name in links:
+            poses[name].append(hand.frame_pose(rp.q[r], name))
+    for i in range(len(rows)):
+        with anim.at_frame(vis, i) as frame:
+            for name in links:
+                frame[f"hand/{name}"].set_transform(poses[name][i])
+
+    if report.play is not None:
+        _keyboard(vis, anim, rp, rows)
+        target = np.array([float(np.mean(rp.tips[rows, :, 0])), 0.08, 0.03])
+        offset = np.array(PLAY_CAMERA_OFFSET_M)
+        vis["/Grid"].set_property("visible", False)
+        vis["/Axes"].set_property("visible", False)
+    else:
+        centres = _ball_centres(report, ctx)
+        if centres is not None:
+            _ball(vis, anim, report, ctx, centres, rows)
+        i_row = int(np.argmin(np.abs(rp.t_s - report.catch.intercept_t)))
+        target = rp.palm[i_row, :3, 3].copy()
+        offset = np.array(CATCH_CAMERA_OFFSET_M)
+    vis["/Cameras/default"].set_transform(_translation(target))
+    # the camera sits in meshcat's y-up "rotated" frame: world (x, y, z) -> (x, z, -y)
+    vis["/Cameras/default/rotated/<object>"].set_property(
+        "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
+    vis.set_animation(anim, play=True, repetitions=1000)
+
+    Path(out_file).parent.mkdir(parents=True, exist_ok=True)
+    text = _page(report, rec, fps, len(rows))
+    tmp = f"{out_file}.part"
+    with open(tmp, "w", encoding="utf-8", newline="\n") as f:
+        f.write(text)
+    os.replace(tmp, out_file)
+    return out_file
+
+
+def _keyboard(vis, anim, rp, rows: np.ndarray) -> None:
+    """88 key boxes; a key moves down by the depth of the fingertip pressing it (<= dip)."""
+    import meshcat.geometry as g
+
+    kc = key_contacts(rp.tips)
+    depth = np.clip(np.nan_to_num(kc.tip_depth, nan=0.0), 0.0, KEY_DIP_M)  # (T, 5)
+    vis["keyboard/bed"].set_object(_mesh(
+        g.Box([key(HIGHEST_PITCH).x_max_m - key(LOWEST_PITCH).x_min_m + 0.02, 0.17, 0.01]),
+        g.MeshPhongMaterial(color=0x2b2b2b), "keyboard/bed"))
+    x_mid = 0.5 * (key(HIGHEST_PITCH).x_max_m + key(LOWEST_PITCH).x_min_m)
+    vis["keyboard/bed"].set_transform(_translation([x_mid, 0.075, -KEY_BODY_M - 0.005]))
+    for p in range(LOWEST_PITCH, HIGHEST_PITCH + 1):
+        k = key(p)
+        path = f"keyboard/{p}"
+        size = [k.x_max_m - k.x_min_m, k.y_max_m - k.y_min_m, KEY_BODY_M]
+        color = 0x151515 if k.black else 0xf7f7f2
+        vis[f"{path}/box"].set_object(_mesh(g.Box(size), g.MeshPhongMaterial(color=color),
+                                            f"{path}/box"))
+        vis[f"{path}/box"].set_transform(_translation([0, 0, -0.5 * KEY_BODY_M]))
+        centre = [k.center_x_m, 0.5 * (k.y_min_m + k.y_max_m), k.top_z_m]
+        vis[path].set_transform(_translation(centre))
+        col = p - LOWEST_PITCH
+        dip = np.where(kc.tip_key == col, depth, 0.0).max(axis=1)  # (T,)
+        if not np.any(dip[rows] > 0):
+            continue
+        for i, r in enumerate(rows):
+            with anim.at_frame(vis, i) as frame:
+                frame[path].set_property("position", "vector3",
+                                         [centre[0], centre[1], centre[2] - float(dip[r])])
+
+
+def _ball(vis, anim, report, ctx, centres: np.ndarray, rows: np.ndarray) -> None:
+    import meshcat.geometry as g
+
+    c = report.catch
+    vis["ball"].set_object(_mesh(g.Sphere(c.radius_m), g.MeshPhongMaterial(color=0xd8e83a),
+                                 "ball"))
+    tf = np.linspace(0.0, c.intercept_t, 200)
+    path = ball_positions(ctx.ball["p0"], ctx.ball["v0"], ctx.ball["drag"], tf)
+    line = g.Line(g.PointsGeometry(path.T.astype(np.float32)),
+                  g.LineBasicMaterial(color=0xe6a700))
+    line.geometry.uuid = _uuid("ball_path", "geometry")
+    line.material.uuid = _uuid("ball_path", "material")
+    line.uuid = _uuid("ball_path", "object")
+    vis["ball_path"].set_object(line)
+    mark = _mesh(g.Sphere(0.006), g.MeshPhongMaterial(color=0xd62728), "intercept")
+    vis["intercept"].set_object(mark)
+    vis["intercept"].set_transform(_translation(c.ball_at_intercept))
+    for i, r in enumerate(rows):
+        with anim.at_frame(vis, i) as frame:
+            frame["ball"].set_transform(_translation(centres[r]))
+
+
+def _page(report: CheckReport, rec: _SceneRecorder, fps: float, n_frames: int) -> str:
+    import meshcat
+
+    js = (Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js").read_text(
+        encoding="utf-8")
+    cmds = ",\n".join(f'"{b}"' for b in rec.commands_b64())
+    lines = [f"{report.task}: {os.path.basename(report.trajectory)}"
+             + (f" + {os.path.basename(report.song)}" if report.song else ""),
+             f"{report.rows} rows, {report.duration_s:.2f} s; animation {n_frames} frames at "
+             f"{fps:.3g} fps",
+             f"check: {'OK' if report.ok else 'FAILED'}"]
+    if report.play is not None and report.play.f1 is not None:
+        p = report.play
+        lines.append(f"frame F1 {p.f1:.3f}, notes hit {p.notes_hit}/{p.notes}, "
+                     f"{len(p.wrong_presses)} wrong presses")
+    if report.catch is not None:
+        c = report.catch
+        err = "n/a" if c.intercept_error_m is None else f"{c.intercept_error_m * 1000:.1f} mm"
+        lines.append(f"intercept at {c.intercept_t:.3f} s, error {err}; "
+                     + ("grasp held" if c.grasp_held else "no held grasp"))
+    info = "<br>".join(html.escape(s) for s in lines)
+    return f"""<!DOCTYPE html>
+<html>
+<head>
+<meta charset="utf-8">
+<title>{html.escape(report.task)} - {html.escape(os.path.basename(report.trajectory))}</title>
+<style>
+body {{ margin: 0; }}
+#meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
+#info {{ position: absolute; left: 8px; top: 8px; padding: 6px 8px; font: 13px sans-serif;
+        color: #fff; background: rgba(0, 0, 0, 0.45); border-radius: 4px; }}
+</style>
+</head>
+<body>
+<div id="meshcat-pane"></div>
+<div id="info">{info}</div>
+<script>
+{js}
+</script>
+<script>
+var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
+var sceneCommands = [
+{cmds}
+];
+for (var i = 0; i < sceneCommands.length; i++) {{
+    var s = atob(sceneCommands[i]);
+    var bytes = new Uint8Array(s.length);
+    for (var j = 0; j < s.length; j++) bytes[j] = s.charCodeAt(j);
+    viewer.handle_command_bytearray(bytes);
+}}
+</script>
+</body>
+</html>
+"""
