@@ -88,11 +88,14 @@ def exposed_center_x(pitch: int) -> float:
 
 
 def surface_near(x: float, y: float) -> float:
-    """Highest resting key top within ``_NEAR_M`` of (x, y); -inf where no key is near."""
+    """Highest resting key top a hovering tip at (x, y) could meet moving sideways: the black
+    keys' top anywhere over the black keys' band (y >= their front - ``_NEAR_M``), the white
+    keys' top elsewhere over the keyboard, -inf off it."""
     t = kb.key_table()
-    near = (t["x_min"] - _NEAR_M <= x) & (x <= t["x_max"] + _NEAR_M) & \
-        (t["y_min"] - _NEAR_M <= y) & (y <= t["y_max"] + _NEAR_M)
-    return float(t["top_z"][near].max()) if near.any() else -np.inf
+    if not (t["x_min"][0] - _NEAR_M <= x <= t["x_max"][-1] + _NEAR_M
+            and -_NEAR_M <= y <= kb.WHITE_LENGTH_M + _NEAR_M):
+        return -np.inf
+    return kb.BLACK_TOP_Z_M if y >= kb.BLACK_Y0_M - _NEAR_M else 0.0
 
 
 class HandIK:

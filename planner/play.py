@@ -364,7 +364,7 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         end_t = float(max((s + p.duration_s for p, s in zip(phases, starts)), default=t_committed))
         if final_t is not None:
             end_t = max(end_t, final_t)
-        n_rows_end = int(math.floor(end_t * rate_hz + 1e-9)) + (1 if final_t is not None else 0)
+        n_rows_end = int(math.floor(end_t * rate_hz + 1e-9)) + 1  # every row at or before end_t
         if n_rows_end > next_row:
             t = np.arange(next_row, n_rows_end) * dt
             q = hand.apply_couplings(sample(phases, starts, t, hold))

@@ -65,10 +65,10 @@ from planner.check import (
     key_episodes,
     pitch_name,
 )
+from planner.errors import InputError
 from planner.hand.model import HandModel, load_hand
 from planner.hand.spec import FINGERS
 from planner.music.keyboard import (
-    BLACK_TOP_Z_M,
     DOWN_DEPTH_M,
     HIGHEST_PITCH,
     KEY_BED_DEPTH_M,
@@ -87,7 +87,8 @@ HTML_FPS = 25.0
 HTML_MAX_FRAMES = 2000
 TIP_SPHERE_M = 0.006
 KEY_BODY_M = 0.020  # drawn thickness of a key
-PLAY_CAMERA_OFFSET_M = (0.45, -0.30, 0.40)  # camera from its target (world frame)
+PLAY_CAMERA_OFFSET_M = (0.12, 0.36, 0.24)  # camera from its target (world frame): the
+# play view looks from behind the keyboard at the fingertips (the forearm would hide them)
 CATCH_CAMERA_OFFSET_M = (-0.35, -0.75, 0.25)
 
 
@@ -122,9 +123,9 @@ def _context(report: CheckReport) -> _Context:
         if isinstance(name, str) and name:
             try:
                 h = load_hand(name)
-            except Exception:  # noqa: BLE001 - any hand that loads will do; fall back below
-                continue
-            if h.urdf_sha256 == report.urdf_sha256:
+            except InputError:
+                h = None
+            if h is not None and h.urdf_sha256 == report.urdf_sha256:
                 hand = h
                 break
     if hand is None:
@@ -196,9 +197,9 @@ def _limit(report: CheckReport, category: str) -> LimitCheck | None:
 def _limit_text(lc: LimitCheck | None) -> str:
     if lc is None:
         return ""
-    verdict = "ok" if lc.ok else f"FAIL: {lc.count} samples over"
-    return (f"{verdict}; worst {lc.worst:.4g} / {lc.limit:.4g} {lc.unit} "
-            f"({lc.name} at {lc.time_s:.2f} s)")
+    verdict = "ok" if lc.ok else f"FAILED, {lc.count} samples beyond"
+    return (f"{verdict}; worst {lc.name} {lc.worst:.4g} vs limit {lc.limit:.4g} {lc.unit} "
+            f"at {lc.time_s:.2f} s")
 
 
 def _title_file(report: CheckReport) -> str:
@@ -236,10 +237,12 @@ def _song_notes(report: CheckReport) -> list[tuple[float, float, int]]:
         try:
             from planner.music.midi import load_song
 
-            return [(float(n.onset_s), float(n.offset_s), int(n.pitch))
-                    for n in load_song(report.song).notes]
-        except Exception:  # noqa: BLE001 - fall back on the replay's expected keys
-            pass
+            notes = [(float(n.onset_s), float(n.offset_s), int(n.pitch))
+                     for n in load_song(report.song).notes]
+        except (InputError, OSError, ValueError):
+            notes = None  # fall back on the replay's expected keys
+        else:
+            return notes
     rp = report.replay
     if rp.expected is None:
         return []
@@ -343,7 +346,9 @@ def _fig_tip_heights(report: CheckReport) -> Figure:
                     ha="left", color=FINGER_COLORS[f])
         # over a key: solid; between keys / off the keyboard (height above z = 0): dotted
         ax.plot(t, np.where(over[:, f], h_mm[:, f], np.nan), color=FINGER_COLORS[f], lw=1.3)
-        ax.plot(t, np.where(over[:, f], np.nan, h_mm[:, f]), color=FINGER_COLORS[f], lw=1.0,
+        off = ~over[:, f]
+        off_ext = off | np.r_[off[1:], False] | np.r_[False, off[:-1]]  # joins the solid line
+        ax.plot(t, np.where(off_ext, h_mm[:, f], np.nan), color=FINGER_COLORS[f], lw=1.0,
                 ls=":")
         deep = h_mm[:, f] < -KEY_BED_DEPTH_M * 1000
         if deep.any():
@@ -456,7 +461,7 @@ def _fig_catch_closing(report: CheckReport, ctx: _Context) -> Figure:
                label=f"intercept_t + {GRASP_WINDOW_S * 1000:g} ms")
     ax.axvspan(c.intercept_t, c.intercept_t + GRASP_WINDOW_S, color="#999999", alpha=0.12, lw=0)
     if c.grasp_time_s is not None:
-        ax.axvline(c.grasp_time_s, color="#2ca02c", lw=1.5,
+        ax.axvline(c.grasp_time_s, color="black", ls="-.", lw=1.5,
                    label=f"grasp closed ({c.grasp_time_s:.3f} s, {'+'.join(c.grasp_fingers)})")
     if c.early_touches:
         et = c.early_touches
@@ -484,12 +489,16 @@ def _grid(n: int, ncols: int = 6) -> tuple[int, int]:
 
 
 def _small_multiples(title: str, names, t: np.ndarray, Y: np.ndarray, lo, hi, ylabels,
-                     xlabel: str = "time (s)", band: bool = False) -> Figure:
+                     xlim: tuple[float, float], band: bool = False) -> Figure:
     """One panel per column of ``Y`` with dashed lines at ``lo``/``hi`` (None: no line);
     samples beyond them are marked in red."""
     n = Y.shape[1]
     rows, cols = _grid(n)
-    fig = Figure(figsize=(3.1 * cols, 2.3 * rows + 0.8), layout="constrained")
+    w, h = 3.1 * cols, 2.3 * rows + 0.9
+    fig = Figure(figsize=(w, h))
+    # fixed margins in inches (a layout engine costs seconds with this many panels)
+    fig.subplots_adjust(left=0.75 / w, right=1 - 0.15 / w, bottom=0.5 / h, top=1 - 0.85 / h,
+                        wspace=0.32, hspace=0.42)
     axs = np.atleast_1d(fig.subplots(rows, cols, sharex=True, squeeze=False)).ravel()
     for i in range(n):
         ax = axs[i]
@@ -507,14 +516,18 @@ def _small_multiples(title: str, names, t: np.ndarray, Y: np.ndarray, lo, hi, yl
         ax.set_ylabel(ylabels[i], fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(color="#eeeeee", lw=0.5)
-        ax.margins(x=0)
+        ax.set_xlim(xlim)
     for ax in axs[n:]:
         ax.set_visible(False)
     for ax in axs[max(0, n - cols):n]:
-        ax.set_xlabel(xlabel, fontsize=8)
+        ax.set_xlabel("time (s)", fontsize=8)
         ax.xaxis.set_tick_params(labelbottom=True)
     fig.suptitle(title, fontsize=11)
     return fig
+
+
+def _xlim(t: np.ndarray) -> tuple[float, float]:
+    return (float(t[0]), float(t[-1])) if t[-1] > t[0] else (float(t[0]) - 0.5, float(t[0]) + 0.5)
 
 
 def _is_prismatic(hand: HandModel, name: str) -> bool:
@@ -535,7 +548,7 @@ def _fig_joint_positions(report: CheckReport, ctx: _Context) -> Figure:
     return _small_multiples(
         f"Joint positions and limits (dashed) - {_title_file(report)}\n"
         f"joint_position: {_limit_text(_limit(report, 'joint_position'))}",
-        hand.joint_names, rp.t_s, Y, lo, hi, units)
+        hand.joint_names, rp.t_s, Y, lo, hi, units, _xlim(rp.t_s))
 
 
 def _speeds(t: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -553,7 +566,8 @@ def _fig_joint_speeds(report: CheckReport, ctx: _Context) -> Figure:
     return _small_multiples(
         f"Joint speeds and speed limits (dashed) - {_title_file(report)}\n"
         f"joint_velocity: {_limit_text(_limit(report, 'joint_velocity'))}",
-        hand.joint_names, ts, V, list(-hand.velocity), list(hand.velocity), units, band=True)
+        hand.joint_names, ts, V, list(-hand.velocity), list(hand.velocity), units,
+        _xlim(rp.t_s), band=True)
 
 
 def _fig_motor_angles(report: CheckReport, ctx: _Context) -> Figure:
@@ -563,7 +577,7 @@ def _fig_motor_angles(report: CheckReport, ctx: _Context) -> Figure:
         f"Motor shaft angles - {_title_file(report)} (motors have no position limit)\n"
         f"motor_consistency: {_limit_text(_limit(report, 'motor_consistency'))}",
         names, rp.t_s, ctx.q_motor, [None] * len(names), [None] * len(names),
-        ["rad"] * len(names))
+        ["rad"] * len(names), _xlim(rp.t_s))
 
 
 def _fig_motor_speeds(report: CheckReport, ctx: _Context) -> Figure:
@@ -575,7 +589,8 @@ def _fig_motor_speeds(report: CheckReport, ctx: _Context) -> Figure:
     fig = _small_multiples(
         f"Motor speeds as a fraction of each motor's speed limit (dashed: +/-1) - "
         f"{_title_file(report)}\nmotor_velocity: {_limit_text(_limit(report, 'motor_velocity'))}",
-        names, ts, frac, [-1.0] * n, [1.0] * n, ["speed / limit"] * n, band=True)
+        names, ts, frac, [-1.0] * n, [1.0] * n, ["speed / limit"] * n, _xlim(rp.t_s),
+        band=True)
     for ax, y in zip(fig.axes, frac.T):
         m = max(1.1, float(np.max(np.abs(y))) * 1.05 if y.size else 1.1)
         ax.set_ylim(-m, m)
@@ -641,7 +656,7 @@ def _frame_rows(t: np.ndarray) -> tuple[np.ndarray, float]:
     fps = HTML_FPS
     if dur * fps + 1 > HTML_MAX_FRAMES:
         fps = (HTML_MAX_FRAMES - 1) / dur
-    n = int(math.floor(dur * fps + 1e-9)) + 1
+    n = math.floor(dur * fps + 1e-9) + 1
     times = t[0] + np.arange(n) / fps
     idx = np.clip(np.searchsorted(t, times), 0, len(t) - 1)
     prev = np.clip(idx - 1, 0, len(t) - 1)
@@ -796,8 +811,8 @@ def _page(report: CheckReport, rec: _SceneRecorder, fps: float, n_frames: int) -
     cmds = ",\n".join(f'"{b}"' for b in rec.commands_b64())
     lines = [f"{report.task}: {os.path.basename(report.trajectory)}"
              + (f" + {os.path.basename(report.song)}" if report.song else ""),
-             f"{report.rows} rows, {report.duration_s:.2f} s; animation {n_frames} frames at "
-             f"{fps:.3g} fps",
+             (f"{report.rows} rows, {report.duration_s:.2f} s; animation {n_frames} frames "
+              f"at {fps:.3g} fps"),
              f"check: {'OK' if report.ok else 'FAILED'}"]
     if report.play is not None and report.play.f1 is not None:
         p = report.play
