@@ -15,7 +15,7 @@ and the cost of going from one candidate to the next is
 
 - rail travel, and travel faster than the rail can comfortably go in the
   time between the groups (infinite above its top speed);
-- a finger reused on a different key with little time between;
+- a finger reused on a different key sooner than ``REUSE_S``;
 - a finger still holding a note of the previous group that is reassigned,
   or whose key leaves its reach.
 
@@ -35,6 +35,7 @@ import numpy as np
 from planner.music import keyboard as kb
 
 CHORD_WINDOW_S = 0.030
+REUSE_S = 0.40  # a finger moved to another key sooner than this is penalised
 FINGER_ORDER = ("thumb", "index", "middle", "ring", "pinky")
 
 
@@ -204,6 +205,7 @@ def _transition(notes, prev_g, fa, ra, g, fb, rb, dt, held, reach: HandReach) ->
             return math.inf
         c += 5.0 * d
     for i, f in prev_finger.items():
-        if f in used_now and used_now[f] != notes[i].pitch and dt < 0.25:
-            c += 0.5 * (0.25 - dt) / 0.25
+        # a finger that must lift, move and come down again needs ~0.3 s
+        if f in used_now and used_now[f] != notes[i].pitch and dt < REUSE_S:
+            c += 5.0 * (REUSE_S - dt) / REUSE_S
     return c

@@ -319,8 +319,9 @@ class HandIK:
 
         Position task on ``palm_center`` (soft, 1e3) at ``point_m - offset_m * normal``
         and an axis-align task of its +z on ``normal`` (soft, ``normal_weight``); the
-        posture/stay/rail tasks of ``solve`` stay in place (posture defaults to
-        ``q_start``); ``locked`` joints are masked. No keyboard constraint applies.
+        posture and stay tasks of ``solve`` stay in place, the arm task pulls the rail and
+        wrist towards ``posture``'s (posture defaults to ``q_start``); ``locked`` joints
+        are masked. No keyboard constraint applies.
         ``press_error_m`` of the result is the distance of ``palm_center + offset_m * n``
         from ``point_m`` (``hover_clearance_m`` is inf: nothing hovers); ``converged``
         also needs the normal within ``tol_rad`` of ``normal``.
@@ -331,8 +332,8 @@ class HandIK:
         posture = q_start if posture is None else posture
         self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
         self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
-        if self.rail_task is not None:
-            self.rail_task.set_joints({"rail": float(posture[self.hand.index["rail"]])})
+        # the arm (rail, wrist) is pulled towards ``posture``'s, not held where it is
+        self.arm_task.set_joints({n: float(posture[self.hand.index[n]]) for n in self._arm})
         self.set_q(q_start)
         for f in list(self._tasks):
             self.solver.remove_task(self._tasks.pop(f))

@@ -165,6 +165,19 @@ class Planner:
         self.bases[seg] = base
         return seg
 
+    def rest_high_q(self, finger: str, seg: int) -> np.ndarray:
+        """``finger`` lifted straight up from its place in hand position ``seg`` to
+        ``HIGH_M`` above the white keys' top; cached."""
+        key = (finger, seg, "rest_high")
+        if key not in self._cache:
+            base = self.bases[seg]
+            tip = self.hand.tip_positions(base)[self.hand.fingers.index(finger)]
+            t = PressTarget(finger, 0, (float(tip[0]), float(tip[1]), HIGH_M), (float(tip[1]),) * 2)
+            r = self.ik.solve_finger(t, base)
+            self._cache[key] = r.q
+            self.ik_solves += 1
+        return self._cache[key]
+
     def press_q(self, finger: str, pitch: int, seg: int) -> tuple[np.ndarray, IKResult]:
         """``finger`` pressing ``pitch`` at full dip, the rest of the hand as in position
         ``seg`` (only the finger's own joints move); cached."""
@@ -243,7 +256,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
 class _Timeline:
     """Builds the phase list in causal order, one finger (or the rail) at a time.
 
-    Every finger is always in one of three places: hovering at rest, waiting
+    Every finger is always in one of four places: at its place in the hand position
+    (``rest``), high above the keys (``high``), waiting
     ``LOW_M`` above a key, or pressing it. A press is: (if the finger is not
     already waiting above that key) up to ``HIGH_M`` above where it is, across
     to ``HIGH_M`` above the key, down to ``LOW_M`` (these three as early as
@@ -281,21 +295,31 @@ class _Timeline:
         return float(self.hand.tip_positions(q)[self.hand.fingers.index(finger), 2])
 
     def travel(self, seg: int, t_s: float) -> None:
-        """Go to hand position ``seg``: every finger up, then the whole hand at once."""
+        """Go to hand position ``seg``: every finger up, the whole hand across with every
+        tip high, fingers ready high above their places."""
         for f in self.hand.fingers:
-            if self.place[f][0] != "rest":
-                self.go_high(f)
+            self.go_high(f)
+        q = self.q.copy()
+        for f in self.hand.fingers:
+            js = self.hand.joint_slice(f)
+            q[js] = self.pl.rest_high_q(f, seg)[js]
+        arm = [j for j in range(self.hand.n) if not any(j in self.hand.joint_slice(f) for f in self.hand.fingers)]
+        q[arm] = self.pl.bases[seg][arm]
         # ordered after (and before) every joint's motion: nothing else moves meanwhile
-        self._move(self.pl.bases[seg].copy(), 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
+        self._move(q, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
         self.seg = seg
         for f in self.hand.fingers:
-            self.place[f] = ("rest",)
+            self.place[f] = ("high",)
 
     def go_high(self, finger: str) -> None:
+        """Lift ``finger`` straight up to ``HIGH_M`` above the white keys' top, from wherever it is."""
         pl = self.place[finger]
-        if pl[0] == "above" and pl[2] == HIGH_M:
+        if pl[0] == "high" or (pl[0] == "above" and pl[2] == HIGH_M):
             return
         if pl[0] == "rest":
+            q = self._with_finger(finger, self.pl.rest_high_q(finger, self.seg))
+            self._move(q, 0.5, 0.0, 0.0, "move", None)
+            self.place[finger] = ("high",)
             return
         q = self._with_finger(finger, self.pl.above_q(finger, pl[1], self.seg, HIGH_M))
         self._move(q, 0.5, 0.0, 0.0, "move", None)
@@ -327,11 +351,11 @@ class _Timeline:
         self.place[finger] = ("above", pitch, LOW_M)
 
     def rest_all(self, t_s: float) -> None:
+        """At the end every finger lifts off the keys."""
+        if self.seg is None:
+            return
         for f in self.hand.fingers:
-            if self.place[f][0] != "rest":
-                self.go_high(f)
-                self._move(self._with_finger(f, self.pl.bases[self.seg]), 0.5, t_s, 0.0, "move", None)
-                self.place[f] = ("rest",)
+            self.go_high(f)
 
 
 def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, float],

@@ -89,7 +89,7 @@ TIP_SPHERE_M = 0.006
 KEY_BODY_M = 0.020  # drawn thickness of a key
 PLAY_CAMERA_OFFSET_M = (0.12, 0.36, 0.24)  # camera from its target (world frame): the
 # play view looks from behind the keyboard at the fingertips (the forearm would hide them)
-CATCH_CAMERA_OFFSET_M = (-0.35, -0.75, 0.25)
+CATCH_CAMERA_OFFSET_M = (-0.15, -0.80, 0.20)  # side view of the flight plane (x-z)
 
 
 # ====================================================================== context
@@ -288,6 +288,9 @@ def _fig_piano_roll(report: CheckReport) -> Figure:
         ax.add_patch(Rectangle((w.start_s, w.pitch - 0.34), w.end_s - w.start_s, 0.68,
                                facecolor="none", edgecolor=ERROR_COLOR, lw=2.0, zorder=3))
         ax.plot([w.start_s], [w.pitch + 0.34], marker="v", color=ERROR_COLOR, ms=7, zorder=5)
+        who = "+".join(str(FINGERS.index(f) + 1) for f in w.fingers if f in FINGERS)
+        ax.text(w.end_s + 0.02 * dur / max(width / 11.0, 1.0), w.pitch, f"wrong {who}".strip(),
+                color=ERROR_COLOR, fontsize=8, va="center", ha="left", zorder=5)
     for m in p.missed:
         ax.add_patch(Rectangle((m.onset_s, m.pitch - 0.42), m.offset_s - m.onset_s, 0.84,
                                facecolor="none", edgecolor=ERROR_COLOR, lw=2.0, hatch="///",
@@ -336,14 +339,18 @@ def _fig_tip_heights(report: CheckReport) -> Figure:
              (-KEY_BED_DEPTH_M * 1000, ERROR_COLOR, "--",
               f"key bed ({-KEY_BED_DEPTH_M * 1000:g} mm)"))
     pressing = over & (np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)
+    wrong = None if rp.expected is None else rp.down & ~rp.expected  # (T, 88)
     for f, ax in enumerate(axs):
         for y, c, ls, _ in lines:
             ax.axhline(y, color=c, ls=ls, lw=1.0, zorder=1)
         key_id = np.where(pressing[:, f], kc.tip_key[:, f], -1)
         for a, b, k in _runs(key_id):
-            ax.axvspan(t[a], t[min(b, len(t) - 1)], color=FINGER_COLORS[f], alpha=0.15, lw=0)
-            ax.text(t[a], top - 1.0, pitch_name(k + LOWEST_PITCH), fontsize=7, va="top",
-                    ha="left", color=FINGER_COLORS[f])
+            bad = wrong is not None and bool(wrong[a:b, k].any())
+            ax.axvspan(t[a], t[min(b, len(t) - 1)], color=ERROR_COLOR if bad else FINGER_COLORS[f],
+                       alpha=0.15, lw=0)
+            ax.text(t[a], top - 1.0, pitch_name(k + LOWEST_PITCH) + (" wrong" if bad else ""),
+                    fontsize=7, va="top", ha="left",
+                    color=ERROR_COLOR if bad else FINGER_COLORS[f])
         # over a key: solid; between keys / off the keyboard (height above z = 0): dotted
         ax.plot(t, np.where(over[:, f], h_mm[:, f], np.nan), color=FINGER_COLORS[f], lw=1.3)
         off = ~over[:, f]
@@ -360,7 +367,8 @@ def _fig_tip_heights(report: CheckReport) -> Figure:
     handles = [Line2D([], [], color=c, ls=ls, label=lab) for _, c, ls, lab in lines]
     handles += [Line2D([], [], color="black", lw=1.3, label="over a key"),
                 Line2D([], [], color="black", lw=1.0, ls=":", label="over no key (vs z = 0)"),
-                Patch(facecolor="#999999", alpha=0.3, label="holding a key down")]
+                Patch(facecolor="#999999", alpha=0.3, label="holding a key down"),
+                Patch(facecolor=ERROR_COLOR, alpha=0.3, label="... a wrong one")]
     axs[0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=8,
                   frameon=False)
     fig.suptitle(f"Fingertip height above the resting top of the key below - "
@@ -735,7 +743,11 @@ def write_html(report: CheckReport, out_file: str) -> str:
         i_row = int(np.argmin(np.abs(rp.t_s - report.catch.intercept_t)))
         target = rp.palm[i_row, :3, 3].copy()
         offset = np.array(CATCH_CAMERA_OFFSET_M)
-    vis["/Cameras/default"].set_transform(_translation(target))
+    # meshcat's orbit controls look at the world origin whatever the camera node's pose:
+    # the scene (and the grid) is shifted instead, so that ``target`` sits at the origin
+    vis.set_transform(_translation(-target))
+    vis["/Grid"].set_transform(_translation(-target))
+    vis["/Axes"].set_transform(_translation(-target))
     # the camera sits in meshcat's y-up "rotated" frame: world (x, y, z) -> (x, z, -y)
     vis["/Cameras/default/rotated/<object>"].set_property(
         "position", [float(offset[0]), float(offset[2]), float(-offset[1])])

@@ -8,21 +8,22 @@ the hand mounted tilted so that the ball arrives on a lob.
 from __future__ import annotations
 
 import base64
+import json
 import re
 import struct
 
 import numpy as np
 import pytest
 
-from planner.check import check_trajectory
+from planner.check import ball_positions, check_trajectory
 from planner.hand.model import load_hand
 from planner.report import _frame_rows, write_check_report, write_html
 from tests.test_check import (
+    BALL_R,
     RATE,
     SONG,
     SPEED,
     T_I,
-    BALL_R,
     grasp_posture,
     meta,
     min_jerk,
@@ -89,6 +90,11 @@ def catch_report(tmp_path_factory, hand):
     return r
 
 
+def _read(path) -> str:
+    with open(path, encoding="utf-8") as f:
+        return f.read()
+
+
 def _png_ok(path):
     import matplotlib.image as mpimg
 
@@ -120,15 +126,15 @@ def test_catch_pngs(catch_report, tmp_path):
 def _commands(text):
     import umsgpack
 
-    m = re.search(r"var sceneCommands = \[(.*?)\];", text, re.S)
+    m = re.search(r"var sceneCommands = \[(.*?)\];", text, re.DOTALL)
     assert m
     return [umsgpack.unpackb(base64.b64decode(s)) for s in re.findall(r'"([A-Za-z0-9+/=]+)"',
                                                                          m.group(1))]
 
 
 def _offline(text):
-    assert not re.search(r"<script[^>]*\bsrc\s*=", text, re.I)
-    assert not re.search(r"<link[^>]*\bhref\s*=", text, re.I)
+    assert not re.search(r"<script[^>]*\bsrc\s*=", text, re.IGNORECASE)
+    assert not re.search(r"<link[^>]*\bhref\s*=", text, re.IGNORECASE)
     # the inlined viewer only mentions the XHTML namespace
     assert set(re.findall(r"https?://[^\s\"'<>]*", text)) <= {"http://www.w3.org/1999/xhtml"}
 
@@ -147,13 +153,13 @@ def test_play_html(play_report, tmp_path, monkeypatch):
 
     monkeypatch.setattr(meshcat.visualizer, "start_zmq_server_as_subprocess", no_server)
     out = write_html(play_report, str(tmp_path / "a" / "play.html"))
-    text = open(out, encoding="utf-8").read()
+    text = _read(out)
     assert text.startswith("<!DOCTYPE html>") and "MeshCat.Viewer" in text
     _offline(text)
     cmds = _commands(text)
     clips = _animation(cmds)
     rows, fps = _frame_rows(play_report.replay.t_s)
-    assert fps == 25.0 and len(rows) == 3.5 * 25 + 1
+    assert fps == 25.0 and len(rows) == 88  # 3.5 s: frames at 0, 0.04, ..., 3.48 s
     # the hand's links and tips are animated, one key per frame
     tip = clips["/meshcat/hand/index_tip"]
     pos = next(tr for tr in tip["tracks"] if tr["name"] == ".position")
@@ -170,12 +176,12 @@ def test_play_html(play_report, tmp_path, monkeypatch):
     assert "/meshcat/keyboard/71" not in clips  # B4 is never touched
     # deterministic
     out2 = write_html(play_report, str(tmp_path / "b" / "play.html"))
-    assert open(out2, "rb").read() == open(out, "rb").read()
+    assert _read(out2) == _read(out)
 
 
 def test_catch_html(catch_report, tmp_path):
     out = write_html(catch_report, str(tmp_path / "catch.html"))
-    text = open(out, encoding="utf-8").read()
+    text = _read(out)
     _offline(text)
     cmds = _commands(text)
     clips = _animation(cmds)
@@ -183,13 +189,19 @@ def test_catch_html(catch_report, tmp_path):
     rows, _ = _frame_rows(catch_report.replay.t_s)
     assert len(ball["keys"]) == len(rows)
     assert np.allclose(ball["keys"][0]["value"], 0.0, atol=1e-6)  # launched from the origin
-    i = int(np.flatnonzero(catch_report.replay.t_s[rows] == T_I)[0])
-    np.testing.assert_allclose(ball["keys"][i]["value"], catch_report.catch.ball_at_intercept,
+    # in flight before the intercept, on the palm (centre + radius * normal) from it on
+    rp, tr = catch_report.replay, catch_report.replay.t_s[rows]
+    i = int(np.flatnonzero(tr < T_I)[-1])
+    m = json.loads(_read(catch_report.trajectory).split("\n", 1)[0][2:])["ball"]
+    np.testing.assert_allclose(ball["keys"][i]["value"],
+                               ball_positions(m["p0"], m["v0"], 0.0, [tr[i]])[0], atol=1e-5)
+    palm = rp.palm[rows[-1]]
+    np.testing.assert_allclose(ball["keys"][-1]["value"], palm[:3, 3] + BALL_R * palm[:3, 2],
                                atol=1e-5)
     assert not any(c["type"] == "set_object" and c["path"].startswith("/meshcat/keyboard")
                    for c in cmds)
     out2 = write_html(catch_report, str(tmp_path / "again.html"))
-    assert open(out2, "rb").read() == open(out, "rb").read()
+    assert _read(out2) == _read(out)
 
 
 def test_long_plans_are_subsampled():
@@ -199,3 +211,14 @@ def test_long_plans_are_subsampled():
     assert rows[0] == 0 and rows[-1] == len(t) - 1 and np.all(np.diff(rows) > 0)
     rows, fps = _frame_rows(np.arange(101) / 100.0)
     assert fps == 25.0 and list(rows) == list(range(0, 101, 4))
+
+
+def test_check_cli_writes_report_and_html(catch_report, tmp_path, capsys):
+    """``cli.py check TRAJ --report DIR --html FILE`` goes through planner.report."""
+    import cli
+
+    out, page = tmp_path / "rep", tmp_path / "page.html"
+    rc = cli.main(["check", catch_report.trajectory, "--report", str(out), "--html", str(page)])
+    assert rc == 0, capsys.readouterr()
+    assert sorted(p.name for p in out.iterdir()) == sorted(CATCH_PNGS)
+    assert page.stat().st_size > 100_000

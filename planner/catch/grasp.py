@@ -200,11 +200,16 @@ def motor_torque_matrix(hand: HandModel, q: np.ndarray) -> np.ndarray:
     return M
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
 def _tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = np.cross(n, a)
+    e1 = _cross(n, a)
     e1 /= np.linalg.norm(e1)
-    return e1, np.cross(n, e1)
+    return e1, _cross(n, e1)
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -257,46 +262,73 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
             rows.append(r)
             lo.append(0.0)
             hi.append(0.0)
-    # friction pyramids
+    # friction pyramids: n . f >= 0 and (t_k - mu' n) . f <= 0
     mu_in = mu * np.cos(np.pi / facets)
+    ang = 2.0 * np.pi * np.arange(facets) / facets
+    cos_k, sin_k = np.cos(ang)[:, None], np.sin(ang)[:, None]
+    cone_rows = np.zeros((nc * (facets + 1), nx))
+    cone_lo = np.tile(np.concatenate([[0.0], np.full(facets, -np.inf)]), nc)
+    cone_hi = np.tile(np.concatenate([[np.inf], np.zeros(facets)]), nc)
     for c, ct in enumerate(contacts):
         n = ct.normal / np.linalg.norm(ct.normal)
         e1, e2 = _tangents(n)
-        r = np.zeros(nx)
-        r[3 * c:3 * c + 3] = n
-        rows.append(r)
-        lo.append(0.0)
-        hi.append(np.inf)
-        for k in range(facets):
-            ang = 2.0 * np.pi * k / facets
-            t = np.cos(ang) * e1 + np.sin(ang) * e2
-            r = np.zeros(nx)
-            r[3 * c:3 * c + 3] = t - mu_in * n
-            rows.append(r)
-            lo.append(-np.inf)
-            hi.append(0.0)
-    A_dense = np.vstack([np.array(rows), tau_map])
-    lower = np.concatenate([lo, -peak - tau_offset])
-    upper = np.concatenate([hi, peak - tau_offset])
+        r0 = c * (facets + 1)
+        cone_rows[r0, 3 * c:3 * c + 3] = n
+        cone_rows[r0 + 1:r0 + 1 + facets, 3 * c:3 * c + 3] = cos_k * e1 + sin_k * e2 - mu_in * n
+    A_dense = np.vstack([np.array(rows), cone_rows, tau_map])
+    lower = np.concatenate([lo, cone_lo, -peak - tau_offset])
+    upper = np.concatenate([hi, cone_hi, peak - tau_offset])
     # objective: |f|^2 + REG sum (tau/peak)^2  (tau affine in f)
     W = tau_map / peak[:, None]
     P = 2.0 * (np.eye(nx) + REG * W.T @ W)
     cvec = 2.0 * REG * W.T @ (tau_offset / peak)
     return GraspProblem(case, tuple(contacts), F, centre, float(mu), int(facets),
                         bool(moment_balance), tau_offset, tau_map, tuple(hand.motor_names), peak,
-                        sp.triu(sp.csc_matrix(P), format="csc"), cvec, sp.csc_matrix(A_dense),
-                        lower, upper)
+                        _dense_csc(np.triu(P), upper=True), cvec, _dense_csc(A_dense), lower,
+                        upper)
+
+
+def _dense_csc(M: np.ndarray, upper: bool = False) -> sp.csc_matrix:
+    """CSC matrix that stores every entry of ``M`` (its upper triangle if ``upper``), zeros
+    included, so that problems of the same size share one sparsity pattern (the solver
+    is set up once per pattern and then only updated)."""
+    m, n = M.shape
+    if upper:
+        rows = [np.arange(j + 1) for j in range(n)]
+        indptr = np.concatenate([[0], np.cumsum([j + 1 for j in range(n)])])
+        indices = np.concatenate(rows)
+        data = np.concatenate([M[:j + 1, j] for j in range(n)])
+    else:
+        indptr = np.arange(0, m * n + 1, m)
+        indices = np.tile(np.arange(m), n)
+        data = M.flatten(order="F")
+    return sp.csc_matrix((data, indices, indptr), shape=(m, n))
+
+
+_SOLVERS: dict[tuple[int, int], osqp.OSQP] = {}
+
+
+def _osqp_solve(prob: GraspProblem):
+    """OSQP on ``prob``: set up once per problem size (full dense patterns), then updated;
+    cold-started every time, so the result does not depend on earlier problems."""
+    key = prob.A.shape
+    solver = _SOLVERS.get(key)
+    if solver is None:
+        solver = osqp.OSQP(algebra="builtin")
+        solver.setup(P=prob.P, q=prob.c, A=prob.A, l=prob.lower, u=prob.upper, verbose=False,
+                     eps_abs=_EPS, eps_rel=_EPS, eps_prim_inf=1e-6, eps_dual_inf=1e-6,
+                     max_iter=20000, polishing=True, warm_starting=False)
+        _SOLVERS[key] = solver
+    else:
+        solver.update(q=prob.c, l=prob.lower, u=prob.upper, Px=prob.P.data, Ax=prob.A.data)
+    return solver.solve()
 
 
 def solve_grasp(prob: GraspProblem) -> GraspResult:
     """Solve the force QP with OSQP; InfeasibleError / SolverError carry ``prob``."""
     # a motor already past its peak with no contact force at all (gravity alone)
     over = np.abs(prob.tau_offset) > prob.peak
-    solver = osqp.OSQP()
-    solver.setup(P=prob.P, q=prob.c, A=prob.A, l=prob.lower, u=prob.upper, verbose=False,
-                 eps_abs=_EPS, eps_rel=_EPS, eps_prim_inf=1e-6, eps_dual_inf=1e-6,
-                 max_iter=20000, polishing=True)
-    res = solver.solve()
+    res = _osqp_solve(prob)
     status = res.info.status
     if status in ("primal infeasible", "primal infeasible inaccurate") or (
             status not in ("solved", "solved inaccurate") and over.any()):
@@ -322,9 +354,9 @@ def _infeasible_reason(prob: GraspProblem) -> str:
         nx = prob.A.shape[1]
         n_motor = len(prob.peak)
         A = prob.A[:-n_motor]
-        solver = osqp.OSQP()
+        solver = osqp.OSQP(algebra="builtin")
         W = prob.tau_map / prob.peak[:, None]
-        P = sp.triu(sp.csc_matrix(2.0 * (W.T @ W + 1e-6 * np.eye(nx))), format="csc")
+        P = sp.csc_matrix(np.triu(2.0 * (W.T @ W + 1e-6 * np.eye(nx))))
         c = 2.0 * W.T @ (prob.tau_offset / prob.peak)
         solver.setup(P=P, q=c, A=A, l=prob.lower[:-n_motor], u=prob.upper[:-n_motor],
                      verbose=False, eps_abs=_EPS, eps_rel=_EPS, max_iter=20000)
