@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from planner.errors import InputError
+from planner.errors import InputError, SolverError
 from planner.fingering import HandReach, assign_fingers
 from planner.hand.model import HandModel, load_hand
 from planner.ik import HandIK, IKResult, PressTarget, press_target
@@ -358,6 +358,58 @@ class _Timeline:
             self.go_high(f)
 
 
+def _guard(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -> None:
+    """Refuse (never clamp) setpoints outside the joint position or speed limits: they
+    protect the hardware, so a planner bug must stop the plan, not reach the hand."""
+    if not np.all(np.isfinite(q)):
+        raise SolverError("planner produced a non-finite setpoint")
+    lo, hi = hand.lower - 1e-9, hand.upper + 1e-9
+    bad = np.argwhere((q < lo) | (q > hi))
+    if bad.size:
+        i, j = bad[0]
+        raise SolverError(f"planner bug: {hand.joint_names[j]} = {q[i, j]:.6f} outside "
+                          f"[{hand.lower[j]:.6f}, {hand.upper[j]:.6f}]", problem=q)
+    rows = q if prev is None else np.vstack([prev, q])
+    if len(rows) > 1:
+        v = np.abs(np.diff(rows, axis=0)) / dt
+        over = np.argwhere(v > hand.velocity * (1.0 + 1e-6) + 1e-9)
+        if over.size:
+            i, j = over[0]
+            raise SolverError(f"planner bug: {hand.joint_names[j]} speed {v[i, j]:.4f} above "
+                              f"{hand.velocity[j]:.4f}", problem=q)
+
+
+def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float,
+                rail_of: dict[int, float], reasons: dict[int, str]) -> None:
+    """Move the hand to a new position for the notes of ``group`` (struck at ``t``): a
+    whole-hand IK with them pressed and the fingers that play next waiting above their
+    keys; the hand travels there (or starts there, before t = 0)."""
+    upcoming: dict[str, PressTarget] = {}
+    busy = {g.finger for g in group}
+    for e in events:
+        if e[1] != 1 or e[0] <= t + 1e-9 or e[3].press.note_index in reasons:
+            continue
+        q_ = e[3].press
+        if abs(rail_of[q_.note_index] - rail) > 1e-9:
+            break
+        if q_.finger not in busy and q_.finger not in upcoming:
+            upcoming[q_.finger] = press_target(q_.finger, q_.pitch)
+    seg = pl.anchor([press_target(g.finger, g.pitch) for g in group], rail, tl.q,
+                    list(upcoming.values()))
+    if seg is None and len(group) > 1:  # at least the lowest note
+        seg = pl.anchor([press_target(group[0].finger, group[0].pitch)], rail, tl.q)
+    if seg is None:
+        return
+    if tl.seg is None:  # the hand is brought there before t = 0
+        tl.q = pl.bases[seg].copy()
+        tl.seg = seg
+        for g in group:  # with the first fingers just above their keys
+            tl.q = tl._with_finger(g.finger, pl.above_q(g.finger, g.pitch, seg, LOW_M))
+            tl.place[g.finger] = ("above", g.pitch, LOW_M)
+    else:
+        tl.travel(seg, t)
+
+
 def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, float],
          writer: TrajectoryWriter, rate_hz: float, reasons: dict[int, str], progress: bool,
          t_start: float) -> PlayResult:
@@ -367,15 +419,16 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         float(pl.rest[pl.rail]) if pl.rail is not None else 0.0)
     q_start = pl.posture_at(rail0)
     tl = _Timeline(pl, hand, q_start, None, dt)
-    seg_rail: dict[int, float] = {}
     next_row = 0
     t_committed = 0.0
     first_row_s = math.nan
     late: list[tuple[int, float]] = []
     hold = tl.q.copy()
 
+    last_row = None
+
     def flush(final_t=None):
-        nonlocal next_row, t_committed, first_row_s, hold
+        nonlocal next_row, t_committed, first_row_s, hold, last_row
         phases_meta = tl.phases
         tl.phases = []
         phases = [p for p, _, _ in phases_meta]
@@ -392,6 +445,8 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         if n_rows_end > next_row:
             t = np.arange(next_row, n_rows_end) * dt
             q = hand.apply_couplings(sample(phases, starts, t, hold))
+            _guard(hand, q, last_row, dt)
+            last_row = q[-1].copy()
             writer.write_rows(t, q, hand.motor_angles(q))
             if math.isnan(first_row_s):
                 first_row_s = time.perf_counter() - t_start
@@ -407,44 +462,23 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
     events.sort(key=lambda e: (e[0], e[1], e[2]))
     down: dict[int, object] = {}
     total = len(events)
+    group_t = -math.inf
     for k, (t, is_press, _, iv) in enumerate(events):
         p = iv.press
         if is_press:
             rail = rail_of[p.note_index]
-            ok = False
-            if tl.seg is not None:  # the hand stays where it is if the finger reaches from there
-                ok = tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
-            if not ok and not down:
-                # a new hand position for this note and the notes struck with it
+            if abs(t - group_t) > 1e-9:  # the first key of a new group of notes
+                group_t = t
                 group = [e[3].press for e in events if e[1] == 1 and abs(e[0] - t) <= 1e-9]
                 group = [g for g in group if g.note_index not in reasons]
-                # the keys the other fingers play next at this hand position
-                upcoming: dict[str, PressTarget] = {}
-                busy = {g.finger for g in group}
-                for e in events:
-                    if e[1] != 1 or e[0] <= t + 1e-9 or e[3].press.note_index in reasons:
-                        continue
-                    q_ = e[3].press
-                    if abs(rail_of[q_.note_index] - rail) > 1e-9:
-                        break
-                    if q_.finger not in busy and q_.finger not in upcoming:
-                        upcoming[q_.finger] = press_target(q_.finger, q_.pitch)
-                seg = pl.anchor([press_target(g.finger, g.pitch) for g in group], rail, tl.q,
-                                list(upcoming.values()))
-                if seg is None and len(group) > 1:
-                    seg = pl.anchor([press_target(p.finger, p.pitch)], rail, tl.q)
-                if seg is not None:
-                    seg_rail[seg] = rail
-                    if tl.seg is None:  # the hand is brought there before t = 0
-                        tl.q = pl.bases[seg].copy()
-                        tl.seg = seg
-                        for g in group:  # with the first fingers just above their keys
-                            tl.q = tl._with_finger(g.finger, pl.above_q(g.finger, g.pitch, seg, LOW_M))
-                            tl.place[g.finger] = ("above", g.pitch, LOW_M)
+                reachable = tl.seg is not None and all(
+                    pl.press_q(g.finger, g.pitch, tl.seg)[1].converged for g in group)
+                if not reachable and not down:
+                    first = tl.seg is None
+                    _reposition(pl, tl, events, group, t, rail, rail_of, reasons)
+                    if first and tl.seg is not None:  # the start configuration
                         hold = tl.q.copy()
-                    else:
-                        tl.travel(seg, t)
-                    ok = tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
+            ok = tl.seg is not None and tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
             if ok:
                 down[p.note_index] = iv
                 tau = hand.press_torques(tl.q, {p.finger: p.force_n})

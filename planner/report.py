@@ -295,8 +295,8 @@ def _fig_piano_roll(report: CheckReport) -> Figure:
         ax.add_patch(Rectangle((m.onset_s, m.pitch - 0.42), m.offset_s - m.onset_s, 0.84,
                                facecolor="none", edgecolor=ERROR_COLOR, lw=2.0, hatch="///",
                                zorder=3))
-        ax.text(m.onset_s, m.pitch + 0.5, "miss", color=ERROR_COLOR, fontsize=8,
-                va="bottom", ha="left", zorder=5)
+        ax.text(m.offset_s + 0.02 * dur / max(width / 11.0, 1.0), m.pitch, "missed",
+                color=ERROR_COLOR, fontsize=8, va="center", ha="left", zorder=5)
     ax.set_xlim(min(0.0, float(t[0])), float(t_end[-1]))
     ax.set_ylim(lo - 0.5, hi + 0.5)
     step = 1 if n_rows <= 40 else 12
@@ -361,6 +361,12 @@ def _fig_tip_heights(report: CheckReport) -> Figure:
         if deep.any():
             ax.plot(t[deep], h_mm[deep, f], "x", color=ERROR_COLOR, ms=5)
         ax.set_ylim(-16.0, top)
+        above = float(np.mean(h_mm[:, f] > top))
+        if above > 0:
+            ax.text(0.995, 0.97, f"{above:.0%} of the time above {top:.0f} mm "
+                    f"(max {np.max(h_mm[:, f]):.0f} mm)", transform=ax.transAxes, ha="right",
+                    va="top", fontsize=8, color="#555555",
+                    bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8})
         ax.set_ylabel(f"{f + 1} {FINGERS[f]}\nheight (mm)", fontsize=9)
         ax.grid(axis="x", color="#dddddd", lw=0.5)
     axs[-1].set_xlabel("time (s)")
@@ -629,9 +635,6 @@ class _SceneRecorder:
 
     def close(self) -> None:  # nothing to stop
         pass
-
-    def get_scene(self) -> str:
-        return "\n".join(self.commands_b64())
 
     def commands_b64(self) -> list[str]:
         cmds = self.commands + ([self.animation] if self.animation is not None else [])

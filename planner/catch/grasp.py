@@ -57,7 +57,7 @@ FACETS = 8
 STOP_DISTANCE_M = 0.02  # give of the padded palm while the ball stops
 HOLD_SAFETY = 1.5  # seed (David): safety factor on the grip
 REG = 1e-2
-_EPS = 1e-7  # OSQP absolute/relative tolerances
+_EPS = 1e-6  # OSQP absolute/relative tolerances (N)
 
 
 @dataclass(frozen=True)
@@ -255,9 +255,12 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
         lo.append(F[a])
         hi.append(F[a])
     if moment_balance:
+        # moments about the centre, divided by the contacts' largest lever arm (rows of
+        # the same scale as the force rows; the constraint is the same)
+        lever = max(float(np.linalg.norm(ct.point - centre)) for ct in contacts) or 1.0
         Mrows = np.zeros((3, nx))
         for c, ct in enumerate(contacts):
-            Mrows[:, 3 * c:3 * c + 3] = _skew(ct.point - centre)
+            Mrows[:, 3 * c:3 * c + 3] = _skew(ct.point - centre) / lever
         for r in Mrows:
             rows.append(r)
             lo.append(0.0)
@@ -288,40 +291,51 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
                         upper)
 
 
+_PATTERNS: dict[tuple[int, int, bool], tuple[np.ndarray, np.ndarray, tuple]] = {}
+
+
 def _dense_csc(M: np.ndarray, upper: bool = False) -> sp.csc_matrix:
     """CSC matrix that stores every entry of ``M`` (its upper triangle if ``upper``), zeros
     included, so that problems of the same size share one sparsity pattern (the solver
     is set up once per pattern and then only updated)."""
     m, n = M.shape
-    if upper:
-        rows = [np.arange(j + 1) for j in range(n)]
-        indptr = np.concatenate([[0], np.cumsum([j + 1 for j in range(n)])])
-        indices = np.concatenate(rows)
-        data = np.concatenate([M[:j + 1, j] for j in range(n)])
-    else:
-        indptr = np.arange(0, m * n + 1, m)
-        indices = np.tile(np.arange(m), n)
-        data = M.flatten(order="F")
-    return sp.csc_matrix((data, indices, indptr), shape=(m, n))
+    key = (m, n, upper)
+    pat = _PATTERNS.get(key)
+    if pat is None:
+        if upper:
+            indptr = np.concatenate([[0], np.cumsum(np.arange(1, n + 1))])
+            indices = np.concatenate([np.arange(j + 1) for j in range(n)])
+            sel = np.tril_indices(n)  # of M.T: column j of M, rows 0..j, column-major
+        else:
+            indptr = np.arange(0, m * n + 1, m)
+            indices = np.tile(np.arange(m), n)
+            sel = ()
+        pat = _PATTERNS[key] = (indptr.astype(np.int32), indices.astype(np.int32), sel)
+    indptr, indices, sel = pat
+    data = M.T[sel] if upper else M.flatten(order="F")
+    out = sp.csc_matrix((m, n))
+    out.data, out.indices, out.indptr = data, indices, indptr
+    return out
 
 
 _SOLVERS: dict[tuple[int, int], osqp.OSQP] = {}
 
 
 def _osqp_solve(prob: GraspProblem):
-    """OSQP on ``prob``: set up once per problem size (full dense patterns), then updated;
-    cold-started every time, so the result does not depend on earlier problems."""
+    """OSQP on ``prob``: set up once per problem size (full dense patterns), then updated
+    and warm-started from the previous solution of that size (consecutive throws give
+    similar problems); solutions agree with a cold start to the solver tolerance."""
     key = prob.A.shape
     solver = _SOLVERS.get(key)
     if solver is None:
         solver = osqp.OSQP(algebra="builtin")
         solver.setup(P=prob.P, q=prob.c, A=prob.A, l=prob.lower, u=prob.upper, verbose=False,
                      eps_abs=_EPS, eps_rel=_EPS, eps_prim_inf=1e-6, eps_dual_inf=1e-6,
-                     max_iter=20000, polishing=True, warm_starting=False)
+                     max_iter=20000, polishing=True, warm_starting=True)
         _SOLVERS[key] = solver
     else:
         solver.update(q=prob.c, l=prob.lower, u=prob.upper, Px=prob.P.data, Ax=prob.A.data)
-    return solver.solve()
+    return solver.solve(raise_error=False)
 
 
 def solve_grasp(prob: GraspProblem) -> GraspResult:

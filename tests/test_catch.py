@@ -1,0 +1,468 @@
+"""Catch planner (planner.catch.plan) and grasp force QP (planner.catch.grasp).
+
+Two hands are used:
+
+* ``default`` (the shipped seed hand). Its thumb cannot reach a ball held on
+  the palm: with every thumb joint at its limit the thumb tip stays ~17 mm
+  outside a tennis ball centred at palm_center + radius * n, so the grasp
+  criterion (thumb + 2 fingertips within radius + 10 mm) is unreachable and
+  every default-hand catch is reported infeasible with that reason
+  (``test_default_hand_thumb_cannot_reach`` checks the geometry independently).
+* ``thumb110``: the same hand file with the thumb's CMC flexion range raised from
+  90 to 110 deg (written to a temporary directory). Everything else is
+  identical; with it the full catch can be checked.
+
+No wall-clock assertions.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize
+
+from cli import main as cli_main
+from planner.catch import grasp as gq
+from planner.catch.flight import predict_throw
+from planner.catch.plan import (
+    GRASP_TOL_M,
+    GRASP_WINDOW_S,
+    INTERCEPT_TOL_M,
+    CatchPlanner,
+    catch_mount,
+    default_mount,
+    get_planner,
+    plan_catch,
+    plan_throw,
+)
+from planner.errors import InfeasibleError, InputError
+from planner.hand.model import load_hand
+from planner.hand.spec import hands_dir
+from planner.trajfile import read_trajectory
+
+RADIUS = {"tennis": 0.0335}
+THUMB_REASON = "grasp: the thumb cannot reach"
+STOP_REASON = "torque (stopping the ball"
+
+
+# ------------------------------------------------------------------ fixtures
+
+
+@pytest.fixture(scope="module")
+def thumb110(tmp_path_factory) -> str:
+    text = (hands_dir() / "default.toml").read_text(encoding="utf-8")
+    old = "cmc_flex = { lower_deg = 0.0, upper_deg = 90.0 }"
+    assert old in text
+    text = text.replace(old, "cmc_flex = { lower_deg = 0.0, upper_deg = 110.0 }")
+    text = text.replace('name = "default"', 'name = "thumb110"')
+    p = tmp_path_factory.mktemp("hands") / "thumb110.toml"
+    p.write_text(text, encoding="utf-8")
+    return str(p)
+
+
+@pytest.fixture(scope="module")
+def seed_plan(tmp_path_factory, thumb110):
+    out = tmp_path_factory.mktemp("catch") / "seed.csv"
+    res = plan_catch(30.0, 1.5, 0.0, thumb110, str(out))
+    return res, str(out)
+
+
+def _rows_at(t: np.ndarray, Q: np.ndarray, ti: float) -> np.ndarray:
+    return np.array([np.interp(ti, t, Q[:, j]) for j in range(Q.shape[1])])
+
+
+def _mounted_from_file(path: str, hand_source: str):
+    tr = read_trajectory(path)
+    hand = load_hand(hand_source).mounted(np.array(tr.metadata["T_world_root"]))
+    return tr, hand
+
+
+def _ball(meta, t):
+    b = meta["ball"]
+    assert b["drag"] == 0.0
+    t = np.atleast_1d(t)[:, None]
+    return np.array(b["p0"]) + np.array(b["v0"]) * t + 0.5 * np.array([0, 0, -9.81]) * t * t
+
+
+# ------------------------------------------------------------------ seed numbers, file
+
+
+def test_seed_numbers(seed_plan):
+    res, _ = seed_plan
+    # seed: 30 deg over 1.5 m -> 4.122 m/s, 0.42 s
+    assert res.plan.launch_speed == pytest.approx(4.122, abs=5e-4)
+    assert res.plan.flight_time_s == pytest.approx(0.42, abs=5e-3)
+    assert res.feasible, res.reasons
+
+
+def test_file_metadata(seed_plan, thumb110):
+    res, path = seed_plan
+    tr = read_trajectory(path)
+    m = tr.metadata
+    for k in ("format", "version", "task", "hand", "urdf_sha256", "T_world_root", "rate_hz",
+              "ball", "intercept_t"):
+        assert k in m
+    assert m["task"] == "catch" and m["format"] == "hand-trajectory" and m["version"] == 1
+    hand = load_hand(thumb110)
+    assert m["hand"] == hand.name and m["urdf_sha256"] == hand.urdf_sha256
+    assert set(m["ball"]) >= {"p0", "v0", "radius", "mass", "drag"}
+    assert m["ball"]["radius"] == pytest.approx(RADIUS["tennis"])
+    T = np.array(m["T_world_root"])
+    assert np.allclose(T, res.plan.T_world_root)
+    assert np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-12)
+    # the mount is the hand file's [catch] section placed at the catch point (1.5, 0, 0)
+    mount = catch_mount(hand, thumb110)
+    assert np.allclose(T[:3, 3], np.array([1.5, 0.0, 0.0]) + mount.offset_m)
+    assert tr.complete and tr.joint_names == hand.joint_names
+    assert tr.motor_names == hand.motor_names
+    assert m["rate_hz"] == 100.0
+    assert np.allclose(np.diff(tr.t_s), 0.01) and tr.t_s[0] == 0.0
+    assert tr.t_s[-1] >= m["intercept_t"] + 0.5 - 0.01
+
+
+def test_rows_within_limits_and_couplings(seed_plan, thumb110):
+    _, path = seed_plan
+    tr = read_trajectory(path)
+    hand = load_hand(thumb110)
+    Q = tr.q
+    assert np.all(Q >= hand.lower - 1e-6) and np.all(Q <= hand.upper + 1e-6)
+    dt = np.diff(tr.t_s)[:, None]
+    V = np.diff(Q, axis=0) / dt
+    assert np.all(np.abs(V) <= hand.velocity * 1.0 + 2e-6 / dt)
+    A = np.diff(V, axis=0) / dt[1:]
+    assert np.all(np.abs(A) <= hand.acceleration * 1.01 + 4e-6 / dt[1:] ** 2)
+    assert np.max(np.abs(hand.coupling_errors(Q))) < 2e-6  # exact up to the 6 decimals
+    assert np.allclose(tr.q_motor, hand.motor_angles(Q), atol=1e-4)
+
+
+def test_palm_meets_ball_and_grasp(seed_plan, thumb110):
+    """Own FK: ball centre within 15 mm of palm_center + r n at intercept_t; no fingertip
+    inside the ball before it; thumb + 2 within r + 10 mm within 150 ms, held to the end."""
+    _, path = seed_plan
+    tr, hand = _mounted_from_file(path, thumb110)
+    m = tr.metadata
+    r = m["ball"]["radius"]
+    ti = m["intercept_t"]
+    qi = _rows_at(tr.t_s, tr.q, ti)
+    P = hand.palm_pose(qi)
+    target = P[:3, 3] + r * P[:3, 2]
+    assert np.linalg.norm(_ball(m, ti)[0] - target) < INTERCEPT_TOL_M
+    assert np.linalg.norm(_ball(m, ti)[0] - target) < 0.002  # planned to ~0
+    thumb = hand.fingers.index("thumb")
+    grasp_rows = []
+    for t, q in zip(tr.t_s, tr.q):
+        tips = hand.tip_positions(q)
+        if t < ti:
+            assert np.min(np.linalg.norm(tips - _ball(m, t)[0], axis=1)) >= r
+        else:
+            Pq = hand.palm_pose(q)
+            c = Pq[:3, 3] + r * Pq[:3, 2]
+            close = np.linalg.norm(tips - c, axis=1) <= r + GRASP_TOL_M
+            grasp_rows.append((t, bool(close[thumb] and close.sum() >= 3)))
+    first = next(t for t, ok in grasp_rows if ok)
+    assert first <= ti + GRASP_WINDOW_S
+    assert all(ok for t, ok in grasp_rows if t >= first)
+
+
+def test_palm_faces_ball(seed_plan):
+    res, _ = seed_plan
+    p = res.plan
+    n = p.hand.palm_pose(p.q_open)[:3, 2]
+    v = p.arrival_velocity
+    assert math.degrees(math.acos(-(v @ n) / np.linalg.norm(v))) < 1.0
+    assert p.close_s >= 0.150 - 1e-9  # closing time within the seed's 150-300 ms
+    assert p.close_s <= 0.300
+
+
+def test_independent_check_passes(seed_plan, thumb110):
+    check = pytest.importorskip("planner.check")
+    _, path = seed_plan
+    rep = check.check_trajectory(path, hand_override=thumb110)
+    assert rep.ok, rep.problems
+
+
+# ------------------------------------------------------------------ default hand
+
+
+def test_default_hand_thumb_cannot_reach():
+    """Independent geometry: over the thumb's whole joint box the default hand's thumb tip
+    stays more than radius + 10 mm from a tennis ball resting on the palm."""
+    hand = load_hand("default")
+    q = hand.q_neutral.copy()
+    P = hand.palm_pose(q)
+    r = RADIUS["tennis"]
+    c = P[:3, 3] + r * P[:3, 2]
+    js = hand.joint_slice("thumb")
+    bounds = list(zip(hand.lower[js], hand.upper[js]))
+
+    def dist(x):
+        qq = q.copy()
+        qq[js] = x
+        return float(np.linalg.norm(hand.tip_positions(qq)[0] - c))
+
+    # global: a grid over the joint box, then local refinement of the best grid points
+    axes = [np.linspace(lo, hi, 19) for lo, hi in bounds]
+    grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(js), -1).T
+    d = np.array([dist(x) for x in grid])
+    starts = grid[np.argsort(d)[:4]]
+    best = min((minimize(dist, x0, bounds=bounds) for x0 in starts), key=lambda s: s.fun)
+    assert best.fun <= d.min() + 1e-12
+    assert best.fun - r > GRASP_TOL_M + 0.005  # ~17 mm beyond the surface
+    # flexion and IP at their upper limits: more thumb range is what is missing
+    assert np.allclose(best.x[1:], hand.upper[js][1:], atol=1e-3)
+
+
+def test_default_hand_catch_reported(tmp_path):
+    out = tmp_path / "c.csv"
+    res = plan_catch(30.0, 1.5, 0.0, "default", str(out))
+    assert out.exists() and not res.feasible
+    assert res.reasons[0].startswith(THUMB_REASON)
+    # the rest of the catch is planned: palm on the ball, fingertips clear before it
+    assert res.plan.intercept_error_m < 0.001
+    assert res.plan.min_clearance_before_m > 0
+    with pytest.raises(InfeasibleError):
+        plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "s.csv"), strict=True)
+    assert (tmp_path / "s.csv").exists()
+
+
+# ------------------------------------------------------------------ grid
+
+
+def _stop_torque_exceeds(plan) -> bool:
+    """Palm-only stop: the contact force is fixed (= the required force), so the motor
+    torques follow directly; True when one exceeds its peak."""
+    hand = plan.hand
+    qi = _rows_at(plan.t, plan.q, plan.intercept_t)
+    F = gq.stop_force(plan.flight.ball.mass_kg, plan.arrival_velocity)
+    tau = hand.gravity_torques(qi) + gq.palm_jacobian(hand, qi).T @ F
+    tm = hand.motor_torques(qi, tau)
+    return bool(np.any(np.abs(tm) > hand.motor_peak_torque))
+
+
+@pytest.mark.parametrize("hand_kind", ["thumb110", "default"])
+def test_grid(hand_kind, thumb110):
+    """Angles 20-60 deg (step 10) x distances 1-3 m (step 0.5): every throw is reached and
+    closed in time; the only infeasibilities are (default hand) the thumb, and (both
+    hands) stopping a ball that arrives faster than ~5.3 m/s on the palm over 2 cm, which
+    needs more than the wrist flexion motor's 2 N m peak."""
+    source = thumb110 if hand_kind == "thumb110" else "default"
+    pl = get_planner(source)
+    n_stop = 0
+    for a in range(20, 61, 10):
+        for d in np.arange(1.0, 3.01, 0.5):
+            p = plan_throw(a, d, 0.0, planner=pl)
+            assert p.intercept_error_m < 0.001
+            assert p.misalignment_deg < 1.0
+            assert p.min_clearance_before_m > 0.0
+            reasons = list(p.reasons)
+            if hand_kind == "default":
+                assert reasons and reasons[0].startswith(THUMB_REASON)
+                reasons = reasons[1:]
+            else:
+                assert p.grasp_t is not None and p.grasp_t <= p.intercept_t + GRASP_WINDOW_S
+            exceeds = _stop_torque_exceeds(p)
+            if exceeds:
+                n_stop += 1
+                assert reasons == [r for r in reasons if r.startswith(STOP_REASON)] and reasons
+                assert "motor.wrist_flex" in reasons[0]
+                assert np.linalg.norm(p.arrival_velocity) > 5.0
+            else:
+                assert reasons == [], (a, d, reasons)
+                assert p.stop is not None and p.stop.headroom >= 0
+            if np.linalg.norm(p.arrival_velocity) < 5.0:
+                assert not exceeds
+    assert 0 < n_stop < 25
+
+
+# ------------------------------------------------------------------ grasp QP
+
+
+@pytest.fixture(scope="module")
+def closed(thumb110):
+    p = plan_throw(40.0, 2.0, 0.0, hand=thumb110)
+    return p
+
+
+def _check_grasp(res: gq.GraspResult, hand, q):
+    prob = res.problem
+    # equilibrium
+    assert np.allclose(res.total_force, prob.required_force, atol=1e-4)
+    if prob.moment_balance:
+        M = sum(np.cross(c.point - prob.centre, f) for c, f in zip(prob.contacts, res.forces))
+        assert np.allclose(M, 0.0, atol=1e-5)
+    # inside every friction cone (the true cone, mu = 0.8)
+    for c, f in zip(prob.contacts, res.forces):
+        fn = f @ c.normal
+        assert fn >= -1e-5
+        assert np.linalg.norm(f - fn * c.normal) <= prob.mu * fn + 1e-5
+    assert res.cone_margin() >= -1e-5
+    # motor torques recomputed from the forces with the hand model
+    tau = hand.gravity_torques(q)
+    for c, f in zip(prob.contacts, res.forces):
+        tau = tau + c.jacobian.T @ f
+    tm = hand.motor_torques(q, tau)
+    assert np.allclose(tm, res.motor_torques, atol=1e-6)
+    assert np.all(np.abs(tm) <= hand.motor_peak_torque * (1 + 1e-4))
+    ratio = np.abs(tm) / hand.motor_peak_torque
+    assert res.headroom == pytest.approx(1 - ratio.max(), abs=1e-9)
+    assert res.limiting_motor == hand.motor_names[int(np.argmax(ratio))]
+
+
+def test_grasp_hold(closed):
+    p = closed
+    hand = p.hand
+    r = p.flight.ball.radius_m
+    P = hand.palm_pose(p.q_closed)
+    c = P[:3, 3] + r * P[:3, 2]
+    res = gq.grasp_forces(hand, p.q_closed, c, r, gq.hold_force(p.flight.ball.mass_kg))
+    names = [ct.name for ct in res.problem.contacts]
+    assert names[0] == "palm" and "thumb" in names and len(names) >= 4
+    assert res.problem.facets == 8 and res.problem.mu == 0.8
+    assert np.allclose(res.total_force, [0, 0, 1.5 * 0.057 * 9.81], atol=1e-4)
+    _check_grasp(res, hand, p.q_closed)
+
+
+def test_grasp_stop(closed):
+    p = closed
+    hand = p.hand
+    r = p.flight.ball.radius_m
+    P = hand.palm_pose(p.q_open)
+    c = P[:3, 3] + r * P[:3, 2]
+    F = gq.stop_force(p.flight.ball.mass_kg, p.arrival_velocity)
+    v = np.linalg.norm(p.arrival_velocity)
+    # m v^2 / (2 d) against the velocity, plus the weight
+    assert np.linalg.norm(F + 0.057 * np.array([0, 0, -9.81])) == pytest.approx(
+        0.057 * v * v / (2 * gq.STOP_DISTANCE_M))
+    res = gq.grasp_forces(hand, p.q_open, c, r, F, case="stop", tip_tol_m=0.001,
+                          moment_balance=False)
+    assert [ct.name for ct in res.problem.contacts] == ["palm"]
+    _check_grasp(res, hand, p.q_open)
+    assert res.limiting_motor == "wrist_flex"
+
+
+def test_grasp_infeasible_huge_mass(closed):
+    p = closed
+    hand = p.hand
+    r = p.flight.ball.radius_m
+    P = hand.palm_pose(p.q_closed)
+    c = P[:3, 3] + r * P[:3, 2]
+    with pytest.raises(InfeasibleError) as ei:
+        gq.grasp_forces(hand, p.q_closed, c, r, gq.hold_force(50.0))
+    prob = ei.value.problem
+    assert isinstance(prob, gq.GraspProblem)
+    assert prob.required_force[2] == pytest.approx(1.5 * 50.0 * 9.81)
+    assert "motor." in str(ei.value)
+
+
+def test_grasp_bad_input(closed):
+    p = closed
+    with pytest.raises(InputError):
+        gq.build_grasp_problem(p.hand, p.q_closed, [], np.zeros(3), np.zeros(3))
+    cts = gq.ball_contacts(p.hand, p.q_closed, np.zeros(3), 0.03, 0.01)
+    with pytest.raises(InputError):
+        gq.build_grasp_problem(p.hand, p.q_closed, cts, np.zeros(3), np.zeros(3), facets=3)
+
+
+# ------------------------------------------------------------------ bad arguments
+
+
+@pytest.mark.parametrize("args", [
+    (0.0, 1.5, 0.0), (90.0, 1.5, 0.0), (-10.0, 1.5, 0.0), (120.0, 1.5, 0.0),
+    (float("nan"), 1.5, 0.0), (float("inf"), 1.5, 0.0), (30.0, 0.0, 0.0), (30.0, -1.0, 0.0),
+    (30.0, float("nan"), 0.0), (30.0, float("inf"), 0.0), (30.0, 1.5, float("nan")),
+    (30.0, 1.5, float("-inf")), ("x", 1.5, 0.0),
+])
+def test_bad_arguments(tmp_path, args):
+    out = tmp_path / "c.csv"
+    with pytest.raises(InputError):
+        plan_catch(*args, "default", str(out))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bad_rate_ball_hand_obs(tmp_path):
+    out = str(tmp_path / "c.csv")
+    for kw in ({"rate_hz": 0.0}, {"rate_hz": float("nan")}, {"ball": "football"},
+               {"observations": str(tmp_path / "none.csv")}):
+        with pytest.raises(InputError):
+            plan_catch(30.0, 1.5, 0.0, "default", out, **kw)
+    with pytest.raises(InputError):
+        plan_catch(30.0, 1.5, 0.0, "no_such_hand", out)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_exit_codes(tmp_path, capsys):
+    out = tmp_path / "c.csv"
+    assert cli_main(["catch", "--angle", "0", "--dist", "1.5", "-o", str(out)]) == 2
+    assert not out.exists()
+    assert "error:" in capsys.readouterr().err
+    assert cli_main(["catch", "--angle", "30", "--dist", "1.5", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    for s in ("launch speed 4.122 m/s", "flight time 0.420 s", "intercept t =", "close start",
+              "margins:", "torque headroom", "feasible: NO", THUMB_REASON):
+        assert s in err
+    assert out.exists()
+    out.unlink()
+    assert cli_main(["catch", "--angle", "30", "--dist", "1.5", "-o", str(out),
+                     "--strict"]) == 1
+    assert out.exists()
+
+
+# ------------------------------------------------------------------ observations, drag, rate
+
+
+def test_observations(tmp_path, thumb110):
+    fl = predict_throw(35.0, 2.0, 0.1, "tennis")
+    ts = np.arange(0.0, 0.16, 1 / 120)
+    ps = fl.position(ts) + np.random.default_rng(3).normal(0, 0.002, (len(ts), 3))
+    csv = tmp_path / "obs.csv"
+    csv.write_text("t,x,y,z\n" + "".join(f"{t},{x},{y},{z}\n" for t, (x, y, z) in zip(ts, ps)))
+    out = tmp_path / "c.csv"
+    res = plan_catch(35.0, 2.0, 0.1, thumb110, str(out), observations=str(csv))
+    p = res.plan
+    u = p.uncertainty
+    assert u is not None and 0 < u["sigma_t_s"] < 0.05 and 0 < u["sigma_z_m"] < 0.05
+    assert p.t_info_s == pytest.approx(ts[-1])
+    assert p.move_start_s == pytest.approx(ts[-1] + 0.030)
+    ref = plan_throw(35.0, 2.0, 0.1, hand=thumb110)
+    assert p.intercept_t == pytest.approx(ref.intercept_t, abs=0.02)
+    tr = read_trajectory(str(out))
+    assert tr.metadata["ball"]["v0"] == pytest.approx(list(p.flight.v0))
+    assert res.intercept_error_m < 0.002  # on the fitted flight
+
+
+def test_drag_and_rate(tmp_path, thumb110):
+    out = tmp_path / "c.csv"
+    res = plan_catch(40.0, 2.0, 0.0, thumb110, str(out), drag=True, rate_hz=250.0)
+    tr = read_trajectory(str(out))
+    assert tr.metadata["ball"]["drag"] > 0 and tr.metadata["rate_hz"] == 250.0
+    assert np.allclose(np.diff(tr.t_s), 0.004)
+    assert res.plan.intercept_error_m < 0.001
+    assert res.feasible, res.reasons
+
+
+def test_mount_defaults(thumb110):
+    hand = load_hand("default")
+    m_file = catch_mount(hand)
+    assert m_file.source.startswith("default.toml")
+    m_code = default_mount(hand)
+    assert np.allclose(m_file.offset_m, m_code.offset_m, atol=1e-4)
+    assert np.allclose(m_file.rpy_deg, m_code.rpy_deg)
+    # a hand file without [catch] (mk5 ships none) gets the computed default
+    mk5 = load_hand("mk5")
+    assert catch_mount(mk5).source.startswith("default (")
+
+
+def test_out_of_reach_is_reported(tmp_path, thumb110):
+    """A mount far from the path: the plan is still written, the reason says why."""
+    from planner.catch.plan import CatchMount
+
+    hand = load_hand(thumb110)
+    far = CatchMount((-0.2287, 0.0, -0.8), (126.0, 0.0, 90.0), "test: 0.5 m too low")
+    pl = CatchPlanner(hand, far)
+    p = pl.plan(predict_throw(30.0, 1.5, 0.0, "tennis"), np.array([1.5, 0.0, 0.0]))
+    assert not p.feasible
+    assert any(r.startswith("out of reach") for r in p.reasons)
+    assert len(p.t) > 0 and np.all(np.isfinite(p.q))
