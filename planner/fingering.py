@@ -35,7 +35,7 @@ import numpy as np
 from planner.music import keyboard as kb
 
 CHORD_WINDOW_S = 0.030
-REUSE_S = 0.40  # a finger moved to another key sooner than this is penalised
+REUSE_S = 0.30  # a finger moved to another key sooner than this after its release is penalised
 FINGER_ORDER = ("thumb", "index", "middle", "ring", "pinky")
 
 
@@ -204,8 +204,11 @@ def _transition(notes, prev_g, fa, ra, g, fb, rb, dt, held, reach: HandReach) ->
         if abs(dev) > reach.reach_m[f]:
             return math.inf
         c += 5.0 * d
+    onset = notes[g[0]].onset_s
     for i, f in prev_finger.items():
-        # a finger that must lift, move and come down again needs ~0.3 s
-        if f in used_now and used_now[f] != notes[i].pitch and dt < REUSE_S:
-            c += 5.0 * (REUSE_S - dt) / REUSE_S
+        # a finger that must lift, move and come down again needs ~0.3 s between
+        # releasing one key and striking the next
+        free = onset - notes[i].offset_s
+        if f in used_now and used_now[f] != notes[i].pitch and free < REUSE_S:
+            c += 5.0 * (REUSE_S - max(free, 0.0)) / REUSE_S
     return c

@@ -536,12 +536,16 @@ def play_cli(a) -> int:
     sys.stderr.write(format_summary(name, res, max((n.offset_s for n in song.notes), default=0.0),
                                     out) + "\n")
     if a.report or a.html:
-        from planner import report
+        if out == "-":
+            raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
+        from planner.check import check_trajectory
+        from planner.report import write_check_report, write_html
 
+        rep = check_trajectory(out, a.song)
         if a.report:
-            report.write_play_report(a.report, out, a.song)
+            write_check_report(rep, a.report)
         if a.html:
-            report.write_html(a.html, out)
+            write_html(rep, a.html)
     if a.strict and (res.infeasible or res.late):
         return 1
     return 0

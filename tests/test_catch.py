@@ -18,7 +18,6 @@ No wall-clock assertions.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest

@@ -374,7 +374,7 @@ def _infeasible_reason(prob: GraspProblem) -> str:
         c = 2.0 * W.T @ (prob.tau_offset / prob.peak)
         solver.setup(P=P, q=c, A=A, l=prob.lower[:-n_motor], u=prob.upper[:-n_motor],
                      verbose=False, eps_abs=_EPS, eps_rel=_EPS, max_iter=20000)
-        res = solver.solve()
+        res = solver.solve(raise_error=False)
         if res.info.status not in ("solved", "solved inaccurate") or res.x is None:
             return (f"{prob.case}: no force split of {F:.1f} N over {where} lies inside the "
                     f"friction cones (mu {prob.mu:g})")

@@ -76,7 +76,6 @@ import importlib.util
 import math
 import sys
 import time
-import tomllib
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -84,6 +83,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+import tomllib
 
 from planner.catch import grasp as gq
 from planner.catch.flight import (
@@ -607,7 +607,7 @@ class CatchPlanner:
         t = np.linspace(max(0.0, t_c - 0.30), t_c + 0.15, _N_SEARCH)
         b = flight.position(t) - C
         v = flight.velocity(t)
-        theta, s, hgt = self._aligned(b, v, r)
+        _, _, hgt = self._aligned(b, v, r)
         # first crossing of the palm plane (+ before, - after)
         cross = np.flatnonzero((hgt[:-1] > 0) & (hgt[1:] <= 0))
         if cross.size:
@@ -638,7 +638,6 @@ class CatchPlanner:
         """No pose faces the ball exactly: put the palm point on the path with the
         deviation at each candidate value and pick the least misaligned reachable one."""
         b = flight.position(t) - C
-        v = flight.velocity(t)
         e = self.e_f
         w = b - self.W
         w_p = w - np.outer(w @ e, e)
@@ -773,7 +772,7 @@ class CatchPlanner:
         starts = np.array([t_react, s_c])
 
         # 3. rows
-        n_rows = int(math.floor((t_i + HOLD_AFTER_S) * rate_hz + 1e-9)) + 1
+        n_rows = math.floor((t_i + HOLD_AFTER_S) * rate_hz + 1e-9) + 1
         t = np.arange(n_rows) * dt
         Q = h.apply_couplings(sample(phases, starts, t, self.q_rest))
         QM = h.motor_angles(Q)
@@ -927,7 +926,7 @@ class CatchPlanner:
 
 def _uncertainty(fit: FitResult, x_plane: float) -> dict[str, float] | None:
     try:
-        t, p, cov, sig_t = predict_intercept(fit, x_plane)
+        t, _, cov, sig_t = predict_intercept(fit, x_plane)
     except PlannerError:
         return None
     return {"x_plane_m": x_plane, "t_s": t, "sigma_t_s": sig_t,
