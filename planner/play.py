@@ -333,13 +333,13 @@ class _Timeline:
             self.go_high(finger)
             self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, HIGH_M)),
                        0.5, t_s, 0.0, "move", None)
-            self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M)),
-                       0.5, t_s, 0.0, "move", None)
         q_new = self._with_finger(finger, qp)
         frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
         # the key goes down half a frame before the onset, so the onset's frame shows it
+        # MIDI velocity sets the key speed: no faster than descent_time_s per 30 mm
+        drop = max(self._tip_z(self.q, finger) - self._tip_z(q_new, finger), 0.0)
         self._move(q_new, frac, t_s - 0.5 * self.dt, 1.0, "press", note,
-                   min_s=descent_time_s(velocity) * LOW_M / 0.030)
+                   min_s=descent_time_s(velocity) * drop / 0.030)
         self.place[finger] = ("down", pitch)
         return True
 

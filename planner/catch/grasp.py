@@ -149,17 +149,32 @@ def stop_time(v_arrival: np.ndarray, stop_distance_m: float = STOP_DISTANCE_M) -
 # ------------------------------------------------------------------ contacts
 
 
-def palm_jacobian(hand: HandModel, q: np.ndarray) -> np.ndarray:
-    """World-frame position Jacobian (3, n) of ``palm_center`` in the hand's joint order."""
+def _pin_index(hand: HandModel) -> np.ndarray:
+    model = hand.pin_model
+    return np.array([model.idx_qs[model.getJointId(n)] for n in hand.joint_names])
+
+
+def _kinematics(hand: HandModel, q: np.ndarray, frames: list[str]):
+    """World poses (4x4) and world position Jacobians (3, n) of ``frames``, one FK pass."""
     model, data = hand.pin_model, hand.pin_data
+    idx = _pin_index(hand)
     qp = np.zeros(model.nq)
-    idx = np.array([model.idx_qs[model.getJointId(n)] for n in hand.joint_names])
     qp[idx] = q
     pin.computeJointJacobians(model, data, qp)
     pin.updateFramePlacements(model, data)
-    J = pin.getFrameJacobian(model, data, model.getFrameId(PALM_FRAME),
-                             pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-    return hand.T_world_root[:3, :3] @ J[:3, idx]
+    T, R = hand.T_world_root, hand.T_world_root[:3, :3]
+    poses, jacs = [], []
+    for f in frames:
+        fid = model.getFrameId(f)
+        poses.append(T @ data.oMf[fid].homogeneous)
+        J = pin.getFrameJacobian(model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        jacs.append(R @ J[:3, idx])
+    return poses, jacs
+
+
+def palm_jacobian(hand: HandModel, q: np.ndarray) -> np.ndarray:
+    """World-frame position Jacobian (3, n) of ``palm_center`` in the hand's joint order."""
+    return _kinematics(hand, q, [PALM_FRAME])[1][0]
 
 
 def ball_contacts(hand: HandModel, q: np.ndarray, centre: np.ndarray, radius: float,
@@ -168,17 +183,18 @@ def ball_contacts(hand: HandModel, q: np.ndarray, centre: np.ndarray, radius: fl
     the palm centre (normal = palm +z) and every fingertip within ``radius + tip_tol_m``
     of the centre (normal from the tip towards the centre)."""
     centre = np.asarray(centre, dtype=float)
+    frames = [PALM_FRAME, *hand.tip_frames]
+    poses, jacs = _kinematics(hand, q, frames)
     out: list[Contact] = []
     if palm:
-        T = hand.palm_pose(q)
-        out.append(Contact("palm", T[:3, 3].copy(), T[:3, 2].copy(), palm_jacobian(hand, q)))
-    tips = hand.tip_positions(q)
-    J = hand.tip_jacobians(q)
+        T = poses[0]
+        out.append(Contact("palm", T[:3, 3].copy(), T[:3, 2].copy(), jacs[0]))
     for k, f in enumerate(hand.fingers):
-        d = centre - tips[k]
+        tip = poses[k + 1][:3, 3]
+        d = centre - tip
         dist = float(np.linalg.norm(d))
         if dist <= radius + tip_tol_m and dist > 1e-9:
-            out.append(Contact(f, tips[k].copy(), d / dist, J[k].copy()))
+            out.append(Contact(f, tip.copy(), d / dist, jacs[k + 1]))
     return out
 
 
@@ -331,7 +347,7 @@ def _osqp_solve(prob: GraspProblem):
         solver = osqp.OSQP(algebra="builtin")
         solver.setup(P=prob.P, q=prob.c, A=prob.A, l=prob.lower, u=prob.upper, verbose=False,
                      eps_abs=_EPS, eps_rel=_EPS, eps_prim_inf=1e-6, eps_dual_inf=1e-6,
-                     max_iter=20000, polishing=True, warm_starting=True)
+                     max_iter=20000, polishing=False, warm_starting=True)
         _SOLVERS[key] = solver
     else:
         solver.update(q=prob.c, l=prob.lower, u=prob.upper, Px=prob.P.data, Ax=prob.A.data)

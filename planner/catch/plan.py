@@ -120,7 +120,7 @@ DESIGN_DESCENT_DEG = 36.0  # default mount: the palm faces a ball descending at 
 DESIGN_DEV_DEG = 10.0  # ... with the wrist deviated this much (room for the path's curvature)
 REST_CURL = 0.3  # rest pose: flexion joints at this fraction of their upper limit
 MAX_MISALIGN_DEG = 80.0  # beyond this the ball grazes the palm: out of reach
-_N_SEARCH = 91  # samples of the ball's path in the intercept search
+_N_SEARCH = 46  # samples of the ball's path in the intercept search
 _N_CLOSE = 201  # samples of the closing move (palm frame table)
 _N_CAND = 33  # candidate starts of the closing move
 NEAR_M = 0.35  # a fingertip is never farther than this from the palm target
@@ -880,10 +880,10 @@ class CatchPlanner:
             reasons.append(f"the palm misses the ball by {1000 * err:.0f} mm at t = {t_i:.3f} s")
         # rows that matter: before the intercept those in which the ball is within
         # NEAR_M of the palm target (no fingertip reaches farther); after it, rows until
-        # the hand stops moving (``t_static``) and the grasp window ends, and the last row
+        # the hand stops moving (``t_static``; later rows repeat the last), and the last row
         b_all = flight.position(t) - C
         pre = (t < t_i) & (np.linalg.norm(b_all - P, axis=1) < NEAR_M)
-        post = (t >= t_i) & (t <= max(t_static, t_i + GRASP_WINDOW_S) + 1.5 / self._rate)
+        post = (t >= t_i) & (t <= t_static + 1.5 / self._rate)  # static afterwards
         post[-1] = t[-1] >= t_i
         idx = np.flatnonzero(pre | post)
         tips, palm = self._frames(Q[idx])

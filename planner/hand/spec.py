@@ -174,7 +174,7 @@ def load_hand_spec(name_or_path: str) -> HandSpec:
         return build_spec(data)
     except InputError as e:
         raise InputError(f"malformed hand file {path.name}: {e}") from None
-    except (KeyError, TypeError, ValueError, IndexError) as e:
+    except (KeyError, TypeError, ValueError, IndexError, ZeroDivisionError, AttributeError) as e:
         raise InputError(f"malformed hand file {path.name}: bad or missing entry {e}") from None
 
 
@@ -199,6 +199,13 @@ def _length(d: dict[str, Any], key: str) -> float:
         v = _get(d, f"{key}_m")
     if v <= 0:
         raise InputError(f"length {key!r} must be positive")
+    return v
+
+
+def _positive(d: dict[str, Any], key: str) -> float:
+    v = _get(d, key)
+    if v <= 0:
+        raise InputError(f"{key!r} must be positive, got {v!r}")
     return v
 
 
@@ -334,7 +341,7 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
     palm = _get(data, "palm", dict)
     p_len, p_thk = _length(palm, "length"), _get(palm, "thickness_m")
     tendon = _get(data, "tendon", dict)
-    spool = _get(tendon, "spool_radius_m")
+    spool = _positive(tendon, "spool_radius_m")
     w_motor = _get(tendon, "motor_speed_rad_s")
     eff = _get(tendon, "efficiency")
     if not 0 < eff <= 1:
@@ -350,13 +357,15 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
     finger_joints: list[tuple[str, tuple[str, ...]]] = []
     fingers = _get(data, "finger", list)
     names = [f.get("name") for f in fingers]
-    if sorted(names) != sorted(FINGERS[1:]):
+    if sorted(map(str, names)) != sorted(FINGERS[1:]):
         raise InputError(f"[[finger]] entries must be exactly {', '.join(FINGERS[1:])}; got {names}")
 
     # thumb
     th = _get(data, "thumb", dict)
     tb, tt, tw = _length(th, "base"), _length(th, "top"), _length(th, "width")
     tarm = _get(th, "moment_arm_m", dict)
+    for k in ("cmc_flex", "ip"):
+        _positive(tarm, k)
     tm = _get(th, "masses_kg", dict)
     cmc_xyz = _vec(th, "base_xyz_m")
     cmc_rpy = tuple(math.radians(a) for a in _vec(th, "base_rpy_deg"))
@@ -409,7 +418,7 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
                             axis=(0.0, 0.0, 1.0), lower=lo_a,
                             upper=hi_a, velocity=min(v_cap, _get(servo, "speed_rad_s")),
                             acceleration=a_max, effort=_get(servo, "peak_torque_nm")))
-        a_mcp, a_pip, a_dip = _get(arm, "mcp"), _get(arm, "pip"), _get(arm, "dip")
+        a_mcp, a_pip, a_dip = _positive(arm, "mcp"), _positive(arm, "pip"), _positive(arm, "dip")
         # one tendon crosses the PIP and the DIP: its motor turns
         # (a_pip + ratio a_dip) / spool per PIP radian
         a_pip_eff = a_pip + ratio * a_dip
