@@ -23,8 +23,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from planner.catch.flight import get_ball  # noqa: E402
-from planner.catch.plan import get_planner, plan_throw  # noqa: E402
+from planner.catch.flight import get_ball
+from planner.catch.plan import get_planner, plan_throw
 
 BUDGET_S = 0.420 - 0.300 - 0.025  # seed flight time - actuation time - signal handling
 

@@ -360,7 +360,10 @@ class HandIK:
                     break
                 if self._nonlinear:
                     self._set_half_spaces(())
-                self.solver.solve(True)
+                try:
+                    self.solver.solve(True)
+                except RuntimeError:  # a rank-deficient step: return what we have
+                    break
                 self.robot.update_kinematics()
                 err, ang = errors()
         finally:

@@ -36,6 +36,7 @@ TRAVEL_Z_M = kb.BLACK_TOP_Z_M + 0.010  # lifted fingertips clear every key by 10
 DIRECT_MOVE_M = 0.004  # an arm move shifting no tip more than this sideways is local
 LATE_S = 0.020  # a note whose key goes down later than this is reported
 CHUNK_PHASES = 40
+FIRST_CHUNK_PHASES = 4
 REST_HOVER_Z_M = 0.020
 HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white tops (7.5 mm over black)
 LOW_M = 0.003  # a finger waiting to press (or just released) rests this far above its key
@@ -493,7 +494,8 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         elif p.note_index in down:
             tl.release(p.finger, p.pitch, t)
             del down[p.note_index]
-            if not down and len(tl.phases) >= CHUNK_PHASES:
+            # the first rows go out as soon as there are a few, then in larger chunks
+            if not down and len(tl.phases) >= (FIRST_CHUNK_PHASES if next_row == 0 else CHUNK_PHASES):
                 flush()
         if progress and total > 400 and k % 100 == 0:
             sys.stderr.write(f"\rplanning {k}/{total} key events ({100 * k // total}%)")

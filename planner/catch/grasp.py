@@ -254,33 +254,22 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
     # motor torques: offset (gravity) and one column per unit contact force
     M = motor_torque_matrix(hand, q)
     tau_offset = M @ hand.gravity_torques(q)
-    tau_map = np.empty((hand.n_motor, nx))
-    for c, ct in enumerate(contacts):
-        for a in range(3):  # unit force along axis a at contact c
-            tau_map[:, 3 * c + a] = M @ ct.jacobian[a]
+    # column 3c + a: motor torques for a unit force along axis a at contact c (J_c^T e_a)
+    tau_map = M @ np.concatenate([ct.jacobian for ct in contacts], axis=0).T
     peak = np.asarray(hand.motor_peak_torque, dtype=float)
 
-    rows: list[np.ndarray] = []
-    lo: list[float] = []
-    hi: list[float] = []
     # force balance (equalities)
-    for a in range(3):
-        r = np.zeros(nx)
-        r[a::3] = 1.0
-        rows.append(r)
-        lo.append(F[a])
-        hi.append(F[a])
+    eq = [np.tile(np.eye(3), nc)]
+    eq_b = [F]
     if moment_balance:
         # moments about the centre, divided by the contacts' largest lever arm (rows of
         # the same scale as the force rows; the constraint is the same)
-        lever = max(float(np.linalg.norm(ct.point - centre)) for ct in contacts) or 1.0
-        Mrows = np.zeros((3, nx))
-        for c, ct in enumerate(contacts):
-            Mrows[:, 3 * c:3 * c + 3] = _skew(ct.point - centre) / lever
-        for r in Mrows:
-            rows.append(r)
-            lo.append(0.0)
-            hi.append(0.0)
+        arms = np.array([ct.point - centre for ct in contacts])
+        lever = float(np.linalg.norm(arms, axis=1).max()) or 1.0
+        eq.append(np.hstack([_skew(a) for a in arms]) / lever)
+        eq_b.append(np.zeros(3))
+    rows = np.vstack(eq)
+    lo = hi = np.concatenate(eq_b)
     # friction pyramids: n . f >= 0 and (t_k - mu' n) . f <= 0
     mu_in = mu * np.cos(np.pi / facets)
     ang = 2.0 * np.pi * np.arange(facets) / facets
@@ -294,7 +283,7 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
         r0 = c * (facets + 1)
         cone_rows[r0, 3 * c:3 * c + 3] = n
         cone_rows[r0 + 1:r0 + 1 + facets, 3 * c:3 * c + 3] = cos_k * e1 + sin_k * e2 - mu_in * n
-    A_dense = np.vstack([np.array(rows), cone_rows, tau_map])
+    A_dense = np.vstack([rows, cone_rows, tau_map])
     lower = np.concatenate([lo, cone_lo, -peak - tau_offset])
     upper = np.concatenate([hi, cone_hi, peak - tau_offset])
     # objective: |f|^2 + REG sum (tau/peak)^2  (tau affine in f)

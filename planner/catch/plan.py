@@ -78,6 +78,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -122,8 +123,7 @@ REST_CURL = 0.3  # rest pose: flexion joints at this fraction of their upper lim
 MAX_MISALIGN_DEG = 80.0  # beyond this the ball grazes the palm: out of reach
 _N_SEARCH = 46  # samples of the ball's path in the intercept search
 _N_CLOSE = 201  # samples of the closing move (palm frame table)
-_N_CAND = 33  # candidate starts of the closing move
-NEAR_M = 0.35  # a fingertip is never farther than this from the palm target
+_N_CAND = 25  # candidate starts of the closing move
 _WRIST = ("wrist_flex", "wrist_dev")
 
 
@@ -244,6 +244,7 @@ class Closing:
     u: np.ndarray  # (K,) move fractions of the table
     tips_pc: np.ndarray  # (K, 5, 3) fingertips in the palm_center frame
     reason: str | None
+    reach_m: float  # farthest fingertip from the ball centre during the move
 
 
 @dataclass
@@ -426,7 +427,6 @@ class CatchPlanner:
         self.abd_idx = np.array(abd, dtype=int)
         self.flexion_idx = np.array([i for i in self.finger_idx if i not in set(abd)], dtype=int)
         self._locked = tuple(h.joint_names[i] for i in self.arm)
-        self._fingers_locked = tuple(h.joint_names[i] for i in self.finger_idx)
         self._pin_idx = np.array([h.pin_model.idx_qs[h.pin_model.getJointId(n)]
                                   for n in h.joint_names])
         self._tip_ids = [h.pin_model.getFrameId(f"{f}_tip") for f in h.fingers]
@@ -435,6 +435,7 @@ class CatchPlanner:
         self.q_zero = _zero_pose(h)
         self._geometry()
         self.q_rest = self._rest_pose()
+        self.near_m = self._tip_reach()
         self._closings: dict[float, Closing] = {}
 
     # ------------------------------------------------------------ setup
@@ -462,6 +463,9 @@ class CatchPlanner:
             raise PlannerError("catch planner: the wrist must be flexion (across the rail) then "
                                "deviation about the palm normal, through one point")
         self.b0 = _unit(np.cross(self.n0, self.e_r))
+        self._e_t = tuple(float(x) for x in self.e_f)
+        self._n0_t = tuple(float(x) for x in self.n0)
+        self._W_t = tuple(float(x) for x in self.W)
         g0p = self.g0 - (self.g0 @ self.n0) * self.n0
         self._dev_A = float(g0p @ self.b0)
         self._dev_B = float(np.cross(self.u_d, g0p) @ self.b0)
@@ -471,6 +475,19 @@ class CatchPlanner:
         self.dev_lim = (float(lo[self.i_dev]), float(hi[self.i_dev]))
         self.rail_lim = ((float(lo[self.i_rail]), float(hi[self.i_rail]))
                          if self.i_rail is not None else (0.0, 0.0))
+
+    def _tip_reach(self) -> float:
+        """Bound on any fingertip's distance from palm_center over the joint box (m):
+        the sum of each finger's segment lengths from the palm centre (triangle
+        inequality), plus 1 cm."""
+        h, q0 = self.hand, self.q_zero
+        pc = h.palm_pose(q0)[:3, 3]
+        tips = h.tip_positions(q0)
+        best = 0.0
+        for k, f in enumerate(h.fingers):
+            pts = [pc] + [h.frame_pose(q0, j)[:3, 3] for j in h.spec.joints_of(f)] + [tips[k]]
+            best = max(best, sum(float(np.linalg.norm(b - a)) for a, b in pairwise(pts)))
+        return best + 0.01
 
     def _rest_pose(self) -> np.ndarray:
         h = self.hand
@@ -556,7 +573,8 @@ class CatchPlanner:
                       f"on the palm (closest fingertip-to-surface: {', '.join(near)})")
         fingers = tuple(f for k, f in enumerate(h.fingers) if within[-1, k])
         T_c = phase_duration(q_closed - q_open, h.velocity, h.acceleration)
-        return Closing(r, q_closed, T_c, u_g, dist, fingers, u, tips_pc, reason)
+        return Closing(r, q_closed, T_c, u_g, dist, fingers, u, tips_pc, reason,
+                       float(d_tab.max()))
 
     def _open_from(self, q_arm: np.ndarray, q_closed: np.ndarray) -> np.ndarray:
         """Open hand: the arm joints of ``q_arm``, abduction as in ``q_closed``, flexion 0."""
@@ -575,6 +593,30 @@ class CatchPlanner:
         theta = np.arctan2(_cross(np.broadcast_to(n0, m.shape), m) @ e, m @ n0)
         s = _rot(e, -theta, b - self.W)
         return theta, s, s @ n0 - (self._g0n + r)
+
+    def _aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float
+                  ) -> tuple[float, np.ndarray, float]:
+        """``_aligned`` for one time (plain float arithmetic: no numpy call overhead)."""
+        bx, by, bz = (float(x) for x in flight.position(t) - C)
+        vx, vy, vz = (float(x) for x in flight.velocity(t))
+        ex, ey, ez = self._e_t
+        nx, ny, nz = self._n0_t
+        wx, wy, wz = self._W_t
+        d = -(vx * ex + vy * ey + vz * ez)
+        mx, my, mz = -vx - d * ex, -vy - d * ey, -vz - d * ez
+        mn = math.sqrt(mx * mx + my * my + mz * mz)
+        mx, my, mz = mx / mn, my / mn, mz / mn
+        cx, cy, cz = ny * mz - nz * my, nz * mx - nx * mz, nx * my - ny * mx
+        th = math.atan2(cx * ex + cy * ey + cz * ez, mx * nx + my * ny + mz * nz)
+        # s = Rot(e, -th) (b - W)
+        px, py, pz = bx - wx, by - wy, bz - wz
+        c, sn = math.cos(-th), math.sin(-th)
+        kx, ky, kz = ey * pz - ez * py, ez * px - ex * pz, ex * py - ey * px
+        kp = (px * ex + py * ey + pz * ez) * (1.0 - c)
+        s = np.array([px * c + kx * sn + kp * ex, py * c + ky * sn + kp * ey,
+                      pz * c + kz * sn + kp * ez])
+        h = float(s[0] * nx + s[1] * ny + s[2] * nz) - (self._g0n + r)
+        return th, s, h
 
     def _dev_rail(self, s: np.ndarray, r: float) -> tuple[float, float] | None:
         """Deviation and rail that put palm_center + r n0 at ``s`` (zero-flexion frame)."""
@@ -613,25 +655,51 @@ class CatchPlanner:
         if cross.size:
             k = int(cross[0])
             ta, tb, fa, fb = float(t[k]), float(t[k + 1]), float(hgt[k]), float(hgt[k + 1])
-            for _ in range(8):  # Illinois regula falsi
-                tm = tb - fb * (tb - ta) / (fb - fa)
-                th_m, s_m, h_m = self._aligned(flight.position([tm]) - C,
-                                               flight.velocity([tm]), r)
-                fm = float(h_m[0])
-                if abs(fm) < 1e-6 or abs(tb - ta) < 1e-7:
-                    break
-                if (fm > 0) == (fa > 0):
-                    ta, fa = tm, fm
-                    fb *= 0.5
+            # secant from the bracket (h is smooth: ~ the ball's height above the palm
+            # plane), kept inside the bracket; converges in 2-4 steps to 1e-8 m
+            t0, f0, t1, f1 = ta, fa, tb, fb
+            for _ in range(12):
+                tm = t1 - f1 * (t1 - t0) / (f1 - f0) if f1 != f0 else 0.5 * (ta + tb)
+                if not ta < tm < tb:
+                    tm = 0.5 * (ta + tb)
+                th, s_vec, fm = self._aligned1(flight, C, tm, r)
+                if fm > 0:
+                    ta = tm
                 else:
-                    tb, fb = tm, fm
-                    fa *= 0.5
+                    tb = tm
+                t0, f0, t1, f1 = t1, f1, tm, fm
+                if abs(fm) < 1e-8 or tb - ta < 1e-9:
+                    break
             ti = tm
-            th = float(th_m[0])
-            sol = self._dev_rail(s_m[0], r)
+            sol = self._dev_rail(s_vec, r)
             if sol is not None and self.flex_lim[0] <= th <= self.flex_lim[1]:
                 return _Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
         return self._intercept_position_only(flight, C, r, t)
+
+    def _crossing(self, flight: Flight, C: np.ndarray, rho: float, ta: float, tb: float,
+                  fa: float, fb: float) -> float:
+        """Time in [ta, tb] at which the ball is ``rho`` from the flexion axis (secant)."""
+        e = self.e_f
+
+        def f(t: float) -> float:
+            w = flight.position(t) - C - self.W
+            return float(np.linalg.norm(w - (w @ e) * e)) - rho
+
+        t0, f0, t1, f1 = ta, fa, tb, fb
+        tm = 0.5 * (ta + tb)
+        for _ in range(12):
+            tm = t1 - f1 * (t1 - t0) / (f1 - f0) if f1 != f0 else 0.5 * (ta + tb)
+            if not ta < tm < tb:
+                tm = 0.5 * (ta + tb)
+            fm = f(tm)
+            if fm > 0:
+                ta = tm
+            else:
+                tb = tm
+            t0, f0, t1, f1 = t1, f1, tm, fm
+            if abs(fm) < 1e-8 or tb - ta < 1e-9:
+                break
+        return tm
 
     def _intercept_position_only(self, flight: Flight, C: np.ndarray, r: float,
                                  t: np.ndarray) -> _Intercept:
@@ -657,8 +725,8 @@ class CatchPlanner:
             if not cross.size:
                 continue
             k = int(cross[0])
-            lam = f[k] / (f[k] - f[k + 1])
-            tk = float(t[k] + lam * (t[k + 1] - t[k]))
+            tk = self._crossing(flight, C, rho, float(t[k]), float(t[k + 1]), float(f[k]),
+                                float(f[k + 1]))
             bk = flight.position(tk) - C
             vk = flight.velocity(tk)
             wk = bk - self.W
@@ -739,8 +807,9 @@ class CatchPlanner:
         if ic.reason is None:
             b_i = flight.position(ic.t) - C
             n_des = _rot1(self.e_f, ic.theta, self.n0)
-            res = self.ik.solve_palm(b_i, n_des, q_open, q_open, offset_m=r,
-                                     locked=self._fingers_locked, max_iter=5,
+            # the fingers are not masked (their hard coupling tasks would lose rank); the
+            # palm does not depend on them and the posture/stay tasks hold them
+            res = self.ik.solve_palm(b_i, n_des, q_open, q_open, offset_m=r, max_iter=5,
                                      tol_m=INTERCEPT_PLAN_TOL_M, tol_rad=0.02)
             ik_iter = res.iterations
             if res.iterations:
@@ -849,9 +918,9 @@ class CatchPlanner:
         want = max(ready, t_i + stop_t - closing.u_grasp * T_c)
         if want >= t_i:
             return want
-        # the ball can only meet a fingertip in its last NEAR_M before the palm
+        # the ball can only meet a fingertip in the last stretch before the palm
         speed = float(np.linalg.norm(flight.velocity(t_i)))
-        tt = np.arange(max(want, t_i - NEAR_M / speed), t_i, 0.001)
+        tt = np.arange(max(want, t_i - (closing.reach_m + r) / speed), t_i, 0.001)
         if tt.size == 0:
             return want
         Tinv = np.linalg.inv(self.hand.palm_pose(q_open))
@@ -879,10 +948,10 @@ class CatchPlanner:
         if err > INTERCEPT_TOL_M:
             reasons.append(f"the palm misses the ball by {1000 * err:.0f} mm at t = {t_i:.3f} s")
         # rows that matter: before the intercept those in which the ball is within
-        # NEAR_M of the palm target (no fingertip reaches farther); after it, rows until
+        # ``near_m`` of the palm target (no fingertip reaches farther); after it, rows until
         # the hand stops moving (``t_static``; later rows repeat the last), and the last row
         b_all = flight.position(t) - C
-        pre = (t < t_i) & (np.linalg.norm(b_all - P, axis=1) < NEAR_M)
+        pre = (t < t_i) & (np.linalg.norm(b_all - P, axis=1) < self.near_m + 2.0 * r)
         post = (t >= t_i) & (t <= t_static + 1.5 / self._rate)  # static afterwards
         post[-1] = t[-1] >= t_i
         idx = np.flatnonzero(pre | post)
@@ -1135,23 +1204,30 @@ def format_summary(res: CatchResult) -> str:
 
 
 def catch_cli(args) -> int:
-    """``cli.py catch``: plan, write, print the summary on stderr; exit status."""
+    """``cli.py catch``: plan, write, print the summary on stderr; exit status.
+
+    ``--report DIR`` / ``--html FILE``: the written plan is replayed by the
+    independent check and drawn by ``planner.report`` (``write_check_report``,
+    ``write_html``); both need a file output (not ``-``)."""
     report = getattr(args, "report", None)
     html = getattr(args, "html", None)
-    if (report or html) and importlib.util.find_spec("planner.report") is None:
-        raise InputError("--report/--html need planner.report, which is not installed")
+    if report or html:
+        for mod in ("planner.report", "planner.check"):
+            if importlib.util.find_spec(mod) is None:
+                raise InputError(f"--report/--html need {mod}, which is not installed")
+        if args.output == "-":
+            raise InputError("--report/--html need a trajectory file (-o FILE), not stdout")
     res = plan_catch(args.angle, args.dist, args.height, args.hand, args.output,
                      ball=args.ball, drag=args.drag, observations=args.observations,
                      rate_hz=args.rate, strict=False)
     sys.stderr.write(format_summary(res) + "\n")
     if report or html:
         from planner import report as rep
+        from planner.check import check_trajectory
 
+        checked = check_trajectory(args.output, hand_override=args.hand)
         if report:
-            fn = getattr(rep, "write_catch_report", None)
-            if fn is None:
-                raise InputError("planner.report has no write_catch_report")
-            fn(report, args.output)
+            rep.write_check_report(checked, report)
         if html:
-            rep.write_html(html, args.output)
+            rep.write_html(checked, html)
     return 1 if (args.strict and not res.feasible) else 0

@@ -339,7 +339,7 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
     T_world_root, rail_enabled = build_mount_rail_wrist(data, links, joints, actuators)
 
     palm = _get(data, "palm", dict)
-    p_len, p_thk = _length(palm, "length"), _get(palm, "thickness_m")
+    p_len = _length(palm, "length")
     tendon = _get(data, "tendon", dict)
     spool = _positive(tendon, "spool_radius_m")
     w_motor = _get(tendon, "motor_speed_rad_s")
