@@ -27,10 +27,6 @@ FORMAT = "hand-trajectory"
 VERSION = 1
 
 
-def _fmt(x: float) -> str:
-    return f"{x:.6f}"
-
-
 def write_text_atomic(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file and a rename."""
     path = Path(path)
@@ -94,18 +90,17 @@ class TrajectoryWriter:
 
     def write_rows(self, t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> None:
         """Append rows (times in s, joint positions, motor angles) and flush."""
-        lines = []
-        for k in range(len(t_s)):
-            t = float(t_s[k])
-            if not t > self._last_t:
-                raise PlannerError(f"trajectory time not increasing at t={t}")
-            self._last_t = t
-            vals = [t, *q[k], *q_motor[k]]
-            lines.append(",".join(_fmt(v) for v in vals))
-        if lines:
-            self._write("\n".join(lines) + "\n")
-            self.rows += len(lines)
-            self._flush()
+        t_s = np.asarray(t_s, dtype=float)
+        if len(t_s) == 0:
+            return
+        if not (t_s[0] > self._last_t and np.all(np.diff(t_s) > 0)):
+            raise PlannerError(f"trajectory time not increasing near t={t_s[0]}")
+        self._last_t = float(t_s[-1])
+        arr = np.column_stack([t_s, q, q_motor])
+        fmt = ",".join(["%.6f"] * arr.shape[1])
+        self._write("\n".join([fmt % tuple(r) for r in arr.tolist()]) + "\n")
+        self.rows += len(arr)
+        self._flush()
 
     def close(self) -> None:
         """Write the end marker and publish the file."""
