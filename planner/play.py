@@ -39,6 +39,7 @@ CHUNK_PHASES = 40
 FIRST_CHUNK_PHASES = 12
 REST_HOVER_Z_M = 0.020
 HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white tops (7.5 mm over black)
+RELEASE_WEIGHT = 0.3  # an onset on time matters more than a release on time
 LOW_M = 0.003  # a finger waiting to press (or just released) rests this far above its key
 
 
@@ -299,6 +300,7 @@ class _Timeline:
         """Go to hand position ``seg``: every finger up, the whole hand across with every
         tip high, fingers ready high above their places."""
         for f in self.hand.fingers:
+            self._release_high(f)
             self.go_high(f)
         q = self.q.copy()
         for f in self.hand.fingers:
@@ -311,6 +313,29 @@ class _Timeline:
         self.seg = seg
         for f in self.hand.fingers:
             self.place[f] = ("high",)
+
+    def _release_high(self, finger: str) -> None:
+        """If ``finger``'s last motion was a release to ``LOW_M``, make it a release
+        straight to ``HIGH_M`` (one motion instead of two before the hand travels)."""
+        pl = self.place[finger]
+        if pl[0] != "above" or pl[2] != LOW_M:
+            return
+        js = self.hand.joint_slice(finger)
+        for k in range(len(self.phases) - 1, -1, -1):
+            ph, kind, note = self.phases[k]
+            if not np.any(ph.delta[js]):
+                continue
+            if kind != "release" or np.any(np.delete(ph.delta, js)):
+                return
+            q_from = self.q - ph.delta
+            q_new = self._with_finger(finger, self.pl.above_q(finger, pl[1], self.seg, HIGH_M))
+            d = q_new - q_from
+            frac = _key_crossing(self.hand, q_from, q_new, finger, pl[1])
+            T = phase_duration(d, self.hand.velocity, self.hand.acceleration)
+            self.phases[k] = (Phase(d, T, frac, ph.ideal_s, ph.weight), kind, note)
+            self.q = self.q + (d - ph.delta)
+            self.place[finger] = ("above", pl[1], HIGH_M)
+            return
 
     def go_high(self, finger: str) -> None:
         """Lift ``finger`` straight up to ``HIGH_M`` above the white keys' top, from wherever it is."""
@@ -348,7 +373,7 @@ class _Timeline:
         q_new = self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M))
         frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
         # up half a frame before the note's end, so its last frame is its own
-        self._move(q_new, frac, t_s - 0.5 * self.dt, 1.0, "release", None)
+        self._move(q_new, frac, t_s - 0.5 * self.dt, RELEASE_WEIGHT, "release", None)
         self.place[finger] = ("above", pitch, LOW_M)
 
     def rest_all(self, t_s: float) -> None:

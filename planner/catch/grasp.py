@@ -32,6 +32,11 @@ Required force (``stop_force`` / ``hold_force``):
 * holding: ``F_req = -SAFETY * m g`` with the seed's safety factor 1.5 on the
   grip (David: "a safety factor of 1.5"), with moment balance.
 
+OSQP settings: eps_abs = eps_rel = 1e-6 (N), no polishing, one solver per problem
+size set up once and then updated and warm-started (problems of consecutive
+throws are alike: this is what keeps a plan within its latency budget); the
+result is accepted only if every motor is within 1e-4 of its peak.
+
 ``build_grasp_problem`` assembles the QP (pure data); ``solve_grasp`` solves it
 and raises ``InfeasibleError`` (primal infeasible: no force split keeps every
 motor within its peak inside the friction cones) or ``SolverError``, both

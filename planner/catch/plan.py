@@ -245,6 +245,7 @@ class Closing:
     tips_pc: np.ndarray  # (K, 5, 3) fingertips in the palm_center frame
     reason: str | None
     reach_m: float  # farthest fingertip from the ball centre during the move
+    min_gap_m: np.ndarray  # (5,) closest each fingertip comes to the ball's surface
 
 
 @dataclass
@@ -574,7 +575,7 @@ class CatchPlanner:
         fingers = tuple(f for k, f in enumerate(h.fingers) if within[-1, k])
         T_c = phase_duration(q_closed - q_open, h.velocity, h.acceleration)
         return Closing(r, q_closed, T_c, u_g, dist, fingers, u, tips_pc, reason,
-                       float(d_tab.max()))
+                       float(d_tab.max()), (d_tab - r).min(axis=0))
 
     def _open_from(self, q_arm: np.ndarray, q_closed: np.ndarray) -> np.ndarray:
         """Open hand: the arm joints of ``q_arm``, abduction as in ``q_closed``, flexion 0."""
@@ -787,6 +788,10 @@ class CatchPlanner:
         closing = self.closing(r)
         if closing.reason:
             reasons.append(closing.reason)
+        for f, gap in zip(h.fingers, closing.min_gap_m):
+            if gap < 0:
+                reasons.append(f"fingers in the way: the {f} tip passes {1000 * -gap:.1f} mm "
+                               "inside the ball while the hand closes")
 
         # 1. intercept
         if flight_time_s is None:
