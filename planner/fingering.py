@@ -46,6 +46,8 @@ class HandReach:
     ``offset_m[f]``: x of finger f's tip minus the rail position, at rest.
     ``reach_m[f]``: how far (either way) the tip can move sideways from
     there without moving the rail (abduction and wrist deviation).
+    ``spread_m[f]``: the same with the wrist still too: two fingers of one
+    chord can be at most ``spread_m`` of each further apart than at rest.
     ``rail_speed_m_s``: the rail's top speed; ``rail_range_m``: its travel.
     """
 
@@ -53,6 +55,7 @@ class HandReach:
     reach_m: dict[str, float]
     rail_speed_m_s: float
     rail_range_m: tuple[float, float]
+    spread_m: dict[str, float] | None = None  # sideways reach with the wrist still too
 
 
 @dataclass(frozen=True)
@@ -109,6 +112,11 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
             dev = xs - offs - rail
             if np.any(np.abs(dev) > lim):
                 continue
+            if reach.spread_m is not None and len(fingers) > 1:
+                sp = np.array([reach.spread_m[f] for f in fingers])
+                d0 = xs - offs
+                if np.any(np.abs(d0[:, None] - d0[None, :]) > sp[:, None] + sp[None, :] + 1e-12):
+                    continue
             cost = float(np.sum((dev / lim) ** 2))
             for f, b in zip(fingers, black):
                 if b and f == "thumb":

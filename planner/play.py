@@ -81,10 +81,12 @@ class Planner:
         tips = hand.tip_positions(self.rest)
         rail0 = self.rest[self.rail] if self.rail is not None else 0.0
         offsets = {f: float(tips[i, 0] - rail0) for i, f in enumerate(hand.fingers)}
-        reach = {f: self._probe_reach(f, tips[i]) for i, f in enumerate(hand.fingers)}
+        reach = {f: self._probe_reach(f, tips[i], ("rail",)) for i, f in enumerate(hand.fingers)}
         lo = hand.lower[self.rail] if self.rail is not None else 0.0
         hi = hand.upper[self.rail] if self.rail is not None else 0.0
         vmax = hand.velocity[self.rail] if self.rail is not None else 1e-9
+        # (a chord's spread is left to the whole-hand IK: a probe with the wrist still
+        # rejected octaves the hand can play)
         self.reach = HandReach(offsets, reach, float(vmax), (float(lo), float(hi)))
 
     def _rest_posture(self) -> np.ndarray:
@@ -106,13 +108,15 @@ class Planner:
         r = self.ik.solve(targets, q0, q0, hover=())
         return r.q
 
-    def _probe_reach(self, finger: str, tip: np.ndarray) -> float:
-        """How far (m) a fingertip can move sideways from rest, rail and wrist locked.
+    def _probe_reach(self, finger: str, tip: np.ndarray, locked_joints: tuple[str, ...]) -> float:
+        """How far (m) a fingertip can move sideways from rest with ``locked_joints`` still
+        (rail only: the reach of the hand at a rail position, the wrist helping; rail and
+        wrist: how far a finger spreads from the others).
 
         Found by IK: the largest d in 2.5 mm steps for which the tip reaches
         rest +/- d at hover height (the smaller of the two sides)."""
         ik = self.ik
-        locked = [n for n in ("rail", "wrist_flex", "wrist_dev") if n in self.hand.index]
+        locked = [n for n in locked_joints if n in self.hand.index]
         for n in locked:
             ik.solver.mask_dof(n)
         try:

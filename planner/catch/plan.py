@@ -865,14 +865,14 @@ class CatchPlanner:
             stop = gq.grasp_forces(h, q_i, centre_i, r, gq.stop_force(mass, v_i), case="stop",
                                    tip_tol_m=0.001, moment_balance=False)
         except InfeasibleError as e:
-            reasons.append(f"torque (stopping the ball over {100 * gq.STOP_DISTANCE_M:g} cm): "
-                           f"{e}")
+            reasons.append(f"{_kind(e)} (stopping the ball over {100 * gq.STOP_DISTANCE_M:g} "
+                           f"cm): {e}")
         centre_c = self._palm_target(q_closed, r)
         try:
             hold = gq.grasp_forces(h, q_closed, centre_c, r, gq.hold_force(mass), case="hold",
                                    tip_tol_m=GRASP_TOL_M, moment_balance=True)
         except InfeasibleError as e:
-            reasons.append(f"torque (holding the ball): {e}")
+            reasons.append(f"{_kind(e)} (holding the ball): {e}")
 
         T_world = self.mount.T_world_root(C)
         unc = None
@@ -996,6 +996,12 @@ class CatchPlanner:
                            f"fingertips within radius + {1000 * GRASP_TOL_M:g} mm) holds {when}"
                            f", limit {1000 * GRASP_WINDOW_S:g} ms")
         return err, clear, g_t, g_f, reasons
+
+
+def _kind(e: InfeasibleError) -> str:
+    """'torque' when a motor's peak is what fails, else 'friction' (no force split lies
+    inside the contacts' friction cones)."""
+    return "torque" if "needs motor." in str(e) else "friction"
 
 
 def _uncertainty(fit: FitResult, x_plane: float) -> dict[str, float] | None:
