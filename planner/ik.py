@@ -284,12 +284,11 @@ class HandIK:
         ``q_base``) to put its tip on the target. The result is ``q_base`` with that
         finger's joints replaced."""
         own = set(self.hand.spec.joints_of(target.finger))
-        locked = [n for n in self._names if n not in own]
-        # a hard coupling between two locked joints would be an empty equality row
-        idle = [n for n in self._gears if n not in own]
-        for n in idle:
-            self.solver.remove_task(self._gears.pop(n)[0])
-            self._gears[n] = None
+        # lock every other joint; a coupled joint of another finger stays free but is
+        # held by its (hard) coupling to its locked source, so that no equality row is
+        # empty and the solver's tasks stay the same (results do not depend on history)
+        followers = {self._names[c.dep] for c in self.hand.couplings}
+        locked = [n for n in self._names if n not in own and n not in followers]
         for n in locked:
             self.solver.mask_dof(n)
         try:
@@ -297,10 +296,6 @@ class HandIK:
         finally:
             for n in locked:
                 self.solver.unmask_dof(n)
-            for n in idle:
-                c = next(c for c in self.hand.couplings if self._names[c.dep] == n)
-                del self._gears[n]
-                self._add_gear(c)
         q = q_base.copy()
         js = self.hand.joint_slice(target.finger)
         q[js] = r.q[js]

@@ -68,6 +68,16 @@ Per throw (``CatchPlanner.plan``):
 
 Infeasible throws (out of reach, too fast, fingers in the way, grasp, torque)
 are planned as far as they go; ``CatchPlan.reasons`` says why.
+
+Known limits of the shipped hands (reported, not hidden): the default hand's
+thumb cannot come within radius + 10 mm of a ball held on the palm (its CMC
+sits 3 cm proud of the palm; with CMC flexion at 90 deg and IP at 80 deg, both
+at their limits, the tip stays ~17 mm outside a tennis ball), so every catch
+with it fails the grasp criterion; a CMC flexion range of 110 deg (or the CMC
+1 cm closer to the palm) would reach. The mk5 hand's true-size fingers do not
+reach a ball on its 1.5x palm at all. Stopping a ball that arrives faster than
+~5.3 m/s over the palm's 2 cm give needs more than the wrist flexion motor's
+2 N m peak.
 """
 
 from __future__ import annotations
