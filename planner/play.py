@@ -102,7 +102,8 @@ class Planner:
         targets = []
         for f in h.fingers:
             j = h.spec.joint(h.spec.joints_of(f)[0])
-            x = j.xyz_m[0] if f != "thumb" else h.spec.joint("index_mcp_abd").xyz_m[0] - 0.035
+            index_root = h.spec.joint(h.spec.joints_of("index")[0])
+            x = j.xyz_m[0] if f != "thumb" else index_root.xyz_m[0] - 0.035
             y = 0.095 if f != "thumb" else 0.030
             targets.append(PressTarget(f, 0, (x, y, REST_HOVER_Z_M), (y, y)))
         r = self.ik.solve(targets, q0, q0, hover=())
