@@ -25,13 +25,37 @@ from planner.errors import InputError, PlannerError
 
 FORMAT = "hand-trajectory"
 VERSION = 1
+_MAX_META_CHARS = 1 << 20  # a metadata line longer than this is not one (e.g. /dev/zero)
+
+
+def _check_target(path: str | os.PathLike) -> None:
+    """InputError before any work when ``path`` cannot name an output file."""
+    if not os.fspath(path):
+        raise InputError("cannot write '': empty output path")
+    if os.path.isdir(path):
+        raise InputError(f"cannot write {os.fspath(path)}: is a directory")
+
+
+def _mkstemp_beside(path: Path) -> tuple[int, str]:
+    """A temporary file beside ``path`` with the permissions a plain open() would give
+    (mkstemp makes it 0600, which the rename would carry over to the published file)."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part",
+                               dir=str(path.parent) if str(path.parent) else ".")
+    umask = os.umask(0)
+    os.umask(umask)
+    try:
+        os.fchmod(fd, 0o666 & ~umask)
+    except OSError:
+        pass
+    return fd, tmp
 
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file and a rename."""
+    _check_target(path)
     path = Path(path)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent or ".")
+        fd, tmp = _mkstemp_beside(path)
     except OSError as e:
         raise InputError(f"cannot write {path}: {e.strerror or e}") from None
     try:
@@ -62,10 +86,9 @@ class TrajectoryWriter:
         if path == "-":
             self._f: IO[str] = sys.stdout
         else:
-            p = Path(path)
+            _check_target(path)
             try:
-                fd, self._tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".part",
-                                                 dir=str(p.parent) if str(p.parent) else ".")
+                fd, self._tmp = _mkstemp_beside(Path(path))
             except OSError as e:
                 raise InputError(f"cannot write {path}: {e.strerror or e}") from None
             self._f = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
@@ -143,11 +166,15 @@ def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:
     """Read and validate a hand-trajectory v1 file; InputError (one line) on any defect."""
     try:
         with open(path, encoding="utf-8", newline="") as f:
-            text = f.read()
+            text = f.readline(_MAX_META_CHARS)  # bounded: an endless first line is refused
+            if not text.startswith("# "):
+                raise InputError(f"{path}: not a hand-trajectory file (no metadata line)")
+            text += f.read()
     except FileNotFoundError:
         raise InputError(f"no such trajectory file: {path}") from None
     except (OSError, UnicodeDecodeError) as e:
         raise InputError(f"cannot read trajectory {path}: {e}") from None
+    terminated = text.endswith("\n")
     lines = text.split("\n")
     if lines and lines[-1] == "":
         lines.pop()
@@ -155,7 +182,7 @@ def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:
         raise InputError(f"{path}: not a hand-trajectory file (no metadata line)")
     try:
         meta = json.loads(lines[0][2:])
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, RecursionError):
         raise InputError(f"{path}: metadata line is not valid JSON") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise InputError(f"{path}: not a hand-trajectory file (format is not {FORMAT!r})")
@@ -170,7 +197,7 @@ def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:
     if lines[-1].startswith("# "):
         try:
             end = json.loads(lines[-1][2:])
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):
             end = None
         if isinstance(end, dict) and end.get("end") is True:
             complete = True
@@ -181,8 +208,8 @@ def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:
         if not allow_incomplete:
             raise InputError(f"{path}: incomplete trajectory (no end marker); use --allow-incomplete to read it anyway")
         body = lines[2:]
-        if body and body[-1].startswith("#"):
-            body = body[:-1]
+        if body and (body[-1].startswith("#") or not terminated):
+            body = body[:-1]  # a damaged end marker, or a row still being written
     header = lines[1].split(",")
     if not header or header[0] != "t":
         raise InputError(f"{path}: header must start with 't'")

@@ -52,9 +52,11 @@ lasting more than 24 hours are refused.
 
 from __future__ import annotations
 
+import errno
 import io
 import os
 import struct
+import tempfile
 from bisect import bisect_right
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -652,7 +654,30 @@ def write_notes_midi(
     part.append(mido.MetaMessage("end_of_track", time=0))
     mf.tracks.append(conductor)
     mf.tracks.append(part)
+    buf = io.BytesIO()
+    mf.save(file=buf)
+    _write_bytes_atomic(os.fspath(path), buf.getvalue())
+
+
+def _write_bytes_atomic(name: str, data: bytes) -> None:
+    """Write ``data`` to ``name`` through a temporary file beside it and a rename: the file
+    is complete or absent (a full disk leaves nothing half-written behind)."""
+    folder, base = os.path.split(name)
+    tmp = None
     try:
-        mf.save(os.fspath(path))
+        if not base or os.path.isdir(name):
+            raise IsADirectoryError(errno.EISDIR, "is a directory or has no file name")
+        fd, tmp = tempfile.mkstemp(prefix=f".{base}.", suffix=".part", dir=folder or ".")
+        umask = os.umask(0)
+        os.umask(umask)
+        os.fchmod(fd, 0o666 & ~umask)  # as open() would create it (mkstemp makes 0600)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, name)
     except OSError as exc:
-        raise InputError(f"{os.fspath(path)}: cannot write MIDI file ({_one_line(exc)})") from None
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        raise InputError(f"{name}: cannot write MIDI file ({_one_line(exc)})") from None
