@@ -292,6 +292,11 @@ class _Timeline:
         self.phases.append((Phase(d, T, anchor, ideal, weight, order_joints=order), kind, note))
         self.q = q_new.copy()
 
+    def _frame_edge(self, t_s: float) -> float:
+        """Half a frame before the first frame at or after ``t_s``: a key that goes down
+        (or up) then is down (or up) from exactly that frame on."""
+        return math.ceil(t_s / self.dt - 1e-9) * self.dt - 0.5 * self.dt
+
     def _with_finger(self, finger: str, q_src: np.ndarray) -> np.ndarray:
         js = self.hand.joint_slice(finger)
         q = self.q.copy()
@@ -366,10 +371,10 @@ class _Timeline:
                        0.5, t_s, 0.0, "move", None)
         q_new = self._with_finger(finger, qp)
         frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
-        # the key goes down half a frame before the onset, so the onset's frame shows it
+        # the key goes down just before the first frame of the note
         # MIDI velocity sets the key speed: no faster than descent_time_s per 30 mm
         drop = max(self._tip_z(self.q, finger) - self._tip_z(q_new, finger), 0.0)
-        self._move(q_new, frac, t_s - 0.5 * self.dt, 1.0, "press", note,
+        self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note,
                    min_s=descent_time_s(velocity) * drop / 0.030)
         self.place[finger] = ("down", pitch)
         return True
@@ -377,8 +382,8 @@ class _Timeline:
     def release(self, finger: str, pitch: int, t_s: float) -> None:
         q_new = self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M))
         frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
-        # up half a frame before the note's end, so its last frame is its own
-        self._move(q_new, frac, t_s - 0.5 * self.dt, RELEASE_WEIGHT, "release", None)
+        # up just before the first frame after the note
+        self._move(q_new, frac, self._frame_edge(t_s), RELEASE_WEIGHT, "release", None)
         self.place[finger] = ("above", pitch, LOW_M)
 
     def rest_all(self, t_s: float) -> None:
