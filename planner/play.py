@@ -40,7 +40,8 @@ FIRST_CHUNK_PHASES = 12
 REST_HOVER_Z_M = 0.020
 HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white tops (7.5 mm over black)
 RELEASE_WEIGHT = 0.3  # an onset on time matters more than a release on time
-LOW_M = 0.003  # a finger waiting to press (or just released) rests this far above its key
+LOW_M = 0.003
+START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on  # a finger waiting to press (or just released) rests this far above its key
 
 
 @dataclass(frozen=True)
@@ -280,6 +281,7 @@ class _Timeline:
         self.q = q0.copy()  # configuration reached so far (end of all phases)
         self.seg = seg
         self.place: dict[str, tuple] = {f: ("rest",) for f in hand.fingers}
+        self.pre_pressed: set[int] = set()  # notes down in the very first row
         self.phases: list[tuple[Phase, str, int | None]] = []
         self.all_joints = np.arange(hand.n)
 
@@ -442,6 +444,10 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
         for g in group:  # with the first fingers just above their keys
             tl.q = tl._with_finger(g.finger, pl.above_q(g.finger, g.pitch, seg, LOW_M))
             tl.place[g.finger] = ("above", g.pitch, LOW_M)
+            if t < START_PRESSED_S:  # a song that starts at once starts with its keys down
+                tl.q = tl._with_finger(g.finger, pl.press_q(g.finger, g.pitch, seg)[0])
+                tl.place[g.finger] = ("down", g.pitch)
+                tl.pre_pressed.add(g.note_index)
     else:
         tl.travel(seg, t)
 
@@ -514,7 +520,10 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
                     _reposition(pl, tl, events, group, t, rail, rail_of, reasons)
                     if first and tl.seg is not None:  # the start configuration
                         hold = tl.q.copy()
-            ok = tl.seg is not None and tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
+            if p.note_index in tl.pre_pressed:
+                ok = True
+            else:
+                ok = tl.seg is not None and tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
             if ok:
                 down[p.note_index] = iv
                 tau = hand.press_torques(tl.q, {p.finger: p.force_n})
