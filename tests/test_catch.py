@@ -27,6 +27,7 @@ from planner.catch.plan import (
     get_planner,
     plan_catch,
     plan_throw,
+    write_plan,
 )
 from planner.errors import InfeasibleError, InputError
 from planner.hand.model import load_hand
@@ -437,3 +438,50 @@ def test_out_of_reach_is_reported(tmp_path, thumb110):
     assert not p.feasible
     assert any(r.startswith("out of reach") for r in p.reasons)
     assert len(p.t) > 0 and np.all(np.isfinite(p.q))
+
+
+# ------------------------------------------------------------------ independent check on a grid
+
+
+def test_independent_check_confirms_grid(tmp_path):
+    """Issue 4's done-when: the independent replay check (planner.check, which shares only
+    the hand model) confirms every catch of the grid 20-60 deg x 1-3 m; a throw the wrist
+    cannot stop (> 5.3 m/s at the palm) is still geometrically caught (the planner reports
+    the torque), so the check passes for all 25."""
+    from planner import check
+
+    pl = get_planner("default")
+    failed = []
+    for a in range(20, 61, 10):
+        for d in (1.0, 1.5, 2.0, 2.5, 3.0):
+            p = plan_throw(a, d, 0.0, planner=pl)
+            path = tmp_path / f"c{a}_{d}.csv"
+            write_plan(p, str(path))
+            rep = check.check_trajectory(str(path))
+            if not rep.ok:
+                failed.append((a, d, rep.problems))
+    assert failed == []
+
+
+def test_independent_check_rejects_a_hand_elsewhere(tmp_path):
+    """The same plan with the rail moved 5 cm: the check reports the palm off the ball."""
+    from planner import check
+
+    p = plan_throw(30.0, 1.5, 0.0, hand="default")
+    path = tmp_path / "c.csv"
+    write_plan(p, str(path))
+    tr = read_trajectory(str(path))
+    hand = load_hand("default")
+    lines = path.read_text().splitlines()
+    j = 1 + hand.index["rail"]
+    out = lines[:2]
+    for ln in lines[2:-1]:
+        v = ln.split(",")
+        v[j] = f"{float(v[j]) + 0.05:.6f}"
+        out.append(",".join(v))
+    out.append(lines[-1])
+    (tmp_path / "moved.csv").write_text("\n".join(out) + "\n")
+    assert len(tr.t_s) == len(out) - 3
+    rep = check.check_trajectory(str(tmp_path / "moved.csv"))
+    assert not rep.ok
+    assert any("palm" in pr or "ball" in pr for pr in rep.problems), rep.problems
