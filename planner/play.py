@@ -483,7 +483,7 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         end_t = float(max((s + p.duration_s for p, s in zip(phases, starts)), default=t_committed))
         if final_t is not None:
             end_t = max(end_t, final_t)
-        n_rows_end = int(math.floor(end_t * rate_hz + 1e-9)) + 1  # every row at or before end_t
+        n_rows_end = math.floor(end_t * rate_hz + 1e-9) + 1  # every row at or before end_t
         if n_rows_end > next_row:
             t = np.arange(next_row, n_rows_end) * dt
             q = hand.apply_couplings(sample(phases, starts, t, hold))
@@ -502,6 +502,10 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         events.append((iv.start_s, 1, iv.press.pitch, iv))
         events.append((iv.end_s, 0, iv.press.pitch, iv))
     events.sort(key=lambda e: (e[0], e[1], e[2]))
+    groups: dict[float, list] = {}
+    for e in events:
+        if e[1] == 1:
+            groups.setdefault(e[0], []).append(e[3].press)
     down: dict[int, object] = {}
     total = len(events)
     group_t = -math.inf
@@ -511,13 +515,12 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
             rail = rail_of[p.note_index]
             if abs(t - group_t) > 1e-9:  # the first key of a new group of notes
                 group_t = t
-                group = [e[3].press for e in events if e[1] == 1 and abs(e[0] - t) <= 1e-9]
-                group = [g for g in group if g.note_index not in reasons]
+                group = [g for g in groups[t] if g.note_index not in reasons]
                 reachable = tl.seg is not None and all(
                     pl.press_q(g.finger, g.pitch, tl.seg)[1].converged for g in group)
                 if not reachable and not down:
                     first = tl.seg is None
-                    _reposition(pl, tl, events, group, t, rail, rail_of, reasons)
+                    _reposition(pl, tl, events[k:], group, t, rail, rail_of, reasons)
                     if first and tl.seg is not None:  # the start configuration
                         hold = tl.q.copy()
             if p.note_index in tl.pre_pressed:
@@ -558,11 +561,11 @@ def format_summary(song_name: str, res: PlayResult, song_s: float, out: str) -> 
     n = len(res.notes)
     bad = res.infeasible
     rtf = song_s / res.planning_s if res.planning_s > 0 else math.inf
-    lines = [f"{song_name}: {n} notes, {n - len(bad)} played, {len(bad)} infeasible; "
-             f"{res.rows} rows ({res.duration_s:.2f} s) -> {out}",
-             f"planning {res.planning_s * 1000:.0f} ms for {song_s:.2f} s of music "
+    lines = [(f"{song_name}: {n} notes, {n - len(bad)} played, {len(bad)} infeasible; "
+             f"{res.rows} rows ({res.duration_s:.2f} s) -> {out}"),
+             (f"planning {res.planning_s * 1000:.0f} ms for {song_s:.2f} s of music "
              f"(real-time factor {rtf:.0f}x), first row after {res.first_row_s * 1000:.0f} ms, "
-             f"{res.ik_solves} IK solves"]
+             f"{res.ik_solves} IK solves")]
     for nr in bad:
         lines.append(f"  infeasible: t={nr.onset_s:.3f} s {pitch_name(nr.pitch)} (MIDI {nr.pitch}): {nr.reason}")
     for i, lt in res.late:

@@ -107,6 +107,7 @@ from planner.catch.flight import (
     predict_intercept,
     predict_throw,
 )
+from planner.catch.flight import _finite as flight_finite
 from planner.errors import InfeasibleError, InputError, PlannerError
 from planner.hand.model import HandModel, load_hand
 from planner.hand.spec import PALM_FRAME, hands_dir, rpy_matrix
@@ -1045,15 +1046,8 @@ def get_planner(hand: HandModel | str = "default", mount: CatchMount | None = No
 
 
 def _finite(name: str, x: Any) -> float:
-    if isinstance(x, bool):
-        raise InputError(f"{name} must be a number, got {x!r}")
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {x!r}") from None
-    if not math.isfinite(v):
-        raise InputError(f"{name} must be finite, got {v}")
-    return v
+    """A finite float, or InputError naming ``name`` (shared with the flight module)."""
+    return flight_finite(name, x)
 
 
 def validate_throw(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any

@@ -34,7 +34,6 @@ from planner.errors import InputError
 from planner.hand import mk5
 from planner.hand.spec import (
     FINGERS,
-    TIP_FRAMES,
     Actuator,
     HandSpec,
     Joint,
@@ -46,6 +45,7 @@ from planner.hand.spec import (
     _seg_link,
     _tip,
     _vec,
+    assemble_spec,
     build_mount_rail_wrist,
 )
 
@@ -157,18 +157,5 @@ def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
                                   radius_m=p.r_mot, mk5=c))
         finger_joints.append((n, (f"{n}_q1", f"{n}_q2")))
 
-    src = data.get("sources", {})
-    sources = tuple(sorted((str(k), str(v)) for k, v in src.items())) if isinstance(src, dict) else ()
-    return HandSpec(
-        name=_get(data, "name", str),
-        description=str(data.get("description", "")),
-        links=tuple(links),
-        joints=tuple(joints),
-        couplings=tuple(couplings),
-        actuators=tuple(actuators),
-        T_world_root=T_world_root,
-        tip_frames=TIP_FRAMES,
-        rail_enabled=rail_enabled,
-        sources=sources,
-        finger_joints=tuple(finger_joints),
-    )
+    return assemble_spec(data, links, joints, couplings, actuators, T_world_root, rail_enabled,
+                         finger_joints)

@@ -318,6 +318,26 @@ def build_mount_rail_wrist(data: dict[str, Any], links: list[Link], joints: list
     return T_world_root, rail_enabled
 
 
+def assemble_spec(data: dict[str, Any], links, joints, couplings, actuators, T_world_root,
+                  rail_enabled: bool, finger_joints) -> HandSpec:
+    """The HandSpec of a built hand, with the file's name, description and sources."""
+    src = data.get("sources", {})
+    sources = tuple(sorted((str(k), str(v)) for k, v in src.items())) if isinstance(src, dict) else ()
+    return HandSpec(
+        name=_get(data, "name", str),
+        description=str(data.get("description", "")),
+        links=tuple(links),
+        joints=tuple(joints),
+        couplings=tuple(couplings),
+        actuators=tuple(actuators),
+        T_world_root=T_world_root,
+        tip_frames=TIP_FRAMES,
+        rail_enabled=rail_enabled,
+        sources=sources,
+        finger_joints=tuple(finger_joints),
+    )
+
+
 def _seg_link(name: str, length: float, width: float, mass: float) -> Link:
     return Link(name, mass, (0.0, length / 2, 0.0), (width, length, 0.8 * width))
 
@@ -452,18 +472,5 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
         ]
         finger_joints.append((n, (f"{n}_mcp_abd", f"{n}_mcp_flex", f"{n}_pip", f"{n}_dip")))
 
-    src = data.get("sources", {})
-    sources = tuple(sorted((str(k), str(v)) for k, v in src.items())) if isinstance(src, dict) else ()
-    return HandSpec(
-        name=_get(data, "name", str),
-        description=str(data.get("description", "")),
-        links=tuple(links),
-        joints=tuple(joints),
-        couplings=tuple(couplings),
-        actuators=tuple(actuators),
-        T_world_root=T_world_root,
-        tip_frames=TIP_FRAMES,
-        rail_enabled=rail_enabled,
-        sources=sources,
-        finger_joints=tuple(finger_joints),
-    )
+    return assemble_spec(data, links, joints, couplings, actuators, T_world_root, rail_enabled,
+                         finger_joints)
