@@ -33,7 +33,7 @@ from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 
 PRESS_TOL_M = 1e-3  # seed: precision 1 mm
-PREPARE_HEIGHT_M = 0.004  # a finger about to press waits this far above its key
+PREPARE_HEIGHT_M = 0.0055  # a finger about to press waits this far above its key (>= 5 mm)
 HOVER_CLEARANCE_M = 0.007  # spec: 5 mm above the keys, plus 2 mm for linearisation
 _NEAR_M = 0.006  # keys within this distance (x, y) of a hovering tip count as under it
 

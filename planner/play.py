@@ -40,7 +40,7 @@ FIRST_CHUNK_PHASES = 12
 REST_HOVER_Z_M = 0.020
 HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white tops (7.5 mm over black)
 RELEASE_WEIGHT = 0.3  # an onset on time matters more than a release on time
-LOW_M = 0.003
+LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
 START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on  # a finger waiting to press (or just released) rests this far above its key
 
 
