@@ -11,9 +11,15 @@ import argparse
 import sys
 
 
+def _line(text: object) -> str:
+    """``text`` on one line: user input quoted in a message (a file name, an argument)
+    may hold line breaks, which would break the one-line promise."""
+    return str(text).replace("\r", "\\r").replace("\n", "\\n")
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, exit 2
-        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        sys.stderr.write(f"{self.prog}: error: {_line(message)}\n")
         raise SystemExit(2)
 
 
@@ -114,13 +120,13 @@ def main(argv: list[str] | None = None) -> int:
             args.command
         ](args)
     except InputError as e:
-        sys.stderr.write(f"error: {e}\n")
+        sys.stderr.write(f"error: {_line(e)}\n")
         return 2
     except InfeasibleError as e:
-        sys.stderr.write(f"infeasible: {e}\n")
+        sys.stderr.write(f"infeasible: {_line(e)}\n")
         return 1
     except PlannerError as e:
-        sys.stderr.write(f"failed: {e}\n")
+        sys.stderr.write(f"failed: {_line(e)}\n")
         return 1
     except KeyboardInterrupt:
         sys.stderr.write("interrupted\n")

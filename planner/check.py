@@ -724,13 +724,14 @@ def _worst(category: str, excess: np.ndarray, value: np.ndarray, limit: np.ndarr
     if excess.size == 0:
         return LimitCheck(category, 0, 0.0, float(np.max(limit)) if np.size(limit) else 0.0,
                           "", 0.0, unit)
-    count = int(np.count_nonzero(value > limit + tol))
+    count = int(np.count_nonzero(~(value <= limit + tol)))  # NaN (inf - inf) is no pass
     r, c = np.unravel_index(int(np.argmax(excess)), excess.shape)
     lim = np.broadcast_to(limit, value.shape)
     return LimitCheck(category, count, float(value[r, c]), float(lim[r, c]), names[c],
                       float(times[r]), unit)
 
 
+@np.errstate(over="ignore", invalid="ignore")  # absurd values give inf: counted, not printed
 def _limit_audit(hand: HandModel, kin: _Kin, tr: Trajectory, pressing_tips: np.ndarray | None,
                  ball_load: np.ndarray | None) -> list[LimitCheck]:
     t, Q, QM = tr.t_s, tr.q, tr.q_motor

@@ -17,14 +17,18 @@ disk), (5) the joint/motor envelope as a property over random small songs,
 (6) determinism.
 
 Hypothesis runs derandomized (the same examples on every run, no example
-database) with ``HARDENING_EXAMPLES`` examples per property (default 40, a
+database) with ``HARDENING_EXAMPLES`` examples per property (default 60, a
 few minutes in all on 2 cores). The long mode::
 
     HARDENING_EXAMPLES=1000 pytest tests/test_hardening.py
 
-runs 1000 examples per property and also plans a 10,000-note song end to end
-(about two minutes on its own). Planner bugs that must be fixed in modules
-this file may not touch are pinned as strict xfails with the minimal example.
+runs 1000 examples per property (about 20 minutes) and also replays the
+10,000-note song (planned in every mode) through the independent check. Planner
+bugs that must be fixed in modules this file may not touch are pinned as strict
+xfails with their minimal example (from 300 examples on, the envelope property
+finds the hand-travel key-bed hit pinned by test_hand_travel_stays_above_the_keys
+and fails until play.py is fixed); the catch tests skip while planner.catch.plan
+cannot be imported.
 """
 
 from __future__ import annotations
@@ -52,7 +56,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import cli
-from planner import trajfile
 from planner.check import check_trajectory
 from planner.hand.model import load_hand
 from planner.music.midi import MAX_DURATION_S, Note, load_song, parse_song_bytes, write_notes_midi
@@ -62,7 +65,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SONGS = sorted((ROOT / "songs").glob("*.mid"))
 PY = sys.executable
 
-EXAMPLES = int(os.environ.get("HARDENING_EXAMPLES", "40"))
+EXAMPLES = int(os.environ.get("HARDENING_EXAMPLES", "60"))
 LONG = EXAMPLES >= 1000
 SETTINGS = settings(
     max_examples=EXAMPLES,
@@ -75,9 +78,11 @@ SETTINGS = settings(
 # songs planned by the fuzz cases stay short so that every case runs in a couple of seconds
 MAX_PLANNED_S = 40.0
 
+# printed on stdout by OSQP from planner/trajectory.py's timing QP (see the xfail below)
+OSQP_NOISE = "Polishing not needed - no active set detected at optimal point\n"
 SUMMARY = re.compile(r"^(?P<name>.*): (?P<notes>\d+) notes, (?P<played>\d+) played, "
                      r"(?P<bad>\d+) infeasible; (?P<rows>\d+) rows \((?P<dur>[0-9.]+) s\) -> "
-                     r"(?P<out>.*)$", re.M)
+                     r"(?P<out>.*)$", re.MULTILINE)
 
 
 # ====================================================================== helpers: running
@@ -108,7 +113,7 @@ def run_sub(*argv: str, cwd: str | os.PathLike, timeout: float = 120,
     def cap():  # a runaway reader must not take the CI machine down
         resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
 
-    return subprocess.run([PY, str(ROOT / "cli.py"), *map(str, argv)], cwd=cwd,
+    return subprocess.run([PY, str(ROOT / "cli.py"), *map(str, argv)], check=False, cwd=cwd,
                           capture_output=True, text=True, timeout=timeout,
                           preexec_fn=cap if limit_memory else None)
 
@@ -143,7 +148,7 @@ def assert_play_outcome(rc: int, err: str, out_path: str | os.PathLike, strict: 
     m = SUMMARY.search(err)
     assert rc == 0 or (rc == 1 and strict and m is not None), (rc, err)
     assert m is not None, f"no summary on stderr: {err!r}"
-    assert out == "", "trajectory rows went to stdout with -o FILE"
+    assert out.replace(OSQP_NOISE, "") == "", "text on stdout with -o FILE"
     tr = read_trajectory(str(out_path))  # complete: end marker and valid rows
     assert tr.complete
     # output never lies: the summary's counts are those of the file
@@ -172,7 +177,7 @@ def play_bytes(capsys, data: bytes, *flags: str, check_limits: bool = False) -> 
         song.write_bytes(data)
         out = Path(d, "out.csv")
         rc, o, err = run_cli(capsys, "play", song, "-o", out, *flags)
-        rc, summary = assert_play_outcome(rc, err, out, strict="--strict" in flags, out=o)
+        rc, _ = assert_play_outcome(rc, err, out, strict="--strict" in flags, out=o)
         if rc != 2 and check_limits and len(read_trajectory(str(out)).t_s) <= 2000:
             assert_envelope(out)
         return rc
@@ -462,15 +467,20 @@ def test_ten_thousand_notes_struck_together(capsys, tmp_path):
     assert assert_play_outcome(rc, err, out, out=o)[1]["notes"] == "16"
 
 
-@pytest.mark.skipif(not LONG, reason="long mode only (HARDENING_EXAMPLES >= 1000): ~2 minutes")
 def test_ten_thousand_notes_planned_end_to_end(tmp_path):
+    """One case (a subprocess, ~20-60 s): 10,000 notes at 8 per second, 1250 s of music;
+    in long mode the 125,000 rows are also replayed through the independent check."""
     notes = [Note((60, 62, 64, 65, 67)[i % 5], 0.125 * i, 0.125 * i + 0.1, 64)
              for i in range(10_000)]
     write_notes_midi(notes, tmp_path / "big.mid")
     r = run_sub("play", tmp_path / "big.mid", "-o", tmp_path / "big.csv", cwd=tmp_path,
-                timeout=900)
+                timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
-    assert read_trajectory(str(tmp_path / "big.csv")).metadata["notes"] == 10_000
+    tr = read_trajectory(str(tmp_path / "big.csv"))
+    assert tr.metadata["notes"] == 10_000
+    assert int(SUMMARY.search(r.stderr)["rows"]) == len(tr.t_s)
+    if LONG:
+        assert_envelope(tmp_path / "big.csv")
 
 
 def test_a_song_longer_than_24_hours_is_refused(capsys, tmp_path):
@@ -514,6 +524,17 @@ def test_play_with_every_shipped_hand(capsys, tmp_path, hand):
     rc, o, err = run_cli(capsys, "play", SCALE, "--hand", hand, "-o", out)
     assert_play_outcome(rc, err, out, out=o)
     assert_envelope(out, SCALE)
+
+
+@pytest.mark.parametrize("argv", [
+    ["play", "no\nsuch.mid"], ["play", str(SCALE), "stray\nargument"],
+    ["play", str(SCALE), "--hand", "x\ny"], ["play", str(SCALE), "--rate", "1\n2"],
+    ["check", "no\nsuch.csv"], ["hand", "--hand", "a\r\nb"],
+], ids=["song", "argument", "hand", "rate", "check", "crlf"])
+def test_line_breaks_in_user_input_stay_on_one_line(capsys, tmp_path, argv):
+    rc, out, err = run_cli(capsys, *argv)
+    assert rc == 2 and out == ""
+    one_line(err)
 
 
 BAD_MIDI = {
@@ -638,26 +659,60 @@ def test_catch_huge_distance_is_one_line_and_no_file(capsys, tmp_path, dist):
     assert not out.exists() and part_files(tmp_path) == []
 
 
-@needs_catch
-@pytest.mark.xfail(strict=True, reason=(
-    "planner/catch/plan.py: a tiny positive --dist (1e-10 m) crashes CatchPlanner._check_rows "
-    "-> _interp_row(t, Q, t_i) with IndexError (Q has no rows): a traceback, no exit status"))
-def test_catch_tiny_distance_does_not_crash(capsys, tmp_path):
-    rc, _, err, out = _catch(capsys, tmp_path, "--angle=45", "--dist=1e-10")
-    assert rc in (0, 1, 2)
-    if rc == 2:
-        assert_input_refused(rc, err, out)
+TINY_DIST_BUGS = {  # (angle, dist) -> what planner/catch/plan.py does today
+    ("45", "1e-4"): "IndexError in CatchPlanner._check_rows -> _interp_row (Q has no rows)",
+    ("45", "1e-10"): "IndexError in CatchPlanner._check_rows -> _interp_row (Q has no rows)",
+    ("89", "1e-20"): "MemoryError: plans 474,351,208 rows (3.5 GiB of times, "
+                       "78 GiB of joint rows)",
+    ("45", "1e-50"): "ValueError: Maximum allowed size exceeded (row count overflows)",
+    ("45", "1e-200"): "numpy RuntimeWarnings (invalid value in divide, _unit and _refine_time) "
+                      "on stderr before 'error: t must be finite', which names no argument",
+    ("89", "5e-324"): "ZeroDivisionError: float division by zero",
+}
 
 
 @needs_catch
-@pytest.mark.xfail(strict=True, reason=(
-    "planner/catch/plan.py _refine_time divides by v@v = 0 for --dist=1e-200: a numpy "
-    "RuntimeWarning (2 extra stderr lines) precedes 'error: t must be finite', which does "
-    "not name the argument"))
-def test_catch_vanishing_distance_one_clear_line(tmp_path):
-    r = run_sub("catch", "--angle=45", "--dist=1e-200", "-o", tmp_path / "c.csv", cwd=tmp_path)
-    assert_input_refused(r.returncode, r.stderr, tmp_path / "c.csv")
-    assert "--dist" in r.stderr
+@pytest.mark.parametrize("angle, dist", [
+    pytest.param(a, d, marks=pytest.mark.xfail(strict=True, reason=f"planner/catch/plan.py: "
+                                               f"--angle {a} --dist {d}: {why}"))
+    for (a, d), why in TINY_DIST_BUGS.items()], ids=lambda v: v)
+def test_catch_tiny_distance_ends_cleanly(tmp_path, angle, dist):
+    """A tiny but positive distance passes validation; the plan must still end in a
+    documented way (a subprocess with 3 GiB of address space: one case tries 78 GiB)."""
+    out = tmp_path / "c.csv"
+    r = run_sub("catch", f"--angle={angle}", f"--dist={dist}", "-o", out, cwd=tmp_path,
+                timeout=120, limit_memory=True)
+    assert "Traceback" not in r.stderr and r.returncode in (0, 1, 2), r.stderr[-3000:]
+    if r.returncode == 0:
+        assert read_trajectory(str(out)).complete
+    else:
+        one_line(r.stderr)
+        assert not out.exists() and part_files(tmp_path) == []
+        assert r.returncode == 1 or "--dist" in r.stderr, r.stderr
+
+
+@needs_catch
+@SETTINGS
+@given(angle=st.floats(0.5, 89.5), dist=st.floats(0.05, 30.0), height=st.floats(-9.9, 9.9),
+       ball=st.sampled_from(["tennis", "baseball", "seed"]), drag=st.booleans())
+def test_catch_any_plausible_throw_ends_cleanly(capsys, angle, dist, height, ball, drag):
+    """Valid arguments: exit 0 with a complete file (and, when the summary says feasible,
+    the independent check agrees), or exit 1 with one line and no file."""
+    with tempfile.TemporaryDirectory() as d:
+        rc, o, err, out = _catch(capsys, d, f"--angle={angle!r}", f"--dist={dist!r}",
+                                 f"--height={height!r}", f"--ball={ball}",
+                                 *(["--drag"] if drag else []))
+        assert "Traceback" not in err and o == ""
+        assert part_files(d) == []
+        if rc == 0:
+            assert read_trajectory(str(out)).complete
+            if "feasible: yes" in err:
+                rep = check_trajectory(str(out))
+                assert rep.ok, rep.summary()
+        else:
+            assert rc in (1, 2), (rc, err)
+            one_line(err)
+            assert not out.exists()
 
 
 @needs_catch
@@ -750,7 +805,7 @@ DAMAGE = {  # name -> (lines -> text or bytes, expected exit status)
     "no_end_marker": (lambda L: _with(L[:-1]), 2),
     "end_marker_rows_wrong": (lambda L: _with([*L[:-1], '# {"end": true, "rows": 3}']), 2),
     "end_marker_rows_plus_one": (lambda L: _with(
-        [*L[:-1], '# {"end": true, "rows": %d}' % (len(L) - 2)]), 2),
+        [*L[:-1], f'# {{"end": true, "rows": {len(L) - 2}}}']), 2),
     "no_rows": (lambda L: _with([L[0], L[1], '# {"end": true, "rows": 0}']), 2),
     "empty_file": (lambda L: "", 2),
     "only_newlines": (lambda L: "\n\n\n", 2),
@@ -787,13 +842,66 @@ def test_check_damaged_file(capsys, planned, tmp_path, name):
     assert os.listdir(tmp_path) == ["damaged.csv"]
 
 
+JSON = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=5) | st.dictionaries(st.text(max_size=5), inner,
+                                                                max_size=4),
+    max_leaves=20)
+
+
+@SETTINGS
+@given(key=st.sampled_from(["task", "hand", "urdf_sha256", "T_world_root", "rate_hz", "format",
+                            "version", "notes", "song"]),
+       value=JSON | st.just(KeyError))
+def test_check_random_metadata_values(capsys, planned, key, value):
+    """Any JSON value for a metadata key: the file is replayed or refused in one line."""
+    lines = _lines(planned)
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d, "m.csv")
+        path.write_text(_with(_meta(lines, **{key: value})), newline="")
+        rc, out, err = run_cli(capsys, "check", path)
+        if rc == 2:
+            one_line(err)
+            assert out == ""
+        else:
+            assert rc in (0, 1) and err == "", (rc, err)
+            assert out.startswith(f"check {path}: ")
+
+
+@SETTINGS
+@given(cells=st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 100), st.one_of(
+    st.floats(allow_nan=False, allow_infinity=False),
+    st.floats(-10, 10),
+    st.sampled_from([1e300, -1e300, 5e-324, 0.0, -0.0]),
+)), min_size=1, max_size=5))
+def test_check_random_values_are_audited_not_crashed(capsys, planned, cells):
+    """Finite but wrong numbers anywhere in the rows (time included): a valid file,
+    audited (exit 0 or 1, nothing on stderr) or refused (exit 2, one line: e.g. time
+    no longer increasing)."""
+    lines = _lines(planned)
+    rows = len(lines) - 3
+    for r, c, v in cells:
+        lines = _set(lines, r % rows, c % len(lines[1].split(",")), repr(v))
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d, "v.csv")
+        path.write_text(_with(lines), newline="")
+        rc, out, err = run_cli(capsys, "check", path, "--json")
+        if rc == 2:
+            one_line(err)
+            assert out == ""
+        else:
+            assert rc in (0, 1) and err == "", (rc, err)
+            rep = json.loads(out)
+            assert rep["ok"] is (rc == 0)
+
+
 def test_check_the_undamaged_file_passes(capsys, planned):
     rc, out, err = run_cli(capsys, "check", planned, SCALE)
     assert rc == 0 and err == "" and out.startswith(f"check {planned}: OK"), out
 
 
 @SETTINGS
-@given(frac=st.floats(0.0, 1.0, exclude_max=True))
+@given(frac=st.one_of(st.floats(0.0, 1.0, exclude_max=True), st.just(1.0 - 1e-16)))
 def test_check_truncated_anywhere(capsys, planned, frac):
     """Cut the file anywhere: refused without --allow-incomplete; with it, exactly the
     complete rows are read (a half-written last row is not a row)."""
@@ -804,6 +912,9 @@ def test_check_truncated_anywhere(capsys, planned, frac):
         path = Path(d, "cut.csv")
         path.write_bytes(cut)
         rc, out, err = run_cli(capsys, "check", path)
+        if cut == data[:-1]:  # only the last line break is gone: the end marker is whole
+            assert rc == 0 and err == "", (rc, err)
+            return
         assert rc == 2 and out == "", (rc, err)
         one_line(err)
         rc, out, err = run_cli(capsys, "check", path, "--allow-incomplete", "--json")
@@ -892,7 +1003,7 @@ def test_unwritable_urdf_and_played_paths(capsys, planned, tmp_path):
 
 @pytest.mark.parametrize("dest", ["file", "stdout"])
 def test_interrupt_during_planning_leaves_nothing(capsys, monkeypatch, tmp_path, dest):
-    import planner.play as play
+    from planner import play
 
     real = play.solve_timing
     calls = {"n": 0, "rows_before": None}
@@ -990,7 +1101,7 @@ def _fill_disk(monkeypatch, budget: int, where: str, directory: Path) -> None:
 def test_full_disk(capsys, monkeypatch, tmp_path, where, budget):
     _fill_disk(monkeypatch, budget, where, tmp_path)
     out = tmp_path / "o.csv"
-    rc, o, err = run_cli(capsys, "play", SCALE, "-o", out)
+    rc, _, err = run_cli(capsys, "play", SCALE, "-o", out)
     monkeypatch.undo()
     assert rc in (1, 2), (rc, err)
     one_line(err)
@@ -1002,7 +1113,7 @@ def test_full_disk(capsys, monkeypatch, tmp_path, where, budget):
 def test_full_disk_while_writing_played_midi(capsys, monkeypatch, planned, tmp_path, where):
     """``check --played OUT.mid``: a full disk leaves no truncated MIDI file behind."""
     _fill_disk(monkeypatch, 20, where, tmp_path)
-    rc, o, err = run_cli(capsys, "check", planned, "--played", tmp_path / "played.mid")
+    rc, _, err = run_cli(capsys, "check", planned, "--played", tmp_path / "played.mid")
     monkeypatch.undo()
     assert rc in (1, 2), (rc, err)
     one_line(err)
@@ -1024,7 +1135,7 @@ def test_full_temporary_directory_during_planning(capsys, monkeypatch, tmp_path)
 
     monkeypatch.setattr(tempfile, "mkstemp", mkstemp)
     out = tmp_path / "o.csv"
-    rc, o, err = run_cli(capsys, "play", SCALE, "-o", out)
+    rc, _, err = run_cli(capsys, "play", SCALE, "-o", out)
     monkeypatch.undo()
     assert rc == 1
     one_line(err)
@@ -1050,6 +1161,27 @@ def test_stdout_output_is_complete(capsys):
     assert json.loads(lines[-1][2:]) == {"end": True, "rows": len(lines) - 3}
     m = SUMMARY.search(err)
     assert int(m["rows"]) == len(lines) - 3
+
+
+# minimal example found by test_zero_length_and_overlapping_notes (hypothesis, shrunk):
+# C4 struck five times 30 ms apart at velocity 1 over a held E4
+POLISH_EVENTS = ([(0, "on", 60, 1, 0)] * 4 + [(0, "on", 64, 1, 0)] + [(29, "on", 60, 1, 0)] * 5
+                 + [(1, "on", 60, 1, 0)])
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "planner/trajectory.py solve_timing: OSQP (polishing=True) prints 'Polishing not needed - "
+    "no active set detected at optimal point' on stdout even with verbose=False; with "
+    "`-o -` that line lands inside the trajectory stream (between rows), which then no "
+    "longer parses; with -o FILE it is stray text on stdout"))
+def test_stdout_stream_is_only_the_trajectory(capsys, tmp_path):
+    song = tmp_path / "s.mid"
+    song.write_bytes(header(1, 1) + _events_track(POLISH_EVENTS))
+    rc, out, err = run_cli(capsys, "play", song, "-o", "-")
+    assert rc == 0, err
+    (tmp_path / "stdout.csv").write_text(out)
+    tr = read_trajectory(str(tmp_path / "stdout.csv"))
+    assert int(SUMMARY.search(err)["rows"]) == len(tr.t_s)
 
 
 # ====================================================================== 5. the envelope
@@ -1095,6 +1227,21 @@ def assert_inside_envelope(rep) -> None:
 @given(notes=NOTES)
 def test_random_songs_stay_inside_the_envelope(song_planner, notes):
     assert_inside_envelope(plan_and_check(notes, song_planner))
+
+
+# minimal example found by the property above (HARDENING_EXAMPLES=300, shrunk by hypothesis):
+# (pitch, onset s, duration s, velocity); the velocity does not matter
+TRAVEL_DIP = [(62, 0.0, 1.0, 1), (77, 0.015625, 1.0, 1), (48, 2.0, 1.0, 1)]
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "planner/play.py _Timeline.travel moves rail, wrist and every finger at once on one "
+    "joint-space min-jerk line, so fingertip heights between its end postures are not "
+    "bounded: D4 (0 s) + F5 (15.6 ms), then C3 (2 s) -> while the hand travels left at "
+    "t=1.15 s the pinky tip sweeps 2 mm below the white tops, through G#4's footprint "
+    "14.25 mm below its top (key bed at 12 mm): a key-bed hit and a wrong press of G#4"))
+def test_hand_travel_stays_above_the_keys():
+    assert_inside_envelope(plan_and_check(TRAVEL_DIP, None))  # a fresh Planner
 
 
 # ====================================================================== 6. determinism
