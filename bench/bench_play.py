@@ -18,9 +18,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from planner.hand.model import load_hand  # noqa: E402
-from planner.music.midi import load_song  # noqa: E402
-from planner.play import Planner, plan_song  # noqa: E402
+from planner.hand.model import load_hand
+from planner.music.midi import load_song
+from planner.play import Planner, plan_song
 
 
 def main() -> None:

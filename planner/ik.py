@@ -21,8 +21,6 @@ Per step the QP holds:
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,13 +101,8 @@ class HandIK:
 
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand
-        fd, path = tempfile.mkstemp(suffix=".urdf")
-        try:
-            with os.fdopen(fd, "w") as f:
-                f.write(hand.urdf)
-            self.robot = placo.RobotWrapper(path, placo.Flags.ignore_collisions)
-        finally:
-            os.unlink(path)
+        # the URDF text is passed directly: no temporary file
+        self.robot = placo.RobotWrapper("", placo.Flags.ignore_collisions, hand.urdf)
         self.robot.set_T_world_fbase(hand.T_world_root)
         self._names = hand.joint_names
         self._v_off = np.array([self.robot.get_joint_v_offset(n) for n in self._names])

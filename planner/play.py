@@ -40,6 +40,8 @@ FIRST_CHUNK_PHASES = 12
 REST_HOVER_Z_M = 0.020
 HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white tops (7.5 mm over black)
 RELEASE_WEIGHT = 0.3  # an onset on time matters more than a release on time
+TRAVEL_MIN_Z_M = kb.BLACK_TOP_Z_M + 0.002  # no tip lower than this while the hand travels
+TRAVEL_SAFE_Z_M = 0.040  # fingertips lifted this high when a straight travel would dip
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
 START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on  # a finger waiting to press (or just released) rests this far above its key
 
@@ -172,6 +174,15 @@ class Planner:
             base[js] = self.above_q(t.finger, t.pitch, seg, HIGH_M)[js]
         self.bases[seg] = base
         return seg
+
+    def lift_to(self, q: np.ndarray, finger: str, z_m: float) -> np.ndarray:
+        """``q`` with ``finger`` raised straight up to height ``z_m`` (not lowered)."""
+        tip = self.hand.tip_positions(q)[self.hand.fingers.index(finger)]
+        if tip[2] >= z_m:
+            return q
+        t = PressTarget(finger, 0, (float(tip[0]), float(tip[1]), z_m), (float(tip[1]),) * 2)
+        self.ik_solves += 1
+        return self.ik.solve_finger(t, q).q
 
     def rest_high_q(self, finger: str, seg: int) -> np.ndarray:
         """``finger`` lifted straight up from its place in hand position ``seg`` to
@@ -320,8 +331,21 @@ class _Timeline:
             q[js] = self.pl.rest_high_q(f, seg)[js]
         arm = [j for j in range(self.hand.n) if not any(j in self.hand.joint_slice(f) for f in self.hand.fingers)]
         q[arm] = self.pl.bases[seg][arm]
-        # ordered after (and before) every joint's motion: nothing else moves meanwhile
-        self._move(q, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
+        if self._path_low(self.q, q):
+            # the straight move would sweep a fingertip through the keys: every finger up
+            # to TRAVEL_SAFE_Z first, across, then down to its place
+            up = self.q.copy()
+            for f in self.hand.fingers:
+                up = self.pl.lift_to(up, f, TRAVEL_SAFE_Z_M)
+            self._move(up, 0.5, t_s, 0.0, "move", None)
+            q_up = q.copy()
+            for f in self.hand.fingers:
+                q_up = self.pl.lift_to(q_up, f, TRAVEL_SAFE_Z_M)
+            self._move(q_up, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
+            self._move(q, 0.5, t_s, 0.0, "move", None)
+        else:
+            # ordered after (and before) every joint's motion: nothing else moves meanwhile
+            self._move(q, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
         self.seg = seg
         for f in self.hand.fingers:
             self.place[f] = ("high",)
@@ -348,6 +372,14 @@ class _Timeline:
             self.q = self.q + (d - ph.delta)
             self.place[finger] = ("above", pl[1], HIGH_M)
             return
+
+    def _path_low(self, qa: np.ndarray, qb: np.ndarray) -> bool:
+        """True if a fingertip dips below ``TRAVEL_MIN_Z_M`` on the straight joint-space
+        move from ``qa`` to ``qb`` (checked by FK at 13 points)."""
+        for s in np.linspace(0.0, 1.0, 13):
+            if self.hand.tip_positions(qa + (qb - qa) * s)[:, 2].min() < TRAVEL_MIN_Z_M:
+                return True
+        return False
 
     def go_high(self, finger: str) -> None:
         """Lift ``finger`` straight up to ``HIGH_M`` above the white keys' top, from wherever it is."""

@@ -115,7 +115,7 @@ def build_timing(phases: list[Phase], t0: float) -> TimingProblem:
 
 
 def solve_timing(prob: TimingProblem) -> np.ndarray:
-    """Start times (s) of the phases, by OSQP (tight tolerances, polished).
+    """Start times (s) of the phases, by OSQP (tight tolerances; no polishing: it prints to stdout).
 
     Phases with weight 0 get a tiny pull to start as early as they may, so
     the problem is strictly convex. The solution is then made exactly
@@ -142,7 +142,7 @@ def solve_timing(prob: TimingProblem) -> np.ndarray:
     l_vec = np.concatenate(lo)
     solver = osqp.OSQP()
     solver.setup(P=P, q=q, A=A, l=l_vec, u=np.full(len(l_vec), np.inf), verbose=False,
-                 eps_abs=1e-9, eps_rel=1e-9, max_iter=20000, polishing=True)
+                 eps_abs=1e-9, eps_rel=1e-9, max_iter=20000, polishing=False)  # polishing prints to stdout (breaks -o -)
     res = solver.solve()
     if res.info.status not in ("solved", "solved inaccurate") or res.x is None:
         raise SolverError(f"timing QP failed: {res.info.status}", problem=prob)
