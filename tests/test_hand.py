@@ -669,3 +669,23 @@ def test_error_unreadable_hand_file(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="cannot read hand file") as e:
         load_hand_spec(str(tmp_path / "missing.toml"))
     assert "\n" not in str(e.value)
+
+
+def test_rail_can_be_turned_off(tmp_path):
+    """A hand file with ``[rail] enabled = false``: no rail joint or motor, 21 hand joints,
+    and play still plans (notes out of reach of the fixed hand are reported, not dropped)."""
+    from planner.hand.spec import hands_dir, load_hand_spec
+    from planner.music.midi import load_song
+    from planner.play import plan_song
+
+    text = (hands_dir() / "default.toml").read_text(encoding="utf-8")
+    assert "enabled = true" in text
+    p = tmp_path / "norail.toml"
+    p.write_text(text.replace("enabled = true", "enabled = false").replace(
+        'name = "default"', 'name = "norail"'), encoding="utf-8")
+    hand = HandModel(load_hand_spec(str(p)))
+    assert "rail" not in hand.joint_names and "rail" not in hand.motor_names
+    assert len(hand.joint_names) == 21
+    song = load_song(Path(__file__).resolve().parents[1] / "songs" / "twinkle.mid")
+    res = plan_song(song, hand, str(tmp_path / "t.csv"))
+    assert len(res.notes) == 14 and all(n.finger or n.reason for n in res.notes)
