@@ -1,8 +1,6 @@
-"""Notes + fingering -> key states: which finger holds which key, when.
+"""Notes + fingering -> press intervals: which finger holds which key, when.
 
-A ``KeyState`` is what the hand must hold from ``t_s`` until the next
-state: the set of fingers pressing keys (each at full dip, with a force),
-the others hovering. Press intervals are a note's [onset, offset), except:
+A note's press interval is its [onset, offset), except:
 
 - a key struck again within ``RELEASE_S`` of its release is released
   ``RELEASE_S`` before the new onset (a piano key must come up to sound
@@ -13,7 +11,8 @@ the others hovering. Press intervals are a note's [onset, offset), except:
 MIDI velocity maps to press force (N) and key speed: ``force_n = 0.5 +
 2.5 (v/127)^2`` (0.5 N is a real key's weight, 3 N a forte press on this
 hand) and a descent time of ``60 - 35 v/127`` ms over the 30 mm from travel
-height to full dip (key speed 0.5 to 1.2 m/s).
+height to full dip (key speed 0.5 to 1.2 m/s); play.py scales it to the
+actual descent.
 """
 
 from __future__ import annotations
@@ -48,15 +47,6 @@ class Press:
 
 
 @dataclass(frozen=True)
-class KeyState:
-    """Hold from ``t_s`` on: ``presses`` down (finger order), the other fingers up."""
-
-    t_s: float
-    presses: tuple[Press, ...]
-    rail_hint_m: float
-
-
-@dataclass(frozen=True)
 class PressInterval:
     start_s: float
     end_s: float
@@ -78,32 +68,8 @@ def press_intervals(notes, assignments) -> list[PressInterval]:
             k = key_fn(it[2])
             prev = last.get(k)
             if prev is not None and prev[1] > it[0] - gap:
-                if key_fn is not None and k[0] == "finger" and prev[2].pitch == it[2].pitch:
-                    pass  # same key, same finger: handled by the key rule
                 prev[1] = max(prev[0] + 0.5 * (it[0] - prev[0]), it[0] - gap)
                 prev[1] = min(prev[1], it[0])
             last[k] = it
     return [PressInterval(s, e, p) for s, e, p in sorted(items, key=lambda x: (x[0], x[2].pitch))
             if e > s]
-
-
-def build_states(intervals: list[PressInterval], rail_of_note: dict[int, float],
-                 rest_rail_m: float) -> list[KeyState]:
-    """The sequence of key states from t = 0, one per change of the pressed set."""
-    times = sorted({0.0} | {iv.start_s for iv in intervals} | {iv.end_s for iv in intervals})
-    order = {"thumb": 0, "index": 1, "middle": 2, "ring": 3, "pinky": 4}
-    states: list[KeyState] = []
-    starts = sorted(intervals, key=lambda iv: iv.start_s)
-    for k, t in enumerate(times):
-        active = tuple(sorted((iv.press for iv in intervals if iv.start_s <= t < iv.end_s),
-                              key=lambda p: order[p.finger]))
-        if active:
-            rail = sum(rail_of_note[p.note_index] for p in active) / len(active)
-        else:  # prepare for what comes next
-            nxt = [iv for iv in starts if iv.start_s > t]
-            rail = rail_of_note[nxt[0].press.note_index] if nxt else (
-                states[-1].rail_hint_m if states else rest_rail_m)
-        if states and states[-1].presses == active:
-            continue
-        states.append(KeyState(t, active, rail))
-    return states

@@ -41,18 +41,6 @@ def min_jerk(u: np.ndarray) -> np.ndarray:
     return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
 
 
-def min_jerk_inverse(s: float) -> float:
-    """The u in [0, 1] with min_jerk(u) = s (bisection; s in [0, 1])."""
-    lo, hi = 0.0, 1.0
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        if min_jerk(np.array(mid)) < s:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
 def phase_duration(dq: np.ndarray, v_max: np.ndarray, a_max: np.ndarray, floor_s: float = MIN_PHASE_S) -> float:
     """Shortest duration (s) of a min-jerk move ``dq`` within speed/acceleration limits."""
     adq = np.abs(dq)
