@@ -25,15 +25,12 @@ from planner.trajectory import (
     Phase,
     build_timing,
     min_jerk,
-    min_jerk_inverse,
     phase_duration,
     sample,
     solve_timing,
 )
 from planner.trajfile import TrajectoryWriter
 
-TRAVEL_Z_M = kb.BLACK_TOP_Z_M + 0.010  # lifted fingertips clear every key by 10 mm
-DIRECT_MOVE_M = 0.004  # an arm move shifting no tip more than this sideways is local
 LATE_S = 0.020  # a note whose key goes down later than this is reported
 CHUNK_PHASES = 40
 FIRST_CHUNK_PHASES = 12
@@ -175,26 +172,26 @@ class Planner:
         self.bases[seg] = base
         return seg
 
+    def _vertical(self, q: np.ndarray, finger: str, z_m: float, pitch: int = 0) -> IKResult:
+        """Single-finger IK moving ``finger``'s tip straight up or down from where it is
+        in ``q`` to height ``z_m`` (the rest of the hand stays as in ``q``)."""
+        tip = self.hand.tip_positions(q)[self.hand.fingers.index(finger)]
+        t = PressTarget(finger, pitch, (float(tip[0]), float(tip[1]), z_m), (float(tip[1]),) * 2)
+        self.ik_solves += 1
+        return self.ik.solve_finger(t, q)
+
     def lift_to(self, q: np.ndarray, finger: str, z_m: float) -> np.ndarray:
         """``q`` with ``finger`` raised straight up to height ``z_m`` (not lowered)."""
-        tip = self.hand.tip_positions(q)[self.hand.fingers.index(finger)]
-        if tip[2] >= z_m:
+        if self.hand.tip_positions(q)[self.hand.fingers.index(finger), 2] >= z_m:
             return q
-        t = PressTarget(finger, 0, (float(tip[0]), float(tip[1]), z_m), (float(tip[1]),) * 2)
-        self.ik_solves += 1
-        return self.ik.solve_finger(t, q).q
+        return self._vertical(q, finger, z_m).q
 
     def rest_high_q(self, finger: str, seg: int) -> np.ndarray:
         """``finger`` lifted straight up from its place in hand position ``seg`` to
         ``HIGH_M`` above the white keys' top; cached."""
         key = (finger, seg, "rest_high")
         if key not in self._cache:
-            base = self.bases[seg]
-            tip = self.hand.tip_positions(base)[self.hand.fingers.index(finger)]
-            t = PressTarget(finger, 0, (float(tip[0]), float(tip[1]), HIGH_M), (float(tip[1]),) * 2)
-            r = self.ik.solve_finger(t, base)
-            self._cache[key] = r.q
-            self.ik_solves += 1
+            self._cache[key] = self._vertical(self.bases[seg], finger, HIGH_M).q
         return self._cache[key]
 
     def press_q(self, finger: str, pitch: int, seg: int) -> tuple[np.ndarray, IKResult]:
@@ -213,18 +210,8 @@ class Planner:
         key = (finger, pitch, seg, height_m)
         if key not in self._cache:
             qp, _ = self.press_q(finger, pitch, seg)
-            tip = self.hand.tip_positions(qp)[self.hand.fingers.index(finger)]
-            z = kb.key(pitch).top_z_m + height_m
-            t = PressTarget(finger, pitch, (float(tip[0]), float(tip[1]), z), (float(tip[1]),) * 2)
-            r = self.ik.solve_finger(t, qp)
-            self._cache[key] = (r.q, r)
-            self.ik_solves += 1
-        return self._cache[key][0]
-
-
-def _crossing_fraction(z_from: float, z_to: float, z_cross: float) -> float:
-    s = (z_cross - z_from) / (z_to - z_from) if z_to != z_from else 0.5
-    return min_jerk_inverse(min(max(s, 0.0), 1.0))
+            self._cache[key] = self._vertical(qp, finger, kb.key(pitch).top_z_m + height_m, pitch).q
+        return self._cache[key]
 
 
 def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int) -> float:
