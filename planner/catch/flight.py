@@ -454,17 +454,22 @@ class Flight:
 # --------------------------------------------------------------------------- throws
 
 
-def _check_throw(angle_deg: Any, dist_m: Any, height_m: Any) -> tuple[float, float, float]:
-    a = _finite("angle", angle_deg)
+def check_throw(angle_deg: Any, dist_m: Any, height_m: Any, prefix: str = ""
+                ) -> tuple[float, float, float]:
+    """(angle, dist, height) as floats, or InputError: 0 < angle < 90 deg, dist > 0,
+    |height| < MAX_HEIGHT, all finite. ``prefix`` goes before the names in messages
+    (``--`` for the command line)."""
+    a = _finite(f"{prefix}angle", angle_deg)
     if not 0.0 < a < 90.0:
-        raise InputError(f"angle must be strictly between 0 and 90 degrees, got {a:g}")
-    d = _finite("dist", dist_m)
+        raise InputError(f"{prefix}angle must be strictly between 0 and 90 degrees, got {a:g}")
+    d = _finite(f"{prefix}dist", dist_m)
     if d <= 0.0:
-        raise InputError(f"dist must be > 0 m, got {d:g}")
-    h = _finite("height", height_m)
+        raise InputError(f"{prefix}dist must be > 0 m, got {d:g}")
+    h = _finite(f"{prefix}height", height_m)
     if not abs(h) < MAX_HEIGHT:
         raise InputError(
-            f"height must be between -{MAX_HEIGHT:g} and {MAX_HEIGHT:g} m (exclusive), got {h:g}"
+            f"{prefix}height must be between -{MAX_HEIGHT:g} and {MAX_HEIGHT:g} m (exclusive), "
+            f"got {h:g}"
         )
     return a, d, h
 
@@ -552,7 +557,7 @@ def predict_throw(
     shoots for the launch speed. InputError on a bad argument, InfeasibleError
     when no throw at that angle (at most MAX_LAUNCH_SPEED) reaches the point.
     """
-    a, d, h = _check_throw(angle_deg, dist_m, height_m)
+    a, d, h = check_throw(angle_deg, dist_m, height_m)
     b = get_ball(ball)
     a_rad = math.radians(a)
     v = _vacuum_speed(a_rad, d, h, a)

@@ -101,6 +101,7 @@ from planner.catch.flight import (
     Ball,
     FitResult,
     Flight,
+    check_throw,
     fit_observations,
     get_ball,
     load_observations_csv,
@@ -1056,18 +1057,13 @@ MAX_DIST_M = 100.0
 
 def validate_throw(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any
                    ) -> tuple[float, float, float, float]:
-    """InputError unless 0 < angle < 90, MIN_DIST_M <= dist <= MAX_DIST_M, all finite,
+    """InputError unless 0 < angle < 90, MIN_DIST_M <= dist <= MAX_DIST_M,
+    |height| < 10 m, all finite,
     1 <= rate <= 10000 Hz. (A throw from closer than the hand's own size is no throw: a
     tiny distance would ask for flights of microseconds.)"""
-    a = _finite("--angle", angle_deg)
-    if not 0.0 < a < 90.0:
-        raise InputError(f"--angle must be strictly between 0 and 90 degrees, got {a:g}")
-    d = _finite("--dist", dist_m)
-    if d <= 0.0:
-        raise InputError(f"--dist must be > 0 m, got {d:g}")
+    a, d, hgt = check_throw(angle_deg, dist_m, height_m, prefix="--")
     if not MIN_DIST_M <= d <= MAX_DIST_M:
         raise InputError(f"--dist must be between {MIN_DIST_M:g} and {MAX_DIST_M:g} m, got {d:g}")
-    hgt = _finite("--height", height_m)
     rate = _finite("--rate", rate_hz)
     if not 1.0 <= rate <= 10000.0:
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate:g}")
