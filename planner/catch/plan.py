@@ -668,22 +668,10 @@ class CatchPlanner:
         if cross.size:
             k = int(cross[0])
             ta, tb, fa, fb = float(t[k]), float(t[k + 1]), float(hgt[k]), float(hgt[k + 1])
-            # secant from the bracket (h is smooth: ~ the ball's height above the palm
-            # plane), kept inside the bracket; converges in 2-4 steps to 1e-8 m
-            t0, f0, t1, f1 = ta, fa, tb, fb
-            for _ in range(12):
-                tm = t1 - f1 * (t1 - t0) / (f1 - f0) if f1 != f0 else 0.5 * (ta + tb)
-                if not ta < tm < tb:
-                    tm = 0.5 * (ta + tb)
-                th, s_vec, fm = self._aligned1(flight, C, tm, r)
-                if fm > 0:
-                    ta = tm
-                else:
-                    tb = tm
-                t0, f0, t1, f1 = t1, f1, tm, fm
-                if abs(fm) < 1e-8 or tb - ta < 1e-9:
-                    break
-            ti = tm
+            # h is smooth (~ the ball's height above the palm plane): a bracketed
+            # secant converges in 2-4 steps to 1e-8 m
+            ti, (th, s_vec, _) = _bracketed_secant(
+                lambda tm: self._aligned1(flight, C, tm, r), ta, tb, fa, fb)
             sol = self._dev_rail(s_vec, r)
             if sol is not None and self.flex_lim[0] <= th <= self.flex_lim[1]:
                 return _Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
@@ -694,25 +682,11 @@ class CatchPlanner:
         """Time in [ta, tb] at which the ball is ``rho`` from the flexion axis (secant)."""
         e = self.e_f
 
-        def f(t: float) -> float:
+        def f(t: float) -> tuple[float]:
             w = flight.position(t) - C - self.W
-            return float(np.linalg.norm(w - (w @ e) * e)) - rho
+            return (float(np.linalg.norm(w - (w @ e) * e)) - rho,)
 
-        t0, f0, t1, f1 = ta, fa, tb, fb
-        tm = 0.5 * (ta + tb)
-        for _ in range(12):
-            tm = t1 - f1 * (t1 - t0) / (f1 - f0) if f1 != f0 else 0.5 * (ta + tb)
-            if not ta < tm < tb:
-                tm = 0.5 * (ta + tb)
-            fm = f(tm)
-            if fm > 0:
-                ta = tm
-            else:
-                tb = tm
-            t0, f0, t1, f1 = t1, f1, tm, fm
-            if abs(fm) < 1e-8 or tb - ta < 1e-9:
-                break
-        return tm
+        return _bracketed_secant(f, ta, tb, fa, fb)[0]
 
     def _intercept_position_only(self, flight: Flight, C: np.ndarray, r: float,
                                  t: np.ndarray) -> _Intercept:
@@ -1053,6 +1027,28 @@ def _finite(name: str, x: Any) -> float:
 
 MIN_DIST_M = 0.1  # launch point at least this far from the hand's nominal catch point
 MAX_DIST_M = 100.0
+
+
+def _bracketed_secant(f, ta: float, tb: float, fa: float, fb: float, iters: int = 12):
+    """Root of a smooth function on the bracket [ta, tb] (fa > 0 >= fb): secant steps kept
+    inside the shrinking bracket, bisection when a step leaves it. ``f(t)`` returns a
+    tuple whose last item is the value; returns (t, f(t)) of the last iterate."""
+    t0, f0, t1, f1 = ta, fa, tb, fb
+    tm, out = 0.5 * (ta + tb), None
+    for _ in range(iters):
+        tm = t1 - f1 * (t1 - t0) / (f1 - f0) if f1 != f0 else 0.5 * (ta + tb)
+        if not ta < tm < tb:
+            tm = 0.5 * (ta + tb)
+        out = f(tm)
+        fm = out[-1]
+        if fm > 0:
+            ta = tm
+        else:
+            tb = tm
+        t0, f0, t1, f1 = t1, f1, tm, fm
+        if abs(fm) < 1e-8 or tb - ta < 1e-9:
+            break
+    return tm, out
 
 
 def validate_throw(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any
