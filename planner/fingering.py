@@ -35,7 +35,10 @@ import numpy as np
 from planner.music import keyboard as kb
 
 CHORD_WINDOW_S = 0.030
-REUSE_S = 0.30  # a finger moved to another key sooner than this after its release is penalised
+REUSE_S = 0.30
+REPOSITION_OVERHEAD_S = 0.15  # lift before and landing after the rail's move (measured on the songs)
+MOVE_COST = 1.0  # any change of hand position (all fingers must be up)
+LOST_S_COST = 50.0  # per second of a note the hand is still travelling in  # a finger moved to another key sooner than this after its release is penalised
 FINGER_ORDER = ("thumb", "index", "middle", "ring", "pinky")
 
 
@@ -48,14 +51,20 @@ class HandReach:
     there without moving the rail (abduction and wrist deviation).
     ``spread_m[f]``: the same with the wrist still too: two fingers of one
     chord can be at most ``spread_m`` of each further apart than at rest.
-    ``rail_speed_m_s``: the rail's top speed; ``rail_range_m``: its travel.
+    ``rail_speed_m_s``, ``rail_accel_m_s2``: the rail's top speed and acceleration;
+    ``rail_range_m``: its travel. ``repeat_s[f]``, ``move_s[f]``: the shortest time from
+    finger f letting a key up to striking it again, or striking the next white key
+    (measured on the hand's own motions).
     """
 
     offset_m: dict[str, float]
     reach_m: dict[str, float]
     rail_speed_m_s: float
     rail_range_m: tuple[float, float]
+    rail_accel_m_s2: float
     spread_m: dict[str, float] | None = None  # sideways reach with the wrist still too
+    repeat_s: dict[str, float] | None = None  # key up to key down again, same key (s)
+    move_s: dict[str, float] | None = None  # key up to key down on the next white key (s)
 
 
 @dataclass(frozen=True)
@@ -91,7 +100,7 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
     infeasible: list[Infeasible] = []
 
     # candidates per group
-    cands: list[list[tuple[tuple[str, ...], float, float]]] = []  # (fingers, rail, static cost)
+    cands: list[list[tuple]] = []  # (fingers, rail, static cost, (rail lo, rail hi))
     kept_groups: list[list[int]] = []
     for g in groups:
         g = sorted(g, key=lambda i: notes[i].pitch)
@@ -118,12 +127,14 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
                 if np.any(np.abs(d0[:, None] - d0[None, :]) > sp[:, None] + sp[None, :] + 1e-12):
                     continue
             cost = float(np.sum((dev / lim) ** 2))
+            # the rail positions from which these fingers reach these keys
+            span = (float(np.max(xs - offs - lim)), float(np.min(xs - offs + lim)))
             for f, b in zip(fingers, black):
                 if b and f == "thumb":
                     cost += 2.0
                 elif b and f == "pinky":
                     cost += 0.5
-            cs.append((fingers, rail, cost))
+            cs.append((fingers, rail, cost, span))
         if not cs:
             span = (max(xs) - min(xs)) if len(xs) > 1 else 0.0
             why = (f"chord wider than the hand ({span * 1000:.0f} mm)" if len(g) > 1
@@ -147,10 +158,12 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
         held = [i for i in prev_g if notes[i].offset_s > notes[g[0]].onset_s + 1e-6]
         ck = np.empty(len(cands[k]))
         bk = np.empty(len(cands[k]), dtype=int)
-        for b, (fb, rb, sb) in enumerate(cands[k]):
+        free_s = notes[g[0]].onset_s - max(notes[i].offset_s for i in prev_g)
+        for b, (fb, rb, sb, span_b) in enumerate(cands[k]):
             best, arg = math.inf, 0
-            for a, (fa, ra, _) in enumerate(cands[k - 1]):
-                c = cost[k - 1][a] + _transition(notes, prev_g, fa, ra, g, fb, rb, dt, held, reach)
+            for a, (fa, ra, _, span_a) in enumerate(cands[k - 1]):
+                c = cost[k - 1][a] + _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt,
+                                                 free_s, held, reach)
                 if c < best:
                     best, arg = c, a
             ck[b] = best + sb
@@ -163,19 +176,19 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
     for k in range(n - 1, 0, -1):
         choice[k - 1] = int(back[k][choice[k]])
     # Rails: the chosen fingers leave each group an interval of rail positions
-    # that reach all its keys; keep the rail still while the interval allows
-    # (clamped a quarter of the interval inside its ends), so that the hand
-    # only travels when it must.
+    # that reach all its keys; keep the rail still while the interval allows,
+    # else move it a quarter of the interval inside the nearer end, so that the
+    # hand only travels when it must.
     rails: list[float] = []
     prev = None
     for k, g in enumerate(kept_groups):
-        fingers, rail, _ = cands[k][choice[k]]
+        fingers, rail, _, _ = cands[k][choice[k]]
         lo, hi = -math.inf, math.inf
-        for i, f in zip(g, fingers):
-            c = kb.key(notes[i].pitch).center_x_m - reach.offset_m[f]
-            lo, hi = max(lo, c - reach.reach_m[f]), min(hi, c + reach.reach_m[f])
+        lo, hi = cands[k][choice[k]][3]
         if prev is None or not lo <= hi:
             r = rail
+        elif lo <= prev <= hi:
+            r = prev
         else:
             m = 0.25 * (hi - lo)
             r = min(max(prev, lo + m), hi - m)
@@ -183,7 +196,7 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
         prev = r
     out: list[Assignment] = []
     for k, g in enumerate(kept_groups):
-        fingers, _, _ = cands[k][choice[k]]
+        fingers, _, _, _ = cands[k][choice[k]]
         if not math.isfinite(cost[k][choice[k]]):
             for i in g:
                 infeasible.append(Infeasible(i, "no fingering reaches it in time"))
@@ -195,12 +208,38 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
     return out, infeasible
 
 
-def _transition(notes, prev_g, fa, ra, g, fb, rb, dt, held, reach: HandReach) -> float:
+def reposition_s(d_m: float, reach: HandReach) -> float:
+    """Time (s) a change of hand position over ``d_m`` of rail takes: fingers up, the
+    rail's minimum-jerk move (within its speed and acceleration), fingers down."""
+    if d_m <= 0.0:
+        return 0.0
+    t_rail = max(1.875 * d_m / reach.rail_speed_m_s, math.sqrt(5.7735 * d_m / reach.rail_accel_m_s2))
+    return REPOSITION_OVERHEAD_S + t_rail
+
+
+def _crosses(notes, prev_g, fa, g, fb) -> bool:
+    """True if some finger of the new group plays a key on the wrong side of (or the
+    same key as) a key another finger played in the previous group."""
+    a = [(FINGER_ORDER.index(f), notes[i].pitch) for i, f in zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa)]
+    b = [(FINGER_ORDER.index(f), notes[i].pitch) for i, f in zip(sorted(g, key=lambda i: notes[i].pitch), fb)]
+    return any(f1 != f2 and (f1 - f2) * (p1 - p2) <= 0 for f1, p1 in a for f2, p2 in b)
+
+
+def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held,
+                reach: HandReach) -> float:
     d = abs(rb - ra)
     v = d / dt
     if v > reach.rail_speed_m_s:
         return 1e6 * (1.0 + v)  # effectively infeasible, but keeps a path
     c = 10.0 * d + 20.0 * max(0.0, v - 0.5 * reach.rail_speed_m_s) ** 2
+    # a rail position serving both groups: the hand stays; else it must lift, travel
+    # and land between them, and every frame that takes is a frame of music lost
+    gap = max(span_b[0] - span_a[1], span_a[0] - span_b[1], 0.0)
+    if gap == 0.0 and _crosses(notes, prev_g, fa, g, fb):
+        # a finger passing another (or taking over its key) needs the hand moved too
+        gap = kb.WHITE_PITCH_M
+    if gap > 0.0:
+        c += MOVE_COST + LOST_S_COST * max(0.0, reposition_s(gap, reach) - max(free_s, 0.0))
     prev_finger = dict(zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa))
     new_finger = dict(zip(sorted(g, key=lambda i: notes[i].pitch), fb))
     used_now = {f: notes[i].pitch for i, f in new_finger.items()}
@@ -214,9 +253,14 @@ def _transition(notes, prev_g, fa, ra, g, fb, rb, dt, held, reach: HandReach) ->
         c += 5.0 * d
     onset = notes[g[0]].onset_s
     for i, f in prev_finger.items():
-        # a finger that must lift, move and come down again needs ~0.3 s between
-        # releasing one key and striking the next
-        free = onset - notes[i].offset_s
-        if f in used_now and used_now[f] != notes[i].pitch and free < REUSE_S:
-            c += 5.0 * (REUSE_S - max(free, 0.0)) / REUSE_S
+        # a finger struck again must first come up (and, for another key, lift, cross
+        # and come down): the time it needs beyond its free time is music lost
+        if f not in used_now:
+            continue
+        free = max(onset - notes[i].offset_s, 0.0)
+        if used_now[f] == notes[i].pitch:
+            need = reach.repeat_s[f] if reach.repeat_s else 0.0
+        else:
+            need = reach.move_s[f] if reach.move_s else REUSE_S
+        c += LOST_S_COST * max(0.0, need - free)
     return c

@@ -195,6 +195,7 @@ class HandIK:
             self._tasks[p.finger] = t
         err = np.inf
         clearance = np.inf
+        prep_last = np.inf
         it = 0
         for it in range(1, max_iter + 1):
             # slide each target's y within its range to the tip's current y
@@ -212,7 +213,11 @@ class HandIK:
             err = self._press_error(presses)
             clearance = self._clearance(hover)
             if err <= tol_m and clearance >= 0.005 - 1e-9:
-                break
+                # the waiting fingers are soft targets: iterate on while they still approach
+                prep = self._prepare_error(prepare)
+                if prep <= tol_m or prep > prep_last - 1e-5:
+                    break
+                prep_last = prep
         q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
         self._clear_half_spaces()
         return IKResult(q, bool(err <= tol_m and clearance >= 0.005 - 1e-9), it, float(err), float(clearance))
@@ -223,6 +228,15 @@ class HandIK:
             tip = self._tip(p.finger)
             y = float(np.clip(tip[1], *p.y_range_m))
             e = max(e, float(np.linalg.norm(tip - np.array([p.point_m[0], y, p.point_m[2]]))))
+        return e
+
+    def _prepare_error(self, prepare: list[PressTarget]) -> float:
+        """Worst distance (m) of a waiting fingertip from its place above its key."""
+        e = 0.0
+        for p in prepare:
+            x, y, z = p.point_m
+            goal = np.array([x, y, z + kb.KEY_DIP_M + PREPARE_HEIGHT_M])
+            e = max(e, float(np.linalg.norm(self._tip(p.finger) - goal)))
         return e
 
     def _clearance(self, hover) -> float:

@@ -6,6 +6,7 @@ and flushed chunk by chunk while the song is planned.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import sys
@@ -17,7 +18,7 @@ import numpy as np
 from planner.errors import InputError, SolverError
 from planner.fingering import HandReach, assign_fingers
 from planner.hand.model import HandModel, load_hand
-from planner.ik import HandIK, IKResult, PressTarget, press_target
+from planner.ik import HandIK, IKResult, PressTarget, press_target, surface_near
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
 from planner.targets import descent_time_s, press_intervals
@@ -35,10 +36,13 @@ LATE_S = 0.020  # a note whose key goes down later than this is reported
 CHUNK_PHASES = 40
 FIRST_CHUNK_PHASES = 12
 REST_HOVER_Z_M = 0.020
+VERTICAL_SLIDE_M = 0.015  # a finger moving up or down may slide this far along the keys
 HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white tops (7.5 mm over black)
 RELEASE_WEIGHT = 0.3  # an onset on time matters more than a release on time
-TRAVEL_MIN_Z_M = kb.BLACK_TOP_Z_M + 0.002  # no tip lower than this while the hand travels
 TRAVEL_SAFE_Z_M = 0.040  # fingertips lifted this high when a straight travel would dip
+TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
+TRAVEL_OVERLAPS = (0.3, 0.5, 0.7, 0.85, 1.0)  # fractions of a motion done before the next starts
+_SIM_DT_S = 0.002
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
 START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on  # a finger waiting to press (or just released) rests this far above its key
 
@@ -85,9 +89,12 @@ class Planner:
         lo = hand.lower[self.rail] if self.rail is not None else 0.0
         hi = hand.upper[self.rail] if self.rail is not None else 0.0
         vmax = hand.velocity[self.rail] if self.rail is not None else 1e-9
+        amax = hand.acceleration[self.rail] if self.rail is not None else 1e-9
         # (a chord's spread is left to the whole-hand IK: a probe with the wrist still
         # rejected octaves the hand can play)
-        self.reach = HandReach(offsets, reach, float(vmax), (float(lo), float(hi)))
+        repeat, move = self._finger_times(tips)
+        self.reach = HandReach(offsets, reach, float(vmax), (float(lo), float(hi)), float(amax),
+                               repeat_s=repeat, move_s=move)
 
     def _rest_posture(self) -> np.ndarray:
         """The natural hovering hand at rail 0: fingertips over their knuckles, 20 mm above
@@ -108,6 +115,31 @@ class Planner:
             targets.append(PressTarget(f, 0, (x, y, REST_HOVER_Z_M), (y, y)))
         r = self.ik.solve(targets, q0, q0, hover=())
         return r.q
+
+    def _finger_times(self, tips: np.ndarray) -> tuple[dict[str, float], dict[str, float]]:
+        """Per finger, from the rest posture over the white key under it: the time from
+        key up to key down again on the same key (release to ``LOW_M`` and press, each
+        counted from its key crossing), and on the next white key up (release to
+        ``HIGH_M``, across, press from ``HIGH_M``), as the timeline plans them."""
+        h = self.hand
+        repeat, move = {}, {}
+        for i, f in enumerate(h.fingers):
+            x = float(tips[i, 0])
+            pitch = min((p for p in kb.ALL_PITCHES if not kb.is_black(p)),
+                        key=lambda p: abs(kb.key(p).center_x_m - x))
+            nxt = pitch + (1 if not kb.is_black(pitch + 1) else 2)
+            r = self.ik.solve([press_target(f, pitch)], self.rest, self.rest)
+            r2 = self.ik.solve_finger(press_target(f, nxt), r.q)
+            q_low = self._vertical(r.q, f, kb.key(pitch).top_z_m + LOW_M, pitch).q
+            q_high = self._vertical(r.q, f, kb.key(pitch).top_z_m + HIGH_M, pitch).q
+            q_high2 = self._vertical(r2.q, f, kb.key(nxt).top_z_m + HIGH_M, nxt).q
+            T = lambda a, b: phase_duration(b - a, h.velocity, h.acceleration)  # noqa: E731
+            up, down = _key_crossing(h, r.q, q_low, f, pitch), _key_crossing(h, q_low, r.q, f, pitch)
+            repeat[f] = (1.0 - up) * T(r.q, q_low) + down * T(q_low, r.q)
+            up = _key_crossing(h, r.q, q_high, f, pitch)
+            down = _key_crossing(h, q_high2, r2.q, f, nxt)
+            move[f] = (1.0 - up) * T(r.q, q_high) + T(q_high, q_high2) + down * T(q_high2, r2.q)
+        return repeat, move
 
     def _probe_reach(self, finger: str, tip: np.ndarray, locked_joints: tuple[str, ...]) -> float:
         """How far (m) a fingertip can move sideways from rest with ``locked_joints`` still
@@ -146,19 +178,22 @@ class Planner:
 
     # ------------------------------------------------------------ hand positions
     def anchor(self, targets: list[PressTarget], rail_m: float, q_from: np.ndarray,
-               upcoming: list[PressTarget] = ()) -> int | None:
+               upcoming: list[PressTarget] = (), chord: list[PressTarget] = ()) -> int | None:
         """A new hand position (rail and wrist) for the keys ``targets``: whole-hand IK with
         those fingers pressing, the fingers that play ``upcoming`` keys next waiting just
-        above them, and the others hovering. Returns its index in ``bases`` (the hand
-        there with every finger up), or None when the IK cannot reach."""
+        above them, and the others hovering; or, with ``chord``, the fingers of ``chord``
+        pressing too (a chord the hand does not play, only takes the shape of, so that
+        each of those fingers reaches its key from there by itself). Returns its index in
+        ``bases`` (the hand there with every finger up), or None when the IK cannot reach."""
         posture = self.posture_at(rail_m)
-        r = self.ik.solve(targets, q_from, posture, prepare=upcoming)
+        presses = list(targets) + list(chord)
+        r = self.ik.solve(presses, q_from, posture, prepare=upcoming)
         self.ik_solves += 1
         if not r.converged:
-            r = self.ik.solve(targets, posture, posture, prepare=upcoming)
+            r = self.ik.solve(presses, posture, posture, prepare=upcoming)
             self.ik_solves += 1
         if not r.converged and upcoming:
-            r = self.ik.solve(targets, posture, posture)
+            r = self.ik.solve(presses, posture, posture)
             self.ik_solves += 1
         if not r.converged:
             return None
@@ -169,14 +204,26 @@ class Planner:
             self._cache[(t.finger, t.pitch, seg, "press")] = (r.q, r)
             js = self.hand.joint_slice(t.finger)
             base[js] = self.above_q(t.finger, t.pitch, seg, HIGH_M)[js]
+        for t in chord:  # the others high above where they took the chord's shape
+            js = self.hand.joint_slice(t.finger)
+            base[js] = self._vertical(r.q, t.finger, kb.key(t.pitch).top_z_m + HIGH_M).q[js]
         self.bases[seg] = base
         return seg
 
-    def _vertical(self, q: np.ndarray, finger: str, z_m: float, pitch: int = 0) -> IKResult:
-        """Single-finger IK moving ``finger``'s tip straight up or down from where it is
-        in ``q`` to height ``z_m`` (the rest of the hand stays as in ``q``)."""
+    def _vertical(self, q: np.ndarray, finger: str, z_m: float, pitch: int | None = None) -> IKResult:
+        """Single-finger IK moving ``finger``'s tip up or down from where it is in ``q`` to
+        height ``z_m``, its x (across the keys) unchanged (the rest of the hand stays as in
+        ``q``). Its y (along the keys) may slide within the range where it may press
+        ``pitch`` (or ``VERTICAL_SLIDE_M`` either way), so the finger moves as little as it
+        can: a straight-up path would need every joint of the finger."""
         tip = self.hand.tip_positions(q)[self.hand.fingers.index(finger)]
-        t = PressTarget(finger, pitch, (float(tip[0]), float(tip[1]), z_m), (float(tip[1]),) * 2)
+        y = float(tip[1])
+        if pitch is None:
+            y_range = (y - VERTICAL_SLIDE_M, y + VERTICAL_SLIDE_M)
+        else:
+            lo, hi = press_target(finger, pitch).y_range_m
+            y_range = (min(lo, y), max(hi, y))
+        t = PressTarget(finger, pitch or 0, (float(tip[0]), y, z_m), y_range)
         self.ik_solves += 1
         return self.ik.solve_finger(t, q)
 
@@ -280,16 +327,21 @@ class _Timeline:
         self.seg = seg
         self.place: dict[str, tuple] = {f: ("rest",) for f in hand.fingers}
         self.pre_pressed: set[int] = set()  # notes down in the very first row
-        self.phases: list[tuple[Phase, str, int | None]] = []
+        self.phases: list[tuple[Phase, str, int | None]] = []  # the chunk being planned
+        self.offset = 0  # number of phases planned in earlier chunks (global index of phases[0])
+        self.carried: list[tuple[int, Phase, float]] = []  # (global index, phase, start) still running at the last cut
         self.all_joints = np.arange(hand.n)
+        fj = {j for f in hand.fingers for j in np.arange(hand.n)[hand.joint_slice(f)]}
+        self.arm_joints = np.array([j for j in range(hand.n) if j not in fj], dtype=int)
 
     def _move(self, q_new: np.ndarray, anchor: float, ideal: float, weight: float, kind: str,
-              note: int | None, min_s: float = 0.0, order=None) -> None:
+              note: int | None, min_s: float = 0.0, order=None, follows=()) -> None:
         d = q_new - self.q
         if not np.any(d) and order is None:
             return
         T = max(phase_duration(d, self.hand.velocity, self.hand.acceleration), min_s)
-        self.phases.append((Phase(d, T, anchor, ideal, weight, order_joints=order), kind, note))
+        self.phases.append((Phase(d, T, anchor, ideal, weight, order_joints=order, follows=follows),
+                            kind, note))
         self.q = q_new.copy()
 
     def _frame_edge(self, t_s: float) -> float:
@@ -306,33 +358,121 @@ class _Timeline:
     def _tip_z(self, q: np.ndarray, finger: str) -> float:
         return float(self.hand.tip_positions(q)[self.hand.fingers.index(finger), 2])
 
-    def travel(self, seg: int, t_s: float) -> None:
-        """Go to hand position ``seg``: every finger up, the whole hand across with every
-        tip high, fingers ready high above their places."""
-        for f in self.hand.fingers:
+    def travel(self, seg: int, t_s: float, ready: dict[str, int] | None = None) -> None:
+        """Go to hand position ``seg``: every finger up, the arm (rail and wrist) across,
+        every finger down to its place there, high above the keys (``ready``: finger ->
+        pitch: above the key it presses next).
+
+        The arm may start before the fingers are all the way up, and the fingers may
+        start down before the arm has arrived: the least overlap is found by simulating
+        the three motions (forward kinematics every ``_SIM_DT_S``) so that no fingertip
+        comes within ``TRAVEL_CLEARANCE_M`` of a key top it moves over once the arm is
+        moving. If even the fully sequential motion would dip, every fingertip is first
+        lifted to ``TRAVEL_SAFE_Z_M`` (the old, slow way)."""
+        hand = self.hand
+        for f in hand.fingers:
             self._release_high(f)
             self.go_high(f)
-        q = self.q.copy()
+        arm = self.arm_joints
+        q_end = self.q.copy()
+        q_end[arm] = self.pl.bases[seg][arm]
+        ready = ready or {}
+        for f in hand.fingers:
+            js = hand.joint_slice(f)
+            q_end[js] = (self.pl.above_q(f, ready[f], seg, HIGH_M) if f in ready
+                         else self.pl.rest_high_q(f, seg))[js]
+        # each finger's last motion (global index): its lift (or release) to the top
+        last: dict[int, Phase] = {}
+        for f in hand.fingers:
+            js = hand.joint_slice(f)
+            found = [(self.offset + k, ph) for k, (ph, _, _) in enumerate(self.phases) if np.any(ph.delta[js])]
+            found = found or [(g, ph) for g, ph, _ in self.carried if np.any(ph.delta[js])]
+            if found:
+                last[found[-1][0]] = found[-1][1]
+        lifts = [(last[g].delta, last[g].duration_s) for g in sorted(last)]
+        q0 = self.q - sum((d for d, _ in lifts), np.zeros(hand.n))
+        c = self._travel_overlap(q0, lifts, q_end)
+        if c is None:
+            # from TRAVEL_SAFE_Z_M, a second lift of every finger
+            q_safe = self.q.copy()
+            for f in hand.fingers:
+                q_safe = self.pl.lift_to(q_safe, f, TRAVEL_SAFE_Z_M)
+            extra = []
+            for f in hand.fingers:
+                d = self._with_finger(f, q_safe) - self.q
+                if np.any(d):
+                    extra.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
+            c = self._travel_overlap(self.q, extra, q_end)
+            if c is None:
+                self._travel_safe(seg, t_s, q_end)
+                return
+            last = {}
+            for f in hand.fingers:
+                n = len(self.phases)
+                self._move(self._with_finger(f, q_safe), 0.5, t_s, 0.0, "move", None)
+                if len(self.phases) > n:
+                    last[self.offset + n] = self.phases[n][0]
+        k_arm = len(self.phases)
+        q_arm = self.q.copy()
+        q_arm[arm] = self.pl.bases[seg][arm]
+        self._move(q_arm, 0.5, t_s, 0.0, "travel", None,
+                   follows=tuple((g, c * last[g].duration_s) for g in sorted(last)))
+        follows = (((self.offset + k_arm, c * self.phases[k_arm][0].duration_s),)
+                   if len(self.phases) > k_arm else ())
+        for f in hand.fingers:
+            self._move(self._with_finger(f, q_end), 0.5, t_s, 0.0, "move", None, follows=follows)
+        self.seg = seg
+        for f in hand.fingers:
+            self.place[f] = ("above", ready[f], HIGH_M) if f in ready else ("high",)
+
+    def _travel_overlap(self, q0: np.ndarray, lifts: list[tuple[np.ndarray, float]],
+                        q_end: np.ndarray) -> float | None:
+        """The most overlap that keeps every fingertip ``TRAVEL_CLEARANCE_M`` clear of the
+        keys once the arm moves: the fraction of the fingers' ``lifts`` (joint motions,
+        durations) from ``q0`` that must have passed before the arm starts, and of the
+        arm's move before the fingers start down to their places in ``q_end``. None if
+        even no overlap keeps them clear."""
+        hand = self.hand
+        arm = self.arm_joints
+        q_up = q0 + sum((d for d, _ in lifts), np.zeros(hand.n))
+        d_arm = np.zeros(hand.n)
+        d_arm[arm] = (q_end - q_up)[arm]
+        T_arm = phase_duration(d_arm, hand.velocity, hand.acceleration)
+        land = []
+        for f in hand.fingers:
+            d = np.zeros(hand.n)
+            js = hand.joint_slice(f)
+            d[js] = (q_end - q_up)[js]
+            land.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
+        for c in TRAVEL_OVERLAPS:
+            x_arm = max((c * T for _, T in lifts), default=0.0)
+            x_land = x_arm + c * T_arm
+            t_end = max([x_arm + T_arm] + [x_land + T for _, T in land])
+            ok = True
+            for t in np.arange(x_arm, t_end + _SIM_DT_S, _SIM_DT_S):
+                q = q0 + sum((d * min_jerk(np.array(t / T)) for d, T in lifts), np.zeros(hand.n))
+                q = q + d_arm * min_jerk(np.array((t - x_arm) / T_arm))
+                q = q + sum((d * min_jerk(np.array((t - x_land) / T)) for d, T in land), np.zeros(hand.n))
+                tips = hand.tip_positions(hand.apply_couplings(q))
+                if any(z < surface_near(x, y) + TRAVEL_CLEARANCE_M for x, y, z in tips):
+                    ok = False
+                    break
+            if ok:
+                return c
+        return None
+
+    def _travel_safe(self, seg: int, t_s: float, q: np.ndarray) -> None:
+        """Travel with every fingertip lifted to ``TRAVEL_SAFE_Z_M`` first, nothing else
+        moving while the arm does."""
+        up = self.q.copy()
         for f in self.hand.fingers:
-            js = self.hand.joint_slice(f)
-            q[js] = self.pl.rest_high_q(f, seg)[js]
-        arm = [j for j in range(self.hand.n) if not any(j in self.hand.joint_slice(f) for f in self.hand.fingers)]
-        q[arm] = self.pl.bases[seg][arm]
-        if self._path_low(self.q, q):
-            # the straight move would sweep a fingertip through the keys: every finger up
-            # to TRAVEL_SAFE_Z first, across, then down to its place
-            up = self.q.copy()
-            for f in self.hand.fingers:
-                up = self.pl.lift_to(up, f, TRAVEL_SAFE_Z_M)
-            self._move(up, 0.5, t_s, 0.0, "move", None)
-            q_up = q.copy()
-            for f in self.hand.fingers:
-                q_up = self.pl.lift_to(q_up, f, TRAVEL_SAFE_Z_M)
-            self._move(q_up, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
-            self._move(q, 0.5, t_s, 0.0, "move", None)
-        else:
-            # ordered after (and before) every joint's motion: nothing else moves meanwhile
-            self._move(q, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
+            up = self.pl.lift_to(up, f, TRAVEL_SAFE_Z_M)
+        self._move(up, 0.5, t_s, 0.0, "move", None)
+        q_up = q.copy()
+        for f in self.hand.fingers:
+            q_up = self.pl.lift_to(q_up, f, TRAVEL_SAFE_Z_M)
+        self._move(q_up, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
+        self._move(q, 0.5, t_s, 0.0, "move", None)
         self.seg = seg
         for f in self.hand.fingers:
             self.place[f] = ("high",)
@@ -359,14 +499,6 @@ class _Timeline:
             self.q = self.q + (d - ph.delta)
             self.place[finger] = ("above", pl[1], HIGH_M)
             return
-
-    def _path_low(self, qa: np.ndarray, qb: np.ndarray) -> bool:
-        """True if a fingertip dips below ``TRAVEL_MIN_Z_M`` on the straight joint-space
-        move from ``qa`` to ``qb`` (checked by FK at 13 points)."""
-        for s in np.linspace(0.0, 1.0, 13):
-            if self.hand.tip_positions(qa + (qb - qa) * s)[:, 2].min() < TRAVEL_MIN_Z_M:
-                return True
-        return False
 
     def go_high(self, finger: str) -> None:
         """Lift ``finger`` straight up to ``HIGH_M`` above the white keys' top, from wherever it is."""
@@ -399,6 +531,22 @@ class _Timeline:
                    min_s=descent_time_s(velocity) * drop / 0.030)
         self.place[finger] = ("down", pitch)
         return True
+
+    def prepare(self, finger: str, pitch: int) -> None:
+        """Bring an idle ``finger`` to wait ``LOW_M`` above ``pitch``, the key it presses
+        next, as early as it may (no timing wish: the timing QP starts it at once)."""
+        pl = self.place[finger]
+        if pl[0] == "down" or pl == ("above", pitch, LOW_M) or self.seg is None:
+            return
+        if not self.pl.press_q(finger, pitch, self.seg)[1].converged:
+            return
+        if pl != ("above", pitch, HIGH_M):
+            self.go_high(finger)
+            self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, HIGH_M)),
+                       0.5, 0.0, 0.0, "move", None)
+        self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M)),
+                   0.5, 0.0, 0.0, "move", None)
+        self.place[finger] = ("above", pitch, LOW_M)
 
     def release(self, finger: str, pitch: int, t_s: float) -> None:
         q_new = self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M))
@@ -436,23 +584,79 @@ def _guard(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -
                               f"{hand.velocity[j]:.4f}", problem=q)
 
 
-def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float,
-                rail_of: dict[int, float], reasons: dict[int, str]) -> None:
-    """Move the hand to a new position for the notes of ``group`` (struck at ``t``): a
-    whole-hand IK with them pressed and the fingers that play next waiting above their
-    keys; the hand travels there (or starts there, before t = 0)."""
-    upcoming: dict[str, PressTarget] = {}
-    busy = {g.finger for g in group}
+WINDOW_NOTES = 200  # a new hand position is chosen for at most this many notes ahead
+
+
+def _window(events, group, t: float, rail: float, rail_of: dict[int, float],
+            reasons: dict[int, str]) -> list:
+    """The presses the hand position chosen at ``t`` should serve: those after ``t`` that
+    the fingering plays at the same rail position (at most ``WINDOW_NOTES``)."""
+    out = []
     for e in events:
         if e[1] != 1 or e[0] <= t + 1e-9 or e[3].press.note_index in reasons:
             continue
         q_ = e[3].press
-        if abs(rail_of[q_.note_index] - rail) > 1e-9:
+        if abs(rail_of[q_.note_index] - rail) > 1e-9 or len(out) >= WINDOW_NOTES:
             break
-        if q_.finger not in busy and q_.finger not in upcoming:
-            upcoming[q_.finger] = press_target(q_.finger, q_.pitch)
-    seg = pl.anchor([press_target(g.finger, g.pitch) for g in group], rail, tl.q,
-                    list(upcoming.values()))
+        out.append(q_)
+    return out
+
+
+def _covered(pl: Planner, seg: int, window) -> int:
+    """How many presses of ``window``, in order, the fingers reach from hand position
+    ``seg`` without moving the arm."""
+    for k, p in enumerate(window):
+        if not pl.press_q(p.finger, p.pitch, seg)[1].converged:
+            return k
+    return len(window)
+
+
+def _centroid_target(finger: str, pitches) -> PressTarget:
+    """``finger``'s press target on the key nearest the middle of ``pitches``, moved
+    sideways to that middle (mean x of their press points)."""
+    ts = [press_target(finger, p) for p in pitches]
+    x = float(np.mean([t.point_m[0] for t in ts]))
+    near = min(ts, key=lambda t: abs(t.point_m[0] - x))
+    return PressTarget(finger, near.pitch, (x, near.point_m[1], near.point_m[2]), near.y_range_m)
+
+
+def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float,
+                rail_of: dict[int, float], reasons: dict[int, str]) -> None:
+    """Move the hand to a new position for the notes of ``group`` (struck at ``t``): a
+    whole-hand IK with them pressed and the fingers that play next waiting above their
+    keys; the hand travels there (or starts there, before t = 0).
+
+    Candidate positions, tried in turn until one serves every press of the window (the
+    presses after ``t`` that the fingering plays at this rail position): the hand in the
+    shape of a chord of every finger it uses there on its first key, or on the middle
+    of its keys, or (the fingers only waiting above their next keys) the group alone.
+    The one from which the fingers alone reach the most of those presses, in order, is
+    kept, so that the hand moves again as late as possible."""
+    busy = {g.finger for g in group}
+    window = list(group) + _window(events, group, t, rail, rail_of, reasons)
+    first: dict[str, PressTarget] = {}
+    keys: dict[str, list[int]] = {}
+    for q_ in window:
+        if q_.finger not in busy:
+            first.setdefault(q_.finger, press_target(q_.finger, q_.pitch))
+        if q_.pitch not in keys.setdefault(q_.finger, []):
+            keys[q_.finger].append(q_.pitch)
+    presses = [press_target(g.finger, g.pitch) for g in group]
+    candidates = [(presses, (), list(first.values()))]
+    if any(len(ps) > 1 for ps in keys.values()):
+        candidates.append(([], (), [_centroid_target(f, ps) for f, ps in keys.items()]))
+    candidates.append((presses, list(first.values()), ()))
+    seg = None
+    best = len(group) - 1  # a position must at least serve the group itself
+    for targets, upcoming, chord in candidates:
+        s_ = pl.anchor(targets, rail, tl.q, upcoming, chord)
+        if s_ is None:
+            continue
+        c = _covered(pl, s_, window)
+        if c > best:
+            seg, best = s_, c
+        if c == len(window):
+            break
     if seg is None and len(group) > 1:  # at least the lowest note
         seg = pl.anchor([press_target(group[0].finger, group[0].pitch)], rail, tl.q)
     if seg is None:
@@ -468,7 +672,18 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
                 tl.place[g.finger] = ("down", g.pitch)
                 tl.pre_pressed.add(g.note_index)
     else:
-        tl.travel(seg, t)
+        tl.travel(seg, t, {g.finger: g.pitch for g in group
+                           if pl.press_q(g.finger, g.pitch, seg)[1].converged})
+
+
+def _moves_next(pl: Planner, tl: _Timeline, events, k: int, groups, reasons) -> bool:
+    """True if the next group of notes after event ``k`` needs a new hand position (the
+    fingers lift while the last key goes up: no chunk boundary in between)."""
+    for e in events[k + 1:]:
+        if e[1] == 1:
+            return tl.seg is None or not all(pl.press_q(g.finger, g.pitch, tl.seg)[1].converged
+                                             for g in groups[e[0]] if g.note_index not in reasons)
+    return False
 
 
 def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, float],
@@ -481,39 +696,64 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
     q_start = pl.posture_at(rail0)
     tl = _Timeline(pl, hand, q_start, None, dt)
     next_row = 0
-    t_committed = 0.0
+    t_cut = 0.0  # rows up to here are written; no new phase starts before it
     first_row_s = math.nan
     late: list[tuple[int, float]] = []
-    hold = tl.q.copy()
-
+    hold = tl.q.copy()  # the configuration before every phase not yet complete at t_cut
+    joint_free = np.zeros(hand.n)  # when each joint's last planned motion ends
     last_row = None
 
-    def flush(final_t=None):
-        nonlocal next_row, t_committed, first_row_s, hold, last_row
+    def flush(cut_s=None, final_t=None):
+        """Time the chunk of phases (timing QP), write every row up to ``cut_s`` (all of
+        them with ``final_t``), and carry the phases still running then over to the next
+        chunk with their start times fixed."""
+        nonlocal next_row, t_cut, first_row_s, hold, last_row, joint_free
         phases_meta = tl.phases
-        tl.phases = []
-        phases = [p for p, _, _ in phases_meta]
-        starts = solve_timing(build_timing(phases, t_committed))
-        for (p, kind, note), s in zip(phases_meta, starts):
+        carried_start = {g: x for g, _, x in tl.carried}
+        phases = []
+        for k, (ph, _, _) in enumerate(phases_meta):
+            js = ph.joints if ph.order_joints is None else ph.order_joints
+            earliest = max([t_cut] + [float(joint_free[j]) for j in js.tolist()])
+            follows = []
+            for g, lag in ph.follows:
+                if g >= tl.offset:
+                    follows.append((g - tl.offset, lag))
+                elif g in carried_start:
+                    earliest = max(earliest, carried_start[g] + lag)
+            phases.append(dataclasses.replace(ph, earliest_s=earliest, follows=tuple(follows)))
+        starts = solve_timing(build_timing(phases, t_cut))
+        for (p, kind, note), x in zip(phases_meta, starts):
             if kind == "press" and note is not None:
-                lateness = s + p.anchor * p.duration_s - p.ideal_s
+                lateness = x + p.anchor * p.duration_s - p.ideal_s
                 if lateness > LATE_S:
                     late.append((note, lateness))
-        end_t = float(max((s + p.duration_s for p, s in zip(phases, starts)), default=t_committed))
+        every = [(g, p, x) for g, p, x in tl.carried] + [
+            (tl.offset + k, p, float(x)) for k, (p, x) in enumerate(zip(phases, starts))]
+        for _, p, x in every:
+            js = p.joints if p.order_joints is None else p.order_joints
+            joint_free[js] = np.maximum(joint_free[js], x + p.duration_s)
+        end_t = max([t_cut] + [x + p.duration_s for _, p, x in every])
         if final_t is not None:
-            end_t = max(end_t, final_t)
-        n_rows_end = math.floor(end_t * rate_hz + 1e-9) + 1  # every row at or before end_t
+            end = max(end_t, final_t)
+        else:
+            end = max(t_cut, min(cut_s, end_t))
+        n_rows_end = math.floor(end * rate_hz + 1e-9) + 1  # every row at or before end
         if n_rows_end > next_row:
             t = np.arange(next_row, n_rows_end) * dt
-            q = hand.apply_couplings(sample(phases, starts, t, hold))
+            q = hand.apply_couplings(sample([p for _, p, _ in every], np.array([x for _, _, x in every]), t, hold))
             _guard(hand, q, last_row, dt)
             last_row = q[-1].copy()
             writer.write_rows(t, q, hand.motor_angles(q))
             if math.isnan(first_row_s):
                 first_row_s = time.perf_counter() - t_start
             next_row = n_rows_end
-        t_committed = max(end_t, t_committed)
-        hold = tl.q.copy()
+        t_cut = max(t_cut, end)
+        tl.carried = [(g, p, x) for g, p, x in every if x + p.duration_s > t_cut]
+        for _, p, x in every:
+            if x + p.duration_s <= t_cut:
+                hold = hold + p.delta
+        tl.offset += len(phases_meta)
+        tl.phases = []
 
     # events in time order: releases before presses at the same instant
     events = []
@@ -525,6 +765,15 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
     for e in events:
         if e[1] == 1:
             groups.setdefault(e[0], []).append(e[3].press)
+    # for every press event, the next press of the same finger (what it prepares for)
+    next_of: dict[int, object] = {}
+    last_of: dict[str, int] = {}
+    for e in events:
+        if e[1] == 1:
+            p_ = e[3].press
+            if p_.finger in last_of:
+                next_of[last_of[p_.finger]] = p_
+            last_of[p_.finger] = p_.note_index
     down: dict[int, object] = {}
     total = len(events)
     group_t = -math.inf
@@ -542,6 +791,12 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
                     _reposition(pl, tl, events[k:], group, t, rail, rail_of, reasons)
                     if first and tl.seg is not None:  # the start configuration
                         hold = tl.q.copy()
+                    # the fingers not striking now get ready for their next keys
+                    busy = {g.finger for g in group}
+                    for e in events[k:]:
+                        if e[1] == 1 and e[3].press.finger not in busy and e[3].press.note_index not in reasons:
+                            busy.add(e[3].press.finger)
+                            tl.prepare(e[3].press.finger, e[3].press.pitch)
             if p.note_index in tl.pre_pressed:
                 ok = True
             else:
@@ -560,16 +815,20 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         elif p.note_index in down:
             tl.release(p.finger, p.pitch, t)
             del down[p.note_index]
+            nxt = next_of.get(p.note_index)
+            if nxt is not None and nxt.note_index not in reasons:
+                tl.prepare(nxt.finger, nxt.pitch)
             # the first rows go out as soon as there are a few, then in larger chunks
-            if not down and len(tl.phases) >= (FIRST_CHUNK_PHASES if next_row == 0 else CHUNK_PHASES):
-                flush()
+            if (not down and len(tl.phases) >= (FIRST_CHUNK_PHASES if next_row == 0 else CHUNK_PHASES)
+                    and not _moves_next(pl, tl, events, k, groups, reasons)):
+                flush(cut_s=t)
         if progress and total > 400 and k % 100 == 0:
             sys.stderr.write(f"\rplanning {k}/{total} key events ({100 * k // total}%)")
             sys.stderr.flush()
     if progress and total > 400:
         sys.stderr.write(f"\rplanning {total}/{total} key events (100%)\n")
     tl.rest_all(end_song)
-    flush(final_t=max(end_song + 0.25, t_committed + 0.25))
+    flush(final_t=end_song + 0.25)
     return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late)
 
 

@@ -66,6 +66,9 @@ class Phase:
     weight: float = 1.0
     earliest_s: float = 0.0
     order_joints: np.ndarray | None = None  # joints it is ordered on, if not the ones it moves
+    # (k, lag_s): start at least lag_s after phase k (an earlier one) starts, even without
+    # a common joint: a motion that may overlap the end of another, but not all of it
+    follows: tuple[tuple[int, float], ...] = ()
 
     @property
     def joints(self) -> np.ndarray:
@@ -75,31 +78,38 @@ class Phase:
 @dataclass(frozen=True)
 class TimingProblem:
     """min sum w (x_p + a_p T_p - ideal_p)^2  s.t.  x_p >= earliest_p,
-    x_q - x_p >= T_p for every (p, q) in ``after`` (q moves a joint p moved before)."""
+    x_q - x_p >= lag_pq for every (p, q) in ``after`` (q moves a joint p moved before:
+    lag T_p; or q follows p by a given lag)."""
 
     durations: np.ndarray
     anchors: np.ndarray
     ideals: np.ndarray
     weights: np.ndarray
     earliest: np.ndarray
-    after: np.ndarray  # (m, 2) pairs (p, q)
+    after: np.ndarray  # (m, 2) pairs (p, q), p < q
+    lags: np.ndarray  # (m,) s
     t0: float
 
 
 def build_timing(phases: list[Phase], t0: float) -> TimingProblem:
     last: dict[int, int] = {}
-    pairs: set[tuple[int, int]] = set()
+    lag: dict[tuple[int, int], float] = {}
     for q, ph in enumerate(phases):
         js = ph.joints if ph.order_joints is None else ph.order_joints
         for j in js.tolist():
             if j in last:
-                pairs.add((last[j], q))
+                lag[(last[j], q)] = phases[last[j]].duration_s
             last[j] = q
+        for p, lag_s in ph.follows:
+            if not 0 <= p < q:
+                raise ValueError(f"phase {q} follows phase {p}: not an earlier phase")
+            lag[(p, q)] = max(lag.get((p, q), -np.inf), float(lag_s))
+    pairs = sorted(lag)
     return TimingProblem(
         np.array([p.duration_s for p in phases]), np.array([p.anchor for p in phases]),
         np.array([p.ideal_s for p in phases]), np.array([p.weight for p in phases]),
         np.array([max(p.earliest_s, t0) for p in phases]),
-        np.array(sorted(pairs), dtype=int).reshape(-1, 2), t0)
+        np.array(pairs, dtype=int).reshape(-1, 2), np.array([lag[pq] for pq in pairs], dtype=float), t0)
 
 
 def solve_timing(prob: TimingProblem) -> np.ndarray:
@@ -125,21 +135,29 @@ def solve_timing(prob: TimingProblem) -> np.ndarray:
         c = prob.after.ravel()
         v = np.tile([-1.0, 1.0], m)
         rows.append(sp.csc_matrix((v, (r, c)), shape=(m, n)))
-        lo.append(prob.durations[prob.after[:, 0]])
+        lo.append(prob.lags)
     A = sp.vstack(rows, format="csc")
     l_vec = np.concatenate(lo)
-    solver = osqp.OSQP()
-    solver.setup(P=P, q=q, A=A, l=l_vec, u=np.full(len(l_vec), np.inf), verbose=False,
-                 eps_abs=1e-9, eps_rel=1e-9, max_iter=20000, polishing=False)  # polishing prints to stdout (breaks -o -)
-    res = solver.solve()
-    if res.info.status not in ("solved", "solved inaccurate") or res.x is None:
+    # The problem is strictly convex and always feasible (lower bounds on starts and on
+    # differences of starts that point forward), so OSQP's infeasibility certificates
+    # can only be false alarms: their tolerances are set far below reach. Polishing
+    # is off: it prints to stdout (which would break ``-o -``).
+    for scaling in (10, 0):
+        solver = osqp.OSQP()
+        solver.setup(P=P, q=q, A=A, l=l_vec, u=np.full(len(l_vec), np.inf), verbose=False,
+                     eps_abs=1e-9, eps_rel=1e-9, eps_prim_inf=1e-15, eps_dual_inf=1e-15,
+                     max_iter=20000, polishing=False, scaling=scaling)
+        res = solver.solve(raise_error=False)
+        if res.info.status in ("solved", "solved inaccurate") and res.x is not None:
+            break
+    else:
         raise SolverError(f"timing QP failed: {res.info.status}", problem=prob)
     x = np.maximum(np.array(res.x, dtype=float), prob.earliest)
-    for p, qq in prob.after:  # sorted by p, and p < q
-        x[qq] = max(x[qq], x[p] + prob.durations[p])
+    for (p, qq), lag in zip(prob.after, prob.lags):  # sorted by p, and p < q
+        x[qq] = max(x[qq], x[p] + lag)
     # one more pass in case a delayed phase pushes a later one
-    for p, qq in prob.after:
-        x[qq] = max(x[qq], x[p] + prob.durations[p])
+    for (p, qq), lag in zip(prob.after, prob.lags):
+        x[qq] = max(x[qq], x[p] + lag)
     return x
 
 
