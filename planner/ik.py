@@ -74,14 +74,23 @@ def press_target(finger: str, pitch: int) -> PressTarget:
     return PressTarget(finger, pitch, (x, 0.095, z), (kb.BLACK_Y0_M + 0.012, kb.WHITE_LENGTH_M - 0.020))
 
 
-def exposed_center_x(pitch: int) -> float:
-    """Centre (x, m) of the part of a white key between its black neighbours."""
+def exposed_range_x(pitch: int) -> tuple[float, float]:
+    """x range (m) of the part of a key no other key overhangs: for a white key, between
+    its black neighbours; for a black key, the key itself."""
     k = kb.key(pitch)
     lo, hi = k.x_min_m, k.x_max_m
+    if k.black:
+        return lo, hi
     if pitch - 1 >= kb.LOWEST_PITCH and kb.is_black(pitch - 1):
         lo = max(lo, kb.key(pitch - 1).x_max_m)
     if pitch + 1 <= kb.HIGHEST_PITCH and kb.is_black(pitch + 1):
         hi = min(hi, kb.key(pitch + 1).x_min_m)
+    return lo, hi
+
+
+def exposed_center_x(pitch: int) -> float:
+    """Centre (x, m) of the part of a white key between its black neighbours."""
+    lo, hi = exposed_range_x(pitch)
     return 0.5 * (lo + hi)
 
 

@@ -18,7 +18,7 @@ import numpy as np
 from planner.errors import InputError, SolverError
 from planner.fingering import HandReach, assign_fingers
 from planner.hand.model import HandModel, load_hand
-from planner.ik import HandIK, IKResult, PressTarget, press_target, surface_near
+from planner.ik import HandIK, IKResult, PressTarget, exposed_range_x, press_target, surface_near
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
 from planner.targets import descent_time_s, press_intervals
@@ -34,14 +34,16 @@ from planner.trajfile import TrajectoryWriter
 
 LATE_S = 0.020  # a note whose key goes down later than this is reported
 CHUNK_PHASES = 40
+TRAVEL_LEAD_S = 0.25  # a chunk cut before a change of hand position ends this long before the last release
 FIRST_CHUNK_PHASES = 12
 REST_HOVER_Z_M = 0.020
 VERTICAL_SLIDE_M = 0.015  # a finger moving up or down may slide this far along the keys
 HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white tops (7.5 mm over black)
 RELEASE_WEIGHT = 0.3  # an onset on time matters more than a release on time
 TRAVEL_SAFE_Z_M = 0.040  # fingertips lifted this high when a straight travel would dip
+TRAVEL_LIFTS_M = (0.028, TRAVEL_SAFE_Z_M)  # higher lifts tried when HIGH_M is not enough
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
-TRAVEL_OVERLAPS = (0.3, 0.5, 0.7, 0.85, 1.0)  # fractions of a motion done before the next starts
+TRAVEL_OVERLAPS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # fractions of a motion done before the next starts
 _SIM_DT_S = 0.002
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
 START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on  # a finger waiting to press (or just released) rests this far above its key
@@ -261,11 +263,13 @@ class Planner:
         return self._cache[key]
 
 
-def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int) -> float:
+def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int,
+                  depth_m: float = kb.DOWN_DEPTH_M) -> float:
     """Fraction of the duration of a min-jerk phase from ``qa`` to ``qb`` at which
-    ``finger``'s tip passes the key-down depth of ``pitch`` (FK along the path)."""
+    ``finger``'s tip passes ``depth_m`` below the top of ``pitch`` (default: the key-down
+    depth; FK along the path)."""
     k = hand.fingers.index(finger)
-    z_cross = kb.key(pitch).top_z_m - kb.DOWN_DEPTH_M
+    z_cross = kb.key(pitch).top_z_m - depth_m
     u = np.linspace(0.0, 1.0, 17)
     s = min_jerk(u)
     z = np.array([hand.tip_positions(qa + (qb - qa) * si)[k, 2] for si in s]) - z_cross
@@ -307,18 +311,23 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
 
 
 class _Timeline:
-    """Builds the phase list in causal order, one finger (or the rail) at a time.
+    """Builds the phase list in causal order, one finger (or the arm) at a time.
 
     Every finger is always in one of four places: at its place in the hand position
-    (``rest``), high above the keys (``high``), waiting
-    ``LOW_M`` above a key, or pressing it. A press is: (if the finger is not
-    already waiting above that key) up to ``HIGH_M`` above where it is, across
-    to ``HIGH_M`` above the key, down to ``LOW_M`` (these three as early as
-    they may), then down onto the key, its key-down moment anchored on the
-    note's onset; the release goes back to ``LOW_M``, anchored on the note's
-    end. A change of hand position (rail) moves the rail alone, after every
-    finger has let go and before any presses again, with all tips at least
-    ``LOW_M`` over the keys.
+    (``rest``), high above the keys (``high``), waiting above a key (``LOW_M`` or
+    ``HIGH_M`` over it), or pressing it. A press is: (if the finger is not already
+    waiting above that key) up to ``HIGH_M`` above where it is, across to ``HIGH_M``
+    above the key, then down onto the key, its key-down moment anchored on the note's
+    onset; the release goes back to ``LOW_M``, anchored on the note's end. An idle
+    finger is brought ``LOW_M`` above the key it strikes next (``prepare``), as early
+    as it may. A change of hand position (``travel``) happens when every key is up:
+    the fingers lift, the arm (rail and wrist) moves, the fingers land, with overlaps
+    checked by simulation; nothing else moves until the arm stops, except a finger
+    waiting above its key, which may start down but touches it only once the arm
+    has stopped.
+
+    Phases are numbered globally; ``phases`` holds the chunk not yet timed and
+    ``carried`` the timed phases still running where the last chunk was cut.
     """
 
     def __init__(self, pl: Planner, hand: HandModel, q0: np.ndarray, seg: int | None, dt: float):
@@ -330,6 +339,7 @@ class _Timeline:
         self.phases: list[tuple[Phase, str, int | None]] = []  # the chunk being planned
         self.offset = 0  # number of phases planned in earlier chunks (global index of phases[0])
         self.carried: list[tuple[int, Phase, float]] = []  # (global index, phase, start) still running at the last cut
+        self.arm_motion: tuple[int, float] | None = None  # (global index, duration) of the last travel
         self.all_joints = np.arange(hand.n)
         fj = {j for f in hand.fingers for j in np.arange(hand.n)[hand.joint_slice(f)]}
         self.arm_joints = np.array([j for j in range(hand.n) if j not in fj], dtype=int)
@@ -339,6 +349,9 @@ class _Timeline:
         d = q_new - self.q
         if not np.any(d) and order is None:
             return
+        if self.arm_motion is not None and not follows:
+            # nothing moves that the travel's simulation did not see until the arm stops
+            follows = (self.arm_motion,)
         T = max(phase_duration(d, self.hand.velocity, self.hand.acceleration), min_s)
         self.phases.append((Phase(d, T, anchor, ideal, weight, order_joints=order, follows=follows),
                             kind, note))
@@ -349,9 +362,9 @@ class _Timeline:
         (or up) then is down (or up) from exactly that frame on."""
         return math.ceil(t_s / self.dt - 1e-9) * self.dt - 0.5 * self.dt
 
-    def _with_finger(self, finger: str, q_src: np.ndarray) -> np.ndarray:
+    def _with_finger(self, finger: str, q_src: np.ndarray, q_into: np.ndarray | None = None) -> np.ndarray:
         js = self.hand.joint_slice(finger)
-        q = self.q.copy()
+        q = (self.q if q_into is None else q_into).copy()
         q[js] = q_src[js]
         return q
 
@@ -367,12 +380,13 @@ class _Timeline:
         start down before the arm has arrived: the least overlap is found by simulating
         the three motions (forward kinematics every ``_SIM_DT_S``) so that no fingertip
         comes within ``TRAVEL_CLEARANCE_M`` of a key top it moves over once the arm is
-        moving. If even the fully sequential motion would dip, every fingertip is first
-        lifted to ``TRAVEL_SAFE_Z_M`` (the old, slow way)."""
+        moving. The fingers first stay as low as they are (a released key's finger
+        ``LOW_M`` above it), then go up to ``HIGH_M``, then further to each of
+        ``TRAVEL_LIFTS_M``, until the simulation finds the motion clear; the fingers
+        that strike first land ``LOW_M`` above their keys if that is clear, else
+        ``HIGH_M``. If nothing is clear, every fingertip goes to ``TRAVEL_SAFE_Z_M``
+        and the arm moves alone."""
         hand = self.hand
-        for f in hand.fingers:
-            self._release_high(f)
-            self.go_high(f)
         arm = self.arm_joints
         q_end = self.q.copy()
         q_end[arm] = self.pl.bases[seg][arm]
@@ -381,58 +395,109 @@ class _Timeline:
             js = hand.joint_slice(f)
             q_end[js] = (self.pl.above_q(f, ready[f], seg, HIGH_M) if f in ready
                          else self.pl.rest_high_q(f, seg))[js]
-        # each finger's last motion (global index): its lift (or release) to the top
-        last: dict[int, Phase] = {}
+        # the fingers that strike first land LOW_M above their keys if they can
+        q_low = q_end.copy()
+        for f in ready:
+            q_low = self._with_finger(f, self.pl.above_q(f, ready[f], seg, LOW_M), q_low)
+        land_z = LOW_M
+        # the fingers as they are (released keys left LOW_M below), else all up to HIGH_M
+        last, lifts, q0 = self._last_motions()
+        c = self._travel_overlap(q0, lifts, q_low, ready)
+        if c is None:
+            for f in hand.fingers:
+                self._release_high(f)
+                self.go_high(f)
+            last, lifts, q0 = self._last_motions()
+            c = self._travel_overlap(q0, lifts, q_low, ready)
+        if c is None:
+            land_z = HIGH_M
+            c = self._travel_overlap(q0, lifts, q_end)
+        else:
+            q_end = q_low
+        arm_after: dict[int, float] | None = None  # phase (global index) -> lag of the arm after its start
+        for z_up in TRAVEL_LIFTS_M:
+            if c is not None:
+                break
+            # a second lift of every finger, higher
+            q_up = self.q.copy()
+            for f in hand.fingers:
+                q_up = self.pl.lift_to(q_up, f, z_up)
+            extra = []
+            for f in hand.fingers:
+                d = self._with_finger(f, q_up) - self.q
+                if np.any(d):
+                    extra.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
+            c = self._travel_overlap(self.q, extra, q_end)
+            if c is not None:
+                # the arm waits for the fingers not lifted again to finish their motions
+                done = {g: ph.duration_s for g, ph in self._last_motions()[0].items()}
+                n = len(self.phases)
+                for f in hand.fingers:
+                    self._move(self._with_finger(f, q_up), 0.5, t_s, 0.0, "move", None)
+                lifted = self._last_motions()[0]
+                arm_after = {g: done.get(g, c[0]) for g in lifted if g - self.offset < n} | {
+                    g: c[0] for g in lifted if g - self.offset >= n}
+        if c is not None and arm_after is None:
+            arm_after = {g: c[0] for g in last}
+        if c is None:
+            self._travel_safe(seg, t_s, q_end)
+            for f in ready:
+                self.place[f] = ("above", ready[f], HIGH_M)
+            return
+        k_arm = len(self.phases)
+        q_arm = self.q.copy()
+        q_arm[arm] = self.pl.bases[seg][arm]
+        self.arm_motion = None
+        self._move(q_arm, 0.5, t_s, 0.0, "travel", None,
+                   follows=tuple((g, arm_after[g]) for g in sorted(arm_after)))
+        if len(self.phases) > k_arm:
+            T_arm = self.phases[k_arm][0].duration_s
+            follows = ((self.offset + k_arm, c[1] * T_arm),)
+            for f in hand.fingers:
+                self._move(self._with_finger(f, q_end), 0.5, t_s, 0.0, "move", None, follows=follows)
+            self.arm_motion = (self.offset + k_arm, T_arm)
+        else:
+            for f in hand.fingers:
+                self._move(self._with_finger(f, q_end), 0.5, t_s, 0.0, "move", None)
+        self.seg = seg
         for f in hand.fingers:
-            js = hand.joint_slice(f)
+            self.place[f] = ("above", ready[f], land_z) if f in ready else ("high",)
+
+    def _last_motions(self) -> tuple[dict[int, Phase], list[tuple[np.ndarray, float]], np.ndarray]:
+        """Each finger's last motion (global index -> phase), their (delta, duration) and
+        the configuration before them."""
+        last: dict[int, Phase] = {}
+        for f in self.hand.fingers:
+            js = self.hand.joint_slice(f)
             found = [(self.offset + k, ph) for k, (ph, _, _) in enumerate(self.phases) if np.any(ph.delta[js])]
             found = found or [(g, ph) for g, ph, _ in self.carried if np.any(ph.delta[js])]
             if found:
                 last[found[-1][0]] = found[-1][1]
         lifts = [(last[g].delta, last[g].duration_s) for g in sorted(last)]
-        q0 = self.q - sum((d for d, _ in lifts), np.zeros(hand.n))
-        c = self._travel_overlap(q0, lifts, q_end)
-        if c is None:
-            # from TRAVEL_SAFE_Z_M, a second lift of every finger
-            q_safe = self.q.copy()
-            for f in hand.fingers:
-                q_safe = self.pl.lift_to(q_safe, f, TRAVEL_SAFE_Z_M)
-            extra = []
-            for f in hand.fingers:
-                d = self._with_finger(f, q_safe) - self.q
-                if np.any(d):
-                    extra.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
-            c = self._travel_overlap(self.q, extra, q_end)
-            if c is None:
-                self._travel_safe(seg, t_s, q_end)
-                return
-            last = {}
-            for f in hand.fingers:
-                n = len(self.phases)
-                self._move(self._with_finger(f, q_safe), 0.5, t_s, 0.0, "move", None)
-                if len(self.phases) > n:
-                    last[self.offset + n] = self.phases[n][0]
-        k_arm = len(self.phases)
-        q_arm = self.q.copy()
-        q_arm[arm] = self.pl.bases[seg][arm]
-        self._move(q_arm, 0.5, t_s, 0.0, "travel", None,
-                   follows=tuple((g, c * last[g].duration_s) for g in sorted(last)))
-        follows = (((self.offset + k_arm, c * self.phases[k_arm][0].duration_s),)
-                   if len(self.phases) > k_arm else ())
-        for f in hand.fingers:
-            self._move(self._with_finger(f, q_end), 0.5, t_s, 0.0, "move", None, follows=follows)
-        self.seg = seg
-        for f in hand.fingers:
-            self.place[f] = ("above", ready[f], HIGH_M) if f in ready else ("high",)
+        q0 = self.q - sum((d for d, _ in lifts), np.zeros(self.hand.n))
+        return last, lifts, q0
 
     def _travel_overlap(self, q0: np.ndarray, lifts: list[tuple[np.ndarray, float]],
-                        q_end: np.ndarray) -> float | None:
+                        q_end: np.ndarray, ready: dict[str, int] | None = None) -> tuple[float, float] | None:
         """The most overlap that keeps every fingertip ``TRAVEL_CLEARANCE_M`` clear of the
-        keys once the arm moves: the fraction of the fingers' ``lifts`` (joint motions,
-        durations) from ``q0`` that must have passed before the arm starts, and of the
-        arm's move before the fingers start down to their places in ``q_end``. None if
-        even no overlap keeps them clear."""
+        keys once the arm moves, as (the time after the start of each of the fingers'
+        ``lifts`` (joint motions, durations, all from ``q0``) when the arm may start, the
+        fraction of the arm's move before the fingers start down to their places in
+        ``q_end``); the first as small as the fingers landing last allow, then the
+        second. The simulation starts every lift at once: a lift that starts earlier
+        is higher when the arm starts, so the arm waiting that long after each lift's
+        start is on the safe side. A finger of ``ready`` (finger -> pitch) over the
+        part of its key no other key overhangs need only clear that key. None if even
+        no overlap keeps them clear."""
         hand = self.hand
+        own = {hand.fingers.index(f): exposed_range_x(p) + (kb.key(p).top_z_m,)
+               for f, p in (ready or {}).items()}
+
+        def clear(k: int, x: float, y: float, z: float) -> bool:
+            if k in own and own[k][0] <= x <= own[k][1]:
+                return z >= own[k][2] + TRAVEL_CLEARANCE_M
+            return z >= surface_near(x, y) + TRAVEL_CLEARANCE_M
+
         arm = self.arm_joints
         q_up = q0 + sum((d for d, _ in lifts), np.zeros(hand.n))
         d_arm = np.zeros(hand.n)
@@ -444,22 +509,32 @@ class _Timeline:
             js = hand.joint_slice(f)
             d[js] = (q_end - q_up)[js]
             land.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
-        for c in TRAVEL_OVERLAPS:
-            x_arm = max((c * T for _, T in lifts), default=0.0)
-            x_land = x_arm + c * T_arm
-            t_end = max([x_arm + T_arm] + [x_land + T for _, T in land])
-            ok = True
-            for t in np.arange(x_arm, t_end + _SIM_DT_S, _SIM_DT_S):
-                q = q0 + sum((d * min_jerk(np.array(t / T)) for d, T in lifts), np.zeros(hand.n))
-                q = q + d_arm * min_jerk(np.array((t - x_arm) / T_arm))
-                q = q + sum((d * min_jerk(np.array((t - x_land) / T)) for d, T in land), np.zeros(hand.n))
-                tips = hand.tip_positions(hand.apply_couplings(q))
-                if any(z < surface_near(x, y) + TRAVEL_CLEARANCE_M for x, y, z in tips):
-                    ok = False
-                    break
-            if ok:
-                return c
-        return None
+        D_lift = np.array([d for d, _ in lifts]).reshape(-1, hand.n)
+        T_lift = np.array([T for _, T in lifts])
+        D_land = np.array([d for d, _ in land]).reshape(-1, hand.n)
+        T_land = np.array([T for _, T in land])
+
+        def safe(c_lift: float, c_land: float) -> bool:
+            x_arm = float(np.max(c_lift * T_lift, initial=0.0))
+            x_land = x_arm + c_land * T_arm
+            t_end = max(x_arm + T_arm, float(np.max(x_land + T_land, initial=0.0)))
+            t = np.arange(x_arm, t_end + _SIM_DT_S, _SIM_DT_S)
+            Q = (q0 + min_jerk(t[:, None] / T_lift[None, :]) @ D_lift
+                 + min_jerk((t - x_arm) / T_arm)[:, None] * d_arm[None, :]
+                 + min_jerk((t - x_land)[:, None] / T_land[None, :]) @ D_land)
+            for q in hand.apply_couplings(Q):
+                tips = hand.tip_positions(q)
+                if not all(clear(k, x, y, z) for k, (x, y, z) in enumerate(tips)):
+                    return False
+            return True
+
+        # the arm as early as the lifts allow (fingers down only after it stops), then
+        # the fingers down as early as that allows
+        c_lift = next((c for c in TRAVEL_OVERLAPS if safe(c, 1.0)), None)
+        if c_lift is None:
+            return None
+        c_land = next(c for c in TRAVEL_OVERLAPS if c == 1.0 or safe(c_lift, c))
+        return float(np.max(c_lift * T_lift, initial=0.0)), c_land
 
     def _travel_safe(self, seg: int, t_s: float, q: np.ndarray) -> None:
         """Travel with every fingertip lifted to ``TRAVEL_SAFE_Z_M`` first, nothing else
@@ -474,6 +549,7 @@ class _Timeline:
         self._move(q_up, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
         self._move(q, 0.5, t_s, 0.0, "move", None)
         self.seg = seg
+        self.arm_motion = None  # ordered on every joint: nothing overlaps it
         for f in self.hand.fingers:
             self.place[f] = ("high",)
 
@@ -495,7 +571,7 @@ class _Timeline:
             d = q_new - q_from
             frac = _key_crossing(self.hand, q_from, q_new, finger, pl[1])
             T = phase_duration(d, self.hand.velocity, self.hand.acceleration)
-            self.phases[k] = (Phase(d, T, frac, ph.ideal_s, ph.weight), kind, note)
+            self.phases[k] = (dataclasses.replace(ph, delta=d, duration_s=T, anchor=frac), kind, note)
             self.q = self.q + (d - ph.delta)
             self.place[finger] = ("above", pl[1], HIGH_M)
             return
@@ -527,8 +603,16 @@ class _Timeline:
         # the key goes down just before the first frame of the note
         # MIDI velocity sets the key speed: no faster than descent_time_s per 30 mm
         drop = max(self._tip_z(self.q, finger) - self._tip_z(q_new, finger), 0.0)
-        self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note,
-                   min_s=descent_time_s(velocity) * drop / 0.030)
+        T = max(phase_duration(q_new - self.q, self.hand.velocity, self.hand.acceleration),
+                descent_time_s(velocity) * drop / 0.030)
+        follows = ()
+        if self.arm_motion is not None and self.place[finger] == ("above", pitch, LOW_M):
+            # waiting right above its key: it may start down while the arm still moves,
+            # but touch the key only once the arm has stopped
+            g, T_arm = self.arm_motion
+            touch = _key_crossing(self.hand, self.q, q_new, finger, pitch, depth_m=0.0)
+            follows = ((g, max(T_arm - touch * T, 0.0)),)
+        self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note, min_s=T, follows=follows)
         self.place[finger] = ("down", pitch)
         return True
 
@@ -677,8 +761,7 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
 
 
 def _moves_next(pl: Planner, tl: _Timeline, events, k: int, groups, reasons) -> bool:
-    """True if the next group of notes after event ``k`` needs a new hand position (the
-    fingers lift while the last key goes up: no chunk boundary in between)."""
+    """True if the next group of notes after event ``k`` needs a new hand position."""
     for e in events[k + 1:]:
         if e[1] == 1:
             return tl.seg is None or not all(pl.press_q(g.finger, g.pitch, tl.seg)[1].converged
@@ -819,9 +902,11 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
             if nxt is not None and nxt.note_index not in reasons:
                 tl.prepare(nxt.finger, nxt.pitch)
             # the first rows go out as soon as there are a few, then in larger chunks
-            if (not down and len(tl.phases) >= (FIRST_CHUNK_PHASES if next_row == 0 else CHUNK_PHASES)
-                    and not _moves_next(pl, tl, events, k, groups, reasons)):
-                flush(cut_s=t)
+            if not down and len(tl.phases) >= (FIRST_CHUNK_PHASES if next_row == 0 else CHUNK_PHASES):
+                # before a change of hand position, cut early enough to leave the lifts
+                # and the travel free to start when they may
+                moves = _moves_next(pl, tl, events, k, groups, reasons)
+                flush(cut_s=t - TRAVEL_LEAD_S if moves else t)
         if progress and total > 400 and k % 100 == 0:
             sys.stderr.write(f"\rplanning {k}/{total} key events ({100 * k // total}%)")
             sys.stderr.flush()
