@@ -67,6 +67,7 @@ class PlayResult:
     first_row_s: float
     ik_solves: int
     late: list[tuple[int, float]] = field(default_factory=list)
+    travels: int = 0  # changes of hand position (rail and wrist) after the start
 
     @property
     def infeasible(self) -> list[NoteReport]:
@@ -268,6 +269,33 @@ def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, 
     """Fraction of the duration of a min-jerk phase from ``qa`` to ``qb`` at which
     ``finger``'s tip passes ``depth_m`` below the top of ``pitch`` (default: the key-down
     depth; FK along the path)."""
+    # only the arm's and this finger's joints move its tip: they key the cache
+    js = np.concatenate([_arm_joints(hand), np.arange(hand.n)[hand.joint_slice(finger)]])
+    key = (hand.urdf_sha256, finger, pitch, depth_m, qa[js].tobytes(), qb[js].tobytes())
+    if key in _CROSSINGS:
+        return _CROSSINGS[key]
+    if len(_CROSSINGS) > 200_000:
+        _CROSSINGS.clear()
+    _CROSSINGS[key] = frac = _crossing(hand, qa, qb, finger, pitch, depth_m)
+    return frac
+
+
+_CROSSINGS: dict = {}
+
+
+def _arm_joints(hand: HandModel) -> np.ndarray:
+    """The joints that belong to no finger (rail, wrist)."""
+    if hand.urdf_sha256 not in _ARM:
+        fj = {j for f in hand.fingers for j in np.arange(hand.n)[hand.joint_slice(f)]}
+        _ARM[hand.urdf_sha256] = np.array([j for j in range(hand.n) if j not in fj], dtype=int)
+    return _ARM[hand.urdf_sha256]
+
+
+_ARM: dict[str, np.ndarray] = {}
+
+
+def _crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int,
+              depth_m: float) -> float:
     k = hand.fingers.index(finger)
     z_cross = kb.key(pitch).top_z_m - depth_m
     u = np.linspace(0.0, 1.0, 17)
@@ -340,9 +368,9 @@ class _Timeline:
         self.offset = 0  # number of phases planned in earlier chunks (global index of phases[0])
         self.carried: list[tuple[int, Phase, float]] = []  # (global index, phase, start) still running at the last cut
         self.arm_motion: tuple[int, float] | None = None  # (global index, duration) of the last travel
+        self.travels = 0
         self.all_joints = np.arange(hand.n)
-        fj = {j for f in hand.fingers for j in np.arange(hand.n)[hand.joint_slice(f)]}
-        self.arm_joints = np.array([j for j in range(hand.n) if j not in fj], dtype=int)
+        self.arm_joints = _arm_joints(hand)
 
     def _move(self, q_new: np.ndarray, anchor: float, ideal: float, weight: float, kind: str,
               note: int | None, min_s: float = 0.0, order=None, follows=()) -> None:
@@ -387,6 +415,7 @@ class _Timeline:
         ``HIGH_M``. If nothing is clear, every fingertip goes to ``TRAVEL_SAFE_Z_M``
         and the arm moves alone."""
         hand = self.hand
+        self.travels += 1
         arm = self.arm_joints
         q_end = self.q.copy()
         q_end[arm] = self.pl.bases[seg][arm]
@@ -493,10 +522,16 @@ class _Timeline:
         own = {hand.fingers.index(f): exposed_range_x(p) + (kb.key(p).top_z_m,)
                for f, p in (ready or {}).items()}
 
-        def clear(k: int, x: float, y: float, z: float) -> bool:
-            if k in own and own[k][0] <= x <= own[k][1]:
-                return z >= own[k][2] + TRAVEL_CLEARANCE_M
-            return z >= surface_near(x, y) + TRAVEL_CLEARANCE_M
+        def clear(tips: np.ndarray) -> bool:
+            if np.all(tips[:, 2] >= kb.BLACK_TOP_Z_M + TRAVEL_CLEARANCE_M):
+                return True  # above every key top
+            for k, (x, y, z) in enumerate(tips):
+                if k in own and own[k][0] <= x <= own[k][1]:
+                    if z < own[k][2] + TRAVEL_CLEARANCE_M:
+                        return False
+                elif z < surface_near(x, y) + TRAVEL_CLEARANCE_M:
+                    return False
+            return True
 
         arm = self.arm_joints
         q_up = q0 + sum((d for d, _ in lifts), np.zeros(hand.n))
@@ -522,11 +557,7 @@ class _Timeline:
             Q = (q0 + min_jerk(t[:, None] / T_lift[None, :]) @ D_lift
                  + min_jerk((t - x_arm) / T_arm)[:, None] * d_arm[None, :]
                  + min_jerk((t - x_land)[:, None] / T_land[None, :]) @ D_land)
-            for q in hand.apply_couplings(Q):
-                tips = hand.tip_positions(q)
-                if not all(clear(k, x, y, z) for k, (x, y, z) in enumerate(tips)):
-                    return False
-            return True
+            return all(clear(hand.tip_positions(q)) for q in hand.apply_couplings(Q))
 
         # the arm as early as the lifts allow (fingers down only after it stops), then
         # the fingers down as early as that allows
@@ -696,12 +727,16 @@ def _covered(pl: Planner, seg: int, window) -> int:
 
 
 def _centroid_target(finger: str, pitches) -> PressTarget:
-    """``finger``'s press target on the key nearest the middle of ``pitches``, moved
-    sideways to that middle (mean x of their press points)."""
+    """A press target in the middle of ``finger``'s press points on ``pitches`` (their
+    mean), free to slide along the keys where all of them allow."""
     ts = [press_target(finger, p) for p in pitches]
-    x = float(np.mean([t.point_m[0] for t in ts]))
-    near = min(ts, key=lambda t: abs(t.point_m[0] - x))
-    return PressTarget(finger, near.pitch, (x, near.point_m[1], near.point_m[2]), near.y_range_m)
+    pts = np.array([t.point_m for t in ts])
+    lo = max(t.y_range_m[0] for t in ts)
+    hi = min(t.y_range_m[1] for t in ts)
+    x, y, z = pts.mean(axis=0)
+    if lo > hi:
+        lo = hi = float(y)
+    return PressTarget(finger, ts[0].pitch, (float(x), float(y), float(z)), (lo, hi))
 
 
 def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float,
@@ -914,7 +949,7 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         sys.stderr.write(f"\rplanning {total}/{total} key events (100%)\n")
     tl.rest_all(end_song)
     flush(final_t=end_song + 0.25)
-    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late)
+    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late, tl.travels)
 
 
 # ---------------------------------------------------------------- CLI glue
@@ -928,7 +963,7 @@ def format_summary(song_name: str, res: PlayResult, song_s: float, out: str) -> 
              f"{res.rows} rows ({res.duration_s:.2f} s) -> {out}"),
              (f"planning {res.planning_s * 1000:.0f} ms for {song_s:.2f} s of music "
              f"(real-time factor {rtf:.0f}x), first row after {res.first_row_s * 1000:.0f} ms, "
-             f"{res.ik_solves} IK solves")]
+             f"{res.ik_solves} IK solves, {res.travels} changes of hand position")]
     for nr in bad:
         lines.append(f"  infeasible: t={nr.onset_s:.3f} s {pitch_name(nr.pitch)} (MIDI {nr.pitch}): {nr.reason}")
     for i, lt in res.late:
