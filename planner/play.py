@@ -33,6 +33,7 @@ from planner.trajectory import (
 from planner.trajfile import TrajectoryWriter
 
 LATE_S = 0.020  # a note whose key goes down later than this is reported
+EARLY_S = 0.005  # no key goes down more than this before its note (a note early is a wrong note)
 CHUNK_PHASES = 40
 TRAVEL_LEAD_S = 0.25  # a chunk cut before a change of hand position ends this long before the last release
 FIRST_CHUNK_PHASES = 12
@@ -42,6 +43,7 @@ HIGH_M = 0.020  # a fingertip crossing keys sideways stays this far above white 
 RELEASE_WEIGHT = 0.3  # an onset on time matters more than a release on time
 TRAVEL_SAFE_Z_M = 0.040  # fingertips lifted this high when a straight travel would dip
 TRAVEL_LIFTS_M = (0.028, TRAVEL_SAFE_Z_M)  # higher lifts tried when HIGH_M is not enough
+WRIST_TRAVEL_RAD = -0.35  # wrist extension (20 deg) raising the fingers for a rail-only travel
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
 TRAVEL_OVERLAPS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # fractions of a motion done before the next starts
 _SIM_DT_S = 0.002
@@ -367,22 +369,24 @@ class _Timeline:
         self.phases: list[tuple[Phase, str, int | None]] = []  # the chunk being planned
         self.offset = 0  # number of phases planned in earlier chunks (global index of phases[0])
         self.carried: list[tuple[int, Phase, float]] = []  # (global index, phase, start) still running at the last cut
-        self.arm_motion: tuple[int, float] | None = None  # (global index, duration) of the last travel
+        # the last travel's arm motions, as (global index, duration): nothing the travel's
+        # simulation did not see starts before they end
+        self.arm_motion: tuple[tuple[int, float], ...] = ()
         self.travels = 0
         self.all_joints = np.arange(hand.n)
         self.arm_joints = _arm_joints(hand)
 
     def _move(self, q_new: np.ndarray, anchor: float, ideal: float, weight: float, kind: str,
-              note: int | None, min_s: float = 0.0, order=None, follows=()) -> None:
+              note: int | None, min_s: float = 0.0, order=None, follows=(), earliest: float = 0.0) -> None:
         d = q_new - self.q
         if not np.any(d) and order is None:
             return
-        if self.arm_motion is not None and not follows:
+        if self.arm_motion and not follows:
             # nothing moves that the travel's simulation did not see until the arm stops
-            follows = (self.arm_motion,)
+            follows = self.arm_motion
         T = max(phase_duration(d, self.hand.velocity, self.hand.acceleration), min_s)
-        self.phases.append((Phase(d, T, anchor, ideal, weight, order_joints=order, follows=follows),
-                            kind, note))
+        self.phases.append((Phase(d, T, anchor, ideal, weight, earliest_s=earliest, order_joints=order,
+                                  follows=follows), kind, note))
         self.q = q_new.copy()
 
     def _frame_edge(self, t_s: float) -> float:
@@ -399,7 +403,7 @@ class _Timeline:
     def _tip_z(self, q: np.ndarray, finger: str) -> float:
         return float(self.hand.tip_positions(q)[self.hand.fingers.index(finger), 2])
 
-    def travel(self, seg: int, t_s: float, ready: dict[str, int] | None = None) -> None:
+    def travel(self, seg: int, t_s: float, ready: dict[str, int] | None = None) -> bool:
         """Go to hand position ``seg``: every finger up, the arm (rail and wrist) across,
         every finger down to its place there, high above the keys (``ready``: finger ->
         pitch: above the key it presses next).
@@ -413,7 +417,8 @@ class _Timeline:
         ``TRAVEL_LIFTS_M``, until the simulation finds the motion clear; the fingers
         that strike first land ``LOW_M`` above their keys if that is clear, else
         ``HIGH_M``. If nothing is clear, every fingertip goes to ``TRAVEL_SAFE_Z_M``
-        and the arm moves alone."""
+        and the wrist up to ``WRIST_TRAVEL_RAD``, the rail moves alone, then the wrist
+        and the fingers come down; if even that is not clear, the hand stays (False)."""
         hand = self.hand
         self.travels += 1
         arm = self.arm_joints
@@ -468,29 +473,72 @@ class _Timeline:
                     g: c[0] for g in lifted if g - self.offset >= n}
         if c is not None and arm_after is None:
             arm_after = {g: c[0] for g in last}
+        moving = arm
         if c is None:
-            self._travel_safe(seg, t_s, q_end)
-            for f in ready:
-                self.place[f] = ("above", ready[f], HIGH_M)
-            return
+            # last resort: every finger to TRAVEL_SAFE_Z_M and the wrist raised
+            # (extended), the rail alone across, then the wrist and the fingers down
+            q_up = self.q.copy()
+            for f in hand.fingers:
+                q_up = self.pl.lift_to(q_up, f, TRAVEL_SAFE_Z_M)
+            wrist = [self.hand.index[n] for n in ("wrist_flex",) if n in self.hand.index]
+            q_up[wrist] = np.maximum(self.hand.lower[wrist], WRIST_TRAVEL_RAD)
+            moving = np.array([self.hand.index["rail"]]) if "rail" in self.hand.index else arm
+            extra = []
+            for js in self._land_groups(moving):
+                d = np.zeros(hand.n)
+                d[js] = (q_up - self.q)[js]
+                if np.any(d):
+                    extra.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
+            c = self._travel_overlap(self.q, extra, q_end, arm=moving)
+            if c is None:
+                self.travels -= 1
+                return False
+            # (the same phases as simulated, in the same order); the wrist goes up only
+            # once every finger has finished what it was doing (no key is down then)
+            before = {g: ph.duration_s for g, ph in self._last_motions()[0].items()}
+            last = {}
+            for js in self._land_groups(moving):
+                q_next = self.q.copy()
+                q_next[js] = q_up[js]
+                n = len(self.phases)
+                wrist = np.intersect1d(js, self.arm_joints).size > 0
+                self._move(q_next, 0.5, t_s, 0.0, "move", None,
+                           follows=tuple(sorted(before.items())) if wrist else ())
+                if len(self.phases) > n:
+                    last[self.offset + n] = self.phases[n][0]
+            arm_after = {g: c[0] for g in last} | {g: T for g, T in before.items()
+                                                  if g not in last}
         k_arm = len(self.phases)
         q_arm = self.q.copy()
-        q_arm[arm] = self.pl.bases[seg][arm]
-        self.arm_motion = None
+        q_arm[moving] = self.pl.bases[seg][moving]
+        self.arm_motion = ()
         self._move(q_arm, 0.5, t_s, 0.0, "travel", None,
                    follows=tuple((g, arm_after[g]) for g in sorted(arm_after)))
+        follows = ()
         if len(self.phases) > k_arm:
             T_arm = self.phases[k_arm][0].duration_s
             follows = ((self.offset + k_arm, c[1] * T_arm),)
-            for f in hand.fingers:
-                self._move(self._with_finger(f, q_end), 0.5, t_s, 0.0, "move", None, follows=follows)
-            self.arm_motion = (self.offset + k_arm, T_arm)
-        else:
-            for f in hand.fingers:
-                self._move(self._with_finger(f, q_end), 0.5, t_s, 0.0, "move", None)
+            # nothing else moves before the arm has stopped
+            self.arm_motion = ((self.offset + k_arm, T_arm),)
+        for js in self._land_groups(moving):
+            q_next = self.q.copy()
+            q_next[js] = q_end[js]
+            n = len(self.phases)
+            self._move(q_next, 0.5, t_s, 0.0, "move", None, follows=follows)
+            if len(self.phases) > n and np.intersect1d(js, self.arm_joints).size > 0:
+                # the wrist coming down after a rail-only travel: it too must stop first
+                self.arm_motion += ((self.offset + n, self.phases[n][0].duration_s),)
         self.seg = seg
         for f in hand.fingers:
             self.place[f] = ("above", ready[f], land_z) if f in ready else ("high",)
+        return True
+
+    def _land_groups(self, arm: np.ndarray) -> list[np.ndarray]:
+        """The joints landing together after the arm's move: each finger's, and the arm
+        joints the move leaves out (the wrist, when only the rail travels)."""
+        groups = [np.arange(self.hand.n)[self.hand.joint_slice(f)] for f in self.hand.fingers]
+        rest = np.setdiff1d(self.arm_joints, arm)
+        return groups + ([rest] if rest.size else [])
 
     def _last_motions(self) -> tuple[dict[int, Phase], list[tuple[np.ndarray, float]], np.ndarray]:
         """Each finger's last motion (global index -> phase), their (delta, duration) and
@@ -507,7 +555,8 @@ class _Timeline:
         return last, lifts, q0
 
     def _travel_overlap(self, q0: np.ndarray, lifts: list[tuple[np.ndarray, float]],
-                        q_end: np.ndarray, ready: dict[str, int] | None = None) -> tuple[float, float] | None:
+                        q_end: np.ndarray, ready: dict[str, int] | None = None,
+                        arm: np.ndarray | None = None) -> tuple[float, float] | None:
         """The most overlap that keeps every fingertip ``TRAVEL_CLEARANCE_M`` clear of the
         keys once the arm moves, as (the time after the start of each of the fingers'
         ``lifts`` (joint motions, durations, all from ``q0``) when the arm may start, the
@@ -533,15 +582,14 @@ class _Timeline:
                     return False
             return True
 
-        arm = self.arm_joints
+        arm = self.arm_joints if arm is None else arm
         q_up = q0 + sum((d for d, _ in lifts), np.zeros(hand.n))
         d_arm = np.zeros(hand.n)
         d_arm[arm] = (q_end - q_up)[arm]
         T_arm = phase_duration(d_arm, hand.velocity, hand.acceleration)
         land = []
-        for f in hand.fingers:
+        for js in self._land_groups(arm):
             d = np.zeros(hand.n)
-            js = hand.joint_slice(f)
             d[js] = (q_end - q_up)[js]
             land.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
         D_lift = np.array([d for d, _ in lifts]).reshape(-1, hand.n)
@@ -566,23 +614,6 @@ class _Timeline:
             return None
         c_land = next(c for c in TRAVEL_OVERLAPS if c == 1.0 or safe(c_lift, c))
         return float(np.max(c_lift * T_lift, initial=0.0)), c_land
-
-    def _travel_safe(self, seg: int, t_s: float, q: np.ndarray) -> None:
-        """Travel with every fingertip lifted to ``TRAVEL_SAFE_Z_M`` first, nothing else
-        moving while the arm does."""
-        up = self.q.copy()
-        for f in self.hand.fingers:
-            up = self.pl.lift_to(up, f, TRAVEL_SAFE_Z_M)
-        self._move(up, 0.5, t_s, 0.0, "move", None)
-        q_up = q.copy()
-        for f in self.hand.fingers:
-            q_up = self.pl.lift_to(q_up, f, TRAVEL_SAFE_Z_M)
-        self._move(q_up, 0.5, t_s, 0.0, "travel", None, order=self.all_joints)
-        self._move(q, 0.5, t_s, 0.0, "move", None)
-        self.seg = seg
-        self.arm_motion = None  # ordered on every joint: nothing overlaps it
-        for f in self.hand.fingers:
-            self.place[f] = ("high",)
 
     def _release_high(self, finger: str) -> None:
         """If ``finger``'s last motion was a release to ``LOW_M``, make it a release
@@ -637,13 +668,13 @@ class _Timeline:
         T = max(phase_duration(q_new - self.q, self.hand.velocity, self.hand.acceleration),
                 descent_time_s(velocity) * drop / 0.030)
         follows = ()
-        if self.arm_motion is not None and self.place[finger] == ("above", pitch, LOW_M):
+        if self.arm_motion and self.place[finger] == ("above", pitch, LOW_M):
             # waiting right above its key: it may start down while the arm still moves,
             # but touch the key only once the arm has stopped
-            g, T_arm = self.arm_motion
             touch = _key_crossing(self.hand, self.q, q_new, finger, pitch, depth_m=0.0)
-            follows = ((g, max(T_arm - touch * T, 0.0)),)
-        self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note, min_s=T, follows=follows)
+            follows = tuple((g, max(T_arm - touch * T, 0.0)) for g, T_arm in self.arm_motion)
+        self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note, min_s=T, follows=follows,
+                   earliest=self._frame_edge(t_s) - EARLY_S - frac * T)
         self.place[finger] = ("down", pitch)
         return True
 
@@ -790,9 +821,11 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
                 tl.q = tl._with_finger(g.finger, pl.press_q(g.finger, g.pitch, seg)[0])
                 tl.place[g.finger] = ("down", g.pitch)
                 tl.pre_pressed.add(g.note_index)
-    else:
-        tl.travel(seg, t, {g.finger: g.pitch for g in group
-                           if pl.press_q(g.finger, g.pitch, seg)[1].converged})
+    elif not tl.travel(seg, t, {g.finger: g.pitch for g in group
+                                if pl.press_q(g.finger, g.pitch, seg)[1].converged}):
+        for g in group:
+            reasons.setdefault(g.note_index, "no path of the hand there keeps the fingers clear of "
+                               "the keys")
 
 
 def _moves_next(pl: Planner, tl: _Timeline, events, k: int, groups, reasons) -> bool:
@@ -831,7 +864,7 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         phases = []
         for k, (ph, _, _) in enumerate(phases_meta):
             js = ph.joints if ph.order_joints is None else ph.order_joints
-            earliest = max([t_cut] + [float(joint_free[j]) for j in js.tolist()])
+            earliest = max([t_cut, ph.earliest_s] + [float(joint_free[j]) for j in js.tolist()])
             follows = []
             for g, lag in ph.follows:
                 if g >= tl.offset:
@@ -915,6 +948,8 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
                         if e[1] == 1 and e[3].press.finger not in busy and e[3].press.note_index not in reasons:
                             busy.add(e[3].press.finger)
                             tl.prepare(e[3].press.finger, e[3].press.pitch)
+            if p.note_index in reasons:  # (no safe path of the hand to it)
+                continue
             if p.note_index in tl.pre_pressed:
                 ok = True
             else:

@@ -51,7 +51,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import cli
@@ -417,6 +417,10 @@ def test_slower_than_the_field_allows_is_not_representable():
 @SETTINGS
 @given(pitches=st.lists(st.integers(0, 127), min_size=1, max_size=6), transpose=st.booleans(),
        strict=st.booleans())
+# found by this test: the hand travelling while a key was still down, and a finger pressing
+# its key while the rail (after a rail-only travel) was still moving: key-bed hits
+@example(pitches=[30, 54, 74], transpose=False, strict=False)
+@example(pitches=[21, 30, 98, 89, 34], transpose=False, strict=False)
 def test_pitches_0_to_127(capsys, pitches, transpose, strict):
     ns = [(p, 240 * i, 240 * i + 200, 80) for i, p in enumerate(pitches)]
     flags = (["--transpose"] if transpose else []) + (["--strict"] if strict else [])
