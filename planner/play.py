@@ -670,8 +670,8 @@ class _Timeline:
         follows = ()
         if self.arm_motion and self.place[finger] == ("above", pitch, LOW_M):
             # waiting right above its key: it may start down while the arm still moves,
-            # but touch the key only once the arm has stopped
-            touch = _key_crossing(self.hand, self.q, q_new, finger, pitch, depth_m=0.0)
+            # but come within TRAVEL_CLEARANCE_M of it only once the arm has stopped
+            touch = _key_crossing(self.hand, self.q, q_new, finger, pitch, depth_m=-TRAVEL_CLEARANCE_M)
             follows = tuple((g, max(T_arm - touch * T, 0.0)) for g, T_arm in self.arm_motion)
         self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note, min_s=T, follows=follows,
                    earliest=self._frame_edge(t_s) - EARLY_S - frac * T)
