@@ -21,7 +21,7 @@ from planner.hand.model import HandModel, load_hand
 from planner.ik import HandIK, IKResult, PressTarget, exposed_range_x, press_target, surface_near
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
-from planner.targets import descent_time_s, press_intervals
+from planner.targets import MOVE_S, descent_time_s, press_intervals
 from planner.trajectory import (
     Phase,
     build_timing,
@@ -35,6 +35,7 @@ from planner.trajfile import TrajectoryWriter
 LATE_S = 0.020  # a note whose key goes down later than this is reported
 EARLY_S = 0.005  # no key goes down more than this before its note (a note early is a wrong note)
 CHUNK_PHASES = 40
+PART_NOTES = 256  # a long song is fingered in parts of at least this many notes
 TRAVEL_LEAD_S = 0.25  # a chunk cut before a change of hand position ends this long before the last release
 FIRST_CHUNK_PHASES = 12
 REST_HOVER_Z_M = 0.020
@@ -319,17 +320,27 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     t_start = time.perf_counter()
     pl = planner or Planner(hand)
     notes = list(song.notes)
-    assignments, infeasible = assign_fingers(notes, pl.reach)
-    reasons: dict[int, str] = {x.note_index: x.reason for x in infeasible}
-    finger_of = {a.note_index: a.finger for a in assignments}
-    rail_of = {a.note_index: a.rail_m for a in assignments}
-    intervals = press_intervals(notes, assignments)
+    reasons: dict[int, str] = {}
+    finger_of: dict[int, str] = {}
+    rail_of: dict[int, float] = {}
+
+    def parts():
+        """The press intervals of each part of the song, fingered when the planner gets
+        there: a long song starts streaming after its first part's fingering, not all."""
+        for idx in _parts(notes):
+            assignments, infeasible = assign_fingers([notes[i] for i in idx], pl.reach)
+            assignments = [dataclasses.replace(a, note_index=idx[a.note_index]) for a in assignments]
+            reasons.update({idx[x.note_index]: x.reason for x in infeasible})
+            finger_of.update({a.note_index: a.finger for a in assignments})
+            rail_of.update({a.note_index: a.rail_m for a in assignments})
+            yield press_intervals(notes, assignments)
+
     meta = {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
             "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
             "song": song_name, "notes": len(notes)}
     writer = TrajectoryWriter(out_path, meta, hand.joint_names, hand.motor_names)
     try:
-        result = _run(pl, hand, notes, intervals, rail_of, writer, rate_hz, reasons, progress, t_start)
+        result = _run(pl, hand, notes, parts(), rail_of, writer, rate_hz, reasons, progress, t_start)
     except BaseException:
         writer.abort()
         raise
@@ -338,6 +349,21 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     result.notes = [NoteReport(i, n.pitch, n.onset_s, finger_of.get(i), reasons.get(i))
                     for i, n in enumerate(notes)]
     return result
+
+
+def _parts(notes) -> list[list[int]]:
+    """Note indices (by onset) cut into parts of at least ``PART_NOTES`` notes, each cut
+    where every key is up for at least ``MOVE_S`` (so no press interval is shortened for
+    a note of the next part). A song without such a pause is one part."""
+    order = sorted(range(len(notes)), key=lambda i: (notes[i].onset_s, notes[i].pitch))
+    out: list[list[int]] = [[]]
+    end = -math.inf
+    for i in order:
+        if len(out[-1]) >= PART_NOTES and notes[i].onset_s >= end + MOVE_S:
+            out.append([])
+        out[-1].append(i)
+        end = max(end, notes[i].offset_s)
+    return [p for p in out if p]
 
 
 class _Timeline:
@@ -837,11 +863,15 @@ def _moves_next(pl: Planner, tl: _Timeline, events, k: int, groups, reasons) -> 
     return False
 
 
-def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, float],
+def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
          writer: TrajectoryWriter, rate_hz: float, reasons: dict[int, str], progress: bool,
          t_start: float) -> PlayResult:
+    """Plan the parts (lists of press intervals, in time order) one after the other on
+    one timeline; ``rail_of`` and ``reasons`` fill in as the parts are fingered."""
     dt = 1.0 / rate_hz
     end_song = max((n.offset_s for n in notes), default=0.0)
+    parts = iter(parts)
+    intervals = next(parts, [])
     rail0 = rail_of[intervals[0].press.note_index] if intervals else (
         float(pl.rest[pl.rail]) if pl.rail is not None else 0.0)
     q_start = pl.posture_at(rail0)
@@ -906,80 +936,84 @@ def _run(pl: Planner, hand: HandModel, notes, intervals, rail_of: dict[int, floa
         tl.offset += len(phases_meta)
         tl.phases = []
 
-    # events in time order: releases before presses at the same instant
-    events = []
-    for iv in intervals:
-        events.append((iv.start_s, 1, iv.press.pitch, iv))
-        events.append((iv.end_s, 0, iv.press.pitch, iv))
-    events.sort(key=lambda e: (e[0], e[1], e[2]))
-    groups: dict[float, list] = {}
-    for e in events:
-        if e[1] == 1:
-            groups.setdefault(e[0], []).append(e[3].press)
-    # for every press event, the next press of the same finger (what it prepares for)
-    next_of: dict[int, object] = {}
-    last_of: dict[str, int] = {}
-    for e in events:
-        if e[1] == 1:
-            p_ = e[3].press
-            if p_.finger in last_of:
-                next_of[last_of[p_.finger]] = p_
-            last_of[p_.finger] = p_.note_index
+    total = 2 * len(notes)
+    done = 0
     down: dict[int, object] = {}
-    total = len(events)
     group_t = -math.inf
-    for k, (t, is_press, _, iv) in enumerate(events):
-        p = iv.press
-        if is_press:
-            rail = rail_of[p.note_index]
-            if abs(t - group_t) > 1e-9:  # the first key of a new group of notes
-                group_t = t
-                group = [g for g in groups[t] if g.note_index not in reasons]
-                reachable = tl.seg is not None and all(
-                    pl.press_q(g.finger, g.pitch, tl.seg)[1].converged for g in group)
-                if not reachable and not down:
-                    first = tl.seg is None
-                    _reposition(pl, tl, events[k:], group, t, rail, rail_of, reasons)
-                    if first and tl.seg is not None:  # the start configuration
-                        hold = tl.q.copy()
-                    # the fingers not striking now get ready for their next keys
-                    busy = {g.finger for g in group}
-                    for e in events[k:]:
-                        if e[1] == 1 and e[3].press.finger not in busy and e[3].press.note_index not in reasons:
-                            busy.add(e[3].press.finger)
-                            tl.prepare(e[3].press.finger, e[3].press.pitch)
-            if p.note_index in reasons:  # (no safe path of the hand to it)
-                continue
-            if p.note_index in tl.pre_pressed:
-                ok = True
-            else:
-                ok = tl.seg is not None and tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
-            if ok:
-                down[p.note_index] = iv
-                tau = hand.press_torques(tl.q, {p.finger: p.force_n})
-                ratio = np.abs(tau) / hand.motor_peak_torque
-                if np.any(ratio > 1.0):
-                    m = int(np.argmax(ratio))
-                    reasons.setdefault(p.note_index, f"torque above bound (motor.{hand.motor_names[m]} "
-                                       f"{abs(tau[m]):.2f} > {hand.motor_peak_torque[m]:.2f} N m)")
-            else:
-                why = "keys held elsewhere keep the hand away" if down else "out of reach"
-                reasons[p.note_index] = f"{why} (for the {p.finger})"
-        elif p.note_index in down:
-            tl.release(p.finger, p.pitch, t)
-            del down[p.note_index]
-            nxt = next_of.get(p.note_index)
-            if nxt is not None and nxt.note_index not in reasons:
-                tl.prepare(nxt.finger, nxt.pitch)
-            # the first rows go out as soon as there are a few, then in larger chunks
-            if not down and len(tl.phases) >= (FIRST_CHUNK_PHASES if next_row == 0 else CHUNK_PHASES):
-                # before a change of hand position, cut early enough to leave the lifts
-                # and the travel free to start when they may
-                moves = _moves_next(pl, tl, events, k, groups, reasons)
-                flush(cut_s=t - TRAVEL_LEAD_S if moves else t)
-        if progress and total > 400 and k % 100 == 0:
-            sys.stderr.write(f"\rplanning {k}/{total} key events ({100 * k // total}%)")
-            sys.stderr.flush()
+    while intervals is not None:
+        # events in time order: releases before presses at the same instant
+        events = []
+        for iv in intervals:
+            events.append((iv.start_s, 1, iv.press.pitch, iv))
+            events.append((iv.end_s, 0, iv.press.pitch, iv))
+        events.sort(key=lambda e: (e[0], e[1], e[2]))
+        groups: dict[float, list] = {}
+        for e in events:
+            if e[1] == 1:
+                groups.setdefault(e[0], []).append(e[3].press)
+        # for every press event, the next press of the same finger (what it prepares for)
+        next_of: dict[int, object] = {}
+        last_of: dict[str, int] = {}
+        for e in events:
+            if e[1] == 1:
+                p_ = e[3].press
+                if p_.finger in last_of:
+                    next_of[last_of[p_.finger]] = p_
+                last_of[p_.finger] = p_.note_index
+        for k, (t, is_press, _, iv) in enumerate(events):
+            p = iv.press
+            if is_press:
+                rail = rail_of[p.note_index]
+                if abs(t - group_t) > 1e-9:  # the first key of a new group of notes
+                    group_t = t
+                    group = [g for g in groups[t] if g.note_index not in reasons]
+                    reachable = tl.seg is not None and all(
+                        pl.press_q(g.finger, g.pitch, tl.seg)[1].converged for g in group)
+                    if not reachable and not down:
+                        first = tl.seg is None
+                        _reposition(pl, tl, events[k:], group, t, rail, rail_of, reasons)
+                        if first and tl.seg is not None:  # the start configuration
+                            hold = tl.q.copy()
+                        # the fingers not striking now get ready for their next keys
+                        busy = {g.finger for g in group}
+                        for e in events[k:]:
+                            if e[1] == 1 and e[3].press.finger not in busy and e[3].press.note_index not in reasons:
+                                busy.add(e[3].press.finger)
+                                tl.prepare(e[3].press.finger, e[3].press.pitch)
+                if p.note_index in reasons:  # (no safe path of the hand to it)
+                    continue
+                if p.note_index in tl.pre_pressed:
+                    ok = True
+                else:
+                    ok = tl.seg is not None and tl.press(p.finger, p.pitch, t, p.note_index, p.velocity)
+                if ok:
+                    down[p.note_index] = iv
+                    tau = hand.press_torques(tl.q, {p.finger: p.force_n})
+                    ratio = np.abs(tau) / hand.motor_peak_torque
+                    if np.any(ratio > 1.0):
+                        m = int(np.argmax(ratio))
+                        reasons.setdefault(p.note_index, f"torque above bound (motor.{hand.motor_names[m]} "
+                                           f"{abs(tau[m]):.2f} > {hand.motor_peak_torque[m]:.2f} N m)")
+                else:
+                    why = "keys held elsewhere keep the hand away" if down else "out of reach"
+                    reasons[p.note_index] = f"{why} (for the {p.finger})"
+            elif p.note_index in down:
+                tl.release(p.finger, p.pitch, t)
+                del down[p.note_index]
+                nxt = next_of.get(p.note_index)
+                if nxt is not None and nxt.note_index not in reasons:
+                    tl.prepare(nxt.finger, nxt.pitch)
+                # the first rows go out as soon as there are a few, then in larger chunks
+                if not down and len(tl.phases) >= (FIRST_CHUNK_PHASES if next_row == 0 else CHUNK_PHASES):
+                    # before a change of hand position, cut early enough to leave the lifts
+                    # and the travel free to start when they may
+                    moves = _moves_next(pl, tl, events, k, groups, reasons)
+                    flush(cut_s=t - TRAVEL_LEAD_S if moves else t)
+            if progress and total > 400 and (done + k) % 100 == 0:
+                sys.stderr.write(f"\rplanning {done + k}/{total} key events ({100 * (done + k) // total}%)")
+                sys.stderr.flush()
+        done += len(events)
+        intervals = next(parts, None)
     if progress and total > 400:
         sys.stderr.write(f"\rplanning {total}/{total} key events (100%)\n")
     tl.rest_all(end_song)

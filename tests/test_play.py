@@ -240,3 +240,39 @@ def test_leaps_cannot_reach_the_target_on_this_rail(planner):
     recall = 1.0 - lost / sum(n.offset_s - n.onset_s for n in notes)
     f1_bound = 2 * recall / (1 + recall)
     assert 0.9 < f1_bound < 0.98, f1_bound
+
+
+def test_parts_are_cut_only_where_every_key_is_up():
+    from planner.play import PART_NOTES, _parts
+    from planner.targets import MOVE_S
+
+    legato = [Note(60 + i % 5, 0.1 * i, 0.1 * i + 0.1, 80) for i in range(3 * PART_NOTES)]
+    assert [len(p) for p in _parts(legato)] == [len(legato)]  # no pause: one part
+    paused = [Note(n.pitch, n.onset_s + (0.2 if i >= PART_NOTES + 7 else 0.0),
+                   n.offset_s + (0.2 if i >= PART_NOTES + 7 else 0.0), 80) for i, n in enumerate(legato)]
+    parts = _parts(paused)
+    assert [len(p) for p in parts] == [PART_NOTES + 7, 2 * PART_NOTES - 7]
+    for a, b in zip(parts, parts[1:]):
+        assert min(paused[i].onset_s for i in b) - max(paused[i].offset_s for i in a) >= MOVE_S
+
+
+def test_a_song_planned_in_parts_is_played_as_well(planner, tmp_path, monkeypatch):
+    """Twinkle three times over, 0.5 s apart, planned in parts of (at least) 14 notes: the
+    parts join on one timeline and the check finds the song played as well as in one go."""
+    import planner.play as play_mod
+    from planner.music.midi import write_notes_midi
+
+    base = load_song(ROOT / "songs" / "twinkle.mid").notes
+    span = max(n.offset_s for n in base) + 0.5
+    notes = [Note(n.pitch, n.onset_s + k * span, n.offset_s + k * span, n.velocity)
+             for k in range(3) for n in base]
+    song = tmp_path / "three.mid"
+    write_notes_midi(notes, song)
+    monkeypatch.setattr(play_mod, "PART_NOTES", 14)
+    assert len(play_mod._parts(notes)) == 3
+    path = tmp_path / "three.csv"
+    res = plan_song(load_song(song), planner.hand, str(path), planner=planner)
+    rep = check_trajectory(str(path), str(song))
+    assert len(res.notes) == 42 and not res.infeasible
+    assert rep.play.f1 >= F1_FLOOR["twinkle"] and not rep.play.key_bed_hits, rep.summary()
+    assert all(v.count == 0 for v in rep.limits)
