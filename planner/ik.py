@@ -105,6 +105,15 @@ def surface_near(x: float, y: float) -> float:
     return kb.BLACK_TOP_Z_M if y >= kb.BLACK_Y0_M - _NEAR_M else 0.0
 
 
+def surfaces_near(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``surface_near`` for arrays of points."""
+    t = kb.key_table()
+    on = ((t["x_min"][0] - _NEAR_M <= x) & (x <= t["x_max"][-1] + _NEAR_M)
+          & (-_NEAR_M <= y) & (y <= kb.WHITE_LENGTH_M + _NEAR_M))
+    top = np.where(y >= kb.BLACK_Y0_M - _NEAR_M, kb.BLACK_TOP_Z_M, 0.0)
+    return np.where(on, top, -np.inf)
+
+
 class HandIK:
     """A placo kinematics solver for one hand, built once and reused for every keyframe."""
 

@@ -18,7 +18,7 @@ import numpy as np
 from planner.errors import InputError, SolverError
 from planner.fingering import HandReach, assign_fingers
 from planner.hand.model import HandModel, load_hand
-from planner.ik import HandIK, IKResult, PressTarget, exposed_range_x, press_target, surface_near
+from planner.ik import HandIK, IKResult, PressTarget, exposed_range_x, press_target, surfaces_near
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
 from planner.targets import MOVE_S, descent_time_s, press_intervals
@@ -85,6 +85,7 @@ class Planner:
         self.ik = HandIK(hand)
         self.rail = hand.index.get("rail")
         self._cache: dict = {}
+        self._anchors: dict = {}  # hand positions of this song, by the IK problem that made them
         self.bases: list[np.ndarray] = []
         self.ik_solves = 0
         self.rest = self._rest_posture()
@@ -191,6 +192,13 @@ class Planner:
         pressing too (a chord the hand does not play, only takes the shape of, so that
         each of those fingers reaches its key from there by itself). Returns its index in
         ``bases`` (the hand there with every finger up), or None when the IK cannot reach."""
+        key = (tuple(targets), tuple(upcoming), tuple(chord), rail_m)
+        if key in self._anchors:  # the same shape at the same rail: the same position
+            return self._anchors[key]
+        self._anchors[key] = seg = self._anchor(targets, rail_m, q_from, upcoming, chord)
+        return seg
+
+    def _anchor(self, targets, rail_m: float, q_from: np.ndarray, upcoming, chord) -> int | None:
         posture = self.posture_at(rail_m)
         presses = list(targets) + list(chord)
         r = self.ik.solve(presses, q_from, posture, prepare=upcoming)
@@ -235,9 +243,16 @@ class Planner:
 
     def lift_to(self, q: np.ndarray, finger: str, z_m: float) -> np.ndarray:
         """``q`` with ``finger`` raised straight up to height ``z_m`` (not lowered)."""
-        if self.hand.tip_positions(q)[self.hand.fingers.index(finger), 2] >= z_m:
-            return q
-        return self._vertical(q, finger, z_m).q
+        js = np.concatenate([_arm_joints(self.hand), np.arange(self.hand.n)[self.hand.joint_slice(finger)]])
+        key = (finger, z_m, q[js].tobytes())
+        if key not in self._cache:
+            if self.hand.tip_positions(q)[self.hand.fingers.index(finger), 2] >= z_m:
+                self._cache[key] = q[js]
+            else:
+                self._cache[key] = self._vertical(q, finger, z_m).q[js]
+        out = q.copy()
+        out[js] = self._cache[key]
+        return out
 
     def rest_high_q(self, finger: str, seg: int) -> np.ndarray:
         """``finger`` lifted straight up from its place in hand position ``seg`` to
@@ -286,6 +301,19 @@ def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, 
 _CROSSINGS: dict = {}
 
 
+def _least(values, ok) -> float:
+    """The least of the increasing ``values`` for which ``ok`` holds, by bisection (``ok``
+    of the last one is known true; a value found is always one ``ok`` accepted)."""
+    lo, hi = -1, len(values) - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if ok(values[mid]):
+            hi = mid
+        else:
+            lo = mid
+    return values[hi]
+
+
 def _arm_joints(hand: HandModel) -> np.ndarray:
     """The joints that belong to no finger (rail, wrist)."""
     if hand.urdf_sha256 not in _ARM:
@@ -319,6 +347,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
     pl = planner or Planner(hand)
+    pl._anchors.clear()  # (a planner reused for another song gives the same bytes as a new one)
     notes = list(song.notes)
     reasons: dict[int, str] = {}
     finger_of: dict[int, str] = {}
@@ -600,13 +629,11 @@ class _Timeline:
         def clear(tips: np.ndarray) -> bool:
             if np.all(tips[:, 2] >= kb.BLACK_TOP_Z_M + TRAVEL_CLEARANCE_M):
                 return True  # above every key top
-            for k, (x, y, z) in enumerate(tips):
-                if k in own and own[k][0] <= x <= own[k][1]:
-                    if z < own[k][2] + TRAVEL_CLEARANCE_M:
-                        return False
-                elif z < surface_near(x, y) + TRAVEL_CLEARANCE_M:
-                    return False
-            return True
+            surface = surfaces_near(tips[:, 0], tips[:, 1])
+            for k, (lo, hi, top) in own.items():
+                if lo <= tips[k, 0] <= hi:
+                    surface[k] = top
+            return bool(np.all(tips[:, 2] >= surface + TRAVEL_CLEARANCE_M))
 
         arm = self.arm_joints if arm is None else arm
         q_up = q0 + sum((d for d, _ in lifts), np.zeros(hand.n))
@@ -631,14 +658,17 @@ class _Timeline:
             Q = (q0 + min_jerk(t[:, None] / T_lift[None, :]) @ D_lift
                  + min_jerk((t - x_arm) / T_arm)[:, None] * d_arm[None, :]
                  + min_jerk((t - x_land)[:, None] / T_land[None, :]) @ D_land)
-            return all(clear(hand.tip_positions(q)) for q in hand.apply_couplings(Q))
+            Q = hand.apply_couplings(Q)
+            # every 5th sample first: a dip shows there sooner
+            order = np.concatenate([np.arange(0, len(Q), 5)] + [np.arange(k, len(Q), 5) for k in range(1, 5)])
+            return all(clear(hand.tip_positions(Q[i])) for i in order)
 
         # the arm as early as the lifts allow (fingers down only after it stops), then
         # the fingers down as early as that allows
-        c_lift = next((c for c in TRAVEL_OVERLAPS if safe(c, 1.0)), None)
-        if c_lift is None:
+        if not safe(1.0, 1.0):
             return None
-        c_land = next(c for c in TRAVEL_OVERLAPS if c == 1.0 or safe(c_lift, c))
+        c_lift = _least(TRAVEL_OVERLAPS, lambda c: safe(c, 1.0))
+        c_land = _least(TRAVEL_OVERLAPS, lambda c: safe(c_lift, c))
         return float(np.max(c_lift * T_lift, initial=0.0)), c_land
 
     def _release_high(self, finger: str) -> None:

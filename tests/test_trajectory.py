@@ -94,3 +94,4 @@ def test_sample_sums_overlapping_phases():
     q = sample(phases, np.array([0.0, 0.05]), np.array([0.0, 0.05, 0.1, 0.15]), np.zeros(2))
     assert q[:, 0] == pytest.approx([0.0, 0.5, 1.0, 1.0])
     assert q[:, 1] == pytest.approx([0.0, 0.0, 0.5, 1.0])
+
