@@ -114,6 +114,18 @@ def surfaces_near(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.where(on, top, -np.inf)
 
 
+def surfaces_under(x: np.ndarray, y: np.ndarray, inflate_m: float) -> np.ndarray:
+    """Highest resting key top (m) whose footprint, grown by ``inflate_m`` on every side,
+    holds each point (x, y); -inf off the keys. Exact, unlike ``surfaces_near``: a tip
+    over the exposed part of a white key is over the white key only."""
+    t = kb.key_table()
+    x = np.asarray(x, dtype=float)[:, None]
+    y = np.asarray(y, dtype=float)[:, None]
+    inside = ((t["x_min"] - inflate_m <= x) & (x <= t["x_max"] + inflate_m)
+              & (t["y_min"] - inflate_m <= y) & (y <= t["y_max"] + inflate_m))
+    return np.where(inside, t["top_z"][None, :], -np.inf).max(axis=1)
+
+
 class HandIK:
     """A placo kinematics solver for one hand, built once and reused for every keyframe."""
 

@@ -18,7 +18,7 @@ import numpy as np
 from planner.errors import InputError, SolverError
 from planner.fingering import HandReach, assign_fingers
 from planner.hand.model import HandModel, load_hand
-from planner.ik import HandIK, IKResult, PressTarget, exposed_range_x, press_target, surfaces_near
+from planner.ik import PRESS_TOL_M, HandIK, IKResult, PressTarget, exposed_range_x, press_target, surfaces_under
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
 from planner.targets import MOVE_S, descent_time_s, press_intervals
@@ -46,8 +46,10 @@ TRAVEL_SAFE_Z_M = 0.040  # fingertips lifted this high when a straight travel wo
 TRAVEL_LIFTS_M = (0.028, TRAVEL_SAFE_Z_M)  # higher lifts tried when HIGH_M is not enough
 WRIST_TRAVEL_RAD = -0.35  # wrist extension (20 deg) raising the fingers for a rail-only travel
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
+TRAVEL_INFLATE_M = 0.002  # ... of every key within this distance of it (a fingertip is not a point)
 TRAVEL_OVERLAPS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # fractions of a motion done before the next starts
 _SIM_DT_S = 0.002
+HOVER_MIN_M = 0.005  # issue: a finger not pressing is at least this far above the keys under it
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
 START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on  # a finger waiting to press (or just released) rests this far above its key
 
@@ -222,6 +224,9 @@ class Planner:
             js = self.hand.joint_slice(t.finger)
             base[js] = self._vertical(r.q, t.finger, kb.key(t.pitch).top_z_m + HIGH_M).q[js]
         self.bases[seg] = base
+        tips = self.hand.tip_positions(base)
+        if np.any(tips[:, 2] - surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) < HOVER_MIN_M - PRESS_TOL_M):
+            return None  # a finger cannot get off the keys there: no place to wait in
         return seg
 
     def _vertical(self, q: np.ndarray, finger: str, z_m: float, pitch: int | None = None) -> IKResult:
@@ -626,14 +631,14 @@ class _Timeline:
         own = {hand.fingers.index(f): exposed_range_x(p) + (kb.key(p).top_z_m,)
                for f, p in (ready or {}).items()}
 
-        def clear(tips: np.ndarray) -> bool:
-            if np.all(tips[:, 2] >= kb.BLACK_TOP_Z_M + TRAVEL_CLEARANCE_M):
+        def clear(tips: np.ndarray, margin: float) -> bool:
+            if np.all(tips[:, 2] >= kb.BLACK_TOP_Z_M + margin):
                 return True  # above every key top
-            surface = surfaces_near(tips[:, 0], tips[:, 1])
+            surface = surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M)
             for k, (lo, hi, top) in own.items():
                 if lo <= tips[k, 0] <= hi:
                     surface[k] = top
-            return bool(np.all(tips[:, 2] >= surface + TRAVEL_CLEARANCE_M))
+            return bool(np.all(tips[:, 2] >= surface + margin))
 
         arm = self.arm_joints if arm is None else arm
         q_up = q0 + sum((d for d, _ in lifts), np.zeros(hand.n))
@@ -649,19 +654,25 @@ class _Timeline:
         T_lift = np.array([T for _, T in lifts])
         D_land = np.array([d for d, _ in land]).reshape(-1, hand.n)
         T_land = np.array([T for _, T in land])
+        # a landing starts no sooner than the lift of the same joints ends
+        after_lift = np.array([max((T for d_l, T in lifts if np.any(d_l[np.abs(d) > 0])), default=0.0)
+                               for d, _ in land])
 
         def safe(c_lift: float, c_land: float) -> bool:
             x_arm = float(np.max(c_lift * T_lift, initial=0.0))
-            x_land = x_arm + c_land * T_arm
+            x_land = np.maximum(x_arm + c_land * T_arm, after_lift)
             t_end = max(x_arm + T_arm, float(np.max(x_land + T_land, initial=0.0)))
             t = np.arange(x_arm, t_end + _SIM_DT_S, _SIM_DT_S)
             Q = (q0 + min_jerk(t[:, None] / T_lift[None, :]) @ D_lift
                  + min_jerk((t - x_arm) / T_arm)[:, None] * d_arm[None, :]
-                 + min_jerk((t - x_land)[:, None] / T_land[None, :]) @ D_land)
+                 + min_jerk((t[:, None] - x_land[None, :]) / T_land[None, :]) @ D_land)
             Q = hand.apply_couplings(Q)
+            # once the arm has stopped, the fingers come down onto their new places: no
+            # margin then, only no contact
+            margin = np.where(t <= x_arm + T_arm, TRAVEL_CLEARANCE_M, 0.0)
             # every 5th sample first: a dip shows there sooner
             order = np.concatenate([np.arange(0, len(Q), 5)] + [np.arange(k, len(Q), 5) for k in range(1, 5)])
-            return all(clear(hand.tip_positions(Q[i])) for i in order)
+            return all(clear(hand.tip_positions(Q[i]), margin[i]) for i in order)
 
         # the arm as early as the lifts allow (fingers down only after it stops), then
         # the fingers down as early as that allows
@@ -852,6 +863,7 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
     if any(len(ps) > 1 for ps in keys.values()):
         candidates.append(([], (), [_centroid_target(f, ps) for f, ps in keys.items()]))
     candidates.append((presses, list(first.values()), ()))
+    candidates.append((presses, (), ()))  # the group alone, every other finger hovering
     seg = None
     best = len(group) - 1  # a position must at least serve the group itself
     for targets, upcoming, chord in candidates:
