@@ -20,8 +20,11 @@ and the cost of going from one candidate to the next is
   or whose key leaves its reach.
 
 No human annotation is used: all numbers come from the hand's kinematics.
-Notes that no candidate can play (a chord wider than the hand, more than
-five notes at once) are returned as infeasible with the reason.
+A group the five fingers cannot hold whole (a chord wider than the hand, more
+than five notes at once) is played in part: its largest subsets that they can
+hold are the candidates, each left-out note costing its length as music lost
+(the top note, often the melody, a little more); the notes left out, and notes
+no candidate can play, are returned as infeasible with the reason.
 """
 
 from __future__ import annotations
@@ -38,7 +41,12 @@ CHORD_WINDOW_S = 0.030
 REUSE_S = 0.30
 REPOSITION_OVERHEAD_S = 0.15  # lift before and landing after the rail's move (measured on the songs)
 MOVE_COST = 1.0  # any change of hand position (all fingers must be up)
-LOST_S_COST = 50.0  # per second of a note the hand is still travelling in  # a finger moved to another key sooner than this after its release is penalised
+LOST_S_COST = 50.0  # per second of a note the hand is still travelling in (or leaves out)
+TOP_NOTE_COST = 1.0  # leaving out a chord's top note (often the melody) costs this much more
+# a transition a held key forbids: not infinite, so that one such note does not make
+# every later one unplayable (the planner names the notes it cannot play then)
+HELD_CONFLICT = 1e6
+MAX_GROUP = 10  # notes struck together beyond this many (the lowest) are not even tried  # a finger moved to another key sooner than this after its release is penalised
 FINGER_ORDER = ("thumb", "index", "middle", "ring", "pinky")
 
 
@@ -104,40 +112,14 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
     kept_groups: list[list[int]] = []
     for g in groups:
         g = sorted(g, key=lambda i: notes[i].pitch)
-        if len(g) > 5:
-            for i in g[5:]:
-                infeasible.append(Infeasible(i, "more than five notes at once"))
-            g = g[:5]
-        xs = np.array([kb.key(notes[i].pitch).center_x_m for i in g])
-        black = [kb.is_black(notes[i].pitch) for i in g]
-        cs = []
-        for fingers in itertools.combinations(FINGER_ORDER, len(g)):
-            offs = np.array([reach.offset_m[f] for f in fingers])
-            lim = np.array([reach.reach_m[f] for f in fingers])
-            # rail that minimises the normalised stretch, clipped to the rail's travel
-            w = 1.0 / lim**2
-            rail = float(np.sum(w * (xs - offs)) / np.sum(w))
-            rail = min(max(rail, reach.rail_range_m[0]), reach.rail_range_m[1])
-            dev = xs - offs - rail
-            if np.any(np.abs(dev) > lim):
-                continue
-            if reach.spread_m is not None and len(fingers) > 1:
-                sp = np.array([reach.spread_m[f] for f in fingers])
-                d0 = xs - offs
-                if np.any(np.abs(d0[:, None] - d0[None, :]) > sp[:, None] + sp[None, :] + 1e-12):
-                    continue
-            cost = float(np.sum((dev / lim) ** 2))
-            # the rail positions from which these fingers reach these keys
-            span = (float(np.max(xs - offs - lim)), float(np.min(xs - offs + lim)))
-            for f, b in zip(fingers, black):
-                if b and f == "thumb":
-                    cost += 2.0
-                elif b and f == "pinky":
-                    cost += 0.5
-            cs.append((fingers, rail, cost, span))
+        if len(g) > MAX_GROUP:  # (a cluster: its highest notes are tried)
+            for i in g[:-MAX_GROUP]:
+                infeasible.append(Infeasible(i, f"more than {MAX_GROUP} notes at once"))
+            g = g[-MAX_GROUP:]
+        cs = _candidates(notes, g, reach)
         if not cs:
-            span = (max(xs) - min(xs)) if len(xs) > 1 else 0.0
-            why = (f"chord wider than the hand ({span * 1000:.0f} mm)" if len(g) > 1
+            xs = [kb.key(notes[i].pitch).center_x_m for i in g]
+            why = (f"chord wider than the hand ({(max(xs) - min(xs)) * 1000:.0f} mm)" if len(g) > 1
                    else "out of the rail's reach")
             for i in g:
                 infeasible.append(Infeasible(i, why))
@@ -201,8 +183,14 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
             for i in g:
                 infeasible.append(Infeasible(i, "no fingering reaches it in time"))
             continue
+        xs = [kb.key(notes[i].pitch).center_x_m for i in g]
+        why = ("more than five notes at once" if len(g) > len(FINGER_ORDER)
+               else f"chord wider than the hand ({(max(xs) - min(xs)) * 1000:.0f} mm)")
         for i, f in zip(g, fingers):
-            out.append(Assignment(i, f, rails[k]))
+            if f is None:
+                infeasible.append(Infeasible(i, f"{why}: left out"))
+            else:
+                out.append(Assignment(i, f, rails[k]))
     out.sort(key=lambda a: a.note_index)
     infeasible.sort(key=lambda x: x.note_index)
     return out, infeasible
@@ -217,11 +205,60 @@ def reposition_s(d_m: float, reach: HandReach) -> float:
     return REPOSITION_OVERHEAD_S + t_rail
 
 
+def _candidates(notes, g: list[int], reach: HandReach) -> list[tuple]:
+    """Fingerings of the group ``g`` (note indices by pitch) as (fingers, rail, static
+    cost, rail span): ``fingers`` has one entry per note, None for a note left out. All
+    of the group if five fingers can hold it, else its largest subsets that they can
+    (each left-out note costs its length as music lost; the top note, often the melody,
+    a little more)."""
+    xs_all = np.array([kb.key(notes[i].pitch).center_x_m for i in g])
+    for size in range(min(len(g), len(FINGER_ORDER)), 0, -1):
+        cs = []
+        for keep in itertools.combinations(range(len(g)), size):
+            xs = xs_all[list(keep)]
+            black = [kb.is_black(notes[g[k]].pitch) for k in keep]
+            dropped = [g[k] for k in range(len(g)) if k not in keep]
+            lost = LOST_S_COST * sum(notes[i].offset_s - notes[i].onset_s for i in dropped)
+            lost += TOP_NOTE_COST if (len(g) - 1) not in keep else 0.0
+            for fingers in itertools.combinations(FINGER_ORDER, size):
+                offs = np.array([reach.offset_m[f] for f in fingers])
+                lim = np.array([reach.reach_m[f] for f in fingers])
+                # rail that minimises the normalised stretch, clipped to the rail's travel
+                w = 1.0 / lim**2
+                rail = float(np.sum(w * (xs - offs)) / np.sum(w))
+                rail = min(max(rail, reach.rail_range_m[0]), reach.rail_range_m[1])
+                dev = xs - offs - rail
+                if np.any(np.abs(dev) > lim):
+                    continue
+                if reach.spread_m is not None and len(fingers) > 1:
+                    sp = np.array([reach.spread_m[f] for f in fingers])
+                    d0 = xs - offs
+                    if np.any(np.abs(d0[:, None] - d0[None, :]) > sp[:, None] + sp[None, :] + 1e-12):
+                        continue
+                cost = float(np.sum((dev / lim) ** 2)) + lost
+                # the rail positions from which these fingers reach these keys
+                span = (float(np.max(xs - offs - lim)), float(np.min(xs - offs + lim)))
+                for f, b in zip(fingers, black):
+                    if b and f == "thumb":
+                        cost += 2.0
+                    elif b and f == "pinky":
+                        cost += 0.5
+                full = [None] * len(g)
+                for k, f in zip(keep, fingers):
+                    full[k] = f
+                cs.append((tuple(full), rail, cost, span))
+        if cs:
+            return cs
+    return []
+
+
 def _crosses(notes, prev_g, fa, g, fb) -> bool:
     """True if some finger of the new group plays a key on the wrong side of (or the
     same key as) a key another finger played in the previous group."""
-    a = [(FINGER_ORDER.index(f), notes[i].pitch) for i, f in zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa)]
-    b = [(FINGER_ORDER.index(f), notes[i].pitch) for i, f in zip(sorted(g, key=lambda i: notes[i].pitch), fb)]
+    a = [(FINGER_ORDER.index(f), notes[i].pitch)
+         for i, f in zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa) if f is not None]
+    b = [(FINGER_ORDER.index(f), notes[i].pitch)
+         for i, f in zip(sorted(g, key=lambda i: notes[i].pitch), fb) if f is not None]
     return any(f1 != f2 and (f1 - f2) * (p1 - p2) <= 0 for f1, p1 in a for f2, p2 in b)
 
 
@@ -240,16 +277,18 @@ def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, he
         gap = kb.WHITE_PITCH_M
     if gap > 0.0:
         c += MOVE_COST + LOST_S_COST * max(0.0, reposition_s(gap, reach) - max(free_s, 0.0))
-    prev_finger = dict(zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa))
-    new_finger = dict(zip(sorted(g, key=lambda i: notes[i].pitch), fb))
+    prev_finger = {i: f for i, f in zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa) if f is not None}
+    new_finger = {i: f for i, f in zip(sorted(g, key=lambda i: notes[i].pitch), fb) if f is not None}
     used_now = {f: notes[i].pitch for i, f in new_finger.items()}
     for i in held:
+        if i not in prev_finger:
+            continue  # left out
         f = prev_finger[i]
         if f in used_now:
-            return math.inf  # the finger is still holding its key
+            return HELD_CONFLICT  # the finger is still holding its key
         dev = kb.key(notes[i].pitch).center_x_m - reach.offset_m[f] - rb
         if abs(dev) > reach.reach_m[f]:
-            return math.inf
+            return HELD_CONFLICT  # the hand would leave a held key behind
         c += 5.0 * d
     onset = notes[g[0]].onset_s
     for i, f in prev_finger.items():

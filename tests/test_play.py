@@ -276,3 +276,16 @@ def test_a_song_planned_in_parts_is_played_as_well(planner, tmp_path, monkeypatc
     assert len(res.notes) == 42 and not res.infeasible
     assert rep.play.f1 >= F1_FLOOR["twinkle"] and not rep.play.key_bed_hits, rep.summary()
     assert all(v.count == 0 for v in rep.limits)
+
+
+def test_a_chord_wider_than_the_hand_is_played_in_part(planner, tmp_path):
+    """C3-E3-G3 with E5 on top: the triad fits the hand, the four notes do not. The hand
+    plays the largest part it can hold and names the note it leaves out; the notes
+    after it are still played (a held key no longer makes every later note unplayable)."""
+    notes = tuple(Note(p, 0.0, 1.0, 80) for p in (48, 52, 55, 76)) + (Note(60, 1.5, 2.0, 80),)
+    res = plan_song(Song(notes, 2.0, (), "t"), planner.hand, str(tmp_path / "w.csv"), planner=planner)
+    left = [n for n in res.notes if n.reason]
+    assert len(left) == 1 and "left out" in left[0].reason and "wider than the hand" in left[0].reason
+    assert {n.pitch for n in res.notes if not n.reason} == {48, 52, 55, 76, 60} - {left[0].pitch}
+    rep = check_trajectory(str(tmp_path / "w.csv"))
+    assert not rep.play.key_bed_hits and all(v.count == 0 for v in rep.limits)
