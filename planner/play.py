@@ -46,6 +46,8 @@ TRAVEL_SAFE_Z_M = 0.040  # fingertips lifted this high when a straight travel wo
 TRAVEL_LIFTS_M = (0.028, TRAVEL_SAFE_Z_M)  # higher lifts tried when HIGH_M is not enough
 WRIST_TRAVEL_RAD = -0.35  # wrist extension (20 deg) raising the fingers for a rail-only travel
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
+ACROSS_SPLITS = 2  # a finger crossing keys high is given up to 3 waypoints
+GRAZE_M = 0.5 * kb.DOWN_DEPTH_M  # a finger moving over keys may sink this far into one, never near sounding it
 TRAVEL_INFLATE_M = 0.002  # ... of every key within this distance of it (a fingertip is not a point)
 TRAVEL_OVERLAPS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # fractions of a motion done before the next starts
 _SIM_DT_S = 0.002
@@ -218,6 +220,7 @@ class Planner:
         base = r.q.copy()
         for t in targets:  # the pressing fingers wait high above their keys
             self._cache[(t.finger, t.pitch, seg, "press")] = (r.q, r)
+            self._check_lift(t.finger, t.pitch, seg)
             js = self.hand.joint_slice(t.finger)
             base[js] = self.above_q(t.finger, t.pitch, seg, HIGH_M)[js]
         for t in chord:  # the others high above where they took the chord's shape
@@ -275,7 +278,25 @@ class Planner:
             r = self.ik.solve_finger(press_target(finger, pitch), self.bases[seg])
             self._cache[key] = (r.q, r)
             self.ik_solves += 1
+            self._check_lift(finger, pitch, seg)
         return self._cache[key]
+
+    def _check_lift(self, finger: str, pitch: int, seg: int) -> None:
+        """A key the finger cannot leave straight up by ``LOW_M`` (to let it go, or to wait
+        over it) is not one it can play from this hand position: its press is marked not
+        converged."""
+        key = (finger, pitch, seg, "press")
+        q, r = self._cache[key]
+        if not r.converged:
+            return
+        up = self._vertical(q, finger, kb.key(pitch).top_z_m + LOW_M, pitch)
+        tip = self.hand.tip_positions(up.q)[self.hand.fingers.index(finger)]
+        lo, hi = exposed_range_x(pitch)
+        over = lo - TRAVEL_INFLATE_M <= tip[0] <= hi + TRAVEL_INFLATE_M
+        if up.converged or (over and tip[2] >= kb.key(pitch).top_z_m + LOW_M - PRESS_TOL_M):
+            self._cache[(finger, pitch, seg, LOW_M)] = up.q
+        else:
+            self._cache[key] = (q, dataclasses.replace(r, converged=False))
 
     def above_q(self, finger: str, pitch: int, seg: int, height_m: float) -> np.ndarray:
         """``finger`` waiting ``height_m`` above the top of ``pitch``, straight above
@@ -433,6 +454,7 @@ class _Timeline:
         # simulation did not see starts before they end
         self.arm_motion: tuple[tuple[int, float], ...] = ()
         self.travels = 0
+        self.failure: str | None = None  # why the last press could not be made, if not reach
         self.all_joints = np.arange(hand.n)
         self.arm_joints = _arm_joints(hand)
 
@@ -725,8 +747,9 @@ class _Timeline:
             return False
         if self.place[finger] != ("above", pitch, LOW_M):
             self.go_high(finger)
-            self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, HIGH_M)),
-                       0.5, t_s, 0.0, "move", None)
+            if not self._across(finger, self.pl.above_q(finger, pitch, self.seg, HIGH_M), t_s):
+                self.failure = "no way over the keys to it"
+                return False
         q_new = self._with_finger(finger, qp)
         frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
         # the key goes down just before the first frame of the note
@@ -755,11 +778,55 @@ class _Timeline:
             return
         if pl != ("above", pitch, HIGH_M):
             self.go_high(finger)
-            self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, HIGH_M)),
-                       0.5, 0.0, 0.0, "move", None)
+            if not self._across(finger, self.pl.above_q(finger, pitch, self.seg, HIGH_M), 0.0):
+                return  # (no clear way there: it stays up)
         self._move(self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M)),
                    0.5, 0.0, 0.0, "move", None)
         self.place[finger] = ("above", pitch, LOW_M)
+
+    def _finger_path_clear(self, qa: np.ndarray, qb: np.ndarray, finger: str) -> bool:
+        """True if ``finger``'s tip stays above every key it passes over (footprints grown
+        ``TRAVEL_INFLATE_M``; it may graze a top by ``GRAZE_M``, half the depth at which a
+        key sounds) on the straight joint-space move from ``qa`` to ``qb``."""
+        k = self.hand.fingers.index(finger)
+        js = self.hand.joint_slice(finger)
+        q = self._with_finger(finger, qa)
+        tips = []
+        for u in np.linspace(0.0, 1.0, 9)[1:-1]:
+            q[js] = qa[js] + u * (qb[js] - qa[js])
+            tips.append(self.hand.tip_positions(self.hand.apply_couplings(q))[k])
+        tips = np.array(tips)
+        return bool(np.all(tips[:, 2] >= surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) - GRAZE_M))
+
+    def _across(self, finger: str, q_to: np.ndarray, t_s: float) -> bool:
+        """Move ``finger`` (up already) sideways to its joints in ``q_to``; if the straight
+        move would dip into a key, over the top: up to ``TRAVEL_SAFE_Z_M``, across (through
+        waypoints if need be), down. Nothing moves when every way dips (False)."""
+        q_to = self._with_finger(finger, q_to)
+        if self._finger_path_clear(self.q, q_to, finger):
+            self._move(q_to, 0.5, t_s, 0.0, "move", None)
+            return True
+        up_a = self.pl.lift_to(self.q, finger, TRAVEL_SAFE_Z_M)
+        up_b = self._with_finger(finger, self.pl.lift_to(q_to, finger, TRAVEL_SAFE_Z_M))
+        path = self._high_path(up_a, up_b, finger, ACROSS_SPLITS)
+        if path is None:
+            return False
+        for q in [up_a] + path + [q_to]:
+            self._move(q, 0.5, t_s, 0.0, "move", None)
+        return True
+
+    def _high_path(self, qa: np.ndarray, qb: np.ndarray, finger: str, splits: int) -> list | None:
+        """Waypoints after ``qa`` to ``qb`` (both high) along which ``finger`` stays clear
+        of the keys: straight, else through a waypoint lifted to ``TRAVEL_SAFE_Z_M`` from
+        the joint-space midpoint, each half alike (``splits`` levels); None if none."""
+        if self._finger_path_clear(qa, qb, finger):
+            return [qb]
+        if splits == 0:
+            return None
+        mid = self.pl.lift_to(self.hand.apply_couplings(0.5 * (qa + qb)), finger, TRAVEL_SAFE_Z_M)
+        first = self._high_path(qa, mid, finger, splits - 1)
+        second = self._high_path(mid, qb, finger, splits - 1) if first is not None else None
+        return None if second is None else first + second
 
     def release(self, finger: str, pitch: int, t_s: float) -> None:
         q_new = self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M))
@@ -1037,7 +1104,8 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                         reasons.setdefault(p.note_index, f"torque above bound (motor.{hand.motor_names[m]} "
                                            f"{abs(tau[m]):.2f} > {hand.motor_peak_torque[m]:.2f} N m)")
                 else:
-                    why = "keys held elsewhere keep the hand away" if down else "out of reach"
+                    why = tl.failure or ("keys held elsewhere keep the hand away" if down else "out of reach")
+                    tl.failure = None
                     reasons[p.note_index] = f"{why} (for the {p.finger})"
             elif p.note_index in down:
                 tl.release(p.finger, p.pitch, t)

@@ -289,3 +289,33 @@ def test_a_chord_wider_than_the_hand_is_played_in_part(planner, tmp_path):
     assert {n.pitch for n in res.notes if not n.reason} == {48, 52, 55, 76, 60} - {left[0].pitch}
     rep = check_trajectory(str(tmp_path / "w.csv"))
     assert not rep.play.key_bed_hits and all(v.count == 0 for v in rep.limits)
+
+
+def _random_walk(seed: int, n: int, tempo_bpm: float, leap_p: float) -> list:
+    """A melody wandering over three octaves of C major (seeded: the same notes every run)."""
+    import random
+
+    rng = random.Random(seed)
+    scale, deg, t, out = (0, 2, 4, 5, 7, 9, 11), 14, 0.0, []
+    for _ in range(n):
+        step = rng.choice([-2, -1, -1, 1, 1, 2]) if rng.random() > leap_p else rng.choice([-7, -5, 5, 7])
+        deg = max(0, min(34, deg + step))
+        d = 60.0 / tempo_bpm * rng.choice([0.5, 1, 1, 1, 2])
+        out.append(Note(48 + 12 * (deg // 7) + scale[deg % 7], t, t + 0.9 * d, rng.randint(50, 110)))
+        t += d
+    return out
+
+
+@pytest.mark.parametrize("seed,tempo,leaps", [(3, 140, 0.1), (5, 240, 0.05), (11, 100, 0.4)])
+def test_random_melodies_never_push_through_a_key(planner, tmp_path, seed, tempo, leaps):
+    """Melodies like the ones that once drove a finger across keys it could not clear,
+    or left a thumb resting in them: no key-bed hit, no limit broken, most notes played."""
+    from planner.music.midi import write_notes_midi
+
+    song, path = tmp_path / "walk.mid", tmp_path / "walk.csv"
+    write_notes_midi(_random_walk(seed, 60, tempo, leaps), song)
+    res = plan_song(load_song(song), planner.hand, str(path), planner=planner)
+    rep = check_trajectory(str(path), str(song))
+    assert not rep.play.key_bed_hits, rep.summary()
+    assert all(v.count == 0 for v in rep.limits), rep.summary()
+    assert len(res.infeasible) <= 3 and rep.play.f1 >= 0.7, rep.summary()
