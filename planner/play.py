@@ -1142,7 +1142,7 @@ def format_summary(song_name: str, res: PlayResult, song_s: float, out: str) -> 
              f"{res.rows} rows ({res.duration_s:.2f} s) -> {out}"),
              (f"planning {res.planning_s * 1000:.0f} ms for {song_s:.2f} s of music "
              f"(real-time factor {rtf:.0f}x), first row after {res.first_row_s * 1000:.0f} ms, "
-             f"{res.ik_solves} IK solves, {res.travels} changes of hand position")]
+             f"{res.ik_solves} IK solves, {res.travels} change{'' if res.travels == 1 else 's'} of hand position")]
     for nr in bad:
         lines.append(f"  infeasible: t={nr.onset_s:.3f} s {pitch_name(nr.pitch)} (MIDI {nr.pitch}): {nr.reason}")
     for i, lt in res.late:
