@@ -1,5 +1,5 @@
 """Fingering by optimisation: a finger for every note, by dynamic programming
-(Viterbi) over the whole song.
+(Viterbi) over a song (or a part of one: play.py fingers a long song in parts).
 
 Notes that start together (within ``CHORD_WINDOW_S``) form a group. For a
 group of m notes, each candidate assigns m distinct fingers in the order of
@@ -14,10 +14,19 @@ the keys. Its cost is
 and the cost of going from one candidate to the next is
 
 - rail travel, and travel faster than the rail can comfortably go in the
-  time between the groups (infinite above its top speed);
-- a finger reused on a different key sooner than ``REUSE_S``;
+  time between the groups (effectively infinite above its top speed);
+- a change of hand position (no rail position serves both groups, or a
+  finger passes another or takes over its key): ``MOVE_COST`` plus the music
+  lost while the hand lifts, travels and lands (``reposition_s``) beyond the
+  time every key is up anyway;
+- a finger struck again sooner than it can come up and down (same key:
+  ``HandReach.repeat_s``; another key: ``move_s``, both measured on the
+  hand's own motions), as music lost;
 - a finger still holding a note of the previous group that is reassigned,
-  or whose key leaves its reach.
+  or whose key leaves its reach (``HELD_CONFLICT``: the planner then names
+  the notes it cannot play).
+
+Music lost is weighed at ``LOST_S_COST`` per second.
 
 No human annotation is used: all numbers come from the hand's kinematics.
 A group the five fingers cannot hold whole (a chord wider than the hand, more
@@ -38,7 +47,7 @@ import numpy as np
 from planner.music import keyboard as kb
 
 CHORD_WINDOW_S = 0.030
-REUSE_S = 0.30
+REUSE_S = 0.30  # time a finger needs to strike another key when the hand gives no measured move_s
 REPOSITION_OVERHEAD_S = 0.15  # lift before and landing after the rail's move (measured on the songs)
 MOVE_COST = 1.0  # any change of hand position (all fingers must be up)
 LOST_S_COST = 50.0  # per second of a note the hand is still travelling in (or leaves out)
