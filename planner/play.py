@@ -596,16 +596,16 @@ class _Timeline:
         self.arm_motion = ()
         self._move(q_arm, 0.5, t_s, 0.0, "travel", None,
                    follows=tuple((g, arm_after[g]) for g in sorted(arm_after)))
-        follows = ()
-        if len(self.phases) > k_arm:
-            T_arm = self.phases[k_arm][0].duration_s
-            follows = ((self.offset + k_arm, c[1] * T_arm),)
+        T_arm = self.phases[k_arm][0].duration_s if len(self.phases) > k_arm else None
+        if T_arm is not None:
             # nothing else moves before the arm has stopped
             self.arm_motion = ((self.offset + k_arm, T_arm),)
-        for js in self._land_groups(moving):
+        for i, js in enumerate(self._land_groups(moving)):
             q_next = self.q.copy()
             q_next[js] = q_end[js]
             n = len(self.phases)
+            c_k = c[2] if i < len(hand.fingers) and hand.fingers[i] in ready else c[1]
+            follows = ((self.offset + k_arm, c_k * T_arm),) if T_arm is not None else ()
             self._move(q_next, 0.5, t_s, 0.0, "move", None, follows=follows)
             if len(self.phases) > n and np.intersect1d(js, self.arm_joints).size > 0:
                 # the wrist coming down after a rail-only travel: it too must stop first
@@ -638,7 +638,7 @@ class _Timeline:
 
     def _travel_overlap(self, q0: np.ndarray, lifts: list[tuple[np.ndarray, float]],
                         q_end: np.ndarray, ready: dict[str, int] | None = None,
-                        arm: np.ndarray | None = None) -> tuple[float, float] | None:
+                        arm: np.ndarray | None = None) -> tuple[float, float, float] | None:
         """The most overlap that keeps every fingertip ``TRAVEL_CLEARANCE_M`` clear of the
         keys once the arm moves, as (the time after the start of each of the fingers'
         ``lifts`` (joint motions, durations, all from ``q0``) when the arm may start, the
@@ -680,9 +680,13 @@ class _Timeline:
         after_lift = np.array([max((T for d_l, T in lifts if np.any(d_l[np.abs(d) > 0])), default=0.0)
                                for d, _ in land])
 
-        def safe(c_lift: float, c_land: float) -> bool:
+        is_ready = np.array([k < len(hand.fingers) and hand.fingers[k] in (ready or {})
+                             for k in range(len(land))], dtype=bool)
+
+        def safe(c_lift: float, c_land: float, c_ready: float | None = None) -> bool:
             x_arm = float(np.max(c_lift * T_lift, initial=0.0))
-            x_land = np.maximum(x_arm + c_land * T_arm, after_lift)
+            c_k = np.where(is_ready, c_land if c_ready is None else c_ready, c_land)
+            x_land = np.maximum(x_arm + c_k * T_arm, after_lift)
             t_end = max(x_arm + T_arm, float(np.max(x_land + T_land, initial=0.0)))
             t = np.arange(x_arm, t_end + _SIM_DT_S, _SIM_DT_S)
             Q = (q0 + min_jerk(t[:, None] / T_lift[None, :]) @ D_lift
@@ -702,7 +706,10 @@ class _Timeline:
             return None
         c_lift = _least(TRAVEL_OVERLAPS, lambda c: safe(c, 1.0))
         c_land = _least(TRAVEL_OVERLAPS, lambda c: safe(c_lift, c))
-        return float(np.max(c_lift * T_lift, initial=0.0)), c_land
+        # the fingers that strike first may come down sooner still
+        options = [c for c in TRAVEL_OVERLAPS if c <= c_land]
+        c_ready = _least(options, lambda c: safe(c_lift, c_land, c)) if is_ready.any() else c_land
+        return float(np.max(c_lift * T_lift, initial=0.0)), c_land, c_ready
 
     def _release_high(self, finger: str) -> None:
         """If ``finger``'s last motion was a release to ``LOW_M``, make it a release
