@@ -33,7 +33,10 @@ from planner.trajectory import (
 from planner.trajfile import TrajectoryWriter
 
 LATE_S = 0.020  # a note whose key goes down later than this is reported
-EARLY_S = 0.005  # no key goes down more than this before its note (a note early is a wrong note)
+DROP_LATE = 0.5  # a note whose key cannot go down before this fraction of it is over is left out
+DROP_ROUNDS = 3
+EARLY_FRAMES = 0.4  # a key goes down at most this fraction of a frame before the half-frame
+# before its note's first frame: never in the frame before (a note early is a wrong note)
 CHUNK_PHASES = 40
 PART_NOTES = 256  # a long song is fingered in parts of at least this many notes
 TRAVEL_LEAD_S = 0.25  # a chunk cut before a change of hand position ends this long before the last release
@@ -771,7 +774,7 @@ class _Timeline:
             touch = _key_crossing(self.hand, self.q, q_new, finger, pitch, depth_m=-TRAVEL_CLEARANCE_M)
             follows = tuple((g, max(T_arm - touch * T, 0.0)) for g, T_arm in self.arm_motion)
         self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note, min_s=T, follows=follows,
-                   earliest=self._frame_edge(t_s) - EARLY_S - frac * T)
+                   earliest=self._frame_edge(t_s) - EARLY_FRAMES * self.dt - frac * T)
         self.place[finger] = ("down", pitch)
         return True
 
@@ -835,11 +838,11 @@ class _Timeline:
         second = self._high_path(mid, qb, finger, splits - 1) if first is not None else None
         return None if second is None else first + second
 
-    def release(self, finger: str, pitch: int, t_s: float) -> None:
+    def release(self, finger: str, pitch: int, t_s: float, note: int | None = None) -> None:
         q_new = self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M))
         frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
         # up just before the first frame after the note
-        self._move(q_new, frac, self._frame_edge(t_s), RELEASE_WEIGHT, "release", None)
+        self._move(q_new, frac, self._frame_edge(t_s), RELEASE_WEIGHT, "release", note)
         self.place[finger] = ("above", pitch, LOW_M)
 
     def rest_all(self, t_s: float) -> None:
@@ -970,6 +973,36 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
                                "the keys")
 
 
+def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
+                   reasons: dict[int, str]) -> bool:
+    """Notes whose key the timing QP can put down only after half of the note is over are
+    left out (named in ``reasons``): struck that late they would mostly sound after
+    their time, as wrong notes, and delay the notes after them. The press and its
+    release become one motion from where the press started to where the release ends
+    (both over the key), so every later motion still starts where it did. Returns True
+    if any was left out (``phases`` and ``meta`` are changed in place)."""
+    dropped = False
+    for k, (p, kind, note) in enumerate(meta):
+        if kind != "press" or note is None:
+            continue
+        n = notes[note]
+        if starts[k] + p.anchor * p.duration_s - p.ideal_s <= DROP_LATE * (n.offset_s - n.onset_s):
+            continue
+        r = next((j for j in range(k + 1, len(meta)) if meta[j][1] == "release" and meta[j][2] == note), None)
+        if r is None:
+            continue
+        d = phases[k].delta + phases[r].delta
+        # (the sum of the two durations keeps the sum of the two moves within every limit)
+        T = phases[k].duration_s + phases[r].duration_s
+        phases[k] = dataclasses.replace(phases[k], delta=d, duration_s=T, anchor=0.5, weight=0.0)
+        phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
+        meta[k] = (phases[k], "move", None)
+        meta[r] = (phases[r], "move", None)
+        reasons[note] = "too late: the finger cannot get there before half of it is over"
+        dropped = True
+    return dropped
+
+
 def _moves_next(pl: Planner, tl: _Timeline, events, k: int, groups, reasons) -> bool:
     """True if the next group of notes after event ``k`` needs a new hand position."""
     for e in events[k + 1:]:
@@ -1019,6 +1052,10 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                     earliest = max(earliest, carried_start[g] + lag)
             phases.append(dataclasses.replace(ph, earliest_s=earliest, follows=tuple(follows)))
         starts = solve_timing(build_timing(phases, t_cut))
+        for _ in range(DROP_ROUNDS):
+            if not _drop_hopeless(phases, phases_meta, starts, notes, reasons):
+                break
+            starts = solve_timing(build_timing(phases, t_cut))
         for (p, kind, note), x in zip(phases_meta, starts):
             if kind == "press" and note is not None:
                 lateness = x + p.anchor * p.duration_s - p.ideal_s
@@ -1115,7 +1152,7 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                     tl.failure = None
                     reasons[p.note_index] = f"{why} (for the {p.finger})"
             elif p.note_index in down:
-                tl.release(p.finger, p.pitch, t)
+                tl.release(p.finger, p.pitch, t, p.note_index)
                 del down[p.note_index]
                 nxt = next_of.get(p.note_index)
                 if nxt is not None and nxt.note_index not in reasons:

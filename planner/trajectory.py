@@ -33,6 +33,7 @@ from planner.errors import SolverError
 PEAK_VEL = 15.0 / 8.0
 PEAK_ACC = 10.0 / np.sqrt(3.0)
 MIN_PHASE_S = 0.010
+ADAPTIVE_RHO_INTERVAL = 25  # OSQP iterations between rho updates (fixed: deterministic)
 LIMIT_MARGIN = 0.98  # plan at 98 % of every speed and acceleration limit
 
 
@@ -138,6 +139,9 @@ def solve_timing(prob: TimingProblem) -> np.ndarray:
         lo.append(prob.lags)
     A = sp.vstack(rows, format="csc")
     l_vec = np.concatenate(lo)
+    # OSQP's default rho adaptation is timed by its own set-up time: results (at the
+    # 1e-9 level, enough to flip a printed digit) would depend on the machine's load.
+    # A fixed interval keeps the same input giving the same bytes.
     # The problem is strictly convex and always feasible (lower bounds on starts and on
     # differences of starts that point forward), so OSQP's infeasibility certificates
     # can only be false alarms: their tolerances are set far below reach. Polishing
@@ -146,7 +150,8 @@ def solve_timing(prob: TimingProblem) -> np.ndarray:
         solver = osqp.OSQP()
         solver.setup(P=P, q=q, A=A, l=l_vec, u=np.full(len(l_vec), np.inf), verbose=False,
                      eps_abs=1e-9, eps_rel=1e-9, eps_prim_inf=1e-15, eps_dual_inf=1e-15,
-                     max_iter=20000, polishing=False, scaling=scaling)
+                     max_iter=20000, polishing=False, scaling=scaling,
+                     adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
         res = solver.solve(raise_error=False)
         if res.info.status in ("solved", "solved inaccurate") and res.x is not None:
             break

@@ -24,7 +24,7 @@ SONGS = sorted(p.stem for p in (ROOT / "songs").glob("*.mid"))
 REACHES_TARGET = {"twinkle", "ode_to_joy"}
 # Regression floors: frame F1 measured on each song today (see the issue note), less 0.01.
 F1_FLOOR = {"twinkle": 0.97, "ode_to_joy": 0.97, "chords": 0.97, "scale": 0.96,
-            "fur_elise": 0.93, "fast": 0.87, "leaps": 0.66}
+            "fur_elise": 0.93, "fast": 0.90, "leaps": 0.67}
 
 
 @pytest.fixture(scope="module")
@@ -309,7 +309,8 @@ def _random_walk(seed: int, n: int, tempo_bpm: float, leap_p: float) -> list:
 @pytest.mark.parametrize("seed,tempo,leaps", [(3, 140, 0.1), (5, 240, 0.05), (11, 100, 0.4)])
 def test_random_melodies_never_push_through_a_key(planner, tmp_path, seed, tempo, leaps):
     """Melodies like the ones that once drove a finger across keys it could not clear,
-    or left a thumb resting in them: no key-bed hit, no limit broken, most notes played."""
+    or left a thumb resting in them: no key-bed hit, no limit broken, most notes played,
+    hardly a key down out of its note."""
     from planner.music.midi import write_notes_midi
 
     song, path = tmp_path / "walk.mid", tmp_path / "walk.csv"
@@ -318,4 +319,21 @@ def test_random_melodies_never_push_through_a_key(planner, tmp_path, seed, tempo
     rep = check_trajectory(str(path), str(song))
     assert not rep.play.key_bed_hits, rep.summary()
     assert all(v.count == 0 for v in rep.limits), rep.summary()
-    assert len(res.infeasible) <= 3 and rep.play.f1 >= 0.7, rep.summary()
+    # (notes the fingers cannot strike before they are half over are left out, and named)
+    assert len(res.infeasible) <= 15 and rep.play.f1 >= 0.7, rep.summary()
+    assert rep.play.precision >= 0.99, rep.summary()
+
+
+def test_a_note_that_cannot_be_struck_in_time_is_left_out_and_named(planner, tmp_path):
+    """Four octaves up and down every 0.15 s: the rail cannot get there in time. The notes
+    the hand cannot strike before they are half over are left out and named, and no key
+    is down out of its note."""
+    from planner.music.midi import write_notes_midi
+
+    notes = [Note(36 if i % 2 else 84, 0.5 + 0.15 * i, 0.6 + 0.15 * i, 80) for i in range(8)]
+    song, path = tmp_path / "tr.mid", tmp_path / "tr.csv"
+    write_notes_midi(notes, song)
+    res = plan_song(load_song(song), planner.hand, str(path), planner=planner)
+    rep = check_trajectory(str(path), str(song))
+    late = [n for n in res.notes if n.reason and "too late" in n.reason]
+    assert late and not rep.play.wrong_presses, rep.summary()
