@@ -105,18 +105,9 @@ def surface_near(x: float, y: float) -> float:
     return kb.BLACK_TOP_Z_M if y >= kb.BLACK_Y0_M - _NEAR_M else 0.0
 
 
-def surfaces_near(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``surface_near`` for arrays of points."""
-    t = kb.key_table()
-    on = ((t["x_min"][0] - _NEAR_M <= x) & (x <= t["x_max"][-1] + _NEAR_M)
-          & (-_NEAR_M <= y) & (y <= kb.WHITE_LENGTH_M + _NEAR_M))
-    top = np.where(y >= kb.BLACK_Y0_M - _NEAR_M, kb.BLACK_TOP_Z_M, 0.0)
-    return np.where(on, top, -np.inf)
-
-
 def surfaces_under(x: np.ndarray, y: np.ndarray, inflate_m: float) -> np.ndarray:
     """Highest resting key top (m) whose footprint, grown by ``inflate_m`` on every side,
-    holds each point (x, y); -inf off the keys. Exact, unlike ``surfaces_near``: a tip
+    holds each point (x, y); -inf off the keys. Exact, unlike ``surface_near``: a tip
     over the exposed part of a white key is over the white key only."""
     t = kb.key_table()
     x = np.asarray(x, dtype=float)[:, None]

@@ -18,7 +18,15 @@ import numpy as np
 from planner.errors import InputError, SolverError
 from planner.fingering import HandReach, assign_fingers
 from planner.hand.model import HandModel, load_hand
-from planner.ik import PRESS_TOL_M, HandIK, IKResult, PressTarget, exposed_range_x, press_target, surfaces_under
+from planner.ik import (
+    PRESS_TOL_M,
+    HandIK,
+    IKResult,
+    PressTarget,
+    exposed_range_x,
+    press_target,
+    surfaces_under,
+)
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
 from planner.targets import MOVE_S, descent_time_s, press_intervals
@@ -137,6 +145,10 @@ class Planner:
         ``HIGH_M``, across, press from ``HIGH_M``), as the timeline plans them."""
         h = self.hand
         repeat, move = {}, {}
+
+        def T(a: np.ndarray, b: np.ndarray) -> float:
+            return phase_duration(b - a, h.velocity, h.acceleration)
+
         for i, f in enumerate(h.fingers):
             x = float(tips[i, 0])
             pitch = min((p for p in kb.ALL_PITCHES if not kb.is_black(p)),
@@ -147,7 +159,6 @@ class Planner:
             q_low = self._vertical(r.q, f, kb.key(pitch).top_z_m + LOW_M, pitch).q
             q_high = self._vertical(r.q, f, kb.key(pitch).top_z_m + HIGH_M, pitch).q
             q_high2 = self._vertical(r2.q, f, kb.key(nxt).top_z_m + HIGH_M, nxt).q
-            T = lambda a, b: phase_duration(b - a, h.velocity, h.acceleration)  # noqa: E731
             up, down = _key_crossing(h, r.q, q_low, f, pitch), _key_crossing(h, q_low, r.q, f, pitch)
             repeat[f] = (1.0 - up) * T(r.q, q_low) + down * T(q_low, r.q)
             up = _key_crossing(h, r.q, q_high, f, pitch)
@@ -533,7 +544,8 @@ class _Timeline:
             c = self._travel_overlap(q0, lifts, q_end)
         else:
             q_end = q_low
-        arm_after: dict[int, float] | None = None  # phase (global index) -> lag of the arm after its start
+        moving = arm
+        arm_after = None if c is None else {g: c[0] for g in last}  # phase -> the arm's lag after its start
         for z_up in TRAVEL_LIFTS_M:
             if c is not None:
                 break
@@ -541,24 +553,7 @@ class _Timeline:
             q_up = self.q.copy()
             for f in hand.fingers:
                 q_up = self.pl.lift_to(q_up, f, z_up)
-            extra = []
-            for f in hand.fingers:
-                d = self._with_finger(f, q_up) - self.q
-                if np.any(d):
-                    extra.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
-            c = self._travel_overlap(self.q, extra, q_end)
-            if c is not None:
-                # the arm waits for the fingers not lifted again to finish their motions
-                done = {g: ph.duration_s for g, ph in self._last_motions()[0].items()}
-                n = len(self.phases)
-                for f in hand.fingers:
-                    self._move(self._with_finger(f, q_up), 0.5, t_s, 0.0, "move", None)
-                lifted = self._last_motions()[0]
-                arm_after = {g: done.get(g, c[0]) for g in lifted if g - self.offset < n} | {
-                    g: c[0] for g in lifted if g - self.offset >= n}
-        if c is not None and arm_after is None:
-            arm_after = {g: c[0] for g in last}
-        moving = arm
+            c, arm_after = self._lift_again(q_up, arm, q_end, t_s)
         if c is None:
             # last resort: every finger to TRAVEL_SAFE_Z_M and the wrist raised
             # (extended), the rail alone across, then the wrist and the fingers down
@@ -568,31 +563,10 @@ class _Timeline:
             wrist = [self.hand.index[n] for n in ("wrist_flex",) if n in self.hand.index]
             q_up[wrist] = np.maximum(self.hand.lower[wrist], WRIST_TRAVEL_RAD)
             moving = np.array([self.hand.index["rail"]]) if "rail" in self.hand.index else arm
-            extra = []
-            for js in self._land_groups(moving):
-                d = np.zeros(hand.n)
-                d[js] = (q_up - self.q)[js]
-                if np.any(d):
-                    extra.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
-            c = self._travel_overlap(self.q, extra, q_end, arm=moving)
+            c, arm_after = self._lift_again(q_up, moving, q_end, t_s)
             if c is None:
                 self.travels -= 1
                 return False
-            # (the same phases as simulated, in the same order); the wrist goes up only
-            # once every finger has finished what it was doing (no key is down then)
-            before = {g: ph.duration_s for g, ph in self._last_motions()[0].items()}
-            last = {}
-            for js in self._land_groups(moving):
-                q_next = self.q.copy()
-                q_next[js] = q_up[js]
-                n = len(self.phases)
-                wrist = np.intersect1d(js, self.arm_joints).size > 0
-                self._move(q_next, 0.5, t_s, 0.0, "move", None,
-                           follows=tuple(sorted(before.items())) if wrist else ())
-                if len(self.phases) > n:
-                    last[self.offset + n] = self.phases[n][0]
-            arm_after = {g: c[0] for g in last} | {g: T for g, T in before.items()
-                                                  if g not in last}
         k_arm = len(self.phases)
         q_arm = self.q.copy()
         q_arm[moving] = self.pl.bases[seg][moving]
@@ -617,6 +591,40 @@ class _Timeline:
         for f in hand.fingers:
             self.place[f] = ("above", ready[f], land_z) if f in ready else ("high",)
         return True
+
+    def _lift_again(self, q_up: np.ndarray, moving: np.ndarray, q_end: np.ndarray,
+                    t_s: float) -> tuple[tuple | None, dict[int, float] | None]:
+        """Lift every joint group the arm's move (``moving``) leaves out further, to
+        ``q_up``, if the simulation finds the travel from there clear: the lift phases
+        are added, each group's after its last motion (the wrist's only once every
+        finger has finished: no key is down then). Returns the overlaps and, per phase
+        the arm must wait for, its lag after that phase's start (a new lift: the
+        simulated one; a finger not lifted again: its whole last motion); (None, None)
+        and nothing added if the travel is not clear."""
+        hand = self.hand
+        extra = []
+        for js in self._land_groups(moving):
+            d = np.zeros(hand.n)
+            d[js] = (q_up - self.q)[js]
+            if np.any(d):
+                extra.append((d, phase_duration(d, hand.velocity, hand.acceleration)))
+        c = self._travel_overlap(self.q, extra, q_end, arm=moving)
+        if c is None:
+            return None, None
+        # (the same phases as simulated, in the same order)
+        before = {g: ph.duration_s for g, ph in self._last_motions()[0].items()}
+        new = []
+        for js in self._land_groups(moving):
+            q_next = self.q.copy()
+            q_next[js] = q_up[js]
+            n = len(self.phases)
+            wrist = np.intersect1d(js, self.arm_joints).size > 0
+            self._move(q_next, 0.5, t_s, 0.0, "move", None,
+                       follows=tuple(sorted(before.items())) if wrist else ())
+            if len(self.phases) > n:
+                new.append(self.offset + n)
+        waits = {g: before[g] for g in self._last_motions()[0] if g in before}
+        return c, waits | {g: c[0] for g in new}
 
     def _land_groups(self, arm: np.ndarray) -> list[np.ndarray]:
         """The joints landing together after the arm's move: each finger's, and the arm
@@ -1130,6 +1138,8 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                         # the fingers not striking now get ready for their next keys
                         busy = {g.finger for g in group}
                         for e in events[k:]:
+                            if len(busy) == len(hand.fingers):
+                                break
                             if e[1] == 1 and e[3].press.finger not in busy and e[3].press.note_index not in reasons:
                                 busy.add(e[3].press.finger)
                                 tl.prepare(e[3].press.finger, e[3].press.pitch)

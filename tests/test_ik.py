@@ -1,16 +1,7 @@
 """Keyboard surfaces and press targets of the IK module (planner/ik.py)."""
 
-import numpy as np
-
-from planner.ik import exposed_range_x, press_target, surface_near, surfaces_near
+from planner.ik import exposed_range_x, press_target
 from planner.music import keyboard as kb
-
-
-def test_surfaces_near_matches_the_scalar_version():
-    rng = np.random.default_rng(0)
-    x = rng.uniform(-0.7, 0.8, 2000)
-    y = rng.uniform(-0.02, 0.17, 2000)
-    assert np.array_equal(surfaces_near(x, y), [surface_near(a, b) for a, b in zip(x, y)])
 
 
 def test_exposed_range_of_white_keys_lies_between_their_black_neighbours():

@@ -3,6 +3,7 @@ independent check (planner.check), which shares only the hand model with the pla
 
 from __future__ import annotations
 
+import itertools
 import subprocess
 import sys
 from pathlib import Path
@@ -234,7 +235,7 @@ def test_leaps_cannot_reach_the_target_on_this_rail(planner):
 
     notes = sorted(load_song(ROOT / "songs" / "leaps.mid").notes, key=lambda n: n.onset_s)
     lost = 0.0
-    for a, b in zip(notes, notes[1:]):
+    for a, b in itertools.pairwise(notes):
         d = max(0.0, abs(kb.key(b.pitch).center_x_m - kb.key(a.pitch).center_x_m) - span)
         lost += max(0.0, t_min(d) - (b.onset_s - a.offset_s)) if d > 0 else 0.0
     recall = 1.0 - lost / sum(n.offset_s - n.onset_s for n in notes)
@@ -252,7 +253,7 @@ def test_parts_are_cut_only_where_every_key_is_up():
                    n.offset_s + (0.2 if i >= PART_NOTES + 7 else 0.0), 80) for i, n in enumerate(legato)]
     parts = _parts(paused)
     assert [len(p) for p in parts] == [PART_NOTES + 7, 2 * PART_NOTES - 7]
-    for a, b in zip(parts, parts[1:]):
+    for a, b in itertools.pairwise(parts):
         assert min(paused[i].onset_s for i in b) - max(paused[i].offset_s for i in a) >= MOVE_S
 
 
