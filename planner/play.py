@@ -34,6 +34,7 @@ from planner.trajectory import (
     Phase,
     build_timing,
     min_jerk,
+    min_jerk_rates,
     phase_duration,
     sample,
     solve_timing,
@@ -57,10 +58,11 @@ TRAVEL_SAFE_Z_M = 0.040  # fingertips lifted this high when a straight travel wo
 TRAVEL_LIFTS_M = (0.028, TRAVEL_SAFE_Z_M)  # higher lifts tried when HIGH_M is not enough
 WRIST_TRAVEL_RAD = -0.35  # wrist extension (20 deg) raising the fingers for a rail-only travel
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
+ARRIVE_M = 0.001  # a finger touches its key once what is left of the arm's move shifts it less
 ACROSS_SPLITS = 2  # a finger crossing keys high is given up to 3 waypoints
 GRAZE_M = 0.5 * kb.DOWN_DEPTH_M  # a finger moving over keys may sink this far into one, never near sounding it
 TRAVEL_INFLATE_M = 0.002  # ... of every key within this distance of it (a fingertip is not a point)
-TRAVEL_OVERLAPS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)  # fractions of a motion done before the next starts
+TRAVEL_OVERLAPS = tuple(np.round(np.arange(0.1, 1.0001, 0.05), 2))  # fractions of a motion done before the next starts
 _SIM_DT_S = 0.002
 HOVER_MIN_M = 0.005  # issue: a finger not pressing is at least this far above the keys under it
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
@@ -467,13 +469,17 @@ class _Timeline:
         # the last travel's arm motions, as (global index, duration): nothing the travel's
         # simulation did not see starts before they end
         self.arm_motion: tuple[tuple[int, float], ...] = ()
+        self.arm_deltas: dict[int, np.ndarray] = {}  # global index -> joint motion, of those
+        self._land_ok: set[int] = set()  # the travel's landings a press may blend with
         self.travels = 0
+        self._blend_floor = 0  # no motion blends with one before this (global index)
         self.failure: str | None = None  # why the last press could not be made, if not reach
         self.all_joints = np.arange(hand.n)
         self.arm_joints = _arm_joints(hand)
 
     def _move(self, q_new: np.ndarray, anchor: float, ideal: float, weight: float, kind: str,
-              note: int | None, min_s: float = 0.0, order=None, follows=(), earliest: float = 0.0) -> None:
+              note: int | None, min_s: float = 0.0, order=None, follows=(), earliest: float = 0.0,
+              pitch: int | None = None) -> None:
         d = q_new - self.q
         if not np.any(d) and order is None:
             return
@@ -481,9 +487,84 @@ class _Timeline:
             # nothing moves that the travel's simulation did not see until the arm stops
             follows = self.arm_motion
         T = max(phase_duration(d, self.hand.velocity, self.hand.acceleration), min_s)
+        blend_s, after = self._blend(d, T, kind, pitch) if order is None else (0.0, -1)
         self.phases.append((Phase(d, T, anchor, ideal, weight, earliest_s=earliest, order_joints=order,
-                                  follows=follows), kind, note))
+                                  follows=follows, blend_s=blend_s, blend_after=after), kind, note))
         self.q = q_new.copy()
+
+    def _blend(self, d: np.ndarray, T: float, kind: str, pitch: int | None) -> tuple[float, int]:
+        """How long (s) a finger's new motion ``d`` (``T`` s; a ``move``, or a ``press`` of
+        ``pitch``) may start before the finger's previous motion ends, and that motion's
+        global index: one curve instead of a stop at every waypoint.
+
+        Only a finger's own motions after the last change of hand position blend: a move
+        after a move, the lift after a release once the key is up (straight up), a press
+        after a move while the tip is still ``TRAVEL_CLEARANCE_M`` above its key (so the
+        key goes down exactly when it would without the blend). For every overlap up to
+        the one returned (every ``_SIM_DT_S``) the sum of the two motions stays within
+        every joint's speed and acceleration limit, and the tip, sampled by forward
+        kinematics, above the keys it passes as ``_finger_path_clear`` asks."""
+        none = (0.0, -1)
+        moved = np.flatnonzero(d)
+        if kind not in ("move", "press") or moved.size == 0:
+            return none
+        finger = next((f for f in self.hand.fingers if np.all(np.isin(moved, self.hand.joint_slice(f)))), None)
+        if finger is None:
+            return none
+        js = self.hand.joint_slice(finger)
+        k = next((i for i in range(len(self.phases) - 1, -1, -1) if np.any(self.phases[i][0].delta[js])), None)
+        if k is None or (self.offset + k < self._blend_floor and self.offset + k not in self._land_ok):
+            return none
+        prev, prev_kind, _ = self.phases[k]
+        if np.any(np.delete(prev.delta, js)) or (prev_kind, kind) not in (
+                ("move", "move"), ("release", "move"), ("move", "press")):
+            return none
+        Tp = prev.duration_s
+        # (never three motions of a joint at once: the previous one's blend with the one
+        # before it and this blend do not overlap)
+        b_max = min(Tp - prev.blend_s, 0.5 * T)
+        q_a = self.q - prev.delta  # the finger where its previous motion starts
+        q_b = self.q + d
+        if prev_kind == "release":
+            # the lift starts once the key is up, and only straight up
+            b_max = min(b_max, (1.0 - prev.anchor) * Tp)
+            i = self.hand.fingers.index(finger)
+            slide = self.hand.tip_positions(q_b)[i, :2] - self.hand.tip_positions(self.q)[i, :2]
+            if np.hypot(*slide) > VERTICAL_SLIDE_M:
+                return none
+        if kind == "press":
+            b_max = min(b_max, _key_crossing(self.hand, self.q, q_b, finger, pitch,
+                                             depth_m=-TRAVEL_CLEARANCE_M) * T)
+        if b_max < _SIM_DT_S:
+            return none
+        # speed and acceleration of the sum, every _SIM_DT_S of overlap
+        vmax, amax = 0.995 * self.hand.velocity[js], 0.995 * self.hand.acceleration[js]
+        dp, dq = prev.delta[js], d[js]
+        best = 0.0
+        for o in np.arange(_SIM_DT_S, b_max + 1e-12, _SIM_DT_S):
+            t = np.linspace(Tp - o, Tp, 16 + int(o / 0.001))  # from the previous motion's start
+            v1, a1 = min_jerk_rates(t / Tp)
+            v2, a2 = min_jerk_rates((t - Tp + o) / T)
+            v = np.abs(np.outer(v1 / Tp, dp) + np.outer(v2 / T, dq))
+            a = np.abs(np.outer(a1 / Tp ** 2, dp) + np.outer(a2 / T ** 2, dq))
+            if np.any(v > vmax) or np.any(a > amax):
+                break
+            best = o
+        if prev_kind == "move" or kind == "move":
+            # the tip's path over the keys, at a third, two thirds and all of the overlap
+            while best >= _SIM_DT_S and not self._blend_clear(q_a, prev.delta, Tp, d, T, best, finger):
+                best = math.floor(0.5 * best / _SIM_DT_S) * _SIM_DT_S
+        return (best, self.offset + k) if best >= _SIM_DT_S else none
+
+    def _blend_clear(self, q_a, dp, Tp, dq, T, b, finger) -> bool:
+        i = self.hand.fingers.index(finger)
+        qs = []
+        for o in (b / 3.0, 2.0 * b / 3.0, b):
+            t = np.linspace(Tp - o, Tp, 7)
+            s1, s2 = min_jerk(t / Tp), min_jerk((t - Tp + o) / T)
+            qs.extend(q_a + np.outer(s1, dp) + np.outer(s2, dq))
+        tips = np.array([self.hand.tip_positions(q)[i] for q in self.hand.apply_couplings(np.array(qs))])
+        return bool(np.all(tips[:, 2] >= surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) - GRAZE_M))
 
     def _frame_edge(self, t_s: float) -> float:
         """Half a frame before the first frame at or after ``t_s``: a key that goes down
@@ -515,6 +596,13 @@ class _Timeline:
         ``HIGH_M``. If nothing is clear, every fingertip goes to ``TRAVEL_SAFE_Z_M``
         and the wrist up to ``WRIST_TRAVEL_RAD``, the rail moves alone, then the wrist
         and the fingers come down; if even that is not clear, the hand stays (False)."""
+        self._blend_floor = math.inf  # the travel's motions are timed by its own simulation
+        try:
+            return self._travel(seg, t_s, ready)
+        finally:
+            self._blend_floor = self.offset + len(self.phases)
+
+    def _travel(self, seg: int, t_s: float, ready: dict[str, int] | None) -> bool:
         hand = self.hand
         self.travels += 1
         arm = self.arm_joints
@@ -545,14 +633,22 @@ class _Timeline:
         else:
             q_end = q_low
         moving = arm
-        arm_after = None if c is None else {g: c[0] for g in last}  # phase -> the arm's lag after its start
+        # phase -> the arm's lag after its start (all of a motion that does not lift)
+        arm_after = None if c is None else {g: c[0] if g in self._lifting else ph.duration_s
+                                            for g, ph in last.items()}
         for z_up in TRAVEL_LIFTS_M:
             if c is not None:
                 break
-            # a second lift of every finger, higher
+            # a second lift of every finger, higher, and higher still where the arm's move
+            # (a wrist flexing) would bring the finger down
             q_up = self.q.copy()
             for f in hand.fingers:
                 q_up = self.pl.lift_to(q_up, f, z_up)
+                q_there = q_up.copy()
+                q_there[arm] = q_end[arm]
+                drop = z_up - self._tip_z(q_there, f)
+                if drop > 0.0:
+                    q_up = self.pl.lift_to(q_up, f, z_up + drop)
             c, arm_after = self._lift_again(q_up, arm, q_end, t_s)
         if c is None:
             # last resort: every finger to TRAVEL_SAFE_Z_M and the wrist raised
@@ -577,6 +673,8 @@ class _Timeline:
         if T_arm is not None:
             # nothing else moves before the arm has stopped
             self.arm_motion = ((self.offset + k_arm, T_arm),)
+            self.arm_deltas = {self.offset + k_arm: self.phases[k_arm][0].delta}
+        self._land_ok = set()
         for i, js in enumerate(self._land_groups(moving)):
             q_next = self.q.copy()
             q_next[js] = q_end[js]
@@ -587,6 +685,9 @@ class _Timeline:
             if len(self.phases) > n and np.intersect1d(js, self.arm_joints).size > 0:
                 # the wrist coming down after a rail-only travel: it too must stop first
                 self.arm_motion += ((self.offset + n, self.phases[n][0].duration_s),)
+                self.arm_deltas[self.offset + n] = self.phases[n][0].delta
+            elif len(self.phases) > n and i < len(hand.fingers) and hand.fingers[i] in ready:
+                self._land_ok.add(self.offset + n)
         self.seg = seg
         for f in hand.fingers:
             self.place[f] = ("above", ready[f], land_z) if f in ready else ("high",)
@@ -634,17 +735,24 @@ class _Timeline:
         return groups + ([rest] if rest.size else [])
 
     def _last_motions(self) -> tuple[dict[int, Phase], list[tuple[np.ndarray, float]], np.ndarray]:
-        """Each finger's last motion (global index -> phase), their (delta, duration) and
-        the configuration before them."""
+        """Each finger's last motion (global index -> phase); the (delta, duration) of
+        those that lift the fingertip, and the configuration before them. The arm may
+        start while a lift still runs (the simulation sees it), but only after a motion
+        that does not lift has ended: started early, it would be lower than simulated."""
         last: dict[int, Phase] = {}
-        for f in self.hand.fingers:
+        lifting: list[int] = []
+        for i, f in enumerate(self.hand.fingers):
             js = self.hand.joint_slice(f)
             found = [(self.offset + k, ph) for k, (ph, _, _) in enumerate(self.phases) if np.any(ph.delta[js])]
             found = found or [(g, ph) for g, ph, _ in self.carried if np.any(ph.delta[js])]
             if found:
-                last[found[-1][0]] = found[-1][1]
-        lifts = [(last[g].delta, last[g].duration_s) for g in sorted(last)]
+                g, ph = found[-1]
+                last[g] = ph
+                if self._tip_z(self.q, f) > self.hand.tip_positions(self.q - ph.delta)[i, 2]:
+                    lifting.append(g)
+        lifts = [(last[g].delta, last[g].duration_s) for g in sorted(lifting)]
         q0 = self.q - sum((d for d, _ in lifts), np.zeros(self.hand.n))
+        self._lifting = set(lifting)
         return last, lifts, q0
 
     def _travel_overlap(self, q0: np.ndarray, lifts: list[tuple[np.ndarray, float]],
@@ -658,19 +766,29 @@ class _Timeline:
         second. The simulation starts every lift at once: a lift that starts earlier
         is higher when the arm starts, so the arm waiting that long after each lift's
         start is on the safe side. A finger of ``ready`` (finger -> pitch) over the
-        part of its key no other key overhangs need only clear that key. None if even
-        no overlap keeps them clear."""
+        part of its key no other key overhangs need only clear that key; a finger leaving
+        a key (above it when the travel begins: it may be on its way up from it) is free
+        anywhere over that part of it, less ``TRAVEL_INFLATE_M`` on each side (the key
+        rises under it, and no other key is there). None if even no overlap keeps them
+        clear."""
         hand = self.hand
-        own = {hand.fingers.index(f): exposed_range_x(p) + (kb.key(p).top_z_m,)
-               for f, p in (ready or {}).items()}
+        own: dict[int, list[tuple[float, float, float]]] = {}
+        for f, p in (ready or {}).items():
+            own.setdefault(hand.fingers.index(f), []).append(exposed_range_x(p) + (kb.key(p).top_z_m,))
+        for f, place in self.place.items():
+            if place[0] == "above":
+                lo, hi = exposed_range_x(place[1])
+                own.setdefault(hand.fingers.index(f), []).append(
+                    (lo + TRAVEL_INFLATE_M, hi - TRAVEL_INFLATE_M, -np.inf))
 
         def clear(tips: np.ndarray, margin: float) -> bool:
             if np.all(tips[:, 2] >= kb.BLACK_TOP_Z_M + margin):
                 return True  # above every key top
             surface = surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M)
-            for k, (lo, hi, top) in own.items():
-                if lo <= tips[k, 0] <= hi:
-                    surface[k] = top
+            for k, regions in own.items():
+                tops = [top for lo, hi, top in regions if lo <= tips[k, 0] <= hi]
+                if tops:
+                    surface[k] = min(tops)
             return bool(np.all(tips[:, 2] >= surface + margin))
 
         arm = self.arm_joints if arm is None else arm
@@ -698,9 +816,18 @@ class _Timeline:
             x_arm = float(np.max(c_lift * T_lift, initial=0.0))
             c_k = np.where(is_ready, c_land if c_ready is None else c_ready, c_land)
             x_land = np.maximum(x_arm + c_k * T_arm, after_lift)
+            # the lifts as late as the arm allows (all starting at 0): the fingers at their
+            # lowest when the arm starts; and, where that delays a landing, the lifts long
+            # over: the landings at their earliest
+            cases = [(q0, 1.0, x_land)]
+            if np.any(x_land > x_arm + c_k * T_arm):
+                cases.append((q0 + D_lift.sum(axis=0), 0.0, x_arm + c_k * T_arm))
+            return all(run(x_arm, q_from, lifting, x_l) for q_from, lifting, x_l in cases)
+
+        def run(x_arm: float, q_from: np.ndarray, lifting: float, x_land: np.ndarray) -> bool:
             t_end = max(x_arm + T_arm, float(np.max(x_land + T_land, initial=0.0)))
             t = np.arange(x_arm, t_end + _SIM_DT_S, _SIM_DT_S)
-            Q = (q0 + min_jerk(t[:, None] / T_lift[None, :]) @ D_lift
+            Q = (q_from + lifting * min_jerk(t[:, None] / T_lift[None, :]) @ D_lift
                  + min_jerk((t - x_arm) / T_arm)[:, None] * d_arm[None, :]
                  + min_jerk((t[:, None] - x_land[None, :]) / T_land[None, :]) @ D_land)
             Q = hand.apply_couplings(Q)
@@ -778,13 +905,31 @@ class _Timeline:
         follows = ()
         if self.arm_motion and self.place[finger] == ("above", pitch, LOW_M):
             # waiting right above its key: it may start down while the arm still moves,
-            # but come within TRAVEL_CLEARANCE_M of it only once the arm has stopped
+            # but come within TRAVEL_CLEARANCE_M of it only once the arm has (all but) stopped
             touch = _key_crossing(self.hand, self.q, q_new, finger, pitch, depth_m=-TRAVEL_CLEARANCE_M)
-            follows = tuple((g, max(T_arm - touch * T, 0.0)) for g, T_arm in self.arm_motion)
+            follows = tuple((g, max(self._arrived(g, T_arm, finger) - touch * T, 0.0))
+                            for g, T_arm in self.arm_motion)
         self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note, min_s=T, follows=follows,
-                   earliest=self._frame_edge(t_s) - EARLY_FRAMES * self.dt - frac * T)
+                   earliest=self._frame_edge(t_s) - EARLY_FRAMES * self.dt - frac * T, pitch=pitch)
         self.place[finger] = ("down", pitch)
         return True
+
+    def _arrived(self, g: int, T_arm: float, finger: str) -> float:
+        """When (s after the start of the arm's motion ``g``, ``T_arm`` long) what is left
+        of it moves ``finger``'s tip (where it is now) less than ``ARRIVE_M``."""
+        i = self.hand.fingers.index(finger)
+        d = self.arm_deltas[g]
+        dist = float(np.linalg.norm(self.hand.tip_positions(self.q)[i] - self.hand.tip_positions(self.q - d)[i]))
+        if dist <= ARRIVE_M:
+            return 0.0
+        lo, hi = 0.0, 1.0  # min-jerk progress s(u) >= 1 - ARRIVE_M / dist
+        for _ in range(30):
+            mid = 0.5 * (lo + hi)
+            if 1.0 - float(min_jerk(np.array(mid))) <= ARRIVE_M / dist:
+                hi = mid
+            else:
+                lo = mid
+        return hi * T_arm
 
     def prepare(self, finger: str, pitch: int) -> None:
         """Bring an idle ``finger`` to wait ``LOW_M`` above ``pitch``, the key it presses
@@ -1002,7 +1147,9 @@ def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
         d = phases[k].delta + phases[r].delta
         # (the sum of the two durations keeps the sum of the two moves within every limit)
         T = phases[k].duration_s + phases[r].duration_s
-        phases[k] = dataclasses.replace(phases[k], delta=d, duration_s=T, anchor=0.5, weight=0.0)
+        # (no blend with the motion before: it was checked against the press alone)
+        phases[k] = dataclasses.replace(phases[k], delta=d, duration_s=T, anchor=0.5, weight=0.0,
+                                        blend_s=0.0, blend_after=-1)
         phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
         meta[k] = (phases[k], "move", None)
         meta[r] = (phases[r], "move", None)
@@ -1058,7 +1205,10 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                     follows.append((g - tl.offset, lag))
                 elif g in carried_start:
                     earliest = max(earliest, carried_start[g] + lag)
-            phases.append(dataclasses.replace(ph, earliest_s=earliest, follows=tuple(follows)))
+            # a blend with a motion timed in an earlier chunk is not taken (joint_free)
+            blend = (ph.blend_s, ph.blend_after - tl.offset) if ph.blend_after >= tl.offset else (0.0, -1)
+            phases.append(dataclasses.replace(ph, earliest_s=earliest, follows=tuple(follows),
+                                              blend_s=blend[0], blend_after=blend[1]))
         starts = solve_timing(build_timing(phases, t_cut))
         for _ in range(DROP_ROUNDS):
             if not _drop_hopeless(phases, phases_meta, starts, notes, reasons):

@@ -42,6 +42,13 @@ def min_jerk(u: np.ndarray) -> np.ndarray:
     return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
 
 
+def min_jerk_rates(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """ds/du and d2s/du2 of the min-jerk profile (0 outside [0, 1])."""
+    inside = (u >= 0.0) & (u <= 1.0)
+    w = np.where(inside, u * (1.0 - u), 0.0)
+    return 30.0 * w * w, np.where(inside, 60.0 * w * (1.0 - 2.0 * u), 0.0)
+
+
 def phase_duration(dq: np.ndarray, v_max: np.ndarray, a_max: np.ndarray, floor_s: float = MIN_PHASE_S) -> float:
     """Shortest duration (s) of a min-jerk move ``dq`` within speed/acceleration limits."""
     adq = np.abs(dq)
@@ -70,6 +77,13 @@ class Phase:
     # (k, lag_s): start at least lag_s after phase k (an earlier one) starts, even without
     # a common joint: a motion that may overlap the end of another, but not all of it
     follows: tuple[tuple[int, float], ...] = ()
+    # may start blend_s before the end of phase blend_after (an earlier phase on its joints,
+    # the last one before it on every one of them): the two motions add in the overlap,
+    # which whoever builds the phase has checked within every limit for any overlap up
+    # to blend_s (at most blend_after's duration less its own blend_s, so no three
+    # motions of a joint overlap)
+    blend_s: float = 0.0
+    blend_after: int = -1
 
     @property
     def joints(self) -> np.ndarray:
@@ -80,7 +94,7 @@ class Phase:
 class TimingProblem:
     """min sum w (x_p + a_p T_p - ideal_p)^2  s.t.  x_p >= earliest_p,
     x_q - x_p >= lag_pq for every (p, q) in ``after`` (q moves a joint p moved before:
-    lag T_p; or q follows p by a given lag)."""
+    lag T_p, less q's blend if it blends with p; or q follows p by a given lag)."""
 
     durations: np.ndarray
     anchors: np.ndarray
@@ -99,7 +113,8 @@ def build_timing(phases: list[Phase], t0: float) -> TimingProblem:
         js = ph.joints if ph.order_joints is None else ph.order_joints
         for j in js.tolist():
             if j in last:
-                lag[(last[j], q)] = phases[last[j]].duration_s
+                p = last[j]
+                lag[(p, q)] = phases[p].duration_s - (ph.blend_s if p == ph.blend_after else 0.0)
             last[j] = q
         for p, lag_s in ph.follows:
             if not 0 <= p < q:

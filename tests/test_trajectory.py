@@ -8,6 +8,7 @@ from planner.trajectory import (
     TimingProblem,
     build_timing,
     min_jerk,
+    min_jerk_rates,
     phase_duration,
     sample,
     solve_timing,
@@ -95,3 +96,29 @@ def test_sample_sums_overlapping_phases():
     assert q[:, 0] == pytest.approx([0.0, 0.5, 1.0, 1.0])
     assert q[:, 1] == pytest.approx([0.0, 0.0, 0.5, 1.0])
 
+
+
+def test_blend_shortens_the_lag_to_the_phase_it_names_only():
+    p0 = _ph([0], T=0.1)
+    p1 = _ph([0], T=0.1, blend_s=0.03, blend_after=0)
+    p2 = _ph([0], T=0.1, blend_s=0.03, blend_after=0)  # names a phase that is not its previous one
+    prob = build_timing([p0, p1, p2], 0.0)
+    lags = {tuple(pq): lag for pq, lag in zip(prob.after.tolist(), prob.lags)}
+    assert lags[(0, 1)] == pytest.approx(0.07)
+    assert lags[(1, 2)] == pytest.approx(0.1)
+    x = solve_timing(prob)
+    assert x[1] - x[0] == pytest.approx(0.07, abs=1e-6)
+    assert x[2] - x[1] == pytest.approx(0.1, abs=1e-6)
+
+
+def test_min_jerk_rates_match_finite_differences():
+    u = np.linspace(0.0, 1.0, 201)
+    v, a = min_jerk_rates(u)
+    h = 1e-6
+    assert v == pytest.approx((min_jerk(u + h) - min_jerk(u - h)) / (2 * h), abs=1e-4)
+    assert a[1:-1] == pytest.approx((min_jerk(u + h)[1:-1] - 2 * min_jerk(u)[1:-1] + min_jerk(u - h)[1:-1]) / h**2,
+                                    abs=2e-2)
+    assert max(v) == pytest.approx(15.0 / 8.0)
+    assert max(np.abs(a)) == pytest.approx(10.0 / np.sqrt(3.0), rel=1e-3)
+    v_out, a_out = min_jerk_rates(np.array([-0.5, 1.5]))
+    assert np.all(v_out == 0.0) and np.all(a_out == 0.0)
