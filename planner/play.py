@@ -1320,9 +1320,11 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                 # the first rows go out as soon as there are a few, then in larger chunks
                 if not down and len(tl.phases) >= (FIRST_CHUNK_PHASES if next_row == 0 else CHUNK_PHASES):
                     # before a change of hand position, cut early enough to leave the lifts
-                    # and the travel free to start when they may
+                    # and the travel free to start when they may; else early enough for
+                    # the next press (and a finger's way to it) to start in time
                     moves = _moves_next(pl, tl, events, k, groups, reasons)
-                    flush(cut_s=t - TRAVEL_LEAD_S if moves else t)
+                    t_next = next((e[0] for e in events[k + 1:] if e[1] == 1), math.inf)
+                    flush(cut_s=t - TRAVEL_LEAD_S if moves else min(t, t_next - TRAVEL_LEAD_S))
             if progress and total > 400 and (done + k) % 100 == 0:
                 sys.stderr.write(f"\rplanning {done + k}/{total} key events ({100 * (done + k) // total}%)")
                 sys.stderr.flush()
