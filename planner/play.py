@@ -60,6 +60,7 @@ WRIST_TRAVEL_RAD = -0.35  # wrist extension (20 deg) raising the fingers for a r
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
 ARRIVE_M = 0.001  # a finger touches its key once what is left of the arm's move shifts it less
 ACROSS_SPLITS = 2  # a finger crossing keys high is given up to 3 waypoints
+PATH_STEP_M = 0.003  # a finger's path over the keys is checked at least this often
 GRAZE_M = 0.5 * kb.DOWN_DEPTH_M  # a finger moving over keys may sink this far into one, never near sounding it
 TRAVEL_INFLATE_M = 0.002  # ... of every key within this distance of it (a fingertip is not a point)
 TRAVEL_OVERLAPS = tuple(np.round(np.arange(0.1, 1.0001, 0.05), 2))  # fractions of a motion done before the next starts
@@ -781,15 +782,21 @@ class _Timeline:
                 own.setdefault(hand.fingers.index(f), []).append(
                     (lo + TRAVEL_INFLATE_M, hi - TRAVEL_INFLATE_M, -np.inf))
 
-        def clear(tips: np.ndarray, margin: float) -> bool:
-            if np.all(tips[:, 2] >= kb.BLACK_TOP_Z_M + margin):
+        def clear(tips: np.ndarray, margin: np.ndarray) -> bool:
+            """tips (N, 5, 3) at N samples, margin (N,)."""
+            low = ~np.all(tips[:, :, 2] >= kb.BLACK_TOP_Z_M + margin[:, None], axis=1)
+            if not low.any():
                 return True  # above every key top
-            surface = surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M)
+            tips, margin = tips[low], margin[low]
+            n = len(tips)
+            surface = surfaces_under(tips[:, :, 0].ravel(), tips[:, :, 1].ravel(), TRAVEL_INFLATE_M).reshape(n, -1)
             for k, regions in own.items():
-                tops = [top for lo, hi, top in regions if lo <= tips[k, 0] <= hi]
-                if tops:
-                    surface[k] = min(tops)
-            return bool(np.all(tips[:, 2] >= surface + margin))
+                x = tips[:, k, 0]
+                mine = np.full(n, np.inf)
+                for lo, hi, top in regions:
+                    mine = np.where((lo <= x) & (x <= hi), np.minimum(mine, top), mine)
+                surface[:, k] = np.where(mine < np.inf, mine, surface[:, k])
+            return bool(np.all(tips[:, :, 2] >= surface + margin[:, None]))
 
         arm = self.arm_joints if arm is None else arm
         q_up = q0 + sum((d for d, _ in lifts), np.zeros(hand.n))
@@ -835,8 +842,10 @@ class _Timeline:
             # margin then, only no contact
             margin = np.where(t <= x_arm + T_arm, TRAVEL_CLEARANCE_M, 0.0)
             # every 5th sample first: a dip shows there sooner
-            order = np.concatenate([np.arange(0, len(Q), 5)] + [np.arange(k, len(Q), 5) for k in range(1, 5)])
-            return all(clear(hand.tip_positions(Q[i]), margin[i]) for i in order)
+            for idx in (np.arange(0, len(Q), 5), np.setdiff1d(np.arange(len(Q)), np.arange(0, len(Q), 5))):
+                if not clear(np.array([hand.tip_positions(Q[i]) for i in idx]).reshape(len(idx), -1, 3), margin[idx]):
+                    return False
+            return True
 
         # the arm as early as the lifts allow (fingers down only after it stops), then
         # the fingers down as early as that allows
@@ -955,7 +964,10 @@ class _Timeline:
         js = self.hand.joint_slice(finger)
         q = self._with_finger(finger, qa)
         tips = []
-        for u in np.linspace(0.0, 1.0, 9)[1:-1]:
+        # samples no further apart than PATH_STEP_M of the tip's straight-line travel (the
+        # path itself bends: a long crossing may dip between coarse samples)
+        span = np.linalg.norm(self.hand.tip_positions(qb)[k] - self.hand.tip_positions(q)[k])
+        for u in np.linspace(0.0, 1.0, max(9, math.ceil(span / PATH_STEP_M) + 2))[1:-1]:
             q[js] = qa[js] + u * (qb[js] - qa[js])
             tips.append(self.hand.tip_positions(self.hand.apply_couplings(q))[k])
         tips = np.array(tips)
