@@ -1117,14 +1117,25 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
             seg, best = s_, c
         if c == len(window):
             break
-    if seg is None and len(group) > 1:  # at least the lowest note
-        seg = pl.anchor([press_target(group[0].finger, group[0].pitch)], rail, tl.q)
+    if seg is None and len(group) > 1:
+        # the chord whole is beyond the hand here: as much of it as it holds, from the
+        # bottom (at least the lowest note); the rest is named
+        for n in range(len(group) - 1, 0, -1):
+            seg = pl.anchor([press_target(g.finger, g.pitch) for g in group[:n]], rail, tl.q)
+            if seg is not None:
+                xs = [kb.key(g.pitch).center_x_m for g in group]
+                for g in group[n:]:
+                    reasons.setdefault(g.note_index, f"chord wider than the hand here "
+                                       f"({(max(xs) - min(xs)) * 1000:.0f} mm): left out")
+                break
     if seg is None:
         return
     if tl.seg is None:  # the hand is brought there before t = 0
         tl.q = pl.bases[seg].copy()
         tl.seg = seg
-        for g in group:  # with the first fingers just above their keys
+        for g in group:  # with the first fingers just above their keys (those that reach)
+            if not pl.press_q(g.finger, g.pitch, seg)[1].converged:
+                continue
             tl.q = tl._with_finger(g.finger, pl.above_q(g.finger, g.pitch, seg, LOW_M))
             tl.place[g.finger] = ("above", g.pitch, LOW_M)
             if t < START_PRESSED_S:  # a song that starts at once starts with its keys down
@@ -1139,7 +1150,7 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
 
 
 def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
-                   reasons: dict[int, str]) -> bool:
+                   reasons: dict[int, str], dt: float) -> bool:
     """Notes whose key the timing QP can put down only after half of the note is over are
     left out (named in ``reasons``): struck that late they would mostly sound after
     their time, as wrong notes, and delay the notes after them. The press and its
@@ -1151,10 +1162,13 @@ def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
         if kind != "press" or note is None:
             continue
         n = notes[note]
-        if starts[k] + p.anchor * p.duration_s - p.ideal_s <= DROP_LATE * (n.offset_s - n.onset_s):
-            continue
         r = next((j for j in range(k + 1, len(meta)) if meta[j][1] == "release" and meta[j][2] == note), None)
         if r is None:
+            continue
+        late_down = starts[k] + p.anchor * p.duration_s - p.ideal_s > DROP_LATE * (n.offset_s - n.onset_s)
+        # a key still down in the first frame after its note is a wrong press
+        late_up = starts[r] + phases[r].anchor * phases[r].duration_s > phases[r].ideal_s + 0.5 * dt - 1e-9
+        if not (late_down or late_up):
             continue
         d = phases[k].delta + phases[r].delta
         # (the sum of the two durations keeps the sum of the two moves within every limit)
@@ -1165,7 +1179,8 @@ def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
         phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
         meta[k] = (phases[k], "move", None)
         meta[r] = (phases[r], "move", None)
-        reasons[note] = "too late: the finger cannot get there before half of it is over"
+        reasons[note] = ("too late: the finger cannot get there before half of it is over" if late_down
+                         else "too late: struck that late, its key could not be up by its end")
         dropped = True
     return dropped
 
@@ -1223,7 +1238,7 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                                               blend_s=blend[0], blend_after=blend[1]))
         starts = solve_timing(build_timing(phases, t_cut))
         for _ in range(DROP_ROUNDS):
-            if not _drop_hopeless(phases, phases_meta, starts, notes, reasons):
+            if not _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt):
                 break
             starts = solve_timing(build_timing(phases, t_cut))
         for (p, kind, note), x in zip(phases_meta, starts):

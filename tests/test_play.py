@@ -447,3 +447,47 @@ def test_a_finger_path_found_clear_is_clear_all_along(planner):
         gap = tips[:, 2] - (surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) - GRAZE_M)
         assert gap.min() >= -0.001, (f, gap.min())
     assert checked >= 50
+
+
+def test_a_chord_the_hand_cannot_hold_here_is_played_from_the_bottom(planner, tmp_path):
+    """C3-E3-G3 with E4 on top at t = 0: the fingering's reach model allows it, the
+    whole-hand IK does not. The hand takes the lowest three and names the top one; no
+    finger lands on a key it was not given (a finger whose IK had not converged once
+    pressed F3 here for G3)."""
+    from planner.music.midi import write_notes_midi
+
+    notes = [Note(48, 0.0, 0.9, 70), Note(52, 0.0, 0.9, 70), Note(55, 0.0, 0.9, 70),
+             Note(64, 0.0, 0.45, 95), Note(65, 0.5, 0.95, 63)]
+    song, path = tmp_path / "wide.mid", tmp_path / "wide.csv"
+    write_notes_midi(notes, song)
+    res = plan_song(load_song(song), planner.hand, str(path), planner=planner)
+    rep = check_trajectory(str(path), str(song))
+    assert len(rep.play.wrong_presses) == 0 and not rep.play.key_bed_hits, rep.summary()
+    why = {r.pitch: r.reason for r in res.infeasible}
+    assert why[64].startswith("chord wider than the hand"), why
+    assert {48, 52, 55} <= {p["pitch"] if isinstance(p, dict) else p.pitch for p in rep.play.played}
+
+
+def test_a_note_whose_key_cannot_be_up_by_its_end_is_left_out():
+    """A press the timing QP can only put down late pushes its release late too: a key
+    still down in the first frame after its note would be a wrong press, so the note is
+    left out (named), its press and release merged into one motion over the key."""
+    from planner.play import _drop_hopeless
+    from planner.trajectory import Phase
+
+    dt = 0.01
+    notes = [Note(60, 0.0, 0.2, 80)]
+    d = np.array([-1.0, 0.0])
+
+    def case(release_start):
+        phases = [Phase(d, 0.1, 0.5, 0.0, 1.0), Phase(-d, 0.1, 0.5, 0.195, 0.3)]
+        meta = [(phases[0], "press", 0), (phases[1], "release", 0)]
+        reasons = {}
+        dropped = _drop_hopeless(phases, meta, np.array([0.0, release_start]), notes, reasons, dt)
+        return dropped, phases, reasons
+
+    dropped, phases, reasons = case(0.1)  # up at 0.15: in time
+    assert not dropped and not reasons
+    dropped, phases, reasons = case(0.16)  # up at 0.21: down in the frame at 0.20
+    assert dropped and reasons[0].startswith("too late")
+    assert np.allclose(phases[0].delta, 0.0) and phases[0].weight == 0.0
