@@ -58,6 +58,7 @@ TRAVEL_SAFE_Z_M = 0.040  # fingertips lifted this high when a straight travel wo
 TRAVEL_LIFTS_M = (0.028, TRAVEL_SAFE_Z_M)  # higher lifts tried when HIGH_M is not enough
 WRIST_TRAVEL_RAD = -0.35  # wrist extension (20 deg) raising the fingers for a rail-only travel
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
+KEY_UP_SLACK_M = 0.0005  # a finger leaving its key is this far above the key-up depth once the arm moves
 ARRIVE_M = 0.001  # a finger touches its key once what is left of the arm's move shifts it less
 ACROSS_SPLITS = 2  # a finger crossing keys high is given up to 3 waypoints
 PATH_STEP_M = 0.003  # a finger's path over the keys is checked at least this often
@@ -768,19 +769,23 @@ class _Timeline:
         is higher when the arm starts, so the arm waiting that long after each lift's
         start is on the safe side. A finger of ``ready`` (finger -> pitch) over the
         part of its key no other key overhangs need only clear that key; a finger leaving
-        a key (above it when the travel begins: it may be on its way up from it) is free
-        anywhere over that part of it, less ``TRAVEL_INFLATE_M`` on each side (the key
-        rises under it, and no other key is there). None if even no overlap keeps them
+        a key (above it when the travel begins: it may be on its way up from it) may be
+        anywhere over that part of it, less ``TRAVEL_INFLATE_M`` on each side, above the
+        depth at which the key is down (the key has come up with it, so its key-up
+        moment stays the release's, and no other key is there). None if even no overlap keeps them
         clear."""
         hand = self.hand
-        own: dict[int, list[tuple[float, float, float]]] = {}
+        own: dict[int, list[tuple[float, float, float, bool]]] = {}
         for f, p in (ready or {}).items():
-            own.setdefault(hand.fingers.index(f), []).append(exposed_range_x(p) + (kb.key(p).top_z_m,))
+            own.setdefault(hand.fingers.index(f), []).append(exposed_range_x(p) + (kb.key(p).top_z_m, False))
         for f, place in self.place.items():
             if place[0] == "above":
+                # (a floor for the tip, margin included: the key is up before the arm
+                # moves, so its key-up moment stays the release's)
                 lo, hi = exposed_range_x(place[1])
                 own.setdefault(hand.fingers.index(f), []).append(
-                    (lo + TRAVEL_INFLATE_M, hi - TRAVEL_INFLATE_M, -np.inf))
+                    (lo + TRAVEL_INFLATE_M, hi - TRAVEL_INFLATE_M,
+                     kb.key(place[1]).top_z_m - kb.DOWN_DEPTH_M + KEY_UP_SLACK_M, True))
 
         def clear(tips: np.ndarray, margin: np.ndarray) -> bool:
             """tips (N, 5, 3) at N samples, margin (N,)."""
@@ -793,8 +798,10 @@ class _Timeline:
             for k, regions in own.items():
                 x = tips[:, k, 0]
                 mine = np.full(n, np.inf)
-                for lo, hi, top in regions:
-                    mine = np.where((lo <= x) & (x <= hi), np.minimum(mine, top), mine)
+                for lo, hi, top, floor in regions:
+                    # (a floor: the margin does not add to it)
+                    top_k = top - margin if floor else np.full(n, top)
+                    mine = np.where((lo <= x) & (x <= hi), np.minimum(mine, top_k), mine)
                 surface[:, k] = np.where(mine < np.inf, mine, surface[:, k])
             return bool(np.all(tips[:, :, 2] >= surface + margin[:, None]))
 
