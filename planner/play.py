@@ -542,16 +542,15 @@ class _Timeline:
         # speed and acceleration of the sum, every _SIM_DT_S of overlap
         vmax, amax = 0.995 * self.hand.velocity[js], 0.995 * self.hand.acceleration[js]
         dp, dq = prev.delta[js], d[js]
-        best = 0.0
-        for o in np.arange(_SIM_DT_S, b_max + 1e-12, _SIM_DT_S):
-            t = np.linspace(Tp - o, Tp, 16 + int(o / 0.001))  # from the previous motion's start
-            v1, a1 = min_jerk_rates(t / Tp)
-            v2, a2 = min_jerk_rates((t - Tp + o) / T)
-            v = np.abs(np.outer(v1 / Tp, dp) + np.outer(v2 / T, dq))
-            a = np.abs(np.outer(a1 / Tp ** 2, dp) + np.outer(a2 / T ** 2, dq))
-            if np.any(v > vmax) or np.any(a > amax):
-                break
-            best = o
+        o = np.arange(_SIM_DT_S, b_max + 1e-12, _SIM_DT_S)[:, None]  # (O, 1) overlaps
+        t = Tp - o * (1.0 - np.linspace(0.0, 1.0, 16 + int(b_max / 0.001)))  # (O, M), from its start
+        v1, a1 = min_jerk_rates(t / Tp)
+        v2, a2 = min_jerk_rates((t - Tp + o) / T)
+        v = np.abs(v1[..., None] * (dp / Tp) + v2[..., None] * (dq / T))  # (O, M, J)
+        a = np.abs(a1[..., None] * (dp / Tp ** 2) + a2[..., None] * (dq / T ** 2))
+        ok = np.all((v <= vmax) & (a <= amax), axis=(1, 2))
+        n_ok = len(ok) if ok.all() else int(np.argmin(ok))  # overlaps up to the first that fails
+        best = float(o[n_ok - 1, 0]) if n_ok else 0.0
         if prev_kind == "move" or kind == "move":
             # the tip's path over the keys, at a third, two thirds and all of the overlap
             while best >= _SIM_DT_S and not self._blend_clear(q_a, prev.delta, Tp, d, T, best, finger):
