@@ -55,19 +55,26 @@ class IKResult:
     hover_clearance_m: float  # smallest height of a hovering tip above the keys near it
 
 
+THUMB_BLACK_EDGE_M = 0.008  # the thumb presses a black key at least this far behind its front
+
+
 def press_target(finger: str, pitch: int) -> PressTarget:
     """Where ``finger`` presses key ``pitch``: at full dip, centred on the part of the key it can touch.
 
     The thumb presses white keys in front of the black keys; the long fingers
     press white keys behind the black keys' front (between them), where the
     exposed part of the key is centred at ``exposed_center_x``. Black keys
-    are pressed 30 mm behind their front end by every finger.
+    are pressed 30 mm behind their front end, sliding between 15 mm behind it
+    (the thumb: ``THUMB_BLACK_EDGE_M``, as far as it reaches back) and 25 mm
+    before their back end.
     """
     k = kb.key(pitch)
     z = k.top_z_m - kb.KEY_DIP_M
     if k.black:
         y0 = kb.BLACK_Y0_M + 0.030
-        return PressTarget(finger, pitch, (k.center_x_m, y0, z), (kb.BLACK_Y0_M + 0.015, kb.BLACK_Y1_M - 0.025))
+        # the thumb (short, reaching back from the front) may press nearer the front edge
+        lo = kb.BLACK_Y0_M + (THUMB_BLACK_EDGE_M if finger == "thumb" else 0.015)
+        return PressTarget(finger, pitch, (k.center_x_m, y0, z), (lo, kb.BLACK_Y1_M - 0.025))
     if finger == "thumb":
         return PressTarget(finger, pitch, (k.center_x_m, 0.012, z), (0.004, 0.025))
     x = exposed_center_x(pitch)
