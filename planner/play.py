@@ -634,6 +634,7 @@ class _Timeline:
         else:
             q_end = q_low
         moving = arm
+        q_final = None  # where the fingers go straight down to after landing, if not q_end
         # phase -> the arm's lag after its start (all of a motion that does not lift)
         arm_after = None if c is None else {g: c[0] if g in self._lifting else ph.duration_s
                                             for g, ph in last.items()}
@@ -651,6 +652,36 @@ class _Timeline:
                 if drop > 0.0:
                     q_up = self.pl.lift_to(q_up, f, z_up + drop)
             c, arm_after = self._lift_again(q_up, arm, q_end, t_s)
+            if c is None:
+                # a finger's straight way down from there dips into a key: land as high
+                # at the new place, then straight down
+                q_end_up = q_end.copy()
+                for f in hand.fingers:
+                    q_end_up = self.pl.lift_to(q_end_up, f, z_up)
+                if np.any(q_end_up != q_end):
+                    c, arm_after = self._lift_again(q_up, arm, q_end_up, t_s)
+                    if c is not None:
+                        q_final, q_end = q_end, q_end_up
+            if c is None:
+                # a finger whose way down at the new place dips even from that high (from
+                # curled in front of the keys to reaching over them) rides along lifted and
+                # finds its own way there afterwards (``_across``, as when it plays)
+                q_there = q_up.copy()
+                q_there[arm] = q_end[arm]
+                riders = [f for f in hand.fingers
+                          if not self._finger_path_clear(q_there, q_end, f, base=q_there)]
+                # (each must have a way there over the keys once the arm has stopped)
+                if riders and all(self._high_path(self.pl.lift_to(q_there, f, TRAVEL_SAFE_Z_M),
+                                                  self.pl.lift_to(q_end, f, TRAVEL_SAFE_Z_M),
+                                                  f, ACROSS_SPLITS, base=q_there) is not None
+                                  for f in riders):
+                    q_land = q_end.copy()
+                    for f in riders:
+                        q_land = self._with_finger(f, q_up, q_land)
+                    c, arm_after = self._lift_again(q_up, arm, q_land, t_s)
+                    if c is not None:
+                        q_end = q_land
+                        ready = {f: p for f, p in ready.items() if f not in riders}
         if c is None:
             # last resort: every finger to TRAVEL_SAFE_Z_M and the wrist raised
             # (extended), the rail alone across, then the wrist and the fingers down
@@ -689,6 +720,12 @@ class _Timeline:
                 self.arm_deltas[self.offset + n] = self.phases[n][0].delta
             elif len(self.phases) > n and i < len(hand.fingers) and hand.fingers[i] in ready:
                 self._land_ok.add(self.offset + n)
+        if q_final is not None:
+            for f in hand.fingers:
+                n = len(self.phases)
+                self._move(self._with_finger(f, q_final), 0.5, t_s, 0.0, "move", None)
+                if len(self.phases) > n and f in ready:
+                    self._land_ok.add(self.offset + n)
         self.seg = seg
         for f in hand.fingers:
             self.place[f] = ("above", ready[f], land_z) if f in ready else ("high",)
@@ -962,13 +999,15 @@ class _Timeline:
                    0.5, 0.0, 0.0, "move", None)
         self.place[finger] = ("above", pitch, LOW_M)
 
-    def _finger_path_clear(self, qa: np.ndarray, qb: np.ndarray, finger: str) -> bool:
+    def _finger_path_clear(self, qa: np.ndarray, qb: np.ndarray, finger: str,
+                           base: np.ndarray | None = None) -> bool:
         """True if ``finger``'s tip stays above every key it passes over (footprints grown
         ``TRAVEL_INFLATE_M``; it may graze a top by ``GRAZE_M``, half the depth at which a
-        key sounds) on the straight joint-space move from ``qa`` to ``qb``."""
+        key sounds) on the straight joint-space move from ``qa`` to ``qb`` (the rest of
+        the hand as in ``base``, default where it is now)."""
         k = self.hand.fingers.index(finger)
         js = self.hand.joint_slice(finger)
-        q = self._with_finger(finger, qa)
+        q = self._with_finger(finger, qa, base)
         tips = []
         # samples no further apart than PATH_STEP_M of the tip's straight-line travel (the
         # path itself bends: a long crossing may dip between coarse samples)
@@ -996,17 +1035,18 @@ class _Timeline:
             self._move(q, 0.5, t_s, 0.0, "move", None)
         return True
 
-    def _high_path(self, qa: np.ndarray, qb: np.ndarray, finger: str, splits: int) -> list | None:
+    def _high_path(self, qa: np.ndarray, qb: np.ndarray, finger: str, splits: int,
+                   base: np.ndarray | None = None) -> list | None:
         """Waypoints after ``qa`` to ``qb`` (both high) along which ``finger`` stays clear
         of the keys: straight, else through a waypoint lifted to ``TRAVEL_SAFE_Z_M`` from
         the joint-space midpoint, each half alike (``splits`` levels); None if none."""
-        if self._finger_path_clear(qa, qb, finger):
+        if self._finger_path_clear(qa, qb, finger, base):
             return [qb]
         if splits == 0:
             return None
         mid = self.pl.lift_to(self.hand.apply_couplings(0.5 * (qa + qb)), finger, TRAVEL_SAFE_Z_M)
-        first = self._high_path(qa, mid, finger, splits - 1)
-        second = self._high_path(mid, qb, finger, splits - 1) if first is not None else None
+        first = self._high_path(qa, mid, finger, splits - 1, base)
+        second = self._high_path(mid, qb, finger, splits - 1, base) if first is not None else None
         return None if second is None else first + second
 
     def release(self, finger: str, pitch: int, t_s: float, note: int | None = None) -> None:

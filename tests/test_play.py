@@ -508,3 +508,25 @@ def test_a_key_let_go_of_is_up_on_time_though_the_arm_moves_on(planner, tmp_path
     rep = check_trajectory(str(path), str(song))
     assert len(rep.play.wrong_presses) == 0 and not rep.play.key_bed_hits, rep.summary()
     assert rep.play.f1 >= 0.95, rep.summary()
+
+
+REPEATED_DESCENT = [66] * 7 + [61] * 3 + [56] * 2 + [51] * 2 + [46] + [41] * 3 + [46, 51, 49] + [44] * 9 + [46] \
+    + [41] * 7 + [43] * 3 + [41] * 7  # a random song of repeated notes (seed 1 of the session's generator)
+
+
+def test_a_finger_curled_in_front_of_the_keys_rides_along_when_the_hand_travels(planner, tmp_path):
+    """Repeated notes stepping down by fourths, 0.15 s long every 0.2146 s: a change of
+    hand position where a finger must go from curled in front of the keys to reaching
+    over them dipped into a key on its straight way down at every lift height, and the
+    hand fell back on raising the wrist (0.35 s): six notes were left out, too late. The
+    finger now rides along lifted and finds its own way there once the arm stops."""
+    from planner.music.midi import write_notes_midi
+
+    step = 0.21458333333333332
+    notes = [Note(p, k * step, k * step + 0.15, 90) for k, p in enumerate(REPEATED_DESCENT)]
+    song, path = tmp_path / "descent.mid", tmp_path / "descent.csv"
+    write_notes_midi(notes, song)
+    res = plan_song(load_song(song), planner.hand, str(path), planner=planner)
+    rep = check_trajectory(str(path), str(song))
+    assert len(rep.play.wrong_presses) == 0 and not rep.play.key_bed_hits, rep.summary()
+    assert len(res.infeasible) <= 1 and rep.play.f1 >= 0.94, (res.infeasible, rep.summary())
