@@ -7,6 +7,7 @@ and flushed chunk by chunk while the song is planned.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import os
 import sys
@@ -59,6 +60,9 @@ TRAVEL_LIFTS_M = (0.028, TRAVEL_SAFE_Z_M)  # higher lifts tried when HIGH_M is n
 WRIST_TRAVEL_RAD = -0.35  # wrist extension (20 deg) raising the fingers for a rail-only travel
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
 KEY_UP_SLACK_M = 0.0005  # a finger leaving its key is this far above the key-up depth once the arm moves
+HOLD_SLACK_M = 0.0005  # a held key's tip stays this far below the key-down depth ...
+HOLD_DEEPER_M = 0.001
+SHIFT_STEPS = (1, 2, 4)  # the arm's steps while a finger holds its key (the fewest that keep it down)  # ... and at most this far below full dip (the key bed is 2 mm below it)
 ARRIVE_M = 0.001  # a finger touches its key once what is left of the arm's move shifts it less
 ACROSS_SPLITS = 2  # a finger crossing keys high is given up to 3 waypoints
 PATH_STEP_M = 0.003  # a finger's path over the keys is checked at least this often
@@ -89,7 +93,8 @@ class PlayResult:
     first_row_s: float
     ik_solves: int
     late: list[tuple[int, float]] = field(default_factory=list)
-    travels: int = 0  # changes of hand position (rail and wrist) after the start
+    travels: int = 0  # changes of hand position (rail and wrist) after the start, every key up
+    shifts: int = 0  # ... and those made while a finger held its key
 
     @property
     def infeasible(self) -> list[NoteReport]:
@@ -474,6 +479,7 @@ class _Timeline:
         self.arm_deltas: dict[int, np.ndarray] = {}  # global index -> joint motion, of those
         self._land_ok: set[int] = set()  # the travel's landings a press may blend with
         self.travels = 0
+        self.shifts = 0  # hand moves made while a key was held
         self._blend_floor = 0  # no motion blends with one before this (global index)
         self.failure: str | None = None  # why the last press could not be made, if not reach
         self.all_joints = np.arange(hand.n)
@@ -490,6 +496,10 @@ class _Timeline:
             follows = self.arm_motion
         T = max(phase_duration(d, self.hand.velocity, self.hand.acceleration), min_s)
         blend_s, after = self._blend(d, T, kind, pitch) if order is None else (0.0, -1)
+        if order is None:
+            # a finger's motions come one after the other even where they move different
+            # joints of it (a press bending one joint after a landing that moved others)
+            order = self._whole_fingers(np.flatnonzero(d))
         self.phases.append((Phase(d, T, anchor, ideal, weight, earliest_s=earliest, order_joints=order,
                                   follows=follows, blend_s=blend_s, blend_after=after), kind, note))
         self.q = q_new.copy()
@@ -566,6 +576,15 @@ class _Timeline:
             qs.extend(q_a + np.outer(s1, dp) + np.outer(s2, dq))
         tips = np.array([self.hand.tip_positions(q)[i] for q in self.hand.apply_couplings(np.array(qs))])
         return bool(np.all(tips[:, 2] >= surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) - GRAZE_M))
+
+    def _whole_fingers(self, joints: np.ndarray) -> np.ndarray:
+        """``joints`` with every joint of each finger they touch."""
+        out = set(joints.tolist())
+        for f in self.hand.fingers:
+            js = self.hand.joint_slice(f)
+            if out.intersection(js.tolist()):
+                out.update(js.tolist())
+        return np.array(sorted(out), dtype=int)
 
     def _frame_edge(self, t_s: float) -> float:
         """Half a frame before the first frame at or after ``t_s``: a key that goes down
@@ -729,6 +748,98 @@ class _Timeline:
         self.seg = seg
         for f in hand.fingers:
             self.place[f] = ("above", ready[f], land_z) if f in ready else ("high",)
+        return True
+
+    def shift(self, seg: int, finger: str, pitch: int, t_s: float, budget_s: float) -> bool:
+        """Move the arm to hand position ``seg`` while ``finger`` holds ``pitch`` down:
+        the other fingers first go ``HIGH_M`` up (they are idle: no other key is down),
+        then the arm goes there, the holding finger following it on its key: through
+        ``n`` equal steps of the arm (1, 2 or 4, the fewest that do), the finger at each
+        step where single-finger IK presses the key from there. Kept only if, sampled
+        along it, the holding finger's tip stays on the part of its key no other key
+        overhangs (``HOLD_SLACK_M`` inside its sides), below the depth at which the key
+        is down (by ``HOLD_SLACK_M``) and no more than ``HOLD_DEEPER_M`` below full dip
+        (the key bed is 2 mm below it), every other tip ``TRAVEL_CLEARANCE_M`` above the
+        keys under it, and the steps take no more than the held note less
+        ``SHIFT_BUDGET_S``. False (nothing added) otherwise."""
+        hand = self.hand
+        js_h = hand.joint_slice(finger)
+        arm = self.arm_joints
+        # the idle fingers as they would be once up
+        q_up = self.q.copy()
+        for f in hand.fingers:
+            if f != finger:
+                pl_ = self.place[f]
+                if pl_[0] == "rest":
+                    q_up = self._with_finger(f, self.pl.rest_high_q(f, self.seg), q_up)
+                elif pl_[0] == "above" and pl_[2] != HIGH_M:
+                    q_up = self._with_finger(f, self.pl.above_q(f, pl_[1], self.seg, HIGH_M), q_up)
+        target = press_target(finger, pitch)
+        q_end = q_up.copy()
+        q_end[arm] = self.pl.bases[seg][arm]
+        q_end[js_h] = self.pl.press_q(finger, pitch, seg)[0][js_h]
+        for n in SHIFT_STEPS:
+            path = [q_up]
+            for i in range(1, n):
+                q = q_up.copy()
+                q[arm] = q_up[arm] + (i / n) * (q_end[arm] - q_up[arm])
+                r = self.pl.ik.solve_finger(target, q)
+                self.pl.ik_solves += 1
+                if not r.converged:
+                    break
+                q[js_h] = r.q[js_h]
+                path.append(q)
+            else:
+                path.append(q_end)
+                T = sum(phase_duration(b - a, hand.velocity, hand.acceleration) for a, b in itertools.pairwise(path))
+                if T > budget_s - SHIFT_BUDGET_S:
+                    return False
+                if all(self._held_clear(a, b, finger, pitch) for a, b in itertools.pairwise(path)):
+                    break
+        else:
+            return False
+        # the idle fingers up, then the arm's steps after them
+        n0 = len(self.phases)
+        for f in hand.fingers:
+            if f != finger:
+                self.go_high(f)
+        follows = tuple((self.offset + i, self.phases[i][0].duration_s) for i in range(n0, len(self.phases)))
+        self._blend_floor = math.inf
+        for q in path[1:]:
+            k_arm = len(self.phases)
+            q_next = self.q.copy()
+            q_next[arm], q_next[js_h] = q[arm], q[js_h]
+            self._move(q_next, 0.5, t_s, 0.0, "travel", None, follows=follows or self.arm_motion)
+            follows = ()
+            if len(self.phases) > k_arm:
+                self.arm_motion = ((self.offset + k_arm, self.phases[k_arm][0].duration_s),)
+                self.arm_deltas = {self.offset + k_arm: self.phases[k_arm][0].delta}
+        self._blend_floor = self.offset + len(self.phases)
+        self._land_ok = set()
+        self.seg = seg
+        for f in hand.fingers:  # (held where they were over the old position: "high")
+            if f != finger:
+                self.place[f] = ("high",)
+        self.shifts += 1
+        return True
+
+    def _held_clear(self, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int) -> bool:
+        """On the straight move from ``qa`` to ``qb`` (sampled), ``finger`` holds ``pitch``
+        down (see ``shift``) and every other fingertip clears the keys under it."""
+        hand = self.hand
+        k = hand.fingers.index(finger)
+        key = kb.key(pitch)
+        lo, hi = exposed_range_x(pitch)
+        others = [i for i in range(len(hand.fingers)) if i != k]
+        for u in np.linspace(0.0, 1.0, 11):
+            tips = hand.tip_positions(hand.apply_couplings(qa + u * (qb - qa)))
+            x, z = tips[k, 0], tips[k, 2]
+            if not (lo + HOLD_SLACK_M <= x <= hi - HOLD_SLACK_M
+                    and key.top_z_m - kb.KEY_DIP_M - HOLD_DEEPER_M <= z <= key.top_z_m - kb.DOWN_DEPTH_M - HOLD_SLACK_M):
+                return False
+            o = tips[others]
+            if np.any(o[:, 2] < surfaces_under(o[:, 0], o[:, 1], TRAVEL_INFLATE_M) + TRAVEL_CLEARANCE_M):
+                return False
         return True
 
     def _lift_again(self, q_up: np.ndarray, moving: np.ndarray, q_end: np.ndarray,
@@ -1085,6 +1196,8 @@ def _guard(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -
                               f"{hand.velocity[j]:.4f}", problem=q)
 
 
+SHIFT_GAP_S = 0.25  # the hand moves while a key is held when the next notes come this soon after
+SHIFT_BUDGET_S = 0.1  # ... and the held note is at least this much longer than the move
 WINDOW_NOTES = 200  # a new hand position is chosen for at most this many notes ahead
 
 
@@ -1125,31 +1238,29 @@ def _centroid_target(finger: str, pitches) -> PressTarget:
     return PressTarget(finger, ts[0].pitch, (float(x), float(y), float(z)), (lo, hi))
 
 
-def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float,
-                rail_of: dict[int, float], reasons: dict[int, str]) -> None:
-    """Move the hand to a new position for the notes of ``group`` (struck at ``t``): a
-    whole-hand IK with them pressed and the fingers that play next waiting above their
-    keys; the hand travels there (or starts there, before t = 0).
-
-    Candidate positions, tried in turn until one serves every press of the window (the
-    presses after ``t`` that the fingering plays at this rail position): the hand in the
-    shape of a chord of every finger it uses there on its first key, or on the middle
-    of its keys, or (the fingers only waiting above their next keys) the group alone.
-    The one from which the fingers alone reach the most of those presses, in order, is
-    kept, so that the hand moves again as late as possible."""
+def _best_position(pl: Planner, tl: _Timeline, events, group, t: float, rail: float,
+                   rail_of: dict[int, float], reasons: dict[int, str],
+                   held: PressTarget | None = None) -> tuple[int | None, int]:
+    """The candidate hand position for ``group`` (see ``_reposition``) whose fingers reach
+    the most presses of the window, in order, and that number; with ``held``, a finger
+    that keeps its key down there too (its later keys in the window left out of the
+    shape). (None, 0) if none serves the group."""
     busy = {g.finger for g in group}
     window = list(group) + _window(events, group, t, rail, rail_of, reasons)
     first: dict[str, PressTarget] = {}
     keys: dict[str, list[int]] = {}
     for q_ in window:
+        if held is not None and q_.finger == held.finger:
+            continue
         if q_.finger not in busy:
             first.setdefault(q_.finger, press_target(q_.finger, q_.pitch))
         if q_.pitch not in keys.setdefault(q_.finger, []):
             keys[q_.finger].append(q_.pitch)
-    presses = [press_target(g.finger, g.pitch) for g in group]
+    presses = [press_target(g.finger, g.pitch) for g in group] + ([held] if held is not None else [])
     candidates = [(presses, (), list(first.values()))]
     if any(len(ps) > 1 for ps in keys.values()):
-        candidates.append(([], (), [_centroid_target(f, ps) for f, ps in keys.items()]))
+        candidates.append(([held] if held is not None else [],
+                           (), [_centroid_target(f, ps) for f, ps in keys.items()]))
     candidates.append((presses, list(first.values()), ()))
     candidates.append((presses, (), ()))  # the group alone, every other finger hovering
     seg = None
@@ -1163,6 +1274,22 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
             seg, best = s_, c
         if c == len(window):
             break
+    return seg, (best if seg is not None else 0)
+
+
+def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float,
+                rail_of: dict[int, float], reasons: dict[int, str]) -> None:
+    """Move the hand to a new position for the notes of ``group`` (struck at ``t``): a
+    whole-hand IK with them pressed and the fingers that play next waiting above their
+    keys; the hand travels there (or starts there, before t = 0).
+
+    Candidate positions, tried in turn until one serves every press of the window (the
+    presses after ``t`` that the fingering plays at this rail position): the hand in the
+    shape of a chord of every finger it uses there on its first key, or on the middle
+    of its keys, or (the fingers only waiting above their next keys) the group alone.
+    The one from which the fingers alone reach the most of those presses, in order, is
+    kept, so that the hand moves again as late as possible."""
+    seg, _ = _best_position(pl, tl, events, group, t, rail, rail_of, reasons)
     if seg is None and len(group) > 1:
         # the chord whole is beyond the hand here: as much of it as it holds, from the
         # bottom (at least the lowest note); the rest is named
@@ -1193,6 +1320,34 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
         for g in group:
             reasons.setdefault(g.note_index, "no path of the hand there keeps the fingers clear of "
                                "the keys")
+
+
+def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_of, reasons,
+                      iv, notes) -> None:
+    """Before the last held key (event ``k``, interval ``iv``) is let go of, if the next
+    notes need a new hand position and come soon after, move the hand there while that
+    key is still held: to a position (whole-hand IK) from which its finger still holds it
+    and the next notes' fingers reach theirs; the holding finger follows the arm on its
+    key (``_Timeline.shift``). Saves the lift-travel-land between legato notes."""
+    if tl.seg is None:
+        return
+    t = events[k][0]
+    nxt = next((e for e in events[k + 1:] if e[1] == 1), None)
+    if nxt is None or nxt[0] - t > SHIFT_GAP_S:
+        return
+    group = [g for g in groups[nxt[0]] if g.note_index not in reasons]
+    h = iv.press
+    if len(group) != 1 or any(g.finger == h.finger for g in group) or all(
+            pl.press_q(g.finger, g.pitch, tl.seg)[1].converged for g in group):
+        return
+    n = notes[h.note_index]
+    rail = rail_of[group[0].note_index]
+    # a position that serves the next notes as far as the one the hand would travel to
+    seg, c = _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons,
+                            held=press_target(h.finger, h.pitch))
+    if seg is None or c < _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons)[1]:
+        return
+    tl.shift(seg, h.finger, h.pitch, t, budget_s=n.offset_s - n.onset_s)
 
 
 def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
@@ -1385,6 +1540,8 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                     tl.failure = None
                     reasons[p.note_index] = f"{why} (for the {p.finger})"
             elif p.note_index in down:
+                if len(down) == 1:
+                    _shift_while_held(pl, tl, events, k, groups, rail_of, reasons, iv, notes)
                 tl.release(p.finger, p.pitch, t, p.note_index)
                 del down[p.note_index]
                 nxt = next_of.get(p.note_index)
@@ -1407,7 +1564,8 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
         sys.stderr.write(f"\rplanning {total}/{total} key events (100%)\n")
     tl.rest_all(end_song)
     flush(final_t=end_song + 0.25)
-    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late, tl.travels)
+    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late, tl.travels,
+                      tl.shifts)
 
 
 # ---------------------------------------------------------------- CLI glue
@@ -1421,7 +1579,9 @@ def format_summary(song_name: str, res: PlayResult, song_s: float, out: str) -> 
              f"{res.rows} rows ({res.duration_s:.2f} s) -> {out}"),
              (f"planning {res.planning_s * 1000:.0f} ms for {song_s:.2f} s of music "
              f"(real-time factor {rtf:.0f}x), first row after {res.first_row_s * 1000:.0f} ms, "
-             f"{res.ik_solves} IK solves, {res.travels} change{'' if res.travels == 1 else 's'} of hand position")]
+             f"{res.ik_solves} IK solves, {res.travels + res.shifts} change"
+             f"{'' if res.travels + res.shifts == 1 else 's'} of hand position"
+             + (f" ({res.shifts} while a key was held)" if res.shifts else ""))]
     for nr in bad:
         lines.append(f"  infeasible: t={nr.onset_s:.3f} s {pitch_name(nr.pitch)} (MIDI {nr.pitch}): {nr.reason}")
     for i, lt in res.late:
