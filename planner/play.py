@@ -1351,7 +1351,8 @@ def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_o
 
 
 def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
-                   reasons: dict[int, str], dt: float) -> bool:
+                   reasons: dict[int, str], dt: float, hand_v: np.ndarray | None = None,
+                   hand_a: np.ndarray | None = None) -> bool:
     """Notes whose key the timing QP can put down only after half of the note is over are
     left out (named in ``reasons``): struck that late they would mostly sound after
     their time, as wrong notes, and delay the notes after them. The press and its
@@ -1374,10 +1375,32 @@ def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
         d = phases[k].delta + phases[r].delta
         # (the sum of the two durations keeps the sum of the two moves within every limit)
         T = phases[k].duration_s + phases[r].duration_s
-        # (no blend with the motion before: it was checked against the press alone)
-        phases[k] = dataclasses.replace(phases[k], delta=d, duration_s=T, anchor=0.5, weight=0.0,
-                                        blend_s=0.0, blend_after=-1)
-        phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
+        own = p.order_joints if p.order_joints is not None else p.joints
+        moves = [j for j in range(k + 1, r) if np.any(phases[j].delta[own])]
+        if moves:
+            # the hand moved while the key was to be held (``shift``): the finger goes from
+            # where the press started to where the release ends during the arm's first
+            # step instead (between two places within its limits), and no longer presses
+            fj = np.zeros_like(d, dtype=bool)
+            fj[own] = True
+            total = d + sum((phases[j].delta * fj for j in moves), np.zeros_like(d))
+            for i, j in enumerate(moves):
+                dj = np.where(fj, total if i == 0 else 0.0, phases[j].delta)
+                Tj = max(phases[j].duration_s, phase_duration(dj, hand_v, hand_a))
+                phases[j] = dataclasses.replace(phases[j], delta=dj, duration_s=Tj)
+                meta[j] = (phases[j],) + tuple(meta[j][1:])
+            phases[k] = dataclasses.replace(phases[k], delta=np.zeros_like(d), weight=0.0,
+                                            blend_s=0.0, blend_after=-1)
+            phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
+        else:
+            # (no blend with the motion before: it was checked against the press alone)
+            phases[k] = dataclasses.replace(phases[k], delta=d, duration_s=T, anchor=0.5, weight=0.0,
+                                            blend_s=0.0, blend_after=-1)
+            phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
+        for j in range(r + 1, len(phases)):  # (a blend with the release was checked against it alone)
+            if phases[j].blend_after in (k, r):
+                phases[j] = dataclasses.replace(phases[j], blend_s=0.0, blend_after=-1)
+                meta[j] = (phases[j],) + tuple(meta[j][1:])
         meta[k] = (phases[k], "move", None)
         meta[r] = (phases[r], "move", None)
         reasons[note] = ("too late: the finger cannot get there before half of it is over" if late_down
@@ -1439,7 +1462,7 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                                               blend_s=blend[0], blend_after=blend[1]))
         starts = solve_timing(build_timing(phases, t_cut))
         for _ in range(DROP_ROUNDS):
-            if not _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt):
+            if not _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt, hand.velocity, hand.acceleration):
                 break
             starts = solve_timing(build_timing(phases, t_cut))
         for (p, kind, note), x in zip(phases_meta, starts):
