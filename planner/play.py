@@ -757,7 +757,7 @@ class _Timeline:
         ``n`` equal steps of the arm (1, 2 or 4, the fewest that do), the finger at each
         step where single-finger IK presses the key from there. Kept only if, sampled
         along it, the holding finger's tip stays on the part of its key no other key
-        overhangs (``HOLD_SLACK_M`` inside its sides), below the depth at which the key
+        overhangs (``TRAVEL_INFLATE_M`` inside its sides), below the depth at which the key
         is down (by ``HOLD_SLACK_M``) and no more than ``HOLD_DEEPER_M`` below full dip
         (the key bed is 2 mm below it), every other tip ``TRAVEL_CLEARANCE_M`` above the
         keys under it, and the steps take no more than the held note less
@@ -834,7 +834,7 @@ class _Timeline:
         for u in np.linspace(0.0, 1.0, 11):
             tips = hand.tip_positions(hand.apply_couplings(qa + u * (qb - qa)))
             x, z = tips[k, 0], tips[k, 2]
-            if not (lo + HOLD_SLACK_M <= x <= hi - HOLD_SLACK_M
+            if not (lo + TRAVEL_INFLATE_M <= x <= hi - TRAVEL_INFLATE_M
                     and key.top_z_m - kb.KEY_DIP_M - HOLD_DEEPER_M <= z <= key.top_z_m - kb.DOWN_DEPTH_M - HOLD_SLACK_M):
                 return False
             o = tips[others]
