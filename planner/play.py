@@ -1342,9 +1342,16 @@ def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_o
         return
     n = notes[h.note_index]
     rail = rail_of[group[0].note_index]
+    budget = n.offset_s - n.onset_s - SHIFT_BUDGET_S
+    if pl.rail is not None:  # (the rail's own move alone must fit)
+        d = abs(rail - float(tl.q[pl.rail]))
+        if phase_duration(np.array([d]), pl.hand.velocity[[pl.rail]], pl.hand.acceleration[[pl.rail]]) > budget:
+            return
+    held = press_target(h.finger, h.pitch)
+    if pl.anchor([press_target(g.finger, g.pitch) for g in group] + [held], rail, tl.q) is None:
+        return  # (the plainest shape first: the search below tries it last)
     # a position that serves the next notes as far as the one the hand would travel to
-    seg, c = _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons,
-                            held=press_target(h.finger, h.pitch))
+    seg, c = _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons, held=held)
     if seg is None or c < _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons)[1]:
         return
     tl.shift(seg, h.finger, h.pitch, t, budget_s=n.offset_s - n.onset_s)
