@@ -219,7 +219,9 @@ class Planner:
         pressing too (a chord the hand does not play, only takes the shape of, so that
         each of those fingers reaches its key from there by itself). Returns its index in
         ``bases`` (the hand there with every finger up), or None when the IK cannot reach."""
-        key = (tuple(targets), tuple(upcoming), tuple(chord), rail_m)
+        neutral = q_from is None  # (from the natural hand at that rail, not where it is)
+        q_from = self.posture_at(rail_m) if neutral else q_from
+        key = (tuple(targets), tuple(upcoming), tuple(chord), rail_m, neutral)
         if key in self._anchors:  # the same shape at the same rail: the same position
             return self._anchors[key]
         self._anchors[key] = seg = self._anchor(targets, rail_m, q_from, upcoming, chord)
@@ -1265,14 +1267,19 @@ def _best_position(pl: Planner, tl: _Timeline, events, group, t: float, rail: fl
     candidates.append((presses, (), ()))  # the group alone, every other finger hovering
     seg = None
     best = len(group) - 1  # a position must at least serve the group itself
-    for targets, upcoming, chord in candidates:
-        s_ = pl.anchor(targets, rail, tl.q, upcoming, chord)
-        if s_ is None:
-            continue
-        c = _covered(pl, s_, window)
-        if c > best:
-            seg, best = s_, c
-        if c == len(window):
+    # from where the hand is (it moves least), else from the natural hand at that rail (a
+    # wrist twisted far by earlier positions may leave no shape within reach)
+    for q_from in (tl.q, None):
+        for targets, upcoming, chord in candidates:
+            s_ = pl.anchor(targets, rail, q_from, upcoming, chord)
+            if s_ is None:
+                continue
+            c = _covered(pl, s_, window)
+            if c > best:
+                seg, best = s_, c
+            if c == len(window):
+                break
+        if seg is not None:
             break
     return seg, (best if seg is not None else 0)
 

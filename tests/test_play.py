@@ -549,3 +549,30 @@ def test_the_hand_moves_while_a_key_is_held_when_the_next_note_needs_it(planned,
     moving = tr.t_s[1:][np.abs(np.diff(rail)) > 1e-6]
     held = [p for p in rep.play.played if any(p.start_s < t < p.end_s - 0.01 for t in moving)]
     assert held, "the rail never moved while a key was down"
+
+
+def test_a_new_hand_position_is_found_from_a_twisted_wrist(planner):
+    """The IK for a new hand position starts from where the hand is, so that it moves
+    least, and keeps the wrist near where it is; a wrist twisted far by earlier positions
+    (here 0.51 rad flexed, 0.44 rad deviated: the hand as a random melody left it) left no
+    shape with the thumb on B5 that it could use, the hand stayed, and the notes after
+    failed one by one (F1 0.945 -> 0.870). The search now tries again from the natural
+    hand at that rail."""
+    from planner.play import _best_position, _Timeline
+    from planner.targets import Press, PressInterval
+
+    q = np.array([0.23498978529523593, 0.5088737420656119, -0.43598831115609304, 1.0471975511965976,
+                  0.49493363971558685, 1.3962634015954636, -0.3490658503988659, -0.2623448959888377,
+                  1.1523150257018826, 0.7685941221431557, -0.261799387799, -0.22780999200490537,
+                  1.3200292158472278, 0.880459486970101, -0.17511747579145281, -0.2389022691153197,
+                  1.1975173131590298, 0.7987440478770729, -0.21489263567380296, -0.20066169386292246,
+                  0.6297923080349153, 0.4200714694592885])
+    tl = _Timeline(planner, planner.hand, q, None, 0.01)
+    rail = 0.3591976406704055
+    notes = [(83, "thumb"), (84, "index"), (86, "middle"), (88, "ring"), (89, "ring"), (91, "pinky")]
+    presses = [Press(f, p, 1.0, i, 80) for i, (p, f) in enumerate(notes)]
+    events = [(0.43 * i, 1, pr.pitch, PressInterval(0.43 * i, 0.43 * i + 0.39, pr)) for i, pr in enumerate(presses)]
+    seg, covered = _best_position(planner, tl, events, presses[:1], 0.0, rail,
+                                  {pr.note_index: rail for pr in presses}, {})
+    assert seg is not None and covered >= 1
+    assert planner.press_q("thumb", 83, seg)[1].converged
