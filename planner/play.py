@@ -49,6 +49,7 @@ EARLY_FRAMES = 0.4  # a key goes down at most this fraction of a frame before th
 # before its note's first frame: never in the frame before (a note early is a wrong note)
 CHUNK_PHASES = 40
 PART_NOTES = 256  # a long song is fingered in parts of at least this many notes
+FIRST_PART_NOTES = 32  # ... the first of at least this many
 TRAVEL_LEAD_S = 0.25  # a chunk cut before a change of hand position ends this long before the last release
 FIRST_CHUNK_PHASES = 12
 REST_HOVER_Z_M = 0.020
@@ -432,14 +433,16 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
 
 
 def _parts(notes) -> list[list[int]]:
-    """Note indices (by onset) cut into parts of at least ``PART_NOTES`` notes, each cut
-    where every key is up for at least ``MOVE_S`` (so no press interval is shortened for
-    a note of the next part). A song without such a pause is one part."""
+    """Note indices (by onset) cut into parts of at least ``PART_NOTES`` notes (the first:
+    ``FIRST_PART_NOTES``, so that the first rows come soon), each cut where every key is
+    up for at least ``MOVE_S`` (so no press interval is shortened for a note of the next
+    part). A song without such a pause is one part."""
     order = sorted(range(len(notes)), key=lambda i: (notes[i].onset_s, notes[i].pitch))
     out: list[list[int]] = [[]]
     end = -math.inf
     for i in order:
-        if len(out[-1]) >= PART_NOTES and notes[i].onset_s >= end + MOVE_S:
+        if (len(out[-1]) >= (FIRST_PART_NOTES if len(out) == 1 else PART_NOTES)
+                and notes[i].onset_s >= end + MOVE_S):
             out.append([])
         out[-1].append(i)
         end = max(end, notes[i].offset_s)

@@ -263,7 +263,7 @@ def test_leaps_cannot_reach_the_target_on_this_rail(planner):
 
 
 def test_parts_are_cut_only_where_every_key_is_up():
-    from planner.play import PART_NOTES, _parts
+    from planner.play import FIRST_PART_NOTES, PART_NOTES, _parts
     from planner.targets import MOVE_S
 
     legato = [Note(60 + i % 5, 0.1 * i, 0.1 * i + 0.1, 80) for i in range(3 * PART_NOTES)]
@@ -274,6 +274,10 @@ def test_parts_are_cut_only_where_every_key_is_up():
     assert [len(p) for p in parts] == [PART_NOTES + 7, 2 * PART_NOTES - 7]
     for a, b in itertools.pairwise(parts):
         assert min(paused[i].onset_s for i in b) - max(paused[i].offset_s for i in a) >= MOVE_S
+    # the first part is cut sooner (its fingering is all the first rows wait for)
+    early = [Note(n.pitch, n.onset_s + (0.2 if i >= FIRST_PART_NOTES + 3 else 0.0),
+                  n.offset_s + (0.2 if i >= FIRST_PART_NOTES + 3 else 0.0), 80) for i, n in enumerate(legato)]
+    assert [len(p) for p in _parts(early)] == [FIRST_PART_NOTES + 3, len(legato) - FIRST_PART_NOTES - 3]
 
 
 def test_a_song_planned_in_parts_is_played_as_well(planner, tmp_path, monkeypatch):
@@ -289,6 +293,7 @@ def test_a_song_planned_in_parts_is_played_as_well(planner, tmp_path, monkeypatc
     song = tmp_path / "three.mid"
     write_notes_midi(notes, song)
     monkeypatch.setattr(play_mod, "PART_NOTES", 14)
+    monkeypatch.setattr(play_mod, "FIRST_PART_NOTES", 14)
     assert len(play_mod._parts(notes)) == 3
     path = tmp_path / "three.csv"
     res = plan_song(load_song(song), planner.hand, str(path), planner=planner)
