@@ -62,8 +62,8 @@ WRIST_TRAVEL_RAD = -0.35  # wrist extension (20 deg) raising the fingers for a r
 TRAVEL_CLEARANCE_M = 0.002  # a fingertip moving over the keys stays this far above their tops
 KEY_UP_SLACK_M = 0.0005  # a finger leaving its key is this far above the key-up depth once the arm moves
 HOLD_SLACK_M = 0.0005  # a held key's tip stays this far below the key-down depth ...
-HOLD_DEEPER_M = 0.001
-SHIFT_STEPS = (1, 2, 4)  # the arm's steps while a finger holds its key (the fewest that keep it down)  # ... and at most this far below full dip (the key bed is 2 mm below it)
+HOLD_DEEPER_M = 0.001  # ... and at most this far below full dip (the key bed is 2 mm below it)
+SHIFT_STEPS = (1, 2, 4)  # the arm's steps while a finger holds its key (the fewest that keep it down)
 ARRIVE_M = 0.001  # a finger touches its key once what is left of the arm's move shifts it less
 ACROSS_SPLITS = 2  # a finger crossing keys high is given up to 3 waypoints
 PATH_STEP_M = 0.003  # a finger's path over the keys is checked at least this often
@@ -73,7 +73,7 @@ TRAVEL_OVERLAPS = tuple(np.round(np.arange(0.1, 1.0001, 0.05), 2))  # fractions 
 _SIM_DT_S = 0.002
 HOVER_MIN_M = 0.005  # issue: a finger not pressing is at least this far above the keys under it
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
-START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on  # a finger waiting to press (or just released) rests this far above its key
+START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on
 
 
 @dataclass(frozen=True)
@@ -254,7 +254,7 @@ class Planner:
             base[js] = self._vertical(r.q, t.finger, kb.key(t.pitch).top_z_m + HIGH_M).q[js]
         self.bases[seg] = base
         tips = self.hand.tip_positions(base)
-        if np.any(tips[:, 2] - surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) < HOVER_MIN_M - PRESS_TOL_M):
+        if not np.all(_above_keys(tips, HOVER_MIN_M - PRESS_TOL_M)):
             return None  # a finger cannot get off the keys there: no place to wait in
         return seg
 
@@ -351,6 +351,12 @@ def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, 
 
 
 _CROSSINGS: dict = {}
+
+
+def _above_keys(tips: np.ndarray, margin_m: float) -> np.ndarray:
+    """Per fingertip (rows of ``tips``, m): is it ``margin_m`` or more above the top of
+    every key whose footprint, grown by ``TRAVEL_INFLATE_M``, holds it."""
+    return tips[:, 2] >= surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) + margin_m
 
 
 def _least(values, ok) -> float:
@@ -487,7 +493,6 @@ class _Timeline:
         self.shifts = 0  # hand moves made while a key was held
         self._blend_floor = 0  # no motion blends with one before this (global index)
         self.failure: str | None = None  # why the last press could not be made, if not reach
-        self.all_joints = np.arange(hand.n)
         self.arm_joints = _arm_joints(hand)
 
     def _move(self, q_new: np.ndarray, anchor: float, ideal: float, weight: float, kind: str,
@@ -580,7 +585,7 @@ class _Timeline:
             s1, s2 = min_jerk(t / Tp), min_jerk((t - Tp + o) / T)
             qs.extend(q_a + np.outer(s1, dp) + np.outer(s2, dq))
         tips = np.array([self.hand.tip_positions(q)[i] for q in self.hand.apply_couplings(np.array(qs))])
-        return bool(np.all(tips[:, 2] >= surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) - GRAZE_M))
+        return bool(np.all(_above_keys(tips, -GRAZE_M)))
 
     def _whole_fingers(self, joints: np.ndarray) -> np.ndarray:
         """``joints`` with every joint of each finger they touch."""
@@ -644,13 +649,13 @@ class _Timeline:
             q_low = self._with_finger(f, self.pl.above_q(f, ready[f], seg, LOW_M), q_low)
         land_z = LOW_M
         # the fingers as they are (released keys left LOW_M below), else all up to HIGH_M
-        last, lifts, q0 = self._last_motions()
+        last, lifts, q0, lifting = self._last_motions()
         c = self._travel_overlap(q0, lifts, q_low, ready)
         if c is None:
             for f in hand.fingers:
                 self._release_high(f)
                 self.go_high(f)
-            last, lifts, q0 = self._last_motions()
+            last, lifts, q0, lifting = self._last_motions()
             c = self._travel_overlap(q0, lifts, q_low, ready)
         if c is None:
             land_z = HIGH_M
@@ -660,7 +665,7 @@ class _Timeline:
         moving = arm
         q_final = None  # where the fingers go straight down to after landing, if not q_end
         # phase -> the arm's lag after its start (all of a motion that does not lift)
-        arm_after = None if c is None else {g: c[0] if g in self._lifting else ph.duration_s
+        arm_after = None if c is None else {g: c[0] if g in lifting else ph.duration_s
                                             for g, ph in last.items()}
         for z_up in TRAVEL_LIFTS_M:
             if c is not None:
@@ -765,8 +770,8 @@ class _Timeline:
         overhangs (``TRAVEL_INFLATE_M`` inside its sides), below the depth at which the key
         is down (by ``HOLD_SLACK_M``) and no more than ``HOLD_DEEPER_M`` below full dip
         (the key bed is 2 mm below it), every other tip ``TRAVEL_CLEARANCE_M`` above the
-        keys under it, and the steps take no more than the held note less
-        ``SHIFT_BUDGET_S``. False (nothing added) otherwise."""
+        keys under it, and the steps take no more than ``budget_s``. False (nothing added)
+        otherwise."""
         hand = self.hand
         js_h = hand.joint_slice(finger)
         arm = self.arm_joints
@@ -774,11 +779,8 @@ class _Timeline:
         q_up = self.q.copy()
         for f in hand.fingers:
             if f != finger:
-                pl_ = self.place[f]
-                if pl_[0] == "rest":
-                    q_up = self._with_finger(f, self.pl.rest_high_q(f, self.seg), q_up)
-                elif pl_[0] == "above" and pl_[2] != HIGH_M:
-                    q_up = self._with_finger(f, self.pl.above_q(f, pl_[1], self.seg, HIGH_M), q_up)
+                q_f, _ = self._high_q(f, q_up)
+                q_up = q_up if q_f is None else q_f
         target = press_target(finger, pitch)
         q_end = q_up.copy()
         q_end[arm] = self.pl.bases[seg][arm]
@@ -797,7 +799,7 @@ class _Timeline:
             else:
                 path.append(q_end)
                 T = sum(phase_duration(b - a, hand.velocity, hand.acceleration) for a, b in itertools.pairwise(path))
-                if T > budget_s - SHIFT_BUDGET_S:
+                if T > budget_s:
                     return False
                 if all(self._held_clear(a, b, finger, pitch) for a, b in itertools.pairwise(path)):
                     break
@@ -842,8 +844,7 @@ class _Timeline:
             if not (lo + TRAVEL_INFLATE_M <= x <= hi - TRAVEL_INFLATE_M
                     and key.top_z_m - kb.KEY_DIP_M - HOLD_DEEPER_M <= z <= key.top_z_m - kb.DOWN_DEPTH_M - HOLD_SLACK_M):
                 return False
-            o = tips[others]
-            if np.any(o[:, 2] < surfaces_under(o[:, 0], o[:, 1], TRAVEL_INFLATE_M) + TRAVEL_CLEARANCE_M):
+            if not np.all(_above_keys(tips[others], TRAVEL_CLEARANCE_M)):
                 return False
         return True
 
@@ -888,9 +889,9 @@ class _Timeline:
         rest = np.setdiff1d(self.arm_joints, arm)
         return groups + ([rest] if rest.size else [])
 
-    def _last_motions(self) -> tuple[dict[int, Phase], list[tuple[np.ndarray, float]], np.ndarray]:
+    def _last_motions(self) -> tuple[dict[int, Phase], list[tuple[np.ndarray, float]], np.ndarray, set[int]]:
         """Each finger's last motion (global index -> phase); the (delta, duration) of
-        those that lift the fingertip, and the configuration before them. The arm may
+        those that lift the fingertip, the configuration before them, and their indices. The arm may
         start while a lift still runs (the simulation sees it), but only after a motion
         that does not lift has ended: started early, it would be lower than simulated."""
         last: dict[int, Phase] = {}
@@ -906,8 +907,7 @@ class _Timeline:
                     lifting.append(g)
         lifts = [(last[g].delta, last[g].duration_s) for g in sorted(lifting)]
         q0 = self.q - sum((d for d, _ in lifts), np.zeros(self.hand.n))
-        self._lifting = set(lifting)
-        return last, lifts, q0
+        return last, lifts, q0, set(lifting)
 
     def _travel_overlap(self, q0: np.ndarray, lifts: list[tuple[np.ndarray, float]],
                         q_end: np.ndarray, ready: dict[str, int] | None = None,
@@ -1042,17 +1042,21 @@ class _Timeline:
 
     def go_high(self, finger: str) -> None:
         """Lift ``finger`` straight up to ``HIGH_M`` above the white keys' top, from wherever it is."""
+        q, place = self._high_q(finger)
+        if q is not None:
+            self._move(q, 0.5, 0.0, 0.0, "move", None)
+            self.place[finger] = place
+
+    def _high_q(self, finger: str, q_into: np.ndarray | None = None) -> tuple[np.ndarray | None, tuple]:
+        """``q_into`` (default: where the hand is) with ``finger`` where ``go_high`` takes
+        it, and its place then; (None, its place) if it is that high already."""
         pl = self.place[finger]
         if pl[0] == "high" or (pl[0] == "above" and pl[2] == HIGH_M):
-            return
+            return None, pl
         if pl[0] == "rest":
-            q = self._with_finger(finger, self.pl.rest_high_q(finger, self.seg))
-            self._move(q, 0.5, 0.0, 0.0, "move", None)
-            self.place[finger] = ("high",)
-            return
-        q = self._with_finger(finger, self.pl.above_q(finger, pl[1], self.seg, HIGH_M))
-        self._move(q, 0.5, 0.0, 0.0, "move", None)
-        self.place[finger] = ("above", pl[1], HIGH_M)
+            return self._with_finger(finger, self.pl.rest_high_q(finger, self.seg), q_into), ("high",)
+        return (self._with_finger(finger, self.pl.above_q(finger, pl[1], self.seg, HIGH_M), q_into),
+                ("above", pl[1], HIGH_M))
 
     def press(self, finger: str, pitch: int, t_s: float, note: int, velocity: int) -> bool:
         qp, r = self.pl.press_q(finger, pitch, self.seg)
@@ -1132,7 +1136,7 @@ class _Timeline:
             q[js] = qa[js] + u * (qb[js] - qa[js])
             tips.append(self.hand.tip_positions(self.hand.apply_couplings(q))[k])
         tips = np.array(tips)
-        return bool(np.all(tips[:, 2] >= surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M) - GRAZE_M))
+        return bool(np.all(_above_keys(tips, -GRAZE_M)))
 
     def _across(self, finger: str, q_to: np.ndarray, t_s: float) -> bool:
         """Move ``finger`` (up already) sideways to its joints in ``q_to``; if the straight
@@ -1364,12 +1368,11 @@ def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_o
     seg, c = _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons, held=held)
     if seg is None or c < _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons)[1]:
         return
-    tl.shift(seg, h.finger, h.pitch, t, budget_s=n.offset_s - n.onset_s)
+    tl.shift(seg, h.finger, h.pitch, t, budget_s=budget)
 
 
 def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
-                   reasons: dict[int, str], dt: float, hand_v: np.ndarray | None = None,
-                   hand_a: np.ndarray | None = None) -> bool:
+                   reasons: dict[int, str], dt: float, hand_v: np.ndarray, hand_a: np.ndarray) -> bool:
     """Notes whose key the timing QP can put down only after half of the note is over are
     left out (named in ``reasons``): struck that late they would mostly sound after
     their time, as wrong notes, and delay the notes after them. The press and its

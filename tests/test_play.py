@@ -489,7 +489,7 @@ def test_a_note_whose_key_cannot_be_up_by_its_end_is_left_out():
         phases = [Phase(d, 0.1, 0.5, 0.0, 1.0), Phase(-d, 0.1, 0.5, 0.195, 0.3)]
         meta = [(phases[0], "press", 0), (phases[1], "release", 0)]
         reasons = {}
-        dropped = _drop_hopeless(phases, meta, np.array([0.0, release_start]), notes, reasons, dt)
+        dropped = _drop_hopeless(phases, meta, np.array([0.0, release_start]), notes, reasons, dt, np.ones(2), np.ones(2))
         return dropped, phases, reasons
 
     dropped, phases, reasons = case(0.1)  # up at 0.15: in time
