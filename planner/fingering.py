@@ -9,7 +9,10 @@ natural lateral offsets (from the hand's rest posture, ``HandReach``) to
 the keys. Its cost is
 
 - stretch: squared distance of every finger from its natural place at that
-  rail position, infinite beyond the finger's reach;
+  rail position, infinite beyond the finger's reach, or where two of its keys
+  are a shape the hand cannot take (``pair_ok``: the planner's whole-hand IK;
+  the lateral model alone misses, e.g., a finger between two pressing ones that
+  has no room to clear the keys);
 - the thumb (and, less, the pinky) on a black key;
 and the cost of going from one candidate to the next is
 
@@ -40,6 +43,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,6 +61,8 @@ TOP_NOTE_COST = 1.0  # leaving out a chord's top note (often the melody) costs t
 HELD_CONFLICT = 1e6
 MAX_GROUP = 10  # notes struck together beyond this many (the lowest) are not even tried  # a finger moved to another key sooner than this after its release is penalised
 FINGER_ORDER = ("thumb", "index", "middle", "ring", "pinky")
+# (finger 1, pitch 1, finger 2, pitch 2) -> whether both can be down at once
+PairCheck = Callable[[str, int, str, int], bool]
 
 
 @dataclass(frozen=True)
@@ -109,8 +115,13 @@ def _groups(onsets: list[float]) -> list[list[int]]:
     return groups
 
 
-def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infeasible]]:
-    """Choose a finger for every note of ``notes`` (sorted by onset, then pitch)."""
+def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
+                   ) -> tuple[list[Assignment], list[Infeasible]]:
+    """Choose a finger for every note of ``notes`` (sorted by onset, then pitch).
+
+    ``pair_ok(f1, p1, f2, p2)``: whether finger f1 on pitch p1 and f2 on p2 can be
+    down at once (the planner's whole-hand IK); every two keys of a chord must pass
+    it. None: the lateral reach model alone."""
     order = sorted(range(len(notes)), key=lambda i: (notes[i].onset_s, notes[i].pitch))
     groups_local = _groups([notes[i].onset_s for i in order])
     groups = [[order[k] for k in g] for g in groups_local]
@@ -125,7 +136,7 @@ def assign_fingers(notes, reach: HandReach) -> tuple[list[Assignment], list[Infe
             for i in g[:-MAX_GROUP]:
                 infeasible.append(Infeasible(i, f"more than {MAX_GROUP} notes at once"))
             g = g[-MAX_GROUP:]
-        cs = _candidates(notes, g, reach)
+        cs = _candidates(notes, g, reach, pair_ok)
         if not cs:
             xs = [kb.key(notes[i].pitch).center_x_m for i in g]
             why = (f"chord wider than the hand ({(max(xs) - min(xs)) * 1000:.0f} mm)" if len(g) > 1
@@ -214,7 +225,18 @@ def reposition_s(d_m: float, reach: HandReach) -> float:
     return REPOSITION_OVERHEAD_S + t_rail
 
 
-def _candidates(notes, g: list[int], reach: HandReach) -> list[tuple]:
+def fit_rail(fingers, xs_m: np.ndarray, reach: HandReach) -> tuple[float, np.ndarray]:
+    """The rail position (m) that puts ``fingers`` nearest, by their reach, to keys at
+    ``xs_m`` (least squares of each finger's sideways stretch from its natural place
+    over its reach), clipped to the rail's travel; and each finger's stretch there (m)."""
+    offs = np.array([reach.offset_m[f] for f in fingers])
+    w = 1.0 / np.array([reach.reach_m[f] for f in fingers]) ** 2
+    rail = float(np.sum(w * (xs_m - offs)) / np.sum(w))
+    rail = min(max(rail, reach.rail_range_m[0]), reach.rail_range_m[1])
+    return rail, xs_m - offs - rail
+
+
+def _candidates(notes, g: list[int], reach: HandReach, pair_ok: PairCheck | None = None) -> list[tuple]:
     """Fingerings of the group ``g`` (note indices by pitch) as (fingers, rail, static
     cost, rail span): ``fingers`` has one entry per note, None for a note left out. All
     of the group if five fingers can hold it, else its largest subsets that they can
@@ -232,12 +254,12 @@ def _candidates(notes, g: list[int], reach: HandReach) -> list[tuple]:
             for fingers in itertools.combinations(FINGER_ORDER, size):
                 offs = np.array([reach.offset_m[f] for f in fingers])
                 lim = np.array([reach.reach_m[f] for f in fingers])
-                # rail that minimises the normalised stretch, clipped to the rail's travel
-                w = 1.0 / lim**2
-                rail = float(np.sum(w * (xs - offs)) / np.sum(w))
-                rail = min(max(rail, reach.rail_range_m[0]), reach.rail_range_m[1])
-                dev = xs - offs - rail
+                rail, dev = fit_rail(fingers, xs, reach)
                 if np.any(np.abs(dev) > lim):
+                    continue
+                if pair_ok is not None and not all(
+                        pair_ok(fingers[a], notes[g[keep[a]]].pitch, fingers[b], notes[g[keep[b]]].pitch)
+                        for a, b in itertools.combinations(range(size), 2)):
                     continue
                 if reach.spread_m is not None and len(fingers) > 1:
                     sp = np.array([reach.spread_m[f] for f in fingers])

@@ -8,16 +8,18 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import json
 import math
 import os
 import sys
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from planner.errors import InputError, SolverError
-from planner.fingering import HandReach, assign_fingers
+from planner.fingering import FINGER_ORDER, HandReach, assign_fingers, fit_rail
 from planner.hand.model import HandModel, load_hand
 from planner.ik import (
     PRESS_TOL_M,
@@ -73,6 +75,8 @@ TRAVEL_OVERLAPS = tuple(np.round(np.arange(0.1, 1.0001, 0.05), 2))  # fractions 
 _SIM_DT_S = 0.002
 HOVER_MIN_M = 0.005  # issue: a finger not pressing is at least this far above the keys under it
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
+PAIR_TABLE_DIR = Path(__file__).parent / "tables"
+PAIR_RETRY_ITER = 120  # a two-finger chord's IK that has not converged goes on this many steps
 START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on
 
 
@@ -111,6 +115,7 @@ class Planner:
         self.rail = hand.index.get("rail")
         self._cache: dict = {}
         self._anchors: dict = {}  # hand positions of this song, by the IK problem that made them
+        self._pairs: dict = _load_pair_table(hand)  # pair_ok's answers (shipped ones first)
         self.bases: list[np.ndarray] = []
         self.ik_solves = 0
         self.rest = self._rest_posture()
@@ -127,6 +132,60 @@ class Planner:
         repeat, move = self._finger_times(tips)
         self.reach = HandReach(offsets, reach, float(vmax), (float(lo), float(hi)), float(amax),
                                repeat_s=repeat, move_s=move)
+
+    def pair_ok(self, f1: str, p1: int, f2: str, p2: int) -> bool:
+        """Whether finger ``f1`` on ``p1`` and ``f2`` on ``p2`` can be down at once with
+        every other fingertip clear of the keys: the whole-hand IK of a chord, from the
+        natural hand at the rail the fingering's reach model fits to the two. The keyboard
+        repeats every octave and the rail only translates the hand, so the answer is
+        worked out once per pair of fingers, pitch class and interval (in the octave of
+        middle C) and remembered."""
+        if f1 == f2:
+            return p1 == p2
+        if FINGER_ORDER.index(f1) > FINGER_ORDER.index(f2):
+            f1, p1, f2, p2 = f2, p2, f1, p1
+        key = (f1, f2, p1 % 12, p2 - p1)
+        if key not in self._pairs:
+            a = 60 + p1 % 12
+            b = a + p2 - p1
+            ok = kb.LOWEST_PITCH <= b <= kb.HIGHEST_PITCH
+            if ok:
+                q = self.posture_at(fit_rail((f1, f2), np.array([kb.key(a).center_x_m, kb.key(b).center_x_m]),
+                                             self.reach)[0])
+                targets = [press_target(f1, a), press_target(f2, b)]
+                r = self.ik.solve(targets, q, q)
+                if not r.converged:  # (slow to converge from there: on from where it got to)
+                    rail = float(r.q[self.rail]) if self.rail is not None else 0.0
+                    r = self.ik.solve(targets, r.q, self.posture_at(rail), max_iter=PAIR_RETRY_ITER)
+                    self.ik_solves += 1
+                ok = r.converged
+                self.ik_solves += 1
+            self._pairs[key] = ok
+        return self._pairs[key]
+
+    def pair_table(self) -> dict:
+        """Every answer of ``pair_ok`` the fingering may ask for (the fingers in order,
+        the keys within the reach model's stretch), as written to ``PAIR_TABLE_DIR``."""
+        r = self.reach
+        rows = {}
+        for i, f1 in enumerate(FINGER_ORDER):
+            for f2 in FINGER_ORDER[i + 1:]:
+                lim = np.array([r.reach_m[f1], r.reach_m[f2]])
+                for pc in range(12):
+                    a = 60 + pc
+                    row = []
+                    for iv in range(kb.HIGHEST_PITCH - a + 1):
+                        xs = np.array([kb.key(a).center_x_m, kb.key(a + iv).center_x_m])
+                        if np.any(np.abs(fit_rail((f1, f2), xs, r)[1]) > lim):
+                            row.append("-")
+                        else:
+                            row.append("1" if self.pair_ok(f1, a, f2, a + iv) else "0")
+                    rows[f"{f1} {f2} {pc}"] = "".join(row).rstrip("-")
+        return {"urdf_sha256": self.hand.urdf_sha256, "hand": self.hand.name,
+                "about": "Planner.pair_ok by finger pair and pitch class of the lower key: one "
+                         "character per interval in semitones from 0 (1 both keys down at once, "
+                         "0 not, - not worked out); written by scripts/make_pair_table.py",
+                "pairs": rows}
 
     def _rest_posture(self) -> np.ndarray:
         """The natural hovering hand at rail 0: fingertips over their knuckles, 20 mm above
@@ -334,6 +393,29 @@ class Planner:
         return self._cache[key]
 
 
+def pair_table_path(urdf_sha256: str) -> Path:
+    """Where the shipped ``Planner.pair_table`` of the hand with this URDF is."""
+    return PAIR_TABLE_DIR / f"pairs-{urdf_sha256[:16]}.json"
+
+
+def _load_pair_table(hand: HandModel) -> dict:
+    """``Planner.pair_ok``'s answers as shipped for this hand's URDF ({} if none: they
+    are then worked out when asked)."""
+    path = pair_table_path(hand.urdf_sha256)
+    if not path.exists():
+        return {}
+    data = json.loads(path.read_text())
+    if data.get("urdf_sha256") != hand.urdf_sha256:
+        return {}
+    out = {}
+    for k, row in data["pairs"].items():
+        f1, f2, pc = k.split()
+        for iv, c in enumerate(row):
+            if c != "-":
+                out[(f1, f2, int(pc), iv)] = c == "1"
+    return out
+
+
 def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int,
                   depth_m: float = kb.DOWN_DEPTH_M) -> float:
     """Fraction of the duration of a min-jerk phase from ``qa`` to ``qb`` at which
@@ -415,7 +497,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
         """The press intervals of each part of the song, fingered when the planner gets
         there: a long song starts streaming after its first part's fingering, not all."""
         for idx in _parts(notes):
-            assignments, infeasible = assign_fingers([notes[i] for i in idx], pl.reach)
+            assignments, infeasible = assign_fingers([notes[i] for i in idx], pl.reach, pl.pair_ok)
             assignments = [dataclasses.replace(a, note_index=idx[a.note_index]) for a in assignments]
             reasons.update({idx[x.note_index]: x.reason for x in infeasible})
             finger_of.update({a.note_index: a.finger for a in assignments})

@@ -581,3 +581,60 @@ def test_a_new_hand_position_is_found_from_a_twisted_wrist(planner):
                                   {pr.note_index: rail for pr in presses}, {})
     assert seg is not None and covered >= 1
     assert planner.press_q("thumb", 83, seg)[1].converged
+
+
+def test_walking_thirds_are_fingered_as_the_hand_can_hold_them(planner, tmp_path):
+    """Thirds walking down to C#4-E4: the lateral reach model lets thumb and middle take
+    that one, but with the thumb on a black key the index between them cannot clear the
+    keys; the fingering asks the whole-hand IK (``Planner.pair_ok``) and every third is
+    played (the top note of C#4-E4 was left out as a 'chord wider than the hand')."""
+    from planner.music.midi import write_notes_midi
+
+    thirds = [(65, 69), (63, 66), (61, 64), (63, 66), (64, 67)]
+    notes = [Note(p, 0.6 * i, 0.6 * i + 0.54, 80) for i, pair in enumerate(thirds) for p in pair]
+    song = tmp_path / "thirds.mid"
+    write_notes_midi(notes, song)
+    res = plan_song(load_song(song), planner.hand, str(tmp_path / "t.csv"), planner=planner)
+    assert [(n.pitch, n.reason) for n in res.notes if n.reason] == []
+    assert not planner.pair_ok("thumb", 61, "middle", 64)
+    rep = check_trajectory(str(tmp_path / "t.csv"), str(song))
+    assert rep.play.notes_hit == len(notes) and not rep.play.wrong_presses
+
+
+def test_pair_ok_ignores_argument_order_and_octave(planner):
+    for f1, p1, f2, p2 in [("thumb", 61, "middle", 64), ("index", 60, "pinky", 72),
+                           ("thumb", 48, "pinky", 60), ("ring", 66, "pinky", 70)]:
+        ok = planner.pair_ok(f1, p1, f2, p2)
+        assert planner.pair_ok(f2, p2, f1, p1) == ok
+        assert planner.pair_ok(f1, p1 + 12, f2, p2 + 12) == ok
+        assert planner.pair_ok(f1, p1 - 24, f2, p2 - 24) == ok
+    assert planner.pair_ok("index", 60, "index", 60) and not planner.pair_ok("index", 60, "index", 62)
+    assert planner.pair_ok("thumb", 60, "pinky", 67)  # a fifth: the hand's natural span
+    assert not planner.pair_ok("thumb", 60, "index", 84)  # two octaves
+
+
+def test_the_shipped_pair_table_is_the_planners_own():
+    """``planner/tables`` holds ``Planner.pair_table`` for the default hand's URDF (it
+    saves the time of working its answers out); the file must be for today's URDF and
+    agree with the IK, re-asked here on a sample of its entries, the 'no's included
+    (after a change of the hand or the IK: ``python scripts/make_pair_table.py``)."""
+    import json
+
+    from planner.play import pair_table_path
+
+    hand = load_hand("default")
+    path = pair_table_path(hand.urdf_sha256)
+    assert path.exists(), "run python scripts/make_pair_table.py"
+    data = json.loads(path.read_text())
+    assert data["urdf_sha256"] == hand.urdf_sha256
+    entries = [(k, iv, c) for k, row in sorted(data["pairs"].items()) for iv, c in enumerate(row) if c != "-"]
+    assert len(entries) > 1000
+    fresh = Planner(hand)
+    assert len(fresh._pairs) == len(entries)  # (loaded)
+    fresh._pairs.clear()
+    no = [e for e in entries if e[2] == "0"]
+    yes = [e for e in entries if e[2] == "1"]
+    assert no and yes
+    for k, iv, c in no[:: max(1, len(no) // 12)] + yes[:: max(1, len(yes) // 12)]:
+        f1, f2, pc = k.split()
+        assert fresh.pair_ok(f1, 60 + int(pc), f2, 60 + int(pc) + iv) == (c == "1"), (k, iv)
