@@ -67,6 +67,7 @@ HOLD_SLACK_M = 0.0005  # a held key's tip stays this far below the key-down dept
 HOLD_DEEPER_M = 0.001  # ... and at most this far below full dip (the key bed is 2 mm below it)
 SHIFT_STEPS = (1, 2, 4)  # the arm's steps while a finger holds its key (the fewest that keep it down)
 ARRIVE_M = 0.001  # a finger touches its key once what is left of the arm's move shifts it less
+PRESS_LAG_STEP_S = 0.005  # a press from high above its key while the arm moves: its start tried this often
 ACROSS_SPLITS = 2  # a finger crossing keys high is given up to 3 waypoints
 PATH_STEP_M = 0.003  # a finger's path over the keys is checked at least this often
 GRAZE_M = 0.5 * kb.DOWN_DEPTH_M  # a finger moving over keys may sink this far into one, never near sounding it
@@ -739,7 +740,13 @@ class _Timeline:
                 self.go_high(f)
             last, lifts, q0, lifting = self._last_motions()
             c = self._travel_overlap(q0, lifts, q_low, ready)
-        if c is None:
+        # or high above them, sooner, if that strikes sooner (a press from there waits for
+        # a clear way down: ``_press_lag``)
+        c_high = self._travel_overlap(q0, lifts, q_end, ready) if ready else None
+        if c_high is not None and (c is None or self._strike_s(c_high, q0, lifts, q_end, ready, seg, True)
+                                   < self._strike_s(c, q0, lifts, q_low, ready, seg, False)):
+            land_z, c = HIGH_M, c_high
+        elif c is None:
             land_z = HIGH_M
             c = self._travel_overlap(q0, lifts, q_end)
         else:
@@ -829,7 +836,7 @@ class _Timeline:
                 # the wrist coming down after a rail-only travel: it too must stop first
                 self.arm_motion += ((self.offset + n, self.phases[n][0].duration_s),)
                 self.arm_deltas[self.offset + n] = self.phases[n][0].delta
-            elif len(self.phases) > n and i < len(hand.fingers) and hand.fingers[i] in ready:
+            elif len(self.phases) > n and i < len(hand.fingers) and hand.fingers[i] in ready and land_z == LOW_M:
                 self._land_ok.add(self.offset + n)
         if q_final is not None:
             for f in hand.fingers:
@@ -841,6 +848,29 @@ class _Timeline:
         for f in hand.fingers:
             self.place[f] = ("above", ready[f], land_z) if f in ready else ("high",)
         return True
+
+    def _strike_s(self, c: tuple[float, float, float], q0: np.ndarray, lifts, q_end: np.ndarray,
+                  ready: dict[str, int], seg: int, high: bool) -> float:
+        """When (s after the lifts start) the last of the ``ready`` fingers would have its
+        key down after the travel to ``q_end`` with overlaps ``c`` (``_travel_overlap``):
+        its landing done, then its press from there (high: from ``HIGH_M``), started as
+        ``_press_lag`` allows."""
+        hand = self.hand
+        q_up = q0 + sum((d for d, _ in lifts), np.zeros(hand.n))
+        d_arm = np.zeros(hand.n)
+        d_arm[self.arm_joints] = (q_end - q_up)[self.arm_joints]
+        T_arm = phase_duration(d_arm, hand.velocity, hand.acceleration)
+        last = 0.0
+        for f, p in ready.items():
+            d_land = np.zeros(hand.n)
+            js = hand.joint_slice(f)
+            d_land[js] = (q_end - q_up)[js]
+            landed = c[0] + c[2] * T_arm + phase_duration(d_land, hand.velocity, hand.acceleration)
+            q_press = self._with_finger(f, self.pl.press_q(f, p, seg)[0], q_end)
+            T = phase_duration(q_press - q_end, hand.velocity, hand.acceleration)
+            lag = self._press_lag(f, p, q_end, q_press, T, d_arm, T_arm, path=high)
+            last = max(last, max(landed, c[0] + lag) + _key_crossing(hand, q_end, q_press, f, p) * T)
+        return last
 
     def shift(self, seg: int, finger: str, pitch: int, t_s: float, budget_s: float) -> bool:
         """Move the arm to hand position ``seg`` while ``finger`` holds ``pitch`` down:
@@ -1160,30 +1190,61 @@ class _Timeline:
         if self.arm_motion and self.place[finger] == ("above", pitch, LOW_M):
             # waiting right above its key: it may start down while the arm still moves,
             # but come within TRAVEL_CLEARANCE_M of it only once the arm has (all but) stopped
-            touch = _key_crossing(self.hand, self.q, q_new, finger, pitch, depth_m=-TRAVEL_CLEARANCE_M)
-            follows = tuple((g, max(self._arrived(g, T_arm, finger) - touch * T, 0.0))
+            follows = tuple((g, self._press_lag(finger, pitch, self.q, q_new, T, self.arm_deltas[g], T_arm))
                             for g, T_arm in self.arm_motion)
+        elif len(self.arm_motion) == 1 and self.place[finger] == ("above", pitch, HIGH_M):
+            # landed high above its key: the same, once the way down is clear of the keys
+            g, T_arm = self.arm_motion[0]
+            follows = ((g, self._press_lag(finger, pitch, self.q, q_new, T, self.arm_deltas[g], T_arm,
+                                           path=True)),)
         self._move(q_new, frac, self._frame_edge(t_s), 1.0, "press", note, min_s=T, follows=follows,
                    earliest=self._frame_edge(t_s) - EARLY_FRAMES * self.dt - frac * T, pitch=pitch)
         self.place[finger] = ("down", pitch)
         return True
 
-    def _arrived(self, g: int, T_arm: float, finger: str) -> float:
-        """When (s after the start of the arm's motion ``g``, ``T_arm`` long) what is left
-        of it moves ``finger``'s tip (where it is now) less than ``ARRIVE_M``."""
-        i = self.hand.fingers.index(finger)
-        d = self.arm_deltas[g]
-        dist = float(np.linalg.norm(self.hand.tip_positions(self.q)[i] - self.hand.tip_positions(self.q - d)[i]))
-        if dist <= ARRIVE_M:
-            return 0.0
-        lo, hi = 0.0, 1.0  # min-jerk progress s(u) >= 1 - ARRIVE_M / dist
-        for _ in range(30):
-            mid = 0.5 * (lo + hi)
-            if 1.0 - float(min_jerk(np.array(mid))) <= ARRIVE_M / dist:
-                hi = mid
-            else:
-                lo = mid
-        return hi * T_arm
+    def _press_lag(self, finger: str, pitch: int, q_above: np.ndarray, q_press: np.ndarray, T: float,
+                   d_arm: np.ndarray, T_arm: float, path: bool = False) -> float:
+        """The earliest start (s after the start of the arm's last motion, ``d_arm`` in
+        ``T_arm`` s) of ``finger``'s press from ``q_above`` (the arm's motion done) to
+        ``q_press`` (``T`` s) at which its tip comes within ``TRAVEL_CLEARANCE_M`` of its
+        key only once what is left of the arm's motion moves it less than ``ARRIVE_M``;
+        with ``path``, also staying ``TRAVEL_CLEARANCE_M`` above every key it passes over
+        until then (over the part of its own key no other key overhangs, that key's top),
+        by forward kinematics every ``_SIM_DT_S``, the start tried every ``PRESS_LAG_STEP_S``
+        (a later start is clearer: less of the arm's motion is left). Without ``path`` the
+        tip is ``LOW_M`` above that part of its key already (the travel's simulation)."""
+        hand = self.hand
+        k = hand.fingers.index(finger)
+        touch = _key_crossing(hand, q_above, q_press, finger, pitch, depth_m=-TRAVEL_CLEARANCE_M)
+        tip = hand.tip_positions(q_above)[k]
+        dist = float(np.linalg.norm(tip - hand.tip_positions(q_above - d_arm)[k]))
+        arrive = 0.0
+        if dist > ARRIVE_M:
+            lo, hi = 0.0, 1.0  # min-jerk progress s(u) >= 1 - ARRIVE_M / dist
+            for _ in range(30):
+                mid = 0.5 * (lo + hi)
+                if 1.0 - float(min_jerk(np.array(mid))) <= ARRIVE_M / dist:
+                    hi = mid
+                else:
+                    lo = mid
+            arrive = hi * T_arm
+        lag = max(arrive - touch * T, 0.0)
+        if not path:
+            return lag
+        x_lo, x_hi = exposed_range_x(pitch)
+        top = kb.key(pitch).top_z_m
+        d_press = q_press - q_above
+        while lag < T_arm:
+            tau = np.arange(lag, min(lag + touch * T, T_arm), _SIM_DT_S)  # (up to the touch)
+            Q = (q_above[None, :] - (1.0 - min_jerk(tau / T_arm))[:, None] * d_arm[None, :]
+                 + min_jerk((tau - lag) / T)[:, None] * d_press[None, :])
+            tips = np.array([hand.tip_positions(q)[k] for q in hand.apply_couplings(Q)])
+            under = surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M)
+            under = np.where((x_lo <= tips[:, 0]) & (tips[:, 0] <= x_hi), top, under)
+            if np.all(tips[:, 2] >= under + TRAVEL_CLEARANCE_M):
+                return lag
+            lag += PRESS_LAG_STEP_S
+        return T_arm
 
     def prepare(self, finger: str, pitch: int) -> None:
         """Bring an idle ``finger`` to wait ``LOW_M`` above ``pitch``, the key it presses

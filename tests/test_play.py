@@ -25,7 +25,7 @@ SONGS = sorted(p.stem for p in (ROOT / "songs").glob("*.mid"))
 REACHES_TARGET = {"twinkle", "ode_to_joy", "chords", "scale", "fur_elise"}
 # Regression floors: frame F1 measured on each song today (see the issue note), less 0.01.
 F1_FLOOR = {"twinkle": 0.985, "ode_to_joy": 0.98, "chords": 0.985, "scale": 0.975,
-            "fur_elise": 0.99, "fast": 0.905, "leaps": 0.73}
+            "fur_elise": 0.99, "fast": 0.905, "leaps": 0.75}
 
 
 @pytest.fixture(scope="module")
@@ -638,3 +638,52 @@ def test_the_shipped_pair_table_is_the_planners_own():
     for k, iv, c in no[:: max(1, len(no) // 12)] + yes[:: max(1, len(yes) // 12)]:
         f1, f2, pc = k.split()
         assert fresh.pair_ok(f1, 60 + int(pc), f2, 60 + int(pc) + iv) == (c == "1"), (k, iv)
+
+
+def test_a_press_from_high_waits_for_a_clear_way_down(planner):
+    """After a leap the pinky, high above E5, may start its press while the rail still
+    moves, but only so late (``_press_lag`` with the path checked) that its tip, sampled
+    every 0.5 ms until it touches, stays TRAVEL_CLEARANCE_M above every key it passes
+    over (its own key's top over the part of E5 no other key overhangs); 5 ms sooner it
+    would not, and the check makes it wait longer than the touch rule alone."""
+    from planner.ik import exposed_range_x, press_target, surfaces_under
+    from planner.music import keyboard as kb
+    from planner.play import (
+        HIGH_M,
+        PRESS_LAG_STEP_S,
+        TRAVEL_CLEARANCE_M,
+        TRAVEL_INFLATE_M,
+        _key_crossing,
+        _Timeline,
+    )
+    from planner.trajectory import min_jerk, phase_duration
+
+    hand = planner.hand
+    rail = hand.index["rail"]
+    seg = planner.anchor([press_target("pinky", 76)], 0.146, None)
+    assert seg is not None
+    tl = _Timeline(planner, hand, planner.bases[seg], seg, 0.01)
+    q_above = tl._with_finger("pinky", planner.above_q("pinky", 76, seg, HIGH_M))
+    q_press = tl._with_finger("pinky", planner.press_q("pinky", 76, seg)[0], q_above)
+    T = phase_duration(q_press - q_above, hand.velocity, hand.acceleration)
+    d_arm = np.zeros(hand.n)
+    d_arm[rail] = 0.25  # the rail arriving from 25 cm to the left
+    T_arm = phase_duration(d_arm, hand.velocity, hand.acceleration)
+    lag = tl._press_lag("pinky", 76, q_above, q_press, T, d_arm, T_arm, path=True)
+    assert lag > tl._press_lag("pinky", 76, q_above, q_press, T, d_arm, T_arm)
+    assert lag < T_arm  # (it does start before the rail has stopped)
+    touch = _key_crossing(hand, q_above, q_press, "pinky", 76, depth_m=-TRAVEL_CLEARANCE_M)
+    lo, hi = exposed_range_x(76)
+    k = hand.fingers.index("pinky")
+
+    def clearance(start):
+        tau = np.arange(start, min(start + touch * T, T_arm), 0.0005)
+        Q = (q_above - (1.0 - min_jerk(tau / T_arm))[:, None] * d_arm
+             + min_jerk((tau - start) / T)[:, None] * (q_press - q_above))
+        tips = np.array([hand.tip_positions(q)[k] for q in hand.apply_couplings(Q)])
+        under = surfaces_under(tips[:, 0], tips[:, 1], TRAVEL_INFLATE_M)
+        under = np.where((lo <= tips[:, 0]) & (tips[:, 0] <= hi), kb.key(76).top_z_m, under)
+        return float(np.min(tips[:, 2] - under))
+
+    assert clearance(lag) >= TRAVEL_CLEARANCE_M - 2e-4
+    assert clearance(lag - PRESS_LAG_STEP_S) < TRAVEL_CLEARANCE_M
