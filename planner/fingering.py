@@ -25,9 +25,11 @@ and the cost of going from one candidate to the next is
 - a finger struck again sooner than it can come up and down (same key:
   ``HandReach.repeat_s``; another key: ``move_s``, both measured on the
   hand's own motions), as music lost;
-- a finger still holding a note of the previous group that is reassigned,
-  or whose key leaves its reach (``HELD_CONFLICT``: the planner then names
-  the notes it cannot play).
+- a key still held (from any earlier group, along the best path into each
+  candidate) whose finger is wanted again, or that the new rail position
+  leaves out of its finger's reach: it is let go ``CUT_LEAD_S`` before the new
+  notes (``Assignment.release_s``) and the rest of it is music lost, so the
+  fingering weighs cutting a held note short against the other ways on.
 
 Music lost is weighed at ``LOST_S_COST`` per second.
 
@@ -52,13 +54,17 @@ from planner.music import keyboard as kb
 
 CHORD_WINDOW_S = 0.030
 REUSE_S = 0.30  # time a finger needs to strike another key when the hand gives no measured move_s
-REPOSITION_OVERHEAD_S = 0.15  # lift before and landing after the rail's move (measured on the songs)
+# lift before and landing after the rail's move, beyond the rail's own time: the fingers
+# overlap more of a long move (measured: ~0.03 s after a 0.25 m leap; a short move in a
+# fast passage costs the notes after it more than its own time)
+REPOSITION_OVERHEAD_S = 0.15
+REPOSITION_OVERHEAD_MIN_S = 0.03
 MOVE_COST = 1.0  # any change of hand position (all fingers must be up)
 LOST_S_COST = 50.0  # per second of a note the hand is still travelling in (or leaves out)
 TOP_NOTE_COST = 1.0  # leaving out a chord's top note (often the melody) costs this much more
-# a transition a held key forbids: not infinite, so that one such note does not make
-# every later one unplayable (the planner names the notes it cannot play then)
-HELD_CONFLICT = 1e6
+# a key held while later notes need its finger, or the hand where its finger cannot
+# reach it, is let go this long before them (the rest of it is music lost)
+CUT_LEAD_S = 0.060
 MAX_GROUP = 10  # notes struck together beyond this many (the lowest) are not even tried  # a finger moved to another key sooner than this after its release is penalised
 FINGER_ORDER = ("thumb", "index", "middle", "ring", "pinky")
 # (finger 1, pitch 1, finger 2, pitch 2) -> whether both can be down at once
@@ -97,6 +103,7 @@ class Assignment:
     note_index: int
     finger: str
     rail_m: float
+    release_s: float | None = None  # let go by then, before its offset (a later note needs it)
 
 
 @dataclass(frozen=True)
@@ -150,28 +157,53 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
     if not kept_groups:
         return [], infeasible
 
-    # Viterbi
+    # Viterbi. Each group has one more state than its candidates: the group left out
+    # (its notes as music lost), so that a note whose playing would cost more (keys held
+    # before it let go early, a change of hand position) than it is worth is not played.
     n = len(kept_groups)
-    cost = [np.array([c[2] for c in cands[0]])]
-    back: list[np.ndarray] = [np.zeros(len(cands[0]), dtype=int)]
+    onsets = [notes[g[0]].onset_s for g in kept_groups]
+    skip_cost = [LOST_S_COST * sum(notes[i].offset_s - notes[i].onset_s for i in g) + TOP_NOTE_COST
+                 for g in kept_groups]
+    cost = [np.array([c[2] for c in cands[0]] + [skip_cost[0]])]
+    back: list[np.ndarray] = [np.zeros(len(cands[0]) + 1, dtype=int)]
+    # per state, along the best path into it: the notes (and fingers) sounding from its
+    # group on (a key held over several later groups keeps its finger and its reach),
+    # the last state that plays (group, candidate; None before any), and the held notes
+    # its transition lets go early
+    sounding = [[tuple((i, f) for i, f in zip(kept_groups[0], c[0]) if f is not None) for c in cands[0]] + [()]]
+    last = [[(0, a) for a in range(len(cands[0]))] + [None]]
+    cuts: list[list[tuple[int, ...]]] = [[() for _ in range(len(cands[0]) + 1)]]
     for k in range(1, n):
-        prev_g, g = kept_groups[k - 1], kept_groups[k]
-        dt = max(notes[g[0]].onset_s - notes[prev_g[0]].onset_s, 1e-3)
-        held = [i for i in prev_g if notes[i].offset_s > notes[g[0]].onset_s + 1e-6]
-        ck = np.empty(len(cands[k]))
-        bk = np.empty(len(cands[k]), dtype=int)
-        free_s = notes[g[0]].onset_s - max(notes[i].offset_s for i in prev_g)
+        g, onset = kept_groups[k], onsets[k]
+        held = [tuple((i, f) for i, f in snd if notes[i].offset_s > onset + 1e-6) for snd in sounding[k - 1]]
+        free = [onset - max(notes[i].offset_s for i, _ in snd) if snd else math.inf for snd in sounding[k - 1]]
+        m = len(cands[k])
+        ck = np.empty(m + 1)
+        bk = np.empty(m + 1, dtype=int)
+        cuts_k: list[tuple[int, ...]] = []
         for b, (fb, rb, sb, span_b) in enumerate(cands[k]):
-            best, arg = math.inf, 0
-            for a, (fa, ra, _, span_a) in enumerate(cands[k - 1]):
-                c = cost[k - 1][a] + _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt,
-                                                 free_s, held, reach)
-                if c < best:
-                    best, arg = c, a
+            best, arg, best_cut = math.inf, 0, ()
+            for a, e in enumerate(last[k - 1]):
+                c, cut = 0.0, ()
+                if e is not None:
+                    fa, ra, _, span_a = cands[e[0]][e[1]]
+                    c, cut = _transition(notes, kept_groups[e[0]], fa, ra, span_a, g, fb, rb, span_b,
+                                         max(onset - onsets[e[0]], 1e-3), free[a], held[a], reach, pair_ok)
+                if cost[k - 1][a] + c < best:
+                    best, arg, best_cut = cost[k - 1][a] + c, a, cut
             ck[b] = best + sb
             bk[b] = arg
+            cuts_k.append(best_cut)
+        a_best = int(np.argmin(cost[k - 1]))  # (left out: the best way here so far goes on)
+        ck[m], bk[m] = cost[k - 1][a_best] + skip_cost[k], a_best
+        cuts_k.append(())
         cost.append(ck)
         back.append(bk)
+        cuts.append(cuts_k)
+        sounding.append([tuple((i, f) for i, f in held[int(bk[b])] if i not in cuts_k[b])
+                         + tuple((i, f) for i, f in zip(g, c[0]) if f is not None)
+                         for b, c in enumerate(cands[k])] + [held[a_best]])
+        last.append([(k, b) for b in range(m)] + [last[k - 1][a_best]])
     # backtrack (ties broken by the lowest index: deterministic)
     choice = [0] * n
     choice[-1] = int(np.argmin(cost[-1]))
@@ -184,8 +216,10 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
     rails: list[float] = []
     prev = None
     for k, g in enumerate(kept_groups):
+        if choice[k] == len(cands[k]):  # left out
+            rails.append(math.nan)
+            continue
         fingers, rail, _, _ = cands[k][choice[k]]
-        lo, hi = -math.inf, math.inf
         lo, hi = cands[k][choice[k]][3]
         if prev is None or not lo <= hi:
             r = rail
@@ -196,8 +230,17 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
             r = min(max(prev, lo + m), hi - m)
         rails.append(r)
         prev = r
+    release: dict[int, float] = {}  # held notes let go early (by that time)
+    for k, g in enumerate(kept_groups):
+        for i in cuts[k][choice[k]]:
+            release[i] = notes[g[0]].onset_s - CUT_LEAD_S
     out: list[Assignment] = []
     for k, g in enumerate(kept_groups):
+        if choice[k] == len(cands[k]):
+            for i in g:
+                infeasible.append(Infeasible(i, "left out: playing it would cost more music than it is "
+                                                "(held keys let go early, the hand's way there)"))
+            continue
         fingers, _, _, _ = cands[k][choice[k]]
         if not math.isfinite(cost[k][choice[k]]):
             for i in g:
@@ -209,8 +252,11 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
         for i, f in zip(g, fingers):
             if f is None:
                 infeasible.append(Infeasible(i, f"{why}: left out"))
+            elif i in release and release[i] < notes[i].onset_s + CUT_LEAD_S:
+                infeasible.append(Infeasible(i, "left out: its finger, or the hand, is needed elsewhere "
+                                                "at once"))
             else:
-                out.append(Assignment(i, f, rails[k]))
+                out.append(Assignment(i, f, rails[k], release.get(i)))
     out.sort(key=lambda a: a.note_index)
     infeasible.sort(key=lambda x: x.note_index)
     return out, infeasible
@@ -222,7 +268,7 @@ def reposition_s(d_m: float, reach: HandReach) -> float:
     if d_m <= 0.0:
         return 0.0
     t_rail = max(1.875 * d_m / reach.rail_speed_m_s, math.sqrt(5.7735 * d_m / reach.rail_accel_m_s2))
-    return REPOSITION_OVERHEAD_S + t_rail
+    return t_rail + max(REPOSITION_OVERHEAD_MIN_S, REPOSITION_OVERHEAD_S - 0.5 * t_rail)
 
 
 def fit_rail(fingers, xs_m: np.ndarray, reach: HandReach) -> tuple[float, np.ndarray]:
@@ -294,11 +340,14 @@ def _crosses(notes, prev_g, fa, g, fb) -> bool:
 
 
 def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held,
-                reach: HandReach) -> float:
+                reach: HandReach, pair_ok: PairCheck | None = None) -> tuple[float, tuple[int, ...]]:
+    """The cost of going from candidate (fa, ra) of group ``prev_g`` to (fb, rb) of ``g``
+    with the keys ``held`` ((note, finger) still down at ``g``'s onset), and the held
+    notes that must then be let go early (see ``CUT_LEAD_S``)."""
     d = abs(rb - ra)
     v = d / dt
     if v > reach.rail_speed_m_s:
-        return 1e6 * (1.0 + v)  # effectively infeasible, but keeps a path
+        return 1e6 * (1.0 + v), ()  # effectively infeasible, but keeps a path
     c = 10.0 * d + 20.0 * max(0.0, v - 0.5 * reach.rail_speed_m_s) ** 2
     # a rail position serving both groups: the hand stays; else it must lift, travel
     # and land between them, and every frame that takes is a frame of music lost
@@ -306,22 +355,25 @@ def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, he
     if gap == 0.0 and _crosses(notes, prev_g, fa, g, fb):
         # a finger passing another (or taking over its key) needs the hand moved too
         gap = kb.WHITE_PITCH_M
-    if gap > 0.0:
-        c += MOVE_COST + LOST_S_COST * max(0.0, reposition_s(gap, reach) - max(free_s, 0.0))
     prev_finger = {i: f for i, f in zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa) if f is not None}
     new_finger = {i: f for i, f in zip(sorted(g, key=lambda i: notes[i].pitch), fb) if f is not None}
     used_now = {f: notes[i].pitch for i, f in new_finger.items()}
-    for i in held:
-        if i not in prev_finger:
-            continue  # left out
-        f = prev_finger[i]
-        if f in used_now:
-            return HELD_CONFLICT  # the finger is still holding its key
-        dev = kb.key(notes[i].pitch).center_x_m - reach.offset_m[f] - rb
-        if abs(dev) > reach.reach_m[f]:
-            return HELD_CONFLICT  # the hand would leave a held key behind
-        c += 5.0 * d
     onset = notes[g[0]].onset_s
+    cut = []
+    for i, f in held:
+        dev = kb.key(notes[i].pitch).center_x_m - reach.offset_m[f] - rb
+        if f in used_now or abs(dev) > reach.reach_m[f] or (pair_ok is not None and not all(
+                pair_ok(f, notes[i].pitch, f2, notes[j].pitch) for j, f2 in new_finger.items())):
+            # its finger is wanted again, or the hand must leave it behind: the key is
+            # let go CUT_LEAD_S before the new notes, and the rest of it is music lost
+            cut.append(i)
+            c += LOST_S_COST * (notes[i].offset_s - (onset - CUT_LEAD_S))
+            continue
+        c += 5.0 * d
+    if cut:
+        free_s = max(free_s, CUT_LEAD_S) if len(cut) == len(held) else free_s
+    if gap > 0.0:
+        c += MOVE_COST + LOST_S_COST * max(0.0, reposition_s(gap, reach) - max(free_s, 0.0))
     for i, f in prev_finger.items():
         # a finger struck again must first come up (and, for another key, lift, cross
         # and come down): the time it needs beyond its free time is music lost
@@ -333,4 +385,4 @@ def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, he
         else:
             need = reach.move_s[f] if reach.move_s else REUSE_S
         c += LOST_S_COST * max(0.0, need - free)
-    return c
+    return c, tuple(cut)

@@ -99,6 +99,7 @@ class PlayResult:
     first_row_s: float
     ik_solves: int
     late: list[tuple[int, float]] = field(default_factory=list)
+    cut: list[tuple[int, float]] = field(default_factory=list)  # (note, s) let go that early
     travels: int = 0  # changes of hand position (rail and wrist) after the start, every key up
     shifts: int = 0  # ... and those made while a finger held its key
 
@@ -493,6 +494,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     reasons: dict[int, str] = {}
     finger_of: dict[int, str] = {}
     rail_of: dict[int, float] = {}
+    cut: list[tuple[int, float]] = []
 
     def parts():
         """The press intervals of each part of the song, fingered when the planner gets
@@ -503,6 +505,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
             reasons.update({idx[x.note_index]: x.reason for x in infeasible})
             finger_of.update({a.note_index: a.finger for a in assignments})
             rail_of.update({a.note_index: a.rail_m for a in assignments})
+            cut.extend((a.note_index, notes[a.note_index].offset_s - a.release_s)
+                       for a in assignments if a.release_s is not None)
             yield press_intervals(notes, assignments)
 
     meta = {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
@@ -516,6 +520,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
         raise
     writer.close()
     result.planning_s = time.perf_counter() - t_start
+    result.cut = sorted(cut)
     result.notes = [NoteReport(i, n.pitch, n.onset_s, finger_of.get(i), reasons.get(i))
                     for i, n in enumerate(notes)]
     return result
@@ -1770,6 +1775,10 @@ def format_summary(song_name: str, res: PlayResult, song_s: float, out: str) -> 
              + (f" ({res.shifts} while a key was held)" if res.shifts else ""))]
     for nr in bad:
         lines.append(f"  infeasible: t={nr.onset_s:.3f} s {pitch_name(nr.pitch)} (MIDI {nr.pitch}): {nr.reason}")
+    for i, early in res.cut:
+        nt = res.notes[i]
+        lines.append(f"  cut short: t={nt.onset_s:.3f} s {pitch_name(nt.pitch)} let go {early:.2f} s early "
+                     "(its finger, or the hand, is needed for the notes after it)")
     for i, lt in res.late:
         nt = res.notes[i]
         lines.append(f"  late: t={nt.onset_s:.3f} s {pitch_name(nt.pitch)} key down {lt * 1000:.0f} ms late "

@@ -6,7 +6,9 @@ A note's press interval is its [onset, offset), except:
   ``RELEASE_S`` before the new onset (a piano key must come up to sound
   again); the first press keeps at least half its length;
 - a finger that must move to another key is freed ``MOVE_S`` before its
-  next onset, likewise.
+  next onset, likewise;
+- a note the fingering lets go early (``Assignment.release_s``: later notes
+  need its finger, or the hand where it cannot hold the key) ends then.
 
 MIDI velocity maps to press force (N) and key speed: ``force_n = 0.5 +
 2.5 (v/127)^2`` (0.5 N is a real key's weight, 3 N a forte press on this
@@ -59,8 +61,8 @@ def press_intervals(notes, assignments) -> list[PressInterval]:
     items = []
     for i, a in sorted(by_note.items()):
         n = notes[i]
-        items.append([n.onset_s, n.offset_s, Press(a.finger, n.pitch, press_force_n(n.velocity), i,
-                                                   n.velocity)])
+        end = n.offset_s if a.release_s is None else min(n.offset_s, a.release_s)
+        items.append([n.onset_s, end, Press(a.finger, n.pitch, press_force_n(n.velocity), i, n.velocity)])
     # same key struck again, same finger moving on: free it in time
     for key_fn, gap in ((lambda p: ("key", p.pitch), RELEASE_S), (lambda p: ("finger", p.finger), MOVE_S)):
         last: dict = {}

@@ -82,3 +82,66 @@ def test_a_chord_no_pair_of_fingers_holds_is_played_in_part():
     assert len(out) == 1 and len(bad) == 1
     assert out[0].note_index == 1  # the top note is kept (often the melody)
     assert "chord wider than the hand" in bad[0].reason and "left out" in bad[0].reason
+
+
+def test_a_key_held_over_later_notes_keeps_its_finger():
+    """A bass note held under three melody notes: its finger is not given any of them
+    (the fingering follows the keys still down over several groups, not only the last)."""
+    notes = [Note(48, 0.0, 2.0, 80), Note(60, 0.0, 0.45, 80)] + [
+        Note(p, 0.5 * k, 0.5 * k + 0.45, 80) for k, p in ((1, 59), (2, 57), (3, 55))]
+    out, bad = assign_fingers(notes, REACH)
+    fingers = {a.note_index: a.finger for a in out}
+    assert bad == [] or all(b.note_index != 0 for b in bad)
+    bass = fingers[0]
+    for i in range(1, len(notes)):
+        if i in fingers and notes[i].onset_s < notes[0].offset_s:
+            assert fingers[i] != bass, (i, fingers)
+    assert all(a.release_s is None for a in out)
+
+
+def test_a_held_key_is_let_go_early_when_later_notes_need_the_hand_elsewhere():
+    """C3 held for 3 s; from 0.5 s on, thirds two octaves up (out of reach while C3 is
+    down), 4.5 s of notes while it would sound. Leaving them out costs more music than
+    cutting C3 short (2.56 s): C3 is let go CUT_LEAD_S before them (release_s), and its
+    press interval ends then."""
+    from planner.fingering import CUT_LEAD_S
+    from planner.targets import press_intervals
+
+    thirds = ((72, 76), (74, 77), (76, 79), (77, 81), (79, 83))
+    notes = [Note(48, 0.0, 3.0, 80)] + [Note(p, 0.5 + 0.5 * k, 0.95 + 0.5 * k, 80)
+                                        for k, pair in enumerate(thirds) for p in pair]
+    out, bad = assign_fingers(notes, REACH)
+    assert bad == []
+    bass = next(a for a in out if a.note_index == 0)
+    assert bass.release_s == pytest.approx(0.5 - CUT_LEAD_S)
+    ends = {iv.press.note_index: iv.end_s for iv in press_intervals(notes, out)}
+    assert ends[0] == pytest.approx(0.5 - CUT_LEAD_S)
+    assert all(ends[i] == pytest.approx(notes[i].offset_s) for i in range(1, len(notes)))
+
+
+def test_a_short_note_that_would_cut_a_long_held_chord_is_left_out():
+    """A C3-E3-G3 chord held 3 s and one short note two octaves up at 1 s: cutting the
+    chord short would lose 6 s of music for 0.2 s, so the short note is left out, with
+    the reason, and the chord keeps its length."""
+    notes = [Note(p, 0.0, 3.0, 80) for p in (48, 52, 55)] + [Note(79, 1.0, 1.2, 80)]
+    out, bad = assign_fingers(notes, REACH)
+    assert [b.note_index for b in bad] == [3]
+    assert bad[0].reason.startswith("left out: playing it would cost more music")
+    assert sorted(a.note_index for a in out) == [0, 1, 2]
+    assert all(a.release_s is None for a in out)
+
+
+def test_reposition_time_is_the_rails_own_time_and_an_overhead():
+    """The overhead beyond the rail's minimum-jerk time shrinks as the move grows (the
+    fingers overlap more of a long one) but never below REPOSITION_OVERHEAD_MIN_S; the
+    total grows with the distance."""
+    from planner.fingering import REPOSITION_OVERHEAD_MIN_S, REPOSITION_OVERHEAD_S, reposition_s
+
+    assert reposition_s(0.0, REACH) == 0.0
+    d = np.linspace(0.001, 1.0, 400)
+    t = np.array([reposition_s(x, REACH) for x in d])
+    t_rail = np.maximum(1.875 * d / REACH.rail_speed_m_s, np.sqrt(5.7735 * d / REACH.rail_accel_m_s2))
+    over = t - t_rail
+    assert np.all(np.diff(t) > 0)
+    assert np.all(over >= REPOSITION_OVERHEAD_MIN_S - 1e-12) and np.all(over <= REPOSITION_OVERHEAD_S)
+    assert over[0] > 0.14 and over[-1] == pytest.approx(REPOSITION_OVERHEAD_MIN_S)

@@ -25,7 +25,7 @@ SONGS = sorted(p.stem for p in (ROOT / "songs").glob("*.mid"))
 REACHES_TARGET = {"twinkle", "ode_to_joy", "chords", "scale", "fur_elise"}
 # Regression floors: frame F1 measured on each song today (see the issue note), less 0.01.
 F1_FLOOR = {"twinkle": 0.985, "ode_to_joy": 0.98, "chords": 0.985, "scale": 0.975,
-            "fur_elise": 0.99, "fast": 0.905, "leaps": 0.75}
+            "fur_elise": 0.99, "fast": 0.94, "leaps": 0.75}
 
 
 @pytest.fixture(scope="module")
@@ -687,3 +687,26 @@ def test_a_press_from_high_waits_for_a_clear_way_down(planner):
 
     assert clearance(lag) >= TRAVEL_CLEARANCE_M - 2e-4
     assert clearance(lag - PRESS_LAG_STEP_S) < TRAVEL_CLEARANCE_M
+
+
+def test_a_held_key_the_hand_must_leave_is_let_go_and_named(planner, tmp_path):
+    """C3 held 3 s under thirds two octaves up: the fingering lets C3 go early (the hand
+    cannot hold it and reach them), the plan lifts it then, the thirds are all played,
+    and the summary names the cut ("cut short", with how much)."""
+    from planner.fingering import CUT_LEAD_S
+    from planner.music.midi import write_notes_midi
+    from planner.play import format_summary
+
+    thirds = ((72, 76), (74, 77), (76, 79), (77, 81), (79, 83))
+    notes = [Note(48, 0.0, 3.0, 80)] + [Note(p, 0.5 + 0.5 * k, 0.95 + 0.5 * k, 80)
+                                        for k, pair in enumerate(thirds) for p in pair]
+    song = tmp_path / "cut.mid"
+    write_notes_midi(notes, song)
+    res = plan_song(load_song(song), planner.hand, str(tmp_path / "c.csv"), planner=planner)
+    assert res.infeasible == []
+    assert res.cut == [(0, pytest.approx(3.0 - 0.5 + CUT_LEAD_S))]
+    assert "cut short: t=0.000 s C3 let go 2.56 s early" in format_summary("cut.mid", res, 3.0, "c.csv")
+    rep = check_trajectory(str(tmp_path / "c.csv"), str(song))
+    bass = [p for p in rep.play.played if p.pitch == 48]
+    assert len(bass) == 1 and bass[0].end_s <= 0.5 - CUT_LEAD_S + 0.02
+    assert rep.play.notes_hit == len(notes) - 1 and not rep.play.wrong_presses
