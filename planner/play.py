@@ -1755,8 +1755,8 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
         sys.stderr.write(f"\rplanning {total}/{total} key events (100%)\n")
     tl.rest_all(end_song)
     flush(final_t=end_song + 0.25)
-    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late, tl.travels,
-                      tl.shifts)
+    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late=late,
+                      travels=tl.travels, shifts=tl.shifts)
 
 
 # ---------------------------------------------------------------- CLI glue
