@@ -352,8 +352,12 @@ def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, he
     # a rail position serving both groups: the hand stays; else it must lift, travel
     # and land between them, and every frame that takes is a frame of music lost
     gap = max(span_b[0] - span_a[1], span_a[0] - span_b[1], 0.0)
-    if gap == 0.0 and _crosses(notes, prev_g, fa, g, fb):
-        # a finger passing another (or taking over its key) needs the hand moved too
+    if gap == 0.0 and (_crosses(notes, prev_g, fa, g, fb) or (pair_ok is not None and not all(
+            pair_ok(f1, notes[i1].pitch, f2, notes[i2].pitch)
+            for i1, f1 in zip(prev_g, fa) if f1 is not None
+            for i2, f2 in zip(g, fb) if f2 is not None and f2 != f1))):
+        # a finger passing another (or taking over its key) needs the hand moved too, and
+        # so do two keys no one hand shape reaches
         gap = kb.WHITE_PITCH_M
     prev_finger = {i: f for i, f in zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa) if f is not None}
     new_finger = {i: f for i, f in zip(sorted(g, key=lambda i: notes[i].pitch), fb) if f is not None}

@@ -145,3 +145,22 @@ def test_reposition_time_is_the_rails_own_time_and_an_overhead():
     assert np.all(np.diff(t) > 0)
     assert np.all(over >= REPOSITION_OVERHEAD_MIN_S - 1e-12) and np.all(over <= REPOSITION_OVERHEAD_S)
     assert over[0] > 0.14 and over[-1] == pytest.approx(REPOSITION_OVERHEAD_MIN_S)
+
+
+def test_two_keys_no_hand_shape_reaches_are_costed_as_a_move():
+    """C4 with the index, then G4 with the ring, 0.5 s later: the lateral model finds
+    one rail position for both (no move). If the whole-hand IK says no shape holds the
+    two (``pair_ok``), the step costs a change of hand position like any other."""
+    from planner.fingering import MOVE_COST, _transition
+
+    notes = [Note(60, 0.0, 0.45, 80), Note(67, 0.5, 0.95, 80)]
+    span = (-1.0, 1.0)  # (the rail positions each reaches: they overlap)
+
+    def step(pair_ok):
+        return _transition(notes, [0], ("index",), 0.0, span, [1], ("ring",), 0.0, span, 0.5, 0.05, (),
+                           REACH, pair_ok)
+
+    free, _ = step(None)
+    assert step(lambda *a: True)[0] == free
+    apart, cut = step(lambda *a: False)
+    assert cut == () and apart >= free + MOVE_COST
