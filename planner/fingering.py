@@ -54,11 +54,14 @@ from planner.music import keyboard as kb
 
 CHORD_WINDOW_S = 0.030
 REUSE_S = 0.30  # time a finger needs to strike another key when the hand gives no measured move_s
-# lift before and landing after the rail's move, beyond the rail's own time: the fingers
-# overlap more of a long move (measured: ~0.03 s after a 0.25 m leap; a short move in a
-# fast passage costs the notes after it more than its own time)
+# lift before and landing after the rail's move, beyond the rail's own time; a short move
+# in a fast passage costs the notes after it more than its own time, while the fingers
+# overlap most of a long one (measured: 0.00-0.04 s after moves of 0.15-0.25 m). So:
+# the rail's time and REPOSITION_OVERHEAD_S, but no more than REPOSITION_CAP_S in all
+# unless the rail itself takes longer, then its time and REPOSITION_OVERHEAD_MIN_S
 REPOSITION_OVERHEAD_S = 0.15
 REPOSITION_OVERHEAD_MIN_S = 0.03
+REPOSITION_CAP_S = 0.25
 MOVE_COST = 1.0  # any change of hand position (all fingers must be up)
 LOST_S_COST = 50.0  # per second of a note the hand is still travelling in (or leaves out)
 TOP_NOTE_COST = 1.0  # leaving out a chord's top note (often the melody) costs this much more
@@ -268,7 +271,7 @@ def reposition_s(d_m: float, reach: HandReach) -> float:
     if d_m <= 0.0:
         return 0.0
     t_rail = max(1.875 * d_m / reach.rail_speed_m_s, math.sqrt(5.7735 * d_m / reach.rail_accel_m_s2))
-    return t_rail + max(REPOSITION_OVERHEAD_MIN_S, REPOSITION_OVERHEAD_S - 0.5 * t_rail)
+    return max(t_rail + REPOSITION_OVERHEAD_MIN_S, min(t_rail + REPOSITION_OVERHEAD_S, REPOSITION_CAP_S))
 
 
 def fit_rail(fingers, xs_m: np.ndarray, reach: HandReach) -> tuple[float, np.ndarray]:

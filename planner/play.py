@@ -579,6 +579,7 @@ class _Timeline:
         self._land_ok: set[int] = set()  # the travel's landings a press may blend with
         self.travels = 0
         self.shifts = 0  # hand moves made while a key was held
+        self.shift_from: dict[int, np.ndarray] = {}  # a shift's arm step (global index) -> where it starts
         self._blend_floor = 0  # no motion blends with one before this (global index)
         self.failure: str | None = None  # why the last press could not be made, if not reach
         self.arm_joints = _arm_joints(hand)
@@ -933,9 +934,11 @@ class _Timeline:
             k_arm = len(self.phases)
             q_next = self.q.copy()
             q_next[arm], q_next[js_h] = q[arm], q[js_h]
+            q_before = self.q.copy()
             self._move(q_next, 0.5, t_s, 0.0, "travel", None, follows=follows or self.arm_motion)
             follows = ()
             if len(self.phases) > k_arm:
+                self.shift_from[self.offset + k_arm] = q_before
                 self.arm_motion = ((self.offset + k_arm, self.phases[k_arm][0].duration_s),)
                 self.arm_deltas = {self.offset + k_arm: self.phases[k_arm][0].delta}
         self._blend_floor = self.offset + len(self.phases)
@@ -946,6 +949,23 @@ class _Timeline:
                 self.place[f] = ("high",)
         self.shifts += 1
         return True
+
+    def sweep_clear(self, j: int, d: np.ndarray, joints: np.ndarray, before: np.ndarray) -> bool:
+        """Whether the fingertip moved by ``joints`` stays ``TRAVEL_CLEARANCE_M`` above the
+        keys it passes over (sampled every ``PATH_STEP_M`` of its travel at least) when the
+        shift's arm step ``j`` (index in the chunk) moves by ``d`` instead, from where it
+        starts less ``before`` (the press it no longer makes)."""
+        q0 = self.shift_from.get(self.offset + j)
+        if q0 is None:
+            return False
+        q0 = q0 + before
+        hand = self.hand
+        k = next(i for i, f in enumerate(hand.fingers) if np.intersect1d(np.arange(hand.n)[hand.joint_slice(f)],
+                                                                          joints).size)
+        span = np.linalg.norm(hand.tip_positions(q0 + d)[k] - hand.tip_positions(q0)[k])
+        tips = np.array([hand.tip_positions(hand.apply_couplings(q0 + u * d))[k]
+                         for u in np.linspace(0.0, 1.0, max(11, math.ceil(span / PATH_STEP_M) + 2))])
+        return bool(np.all(_above_keys(tips, TRAVEL_CLEARANCE_M)))
 
     def _held_clear(self, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int) -> bool:
         """On the straight move from ``qa`` to ``qb`` (sampled), ``finger`` holds ``pitch``
@@ -1520,7 +1540,8 @@ def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_o
 
 
 def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
-                   reasons: dict[int, str], dt: float, hand_v: np.ndarray, hand_a: np.ndarray) -> bool:
+                   reasons: dict[int, str], dt: float, hand_v: np.ndarray, hand_a: np.ndarray,
+                   sweep_clear=None) -> bool:
     """Notes whose key the timing QP can put down only after half of the note is over are
     left out (named in ``reasons``): struck that late they would mostly sound after
     their time, as wrong notes, and delay the notes after them. The press and its
@@ -1548,12 +1569,17 @@ def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
         if moves:
             # the hand moved while the key was to be held (``shift``): the finger goes from
             # where the press started to where the release ends during the arm's first
-            # step instead (between two places within its limits), and no longer presses
+            # step instead (between two places within its limits), and no longer presses;
+            # only if its tip then clears the keys it passes over (``sweep_clear``), else
+            # the note is kept, late as it is
             fj = np.zeros_like(d, dtype=bool)
             fj[own] = True
             total = d + sum((phases[j].delta * fj for j in moves), np.zeros_like(d))
+            d0 = np.where(fj, total, phases[moves[0]].delta)
+            if sweep_clear is None or not sweep_clear(moves[0], d0, own, -phases[k].delta):
+                continue
             for i, j in enumerate(moves):
-                dj = np.where(fj, total if i == 0 else 0.0, phases[j].delta)
+                dj = d0 if i == 0 else np.where(fj, 0.0, phases[j].delta)
                 Tj = max(phases[j].duration_s, phase_duration(dj, hand_v, hand_a))
                 phases[j] = dataclasses.replace(phases[j], delta=dj, duration_s=Tj)
                 meta[j] = (phases[j],) + tuple(meta[j][1:])
@@ -1630,7 +1656,8 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                                               blend_s=blend[0], blend_after=blend[1]))
         starts = solve_timing(build_timing(phases, t_cut))
         for _ in range(DROP_ROUNDS):
-            if not _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt, hand.velocity, hand.acceleration):
+            if not _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt, hand.velocity,
+                                  hand.acceleration, tl.sweep_clear):
                 break
             starts = solve_timing(build_timing(phases, t_cut))
         for (p, kind, note), x in zip(phases_meta, starts):
