@@ -161,17 +161,21 @@ def solve_timing(prob: TimingProblem) -> np.ndarray:
     # differences of starts that point forward), so OSQP's infeasibility certificates
     # can only be false alarms: their tolerances are set far below reach. Polishing
     # is off: it prints to stdout (which would break ``-o -``).
-    for scaling in (10, 0):
+    # (tight first; then looser; and at last the last iterate of the loosest, if finite: the
+    # pass below makes any start times feasible, only the timing wishes suffer)
+    for scaling, eps in ((10, 1e-9), (0, 1e-9), (10, 1e-6)):
         solver = osqp.OSQP()
         solver.setup(P=P, q=q, A=A, l=l_vec, u=np.full(len(l_vec), np.inf), verbose=False,
-                     eps_abs=1e-9, eps_rel=1e-9, eps_prim_inf=1e-15, eps_dual_inf=1e-15,
+                     eps_abs=eps, eps_rel=eps, eps_prim_inf=1e-15, eps_dual_inf=1e-15,
                      max_iter=20000, polishing=False, scaling=scaling,
                      adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
         res = solver.solve(raise_error=False)
         if res.info.status in ("solved", "solved inaccurate") and res.x is not None:
             break
     else:
-        raise SolverError(f"timing QP failed: {res.info.status}", problem=prob)
+        if (res.info.status != "maximum iterations reached" or res.x is None
+                or not np.all(np.isfinite(res.x))):
+            raise SolverError(f"timing QP failed: {res.info.status}", problem=prob)
     x = np.maximum(np.array(res.x, dtype=float), prob.earliest)
     for (p, qq), lag in zip(prob.after, prob.lags):  # sorted by p, and p < q
         x[qq] = max(x[qq], x[p] + lag)
