@@ -170,7 +170,8 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
     cost = [np.array([c[2] for c in cands[0]] + [skip_cost[0]])]
     back: list[np.ndarray] = [np.zeros(len(cands[0]) + 1, dtype=int)]
     # per state, along the best path into it: the notes (and fingers) sounding from its
-    # group on (a key held over several later groups keeps its finger and its reach),
+    # group on (a key held over several later groups keeps its finger and its reach; a
+    # group left out keeps those of the state before it, whose key-up time still counts),
     # the last state that plays (group, candidate; None before any), and the held notes
     # its transition lets go early
     sounding = [[tuple((i, f) for i, f in zip(kept_groups[0], c[0]) if f is not None) for c in cands[0]] + [()]]
@@ -205,7 +206,7 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
         cuts.append(cuts_k)
         sounding.append([tuple((i, f) for i, f in held[int(bk[b])] if i not in cuts_k[b])
                          + tuple((i, f) for i, f in zip(g, c[0]) if f is not None)
-                         for b, c in enumerate(cands[k])] + [held[a_best]])
+                         for b, c in enumerate(cands[k])] + [sounding[k - 1][a_best]])
         last.append([(k, b) for b in range(m)] + [last[k - 1][a_best]])
     # backtrack (ties broken by the lowest index: deterministic)
     choice = [0] * n

@@ -173,3 +173,26 @@ def test_two_keys_no_hand_shape_reaches_are_costed_as_a_move():
     assert step(lambda *a: True)[0] == free
     apart, cut = step(lambda *a: False)
     assert cut == () and apart >= free + MOVE_COST
+
+
+def test_after_a_note_left_out_the_hand_is_free_from_the_last_key_up(monkeypatch):
+    """C4, then C7 for 50 ms (two long changes of hand position: left out), then D4: the
+    step to D4 from the state that left C7 out is costed with the time since C4's key
+    came up (0.2 s), not as if no key had ever been down (free time infinite: a change
+    of hand position there would have looked free)."""
+    import planner.fingering as fg
+
+    notes = [Note(60, 0.0, 0.4, 80), Note(96, 0.45, 0.5, 80), Note(62, 0.6, 1.0, 80)]
+    seen = []
+    orig = fg._transition
+
+    def spy(notes_, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held, reach, pair_ok=None):
+        if g == [2]:
+            seen.append((tuple(prev_g), free_s))
+        return orig(notes_, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held, reach, pair_ok)
+
+    monkeypatch.setattr(fg, "_transition", spy)
+    _, bad = assign_fingers(notes, REACH)
+    assert [b.note_index for b in bad] == [1]
+    from_c4 = [f for prev, f in seen if prev == (0,)]
+    assert from_c4 and all(f == pytest.approx(0.2) for f in from_c4)
