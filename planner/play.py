@@ -77,6 +77,7 @@ _SIM_DT_S = 0.002
 HOVER_MIN_M = 0.005  # issue: a finger not pressing is at least this far above the keys under it
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
 PAIR_TABLE_DIR = Path(__file__).parent / "tables"
+PAIR_TABLE_FIRST = -12  # the shipped table starts at this interval (crossed fingers: the fingering asks)
 PAIR_RETRY_ITER = 120  # a two-finger chord's IK that has not converged goes on this many steps
 START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on
 
@@ -176,7 +177,7 @@ class Planner:
                 for pc in range(12):
                     a = 60 + pc
                     row = []
-                    for iv in range(kb.HIGHEST_PITCH - a + 1):
+                    for iv in range(PAIR_TABLE_FIRST, kb.HIGHEST_PITCH - a + 1):
                         xs = np.array([kb.key(a).center_x_m, kb.key(a + iv).center_x_m])
                         if np.any(np.abs(fit_rail((f1, f2), xs, r)[1]) > lim):
                             row.append("-")
@@ -184,10 +185,11 @@ class Planner:
                             row.append("1" if self.pair_ok(f1, a, f2, a + iv) else "0")
                     rows[f"{f1} {f2} {pc}"] = "".join(row).rstrip("-")
         return {"urdf_sha256": self.hand.urdf_sha256, "hand": self.hand.name,
-                "about": "Planner.pair_ok by finger pair and pitch class of the lower key: one "
-                         "character per interval in semitones from 0 (1 both keys down at once, "
-                         "0 not, - not worked out); written by scripts/make_pair_table.py",
-                "pairs": rows}
+                "about": "Planner.pair_ok by finger pair (in the hand's order) and pitch class of "
+                         "the first finger's key: one character per interval in semitones to the "
+                         "second's, from first_interval on (1 both keys down at once, 0 not, - not "
+                         "worked out); written by scripts/make_pair_table.py",
+                "first_interval": PAIR_TABLE_FIRST, "pairs": rows}
 
     def _rest_posture(self) -> np.ndarray:
         """The natural hovering hand at rail 0: fingertips over their knuckles, 20 mm above
@@ -412,7 +414,7 @@ def _load_pair_table(hand: HandModel) -> dict:
     out = {}
     for k, row in data["pairs"].items():
         f1, f2, pc = k.split()
-        for iv, c in enumerate(row):
+        for iv, c in enumerate(row, start=data.get("first_interval", 0)):
             if c != "-":
                 out[(f1, f2, int(pc), iv)] = c == "1"
     return out
@@ -619,7 +621,7 @@ class _Timeline:
         moved = np.flatnonzero(d)
         if kind not in ("move", "press") or moved.size == 0:
             return none
-        finger = next((f for f in self.hand.fingers if np.all(np.isin(moved, self.hand.joint_slice(f)))), None)
+        finger = self._finger_of(moved)
         if finger is None:
             return none
         js = self.hand.joint_slice(finger)
@@ -959,13 +961,23 @@ class _Timeline:
         if q0 is None:
             return False
         q0 = q0 + before
-        hand = self.hand
-        k = next(i for i, f in enumerate(hand.fingers) if np.intersect1d(np.arange(hand.n)[hand.joint_slice(f)],
-                                                                          joints).size)
-        span = np.linalg.norm(hand.tip_positions(q0 + d)[k] - hand.tip_positions(q0)[k])
-        tips = np.array([hand.tip_positions(hand.apply_couplings(q0 + u * d))[k]
-                         for u in np.linspace(0.0, 1.0, max(11, math.ceil(span / PATH_STEP_M) + 2))])
+        tips = self._tip_track(q0, q0 + d, self.hand.fingers.index(self._finger_of(joints)), 11)
         return bool(np.all(_above_keys(tips, TRAVEL_CLEARANCE_M)))
+
+    def _tip_track(self, qa: np.ndarray, qb: np.ndarray, k: int, n_min: int, ends: bool = True) -> np.ndarray:
+        """Fingertip ``k`` on the straight joint-space move from ``qa`` to ``qb``: at least
+        ``n_min`` samples counting both ends (left out without ``ends``), no further apart
+        than ``PATH_STEP_M`` of the tip's straight-line travel (the path itself bends: a
+        long crossing may dip between coarse samples)."""
+        hand = self.hand
+        span = np.linalg.norm(hand.tip_positions(qb)[k] - hand.tip_positions(qa)[k])
+        u = np.linspace(0.0, 1.0, max(n_min, math.ceil(span / PATH_STEP_M) + 2))
+        return np.array([hand.tip_positions(hand.apply_couplings(qa + ui * (qb - qa)))[k]
+                         for ui in (u if ends else u[1:-1])])
+
+    def _finger_of(self, joints: np.ndarray) -> str | None:
+        """The finger all of ``joints`` belong to (None if no one finger)."""
+        return next((f for f in self.hand.fingers if np.all(np.isin(joints, self.hand.joint_slice(f)))), None)
 
     def _held_clear(self, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int) -> bool:
         """On the straight move from ``qa`` to ``qb`` (sampled), ``finger`` holds ``pitch``
@@ -1294,16 +1306,9 @@ class _Timeline:
         key sounds) on the straight joint-space move from ``qa`` to ``qb`` (the rest of
         the hand as in ``base``, default where it is now)."""
         k = self.hand.fingers.index(finger)
-        js = self.hand.joint_slice(finger)
-        q = self._with_finger(finger, qa, base)
-        tips = []
-        # samples no further apart than PATH_STEP_M of the tip's straight-line travel (the
-        # path itself bends: a long crossing may dip between coarse samples)
-        span = np.linalg.norm(self.hand.tip_positions(qb)[k] - self.hand.tip_positions(q)[k])
-        for u in np.linspace(0.0, 1.0, max(9, math.ceil(span / PATH_STEP_M) + 2))[1:-1]:
-            q[js] = qa[js] + u * (qb[js] - qa[js])
-            tips.append(self.hand.tip_positions(self.hand.apply_couplings(q))[k])
-        tips = np.array(tips)
+        # (the straight move of this finger's joints alone, the rest of the hand as in base)
+        tips = self._tip_track(self._with_finger(finger, qa, base), self._with_finger(finger, qb, base), k, 9,
+                               ends=False)
         return bool(np.all(_above_keys(tips, -GRAZE_M)))
 
     def _across(self, finger: str, q_to: np.ndarray, t_s: float) -> bool:
