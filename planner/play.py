@@ -1283,6 +1283,15 @@ class _Timeline:
             lag += PRESS_LAG_STEP_S
         return T_arm
 
+    def wait_above(self, finger: str, pitch: int) -> None:
+        """Before anything moves (the start configuration): an idle ``finger`` waits
+        ``LOW_M`` above ``pitch``, the key it presses next, if it reaches it from here."""
+        if self.seg is None or self.phases or self.place[finger][0] == "down":
+            return
+        if self.pl.press_q(finger, pitch, self.seg)[1].converged:
+            self.q = self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M))
+            self.place[finger] = ("above", pitch, LOW_M)
+
     def prepare(self, finger: str, pitch: int) -> None:
         """Bring an idle ``finger`` to wait ``LOW_M`` above ``pitch``, the key it presses
         next, as early as it may (no timing wish: the timing QP starts it at once)."""
@@ -1734,16 +1743,20 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                     if not reachable and not down:
                         first = tl.seg is None
                         _reposition(pl, tl, events[k:], group, t, rail, rail_of, reasons)
-                        if first and tl.seg is not None:  # the start configuration
-                            hold = tl.q.copy()
-                        # the fingers not striking now get ready for their next keys
+                        # the fingers not striking now get ready for their next keys (at
+                        # the start, they are there from the first row on)
                         busy = {g.finger for g in group}
                         for e in events[k:]:
                             if len(busy) == len(hand.fingers):
                                 break
                             if e[1] == 1 and e[3].press.finger not in busy and e[3].press.note_index not in reasons:
                                 busy.add(e[3].press.finger)
-                                tl.prepare(e[3].press.finger, e[3].press.pitch)
+                                if first:
+                                    tl.wait_above(e[3].press.finger, e[3].press.pitch)
+                                else:
+                                    tl.prepare(e[3].press.finger, e[3].press.pitch)
+                        if first and tl.seg is not None:  # the start configuration
+                            hold = tl.q.copy()
                 if p.note_index in reasons:  # (no safe path of the hand to it)
                     continue
                 if p.note_index in tl.pre_pressed:

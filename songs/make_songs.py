@@ -8,9 +8,13 @@ Every melody is public domain (see README.md). The files are written with
 ``planner.music.midi.write_notes_midi`` and their bytes are deterministic:
 running the script again rewrites identical files.
 
-Timing rule: every note sounds for 90 % of its slot, so there is always a
-gap before the next note; when the next note repeats the pitch the gap is
-at least 60 ms (the key must come up before it can be struck again).
+Timing rule: every note sounds for 90 % of its slot (the leaps: half of it,
+detached), so there is always a gap before the next note; when the next
+note repeats the pitch the gap is at least 60 ms (the key must come up
+before it can be struck again).
+
+``stress/`` holds songs beyond this hand (see README.md there): the planner
+must still plan them, name what it cannot play and stay within every limit.
 """
 
 from __future__ import annotations
@@ -36,10 +40,11 @@ def tempo_us(bpm: float) -> int:
     return round(60_000_000 / bpm)
 
 
-def melody(events: list[tuple[object, float]], bpm: float) -> list[tuple[int, float, float]]:
+def melody(events: list[tuple[object, float]], bpm: float, sound: float = 0.9
+           ) -> list[tuple[int, float, float]]:
     """(pitch(es) or None for a rest, beats) -> (pitch, onset_s, offset_s).
 
-    A pitch may be a tuple for a chord. Each note sounds 90 % of its slot;
+    A pitch may be a tuple for a chord. Each note sounds ``sound`` of its slot;
     if the next slot repeats one of its pitches the gap is at least 60 ms.
     Times are whole ticks of the file that main() writes, so the file holds
     exactly these times.
@@ -55,7 +60,7 @@ def melody(events: list[tuple[object, float]], bpm: float) -> list[tuple[int, fl
             nxt = events[k + 1][0] if k + 1 < len(events) else None
             nxt_group = nxt if isinstance(nxt, tuple) else (nxt,)
             for p in group:
-                length = (9 * slot) // 10
+                length = math.floor(sound * slot + 1e-9)
                 if p in nxt_group:
                     length = min(length, slot - repeat_gap)
                 out.append((p, tick * tick_s, (tick + length) * tick_s))
@@ -106,7 +111,27 @@ def chords() -> tuple[list, float]:
 
 
 def fast() -> tuple[list, float]:
-    # sixteenth-note runs within C4..A4 at 132 bpm: 8.8 notes per second
+    # sixteenth-note runs at 132 bpm (8.8 notes per second), each within five keys, the
+    # hand moving on to the next five (C4..G4, D4..A4, C4..G4) in an eighth-note rest
+    on_c = [C4, D4, E4, F4, G4, F4, E4, D4, C4, D4, E4, F4, G4, F4]
+    on_d = [D4, E4, F4, G4, A4, G4, F4, E4, D4, E4, F4, G4, A4, G4]
+    back = [C4, D4, E4, F4, G4, F4, E4, D4, C4, D4, E4, F4, E4, D4]
+    ev = ([(p, S16) for p in on_c] + [(None, E8)] + [(p, S16) for p in on_d] + [(None, E8)]
+          + [(p, S16) for p in back] + [(C4, Q)])
+    return melody(ev, 132), 132
+
+
+def leaps() -> tuple[list, float]:
+    # leaps of two octaves and more (C3 <-> E5 is 28 semitones), 0.6 s per note, each
+    # note detached (half its slot): the hand crosses the keyboard in the other half
+    seq = [C3, E5, C3, E5, D3, F5, E3, G5, C3, C6, G3, C5]
+    return melody([(p, Q) for p in seq], 100, sound=0.5), 100
+
+
+def fast_six_keys() -> tuple[list, float]:
+    # (stress) sixteenth-note runs over six keys, C4..A4, at 132 bpm, without a rest:
+    # five fingers that do not cross cannot hold six keys, and no finger of this hand
+    # moves to another key in the 11 ms between two notes
     run = [C4, D4, E4, F4, G4, F4, E4, D4,
            C4, D4, E4, F4, G4, A4, G4, F4,
            E4, F4, G4, A4, G4, F4, E4, D4,
@@ -114,8 +139,9 @@ def fast() -> tuple[list, float]:
     return melody([(p, S16) for p in run] + [(C4, Q)], 132), 132
 
 
-def leaps() -> tuple[list, float]:
-    # leaps of two octaves and more (C3 <-> E5 is 28 semitones), 0.6 s per note
+def leaps_legato() -> tuple[list, float]:
+    # (stress) the leaps held for 90 % of their slot: 60 ms for the hand to cross up to
+    # three octaves, which the rail alone cannot do
     seq = [C3, E5, C3, E5, D3, F5, E3, G5, C3, C6, G3, C5]
     return melody([(p, Q) for p in seq], 100), 100
 
@@ -128,6 +154,8 @@ SONGS = {
     "chords.mid": chords,
     "fast.mid": fast,
     "leaps.mid": leaps,
+    "stress/fast_six_keys.mid": fast_six_keys,
+    "stress/leaps_legato.mid": leaps_legato,
 }
 
 
@@ -138,6 +166,7 @@ def main() -> int:
     for name, make in SONGS.items():
         triples, bpm = make()
         notes = [Note(p, on, off, 80) for p, on, off in triples]
+        (HERE / name).parent.mkdir(exist_ok=True)
         write_notes_midi(notes, HERE / name, ticks_per_beat=TPB, tempo_us=tempo_us(bpm))
         end = max(off for _, _, off in triples)
         print(f"{name:16s} {len(notes):3d} notes  {end:6.2f} s  {bpm:g} bpm")

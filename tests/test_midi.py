@@ -571,8 +571,10 @@ EXPECTED = {  # name: (notes, lowest, highest)
     "ode_to_joy.mid": (62, 55, 67),
     "fur_elise.mid": (17, 60, 76),
     "chords.mid": (29, 59, 72),
-    "fast.mid": (33, 60, 69),
+    "fast.mid": (43, 60, 69),
     "leaps.mid": (12, 48, 84),
+    "stress/fast_six_keys.mid": (33, 60, 69),
+    "stress/leaps_legato.mid": (12, 48, 84),
 }
 
 
@@ -609,11 +611,27 @@ def test_sample_fast_has_eight_notes_per_second():
     assert 5 <= len(pitches) <= 8
 
 
+def test_sample_fast_runs_stay_within_five_keys_between_rests():
+    """Each legato run of fast.mid (notes less than a sixteenth apart) spans five keys at
+    most; the stress song's runs span six."""
+    def runs(name):
+        notes = sorted(load_song(SONGS / name).notes, key=lambda n: n.onset_s)
+        out = [[notes[0]]]
+        for a, b in pairwise(notes):
+            (out[-1] if b.onset_s - a.offset_s < 0.05 else out.append([]) or out[-1]).append(b)
+        return [{n.pitch for n in r} for r in out]
+
+    assert [len(r) for r in runs("fast.mid")] == [5, 5, 5]
+    assert max(len(r) for r in runs("stress/fast_six_keys.mid")) == 6
+
+
 def test_sample_leaps_has_a_leap_over_two_octaves():
     notes = load_song(SONGS / "leaps.mid").notes
     leaps = [abs(b.pitch - a.pitch) for a, b in pairwise(notes)]
     assert max(leaps) > 24
     assert min(b.onset_s - a.onset_s for a, b in pairwise(notes)) >= 0.6 - 1e-9
+    # detached: half of every slot is the hand's to cross the keyboard in
+    assert min(b.onset_s - a.offset_s for a, b in pairwise(notes)) == pytest.approx(0.3)
 
 
 def test_sample_chords_has_three_and_four_note_chords():
