@@ -956,11 +956,14 @@ class _Timeline:
         """Whether the fingertip moved by ``joints`` stays ``TRAVEL_CLEARANCE_M`` above the
         keys it passes over (sampled every ``PATH_STEP_M`` of its travel at least) when the
         shift's arm step ``j`` (index in the chunk) moves by ``d`` instead, from where it
-        starts less ``before`` (the press it no longer makes)."""
+        starts less ``before`` (the press it no longer makes), and both ends of that move
+        are within the joint limits."""
         q0 = self.shift_from.get(self.offset + j)
         if q0 is None:
             return False
         q0 = q0 + before
+        if not (self.hand.within_limits(q0) and self.hand.within_limits(q0 + d)):
+            return False  # (a straight move between two places within the limits stays within)
         tips = self._tip_track(q0, q0 + d, self.hand.fingers.index(self._finger_of(joints)), 11)
         return bool(np.all(_above_keys(tips, TRAVEL_CLEARANCE_M)))
 
@@ -1519,12 +1522,15 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
 
 
 def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_of, reasons,
-                      iv, notes) -> None:
+                      iv, notes, press_late_s=None) -> None:
     """Before the last held key (event ``k``, interval ``iv``) is let go of, if the next
     notes need a new hand position and come soon after, move the hand there while that
     key is still held: to a position (whole-hand IK) from which its finger still holds it
     and the next notes' fingers reach theirs; the holding finger follows the arm on its
-    key (``_Timeline.shift``). Saves the lift-travel-land between legato notes."""
+    key (``_Timeline.shift``). Saves the lift-travel-land between legato notes. The move
+    must fit in the note less ``SHIFT_BUDGET_S`` and less what of it a late key-down takes
+    (``press_late_s``: the chunk timed as it is): a move that ran past the note's end would
+    keep its key down, a wrong note."""
     if tl.seg is None:
         return
     t = events[k][0]
@@ -1539,9 +1545,15 @@ def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_o
     n = notes[h.note_index]
     rail = rail_of[group[0].note_index]
     budget = n.offset_s - n.onset_s - SHIFT_BUDGET_S
-    if pl.rail is not None:  # (the rail's own move alone must fit)
+    t_rail = 0.0  # (the rail's own move alone must fit)
+    if pl.rail is not None:
         d = abs(rail - float(tl.q[pl.rail]))
-        if phase_duration(np.array([d]), pl.hand.velocity[[pl.rail]], pl.hand.acceleration[[pl.rail]]) > budget:
+        t_rail = phase_duration(np.array([d]), pl.hand.velocity[[pl.rail]], pl.hand.acceleration[[pl.rail]])
+    if t_rail > budget:
+        return
+    if press_late_s is not None:
+        budget -= press_late_s(h.note_index)
+        if t_rail > budget:
             return
     held = press_target(h.finger, h.pitch)
     if pl.anchor([press_target(g.finger, g.pitch) for g in group] + [held], rail, tl.q) is None:
@@ -1584,22 +1596,33 @@ def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
             # the hand moved while the key was to be held (``shift``): the finger goes from
             # where the press started to where the release ends during the arm's first
             # step instead (between two places within its limits), and no longer presses;
-            # only if its tip then clears the keys it passes over (``sweep_clear``), else
-            # the note is kept, late as it is
+            # or it follows the arm's steps above its key; only if its tip then clears the
+            # keys it passes over (``sweep_clear``), else the note is kept, late as it is
             fj = np.zeros_like(d, dtype=bool)
             fj[own] = True
             total = d + sum((phases[j].delta * fj for j in moves), np.zeros_like(d))
             d0 = np.where(fj, total, phases[moves[0]].delta)
-            if sweep_clear is None or not sweep_clear(moves[0], d0, own, -phases[k].delta):
+            if sweep_clear is not None and sweep_clear(moves[0], d0, own, -phases[k].delta):
+                for i, j in enumerate(moves):
+                    dj = d0 if i == 0 else np.where(fj, 0.0, phases[j].delta)
+                    Tj = max(phases[j].duration_s, phase_duration(dj, hand_v, hand_a))
+                    phases[j] = dataclasses.replace(phases[j], delta=dj, duration_s=Tj)
+                    meta[j] = (phases[j],) + tuple(meta[j][1:])
+                phases[k] = dataclasses.replace(phases[k], delta=np.zeros_like(d), weight=0.0,
+                                                blend_s=0.0, blend_after=-1)
+                phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
+            elif sweep_clear is not None and all(sweep_clear(j, phases[j].delta, own, -phases[k].delta)
+                                                 for j in moves):
+                # else the finger need not press to follow the arm: from where the press
+                # would have started (above its key), the arm's steps as planned keep it
+                # over its key, clear of every key; at the end it goes where the release
+                # would have taken it
+                T_r = max(phases[r].duration_s, phase_duration(d, hand_v, hand_a))
+                phases[k] = dataclasses.replace(phases[k], delta=np.zeros_like(d), weight=0.0,
+                                                blend_s=0.0, blend_after=-1)
+                phases[r] = dataclasses.replace(phases[r], delta=d, duration_s=T_r, weight=0.0)
+            else:
                 continue
-            for i, j in enumerate(moves):
-                dj = d0 if i == 0 else np.where(fj, 0.0, phases[j].delta)
-                Tj = max(phases[j].duration_s, phase_duration(dj, hand_v, hand_a))
-                phases[j] = dataclasses.replace(phases[j], delta=dj, duration_s=Tj)
-                meta[j] = (phases[j],) + tuple(meta[j][1:])
-            phases[k] = dataclasses.replace(phases[k], delta=np.zeros_like(d), weight=0.0,
-                                            blend_s=0.0, blend_after=-1)
-            phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
         else:
             # (no blend with the motion before: it was checked against the press alone)
             phases[k] = dataclasses.replace(phases[k], delta=d, duration_s=T, anchor=0.5, weight=0.0,
@@ -1647,15 +1670,12 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
     joint_free = np.zeros(hand.n)  # when each joint's last planned motion ends
     last_row = None
 
-    def flush(cut_s=None, final_t=None):
-        """Time the chunk of phases (timing QP), write every row up to ``cut_s`` (all of
-        them with ``final_t``), and carry the phases still running then over to the next
-        chunk with their start times fixed."""
-        nonlocal next_row, t_cut, first_row_s, hold, last_row, joint_free
-        phases_meta = tl.phases
+    def chunk_phases() -> list[Phase]:
+        """The chunk's phases as the timing QP takes them: each no sooner than the rows
+        written and its joints' last timed motion, after the carried motions it follows."""
         carried_start = {g: x for g, _, x in tl.carried}
         phases = []
-        for k, (ph, _, _) in enumerate(phases_meta):
+        for k, (ph, _, _) in enumerate(tl.phases):
             js = ph.joints if ph.order_joints is None else ph.order_joints
             earliest = max([t_cut, ph.earliest_s] + [float(joint_free[j]) for j in js.tolist()])
             follows = []
@@ -1668,6 +1688,25 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
             blend = (ph.blend_s, ph.blend_after - tl.offset) if ph.blend_after >= tl.offset else (0.0, -1)
             phases.append(dataclasses.replace(ph, earliest_s=earliest, follows=tuple(follows),
                                               blend_s=blend[0], blend_after=blend[1]))
+        return phases
+
+    def press_late_s(note: int) -> float:
+        """How late (s) the timing QP would put ``note``'s key down if the chunk were timed
+        now (0 if its press is not in the chunk)."""
+        k = next((k for k, (_, kind, n) in enumerate(tl.phases) if kind == "press" and n == note), None)
+        if k is None:
+            return 0.0
+        phases = chunk_phases()
+        x = solve_timing(build_timing(phases, t_cut))[k]
+        return max(0.0, float(x + phases[k].anchor * phases[k].duration_s - phases[k].ideal_s))
+
+    def flush(cut_s=None, final_t=None):
+        """Time the chunk of phases (timing QP), write every row up to ``cut_s`` (all of
+        them with ``final_t``), and carry the phases still running then over to the next
+        chunk with their start times fixed."""
+        nonlocal next_row, t_cut, first_row_s, hold, last_row, joint_free
+        phases_meta = tl.phases
+        phases = chunk_phases()
         starts = solve_timing(build_timing(phases, t_cut))
         for _ in range(DROP_ROUNDS):
             if not _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt, hand.velocity,
@@ -1777,7 +1816,7 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                     reasons[p.note_index] = f"{why} (for the {p.finger})"
             elif p.note_index in down:
                 if len(down) == 1:
-                    _shift_while_held(pl, tl, events, k, groups, rail_of, reasons, iv, notes)
+                    _shift_while_held(pl, tl, events, k, groups, rail_of, reasons, iv, notes, press_late_s)
                 tl.release(p.finger, p.pitch, t, p.note_index)
                 del down[p.note_index]
                 nxt = next_of.get(p.note_index)

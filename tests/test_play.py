@@ -757,7 +757,9 @@ def test_two_hands_of_notes_give_no_wrong_press(planner, tmp_path):
     was left out even where the hand moved while its key was to be held (``shift``):
     its finger then swept over the black keys beside it at key height (four wrong
     presses); it is now left out only if that way is clear (``sweep_clear``), else kept
-    late (its key up a frame after its end at worst)."""
+    late (its key was up a frame after its end). Now the hand no longer moves while a key
+    is held when the timing already puts that key down late, and a note left out there
+    may also have its finger follow the arm above its key: no wrong press at all."""
     from planner.music.midi import write_notes_midi
 
     melody = [70, 68, 66, 67, 66, 67, 68, 68, 67, 67, 65, 65, 65, 67, 69, 69,
@@ -768,8 +770,7 @@ def test_two_hands_of_notes_give_no_wrong_press(planner, tmp_path):
     assert len(res.infeasible) > 0  # (one hand: much of it is named infeasible)
     rep = check_trajectory(str(tmp_path / "t.csv"), str(song))
     assert not rep.play.key_bed_hits and not [lim for lim in rep.limits if lim.count]
-    assert len(rep.play.wrong_presses) <= 1, rep.play.wrong_presses
-    assert all(p.end_s - p.start_s <= 0.011 for p in rep.play.wrong_presses)  # (a frame late up at most)
+    assert not rep.play.wrong_presses, rep.play.wrong_presses
 
 
 def test_a_trill_faster_than_the_fingers_is_planned_not_refused(planner, tmp_path):
@@ -788,3 +789,29 @@ def test_a_trill_faster_than_the_fingers_is_planned_not_refused(planner, tmp_pat
     assert not [lim for lim in rep.limits if lim.count]
     named = {n.index for n in res.infeasible}
     assert rep.play.notes_hit + len(named) >= len(notes)
+
+
+def test_the_planner_does_not_need_the_fingerings_rail_exact(planner, tmp_path, monkeypatch):
+    """A trill of thumb and index on C5-D5 with the fingering's rail 50 mm off: the
+    whole-hand IK finds a hand position for the whole trill anyway and plays it from
+    there, instead of moving the hand for every note."""
+    import dataclasses as dc
+
+    import planner.play as play_mod
+    from planner.music.midi import write_notes_midi
+
+    notes = [Note(72 + 2 * (i % 2), 0.25 * i, 0.25 * i + 0.2, 80) for i in range(16)]
+    song = tmp_path / "trill.mid"
+    write_notes_midi(notes, song)
+    orig = play_mod.assign_fingers
+
+    def off(notes_, reach, pair_ok=None):
+        a, bad = orig(notes_, reach, pair_ok)
+        return [dc.replace(x, rail_m=x.rail_m + 0.05) for x in a], bad
+
+    monkeypatch.setattr(play_mod, "assign_fingers", off)
+    path = tmp_path / "t.csv"
+    res = plan_song(load_song(song), planner.hand, str(path), planner=Planner(planner.hand))
+    rep = check_trajectory(str(path), str(song))
+    assert res.travels <= 1 and not res.infeasible, [(n.onset_s, n.pitch, n.reason) for n in res.infeasible]
+    assert rep.play.f1 >= 0.98 and not rep.play.wrong_presses, rep.summary()
