@@ -18,8 +18,10 @@ and the cost of going from one candidate to the next is
 
 - rail travel, and travel faster than the rail can comfortably go in the
   time between the groups (effectively infinite above its top speed);
-- a change of hand position (no rail position serves both groups, or a
-  finger passes another or takes over its key): ``MOVE_COST`` plus the music
+- a change of hand position (no rail position serves both groups, a finger
+  passes another or takes over its key, or a finger goes to a key further from
+  the others it played since the hand last moved than it reaches with the arm
+  still, ``HandReach.range_m``): ``MOVE_COST`` plus the music
   lost while the hand lifts, travels and lands (``reposition_s``) beyond the
   time every key is up anyway;
 - a finger struck again sooner than it can come up and down (same key:
@@ -97,6 +99,10 @@ class HandReach:
     spread_m: dict[str, float] | None = None  # sideways reach with the wrist still too
     repeat_s: dict[str, float] | None = None  # key up to key down again, same key (s)
     move_s: dict[str, float] | None = None  # key up to key down on the next white key (s)
+    # how far apart (m) two keys one finger plays from one hand position (rail and wrist
+    # still) may be: its sideways reach from its key both ways together, from the hand on
+    # white keys (see ``Planner._finger_ranges``). None: no limit beyond ``reach_m``
+    range_m: dict[str, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -177,6 +183,9 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
     sounding = [[tuple((i, f) for i, f in zip(kept_groups[0], c[0]) if f is not None) for c in cands[0]] + [()]]
     last = [[(0, a) for a in range(len(cands[0]))] + [None]]
     cuts: list[list[tuple[int, ...]]] = [[() for _ in range(len(cands[0]) + 1)]]
+    # per state, along the best path into it: each finger's keys (lowest and highest x)
+    # since the hand last moved
+    spans = [[_key_spans(notes, kept_groups[0], c[0], {}) for c in cands[0]] + [{}]]
     for k in range(1, n):
         g, onset = kept_groups[k], onsets[k]
         held = [tuple((i, f) for i, f in snd if notes[i].offset_s > onset + 1e-6) for snd in sounding[k - 1]]
@@ -185,22 +194,27 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
         ck = np.empty(m + 1)
         bk = np.empty(m + 1, dtype=int)
         cuts_k: list[tuple[int, ...]] = []
+        spans_k: list[dict] = []
         for b, (fb, rb, sb, span_b) in enumerate(cands[k]):
-            best, arg, best_cut = math.inf, 0, ()
+            best, arg, best_cut, best_move = math.inf, 0, (), False
             for a, e in enumerate(last[k - 1]):
-                c, cut = 0.0, ()
+                c, cut, move = 0.0, (), False
                 if e is not None:
                     fa, ra, _, span_a = cands[e[0]][e[1]]
-                    c, cut = _transition(notes, kept_groups[e[0]], fa, ra, span_a, g, fb, rb, span_b,
-                                         max(onset - onsets[e[0]], 1e-3), free[a], held[a], reach, pair_ok)
+                    c, cut, move = _transition(notes, kept_groups[e[0]], fa, ra, span_a, g, fb, rb, span_b,
+                                               max(onset - onsets[e[0]], 1e-3), free[a], held[a], reach,
+                                               pair_ok, spans[k - 1][a])
                 if cost[k - 1][a] + c < best:
-                    best, arg, best_cut = cost[k - 1][a] + c, a, cut
+                    best, arg, best_cut, best_move = cost[k - 1][a] + c, a, cut, move
             ck[b] = best + sb
             bk[b] = arg
             cuts_k.append(best_cut)
+            spans_k.append(_key_spans(notes, g, fb, {} if best_move else spans[k - 1][arg]))
         a_best = int(np.argmin(cost[k - 1]))  # (left out: the best way here so far goes on)
         ck[m], bk[m] = cost[k - 1][a_best] + skip_cost[k], a_best
         cuts_k.append(())
+        spans_k.append(spans[k - 1][a_best])
+        spans.append(spans_k)
         cost.append(ck)
         back.append(bk)
         cuts.append(cuts_k)
@@ -217,6 +231,8 @@ def assign_fingers(notes, reach: HandReach, pair_ok: PairCheck | None = None
     # that reach all its keys; keep the rail still while the interval allows,
     # else move it a quarter of the interval inside the nearer end, so that the
     # hand only travels when it must.
+    # (A change of hand position that the rail's interval alone does not ask for, a
+    # finger beyond its range, keeps the rail: the planner finds the new position there.)
     rails: list[float] = []
     prev = None
     for k, g in enumerate(kept_groups):
@@ -343,15 +359,40 @@ def _crosses(notes, prev_g, fa, g, fb) -> bool:
     return any(f1 != f2 and (f1 - f2) * (p1 - p2) <= 0 for f1, p1 in a for f2, p2 in b)
 
 
+def _key_spans(notes, g, fingers, before: dict) -> dict:
+    """``before`` (finger -> (lowest, highest) x of its keys, m) with the keys of
+    ``fingers`` on the group ``g`` added."""
+    out = dict(before)
+    for i, f in zip(sorted(g, key=lambda i: notes[i].pitch), fingers):
+        if f is not None:
+            x = kb.key(notes[i].pitch).center_x_m
+            lo, hi = out.get(f, (x, x))
+            out[f] = (min(lo, x), max(hi, x))
+    return out
+
+
+def _range_excess(notes, g, fb, spans: dict, reach: HandReach) -> float:
+    """How far (m) the keys of ``fb`` on ``g`` take a finger beyond ``reach.range_m``
+    from the keys it played since the hand last moved (``spans``)."""
+    if reach.range_m is None:
+        return 0.0
+    worst = 0.0
+    for f, (lo, hi) in _key_spans(notes, g, fb, spans).items():
+        worst = max(worst, hi - lo - reach.range_m[f])
+    return worst
+
+
 def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held,
-                reach: HandReach, pair_ok: PairCheck | None = None) -> tuple[float, tuple[int, ...]]:
+                reach: HandReach, pair_ok: PairCheck | None = None,
+                spans: dict | None = None) -> tuple[float, tuple[int, ...], bool]:
     """The cost of going from candidate (fa, ra) of group ``prev_g`` to (fb, rb) of ``g``
-    with the keys ``held`` ((note, finger) still down at ``g``'s onset), and the held
-    notes that must then be let go early (see ``CUT_LEAD_S``)."""
+    with the keys ``held`` ((note, finger) still down at ``g``'s onset), the held notes
+    that must then be let go early (see ``CUT_LEAD_S``), and whether the hand changes
+    position. ``spans``: each finger's keys since the hand last moved (``_key_spans``)."""
     d = abs(rb - ra)
     v = d / dt
     if v > reach.rail_speed_m_s:
-        return 1e6 * (1.0 + v), ()  # effectively infeasible, but keeps a path
+        return 1e6 * (1.0 + v), (), True  # effectively infeasible, but keeps a path
     c = 10.0 * d + 20.0 * max(0.0, v - 0.5 * reach.rail_speed_m_s) ** 2
     # a rail position serving both groups: the hand stays; else it must lift, travel
     # and land between them, and every frame that takes is a frame of music lost
@@ -363,6 +404,11 @@ def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, he
         # a finger passing another (or taking over its key) needs the hand moved too, and
         # so do two keys no one hand shape reaches
         gap = kb.WHITE_PITCH_M
+    if gap == 0.0 and spans:
+        # a finger sent further from its earlier keys here than it reaches with the arm still
+        excess = _range_excess(notes, g, fb, spans, reach)
+        if excess > 1e-9:
+            gap = max(excess, kb.WHITE_PITCH_M)
     prev_finger = {i: f for i, f in zip(sorted(prev_g, key=lambda i: notes[i].pitch), fa) if f is not None}
     new_finger = {i: f for i, f in zip(sorted(g, key=lambda i: notes[i].pitch), fb) if f is not None}
     used_now = {f: notes[i].pitch for i, f in new_finger.items()}
@@ -393,4 +439,4 @@ def _transition(notes, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, he
         else:
             need = reach.move_s[f] if reach.move_s else REUSE_S
         c += LOST_S_COST * max(0.0, need - free)
-    return c, tuple(cut)
+    return c, tuple(cut), gap > 0.0

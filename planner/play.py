@@ -79,6 +79,8 @@ LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
 PAIR_TABLE_DIR = Path(__file__).parent / "tables"
 PAIR_TABLE_FIRST = -12  # the shipped table starts at this interval (crossed fingers: the fingering asks)
 PAIR_RETRY_ITER = 120  # a two-finger chord's IK that has not converged goes on this many steps
+RANGE_MAX_M = 0.06  # a finger's sideways reach with the arm still: probed up to this far a side
+RANGE_TOL_M = 0.001  # ... to this precision
 START_PRESSED_S = 1e-9  # notes at t = 0 are down from the first row on
 
 
@@ -134,7 +136,7 @@ class Planner:
         # rejected octaves the hand can play)
         repeat, move = self._finger_times(tips)
         self.reach = HandReach(offsets, reach, float(vmax), (float(lo), float(hi)), float(amax),
-                               repeat_s=repeat, move_s=move)
+                               repeat_s=repeat, move_s=move, range_m=self._finger_ranges(tips))
 
     def pair_ok(self, f1: str, p1: int, f2: str, p2: int) -> bool:
         """Whether finger ``f1`` on ``p1`` and ``f2`` on ``p2`` can be down at once with
@@ -238,6 +240,45 @@ class Planner:
             down = _key_crossing(h, q_high2, r2.q, f, nxt)
             move[f] = (1.0 - up) * T(r.q, q_high) + T(q_high, q_high2) + down * T(q_high2, r2.q)
         return repeat, move
+
+    def _finger_ranges(self, tips: np.ndarray) -> dict[str, float] | None:
+        """Per finger, how far apart (m) two keys it plays from one hand position may be:
+        from the hand on white keys (one finger each, the thumb on the key under it at
+        rest; adjacent keys, and every other key), how far its tip moves sideways at full
+        dip with the arm still (rail and wrist), to the left and to the right, added
+        (bisection to ``RANGE_TOL_M``, at most ``RANGE_MAX_M`` a side); the larger of the
+        two shapes. None if the hand takes neither."""
+        h = self.hand
+        whites = [p for p in kb.ALL_PITCHES if not kb.is_black(p)]
+        first = min(range(len(whites)), key=lambda k: abs(kb.key(whites[k]).center_x_m - tips[0, 0]))
+        rail0 = self.rest[self.rail] if self.rail is not None else 0.0
+        natural = HandReach({f: float(tips[i, 0] - rail0) for i, f in enumerate(h.fingers)},
+                            {f: 1.0 for f in h.fingers}, 1.0, (-np.inf, np.inf), 1.0)
+        out: dict[str, float] = {}
+        for step in (1, 2):
+            keys = dict(zip(h.fingers, whites[first:first + step * len(h.fingers):step]))
+            targets = [press_target(f, p) for f, p in keys.items()]
+            rail_m, _ = fit_rail(h.fingers, np.array([kb.key(p).center_x_m for p in keys.values()]), natural)
+            q0 = self.posture_at(rail_m)
+            r = self.ik.solve(targets, q0, q0)
+            if not r.converged:
+                continue
+            for t in targets:
+                k = h.fingers.index(t.finger)
+                x0 = float(h.tip_positions(r.q)[k, 0])
+                total = 0.0
+                for sign in (-1.0, 1.0):
+                    lo, hi = 0.0, RANGE_MAX_M
+                    while hi - lo > RANGE_TOL_M:
+                        d = 0.5 * (lo + hi)
+                        goal = PressTarget(t.finger, t.pitch, (x0 + sign * d, t.point_m[1], t.point_m[2]), t.y_range_m)
+                        if self.ik.solve_finger(goal, r.q).converged:
+                            lo = d
+                        else:
+                            hi = d
+                    total += lo
+                out[t.finger] = max(out.get(t.finger, 0.0), total)
+        return out or None
 
     def _probe_reach(self, finger: str, tip: np.ndarray, locked_joints: tuple[str, ...]) -> float:
         """How far (m) a fingertip can move sideways from rest with ``locked_joints`` still
@@ -1354,6 +1395,14 @@ class _Timeline:
         second = self._high_path(mid, qb, finger, splits - 1, base) if first is not None else None
         return None if second is None else first + second
 
+    def snapshot(self) -> dict:
+        """The timeline's state, to go back to (``restore``) when motions added are undone."""
+        return {k: (v.copy() if isinstance(v, (np.ndarray, list, dict, set)) else v)
+                for k, v in self.__dict__.items()}
+
+    def restore(self, state: dict) -> None:
+        self.__dict__.update(state)
+
     def release(self, finger: str, pitch: int, t_s: float, note: int | None = None) -> None:
         q_new = self._with_finger(finger, self.pl.above_q(finger, pitch, self.seg, LOW_M))
         frac = _key_crossing(self.hand, self.q, q_new, finger, pitch)
@@ -1392,6 +1441,7 @@ def _guard(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -
 
 SHIFT_GAP_S = 0.25  # the hand moves while a key is held when the next notes come this soon after
 SHIFT_BUDGET_S = 0.1  # ... and the held note is at least this much longer than the move
+REFIT_MIN_M = 0.002  # a hand position is sought at a rail refitted to its window if that moves it this far
 WINDOW_NOTES = 200  # a new hand position is chosen for at most this many notes ahead
 
 
@@ -1459,20 +1509,29 @@ def _best_position(pl: Planner, tl: _Timeline, events, group, t: float, rail: fl
     candidates.append((presses, (), ()))  # the group alone, every other finger hovering
     seg = None
     best = len(group) - 1  # a position must at least serve the group itself
-    # from where the hand is (it moves least), else from the natural hand at that rail (a
-    # wrist twisted far by earlier positions may leave no shape within reach)
-    for q_from in (tl.q, None):
-        for targets, upcoming, chord in candidates:
-            s_ = pl.anchor(targets, rail, q_from, upcoming, chord)
-            if s_ is None:
-                continue
-            c = _covered(pl, s_, window)
-            if c > best:
-                seg, best = s_, c
-            if c == len(window):
-                break
-        if seg is not None:
+    # at the fingering's rail position; where none there serves more than the group (the
+    # fingering's lateral model is generous), also at the rail that puts the fingers
+    # nearest their first keys of the window
+    fingers = [g.finger for g in group] + list(first)
+    xs = np.array([kb.key(g.pitch).center_x_m for g in group] + [kb.key(p.pitch).center_x_m for p in first.values()])
+    for r_ in (rail, fit_rail(fingers, xs, pl.reach)[0]):
+        if r_ != rail and (best > len(group) or len(window) == len(group) or abs(r_ - rail) < REFIT_MIN_M):
             break
+        # from where the hand is (it moves least), else from the natural hand at that rail
+        # (a wrist twisted far by earlier positions may leave no shape within reach)
+        seg_before = seg
+        for q_from in (tl.q, None):
+            for targets, upcoming, chord in candidates:
+                s_ = pl.anchor(targets, r_, q_from, upcoming, chord)
+                if s_ is None:
+                    continue
+                c = _covered(pl, s_, window)
+                if c > best:
+                    seg, best = s_, c
+                if c == len(window):
+                    break
+            if seg is not seg_before:
+                break
     return seg, (best if seg is not None else 0)
 
 
@@ -1522,15 +1581,16 @@ def _reposition(pl: Planner, tl: _Timeline, events, group, t: float, rail: float
 
 
 def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_of, reasons,
-                      iv, notes, press_late_s=None) -> None:
+                      iv, notes, late_s=None) -> None:
     """Before the last held key (event ``k``, interval ``iv``) is let go of, if the next
     notes need a new hand position and come soon after, move the hand there while that
     key is still held: to a position (whole-hand IK) from which its finger still holds it
     and the next notes' fingers reach theirs; the holding finger follows the arm on its
     key (``_Timeline.shift``). Saves the lift-travel-land between legato notes. The move
     must fit in the note less ``SHIFT_BUDGET_S`` and less what of it a late key-down takes
-    (``press_late_s``: the chunk timed as it is): a move that ran past the note's end would
-    keep its key down, a wrong note."""
+    (``late_s``: the chunk timed as it is), and is undone if the chunk, timed with it and
+    the release after it, would let the key up late: a key still down after its note is a
+    wrong note."""
     if tl.seg is None:
         return
     t = events[k][0]
@@ -1551,8 +1611,8 @@ def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_o
         t_rail = phase_duration(np.array([d]), pl.hand.velocity[[pl.rail]], pl.hand.acceleration[[pl.rail]])
     if t_rail > budget:
         return
-    if press_late_s is not None:
-        budget -= press_late_s(h.note_index)
+    if late_s is not None:
+        budget -= late_s(h.note_index, "press")
         if t_rail > budget:
             return
     held = press_target(h.finger, h.pitch)
@@ -1562,7 +1622,12 @@ def _shift_while_held(pl: Planner, tl: _Timeline, events, k: int, groups, rail_o
     seg, c = _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons, held=held)
     if seg is None or c < _best_position(pl, tl, events[k + 1:], group, nxt[0], rail, rail_of, reasons)[1]:
         return
-    tl.shift(seg, h.finger, h.pitch, t, budget_s=budget)
+    before = tl.snapshot()
+    if tl.shift(seg, h.finger, h.pitch, t, budget_s=budget) and late_s is not None:
+        shifted = tl.snapshot()
+        tl.release(h.finger, h.pitch, t, h.note_index)
+        late = late_s(h.note_index, "release") > 0.5 * tl.dt
+        tl.restore(before if late else shifted)
 
 
 def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
@@ -1690,10 +1755,10 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                                               blend_s=blend[0], blend_after=blend[1]))
         return phases
 
-    def press_late_s(note: int) -> float:
-        """How late (s) the timing QP would put ``note``'s key down if the chunk were timed
-        now (0 if its press is not in the chunk)."""
-        k = next((k for k, (_, kind, n) in enumerate(tl.phases) if kind == "press" and n == note), None)
+    def late_s(note: int, kind: str) -> float:
+        """How late (s) the timing QP would put ``note``'s key down (``kind`` "press") or up
+        ("release") if the chunk were timed now (0 if that motion is not in the chunk)."""
+        k = next((k for k, (_, kd, n) in enumerate(tl.phases) if kd == kind and n == note), None)
         if k is None:
             return 0.0
         phases = chunk_phases()
@@ -1816,7 +1881,7 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
                     reasons[p.note_index] = f"{why} (for the {p.finger})"
             elif p.note_index in down:
                 if len(down) == 1:
-                    _shift_while_held(pl, tl, events, k, groups, rail_of, reasons, iv, notes, press_late_s)
+                    _shift_while_held(pl, tl, events, k, groups, rail_of, reasons, iv, notes, late_s)
                 tl.release(p.finger, p.pitch, t, p.note_index)
                 del down[p.note_index]
                 nxt = next_of.get(p.note_index)

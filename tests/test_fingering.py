@@ -169,10 +169,11 @@ def test_two_keys_no_hand_shape_reaches_are_costed_as_a_move():
         return _transition(notes, [0], ("index",), 0.0, span, [1], ("ring",), 0.0, span, 0.5, 0.05, (),
                            REACH, pair_ok)
 
-    free, _ = step(None)
+    free, _, moved = step(None)
+    assert not moved
     assert step(lambda *a: True)[0] == free
-    apart, cut = step(lambda *a: False)
-    assert cut == () and apart >= free + MOVE_COST
+    apart, cut, moved = step(lambda *a: False)
+    assert cut == () and moved and apart >= free + MOVE_COST
 
 
 def test_after_a_note_left_out_the_hand_is_free_from_the_last_key_up(monkeypatch):
@@ -186,13 +187,40 @@ def test_after_a_note_left_out_the_hand_is_free_from_the_last_key_up(monkeypatch
     seen = []
     orig = fg._transition
 
-    def spy(notes_, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held, reach, pair_ok=None):
+    def spy(notes_, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held, reach, pair_ok=None,
+            spans=None):
         if g == [2]:
             seen.append((tuple(prev_g), free_s))
-        return orig(notes_, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held, reach, pair_ok)
+        return orig(notes_, prev_g, fa, ra, span_a, g, fb, rb, span_b, dt, free_s, held, reach, pair_ok,
+                    spans)
 
     monkeypatch.setattr(fg, "_transition", spy)
     _, bad = assign_fingers(notes, REACH)
     assert [b.note_index for b in bad] == [1]
     from_c4 = [f for prev, f in seen if prev == (0,)]
     assert from_c4 and all(f == pytest.approx(0.2) for f in from_c4)
+
+
+def test_a_finger_sent_beyond_its_range_moves_the_hand():
+    """The middle finger on C4, then on F4 0.5 s later: within its reach (the rail stays),
+    but beyond its range at one hand position (``HandReach.range_m``), so the step is a
+    change of hand position, costed as one; within range it is not."""
+    import dataclasses as dc
+
+    from planner.fingering import MOVE_COST, _key_spans, _transition
+
+    notes = [Note(60, 0.0, 0.45, 80), Note(65, 0.5, 0.95, 80)]
+    span = (-1.0, 1.0)
+    spans = _key_spans(notes, [0], ("middle",), {})
+    assert spans == {"middle": (kb.key(60).center_x_m, kb.key(60).center_x_m)}
+
+    def step(range_m):
+        reach = dc.replace(REACH, range_m={f: range_m for f in FINGER_ORDER})
+        return _transition(notes, [0], ("middle",), 0.0, span, [1], ("middle",), 0.0, span, 0.5, 0.05, (),
+                           reach, None, spans)
+
+    wide, _, moved_wide = step(0.08)  # F4 is 70.5 mm from C4
+    narrow, _, moved_narrow = step(0.05)
+    assert not moved_wide and moved_narrow
+    assert narrow >= wide + MOVE_COST
+

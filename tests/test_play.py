@@ -815,3 +815,32 @@ def test_the_planner_does_not_need_the_fingerings_rail_exact(planner, tmp_path, 
     rep = check_trajectory(str(path), str(song))
     assert res.travels <= 1 and not res.infeasible, [(n.onset_s, n.pitch, n.reason) for n in res.infeasible]
     assert rep.play.f1 >= 0.98 and not rep.play.wrong_presses, rep.summary()
+
+
+@pytest.mark.parametrize("name,f1", [("melody_over_held_bass", 0.90), ("trill_sections", 0.96)])
+def test_regression_songs(planner, name, f1, tmp_path):
+    """Random songs the planner once did badly on (tests/data/README.md): the fingering's
+    per-finger range at one hand position (melody_over_held_bass: 0.846 before it); a
+    hand position sought at a rail fitted to the window's keys when none at the
+    fingering's rail serves more than the notes struck (trill_sections: 0.46 without)."""
+    song = ROOT / "tests" / "data" / f"{name}.mid"
+    path = tmp_path / "o.csv"
+    plan_song(load_song(song), planner.hand, str(path), planner=planner)
+    rep = check_trajectory(str(path), str(song))
+    assert not rep.play.wrong_presses and not rep.play.key_bed_hits, rep.summary()
+    assert all(v.count == 0 for v in rep.limits), rep.summary()
+    assert rep.play.f1 >= f1, rep.summary()
+
+
+def test_finger_ranges_are_measured_by_ik(planner):
+    """Each finger's range at one hand position (the arm still): from the hand on white
+    keys, every finger reaches the white key next to its own (so the range is more than
+    one key's pitch), and no more than the probe's limit on each side; the thumb, pressing
+    with its side, has the least."""
+    from planner.music import keyboard as kb
+    from planner.play import RANGE_MAX_M
+
+    r = planner.reach.range_m
+    assert set(r) == set(planner.hand.fingers)
+    assert all(kb.WHITE_PITCH_M < v <= 2 * RANGE_MAX_M for v in r.values()), r
+    assert r["thumb"] == min(r.values()), r
