@@ -136,7 +136,8 @@ class Planner:
         # rejected octaves the hand can play)
         repeat, move = self._finger_times(tips)
         self.reach = HandReach(offsets, reach, float(vmax), (float(lo), float(hi)), float(amax),
-                               repeat_s=repeat, move_s=move, range_m=self._finger_ranges(tips))
+                               repeat_s=repeat, move_s=move,
+                               range_m=_shipped_ranges(hand) or self._finger_ranges(tips))
 
     def pair_ok(self, f1: str, p1: int, f2: str, p2: int) -> bool:
         """Whether finger ``f1`` on ``p1`` and ``f2`` on ``p2`` can be down at once with
@@ -191,7 +192,8 @@ class Planner:
                          "the first finger's key: one character per interval in semitones to the "
                          "second's, from first_interval on (1 both keys down at once, 0 not, - not "
                          "worked out); written by scripts/make_pair_table.py",
-                "first_interval": PAIR_TABLE_FIRST, "pairs": rows}
+                "first_interval": PAIR_TABLE_FIRST, "pairs": rows,
+                "range_m": self._finger_ranges(self.hand.tip_positions(self.rest))}
 
     def _rest_posture(self) -> np.ndarray:
         """The natural hovering hand at rail 0: fingertips over their knuckles, 20 mm above
@@ -459,6 +461,16 @@ def _load_pair_table(hand: HandModel) -> dict:
             if c != "-":
                 out[(f1, f2, int(pc), iv)] = c == "1"
     return out
+
+
+def _shipped_ranges(hand: HandModel) -> dict[str, float] | None:
+    """``Planner._finger_ranges`` as shipped with the pair table for this hand's URDF (None
+    if not there: it is then worked out, ~0.1 s)."""
+    path = pair_table_path(hand.urdf_sha256)
+    if not path.exists():
+        return None
+    data = json.loads(path.read_text())
+    return data.get("range_m") if data.get("urdf_sha256") == hand.urdf_sha256 else None
 
 
 def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int,

@@ -1,6 +1,7 @@
 """Write the table of which two fingers can press which two keys at once
 (``Planner.pair_table``) for a hand, where the planner loads it from
-(``planner/tables/pairs-<URDF hash>.json``). Without it the planner works the same
+(``planner/tables/pairs-<URDF hash>.json``), with each finger's range at one hand position
+(``Planner._finger_ranges``). Without it the planner works the same
 answers out as the fingering asks for them (whole-hand IK, a few ms each); the table
 only saves that time. Run from the repository root after changing a hand or the IK:
 

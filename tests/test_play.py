@@ -663,6 +663,9 @@ def test_the_shipped_pair_table_is_the_planners_own():
     for k, iv, c in no[:: max(1, len(no) // 12)] + yes[:: max(1, len(yes) // 12)]:
         f1, f2, pc = k.split()
         assert fresh.pair_ok(f1, 60 + int(pc), f2, 60 + int(pc) + iv) == (c == "1"), (k, iv)
+    # and the fingers' ranges at one hand position, loaded, are the IK's own
+    assert fresh.reach.range_m == data["range_m"]
+    assert fresh._finger_ranges(hand.tip_positions(fresh.rest)) == data["range_m"]
 
 
 def test_a_press_from_high_waits_for_a_clear_way_down(planner):
