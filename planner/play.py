@@ -46,7 +46,6 @@ from planner.trajfile import TrajectoryWriter
 
 LATE_S = 0.020  # a note whose key goes down later than this is reported
 DROP_LATE = 0.5  # a note whose key cannot go down before this fraction of it is over is left out
-DROP_ROUNDS = 3
 EARLY_FRAMES = 0.4  # a key goes down at most this fraction of a frame before the half-frame
 # before its note's first frame: never in the frame before (a note early is a wrong note)
 CHUNK_PHASES = 40
@@ -1785,10 +1784,10 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
         phases_meta = tl.phases
         phases = chunk_phases()
         starts = solve_timing(build_timing(phases, t_cut))
-        for _ in range(DROP_ROUNDS):
-            if not _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt, hand.velocity,
-                                  hand.acceleration, tl.sweep_clear):
-                break
+        # until none is left (each round leaves out at least one note, or ends): a note
+        # left out moves the others, and one of them may be hopeless then
+        while _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt, hand.velocity,
+                             hand.acceleration, tl.sweep_clear):
             starts = solve_timing(build_timing(phases, t_cut))
         for (p, kind, note), x in zip(phases_meta, starts):
             if kind == "press" and note is not None:

@@ -847,3 +847,21 @@ def test_finger_ranges_are_measured_by_ik(planner):
     assert set(r) == set(planner.hand.fingers)
     assert all(kb.WHITE_PITCH_M < v <= 2 * RANGE_MAX_M for v in r.values()), r
     assert r["thumb"] == min(r.values()), r
+
+
+def test_notes_the_timing_cannot_strike_in_time_are_left_out_to_the_last(planner, tmp_path, monkeypatch):
+    """A trill whose notes the timing cannot all strike in time (with the fingering's
+    change of hand position costed lower, as a variant of the planner might): each note
+    left out lets the timing move the next one later, and another may become hopeless.
+    The rounds of leaving out go on until none is left (after three, a late note was
+    kept and its key came up 2 frames after its end)."""
+    import planner.fingering as fg
+
+    monkeypatch.setattr(fg, "REPOSITION_OVERHEAD_S", 0.10)
+    song = ROOT / "tests" / "data" / "trill_cascade.mid"
+    path = tmp_path / "o.csv"
+    res = plan_song(load_song(song), planner.hand, str(path), planner=Planner(planner.hand))
+    rep = check_trajectory(str(path), str(song))
+    assert any(n.reason and n.reason.startswith("too late") for n in res.notes)
+    assert not rep.play.wrong_presses and not rep.play.key_bed_hits, rep.summary()
+    assert all(v.count == 0 for v in rep.limits), rep.summary()
