@@ -119,7 +119,8 @@ class Planner:
         self.rail = hand.index.get("rail")
         self._cache: dict = {}
         self._anchors: dict = {}  # hand positions of this song, by the IK problem that made them
-        self._pairs: dict = _load_pair_table(hand)  # pair_ok's answers (shipped ones first)
+        shipped = _shipped_table(hand)  # (read once: the pairs and the ranges)
+        self._pairs: dict = _pair_answers(shipped)  # pair_ok's answers (shipped ones first)
         self.bases: list[np.ndarray] = []
         self.ik_solves = 0
         self.rest = self._rest_posture()
@@ -136,7 +137,7 @@ class Planner:
         repeat, move = self._finger_times(tips)
         self.reach = HandReach(offsets, reach, float(vmax), (float(lo), float(hi)), float(amax),
                                repeat_s=repeat, move_s=move,
-                               range_m=_shipped_ranges(hand) or self._finger_ranges(tips))
+                               range_m=shipped.get("range_m") or self._finger_ranges(tips))
 
     def pair_ok(self, f1: str, p1: int, f2: str, p2: int) -> bool:
         """Whether finger ``f1`` on ``p1`` and ``f2`` on ``p2`` can be down at once with
@@ -444,32 +445,25 @@ def pair_table_path(urdf_sha256: str) -> Path:
     return PAIR_TABLE_DIR / f"pairs-{urdf_sha256[:16]}.json"
 
 
-def _load_pair_table(hand: HandModel) -> dict:
-    """``Planner.pair_ok``'s answers as shipped for this hand's URDF ({} if none: they
-    are then worked out when asked)."""
+def _shipped_table(hand: HandModel) -> dict:
+    """``Planner.pair_table`` as shipped for this hand's URDF ({} if there is none)."""
     path = pair_table_path(hand.urdf_sha256)
     if not path.exists():
         return {}
     data = json.loads(path.read_text())
-    if data.get("urdf_sha256") != hand.urdf_sha256:
-        return {}
+    return data if data.get("urdf_sha256") == hand.urdf_sha256 else {}
+
+
+def _pair_answers(data: dict) -> dict:
+    """``Planner.pair_ok``'s answers in a shipped table ``data`` ({} if none: they are then
+    worked out when asked)."""
     out = {}
-    for k, row in data["pairs"].items():
+    for k, row in data.get("pairs", {}).items():
         f1, f2, pc = k.split()
         for iv, c in enumerate(row, start=data.get("first_interval", 0)):
             if c != "-":
                 out[(f1, f2, int(pc), iv)] = c == "1"
     return out
-
-
-def _shipped_ranges(hand: HandModel) -> dict[str, float] | None:
-    """``Planner._finger_ranges`` as shipped with the pair table for this hand's URDF (None
-    if not there: it is then worked out, ~0.1 s)."""
-    path = pair_table_path(hand.urdf_sha256)
-    if not path.exists():
-        return None
-    data = json.loads(path.read_text())
-    return data.get("range_m") if data.get("urdf_sha256") == hand.urdf_sha256 else None
 
 
 def _key_crossing(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str, pitch: int,
@@ -1684,8 +1678,6 @@ def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
                     Tj = max(phases[j].duration_s, phase_duration(dj, hand_v, hand_a))
                     phases[j] = dataclasses.replace(phases[j], delta=dj, duration_s=Tj)
                     meta[j] = (phases[j],) + tuple(meta[j][1:])
-                phases[k] = dataclasses.replace(phases[k], delta=np.zeros_like(d), weight=0.0,
-                                                blend_s=0.0, blend_after=-1)
                 phases[r] = dataclasses.replace(phases[r], delta=np.zeros_like(d), weight=0.0)
             elif sweep_clear is not None and all(sweep_clear(j, phases[j].delta, own, -phases[k].delta)
                                                  for j in moves):
@@ -1694,11 +1686,11 @@ def _drop_hopeless(phases: list[Phase], meta: list, starts: np.ndarray, notes,
                 # over its key, clear of every key; at the end it goes where the release
                 # would have taken it
                 T_r = max(phases[r].duration_s, phase_duration(d, hand_v, hand_a))
-                phases[k] = dataclasses.replace(phases[k], delta=np.zeros_like(d), weight=0.0,
-                                                blend_s=0.0, blend_after=-1)
                 phases[r] = dataclasses.replace(phases[r], delta=d, duration_s=T_r, weight=0.0)
             else:
                 continue
+            phases[k] = dataclasses.replace(phases[k], delta=np.zeros_like(d), weight=0.0,
+                                            blend_s=0.0, blend_after=-1)
         else:
             # (no blend with the motion before: it was checked against the press alone)
             phases[k] = dataclasses.replace(phases[k], delta=d, duration_s=T, anchor=0.5, weight=0.0,
