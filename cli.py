@@ -3,12 +3,50 @@
 
 Exit status (spec section 1): 0 success; 2 bad input or usage (one line on
 stderr); 1 anything else that failed, or an infeasible plan under --strict.
+A reader that closes its end of the output pipe (``| head``) ends the run
+quietly with 141 (128 + SIGPIPE, what a shell reports for a program killed by
+it); SIGINT, SIGTERM and SIGHUP stop it cleanly with 128 + the signal's number.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
+
+EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE  # 141
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, handled as SIGINT is: the run stops where it is."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _on_signal(signum, _frame) -> None:
+    raise Interrupted(signum)
+
+
+def _follow_signals() -> None:
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        try:
+            signal.signal(sig, _on_signal)
+        except (ValueError, OSError):  # not the main thread (an embedding program)
+            pass
+
+
+def _quiet_stdout() -> None:
+    """After a closed pipe: stdout goes to /dev/null so that the interpreter's last
+    flush at exit cannot fail again (and print 'Exception ignored ...')."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def _line(text: object) -> str:
@@ -59,14 +97,23 @@ def _build_parser() -> argparse.ArgumentParser:
     c.add_argument("--html", metavar="FILE")
 
     k = sub.add_parser("check", help="replay a trajectory and verify it")
-    k.add_argument("trajectory")
-    k.add_argument("song", nargs="?", default=None)
-    k.add_argument("--allow-incomplete", action="store_true")
-    k.add_argument("--min-f1", type=float, default=None)
-    k.add_argument("--json", action="store_true")
-    k.add_argument("--played", metavar="OUT.mid")
-    k.add_argument("--report", metavar="DIR")
-    k.add_argument("--html", metavar="FILE")
+    k.add_argument("trajectory", help="hand-trajectory v1 file")
+    k.add_argument("song", nargs="?", default=None, help="the MIDI file it was planned from")
+    k.add_argument("--allow-incomplete", action="store_true",
+                   help="replay a file without its end marker (still being written, or cut)")
+    k.add_argument("--min-f1", type=float, default=None, help="fail under this frame F1")
+    k.add_argument("--strict", action="store_true",
+                   help="fail on any missed or late note, not only wrong ones")
+    k.add_argument("--track", type=int, default=None,
+                   help="read only this track of the song (default: as the plan was made)")
+    k.add_argument("--channel", type=int, default=None,
+                   help="read only this channel (default: as the plan was made)")
+    k.add_argument("--transpose", action="store_true",
+                   help="move notes outside A0-C8 by octaves (default: as the plan was made)")
+    k.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    k.add_argument("--played", metavar="OUT.mid", help="write the keys pressed as a MIDI file")
+    k.add_argument("--report", metavar="DIR", help="write PNG plots here")
+    k.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
     return p
 
 
@@ -85,9 +132,9 @@ def _cmd_hand(a: argparse.Namespace) -> int:
         if a.urdf == "-":
             sys.stdout.write(hand.urdf)
         else:
-            from planner.trajfile import write_text_atomic
+            from planner.output import write_file
 
-            write_text_atomic(a.urdf, hand.urdf)
+            write_file(a.urdf, hand.urdf)
         return 0
     print(hand.summary())
     return 0
@@ -115,10 +162,16 @@ def main(argv: list[str] | None = None) -> int:
     args = _build_parser().parse_args(argv)
     from planner.errors import InfeasibleError, InputError, PlannerError
 
+    _follow_signals()
     try:
-        return {"hand": _cmd_hand, "play": _cmd_play, "catch": _cmd_catch, "check": _cmd_check}[
+        rc = {"hand": _cmd_hand, "play": _cmd_play, "catch": _cmd_catch, "check": _cmd_check}[
             args.command
         ](args)
+        sys.stdout.flush()
+        return rc
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_BROKEN_PIPE
     except InputError as e:
         sys.stderr.write(f"error: {_line(e)}\n")
         return 2
@@ -128,11 +181,10 @@ def main(argv: list[str] | None = None) -> int:
     except PlannerError as e:
         sys.stderr.write(f"failed: {_line(e)}\n")
         return 1
-    except KeyboardInterrupt:
-        sys.stderr.write("interrupted\n")
-        return 130
-    except BrokenPipeError:
-        return 1
+    except KeyboardInterrupt as e:
+        signum = e.signum if isinstance(e, Interrupted) else signal.SIGINT
+        sys.stderr.write(f"interrupted ({signal.Signals(signum).name})\n")
+        return 128 + signum
 
 
 if __name__ == "__main__":

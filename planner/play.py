@@ -32,6 +32,7 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
+from planner.selfcheck import SelfCheck, Verdict
 from planner.targets import MOVE_S, descent_time_s, press_intervals
 from planner.trajectory import (
     Phase,
@@ -44,7 +45,6 @@ from planner.trajectory import (
 )
 from planner.trajfile import TrajectoryWriter
 
-LATE_S = 0.020  # a note whose key goes down later than this is reported
 DROP_LATE = 0.5  # a note whose key cannot go down before this fraction of it is over is left out
 EARLY_FRAMES = 0.4  # a key goes down at most this fraction of a frame before the half-frame
 # before its note's first frame: never in the frame before (a note early is a wrong note)
@@ -100,10 +100,10 @@ class PlayResult:
     planning_s: float
     first_row_s: float
     ik_solves: int
-    late: list[tuple[int, float]] = field(default_factory=list)
     cut: list[tuple[int, float]] = field(default_factory=list)  # (note, s) let go that early
     travels: int = 0  # changes of hand position (rail and wrist) after the start, every key up
     shifts: int = 0  # ... and those made while a finger held its key
+    verdict: Verdict | None = None  # the rows replayed by the check's rules (selfcheck)
 
     @property
     def infeasible(self) -> list[NoteReport]:
@@ -559,17 +559,25 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
 
     meta = {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
             "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
-            "song": song_name, "notes": len(notes)}
-    writer = TrajectoryWriter(out_path, meta, hand.joint_names, hand.motor_names)
+            "song": song_name, "notes": len(notes), "track": song.track,
+            "channel": song.channel, "transpose": song.transpose}
+    selfcheck = SelfCheck(hand, rate_hz)
+    writer = TrajectoryWriter(out_path, meta, hand.joint_names, hand.motor_names,
+                              on_rows=selfcheck.add_rows)
     try:
         result = _run(pl, hand, notes, parts(), rail_of, writer, rate_hz, reasons, progress, t_start)
-    except BaseException:
-        writer.abort()
+        cut_short = {i: f"cut short: let go {early:.2f} s early (its finger, or the hand, is "
+                        "needed for the notes after it)" for i, early in cut}
+        verdict = selfcheck.verdict(notes, {**cut_short, **reasons})
+        writer.close(verdict.end_info())
+    except BaseException as e:
+        writer.abort(discard=isinstance(e, InputError))
         raise
-    writer.close()
     result.planning_s = time.perf_counter() - t_start
     result.cut = sorted(cut)
-    result.notes = [NoteReport(i, n.pitch, n.onset_s, finger_of.get(i), reasons.get(i))
+    result.verdict = verdict
+    skipped = {s.note: s.detail for s in verdict.skipped}
+    result.notes = [NoteReport(i, n.pitch, n.onset_s, finger_of.get(i), skipped.get(i))
                     for i, n in enumerate(notes)]
     return result
 
@@ -1733,7 +1741,6 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
     next_row = 0
     t_cut = 0.0  # rows up to here are written; no new phase starts before it
     first_row_s = math.nan
-    late: list[tuple[int, float]] = []
     hold = tl.q.copy()  # the configuration before every phase not yet complete at t_cut
     joint_free = np.zeros(hand.n)  # when each joint's last planned motion ends
     last_row = None
@@ -1781,11 +1788,6 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
         while _drop_hopeless(phases, phases_meta, starts, notes, reasons, dt, hand.velocity,
                              hand.acceleration, tl.sweep_clear):
             starts = solve_timing(build_timing(phases, t_cut))
-        for (p, kind, note), x in zip(phases_meta, starts):
-            if kind == "press" and note is not None:
-                lateness = x + p.anchor * p.duration_s - p.ideal_s
-                if lateness > LATE_S:
-                    late.append((note, lateness))
         every = [(g, p, x) for g, p, x in tl.carried] + [
             (tl.offset + k, p, float(x)) for k, (p, x) in enumerate(zip(phases, starts))]
         for _, p, x in every:
@@ -1907,7 +1909,7 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
         sys.stderr.write(f"\rplanning {total}/{total} key events (100%)\n")
     tl.rest_all(end_song)
     flush(final_t=end_song + 0.25)
-    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves, late=late,
+    return PlayResult(writer.rows, writer.rows * dt, [], 0.0, first_row_s, pl.ik_solves,
                       travels=tl.travels, shifts=tl.shifts)
 
 
@@ -1931,10 +1933,13 @@ def format_summary(song_name: str, res: PlayResult, song_s: float, out: str) -> 
         nt = res.notes[i]
         lines.append(f"  cut short: t={nt.onset_s:.3f} s {pitch_name(nt.pitch)} let go {early:.2f} s early "
                      "(its finger, or the hand, is needed for the notes after it)")
-    for i, lt in res.late:
-        nt = res.notes[i]
-        lines.append(f"  late: t={nt.onset_s:.3f} s {pitch_name(nt.pitch)} key down {lt * 1000:.0f} ms late "
+    score = res.verdict.score
+    for lt in score.late:
+        lines.append(f"  late: t={lt.onset_s:.3f} s {lt.name} key down {lt.late_s * 1000:.0f} ms late "
                      "(too fast for the motors)")
+    for w in score.wrong_presses:
+        lines.append(f"  WRONG PRESS: {w.start_s:.3f}-{w.end_s:.3f} s {w.name} by "
+                     f"{'+'.join(w.fingers) or '?'} (no note of that key sounds then)")
     return "\n".join(lines)
 
 
@@ -1958,6 +1963,7 @@ def play_cli(a) -> int:
             write_check_report(rep, a.report)
         if a.html:
             write_html(rep, a.html)
-    if a.strict and (res.infeasible or res.late):
+    score = res.verdict.score
+    if a.strict and (res.infeasible or score.late or score.wrong_presses):
         return 1
     return 0

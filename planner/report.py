@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import base64
 import html
+import io
 import json
 import math
 import os
@@ -77,6 +78,7 @@ from planner.music.keyboard import (
     is_black,
     key,
 )
+from planner.output import write_file
 
 __all__ = ["write_check_report", "write_html"]
 
@@ -185,7 +187,9 @@ def write_check_report(report: CheckReport, out_dir: str) -> list[str]:
     paths = []
     for name, fig in figs:
         path = os.path.join(out_dir, name)
-        fig.savefig(path, dpi=DPI, metadata={"Software": None})
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=DPI, metadata={"Software": None})
+        write_file(path, buf.getvalue())
         paths.append(path)
     return paths
 
@@ -758,10 +762,7 @@ def write_html(report: CheckReport, out_file: str) -> str:
 
     Path(out_file).parent.mkdir(parents=True, exist_ok=True)
     text = _page(report, rec, fps, len(rows))
-    tmp = f"{out_file}.part"
-    with open(tmp, "w", encoding="utf-8", newline="\n") as f:
-        f.write(text)
-    os.replace(tmp, out_file)
+    write_file(out_file, text)
     return out_file
 
 

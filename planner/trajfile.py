@@ -1,157 +1,96 @@
 """The ``hand-trajectory`` version 1 file (interface spec, section 4).
 
-``TrajectoryWriter`` streams rows as they are planned and flushes them, so a
-reader can follow the file while it grows. A file is complete only with its
-end marker. To a path, rows go to a temporary name beside it that is renamed
-onto the path only after the end marker is written: an interrupted plan never
-leaves a complete-looking file (nor a file at the path at all). To stdout
-(``-``) the end marker is the signal.
+``TrajectoryWriter`` streams rows into the named path itself as they are
+planned, flushed per chunk, so a reader can follow the file while it grows
+(``planner.output``: a FIFO, a device or a symlink's target is written, never
+replaced). The end marker is what says the file is complete: a plan that stops
+early leaves a file without it, which every reader must call incomplete. The
+end marker also carries the plan's own per-note claims (``end_info``), which
+``check --strict`` holds against its replay.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import os
-import sys
-import tempfile
-from dataclasses import dataclass
-from pathlib import Path
-from typing import IO, Any
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from planner.errors import InputError, PlannerError
+from planner.output import open_stream
 
 FORMAT = "hand-trajectory"
 VERSION = 1
 _MAX_META_CHARS = 1 << 20  # a metadata line longer than this is not one (e.g. /dev/zero)
 
 
-def _check_target(path: str | os.PathLike) -> None:
-    """InputError before any work when ``path`` cannot name an output file."""
-    if not os.fspath(path):
-        raise InputError("cannot write '': empty output path")
-    if os.path.isdir(path):
-        raise InputError(f"cannot write {os.fspath(path)}: is a directory")
-
-
-def _mkstemp_beside(path: Path) -> tuple[int, str]:
-    """A temporary file beside ``path`` with the permissions a plain open() would give
-    (mkstemp makes it 0600, which the rename would carry over to the published file)."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part",
-                               dir=str(path.parent) if str(path.parent) else ".")
-    umask = os.umask(0)
-    os.umask(umask)
-    try:
-        os.fchmod(fd, 0o666 & ~umask)
-    except OSError:
-        pass
-    return fd, tmp
-
-
-def write_text_atomic(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename."""
-    _check_target(path)
-    path = Path(path)
-    try:
-        fd, tmp = _mkstemp_beside(path)
-    except OSError as e:
-        raise InputError(f"cannot write {path}: {e.strerror or e}") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except OSError as e:
-        _unlink(tmp)
-        raise PlannerError(f"cannot write {path}: {e.strerror or e}") from None
-
-
-def _unlink(p: str) -> None:
-    try:
-        os.unlink(p)
-    except OSError:
-        pass
-
-
 class TrajectoryWriter:
-    """Streams a trajectory: ``open`` writes metadata and header, ``row`` one setpoint, ``close`` the end."""
+    """Streams a trajectory: the constructor opens the path and writes metadata and
+    header, ``write_rows`` appends setpoints, ``close`` writes the end marker."""
 
-    def __init__(self, path: str, metadata: dict[str, Any], joint_names, motor_names) -> None:
+    def __init__(self, path: str, metadata: dict[str, Any], joint_names, motor_names,
+                 on_rows: Callable[[np.ndarray], None] | None = None) -> None:
+        """``on_rows`` is given every chunk of rows as the file holds them (a self-check)."""
         self.path = path
+        self._on_rows = on_rows
         self.rows = 0
-        self._tmp: str | None = None
         self._last_t = -math.inf
         self.columns = ["t", *joint_names, *(f"motor.{m}" for m in motor_names)]
-        if path == "-":
-            self._f: IO[str] = sys.stdout
-        else:
-            _check_target(path)
-            try:
-                fd, self._tmp = _mkstemp_beside(Path(path))
-            except OSError as e:
-                raise InputError(f"cannot write {path}: {e.strerror or e}") from None
-            self._f = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
+        self._out = open_stream(path)
         meta = {"format": FORMAT, "version": VERSION, **metadata}
-        self._write("# " + json.dumps(meta, sort_keys=False, separators=(", ", ": ")) + "\n")
-        self._write(",".join(self.columns) + "\n")
-        self._flush()
+        self._out.write("# " + json.dumps(meta, sort_keys=False, separators=(", ", ": ")) + "\n")
+        self._out.write(",".join(self.columns) + "\n")
+        self._out.flush()
 
-    def _write(self, s: str) -> None:
-        try:
-            self._f.write(s)
-        except OSError as e:
-            self.abort()
-            raise PlannerError(f"cannot write {self.path}: {e.strerror or e}") from None
-
-    def _flush(self) -> None:
-        try:
-            self._f.flush()
-        except OSError as e:
-            self.abort()
-            raise PlannerError(f"cannot write {self.path}: {e.strerror or e}") from None
-
-    def write_rows(self, t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> None:
-        """Append rows (times in s, joint positions, motor angles) and flush."""
+    def write_rows(self, t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> np.ndarray:
+        """Append rows (times in s, joint positions, motor angles) and flush. Returns
+        the rows as the file holds them (rounded to its 6 decimals), (n, columns)."""
         t_s = np.asarray(t_s, dtype=float)
         if len(t_s) == 0:
-            return
+            return np.empty((0, len(self.columns)))
         if not (t_s[0] > self._last_t and np.all(np.diff(t_s) > 0)):
             raise PlannerError(f"trajectory time not increasing near t={t_s[0]}")
         self._last_t = float(t_s[-1])
         arr = np.column_stack([t_s, q, q_motor])
         fmt = ",".join(["%.6f"] * arr.shape[1])
-        self._write("\n".join([fmt % tuple(r) for r in arr.tolist()]) + "\n")
+        text = "\n".join([fmt % tuple(r) for r in arr.tolist()]) + "\n"
+        self._out.write(text)
         self.rows += len(arr)
-        self._flush()
+        self._out.flush()
+        written = np.array(text.replace("\n", ",").split(",")[:-1], dtype=float).reshape(arr.shape)
+        if self._on_rows is not None:
+            self._on_rows(written)
+        return written
 
-    def close(self) -> None:
-        """Write the end marker and publish the file."""
-        self._write("# " + json.dumps({"end": True, "rows": self.rows}) + "\n")
-        self._flush()
-        if self._tmp is not None:
-            try:
-                self._f.close()
-                os.replace(self._tmp, self.path)
-            except OSError as e:
-                self.abort()
-                raise PlannerError(f"cannot write {self.path}: {e.strerror or e}") from None
-            self._tmp = None
+    def close(self, end_info: dict[str, Any] | None = None) -> None:
+        """Write the end marker (with ``end_info``'s keys after ``end`` and ``rows``)."""
+        end = {"end": True, "rows": self.rows, **(end_info or {})}
+        self._out.write("# " + json.dumps(end, separators=(", ", ": ")) + "\n")
+        self._out.close()
 
-    def abort(self) -> None:
-        """Drop a partial file (path output); nothing complete-looking stays behind."""
-        if self._tmp is not None:
-            try:
-                self._f.close()
-            except OSError:
-                pass
-            _unlink(self._tmp)
-            self._tmp = None
+    def abort(self, discard: bool = False) -> None:
+        """Stop without the end marker: the file stays visibly incomplete. ``discard``
+        (the input was found bad after opening) removes a regular file it created."""
+        if discard:
+            self._out.discard()
+            return
+        try:
+            self._out.close()
+        except (PlannerError, BrokenPipeError):
+            pass
+
+
+ROW_TIME_TOL_S = 1e-6  # a row's t vs k / rate_hz: one unit of the 6 decimals written
+MIN_ROWS = 2  # one row has no duration: no speed, no time to play anything
 
 
 @dataclass(frozen=True)
 class Trajectory:
-    """A trajectory read back: metadata, column names, times (s), joint and motor arrays."""
+    """A trajectory read back: metadata, column names, times (s), joint and motor
+    arrays; ``end`` is the end marker's object (empty when incomplete)."""
 
     metadata: dict[str, Any]
     joint_names: tuple[str, ...]
@@ -160,28 +99,57 @@ class Trajectory:
     q: np.ndarray
     q_motor: np.ndarray
     complete: bool
+    end: dict[str, Any] = field(default_factory=dict)
 
 
 def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:
-    """Read and validate a hand-trajectory v1 file; InputError (one line) on any defect."""
-    try:
-        with open(path, encoding="utf-8", newline="") as f:
-            text = f.readline(_MAX_META_CHARS)  # bounded: an endless first line is refused
-            if not text.startswith("# "):
-                raise InputError(f"{path}: not a hand-trajectory file (no metadata line)")
-            text += f.read()
-    except FileNotFoundError:
-        raise InputError(f"no such trajectory file: {path}") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise InputError(f"cannot read trajectory {path}: {e}") from None
+    """Read and validate a hand-trajectory v1 file; InputError (one line) on any defect,
+    the first bad row named: rows must be at ``rate_hz`` from t = 0 (within
+    ``ROW_TIME_TOL_S``), with no gap, at least ``MIN_ROWS`` of them."""
+    text = _read_text(path)
     terminated = text.endswith("\n")
     lines = text.split("\n")
     if lines and lines[-1] == "":
         lines.pop()
     if len(lines) < 2 or not lines[0].startswith("# "):
         raise InputError(f"{path}: not a hand-trajectory file (no metadata line)")
+    meta = _metadata(lines[0], path)
+    end = _end_marker(lines[-1])
+    if end is not None:
+        body = lines[2:-1]
+        if end.get("rows") != len(body):
+            raise InputError(f"{path}: end marker says {end.get('rows')} rows, file has {len(body)}")
+    else:
+        if not allow_incomplete:
+            raise InputError(f"{path}: incomplete trajectory (no end marker); "
+                             "use --allow-incomplete to read it anyway")
+        body = lines[2:]
+        if body and (body[-1].startswith("#") or not terminated):
+            body = body[:-1]  # a damaged end marker, or a row still being written
+    joint_cols, motor_cols = _header(lines[1], path)
+    arr = _rows(body, 1 + len(joint_cols) + len(motor_cols), path)
+    _check_clock(arr[:, 0], float(meta["rate_hz"]), path)
+    nj = len(joint_cols)
+    return Trajectory(meta, tuple(joint_cols), tuple(c[6:] for c in motor_cols), arr[:, 0],
+                      arr[:, 1:1 + nj], arr[:, 1 + nj:], end is not None, end or {})
+
+
+def _read_text(path: str) -> str:
     try:
-        meta = json.loads(lines[0][2:])
+        with open(path, encoding="utf-8", newline="") as f:
+            text = f.readline(_MAX_META_CHARS)  # bounded: an endless first line is refused
+            if not text.startswith("# "):
+                raise InputError(f"{path}: not a hand-trajectory file (no metadata line)")
+            return text + f.read()
+    except FileNotFoundError:
+        raise InputError(f"no such trajectory file: {path}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise InputError(f"cannot read trajectory {path}: {e}") from None
+
+
+def _metadata(line: str, path: str) -> dict[str, Any]:
+    try:
+        meta = json.loads(line[2:])
     except (json.JSONDecodeError, RecursionError):
         raise InputError(f"{path}: metadata line is not valid JSON") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
@@ -193,24 +161,25 @@ def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:
             raise InputError(f"{path}: metadata lacks required key {key!r}")
     if meta["task"] not in ("play", "catch"):
         raise InputError(f"{path}: task must be 'play' or 'catch', got {meta['task']!r}")
-    complete = False
-    if lines[-1].startswith("# "):
-        try:
-            end = json.loads(lines[-1][2:])
-        except (json.JSONDecodeError, RecursionError):
-            end = None
-        if isinstance(end, dict) and end.get("end") is True:
-            complete = True
-            body = lines[2:-1]
-            if end.get("rows") != len(body):
-                raise InputError(f"{path}: end marker says {end.get('rows')} rows, file has {len(body)}")
-    if not complete:
-        if not allow_incomplete:
-            raise InputError(f"{path}: incomplete trajectory (no end marker); use --allow-incomplete to read it anyway")
-        body = lines[2:]
-        if body and (body[-1].startswith("#") or not terminated):
-            body = body[:-1]  # a damaged end marker, or a row still being written
-    header = lines[1].split(",")
+    rate = meta["rate_hz"]
+    if (not isinstance(rate, (int, float)) or isinstance(rate, bool) or not math.isfinite(rate)
+            or not rate > 0):
+        raise InputError(f"{path}: rate_hz must be a positive number, got {rate!r}")
+    return meta
+
+
+def _end_marker(line: str) -> dict[str, Any] | None:
+    if not line.startswith("# "):
+        return None
+    try:
+        end = json.loads(line[2:])
+    except (json.JSONDecodeError, RecursionError):
+        return None
+    return end if isinstance(end, dict) and end.get("end") is True else None
+
+
+def _header(line: str, path: str) -> tuple[list[str], list[str]]:
+    header = line.split(",")
     if not header or header[0] != "t":
         raise InputError(f"{path}: header must start with 't'")
     motor_cols = [c for c in header[1:] if c.startswith("motor.")]
@@ -219,25 +188,36 @@ def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:
         raise InputError(f"{path}: motor columns must follow the joint columns")
     if len(set(header)) != len(header):
         raise InputError(f"{path}: duplicate column names")
-    if not body:
-        raise InputError(f"{path}: no rows")
+    return joint_cols, motor_cols
+
+
+def _rows(body: list[str], n: int, path: str) -> np.ndarray:
+    if len(body) < MIN_ROWS:
+        raise InputError(f"{path}: {len(body)} row{'' if len(body) == 1 else 's'}; a trajectory "
+                         f"has at least {MIN_ROWS}")
     try:
         arr = np.array([[float(x) for x in ln.split(",")] for ln in body], dtype=float)
     except ValueError:
-        bad = next(i for i, ln in enumerate(body) if not _row_ok(ln, len(header)))
-        raise InputError(f"{path}: row {bad + 1} is not {len(header)} numbers") from None
-    if arr.ndim != 2 or arr.shape[1] != len(header):
-        raise InputError(f"{path}: rows must have {len(header)} values")
+        bad = next(i for i, ln in enumerate(body) if not _row_ok(ln, n))
+        raise InputError(f"{path}: row {bad + 1} is not {n} numbers") from None
+    if arr.ndim != 2 or arr.shape[1] != n:
+        raise InputError(f"{path}: rows must have {n} values")
     if not np.all(np.isfinite(arr)):
         i = int(np.argwhere(~np.isfinite(arr))[0, 0])
         raise InputError(f"{path}: row {i + 1} has a NaN or infinite value")
-    t = arr[:, 0]
+    return arr
+
+
+def _check_clock(t: np.ndarray, rate_hz: float, path: str) -> None:
+    """Row k (1-based k + 1) at t = k / rate_hz: strictly increasing, no gap, no offset."""
     if len(t) > 1 and not np.all(np.diff(t) > 0):
         i = int(np.argmax(~(np.diff(t) > 0)))
         raise InputError(f"{path}: time not strictly increasing at row {i + 2} (t={t[i + 1]:.6f})")
-    nj = len(joint_cols)
-    return Trajectory(meta, tuple(joint_cols), tuple(c[6:] for c in motor_cols), t,
-                      arr[:, 1:1 + nj], arr[:, 1 + nj:], complete)
+    err = np.abs(t - np.arange(len(t)) / rate_hz)
+    if np.any(err > ROW_TIME_TOL_S):
+        i = int(np.argmax(err > ROW_TIME_TOL_S))
+        raise InputError(f"{path}: row {i + 1} is at t={t[i]:.6f} s, not {i / rate_hz:.6f} s "
+                         f"(rows are at rate_hz = {rate_hz:g} from t = 0)")
 
 
 def _row_ok(line: str, n: int) -> bool:

@@ -310,8 +310,9 @@ def test_wrong_key_is_reported(tmp_path, hand):
     (m,) = r.play.missed
     assert (m.pitch, m.name, m.onset_s, m.reason) == (62, "D4", 1.1, "key never down")
     assert r.play.notes_hit == 3
-    # 30 of 341 frames score 0
-    assert r.play.f1 == pytest.approx(1 - 30 / len(t))
+    # 30 of the song's 300 frames (3.0 s at 100 Hz; the 41 rows after it are not scored)
+    assert r.play.song_frames == 300 < len(t)
+    assert r.play.f1 == pytest.approx(1 - 30 / 300)
     assert any("wrong presses" in p for p in r.problems)
     assert any("frame F1" in p for p in r.problems)
     assert "E4" in r.summary()
@@ -679,3 +680,94 @@ def test_check_of_a_60_s_song(tmp_path, hand):
     song = song_file(tmp_path, presses)
     r = check_trajectory(traj, song)
     assert r.ok and r.play.f1 == 1.0 and r.play.notes_hit == 74, r.summary()
+
+
+# ---------------------------------------------------------------- issue 14: strict, claims, song
+
+
+def test_strict_fails_on_a_missed_note_and_a_late_one(tmp_path, hand):
+    late = [SONG[0], (62, "middle", 1.16, 1.40), SONG[2]]  # D4 60 ms late; C#4 never pressed
+    t, q = play_trajectory(late, 3.4)
+    traj = write_traj(tmp_path / "l.csv", hand, t, q)
+    song = song_file(tmp_path)
+    r = check_trajectory(traj, song)
+    assert r.ok, r.summary()  # no wrong key, no limit: the default verdict passes
+    s = check_trajectory(traj, song, strict=True)
+    assert not s.ok
+    (m,) = s.play.missed
+    (lt,) = s.play.late
+    assert (m.name, m.note) == ("C#4", 3) and (lt.name, lt.note) == ("D4", 1)
+    assert lt.late_s == pytest.approx(0.06, abs=0.011)
+    assert any("1 notes missed" in p for p in s.problems)
+    assert any("1 notes late" in p for p in s.problems)
+    assert check_cli(_args(trajectory=traj, song=song, strict=True)) == 1
+
+
+def _claiming(path, hand, t, q, left_out):
+    w = TrajectoryWriter(str(path), meta(hand, notes=4), hand.joint_names, hand.motor_names)
+    w.write_rows(t, q, hand.motor_angles(q))
+    w.close({"notes": 4, "played": 4 - len(left_out),
+             "left_out": [{"note": i, "reason": "left_out", "detail": "x"} for i in left_out]})
+    return str(path)
+
+
+def test_claims_the_replay_contradicts_fail_the_check(tmp_path, hand):
+    """A note the end marker says was played, which the replay finds missed, fails the
+    verdict even without --strict; a true claim passes."""
+    partial = SONG[:3]  # C#4 (note 3) never pressed
+    t, q = play_trajectory(partial, 3.4)
+    song = song_file(tmp_path)
+    honest = check_trajectory(_claiming(tmp_path / "h.csv", hand, t, q, [3]), song)
+    assert honest.ok and honest.play.claims and not honest.play.claim_mismatches
+    lying = check_trajectory(_claiming(tmp_path / "x.csv", hand, t, q, []), song)
+    assert not lying.ok
+    (c,) = lying.play.claim_mismatches
+    assert (c.note, c.name, c.claimed, c.found) == (3, "C#4", "played", "missed")
+    wrong_way = check_trajectory(_claiming(tmp_path / "y.csv", hand, t, q, [0, 3]), song)
+    (c,) = wrong_way.play.claim_mismatches
+    assert (c.note, c.claimed, c.found) == (0, "left out", "hit")
+    bad = _claiming(tmp_path / "z.csv", hand, t, q, [9])  # no note 9 in a song of 4
+    with pytest.raises(InputError, match="left_out"):
+        check_trajectory(bad, song)
+
+
+def test_f1_counts_missing_rows_at_the_end_as_misses(tmp_path, hand, good):
+    """A file cut to its first rows cannot pass a song it never reaches (issue 14: cut to
+    10 %, --min-f1 0.9 passed with F1 1.0)."""
+    _, song, t, q = good
+    cut = write_traj(tmp_path / "cut.csv", hand, t[:40], q[:40])
+    r = check_trajectory(cut, song, min_f1=0.9)
+    assert r.play.song_frames == 300 and r.play.notes_hit == 0
+    # the four notes sound in 120 frames; rows 30..39 (C4 down from its first frame) are
+    # the only ones of them present: 110 frames score 0
+    assert r.play.f1 == pytest.approx(1 - 110 / 300)
+    assert not r.ok
+
+
+def test_the_song_is_read_as_the_plan_was(tmp_path, hand):
+    """track / channel / transpose come from the metadata; a song of another note count
+    is refused (exit 2) with the options named."""
+    t, q = play_trajectory(SONG, 3.4)
+    high = tmp_path / "high.mid"  # SONG an octave above C8's range would be... C4 + 60
+    write_notes_midi([Note(p + 60, on, off, 80) for p, _, on, off in SONG[:1]]
+                     + [Note(p, on, off, 80) for p, _, on, off in SONG[1:]], high)
+    plain = write_traj(tmp_path / "p.csv", hand, t, q, metadata=meta(hand, notes=4))
+    with pytest.raises(InputError, match="outside the piano range|A0-C8|range"):
+        check_trajectory(plain, str(high))
+    tr = write_traj(tmp_path / "t.csv", hand, t, q, metadata=meta(hand, notes=4, transpose=True))
+    r = check_trajectory(tr, str(high))
+    assert r.play.notes == 4  # C9 read as C8 .. down by octaves into the range
+    other = write_traj(tmp_path / "o.csv", hand, t, q, metadata=meta(hand, notes=5))
+    with pytest.raises(InputError, match="planned for a song of 5 notes"):
+        check_trajectory(other, song_file(tmp_path))
+
+
+def test_a_gap_in_the_rows_is_refused_naming_the_row(tmp_path, hand, good):
+    _, song, t, q = good
+    keep = np.r_[0:60, 110:len(t)]
+    w = TrajectoryWriter(str(tmp_path / "gap.csv"), meta(hand), hand.joint_names,
+                         hand.motor_names)
+    w.write_rows(t[keep], q[keep], hand.motor_angles(q[keep]))
+    w.close()
+    with pytest.raises(InputError, match=r"row 61 is at t=1.100000 s, not 0.600000 s"):
+        check_trajectory(str(tmp_path / "gap.csv"), song)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -311,18 +312,18 @@ def test_bad_height(height):
 def test_unreachable_height(drag):
     # 30 deg over 1.5 m rises at most to 1.5 tan 30 = 0.866 m
     for h in (0.866026, 1.0, 5.0):
-        with pytest.raises(InfeasibleError, match="tan"):
+        with pytest.raises(InputError, match="tan"):  # no such throw: bad input (issue 14)
             predict_throw(30.0, 1.5, h, drag=drag)
     assert issubclass(InfeasibleError, PlannerError)
 
 
 def test_too_fast():
     # reachable in principle, but only just below the line of sight: > 100 m/s
-    with pytest.raises(InfeasibleError, match="m/s"):
+    with pytest.raises(InputError, match="m/s"):
         predict_throw(30.0, 1.5, 0.8659)
     # vacuum needs ~50 m/s, drag more than 100 m/s
     predict_throw(45.0, 250.0)
-    with pytest.raises(InfeasibleError, match="100 m/s"):
+    with pytest.raises(InputError, match="100 m/s"):
         predict_throw(45.0, 250.0, ball="tennis", drag=True)
 
 
@@ -428,3 +429,31 @@ def test_csv_tolerates_spaces_and_blank_lines(tmp_path):
     ts, ps = load_observations_csv(path)
     np.testing.assert_allclose(ts, [0.0, 0.01, 0.02])
     np.testing.assert_allclose(ps[:, 0], [0.0, 0.04, 0.08])
+
+
+# ------------------------------------------------------------------ impossible observations
+
+
+DATA = Path(__file__).resolve().parent / "data"
+
+
+@pytest.mark.parametrize("drag", [False, True])
+def test_huge_observations_are_bad_input_with_no_warning(drag):
+    """Issue 14 (shared/repro/observations_huge_values.csv): finite positions of 4e298 m."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a numpy overflow warning would fail here
+        ts, ps = load_observations_csv(DATA / "observations_huge_values.csv",
+                                       min_rows=6 if drag else 3)
+        with pytest.raises(InputError, match="observation 2: .* farther than any throw"):
+            fit_observations(ts, ps, "tennis", 0.5 if drag else 0.0)
+
+
+def test_observations_faster_than_any_throw_are_bad_input():
+    t = np.linspace(0.0, 0.05, 6)
+    ps = np.stack([1e4 * t, 0 * t, 0 * t], axis=1)  # 10 km/s: within range, no throw
+    with pytest.raises(InputError, match="faster than any throw"):
+        fit_observations(t, ps, "tennis", 0.0)
+    with pytest.raises(InputError, match="more than 100 s from the launch"):
+        fit_observations(np.array([0.0, 1.0, 200.0]), np.zeros((3, 3)), "tennis", 0.0)

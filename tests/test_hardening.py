@@ -56,6 +56,7 @@ from hypothesis import strategies as st
 
 import cli
 from planner.check import check_trajectory
+from planner.errors import InputError
 from planner.hand.model import load_hand
 from planner.music.midi import MAX_DURATION_S, Note, load_song, parse_song_bytes, write_notes_midi
 from planner.trajfile import read_trajectory
@@ -739,6 +740,17 @@ def _with(lines: list[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _retime(lines, scale: float, offset: float = 0.0):
+    """Every row's t scaled and offset, the rest as it is."""
+    return lines[:2] + [",".join([f"{float(ln.split(',')[0]) * scale + offset:.6f}",
+                                  *ln.split(",")[1:]]) for ln in lines[2:-1]] + lines[-1:]
+
+
+def _end(lines):
+    """``lines`` (metadata, header, rows) with an end marker that counts its rows."""
+    return [*lines, f'# {{"end": true, "rows": {len(lines) - 2}}}']
+
+
 def _meta(lines, **kw):
     m = json.loads(lines[0][2:])
     m.update(kw)
@@ -812,9 +824,13 @@ DAMAGE = {  # name -> (lines -> text or bytes, expected exit status)
     "nul_bytes": (lambda L: b"\0" * 5000, 2),
     # valid files the audit must fail (exit 1): the file is fine, the motion is not
     "joint_beyond_limit": (lambda L: _with(_set(L, 10, 4, "9.000000")), 1),
-    "ten_times_faster": (lambda L: _with(L[:2] + [
-        ",".join([f"{float(ln.split(',')[0]) / 10:.6f}", *ln.split(",")[1:]])
-        for ln in L[2:-1]] + L[-1:]), 1),
+    "ten_times_faster": (lambda L: _with(_meta(_retime(L, 0.1), rate_hz=1000)), 1),
+    # the file contract (issue 14): rows at rate_hz from t = 0, no gap, metadata as the rows
+    "rows_cut_from_the_middle": (lambda L: _with(_end(L[:60] + L[110:-1])), 2),
+    "time_offset_100_s": (lambda L: _with(_retime(L, 1.0, 100.0)), 2),
+    "time_stretched_by_2": (lambda L: _with(_retime(L, 2.0)), 2),
+    "rate_hz_not_the_rows": (lambda L: _with(_meta(L, rate_hz=50)), 2),
+    "one_row": (lambda L: _with(_end(L[:3])), 2),
     "crlf_line_ends": (lambda L: _with(L).replace("\n", "\r\n"), 2),
 }
 
@@ -998,7 +1014,9 @@ def test_unwritable_urdf_and_played_paths(capsys, planned, tmp_path):
 
 
 @pytest.mark.parametrize("dest", ["file", "stdout"])
-def test_interrupt_during_planning_leaves_nothing(capsys, monkeypatch, tmp_path, dest):
+def test_interrupt_during_planning_leaves_an_incomplete_file(capsys, monkeypatch, tmp_path, dest):
+    """The rows streamed into the named file stay there without the end marker (what
+    says a file is complete); nothing hidden is left beside it."""
     from planner import play
 
     real = play.solve_timing
@@ -1008,8 +1026,7 @@ def test_interrupt_during_planning_leaves_nothing(capsys, monkeypatch, tmp_path,
     def interrupted(prob):
         calls["n"] += 1
         if calls["n"] == 3:
-            parts = part_files(tmp_path)
-            calls["rows_before"] = (tmp_path / parts[0]).read_text().count("\n") if parts else 0
+            calls["rows_before"] = out.read_text().count("\n") if out.exists() else 0
             raise KeyboardInterrupt
         return real(prob)
 
@@ -1017,11 +1034,16 @@ def test_interrupt_during_planning_leaves_nothing(capsys, monkeypatch, tmp_path,
     song = ROOT / "songs" / "ode_to_joy.mid"
     rc, o, err = run_cli(capsys, "play", song, "-o", out if dest == "file" else "-")
     assert calls["n"] == 3, "the interrupt never fired: pick a longer song"
-    assert rc == 130 and err == "interrupted\n"
-    assert not out.exists() and part_files(tmp_path) == []
+    assert rc == 130 and err == "interrupted (SIGINT)\n"
+    assert part_files(tmp_path) == []
     if dest == "file":
         assert calls["rows_before"] > 2, "rows had been streamed before the interrupt"
+        text = out.read_text()
+        assert '"end"' not in text and text.count("\n") >= calls["rows_before"]
+        with pytest.raises(InputError, match="incomplete"):
+            read_trajectory(str(out))
     else:  # stdout: rows went out, the end marker (the completeness signal) did not
+        assert not out.exists()
         assert o.count("\n") > 2 and '"end"' not in o
 
 
@@ -1102,7 +1124,10 @@ def test_full_disk(capsys, monkeypatch, tmp_path, where, budget):
     assert rc in (1, 2), (rc, err)
     one_line(err)
     assert "No space left on device" in err and str(out) in err
-    assert not out.exists() and part_files(tmp_path) == []
+    assert part_files(tmp_path) == []
+    # what reached the disk stays, visibly incomplete: no end marker (a close that fails
+    # comes after the end marker was written and flushed: the file holds the whole plan)
+    assert ('"end"' in out.read_text()) == (where == "close")
 
 
 @pytest.mark.parametrize("where", ["write", "close"])
@@ -1151,7 +1176,9 @@ def test_stdout_output_is_complete(capsys):
     rc, out, err = run_cli(capsys, "play", SCALE, "-o", "-")
     assert rc == 0
     lines = out.split("\n")[:-1]
-    assert json.loads(lines[-1][2:]) == {"end": True, "rows": len(lines) - 3}
+    end = json.loads(lines[-1][2:])
+    assert (end["end"], end["rows"], end["notes"], end["played"]) == (True, len(lines) - 3, 15, 15)
+    assert end["left_out"] == []
     m = SUMMARY.search(err)
     assert int(m["rows"]) == len(lines) - 3
 
@@ -1251,7 +1278,7 @@ def test_same_song_same_bytes_in_different_directories(tmp_path):
     # no time of day or date anywhere in the metadata
     assert not re.search(r"\d{1,2}:\d{2}|\d{4}-\d{2}-\d{2}", meta_line), meta_line
     assert set(meta) == {"format", "version", "task", "hand", "urdf_sha256", "T_world_root",
-                         "rate_hz", "song", "notes"}
+                         "rate_hz", "song", "notes", "track", "channel", "transpose"}
 
 
 def test_in_process_run_gives_the_same_bytes_as_a_subprocess(capsys, tmp_path):

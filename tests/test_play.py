@@ -163,10 +163,9 @@ def test_a_song_beyond_the_hand_is_planned_safely_and_named(stressed, name):
     assert not rep.play.wrong_presses and not rep.play.key_bed_hits, rep.summary()
     assert all(v.count == 0 for v in rep.limits), rep.summary()
     assert rep.play.f1 >= STRESS_FLOOR[name], rep.summary()
-    named = {(round(n.onset_s, 3), n.pitch) for n in res.notes if n.reason}
-    late = {res.notes[i].onset_s for i, _ in res.late + res.cut}
-    for m in rep.play.missed:
-        assert (round(m.onset_s, 3), m.pitch) in named or m.onset_s in late, (m, rep.summary())
+    named = {i for i, n in enumerate(res.notes) if n.reason}
+    assert named == {m.note for m in rep.play.missed}, rep.summary()
+    assert rep.play.claims and not rep.play.claim_mismatches
 
 
 @pytest.mark.parametrize("name", SONGS)
@@ -560,7 +559,11 @@ def test_a_finger_curled_in_front_of_the_keys_rides_along_when_the_hand_travels(
     res = plan_song(load_song(song), planner.hand, str(path), planner=planner)
     rep = check_trajectory(str(path), str(song))
     assert len(rep.play.wrong_presses) == 0 and not rep.play.key_bed_hits, rep.summary()
-    assert len(res.infeasible) <= 3 and rep.play.f1 >= 0.92, (res.infeasible, rep.summary())
+    # the planner leaves 3 out; since its summary is its own replay (issue 14), the two it
+    # strikes for 20 % and 27 % of their frames count as not played too (they had been
+    # called played, and the check found them missed)
+    assert len(res.infeasible) <= 5 and rep.play.f1 >= 0.92, (res.infeasible, rep.summary())
+    assert {n.index for n in res.infeasible} == {m.note for m in rep.play.missed}
 
 
 def test_the_hand_moves_while_a_key_is_held_when_the_next_note_needs_it(planned, planner):
@@ -731,7 +734,8 @@ def test_a_held_key_the_hand_must_leave_is_let_go_and_named(planner, tmp_path):
     song = tmp_path / "cut.mid"
     write_notes_midi(notes, song)
     res = plan_song(load_song(song), planner.hand, str(tmp_path / "c.csv"), planner=planner)
-    assert res.infeasible == []
+    # let go after 7 % of its frames, C3 is not played (the check's rule): named as cut
+    assert [(n.index, n.reason[:10]) for n in res.infeasible] == [(0, "cut short:")]
     assert res.cut == [(0, pytest.approx(3.0 - 0.5 + CUT_LEAD_S))]
     assert "cut short: t=0.000 s C3 let go 2.56 s early" in format_summary("cut.mid", res, 3.0, "c.csv")
     rep = check_trajectory(str(tmp_path / "c.csv"), str(song))

@@ -75,6 +75,9 @@ MAX_HEIGHT = 10.0
 """|height| of the target point must be below this, m."""
 MAX_TIME = 100.0
 """Drag flights are only evaluated for |t| <= MAX_TIME seconds."""
+MAX_OBS_RANGE_M = MAX_LAUNCH_SPEED * MAX_TIME + 0.5 * G * MAX_TIME**2
+"""The farthest a ball launched at MAX_LAUNCH_SPEED gets from the launch point within
+MAX_TIME (vacuum): an observation farther off is no ball of a throw, m."""
 
 _MAX_STEP = 0.01  # s, coarsest RK4 step of a drag table
 _STEP_SCALE = 0.005  # step <= _STEP_SCALE / (k * speed scale)
@@ -477,14 +480,14 @@ def check_throw(angle_deg: Any, dist_m: Any, height_m: Any, prefix: str = ""
 def _vacuum_speed(a_rad: float, d: float, h: float, angle_deg: float) -> float:
     rise = d * math.tan(a_rad) - h
     if rise <= 0.0:
-        raise InfeasibleError(
+        raise InputError(
             f"no throw at {angle_deg:g} deg passes through ({d:g}, 0, {h:g}) m: the height "
             f"must be below dist*tan(angle) = {d * math.tan(a_rad):.4g} m"
         )
     c = math.cos(a_rad)
     v = math.sqrt(G * d * d / (2.0 * c * c * rise))
     if v > MAX_LAUNCH_SPEED:
-        raise InfeasibleError(
+        raise InputError(
             f"a throw at {angle_deg:g} deg through ({d:g}, 0, {h:g}) m needs {v:.4g} m/s, "
             f"more than {MAX_LAUNCH_SPEED:g} m/s"
         )
@@ -532,7 +535,7 @@ def _shoot_drag(a_rad: float, d: float, h: float, k: float, v_vac: float, angle_
     # Fallback: bracket [v_vac, MAX_LAUNCH_SPEED] (drag only ever needs more speed).
     f_hi, _ = run(MAX_LAUNCH_SPEED)
     if f_hi < 0.0:
-        raise InfeasibleError(
+        raise InputError(
             f"no throw at {angle_deg:g} deg up to {MAX_LAUNCH_SPEED:g} m/s reaches "
             f"({d:g}, 0, {h:g}) m with drag k = {k:.4g} 1/m"
         )
@@ -618,6 +621,16 @@ def _check_observations(ts: Any, ps: Any, min_rows: int) -> tuple[np.ndarray, np
         raise InputError("observations must be finite (no NaN or inf)")
     if np.any(np.diff(t) <= 0):
         raise InputError("observation times must be strictly increasing")
+    if np.any(np.abs(t) > MAX_TIME):
+        i = int(np.argmax(np.abs(t) > MAX_TIME))
+        raise InputError(f"observation {i + 1}: t = {t[i]:.6g} s is more than {MAX_TIME:g} s "
+                         "from the launch")
+    far = np.abs(p).max(axis=1) > MAX_OBS_RANGE_M  # (a norm of such values overflows)
+    if np.any(far):
+        i = int(np.argmax(far))
+        raise InputError(f"observation {i + 1}: the ball {np.abs(p[i]).max():.6g} m off the "
+                         f"launch point along an axis, farther than any throw reaches "
+                         f"({MAX_OBS_RANGE_M:g} m)")
     return t, p
 
 
@@ -656,6 +669,10 @@ def fit_observations(
     y = p - 0.5 * GRAVITY * (t * t)[:, None]
     coef, *_ = np.linalg.lstsq(A, y, rcond=None)  # (2, 3): rows p0, v0
     theta = np.concatenate([coef[0], coef[1]])
+    speed = float(np.linalg.norm(theta[3:]))
+    if speed > MAX_LAUNCH_SPEED:
+        raise InputError(f"the observations move at {speed:.4g} m/s at t = 0, faster than any "
+                         f"throw (at most {MAX_LAUNCH_SPEED:g} m/s)")
     if k == 0.0:
         res = y - A @ coef
         M = np.linalg.pinv(A.T @ A)

@@ -1124,8 +1124,8 @@ def write_plan(plan: CatchPlan, out_path: str) -> int:
     writer = TrajectoryWriter(out_path, plan.metadata(), hand.joint_names, hand.motor_names)
     try:
         writer.write_rows(plan.t, plan.q, plan.q_motor)
-    except BaseException:
-        writer.abort()
+    except BaseException as e:
+        writer.abort(discard=isinstance(e, InputError))
         raise
     writer.close()
     return writer.rows

@@ -52,11 +52,9 @@ lasting more than 24 hours are refused.
 
 from __future__ import annotations
 
-import errno
 import io
 import os
 import struct
-import tempfile
 from bisect import bisect_right
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -127,6 +125,9 @@ class Song:
     duration_s: float
     sustain: tuple[tuple[float, float], ...] = ()
     source: str = ""
+    track: int | None = None  # the options it was read with (a plan's metadata names them)
+    channel: int | None = None
+    transpose: bool = False
 
 
 def pitch_name(pitch: int) -> str:
@@ -219,6 +220,9 @@ def parse_song_bytes(
         duration_s=tempo_map.seconds(end_tick),
         sustain=tuple(sustain_s),
         source=source,
+        track=track,
+        channel=channel,
+        transpose=bool(transpose),
     )
 
 
@@ -656,28 +660,6 @@ def write_notes_midi(
     mf.tracks.append(part)
     buf = io.BytesIO()
     mf.save(file=buf)
-    _write_bytes_atomic(os.fspath(path), buf.getvalue())
+    from planner.output import write_file
 
-
-def _write_bytes_atomic(name: str, data: bytes) -> None:
-    """Write ``data`` to ``name`` through a temporary file beside it and a rename: the file
-    is complete or absent (a full disk leaves nothing half-written behind)."""
-    folder, base = os.path.split(name)
-    tmp = None
-    try:
-        if not base or os.path.isdir(name):
-            raise IsADirectoryError(errno.EISDIR, "is a directory or has no file name")
-        fd, tmp = tempfile.mkstemp(prefix=f".{base}.", suffix=".part", dir=folder or ".")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.fchmod(fd, 0o666 & ~umask)  # as open() would create it (mkstemp makes 0600)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, name)
-    except OSError as exc:
-        if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-        raise InputError(f"{name}: cannot write MIDI file ({_one_line(exc)})") from None
+    write_file(path, buf.getvalue())

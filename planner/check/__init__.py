@@ -1,0 +1,414 @@
+"""The independent replay check: what does a trajectory file really do?
+
+``check_trajectory(path, song)`` reads a ``hand-trajectory`` v1 file (spec
+section 4), rebuilds the hand it names, replays every row through forward
+kinematics and reports
+
+* **play**: which keys go down in every frame (spec section 2: a fingertip
+  point inside a key's footprint -- for a white key minus the black keys'
+  rectangles -- at least ``DOWN_DEPTH_M`` below the key's resting top), key-bed
+  hits (a fingertip in a footprint more than ``KEY_BED_DEPTH_M`` below that
+  top), and with a song: frame-level precision / recall / F1 (RoboPianist's
+  metric), note-level hits, missed notes and wrong presses;
+* **catch**: the ball's flight (integrated here), where it meets the palm,
+  fingertips touching it early and the grasp after the intercept;
+* **both**: a limit audit (joint positions, speeds, accelerations, motor
+  speeds, motor columns against the joints, static motor torque, couplings).
+
+The package: ``criteria`` (the rules, imported by the planners' self-checks
+too), ``kinematics`` (its own Pinocchio model), ``keys`` (play), ``ball``
+(catch), ``limits`` (the audit), ``results`` (frozen results, summary, JSON).
+
+The file contract (``planner.trajfile``): rows at ``rate_hz`` from t = 0 (within
+``ROW_TIME_TOL_S``), no gap, at least two rows; a damaged file is bad input (exit
+2) with the first bad row named. With a song, the file's metadata must name as
+many notes as the song has (with its ``track``, ``channel`` and ``transpose``,
+which the check reads from the metadata unless given).
+
+The verdict fails on key-bed hits, wrong presses, limit violations, a failed
+catch, F1 under ``min_f1``, and on any note whose outcome the plan's end marker
+states otherwise than the replay finds (``left_out``: the notes it says it left
+out, every other note it says it played). ``strict`` also fails it on any missed
+or late note.
+
+Independence: this package shares only the hand model, the keyboard geometry,
+the trajectory reader and the MIDI reader with the planner. It never imports
+``planner.play``, ``planner.ik``, ``planner.trajectory``, ``planner.catch`` or
+the fingering / targets modules, and it runs its own copy of the Pinocchio
+model (so it never touches the shared hand's data, and can put the root where
+the file's metadata says).
+
+Choices (each one a named constant below):
+
+* Times. The song's clock is the trajectory's clock (t = 0 in both). A note
+  sounds in frame ``t`` when ``onset_s <= t < offset_s``.
+* Frame F1 (``frame_scores``) over the song's frames (``song_frames``: rows
+  missing at the end count as frames with nothing pressed, rows after the last
+  note are not scored): per frame, a binary classification over the 88
+  keys scored like ``sklearn.metrics.precision_recall_fscore_support(...,
+  average="binary", zero_division=1)``: precision = tp/(tp+fp), recall =
+  tp/(tp+fn), F1 = 2 tp/(2 tp+fp+fn), each 1 when its denominator is 0 -- so
+  a frame with nothing expected and nothing pressed scores 1, and a frame with
+  only false positives or only misses scores 0. The three are averaged over
+  the song's frames.
+* Note hits: a note is hit when its key is down in at least
+  ``NOTE_HIT_FRACTION`` (50 %) of the frames in ``[onset, offset)``; a note
+  with no frame inside that interval (shorter than a frame period, or
+  after the trajectory's end) cannot be hit and is listed as missed with the
+  reason.
+* Wrong presses: a key down in a frame where no note of that key sounds,
+  grouped into contiguous episodes per key. An episode runs from its first
+  frame's time to the time of the frame after its last one (one median frame
+  period past the last row at the end of the file), and lists every finger
+  that held the key down during it.
+* Speeds and accelerations are first and second differences of consecutive
+  rows (non-uniform steps handled). For a trajectory whose continuous speed
+  and acceleration respect the limits, the differences do too (they are
+  averages of the continuous quantity), so they are a sound test. Tolerances
+  are 1 % of the limit plus the effect of the file's 6-decimal rounding
+  (``1e-6/dt`` for speeds, ``2e-6/dt^2`` for second differences: 0.02 rad/s^2
+  at 100 Hz). The speed is reported at the later row of its pair, the
+  acceleration at the middle row of its triple.
+* Motor torque: the static torque only -- gravity (with the file's
+  ``T_world_root`` orientation) plus, for play, a nominal
+  ``KEY_FORCE_N`` = 0.5 N upward on every fingertip that holds a key down
+  (the planner may press harder), and for a catch, after the intercept, the
+  ball's weight on the palm centre -- mapped to the motors with
+  ``HandModel.motor_torques`` and compared with ``motor_peak_torque`` (1 %).
+  Inertial torques are not counted.
+* Motor columns must equal ``HandModel.motor_angles(q)`` of the row's joints
+  within ``MOTOR_TOL_RAD`` (1e-5 rad) plus the rounding of the file (half a
+  unit of the 6th decimal on the motor value and on each joint, weighted by
+  the motor's sensitivity to it: 100 rad/m for the rail's belt). Couplings
+  likewise within ``COUPLING_TOL_RAD`` plus rounding.
+* Catch: the ball flies from ``p0, v0`` at t = 0 (acceleration g - k|v|v,
+  closed form when k = 0, else RK4 with steps of at most 1 ms). At
+  ``intercept_t`` (joint rows interpolated linearly in time) its centre must
+  lie within ``INTERCEPT_TOL_M`` (15 mm) of ``palm_center + radius * n`` (n the
+  palm frame's +z). Before ``intercept_t`` no fingertip may be closer than the
+  radius to the ball's centre. From ``intercept_t`` on the ball is taken to
+  be held: its centre is ``palm_center + radius * n`` of each row. Within
+  ``GRASP_WINDOW_S`` (150 ms) after ``intercept_t`` some row must have at least
+  ``GRASP_MIN_TIPS`` (3) fingertips, the thumb among them, within
+  ``radius + GRASP_TOL_M`` (10 mm) of the ball's centre, and every later row
+  must keep that grasp (the catch holds to the end of the file).
+* ``T_world_root``: the FK uses the metadata's pose. For ``play`` it must equal
+  the hand's mount (the keyboard frame is defined by that mount) within
+  ``T_TOL``; for ``catch`` the catch frame has its origin at the launch point,
+  so the hand may be mounted anywhere in it -- the pose is only required to be
+  a rigid transform.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any
+
+import numpy as np
+
+from planner.check.ball import ball_params, ball_positions, catch_audit, is_num
+from planner.check.criteria import (
+    DOWN_DEPTH_M,
+    GRASP_MIN_TIPS,
+    GRASP_TOL_M,
+    GRASP_WINDOW_S,
+    INTERCEPT_TOL_M,
+    KEY_BED_DEPTH_M,
+    LATE_S,
+    NOTE_HIT_FRACTION,
+    KeyContacts,
+    expected_keys,
+    frame_f1,
+    frame_scores,
+    key_contacts,
+    pitch_name,
+    song_frames,
+)
+from planner.check.keys import key_episodes, play_replay
+from planner.check.kinematics import Kinematics, fk_frames, keys_down
+from planner.check.limits import limit_audit
+from planner.check.results import (
+    CatchResult,
+    CheckReport,
+    ClaimMismatch,
+    KeyBedHit,
+    KeyEpisode,
+    LateNote,
+    LimitCheck,
+    MissedNote,
+    PlayResult,
+    Replay,
+    TipTouch,
+)
+from planner.errors import InputError
+from planner.hand.model import HandModel, load_hand
+from planner.trajfile import Trajectory, read_trajectory
+
+__all__ = [
+    "DOWN_DEPTH_M",
+    "GRASP_MIN_TIPS",
+    "GRASP_TOL_M",
+    "GRASP_WINDOW_S",
+    "INTERCEPT_TOL_M",
+    "KEY_BED_DEPTH_M",
+    "LATE_S",
+    "NOTE_HIT_FRACTION",
+    "CatchResult",
+    "CheckReport",
+    "ClaimMismatch",
+    "KeyBedHit",
+    "KeyContacts",
+    "KeyEpisode",
+    "LateNote",
+    "LimitCheck",
+    "MissedNote",
+    "PlayResult",
+    "Replay",
+    "TipTouch",
+    "ball_params",
+    "ball_positions",
+    "catch_audit",
+    "check_cli",
+    "check_trajectory",
+    "expected_keys",
+    "fk_frames",
+    "frame_f1",
+    "frame_scores",
+    "is_num",
+    "key_contacts",
+    "key_episodes",
+    "keys_down",
+    "pitch_name",
+    "song_frames",
+]
+
+T_TOL = 1e-9  # metadata T_world_root vs the hand's mount (play)
+
+
+def _load_hand(meta: dict[str, Any], path: str, hand_override) -> HandModel:
+    if isinstance(hand_override, HandModel):
+        return hand_override
+    name = hand_override if hand_override is not None else meta["hand"]
+    if not isinstance(name, str) or not name:
+        raise InputError(f"{path}: metadata 'hand' must be a hand name, got {name!r}")
+    try:
+        return load_hand(name)
+    except InputError as e:
+        raise InputError(f"{path}: cannot rebuild hand {name!r}: {e}") from None
+
+
+def _check_columns(tr: Trajectory, hand: HandModel, path: str) -> None:
+    for what, have, want in (("joint", tr.joint_names, hand.joint_names),
+                             ("motor", tr.motor_names, hand.motor_names)):
+        if tuple(have) == tuple(want):
+            continue
+        pre = "motor." if what == "motor" else ""
+        missing = [pre + n for n in want if n not in have]
+        extra = [pre + n for n in have if n not in want]
+        parts = []
+        if missing:
+            parts.append("missing " + ", ".join(missing))
+        if extra:
+            parts.append("extra " + ", ".join(extra))
+        if not parts:
+            parts.append(f"order differs from the hand's ({', '.join(pre + n for n in want)})")
+        raise InputError(f"{path}: {what} columns do not match hand {hand.name!r}: "
+                         + "; ".join(parts))
+
+
+def _T_world_root(meta: dict[str, Any], hand: HandModel, path: str) -> np.ndarray:
+    raw = meta["T_world_root"]
+    try:
+        T = np.array(raw, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{path}: T_world_root must be a 4x4 list of numbers") from None
+    if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+        raise InputError(f"{path}: T_world_root must be a 4x4 list of finite numbers")
+    R = T[:3, :3]
+    if (not np.allclose(T[3], [0, 0, 0, 1], atol=1e-9)
+            or not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0):
+        raise InputError(f"{path}: T_world_root is not a rigid transform")
+    if meta["task"] == "play":
+        diff = float(np.max(np.abs(T - hand.T_world_root)))
+        if diff > T_TOL:
+            raise InputError(f"{path}: T_world_root differs from hand {hand.name!r}'s mount by "
+                             f"{diff:.3g} (the keyboard frame is that mount)")
+    return T
+
+
+
+def _song_notes(song_path: str, meta: dict[str, Any], path: str, options: dict[str, Any]):
+    """The song's notes, read with the options the plan was made with (the file's
+    metadata) unless given; InputError when the file names another number of notes."""
+    from planner.music.midi import load_song
+
+    opts = {k: (options.get(k) if options.get(k) is not None else meta.get(k))
+            for k in ("track", "channel", "transpose")}
+    notes = load_song(song_path, track=opts["track"], channel=opts["channel"],
+                      transpose=bool(opts["transpose"])).notes
+    want = meta.get("notes")
+    if is_num(want) and int(want) != len(notes):
+        given = ", ".join(f"{k}={v}" for k, v in opts.items() if v not in (None, False)) or "none"
+        raise InputError(f"{path}: planned for a song of {int(want)} notes, {song_path} has "
+                         f"{len(notes)} (another song, or other --track/--channel/--transpose; "
+                         f"options used: {given})")
+    return notes
+
+
+def _left_out(end: dict[str, Any], n_notes: int, path: str) -> set[int] | None:
+    """The notes the end marker says the plan left out (None: it states no claims)."""
+    raw = end.get("left_out")
+    if raw is None:
+        return None
+    ok = isinstance(raw, list) and all(
+        isinstance(x, dict) and isinstance(x.get("note"), int) and 0 <= x["note"] < n_notes
+        for x in raw)
+    if not ok:
+        raise InputError(f"{path}: end marker's 'left_out' is not a list of notes of the song")
+    return {x["note"] for x in raw}
+
+
+def _claim_mismatches(notes, missed_notes: set[int], left_out: set[int]) -> list[ClaimMismatch]:
+    out = []
+    for i, n in enumerate(notes):
+        missed = i in missed_notes
+        claimed_out = i in left_out
+        if missed != claimed_out:
+            out.append(ClaimMismatch(i, float(n.onset_s), int(n.pitch), pitch_name(n.pitch),
+                                     "left out" if claimed_out else "played",
+                                     "hit" if claimed_out else "missed"))
+    return out
+
+
+def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list[str]:
+    problems = []
+    if play.key_bed_hits:
+        h = play.key_bed_hits[0]
+        problems.append(f"{len(play.key_bed_hits)} key-bed hits (first: {h.finger} on {h.name}"
+                        f" at {h.time_s:.3f} s, {h.depth_m * 1000:.2f} mm deep)")
+    if play.wrong_presses:
+        w = play.wrong_presses[0]
+        problems.append(f"{len(play.wrong_presses)} wrong presses (first: {w.name} at "
+                        f"{w.start_s:.3f} s)")
+    if play.claim_mismatches:
+        c = play.claim_mismatches[0]
+        problems.append(f"{len(play.claim_mismatches)} notes the plan claims otherwise than the "
+                        f"replay finds (first: {c.name} at {c.onset_s:.3f} s, claimed {c.claimed},"
+                        f" {c.found})")
+    if min_f1 is not None and play.f1 < min_f1:
+        problems.append(f"frame F1 {play.f1:.4f} < {min_f1:g}")
+    if strict and play.missed:
+        m = play.missed[0]
+        problems.append(f"{len(play.missed)} notes missed (first: {m.name} at {m.onset_s:.3f} s:"
+                        f" {m.reason})")
+    if strict and play.late:
+        n = play.late[0]
+        problems.append(f"{len(play.late)} notes late by more than {LATE_S * 1000:g} ms (first: "
+                        f"{n.name} at {n.onset_s:.3f} s, {n.late_s * 1000:.0f} ms)")
+    return problems
+
+
+def check_trajectory(traj_path: str, song_path: str | None = None, *,
+                     allow_incomplete: bool = False, min_f1: float | None = None,
+                     hand_override: str | HandModel | None = None, strict: bool = False,
+                     song_options: dict[str, Any] | None = None) -> CheckReport:
+    """Replay ``traj_path`` and audit it (see the package docstring).
+
+    ``song_path``: a MIDI file (play only) for F1, note hits and wrong presses, read
+    with ``song_options`` (``track``, ``channel``, ``transpose``; each defaults to the
+    file's metadata). ``min_f1``: the verdict also requires frame F1 >= this (needs a
+    song). ``strict``: the verdict also fails on any missed or late note.
+    ``hand_override``: a hand name / hand file or a HandModel to use instead of
+    metadata["hand"] (its URDF hash must still match the file's).
+    Raises InputError when the file cannot be replayed: damaged or incomplete (unless
+    allowed), unknown hand, URDF hash or column mismatch, bad T_world_root, bad
+    catch metadata, a song other than the plan's.
+    """
+    tr = read_trajectory(traj_path, allow_incomplete=allow_incomplete)
+    meta = tr.metadata
+    hand = _load_hand(meta, traj_path, hand_override)
+    if meta["urdf_sha256"] != hand.urdf_sha256:
+        raise InputError(f"{traj_path}: urdf_sha256 mismatch: the file was planned for "
+                         f"{meta['urdf_sha256']!r}, hand {hand.name!r} is {hand.urdf_sha256!r}")
+    _check_columns(tr, hand, traj_path)
+    T_world_root = _T_world_root(meta, hand, traj_path)
+    if min_f1 is not None and not (0.0 <= min_f1 <= 1.0):
+        raise InputError(f"--min-f1 must be within 0..1, got {min_f1}")
+    task = meta["task"]
+    if song_path is not None and task != "play":
+        raise InputError(f"a song was given but {traj_path} is a {task} trajectory")
+    if min_f1 is not None and song_path is None:
+        raise InputError("--min-f1 needs a song")
+    notes = (None if song_path is None
+             else _song_notes(song_path, meta, traj_path, song_options or {}))
+
+    kin = Kinematics(hand, T_world_root)
+    tips, palm = kin.frames(tr.q)
+    problems: list[str] = []
+    play = catch = None
+    replay_kw: dict[str, Any] = {}
+    pressing = ball_load = None
+    if task == "play":
+        play, kc, exp = play_replay(tr, tips, notes)
+        if notes is not None:
+            left_out = _left_out(tr.end, len(notes), traj_path)
+            if left_out is not None:
+                missed = {m.note for m in play.missed}
+                play = _with_claims(play, _claim_mismatches(notes, missed, left_out))
+        pressing = np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
+        replay_kw = {"down": kc.down, "finger": kc.finger, "expected": exp}
+        problems.extend(_play_problems(play, min_f1, strict))
+    else:
+        catch, ball_load = catch_audit(tr, kin, tips, palm, traj_path)
+        problems.extend(catch.problems)
+
+    limits = limit_audit(hand, kin, tr, pressing, ball_load)
+    for lc in limits:
+        if not lc.ok:
+            problems.append(f"{lc.count} {lc.category.replace('_', ' ')} violations (worst "
+                            f"{lc.worst:.6g} vs {lc.limit:.6g} {lc.unit}, {lc.name} at "
+                            f"{lc.time_s:.3f} s)")
+    return CheckReport(
+        trajectory=os.fspath(traj_path), song=None if song_path is None else os.fspath(song_path),
+        task=task, hand=hand.name, urdf_sha256=hand.urdf_sha256, complete=tr.complete,
+        rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), rate_hz=float(meta["rate_hz"]),
+        limits=tuple(limits), play=play, catch=catch, min_f1=min_f1, problems=tuple(problems),
+        replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw))
+
+
+def _with_claims(play: PlayResult, mismatches: list[ClaimMismatch]) -> PlayResult:
+    import dataclasses
+
+    return dataclasses.replace(play, claims=True, claim_mismatches=tuple(mismatches))
+
+
+def check_cli(args) -> int:
+    """``cli.py check``: print the summary (or one JSON object with --json);
+    0 when the check passes, 1 otherwise. ``--played OUT.mid`` writes the
+    key-down episodes as notes (velocity 64). ``--report DIR`` / ``--html FILE``
+    are handed to ``planner.report``."""
+    options = {"track": getattr(args, "track", None), "channel": getattr(args, "channel", None),
+               "transpose": True if getattr(args, "transpose", False) else None}
+    report = check_trajectory(args.trajectory, args.song,
+                              allow_incomplete=bool(getattr(args, "allow_incomplete", False)),
+                              min_f1=getattr(args, "min_f1", None),
+                              strict=bool(getattr(args, "strict", False)), song_options=options)
+    played = getattr(args, "played", None)
+    if played:
+        from planner.music.midi import Note, write_notes_midi
+
+        eps = report.play.played if report.play is not None else ()
+        write_notes_midi([Note(e.pitch, e.start_s, e.end_s, 64) for e in eps], played)
+    if getattr(args, "report", None) or getattr(args, "html", None):
+        from planner.report import write_check_report, write_html
+
+        if args.report:
+            write_check_report(report, args.report)
+        if args.html:
+            write_html(report, args.html)
+    if getattr(args, "json", False):
+        print(json.dumps(report.to_dict()))
+    else:
+        print(report.summary())
+    return 0 if report.ok else 1

@@ -1,0 +1,95 @@
+"""Forward kinematics of the check: its own copy of the hand's Pinocchio model, with
+the root where the file's metadata puts it (it never touches the planner's data)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from planner.check.criteria import key_contacts
+from planner.hand.model import HandModel
+from planner.hand.spec import PALM_FRAME
+
+G = 9.81
+GRAVITY = np.array([0.0, 0.0, -G])
+
+
+class Kinematics:
+    """A private Pinocchio model of the hand with the root at ``T_world_root``."""
+
+    def __init__(self, hand: HandModel, T_world_root: np.ndarray) -> None:
+        self.hand = hand
+        self.T = np.asarray(T_world_root, dtype=float)
+        self.R = self.T[:3, :3]
+        self.p = self.T[:3, 3]
+        self.model = hand.pin_model.copy()
+        self.model.gravity.linear = self.R.T @ GRAVITY
+        self.data = self.model.createData()
+        m = self.model
+        self.idx = np.array([m.idx_qs[m.getJointId(n)] for n in hand.joint_names])
+        self.tip_ids = [m.getFrameId(f) for f in hand.tip_frames]
+        self.palm_id = m.getFrameId(PALM_FRAME)
+
+    def pin_q(self, q: np.ndarray) -> np.ndarray:
+        qp = np.zeros(self.model.nq)
+        qp[self.idx] = q
+        return qp
+
+    def frames(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World tips (T, 5, 3) and palm poses (T, 4, 4) of every row of ``Q``."""
+        Q = np.atleast_2d(Q)
+        T = len(Q)
+        tips = np.empty((T, len(self.tip_ids), 3))
+        palm = np.empty((T, 4, 4))
+        QP = np.zeros((T, self.model.nq))
+        QP[:, self.idx] = Q
+        m, d = self.model, self.data
+        for k in range(T):
+            pin.framesForwardKinematics(m, d, QP[k])
+            for j, f in enumerate(self.tip_ids):
+                tips[k, j] = d.oMf[f].translation
+            palm[k] = d.oMf[self.palm_id].homogeneous
+        tips = tips @ self.R.T + self.p
+        palm = np.einsum("ij,tjk->tik", self.T, palm)
+        return tips, palm
+
+    def gravity(self, q: np.ndarray) -> np.ndarray:
+        return pin.computeGeneralizedGravity(self.model, self.data, self.pin_q(q))[self.idx]
+
+    def point_jacobians(self, q: np.ndarray, frame_ids: list[int]) -> list[np.ndarray]:
+        """World position Jacobians (3, n) of frames, our joint order."""
+        pin.computeJointJacobians(self.model, self.data, self.pin_q(q))
+        pin.updateFramePlacements(self.model, self.data)
+        out = []
+        for fid in frame_ids:
+            J = pin.getFrameJacobian(self.model, self.data, fid,
+                                     pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            out.append(self.R @ J[:3, self.idx])
+        return out
+
+
+def fk_frames(hand: HandModel, q: np.ndarray,
+              T_world_root: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Forward kinematics of every row: fingertips (T, 5, 3) in ``FINGERS`` order
+    and palm_center poses (T, 4, 4), in the world of ``T_world_root`` (default
+    the hand's mount)."""
+    T = hand.T_world_root if T_world_root is None else T_world_root
+    return Kinematics(hand, T).frames(np.asarray(q, dtype=float))
+
+
+def keys_down(hand: HandModel, t_s: np.ndarray, q: np.ndarray,
+              T_world_root: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Keys down in each row of ``q`` (times ``t_s``, only used for the shape check).
+
+    Returns ``(down, finger)``: ``down`` (T, 88) bool, column ``pitch - 21``;
+    ``finger`` (T, 88) int8, the index into ``FINGERS`` of the fingertip that
+    holds the key down (the deepest one if several), -1 where the key is up.
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    if len(np.atleast_1d(t_s)) != len(q):
+        raise ValueError("t_s and q must have the same number of rows")
+    tips, _ = fk_frames(hand, q, T_world_root)
+    c = key_contacts(tips)
+    return c.down, c.finger
+
+

@@ -1,0 +1,126 @@
+"""The limit audit of a replay: joint positions, speeds, accelerations, motor speeds,
+motor columns against the joints, couplings and static motor torque."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.check.kinematics import GRAVITY, Kinematics
+from planner.check.results import LimitCheck
+from planner.hand.model import HandModel
+from planner.trajfile import Trajectory
+
+FILE_QUANTUM = 1e-6  # the writer's 6 decimals
+POSITION_TOL = 1e-6  # rad or m beyond a joint limit
+RATE_TOL = 0.01  # 1 % of a speed / acceleration / torque limit
+MOTOR_TOL_RAD = 1e-5  # motor column vs motor_angles(q), plus file rounding
+COUPLING_TOL_RAD = 1e-5  # |coupling error|, plus file rounding
+KEY_FORCE_N = 0.5  # nominal key reaction on a pressing fingertip
+
+
+def _worst(category: str, excess: np.ndarray, value: np.ndarray, limit: np.ndarray,
+           tol: np.ndarray, names, times: np.ndarray, unit: str) -> LimitCheck:
+    """Build a LimitCheck from (R, C) arrays: ``excess`` ranks samples (bigger is
+    worse), a sample violates when its ``value`` is beyond ``limit + tol``."""
+    if excess.size == 0:
+        return LimitCheck(category, 0, 0.0, float(np.max(limit)) if np.size(limit) else 0.0,
+                          "", 0.0, unit)
+    count = int(np.count_nonzero(~(value <= limit + tol)))  # NaN (inf - inf) is no pass
+    r, c = np.unravel_index(int(np.argmax(excess)), excess.shape)
+    lim = np.broadcast_to(limit, value.shape)
+    return LimitCheck(category, count, float(value[r, c]), float(lim[r, c]), names[c],
+                      float(times[r]), unit)
+
+
+@np.errstate(over="ignore", invalid="ignore")  # absurd values give inf: counted, not printed
+def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips: np.ndarray | None,
+                 ball_load: np.ndarray | None) -> list[LimitCheck]:
+    t, Q, QM = tr.t_s, tr.q, tr.q_motor
+    jn, mn = hand.joint_names, tuple(f"motor.{m}" for m in hand.motor_names)
+    out = []
+
+    # positions: excess beyond the nearer bound (<= 0 inside); infinite bounds never bind
+    lo = np.where(np.isfinite(hand.lower), hand.lower, -np.inf)
+    hi = np.where(np.isfinite(hand.upper), hand.upper, np.inf)
+    below, above = lo - Q, Q - hi
+    excess = np.maximum(below, above)
+    bound = np.where(below > above, lo, hi)
+    r, c = np.unravel_index(int(np.argmax(excess)), excess.shape)
+    out.append(LimitCheck("joint_position", int(np.count_nonzero(excess > POSITION_TOL)),
+                          float(Q[r, c]), float(bound[r, c]), jn[c], float(t[r]), "rad|m"))
+
+    dt = np.diff(t)
+    if len(t) >= 2:
+        V = np.diff(Q, axis=0) / dt[:, None]
+        tol = RATE_TOL * hand.velocity + FILE_QUANTUM / dt[:, None]
+        out.append(_worst("joint_velocity", np.abs(V) / hand.velocity, np.abs(V), hand.velocity,
+                          tol, jn, t[1:], "rad/s|m/s"))
+        VM = np.diff(QM, axis=0) / dt[:, None]
+        tol = RATE_TOL * hand.motor_speed + FILE_QUANTUM / dt[:, None]
+        out.append(_worst("motor_velocity", np.abs(VM) / hand.motor_speed, np.abs(VM),
+                          hand.motor_speed, tol, mn, t[1:], "rad/s"))
+    else:
+        out.append(LimitCheck("joint_velocity", 0, 0.0, 0.0, "", 0.0, "rad/s|m/s"))
+        out.append(LimitCheck("motor_velocity", 0, 0.0, 0.0, "", 0.0, "rad/s"))
+    if len(t) >= 3:
+        V = np.diff(Q, axis=0) / dt[:, None]
+        h = 0.5 * (dt[1:] + dt[:-1])[:, None]
+        A = np.diff(V, axis=0) / h
+        tol = RATE_TOL * hand.acceleration + 2 * FILE_QUANTUM / (dt[1:] * dt[:-1])[:, None]
+        out.append(_worst("joint_acceleration", np.abs(A) / hand.acceleration, np.abs(A),
+                          hand.acceleration, tol, jn, t[1:-1], "rad/s^2|m/s^2"))
+    else:
+        out.append(LimitCheck("joint_acceleration", 0, 0.0, 0.0, "", 0.0, "rad/s^2|m/s^2"))
+
+    # motor columns vs the joints: tolerance plus the rounding of the file
+    QMc = hand.motor_angles(Q)
+    sens = np.zeros_like(QMc)
+    step = 1e-4
+    for j in range(hand.n):
+        Qp = Q.copy()
+        Qp[:, j] += step
+        sens += np.abs(hand.motor_angles(Qp) - QMc) / step
+    err = np.abs(QM - QMc)
+    tol = MOTOR_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + sens)
+    out.append(_worst("motor_consistency", err / tol, err, tol, 0.0, mn, t, "rad"))
+
+    # couplings
+    if hand.couplings:
+        ce = np.abs(hand.coupling_errors(Q))
+        slope = np.stack([np.abs(c.slope(Q[:, c.src])) for c in hand.couplings], axis=-1)
+        tol = COUPLING_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + slope)
+        names = [jn[c.dep] for c in hand.couplings]
+        out.append(_worst("coupling", ce / tol, ce, tol, 0.0, names, t, "rad"))
+    else:
+        out.append(LimitCheck("coupling", 0, 0.0, COUPLING_TOL_RAD, "", 0.0, "rad"))
+
+    # static motor torque
+    tau = np.array([kin.gravity(q) for q in Q])
+    if pressing_tips is not None:
+        tip_ids = kin.tip_ids
+        for k in np.flatnonzero(pressing_tips.any(axis=1)):
+            Js = kin.point_jacobians(Q[k], [tip_ids[f] for f in np.flatnonzero(pressing_tips[k])])
+            for J in Js:
+                tau[k] -= J.T @ np.array([0.0, 0.0, KEY_FORCE_N])
+    if ball_load is not None:
+        for k in np.flatnonzero(ball_load > 0):
+            (J,) = kin.point_jacobians(Q[k], [kin.palm_id])
+            tau[k] -= J.T @ (ball_load[k] * GRAVITY)
+    TM = _motor_torques(hand, Q, tau)
+    ratio = np.abs(TM) / hand.motor_peak_torque
+    out.append(_worst("motor_torque", ratio, np.abs(TM), hand.motor_peak_torque,
+                      RATE_TOL * hand.motor_peak_torque, mn, t, "N m"))
+    return out
+
+
+def _motor_torques(hand: HandModel, Q: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """``hand.motor_torques`` of every row; one matrix when every law is linear."""
+    linear = (all(c.kind == "linear" for c in hand.couplings)
+              and all(a.mk5 is None for a in hand.actuators))
+    if linear:
+        q0 = hand.q_neutral
+        M = np.stack([hand.motor_torques(q0, e) for e in np.eye(hand.n)], axis=1)
+        return tau @ M.T
+    return np.array([hand.motor_torques(q, g) for q, g in zip(Q, tau)])
+
+

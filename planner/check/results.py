@@ -1,0 +1,284 @@
+"""What the check found: frozen results, their summary and their JSON form."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, is_dataclass
+from typing import Any
+
+import numpy as np
+
+from planner.check.criteria import INTERCEPT_TOL_M, KEY_BED_DEPTH_M
+
+
+@dataclass(frozen=True)
+class LimitCheck:
+    """One audited quantity: how many samples exceed their limit and the worst one.
+
+    ``worst`` is the sample with the largest value relative to its limit (for
+    positions: the largest excess beyond a bound; when nothing is violated,
+    the closest approach), ``limit`` its limit, ``name`` the joint or motor,
+    ``time_s`` the row's time. ``count`` counts (row, joint) samples.
+    """
+
+    category: str
+    count: int
+    worst: float
+    limit: float
+    name: str
+    time_s: float
+    unit: str
+
+    @property
+    def ok(self) -> bool:
+        return self.count == 0
+
+
+@dataclass(frozen=True)
+class KeyEpisode:
+    """A key held down over contiguous frames: [start_s, end_s), by these fingers."""
+
+    pitch: int
+    name: str
+    start_s: float
+    end_s: float
+    fingers: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class KeyBedHit:
+    """A fingertip more than KEY_BED_DEPTH_M below the top of the key it is over."""
+
+    time_s: float
+    finger: str
+    pitch: int
+    name: str
+    depth_m: float
+
+
+@dataclass(frozen=True)
+class MissedNote:
+    onset_s: float
+    offset_s: float
+    pitch: int
+    name: str
+    fraction_down: float  # of the note's frames
+    reason: str
+    note: int = -1  # its index in the song
+
+
+@dataclass(frozen=True)
+class LateNote:
+    """A note hit, but whose key first went down ``late_s`` after its onset (> LATE_S)."""
+
+    onset_s: float
+    pitch: int
+    name: str
+    late_s: float
+    note: int = -1  # its index in the song
+
+
+@dataclass(frozen=True)
+class ClaimMismatch:
+    """A note whose outcome the plan's end marker states otherwise than the replay finds:
+    ``claimed`` is "played" or "left out", ``found`` "missed" or "hit"."""
+
+    note: int
+    onset_s: float
+    pitch: int
+    name: str
+    claimed: str
+    found: str
+
+
+@dataclass(frozen=True)
+class PlayResult:
+    """Keys, notes and the frame metrics of a play trajectory.
+
+    ``f1``/``precision``/``recall`` and the note counts are None without a song.
+    ``played`` are all key-down episodes (what the trajectory plays). The scores are
+    over the song's frames (``song_frames``, criteria); ``claim_mismatches`` holds the
+    notes the plan's end marker claims otherwise than the replay finds.
+    """
+
+    frames: int
+    played: tuple[KeyEpisode, ...]
+    key_bed_hits: tuple[KeyBedHit, ...]
+    f1: float | None = None
+    precision: float | None = None
+    recall: float | None = None
+    notes: int | None = None
+    notes_hit: int | None = None
+    missed: tuple[MissedNote, ...] = ()
+    wrong_presses: tuple[KeyEpisode, ...] = ()
+    late: tuple[LateNote, ...] = ()
+    song_frames: int | None = None  # the frames F1 is computed over
+    claims: bool = False  # the file's end marker states per-note outcomes
+    claim_mismatches: tuple[ClaimMismatch, ...] = ()
+
+    @property
+    def hit_rate(self) -> float | None:
+        if self.notes is None:
+            return None
+        return 1.0 if self.notes == 0 else self.notes_hit / self.notes
+
+
+@dataclass(frozen=True)
+class TipTouch:
+    time_s: float
+    finger: str
+    distance_m: float  # tip to ball centre
+
+
+@dataclass(frozen=True)
+class CatchResult:
+    """The catch audit; ``ok`` when the ball meets the palm, nothing touches it
+    early, and the grasp closes within the window and holds."""
+
+    intercept_t: float
+    radius_m: float
+    ball_at_intercept: tuple[float, float, float]
+    palm_target: tuple[float, float, float]  # palm_center + radius * normal
+    intercept_error_m: float | None
+    intercept_ok: bool
+    early_touches: tuple[TipTouch, ...]
+    grasp_time_s: float | None
+    grasp_fingers: tuple[str, ...]
+    grasp_held: bool
+    min_tip_distance_after_m: float | None
+    problems: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+@dataclass(frozen=True)
+class Replay:
+    """Per-row arrays of the replay (not serialised), for plots and animations.
+
+    ``tips`` (T, 5, 3) world fingertip points in ``FINGERS`` order; ``palm``
+    (T, 4, 4) world palm_center poses; ``down``/``finger``/``depth`` as in
+    ``key_contacts``; ``expected`` (T, 88) bool or None without a song.
+    """
+
+    t_s: np.ndarray
+    q: np.ndarray
+    tips: np.ndarray
+    palm: np.ndarray
+    down: np.ndarray | None = None
+    finger: np.ndarray | None = None
+    expected: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """Everything the check found. ``ok`` is the verdict; ``problems`` says why not."""
+
+    trajectory: str
+    song: str | None
+    task: str
+    hand: str
+    urdf_sha256: str
+    complete: bool
+    rows: int
+    duration_s: float
+    rate_hz: float
+    limits: tuple[LimitCheck, ...]
+    play: PlayResult | None
+    catch: CatchResult | None
+    min_f1: float | None
+    problems: tuple[str, ...]
+    replay: Replay | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-serialisable dict (the replay arrays are left out)."""
+        d = _plain(self)
+        d.pop("replay", None)
+        d["ok"] = self.ok
+        if self.play is not None:
+            d["play"]["hit_rate"] = self.play.hit_rate
+        if self.catch is not None:
+            d["catch"]["ok"] = self.catch.ok
+        for lc, dd in zip(self.limits, d["limits"]):
+            dd["ok"] = lc.ok
+        return d
+
+    def summary(self) -> str:
+        """A readable multi-line account, verdict first."""
+        L = [f"check {self.trajectory}: {'OK' if self.ok else 'FAILED'}"]
+        for p in self.problems:
+            L.append(f"  - {p}")
+        L.append(f"task {self.task}, hand {self.hand}, {self.rows} rows, "
+                 f"{self.duration_s:.3f} s at {self.rate_hz:g} Hz"
+                 + ("" if self.complete else " (INCOMPLETE file: no end marker)"))
+        if self.play is not None:
+            p = self.play
+            L.append(f"keys: {len(p.played)} key presses, {len(p.key_bed_hits)} key-bed hits")
+            if p.f1 is not None:
+                L.append(f"song {self.song}: frame F1 {p.f1:.4f} over its {p.song_frames} frames "
+                         f"(precision {p.precision:.4f}, recall {p.recall:.4f}); notes hit "
+                         f"{p.notes_hit}/{p.notes}, {len(p.late)} late"
+                         + (f"; required F1 >= {self.min_f1:g}" if self.min_f1 is not None else ""))
+            _listing(L, "wrong presses", p.wrong_presses, lambda w: (
+                f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
+                f"{'+'.join(w.fingers) or '?'}"))
+            _listing(L, "missed notes", p.missed, lambda m: (
+                f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
+                f"down {m.fraction_down:.0%}  {m.reason}"))
+            _listing(L, "late notes", p.late, lambda n: (
+                f"{n.onset_s:8.3f} s  {n.name:4s} ({n.pitch})  key down {n.late_s * 1000:.0f} ms "
+                "after the onset"))
+            _listing(L, "claims the replay contradicts", p.claim_mismatches, lambda c: (
+                f"{c.onset_s:8.3f} s  {c.name:4s} ({c.pitch})  note {c.note}: the plan says "
+                f"{c.claimed}, the replay finds it {c.found}"))
+            _listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
+                f"{h.time_s:8.3f} s  {h.finger:6s} {h.name:4s} ({h.pitch})  "
+                f"{h.depth_m * 1000:.2f} mm below the top (max {KEY_BED_DEPTH_M * 1000:g})"))
+        if self.catch is not None:
+            c = self.catch
+            err = "n/a" if c.intercept_error_m is None else f"{c.intercept_error_m * 1000:.1f} mm"
+            L.append(f"catch at t={c.intercept_t:.3f} s: ball {err} from palm target "
+                     f"(max {INTERCEPT_TOL_M * 1000:g} mm); "
+                     + (f"grasp at {c.grasp_time_s:.3f} s by {'+'.join(c.grasp_fingers)}"
+                        + ("" if c.grasp_held else ", NOT held")
+                        if c.grasp_time_s is not None else "no grasp"))
+            _listing(L, "early touches", c.early_touches, lambda e: (
+                f"{e.time_s:8.3f} s  {e.finger:6s} {e.distance_m * 1000:.1f} mm from the centre"))
+        L.append("limits (count, worst / limit, where):")
+        for lc in self.limits:
+            L.append(f"  {lc.category:18s} {'ok  ' if lc.ok else 'FAIL'} {lc.count:6d}  "
+                     f"{lc.worst:.6g} / {lc.limit:.6g} {lc.unit}  {lc.name} at {lc.time_s:.3f} s")
+        return "\n".join(L)
+
+
+def _listing(L: list[str], title: str, items, fmt, first: int = 10) -> None:
+    if not items:
+        return
+    L.append(f"{title} ({len(items)}):")
+    L.extend("  " + fmt(x) for x in items[:first])
+    if len(items) > first:
+        L.append(f"  ... and {len(items) - first} more")
+
+
+def _plain(x: Any) -> Any:
+    if is_dataclass(x) and not isinstance(x, type):
+        return {f.name: _plain(getattr(x, f.name)) for f in fields(x)}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, np.ndarray):
+        return _plain(x.tolist())
+    if isinstance(x, (np.bool_, bool)):
+        return bool(x)
+    if isinstance(x, (np.integer, int)):
+        return int(x)
+    if isinstance(x, (np.floating, float)):
+        v = float(x)
+        return v if math.isfinite(v) else None
+    return x

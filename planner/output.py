@@ -1,0 +1,146 @@
+"""Where output goes: the path the user named, and nothing else.
+
+Two ways to write, one rule for both: a path is *written*, never replaced.
+
+* ``open_stream(path)`` opens a text stream into ``path`` itself (``-``: stdout),
+  for output that grows while it is planned (the trajectory file): a reader can
+  follow it, and completeness is said by the content (the trajectory's end
+  marker), not by the file's existence. A FIFO, a character device or a symlink's
+  target is opened and written like any file; nothing is ever created beside it.
+  What cannot be opened is refused at once (``InputError``, exit 2), before any
+  planning.
+* ``write_file(path, data)`` writes a finished artefact (URDF, MIDI, PNG, HTML).
+  A regular file (or a new path) is written through a temporary file beside it and
+  a rename, so it is complete or absent; a symlink is followed first, so the
+  rename lands on its target and the link stays. Anything else that exists (FIFO,
+  device) is written directly.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import sys
+import tempfile
+from typing import IO
+
+from planner.errors import InputError, PlannerError
+
+STDOUT = "-"
+
+
+def _why(e: OSError) -> str:
+    return e.strerror or str(e)
+
+
+def _refuse_unnameable(path: str) -> None:
+    if not path:
+        raise InputError("cannot write '': empty output path")
+    if os.path.isdir(path):
+        raise InputError(f"cannot write {path}: is a directory")
+
+
+def is_regular_target(path: str) -> bool:
+    """True when ``path`` (a symlink followed) is a regular file or does not exist yet."""
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except FileNotFoundError:
+        return True
+
+
+class OutputStream:
+    """A text stream into the named path: ``write``, ``flush``, ``close``; ``discard``
+    removes a regular file this stream created (for input found bad after opening)."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        if path == STDOUT:
+            self._f: IO[str] = sys.stdout
+            self._created = False
+            return
+        _refuse_unnameable(path)
+        self._created = not os.path.lexists(path)
+        try:
+            self._f = open(path, "w", encoding="utf-8", newline="\n")  # noqa: SIM115
+        except OSError as e:
+            raise InputError(f"cannot write {path}: {_why(e)}") from None
+
+    def write(self, s: str) -> None:
+        self._do(self._f.write, s)
+
+    def flush(self) -> None:
+        self._do(self._f.flush)
+
+    def _do(self, fn, *a) -> None:
+        try:
+            fn(*a)
+        except BrokenPipeError:
+            raise  # a reader that went away: the CLI ends quietly (README, exit status)
+        except OSError as e:
+            raise PlannerError(f"cannot write {self.path}: {_why(e)}") from None
+
+    def close(self) -> None:
+        if self.path == STDOUT:
+            self.flush()
+            return
+        f, self._f = self._f, None
+        if f is not None:
+            self._do(f.close)
+
+    def discard(self) -> None:
+        """Close quietly; a regular file this stream created is removed (nothing was
+        complete in it). An existing file, a FIFO or a device is left as it is."""
+        if self.path == STDOUT:
+            return
+        f, self._f = self._f, None
+        if f is not None:
+            try:
+                f.close()
+            except OSError:
+                pass
+        if self._created and is_regular_target(self.path):
+            try:
+                os.unlink(self.path)
+            except OSError:
+                pass
+
+
+def open_stream(path: str) -> OutputStream:
+    """A stream into ``path`` (``-``: stdout); InputError when it cannot be opened."""
+    return OutputStream(os.fspath(path))
+
+
+def write_file(path: str | os.PathLike, data: str | bytes) -> None:
+    """Write a finished artefact to ``path`` (see the module docstring): complete or
+    absent for a regular file, written in place for a FIFO or a device; a symlink's
+    target is written and the link stays. InputError when it cannot be written."""
+    path = os.fspath(path)
+    _refuse_unnameable(path)
+    raw = data.encode("utf-8") if isinstance(data, str) else bytes(data)
+    target = os.path.realpath(path) if os.path.islink(path) else path
+    try:
+        if is_regular_target(target):
+            _write_replacing(target, raw)
+        else:
+            with open(target, "wb") as f:
+                f.write(raw)
+    except OSError as e:
+        raise InputError(f"cannot write {path}: {_why(e)}") from None
+
+
+def _write_replacing(path: str, raw: bytes) -> None:
+    folder, base = os.path.split(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{base}.", suffix=".part", dir=folder or ".")
+    try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.fchmod(fd, 0o666 & ~umask)  # as open() would create it (mkstemp makes 0600)
+        with os.fdopen(fd, "wb") as f:
+            f.write(raw)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise

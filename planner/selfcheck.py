@@ -1,0 +1,95 @@
+"""The planner's own verdict: the rows it wrote, replayed by the check's rules.
+
+``SelfCheck`` takes every chunk of rows as the file holds them (rounded to its
+decimals), finds the keys down with the check's kinematics and key-down rule
+(``planner.check.criteria``), and at the end scores them against the song with
+the check's own ``score_song``. The summary and the end marker's claims are that
+verdict, so ``check`` never finds a note missed that the planner says it played,
+nor a wrong press the planner did not name.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner.check.criteria import key_contacts
+from planner.check.keys import SongScore, score_song
+from planner.check.kinematics import Kinematics
+from planner.hand.model import HandModel
+
+
+class SkipReason(enum.Enum):
+    """Why a note is not played: the planner left it out (its detail says why), or the
+    planner meant to play it and the replay finds its key down too little."""
+
+    LEFT_OUT = "left_out"
+    MISSED = "missed"
+
+
+@dataclass(frozen=True)
+class Skip:
+    note: int  # index in the song
+    reason: SkipReason
+    detail: str
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What the rows do to the song: notes played, skipped (with reasons), late, and
+    the check's full score."""
+
+    notes: int
+    skipped: tuple[Skip, ...]
+    score: SongScore
+
+    @property
+    def played(self) -> int:
+        return self.notes - len(self.skipped)
+
+    def end_info(self) -> dict[str, Any]:
+        """The end marker's claims (``check`` holds them against its replay)."""
+        return {"notes": self.notes, "played": self.played,
+                "left_out": [{"note": s.note, "reason": s.reason.value, "detail": s.detail}
+                             for s in self.skipped]}
+
+
+class SelfCheck:
+    """Collects the key states of the rows written; ``verdict`` scores them."""
+
+    def __init__(self, hand: HandModel, rate_hz: float) -> None:
+        self._kin = Kinematics(hand, hand.T_world_root)
+        self._nj = hand.n
+        self._rate_hz = rate_hz
+        self._t: list[np.ndarray] = []
+        self._down: list[np.ndarray] = []
+        self._finger: list[np.ndarray] = []
+
+    def add_rows(self, rows: np.ndarray) -> None:
+        """Rows as written: (n, 1 + joints + motors), t first."""
+        if len(rows) == 0:
+            return
+        tips, _ = self._kin.frames(rows[:, 1:1 + self._nj])
+        kc = key_contacts(tips)
+        self._t.append(rows[:, 0].copy())
+        self._down.append(kc.down)
+        self._finger.append(kc.finger)
+
+    def verdict(self, notes, left_out: dict[int, str]) -> Verdict:
+        """Score the rows against ``notes``; ``left_out`` are the planner's own skips
+        (note index -> why). Every note the replay finds missed is skipped: with the
+        planner's reason when it left the note out, else as ``MISSED``."""
+        t = np.concatenate(self._t) if self._t else np.zeros(1)
+        down = np.concatenate(self._down) if self._down else np.zeros((1, 88), dtype=bool)
+        finger = np.concatenate(self._finger) if self._finger else None
+        score = score_song(t, down, finger, notes, self._rate_hz)
+        skipped = []
+        for m in score.missed:
+            if m.note in left_out:
+                skipped.append(Skip(m.note, SkipReason.LEFT_OUT, left_out[m.note]))
+            else:
+                skipped.append(Skip(m.note, SkipReason.MISSED, f"replay: {m.reason}"))
+        return Verdict(len(notes), tuple(skipped), score)
