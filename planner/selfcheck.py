@@ -23,8 +23,9 @@ from planner.hand.model import HandModel
 
 
 class SkipReason(enum.Enum):
-    """Why a note is not played: the planner left it out (its detail says why), or the
-    planner meant to play it and the replay finds its key down too little."""
+    """Why a note is not played, beside the planners' own reasons (enums of their
+    stages): left out by a planner that gives no reason of its own kind (its detail says
+    why), or meant to be played and found by the replay with its key down too little."""
 
     LEFT_OUT = "left_out"
     MISSED = "missed"
@@ -33,7 +34,7 @@ class SkipReason(enum.Enum):
 @dataclass(frozen=True)
 class Skip:
     note: int  # index in the song
-    reason: SkipReason
+    reason: enum.Enum  # SkipReason, or the reason enum of the planner stage that left it out
     detail: str
 
 
@@ -78,10 +79,10 @@ class SelfCheck:
         self._down.append(kc.down)
         self._finger.append(kc.finger)
 
-    def verdict(self, notes, left_out: dict[int, str]) -> Verdict:
+    def verdict(self, notes, left_out: dict[int, tuple[enum.Enum, str]]) -> Verdict:
         """Score the rows against ``notes``; ``left_out`` are the planner's own skips
-        (note index -> why). Every note the replay finds missed is skipped: with the
-        planner's reason when it left the note out, else as ``MISSED``."""
+        (note index -> (reason, detail)). Every note the replay finds missed is skipped:
+        with the planner's reason when it left the note out, else as ``MISSED``."""
         t = np.concatenate(self._t) if self._t else np.zeros(1)
         down = np.concatenate(self._down) if self._down else np.zeros((1, 88), dtype=bool)
         finger = np.concatenate(self._finger) if self._finger else None
@@ -89,7 +90,7 @@ class SelfCheck:
         skipped = []
         for m in score.missed:
             if m.note in left_out:
-                skipped.append(Skip(m.note, SkipReason.LEFT_OUT, left_out[m.note]))
+                skipped.append(Skip(m.note, *left_out[m.note]))
             else:
                 skipped.append(Skip(m.note, SkipReason.MISSED, f"replay: {m.reason}"))
         return Verdict(len(notes), tuple(skipped), score)

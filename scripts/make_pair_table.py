@@ -18,7 +18,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner.hand.model import load_hand
-from planner.play import Planner, pair_table_path
+from planner.play.legacy import Planner, pair_table_path
 
 
 def main() -> int:

@@ -1017,7 +1017,7 @@ def test_unwritable_urdf_and_played_paths(capsys, planned, tmp_path):
 def test_interrupt_during_planning_leaves_an_incomplete_file(capsys, monkeypatch, tmp_path, dest):
     """The rows streamed into the named file stay there without the end marker (what
     says a file is complete); nothing hidden is left beside it."""
-    from planner import play
+    from planner.play import legacy as play
 
     real = play.solve_timing
     calls = {"n": 0, "rows_before": None}

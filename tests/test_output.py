@@ -88,7 +88,7 @@ def test_write_file_of_a_regular_file_is_complete_or_absent(tmp_path):
 
 def test_a_reader_tailing_the_file_sees_rows_before_the_plan_ends(tmp_path, monkeypatch, capsys):
     """The rows are in the named file while the song is planned (not in a hidden one)."""
-    from planner import play
+    from planner.play import legacy as play
 
     real = play.solve_timing
     seen: list[int] = []

@@ -99,7 +99,7 @@ def test_tips_clear_the_keys_while_the_arm_travels(planned, name):
     (whether a key sounds that should not is the song check's business)."""
     from planner.ik import exposed_range_x
     from planner.music import keyboard as kb
-    from planner.play import TRAVEL_CLEARANCE_M, TRAVEL_INFLATE_M
+    from planner.play.legacy import TRAVEL_CLEARANCE_M, TRAVEL_INFLATE_M
 
     path, res, _ = planned[name]
     tr = read_trajectory(str(path))
@@ -285,7 +285,7 @@ def test_leaps_cannot_reach_the_target_on_this_rail(planner):
 
 
 def test_parts_are_cut_only_where_every_key_is_up():
-    from planner.play import FIRST_PART_NOTES, PART_NOTES, _parts
+    from planner.play.legacy import FIRST_PART_NOTES, PART_NOTES, _parts
     from planner.targets import MOVE_S
 
     legato = [Note(60 + i % 5, 0.1 * i, 0.1 * i + 0.1, 80) for i in range(3 * PART_NOTES)]
@@ -305,7 +305,7 @@ def test_parts_are_cut_only_where_every_key_is_up():
 def test_a_song_planned_in_parts_is_played_as_well(planner, tmp_path, monkeypatch):
     """Twinkle three times over, 0.5 s apart, planned in parts of (at least) 14 notes: the
     parts join on one timeline and the check finds the song played as well as in one go."""
-    import planner.play as play_mod
+    import planner.play.legacy as play_mod
     from planner.music.midi import write_notes_midi
 
     base = load_song(ROOT / "songs" / "twinkle.mid").notes
@@ -331,7 +331,7 @@ def test_cutting_the_plan_into_chunks_costs_no_time(planner, tmp_path, monkeypat
     the next press. Short legato notes (25 ms apart) planned with a cut at every release
     play as well as with no cut at all (found on a random melody: a press held back by
     the first cut ended its note late, a key down where none should be)."""
-    import planner.play as play_mod
+    import planner.play.legacy as play_mod
     from planner.music.midi import write_notes_midi
 
     pitches = [74, 72, 76, 77, 74, 76, 77, 79, 77, 76, 74, 72]
@@ -417,7 +417,7 @@ def test_blended_motions_stay_within_every_limit_at_any_overlap(planner, tmp_pat
     two add up in the overlap, which the timing QP may make anything up to blend_s. The
     sum is checked here on a fine grid of overlaps and times, independently of how the
     planner checked it, and the tip over the keys is left to the song check."""
-    from planner import play as P
+    from planner.play import legacy as P
     from planner.trajectory import min_jerk_rates
 
     pairs = []
@@ -453,7 +453,7 @@ def test_a_finger_path_found_clear_is_clear_all_along(planner):
     whenever it finds a move clear, the move sampled 400 times is clear too (within 1 mm
     of the same rule). A long crossing once dipped onto a black key between 7 samples."""
     from planner.ik import surfaces_under
-    from planner.play import GRAZE_M, TRAVEL_INFLATE_M, _Timeline
+    from planner.play.legacy import GRAZE_M, TRAVEL_INFLATE_M, _Timeline
 
     hand = planner.hand
     q0 = planner.posture_at(0.1)
@@ -501,7 +501,7 @@ def test_a_note_whose_key_cannot_be_up_by_its_end_is_left_out():
     """A press the timing QP can only put down late pushes its release late too: a key
     still down in the first frame after its note would be a wrong press, so the note is
     left out (named), its press and release merged into one motion over the key."""
-    from planner.play import _drop_hopeless
+    from planner.play.legacy import _drop_hopeless
     from planner.trajectory import Phase
 
     dt = 0.01
@@ -590,7 +590,7 @@ def test_a_new_hand_position_is_found_from_a_twisted_wrist(planner):
     shape with the thumb on B5 that it could use, the hand stayed, and the notes after
     failed one by one (F1 0.945 -> 0.870). The search now tries again from the natural
     hand at that rail."""
-    from planner.play import _best_position, _Timeline
+    from planner.play.legacy import _best_position, _Timeline
     from planner.targets import Press, PressInterval
 
     q = np.array([0.23498978529523593, 0.5088737420656119, -0.43598831115609304, 1.0471975511965976,
@@ -647,7 +647,7 @@ def test_the_shipped_pair_table_is_the_planners_own():
     (after a change of the hand or the IK: ``python scripts/make_pair_table.py``)."""
     import json
 
-    from planner.play import pair_table_path
+    from planner.play.legacy import pair_table_path
 
     hand = load_hand("default")
     path = pair_table_path(hand.urdf_sha256)
@@ -679,7 +679,7 @@ def test_a_press_from_high_waits_for_a_clear_way_down(planner):
     would not, and the check makes it wait longer than the touch rule alone."""
     from planner.ik import exposed_range_x, press_target, surfaces_under
     from planner.music import keyboard as kb
-    from planner.play import (
+    from planner.play.legacy import (
         HIGH_M,
         PRESS_LAG_STEP_S,
         TRAVEL_CLEARANCE_M,
@@ -726,7 +726,7 @@ def test_a_held_key_the_hand_must_leave_is_let_go_and_named(planner, tmp_path):
     and the summary names the cut ("cut short", with how much)."""
     from planner.fingering import CUT_LEAD_S
     from planner.music.midi import write_notes_midi
-    from planner.play import format_summary
+    from planner.play.legacy import format_summary
 
     thirds = ((72, 76), (74, 77), (76, 79), (77, 81), (79, 83))
     notes = [Note(48, 0.0, 3.0, 80)] + [Note(p, 0.5 + 0.5 * k, 0.95 + 0.5 * k, 80)
@@ -804,7 +804,7 @@ def test_the_planner_does_not_need_the_fingerings_rail_exact(planner, tmp_path, 
     there, instead of moving the hand for every note."""
     import dataclasses as dc
 
-    import planner.play as play_mod
+    import planner.play.legacy as play_mod
     from planner.music.midi import write_notes_midi
 
     notes = [Note(72 + 2 * (i % 2), 0.25 * i, 0.25 * i + 0.2, 80) for i in range(16)]
@@ -845,7 +845,7 @@ def test_finger_ranges_are_measured_by_ik(planner):
     one key's pitch), and no more than the probe's limit on each side; the thumb, pressing
     with its side, has the least."""
     from planner.music import keyboard as kb
-    from planner.play import RANGE_MAX_M
+    from planner.play.legacy import RANGE_MAX_M
 
     r = planner.reach.range_m
     assert set(r) == set(planner.hand.fingers)

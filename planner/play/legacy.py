@@ -32,7 +32,7 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
-from planner.selfcheck import SelfCheck, Verdict
+from planner.selfcheck import SelfCheck, SkipReason, Verdict
 from planner.targets import MOVE_S, descent_time_s, press_intervals
 from planner.trajectory import (
     Phase,
@@ -75,7 +75,7 @@ TRAVEL_OVERLAPS = tuple(np.round(np.arange(0.1, 1.0001, 0.05), 2))  # fractions 
 _SIM_DT_S = 0.002
 HOVER_MIN_M = 0.005  # issue: a finger not pressing is at least this far above the keys under it
 LOW_M = 0.0055  # issue: non-pressing tips at least 5 mm above the keys
-PAIR_TABLE_DIR = Path(__file__).parent / "tables"
+PAIR_TABLE_DIR = Path(__file__).parents[1] / "tables"
 PAIR_TABLE_FIRST = -12  # the shipped table starts at this interval (crossed fingers: the fingering asks)
 PAIR_RETRY_ITER = 120  # a two-finger chord's IK that has not converged goes on this many steps
 RANGE_MAX_M = 0.06  # a finger's sideways reach with the arm still: probed up to this far a side
@@ -568,7 +568,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
         result = _run(pl, hand, notes, parts(), rail_of, writer, rate_hz, reasons, progress, t_start)
         cut_short = {i: f"cut short: let go {early:.2f} s early (its finger, or the hand, is "
                         "needed for the notes after it)" for i, early in cut}
-        verdict = selfcheck.verdict(notes, {**cut_short, **reasons})
+        verdict = selfcheck.verdict(notes, {i: (SkipReason.LEFT_OUT, why) for i, why in
+                                            {**cut_short, **reasons}.items()})
         writer.close(verdict.end_info())
     except BaseException as e:
         writer.abort(discard=isinstance(e, InputError))

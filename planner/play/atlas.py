@@ -1,0 +1,223 @@
+"""The hand atlas: where each finger's joints go to press, wait above and cross over a
+key, for every place of the key relative to the hand.
+
+The arm holds one posture (the natural hovering hand, ``base``); the rail carries it
+along the keyboard (x), so a finger's configuration over a key depends only on the key's
+pitch class and on ``dx`` = the key's centre minus the rail. The atlas samples ``dx``
+every ``STEP_M`` around each finger's natural place and solves, by single-finger IK
+(placo, through ``planner.ik``), four poses per sample:
+
+* ``press``: the tip at the key's press point at full dip (``planner.ik.press_target``);
+* ``rise``: straight above it, ``REPEAT_DEPTH_M`` below the key's top: the key has come
+  up past the key-down depth (spec: 5 mm) by 2 mm, 70 % of its dip back, where a key
+  action is ready to strike again (a piano's repetition lever re-arms at about half the
+  dip), so a finger repeating a note goes no higher;
+* ``hover``: straight above that point, ``PREPARE_HEIGHT_M`` over the key's top (a finger
+  about to press waits there: the spec's 5 mm, plus 0.5 mm);
+* ``high``: straight above it at ``HIGH_Z_M`` (7.5 mm above the black keys' tops), from
+  where the finger moves sideways over any key.
+
+An entry is kept when the four converge (1 mm), every joint is within its limits, and
+the straight joint-space moves high -> hover -> press, high -> press and rise -> press
+keep the tip clear of every other key (forward kinematics, sampled). Its ``max_force_n`` is the largest key force the
+motors hold at the press pose (tau = J^T f plus gravity, through the actuator model):
+a note asking more is not pressed there.
+
+Entries are solved on first use and kept for the process (``Atlas`` is built once per
+hand). ``dx`` off the grid snaps to the nearest sample: the tip lands at most
+``STEP_M / 2`` (0.5 mm) off the press point, inside the seed's 1 mm precision.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from planner.hand.model import HandModel
+from planner.ik import PREPARE_HEIGHT_M, HandIK, PressTarget, press_target, surfaces_under
+from planner.music import keyboard as kb
+
+STEP_M = 0.001  # the atlas samples dx this often
+SPAN_M = 0.045  # ... this far either side of a finger's natural place
+HIGH_Z_M = kb.BLACK_TOP_Z_M + 0.0075  # a finger moving sideways keeps its tip this high
+REPEAT_DEPTH_M = kb.DOWN_DEPTH_M - 0.002  # a repeated key rises to this depth (see above)
+BASE_HOVER_Z_M = 0.005  # the natural hand's tips, above the white tops
+CURL = 0.35  # the natural hand's finger flexion, a fraction of each joint's range
+THUMB_Y_M = 0.015  # where the natural hand's thumb tip sits (y): in front of the black keys
+LONG_Y_M = 0.095  # ... and the long fingers' (over the black keys' middle)
+CLEARANCE_M = 0.001  # a tip passing over a key it does not press stays this far above it
+TIP_RADIUS_M = 0.002  # ... counting the pad's size (a key's footprint grows by this)
+PATH_SAMPLES = 12  # a straight move is checked at this many points
+CANON_OCTAVE = 4  # entries are solved on the keys of this octave (C4..B4)
+
+
+@dataclass(frozen=True, eq=False)  # (entries are made once and compared by identity)
+class AtlasEntry:
+    """One finger over one key at one ``dx`` (key centre x - rail): its joints (in
+    ``hand.joint_slice(finger)`` order) pressing, waiting and crossing high."""
+
+    finger: str
+    pitch_class: int
+    dx_m: float
+    press: np.ndarray
+    rise: np.ndarray
+    hover: np.ndarray
+    high: np.ndarray
+    max_force_n: float
+
+
+class Atlas:
+    """The atlas of one hand (see the module docstring)."""
+
+    def __init__(self, hand: HandModel, ik: HandIK | None = None) -> None:
+        self.hand = hand
+        self.ik = ik or HandIK(hand)
+        self.rail = hand.index["rail"]
+        self.base = self._natural_hand()
+        tips = hand.tip_positions(self.base)
+        self.natural_dx = {f: float(tips[i, 0] - self.base[self.rail])
+                           for i, f in enumerate(hand.fingers)}
+        self._entries: dict[tuple[str, int, int], AtlasEntry | None] = {}
+        self.solves = 0
+
+    # ------------------------------------------------------------------ set-up
+    def _natural_hand(self) -> np.ndarray:
+        """The natural hand at rail 0: every finger ``CURL`` flexed with no abduction, and
+        the wrist (flexion, deviation) that puts the tips, in the least-squares sense,
+        ``BASE_HOVER_Z_M`` above the white tops, midway between full dip and crossing
+        height, so that each finger has room both ways."""
+        h = self.hand
+        q0 = h.q_neutral.copy()
+        for f in h.fingers:
+            js = h.joint_slice(f)
+            for j in js[1:]:
+                q0[j] = h.lower[j] + CURL * (h.upper[j] - h.lower[j])
+            q0[js[0]] = min(max(0.0, h.lower[js[0]]), h.upper[js[0]])
+        q0 = h.apply_couplings(q0)
+        wrist = [h.index[n] for n in ("wrist_flex", "wrist_dev")]
+
+        def heights(w: np.ndarray) -> np.ndarray:
+            q = q0.copy()
+            q[wrist] = w
+            return h.tip_positions(q)[:, 2] - BASE_HOVER_Z_M
+
+        w = least_squares(heights, q0[wrist], bounds=(h.lower[wrist], h.upper[wrist])).x
+        q0[wrist] = w
+        return q0
+
+    # ------------------------------------------------------------------ lookup
+    def grid_index(self, finger: str, pitch: int, rail_m: float) -> int:
+        """The sample of ``dx`` nearest to key ``pitch`` seen from ``rail_m``."""
+        dx = kb.key(pitch).center_x_m - rail_m
+        return round((dx - self.natural_dx[finger]) / STEP_M)
+
+    def rail_for(self, finger: str, pitch: int, k: int) -> float:
+        """The rail position at which key ``pitch`` sits at sample ``k`` of ``finger``."""
+        return kb.key(pitch).center_x_m - (self.natural_dx[finger] + k * STEP_M)
+
+    def entry(self, finger: str, pitch: int, rail_m: float) -> AtlasEntry | None:
+        """The finger's poses over key ``pitch`` with the rail at ``rail_m`` (snapped to
+        the grid); None when the finger cannot press it from there."""
+        k = self.grid_index(finger, pitch, rail_m)
+        if abs(k) * STEP_M > SPAN_M:
+            return None
+        return self.entry_at(finger, pitch % 12, k)
+
+    def entry_at(self, finger: str, pitch_class: int, k: int) -> AtlasEntry | None:
+        key = (finger, pitch_class, k)
+        if key not in self._entries:
+            self._entries[key] = self._solve(finger, pitch_class, k)
+        return self._entries[key]
+
+    def samples(self, finger: str, pitch: int) -> list[int]:
+        """Every grid sample at which ``finger`` can press key ``pitch`` (solving them)."""
+        n = round(SPAN_M / STEP_M)
+        return [k for k in range(-n, n + 1) if self.entry_at(finger, pitch % 12, k) is not None]
+
+    def full_q(self, entry: AtlasEntry, pose: str, rail_m: float,
+               q_into: np.ndarray | None = None) -> np.ndarray:
+        """A whole-hand configuration: ``q_into`` (default the natural hand) with the rail
+        at ``rail_m`` and the entry's finger in ``pose`` ("press", "rise", "hover" or
+        "high")."""
+        q = (self.base if q_into is None else q_into).copy()
+        q[self.rail] = rail_m
+        q[self.hand.joint_slice(entry.finger)] = getattr(entry, pose)
+        return self.hand.apply_couplings(q)
+
+    # ------------------------------------------------------------------ solving
+    def _solve(self, finger: str, pitch_class: int, k: int) -> AtlasEntry | None:
+        h = self.hand
+        pitch = 12 * (CANON_OCTAVE + 1) + pitch_class
+        rail = self.rail_for(finger, pitch, k)
+        if not h.lower[self.rail] <= rail <= h.upper[self.rail]:
+            return None
+        base = self.base.copy()
+        base[self.rail] = rail
+        target = press_target(finger, pitch)
+        self.solves += 1
+        r = self.ik.solve_finger(target, base)
+        if not r.converged:
+            return None
+        tip = h.tip_positions(r.q)[h.fingers.index(finger)]
+        top = kb.key(pitch).top_z_m
+        poses = [r.q]
+        for z in (top - REPEAT_DEPTH_M, top + PREPARE_HEIGHT_M, HIGH_Z_M):
+            self.solves += 1
+            up = self.ik.solve_finger(
+                PressTarget(finger, pitch, (float(tip[0]), float(tip[1]), z), target.y_range_m),
+                poses[-1])
+            if not up.converged:
+                return None
+            poses.append(up.q)
+        js = h.joint_slice(finger)
+        if not all(h.within_limits(q) for q in poses):
+            return None
+        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
+                       (poses[1], poses[0])):
+            if not path_clear(h, qa, qb, finger, pitch):
+                return None
+        return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
+                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger))
+
+
+def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,
+               own_pitch: int | None) -> bool:
+    """True when ``finger``'s tip, on the straight joint-space move qa -> qb, stays
+    ``CLEARANCE_M`` above every key it passes over (footprints grown by
+    ``TIP_RADIUS_M``) except inside key ``own_pitch``'s footprint (shrunk by it), where
+    it may press down to full dip."""
+    f = hand.fingers.index(finger)
+    s = np.linspace(0.0, 1.0, PATH_SAMPLES)
+    tips = np.array([hand.tip_positions(qa + si * (qb - qa))[f] for si in s])
+    x, y, z = tips[:, 0], tips[:, 1], tips[:, 2]
+    over = surfaces_under(x, y, TIP_RADIUS_M)
+    ok = z >= over + CLEARANCE_M
+    if own_pitch is not None:
+        k = kb.key(own_pitch)
+        inside = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
+                  & (k.y_min_m + TIP_RADIUS_M <= y) & (y <= k.y_max_m - TIP_RADIUS_M)
+                  & (z >= k.top_z_m - kb.KEY_DIP_M - 1e-4))
+        if k.black is False:  # a white key's footprint stops at the black keys beside it
+            inside &= surfaces_under(x, y, TIP_RADIUS_M) <= k.top_z_m
+        ok |= inside
+    return bool(ok.all())
+
+
+def max_key_force_n(hand: HandModel, q: np.ndarray, finger: str) -> float:
+    """The largest upward key force (N) on ``finger``'s tip that every motor holds at
+    ``q`` with gravity: tau(f) = tau(0) + f (tau(1) - tau(0)), each |tau_m| <= peak."""
+    tau0 = hand.press_torques(q, {})
+    tau1 = hand.press_torques(q, {finger: 1.0}) - tau0
+    peak = hand.motor_peak_torque
+    best = math.inf
+    for t0, t1, p in zip(tau0, tau1, peak):
+        if abs(t0) > p:
+            return 0.0
+        if t1 > 1e-12:
+            best = min(best, (p - t0) / t1)
+        elif t1 < -1e-12:
+            best = min(best, (-p - t0) / t1)
+    return float(best)

@@ -1,0 +1,354 @@
+"""Motion: the fingering's notes -> timed segments of every finger and of the rail.
+
+Each finger and the rail move on their own joints, one time-optimal straight move
+(``planner.play.moves``) after another, holding still between them. The rules that keep
+the plan safe are few and hold by construction:
+
+* a finger not pressing is at its crossing height (``high``), or waits at ``hover`` over
+  the key it presses next, or moves straight between atlas poses whose paths the atlas
+  and ``Moves.across`` checked clear of the keys;
+* the rail moves only while every finger is at crossing height (so nothing under a tip
+  is higher than a black key's top, at any rail);
+* a key goes down half a frame before the note's first row and comes up half a frame
+  before the first row at or after its end, or as close to that as the moves allow: down
+  later, up earlier, never the other way (a key down outside its note is a wrong note).
+
+Notes are placed in onset order (a causal schedule: later notes never move what was
+placed for earlier ones, except to lift a held finger before a rail move). A note whose
+key cannot go down before half of it is over, or come up in time after a press, is not
+pressed and is named (``TOO_LATE``, ``TOO_SHORT``).
+"""
+
+from __future__ import annotations
+
+import bisect
+import enum
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from planner.errors import PlannerError
+from planner.music import keyboard as kb
+from planner.play.atlas import Atlas, AtlasEntry
+from planner.play.fingering import Assignment
+from planner.play.moves import Moves
+from planner.play.profile import Move
+
+DROP_FRACTION = 0.5  # a note whose key cannot go down before this much of it is over is left out
+WAIT_MARGIN_S = 0.005  # a finger reaches its waiting pose at least this long before it descends
+COMMIT_MARGIN_S = 0.3  # a key due up this soon after the rows written is let up when they are
+
+
+def _key_x(pitch: int) -> float:
+    return kb.key(pitch).center_x_m
+
+
+class MotionSkip(enum.Enum):
+    TOO_LATE = "too_late"  # its key cannot go down before half of it is over
+    TOO_SHORT = "too_short"  # a press cannot go down and up again inside it
+    NO_PATH = "no_path"  # no move checked clear of the keys takes the finger there
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A move of one joint group (a finger, or the rail) starting at ``t0_s``."""
+
+    t0_s: float
+    move: Move
+
+    @property
+    def t1_s(self) -> float:
+        return self.t0_s + self.move.duration_s
+
+
+@dataclass
+class _Track:
+    """One joint group's segments, in time order, and where it is at their end."""
+
+    q: np.ndarray
+    segments: list[Segment] = field(default_factory=list)
+    free_s: float = 0.0  # the end of its last segment
+
+    def add(self, t0_s: float, move: Move) -> float:
+        if move.duration_s <= 0.0:
+            return t0_s
+        t0_s = max(t0_s, self.free_s)
+        self.segments.append(Segment(t0_s, move))
+        self.q = move.q_a + move.dq
+        self.free_s = t0_s + move.duration_s
+        return self.free_s
+
+    def at(self, t_s: np.ndarray, q_start: np.ndarray) -> np.ndarray:
+        """Positions at sorted times ``t_s``."""
+        out = np.empty((len(t_s), len(q_start)))
+        starts = [s.t0_s for s in self.segments]
+        for k, t in enumerate(t_s):
+            i = bisect.bisect_right(starts, t) - 1
+            if i < 0:
+                out[k] = q_start
+                continue
+            s = self.segments[i]
+            out[k] = s.move.at(t - s.t0_s)[0] if t < s.t1_s else s.move.q_a + s.move.dq
+        return out
+
+
+@dataclass
+class _Finger:
+    track: _Track
+    pose: str = "high"  # "high", "hover" or "press"
+    entry: AtlasEntry | None = None  # the key it is over
+    note: int | None = None  # the note it presses
+    up_s: float = -math.inf  # when that note's key is to come up
+    high_s: float = 0.0  # when it was last back at crossing height
+
+
+@dataclass(frozen=True)
+class Outcome:
+    note: int
+    down_s: float | None  # planned key-down moment (None: not pressed)
+    up_s: float | None
+    skip: MotionSkip | None = None
+    detail: str = ""
+
+
+class Motion:
+    """Builds the segments note by note (``place``); ``rows`` samples them."""
+
+    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float,
+                 rail0_m: float) -> None:
+        self.notes, self.atlas, self.moves = notes, atlas, moves
+        self.hand = atlas.hand
+        self.dt = 1.0 / rate_hz
+        self.q0 = atlas.base.copy()
+        self.q0[atlas.rail] = rail0_m
+        self.rail = _Track(np.array([rail0_m]))
+        self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
+                        for f in self.hand.fingers}
+        self._start_high()
+        self.committed_s = 0.0  # nothing may start before this (rows written up to it)
+        self.outcomes: dict[int, Outcome] = {}
+
+    def _start_high(self) -> None:
+        """The hand starts with every finger at crossing height over the key nearest its
+        natural place (the first row: no tip near a key)."""
+        for f, st in self.fingers.items():
+            e = next((e for p in self._keys_by_distance(f)
+                      if (e := self.atlas.entry(f, p, self.rail.q[0])) is not None), None)
+            if e is None:
+                raise PlannerError(f"the atlas has no pose of the {f} over any key near it")
+            st.entry = e
+            st.track.q = e.high.copy()
+            self.q0[self.hand.joint_slice(f)] = e.high
+        self.q0 = self.hand.apply_couplings(self.q0)
+
+    def prepare(self, assignments) -> None:
+        """Before the first row: each finger whose first note is at the start rail waits
+        over its key from t = 0 (crossing height; pressing already when the note starts
+        within the first frame, at t = 0 its key is down from the first row)."""
+        seen = set()
+        for a in sorted(assignments, key=lambda a: self.notes[a.note].onset_s):
+            if a.finger in seen:
+                continue
+            seen.add(a.finger)
+            if abs(a.rail_m - self.rail.q[0]) > 1e-9:
+                continue
+            st = self.fingers[a.finger]
+            e = self.atlas.entry(a.finger, self.notes[a.note].pitch, a.rail_m)
+            up = self.t_up(a.note, a.release_s)
+            pressed = (self.notes[a.note].onset_s < 0.5 * self.dt
+                       and self.moves.lift(e, "high").cross_s <= up)  # (else TOO_SHORT)
+            st.entry = e
+            st.track.q = (e.press if pressed else e.high).copy()
+            self.q0[self.hand.joint_slice(a.finger)] = st.track.q
+            if pressed:
+                st.pose, st.note, st.up_s = "press", a.note, up
+                self.outcomes[a.note] = Outcome(a.note, 0.0, up)
+        self.q0 = self.hand.apply_couplings(self.q0)
+
+    def _keys_by_distance(self, finger: str) -> list[int]:
+        """The keys within a hand's width of the finger's natural place, nearest first."""
+        x = self.rail.q[0] + self.atlas.natural_dx[finger]
+        near = [p for p in kb.ALL_PITCHES if abs(kb.key(p).center_x_m - x) < 0.1]
+        return sorted(near, key=lambda p: abs(kb.key(p).center_x_m - x))
+
+    # ------------------------------------------------------------------ timing targets
+    def t_down(self, note: int) -> float:
+        return (math.ceil(self.notes[note].onset_s / self.dt - 1e-9) - 0.5) * self.dt
+
+    def t_up(self, note: int, release_s: float | None = None) -> float:
+        end = self.notes[note].offset_s if release_s is None else min(release_s,
+                                                                       self.notes[note].offset_s)
+        return (math.ceil(end / self.dt - 1e-9) - 0.5) * self.dt
+
+    # ------------------------------------------------------------------ placing
+    def place(self, a: Assignment) -> Outcome:
+        """Schedule note ``a.note`` (after every note of earlier onset)."""
+        if a.note in self.outcomes:  # (pressed from the first row on: ``prepare``)
+            return self.outcomes[a.note]
+        n = self.notes[a.note]
+        e = self.atlas.entry(a.finger, n.pitch, a.rail_m)
+        if abs(self.rail.q[0] - a.rail_m) > 1e-9:
+            self._move_rail(a.rail_m, self.t_down(a.note) - self.moves.after_rail_s(e))
+        st = self.fingers[a.finger]
+        want = self.t_down(a.note)
+        after = self._release_others_on(n.pitch, a.finger)
+        found = self._approach(st, e, a.finger, want, after)
+        if found is None:
+            out = Outcome(a.note, None, None, MotionSkip.NO_PATH,
+                          f"no checked path of the {a.finger} to it")
+            self.outcomes[a.note] = out
+            return out
+        down_at, steps, start = found
+        desc = self.moves.descend(e, start)
+        press_end = down_at + desc.duration_s - desc.cross_s
+        up = self.t_up(a.note, a.release_s)
+        lift = self.moves.lift(e, "high")
+        shortest = self.moves.press_min_s(e)
+        if up - want < shortest:
+            out = Outcome(a.note, None, None, MotionSkip.TOO_SHORT,
+                          f"{1000 * n.duration_s:.0f} ms long; the {a.finger}'s shortest "
+                          f"press down and up takes {1000 * shortest:.0f} ms")
+        elif down_at > n.onset_s + DROP_FRACTION * n.duration_s:
+            out = Outcome(a.note, None, None, MotionSkip.TOO_LATE,
+                          f"its key could go down {1000 * (down_at - want):.0f} ms late, "
+                          "after half of it")
+        elif press_end + lift.cross_s > up:
+            out = Outcome(a.note, None, None, MotionSkip.TOO_SHORT,
+                          f"{1000 * n.duration_s:.0f} ms long; a press down and up takes "
+                          f"{1000 * (press_end + lift.cross_s - down_at):.0f} ms")
+        else:
+            for t0, move in steps:
+                st.track.add(t0, move)
+            st.pose, st.entry, st.note, st.up_s = "press", e, a.note, up
+            out = Outcome(a.note, down_at, up)
+        self.outcomes[a.note] = out
+        return out
+
+    def _approach(self, st: _Finger, e: AtlasEntry, finger: str, want: float, after_s: float):
+        """The moves that bring the finger from where it is to key-down on ``e`` (no
+        earlier than ``want``, no move starting before ``after_s``): (key-down moment,
+        [(t0, move), ...], the pose its last descent starts from), or None when no
+        checked path leads there."""
+        moves = self.moves
+        floor = max(self.rail.free_s, self.committed_s, after_s)
+        if st.pose == "press" and st.entry is e:  # the same key again: up to rise, down
+            lift, desc = moves.lift(e, "rise"), moves.descend(e, "rise")
+            t_lift = min(want - desc.cross_s - lift.duration_s, st.up_s - lift.cross_s)
+            t_lift = max(t_lift, st.track.free_s, self.committed_s)
+            t_desc = max(want - desc.cross_s, t_lift + lift.duration_s, floor)
+            return t_desc + desc.cross_s, [(t_lift, lift.move), (t_desc, desc.move)], "rise"
+        if st.pose == "hover" and st.entry is e:  # waiting over this key already
+            desc = moves.descend(e, "hover")
+            t_desc = max(want - desc.cross_s, st.track.free_s, floor)
+            return t_desc + desc.cross_s, [(t_desc, desc.move)], "hover"
+        steps: list[tuple[float, Move]] = []
+        t = max(st.track.free_s, self.committed_s, after_s)  # (a finger high may cross
+        # while the rail moves: nothing under a tip that high is higher than it)
+        if st.pose != "high":  # let its key up on time (pressing), rise to crossing height
+            up = self._up_move(st)
+            t_up = max(st.up_s - up.cross_s, st.track.free_s, self.committed_s) \
+                if st.pose == "press" else max(st.track.free_s, self.committed_s)
+            steps.append((t_up, up.move))
+            t = max(t, t_up + up.duration_s)
+        across = None
+        if st.entry is not e:
+            across = moves.across(st.entry, e)
+            if across is None:
+                return None
+        d_high, d_hover = moves.descend(e, "high"), moves.descend(e, "hover")
+        to_hover = moves.to_hover(e)
+        across_s = across.duration_s if across is not None else 0.0
+        low = max(t + across_s, floor)  # below crossing height only once the rail is still
+        if low + to_hover.duration_s + WAIT_MARGIN_S <= want - d_hover.cross_s:
+            # time to wait at hover: get there just in time, then straight down
+            t_hover = want - d_hover.cross_s - WAIT_MARGIN_S - to_hover.duration_s
+            if across is not None:
+                steps.append((max(t, t_hover - across_s), across))
+            steps.append((t_hover, to_hover))
+            steps.append((want - d_hover.cross_s, d_hover.move))
+            return want, steps, "hover"
+        if across is not None:
+            steps.append((t, across))
+        t_desc = max(want - d_high.cross_s, low)
+        steps.append((t_desc, d_high.move))
+        return t_desc + d_high.cross_s, steps, "high"
+
+    def _up_move(self, st: _Finger):
+        """The finger's way up to crossing height from its pose (a timed lift when it
+        presses: its key comes up ``cross_s`` into it)."""
+        if st.pose == "press":
+            return self.moves.lift(st.entry, "high")
+        return self.moves.rise(st.entry)
+
+    def _to_high(self, st: _Finger, latest_s: float = math.inf) -> float:
+        """The finger rises to crossing height: a pressing one lets its key up at its
+        planned time or by ``latest_s``, whichever is first (never before its press is
+        done). Returns when it is up."""
+        if st.pose == "high":
+            return st.high_s
+        up = self._up_move(st)
+        if st.pose == "press":
+            t0 = min(st.up_s, latest_s) - up.cross_s
+            t0 = max(t0, st.track.free_s, self.committed_s)
+            self._shorten(st, t0 + up.cross_s)
+        else:
+            t0 = max(st.track.free_s, self.committed_s)
+        end = st.track.add(t0, up.move)
+        st.pose, st.note, st.high_s = "high", None, end
+        return end
+
+    def _release_others_on(self, pitch: int, finger: str) -> float:
+        """Another finger on key ``pitch`` (pressing or waiting) leaves it, on time, for
+        crossing height; returns when the key is free of it."""
+        clear = -math.inf
+        for g, st in self.fingers.items():
+            if g != finger and st.pose != "high" and st.entry is not None \
+                    and (st.entry.pitch_class == pitch % 12) \
+                    and abs(st.entry.dx_m + self.rail.q[0] - _key_x(pitch)) < 0.005:
+                clear = max(clear, self._to_high(st))
+        return clear
+
+    def _move_rail(self, rail_m: float, arrive_by_s: float) -> None:
+        """Every finger to crossing height, then the rail to ``rail_m``: as late as lets
+        the next key go down on time, as early as the fingers are all up."""
+        move = self.moves.rail_move(self.rail.q[0], rail_m)
+        start = arrive_by_s - move.duration_s
+        ready = max(self.rail.free_s, self.committed_s)
+        for st in self.fingers.values():
+            if st.pose != "high":
+                up = self._up_move(st)
+                self._to_high(st, start - up.duration_s + up.cross_s)
+            ready = max(ready, st.high_s)  # (a finger moving across up there may go on)
+        self.rail.add(max(ready, start), move)
+
+    def _shorten(self, st: _Finger, up_s: float) -> None:
+        if st.note is not None and st.note in self.outcomes:
+            o = self.outcomes[st.note]
+            if o.up_s is not None and up_s < o.up_s:
+                self.outcomes[st.note] = Outcome(o.note, o.down_s, up_s, o.skip, o.detail)
+
+    def commit(self, t_s: float) -> None:
+        """Rows up to ``t_s`` are to be written: every key due up before then (and the
+        lag after) is let up now, and nothing new starts before ``t_s``."""
+        for st in self.fingers.values():
+            if st.pose == "press" and st.up_s <= t_s + COMMIT_MARGIN_S:
+                self._to_high(st)
+        self.committed_s = max(self.committed_s, t_s)
+
+    def finish(self, end_s: float) -> float:
+        """Every key still down comes up on time, every finger rises; returns when the
+        hand is still."""
+        for st in self.fingers.values():
+            self._to_high(st)
+        return max([end_s, self.rail.free_s] + [s.track.free_s for s in self.fingers.values()])
+
+    # ------------------------------------------------------------------ rows
+    def rows(self, t_s: np.ndarray) -> np.ndarray:
+        """Whole-hand configurations at times ``t_s`` (sorted)."""
+        q = np.tile(self.q0, (len(t_s), 1))
+        q[:, self.atlas.rail] = self.rail.at(t_s, np.array([self.q0[self.atlas.rail]]))[:, 0]
+        for f, st in self.fingers.items():
+            js = self.hand.joint_slice(f)
+            q[:, js] = st.track.at(t_s, self.q0[js])
+        return self.hand.apply_couplings(q)

@@ -1,0 +1,161 @@
+"""A finger's moves between atlas poses, timed: the one model of what the motion can
+do, read by the fingering (as costs) and by the motion (as segments).
+
+Every move is a time-optimal straight joint-space move (``profile.straight_move``)
+between two poses of one finger, or of the rail. The moments that matter to the music
+are the key crossings: a key sounds while a tip is ``DOWN_DEPTH_M`` below its top, so a
+descent puts its key down part-way (``down_s`` after its start) and a lift lets it up
+part-way (``up_s``). From them:
+
+* ``press_min_s``: the shortest key-down interval a press can make (descend to full dip,
+  lift at once);
+* ``repeat_gap_s``: key up to key down again on the same key (lift to the atlas's
+  ``rise`` pose, the key 70 % back, and down);
+* ``move_gap_s``: key up on one key to key down on another, the rail still (lift to
+  crossing height, across, down);
+* ``before_rail_s`` / ``after_rail_s``: key up to the end of the lift, and the start of a
+  descent from crossing height to key down, around a move of the rail (which waits for
+  every finger at crossing height).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from planner.hand.model import HandModel
+from planner.music import keyboard as kb
+from planner.play.atlas import (
+    CLEARANCE_M,
+    PATH_SAMPLES,
+    TIP_RADIUS_M,
+    Atlas,
+    AtlasEntry,
+)
+from planner.play.profile import Move, straight_move
+
+CROSS_TOL = 1e-6  # the key crossing's path parameter is found to this precision
+HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
+
+
+@dataclass(frozen=True)
+class Timed:
+    """A move and the time after its start at which its key goes down (descent) or up
+    (lift); ``cross_s`` is None for a move that crosses no key depth."""
+
+    move: Move
+    cross_s: float | None
+
+    @property
+    def duration_s(self) -> float:
+        return self.move.duration_s
+
+
+class Moves:
+    """Timed moves of one hand's fingers over its atlas (memoised per entry)."""
+
+    def __init__(self, hand: HandModel, atlas: Atlas) -> None:
+        self.hand = hand
+        self.atlas = atlas
+        self.js = {f: hand.joint_slice(f) for f in hand.fingers}
+        self._lat: dict = {}
+        self.descend = lru_cache(maxsize=None)(self._descend)
+        self.lift = lru_cache(maxsize=None)(self._lift)
+
+    def _move(self, finger: str, qa: np.ndarray, qb: np.ndarray) -> Move:
+        js = self.js[finger]
+        return straight_move(qa, qb, self.hand.velocity[js], self.hand.acceleration[js])
+
+    def _cross(self, e: AtlasEntry, qa: np.ndarray, qb: np.ndarray, move: Move,
+               going_down: bool) -> float:
+        """Time within ``move`` at which the tip's depth below the key top passes
+        ``DOWN_DEPTH_M`` (bisection on the path parameter, forward kinematics)."""
+        depth = self._depth_fn(e)
+        lo, hi = 0.0, 1.0
+        while hi - lo > CROSS_TOL:
+            mid = 0.5 * (lo + hi)
+            below = depth(qa + mid * (qb - qa)) >= kb.DOWN_DEPTH_M
+            if below == going_down:
+                hi = mid
+            else:
+                lo = mid
+        return move.time_at_s(hi if going_down else lo)
+
+    def _depth_fn(self, e: AtlasEntry):
+        f = self.hand.fingers.index(e.finger)
+        q = self.atlas.base.copy()
+        js = self.js[e.finger]
+        top = kb.key(60 + e.pitch_class).top_z_m
+
+        def depth(qf: np.ndarray) -> float:
+            q[js] = qf
+            return top - float(self.hand.tip_positions(self.hand.apply_couplings(q))[f, 2])
+
+        return depth
+
+    def _descend(self, e: AtlasEntry, start: str) -> Timed:
+        """From ``start`` ("high", "hover" or "rise") down to the press pose."""
+        qa = getattr(e, start)
+        m = self._move(e.finger, qa, e.press)
+        return Timed(m, self._cross(e, qa, e.press, m, True))
+
+    def _lift(self, e: AtlasEntry, end: str) -> Timed:
+        """From the press pose up to ``end`` ("high", "hover" or "rise")."""
+        qb = getattr(e, end)
+        m = self._move(e.finger, e.press, qb)
+        return Timed(m, self._cross(e, e.press, qb, m, False))
+
+    def across(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
+        """The finger from high over one key to high over another; None when the
+        straight move would bring its tip lower than ``HIGH_SAFE_Z_M`` (above every key
+        top, wherever the rail is: the arm may have moved since the finger rose)."""
+        key = (a.finger, id(a), id(b))
+        if key not in self._lat:
+            f = self.hand.fingers.index(a.finger)
+            q = self.atlas.base.copy()
+            js = self.js[a.finger]
+            ok = True
+            for s in np.linspace(0.0, 1.0, PATH_SAMPLES):
+                q[js] = a.high + s * (b.high - a.high)
+                z = self.hand.tip_positions(self.hand.apply_couplings(q))[f, 2]
+                ok &= bool(z >= HIGH_SAFE_Z_M)
+            self._lat[key] = self._move(a.finger, a.high, b.high) if ok else None
+        return self._lat[key]
+
+    def rise(self, e: AtlasEntry) -> Timed:
+        """Up from the waiting pose to crossing height (no key crossing)."""
+        return Timed(self._move(e.finger, e.hover, e.high), 0.0)
+
+    def to_hover(self, e: AtlasEntry) -> Move:
+        """Down from crossing height to the waiting pose over the same key (checked by
+        the atlas)."""
+        return self._move(e.finger, e.high, e.hover)
+
+    # ------------------------------------------------------------------ gaps
+    def press_min_s(self, e: AtlasEntry) -> float:
+        d, u = self.descend(e, "high"), self.lift(e, "high")
+        return (d.duration_s - d.cross_s) + u.cross_s
+
+    def repeat_gap_s(self, e: AtlasEntry) -> float:
+        u, d = self.lift(e, "rise"), self.descend(e, "rise")
+        return (u.duration_s - u.cross_s) + d.cross_s
+
+    def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
+        lat = self.across(a, b)
+        if lat is None:
+            return None
+        return self.before_rail_s(a) + lat.duration_s + self.after_rail_s(b)
+
+    def before_rail_s(self, e: AtlasEntry) -> float:
+        u = self.lift(e, "high")
+        return u.duration_s - u.cross_s
+
+    def after_rail_s(self, e: AtlasEntry) -> float:
+        return self.descend(e, "high").cross_s
+
+    def rail_move(self, rail_a: float, rail_b: float) -> Move:
+        r = self.atlas.rail
+        return straight_move(np.array([rail_a]), np.array([rail_b]),
+                             self.hand.velocity[[r]], self.hand.acceleration[[r]])

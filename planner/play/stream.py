@@ -1,0 +1,131 @@
+"""The second play planner, end to end: fingering (one dynamic programme over the atlas),
+motion (time-optimal segments, note by note), rows streamed as they are final, the
+planner's own replay (``planner.selfcheck``) as its summary and its end marker's claims.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.errors import InputError, PlannerError
+from planner.hand.model import HandModel
+from planner.music.midi import Song
+from planner.play.atlas import Atlas
+from planner.play.fingering import Fingering, plan_fingering
+from planner.play.motion import Motion
+from planner.play.moves import Moves
+from planner.selfcheck import SelfCheck, Verdict
+from planner.trajfile import TrajectoryWriter
+
+COMMIT_LAG_S = 0.5  # rows are written up to this long before the last note placed
+SETTLE_S = 0.1  # rows go on this long after the hand is still
+
+
+@dataclass(frozen=True)
+class PlayPlan:
+    """What ``plan_song`` did: rows written, the fingering, the verdict of its replay."""
+
+    rows: int
+    duration_s: float
+    fingering: Fingering
+    verdict: Verdict
+    planning_s: float
+    first_row_s: float
+
+
+class Planner2:
+    """The per-hand part of the second planner (atlas, timed moves), built once."""
+
+    def __init__(self, hand: HandModel) -> None:
+        self.hand = hand
+        self.atlas = Atlas(hand)
+        self.moves = Moves(hand, self.atlas)
+
+
+def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0,
+              song_name: str = "", planner: Planner2 | None = None) -> PlayPlan:
+    """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout)."""
+    if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
+        raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
+    t_start = time.perf_counter()
+    pl = planner or Planner2(hand)
+    notes = list(song.notes)
+    fingering = plan_fingering(notes, pl.atlas, pl.moves, rate_hz)
+    order = sorted(fingering.assignments, key=lambda a: (notes[a.note].onset_s,
+                                                         notes[a.note].pitch))
+    rail0 = order[0].rail_m if order else float(pl.atlas.base[pl.atlas.rail])
+    motion = Motion(notes, pl.atlas, pl.moves, rate_hz, rail0)
+    motion.prepare(order)
+    meta = {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
+            "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
+            "song": song_name, "notes": len(notes), "track": song.track,
+            "channel": song.channel, "transpose": song.transpose}
+    selfcheck = SelfCheck(hand, rate_hz)
+    writer = TrajectoryWriter(out_path, meta, hand.joint_names, hand.motor_names,
+                              on_rows=selfcheck.add_rows)
+    rows = _Rows(hand, writer, motion, rate_hz)
+    try:
+        for a in order:
+            motion.place(a)
+            t = motion.t_down(a.note) - COMMIT_LAG_S
+            if t > rows.written_to_s + COMMIT_LAG_S:
+                motion.commit(t)
+                rows.write_to(t)
+        end = max((n.offset_s for n in notes), default=0.0)
+        rows.write_to(motion.finish(end) + SETTLE_S)
+        left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}
+        left_out.update({o.note: (o.skip, o.detail)
+                         for o in motion.outcomes.values() if o.skip is not None})
+        verdict = selfcheck.verdict(notes, left_out)
+        writer.close(verdict.end_info())
+    except BaseException as e:
+        writer.abort(discard=isinstance(e, InputError))
+        raise
+    return PlayPlan(writer.rows, writer.rows / rate_hz, fingering, verdict,
+                    time.perf_counter() - t_start, rows.first_row_s - t_start)
+
+
+class _Rows:
+    """Samples the motion at the rows' clock and writes them, guarded."""
+
+    def __init__(self, hand: HandModel, writer: TrajectoryWriter, motion: Motion,
+                 rate_hz: float) -> None:
+        self.hand, self.writer, self.motion = hand, writer, motion
+        self.dt = 1.0 / rate_hz
+        self.next_row = 0
+        self.last: np.ndarray | None = None
+        self.first_row_s = math.nan
+
+    @property
+    def written_to_s(self) -> float:
+        return (self.next_row - 1) * self.dt
+
+    def write_to(self, t_s: float) -> None:
+        n = math.floor(t_s / self.dt + 1e-9) + 1
+        if n <= self.next_row:
+            return
+        t = np.arange(self.next_row, n) * self.dt
+        q = self.motion.rows(t)
+        _guard(self.hand, q, self.last, self.dt)
+        self.writer.write_rows(t, q, self.hand.motor_angles(q))
+        if math.isnan(self.first_row_s):
+            self.first_row_s = time.perf_counter()
+        self.last = q[-1].copy()
+        self.next_row = n
+
+
+def _guard(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -> None:
+    """Refuse (never clamp) rows outside the joint limits or their speed limits."""
+    if not all(hand.within_limits(r, tol=1e-9) for r in q):
+        raise PlannerError("a planned row is outside the joint limits")
+    full = q if prev is None else np.vstack([prev, q])
+    if len(full) > 1:
+        v = np.abs(np.diff(full, axis=0)) / dt
+        if np.any(v > hand.velocity * 1.001 + 1e-9):
+            j = int(np.argmax(np.max(v / hand.velocity, axis=0)))
+            raise PlannerError(f"a planned row moves {hand.joint_names[j]} faster than its "
+                               "speed limit")

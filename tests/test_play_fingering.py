@@ -1,0 +1,102 @@
+"""planner.play.fingering: the dynamic programme on hand-made songs."""
+
+from __future__ import annotations
+
+import pytest
+
+from planner.hand.model import load_hand
+from planner.music.midi import Note
+from planner.play.atlas import Atlas
+from planner.play.fingering import SkipReason, events, plan_fingering
+from planner.play.moves import Moves
+
+FINGERS = ("thumb", "index", "middle", "ring", "pinky")
+
+
+@pytest.fixture(scope="module")
+def hand_parts():
+    h = load_hand("default")
+    at = Atlas(h)
+    return at, Moves(h, at)
+
+
+def plan(hand_parts, notes):
+    at, mv = hand_parts
+    return plan_fingering(notes, at, mv, 100.0)
+
+
+def test_events_group_notes_by_onset():
+    notes = [Note(64, 0.5, 1.0, 80), Note(60, 0.0, 1.0, 80), Note(67, 0.50005, 1.0, 80)]
+    assert events(notes) == [(0.0, [1]), (0.5, [0, 2])]
+
+
+def test_a_slow_melody_is_played_whole_in_finger_order(hand_parts):
+    """C4 D4 E4 F4 at 0.5 s: four fingers from one hand position, in the keys' order, no
+    frame lost. (Adding G4 needs a move of the hand: this hand's fingers are 33 mm apart
+    at rest, keys 23.5 mm; five in a row do not fit, and it costs a few frames.)"""
+    notes = [Note(p, 0.5 * k, 0.5 * k + 0.45, 80) for k, p in enumerate((60, 62, 64, 65))]
+    fg = plan(hand_parts, notes)
+    assert fg.skipped == () and len(fg.assignments) == 4
+    assert fg.expected_loss_frames < 1.0
+    assert len({a.rail_m for a in fg.assignments}) == 1
+    order = [FINGERS.index(a.finger) for a in sorted(fg.assignments, key=lambda a: a.note)]
+    assert order == sorted(order) and len(set(order)) == 4
+    notes.append(Note(67, 2.0, 2.45, 80))
+    fg = plan(hand_parts, notes)
+    assert fg.skipped == () and len(fg.assignments) == 5
+    assert fg.expected_loss_frames < 10.0
+
+
+def test_no_finger_crosses_one_that_just_played(hand_parts):
+    """Pinky on F4, then G4 a frame later: not the ring (it would pass the pinky, still
+    over F4); the thumb on a white key is in front of the long fingers and may pass."""
+    notes = [Note(65, 0.0, 0.4, 80), Note(67, 0.41, 0.8, 80)]
+    fg = plan(hand_parts, notes)
+    a, b = fg.assignments
+    if a.rail_m == b.rail_m and b.finger != "thumb" and a.finger != "thumb":
+        assert FINGERS.index(b.finger) > FINGERS.index(a.finger), (a, b)
+
+
+def test_legato_steps_take_another_finger(hand_parts):
+    """C4 then E4 legato: the same finger would have to lift, cross and come down inside
+    no time at all; the programme gives E4 another finger and loses nothing."""
+    notes = [Note(60, 0.0, 0.5, 80), Note(64, 0.5, 1.0, 80)]
+    fg = plan(hand_parts, notes)
+    a, b = fg.assignments
+    assert a.finger != b.finger and fg.expected_loss_frames < 1.0
+
+
+def test_more_notes_than_fingers_leaves_one_out_named(hand_parts):
+    notes = [Note(p, 0.0, 1.0, 80) for p in (60, 62, 64, 65, 67, 69)]
+    fg = plan(hand_parts, notes)
+    assert len(fg.assignments) <= 5 and fg.skipped
+    assert all(s.reason is SkipReason.CHORD for s in fg.skipped)
+    assert len(fg.assignments) + len(fg.skipped) == 6
+    assert len({a.finger for a in fg.assignments}) == len(fg.assignments)
+
+
+def test_a_chord_wider_than_the_hand_keeps_what_fits(hand_parts):
+    notes = [Note(48, 0.0, 1.0, 80), Note(84, 0.0, 1.0, 80)]
+    fg = plan(hand_parts, notes)
+    assert len(fg.assignments) == 1 and fg.skipped[0].reason is SkipReason.CHORD
+
+
+def test_a_held_note_keeps_its_finger_and_the_hand(hand_parts):
+    """A bass held for 2 s under four melody notes: one finger holds it, no melody note
+    takes that finger, and the hand does not move while it is held (or it is cut)."""
+    notes = [Note(55, 0.0, 2.0, 80)] + [Note(p, 0.5 * k, 0.5 * k + 0.45, 80)
+                                        for k, p in enumerate((64, 65, 67, 65))]
+    fg = plan(hand_parts, notes)
+    by = {a.note: a for a in fg.assignments}
+    bass = by[0]
+    assert len(by) == 5
+    for i in range(1, 5):
+        assert by[i].finger != bass.finger
+        if bass.release_s is None or bass.release_s > notes[i].onset_s:
+            assert by[i].rail_m == bass.rail_m
+
+
+def test_fast_repeated_notes_are_all_fingered(hand_parts):
+    notes = [Note(62, 0.12 * k, 0.12 * k + 0.1, 80) for k in range(12)]
+    fg = plan(hand_parts, notes)
+    assert fg.skipped == () and len(fg.assignments) == 12

@@ -1,0 +1,65 @@
+"""planner.play.profile: time-optimal straight joint-space moves."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planner.play.profile import LIMIT_FRACTION, move_time_s, straight_move
+
+V = np.array([20.0, 10.5, 2.78])
+A = np.array([500.0, 500.0, 40.0])
+
+
+@pytest.mark.parametrize("dq", [[0.44, 0.0, 0.0], [0.02, -0.01, 0.0], [1.5, 0.2, 0.0],
+                                [0.0, 0.0, 0.5], [0.3, -0.3, 0.01]])
+def test_ends_limits_and_optimality(dq):
+    qa = np.array([0.1, -0.2, 0.3])
+    qb = qa + np.array(dq)
+    m = straight_move(qa, qb, V, A)
+    np.testing.assert_allclose(m.at(0.0)[0], qa, atol=1e-12)
+    np.testing.assert_allclose(m.at(m.duration_s)[0], qb, atol=1e-12)
+    t = np.linspace(0.0, m.duration_s, 4001)
+    q = m.at(t)
+    dt = t[1] - t[0]
+    vel = np.diff(q, axis=0) / dt
+    acc = np.diff(vel, axis=0) / dt
+    assert np.all(np.abs(vel) <= V * LIMIT_FRACTION * (1 + 1e-9))
+    assert np.all(np.abs(acc) <= A * LIMIT_FRACTION * (1 + 1e-3) + 1e-6)
+    # the binding joint alone: its own time-optimal move takes exactly as long
+    d = np.abs(np.array(dq))
+    own = [move_time_s(LIMIT_FRACTION * v / x, LIMIT_FRACTION * a / x)
+           for x, v, a in zip(d, V, A) if x > 0]
+    assert m.duration_s == pytest.approx(max(own), rel=1e-12)
+    # the path stays on the straight line
+    s = (q - qa) @ (qb - qa) / ((qb - qa) @ (qb - qa))
+    np.testing.assert_allclose(q, qa + s[:, None] * (qb - qa), atol=1e-12)
+
+
+def test_triangle_and_trapezoid_times():
+    # 0.44 rad at 500 rad/s^2, 20 rad/s: triangle, 2 sqrt(d / a)
+    m = straight_move([0.0], [0.44], [20.0], [500.0])
+    assert m.duration_s == pytest.approx(2 * math.sqrt(0.44 / (500 * LIMIT_FRACTION)))
+    # 0.5 m of rail at 2.78 m/s and 40 m/s^2: reaches the cap, d / v + v / a
+    m = straight_move([0.0], [0.5], [2.78], [40.0])
+    v, a = 2.78 * LIMIT_FRACTION, 40.0 * LIMIT_FRACTION
+    assert m.duration_s == pytest.approx(0.5 / v + v / a)
+    # min-jerk at the same peak acceleration takes 1.2 times as long
+    t_mj = math.sqrt(10 / math.sqrt(3) * 0.44 / (500 * LIMIT_FRACTION))
+    assert t_mj / straight_move([0.0], [0.44], [20.0], [500.0]).duration_s == \
+        pytest.approx(math.sqrt(10 / math.sqrt(3)) / 2)
+
+
+def test_time_at_s_inverts_s():
+    for d in (0.01, 0.44, 2.0):
+        m = straight_move([0.0], [d], [20.0], [500.0])
+        for s in (0.0, 0.05, 0.3, 0.5, 0.77, 0.99, 1.0):
+            assert float(m.s(m.time_at_s(s))) == pytest.approx(s, abs=1e-12)
+
+
+def test_zero_move():
+    m = straight_move([0.2, 0.3], [0.2, 0.3], [1.0, 1.0], [1.0, 1.0])
+    assert m.duration_s == 0.0
+    np.testing.assert_allclose(m.at([0.0, 1.0]), [[0.2, 0.3], [0.2, 0.3]])
