@@ -86,7 +86,7 @@ def test_the_force_bound_is_where_a_motor_reaches_its_peak(atlas, finger, pitch)
     q = atlas.full_q(e, "press", rail)
     f = max_key_force_n(h, q, finger)
     assert f == pytest.approx(e.max_force_n)
-    ratio = lambda F: np.max(np.abs(h.press_torques(q, {finger: F})) / h.motor_peak_torque)  # noqa: E731
+    ratio = lambda F: np.max(np.abs(h.press_torques(q, {finger: F})) / h.motor_peak_torque)
     assert ratio(f) == pytest.approx(1.0, abs=1e-9)
     assert ratio(0.99 * f) < 1.0 < ratio(1.01 * f)
 

@@ -195,21 +195,79 @@ class FingeringProblem:
             loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
         return loss / self.dt
 
-    def _rail_loss(self, prev: _State, arrive: float, rail_i: int) -> float:
-        """Frames lost to a move of the rail: every finger of ``prev`` lifts after its key
-        comes up, the rail moves, the new fingers descend (``arrive``: the latest of their
-        descents' key-down lead minus key-down target). The worst pair decides, and it
-        splits: max over old (lift + key up) + rail time + max over new."""
+    def _rail_loss(self, prev: _State, arrive: float, rail_i: int, kept=()) -> float:
+        """Frames lost to a move of the rail to ``rail_i`` after ``prev``: a finger of
+        ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
+        other lifts after its key comes up; then the rail moves (as slow as its slowest
+        follower), and the new fingers descend (``arrive``: the latest of their descents'
+        key-down lead minus key-down target). The worst pair decides, and it splits:
+        max over the lifters (lift + key up) + the move + max over the new. A ``kept``
+        note (sounding past the event) must follow, or the move is not made (inf)."""
+        key = (prev, rail_i)
+        got = self._release.get(key)
+        if got is None:
+            di = abs(rail_i - prev.rail_i)
+            T = self._rail_time.get(di)
+            if T is None:
+                T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
+            followers = set()
+            for m, f in prev.fingers:
+                a, b = self.entry(m, f, prev.rail_i), self.entry(m, f, rail_i)
+                mv = None if b is None else self.moves.follow(a, b)
+                # (the move fits inside the note, after its press and before its lift)
+                if mv is not None and (self.t_up(m) - self.t_down(m)
+                                       >= mv.duration_s + self.moves.press_min_s(a)):
+                    followers.add((m, f))
+                    T = max(T, mv.duration_s)
+            release = max((self.moves.before_rail_s(self.entry(m, f, prev.rail_i)) + self.t_up(m)
+                           for m, f in prev.last_notes() if (m, f) not in followers),
+                          default=-math.inf)
+            got = self._release[key] = (release + T, frozenset(followers))
+        release_t, followers = got
+        if not set(kept) <= followers:
+            return math.inf
         di = abs(rail_i - prev.rail_i)
-        T = self._rail_time.get(di)
-        if T is None:
-            T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
-        release = self._release.get(prev)
-        if release is None:
-            release = self._release[prev] = max(
-                (self.moves.before_rail_s(self.entry(m, f, prev.rail_i)) + self.t_up(m)
-                 for m, f in prev.last_notes()), default=-math.inf)
-        return max(0.0, release + T + arrive) / self.dt + TIE_RAIL_PER_M * di * RAIL_STEP_M
+        return max(0.0, release_t + arrive) / self.dt + TIE_RAIL_PER_M * di * RAIL_STEP_M
+
+    def _after_follow_loss(self, prev: _State, new: dict[int, str], rail_i: int) -> float:
+        """Frames lost around a move of the rail by the new notes whose finger, or whose
+        key, a follower still holds (that finger strikes again, same key, or moves on,
+        another key, once its note ends; another finger waits for it to leave the key),
+        and by those whose finger lifted from a recent note: it crosses to its new key
+        while the rail moves, then comes down."""
+        followers = self._release[(prev, rail_i)][1]
+        by_finger = {f: m for m, f in followers}
+        by_key = {self.notes[m].pitch: (m, f) for m, f in followers}
+        lifted = {f: m for m, f in prev.last_notes() if (m, f) not in followers}
+        loss = 0.0
+        for n, f in new.items():
+            m = by_finger.get(f)
+            if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
+                m = lifted[f]
+                across = self.moves.across(self.entry(m, f, prev.rail_i),
+                                           self.entry(n, f, rail_i))
+                if across is None:
+                    return math.inf
+                gap = (self.moves.before_rail_s(self.entry(m, f, prev.rail_i))
+                       + across.duration_s + self.moves.after_rail_s(self.entry(n, f, rail_i)))
+                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
+                m = None
+            if m is not None:
+                a, b = self.entry(m, f, rail_i), self.entry(n, f, rail_i)
+                if self.notes[m].pitch == self.notes[n].pitch:
+                    gap = self.moves.repeat_gap_s(a)
+                else:
+                    gap = self.moves.move_gap_s(a, b)
+                    if gap is None:
+                        return math.inf
+                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
+            other = by_key.get(self.notes[n].pitch)
+            if other is not None and other[1] != f:
+                m2, g = other
+                gap = (self.moves.before_rail_s(self.entry(m2, g, rail_i))
+                       + self.moves.after_rail_s(self.entry(n, f, rail_i)))
+                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
+        return loss / self.dt
 
     def _arrival(self, new: dict[int, str], rail_i: int) -> float:
         return max(self.moves.after_rail_s(self.entry(n, f, rail_i)) - self.t_down(n)
@@ -286,8 +344,6 @@ class FingeringProblem:
         crossing = any(b <= a for a, b in itertools.pairwise(order_near))
         recent = {}
         for rail_i, arrive, tie in self._candidates(new):
-            if kept and rail_i != p.rail_i:
-                continue
             if crossing and rail_i == p.rail_i:
                 continue
             if p is None:
@@ -295,7 +351,9 @@ class FingeringProblem:
             elif rail_i == p.rail_i:
                 step = self._same_rail_loss(p, new, rail_i)
             else:
-                step = self._rail_loss(p, arrive, rail_i)
+                step = self._rail_loss(p, arrive, rail_i, kept)
+                if not math.isinf(step):
+                    step += self._after_follow_loss(p, new, rail_i)
             if math.isinf(step):
                 continue
             same = p is not None and rail_i == p.rail_i

@@ -33,15 +33,23 @@ from planner.music import keyboard as kb
 from planner.play.atlas import Atlas, AtlasEntry
 from planner.play.fingering import Assignment
 from planner.play.moves import Moves
-from planner.play.profile import Move
+from planner.play.profile import Move, straight_move
 
 DROP_FRACTION = 0.5  # a note whose key cannot go down before this much of it is over is left out
 WAIT_MARGIN_S = 0.005  # a finger reaches its waiting pose at least this long before it descends
+HOLD_PAST_S = 0.01  # a key held through a move of the rail comes up at least this long after it
 COMMIT_MARGIN_S = 0.3  # a key due up this soon after the rows written is let up when they are
 
 
 def _key_x(pitch: int) -> float:
     return kb.key(pitch).center_x_m
+
+
+def _part(move: Move, first: int, n: int) -> Move:
+    """Joints ``first .. first + n`` of a straight move, on its own timing (the path
+    parameter is shared: every part is where the whole move says at every instant)."""
+    return Move(move.q_a[first:first + n].copy(), move.dq[first:first + n].copy(),
+                move.duration_s, move.v, move.a)
 
 
 class MotionSkip(enum.Enum):
@@ -310,17 +318,75 @@ class Motion:
         return clear
 
     def _move_rail(self, rail_m: float, arrive_by_s: float) -> None:
-        """Every finger to crossing height, then the rail to ``rail_m``: as late as lets
-        the next key go down on time, as early as the fingers are all up."""
-        move = self.moves.rail_move(self.rail.q[0], rail_m)
-        start = arrive_by_s - move.duration_s
-        ready = max(self.rail.free_s, self.committed_s)
+        """The rail to ``rail_m``, as late as lets the next key go down on time, once every
+        finger is at crossing height, except those holding a key that sounds past the
+        move which can follow it (``Moves.follow``: the rail and their joints on one
+        straight time-optimal move, the tip kept on the key)."""
+        r0 = self.rail.q[0]
+        holds = self._holds(rail_m, arrive_by_s)
+        while True:  # (a follower whose key would come up before the move ends lifts)
+            # with followers the move ends before their keys come up: early, if need be
+            end_by = min([arrive_by_s] + [st.up_s - self.moves.lift(e, "high").cross_s
+                                          - HOLD_PAST_S for st, e in holds])
+            move, t0 = self._rail_timing(r0, rail_m, end_by, holds)
+            late = {id(st) for st, e in holds if t0 + move.duration_s
+                    > st.up_s - self.moves.lift(e, "high").cross_s - HOLD_PAST_S / 2}
+            if not late:
+                break
+            holds = [h for h in holds if id(h[0]) not in late]
+        held = {id(st) for st, _ in holds}
         for st in self.fingers.values():
-            if st.pose != "high":
+            if id(st) not in held and st.pose != "high":
                 up = self._up_move(st)
-                self._to_high(st, start - up.duration_s + up.cross_s)
-            ready = max(ready, st.high_s)  # (a finger moving across up there may go on)
-        self.rail.add(max(ready, start), move)
+                self._to_high(st, t0 - up.duration_s + up.cross_s)
+        t0 = max([t0] + [st.high_s for st in self.fingers.values() if id(st) not in held])
+        k = 1
+        self.rail.add(t0, _part(move, 0, 1))
+        for st, e in holds:
+            n = len(st.entry.press)
+            st.track.add(t0, _part(move, k, n))
+            st.entry = e
+            k += n
+
+    def _rail_timing(self, r0: float, rail_m: float, arrive_by_s: float, holds):
+        """The rail's move (with its followers' joints after it) and its start: as late
+        as lets the next key go down on time, not before the hand is ready."""
+        move = self.moves.rail_move(r0, rail_m)
+        if holds:
+            qa, qb = [np.array([r0])], [np.array([rail_m])]
+            vmax = [self.hand.velocity[[self.atlas.rail]]]
+            amax = [self.hand.acceleration[[self.atlas.rail]]]
+            for st, e in holds:
+                js = self.hand.joint_slice(st.entry.finger)
+                qa.append(st.entry.press)
+                qb.append(e.press)
+                vmax.append(self.hand.velocity[js])
+                amax.append(self.hand.acceleration[js])
+            move = straight_move(np.concatenate(qa), np.concatenate(qb), np.concatenate(vmax),
+                                 np.concatenate(amax))
+        ready = max(self.rail.free_s, self.committed_s)
+        held = {id(st) for st, _ in holds}
+        for st in self.fingers.values():
+            if id(st) in held:
+                ready = max(ready, st.track.free_s)
+            elif st.pose == "high":
+                ready = max(ready, st.high_s)  # (a finger moving across up there may go on)
+            else:  # it lifts first: as soon as its press is done, at the latest
+                up = self._up_move(st)
+                ready = max(ready, st.track.free_s + up.duration_s)
+        return move, max(ready, arrive_by_s - move.duration_s)
+
+    def _holds(self, rail_m: float, arrive_by_s: float):
+        """The pressing fingers that may keep their keys through a move of the rail to
+        ``rail_m``: their notes sound past the move, and their tips can follow."""
+        out = []
+        for st in self.fingers.values():
+            if st.pose != "press":
+                continue
+            e = self.atlas.entry(st.entry.finger, self.notes[st.note].pitch, rail_m)
+            if e is not None and self.moves.follow(st.entry, e) is not None:
+                out.append((st, e))
+        return out
 
     def _shorten(self, st: _Finger, up_s: float) -> None:
         if st.note is not None and st.note in self.outcomes:

@@ -26,6 +26,7 @@ from functools import lru_cache
 import numpy as np
 
 from planner.hand.model import HandModel
+from planner.ik import surfaces_under
 from planner.music import keyboard as kb
 from planner.play.atlas import (
     CLEARANCE_M,
@@ -38,6 +39,7 @@ from planner.play.profile import Move, straight_move
 
 CROSS_TOL = 1e-6  # the key crossing's path parameter is found to this precision
 HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
+HOLD_MARGIN_M = 0.001  # a key held while the rail moves stays this far inside its down range
 
 
 @dataclass(frozen=True)
@@ -123,6 +125,43 @@ class Moves:
                 ok &= bool(z >= HIGH_SAFE_Z_M)
             self._lat[key] = self._move(a.finger, a.high, b.high) if ok else None
         return self._lat[key]
+
+    def follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
+        """The rail and a finger holding its key together, from entry ``a`` to entry
+        ``b`` of the same key (another place relative to the rail): one time-optimal
+        straight move of the rail and the finger's joints (rail first in ``dq``), kept
+        only when forward kinematics finds the tip inside the key's footprint and the key
+        down (``HOLD_MARGIN_M`` past the key-down depth, as far from the key bed) all the
+        way; None otherwise."""
+        key = ("follow", id(a), id(b))
+        if key not in self._lat:
+            self._lat[key] = self._follow(a, b)
+        return self._lat[key]
+
+    def _follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
+        h, r = self.hand, self.atlas.rail
+        pitch = 60 + a.pitch_class
+        k = kb.key(pitch)
+        js = self.js[a.finger]
+        cols = np.r_[r, js]
+        qa, qb = self.atlas.base.copy(), self.atlas.base.copy()
+        qa[r], qb[r] = k.center_x_m - a.dx_m, k.center_x_m - b.dx_m
+        qa[js], qb[js] = a.press, b.press
+        f = h.fingers.index(a.finger)
+        q = qa.copy()
+        for s in np.linspace(0.0, 1.0, PATH_SAMPLES):
+            q[cols] = qa[cols] + s * (qb[cols] - qa[cols])
+            x, y, z = h.tip_positions(h.apply_couplings(q))[f]
+            inside = (k.x_min_m + TIP_RADIUS_M <= x <= k.x_max_m - TIP_RADIUS_M
+                      and k.y_min_m + TIP_RADIUS_M <= y <= k.y_max_m - TIP_RADIUS_M)
+            depth = k.top_z_m - z
+            if k.black is False:
+                inside = inside and surfaces_under(np.array([x]), np.array([y]),
+                                                   TIP_RADIUS_M)[0] <= k.top_z_m
+            if not (inside and kb.DOWN_DEPTH_M + HOLD_MARGIN_M <= depth
+                    <= kb.KEY_BED_DEPTH_M - HOLD_MARGIN_M):
+                return None
+        return straight_move(qa[cols], qb[cols], h.velocity[cols], h.acceleration[cols])
 
     def rise(self, e: AtlasEntry) -> Timed:
         """Up from the waiting pose to crossing height (no key crossing)."""
