@@ -142,3 +142,26 @@ def test_move_gap_is_lift_across_descent(atlas, moves):
     for t in np.linspace(0, lat.duration_s, 9):
         q[h.joint_slice("ring")] = lat.at(t)[0]
         assert h.tip_positions(h.apply_couplings(q))[f, 2] >= HIGH_SAFE_Z_M - 1e-9
+
+
+def test_the_shipped_table_is_the_solvers_own(atlas):
+    """planner/tables/atlas-<hash>.npz (scripts/make_atlas.py) holds exactly what the IK
+    gives: a sample of entries solved afresh match it to the bit."""
+    from planner.play.atlas import table_path
+
+    h = atlas.hand
+    assert table_path(h.urdf_sha256).exists(), "run python scripts/make_atlas.py"
+    shipped = Atlas(h)
+    fresh = Atlas(h)
+    fresh._entries.clear()
+    n = 0
+    for f, pc, k in [("thumb", 7, 10), ("index", 0, -5), ("middle", 1, 0), ("ring", 4, 12),
+                     ("pinky", 10, -20), ("index", 6, 44), ("pinky", 3, -45)]:
+        a, b = shipped.entry_at(f, pc, k), fresh.entry_at(f, pc, k)
+        assert (a is None) == (b is None), (f, pc, k)
+        if a is not None:
+            n += 1
+            for pose in ("press", "rise", "hover", "high"):
+                assert np.array_equal(getattr(a, pose), getattr(b, pose)), (f, pc, k, pose)
+            assert a.max_force_n == b.max_force_n and a.dx_m == b.dx_m
+    assert n >= 4

@@ -30,8 +30,10 @@ hand). ``dx`` off the grid snaps to the nearest sample: the tip lands at most
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -52,6 +54,8 @@ CLEARANCE_M = 0.001  # a tip passing over a key it does not press stays this far
 TIP_RADIUS_M = 0.002  # ... counting the pad's size (a key's footprint grows by this)
 PATH_SAMPLES = 12  # a straight move is checked at this many points
 CANON_OCTAVE = 4  # entries are solved on the keys of this octave (C4..B4)
+TABLE_DIR = Path(__file__).parents[1] / "tables"
+_POSES = ("press", "rise", "hover", "high")
 
 
 @dataclass(frozen=True, eq=False)  # (entries are made once and compared by identity)
@@ -82,6 +86,7 @@ class Atlas:
                            for i, f in enumerate(hand.fingers)}
         self._entries: dict[tuple[str, int, int], AtlasEntry | None] = {}
         self.solves = 0
+        self._load(table_path(hand.urdf_sha256))
 
     # ------------------------------------------------------------------ set-up
     def _natural_hand(self) -> np.ndarray:
@@ -147,6 +152,57 @@ class Atlas:
         q[self.hand.joint_slice(entry.finger)] = getattr(entry, pose)
         return self.hand.apply_couplings(q)
 
+    # ------------------------------------------------------------------ the table
+    def solve_all(self) -> int:
+        """Solve every entry of the grid (for the shipped table); returns how many exist."""
+        n = int(round(SPAN_M / STEP_M))
+        return sum(self.entry_at(f, pc, k) is not None for f in self.hand.fingers
+                   for pc in range(12) for k in range(-n, n + 1))
+
+    def save(self, path: Path) -> None:
+        """Write every solved entry (and every sample found empty) to ``path`` (npz)."""
+        keys = sorted(self._entries, key=lambda k: (self.hand.fingers.index(k[0]), k[1], k[2]))
+        width = max(len(self.hand.joint_slice(f)) for f in self.hand.fingers)
+        poses = {p: np.full((len(keys), width), np.nan) for p in _POSES}
+        force = np.full(len(keys), np.nan)
+        for i, key in enumerate(keys):
+            e = self._entries[key]
+            if e is not None:
+                for p in _POSES:
+                    q = getattr(e, p)
+                    poses[p][i, :len(q)] = q
+                force[i] = e.max_force_n
+        idx = np.array([(self.hand.fingers.index(f), pc, k) for f, pc, k in keys], dtype=np.int16)
+        with open(path, "wb") as fh:
+            np.savez_compressed(fh, key=idx, max_force_n=force, params=np.array(self._params()),
+                                **poses)
+
+    def _params(self) -> str:
+        """What the entries depend on besides the URDF: a table made otherwise is not used."""
+        return json.dumps({"urdf_sha256": self.hand.urdf_sha256, "step_m": STEP_M,
+                           "span_m": SPAN_M, "high_z_m": HIGH_Z_M, "repeat_depth_m": REPEAT_DEPTH_M,
+                           "base_hover_z_m": BASE_HOVER_Z_M, "curl": CURL,
+                           "clearance_m": CLEARANCE_M, "tip_radius_m": TIP_RADIUS_M,
+                           "path_samples": PATH_SAMPLES, "canon_octave": CANON_OCTAVE,
+                           "base": [round(float(x), 12) for x in self.base]}, sort_keys=True)
+
+    def _load(self, path: Path) -> None:
+        if not path.exists():
+            return
+        with np.load(path, allow_pickle=False) as z:
+            if str(z["params"]) != self._params():
+                return
+            for (fi, pc, k), force, *qs in zip(z["key"], z["max_force_n"],
+                                               *(z[p] for p in _POSES)):
+                f = self.hand.fingers[int(fi)]
+                if np.isnan(force):
+                    self._entries[(f, int(pc), int(k))] = None
+                    continue
+                n = len(self.hand.joint_slice(f))
+                self._entries[(f, int(pc), int(k))] = AtlasEntry(
+                    f, int(pc), self.natural_dx[f] + int(k) * STEP_M,
+                    *(q[:n].copy() for q in qs), float(force))
+
     # ------------------------------------------------------------------ solving
     def _solve(self, finger: str, pitch_class: int, k: int) -> AtlasEntry | None:
         h = self.hand
@@ -181,6 +237,12 @@ class Atlas:
                 return None
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
                           *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger))
+
+
+def table_path(urdf_sha256: str) -> Path:
+    """Where the atlas of a hand's URDF is shipped (a cache: without it, entries are
+    solved when first asked for; ``scripts/make_atlas.py`` writes it)."""
+    return TABLE_DIR / f"atlas-{urdf_sha256[:16]}.npz"
 
 
 def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,

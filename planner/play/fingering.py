@@ -36,7 +36,8 @@ from planner.targets import press_force_n
 
 THUMB = "thumb"
 RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart
-BEAM = 40  # states kept per event
+BEAM = 60  # states kept per event
+PER_RAIL = 6  # ... at most this many at one rail position
 RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing
 # (the slowest move between two keys in the default hand's atlas, the thumb's, takes 0.2 s)
 ONSET_TOL_S = 1e-4  # notes starting this close together are one event
@@ -82,11 +83,13 @@ class Fingering:
 class _State:
     rail_i: int
     fingers: tuple[tuple[int, str], ...]  # (note, finger), by note: the notes sounding
-    recent: tuple[tuple[int, str], ...] = ()  # fingers' last notes, ended within RECENT_S
+    recent: tuple[tuple[int, str, int], ...] = ()  # (note, finger, rail index it was at):
+    # the last notes of fingers not sounding, ended within RECENT_S
 
-    def last_notes(self) -> tuple[tuple[int, str], ...]:
-        """Every finger's note that still matters to its next move: sounding or recent."""
-        return self.recent + self.fingers
+    def last_notes(self) -> tuple[tuple[int, str, int], ...]:
+        """Every finger's note that still matters to its next move, sounding or recent,
+        with the rail index it is (or was last) pressed from."""
+        return self.recent + tuple((m, f, self.rail_i) for m, f in self.fingers)
 
 
 def events(notes) -> list[tuple[float, list[int]]]:
@@ -172,21 +175,21 @@ class FingeringProblem:
         return e
 
     def _same_rail_loss(self, prev: _State, new_notes: dict[int, str], rail_i: int) -> float:
-        last = {f: m for m, f in prev.last_notes()}
-        on_key = {self.notes[m].pitch: (m, f) for m, f in prev.last_notes()}
+        last = {f: (m, r) for m, f, r in prev.last_notes()}
+        on_key = {self.notes[m].pitch: (m, f) for m, f, r in prev.last_notes() if r == rail_i}
         loss = 0.0
         for n, f in new_notes.items():
-            m = last.get(f)
             other = on_key.get(self.notes[n].pitch)
             if other is not None and other[1] != f:  # another finger leaves the key first
                 m2, g = other
                 gap = (self.moves.before_rail_s(self.entry(m2, g, rail_i))
                        + self.moves.after_rail_s(self.entry(n, f, rail_i)))
                 loss += max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
-            if m is None:
+            if f not in last:
                 continue
-            a, b = self.entry(m, f, rail_i), self.entry(n, f, rail_i)
-            if self.notes[m].pitch == self.notes[n].pitch:
+            m, r = last[f]
+            a, b = self.entry(m, f, r), self.entry(n, f, rail_i)
+            if self.notes[m].pitch == self.notes[n].pitch and r == rail_i:
                 gap = self.moves.repeat_gap_s(a)
             else:
                 gap = self.moves.move_gap_s(a, b)
@@ -219,8 +222,8 @@ class FingeringProblem:
                                        >= mv.duration_s + self.moves.press_min_s(a)):
                     followers.add((m, f))
                     T = max(T, mv.duration_s)
-            release = max((self.moves.before_rail_s(self.entry(m, f, prev.rail_i)) + self.t_up(m)
-                           for m, f in prev.last_notes() if (m, f) not in followers),
+            release = max((self.moves.before_rail_s(self.entry(m, f, r)) + self.t_up(m)
+                           for m, f, r in prev.last_notes() if (m, f) not in followers),
                           default=-math.inf)
             got = self._release[key] = (release + T, frozenset(followers))
         release_t, followers = got
@@ -238,17 +241,16 @@ class FingeringProblem:
         followers = self._release[(prev, rail_i)][1]
         by_finger = {f: m for m, f in followers}
         by_key = {self.notes[m].pitch: (m, f) for m, f in followers}
-        lifted = {f: m for m, f in prev.last_notes() if (m, f) not in followers}
+        lifted = {f: (m, r) for m, f, r in prev.last_notes() if (m, f) not in followers}
         loss = 0.0
         for n, f in new.items():
             m = by_finger.get(f)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
-                m = lifted[f]
-                across = self.moves.across(self.entry(m, f, prev.rail_i),
-                                           self.entry(n, f, rail_i))
+                m, r = lifted[f]
+                across = self.moves.across(self.entry(m, f, r), self.entry(n, f, rail_i))
                 if across is None:
                     return math.inf
-                gap = (self.moves.before_rail_s(self.entry(m, f, prev.rail_i))
+                gap = (self.moves.before_rail_s(self.entry(m, f, r))
                        + across.duration_s + self.moves.after_rail_s(self.entry(n, f, rail_i)))
                 loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
                 m = None
@@ -303,8 +305,21 @@ class FingeringProblem:
             for keep in itertools.combinations(new, size):
                 self._extend(layer, prev, t, list(keep))
             if layer:
-                return dict(sorted(layer.items(), key=lambda kv: kv[1][0])[:BEAM])
+                return self._prune(layer)
         return {}
+
+    @staticmethod
+    def _prune(layer):
+        """The ``BEAM`` cheapest states, at most ``PER_RAIL`` of them at one rail position
+        (so that the programme keeps other hand positions in view)."""
+        out, per = {}, {}
+        for s, v in sorted(layer.items(), key=lambda kv: kv[1][0]):
+            if per.get(s.rail_i, 0) < PER_RAIL:
+                out[s] = v
+                per[s.rail_i] = per.get(s.rail_i, 0) + 1
+                if len(out) == BEAM:
+                    break
+        return out
 
     def _extend(self, layer, prev, t: float, new: list[int]) -> None:
         fingers = self.atlas.hand.fingers
@@ -333,8 +348,9 @@ class FingeringProblem:
         busy = {f for _, f in sounding}
         # fingers that left their keys within RECENT_S are still over them: the new
         # fingers keep the hand's order with them too (no finger crosses another)
-        left = [] if p is None else [(m, f) for m, f in p.last_notes()
-                                     if f not in busy and self.t_up(m) > t - RECENT_S]
+        left = [] if p is None else [(m, f) for m, f, r in p.last_notes()
+                                     if f not in busy and r == p.rail_i
+                                     and self.t_up(m) > t - RECENT_S]
         near = sorted([*sounding, *left], key=lambda mf: self.notes[mf[0]].pitch)
         # (the thumb on a white key presses in front of the black keys, 30 mm and more
         # before the long fingers' tips: they pass behind it, it passes under them)
@@ -383,18 +399,18 @@ class FingeringProblem:
         return out
 
     def _recent(self, p: _State | None, sounding, t: float,
-                rail_i: int) -> tuple[tuple[int, str], ...]:
+                rail_i: int) -> tuple[tuple[int, str, int], ...]:
         """The last notes of the fingers not sounding now, ended within RECENT_S of ``t``
-        (a note of the state before that is not sounding now has just ended); none after
-        a move of the rail (every finger was lifted for it)."""
-        if p is None or p.rail_i != rail_i:
+        (a note of the state before that is not sounding now has just ended), with the
+        rail they were pressed from."""
+        if p is None:
             return ()
         busy = {f for _, f in sounding}
-        last: dict[str, int] = {}
-        for m, f in p.last_notes():
+        last: dict[str, tuple[int, int]] = {}
+        for m, f, r in p.last_notes():
             if f not in busy and self.t_up(m) > t - RECENT_S:
-                last[f] = m
-        return tuple(sorted((m, f) for f, m in last.items()))
+                last[f] = (m, r)
+        return tuple(sorted((m, f, r) for f, (m, r) in last.items()))
 
     def _backtrack(self, layers, skipped: list[Skip]) -> Fingering:
         if not layers:
