@@ -25,6 +25,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
 
 from planner.check import NOTE_HIT_FRACTION, check_trajectory
 from planner.hand.model import load_hand
@@ -59,6 +60,8 @@ def category(path: Path) -> str:
         return "stress"
     if path.parent.name == "songs":
         return "sample"
+    if path.parent.name == "random":
+        return "random " + name.rsplit("_", 1)[0]
     return name.split("_")[0] if not name.startswith("chorale") else "_".join(name.split("_")[:2])
 
 
@@ -68,9 +71,16 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="also write the per-song rows here (TSV)")
     ap.add_argument("--only", default=None, help="only songs whose name holds this")
     ap.add_argument("--planner", default="both", choices=["old", "new", "both"])
+    ap.add_argument("--random", type=int, default=4,
+                    help="random songs per kind (bench/random_songs.py), 0 for none")
     a = ap.parse_args()
     songs = sorted(Path(a.corpus).glob("*.mid")) + sorted((ROOT / "songs").glob("*.mid")) \
         + sorted((ROOT / "songs" / "stress").glob("*.mid"))
+    tmp = tempfile.TemporaryDirectory()
+    if a.random:
+        from random_songs import write_all
+
+        songs += write_all(Path(tmp.name) / "random", a.random)
     if a.only:
         songs = [s for s in songs if a.only in s.name]
     hand = load_hand("default")
@@ -97,11 +107,13 @@ def main() -> None:
     by = defaultdict(list)
     for r in rows:
         by[(r[1], r[0])].append(r)
-        if r[1] not in ("sample", "stress"):
+        if r[1] not in ("sample", "stress") and not r[1].startswith("random"):
             by[("corpus (all)", r[0])].append(r)
+        if r[1].startswith("random"):
+            by[("random (all)", r[0])].append(r)
     print(f"\n{'category':20s} {'planner':7s} {'songs':>5s} {'mean F1':>8s} {'min F1':>7s} "
           f"{'late':>5s} {'early':>5s} {'wrong':>5s} {'median RTF':>10s}")
-    for (cat, k), rs in sorted(by.items(), key=lambda kv: (kv[0][0] == "corpus (all)", kv[0])):
+    for (cat, k), rs in sorted(by.items(), key=lambda kv: (kv[0][0].endswith("(all)"), kv[0])):
         print(f"{cat:20s} {k:7s} {len(rs):5d} {statistics.mean(r[3] for r in rs):8.4f} "
               f"{min(r[3] for r in rs):7.4f} {statistics.mean(r[6] for r in rs):5.2f} "
               f"{statistics.mean(r[7] for r in rs):5.2f} {sum(r[8] for r in rs):5d} "

@@ -155,7 +155,7 @@ class Atlas:
     # ------------------------------------------------------------------ the table
     def solve_all(self) -> int:
         """Solve every entry of the grid (for the shipped table); returns how many exist."""
-        n = int(round(SPAN_M / STEP_M))
+        n = round(SPAN_M / STEP_M)
         return sum(self.entry_at(f, pc, k) is not None for f in self.hand.fingers
                    for pc in range(12) for k in range(-n, n + 1))
 

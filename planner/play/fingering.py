@@ -359,7 +359,7 @@ class FingeringProblem:
         order_near = [fingers.index(f) for _, f in near]
         crossing = any(b <= a for a, b in itertools.pairwise(order_near))
         recent = {}
-        for rail_i, arrive, tie in self._candidates(new):
+        for rail_i, arrive, tie in self._moves_to(self._candidates(new), p):
             if crossing and rail_i == p.rail_i:
                 continue
             if p is None:
@@ -379,6 +379,24 @@ class FingeringProblem:
             total = cost + step + tie
             if s not in layer or total < layer[s][0]:
                 layer[s] = (total, p)
+
+    @staticmethod
+    def _moves_to(cands, p: _State | None):
+        """The rails worth a transition from ``p``: staying, when the new notes can be
+        played from there; else, of the moves, the shortest one each way and the one
+        with the fingers nearest their natural places (a longer move to a place no
+        better for the fingers is never cheaper: the arm's time grows with the distance,
+        the fingers' lifts and descents do not change)."""
+        if p is None or len(cands) <= 3:
+            return cands
+        here = [c for c in cands if c[0] == p.rail_i]
+        below = [c for c in cands if c[0] < p.rail_i]
+        above = [c for c in cands if c[0] > p.rail_i]
+        keep = here + below[-1:] + above[:1]
+        best = min(cands, key=lambda c: c[2])
+        if best not in keep:
+            keep.append(best)
+        return keep
 
     def _candidates(self, new: dict[int, str]) -> list[tuple[int, float, float]]:
         """(rail index, arrival lead, tie-break) of every rail from which the fingers of
@@ -432,7 +450,7 @@ class FingeringProblem:
                     if n not in kept and self.notes[n].offset_s > later_t + ONSET_TOL_S:
                         cut.setdefault(n, later_t)
             for n, f in state.fingers:
-                out.setdefault(n, Assignment(n, f, state.rail_i * RAIL_STEP_M))
+                out[n] = Assignment(n, f, state.rail_i * RAIL_STEP_M)  # (at its first state)
             back = layer[state][1]
             if back is None:
                 break
