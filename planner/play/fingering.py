@@ -37,6 +37,8 @@ from planner.targets import press_force_n
 THUMB = "thumb"
 RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart
 BEAM = 60  # states kept per event
+WINDOW = 48  # events the programme looks over at once ...
+LOOKAHEAD = 16  # ... the last of which it decides only in the next window
 PER_RAIL = 6  # ... at most this many at one rail position
 RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing
 # (the slowest move between two keys in the default hand's atlas, the thumb's, takes 0.2 s)
@@ -77,6 +79,17 @@ class Fingering:
     assignments: tuple[Assignment, ...]
     skipped: tuple[Skip, ...]
     expected_loss_frames: float
+
+
+@dataclass(frozen=True)
+class FingeringChunk:
+    """A stretch of the answer, fixed: notes struck in it, notes left out, held notes
+    (struck in it or before) cut at a time, and the loss the model expects so far."""
+
+    assignments: tuple[Assignment, ...]
+    skipped: tuple[Skip, ...]
+    cuts: tuple[tuple[int, float], ...]
+    loss_frames: float
 
 
 @dataclass(frozen=True)
@@ -277,9 +290,26 @@ class FingeringProblem:
 
     # ------------------------------------------------------------------ the programme
     def solve(self) -> Fingering:
+        """The whole song's answer (the chunks of ``chunks`` put together)."""
+        out: dict[int, Assignment] = {}
         skipped: list[Skip] = []
-        layers: list[tuple[float, dict[_State, tuple[float, _State | None]], list[int]]] = []
-        prev: dict[_State, tuple[float, _State | None]] = {}
+        loss = 0.0
+        for ch in self.chunks():
+            out.update({x.note: x for x in ch.assignments})
+            for n, t in ch.cuts:
+                a = out[n]
+                out[n] = Assignment(a.note, a.finger, a.rail_m, t)
+            skipped.extend(ch.skipped)
+            loss = ch.loss_frames
+        return Fingering(tuple(out[n] for n in sorted(out)),
+                         tuple(sorted(skipped, key=lambda s: s.note)), loss)
+
+    def chunks(self):
+        """The programme over a receding window: the best path over the next ``WINDOW``
+        events decides its first ones (all but ``LOOKAHEAD``), which are yielded
+        (``FingeringChunk``) and fixed; the next window starts from the state it reached.
+        So the motion and the rows can start after the first window, not the song."""
+        evs = []
         for t, new in events(self.notes):
             playable = []
             for n in new:
@@ -287,15 +317,57 @@ class FingeringProblem:
                 if why is None:
                     playable.append(n)
                 else:
-                    skipped.append(why)
-            if not playable:
-                continue
-            layer = self._layer(prev, t, playable)
-            if not layer:  # (cannot happen: one note alone always fits, it is playable)
-                continue
-            layers.append((t, layer, playable))
-            prev = layer
-        return self._backtrack(layers, skipped)
+                    yield FingeringChunk((), (why,), (), 0.0)
+            if playable:
+                evs.append((t, playable))
+        i = 0
+        start: dict[_State, tuple[float, _State | None]] = {}
+        while i < len(evs):
+            layers = []
+            prev = start
+            for t, new in evs[i:i + WINDOW]:
+                prev = self._layer(prev, t, new)
+                layers.append((t, prev, new))
+            final = i + len(layers) >= len(evs)
+            k = len(layers) if final else max(1, len(layers) - LOOKAHEAD)
+            path = self._path(layers)
+            before = next(iter(start)) if start else None
+            yield self._chunk(layers[:k], path[:k], before)
+            last = path[k - 1]
+            start = {last: (layers[k - 1][1][last][0], None)}
+            i += k
+
+    def _path(self, layers) -> list[_State]:
+        """The best path through a window's layers, one state per layer."""
+        state = min(layers[-1][1].items(), key=lambda kv: kv[1][0])[0]
+        out = [state]
+        for _, layer, _ in reversed(layers[1:]):
+            state = layer[state][1]
+            out.append(state)
+        return out[::-1]
+
+    def _chunk(self, layers, path: list[_State], before: _State | None) -> FingeringChunk:
+        """What a committed stretch of the path says: the notes struck in it (finger, rail
+        at their first state), the chord notes left out, the held notes cut (at the event
+        whose state no longer holds them)."""
+        assignments, skipped, cuts = [], [], []
+        seen = set() if before is None else {n for n, _ in before.fingers}
+        prev = before
+        for (t, layer, new), state in zip(layers, path):
+            here = {n for n, _ in state.fingers}
+            skipped.extend(Skip(n, SkipReason.CHORD, f"{len(new)} notes at t={t:.3f} s: the "
+                                f"hand holds {sum(m in here for m in new)} of them from one "
+                                "position") for n in new if n not in here)
+            if prev is not None:
+                cuts.extend((n, t) for n, _ in prev.fingers
+                            if n not in here and self.notes[n].offset_s > t + ONSET_TOL_S)
+            for n, f in state.fingers:
+                if n not in seen:
+                    seen.add(n)
+                    assignments.append(Assignment(n, f, state.rail_i * RAIL_STEP_M))
+            prev = state
+        loss = layers[-1][1][path[-1]][0]
+        return FingeringChunk(tuple(assignments), tuple(skipped), tuple(cuts), float(loss))
 
     def _layer(self, prev, t: float, new: list[int]):
         """The states of one event that hold the largest subset of ``new`` any state holds
@@ -429,37 +501,6 @@ class FingeringProblem:
             if f not in busy and self.t_up(m) > t - RECENT_S:
                 last[f] = (m, r)
         return tuple(sorted((m, f, r) for f, (m, r) in last.items()))
-
-    def _backtrack(self, layers, skipped: list[Skip]) -> Fingering:
-        if not layers:
-            return Fingering((), tuple(sorted(skipped, key=lambda s: s.note)), 0.0)
-        state, (cost, _) = min(layers[-1][1].items(), key=lambda kv: kv[1][0])
-        skipped = list(skipped)
-        out: dict[int, Assignment] = {}
-        cut: dict[int, float] = {}
-        later: _State | None = None
-        later_t = 0.0
-        for t, layer, new in reversed(layers):
-            here = {n for n, _ in state.fingers}
-            skipped.extend(Skip(n, SkipReason.CHORD, f"{len(new)} notes at t={t:.3f} s: the "
-                                f"hand holds {len(new) - sum(m not in here for m in new)} of "
-                                "them from one position") for n in new if n not in here)
-            if later is not None:  # held here, not in the state after: cut then
-                kept = {n for n, _ in later.fingers}
-                for n, _ in state.fingers:
-                    if n not in kept and self.notes[n].offset_s > later_t + ONSET_TOL_S:
-                        cut.setdefault(n, later_t)
-            for n, f in state.fingers:
-                out[n] = Assignment(n, f, state.rail_i * RAIL_STEP_M)  # (at its first state)
-            back = layer[state][1]
-            if back is None:
-                break
-            later, later_t, state = state, t, back
-        assignments = tuple(
-            Assignment(a.note, a.finger, a.rail_m, cut.get(a.note)) for a in
-            (out[n] for n in sorted(out)))
-        return Fingering(assignments, tuple(sorted(skipped, key=lambda s: s.note)), float(cost))
-
 
 def kb_name(pitch: int) -> str:
     names = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")

@@ -388,6 +388,13 @@ class Motion:
                 out.append((st, e))
         return out
 
+    def cut(self, note: int, release_s: float) -> None:
+        """The programme cut ``note`` (held) at ``release_s``: its key comes up by then."""
+        for st in self.fingers.values():
+            if st.pose == "press" and st.note == note:
+                st.up_s = min(st.up_s, self.t_up(note, release_s))
+                self._shorten(st, st.up_s)
+
     def _shorten(self, st: _Finger, up_s: float) -> None:
         if st.note is not None and st.note in self.outcomes:
             o = self.outcomes[st.note]

@@ -39,6 +39,9 @@ from planner.play.profile import Move, straight_move
 
 CROSS_TOL = 1e-6  # the key crossing's path parameter is found to this precision
 HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
+ACROSS_SAMPLES = (0.25, 0.5, 0.75)  # a move across at crossing height is checked here: both
+# ends are at HIGH_Z_M, 4.5 mm above HIGH_SAFE_Z_M, and the tip's height along a straight
+# joint-space move is smooth, lowest near its middle (the rows' replay checks every row)
 HOLD_MARGIN_M = 0.001  # a key held while the rail moves stays this far inside its down range
 
 
@@ -119,7 +122,7 @@ class Moves:
             q = self.atlas.base.copy()
             js = self.js[a.finger]
             ok = True
-            for s in np.linspace(0.0, 1.0, PATH_SAMPLES):
+            for s in ACROSS_SAMPLES:
                 q[js] = a.high + s * (b.high - a.high)
                 z = self.hand.tip_positions(self.hand.apply_couplings(q))[f, 2]
                 ok &= bool(z >= HIGH_SAFE_Z_M)

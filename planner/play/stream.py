@@ -15,7 +15,7 @@ from planner.errors import InputError, PlannerError
 from planner.hand.model import HandModel
 from planner.music.midi import Song
 from planner.play.atlas import Atlas
-from planner.play.fingering import Fingering, plan_fingering
+from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.moves import Moves
 from planner.selfcheck import SelfCheck, Verdict
@@ -54,12 +54,6 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     t_start = time.perf_counter()
     pl = planner or Planner2(hand)
     notes = list(song.notes)
-    fingering = plan_fingering(notes, pl.atlas, pl.moves, rate_hz)
-    order = sorted(fingering.assignments, key=lambda a: (notes[a.note].onset_s,
-                                                         notes[a.note].pitch))
-    rail0 = order[0].rail_m if order else float(pl.atlas.base[pl.atlas.rail])
-    motion = Motion(notes, pl.atlas, pl.moves, rate_hz, rail0)
-    motion.prepare(order)
     meta = {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
             "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
             "song": song_name, "notes": len(notes), "track": song.track,
@@ -67,16 +61,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     selfcheck = SelfCheck(hand, rate_hz)
     writer = TrajectoryWriter(out_path, meta, hand.joint_names, hand.motor_names,
                               on_rows=selfcheck.add_rows)
-    rows = _Rows(hand, writer, motion, rate_hz)
     try:
-        for a in order:
-            motion.place(a)
-            t = motion.t_down(a.note) - COMMIT_LAG_S
-            if t > rows.written_to_s + COMMIT_LAG_S:
-                motion.commit(t)
-                rows.write_to(t)
-        end = max((n.offset_s for n in notes), default=0.0)
-        rows.write_to(motion.finish(end) + SETTLE_S)
+        motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer)
         left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}
         left_out.update({o.note: (o.skip, o.detail)
                          for o in motion.outcomes.values() if o.skip is not None})
@@ -87,6 +73,50 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
         raise
     return PlayPlan(writer.rows, writer.rows / rate_hz, fingering, verdict,
                     time.perf_counter() - t_start, rows.first_row_s - t_start)
+
+
+def _plan(notes, pl: Planner2, rate_hz: float, hand: HandModel, writer: TrajectoryWriter):
+    """Fingering chunk by chunk (``FingeringProblem.chunks``), each chunk's notes placed
+    in time order (a cut before the notes that start with it), rows written up to where
+    nothing can change any more."""
+    problem = FingeringProblem(notes, pl.atlas, pl.moves, rate_hz)
+    motion: Motion | None = None
+    rows: _Rows | None = None
+    done: dict[int, Assignment] = {}
+    skipped: list = []
+    loss = 0.0
+    for ch in problem.chunks():
+        skipped.extend(ch.skipped)
+        loss = ch.loss_frames
+        steps = [((notes[a.note].onset_s, 1, notes[a.note].pitch), a) for a in ch.assignments]
+        steps += [((t, 0, n), (n, t)) for n, t in ch.cuts]
+        steps.sort(key=lambda s: s[0])
+        if motion is None and ch.assignments:
+            first = min(ch.assignments, key=lambda a: (notes[a.note].onset_s, notes[a.note].pitch))
+            motion = Motion(notes, pl.atlas, pl.moves, rate_hz, first.rail_m)
+            motion.prepare(sorted(ch.assignments, key=lambda a: notes[a.note].onset_s))
+            rows = _Rows(hand, writer, motion, rate_hz)
+        for _, item in steps:
+            if isinstance(item, Assignment):
+                motion.place(item)
+                done[item.note] = item
+                t = motion.t_down(item.note) - COMMIT_LAG_S
+                if t > rows.written_to_s + COMMIT_LAG_S:
+                    motion.commit(t)
+                    rows.write_to(t)
+            else:
+                n, t = item
+                motion.cut(n, t)
+                a = done[n]
+                done[n] = Assignment(a.note, a.finger, a.rail_m, t)
+    if motion is None:  # nothing to play: the hand waits, still
+        motion = Motion(notes, pl.atlas, pl.moves, rate_hz, float(pl.atlas.base[pl.atlas.rail]))
+        rows = _Rows(hand, writer, motion, rate_hz)
+    end = max((n.offset_s for n in notes), default=0.0)
+    rows.write_to(motion.finish(end) + SETTLE_S)
+    fingering = Fingering(tuple(done[n] for n in sorted(done)),
+                          tuple(sorted(skipped, key=lambda s: s.note)), loss)
+    return motion, rows, fingering
 
 
 class _Rows:
