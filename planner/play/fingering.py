@@ -1,56 +1,46 @@
 """Fingering and hand positions as one dynamic programme over atlas states.
 
-The song is cut at its onsets (events). At each event the hand is in a state: a rail
-position (on a ``RAIL_STEP_M`` grid) and a finger for every note sounding then (the new
-ones and those still held). A state exists only where the atlas has every one of those
-fingers over its key from that rail, pressing with the note's force within the motors'
-torque (``AtlasEntry.max_force_n``), the fingers in the order of their keys (no crossing
-in this version), one note per finger. A held note keeps its finger and the rail, or is
-cut at the event.
+The song is cut at its onsets (events). At each event the hand is in a state
+(``planner.play.costs.State``): a rail position and a finger for every note sounding
+then (the new ones and those still held). A state exists only where the atlas has every
+one of those fingers over its key from that rail, pressing with the note's force within
+the motors' torque (``AtlasEntry.max_force_n``), the fingers in the order of their keys,
+one note per finger; no finger passes one that has just played (the thumb on a white key
+excepted: it presses in front of the black keys). A held note keeps its finger, and the
+rail unless its finger can follow its key, or is cut at the event. Transitions cost what
+``planner.play.costs`` says.
 
-A transition costs the frames of music it loses (the currency of frame F1), from the
-timed moves of ``planner.play.moves``: a finger striking again needs ``repeat_gap_s``
-(same key) or ``move_gap_s`` (another key) between its key up and key down; a move of
-the rail needs every finger lifted, the rail's own time-optimal move, and the new
-fingers' descents. Where the music gives less, the shortfall is lost (as a key let up
-early or put down late). A cut loses the rest of the held note. Ties go to the smaller
-rail move and the finger nearer its natural place (``TIE_*``, far below a frame).
-
-A note no finger can press from any rail is left out before the programme
-(``OUT_OF_REACH`` or ``TORQUE``); when no state holds every new note of an event (more
-notes than fingers, a chord wider than the hand), the largest subset that fits is kept
-and the rest are left out (``CHORD``). The ``BEAM`` best states of each event go on.
+When no state holds every new note of an event (more notes than fingers, a chord wider
+than the hand), the largest subset that fits is kept and the rest are left out
+(``CHORD``). The ``BEAM`` best states of each event go on (at most ``PER_RAIL`` at one
+rail position), over a receding window (``chunks``).
 """
 
 from __future__ import annotations
 
-import enum
 import itertools
 import math
 from dataclasses import dataclass
 
 from planner.music import keyboard as kb
 from planner.play.atlas import Atlas
+from planner.play.costs import (
+    ONSET_TOL_S,
+    RAIL_STEP_M,
+    RECENT_S,
+    TIE_DX_PER_M,
+    Costs,
+    Skip,
+    SkipReason,
+    State,
+)
 from planner.play.moves import Moves
-from planner.targets import press_force_n
 
 THUMB = "thumb"
-RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart
 BEAM = 60  # states kept per event
 WINDOW = 48  # events the programme looks over at once ...
 LOOKAHEAD = 16  # ... the last of which it decides only in the next window
 PER_RAIL = 6  # ... at most this many at one rail position
-RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing
-# (the slowest move between two keys in the default hand's atlas, the thumb's, takes 0.2 s)
-ONSET_TOL_S = 1e-4  # notes starting this close together are one event
-TIE_RAIL_PER_M = 5.0  # frames per metre of rail moved: a tie-break, not a cost
-TIE_DX_PER_M = 0.5  # frames per metre a finger is off its natural place
-
-
-class SkipReason(enum.Enum):
-    OUT_OF_REACH = "out_of_reach"  # no finger presses the key from any rail position
-    TORQUE = "torque"  # the fingers that reach it cannot press with the note's force
-    CHORD = "chord"  # more notes at once than the hand can hold from one position
 
 
 @dataclass(frozen=True)
@@ -64,11 +54,6 @@ class Assignment:
     release_s: float | None = None
 
 
-@dataclass(frozen=True)
-class Skip:
-    note: int
-    reason: SkipReason
-    detail: str
 
 
 @dataclass(frozen=True)
@@ -92,18 +77,6 @@ class FingeringChunk:
     loss_frames: float
 
 
-@dataclass(frozen=True)
-class _State:
-    rail_i: int
-    fingers: tuple[tuple[int, str], ...]  # (note, finger), by note: the notes sounding
-    recent: tuple[tuple[int, str, int], ...] = ()  # (note, finger, rail index it was at):
-    # the last notes of fingers not sounding, ended within RECENT_S
-
-    def last_notes(self) -> tuple[tuple[int, str, int], ...]:
-        """Every finger's note that still matters to its next move, sounding or recent,
-        with the rail index it is (or was last) pressed from."""
-        return self.recent + tuple((m, f, self.rail_i) for m, f in self.fingers)
-
 
 def events(notes) -> list[tuple[float, list[int]]]:
     """(time, indices of the notes starting then), in time order."""
@@ -117,178 +90,10 @@ def events(notes) -> list[tuple[float, list[int]]]:
     return out
 
 
-class FingeringProblem:
-    """The programme for one song on one hand (built, then ``solve``d)."""
+class FingeringProblem(Costs):
+    """The programme for one song on one hand (built, then ``solve``d or streamed in
+    ``chunks``); its costs are ``Costs``'."""
 
-    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float) -> None:
-        self.notes = notes
-        self.atlas = atlas
-        self.moves = moves
-        self.dt = 1.0 / rate_hz
-        h = atlas.hand
-        r = atlas.rail
-        self.rail_lo = math.ceil(h.lower[r] / RAIL_STEP_M)
-        self.rail_hi = math.floor(h.upper[r] / RAIL_STEP_M)
-        self._rails: dict[tuple[str, int], frozenset[int]] = {}
-        self._entry: dict = {}
-        self._rail_time: dict[int, float] = {}
-        self._release: dict = {}
-        self._cands: dict = {}
-        self._t_down = [(math.ceil(n.onset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
-        self._t_up = [(math.ceil(n.offset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
-
-    # ------------------------------------------------------------------ reach
-    def rails(self, finger: str, note: int) -> frozenset[int]:
-        """Rail grid indices from which ``finger`` presses ``note`` with its force."""
-        key = (finger, note)
-        if key not in self._rails:
-            n = self.notes[note]
-            force = press_force_n(n.velocity)
-            x = kb.key(n.pitch).center_x_m
-            nat = self.atlas.natural_dx[finger]
-            span = 0.05
-            lo = max(self.rail_lo, math.ceil((x - nat - span) / RAIL_STEP_M))
-            hi = min(self.rail_hi, math.floor((x - nat + span) / RAIL_STEP_M))
-            ok = set()
-            for i in range(lo, hi + 1):
-                e = self.atlas.entry(finger, n.pitch, i * RAIL_STEP_M)
-                if e is not None and e.max_force_n >= force:
-                    ok.add(i)
-            self._rails[key] = frozenset(ok)
-        return self._rails[key]
-
-    def _reason(self, note: int) -> Skip | None:
-        fingers = self.atlas.hand.fingers
-        if any(self.rails(f, note) for f in fingers):
-            return None
-        n = self.notes[note]
-        reach = any(self.atlas.entry(f, n.pitch, i * RAIL_STEP_M) is not None
-                    for f in fingers for i in range(self.rail_lo, self.rail_hi + 1, 2))
-        if reach:
-            return Skip(note, SkipReason.TORQUE, f"no finger presses {kb_name(n.pitch)} with "
-                        f"{press_force_n(n.velocity):.1f} N within the motors' torque")
-        return Skip(note, SkipReason.OUT_OF_REACH, f"no finger reaches {kb_name(n.pitch)} "
-                    "from any rail position")
-
-    # ------------------------------------------------------------------ timing model
-    def t_down(self, note: int) -> float:
-        """When the key should go down: half a frame before the note's first row."""
-        return self._t_down[note]
-
-    def t_up(self, note: int) -> float:
-        """When it should come up: half a frame before the first row at or after its end."""
-        return self._t_up[note]
-
-    def entry(self, note: int, finger: str, rail_i: int):
-        key = (note, finger, rail_i)
-        e = self._entry.get(key, False)
-        if e is False:
-            e = self._entry[key] = self.atlas.entry(finger, self.notes[note].pitch,
-                                                    rail_i * RAIL_STEP_M)
-        return e
-
-    def _same_rail_loss(self, prev: _State, new_notes: dict[int, str], rail_i: int) -> float:
-        last = {f: (m, r) for m, f, r in prev.last_notes()}
-        on_key = {self.notes[m].pitch: (m, f) for m, f, r in prev.last_notes() if r == rail_i}
-        loss = 0.0
-        for n, f in new_notes.items():
-            other = on_key.get(self.notes[n].pitch)
-            if other is not None and other[1] != f:  # another finger leaves the key first
-                m2, g = other
-                gap = (self.moves.before_rail_s(self.entry(m2, g, rail_i))
-                       + self.moves.after_rail_s(self.entry(n, f, rail_i)))
-                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
-            if f not in last:
-                continue
-            m, r = last[f]
-            a, b = self.entry(m, f, r), self.entry(n, f, rail_i)
-            if self.notes[m].pitch == self.notes[n].pitch and r == rail_i:
-                gap = self.moves.repeat_gap_s(a)
-            else:
-                gap = self.moves.move_gap_s(a, b)
-                if gap is None:
-                    return math.inf
-            loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
-        return loss / self.dt
-
-    def _rail_loss(self, prev: _State, arrive: float, rail_i: int, kept=()) -> float:
-        """Frames lost to a move of the rail to ``rail_i`` after ``prev``: a finger of
-        ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
-        other lifts after its key comes up; then the rail moves (as slow as its slowest
-        follower), and the new fingers descend (``arrive``: the latest of their descents'
-        key-down lead minus key-down target). The worst pair decides, and it splits:
-        max over the lifters (lift + key up) + the move + max over the new. A ``kept``
-        note (sounding past the event) must follow, or the move is not made (inf)."""
-        key = (prev, rail_i)
-        got = self._release.get(key)
-        if got is None:
-            di = abs(rail_i - prev.rail_i)
-            T = self._rail_time.get(di)
-            if T is None:
-                T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
-            followers = set()
-            for m, f in prev.fingers:
-                a, b = self.entry(m, f, prev.rail_i), self.entry(m, f, rail_i)
-                mv = None if b is None else self.moves.follow(a, b)
-                # (the move fits inside the note, after its press and before its lift)
-                if mv is not None and (self.t_up(m) - self.t_down(m)
-                                       >= mv.duration_s + self.moves.press_min_s(a)):
-                    followers.add((m, f))
-                    T = max(T, mv.duration_s)
-            release = max((self.moves.before_rail_s(self.entry(m, f, r)) + self.t_up(m)
-                           for m, f, r in prev.last_notes() if (m, f) not in followers),
-                          default=-math.inf)
-            got = self._release[key] = (release + T, frozenset(followers))
-        release_t, followers = got
-        if not set(kept) <= followers:
-            return math.inf
-        di = abs(rail_i - prev.rail_i)
-        return max(0.0, release_t + arrive) / self.dt + TIE_RAIL_PER_M * di * RAIL_STEP_M
-
-    def _after_follow_loss(self, prev: _State, new: dict[int, str], rail_i: int) -> float:
-        """Frames lost around a move of the rail by the new notes whose finger, or whose
-        key, a follower still holds (that finger strikes again, same key, or moves on,
-        another key, once its note ends; another finger waits for it to leave the key),
-        and by those whose finger lifted from a recent note: it crosses to its new key
-        while the rail moves, then comes down."""
-        followers = self._release[(prev, rail_i)][1]
-        by_finger = {f: m for m, f in followers}
-        by_key = {self.notes[m].pitch: (m, f) for m, f in followers}
-        lifted = {f: (m, r) for m, f, r in prev.last_notes() if (m, f) not in followers}
-        loss = 0.0
-        for n, f in new.items():
-            m = by_finger.get(f)
-            if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
-                m, r = lifted[f]
-                across = self.moves.across(self.entry(m, f, r), self.entry(n, f, rail_i))
-                if across is None:
-                    return math.inf
-                gap = (self.moves.before_rail_s(self.entry(m, f, r))
-                       + across.duration_s + self.moves.after_rail_s(self.entry(n, f, rail_i)))
-                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
-                m = None
-            if m is not None:
-                a, b = self.entry(m, f, rail_i), self.entry(n, f, rail_i)
-                if self.notes[m].pitch == self.notes[n].pitch:
-                    gap = self.moves.repeat_gap_s(a)
-                else:
-                    gap = self.moves.move_gap_s(a, b)
-                    if gap is None:
-                        return math.inf
-                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
-            other = by_key.get(self.notes[n].pitch)
-            if other is not None and other[1] != f:
-                m2, g = other
-                gap = (self.moves.before_rail_s(self.entry(m2, g, rail_i))
-                       + self.moves.after_rail_s(self.entry(n, f, rail_i)))
-                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
-        return loss / self.dt
-
-    def _arrival(self, new: dict[int, str], rail_i: int) -> float:
-        return max(self.moves.after_rail_s(self.entry(n, f, rail_i)) - self.t_down(n)
-                   for n, f in new.items())
-
-    # ------------------------------------------------------------------ the programme
     def solve(self) -> Fingering:
         """The whole song's answer (the chunks of ``chunks`` put together)."""
         out: dict[int, Assignment] = {}
@@ -313,7 +118,7 @@ class FingeringProblem:
         for t, new in events(self.notes):
             playable = []
             for n in new:
-                why = self._reason(n)
+                why = self.reason(n)
                 if why is None:
                     playable.append(n)
                 else:
@@ -321,7 +126,7 @@ class FingeringProblem:
             if playable:
                 evs.append((t, playable))
         i = 0
-        start: dict[_State, tuple[float, _State | None]] = {}
+        start: dict[State, tuple[float, State | None]] = {}
         while i < len(evs):
             layers = []
             prev = start
@@ -337,7 +142,7 @@ class FingeringProblem:
             start = {last: (layers[k - 1][1][last][0], None)}
             i += k
 
-    def _path(self, layers) -> list[_State]:
+    def _path(self, layers) -> list[State]:
         """The best path through a window's layers, one state per layer."""
         state = min(layers[-1][1].items(), key=lambda kv: kv[1][0])[0]
         out = [state]
@@ -346,7 +151,7 @@ class FingeringProblem:
             out.append(state)
         return out[::-1]
 
-    def _chunk(self, layers, path: list[_State], before: _State | None) -> FingeringChunk:
+    def _chunk(self, layers, path: list[State], before: State | None) -> FingeringChunk:
         """What a committed stretch of the path says: the notes struck in it (finger, rail
         at their first state), the chord notes left out, the held notes cut (at the event
         whose state no longer holds them)."""
@@ -373,7 +178,7 @@ class FingeringProblem:
         """The states of one event that hold the largest subset of ``new`` any state holds
         (the ``BEAM`` cheapest)."""
         for size in range(len(new), 0, -1):
-            layer: dict[_State, tuple[float, _State | None]] = {}
+            layer: dict[State, tuple[float, State | None]] = {}
             for keep in itertools.combinations(new, size):
                 self._extend(layer, prev, t, list(keep))
             if layer:
@@ -409,7 +214,7 @@ class FingeringProblem:
                     for combo in itertools.combinations(free, len(new)):
                         self._try(layer, p, cost + cut, kept, dict(zip(new, combo)), t)
 
-    def _try(self, layer, p: _State | None, cost: float, kept, new: dict[int, str],
+    def _try(self, layer, p: State | None, cost: float, kept, new: dict[int, str],
              t: float) -> None:
         fingers = self.atlas.hand.fingers
         sounding = sorted([*kept, *new.items()], key=lambda mf: self.notes[mf[0]].pitch)
@@ -447,13 +252,13 @@ class FingeringProblem:
             same = p is not None and rail_i == p.rail_i
             if same not in recent:
                 recent[same] = self._recent(p, sounding, t, rail_i)
-            s = _State(rail_i, sounding_t, recent[same])
+            s = State(rail_i, sounding_t, recent[same])
             total = cost + step + tie
             if s not in layer or total < layer[s][0]:
                 layer[s] = (total, p)
 
     @staticmethod
-    def _moves_to(cands, p: _State | None):
+    def _moves_to(cands, p: State | None):
         """The rails worth a transition from ``p``: staying, when the new notes can be
         played from there; else, of the moves, the shortest one each way and the one
         with the fingers nearest their natural places (a longer move to a place no
@@ -488,7 +293,7 @@ class FingeringProblem:
             self._cands[key] = out
         return out
 
-    def _recent(self, p: _State | None, sounding, t: float,
+    def _recent(self, p: State | None, sounding, t: float,
                 rail_i: int) -> tuple[tuple[int, str, int], ...]:
         """The last notes of the fingers not sounding now, ended within RECENT_S of ``t``
         (a note of the state before that is not sounding now has just ended), with the
@@ -502,11 +307,8 @@ class FingeringProblem:
                 last[f] = (m, r)
         return tuple(sorted((m, f, r) for f, (m, r) in last.items()))
 
-def kb_name(pitch: int) -> str:
-    names = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
-    return f"{names[pitch % 12]}{pitch // 12 - 1}"
-
 
 def plan_fingering(notes, atlas: Atlas, moves: Moves, rate_hz: float) -> Fingering:
     """The fingering and hand positions of ``notes`` (see the module docstring)."""
     return FingeringProblem(notes, atlas, moves, rate_hz).solve()
+

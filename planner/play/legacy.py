@@ -557,13 +557,11 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
                        for a in assignments if a.release_s is not None)
             yield press_intervals(notes, assignments)
 
-    meta = {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
-            "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
-            "song": song_name, "notes": len(notes), "track": song.track,
-            "channel": song.channel, "transpose": song.transpose}
+    from planner.play.stream import play_metadata
+
     selfcheck = SelfCheck(hand, rate_hz)
-    writer = TrajectoryWriter(out_path, meta, hand.joint_names, hand.motor_names,
-                              on_rows=selfcheck.add_rows)
+    writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
+                              hand.joint_names, hand.motor_names, on_rows=selfcheck.add_rows)
     try:
         result = _run(pl, hand, notes, parts(), rail_of, writer, rate_hz, reasons, progress, t_start)
         cut_short = {i: f"cut short: let go {early:.2f} s early (its finger, or the hand, is "

@@ -52,6 +52,21 @@ def _part(move: Move, first: int, n: int) -> Move:
                 move.duration_s, move.v, move.a)
 
 
+def start_entries(atlas: Atlas, rail_m: float) -> dict[str, AtlasEntry]:
+    """Each finger's atlas entry over the key nearest its natural place that it can press
+    from ``rail_m`` (searched within a hand's width, nearest first)."""
+    out = {}
+    for f in atlas.hand.fingers:
+        x = rail_m + atlas.natural_dx[f]
+        near = sorted((p for p in kb.ALL_PITCHES if abs(kb.key(p).center_x_m - x) < 0.1),
+                      key=lambda p: abs(kb.key(p).center_x_m - x))
+        e = next((e for p in near if (e := atlas.entry(f, p, rail_m)) is not None), None)
+        if e is None:
+            raise PlannerError(f"the atlas has no pose of the {f} over any key near it")
+        out[f] = e
+    return out
+
+
 class MotionSkip(enum.Enum):
     TOO_LATE = "too_late"  # its key cannot go down before half of it is over
     TOO_SHORT = "too_short"  # a press cannot go down and up again inside it
@@ -140,11 +155,8 @@ class Motion:
     def _start_high(self) -> None:
         """The hand starts with every finger at crossing height over the key nearest its
         natural place (the first row: no tip near a key)."""
-        for f, st in self.fingers.items():
-            e = next((e for p in self._keys_by_distance(f)
-                      if (e := self.atlas.entry(f, p, self.rail.q[0])) is not None), None)
-            if e is None:
-                raise PlannerError(f"the atlas has no pose of the {f} over any key near it")
+        for f, e in start_entries(self.atlas, self.rail.q[0]).items():
+            st = self.fingers[f]
             st.entry = e
             st.track.q = e.high.copy()
             self.q0[self.hand.joint_slice(f)] = e.high
@@ -173,12 +185,6 @@ class Motion:
                 st.pose, st.note, st.up_s = "press", a.note, up
                 self.outcomes[a.note] = Outcome(a.note, 0.0, up)
         self.q0 = self.hand.apply_couplings(self.q0)
-
-    def _keys_by_distance(self, finger: str) -> list[int]:
-        """The keys within a hand's width of the finger's natural place, nearest first."""
-        x = self.rail.q[0] + self.atlas.natural_dx[finger]
-        near = [p for p in kb.ALL_PITCHES if abs(kb.key(p).center_x_m - x) < 0.1]
-        return sorted(near, key=lambda p: abs(kb.key(p).center_x_m - x))
 
     # ------------------------------------------------------------------ timing targets
     def t_down(self, note: int) -> float:

@@ -37,6 +37,15 @@ class PlayPlan:
     first_row_s: float
 
 
+def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -> dict:
+    """A play trajectory's metadata (spec section 4), with the song's note count and the
+    options it was read with, so that ``check`` reads it the same way."""
+    return {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
+            "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
+            "song": song_name, "notes": len(song.notes), "track": song.track,
+            "channel": song.channel, "transpose": song.transpose}
+
+
 class Planner2:
     """The per-hand part of the second planner (atlas, timed moves), built once."""
 
@@ -54,13 +63,9 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     t_start = time.perf_counter()
     pl = planner or Planner2(hand)
     notes = list(song.notes)
-    meta = {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
-            "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
-            "song": song_name, "notes": len(notes), "track": song.track,
-            "channel": song.channel, "transpose": song.transpose}
     selfcheck = SelfCheck(hand, rate_hz)
-    writer = TrajectoryWriter(out_path, meta, hand.joint_names, hand.motor_names,
-                              on_rows=selfcheck.add_rows)
+    writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
+                              hand.joint_names, hand.motor_names, on_rows=selfcheck.add_rows)
     try:
         motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer)
         left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}

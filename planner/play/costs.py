@@ -1,0 +1,243 @@
+"""What a transition of the fingering's dynamic programme costs, in frames of music lost.
+
+A state is a rail position (on a ``RAIL_STEP_M`` grid) and a finger for every note
+sounding then (``State``). A transition costs the frames of music it loses (the currency
+of frame F1), from the timed moves of ``planner.play.moves``: a finger striking again
+needs ``repeat_gap_s`` (same key) or ``move_gap_s`` (another key) between its key up and
+key down; another finger on a key a finger just left waits for its lift; a move of the
+rail needs every finger lifted but those that follow their keys, the rail's own
+time-optimal move, and the new fingers' descents. Where the music gives less, the
+shortfall is lost (as a key let up early or put down late). Ties go to the smaller rail
+move and the finger nearer its natural place (``TIE_*``, far below a frame). A note no
+finger can press from any rail is named (``OUT_OF_REACH`` or ``TORQUE``).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+
+from planner.music import keyboard as kb
+from planner.play.atlas import Atlas
+from planner.play.moves import Moves
+from planner.targets import press_force_n
+
+RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart
+RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing
+# (the slowest move between two keys in the default hand's atlas, the thumb's, takes 0.2 s)
+ONSET_TOL_S = 1e-4  # notes starting this close together are one event
+TIE_RAIL_PER_M = 5.0  # frames per metre of rail moved: a tie-break, not a cost
+TIE_DX_PER_M = 0.5  # frames per metre a finger is off its natural place
+
+
+class SkipReason(enum.Enum):
+    OUT_OF_REACH = "out_of_reach"  # no finger presses the key from any rail position
+    TORQUE = "torque"  # the fingers that reach it cannot press with the note's force
+    CHORD = "chord"  # more notes at once than the hand can hold from one position
+
+
+
+
+@dataclass(frozen=True)
+class Skip:
+    note: int
+    reason: SkipReason
+    detail: str
+
+
+
+
+@dataclass(frozen=True)
+class State:
+    rail_i: int
+    fingers: tuple[tuple[int, str], ...]  # (note, finger), by note: the notes sounding
+    recent: tuple[tuple[int, str, int], ...] = ()  # (note, finger, rail index it was at):
+    # the last notes of fingers not sounding, ended within RECENT_S
+
+    def last_notes(self) -> tuple[tuple[int, str, int], ...]:
+        """Every finger's note that still matters to its next move, sounding or recent,
+        with the rail index it is (or was last) pressed from."""
+        return self.recent + tuple((m, f, self.rail_i) for m, f in self.fingers)
+
+
+
+class Costs:
+    """The cost model of one song on one hand (memoised: built once per song)."""
+
+    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float) -> None:
+        self.notes = notes
+        self.atlas = atlas
+        self.moves = moves
+        self.dt = 1.0 / rate_hz
+        h = atlas.hand
+        r = atlas.rail
+        self.rail_lo = math.ceil(h.lower[r] / RAIL_STEP_M)
+        self.rail_hi = math.floor(h.upper[r] / RAIL_STEP_M)
+        self._rails: dict[tuple[str, int], frozenset[int]] = {}
+        self._entry: dict = {}
+        self._rail_time: dict[int, float] = {}
+        self._release: dict = {}
+        self._cands: dict = {}
+        self._t_down = [(math.ceil(n.onset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
+        self._t_up = [(math.ceil(n.offset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
+
+    # ------------------------------------------------------------------ reach
+    def rails(self, finger: str, note: int) -> frozenset[int]:
+        """Rail grid indices from which ``finger`` presses ``note`` with its force."""
+        key = (finger, note)
+        if key not in self._rails:
+            n = self.notes[note]
+            force = press_force_n(n.velocity)
+            x = kb.key(n.pitch).center_x_m
+            nat = self.atlas.natural_dx[finger]
+            span = 0.05
+            lo = max(self.rail_lo, math.ceil((x - nat - span) / RAIL_STEP_M))
+            hi = min(self.rail_hi, math.floor((x - nat + span) / RAIL_STEP_M))
+            ok = set()
+            for i in range(lo, hi + 1):
+                e = self.atlas.entry(finger, n.pitch, i * RAIL_STEP_M)
+                if e is not None and e.max_force_n >= force:
+                    ok.add(i)
+            self._rails[key] = frozenset(ok)
+        return self._rails[key]
+
+    def reason(self, note: int) -> Skip | None:
+        fingers = self.atlas.hand.fingers
+        if any(self.rails(f, note) for f in fingers):
+            return None
+        n = self.notes[note]
+        reach = any(self.atlas.entry(f, n.pitch, i * RAIL_STEP_M) is not None
+                    for f in fingers for i in range(self.rail_lo, self.rail_hi + 1, 2))
+        if reach:
+            return Skip(note, SkipReason.TORQUE, f"no finger presses {kb_name(n.pitch)} with "
+                        f"{press_force_n(n.velocity):.1f} N within the motors' torque")
+        return Skip(note, SkipReason.OUT_OF_REACH, f"no finger reaches {kb_name(n.pitch)} "
+                    "from any rail position")
+
+    # ------------------------------------------------------------------ timing model
+    def t_down(self, note: int) -> float:
+        """When the key should go down: half a frame before the note's first row."""
+        return self._t_down[note]
+
+    def t_up(self, note: int) -> float:
+        """When it should come up: half a frame before the first row at or after its end."""
+        return self._t_up[note]
+
+    def entry(self, note: int, finger: str, rail_i: int):
+        key = (note, finger, rail_i)
+        e = self._entry.get(key, False)
+        if e is False:
+            e = self._entry[key] = self.atlas.entry(finger, self.notes[note].pitch,
+                                                    rail_i * RAIL_STEP_M)
+        return e
+
+    def _same_rail_loss(self, prev: State, new_notes: dict[int, str], rail_i: int) -> float:
+        last = {f: (m, r) for m, f, r in prev.last_notes()}
+        on_key = {self.notes[m].pitch: (m, f) for m, f, r in prev.last_notes() if r == rail_i}
+        loss = 0.0
+        for n, f in new_notes.items():
+            other = on_key.get(self.notes[n].pitch)
+            if other is not None and other[1] != f:  # another finger leaves the key first
+                loss += self._leave_key_s(other, n, f, rail_i)
+            if f in last:
+                m, r = last[f]
+                loss += self._again_s(m, r, n, f, rail_i)
+        return loss / self.dt
+
+    def _again_s(self, m: int, r: int, n: int, f: str, rail_i: int) -> float:
+        """Seconds lost when finger ``f``, last on note ``m`` from rail ``r``, strikes
+        ``n`` from ``rail_i``: the same key again from the same place (a repeat), else a
+        lift, a move across and a descent; inf when no checked move gets there."""
+        a, b = self.entry(m, f, r), self.entry(n, f, rail_i)
+        if self.notes[m].pitch == self.notes[n].pitch and r == rail_i:
+            gap = self.moves.repeat_gap_s(a)
+        else:
+            gap = self.moves.move_gap_s(a, b)
+            if gap is None:
+                return math.inf
+        return max(0.0, gap - (self.t_down(n) - self.t_up(m)))
+
+    def _leave_key_s(self, other: tuple[int, str], n: int, f: str, rail_i: int) -> float:
+        """Seconds lost when finger ``f`` strikes ``n`` on the key another finger has
+        (``other``: its note and finger): that one lifts first, then this one descends."""
+        m2, g = other
+        gap = (self.moves.before_rail_s(self.entry(m2, g, rail_i))
+               + self.moves.after_rail_s(self.entry(n, f, rail_i)))
+        return max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
+
+    def _rail_loss(self, prev: State, arrive: float, rail_i: int, kept=()) -> float:
+        """Frames lost to a move of the rail to ``rail_i`` after ``prev``: a finger of
+        ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
+        other lifts after its key comes up; then the rail moves (as slow as its slowest
+        follower), and the new fingers descend (``arrive``: the latest of their descents'
+        key-down lead minus key-down target). The worst pair decides, and it splits:
+        max over the lifters (lift + key up) + the move + max over the new. A ``kept``
+        note (sounding past the event) must follow, or the move is not made (inf)."""
+        key = (prev, rail_i)
+        got = self._release.get(key)
+        if got is None:
+            di = abs(rail_i - prev.rail_i)
+            T = self._rail_time.get(di)
+            if T is None:
+                T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
+            followers = set()
+            for m, f in prev.fingers:
+                a, b = self.entry(m, f, prev.rail_i), self.entry(m, f, rail_i)
+                mv = None if b is None else self.moves.follow(a, b)
+                # (the move fits inside the note, after its press and before its lift)
+                if mv is not None and (self.t_up(m) - self.t_down(m)
+                                       >= mv.duration_s + self.moves.press_min_s(a)):
+                    followers.add((m, f))
+                    T = max(T, mv.duration_s)
+            release = max((self.moves.before_rail_s(self.entry(m, f, r)) + self.t_up(m)
+                           for m, f, r in prev.last_notes() if (m, f) not in followers),
+                          default=-math.inf)
+            got = self._release[key] = (release + T, frozenset(followers))
+        release_t, followers = got
+        if not set(kept) <= followers:
+            return math.inf
+        di = abs(rail_i - prev.rail_i)
+        return max(0.0, release_t + arrive) / self.dt + TIE_RAIL_PER_M * di * RAIL_STEP_M
+
+    def _after_follow_loss(self, prev: State, new: dict[int, str], rail_i: int) -> float:
+        """Frames lost around a move of the rail by the new notes whose finger, or whose
+        key, a follower still holds (that finger strikes again, same key, or moves on,
+        another key, once its note ends; another finger waits for it to leave the key),
+        and by those whose finger lifted from a recent note: it crosses to its new key
+        while the rail moves, then comes down."""
+        followers = self._release[(prev, rail_i)][1]
+        by_finger = {f: m for m, f in followers}
+        by_key = {self.notes[m].pitch: (m, f) for m, f in followers}
+        lifted = {f: (m, r) for m, f, r in prev.last_notes() if (m, f) not in followers}
+        loss = 0.0
+        for n, f in new.items():
+            m = by_finger.get(f)
+            if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
+                m, r = lifted[f]
+                across = self.moves.across(self.entry(m, f, r), self.entry(n, f, rail_i))
+                if across is None:
+                    return math.inf
+                gap = (self.moves.before_rail_s(self.entry(m, f, r))
+                       + across.duration_s + self.moves.after_rail_s(self.entry(n, f, rail_i)))
+                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
+                m = None
+            if m is not None:  # (it followed its key: it is at rail_i now)
+                loss += self._again_s(m, rail_i, n, f, rail_i)
+            other = by_key.get(self.notes[n].pitch)
+            if other is not None and other[1] != f:
+                loss += self._leave_key_s(other, n, f, rail_i)
+        return loss / self.dt
+
+    def _arrival(self, new: dict[int, str], rail_i: int) -> float:
+        return max(self.moves.after_rail_s(self.entry(n, f, rail_i)) - self.t_down(n)
+                   for n, f in new.items())
+
+    # ------------------------------------------------------------------ the programme
+
+
+def kb_name(pitch: int) -> str:
+    names = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
+    return f"{names[pitch % 12]}{pitch // 12 - 1}"
+
+
