@@ -105,7 +105,7 @@ def test_the_programme_runs_over_a_receding_window(hand_parts):
     """A 150-note song: the chunks cover every note once (struck or left out), the first
     chunk decides only the window less its look-ahead, and a note cut later is one struck
     before."""
-    from planner.play.fingering import LOOKAHEAD, WINDOW, FingeringProblem
+    from planner.play.fingering import FIRST_LOOKAHEAD, FIRST_WINDOW, FingeringProblem
 
     at, mv = hand_parts
     notes = [Note(60 + (k * 5) % 12, 0.3 * k, 0.3 * k + 0.28, 80) for k in range(150)]
@@ -114,7 +114,7 @@ def test_the_programme_runs_over_a_receding_window(hand_parts):
     struck = [a.note for c in chunks for a in c.assignments]
     left = [s.note for c in chunks for s in c.skipped]
     assert sorted(struck + left) == list(range(150))
-    assert len(chunks[0].assignments) + len(chunks[0].skipped) == WINDOW - LOOKAHEAD
+    assert len(chunks[0].assignments) + len(chunks[0].skipped) == FIRST_WINDOW - FIRST_LOOKAHEAD
     seen: set[int] = set()
     for c in chunks:
         seen |= {a.note for a in c.assignments}

@@ -95,3 +95,26 @@ def test_the_trajectory_ends_with_the_song(planner, tmp_path):
     rep = check_trajectory(str(out), str(song))
     assert rep.ok and not rep.play.wrong_presses
     assert res.duration_s <= 5.0 + 0.5
+
+
+def test_the_cli_layer_summarises_the_replay_and_exits_by_it(tmp_path, capsys):
+    """planner.play.summary.play_cli (the second planner behind ``cli.py play``): the
+    summary line the hardening tests parse, every note left out named, --strict exit 1."""
+    import argparse
+    import re
+
+    from planner.play.summary import play_cli
+
+    def args(song, out, strict=False):
+        return argparse.Namespace(song=str(song), output=str(out), hand="default", rate=100.0,
+                                  track=None, channel=None, transpose=False, strict=strict,
+                                  report=None, html=None)
+
+    assert play_cli(args(ROOT / "songs" / "twinkle.mid", tmp_path / "t.csv")) == 0
+    err = capsys.readouterr().err
+    assert re.search(r"^twinkle.mid: 14 notes, 14 played, 0 infeasible; \d+ rows", err, re.M)
+    short = DATA / "short_note_16_ticks.mid"
+    assert play_cli(args(short, tmp_path / "s.csv")) == 0
+    err = capsys.readouterr().err
+    assert "1 notes, 0 played, 1 infeasible" in err and "too_short: 17 ms long" in err
+    assert play_cli(args(short, tmp_path / "s.csv", strict=True)) == 1

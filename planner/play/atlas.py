@@ -36,7 +36,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from planner.hand.model import HandModel
 from planner.ik import PREPARE_HEIGHT_M, HandIK, PressTarget, press_target, surfaces_under
@@ -89,7 +88,12 @@ class Atlas:
         self._load(table_path(hand.urdf_sha256))
 
     # ------------------------------------------------------------------ set-up
-    def _natural_hand(self) -> np.ndarray:
+    def park(self) -> np.ndarray:
+        """The natural hand with the wrist fitted to hold the tips at crossing height (for
+        a hand that plays nothing: it waits clear of the keys)."""
+        return self._natural_hand(HIGH_Z_M)
+
+    def _natural_hand(self, z_m: float = BASE_HOVER_Z_M) -> np.ndarray:
         """The natural hand at rail 0: every finger ``CURL`` flexed with no abduction, and
         the wrist (flexion, deviation) that puts the tips, in the least-squares sense,
         ``BASE_HOVER_Z_M`` above the white tops, midway between full dip and crossing
@@ -107,9 +111,16 @@ class Atlas:
         def heights(w: np.ndarray) -> np.ndarray:
             q = q0.copy()
             q[wrist] = w
-            return h.tip_positions(q)[:, 2] - BASE_HOVER_Z_M
+            return h.tip_positions(q)[:, 2] - z_m
 
-        w = least_squares(heights, q0[wrist], bounds=(h.lower[wrist], h.upper[wrist])).x
+        w = q0[wrist].copy()
+        for _ in range(50):  # Gauss-Newton on two angles, finite-difference Jacobian
+            r = heights(w)
+            J = np.stack([(heights(w + 1e-6 * e) - r) / 1e-6 for e in np.eye(2)], axis=1)
+            step = np.linalg.lstsq(J, -r, rcond=None)[0]
+            w = np.clip(w + step, h.lower[wrist], h.upper[wrist])
+            if np.max(np.abs(step)) < 1e-10:
+                break
         q0[wrist] = w
         return q0
 

@@ -40,6 +40,7 @@ THUMB = "thumb"
 BEAM = 60  # states kept per event
 WINDOW = 48  # events the programme looks over at once ...
 LOOKAHEAD = 16  # ... the last of which it decides only in the next window
+FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows start sooner
 PER_RAIL = 6  # ... at most this many at one rail position
 
 
@@ -111,9 +112,10 @@ class FingeringProblem(Costs):
 
     def chunks(self):
         """The programme over a receding window: the best path over the next ``WINDOW``
-        events decides its first ones (all but ``LOOKAHEAD``), which are yielded
-        (``FingeringChunk``) and fixed; the next window starts from the state it reached.
-        So the motion and the rows can start after the first window, not the song."""
+        events (``FIRST_WINDOW`` at the start) decides its first ones (all but
+        ``LOOKAHEAD``), which are yielded (``FingeringChunk``) and fixed; the next window
+        starts from the state it reached. So the motion and the rows can start after the
+        first window, not the song."""
         evs = []
         for t, new in events(self.notes):
             playable = []
@@ -128,13 +130,14 @@ class FingeringProblem(Costs):
         i = 0
         start: dict[State, tuple[float, State | None]] = {}
         while i < len(evs):
+            window, ahead = (FIRST_WINDOW, FIRST_LOOKAHEAD) if i == 0 else (WINDOW, LOOKAHEAD)
             layers = []
             prev = start
-            for t, new in evs[i:i + WINDOW]:
+            for t, new in evs[i:i + window]:
                 prev = self._layer(prev, t, new)
                 layers.append((t, prev, new))
             final = i + len(layers) >= len(evs)
-            k = len(layers) if final else max(1, len(layers) - LOOKAHEAD)
+            k = len(layers) if final else max(1, len(layers) - ahead)
             path = self._path(layers)
             before = next(iter(start)) if start else None
             yield self._chunk(layers[:k], path[:k], before)

@@ -30,7 +30,7 @@ import numpy as np
 
 from planner.errors import PlannerError
 from planner.music import keyboard as kb
-from planner.play.atlas import Atlas, AtlasEntry
+from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.fingering import Assignment
 from planner.play.moves import Moves
 from planner.play.profile import Move, straight_move
@@ -54,7 +54,9 @@ def _part(move: Move, first: int, n: int) -> Move:
 
 def start_entries(atlas: Atlas, rail_m: float) -> dict[str, AtlasEntry]:
     """Each finger's atlas entry over the key nearest its natural place that it can press
-    from ``rail_m`` (searched within a hand's width, nearest first)."""
+    from ``rail_m``; where no key is in its reach (the rail near an end of the keyboard),
+    the entry nearest its natural place of any key: its crossing height is above every
+    key top wherever it is."""
     out = {}
     for f in atlas.hand.fingers:
         x = rail_m + atlas.natural_dx[f]
@@ -62,7 +64,11 @@ def start_entries(atlas: Atlas, rail_m: float) -> dict[str, AtlasEntry]:
                       key=lambda p: abs(kb.key(p).center_x_m - x))
         e = next((e for p in near if (e := atlas.entry(f, p, rail_m)) is not None), None)
         if e is None:
-            raise PlannerError(f"the atlas has no pose of the {f} over any key near it")
+            n = round(SPAN_M / STEP_M)
+            e = next((e for k in sorted(range(-n, n + 1), key=abs) for pc in range(12)
+                      if (e := atlas.entry_at(f, pc, k)) is not None), None)
+        if e is None:
+            raise PlannerError(f"the atlas has no pose of the {f} at all")
         out[f] = e
     return out
 
@@ -139,7 +145,9 @@ class Motion:
     """Builds the segments note by note (``place``); ``rows`` samples them."""
 
     def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float,
-                 rail0_m: float) -> None:
+                 rail0_m: float, park: bool = False) -> None:
+        """``park``: the hand has nothing to play; it waits with every tip at crossing
+        height (``Atlas.park``) and never moves."""
         self.notes, self.atlas, self.moves = notes, atlas, moves
         self.hand = atlas.hand
         self.dt = 1.0 / rate_hz
@@ -148,7 +156,13 @@ class Motion:
         self.rail = _Track(np.array([rail0_m]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
                         for f in self.hand.fingers}
-        self._start_high()
+        if park:
+            self.q0 = atlas.park()
+            self.q0[atlas.rail] = rail0_m
+            for f, st in self.fingers.items():
+                st.track.q = self.q0[self.hand.joint_slice(f)].copy()
+        else:
+            self._start_high()
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
         self.outcomes: dict[int, Outcome] = {}
 

@@ -37,7 +37,7 @@ from planner.play.atlas import (
 )
 from planner.play.profile import Move, straight_move
 
-CROSS_TOL = 1e-6  # the key crossing's path parameter is found to this precision
+CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
 HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
 ACROSS_SAMPLES = (0.25, 0.5, 0.75)  # a move across at crossing height is checked here: both
 # ends are at HIGH_Z_M, 4.5 mm above HIGH_SAFE_Z_M, and the tip's height along a straight

@@ -1,0 +1,67 @@
+"""``cli.py play`` on the second planner: the summary a user reads, and the exit status.
+
+The summary is the plan's own replay (``PlayPlan.verdict``: the check's rules): every
+note it calls played the check finds hit, every other note is named with its reason.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+
+from planner.errors import InputError
+from planner.hand.model import load_hand
+from planner.music.midi import load_song, pitch_name
+from planner.play.stream import PlayPlan, plan_song
+
+
+def format_summary(song_name: str, notes, plan: PlayPlan, out: str) -> str:
+    """The summary: counts and the file, timing, then every note not played (with its
+    reason), every late key and every wrong press the replay finds."""
+    v = plan.verdict
+    song_s = max((n.offset_s for n in notes), default=0.0)
+    rtf = song_s / plan.planning_s if plan.planning_s > 0 else math.inf
+    rails = len({a.rail_m for a in plan.fingering.assignments})
+    lines = [(f"{song_name}: {v.notes} notes, {v.played} played, {len(v.skipped)} infeasible; "
+             f"{plan.rows} rows ({plan.duration_s:.2f} s) -> {out}"),
+             (f"planning {plan.planning_s * 1000:.0f} ms for {song_s:.2f} s of music "
+             f"(real-time factor {rtf:.0f}x), first row after {plan.first_row_s * 1000:.0f} ms, "
+             f"{rails} hand position{'' if rails == 1 else 's'}, frame F1 {v.score.f1:.4f}")]
+    for s in v.skipped:
+        n = notes[s.note]
+        lines.append(f"  infeasible: t={n.onset_s:.3f} s {pitch_name(n.pitch)} (MIDI {n.pitch}): "
+                     f"{s.reason.value}: {s.detail}")
+    for lt in v.score.late:
+        lines.append(f"  late: t={lt.onset_s:.3f} s {lt.name} key down {lt.late_s * 1000:.0f} ms "
+                     "late (too fast for the motors)")
+    for w in v.score.wrong_presses:
+        lines.append(f"  WRONG PRESS: {w.start_s:.3f}-{w.end_s:.3f} s {w.name} by "
+                     f"{'+'.join(w.fingers) or '?'} (no note of that key sounds then)")
+    return "\n".join(lines)
+
+
+def play_cli(a) -> int:
+    """Plan, write, summarise; 0, or 1 under ``--strict`` when a note is not played, late
+    or a key is pressed wrongly."""
+    if (a.report or a.html) and a.output == "-":
+        raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
+    song = load_song(a.song, track=a.track, channel=a.channel, transpose=a.transpose)
+    hand = load_hand(a.hand)
+    out = a.output if a.output is not None else os.path.splitext(a.song)[0] + ".csv"
+    name = os.path.basename(a.song)
+    plan = plan_song(song, hand, out, a.rate, song_name=name)
+    sys.stderr.write(format_summary(name, song.notes, plan, out) + "\n")
+    if a.report or a.html:
+        from planner.check import check_trajectory
+        from planner.report import write_check_report, write_html
+
+        rep = check_trajectory(out, a.song)
+        if a.report:
+            write_check_report(rep, a.report)
+        if a.html:
+            write_html(rep, a.html)
+    score = plan.verdict.score
+    if a.strict and (plan.verdict.skipped or score.late or score.wrong_presses):
+        return 1
+    return 0
