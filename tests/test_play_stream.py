@@ -112,7 +112,7 @@ def test_the_cli_layer_summarises_the_replay_and_exits_by_it(tmp_path, capsys):
 
     assert play_cli(args(ROOT / "songs" / "twinkle.mid", tmp_path / "t.csv")) == 0
     err = capsys.readouterr().err
-    assert re.search(r"^twinkle.mid: 14 notes, 14 played, 0 infeasible; \d+ rows", err, re.M)
+    assert re.search(r"^twinkle.mid: 14 notes, 14 played, 0 infeasible; \d+ rows", err, re.MULTILINE)
     short = DATA / "short_note_16_ticks.mid"
     assert play_cli(args(short, tmp_path / "s.csv")) == 0
     err = capsys.readouterr().err
