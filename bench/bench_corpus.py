@@ -30,7 +30,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from planner.check import NOTE_HIT_FRACTION, check_trajectory
 from planner.hand.model import load_hand
 from planner.music.midi import load_song
-from planner.play import Planner, plan_song
+from planner.play.legacy import Planner, plan_song
 from planner.play.stream import Planner2
 from planner.play.stream import plan_song as plan_song2
 

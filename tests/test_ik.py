@@ -29,7 +29,7 @@ def test_the_thumb_presses_every_black_key_from_its_natural_place():
     every one: its press range began 15 mm behind the front, out of its reach.)"""
     from planner.hand.model import load_hand
     from planner.ik import THUMB_BLACK_EDGE_M
-    from planner.play import Planner
+    from planner.play.legacy import Planner
 
     hand = load_hand("default")
     pl = Planner(hand)

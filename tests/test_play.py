@@ -14,7 +14,7 @@ import pytest
 from planner.check import check_trajectory
 from planner.hand.model import load_hand
 from planner.music.midi import Note, Song, load_song
-from planner.play import Planner, plan_song
+from planner.play.legacy import Planner, plan_song
 from planner.trajfile import read_trajectory
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -118,3 +118,36 @@ def test_the_cli_layer_summarises_the_replay_and_exits_by_it(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "1 notes, 0 played, 1 infeasible" in err and "too_short: 17 ms long" in err
     assert play_cli(args(short, tmp_path / "s.csv", strict=True)) == 1
+
+
+def test_a_hand_on_a_fixed_mount_plays_what_it_reaches(tmp_path):
+    """A hand file with ``[rail] enabled = false``: the atlas has one place for the hand;
+    notes out of its reach are named, the rest played, nothing pressed wrongly."""
+    from planner.hand.model import HandModel
+    from planner.hand.spec import hands_dir, load_hand_spec
+
+    text = (hands_dir() / "default.toml").read_text(encoding="utf-8")
+    p = tmp_path / "norail.toml"
+    p.write_text(text.replace("enabled = true", "enabled = false").replace(
+        'name = "default"', 'name = "norail"'), encoding="utf-8")
+    hand = HandModel(load_hand_spec(str(p)))
+    assert "rail" not in hand.joint_names
+    song = ROOT / "songs" / "twinkle.mid"
+    res = plan_song(load_song(song), hand, str(tmp_path / "t.csv"))
+    rep = check_trajectory(str(tmp_path / "t.csv"), str(song), hand_override=hand)
+    assert rep.ok and not rep.play.wrong_presses and all(lc.count == 0 for lc in rep.limits)
+    assert res.verdict.played == rep.play.notes_hit >= 10
+    assert {s.reason.value for s in res.verdict.skipped} <= {"out_of_reach"}
+
+
+def test_a_chord_of_twelve_keeps_five_next_to_each_other(planner, tmp_path):
+    """Twelve notes at once: the programme tries runs of keys in pitch order, not every
+    subset (C(12, 5) and more), keeps what one hand position holds, names the rest."""
+    notes = [Note(60 + k, 0.0, 1.0, 80) for k in range(12)]
+    song = tmp_path / "cluster.mid"
+    write_notes_midi(notes, song)
+    res = plan_song(load_song(song), planner.hand, str(tmp_path / "c.csv"), planner=planner)
+    assert 1 <= res.verdict.played <= 5
+    assert all(s.reason.value == "chord" for s in res.verdict.skipped)
+    played = sorted(a.note for a in res.fingering.assignments)
+    assert played == list(range(played[0], played[0] + len(played)))  # a run of keys

@@ -78,10 +78,10 @@ class Atlas:
     def __init__(self, hand: HandModel, ik: HandIK | None = None) -> None:
         self.hand = hand
         self.ik = ik or HandIK(hand)
-        self.rail = hand.index["rail"]
+        self.rail = hand.index.get("rail")  # None: a hand on a fixed mount (rail at 0)
         self.base = self._natural_hand()
         tips = hand.tip_positions(self.base)
-        self.natural_dx = {f: float(tips[i, 0] - self.base[self.rail])
+        self.natural_dx = {f: float(tips[i, 0] - self.rail_of(self.base))
                            for i, f in enumerate(hand.fingers)}
         self._entries: dict[tuple[str, int, int], AtlasEntry | None] = {}
         self.solves = 0
@@ -124,6 +124,22 @@ class Atlas:
         q0[wrist] = w
         return q0
 
+    def rail_of(self, q: np.ndarray) -> float:
+        """The rail position of a configuration (0 on a fixed mount)."""
+        return 0.0 if self.rail is None else float(q[self.rail])
+
+    def _solved_on(self, finger: str, pitch_class: int, k: int) -> int | None:
+        """The key an entry is solved on: of the canonical octave when the rail can carry
+        the hand there; on a fixed mount, the key of that pitch class at that place (None
+        if none is within half a grid step)."""
+        if self.rail is not None:
+            return 12 * (CANON_OCTAVE + 1) + pitch_class
+        x = self.natural_dx[finger] + k * STEP_M
+        for p in kb.ALL_PITCHES:
+            if p % 12 == pitch_class and abs(kb.key(p).center_x_m - x) <= STEP_M / 2:
+                return p
+        return None
+
     # ------------------------------------------------------------------ lookup
     def grid_index(self, finger: str, pitch: int, rail_m: float) -> int:
         """The sample of ``dx`` nearest to key ``pitch`` seen from ``rail_m``."""
@@ -159,7 +175,8 @@ class Atlas:
         at ``rail_m`` and the entry's finger in ``pose`` ("press", "rise", "hover" or
         "high")."""
         q = (self.base if q_into is None else q_into).copy()
-        q[self.rail] = rail_m
+        if self.rail is not None:
+            q[self.rail] = rail_m
         q[self.hand.joint_slice(entry.finger)] = getattr(entry, pose)
         return self.hand.apply_couplings(q)
 
@@ -217,12 +234,15 @@ class Atlas:
     # ------------------------------------------------------------------ solving
     def _solve(self, finger: str, pitch_class: int, k: int) -> AtlasEntry | None:
         h = self.hand
-        pitch = 12 * (CANON_OCTAVE + 1) + pitch_class
-        rail = self.rail_for(finger, pitch, k)
-        if not h.lower[self.rail] <= rail <= h.upper[self.rail]:
+        pitch = self._solved_on(finger, pitch_class, k)
+        if pitch is None:
             return None
+        rail = self.rail_for(finger, pitch, k)
         base = self.base.copy()
-        base[self.rail] = rail
+        if self.rail is not None:
+            if not h.lower[self.rail] <= rail <= h.upper[self.rail]:
+                return None
+            base[self.rail] = rail
         target = press_target(finger, pitch)
         self.solves += 1
         r = self.ik.solve_finger(target, base)

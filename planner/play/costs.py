@@ -72,8 +72,8 @@ class Costs:
         self.dt = 1.0 / rate_hz
         h = atlas.hand
         r = atlas.rail
-        self.rail_lo = math.ceil(h.lower[r] / RAIL_STEP_M)
-        self.rail_hi = math.floor(h.upper[r] / RAIL_STEP_M)
+        self.rail_lo = 0 if r is None else math.ceil(h.lower[r] / RAIL_STEP_M)
+        self.rail_hi = 0 if r is None else math.floor(h.upper[r] / RAIL_STEP_M)
         self._rails: dict[tuple[str, int], frozenset[int]] = {}
         self._entry: dict = {}
         self._rail_time: dict[int, float] = {}
@@ -85,10 +85,10 @@ class Costs:
     # ------------------------------------------------------------------ reach
     def rails(self, finger: str, note: int) -> frozenset[int]:
         """Rail grid indices from which ``finger`` presses ``note`` with its force."""
-        key = (finger, note)
+        n = self.notes[note]
+        force = press_force_n(n.velocity)
+        key = (finger, n.pitch, force)  # (bounded: keys and forces, not notes)
         if key not in self._rails:
-            n = self.notes[note]
-            force = press_force_n(n.velocity)
             x = kb.key(n.pitch).center_x_m
             nat = self.atlas.natural_dx[finger]
             span = 0.05
@@ -125,12 +125,17 @@ class Costs:
         return self._t_up[note]
 
     def entry(self, note: int, finger: str, rail_i: int):
-        key = (note, finger, rail_i)
+        key = (self.notes[note].pitch, finger, rail_i)  # (bounded: keys, not notes)
         e = self._entry.get(key, False)
         if e is False:
-            e = self._entry[key] = self.atlas.entry(finger, self.notes[note].pitch,
-                                                    rail_i * RAIL_STEP_M)
+            e = self._entry[key] = self.atlas.entry(finger, key[0], rail_i * RAIL_STEP_M)
         return e
+
+    def forget(self) -> None:
+        """Drop what only the states of a window just decided can use (memory stays
+        bounded on a long song)."""
+        self._release.clear()
+        self._cands.clear()
 
     def _same_rail_loss(self, prev: State, new_notes: dict[int, str], rail_i: int) -> float:
         last = {f: (m, r) for m, f, r in prev.last_notes()}

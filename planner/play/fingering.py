@@ -130,6 +130,7 @@ class FingeringProblem(Costs):
         i = 0
         start: dict[State, tuple[float, State | None]] = {}
         while i < len(evs):
+            self.forget()
             window, ahead = (FIRST_WINDOW, FIRST_LOOKAHEAD) if i == 0 else (WINDOW, LOOKAHEAD)
             layers = []
             prev = start
@@ -178,12 +179,14 @@ class FingeringProblem(Costs):
         return FingeringChunk(tuple(assignments), tuple(skipped), tuple(cuts), float(loss))
 
     def _layer(self, prev, t: float, new: list[int]):
-        """The states of one event that hold the largest subset of ``new`` any state holds
-        (the ``BEAM`` cheapest)."""
-        for size in range(len(new), 0, -1):
+        """The states of one event that hold the most notes of ``new`` any state holds (a
+        run of them in pitch order when not all), the ``BEAM`` cheapest."""
+        new = sorted(new, key=lambda n: self.notes[n].pitch)
+        for size in range(min(len(new), len(self.atlas.hand.fingers)), 0, -1):
             layer: dict[State, tuple[float, State | None]] = {}
-            for keep in itertools.combinations(new, size):
-                self._extend(layer, prev, t, list(keep))
+            # (of fewer notes, those next to each other in pitch: one hand's span)
+            for i in range(len(new) - size + 1):
+                self._extend(layer, prev, t, new[i:i + size])
             if layer:
                 return self._prune(layer)
         return {}

@@ -97,6 +97,7 @@ class _Track:
 
     q: np.ndarray
     segments: list[Segment] = field(default_factory=list)
+    starts: list[float] = field(default_factory=list)  # their start times (for bisection)
     free_s: float = 0.0  # the end of its last segment
 
     def add(self, t0_s: float, move: Move) -> float:
@@ -104,6 +105,7 @@ class _Track:
             return t0_s
         t0_s = max(t0_s, self.free_s)
         self.segments.append(Segment(t0_s, move))
+        self.starts.append(t0_s)
         self.q = move.q_a + move.dq
         self.free_s = t0_s + move.duration_s
         return self.free_s
@@ -111,7 +113,7 @@ class _Track:
     def at(self, t_s: np.ndarray, q_start: np.ndarray) -> np.ndarray:
         """Positions at sorted times ``t_s``."""
         out = np.empty((len(t_s), len(q_start)))
-        starts = [s.t0_s for s in self.segments]
+        starts = self.starts
         for k, t in enumerate(t_s):
             i = bisect.bisect_right(starts, t) - 1
             if i < 0:
@@ -152,13 +154,15 @@ class Motion:
         self.hand = atlas.hand
         self.dt = 1.0 / rate_hz
         self.q0 = atlas.base.copy()
-        self.q0[atlas.rail] = rail0_m
+        if atlas.rail is not None:
+            self.q0[atlas.rail] = rail0_m
         self.rail = _Track(np.array([rail0_m]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
                         for f in self.hand.fingers}
         if park:
             self.q0 = atlas.park()
-            self.q0[atlas.rail] = rail0_m
+            if atlas.rail is not None:
+                self.q0[atlas.rail] = rail0_m
             for f, st in self.fingers.items():
                 st.track.q = self.q0[self.hand.joint_slice(f)].copy()
         else:
@@ -440,7 +444,8 @@ class Motion:
     def rows(self, t_s: np.ndarray) -> np.ndarray:
         """Whole-hand configurations at times ``t_s`` (sorted)."""
         q = np.tile(self.q0, (len(t_s), 1))
-        q[:, self.atlas.rail] = self.rail.at(t_s, np.array([self.q0[self.atlas.rail]]))[:, 0]
+        if self.atlas.rail is not None:
+            q[:, self.atlas.rail] = self.rail.at(t_s, np.array([self.q0[self.atlas.rail]]))[:, 0]
         for f, st in self.fingers.items():
             js = self.hand.joint_slice(f)
             q[:, js] = st.track.at(t_s, self.q0[js])

@@ -143,6 +143,8 @@ class Moves:
 
     def _follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
         h, r = self.hand, self.atlas.rail
+        if r is None:
+            return None
         pitch = 60 + a.pitch_class
         k = kb.key(pitch)
         js = self.js[a.finger]
@@ -199,5 +201,7 @@ class Moves:
 
     def rail_move(self, rail_a: float, rail_b: float) -> Move:
         r = self.atlas.rail
+        if r is None:  # (a fixed mount: the rail stays at 0)
+            return Move(np.array([rail_a]), np.zeros(1), 0.0, 1.0, 1.0)
         return straight_move(np.array([rail_a]), np.array([rail_b]),
                              self.hand.velocity[[r]], self.hand.acceleration[[r]])

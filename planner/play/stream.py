@@ -115,7 +115,7 @@ def _plan(notes, pl: Planner2, rate_hz: float, hand: HandModel, writer: Trajecto
                 a = done[n]
                 done[n] = Assignment(a.note, a.finger, a.rail_m, t)
     if motion is None:  # nothing to play: the hand waits, still
-        motion = Motion(notes, pl.atlas, pl.moves, rate_hz, float(pl.atlas.base[pl.atlas.rail]),
+        motion = Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base),
                         park=True)
         rows = _Rows(hand, writer, motion, rate_hz)
     end = max((n.offset_s for n in notes), default=0.0)
