@@ -51,6 +51,16 @@ class Verdict:
     def played(self) -> int:
         return self.notes - len(self.skipped)
 
+    def problem_lines(self) -> list[str]:
+        """The summary's lines for every key the replay finds down late and every wrong
+        press."""
+        out = [f"  late: t={lt.onset_s:.3f} s {lt.name} key down {lt.late_s * 1000:.0f} ms "
+               "late (too fast for the motors)" for lt in self.score.late]
+        out += [f"  WRONG PRESS: {w.start_s:.3f}-{w.end_s:.3f} s {w.name} by "
+                f"{'+'.join(w.fingers) or '?'} (no note of that key sounds then)"
+                for w in self.score.wrong_presses]
+        return out
+
     def end_info(self) -> dict[str, Any]:
         """The end marker's claims (``check`` holds them against its replay)."""
         return {"notes": self.notes, "played": self.played,

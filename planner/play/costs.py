@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 
 from planner.music import keyboard as kb
+from planner.music.midi import pitch_name
 from planner.play.atlas import Atlas
 from planner.play.moves import Moves
 from planner.targets import press_force_n
@@ -110,9 +111,9 @@ class Costs:
         reach = any(self.atlas.entry(f, n.pitch, i * RAIL_STEP_M) is not None
                     for f in fingers for i in range(self.rail_lo, self.rail_hi + 1, 2))
         if reach:
-            return Skip(note, SkipReason.TORQUE, f"no finger presses {kb_name(n.pitch)} with "
+            return Skip(note, SkipReason.TORQUE, f"no finger presses {pitch_name(n.pitch)} with "
                         f"{press_force_n(n.velocity):.1f} N within the motors' torque")
-        return Skip(note, SkipReason.OUT_OF_REACH, f"no finger reaches {kb_name(n.pitch)} "
+        return Skip(note, SkipReason.OUT_OF_REACH, f"no finger reaches {pitch_name(n.pitch)} "
                     "from any rail position")
 
     # ------------------------------------------------------------------ timing model
@@ -239,10 +240,3 @@ class Costs:
                    for n, f in new.items())
 
     # ------------------------------------------------------------------ the programme
-
-
-def kb_name(pitch: int) -> str:
-    names = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
-    return f"{names[pitch % 12]}{pitch // 12 - 1}"
-
-

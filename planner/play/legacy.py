@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.errors import InputError, SolverError
+from planner.errors import InputError
 from planner.fingering import FINGER_ORDER, HandReach, assign_fingers, fit_rail
 from planner.hand.model import HandModel, load_hand
 from planner.ik import (
@@ -32,6 +32,7 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.music.midi import Song, load_song, pitch_name
+from planner.play.stream import guard_rows, play_metadata
 from planner.selfcheck import SelfCheck, SkipReason, Verdict
 from planner.targets import MOVE_S, descent_time_s, press_intervals
 from planner.trajectory import (
@@ -556,8 +557,6 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
             cut.extend((a.note_index, notes[a.note_index].offset_s - a.release_s)
                        for a in assignments if a.release_s is not None)
             yield press_intervals(notes, assignments)
-
-    from planner.play.stream import play_metadata
 
     selfcheck = SelfCheck(hand, rate_hz)
     writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
@@ -1430,27 +1429,6 @@ class _Timeline:
             self.go_high(f)
 
 
-def _guard(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -> None:
-    """Refuse (never clamp) setpoints outside the joint position or speed limits: they
-    protect the hardware, so a planner bug must stop the plan, not reach the hand."""
-    if not np.all(np.isfinite(q)):
-        raise SolverError("planner produced a non-finite setpoint")
-    lo, hi = hand.lower - 1e-9, hand.upper + 1e-9
-    bad = np.argwhere((q < lo) | (q > hi))
-    if bad.size:
-        i, j = bad[0]
-        raise SolverError(f"planner bug: {hand.joint_names[j]} = {q[i, j]:.6f} outside "
-                          f"[{hand.lower[j]:.6f}, {hand.upper[j]:.6f}]", problem=q)
-    rows = q if prev is None else np.vstack([prev, q])
-    if len(rows) > 1:
-        v = np.abs(np.diff(rows, axis=0)) / dt
-        over = np.argwhere(v > hand.velocity * (1.0 + 1e-6) + 1e-9)
-        if over.size:
-            i, j = over[0]
-            raise SolverError(f"planner bug: {hand.joint_names[j]} speed {v[i, j]:.4f} above "
-                              f"{hand.velocity[j]:.4f}", problem=q)
-
-
 SHIFT_GAP_S = 0.25  # the hand moves while a key is held when the next notes come this soon after
 SHIFT_BUDGET_S = 0.1  # ... and the held note is at least this much longer than the move
 REFIT_MIN_M = 0.002  # a hand position is sought at a rail refitted to its window if that moves it this far
@@ -1801,7 +1779,7 @@ def _run(pl: Planner, hand: HandModel, notes, parts, rail_of: dict[int, float],
         if n_rows_end > next_row:
             t = np.arange(next_row, n_rows_end) * dt
             q = hand.apply_couplings(sample([p for _, p, _ in every], np.array([x for _, _, x in every]), t, hold))
-            _guard(hand, q, last_row, dt)
+            guard_rows(hand, q, last_row, dt)
             last_row = q[-1].copy()
             writer.write_rows(t, q, hand.motor_angles(q))
             if math.isnan(first_row_s):
@@ -1932,13 +1910,7 @@ def format_summary(song_name: str, res: PlayResult, song_s: float, out: str) -> 
         nt = res.notes[i]
         lines.append(f"  cut short: t={nt.onset_s:.3f} s {pitch_name(nt.pitch)} let go {early:.2f} s early "
                      "(its finger, or the hand, is needed for the notes after it)")
-    score = res.verdict.score
-    for lt in score.late:
-        lines.append(f"  late: t={lt.onset_s:.3f} s {lt.name} key down {lt.late_s * 1000:.0f} ms late "
-                     "(too fast for the motors)")
-    for w in score.wrong_presses:
-        lines.append(f"  WRONG PRESS: {w.start_s:.3f}-{w.end_s:.3f} s {w.name} by "
-                     f"{'+'.join(w.fingers) or '?'} (no note of that key sounds then)")
+    lines.extend(res.verdict.problem_lines())
     return "\n".join(lines)
 
 
@@ -1954,14 +1926,9 @@ def play_cli(a) -> int:
     if a.report or a.html:
         if out == "-":
             raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
-        from planner.check import check_trajectory
-        from planner.report import write_check_report, write_html
+        from planner.play.summary import write_reports
 
-        rep = check_trajectory(out, a.song)
-        if a.report:
-            write_check_report(rep, a.report)
-        if a.html:
-            write_html(rep, a.html)
+        write_reports(out, a.song, a.report, a.html)
     score = res.verdict.score
     if a.strict and (res.infeasible or score.late or score.wrong_presses):
         return 1

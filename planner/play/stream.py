@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.errors import InputError, PlannerError
+from planner.errors import InputError, SolverError
 from planner.hand.model import HandModel
 from planner.music.midi import Song
 from planner.play.atlas import Atlas
@@ -99,7 +99,7 @@ def _plan(notes, pl: Planner2, rate_hz: float, hand: HandModel, writer: Trajecto
         if motion is None and ch.assignments:
             first = min(ch.assignments, key=lambda a: (notes[a.note].onset_s, notes[a.note].pitch))
             motion = Motion(notes, pl.atlas, pl.moves, rate_hz, first.rail_m)
-            motion.prepare(sorted(ch.assignments, key=lambda a: notes[a.note].onset_s))
+            motion.prepare(ch.assignments)
             rows = _Rows(hand, writer, motion, rate_hz)
         for _, item in steps:
             if isinstance(item, Assignment):
@@ -146,7 +146,7 @@ class _Rows:
             return
         t = np.arange(self.next_row, n) * self.dt
         q = self.motion.rows(t)
-        _guard(self.hand, q, self.last, self.dt)
+        guard_rows(self.hand, q, self.last, self.dt)
         self.writer.write_rows(t, q, self.hand.motor_angles(q))
         if math.isnan(self.first_row_s):
             self.first_row_s = time.perf_counter()
@@ -154,14 +154,22 @@ class _Rows:
         self.next_row = n
 
 
-def _guard(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -> None:
-    """Refuse (never clamp) rows outside the joint limits or their speed limits."""
-    if not all(hand.within_limits(r, tol=1e-9) for r in q):
-        raise PlannerError("a planned row is outside the joint limits")
-    full = q if prev is None else np.vstack([prev, q])
-    if len(full) > 1:
-        v = np.abs(np.diff(full, axis=0)) / dt
-        if np.any(v > hand.velocity * 1.001 + 1e-9):
-            j = int(np.argmax(np.max(v / hand.velocity, axis=0)))
-            raise PlannerError(f"a planned row moves {hand.joint_names[j]} faster than its "
-                               "speed limit")
+def guard_rows(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -> None:
+    """Refuse (never clamp) setpoints outside the joint position or speed limits: they
+    protect the hardware, so a planner bug must stop the plan, not reach the hand."""
+    if not np.all(np.isfinite(q)):
+        raise SolverError("planner produced a non-finite setpoint")
+    lo, hi = hand.lower - 1e-9, hand.upper + 1e-9
+    bad = np.argwhere((q < lo) | (q > hi))
+    if bad.size:
+        i, j = bad[0]
+        raise SolverError(f"planner bug: {hand.joint_names[j]} = {q[i, j]:.6f} outside "
+                          f"[{hand.lower[j]:.6f}, {hand.upper[j]:.6f}]", problem=q)
+    rows = q if prev is None else np.vstack([prev, q])
+    if len(rows) > 1:
+        v = np.abs(np.diff(rows, axis=0)) / dt
+        over = np.argwhere(v > hand.velocity * (1.0 + 1e-6) + 1e-9)
+        if over.size:
+            i, j = over[0]
+            raise SolverError(f"planner bug: {hand.joint_names[j]} speed {v[i, j]:.4f} above "
+                              f"{hand.velocity[j]:.4f}", problem=q)

@@ -32,12 +32,7 @@ def format_summary(song_name: str, notes, plan: PlayPlan, out: str) -> str:
         n = notes[s.note]
         lines.append(f"  infeasible: t={n.onset_s:.3f} s {pitch_name(n.pitch)} (MIDI {n.pitch}): "
                      f"{s.reason.value}: {s.detail}")
-    for lt in v.score.late:
-        lines.append(f"  late: t={lt.onset_s:.3f} s {lt.name} key down {lt.late_s * 1000:.0f} ms "
-                     "late (too fast for the motors)")
-    for w in v.score.wrong_presses:
-        lines.append(f"  WRONG PRESS: {w.start_s:.3f}-{w.end_s:.3f} s {w.name} by "
-                     f"{'+'.join(w.fingers) or '?'} (no note of that key sounds then)")
+    lines.extend(v.problem_lines())
     return "\n".join(lines)
 
 
@@ -53,15 +48,22 @@ def play_cli(a) -> int:
     plan = plan_song(song, hand, out, a.rate, song_name=name)
     sys.stderr.write(format_summary(name, song.notes, plan, out) + "\n")
     if a.report or a.html:
-        from planner.check import check_trajectory
-        from planner.report import write_check_report, write_html
-
-        rep = check_trajectory(out, a.song)
-        if a.report:
-            write_check_report(rep, a.report)
-        if a.html:
-            write_html(rep, a.html)
+        write_reports(out, a.song, a.report, a.html)
     score = plan.verdict.score
     if a.strict and (plan.verdict.skipped or score.late or score.wrong_presses):
         return 1
     return 0
+
+
+def write_reports(traj_path: str, song_path: str, report_dir: str | None,
+                  html_path: str | None) -> None:
+    """``--report DIR`` and ``--html FILE`` of a written plan: the independent check's
+    replay of it, plotted and animated."""
+    from planner.check import check_trajectory
+    from planner.report import write_check_report, write_html
+
+    rep = check_trajectory(traj_path, song_path)
+    if report_dir:
+        write_check_report(rep, report_dir)
+    if html_path:
+        write_html(rep, html_path)
