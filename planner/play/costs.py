@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from planner.music import keyboard as kb
 from planner.music.midi import pitch_name
@@ -55,12 +55,36 @@ class State:
     fingers: tuple[tuple[int, str], ...]  # (note, finger), by note: the notes sounding
     recent: tuple[tuple[int, str, int], ...] = ()  # (note, finger, rail index it was at):
     # the last notes of fingers not sounding, ended within RECENT_S
+    last_notes: tuple[tuple[int, str, int], ...] = field(init=False, compare=False,
+                                                         repr=False)
+    # every finger's note that still matters to its next move, sounding or recent, with
+    # the rail index it is (or was last) pressed from
+    _hash: int = field(init=False, compare=False, repr=False)
 
-    def last_notes(self) -> tuple[tuple[int, str, int], ...]:
-        """Every finger's note that still matters to its next move, sounding or recent,
-        with the rail index it is (or was last) pressed from."""
-        return self.recent + tuple((m, f, self.rail_i) for m, f in self.fingers)
+    def __post_init__(self) -> None:  # (the programme hashes a state many times)
+        object.__setattr__(self, "last_notes", self.recent + tuple(
+            (m, f, self.rail_i) for m, f in self.fingers))
+        object.__setattr__(self, "_hash", hash((self.rail_i, self.fingers, self.recent)))
 
+    def __hash__(self) -> int:
+        return self._hash
+
+
+class Prev:
+    """What a state of the event before tells every transition from it, worked out once
+    (the programme weighs hundreds of transitions from each state)."""
+
+    __slots__ = ("around", "fresh", "held", "last", "on_key", "release", "state")
+
+    def __init__(self, costs: Costs, state: State, t: float) -> None:
+        self.state = state
+        pitch, t_up = costs.pitch, costs._t_up
+        self.held = [(m, f) for m, f in state.fingers if costs.offset[m] > t + ONSET_TOL_S]
+        self.last = {f: (m, r) for m, f, r in state.last_notes}
+        self.on_key = {pitch[m]: (m, f) for m, f, r in state.last_notes if r == state.rail_i}
+        self.fresh = [(m, f, r) for m, f, r in state.last_notes if t_up[m] > t - RECENT_S]
+        self.release: dict[int, tuple[float, frozenset]] = {}  # by rail index
+        self.around: dict[int, tuple] = {}  # by rail index
 
 
 class Costs:
@@ -78,8 +102,9 @@ class Costs:
         self._rails: dict[tuple[str, int], frozenset[int]] = {}
         self._entry: dict = {}
         self._rail_time: dict[int, float] = {}
-        self._release: dict = {}
         self._cands: dict = {}
+        self.pitch = [n.pitch for n in notes]
+        self.offset = [n.offset_s for n in notes]
         self._t_down = [(math.ceil(n.onset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
         self._t_up = [(math.ceil(n.offset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
 
@@ -126,7 +151,7 @@ class Costs:
         return self._t_up[note]
 
     def entry(self, note: int, finger: str, rail_i: int):
-        key = (self.notes[note].pitch, finger, rail_i)  # (bounded: keys, not notes)
+        key = (self.pitch[note], finger, rail_i)  # (bounded: keys, not notes)
         e = self._entry.get(key, False)
         if e is False:
             e = self._entry[key] = self.atlas.entry(finger, key[0], rail_i * RAIL_STEP_M)
@@ -135,15 +160,13 @@ class Costs:
     def forget(self) -> None:
         """Drop what only the states of a window just decided can use (memory stays
         bounded on a long song)."""
-        self._release.clear()
         self._cands.clear()
 
-    def _same_rail_loss(self, prev: State, new_notes: dict[int, str], rail_i: int) -> float:
-        last = {f: (m, r) for m, f, r in prev.last_notes()}
-        on_key = {self.notes[m].pitch: (m, f) for m, f, r in prev.last_notes() if r == rail_i}
+    def _same_rail_loss(self, prev: Prev, new_notes: dict[int, str]) -> float:
+        rail_i, last, on_key = prev.state.rail_i, prev.last, prev.on_key
         loss = 0.0
         for n, f in new_notes.items():
-            other = on_key.get(self.notes[n].pitch)
+            other = on_key.get(self.pitch[n])
             if other is not None and other[1] != f:  # another finger leaves the key first
                 loss += self._leave_key_s(other, n, f, rail_i)
             if f in last:
@@ -156,7 +179,7 @@ class Costs:
         ``n`` from ``rail_i``: the same key again from the same place (a repeat), else a
         lift, a move across and a descent; inf when no checked move gets there."""
         a, b = self.entry(m, f, r), self.entry(n, f, rail_i)
-        if self.notes[m].pitch == self.notes[n].pitch and r == rail_i:
+        if self.pitch[m] == self.pitch[n] and r == rail_i:
             gap = self.moves.repeat_gap_s(a)
         else:
             gap = self.moves.move_gap_s(a, b)
@@ -172,7 +195,7 @@ class Costs:
                + self.moves.after_rail_s(self.entry(n, f, rail_i)))
         return max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
 
-    def _rail_loss(self, prev: State, arrive: float, rail_i: int, kept=()) -> float:
+    def _rail_loss(self, prev: Prev, arrive: float, rail_i: int, kept=()) -> float:
         """Frames lost to a move of the rail to ``rail_i`` after ``prev``: a finger of
         ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
         other lifts after its key comes up; then the rail moves (as slow as its slowest
@@ -180,57 +203,65 @@ class Costs:
         key-down lead minus key-down target). The worst pair decides, and it splits:
         max over the lifters (lift + key up) + the move + max over the new. A ``kept``
         note (sounding past the event) must follow, or the move is not made (inf)."""
-        key = (prev, rail_i)
-        got = self._release.get(key)
+        got = prev.release.get(rail_i)
         if got is None:
-            di = abs(rail_i - prev.rail_i)
-            T = self._rail_time.get(di)
-            if T is None:
-                T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
-            followers = set()
-            for m, f in prev.fingers:
-                a, b = self.entry(m, f, prev.rail_i), self.entry(m, f, rail_i)
-                mv = None if b is None else self.moves.follow(a, b)
-                # (the move fits inside the note, after its press and before its lift)
-                if mv is not None and (self.t_up(m) - self.t_down(m)
-                                       >= mv.duration_s + self.moves.press_min_s(a)):
-                    followers.add((m, f))
-                    T = max(T, mv.duration_s)
-            release = max((self.moves.before_rail_s(self.entry(m, f, r)) + self.t_up(m)
-                           for m, f, r in prev.last_notes() if (m, f) not in followers),
-                          default=-math.inf)
-            got = self._release[key] = (release + T, frozenset(followers))
+            got = prev.release[rail_i] = self._release_of(prev.state, rail_i)
         release_t, followers = got
-        if not set(kept) <= followers:
+        if not followers.issuperset(kept):
             return math.inf
-        di = abs(rail_i - prev.rail_i)
+        di = abs(rail_i - prev.state.rail_i)
         return max(0.0, release_t + arrive) / self.dt + TIE_RAIL_PER_M * di * RAIL_STEP_M
 
-    def _after_follow_loss(self, prev: State, new: dict[int, str], rail_i: int) -> float:
+    def _release_of(self, prev: State, rail_i: int) -> tuple[float, frozenset]:
+        """When the rail arrives at ``rail_i`` after ``prev`` (the lifters' key up, lift,
+        and the move), and which notes ride along."""
+        di = abs(rail_i - prev.rail_i)
+        T = self._rail_time.get(di)
+        if T is None:
+            T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
+        followers = set()
+        for m, f in prev.fingers:
+            a, b = self.entry(m, f, prev.rail_i), self.entry(m, f, rail_i)
+            mv = None if b is None else self.moves.follow(a, b)
+            # (the move fits inside the note, after its press and before its lift)
+            if mv is not None and (self._t_up[m] - self._t_down[m]
+                                   >= mv.duration_s + self.moves.press_min_s(a)):
+                followers.add((m, f))
+                T = max(T, mv.duration_s)
+        release = max((self.moves.before_rail_s(self.entry(m, f, r)) + self._t_up[m]
+                       for m, f, r in prev.last_notes if (m, f) not in followers),
+                      default=-math.inf)
+        return release + T, frozenset(followers)
+
+    def _after_follow_loss(self, prev: Prev, new: dict[int, str], rail_i: int) -> float:
         """Frames lost around a move of the rail by the new notes whose finger, or whose
         key, a follower still holds (that finger strikes again, same key, or moves on,
         another key, once its note ends; another finger waits for it to leave the key),
         and by those whose finger lifted from a recent note: it crosses to its new key
         while the rail moves, then comes down."""
-        followers = self._release[(prev, rail_i)][1]
-        by_finger = {f: m for m, f in followers}
-        by_key = {self.notes[m].pitch: (m, f) for m, f in followers}
-        lifted = {f: (m, r) for m, f, r in prev.last_notes() if (m, f) not in followers}
+        around = prev.around.get(rail_i)
+        if around is None:
+            followers = prev.release[rail_i][1]
+            around = prev.around[rail_i] = (
+                {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
+                {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
+        by_finger, by_key, lifted = around
         loss = 0.0
         for n, f in new.items():
             m = by_finger.get(f)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
                 m, r = lifted[f]
-                across = self.moves.across(self.entry(m, f, r), self.entry(n, f, rail_i))
+                a, b = self.entry(m, f, r), self.entry(n, f, rail_i)
+                across = self.moves.across(a, b)
                 if across is None:
                     return math.inf
-                gap = (self.moves.before_rail_s(self.entry(m, f, r))
-                       + across.duration_s + self.moves.after_rail_s(self.entry(n, f, rail_i)))
-                loss += max(0.0, gap - (self.t_down(n) - self.t_up(m)))
+                gap = (self.moves.before_rail_s(a) + across.duration_s
+                       + self.moves.after_rail_s(b))
+                loss += max(0.0, gap - (self._t_down[n] - self._t_up[m]))
                 m = None
             if m is not None:  # (it followed its key: it is at rail_i now)
                 loss += self._again_s(m, rail_i, n, f, rail_i)
-            other = by_key.get(self.notes[n].pitch)
+            other = by_key.get(self.pitch[n])
             if other is not None and other[1] != f:
                 loss += self._leave_key_s(other, n, f, rail_i)
         return loss / self.dt

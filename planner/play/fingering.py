@@ -13,7 +13,7 @@ rail unless its finger can follow its key, or is cut at the event. Transitions c
 When no state holds every new note of an event (more notes than fingers, a chord wider
 than the hand), the largest subset that fits is kept and the rest are left out
 (``CHORD``). The ``BEAM`` best states of each event go on (at most ``PER_RAIL`` at one
-rail position), over a receding window (``chunks``).
+rail position, one of each hand shape), over a receding window (``chunks``).
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ from planner.play.atlas import Atlas
 from planner.play.costs import (
     ONSET_TOL_S,
     RAIL_STEP_M,
-    RECENT_S,
     TIE_DX_PER_M,
     Costs,
+    Prev,
     Skip,
     SkipReason,
     State,
@@ -37,11 +37,14 @@ from planner.play.costs import (
 from planner.play.moves import Moves
 
 THUMB = "thumb"
-BEAM = 60  # states kept per event
+BEAM = 20  # states kept per event (measured: docs/play-second-design.md, "Speed")
 WINDOW = 48  # events the programme looks over at once ...
 LOOKAHEAD = 16  # ... the last of which it decides only in the next window
 FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows start sooner
 PER_RAIL = 6  # ... at most this many at one rail position
+PER_SHAPE = 1  # ... and one of each hand shape (rail and fingers on the notes sounding):
+# states that differ only in the notes just let go (``State.recent``) crowd out others
+BOUND_EVERY = 8  # the beam's cost bound is renewed after this many states before
 
 
 @dataclass(frozen=True)
@@ -94,6 +97,10 @@ def events(notes) -> list[tuple[float, list[int]]]:
 class FingeringProblem(Costs):
     """The programme for one song on one hand (built, then ``solve``d or streamed in
     ``chunks``); its costs are ``Costs``'."""
+
+    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float) -> None:
+        super().__init__(notes, atlas, moves, rate_hz)
+        self._order = {f: i for i, f in enumerate(atlas.hand.fingers)}
 
     def solve(self) -> Fingering:
         """The whole song's answer (the chunks of ``chunks`` put together)."""
@@ -191,76 +198,93 @@ class FingeringProblem(Costs):
                 return self._prune(layer)
         return {}
 
+    @classmethod
+    def _beam_bound(cls, layer) -> float:
+        """The cost of the last state ``_prune`` keeps of ``layer`` (inf when it keeps
+        fewer than ``BEAM``)."""
+        kept = cls._prune(layer)
+        return max(v[0] for v in kept.values()) if len(kept) == BEAM else math.inf
+
     @staticmethod
     def _prune(layer):
         """The ``BEAM`` cheapest states, at most ``PER_RAIL`` of them at one rail position
         (so that the programme keeps other hand positions in view)."""
-        out, per = {}, {}
+        out, per, shape = {}, {}, {}
         for s, v in sorted(layer.items(), key=lambda kv: kv[1][0]):
-            if per.get(s.rail_i, 0) < PER_RAIL:
+            k = (s.rail_i, s.fingers)
+            if per.get(s.rail_i, 0) < PER_RAIL and shape.get(k, 0) < PER_SHAPE:
                 out[s] = v
                 per[s.rail_i] = per.get(s.rail_i, 0) + 1
+                shape[k] = shape.get(k, 0) + 1
                 if len(out) == BEAM:
                     break
         return out
 
     def _extend(self, layer, prev, t: float, new: list[int]) -> None:
         fingers = self.atlas.hand.fingers
-        new = sorted(new, key=lambda n: self.notes[n].pitch)
+        new = sorted(new, key=lambda n: self.pitch[n])
+        offset = self.offset
         starts = prev.items() if prev else [(None, (0.0, None))]
-        for p, (cost, _) in starts:
-            held = [] if p is None else [(m, f) for m, f in p.fingers
-                                         if self.notes[m].offset_s > t + ONSET_TOL_S]
+        bound = math.inf
+        for i, (p, (cost, _)) in enumerate(starts):
+            # (the states before come cheapest first, and no step costs less than
+            # nothing: once ``BEAM`` states are cheaper than this one's cost, no state
+            # it leads to is kept, nor are those of the states after it)
+            if i % BOUND_EVERY == 0 and len(layer) >= BEAM:
+                bound = self._beam_bound(layer)
+            if cost > bound:
+                break
+            ctx = None if p is None else Prev(self, p, t)
+            held = [] if p is None else ctx.held
             for k in range(len(held), -1, -1):
                 for kept in itertools.combinations(held, k):
-                    cut = sum(self.notes[m].offset_s - t for m, _ in held
+                    cut = sum(offset[m] - t for m, _ in held
                               if (m, _) not in kept) / self.dt
                     busy = {f for _, f in kept}
                     free = [f for f in fingers if f not in busy]
                     for combo in itertools.combinations(free, len(new)):
-                        self._try(layer, p, cost + cut, kept, dict(zip(new, combo)), t)
+                        self._try(layer, ctx, cost + cut, kept, dict(zip(new, combo)), t)
 
-    def _try(self, layer, p: State | None, cost: float, kept, new: dict[int, str],
+    def _try(self, layer, ctx: Prev | None, cost: float, kept, new: dict[int, str],
              t: float) -> None:
-        fingers = self.atlas.hand.fingers
-        sounding = sorted([*kept, *new.items()], key=lambda mf: self.notes[mf[0]].pitch)
-        order = [fingers.index(f) for _, f in sounding]
+        order_of, pitch = self._order, self.pitch
+        sounding = sorted([*kept, *new.items()], key=lambda mf: pitch[mf[0]])
+        order = [order_of[f] for _, f in sounding]
         if any(b <= a for a, b in itertools.pairwise(order)):
             return
+        p = None if ctx is None else ctx.state
         sounding_t = tuple(sorted(sounding))
         busy = {f for _, f in sounding}
         # fingers that left their keys within RECENT_S are still over them: the new
         # fingers keep the hand's order with them too (no finger crosses another)
-        left = [] if p is None else [(m, f) for m, f, r in p.last_notes()
-                                     if f not in busy and r == p.rail_i
-                                     and self.t_up(m) > t - RECENT_S]
-        near = sorted([*sounding, *left], key=lambda mf: self.notes[mf[0]].pitch)
+        left = [] if p is None else [(m, f) for m, f, r in ctx.fresh
+                                     if f not in busy and r == p.rail_i]
+        near = sorted([*sounding, *left], key=lambda mf: pitch[mf[0]])
         # (the thumb on a white key presses in front of the black keys, 30 mm and more
         # before the long fingers' tips: they pass behind it, it passes under them)
-        near = [(m, f) for m, f in near
-                if not (f == THUMB and not kb.is_black(self.notes[m].pitch))]
-        order_near = [fingers.index(f) for _, f in near]
+        order_near = [order_of[f] for m, f in near
+                      if not (f == THUMB and not kb.is_black(pitch[m]))]
         crossing = any(b <= a for a, b in itertools.pairwise(order_near))
-        recent = {}
+        recent = None
         for rail_i, arrive, tie in self._moves_to(self._candidates(new), p):
             if crossing and rail_i == p.rail_i:
                 continue
             if p is None:
                 step = 0.0
             elif rail_i == p.rail_i:
-                step = self._same_rail_loss(p, new, rail_i)
+                step = self._same_rail_loss(ctx, new)
             else:
-                step = self._rail_loss(p, arrive, rail_i, kept)
+                step = self._rail_loss(ctx, arrive, rail_i, kept)
                 if not math.isinf(step):
-                    step += self._after_follow_loss(p, new, rail_i)
+                    step += self._after_follow_loss(ctx, new, rail_i)
             if math.isinf(step):
                 continue
-            same = p is not None and rail_i == p.rail_i
-            if same not in recent:
-                recent[same] = self._recent(p, sounding, t, rail_i)
-            s = State(rail_i, sounding_t, recent[same])
+            if recent is None:
+                recent = self._recent(ctx, busy)
+            s = State(rail_i, sounding_t, recent)
             total = cost + step + tie
-            if s not in layer or total < layer[s][0]:
+            old = layer.get(s)
+            if old is None or total < old[0]:
                 layer[s] = (total, p)
 
     @staticmethod
@@ -299,17 +323,16 @@ class FingeringProblem(Costs):
             self._cands[key] = out
         return out
 
-    def _recent(self, p: State | None, sounding, t: float,
-                rail_i: int) -> tuple[tuple[int, str, int], ...]:
-        """The last notes of the fingers not sounding now, ended within RECENT_S of ``t``
-        (a note of the state before that is not sounding now has just ended), with the
-        rail they were pressed from."""
-        if p is None:
+    @staticmethod
+    def _recent(ctx: Prev | None, busy: set[str]) -> tuple[tuple[int, str, int], ...]:
+        """The last notes of the fingers not sounding now (``busy``: those sounding),
+        ended within RECENT_S of the event (a note of the state before that is not
+        sounding now has just ended), with the rail they were pressed from."""
+        if ctx is None:
             return ()
-        busy = {f for _, f in sounding}
         last: dict[str, tuple[int, int]] = {}
-        for m, f, r in p.last_notes():
-            if f not in busy and self.t_up(m) > t - RECENT_S:
+        for m, f, r in ctx.fresh:
+            if f not in busy:
                 last[f] = (m, r)
         return tuple(sorted((m, f, r) for f, (m, r) in last.items()))
 
