@@ -1,8 +1,8 @@
 """How `play`'s planning time grows with the song (issue 14, item 5): songs of N notes of
-three kinds, each planned once by the planner named, time per note and time to the first
-row, and the ratio of the time per note at each N to the smallest N.
+three kinds, each planned once, time per note and time to the first row, and the ratio of
+the time per note at each N to the smallest N.
 
-    python bench/bench_growth.py [--sizes 1000 5000 20000] [--planner old|new]
+    python bench/bench_growth.py [--sizes 1000 5000 20000]
 
 Kinds: ``dense`` (one-tick notes, 16.7 ms, on five keys back to back), ``same`` (one-tick
 notes on C4, 20 per second), ``spread`` (100 ms notes over two octaves, 8 per second).
@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from planner.hand.model import load_hand
 from planner.music.midi import Note, Song
+from planner.play import Planner, plan_song
 
 TICK_S = 1 / 960  # one tick at 480 per beat, 120 bpm
 
@@ -41,15 +42,9 @@ def song(kind: str, n: int) -> Song:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", type=int, nargs="+", default=[1000, 5000, 20000])
-    ap.add_argument("--planner", default="old", choices=["old", "new"])
     ap.add_argument("--kinds", nargs="+", default=["dense", "same", "spread"])
     a = ap.parse_args()
     hand = load_hand("default")
-    if a.planner == "old":
-        from planner.play.legacy import Planner, plan_song
-    else:
-        from planner.play.stream import Planner2 as Planner
-        from planner.play.stream import plan_song
     print(f"{'kind':8s} {'notes':>7s} {'song s':>8s} {'plan s':>8s} {'ms/note':>8s} "
           f"{'x smallest':>10s} {'first row s':>11s}")
     with tempfile.TemporaryDirectory() as d:

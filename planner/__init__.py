@@ -1,7 +1,8 @@
 """Task planner for a tendon-driven humanoid robot hand.
 
-Pipeline: midi -> notes -> fingering -> targets -> IK -> trajectory -> writer,
-with the hand model and the catch planner beside it. See README.md.
+Play: music (MIDI -> notes) -> play (atlas -> fingering -> motion -> stream) -> trajfile,
+the plan's own replay (selfcheck) as its summary; catch beside it; check replays any
+file independently; the hand model under all of them. See README.md and docs/.
 """
 
 from planner.errors import InfeasibleError, InputError, PlannerError, SolverError

@@ -182,7 +182,7 @@ class HandIK:
     # -------------------------------------------------------------- solve
     def solve(self, presses: list[PressTarget], q_start: np.ndarray, posture: np.ndarray,
               hover: tuple[str, ...] | None = None, max_iter: int = 60,
-              tol_m: float = PRESS_TOL_M, prepare: list[PressTarget] = ()) -> IKResult:
+              tol_m: float = PRESS_TOL_M) -> IKResult:
         """Place the pressing tips on their targets, the others above the keys.
 
         ``q_start``: initial configuration (joint order of the hand).
@@ -191,8 +191,6 @@ class HandIK:
         and the arm task (10) keeps the rail at ``posture``'s rail and the
         wrist where it is, so that the hand moves only what the task needs.
         ``hover``: fingers that must clear the keys (default: all not pressing).
-        ``prepare``: fingers that wait ``PREPARE_HEIGHT_M`` above the key they
-        press next (soft target), so that they can go straight down.
         Returns the configuration reached; ``converged`` says whether every
         pressing tip is within ``tol_m`` and every hovering tip clears the
         keys by the spec's 5 mm.
@@ -201,10 +199,8 @@ class HandIK:
         pressing = {p.finger for p in presses}
         if len(pressing) != len(presses):
             raise InputError("one finger cannot press two keys")
-        prepare = [p for p in prepare if p.finger not in pressing]
         if hover is None:
-            waiting = {p.finger for p in prepare}
-            hover = tuple(f for f in fingers if f not in pressing and f not in waiting)
+            hover = tuple(f for f in fingers if f not in pressing)
         self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
         self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
         self.arm_task.set_joints({n: float((posture if n == "rail" else q_start)[self.hand.index[n]])
@@ -216,14 +212,8 @@ class HandIK:
             t = self.solver.add_position_task(f"{p.finger}_tip", np.array(p.point_m))
             t.configure(f"press_{p.finger}", "soft", 1e5)
             self._tasks[p.finger] = t
-        for p in prepare:
-            x, y, z = p.point_m
-            t = self.solver.add_position_task(f"{p.finger}_tip", np.array([x, y, z + kb.KEY_DIP_M + PREPARE_HEIGHT_M]))
-            t.configure(f"prepare_{p.finger}", "soft", 1e3)
-            self._tasks[p.finger] = t
         err = np.inf
         clearance = np.inf
-        prep_last = np.inf
         it = 0
         for it in range(1, max_iter + 1):
             # slide each target's y within its range to the tip's current y
@@ -241,11 +231,7 @@ class HandIK:
             err = self._press_error(presses)
             clearance = self._clearance(hover)
             if err <= tol_m and clearance >= 0.005 - 1e-9:
-                # the waiting fingers are soft targets: iterate on while they still approach
-                prep = self._prepare_error(prepare)
-                if prep <= tol_m or prep > prep_last - 1e-5:
-                    break
-                prep_last = prep
+                break
         q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
         self._clear_half_spaces()
         return IKResult(q, bool(err <= tol_m and clearance >= 0.005 - 1e-9), it, float(err), float(clearance))
@@ -256,15 +242,6 @@ class HandIK:
             tip = self._tip(p.finger)
             y = float(np.clip(tip[1], *p.y_range_m))
             e = max(e, float(np.linalg.norm(tip - np.array([p.point_m[0], y, p.point_m[2]]))))
-        return e
-
-    def _prepare_error(self, prepare: list[PressTarget]) -> float:
-        """Worst distance (m) of a waiting fingertip from its place above its key."""
-        e = 0.0
-        for p in prepare:
-            x, y, z = p.point_m
-            goal = np.array([x, y, z + kb.KEY_DIP_M + PREPARE_HEIGHT_M])
-            e = max(e, float(np.linalg.norm(self._tip(p.finger) - goal)))
         return e
 
     def _clearance(self, hover) -> float:

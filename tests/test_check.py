@@ -36,7 +36,7 @@ from planner.music.midi import Note, load_song, write_notes_midi
 from planner.trajfile import TrajectoryWriter
 
 FORBIDDEN = ("planner.play", "planner.ik", "planner.trajectory", "planner.catch",
-             "planner.fingering", "planner.targets")
+             "planner.selfcheck")
 RATE = 100.0
 RAMP_S = 0.08  # press / release ramp; the 5 mm threshold is crossed at its middle
 

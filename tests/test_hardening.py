@@ -1017,23 +1017,23 @@ def test_unwritable_urdf_and_played_paths(capsys, planned, tmp_path):
 def test_interrupt_during_planning_leaves_an_incomplete_file(capsys, monkeypatch, tmp_path, dest):
     """The rows streamed into the named file stay there without the end marker (what
     says a file is complete); nothing hidden is left beside it."""
-    from planner.play import legacy as play
+    from planner.play.motion import Motion
 
-    real = play.solve_timing
+    real = Motion.place
     calls = {"n": 0, "rows_before": None}
     out = tmp_path / "o.csv"
 
-    def interrupted(prob):
+    def interrupted(self, item):
         calls["n"] += 1
-        if calls["n"] == 3:
+        if calls["n"] == 40:
             calls["rows_before"] = out.read_text().count("\n") if out.exists() else 0
             raise KeyboardInterrupt
-        return real(prob)
+        return real(self, item)
 
-    monkeypatch.setattr(play, "solve_timing", interrupted)
+    monkeypatch.setattr(Motion, "place", interrupted)
     song = ROOT / "songs" / "ode_to_joy.mid"
     rc, o, err = run_cli(capsys, "play", song, "-o", out if dest == "file" else "-")
-    assert calls["n"] == 3, "the interrupt never fired: pick a longer song"
+    assert calls["n"] == 40, "the interrupt never fired: pick a longer song"
     assert rc == 130 and err == "interrupted (SIGINT)\n"
     assert part_files(tmp_path) == []
     if dest == "file":

@@ -88,19 +88,19 @@ def test_write_file_of_a_regular_file_is_complete_or_absent(tmp_path):
 
 def test_a_reader_tailing_the_file_sees_rows_before_the_plan_ends(tmp_path, monkeypatch, capsys):
     """The rows are in the named file while the song is planned (not in a hidden one)."""
-    from planner.play import legacy as play
+    from planner.play.motion import Motion
 
-    real = play.solve_timing
+    real = Motion.place
     seen: list[int] = []
 
-    def timed(prob):
+    def timed(self, item):
         if out.exists():
             text = out.read_text()
             seen.append(-1 if '"end": true' in text else text.count("\n") - 2)
-        return real(prob)
+        return real(self, item)
 
     out = tmp_path / "o.csv"
-    monkeypatch.setattr(play, "solve_timing", timed)
+    monkeypatch.setattr(Motion, "place", timed)
     assert cli.main(["play", str(LONG_SONG), "-o", str(out)]) == 0
     assert -1 not in seen and max(seen) > 100, seen
     assert read_trajectory(str(out)).complete

@@ -13,7 +13,7 @@ from planner.check import check_trajectory
 from planner.hand.model import load_hand
 from planner.music.midi import Note, load_song, write_notes_midi
 from planner.play.motion import MotionSkip
-from planner.play.stream import Planner2, plan_song
+from planner.play.stream import Planner, plan_song
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
@@ -25,7 +25,7 @@ FLOOR = {"twinkle": 0.995, "ode_to_joy": 0.995, "chords": 0.985, "scale": 0.995,
 
 @pytest.fixture(scope="module")
 def planner():
-    return Planner2(load_hand("default"))
+    return Planner(load_hand("default"))
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +56,7 @@ def test_same_song_same_bytes(planner, tmp_path):
     song = load_song(ROOT / "songs" / "ode_to_joy.mid")
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     plan_song(song, planner.hand, str(a), planner=planner)
-    plan_song(song, planner.hand, str(b), planner=Planner2(planner.hand))
+    plan_song(song, planner.hand, str(b), planner=Planner(planner.hand))
     assert a.read_bytes() == b.read_bytes()
 
 

@@ -825,10 +825,8 @@ class CatchPlanner:
             reasons.append(f"too fast: the open pre-catch pose is reached at {ready:.3f} s, "
                            f"{1000 * (ready - t_i):.0f} ms after the ball (t = {t_i:.3f} s)")
         s_c = self._close_start(flight, C, q_open, closing, t_i, ready, stop_t, r)
-        phases = [Phase(delta=q_open - self.q_rest, duration_s=T_m, anchor=0.0,
-                        ideal_s=t_react, weight=0.0, earliest_s=t_react),
-                  Phase(delta=q_closed - q_open, duration_s=T_c, anchor=1.0,
-                        ideal_s=s_c + T_c, weight=1.0, earliest_s=ready)]
+        phases = [Phase(delta=q_open - self.q_rest, duration_s=T_m),
+                  Phase(delta=q_closed - q_open, duration_s=T_c)]
         starts = np.array([t_react, s_c])
 
         # 3. rows

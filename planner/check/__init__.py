@@ -34,7 +34,7 @@ or late note.
 Independence: this package shares only the hand model, the keyboard geometry,
 the trajectory reader and the MIDI reader with the planner. It never imports
 ``planner.play``, ``planner.ik``, ``planner.trajectory``, ``planner.catch`` or
-the fingering / targets modules, and it runs its own copy of the Pinocchio
+``planner.selfcheck`` (the planners' side), and it runs its own copy of the Pinocchio
 model (so it never touches the shared hand's data, and can put the root where
 the file's metadata says).
 

@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 from planner.music import keyboard as kb
 from planner.music.midi import pitch_name
 from planner.play.atlas import Atlas
+from planner.play.force import press_force_n
 from planner.play.moves import Moves
-from planner.targets import press_force_n
 
 RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart
 RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing

@@ -46,7 +46,7 @@ def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -
             "channel": song.channel, "transpose": song.transpose}
 
 
-class Planner2:
+class Planner:
     """The per-hand part of the second planner (atlas, timed moves), built once."""
 
     def __init__(self, hand: HandModel) -> None:
@@ -56,12 +56,12 @@ class Planner2:
 
 
 def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0,
-              song_name: str = "", planner: Planner2 | None = None) -> PlayPlan:
+              song_name: str = "", planner: Planner | None = None) -> PlayPlan:
     """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout)."""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
-    pl = planner or Planner2(hand)
+    pl = planner or Planner(hand)
     notes = list(song.notes)
     selfcheck = SelfCheck(hand, rate_hz)
     writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
@@ -80,7 +80,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
                     time.perf_counter() - t_start, rows.first_row_s - t_start)
 
 
-def _plan(notes, pl: Planner2, rate_hz: float, hand: HandModel, writer: TrajectoryWriter):
+def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: TrajectoryWriter):
     """Fingering chunk by chunk (``FingeringProblem.chunks``), each chunk's notes placed
     in time order (a cut before the notes that start with it), rows written up to where
     nothing can change any more."""
