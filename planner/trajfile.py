@@ -54,13 +54,20 @@ class TrajectoryWriter:
         if not (t_s[0] > self._last_t and np.all(np.diff(t_s) > 0)):
             raise PlannerError(f"trajectory time not increasing near t={t_s[0]}")
         self._last_t = float(t_s[-1])
-        arr = np.column_stack([t_s, q, q_motor])
-        fmt = ",".join(["%.6f"] * arr.shape[1])
-        text = "\n".join([fmt % tuple(r) for r in arr.tolist()]) + "\n"
+        body = np.column_stack([q, q_motor])
+        # a row whose setpoints equal the row's before is formatted (and read back) once
+        new = np.ones(len(body), dtype=bool)
+        new[1:] = np.any(body[1:] != body[:-1], axis=1)
+        fmt = ",".join(["%.6f"] * body.shape[1])
+        distinct = [fmt % tuple(r) for r in body[new].tolist()]
+        of = (np.cumsum(new) - 1).tolist()
+        times = [f"{t:.6f}" for t in t_s.tolist()]
+        text = "\n".join([f"{a},{distinct[j]}" for a, j in zip(times, of)]) + "\n"
         self._out.write(text)
-        self.rows += len(arr)
+        self.rows += len(body)
         self._out.flush()
-        written = np.array(text.replace("\n", ",").split(",")[:-1], dtype=float).reshape(arr.shape)
+        values = np.array(",".join(distinct).split(","), dtype=float).reshape(-1, body.shape[1])
+        written = np.column_stack([np.array(times, dtype=float), values[of]])
         if self._on_rows is not None:
             self._on_rows(written)
         return written

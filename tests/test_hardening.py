@@ -486,6 +486,51 @@ def test_ten_thousand_notes_planned_end_to_end(tmp_path):
         assert_envelope(tmp_path / "big.csv")
 
 
+# the inputs issue 14 found slow (2 cores): one-tick notes (1/960 s at 480 per beat and
+# 120 bpm), 48 ms each to plan, 20,000 killed at 600 s; a trill of 1 ms notes 78 s; one
+# note after 20 hours of silence killed at 300 s. Long mode: 20,000 notes, an hour of music.
+N_DENSE = 20_000 if LONG else 2_000
+SILENCE_S = 3600 if LONG else 600
+
+
+@pytest.mark.parametrize("kind", ["same_key", "many_keys", "trill_1ms"])
+def test_notes_no_finger_can_strike_are_named_and_cost_nothing(capsys, tmp_path, kind):
+    """Notes shorter than every press a finger can make are named too short before the
+    fingering weighs them: planned at once, every one named, the file complete."""
+    if kind == "trill_1ms":  # 1 ms notes, C4-D4 back to back (at 480 ticks per second)
+        ns = [(60 + 2 * (i % 2), i, i + 1) for i in range(N_DENSE)]
+        data = smf(notes_track([(p, a, b, 80) for p, a, b in ns], tempos=((0, 480_000),)),
+                   division=480)
+    else:  # one tick every 24 ticks: 20 per second
+        ns = [(60 if kind == "same_key" else 48 + (7 * i) % 36, 24 * i, 24 * i + 1, 80)
+              for i in range(N_DENSE)]
+        data = smf(notes_track(ns))
+    song = tmp_path / "dense.mid"
+    song.write_bytes(data)
+    out = tmp_path / "o.csv"
+    rc, o, err = run_cli(capsys, "play", song, "-o", out)
+    _, m = assert_play_outcome(rc, err, out, out=o)
+    assert m["notes"] == str(N_DENSE) and m["played"] == "0" and m["bad"] == str(N_DENSE)
+    assert err.count(": too_short: ") == N_DENSE
+    assert read_trajectory(str(out)).end["left_out"][0]["reason"] == "too_short"
+
+
+def test_one_note_after_a_long_silence(capsys, tmp_path):
+    """Silence costs rows, not planning: a note, ``SILENCE_S`` of nothing, a note; both
+    played, every row in the file, the hand still in between."""
+    song = tmp_path / "silence.mid"
+    ticks = SILENCE_S * 960  # at 120 bpm
+    song.write_bytes(smf(notes_track([(60, 0, 480, 80), (62, ticks, ticks + 480, 80)])))
+    out = tmp_path / "o.csv"
+    rc, o, err = run_cli(capsys, "play", song, "-o", out)
+    _, m = assert_play_outcome(rc, err, out, out=o)
+    assert m["played"] == "2"
+    tr = read_trajectory(str(out))
+    assert len(tr.t_s) >= SILENCE_S * 100
+    mid = (tr.t_s > 5.0) & (tr.t_s < SILENCE_S - 5.0)
+    assert np.ptp(tr.q[mid], axis=0).max() == 0.0
+
+
 def test_a_song_longer_than_24_hours_is_refused(capsys, tmp_path):
     ticks = (MAX_DURATION_S + 3600) * 2 * 480  # at 120 bpm
     song = tmp_path / "long.mid"

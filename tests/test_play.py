@@ -20,7 +20,6 @@ from planner.music.midi import Note, Song, load_song, write_notes_midi
 from planner.play import Planner, plan_song
 from planner.play.atlas import CLEARANCE_M, TIP_RADIUS_M
 from planner.play.costs import SkipReason
-from planner.play.motion import MotionSkip
 from planner.trajfile import read_trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -132,7 +131,7 @@ def test_a_note_that_cannot_be_struck_in_time_is_left_out_and_named(planner, tmp
     notes = [Note(36 if i % 2 else 84, 0.5 + 0.15 * i, 0.6 + 0.15 * i, 80) for i in range(8)]
     res, rep, _ = _plan(planner, notes, tmp_path)
     _safe(rep)
-    assert any(s.reason == MotionSkip.TOO_LATE for s in res.verdict.skipped), res.verdict
+    assert any(s.reason == SkipReason.TOO_LATE for s in res.verdict.skipped), res.verdict
     assert {s.note for s in res.verdict.skipped} == {m.note for m in rep.play.missed}
 
 

@@ -12,8 +12,8 @@ import pytest
 from planner.check import check_trajectory
 from planner.hand.model import load_hand
 from planner.music.midi import Note, load_song, write_notes_midi
-from planner.play.motion import MotionSkip
-from planner.play.stream import Planner, plan_song
+from planner.play import Planner, plan_song
+from planner.play.costs import SkipReason
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
@@ -67,7 +67,7 @@ def test_a_note_too_short_to_press_is_left_out_named(planner, tmp_path):
     res = plan_song(load_song(DATA / "short_note_16_ticks.mid"), planner.hand, str(out),
                     planner=planner)
     (skip,) = res.verdict.skipped
-    assert skip.reason is MotionSkip.TOO_SHORT and "17 ms" in skip.detail
+    assert skip.reason is SkipReason.TOO_SHORT and "17 ms" in skip.detail
     rep = check_trajectory(str(out), str(DATA / "short_note_16_ticks.mid"))
     assert rep.ok and not rep.play.wrong_presses and not rep.play.played
 

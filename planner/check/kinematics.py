@@ -37,12 +37,16 @@ class Kinematics:
 
     def frames(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World tips (T, 5, 3) and palm poses (T, 4, 4) of every row of ``Q``."""
-        Q = np.atleast_2d(Q)
-        T = len(Q)
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        # a row equal to the one before it has its frames (a hand holding still: once)
+        new = np.ones(len(Q), dtype=bool)
+        new[1:] = np.any(Q[1:] != Q[:-1], axis=1)
+        U = Q[new]
+        T = len(U)
         tips = np.empty((T, len(self.tip_ids), 3))
         palm = np.empty((T, 4, 4))
         QP = np.zeros((T, self.model.nq))
-        QP[:, self.idx] = Q
+        QP[:, self.idx] = U
         m, d = self.model, self.data
         for k in range(T):
             pin.framesForwardKinematics(m, d, QP[k])
@@ -51,7 +55,8 @@ class Kinematics:
             palm[k] = d.oMf[self.palm_id].homogeneous
         tips = tips @ self.R.T + self.p
         palm = np.einsum("ij,tjk->tik", self.T, palm)
-        return tips, palm
+        of = np.cumsum(new) - 1  # each row's distinct row
+        return tips[of], palm[of]
 
     def gravity(self, q: np.ndarray) -> np.ndarray:
         return pin.computeGeneralizedGravity(self.model, self.data, self.pin_q(q))[self.idx]

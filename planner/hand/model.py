@@ -99,6 +99,14 @@ class HandModel:
                                         mk5=mk5.MK5_TABLES[c.table][c.finger]))
         self.couplings: tuple[CouplingLaw, ...] = tuple(laws)
         dep = {c.dep for c in laws}
+        # the linear laws at once (none of their sources is a dependent joint: no chain),
+        # then the others in order
+        lin = [c for c in laws if c.kind == "linear"]
+        chained = any(c.src in dep for c in laws)
+        self._lin = None if chained or not lin else (
+            np.array([c.dep for c in lin]), np.array([c.src for c in lin]),
+            np.array([c.ratio for c in lin]), np.array([c.offset for c in lin]))
+        self._other_laws = tuple(c for c in laws if c.kind != "linear") if self._lin else laws
         self.independent = np.array([i for i in range(self.n) if i not in dep])
         self.dependent = np.array(sorted(dep), dtype=int)
 
@@ -138,7 +146,10 @@ class HandModel:
     def apply_couplings(self, q: np.ndarray) -> np.ndarray:
         """A copy of ``q`` with every dependent joint set from its source."""
         q = np.array(q, dtype=float)
-        for c in self.couplings:
+        if self._lin is not None:
+            dep, src, ratio, offset = self._lin
+            q[..., dep] = ratio * q[..., src] + offset
+        for c in self._other_laws:
             q[..., c.dep] = c.value(q[..., c.src])
         return q
 
@@ -174,6 +185,12 @@ class HandModel:
 
     def _update(self, q: np.ndarray) -> None:
         pin.framesForwardKinematics(self.pin_model, self.pin_data, self._pin_q(q))
+
+    def tip_position(self, q: np.ndarray, finger: int) -> np.ndarray:
+        """World position of one fingertip pad point (index in ``FINGERS``), m."""
+        pin.forwardKinematics(self.pin_model, self.pin_data, self._pin_q(q))
+        p = pin.updateFramePlacement(self.pin_model, self.pin_data, self._tip_ids[finger]).translation
+        return self.T_world_root[:3, :3] @ p + self.T_world_root[:3, 3]
 
     def tip_positions(self, q: np.ndarray) -> np.ndarray:
         """World positions of the five fingertip pad points, (5, 3) in m, order ``FINGERS``."""

@@ -33,9 +33,16 @@ TIE_DX_PER_M = 0.5  # frames per metre a finger is off its natural place
 
 
 class SkipReason(enum.Enum):
+    """Why the planner does not play a note: the fingering's reasons (no state holds it)
+    and the motion's (the state chosen cannot strike it in time)."""
+
     OUT_OF_REACH = "out_of_reach"  # no finger presses the key from any rail position
     TORQUE = "torque"  # the fingers that reach it cannot press with the note's force
     CHORD = "chord"  # more notes at once than the hand can hold from one position
+    TOO_SHORT = "too_short"  # a press cannot go down and up again inside it (the fingering
+    # names the notes shorter than every press of every finger and rail that reach them)
+    TOO_LATE = "too_late"  # its key cannot go down before half of it is over
+    NO_PATH = "no_path"  # no move checked clear of the keys takes the finger there
 
 
 
@@ -103,6 +110,7 @@ class Costs:
         self._entry: dict = {}
         self._rail_time: dict[int, float] = {}
         self._cands: dict = {}
+        self._shortest: dict[tuple[int, float], float] = {}
         self.pitch = [n.pitch for n in notes]
         self.offset = [n.offset_s for n in notes]
         self._t_down = [(math.ceil(n.onset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
@@ -129,10 +137,20 @@ class Costs:
         return self._rails[key]
 
     def reason(self, note: int) -> Skip | None:
+        """Why no state can play ``note`` (None: some can): no finger reaches its key with
+        its force, or every press that could is longer than the note (so that the
+        programme never weighs a note the motion cannot strike: a dense run of one-tick
+        notes costs nothing to plan)."""
         fingers = self.atlas.hand.fingers
-        if any(self.rails(f, note) for f in fingers):
-            return None
         n = self.notes[note]
+        if any(self.rails(f, note) for f in fingers):
+            window_s = self._t_up[note] - self._t_down[note]
+            fits, shortest_s = self._press_fits(note, window_s)
+            if fits:
+                return None
+            return Skip(note, SkipReason.TOO_SHORT, f"{1000 * n.duration_s:.0f} ms long; the "
+                        f"shortest press down and up of any finger on {pitch_name(n.pitch)} "
+                        f"takes {1000 * shortest_s:.0f} ms")
         reach = any(self.atlas.entry(f, n.pitch, i * RAIL_STEP_M) is not None
                     for f in fingers for i in range(self.rail_lo, self.rail_hi + 1, 2))
         if reach:
@@ -140,6 +158,25 @@ class Costs:
                         f"{press_force_n(n.velocity):.1f} N within the motors' torque")
         return Skip(note, SkipReason.OUT_OF_REACH, f"no finger reaches {pitch_name(n.pitch)} "
                     "from any rail position")
+
+    def _press_fits(self, note: int, window_s: float) -> tuple[bool, float]:
+        """Whether some finger, from some rail, presses ``note``'s key down and up within
+        ``window_s`` (``Moves.press_min_s``, the motion's bound), and that press's time,
+        or the shortest of all when none fits (memoised per key and force)."""
+        n = self.notes[note]
+        key = (n.pitch, press_force_n(n.velocity))
+        shortest = self._shortest.get(key)
+        if shortest is not None:
+            return window_s >= shortest, shortest
+        shortest = math.inf
+        for f in self.atlas.hand.fingers:
+            for i in sorted(self.rails(f, note)):
+                s = self.moves.press_min_s(self.entry(note, f, i))
+                if s <= window_s:
+                    return True, s
+                shortest = min(shortest, s)
+        self._shortest[key] = shortest
+        return False, shortest
 
     # ------------------------------------------------------------------ timing model
     def t_down(self, note: int) -> float:

@@ -73,12 +73,14 @@ class Fingering:
 @dataclass(frozen=True)
 class FingeringChunk:
     """A stretch of the answer, fixed: notes struck in it, notes left out, held notes
-    (struck in it or before) cut at a time, and the loss the model expects so far."""
+    (struck in it or before) cut at a time, and the loss the model expects so far. Every
+    note starting before ``until_s`` is decided (inf: the song's last chunk)."""
 
     assignments: tuple[Assignment, ...]
     skipped: tuple[Skip, ...]
     cuts: tuple[tuple[int, float], ...]
     loss_frames: float
+    until_s: float = math.inf
 
 
 
@@ -120,38 +122,62 @@ class FingeringProblem(Costs):
     def chunks(self):
         """The programme over a receding window: the best path over the next ``WINDOW``
         events (``FIRST_WINDOW`` at the start) decides its first ones (all but
-        ``LOOKAHEAD``), which are yielded (``FingeringChunk``) and fixed; the next window
-        starts from the state it reached. So the motion and the rows can start after the
-        first window, not the song."""
-        evs = []
+        ``LOOKAHEAD``), which are yielded (``FingeringChunk``, with the notes no state can
+        play that start before the next event) and fixed; the next window starts from the
+        state it reached. Events are read as the windows need them, so the motion and the
+        rows can start after the first window, not the song."""
+        source = self._events()
+        ahead_evs: list[tuple[float, list[int]]] = []  # playable events not decided yet
+        skips: list[tuple[float, Skip]] = []  # notes no state plays, not yet yielded
+        done, first, loss = False, True, 0.0
+        start: dict[State, tuple[float, State | None]] = {}
+        while True:
+            window, ahead = (FIRST_WINDOW, FIRST_LOOKAHEAD) if first else (WINDOW, LOOKAHEAD)
+            while not done and len(ahead_evs) <= window:  # (one more: the next event's time)
+                got = next(source, None)
+                if got is None:
+                    done = True
+                else:
+                    skips.extend((got[0], s) for s in got[2])
+                    if got[1]:
+                        ahead_evs.append(got[:2])
+                    elif not ahead_evs and len(skips) >= WINDOW:  # (a long stretch no state
+                        # plays: it is decided up to its last onset, the rows can go on)
+                        yield FingeringChunk((), tuple(s for _, s in skips), (), loss, got[0])
+                        skips = []
+            if not ahead_evs:
+                break
+            layers, prev = [], start
+            for t, new in ahead_evs[:window]:
+                prev = self._layer(prev, t, new)
+                layers.append((t, prev, new))
+            k = len(layers) if done and len(ahead_evs) <= window else max(1, len(layers) - ahead)
+            path = self._path(layers)
+            until = ahead_evs[k][0] if k < len(ahead_evs) else math.inf
+            mine = tuple(s for t, s in skips if t < until)
+            skips = [(t, s) for t, s in skips if t >= until]
+            ch = self._chunk(layers[:k], path[:k], next(iter(start)) if start else None)
+            loss = ch.loss_frames
+            yield FingeringChunk(ch.assignments, mine + ch.skipped, ch.cuts, loss, until)
+            last = path[k - 1]
+            start = {last: (layers[k - 1][1][last][0], None)}
+            del ahead_evs[:k]
+            first = False
+            self.forget()
+        if skips:
+            yield FingeringChunk((), tuple(s for _, s in skips), (), loss)
+
+    def _events(self):
+        """(time, playable notes, ``Skip`` of the others) of every onset, in time order."""
         for t, new in events(self.notes):
-            playable = []
+            playable, skipped = [], []
             for n in new:
                 why = self.reason(n)
                 if why is None:
                     playable.append(n)
                 else:
-                    yield FingeringChunk((), (why,), (), 0.0)
-            if playable:
-                evs.append((t, playable))
-        i = 0
-        start: dict[State, tuple[float, State | None]] = {}
-        while i < len(evs):
-            self.forget()
-            window, ahead = (FIRST_WINDOW, FIRST_LOOKAHEAD) if i == 0 else (WINDOW, LOOKAHEAD)
-            layers = []
-            prev = start
-            for t, new in evs[i:i + window]:
-                prev = self._layer(prev, t, new)
-                layers.append((t, prev, new))
-            final = i + len(layers) >= len(evs)
-            k = len(layers) if final else max(1, len(layers) - ahead)
-            path = self._path(layers)
-            before = next(iter(start)) if start else None
-            yield self._chunk(layers[:k], path[:k], before)
-            last = path[k - 1]
-            start = {last: (layers[k - 1][1][last][0], None)}
-            i += k
+                    skipped.append(why)
+            yield t, playable, skipped
 
     def _path(self, layers) -> list[State]:
         """The best path through a window's layers, one state per layer."""

@@ -21,8 +21,6 @@ pressed and is named (``TOO_LATE``, ``TOO_SHORT``).
 
 from __future__ import annotations
 
-import bisect
-import enum
 import math
 from dataclasses import dataclass, field
 
@@ -31,6 +29,7 @@ import numpy as np
 from planner.errors import PlannerError
 from planner.music import keyboard as kb
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
+from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
 from planner.play.moves import Moves
 from planner.play.profile import Move, straight_move
@@ -73,12 +72,6 @@ def start_entries(atlas: Atlas, rail_m: float) -> dict[str, AtlasEntry]:
     return out
 
 
-class MotionSkip(enum.Enum):
-    TOO_LATE = "too_late"  # its key cannot go down before half of it is over
-    TOO_SHORT = "too_short"  # a press cannot go down and up again inside it
-    NO_PATH = "no_path"  # no move checked clear of the keys takes the finger there
-
-
 @dataclass(frozen=True)
 class Segment:
     """A move of one joint group (a finger, or the rail) starting at ``t0_s``."""
@@ -111,16 +104,24 @@ class _Track:
         return self.free_s
 
     def at(self, t_s: np.ndarray, q_start: np.ndarray) -> np.ndarray:
-        """Positions at sorted times ``t_s``."""
-        out = np.empty((len(t_s), len(q_start)))
-        starts = self.starts
-        for k, t in enumerate(t_s):
-            i = bisect.bisect_right(starts, t) - 1
-            if i < 0:
-                out[k] = q_start
+        """Positions at sorted times ``t_s`` (each segment's rows at once: a hold of an
+        hour costs what a hold of a second does)."""
+        t_s = np.asarray(t_s, dtype=float)
+        out = np.tile(q_start, (len(t_s), 1))
+        if not self.segments or len(t_s) == 0:
+            return out
+        idx = np.searchsorted(self.starts, t_s, side="right") - 1
+        first = int(np.searchsorted(idx, 0, side="left"))  # (rows before every segment:
+        # q_start); the rows of segment i are a contiguous run, the times being sorted
+        for i in range(int(idx[first]) if first < len(idx) else 0, int(idx[-1]) + 1):
+            lo, hi = np.searchsorted(idx, [i, i + 1], side="left")
+            if lo == hi:
                 continue
-            s = self.segments[i]
-            out[k] = s.move.at(t - s.t0_s)[0] if t < s.t1_s else s.move.q_a + s.move.dq
+            seg = self.segments[i]
+            tt = t_s[lo:hi]
+            moving = int(np.searchsorted(tt, seg.t1_s, side="left"))  # tt < t1: moving
+            out[lo:lo + moving] = seg.move.at(tt[:moving] - seg.t0_s)
+            out[lo + moving:hi] = seg.move.q_a + seg.move.dq
         return out
 
 
@@ -139,7 +140,7 @@ class Outcome:
     note: int
     down_s: float | None  # planned key-down moment (None: not pressed)
     up_s: float | None
-    skip: MotionSkip | None = None
+    skip: SkipReason | None = None
     detail: str = ""
 
 
@@ -227,7 +228,7 @@ class Motion:
         after = self._release_others_on(n.pitch, a.finger)
         found = self._approach(st, e, a.finger, want, after)
         if found is None:
-            out = Outcome(a.note, None, None, MotionSkip.NO_PATH,
+            out = Outcome(a.note, None, None, SkipReason.NO_PATH,
                           f"no checked path of the {a.finger} to it")
             self.outcomes[a.note] = out
             return out
@@ -238,15 +239,15 @@ class Motion:
         lift = self.moves.lift(e, "high")
         shortest = self.moves.press_min_s(e)
         if up - want < shortest:
-            out = Outcome(a.note, None, None, MotionSkip.TOO_SHORT,
+            out = Outcome(a.note, None, None, SkipReason.TOO_SHORT,
                           f"{1000 * n.duration_s:.0f} ms long; the {a.finger}'s shortest "
                           f"press down and up takes {1000 * shortest:.0f} ms")
         elif down_at > n.onset_s + DROP_FRACTION * n.duration_s:
-            out = Outcome(a.note, None, None, MotionSkip.TOO_LATE,
+            out = Outcome(a.note, None, None, SkipReason.TOO_LATE,
                           f"its key could go down {1000 * (down_at - want):.0f} ms late, "
                           "after half of it")
         elif press_end + lift.cross_s > up:
-            out = Outcome(a.note, None, None, MotionSkip.TOO_SHORT,
+            out = Outcome(a.note, None, None, SkipReason.TOO_SHORT,
                           f"{1000 * n.duration_s:.0f} ms long; a press down and up takes "
                           f"{1000 * (press_end + lift.cross_s - down_at):.0f} ms")
         else:

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy.optimize import brentq
 
 from planner.hand.model import HandModel
 from planner.ik import surfaces_under
@@ -76,17 +77,20 @@ class Moves:
     def _cross(self, e: AtlasEntry, qa: np.ndarray, qb: np.ndarray, move: Move,
                going_down: bool) -> float:
         """Time within ``move`` at which the tip's depth below the key top passes
-        ``DOWN_DEPTH_M`` (bisection on the path parameter, forward kinematics)."""
+        ``DOWN_DEPTH_M`` (Brent's method on the path parameter, forward kinematics),
+        reported on the key-down side of the crossing to within ``CROSS_TOL``."""
         depth = self._depth_fn(e)
-        lo, hi = 0.0, 1.0
-        while hi - lo > CROSS_TOL:
-            mid = 0.5 * (lo + hi)
-            below = depth(qa + mid * (qb - qa)) >= kb.DOWN_DEPTH_M
-            if below == going_down:
-                hi = mid
-            else:
-                lo = mid
-        return move.time_at_s(hi if going_down else lo)
+
+        def below(s: float) -> float:
+            return depth(qa + s * (qb - qa)) - kb.DOWN_DEPTH_M
+
+        g0, g1 = below(0.0), below(1.0)
+        if (g0 >= 0.0) == (g1 >= 0.0):  # (no crossing: the key is down, or up, throughout)
+            return move.time_at_s(0.0 if going_down else 1.0) if g0 >= 0.0 else \
+                move.time_at_s(1.0 if going_down else 0.0)
+        s = brentq(below, 0.0, 1.0, xtol=0.5 * CROSS_TOL)
+        s = min(1.0, s + 0.5 * CROSS_TOL) if going_down else max(0.0, s - 0.5 * CROSS_TOL)
+        return move.time_at_s(s)
 
     def _depth_fn(self, e: AtlasEntry):
         f = self.hand.fingers.index(e.finger)
@@ -96,7 +100,7 @@ class Moves:
 
         def depth(qf: np.ndarray) -> float:
             q[js] = qf
-            return top - float(self.hand.tip_positions(self.hand.apply_couplings(q))[f, 2])
+            return top - float(self.hand.tip_position(self.hand.apply_couplings(q), f)[2])
 
         return depth
 
@@ -124,7 +128,7 @@ class Moves:
             ok = True
             for s in ACROSS_SAMPLES:
                 q[js] = a.high + s * (b.high - a.high)
-                z = self.hand.tip_positions(self.hand.apply_couplings(q))[f, 2]
+                z = self.hand.tip_position(self.hand.apply_couplings(q), f)[2]
                 ok &= bool(z >= HIGH_SAFE_Z_M)
             self._lat[key] = self._move(a.finger, a.high, b.high) if ok else None
         return self._lat[key]
@@ -154,18 +158,20 @@ class Moves:
         qa[js], qb[js] = a.press, b.press
         f = h.fingers.index(a.finger)
         q = qa.copy()
-        for s in np.linspace(0.0, 1.0, PATH_SAMPLES):
+        tips = np.empty((PATH_SAMPLES, 3))
+        for i, s in enumerate(np.linspace(0.0, 1.0, PATH_SAMPLES)):
             q[cols] = qa[cols] + s * (qb[cols] - qa[cols])
-            x, y, z = h.tip_positions(h.apply_couplings(q))[f]
+            x, y, z = tips[i] = h.tip_position(h.apply_couplings(q), f)
             inside = (k.x_min_m + TIP_RADIUS_M <= x <= k.x_max_m - TIP_RADIUS_M
                       and k.y_min_m + TIP_RADIUS_M <= y <= k.y_max_m - TIP_RADIUS_M)
             depth = k.top_z_m - z
-            if k.black is False:
-                inside = inside and surfaces_under(np.array([x]), np.array([y]),
-                                                   TIP_RADIUS_M)[0] <= k.top_z_m
             if not (inside and kb.DOWN_DEPTH_M + HOLD_MARGIN_M <= depth
                     <= kb.KEY_BED_DEPTH_M - HOLD_MARGIN_M):
                 return None
+        # (a white key's tip stays off the black keys beside it: nothing higher under it)
+        if k.black is False and np.any(surfaces_under(tips[:, 0], tips[:, 1], TIP_RADIUS_M)
+                                       > k.top_z_m):
+            return None
         return straight_move(qa[cols], qb[cols], h.velocity[cols], h.acceleration[cols])
 
     def rise(self, e: AtlasEntry) -> Timed:

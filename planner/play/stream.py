@@ -23,6 +23,7 @@ from planner.trajfile import TrajectoryWriter
 
 COMMIT_LAG_S = 0.5  # rows are written up to this long before the last note placed
 SETTLE_S = 0.1  # rows go on this long after the hand is still
+ROW_BLOCK = 6000  # rows sampled, guarded, written and replayed at once (60 s at 100 Hz)
 
 
 @dataclass(frozen=True)
@@ -101,6 +102,10 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
             motion = Motion(notes, pl.atlas, pl.moves, rate_hz, first.rail_m)
             motion.prepare(ch.assignments)
             rows = _Rows(hand, writer, motion, rate_hz)
+        elif motion is None and math.isfinite(ch.until_s):  # (nothing playable yet, more
+            # to come: the hand waits at its natural place, the rows go on)
+            motion = Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base))
+            rows = _Rows(hand, writer, motion, rate_hz)
         for _, item in steps:
             if isinstance(item, Assignment):
                 motion.place(item)
@@ -114,6 +119,11 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
                 motion.cut(n, t)
                 a = done[n]
                 done[n] = Assignment(a.note, a.finger, a.rail_m, t)
+        # (every note before ``until_s`` is placed: the rows can go on to a lag before it)
+        t = ch.until_s - COMMIT_LAG_S
+        if rows is not None and math.isfinite(t) and t > rows.written_to_s + COMMIT_LAG_S:
+            motion.commit(t)
+            rows.write_to(t)
     if motion is None:  # nothing to play: the hand waits, still
         motion = Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base),
                         park=True)
@@ -141,17 +151,19 @@ class _Rows:
         return (self.next_row - 1) * self.dt
 
     def write_to(self, t_s: float) -> None:
+        """Rows up to ``t_s``, in blocks of at most ``ROW_BLOCK`` (memory stays bounded
+        through a long silence)."""
         n = math.floor(t_s / self.dt + 1e-9) + 1
-        if n <= self.next_row:
-            return
-        t = np.arange(self.next_row, n) * self.dt
-        q = self.motion.rows(t)
-        guard_rows(self.hand, q, self.last, self.dt)
-        self.writer.write_rows(t, q, self.hand.motor_angles(q))
-        if math.isnan(self.first_row_s):
-            self.first_row_s = time.perf_counter()
-        self.last = q[-1].copy()
-        self.next_row = n
+        while self.next_row < n:
+            end = min(n, self.next_row + ROW_BLOCK)
+            t = np.arange(self.next_row, end) * self.dt
+            q = self.motion.rows(t)
+            guard_rows(self.hand, q, self.last, self.dt)
+            self.writer.write_rows(t, q, self.hand.motor_angles(q))
+            if math.isnan(self.first_row_s):
+                self.first_row_s = time.perf_counter()
+            self.last = q[-1].copy()
+            self.next_row = end
 
 
 def guard_rows(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -> None:
