@@ -259,12 +259,14 @@ class Costs:
         followers = set()
         for m, f in prev.fingers:
             a, b = self.entry(m, f, prev.rail_i), self.entry(m, f, rail_i)
-            mv = None if b is None else self.moves.follow(a, b)
+            if b is None or self.atlas.rail is None:
+                continue
             # (the move fits inside the note, after its press and before its lift)
-            if mv is not None and (self._t_up[m] - self._t_down[m]
-                                   >= mv.duration_s + self.moves.press_min_s(a)):
+            follow_s = self.moves.follow_s(a, b)
+            if (self._t_up[m] - self._t_down[m] >= follow_s + self.moves.press_min_s(a)
+                    and self.moves.follow(a, b) is not None):
                 followers.add((m, f))
-                T = max(T, mv.duration_s)
+                T = max(T, follow_s)
         release = max((self.moves.before_rail_s(self.entry(m, f, r)) + self._t_up[m]
                        for m, f, r in prev.last_notes if (m, f) not in followers),
                       default=-math.inf)

@@ -145,17 +145,32 @@ class Moves:
             self._lat[key] = self._follow(a, b)
         return self._lat[key]
 
+    def follow_s(self, a: AtlasEntry, b: AtlasEntry) -> float:
+        """How long ``follow(a, b)`` takes if its path is clear (no forward kinematics:
+        the programme asks this first, and the path only of the moves that fit)."""
+        return self._follow_ends(a, b)[2].duration_s
+
+    def _follow_ends(self, a: AtlasEntry, b: AtlasEntry):
+        key = ("ends", id(a), id(b))
+        got = self._lat.get(key)
+        if got is None:
+            h, r = self.hand, self.atlas.rail
+            k = kb.key(60 + a.pitch_class)
+            js = self.js[a.finger]
+            cols = np.r_[r, js]
+            qa, qb = self.atlas.base.copy(), self.atlas.base.copy()
+            qa[r], qb[r] = k.center_x_m - a.dx_m, k.center_x_m - b.dx_m
+            qa[js], qb[js] = a.press, b.press
+            move = straight_move(qa[cols], qb[cols], h.velocity[cols], h.acceleration[cols])
+            got = self._lat[key] = (qa, qb, move, cols)
+        return got
+
     def _follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
         h, r = self.hand, self.atlas.rail
         if r is None:
             return None
-        pitch = 60 + a.pitch_class
-        k = kb.key(pitch)
-        js = self.js[a.finger]
-        cols = np.r_[r, js]
-        qa, qb = self.atlas.base.copy(), self.atlas.base.copy()
-        qa[r], qb[r] = k.center_x_m - a.dx_m, k.center_x_m - b.dx_m
-        qa[js], qb[js] = a.press, b.press
+        k = kb.key(60 + a.pitch_class)
+        qa, qb, move, cols = self._follow_ends(a, b)
         f = h.fingers.index(a.finger)
         q = qa.copy()
         tips = np.empty((PATH_SAMPLES, 3))
@@ -172,7 +187,7 @@ class Moves:
         if k.black is False and np.any(surfaces_under(tips[:, 0], tips[:, 1], TIP_RADIUS_M)
                                        > k.top_z_m):
             return None
-        return straight_move(qa[cols], qb[cols], h.velocity[cols], h.acceleration[cols])
+        return move
 
     def rise(self, e: AtlasEntry) -> Timed:
         """Up from the waiting pose to crossing height (no key crossing)."""
