@@ -21,6 +21,7 @@ pressed and is named (``TOO_LATE``, ``TOO_SHORT``).
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass, field
 
@@ -110,7 +111,10 @@ class _Track:
         out = np.tile(q_start, (len(t_s), 1))
         if not self.segments or len(t_s) == 0:
             return out
-        idx = np.searchsorted(self.starts, t_s, side="right") - 1
+        # (only the segments from the one running at the first time on: the rows asked
+        # for are the next ones, and a long song's track has thousands of segments)
+        i0 = max(0, bisect.bisect_right(self.starts, t_s[0]) - 1)
+        idx = np.searchsorted(self.starts[i0:], t_s, side="right") - 1 + i0
         first = int(np.searchsorted(idx, 0, side="left"))  # (rows before every segment:
         # q_start); the rows of segment i are a contiguous run, the times being sorted
         for i in range(int(idx[first]) if first < len(idx) else 0, int(idx[-1]) + 1):
