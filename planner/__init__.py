@@ -3,8 +3,44 @@
 Play: music (MIDI -> notes) -> play (atlas -> fingering -> motion -> stream) -> trajfile,
 the plan's own replay (selfcheck) as its summary; catch beside it; check replays any
 file independently; the hand model under all of them. See README.md and docs/.
+
+The public API (imported on first use, so that ``import planner`` stays light):
+
+* ``load_hand(name_or_path)`` -> ``HandModel``; ``load_song(path, track=, channel=,
+  transpose=)`` -> ``Song``;
+* ``plan_song(song, hand, out_path, rate_hz=100.0)`` -> ``PlayPlan`` (rows streamed to
+  ``out_path``; ``'-'`` for stdout), with a ``Planner(hand)`` to reuse across songs;
+* ``plan_catch(angle_deg, dist_m, height_m, hand, out_path, ...)`` -> ``CatchResult``;
+* ``check_trajectory(traj_path, song_path=None)`` -> ``CheckReport``;
+* ``read_trajectory(path)`` -> ``Trajectory`` (times, joint and motor arrays, metadata).
 """
+
+from __future__ import annotations
+
+import importlib
 
 from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
 
-__all__ = ["InfeasibleError", "InputError", "PlannerError", "SolverError"]
+_API = {
+    "load_hand": "planner.hand.model",
+    "HandModel": "planner.hand.model",
+    "load_song": "planner.music.midi",
+    "Song": "planner.music.midi",
+    "Note": "planner.music.midi",
+    "Planner": "planner.play",
+    "PlayPlan": "planner.play",
+    "plan_song": "planner.play",
+    "plan_catch": "planner.catch.plan",
+    "check_trajectory": "planner.check",
+    "read_trajectory": "planner.trajfile",
+}
+
+__all__ = ["HandModel", "InfeasibleError", "InputError", "Note", "PlannerError", "PlayPlan",
+           "Planner", "SolverError", "Song", "check_trajectory", "load_hand", "load_song",
+           "plan_catch", "plan_song", "read_trajectory"]
+
+
+def __getattr__(name: str):
+    if name in _API:
+        return getattr(importlib.import_module(_API[name]), name)
+    raise AttributeError(f"module 'planner' has no attribute {name!r}")

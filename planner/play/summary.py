@@ -43,7 +43,9 @@ def play_cli(a) -> int:
         raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
     song = load_song(a.song, track=a.track, channel=a.channel, transpose=a.transpose)
     hand = load_hand(a.hand)
-    out = a.output if a.output is not None else os.path.splitext(a.song)[0] + ".csv"
+    # (by default into the current directory, never beside the song: it may be read-only)
+    out = a.output if a.output is not None else \
+        os.path.splitext(os.path.basename(a.song))[0] + ".csv"
     name = os.path.basename(a.song)
     plan = plan_song(song, hand, out, a.rate, song_name=name)
     sys.stderr.write(format_summary(name, song.notes, plan, out) + "\n")

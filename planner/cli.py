@@ -1,0 +1,200 @@
+"""Command line (``hand-planner``, or ``python cli.py`` in the repository): parse, call
+one API function, map errors to exit codes.
+
+Exit status (spec section 1): 0 success; 2 bad input or usage (one line on
+stderr); 1 anything else that failed, or an infeasible plan under --strict.
+A reader that closes its end of the output pipe (``| head``) ends the run
+quietly with 141 (128 + SIGPIPE, what a shell reports for a program killed by
+it); SIGINT, SIGTERM and SIGHUP stop it cleanly with 128 + the signal's number.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+
+EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE  # 141
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, handled as SIGINT is: the run stops where it is."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _on_signal(signum, _frame) -> None:
+    raise Interrupted(signum)
+
+
+def _follow_signals() -> None:
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        try:
+            signal.signal(sig, _on_signal)
+        except (ValueError, OSError):  # not the main thread (an embedding program)
+            pass
+
+
+def _quiet_stdout() -> None:
+    """After a closed pipe: stdout goes to /dev/null so that the interpreter's last
+    flush at exit cannot fail again (and print 'Exception ignored ...')."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def _line(text: object) -> str:
+    """``text`` on one line: user input quoted in a message (a file name, an argument)
+    may hold line breaks, which would break the one-line promise."""
+    return str(text).replace("\r", "\\r").replace("\n", "\\n")
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2
+        sys.stderr.write(f"{self.prog}: error: {_line(message)}\n")
+        raise SystemExit(2)
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    prog = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "hand-planner"
+    p = _Parser(prog=prog if prog in ("cli.py", "hand-planner") else "hand-planner",
+                description="Task planner for a tendon-driven robot hand")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    h = sub.add_parser("hand", help="describe a hand, list hands, write its URDF")
+    h.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
+    h.add_argument("--list", action="store_true", help="list the shipped hands")
+    h.add_argument("--urdf", metavar="PATH", help="write the hand's URDF here ('-' for stdout)")
+
+    pl = sub.add_parser("play", help="plan a MIDI song")
+    pl.add_argument("song", help="MIDI file")
+    pl.add_argument("-o", "--output", default=None,
+                    help="trajectory CSV ('-' for stdout; default: SONG.csv in the current "
+                         "directory)")
+    pl.add_argument("--hand", default="default")
+    pl.add_argument("--rate", type=float, default=100.0, help="setpoint rate, Hz (default 100)")
+    pl.add_argument("--track", type=int, default=None, help="only this track (0-based)")
+    pl.add_argument("--channel", type=int, default=None, help="only this channel (0-15)")
+    pl.add_argument("--transpose", action="store_true", help="move notes outside A0-C8 by octaves")
+    pl.add_argument("--strict", action="store_true", help="exit 1 if any note is infeasible")
+    pl.add_argument("--report", metavar="DIR", help="write PNG plots here")
+    pl.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+
+    c = sub.add_parser("catch", help="plan a catch of a thrown ball")
+    c.add_argument("--angle", type=float, required=True, help="launch angle above horizontal, deg")
+    c.add_argument("--dist", type=float, required=True, help="horizontal distance to the hand, m")
+    c.add_argument("--height", type=float, default=0.0, help="hand height above the launch point, m")
+    c.add_argument("--ball", default="tennis", help="ball: tennis, baseball, seed")
+    c.add_argument("--drag", action="store_true", help="model quadratic air drag")
+    c.add_argument("--observations", metavar="CSV", help="fit the flight to t,x,y,z observations")
+    c.add_argument("-o", "--output", default="catch.csv")
+    c.add_argument("--hand", default="default")
+    c.add_argument("--rate", type=float, default=100.0)
+    c.add_argument("--strict", action="store_true")
+    c.add_argument("--report", metavar="DIR")
+    c.add_argument("--html", metavar="FILE")
+
+    k = sub.add_parser("check", help="replay a trajectory and verify it")
+    k.add_argument("trajectory", help="hand-trajectory v1 file")
+    k.add_argument("song", nargs="?", default=None, help="the MIDI file it was planned from")
+    k.add_argument("--allow-incomplete", action="store_true",
+                   help="replay a file without its end marker (still being written, or cut)")
+    k.add_argument("--min-f1", type=float, default=None, help="fail under this frame F1")
+    k.add_argument("--strict", action="store_true",
+                   help="fail on any missed or late note, not only wrong ones")
+    k.add_argument("--track", type=int, default=None,
+                   help="read only this track of the song (default: as the plan was made)")
+    k.add_argument("--channel", type=int, default=None,
+                   help="read only this channel (default: as the plan was made)")
+    k.add_argument("--transpose", action="store_true",
+                   help="move notes outside A0-C8 by octaves (default: as the plan was made)")
+    k.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    k.add_argument("--played", metavar="OUT.mid", help="write the keys pressed as a MIDI file")
+    k.add_argument("--report", metavar="DIR", help="write PNG plots here")
+    k.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+    return p
+
+
+def _cmd_hand(a: argparse.Namespace) -> int:
+    from planner.hand.model import load_hand
+    from planner.hand.spec import list_hands
+
+    if a.list:
+        from planner.hand.spec import load_hand_spec
+
+        for n in list_hands():
+            print(f"{n:10s} {load_hand_spec(n).description}")
+        return 0
+    hand = load_hand(a.hand)
+    if a.urdf:
+        if a.urdf == "-":
+            sys.stdout.write(hand.urdf)
+        else:
+            from planner.output import write_file
+
+            write_file(a.urdf, hand.urdf)
+        return 0
+    print(hand.summary())
+    return 0
+
+
+def _cmd_play(a: argparse.Namespace) -> int:
+    from planner.play import play_cli
+
+    return play_cli(a)
+
+
+def _cmd_catch(a: argparse.Namespace) -> int:
+    from planner.catch.plan import catch_cli
+
+    return catch_cli(a)
+
+
+def _cmd_check(a: argparse.Namespace) -> int:
+    from planner.check import check_cli
+
+    return check_cli(a)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _build_parser().parse_args(argv)
+    from planner.errors import InfeasibleError, InputError, PlannerError
+
+    _follow_signals()
+    try:
+        rc = {"hand": _cmd_hand, "play": _cmd_play, "catch": _cmd_catch, "check": _cmd_check}[
+            args.command
+        ](args)
+        sys.stdout.flush()
+        return rc
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_BROKEN_PIPE
+    except InputError as e:
+        sys.stderr.write(f"error: {_line(e)}\n")
+        return 2
+    except InfeasibleError as e:
+        sys.stderr.write(f"infeasible: {_line(e)}\n")
+        return 1
+    except PlannerError as e:
+        sys.stderr.write(f"failed: {_line(e)}\n")
+        return 1
+    except KeyboardInterrupt as e:
+        signum = e.signum if isinstance(e, Interrupted) else signal.SIGINT
+        sys.stderr.write(f"interrupted ({signal.Signals(signum).name})\n")
+        return 128 + signum
+
+
+def run() -> None:
+    """The console script's entry point."""
+    sys.exit(main())
+
+
+if __name__ == "__main__":
+    run()

@@ -1,0 +1,83 @@
+"""The public API (planner/__init__.py) and the installed command, as the README shows
+them."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _readme_example() -> str:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = text.split("## Python API", 1)[1]
+    return re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
+
+
+def test_the_readme_api_example_runs(tmp_path, monkeypatch, capsys):
+    (tmp_path / "songs").mkdir()
+    (tmp_path / "songs" / "twinkle.mid").write_bytes((ROOT / "songs" / "twinkle.mid").read_bytes())
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_readme_example(), "README.md", "exec"), {})  # noqa: S102 (the README's own code)
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == "14 of 14 notes played; frame F1 1.0"
+    assert out[1].startswith("True 1.0 (")
+    assert sorted(os.listdir(tmp_path)) == ["songs", "twinkle.csv"]
+
+
+def test_import_planner_is_light():
+    """``import planner`` loads none of the planners (they load on first use)."""
+    code = ("import sys, planner; heavy = [m for m in ('planner.play', 'planner.catch', "
+            "'pinocchio', 'placo', 'matplotlib') if m in sys.modules]; print(heavy); "
+            "assert not heavy; assert callable(planner.plan_song)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       check=False, cwd=ROOT)
+    assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_every_name_of_the_api_is_there():
+    import planner
+
+    assert set(planner.__all__) >= set(planner._API)
+    for name in planner.__all__:
+        assert getattr(planner, name) is not None
+
+
+def test_an_unknown_name_is_an_attribute_error():
+    import planner
+
+    with pytest.raises(AttributeError, match="no_such"):
+        planner.no_such  # noqa: B018
+
+
+def test_play_without_output_writes_into_the_current_directory(tmp_path):
+    """From another directory, ``play SONG`` writes ./SONG.csv there, nothing beside the
+    song. (``python -m planner.cli`` is what the installed ``hand-planner`` runs.)"""
+    song = tmp_path / "in" / "scale.mid"
+    song.parent.mkdir()
+    song.write_bytes((ROOT / "songs" / "scale.mid").read_bytes())
+    work = tmp_path / "work"
+    work.mkdir()
+    r = subprocess.run([sys.executable, "-m", "planner.cli", "play", str(song)],
+                       capture_output=True, text=True, cwd=work, check=False, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert os.listdir(work) == ["scale.csv"] and os.listdir(song.parent) == ["scale.mid"]
+    assert "-> scale.csv" in r.stderr
+
+
+def test_the_installed_command_runs_from_any_directory(tmp_path):
+    """``pip install -e .`` puts ``hand-planner`` beside the interpreter (as .ci/run and
+    the README's quick start install it)."""
+    exe = Path(sys.executable).parent / "hand-planner"
+    if not exe.exists():
+        pytest.skip("the project is not installed into this interpreter's environment")
+    r = subprocess.run([str(exe), "hand", "--list"], capture_output=True, text=True,
+                       cwd=tmp_path, check=False, timeout=120)
+    assert r.returncode == 0 and r.stdout.startswith("default"), r.stderr
+    assert os.listdir(tmp_path) == []
