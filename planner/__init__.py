@@ -35,9 +35,23 @@ _API = {
     "read_trajectory": "planner.trajfile",
 }
 
-__all__ = ["HandModel", "InfeasibleError", "InputError", "Note", "PlannerError", "PlayPlan",
-           "Planner", "SolverError", "Song", "check_trajectory", "load_hand", "load_song",
-           "plan_catch", "plan_song", "read_trajectory"]
+__all__ = [
+    "HandModel",
+    "InfeasibleError",
+    "InputError",
+    "Note",
+    "Planner",
+    "PlannerError",
+    "PlayPlan",
+    "SolverError",
+    "Song",
+    "check_trajectory",
+    "load_hand",
+    "load_song",
+    "plan_catch",
+    "plan_song",
+    "read_trajectory",
+]
 
 
 def __getattr__(name: str):
