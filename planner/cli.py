@@ -11,6 +11,7 @@ it); SIGINT, SIGTERM and SIGHUP stop it cleanly with 128 + the signal's number.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import signal
 import sys
@@ -71,6 +72,7 @@ def _build_parser() -> argparse.ArgumentParser:
     h.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
     h.add_argument("--list", action="store_true", help="list the shipped hands")
     h.add_argument("--urdf", metavar="PATH", help="write the hand's URDF here ('-' for stdout)")
+    h.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
     pl = sub.add_parser("play", help="plan a MIDI song")
     pl.add_argument("song", help="MIDI file")
@@ -85,6 +87,8 @@ def _build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--strict", action="store_true", help="exit 1 if any note is infeasible")
     pl.add_argument("--report", metavar="DIR", help="write PNG plots here")
     pl.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+    pl.add_argument("--json", action="store_true",
+                    help="the summary as one JSON object on stdout (needs -o FILE)")
 
     c = sub.add_parser("catch", help="plan a catch of a thrown ball")
     c.add_argument("--angle", type=float, required=True, help="launch angle above horizontal, deg")
@@ -99,6 +103,8 @@ def _build_parser() -> argparse.ArgumentParser:
     c.add_argument("--strict", action="store_true")
     c.add_argument("--report", metavar="DIR")
     c.add_argument("--html", metavar="FILE")
+    c.add_argument("--json", action="store_true",
+                   help="the summary as one JSON object on stdout (needs -o FILE)")
 
     k = sub.add_parser("check", help="replay a trajectory and verify it")
     k.add_argument("trajectory", help="hand-trajectory v1 file")
@@ -122,25 +128,36 @@ def _build_parser() -> argparse.ArgumentParser:
 
 
 def _cmd_hand(a: argparse.Namespace) -> int:
+    from planner.errors import InputError
     from planner.hand.model import load_hand
     from planner.hand.spec import list_hands
 
     if a.list:
         from planner.hand.spec import load_hand_spec
 
-        for n in list_hands():
-            print(f"{n:10s} {load_hand_spec(n).description}")
+        hands = {n: load_hand_spec(n).description for n in list_hands()}
+        if a.json:
+            print(json.dumps({"command": "hand", "hands": [
+                {"name": n, "description": d} for n, d in hands.items()]}))
+        else:
+            for n, d in hands.items():
+                print(f"{n:10s} {d}")
         return 0
     hand = load_hand(a.hand)
     if a.urdf:
         if a.urdf == "-":
+            if a.json:
+                raise InputError("--json writes its object on stdout: the URDF needs a path")
             sys.stdout.write(hand.urdf)
         else:
             from planner.output import write_file
 
             write_file(a.urdf, hand.urdf)
+        if a.json:
+            print(json.dumps({"command": "hand", "name": hand.name, "urdf": a.urdf,
+                              "urdf_sha256": hand.urdf_sha256}))
         return 0
-    print(hand.summary())
+    print(json.dumps(hand.to_dict()) if a.json else hand.summary())
     return 0
 
 
@@ -151,7 +168,7 @@ def _cmd_play(a: argparse.Namespace) -> int:
 
 
 def _cmd_catch(a: argparse.Namespace) -> int:
-    from planner.catch.plan import catch_cli
+    from planner.catch.summary import catch_cli
 
     return catch_cli(a)
 

@@ -82,9 +82,7 @@ reach a ball on its 1.5x palm at all. Stopping a ball that arrives faster than
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -1158,89 +1156,3 @@ def plan_catch(angle_deg: float, dist_m: float, height_m: float, hand: HandModel
     if strict and not plan.feasible:
         raise InfeasibleError("; ".join(plan.reasons), problem=res)
     return res
-
-
-# ====================================================================== CLI glue
-
-
-def format_summary(res: CatchResult) -> str:
-    p = res.plan
-    ms = 1000.0
-    lines = []
-    thr = p.throw
-    lines.append(f"catch: {thr.get('ball')} ball thrown at {thr.get('angle_deg'):g} deg to "
-                 f"({thr.get('dist_m'):g}, 0, {thr.get('height_m'):g}) m"
-                 + (" with drag" if thr.get("drag") else " (vacuum)")
-                 + f": launch speed {p.launch_speed:.3f} m/s"
-                 + (f", flight time {p.flight_time_s:.3f} s" if p.flight_time_s is not None
-                    else ", never reaches x = dist"))
-    ip = p.intercept_point
-    lines.append(f"  intercept t = {p.intercept_t:.3f} s at ({ip[0]:.3f}, {ip[1]:.3f}, "
-                 f"{ip[2]:.3f}) m, arrival {np.linalg.norm(p.arrival_velocity):.2f} m/s, palm "
-                 f"normal {p.misalignment_deg:.1f} deg off the ball's path, palm error "
-                 f"{p.intercept_error_m * ms:.1f} mm")
-    m = p.margins()
-    lines.append(f"  timeline: move from {p.move_start_s * ms:.0f} ms (signal "
-                 f"{SIGNAL_S * ms:.0f} + planning budget {PLAN_BUDGET_S * ms:.0f} ms"
-                 + (f" after the last observation at {p.t_info_s * ms:.0f} ms" if p.t_info_s
-                    else "") + f"), open pose at {m['ready_s'] * ms:.0f} ms, close start "
-                 f"{p.close_start_s * ms:.0f} ms (closing {p.close_s * ms:.0f} ms; seed "
-                 f"{ACTUATION_SEED_S[0] * ms:.0f}-{ACTUATION_SEED_S[1] * ms:.0f} ms)")
-    g = (f"grasp at +{m['grasp_after_s'] * ms:.0f} ms ({', '.join(p.grasp_fingers)}; "
-         f"{m['grasp_slack_s'] * ms:.0f} ms to spare in the {GRASP_WINDOW_S * ms:.0f} ms window)"
-         if p.grasp_t is not None else "no grasp in the window")
-    lines.append(f"  margins: open hand waits {m['wait_open_s'] * ms:.0f} ms, closing starts "
-                 f"{m['close_lead_s'] * ms:.0f} ms before the ball, {g}; fingertips clear the "
-                 f"ball by {p.min_clearance_before_m * ms:.1f} mm before it")
-    for name, gr in (("stopping", p.stop), ("holding", p.hold)):
-        if gr is not None:
-            lines.append(f"  {name}: {np.linalg.norm(gr.total_force):.1f} N over "
-                         f"{', '.join(c.name for c in gr.problem.contacts)}; torque headroom "
-                         f"{100 * gr.headroom:.0f} % (limited by motor.{gr.limiting_motor})")
-    if p.uncertainty:
-        u = p.uncertainty
-        lines.append(f"  intercept uncertainty (observations): sigma_t {u['sigma_t_s'] * ms:.1f}"
-                     f" ms, sigma_y {u['sigma_y_m'] * ms:.1f} mm, sigma_z "
-                     f"{u['sigma_z_m'] * ms:.1f} mm at x = {u['x_plane_m']:.3f} m")
-    for n in p.notes:
-        lines.append(f"  note: {n}")
-    lines.append(f"  planning {res.planning_s * ms:.1f} ms (one-time setup "
-                 f"{res.setup_s * ms:.0f} ms), {res.rows} rows "
-                 f"({p.t[-1]:.2f} s at {p.rate_hz:g} Hz) -> {res.out_path}")
-    if p.feasible:
-        lines.append("  feasible: yes")
-    else:
-        lines.append("  feasible: NO")
-        for r in p.reasons:
-            lines.append(f"  infeasible: {r}")
-    return "\n".join(lines)
-
-
-def catch_cli(args) -> int:
-    """``cli.py catch``: plan, write, print the summary on stderr; exit status.
-
-    ``--report DIR`` / ``--html FILE``: the written plan is replayed by the
-    independent check and drawn by ``planner.report`` (``write_check_report``,
-    ``write_html``); both need a file output (not ``-``)."""
-    report = getattr(args, "report", None)
-    html = getattr(args, "html", None)
-    if report or html:
-        for mod in ("planner.report", "planner.check"):
-            if importlib.util.find_spec(mod) is None:
-                raise InputError(f"--report/--html need {mod}, which is not installed")
-        if args.output == "-":
-            raise InputError("--report/--html need a trajectory file (-o FILE), not stdout")
-    res = plan_catch(args.angle, args.dist, args.height, args.hand, args.output,
-                     ball=args.ball, drag=args.drag, observations=args.observations,
-                     rate_hz=args.rate, strict=False)
-    sys.stderr.write(format_summary(res) + "\n")
-    if report or html:
-        from planner import report as rep
-        from planner.check import check_trajectory
-
-        checked = check_trajectory(args.output, hand_override=args.hand)
-        if report:
-            rep.write_check_report(checked, report)
-        if html:
-            rep.write_html(checked, html)
-    return 1 if (args.strict and not res.feasible) else 0

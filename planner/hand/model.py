@@ -289,6 +289,30 @@ class HandModel:
             tau = tau - J[self.fingers.index(f)].T @ np.array([0.0, 0.0, F])
         return self.motor_torques(q, tau)
 
+    def to_dict(self) -> dict:
+        """``hand --json``: what ``summary`` says, one JSON object (SI units: m and rad)."""
+        def coupling(c) -> dict:
+            if isinstance(c, LinearCoupling):
+                return {"joint": c.joint, "source": c.source, "kind": "linear",
+                        "ratio": c.ratio, "offset": c.offset}
+            return {"joint": c.joint, "source": c.source, "kind": "mk5", "table": c.table,
+                    "finger": c.finger}
+
+        return {
+            "command": "hand", "name": self.name, "description": self.spec.description,
+            "urdf_sha256": self.urdf_sha256, "rail": bool(self.spec.rail_enabled),
+            "fingers": list(self.fingers),
+            "joints": [{"name": n, "lower": float(self.lower[i]), "upper": float(self.upper[i]),
+                        "velocity": float(self.velocity[i]),
+                        "acceleration": float(self.acceleration[i]),
+                        "unit": "m" if n == "rail" else "rad"}
+                       for i, n in enumerate(self.joint_names)],
+            "couplings": [coupling(c) for c in self.spec.couplings],
+            "actuators": [{"name": a.name, "kind": a.kind, "drives": a.drives,
+                           "speed_rad_s": a.speed_rad_s, "peak_torque_nm": a.peak_torque_nm,
+                           "efficiency": a.efficiency} for a in self.actuators],
+        }
+
     def summary(self) -> str:
         """A readable description: DOF, joints with limits, couplings, actuators."""
         hand_dof = sum(1 for n in self.joint_names if n != "rail")

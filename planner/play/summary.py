@@ -6,6 +6,7 @@ note it calls played the check finds hit, every other note is named with its rea
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import sys
@@ -36,11 +37,35 @@ def format_summary(song_name: str, notes, plan: PlayPlan, out: str) -> str:
     return "\n".join(lines)
 
 
+def plan_dict(song_name: str, notes, plan: PlayPlan, out: str) -> dict:
+    """``play --json``: the summary's facts, one JSON object (units in the names; a note
+    is its index in the song, by onset then pitch, as in the end marker)."""
+    v = plan.verdict
+    song_s = max((n.offset_s for n in notes), default=0.0)
+    return {
+        "command": "play", "song": song_name, "notes": v.notes, "played": v.played,
+        "left_out": [{"note": s.note, "onset_s": float(notes[s.note].onset_s),
+                      "pitch": int(notes[s.note].pitch), "name": pitch_name(notes[s.note].pitch),
+                      "reason": s.reason.value, "detail": s.detail} for s in v.skipped],
+        "late": [{"note": lt.note, "onset_s": lt.onset_s, "pitch": lt.pitch,
+                  "late_s": lt.late_s} for lt in v.score.late],
+        "wrong_presses": [{"start_s": w.start_s, "end_s": w.end_s, "name": w.name,
+                           "fingers": list(w.fingers)} for w in v.score.wrong_presses],
+        "frame_f1": v.score.f1, "rows": plan.rows, "duration_s": plan.duration_s,
+        "trajectory": out, "song_s": song_s, "planning_s": plan.planning_s,
+        "first_row_s": plan.first_row_s,
+        "realtime_factor": song_s / plan.planning_s if plan.planning_s > 0 else None,
+        "hand_positions": len({a.rail_m for a in plan.fingering.assignments}),
+    }
+
+
 def play_cli(a) -> int:
     """Plan, write, summarise; 0, or 1 under ``--strict`` when a note is not played, late
     or a key is pressed wrongly."""
     if (a.report or a.html) and a.output == "-":
         raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
+    if getattr(a, "json", False) and a.output == "-":
+        raise InputError("--json writes its object on stdout: the trajectory needs -o PATH")
     song = load_song(a.song, track=a.track, channel=a.channel, transpose=a.transpose)
     hand = load_hand(a.hand)
     # (by default into the current directory, never beside the song: it may be read-only)
@@ -48,7 +73,10 @@ def play_cli(a) -> int:
         os.path.splitext(os.path.basename(a.song))[0] + ".csv"
     name = os.path.basename(a.song)
     plan = plan_song(song, hand, out, a.rate, song_name=name)
-    sys.stderr.write(format_summary(name, song.notes, plan, out) + "\n")
+    if getattr(a, "json", False):
+        sys.stdout.write(json.dumps(plan_dict(name, song.notes, plan, out)) + "\n")
+    else:
+        sys.stderr.write(format_summary(name, song.notes, plan, out) + "\n")
     if a.report or a.html:
         write_reports(out, a.song, a.report, a.html)
     score = plan.verdict.score

@@ -1,0 +1,144 @@
+"""``cli.py catch``: the summary a user reads (or one JSON object, ``--json``), the
+reports, and the exit status of a planned catch (``planner.catch.plan``)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from typing import Any
+
+import numpy as np
+
+from planner.catch.plan import (
+    ACTUATION_SEED_S,
+    GRASP_WINDOW_S,
+    PLAN_BUDGET_S,
+    SIGNAL_S,
+    CatchResult,
+    plan_catch,
+)
+from planner.errors import InputError
+
+
+def format_summary(res: CatchResult) -> str:
+    p = res.plan
+    ms = 1000.0
+    lines = []
+    thr = p.throw
+    lines.append(f"catch: {thr.get('ball')} ball thrown at {thr.get('angle_deg'):g} deg to "
+                 f"({thr.get('dist_m'):g}, 0, {thr.get('height_m'):g}) m"
+                 + (" with drag" if thr.get("drag") else " (vacuum)")
+                 + f": launch speed {p.launch_speed:.3f} m/s"
+                 + (f", flight time {p.flight_time_s:.3f} s" if p.flight_time_s is not None
+                    else ", never reaches x = dist"))
+    ip = p.intercept_point
+    lines.append(f"  intercept t = {p.intercept_t:.3f} s at ({ip[0]:.3f}, {ip[1]:.3f}, "
+                 f"{ip[2]:.3f}) m, arrival {np.linalg.norm(p.arrival_velocity):.2f} m/s, palm "
+                 f"normal {p.misalignment_deg:.1f} deg off the ball's path, palm error "
+                 f"{p.intercept_error_m * ms:.1f} mm")
+    m = p.margins()
+    lines.append(f"  timeline: move from {p.move_start_s * ms:.0f} ms (signal "
+                 f"{SIGNAL_S * ms:.0f} + planning budget {PLAN_BUDGET_S * ms:.0f} ms"
+                 + (f" after the last observation at {p.t_info_s * ms:.0f} ms" if p.t_info_s
+                    else "") + f"), open pose at {m['ready_s'] * ms:.0f} ms, close start "
+                 f"{p.close_start_s * ms:.0f} ms (closing {p.close_s * ms:.0f} ms; seed "
+                 f"{ACTUATION_SEED_S[0] * ms:.0f}-{ACTUATION_SEED_S[1] * ms:.0f} ms)")
+    g = (f"grasp at +{m['grasp_after_s'] * ms:.0f} ms ({', '.join(p.grasp_fingers)}; "
+         f"{m['grasp_slack_s'] * ms:.0f} ms to spare in the {GRASP_WINDOW_S * ms:.0f} ms window)"
+         if p.grasp_t is not None else "no grasp in the window")
+    lines.append(f"  margins: open hand waits {m['wait_open_s'] * ms:.0f} ms, closing starts "
+                 f"{m['close_lead_s'] * ms:.0f} ms before the ball, {g}; fingertips clear the "
+                 f"ball by {p.min_clearance_before_m * ms:.1f} mm before it")
+    for name, gr in (("stopping", p.stop), ("holding", p.hold)):
+        if gr is not None:
+            lines.append(f"  {name}: {np.linalg.norm(gr.total_force):.1f} N over "
+                         f"{', '.join(c.name for c in gr.problem.contacts)}; torque headroom "
+                         f"{100 * gr.headroom:.0f} % (limited by motor.{gr.limiting_motor})")
+    if p.uncertainty:
+        u = p.uncertainty
+        lines.append(f"  intercept uncertainty (observations): sigma_t {u['sigma_t_s'] * ms:.1f}"
+                     f" ms, sigma_y {u['sigma_y_m'] * ms:.1f} mm, sigma_z "
+                     f"{u['sigma_z_m'] * ms:.1f} mm at x = {u['x_plane_m']:.3f} m")
+    for n in p.notes:
+        lines.append(f"  note: {n}")
+    lines.append(f"  planning {res.planning_s * ms:.1f} ms (one-time setup "
+                 f"{res.setup_s * ms:.0f} ms), {res.rows} rows "
+                 f"({p.t[-1]:.2f} s at {p.rate_hz:g} Hz) -> {res.out_path}")
+    if p.feasible:
+        lines.append("  feasible: yes")
+    else:
+        lines.append("  feasible: NO")
+        for r in p.reasons:
+            lines.append(f"  infeasible: {r}")
+    return "\n".join(lines)
+
+
+def _grasp_dict(gr) -> dict[str, Any] | None:
+    if gr is None:
+        return None
+    return {"force_n": float(np.linalg.norm(gr.total_force)),
+            "contacts": [c.name for c in gr.problem.contacts],
+            "torque_headroom": float(gr.headroom), "limiting_motor": gr.limiting_motor}
+
+
+def catch_dict(res: CatchResult) -> dict[str, Any]:
+    """``catch --json``: the summary's facts, one JSON object (units in the names)."""
+    p = res.plan
+    m = p.margins()
+    return {
+        "command": "catch", "feasible": bool(p.feasible), "reasons": list(p.reasons),
+        "throw": dict(p.throw), "launch_speed_m_s": float(p.launch_speed),
+        "flight_time_s": None if p.flight_time_s is None else float(p.flight_time_s),
+        "intercept_t_s": float(p.intercept_t),
+        "intercept_point_m": [float(x) for x in p.intercept_point],
+        "arrival_speed_m_s": float(np.linalg.norm(p.arrival_velocity)),
+        "palm_misalignment_deg": float(p.misalignment_deg),
+        "intercept_error_m": float(p.intercept_error_m),
+        "move_start_s": float(p.move_start_s), "close_start_s": float(p.close_start_s),
+        "close_s": float(p.close_s),
+        "grasp_t_s": None if p.grasp_t is None else float(p.grasp_t),
+        "grasp_fingers": list(p.grasp_fingers), "margins_s": {k: float(v) for k, v in m.items()},
+        "min_clearance_before_m": float(p.min_clearance_before_m),
+        "stopping": _grasp_dict(p.stop), "holding": _grasp_dict(p.hold),
+        "uncertainty": None if not p.uncertainty else {k: float(v) for k, v in
+                                                       p.uncertainty.items()},
+        "notes": list(p.notes), "rows": int(res.rows), "rate_hz": float(p.rate_hz),
+        "duration_s": float(p.t[-1]), "trajectory": res.out_path,
+        "planning_s": float(res.planning_s), "setup_s": float(res.setup_s),
+    }
+
+
+def catch_cli(args) -> int:
+    """``cli.py catch``: plan, write, print the summary on stderr; exit status.
+
+    ``--report DIR`` / ``--html FILE``: the written plan is replayed by the
+    independent check and drawn by ``planner.report`` (``write_check_report``,
+    ``write_html``); both need a file output (not ``-``)."""
+    report = getattr(args, "report", None)
+    html = getattr(args, "html", None)
+    if report or html:
+        for mod in ("planner.report", "planner.check"):
+            if importlib.util.find_spec(mod) is None:
+                raise InputError(f"--report/--html need {mod}, which is not installed")
+        if args.output == "-":
+            raise InputError("--report/--html need a trajectory file (-o FILE), not stdout")
+    if getattr(args, "json", False) and args.output == "-":
+        raise InputError("--json writes its object on stdout: the trajectory needs -o FILE")
+    res = plan_catch(args.angle, args.dist, args.height, args.hand, args.output,
+                     ball=args.ball, drag=args.drag, observations=args.observations,
+                     rate_hz=args.rate, strict=False)
+    if getattr(args, "json", False):
+        sys.stdout.write(json.dumps(catch_dict(res)) + "\n")
+    else:
+        sys.stderr.write(format_summary(res) + "\n")
+    if report or html:
+        from planner import report as rep
+        from planner.check import check_trajectory
+
+        checked = check_trajectory(args.output, hand_override=args.hand)
+        if report:
+            rep.write_check_report(checked, report)
+        if html:
+            rep.write_html(checked, html)
+    return 1 if (args.strict and not res.feasible) else 0
