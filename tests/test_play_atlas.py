@@ -165,3 +165,20 @@ def test_the_shipped_table_is_the_solvers_own(atlas):
                 assert np.array_equal(getattr(a, pose), getattr(b, pose)), (f, pc, k, pose)
             assert a.max_force_n == b.max_force_n and a.dx_m == b.dx_m
     assert n >= 4
+
+
+def test_a_crossing_is_found_within_its_tolerance_on_the_key_down_side():
+    """``moves._crossing`` (false position, Illinois, bisection as a safeguard) against
+    the root of monotone functions, steep and flat, either way."""
+    from planner.play.moves import _crossing
+
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        root, slope, bend = rng.uniform(0.001, 0.999), rng.uniform(0.1, 50.0), rng.uniform(0, 3)
+        sign = rng.choice([-1.0, 1.0])
+
+        def g(s, root=root, slope=slope, bend=bend, sign=sign):
+            return sign * slope * ((s - root) + bend * (s - root) ** 3)
+
+        s = _crossing(g, g(0.0), g(1.0), 1e-4)
+        assert g(s) >= 0.0 and abs(s - root) <= 1e-4

@@ -40,7 +40,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq, least_squares
 
 from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
 
@@ -542,6 +541,8 @@ def _shoot_drag(a_rad: float, d: float, h: float, k: float, v_vac: float, angle_
     f_lo, _ = run(v_vac)
     if f_lo > 0.0:  # cannot happen with k > 0; guard the bracket anyway
         raise SolverError("drag shooting lost its bracket", problem=(angle_deg, d, h, k))
+    from scipy.optimize import brentq  # (only here: scipy.optimize takes 0.25 s to import)
+
     v = brentq(lambda v: run(v)[0], v_vac, MAX_LAUNCH_SPEED, xtol=1e-13, rtol=1e-15)
     return v, step, run(v)[1]
 
@@ -687,6 +688,8 @@ def fit_observations(
 
         def resid(th: np.ndarray) -> np.ndarray:
             return (Flight(th[:3], th[3:], b, k, step_s=step).position(t) - p).ravel()
+
+        from scipy.optimize import least_squares  # (only here: 0.25 s to import)
 
         try:
             sol = least_squares(

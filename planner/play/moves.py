@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.optimize import brentq
 
 from planner.hand.model import HandModel
 from planner.ik import surfaces_under
@@ -77,8 +76,8 @@ class Moves:
     def _cross(self, e: AtlasEntry, qa: np.ndarray, qb: np.ndarray, move: Move,
                going_down: bool) -> float:
         """Time within ``move`` at which the tip's depth below the key top passes
-        ``DOWN_DEPTH_M`` (Brent's method on the path parameter, forward kinematics),
-        reported on the key-down side of the crossing to within ``CROSS_TOL``."""
+        ``DOWN_DEPTH_M`` (``_crossing`` on the path parameter, forward kinematics), on the
+        key-down side of the crossing, to within ``CROSS_TOL``."""
         depth = self._depth_fn(e)
 
         def below(s: float) -> float:
@@ -88,9 +87,7 @@ class Moves:
         if (g0 >= 0.0) == (g1 >= 0.0):  # (no crossing: the key is down, or up, throughout)
             return move.time_at_s(0.0 if going_down else 1.0) if g0 >= 0.0 else \
                 move.time_at_s(1.0 if going_down else 0.0)
-        s = brentq(below, 0.0, 1.0, xtol=0.5 * CROSS_TOL)
-        s = min(1.0, s + 0.5 * CROSS_TOL) if going_down else max(0.0, s - 0.5 * CROSS_TOL)
-        return move.time_at_s(s)
+        return move.time_at_s(_crossing(below, g0, g1, CROSS_TOL))
 
     def _depth_fn(self, e: AtlasEntry):
         f = self.hand.fingers.index(e.finger)
@@ -226,3 +223,30 @@ class Moves:
             return Move(np.array([rail_a]), np.zeros(1), 0.0, 1.0, 1.0)
         return straight_move(np.array([rail_a]), np.array([rail_b]),
                              self.hand.velocity[[r]], self.hand.acceleration[[r]])
+
+
+def _crossing(g, g0: float, g1: float, tol: float) -> float:
+    """The point of [0, 1] where ``g`` (``g0`` at 0, ``g1`` at 1, of opposite signs)
+    reaches 0, on its side where ``g >= 0``, within ``tol``: false position with the
+    Illinois correction (a few evaluations of ``g`` where bisection takes 14), bisecting
+    whenever one end has been replaced three times in a row (the bracket always shrinks)."""
+    lo, hi, glo, ghi = 0.0, 1.0, g0, g1
+    side, run = 0, 0  # the end the last steps replaced (-1: lo, +1: hi), how many in a row
+    while hi - lo > tol:
+        if run >= 3:
+            m = 0.5 * (lo + hi)
+        else:
+            m = hi - ghi * (hi - lo) / (ghi - glo)
+            m = min(max(m, lo + 0.25 * tol), hi - 0.25 * tol)
+        gm = g(m)
+        if (gm >= 0.0) == (glo >= 0.0):
+            lo, glo = m, gm
+            run, side = (run + 1 if side == -1 else 1), -1
+            if run >= 2:
+                ghi *= 0.5  # (the end kept twice weighs half: Illinois)
+        else:
+            hi, ghi = m, gm
+            run, side = (run + 1 if side == 1 else 1), 1
+            if run >= 2:
+                glo *= 0.5
+    return lo if glo >= 0.0 else hi
