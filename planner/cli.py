@@ -17,6 +17,15 @@ import signal
 import sys
 
 EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE  # 141
+EPILOG = """examples:
+  hand-planner play songs/twinkle.mid -o twinkle.csv
+  hand-planner check twinkle.csv songs/twinkle.mid --strict
+  hand-planner catch --angle 30 --dist 1.5 -o catch.csv --json
+  hand-planner hand --urdf hand.urdf
+
+exit status: 0 success; 2 bad input (one line on stderr); 1 anything else, or what
+--strict rejects; 141 when the reader of the output goes away (| head); 128 + the
+signal's number after SIGINT, SIGTERM or SIGHUP."""
 
 
 class Interrupted(KeyboardInterrupt):
@@ -65,7 +74,8 @@ class _Parser(argparse.ArgumentParser):
 def _build_parser() -> argparse.ArgumentParser:
     prog = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "hand-planner"
     p = _Parser(prog=prog if prog in ("cli.py", "hand-planner") else "hand-planner",
-                description="Task planner for a tendon-driven robot hand")
+                description="Task planner for a tendon-driven robot hand",
+                epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     h = sub.add_parser("hand", help="describe a hand, list hands, write its URDF")
@@ -79,12 +89,13 @@ def _build_parser() -> argparse.ArgumentParser:
     pl.add_argument("-o", "--output", default=None,
                     help="trajectory CSV ('-' for stdout; default: SONG.csv in the current "
                          "directory)")
-    pl.add_argument("--hand", default="default")
+    pl.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
     pl.add_argument("--rate", type=float, default=100.0, help="setpoint rate, Hz (default 100)")
     pl.add_argument("--track", type=int, default=None, help="only this track (0-based)")
     pl.add_argument("--channel", type=int, default=None, help="only this channel (0-15)")
     pl.add_argument("--transpose", action="store_true", help="move notes outside A0-C8 by octaves")
-    pl.add_argument("--strict", action="store_true", help="exit 1 if any note is infeasible")
+    pl.add_argument("--strict", action="store_true",
+                    help="exit 1 if any note is not played, late, or a key is pressed wrongly")
     pl.add_argument("--report", metavar="DIR", help="write PNG plots here")
     pl.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
     pl.add_argument("--json", action="store_true",
@@ -97,12 +108,13 @@ def _build_parser() -> argparse.ArgumentParser:
     c.add_argument("--ball", default="tennis", help="ball: tennis, baseball, seed")
     c.add_argument("--drag", action="store_true", help="model quadratic air drag")
     c.add_argument("--observations", metavar="CSV", help="fit the flight to t,x,y,z observations")
-    c.add_argument("-o", "--output", default="catch.csv")
-    c.add_argument("--hand", default="default")
-    c.add_argument("--rate", type=float, default=100.0)
-    c.add_argument("--strict", action="store_true")
-    c.add_argument("--report", metavar="DIR")
-    c.add_argument("--html", metavar="FILE")
+    c.add_argument("-o", "--output", default="catch.csv",
+                   help="trajectory CSV ('-' for stdout; default catch.csv)")
+    c.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
+    c.add_argument("--rate", type=float, default=100.0, help="setpoint rate, Hz (default 100)")
+    c.add_argument("--strict", action="store_true", help="exit 1 if the catch is infeasible")
+    c.add_argument("--report", metavar="DIR", help="write PNG plots here")
+    c.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
     c.add_argument("--json", action="store_true",
                    help="the summary as one JSON object on stdout (needs -o FILE)")
 

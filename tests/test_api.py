@@ -81,3 +81,18 @@ def test_the_installed_command_runs_from_any_directory(tmp_path):
                        cwd=tmp_path, check=False, timeout=120)
     assert r.returncode == 0 and r.stdout.startswith("default"), r.stderr
     assert os.listdir(tmp_path) == []
+
+
+def test_every_option_has_help_and_the_help_has_examples_and_exit_codes():
+    import argparse
+
+    from planner.cli import _build_parser
+
+    p = _build_parser()
+    text = p.format_help()
+    assert "examples:" in text and "exit status:" in text and "141" in text
+    subs = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))
+    for name, sub in subs.choices.items():
+        for action in sub._actions:
+            if not isinstance(action, argparse._HelpAction):
+                assert action.help, (name, action.dest)

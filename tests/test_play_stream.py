@@ -151,3 +151,15 @@ def test_a_chord_of_twelve_keeps_five_next_to_each_other(planner, tmp_path):
     assert all(s.reason.value == "chord" for s in res.verdict.skipped)
     played = sorted(a.note for a in res.fingering.assignments)
     assert played == list(range(played[0], played[0] + len(played)))  # a run of keys
+
+
+def test_progress_is_reported_as_the_notes_are_decided(planner, tmp_path):
+    """``on_progress(decided, total)``: more than once on a song of several chunks, never
+    backwards, ending at every note (the CLI draws its bar on a terminal from it)."""
+    seen = []
+    song = load_song(ROOT / "songs" / "ode_to_joy.mid")
+    plan_song(song, planner.hand, str(tmp_path / "o.csv"), planner=planner,
+              on_progress=lambda done, total: seen.append((done, total)))
+    assert len(seen) >= 2 and all(t == len(song.notes) for _, t in seen)
+    done = [d for d, _ in seen]
+    assert done == sorted(done) and done[-1] == len(song.notes)

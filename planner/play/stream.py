@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,8 +58,11 @@ class Planner:
 
 
 def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0,
-              song_name: str = "", planner: Planner | None = None) -> PlayPlan:
-    """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout)."""
+              song_name: str = "", planner: Planner | None = None,
+              on_progress: Callable[[int, int], None] | None = None) -> PlayPlan:
+    """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout).
+    ``on_progress(notes_decided, notes)`` is called as the notes are decided (played or
+    left out), chunk by chunk."""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
@@ -68,7 +72,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
     writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
                               hand.joint_names, hand.motor_names, on_rows=selfcheck.add_rows)
     try:
-        motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer)
+        motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
         left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}
         left_out.update({o.note: (o.skip, o.detail)
                          for o in motion.outcomes.values() if o.skip is not None})
@@ -81,7 +85,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
                     time.perf_counter() - t_start, rows.first_row_s - t_start)
 
 
-def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: TrajectoryWriter):
+def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: TrajectoryWriter,
+          on_progress=None):
     """Fingering chunk by chunk (``FingeringProblem.chunks``), each chunk's notes placed
     in time order (a cut before the notes that start with it), rows written up to where
     nothing can change any more."""
@@ -94,6 +99,8 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     for ch in problem.chunks():
         skipped.extend(ch.skipped)
         loss = ch.loss_frames
+        if on_progress is not None:
+            on_progress(len(done) + len(ch.assignments) + len(skipped), len(notes))
         steps = [((notes[a.note].onset_s, 1, notes[a.note].pitch), a) for a in ch.assignments]
         steps += [((t, 0, n), (n, t)) for n, t in ch.cuts]
         steps.sort(key=lambda s: s[0])

@@ -6,6 +6,7 @@ note it calls played the check finds hit, every other note is named with its rea
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -72,17 +73,42 @@ def play_cli(a) -> int:
     out = a.output if a.output is not None else \
         os.path.splitext(os.path.basename(a.song))[0] + ".csv"
     name = os.path.basename(a.song)
-    plan = plan_song(song, hand, out, a.rate, song_name=name)
+    with _progress(len(song.notes), enabled=sys.stderr.isatty() and not getattr(a, "json", False)
+                   ) as progress:
+        plan = plan_song(song, hand, out, a.rate, song_name=name, on_progress=progress)
     if getattr(a, "json", False):
         sys.stdout.write(json.dumps(plan_dict(name, song.notes, plan, out)) + "\n")
     else:
         sys.stderr.write(format_summary(name, song.notes, plan, out) + "\n")
     if a.report or a.html:
         write_reports(out, a.song, a.report, a.html)
+        if not getattr(a, "json", False):
+            sys.stderr.write("".join(f"{what} -> {path}\n" for what, path in
+                                     (("report", a.report), ("html", a.html)) if path))
     score = plan.verdict.score
     if a.strict and (plan.verdict.skipped or score.late or score.wrong_presses):
         return 1
     return 0
+
+
+@contextlib.contextmanager
+def _progress(total: int, enabled: bool):
+    """A progress bar with its rate and time left on a terminal (stderr), for the notes
+    decided; nothing otherwise (a pipe, a log file, ``--json``)."""
+    if not enabled or total == 0:
+        yield None
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, unit="note", file=sys.stderr, leave=False, mininterval=0.2)
+
+    def update(done: int, _total: int) -> None:
+        bar.update(done - bar.n)
+
+    try:
+        yield update
+    finally:
+        bar.close()
 
 
 def write_reports(traj_path: str, song_path: str, report_dir: str | None,
