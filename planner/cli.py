@@ -118,6 +118,15 @@ def _build_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", action="store_true",
                    help="the summary as one JSON object on stdout (needs -o FILE)")
 
+    b = sub.add_parser("batch", help="plan and check every song of a folder (resumable)")
+    b.add_argument("songs", help="folder of MIDI files (*.mid)")
+    b.add_argument("out", help="folder for the trajectories, per-song records and summary")
+    b.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    b.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
+    b.add_argument("--address", default=None,
+                   help="run on a Ray cluster at this address ('local': a local Ray)")
+    b.add_argument("--json", action="store_true", help="one JSON object on stdout")
+
     k = sub.add_parser("check", help="replay a trajectory and verify it")
     k.add_argument("trajectory", help="hand-trajectory v1 file")
     k.add_argument("song", nargs="?", default=None, help="the MIDI file it was planned from")
@@ -185,6 +194,12 @@ def _cmd_catch(a: argparse.Namespace) -> int:
     return catch_cli(a)
 
 
+def _cmd_batch(a: argparse.Namespace) -> int:
+    from planner.batch import batch_cli
+
+    return batch_cli(a)
+
+
 def _cmd_check(a: argparse.Namespace) -> int:
     from planner.check import check_cli
 
@@ -197,7 +212,8 @@ def main(argv: list[str] | None = None) -> int:
 
     _follow_signals()
     try:
-        rc = {"hand": _cmd_hand, "play": _cmd_play, "catch": _cmd_catch, "check": _cmd_check}[
+        rc = {"hand": _cmd_hand, "play": _cmd_play, "catch": _cmd_catch, "check": _cmd_check,
+              "batch": _cmd_batch}[
             args.command
         ](args)
         sys.stdout.flush()

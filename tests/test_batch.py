@@ -1,0 +1,97 @@
+"""Batch planning (planner/batch.py): parallel equals serial, a second run skips what is
+done, a changed or damaged song is planned again, bad input is refused."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from dataclasses import asdict
+from pathlib import Path
+
+import pytest
+
+from planner.batch import batch_plan
+from planner.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[1]
+SONGS = ("twinkle", "scale", "leaps")
+
+
+@pytest.fixture()
+def songs(tmp_path):
+    d = tmp_path / "songs"
+    d.mkdir()
+    for n in SONGS:
+        (d / f"{n}.mid").write_bytes((ROOT / "songs" / f"{n}.mid").read_bytes())
+    return d
+
+
+def _outcome(summary) -> list[dict]:
+    return [{k: v for k, v in asdict(r).items() if k not in ("planning_s", "realtime_factor")}
+            for r in summary.results]
+
+
+def test_two_workers_give_what_one_gives_and_a_second_run_skips_all(songs, tmp_path):
+    serial = batch_plan(songs, tmp_path / "one", workers=1)
+    parallel = batch_plan(songs, tmp_path / "two", workers=2)
+    assert _outcome(serial) == _outcome(parallel)
+    assert [r.song for r in serial.results] == sorted(f"{n}.mid" for n in SONGS)
+    assert all(r.check_ok and r.played == r.notes and not r.error for r in serial.results)
+    for n in SONGS:  # same bytes from either
+        assert (tmp_path / "one" / f"{n}.csv").read_bytes() == \
+            (tmp_path / "two" / f"{n}.csv").read_bytes()
+    again = batch_plan(songs, tmp_path / "two", workers=2)
+    assert again.skipped == 3 and again.planned == 0
+    assert _outcome(again) == [{**o, "skipped": True} for o in _outcome(parallel)]
+    table = (tmp_path / "two" / "summary.csv").read_text().splitlines()
+    assert table[0].startswith("song,notes,played") and len(table) == 4
+    assert len(json.loads((tmp_path / "two" / "summary.json").read_text())["songs"]) == 3
+
+
+def test_a_changed_or_damaged_song_is_planned_again(songs, tmp_path):
+    out = tmp_path / "out"
+    batch_plan(songs, out, workers=1)
+    (songs / "scale.mid").write_bytes((ROOT / "songs" / "fur_elise.mid").read_bytes())
+    csv = (out / "leaps.csv").read_text()
+    (out / "leaps.csv").write_text(csv[: len(csv) // 2])  # cut: no end marker
+    again = batch_plan(songs, out, workers=1)
+    by = {r.song: r for r in again.results}
+    assert by["twinkle.mid"].skipped
+    assert not by["scale.mid"].skipped and by["scale.mid"].notes > 15
+    assert not by["leaps.mid"].skipped and by["leaps.mid"].check_ok
+
+
+def test_a_bad_song_is_recorded_and_the_others_are_planned(songs, tmp_path):
+    (songs / "bad.mid").write_bytes(b"MThd\x00\x00\x00\x06\x00\x01\x00")
+    r = subprocess.run([sys.executable, "-m", "planner.cli", "batch", str(songs),
+                        str(tmp_path / "out"), "--json"], capture_output=True, text=True,
+                       check=False, timeout=600)
+    assert r.returncode == 1, r.stderr
+    d = json.loads(r.stdout)
+    assert d["failed"] == 1 and d["planned"] == 3
+    bad = next(s for s in d["songs"] if s["song"] == "bad.mid")
+    assert bad["error"] and "\n" not in bad["error"]
+
+
+@pytest.mark.parametrize("case", ["no_folder", "empty", "workers"])
+def test_bad_batch_input_is_refused(tmp_path, case):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError):
+        if case == "no_folder":
+            batch_plan(tmp_path / "none", tmp_path / "out")
+        elif case == "empty":
+            batch_plan(tmp_path / "empty", tmp_path / "out")
+        else:
+            batch_plan(ROOT / "songs", tmp_path / "out", workers=0)
+
+
+def test_a_cluster_address_without_ray_is_refused(songs, tmp_path):
+    try:
+        import ray  # noqa: F401
+    except ImportError:
+        with pytest.raises(InputError, match="Ray"):
+            batch_plan(songs, tmp_path / "out", address="local")
+    else:
+        s = batch_plan(songs, tmp_path / "out", address="local")
+        assert s.planned == 3
