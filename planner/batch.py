@@ -8,7 +8,7 @@ skipped by the next run). The summary of every song goes to ``out_dir/summary.cs
 ``summary.json``.
 
 Workers are local processes (each builds its planner once and plans song after song);
-with ``address`` the songs go to a Ray cluster instead (``pip install ray``; one task a
+with ``address`` the songs go to a Ray cluster instead (the ``batch`` extra; one task a
 song). Results are returned in the songs' order, whatever order they finish in.
 """
 
@@ -123,7 +123,7 @@ def _run_ray(songs: list[Path], out: Path, hand: str, address: str):
     try:
         import ray
     except ImportError:
-        raise InputError("--address needs Ray: pip install ray") from None
+        raise InputError('--address needs Ray: pip install -e ".[batch]" (or ray)') from None
     ray.init(address=None if address == "local" else address, ignore_reinit_error=True,
              log_to_driver=False)
     task = ray.remote(plan_one)
