@@ -8,10 +8,11 @@ The public API (imported on first use, so that ``import planner`` stays light):
 
 * ``load_hand(name_or_path)`` -> ``HandModel``; ``load_song(path, track=, channel=,
   transpose=)`` -> ``Song``;
-* ``plan_song(song, hand, out_path, rate_hz=100.0)`` -> ``PlayPlan`` (rows streamed to
-  ``out_path``; ``'-'`` for stdout), with a ``Planner(hand)`` to reuse across songs;
+* ``plan_song(song, hand, out_path=None, rate_hz=100.0)`` -> ``PlayPlan`` (rows streamed
+  to ``out_path``, ``'-'`` for stdout; without one, in memory: ``.trajectory``,
+  ``.write(path)``), with a ``Planner(hand)`` to reuse across songs;
 * ``plan_catch(angle_deg, dist_m, height_m, hand, out_path, ...)`` -> ``CatchResult``;
-* ``check_trajectory(traj_path, song_path=None)`` -> ``CheckReport``;
+* ``check_trajectory(traj_path or Trajectory, song_path or Song=None)`` -> ``CheckReport``;
 * ``read_trajectory(path)`` -> ``Trajectory`` (times, joint and motor arrays, metadata).
 """
 

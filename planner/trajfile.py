@@ -11,6 +11,7 @@ end marker also carries the plan's own per-note claims (``end_info``), which
 
 from __future__ import annotations
 
+import io
 import json
 import math
 from collections.abc import Callable
@@ -31,15 +32,17 @@ class TrajectoryWriter:
     """Streams a trajectory: the constructor opens the path and writes metadata and
     header, ``write_rows`` appends setpoints, ``close`` writes the end marker."""
 
-    def __init__(self, path: str, metadata: dict[str, Any], joint_names, motor_names,
+    def __init__(self, path: str | None, metadata: dict[str, Any], joint_names, motor_names,
                  on_rows: Callable[[np.ndarray], None] | None = None) -> None:
-        """``on_rows`` is given every chunk of rows as the file holds them (a self-check)."""
+        """``on_rows`` is given every chunk of rows as the file holds them (a self-check).
+        ``path`` None: the text is kept in memory (``text`` once closed)."""
         self.path = path
         self._on_rows = on_rows
         self.rows = 0
         self._last_t = -math.inf
         self.columns = ["t", *joint_names, *(f"motor.{m}" for m in motor_names)]
-        self._out = open_stream(path)
+        self._out = io.StringIO() if path is None else open_stream(path)
+        self.text: str | None = None
         meta = {"format": FORMAT, "version": VERSION, **metadata}
         self._out.write("# " + json.dumps(meta, sort_keys=False, separators=(", ", ": ")) + "\n")
         self._out.write(",".join(self.columns) + "\n")
@@ -76,12 +79,14 @@ class TrajectoryWriter:
         """Write the end marker (with ``end_info``'s keys after ``end`` and ``rows``)."""
         end = {"end": True, "rows": self.rows, **(end_info or {})}
         self._out.write("# " + json.dumps(end, separators=(", ", ": ")) + "\n")
+        if self.path is None:
+            self.text = self._out.getvalue()
         self._out.close()
 
     def abort(self, discard: bool = False) -> None:
         """Stop without the end marker: the file stays visibly incomplete. ``discard``
         (the input was found bad after opening) removes a regular file it created."""
-        if discard:
+        if discard and self.path is not None:
             self._out.discard()
             return
         try:
@@ -113,7 +118,12 @@ def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:
     """Read and validate a hand-trajectory v1 file; InputError (one line) on any defect,
     the first bad row named: rows must be at ``rate_hz`` from t = 0 (within
     ``ROW_TIME_TOL_S``), with no gap, at least ``MIN_ROWS`` of them."""
-    text = _read_text(path)
+    return parse_trajectory(_read_text(path), path, allow_incomplete)
+
+
+def parse_trajectory(text: str, path: str = "<memory>",
+                     allow_incomplete: bool = False) -> Trajectory:
+    """``read_trajectory`` of a file's text (``path`` names it in messages)."""
     terminated = text.endswith("\n")
     lines = text.split("\n")
     if lines and lines[-1] == "":

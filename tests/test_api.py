@@ -96,3 +96,24 @@ def test_every_option_has_help_and_the_help_has_examples_and_exit_codes():
         for action in sub._actions:
             if not isinstance(action, argparse._HelpAction):
                 assert action.help, (name, action.dest)
+
+
+def test_a_plan_in_memory_is_the_file_and_checks_the_same(tmp_path):
+    import planner
+
+    hand = planner.load_hand("default")
+    song = planner.load_song(ROOT / "songs" / "scale.mid")
+    pl = planner.Planner(hand)
+    mem = planner.plan_song(song, hand, planner=pl, song_name="scale.mid")
+    planner.plan_song(song, hand, str(tmp_path / "f.csv"), planner=pl, song_name="scale.mid")
+    assert mem.text == (tmp_path / "f.csv").read_text()
+    mem.write(str(tmp_path / "m.csv"))
+    assert (tmp_path / "m.csv").read_bytes() == (tmp_path / "f.csv").read_bytes()
+    tr = mem.trajectory
+    assert tr.complete and tr.q.shape == (mem.rows, len(hand.joint_names))
+    a = planner.check_trajectory(tr, song)
+    b = planner.check_trajectory(str(tmp_path / "f.csv"), str(ROOT / "songs" / "scale.mid"))
+    assert a.ok and (a.play.f1, a.play.notes_hit) == (b.play.f1, b.play.notes_hit)
+    assert a.trajectory == "<memory>"
+    with pytest.raises(planner.PlannerError):
+        _ = planner.plan_song(song, hand, str(tmp_path / "g.csv"), planner=pl).trajectory

@@ -103,7 +103,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -144,6 +144,9 @@ from planner.check.results import (
 from planner.errors import InputError
 from planner.hand.model import HandModel, load_hand
 from planner.trajfile import Trajectory, read_trajectory
+
+if TYPE_CHECKING:
+    from planner.music.midi import Song
 
 __all__ = [
     "DOWN_DEPTH_M",
@@ -241,12 +244,15 @@ def _T_world_root(meta: dict[str, Any], hand: HandModel, path: str) -> np.ndarra
 def _song_notes(song_path: str, meta: dict[str, Any], path: str, options: dict[str, Any]):
     """The song's notes, read with the options the plan was made with (the file's
     metadata) unless given; InputError when the file names another number of notes."""
-    from planner.music.midi import load_song
+    from planner.music.midi import Song, load_song
 
     opts = {k: (options.get(k) if options.get(k) is not None else meta.get(k))
             for k in ("track", "channel", "transpose")}
-    notes = load_song(song_path, track=opts["track"], channel=opts["channel"],
-                      transpose=bool(opts["transpose"])).notes
+    if isinstance(song_path, Song):  # (read already, with the options its reader chose)
+        notes = song_path.notes
+    else:
+        notes = load_song(song_path, track=opts["track"], channel=opts["channel"],
+                          transpose=bool(opts["transpose"])).notes
     want = meta.get("notes")
     if is_num(want) and int(want) != len(notes):
         given = ", ".join(f"{k}={v}" for k, v in opts.items() if v not in (None, False)) or "none"
@@ -309,14 +315,15 @@ def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list
     return problems
 
 
-def check_trajectory(traj_path: str, song_path: str | None = None, *,
+def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None = None, *,
                      allow_incomplete: bool = False, min_f1: float | None = None,
                      hand_override: str | HandModel | None = None, strict: bool = False,
                      song_options: dict[str, Any] | None = None) -> CheckReport:
     """Replay ``traj_path`` and audit it (see the package docstring).
 
-    ``song_path``: a MIDI file (play only) for F1, note hits and wrong presses, read
-    with ``song_options`` (``track``, ``channel``, ``transpose``; each defaults to the
+    ``traj_path``: a file, or a ``Trajectory`` already read (a plan made in memory).
+    ``song_path``: a MIDI file (play only), or a ``Song`` read already, for F1, note hits
+    and wrong presses, read with ``song_options`` (``track``, ``channel``, ``transpose``; each defaults to the
     file's metadata). ``min_f1``: the verdict also requires frame F1 >= this (needs a
     song). ``strict``: the verdict also fails on any missed or late note.
     ``hand_override``: a hand name / hand file or a HandModel to use instead of
@@ -325,7 +332,10 @@ def check_trajectory(traj_path: str, song_path: str | None = None, *,
     allowed), unknown hand, URDF hash or column mismatch, bad T_world_root, bad
     catch metadata, a song other than the plan's.
     """
-    tr = read_trajectory(traj_path, allow_incomplete=allow_incomplete)
+    if isinstance(traj_path, Trajectory):  # (a plan in memory: ``PlayPlan.trajectory``)
+        tr, traj_path = traj_path, "<memory>"
+    else:
+        tr = read_trajectory(traj_path, allow_incomplete=allow_incomplete)
     meta = tr.metadata
     hand = _load_hand(meta, traj_path, hand_override)
     if meta["urdf_sha256"] != hand.urdf_sha256:
@@ -370,7 +380,9 @@ def check_trajectory(traj_path: str, song_path: str | None = None, *,
                             f"{lc.worst:.6g} vs {lc.limit:.6g} {lc.unit}, {lc.name} at "
                             f"{lc.time_s:.3f} s)")
     return CheckReport(
-        trajectory=os.fspath(traj_path), song=None if song_path is None else os.fspath(song_path),
+        trajectory=os.fspath(traj_path),
+        song=None if song_path is None else (song_path.source if not isinstance(
+            song_path, (str, os.PathLike)) else os.fspath(song_path)),
         task=task, hand=hand.name, urdf_sha256=hand.urdf_sha256, complete=tr.complete,
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), rate_hz=float(meta["rate_hz"]),
         limits=tuple(limits), play=play, catch=catch, min_f1=min_f1, problems=tuple(problems),

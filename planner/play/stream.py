@@ -12,15 +12,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.errors import InputError, SolverError
+from planner.errors import InputError, PlannerError, SolverError
 from planner.hand.model import HandModel
 from planner.music.midi import Song
+from planner.output import write_file
 from planner.play.atlas import Atlas
 from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.moves import Moves
 from planner.selfcheck import SelfCheck, Verdict
-from planner.trajfile import TrajectoryWriter
+from planner.trajfile import Trajectory, TrajectoryWriter, parse_trajectory
 
 COMMIT_LAG_S = 0.5  # rows are written up to this long before the last note placed
 SETTLE_S = 0.1  # rows go on this long after the hand is still
@@ -29,7 +30,8 @@ ROW_BLOCK = 6000  # rows sampled, guarded, written and replayed at once (60 s at
 
 @dataclass(frozen=True)
 class PlayPlan:
-    """What ``plan_song`` did: rows written, the fingering, the verdict of its replay."""
+    """What ``plan_song`` did: rows written, the fingering, the verdict of its replay;
+    planned in memory (no path), the file's ``text``, its ``trajectory`` and ``write``."""
 
     rows: int
     duration_s: float
@@ -37,6 +39,20 @@ class PlayPlan:
     verdict: Verdict
     planning_s: float
     first_row_s: float
+    text: str | None = None
+
+    @property
+    def trajectory(self) -> Trajectory:
+        """The plan as read back from its file (times, joint and motor arrays)."""
+        if self.text is None:
+            raise PlannerError("the plan was streamed to a file: read it with read_trajectory")
+        return parse_trajectory(self.text)
+
+    def write(self, path: str) -> None:
+        """Write a plan made in memory to ``path`` (whole: see ``planner.output``)."""
+        if self.text is None:
+            raise PlannerError("the plan was streamed to a file already")
+        write_file(path, self.text)
 
 
 def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -> dict:
@@ -57,10 +73,11 @@ class Planner:
         self.moves = Moves(hand, self.atlas)
 
 
-def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0,
+def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz: float = 100.0,
               song_name: str = "", planner: Planner | None = None,
               on_progress: Callable[[int, int], None] | None = None) -> PlayPlan:
-    """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout).
+    """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout;
+    None: keep it in memory, ``PlayPlan.text``).
     ``on_progress(notes_decided, notes)`` is called as the notes are decided (played or
     left out), chunk by chunk."""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
@@ -82,7 +99,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str, rate_hz: float = 100.0
         writer.abort(discard=isinstance(e, InputError))
         raise
     return PlayPlan(writer.rows, writer.rows / rate_hz, fingering, verdict,
-                    time.perf_counter() - t_start, rows.first_row_s - t_start)
+                    time.perf_counter() - t_start, rows.first_row_s - t_start, writer.text)
 
 
 def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: TrajectoryWriter,
