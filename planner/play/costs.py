@@ -200,54 +200,94 @@ class Costs:
         self._cands.clear()
 
     def _same_rail_loss(self, prev: Prev, new_notes: dict[int, str]) -> float:
+        """Frames lost by the new notes struck with the rail where it is: each key down
+        as late as the latest of what it waits for (another finger leaving the key, its
+        own finger's move from its last key), a repeated key let up early."""
         rail_i, last, on_key = prev.state.rail_i, prev.last, prev.on_key
         loss = 0.0
         for n, f in new_notes.items():
+            late = 0.0
             other = on_key.get(self.pitch[n])
             if other is not None and other[1] != f:  # another finger leaves the key first
-                loss += self._leave_key_s(other, n, f, rail_i)
+                late = self._leave_key_s(other, n, f, rail_i)
             if f in last:
                 m, r = last[f]
-                loss += self._again_s(m, r, n, f, rail_i)
-        return loss / self.dt
+                early, again = self._strike_again(m, r, n, f, rail_i)
+                if math.isinf(again):
+                    return math.inf
+                loss += early / self.dt
+                late = max(late, again)
+            loss += max(0.0, late) / self.dt
+        return loss
 
-    def _again_s(self, m: int, r: int, n: int, f: str, rail_i: int) -> float:
-        """Seconds lost when finger ``f``, last on note ``m`` from rail ``r``, strikes
-        ``n`` from ``rail_i``: the same key again from the same place (a repeat), else a
-        lift, a move across and a descent; inf when no checked move gets there."""
+    def _strike_again(self, m: int, r: int, n: int, f: str, rail_i: int) -> tuple[float, float]:
+        """(seconds ``m``'s key comes up early, seconds ``n``'s goes down late) when finger
+        ``f``, last on note ``m`` from rail ``r``, strikes ``n`` from ``rail_i``: the same
+        key again from the same place is a repeat (the motion lets the key up in time for
+        it), another key a lift, a move across and a descent (the key down late); late
+        inf when no checked move gets there."""
         a, b = self.entry(m, f, r), self.entry(n, f, rail_i)
+        room = self.t_down(n) - self.t_up(m)
         if self.pitch[m] == self.pitch[n] and r == rail_i:
-            gap = self.moves.repeat_gap_s(a)
-        else:
-            gap = self.moves.move_gap_s(a, b)
-            if gap is None:
-                return math.inf
-        return max(0.0, gap - (self.t_down(n) - self.t_up(m)))
+            return max(0.0, self.moves.repeat_gap_s(a) - room), 0.0
+        gap = self.moves.move_gap_s(a, b)
+        if gap is None:
+            return 0.0, math.inf
+        return 0.0, max(0.0, gap - room)
 
     def _leave_key_s(self, other: tuple[int, str], n: int, f: str, rail_i: int) -> float:
-        """Seconds lost when finger ``f`` strikes ``n`` on the key another finger has
+        """Seconds late when finger ``f`` strikes ``n`` on the key another finger has
         (``other``: its note and finger): that one lifts first, then this one descends."""
         m2, g = other
         gap = (self.moves.before_rail_s(self.entry(m2, g, rail_i))
                + self.moves.after_rail_s(self.entry(n, f, rail_i)))
         return max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
 
-    def _rail_loss(self, prev: Prev, arrive: float, rail_i: int, kept=()) -> float:
+    def _rail_loss(self, prev: Prev, new: dict[int, str], rail_i: int, kept=()) -> float:
         """Frames lost to a move of the rail to ``rail_i`` after ``prev``: a finger of
         ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
         other lifts after its key comes up; then the rail moves (as slow as its slowest
-        follower), and the new fingers descend (``arrive``: the latest of their descents'
-        key-down lead minus key-down target). The worst pair decides, and it splits:
-        max over the lifters (lift + key up) + the move + max over the new. A ``kept``
-        note (sounding past the event) must follow, or the move is not made (inf)."""
+        follower), and the new fingers descend. Each new key goes down as late as the
+        latest of what it waits for: the rail, its own finger crossing from its last key
+        (while the rail moves) or striking again after following it, another finger
+        leaving its key. A ``kept`` note (sounding past the event) must follow, or the
+        move is not made (inf)."""
         got = prev.release.get(rail_i)
         if got is None:
             got = prev.release[rail_i] = self._release_of(prev.state, rail_i)
         release_t, followers = got
         if not followers.issuperset(kept):
             return math.inf
-        di = abs(rail_i - prev.state.rail_i)
-        return max(0.0, release_t + arrive) / self.dt + TIE_RAIL_PER_M * di * RAIL_STEP_M
+        around = prev.around.get(rail_i)
+        if around is None:
+            around = prev.around[rail_i] = (
+                {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
+                {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
+        by_finger, by_key, lifted = around
+        loss = TIE_RAIL_PER_M * abs(rail_i - prev.state.rail_i) * RAIL_STEP_M
+        for n, f in new.items():
+            e = self.entry(n, f, rail_i)
+            late = release_t + self.moves.after_rail_s(e) - self._t_down[n]
+            m = by_finger.get(f)
+            if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
+                m, r = lifted[f]
+                a = self.entry(m, f, r)
+                across = self.moves.across(a, e)
+                if across is None:
+                    return math.inf
+                late = max(late, self.moves.before_rail_s(a) + across.duration_s
+                           + self.moves.after_rail_s(e) - (self._t_down[n] - self._t_up[m]))
+            elif m is not None:  # (it followed its key: it is at rail_i now)
+                early, again = self._strike_again(m, rail_i, n, f, rail_i)
+                if math.isinf(again):
+                    return math.inf
+                loss += early / self.dt
+                late = max(late, again)
+            other = by_key.get(self.pitch[n])
+            if other is not None and other[1] != f:
+                late = max(late, self._leave_key_s(other, n, f, rail_i))
+            loss += max(0.0, late) / self.dt
+        return loss
 
     def _release_of(self, prev: State, rail_i: int) -> tuple[float, frozenset]:
         """When the rail arrives at ``rail_i`` after ``prev`` (the lifters' key up, lift,
@@ -271,42 +311,5 @@ class Costs:
                        for m, f, r in prev.last_notes if (m, f) not in followers),
                       default=-math.inf)
         return release + T, frozenset(followers)
-
-    def _after_follow_loss(self, prev: Prev, new: dict[int, str], rail_i: int) -> float:
-        """Frames lost around a move of the rail by the new notes whose finger, or whose
-        key, a follower still holds (that finger strikes again, same key, or moves on,
-        another key, once its note ends; another finger waits for it to leave the key),
-        and by those whose finger lifted from a recent note: it crosses to its new key
-        while the rail moves, then comes down."""
-        around = prev.around.get(rail_i)
-        if around is None:
-            followers = prev.release[rail_i][1]
-            around = prev.around[rail_i] = (
-                {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
-                {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
-        by_finger, by_key, lifted = around
-        loss = 0.0
-        for n, f in new.items():
-            m = by_finger.get(f)
-            if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
-                m, r = lifted[f]
-                a, b = self.entry(m, f, r), self.entry(n, f, rail_i)
-                across = self.moves.across(a, b)
-                if across is None:
-                    return math.inf
-                gap = (self.moves.before_rail_s(a) + across.duration_s
-                       + self.moves.after_rail_s(b))
-                loss += max(0.0, gap - (self._t_down[n] - self._t_up[m]))
-                m = None
-            if m is not None:  # (it followed its key: it is at rail_i now)
-                loss += self._again_s(m, rail_i, n, f, rail_i)
-            other = by_key.get(self.pitch[n])
-            if other is not None and other[1] != f:
-                loss += self._leave_key_s(other, n, f, rail_i)
-        return loss / self.dt
-
-    def _arrival(self, new: dict[int, str], rail_i: int) -> float:
-        return max(self.moves.after_rail_s(self.entry(n, f, rail_i)) - self.t_down(n)
-                   for n, f in new.items())
 
     # ------------------------------------------------------------------ the programme

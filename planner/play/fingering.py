@@ -292,7 +292,7 @@ class FingeringProblem(Costs):
                       if not (f == THUMB and not kb.is_black(pitch[m]))]
         crossing = any(b <= a for a, b in itertools.pairwise(order_near))
         recent = None
-        for rail_i, arrive, tie in self._moves_to(self._candidates(new), p):
+        for rail_i, tie in self._moves_to(self._candidates(new), p):
             if crossing and rail_i == p.rail_i:
                 continue
             if p is None:
@@ -300,9 +300,7 @@ class FingeringProblem(Costs):
             elif rail_i == p.rail_i:
                 step = self._same_rail_loss(ctx, new)
             else:
-                step = self._rail_loss(ctx, arrive, rail_i, kept)
-                if not math.isinf(step):
-                    step += self._after_follow_loss(ctx, new, rail_i)
+                step = self._rail_loss(ctx, new, rail_i, kept)
             if math.isinf(step):
                 continue
             if recent is None:
@@ -326,13 +324,13 @@ class FingeringProblem(Costs):
         below = [c for c in cands if c[0] < p.rail_i]
         above = [c for c in cands if c[0] > p.rail_i]
         keep = here + below[-1:] + above[:1]
-        best = min(cands, key=lambda c: c[2])
+        best = min(cands, key=lambda c: c[1])
         if best not in keep:
             keep.append(best)
         return keep
 
-    def _candidates(self, new: dict[int, str]) -> list[tuple[int, float, float]]:
-        """(rail index, arrival lead, tie-break) of every rail from which the fingers of
+    def _candidates(self, new: dict[int, str]) -> list[tuple[int, float]]:
+        """(rail index, tie-break) of every rail from which the fingers of
         ``new`` press their notes (memoised: it does not depend on the state before)."""
         key = tuple(sorted(new.items()))
         out = self._cands.get(key)
@@ -345,7 +343,7 @@ class FingeringProblem(Costs):
             for rail_i in sorted(rails):
                 tie = sum(abs(self.entry(n, f, rail_i).dx_m - self.atlas.natural_dx[f])
                           for n, f in new.items()) * TIE_DX_PER_M
-                out.append((rail_i, self._arrival(new, rail_i), tie))
+                out.append((rail_i, tie))
             self._cands[key] = out
         return out
 
