@@ -107,6 +107,12 @@ from planner.catch.flight import (
     predict_throw,
 )
 from planner.catch.flight import _finite as flight_finite
+from planner.check.criteria import (
+    GRASP_MIN_TIPS,
+    GRASP_TOL_M,
+    GRASP_WINDOW_S,
+    INTERCEPT_TOL_M,
+)
 from planner.errors import InfeasibleError, InputError, PlannerError
 from planner.hand.model import HandModel, load_hand
 from planner.hand.spec import PALM_FRAME, hands_dir, rpy_matrix
@@ -117,11 +123,9 @@ from planner.trajfile import TrajectoryWriter
 SIGNAL_S = 0.025  # seed (Markus): 25 ms of signal processing
 PLAN_BUDGET_S = 0.005  # planning latency budget (bench target p99)
 ACTUATION_SEED_S = (0.150, 0.300)  # seed: open-to-closed actuation time
-GRASP_WINDOW_S = 0.150  # the grasp must close within this after intercept_t
-GRASP_TOL_M = 0.010  # a fingertip "around" the ball: within radius + 10 mm of its centre
+# (GRASP_WINDOW_S, GRASP_TOL_M, GRASP_MIN_TIPS, INTERCEPT_TOL_M: the check's criteria,
+# one definition, imported above; the planner aims inside them)
 GRASP_MARGIN_M = 0.002  # planned with this much to spare
-GRASP_MIN_TIPS = 3  # the thumb and two more
-INTERCEPT_TOL_M = 0.015  # the independent check's tolerance at intercept_t
 INTERCEPT_PLAN_TOL_M = 0.001  # what the planner aims for
 TOUCH_CLEAR_M = 0.002  # before intercept_t fingertips stay this far outside the ball
 TIP_GAP_M = 0.003  # closed fingertips: this far outside the ball's surface
