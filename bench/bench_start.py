@@ -1,0 +1,56 @@
+"""Start-up of the command line (issue 18, item 4): wall time of each command from a fresh
+interpreter to its exit, and of its imports alone, best of N runs.
+
+    python bench/bench_start.py [--repeat 5]
+
+Not a test: it prints what this machine measures. Target: `hand` and `catch` ready to
+plan within 0.5 s of start.
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CASES = {
+    "hand": (["hand"], "import planner.cli, planner.hand.model"),
+    "catch": (["catch", "--angle", "30", "--dist", "1.5", "-o", "{out}/c.csv"],
+              "import planner.cli, planner.catch.summary"),
+    "play twinkle": (["play", str(ROOT / "songs" / "twinkle.mid"), "-o", "{out}/t.csv"],
+                     "import planner.cli, planner.play"),
+    "check twinkle": (["check", "{out}/t.csv", str(ROOT / "songs" / "twinkle.mid")],
+                      "import planner.cli, planner.check"),
+}
+
+
+def best_of(cmd: list[str], repeat: int) -> float:
+    best = float("inf")
+    for _ in range(repeat):
+        t = time.perf_counter()
+        subprocess.run(cmd, capture_output=True, check=False, cwd=ROOT)
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=5)
+    a = ap.parse_args()
+    bare = best_of([sys.executable, "-c", "pass"], a.repeat)
+    print(f"{'command':16s} {'wall s':>7s} {'imports s':>9s}   (a bare interpreter: {bare:.3f} s)")
+    with tempfile.TemporaryDirectory() as out:
+        for name, (argv, imports) in CASES.items():
+            wall = best_of([sys.executable, "-m", "planner.cli",
+                            *(x.format(out=out) for x in argv)], a.repeat)
+            imp = best_of([sys.executable, "-c", imports], a.repeat)
+            print(f"{name:16s} {wall:7.3f} {imp:9.3f}")
+
+
+if __name__ == "__main__":
+    main()
