@@ -148,6 +148,65 @@ class Outcome:
     detail: str = ""
 
 
+def approach(moves: Moves, st: _Finger, e: AtlasEntry, want: float, after_s: float,
+             rail_free_s: float, committed_s: float):
+    """The moves that bring finger ``st`` from where it is to key-down on ``e`` (no
+    earlier than ``want``, no move starting before ``after_s`` nor ``committed_s`` (the
+    rows written), below crossing height only once the rail is still, at
+    ``rail_free_s``): (key-down moment, [(t0, move), ...], the pose its last descent
+    starts from), or None when no checked path leads there."""
+    floor = max(rail_free_s, committed_s, after_s)
+    if st.pose == "press" and st.entry is e:  # the same key again: up to rise, down
+        lift, desc = moves.lift(e, "rise"), moves.descend(e, "rise")
+        t_lift = min(want - desc.cross_s - lift.duration_s, st.up_s - lift.cross_s)
+        t_lift = max(t_lift, st.track.free_s, committed_s)
+        t_desc = max(want - desc.cross_s, t_lift + lift.duration_s, floor)
+        return t_desc + desc.cross_s, [(t_lift, lift.move), (t_desc, desc.move)], "rise"
+    if st.pose == "hover" and st.entry is e:  # waiting over this key already
+        desc = moves.descend(e, "hover")
+        t_desc = max(want - desc.cross_s, st.track.free_s, floor)
+        return t_desc + desc.cross_s, [(t_desc, desc.move)], "hover"
+    steps: list[tuple[float, Move]] = []
+    t = max(st.track.free_s, committed_s, after_s)  # (a finger high may cross
+    # while the rail moves: nothing under a tip that high is higher than it)
+    if st.pose != "high":  # let its key up on time (pressing), rise to crossing height
+        up = _up_move(moves, st)
+        t_up = max(st.up_s - up.cross_s, st.track.free_s, committed_s) \
+            if st.pose == "press" else max(st.track.free_s, committed_s)
+        steps.append((t_up, up.move))
+        t = max(t, t_up + up.duration_s)
+    across = None
+    if st.entry is not e:
+        across = moves.across(st.entry, e)
+        if across is None:
+            return None
+    d_high, d_hover = moves.descend(e, "high"), moves.descend(e, "hover")
+    to_hover = moves.to_hover(e)
+    across_s = across.duration_s if across is not None else 0.0
+    low = max(t + across_s, floor)  # below crossing height only once the rail is still
+    if low + to_hover.duration_s + WAIT_MARGIN_S <= want - d_hover.cross_s:
+        # time to wait at hover: get there just in time, then straight down
+        t_hover = want - d_hover.cross_s - WAIT_MARGIN_S - to_hover.duration_s
+        if across is not None:
+            steps.append((max(t, t_hover - across_s), across))
+        steps.append((t_hover, to_hover))
+        steps.append((want - d_hover.cross_s, d_hover.move))
+        return want, steps, "hover"
+    if across is not None:
+        steps.append((t, across))
+    t_desc = max(want - d_high.cross_s, low)
+    steps.append((t_desc, d_high.move))
+    return t_desc + d_high.cross_s, steps, "high"
+
+
+def _up_move(moves: Moves, st: _Finger):
+    """The finger's way up to crossing height from its pose (a timed lift when it presses:
+    its key comes up ``cross_s`` into it)."""
+    if st.pose == "press":
+        return moves.lift(st.entry, "high")
+    return moves.rise(st.entry)
+
+
 class Motion:
     """Builds the segments note by note (``place``); ``rows`` samples them."""
 
@@ -230,7 +289,8 @@ class Motion:
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
         after = self._release_others_on(n.pitch, a.finger)
-        found = self._approach(st, e, a.finger, want, after)
+        found = approach(self.moves, st, e, want, after, self.rail.free_s,
+                         self.committed_s)
         if found is None:
             out = Outcome(a.note, None, None, SkipReason.NO_PATH,
                           f"no checked path of the {a.finger} to it")
@@ -262,61 +322,8 @@ class Motion:
         self.outcomes[a.note] = out
         return out
 
-    def _approach(self, st: _Finger, e: AtlasEntry, finger: str, want: float, after_s: float):
-        """The moves that bring the finger from where it is to key-down on ``e`` (no
-        earlier than ``want``, no move starting before ``after_s``): (key-down moment,
-        [(t0, move), ...], the pose its last descent starts from), or None when no
-        checked path leads there."""
-        moves = self.moves
-        floor = max(self.rail.free_s, self.committed_s, after_s)
-        if st.pose == "press" and st.entry is e:  # the same key again: up to rise, down
-            lift, desc = moves.lift(e, "rise"), moves.descend(e, "rise")
-            t_lift = min(want - desc.cross_s - lift.duration_s, st.up_s - lift.cross_s)
-            t_lift = max(t_lift, st.track.free_s, self.committed_s)
-            t_desc = max(want - desc.cross_s, t_lift + lift.duration_s, floor)
-            return t_desc + desc.cross_s, [(t_lift, lift.move), (t_desc, desc.move)], "rise"
-        if st.pose == "hover" and st.entry is e:  # waiting over this key already
-            desc = moves.descend(e, "hover")
-            t_desc = max(want - desc.cross_s, st.track.free_s, floor)
-            return t_desc + desc.cross_s, [(t_desc, desc.move)], "hover"
-        steps: list[tuple[float, Move]] = []
-        t = max(st.track.free_s, self.committed_s, after_s)  # (a finger high may cross
-        # while the rail moves: nothing under a tip that high is higher than it)
-        if st.pose != "high":  # let its key up on time (pressing), rise to crossing height
-            up = self._up_move(st)
-            t_up = max(st.up_s - up.cross_s, st.track.free_s, self.committed_s) \
-                if st.pose == "press" else max(st.track.free_s, self.committed_s)
-            steps.append((t_up, up.move))
-            t = max(t, t_up + up.duration_s)
-        across = None
-        if st.entry is not e:
-            across = moves.across(st.entry, e)
-            if across is None:
-                return None
-        d_high, d_hover = moves.descend(e, "high"), moves.descend(e, "hover")
-        to_hover = moves.to_hover(e)
-        across_s = across.duration_s if across is not None else 0.0
-        low = max(t + across_s, floor)  # below crossing height only once the rail is still
-        if low + to_hover.duration_s + WAIT_MARGIN_S <= want - d_hover.cross_s:
-            # time to wait at hover: get there just in time, then straight down
-            t_hover = want - d_hover.cross_s - WAIT_MARGIN_S - to_hover.duration_s
-            if across is not None:
-                steps.append((max(t, t_hover - across_s), across))
-            steps.append((t_hover, to_hover))
-            steps.append((want - d_hover.cross_s, d_hover.move))
-            return want, steps, "hover"
-        if across is not None:
-            steps.append((t, across))
-        t_desc = max(want - d_high.cross_s, low)
-        steps.append((t_desc, d_high.move))
-        return t_desc + d_high.cross_s, steps, "high"
-
     def _up_move(self, st: _Finger):
-        """The finger's way up to crossing height from its pose (a timed lift when it
-        presses: its key comes up ``cross_s`` into it)."""
-        if st.pose == "press":
-            return self.moves.lift(st.entry, "high")
-        return self.moves.rise(st.entry)
+        return _up_move(self.moves, st)
 
     def _to_high(self, st: _Finger, latest_s: float = math.inf) -> float:
         """The finger rises to crossing height: a pressing one lets its key up at its
