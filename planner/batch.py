@@ -22,6 +22,7 @@ import os
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
+from functools import cache
 from pathlib import Path
 
 from planner.errors import InputError, PlannerError
@@ -163,17 +164,20 @@ def plan_one(song_path: str, out_dir: str, hand_name: str) -> SongResult:
     from planner.check import check_trajectory
     from planner.music.midi import load_song
     from planner.output import write_file
+    from planner.play import plan_song
 
     song = Path(song_path)
     traj = f"{song.stem}.csv"
+    traj_path = str(Path(out_dir) / traj)
     base = {"song": song.name, "song_sha256": _song_sha256(song), "hand": hand_name,
             "trajectory": traj}
     try:
-        notes = load_song(song_path)
+        parsed = load_song(song_path)
         planner = _planner(hand_name)
-        plan = _plan(notes, planner, str(Path(out_dir) / traj), song.name)
-        rep = check_trajectory(str(Path(out_dir) / traj), song_path)
-        song_s = max((n.offset_s for n in notes.notes), default=0.0)
+        plan = plan_song(parsed, planner.hand, traj_path, song_name=song.name,
+                         planner=planner)
+        rep = check_trajectory(traj_path, song_path)
+        song_s = max((n.offset_s for n in parsed.notes), default=0.0)
         r = SongResult(notes=plan.verdict.notes, played=plan.verdict.played,
                        infeasible=len(plan.verdict.skipped), frame_f1=float(rep.play.f1),
                        check_ok=bool(rep.ok), planning_s=float(plan.planning_s),
@@ -186,22 +190,13 @@ def plan_one(song_path: str, out_dir: str, hand_name: str) -> SongResult:
     return r
 
 
-_PLANNERS: dict = {}
-
-
+@cache
 def _planner(hand_name: str):
+    """The worker's planner for a hand, built on its first song."""
     from planner.hand.model import load_hand
     from planner.play import Planner
 
-    if hand_name not in _PLANNERS:
-        _PLANNERS[hand_name] = Planner(load_hand(hand_name))
-    return _PLANNERS[hand_name]
-
-
-def _plan(song, planner, out_path: str, name: str):
-    from planner.play import plan_song
-
-    return plan_song(song, planner.hand, out_path, song_name=name, planner=planner)
+    return Planner(load_hand(hand_name))
 
 
 def _write_summary(summary: BatchSummary, out: Path) -> None:

@@ -149,7 +149,6 @@ def _build_parser() -> argparse.ArgumentParser:
 
 
 def _cmd_hand(a: argparse.Namespace) -> int:
-    from planner.errors import InputError
     from planner.hand.model import load_hand
     from planner.hand.spec import list_hands
 
@@ -167,8 +166,6 @@ def _cmd_hand(a: argparse.Namespace) -> int:
     hand = load_hand(a.hand)
     if a.urdf:
         if a.urdf == "-":
-            if a.json:
-                raise InputError("--json writes its object on stdout: the URDF needs a path")
             sys.stdout.write(hand.urdf)
         else:
             from planner.output import write_file
@@ -206,12 +203,27 @@ def _cmd_check(a: argparse.Namespace) -> int:
     return check_cli(a)
 
 
+# (the option naming where a command's artefact goes: '-' there is stdout)
+_ARTEFACT = {"play": ("output", "trajectory"), "catch": ("output", "trajectory"),
+             "hand": ("urdf", "URDF")}
+
+
+def _refuse_json_with_stdout(a: argparse.Namespace) -> None:
+    """``--json`` owns stdout: the command's trajectory or URDF then needs a path."""
+    option, what = _ARTEFACT.get(a.command, (None, ""))
+    if getattr(a, "json", False) and option and getattr(a, option) == "-":
+        from planner.errors import InputError
+
+        raise InputError(f"--json writes its object on stdout: the {what} needs a path")
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _build_parser().parse_args(argv)
     from planner.errors import InfeasibleError, InputError, PlannerError
 
     _follow_signals()
     try:
+        _refuse_json_with_stdout(args)
         rc = {"hand": _cmd_hand, "play": _cmd_play, "catch": _cmd_catch, "check": _cmd_check,
               "batch": _cmd_batch}[
             args.command

@@ -123,8 +123,6 @@ def catch_cli(args) -> int:
                 raise InputError(f"--report/--html need {mod}, which is not installed")
         if args.output == "-":
             raise InputError("--report/--html need a trajectory file (-o FILE), not stdout")
-    if getattr(args, "json", False) and args.output == "-":
-        raise InputError("--json writes its object on stdout: the trajectory needs -o FILE")
     res = plan_catch(args.angle, args.dist, args.height, args.hand, args.output,
                      ball=args.ball, drag=args.drag, observations=args.observations,
                      rate_hz=args.rate, strict=False)

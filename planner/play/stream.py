@@ -134,20 +134,15 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
             if isinstance(item, Assignment):
                 motion.place(item)
                 done[item.note] = item
-                t = motion.t_down(item.note) - COMMIT_LAG_S
-                if t > rows.written_to_s + COMMIT_LAG_S:
-                    motion.commit(t)
-                    rows.write_to(t)
+                rows.commit_to(motion.t_down(item.note) - COMMIT_LAG_S)
             else:
                 n, t = item
                 motion.cut(n, t)
                 a = done[n]
                 done[n] = Assignment(a.note, a.finger, a.rail_m, t)
         # (every note before ``until_s`` is placed: the rows can go on to a lag before it)
-        t = ch.until_s - COMMIT_LAG_S
-        if rows is not None and math.isfinite(t) and t > rows.written_to_s + COMMIT_LAG_S:
-            motion.commit(t)
-            rows.write_to(t)
+        if rows is not None and math.isfinite(ch.until_s):
+            rows.commit_to(ch.until_s - COMMIT_LAG_S)
     if motion is None:  # nothing to play: the hand waits, still
         motion = Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base),
                         park=True)
@@ -173,6 +168,13 @@ class _Rows:
     @property
     def written_to_s(self) -> float:
         return (self.next_row - 1) * self.dt
+
+    def commit_to(self, t_s: float) -> None:
+        """The motion fixed up to ``t_s`` and its rows written, when that is more than
+        ``COMMIT_LAG_S`` past the rows written already (rows go out in chunks)."""
+        if t_s > self.written_to_s + COMMIT_LAG_S:
+            self.motion.commit(t_s)
+            self.write_to(t_s)
 
     def write_to(self, t_s: float) -> None:
         """Rows up to ``t_s``, in blocks of at most ``ROW_BLOCK`` (memory stays bounded

@@ -18,13 +18,20 @@ from planner.music.midi import load_song, pitch_name
 from planner.play.stream import PlayPlan, plan_song
 
 
+def _timing(notes, plan: PlayPlan) -> tuple[float, float | None, int]:
+    """(seconds of music, real-time factor (None without a planning time), hand
+    positions used): the facts both the summary and ``--json`` give."""
+    song_s = max((n.offset_s for n in notes), default=0.0)
+    rtf = song_s / plan.planning_s if plan.planning_s > 0 else None
+    return song_s, rtf, len({a.rail_m for a in plan.fingering.assignments})
+
+
 def format_summary(song_name: str, notes, plan: PlayPlan, out: str) -> str:
     """The summary: counts and the file, timing, then every note not played (with its
     reason), every late key and every wrong press the replay finds."""
     v = plan.verdict
-    song_s = max((n.offset_s for n in notes), default=0.0)
-    rtf = song_s / plan.planning_s if plan.planning_s > 0 else math.inf
-    rails = len({a.rail_m for a in plan.fingering.assignments})
+    song_s, rtf, rails = _timing(notes, plan)
+    rtf = math.inf if rtf is None else rtf
     lines = [(f"{song_name}: {v.notes} notes, {v.played} played, {len(v.skipped)} infeasible; "
              f"{plan.rows} rows ({plan.duration_s:.2f} s) -> {out}"),
              (f"planning {plan.planning_s * 1000:.0f} ms for {song_s:.2f} s of music "
@@ -42,7 +49,7 @@ def plan_dict(song_name: str, notes, plan: PlayPlan, out: str) -> dict:
     """``play --json``: the summary's facts, one JSON object (units in the names; a note
     is its index in the song, by onset then pitch, as in the end marker)."""
     v = plan.verdict
-    song_s = max((n.offset_s for n in notes), default=0.0)
+    song_s, rtf, rails = _timing(notes, plan)
     return {
         "command": "play", "song": song_name, "notes": v.notes, "played": v.played,
         "left_out": [{"note": s.note, "onset_s": float(notes[s.note].onset_s),
@@ -55,8 +62,7 @@ def plan_dict(song_name: str, notes, plan: PlayPlan, out: str) -> dict:
         "frame_f1": v.score.f1, "rows": plan.rows, "duration_s": plan.duration_s,
         "trajectory": out, "song_s": song_s, "planning_s": plan.planning_s,
         "first_row_s": plan.first_row_s,
-        "realtime_factor": song_s / plan.planning_s if plan.planning_s > 0 else None,
-        "hand_positions": len({a.rail_m for a in plan.fingering.assignments}),
+        "realtime_factor": rtf, "hand_positions": rails,
     }
 
 
@@ -65,24 +71,21 @@ def play_cli(a) -> int:
     or a key is pressed wrongly."""
     if (a.report or a.html) and a.output == "-":
         raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
-    if getattr(a, "json", False) and a.output == "-":
-        raise InputError("--json writes its object on stdout: the trajectory needs -o PATH")
     song = load_song(a.song, track=a.track, channel=a.channel, transpose=a.transpose)
     hand = load_hand(a.hand)
-    # (by default into the current directory, never beside the song: it may be read-only)
-    out = a.output if a.output is not None else \
-        os.path.splitext(os.path.basename(a.song))[0] + ".csv"
     name = os.path.basename(a.song)
-    with _progress(len(song.notes), enabled=sys.stderr.isatty() and not getattr(a, "json", False)
-                   ) as progress:
+    # (by default into the current directory, never beside the song: it may be read-only)
+    out = a.output if a.output is not None else os.path.splitext(name)[0] + ".csv"
+    as_json = getattr(a, "json", False)
+    with _progress(len(song.notes), enabled=sys.stderr.isatty() and not as_json) as progress:
         plan = plan_song(song, hand, out, a.rate, song_name=name, on_progress=progress)
-    if getattr(a, "json", False):
+    if as_json:
         sys.stdout.write(json.dumps(plan_dict(name, song.notes, plan, out)) + "\n")
     else:
         sys.stderr.write(format_summary(name, song.notes, plan, out) + "\n")
     if a.report or a.html:
         write_reports(out, a.song, a.report, a.html)
-        if not getattr(a, "json", False):
+        if not as_json:
             sys.stderr.write("".join(f"{what} -> {path}\n" for what, path in
                                      (("report", a.report), ("html", a.html)) if path))
     score = plan.verdict.score
