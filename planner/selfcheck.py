@@ -23,11 +23,9 @@ from planner.hand.model import HandModel
 
 
 class SkipReason(enum.Enum):
-    """Why a note is not played, beside the planners' own reasons (enums of their
-    stages): left out by a planner that gives no reason of its own kind (its detail says
-    why), or meant to be played and found by the replay with its key down too little."""
+    """Why a note is not played, beside the planner's own reasons (the enum of its
+    stages): meant to be played and found by the replay with its key down too little."""
 
-    LEFT_OUT = "left_out"
     MISSED = "missed"
 
 

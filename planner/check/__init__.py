@@ -323,8 +323,8 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
 
     ``traj_path``: a file, or a ``Trajectory`` already read (a plan made in memory).
     ``song_path``: a MIDI file (play only), or a ``Song`` read already, for F1, note hits
-    and wrong presses, read with ``song_options`` (``track``, ``channel``, ``transpose``; each defaults to the
-    file's metadata). ``min_f1``: the verdict also requires frame F1 >= this (needs a
+    and wrong presses, read with ``song_options`` (``track``, ``channel``, ``transpose``;
+    each defaults to the file's metadata). ``min_f1``: the verdict also requires frame F1 >= this (needs a
     song). ``strict``: the verdict also fails on any missed or late note.
     ``hand_override``: a hand name / hand file or a HandModel to use instead of
     metadata["hand"] (its URDF hash must still match the file's).

@@ -322,16 +322,13 @@ class Motion:
         self.outcomes[a.note] = out
         return out
 
-    def _up_move(self, st: _Finger):
-        return _up_move(self.moves, st)
-
     def _to_high(self, st: _Finger, latest_s: float = math.inf) -> float:
         """The finger rises to crossing height: a pressing one lets its key up at its
         planned time or by ``latest_s``, whichever is first (never before its press is
         done). Returns when it is up."""
         if st.pose == "high":
             return st.high_s
-        up = self._up_move(st)
+        up = _up_move(self.moves, st)
         if st.pose == "press":
             t0 = min(st.up_s, latest_s) - up.cross_s
             t0 = max(t0, st.track.free_s, self.committed_s)
@@ -373,7 +370,7 @@ class Motion:
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():
             if id(st) not in held and st.pose != "high":
-                up = self._up_move(st)
+                up = _up_move(self.moves, st)
                 self._to_high(st, t0 - up.duration_s + up.cross_s)
         t0 = max([t0] + [st.high_s for st in self.fingers.values() if id(st) not in held])
         k = 1
@@ -408,7 +405,7 @@ class Motion:
             elif st.pose == "high":
                 ready = max(ready, st.high_s)  # (a finger moving across up there may go on)
             else:  # it lifts first: as soon as its press is done, at the latest
-                up = self._up_move(st)
+                up = _up_move(self.moves, st)
                 ready = max(ready, st.track.free_s + up.duration_s)
         return move, max(ready, arrive_by_s - move.duration_s)
 
