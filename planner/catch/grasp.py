@@ -49,13 +49,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import osqp
 import pinocchio as pin
-import scipy.sparse as sp
 
 from planner.errors import InfeasibleError, InputError, SolverError
 from planner.hand.model import GRAVITY_WORLD, HandModel
 from planner.hand.spec import PALM_FRAME
+from planner.qp import DenseQp
 
 MU_RUBBER = 0.8  # seed (David): rubber pads
 FACETS = 8
@@ -93,9 +92,9 @@ class GraspProblem:
     tau_map: np.ndarray  # (n_motor, 3 C): motor torques per unit contact force
     motor_names: tuple[str, ...]
     peak: np.ndarray
-    P: sp.csc_matrix
+    P: np.ndarray  # (3 C, 3 C) dense, the QP's Hessian
     c: np.ndarray
-    A: sp.csc_matrix
+    A: np.ndarray  # (rows, 3 C) dense
     lower: np.ndarray
     upper: np.ndarray
 
@@ -298,56 +297,22 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
     cvec = 2.0 * REG * W.T @ (tau_offset / peak)
     return GraspProblem(case, tuple(contacts), F, centre, float(mu), int(facets),
                         bool(moment_balance), tau_offset, tau_map, tuple(hand.motor_names), peak,
-                        _dense_csc(np.triu(P), upper=True), cvec, _dense_csc(A_dense), lower,
+                        P, cvec, A_dense, lower,
                         upper)
 
 
-_PATTERNS: dict[tuple[int, int, bool], tuple[np.ndarray, np.ndarray, tuple]] = {}
-
-
-def _dense_csc(M: np.ndarray, upper: bool = False) -> sp.csc_matrix:
-    """CSC matrix that stores every entry of ``M`` (its upper triangle if ``upper``), zeros
-    included, so that problems of the same size share one sparsity pattern (the solver
-    is set up once per pattern and then only updated)."""
-    m, n = M.shape
-    key = (m, n, upper)
-    pat = _PATTERNS.get(key)
-    if pat is None:
-        if upper:
-            indptr = np.concatenate([[0], np.cumsum(np.arange(1, n + 1))])
-            indices = np.concatenate([np.arange(j + 1) for j in range(n)])
-            sel = np.tril_indices(n)  # of M.T: column j of M, rows 0..j, column-major
-        else:
-            indptr = np.arange(0, m * n + 1, m)
-            indices = np.tile(np.arange(m), n)
-            sel = ()
-        pat = _PATTERNS[key] = (indptr.astype(np.int32), indices.astype(np.int32), sel)
-    indptr, indices, sel = pat
-    data = M.T[sel] if upper else M.flatten(order="F")
-    out = sp.csc_matrix((m, n))
-    out.data, out.indices, out.indptr = data, indices, indptr
-    return out
-
-
-_SOLVERS: dict[tuple[int, int], osqp.OSQP] = {}
+_SOLVERS: dict[tuple[int, int], DenseQp] = {}
+_SETTINGS = dict(eps_abs=_EPS, eps_rel=_EPS, eps_prim_inf=1e-6, eps_dual_inf=1e-6,
+                 max_iter=20000, polishing=False, warm_starting=True,
+                 adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
 
 
 def _osqp_solve(prob: GraspProblem):
     """OSQP on ``prob``: set up once per problem size (full dense patterns), then updated
     and warm-started from the previous solution of that size (consecutive throws give
     similar problems); solutions agree with a cold start to the solver tolerance."""
-    key = prob.A.shape
-    solver = _SOLVERS.get(key)
-    if solver is None:
-        solver = osqp.OSQP(algebra="builtin")
-        solver.setup(P=prob.P, q=prob.c, A=prob.A, l=prob.lower, u=prob.upper, verbose=False,
-                     eps_abs=_EPS, eps_rel=_EPS, eps_prim_inf=1e-6, eps_dual_inf=1e-6,
-                     max_iter=20000, polishing=False, warm_starting=True,
-                     adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
-        _SOLVERS[key] = solver
-    else:
-        solver.update(q=prob.c, l=prob.lower, u=prob.upper, Px=prob.P.data, Ax=prob.A.data)
-    return solver.solve(raise_error=False)
+    solver = _SOLVERS.setdefault(prob.A.shape, DenseQp(**_SETTINGS))
+    return solver.solve(prob.P, prob.c, prob.A, prob.lower, prob.upper)
 
 
 def solve_grasp(prob: GraspProblem) -> GraspResult:
@@ -355,13 +320,12 @@ def solve_grasp(prob: GraspProblem) -> GraspResult:
     # a motor already past its peak with no contact force at all (gravity alone)
     over = np.abs(prob.tau_offset) > prob.peak
     res = _osqp_solve(prob)
-    status = res.info.status
-    if status in ("primal infeasible", "primal infeasible inaccurate") or (
-            status not in ("solved", "solved inaccurate") and over.any()):
+    status = res.status
+    if res.primal_infeasible or (not res.solved and over.any()):
         raise InfeasibleError(_infeasible_reason(prob), problem=prob)
-    if status not in ("solved", "solved inaccurate") or res.x is None:
+    if not res.solved:
         raise SolverError(f"grasp QP ({prob.case}) failed: {status}", problem=prob)
-    x = np.array(res.x, dtype=float)
+    x = res.x
     tau = prob.tau_offset + prob.tau_map @ x
     ratio = np.abs(tau) / prob.peak
     m = int(np.argmax(ratio))
@@ -380,15 +344,13 @@ def _infeasible_reason(prob: GraspProblem) -> str:
         nx = prob.A.shape[1]
         n_motor = len(prob.peak)
         A = prob.A[:-n_motor]
-        solver = osqp.OSQP(algebra="builtin")
         W = prob.tau_map / prob.peak[:, None]
-        P = sp.csc_matrix(np.triu(2.0 * (W.T @ W + 1e-6 * np.eye(nx))))
+        P = 2.0 * (W.T @ W + 1e-6 * np.eye(nx))
         c = 2.0 * W.T @ (prob.tau_offset / prob.peak)
-        solver.setup(P=P, q=c, A=A, l=prob.lower[:-n_motor], u=prob.upper[:-n_motor],
-                     verbose=False, eps_abs=_EPS, eps_rel=_EPS, max_iter=20000,
-                     adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
-        res = solver.solve(raise_error=False)
-        if res.info.status not in ("solved", "solved inaccurate") or res.x is None:
+        solver = DenseQp(eps_abs=_EPS, eps_rel=_EPS, max_iter=20000,
+                         adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
+        res = solver.solve(P, c, A, prob.lower[:-n_motor], prob.upper[:-n_motor])
+        if not res.solved:
             return (f"{prob.case}: no force split of {F:.1f} N over {where} lies inside the "
                     f"friction cones (mu {prob.mu:g})")
         tau = prob.tau_offset + prob.tau_map @ res.x
@@ -396,7 +358,7 @@ def _infeasible_reason(prob: GraspProblem) -> str:
         m = int(np.argmax(ratio))
         return (f"{prob.case}: {F:.1f} N over {where} needs motor.{prob.motor_names[m]} at "
                 f"{abs(tau[m]):.2f} N m > peak {prob.peak[m]:.2f} N m")
-    except (ValueError, RuntimeError):  # pragma: no cover - diagnostics only
+    except (ValueError, RuntimeError, SolverError):  # pragma: no cover - diagnostics only
         return f"{prob.case}: {F:.1f} N over {where} exceeds a motor's peak torque"
 
 
