@@ -10,7 +10,7 @@ import pytest
 
 from planner.qp import DenseQp, dense_csc
 
-TIGHT = dict(eps_abs=1e-9, eps_rel=1e-9, max_iter=50000, polishing=True)
+TIGHT = {"eps_abs": 1e-9, "eps_rel": 1e-9, "max_iter": 50000, "polishing": True}
 
 
 def _box_qp(target, lo, hi):

@@ -302,9 +302,9 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
 
 
 _SOLVERS: dict[tuple[int, int], DenseQp] = {}
-_SETTINGS = dict(eps_abs=_EPS, eps_rel=_EPS, eps_prim_inf=1e-6, eps_dual_inf=1e-6,
-                 max_iter=20000, polishing=False, warm_starting=True,
-                 adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
+_SETTINGS = {"eps_abs": _EPS, "eps_rel": _EPS, "eps_prim_inf": 1e-6, "eps_dual_inf": 1e-6,
+                 "max_iter": 20000, "polishing": False, "warm_starting": True,
+                 "adaptive_rho_interval": ADAPTIVE_RHO_INTERVAL}
 
 
 def _osqp_solve(prob: GraspProblem):
