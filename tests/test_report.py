@@ -17,7 +17,8 @@ import pytest
 
 from planner.check import ball_positions, check_trajectory
 from planner.hand.model import load_hand
-from planner.report import _frame_rows, write_check_report, write_html
+from planner.report import write_check_report, write_html
+from planner.report.html import _frame_rows
 from tests.test_check import (
     BALL_R,
     RATE,
