@@ -276,10 +276,19 @@ def _check_grasp(res: gq.GraspResult, hand, q):
         tau = tau + c.jacobian.T @ f
     tm = hand.motor_torques(q, tau)
     assert np.allclose(tm, res.motor_torques, atol=1e-6)
-    assert np.all(np.abs(tm) <= hand.motor_peak_torque * (1 + 1e-4))
-    ratio = np.abs(tm) / hand.motor_peak_torque
+    # capacity: the motor's peak, or for a tendon motor its cable's design force at the
+    # spool (40 N x 5 mm = 0.2 N m on the default hand, half the 0.4 N m peak)
+    cap = np.array([min(a.peak_torque_nm, a.tendon_force_n * a.radius_m)
+                    if a.tendon_force_n is not None else a.peak_torque_nm
+                    for a in hand.actuators])
+    assert np.all(np.abs(tm) <= cap * (1 + 1e-4))
+    ratio = np.abs(tm) / cap
     assert res.headroom == pytest.approx(1 - ratio.max(), abs=1e-9)
-    assert res.limiting_motor == hand.motor_names[int(np.argmax(ratio))]
+    m = int(np.argmax(ratio))
+    assert res.limiting_motor == hand.motor_names[m]
+    tendon = hand.actuators[m].tendon_force_n is not None
+    assert res.limiting_part == ("tendon force" if tendon else
+                                 "gear" if hand.actuators[m].kind == "gear" else "motor torque")
 
 
 def test_grasp_hold(closed):

@@ -276,7 +276,7 @@ def test_good_trajectory_passes(good, hand):
         ("E4", 1.9, 2.2, ("ring",)), ("C#4", 2.7, 3.0, ("index",))]
     assert {lc.category for lc in r.limits} == {
         "joint_position", "joint_velocity", "joint_acceleration", "motor_velocity",
-        "motor_consistency", "motor_torque", "coupling"}
+        "motor_consistency", "motor_torque", "coupling", "tendon_tension"}
     assert all(lc.ok for lc in r.limits)
     d = json.loads(json.dumps(r.to_dict()))
     assert d["ok"] is True and d["play"]["f1"] == 1.0 and "replay" not in d

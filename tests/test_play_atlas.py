@@ -80,15 +80,23 @@ def test_out_of_the_sampled_span_there_is_no_entry(atlas):
 
 
 @pytest.mark.parametrize("finger, pitch", CASES[:4])
-def test_the_force_bound_is_where_a_motor_reaches_its_peak(atlas, finger, pitch):
+def test_the_force_bound_is_where_a_motor_reaches_its_capacity(atlas, finger, pitch):
+    """A motor's capacity: its peak torque, or for a tendon motor the torque at which its
+    cable pulls its 40 N design force at the 5 mm spool (0.2 N m), whichever is less."""
     e, rail = _some(atlas, finger, pitch)
     h = atlas.hand
     q = atlas.full_q(e, "press", rail)
     f = max_key_force_n(h, q, finger)
     assert f == pytest.approx(e.max_force_n)
-    ratio = lambda F: np.max(np.abs(h.press_torques(q, {finger: F})) / h.motor_peak_torque)
+    cap = np.array([min(a.peak_torque_nm, a.tendon_force_n * a.radius_m)
+                    if a.tendon_force_n is not None else a.peak_torque_nm
+                    for a in h.actuators])
+    ratio = lambda F: np.max(np.abs(h.press_torques(q, {finger: F})) / cap)
     assert ratio(f) == pytest.approx(1.0, abs=1e-9)
     assert ratio(0.99 * f) < 1.0 < ratio(1.01 * f)
+    # it is a tendon that limits the press, at half its motor's peak
+    m = int(np.argmax(np.abs(h.press_torques(q, {finger: f})) / cap))
+    assert h.actuators[m].kind == "tendon" and cap[m] == pytest.approx(0.5 * h.motor_peak_torque[m])
 
 
 def _pair(atlas, finger, p1, p2):

@@ -3,12 +3,12 @@
 The hand touches the ball at its fingertip pads and at the palm centre. Each
 contact c pushes on the ball with a force ``f_c`` (N, world frame). The QP:
 
-    minimise    sum_c |f_c|^2  +  REG * sum_m (tau_m / peak_m)^2
+    minimise    sum_c |f_c|^2  +  REG * sum_m (tau_m / cap_m)^2
     subject to  sum_c f_c = F_req                           (force balance)
                 sum_c (p_c - centre) x f_c = 0              (moment balance, optional)
                 n_c . f_c >= 0                              (contacts push, never pull)
                 (t_k - mu' n_c) . f_c <= 0,  k = 1..FACETS  (linearised friction cone)
-                -peak_m <= tau_m <= peak_m                  (every motor within its peak)
+                -cap_m <= tau_m <= cap_m                    (every motor within its capacity)
 
 * Friction cone: an inscribed pyramid of ``FACETS`` (8) faces with the rubber
   pads' coefficient mu = 0.8 (seed, David), mu' = mu cos(pi / FACETS), so a
@@ -19,6 +19,10 @@ contact c pushes on the ball with a force ``f_c`` (N, world frame). The QP:
   ``tau_motor = hand.motor_torques(q, tau_joint)`` (virtual work through the
   couplings, tendon efficiency). That map is linear in f: its matrix is built
   column by column from unit forces, so the limits are linear constraints.
+* Capacity: ``cap_m`` = min(motor peak torque, tendon design force x spool radius)
+  (``planner.hand.tendon.actuator_capacity``): a tendon's tension at its spool is
+  its motor's torque over the spool radius, so the cable's 40 N (seed 000) is a
+  bound on the same row.
 * The regularisation (``REG`` = 1e-2) slightly prefers force splits that load
   the motors less; it does not change feasibility.
 
@@ -35,13 +39,14 @@ Required force (``stop_force`` / ``hold_force``):
 OSQP settings: eps_abs = eps_rel = 1e-6 (N), no polishing, one solver per problem
 size set up once and then updated and warm-started (problems of consecutive
 throws are alike: this is what keeps a plan within its latency budget); the
-result is accepted only if every motor is within 1e-4 of its peak.
+result is accepted only if every motor is within 1e-4 of its capacity.
 
 ``build_grasp_problem`` assembles the QP (pure data); ``solve_grasp`` solves it
 and raises ``InfeasibleError`` (primal infeasible: no force split keeps every
-motor within its peak inside the friction cones) or ``SolverError``, both
+motor within its capacity inside the friction cones) or ``SolverError``, both
 carrying the problem. The result reports the torque headroom (min over
-motors of 1 - |tau| / peak) and the motor that limits it.
+motors of 1 - |tau| / capacity), the motor that limits it and its limiting part
+(motor torque, tendon force, gear).
 """
 
 from __future__ import annotations
@@ -54,6 +59,7 @@ import pinocchio as pin
 from planner.errors import InfeasibleError, InputError, SolverError
 from planner.hand.model import GRAVITY_WORLD, HandModel
 from planner.hand.spec import PALM_FRAME
+from planner.hand.tendon import actuator_capacity
 from planner.qp import DenseQp
 
 MU_RUBBER = 0.8  # seed (David): rubber pads
@@ -91,7 +97,8 @@ class GraspProblem:
     tau_offset: np.ndarray  # motor torques with no contact force (gravity), N m
     tau_map: np.ndarray  # (n_motor, 3 C): motor torques per unit contact force
     motor_names: tuple[str, ...]
-    peak: np.ndarray
+    capacity: np.ndarray  # each motor's capacity (N m): min(peak torque, tendon force x radius)
+    parts: tuple[str, ...]  # what sets each capacity (planner.hand.tendon)
     P: np.ndarray  # (3 C, 3 C) dense, the QP's Hessian
     c: np.ndarray
     A: np.ndarray  # (rows, 3 C) dense
@@ -104,9 +111,10 @@ class GraspResult:
     problem: GraspProblem
     forces: np.ndarray  # (C, 3) N, force of each contact on the ball
     motor_torques: np.ndarray  # (n_motor,) N m
-    headroom: float  # min over motors of 1 - |tau| / peak
+    headroom: float  # min over motors of 1 - |tau| / capacity
     limiting_motor: str
     status: str
+    limiting_part: str = ""  # "motor torque", "tendon force" or "gear"
 
     @property
     def total_force(self) -> np.ndarray:
@@ -261,7 +269,8 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
     tau_offset = M @ hand.gravity_torques(q)
     # column 3c + a: motor torques for a unit force along axis a at contact c (J_c^T e_a)
     tau_map = M @ np.concatenate([ct.jacobian for ct in contacts], axis=0).T
-    peak = np.asarray(hand.motor_peak_torque, dtype=float)
+    cap = actuator_capacity(hand)
+    cap_nm = cap.torque_nm
 
     # force balance (equalities)
     eq = [np.tile(np.eye(3), nc)]
@@ -289,16 +298,16 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
         cone_rows[r0, 3 * c:3 * c + 3] = n
         cone_rows[r0 + 1:r0 + 1 + facets, 3 * c:3 * c + 3] = cos_k * e1 + sin_k * e2 - mu_in * n
     A_dense = np.vstack([rows, cone_rows, tau_map])
-    lower = np.concatenate([lo, cone_lo, -peak - tau_offset])
-    upper = np.concatenate([hi, cone_hi, peak - tau_offset])
-    # objective: |f|^2 + REG sum (tau/peak)^2  (tau affine in f)
-    W = tau_map / peak[:, None]
+    lower = np.concatenate([lo, cone_lo, -cap_nm - tau_offset])
+    upper = np.concatenate([hi, cone_hi, cap_nm - tau_offset])
+    # objective: |f|^2 + REG sum (tau/cap)^2  (tau affine in f)
+    W = tau_map / cap_nm[:, None]
     P = 2.0 * (np.eye(nx) + REG * W.T @ W)
-    cvec = 2.0 * REG * W.T @ (tau_offset / peak)
+    cvec = 2.0 * REG * W.T @ (tau_offset / cap_nm)
     return GraspProblem(case, tuple(contacts), F, centre, float(mu), int(facets),
-                        bool(moment_balance), tau_offset, tau_map, tuple(hand.motor_names), peak,
-                        P, cvec, A_dense, lower,
-                        upper)
+                        bool(moment_balance), tau_offset, tau_map, tuple(hand.motor_names), cap_nm,
+                        tuple(cap.limiting(m) for m in range(len(cap_nm))), P, cvec, A_dense,
+                        lower, upper)
 
 
 _SOLVERS: dict[tuple[int, int], DenseQp] = {}
@@ -317,8 +326,8 @@ def _osqp_solve(prob: GraspProblem):
 
 def solve_grasp(prob: GraspProblem) -> GraspResult:
     """Solve the force QP with OSQP; InfeasibleError / SolverError carry ``prob``."""
-    # a motor already past its peak with no contact force at all (gravity alone)
-    over = np.abs(prob.tau_offset) > prob.peak
+    # a motor already past its capacity with no contact force at all (gravity alone)
+    over = np.abs(prob.tau_offset) > prob.capacity
     res = _osqp_solve(prob)
     status = res.status
     if res.primal_infeasible or (not res.solved and over.any()):
@@ -327,26 +336,26 @@ def solve_grasp(prob: GraspProblem) -> GraspResult:
         raise SolverError(f"grasp QP ({prob.case}) failed: {status}", problem=prob)
     x = res.x
     tau = prob.tau_offset + prob.tau_map @ x
-    ratio = np.abs(tau) / prob.peak
+    ratio = np.abs(tau) / prob.capacity
     m = int(np.argmax(ratio))
     if ratio[m] > 1.0 + 1e-4:  # "solved inaccurate" that is not really inside the limits
         raise InfeasibleError(_infeasible_reason(prob), problem=prob)
     return GraspResult(prob, x.reshape(-1, 3), tau, float(1.0 - ratio[m]), prob.motor_names[m],
-                       status)
+                       status, prob.parts[m])
 
 
 def _infeasible_reason(prob: GraspProblem) -> str:
-    """Which motor is short: the motor whose peak is exceeded in the least-torque
+    """Which motor is short: the motor whose capacity is exceeded in the least-torque
     force split that satisfies the balance and cone constraints alone."""
     F = np.linalg.norm(prob.required_force)
     where = ", ".join(c.name for c in prob.contacts)
     try:
         nx = prob.A.shape[1]
-        n_motor = len(prob.peak)
+        n_motor = len(prob.capacity)
         A = prob.A[:-n_motor]
-        W = prob.tau_map / prob.peak[:, None]
+        W = prob.tau_map / prob.capacity[:, None]
         P = 2.0 * (W.T @ W + 1e-6 * np.eye(nx))
-        c = 2.0 * W.T @ (prob.tau_offset / prob.peak)
+        c = 2.0 * W.T @ (prob.tau_offset / prob.capacity)
         solver = DenseQp(eps_abs=_EPS, eps_rel=_EPS, max_iter=20000,
                          adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
         res = solver.solve(P, c, A, prob.lower[:-n_motor], prob.upper[:-n_motor])
@@ -354,12 +363,12 @@ def _infeasible_reason(prob: GraspProblem) -> str:
             return (f"{prob.case}: no force split of {F:.1f} N over {where} lies inside the "
                     f"friction cones (mu {prob.mu:g})")
         tau = prob.tau_offset + prob.tau_map @ res.x
-        ratio = np.abs(tau) / prob.peak
+        ratio = np.abs(tau) / prob.capacity
         m = int(np.argmax(ratio))
         return (f"{prob.case}: {F:.1f} N over {where} needs motor.{prob.motor_names[m]} at "
-                f"{abs(tau[m]):.2f} N m > peak {prob.peak[m]:.2f} N m")
+                f"{abs(tau[m]):.2f} N m > its {prob.parts[m]} limit {prob.capacity[m]:.2f} N m")
     except (ValueError, RuntimeError, SolverError):  # pragma: no cover - diagnostics only
-        return f"{prob.case}: {F:.1f} N over {where} exceeds a motor's peak torque"
+        return f"{prob.case}: {F:.1f} N over {where} exceeds a motor's capacity"
 
 
 def grasp_forces(hand: HandModel, q: np.ndarray, centre: np.ndarray, radius: float,

@@ -60,7 +60,8 @@ Per throw (``CatchPlanner.plan``):
    intercept. Rows at ``rate_hz`` until ``intercept_t + HOLD_AFTER_S``.
 4. Forces (``planner.catch.grasp``): stopping the ball on the palm (2 cm give)
    and holding it in the closed hand, each a QP with friction cones and every
-   motor within its peak; headroom and the limiting motor are reported.
+   motor within its capacity (its peak torque, or its tendon's design force at the
+   spool: ``planner.hand.tendon``); headroom and the limiting motor are reported.
 5. Self-check on the rows (same criteria as the independent check): the ball
    within ``INTERCEPT_TOL_M`` of ``palm_center + radius * n`` at intercept_t
    (joints interpolated), no fingertip inside the ball before it, the grasp
@@ -985,7 +986,7 @@ class CatchPlanner:
 
 
 def _kind(e: InfeasibleError) -> str:
-    """'torque' when a motor's peak is what fails, else 'friction' (no force split lies
+    """'torque' when a motor's capacity is what fails, else 'friction' (no force split lies
     inside the contacts' friction cones)."""
     return "torque" if "needs motor." in str(e) else "friction"
 

@@ -19,6 +19,7 @@ from planner.catch.plan import (
     plan_catch,
 )
 from planner.errors import InputError
+from planner.hand.tendon import TENDON_FORCE
 
 
 def format_summary(res: CatchResult) -> str:
@@ -54,7 +55,8 @@ def format_summary(res: CatchResult) -> str:
         if gr is not None:
             lines.append(f"  {name}: {np.linalg.norm(gr.total_force):.1f} N over "
                          f"{', '.join(c.name for c in gr.problem.contacts)}; torque headroom "
-                         f"{100 * gr.headroom:.0f} % (limited by motor.{gr.limiting_motor})")
+                         f"{100 * gr.headroom:.0f} % (limited by motor.{gr.limiting_motor}"
+                         f"{_part(gr)})")
     if p.uncertainty:
         u = p.uncertainty
         lines.append(f"  intercept uncertainty (observations): sigma_t {u['sigma_t_s'] * ms:.1f}"
@@ -74,12 +76,18 @@ def format_summary(res: CatchResult) -> str:
     return "\n".join(lines)
 
 
+def _part(gr) -> str:
+    """', its tendon force' when the motor's tendon, not its torque, sets the headroom."""
+    return f", its {gr.limiting_part}" if gr.limiting_part == TENDON_FORCE else ""
+
+
 def _grasp_dict(gr) -> dict[str, Any] | None:
     if gr is None:
         return None
     return {"force_n": float(np.linalg.norm(gr.total_force)),
             "contacts": [c.name for c in gr.problem.contacts],
-            "torque_headroom": float(gr.headroom), "limiting_motor": gr.limiting_motor}
+            "torque_headroom": float(gr.headroom), "limiting_motor": gr.limiting_motor,
+            "limiting_part": gr.limiting_part}
 
 
 def catch_dict(res: CatchResult) -> dict[str, Any]:
@@ -131,12 +139,9 @@ def catch_cli(args) -> int:
     else:
         sys.stderr.write(format_summary(res) + "\n")
     if report or html:
-        from planner import report as rep
         from planner.check import check_trajectory
+        from planner.report import draw_reports
 
-        checked = check_trajectory(args.output, hand_override=args.hand)
-        if report:
-            rep.write_check_report(checked, report)
-        if html:
-            rep.write_html(checked, html)
+        draw_reports(check_trajectory(args.output, hand_override=args.hand), report, html,
+                     enabled=not getattr(args, "json", False))
     return 1 if (args.strict and not res.feasible) else 0

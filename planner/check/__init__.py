@@ -13,7 +13,8 @@ kinematics and reports
 * **catch**: the ball's flight (integrated here), where it meets the palm,
   fingertips touching it early and the grasp after the intercept;
 * **both**: a limit audit (joint positions, speeds, accelerations, motor
-  speeds, motor columns against the joints, static motor torque, couplings).
+  speeds, motor columns against the joints, static motor torque, couplings, tendon
+  tensions).
 
 The package: ``criteria`` (the rules, imported by the planners' self-checks
 too), ``kinematics`` (its own Pinocchio model), ``keys`` (play), ``ball``
@@ -139,6 +140,7 @@ from planner.check.results import (
     MissedNote,
     PlayResult,
     Replay,
+    TendonLoad,
     TipTouch,
 )
 from planner.errors import InputError
@@ -168,6 +170,7 @@ __all__ = [
     "MissedNote",
     "PlayResult",
     "Replay",
+    "TendonLoad",
     "TipTouch",
     "ball_params",
     "ball_positions",
@@ -373,7 +376,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         catch, ball_load = catch_audit(tr, kin, tips, palm, traj_path)
         problems.extend(catch.problems)
 
-    limits = limit_audit(hand, kin, tr, pressing, ball_load)
+    limits, tendons = limit_audit(hand, kin, tr, pressing, ball_load)
     for lc in limits:
         if not lc.ok:
             problems.append(f"{lc.count} {lc.category.replace('_', ' ')} violations (worst "
@@ -386,7 +389,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         task=task, hand=hand.name, urdf_sha256=hand.urdf_sha256, complete=tr.complete,
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), rate_hz=float(meta["rate_hz"]),
         limits=tuple(limits), play=play, catch=catch, min_f1=min_f1, problems=tuple(problems),
-        replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw))
+        replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw), tendons=tendons)
 
 
 def _with_claims(play: PlayResult, mismatches: list[ClaimMismatch]) -> PlayResult:
@@ -413,12 +416,9 @@ def check_cli(args) -> int:
         eps = report.play.played if report.play is not None else ()
         write_notes_midi([Note(e.pitch, e.start_s, e.end_s, 64) for e in eps], played)
     if getattr(args, "report", None) or getattr(args, "html", None):
-        from planner.report import write_check_report, write_html
+        from planner.report import draw_reports
 
-        if args.report:
-            write_check_report(report, args.report)
-        if args.html:
-            write_html(report, args.html)
+        draw_reports(report, args.report, args.html, enabled=not getattr(args, "json", False))
     if getattr(args, "json", False):
         print(json.dumps(report.to_dict()))
     else:

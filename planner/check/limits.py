@@ -1,13 +1,16 @@
 """The limit audit of a replay: joint positions, speeds, accelerations, motor speeds,
-motor columns against the joints, couplings and static motor torque."""
+motor columns against the joints, couplings, static motor torque and the tendons'
+tensions (planner.hand.tendon: tension at the spool = motor torque / spool radius,
+bounded by the cable's design force)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from planner.check.kinematics import GRAVITY, Kinematics
-from planner.check.results import LimitCheck
+from planner.check.results import LimitCheck, TendonLoad
 from planner.hand.model import HandModel
+from planner.hand.tendon import spool_tensions_n, tendon_motors
 from planner.trajfile import Trajectory
 
 FILE_QUANTUM = 1e-6  # the writer's 6 decimals
@@ -34,7 +37,8 @@ def _worst(category: str, excess: np.ndarray, value: np.ndarray, limit: np.ndarr
 
 @np.errstate(over="ignore", invalid="ignore")  # absurd values give inf: counted, not printed
 def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips: np.ndarray | None,
-                 ball_load: np.ndarray | None) -> list[LimitCheck]:
+                ball_load: np.ndarray | None) -> tuple[list[LimitCheck], tuple[TendonLoad, ...]]:
+    """The limit checks (one per category) and the worst tension of every tendon."""
     t, Q, QM = tr.t_s, tr.q, tr.q_motor
     jn, mn = hand.joint_names, tuple(f"motor.{m}" for m in hand.motor_names)
     out = []
@@ -110,7 +114,27 @@ def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips:
     ratio = np.abs(TM) / hand.motor_peak_torque
     out.append(_worst("motor_torque", ratio, np.abs(TM), hand.motor_peak_torque,
                       RATE_TOL * hand.motor_peak_torque, mn, t, "N m"))
-    return out
+    tendon_check, tendons = _tendon_audit(hand, TM, t)
+    out.append(tendon_check)
+    return out, tendons
+
+
+def _tendon_audit(hand: HandModel, TM: np.ndarray, t: np.ndarray
+                  ) -> tuple[LimitCheck, tuple[TendonLoad, ...]]:
+    """Spool tensions of every row (N) against each tendon's design force (1 %)."""
+    idx = tendon_motors(hand)
+    names = tuple(f"motor.{hand.motor_names[m]}" for m in idx)
+    if idx.size == 0:
+        return LimitCheck("tendon_tension", 0, 0.0, 0.0, "", 0.0, "N"), ()
+    T = np.abs(spool_tensions_n(hand, TM))
+    force = np.array([hand.actuators[m].tendon_force_n for m in idx], dtype=float)
+    tol = RATE_TOL * force
+    loads = []
+    for k, name in enumerate(names):
+        r = int(np.argmax(T[:, k]))
+        loads.append(TendonLoad(name, int(np.count_nonzero(~(T[:, k] <= force[k] + tol[k]))),
+                                float(T[r, k]), float(force[k]), float(t[r])))
+    return _worst("tendon_tension", T / force, T, force, tol, names, t, "N"), tuple(loads)
 
 
 def _motor_torques(hand: HandModel, Q: np.ndarray, tau: np.ndarray) -> np.ndarray:

@@ -35,6 +35,22 @@ class LimitCheck:
 
 
 @dataclass(frozen=True)
+class TendonLoad:
+    """One tendon over the replay: its worst tension at the spool (``worst_n``, N, at
+    ``time_s``) against its design force (``limit_n``); ``count`` rows beyond it (1 %)."""
+
+    name: str
+    count: int
+    worst_n: float
+    limit_n: float
+    time_s: float
+
+    @property
+    def ok(self) -> bool:
+        return self.count == 0
+
+
+@dataclass(frozen=True)
 class KeyEpisode:
     """A key held down over contiguous frames: [start_s, end_s), by these fingers."""
 
@@ -190,6 +206,7 @@ class CheckReport:
     min_f1: float | None
     problems: tuple[str, ...]
     replay: Replay | None = field(default=None, compare=False, repr=False)
+    tendons: tuple[TendonLoad, ...] = ()  # the worst tension of every tendon
 
     @property
     def ok(self) -> bool:
@@ -206,6 +223,8 @@ class CheckReport:
             d["catch"]["ok"] = self.catch.ok
         for lc, dd in zip(self.limits, d["limits"]):
             dd["ok"] = lc.ok
+        for tl, dd in zip(self.tendons, d["tendons"]):
+            dd["ok"] = tl.ok
         return d
 
     def summary(self) -> str:
@@ -253,6 +272,11 @@ class CheckReport:
         for lc in self.limits:
             L.append(f"  {lc.category:18s} {'ok  ' if lc.ok else 'FAIL'} {lc.count:6d}  "
                      f"{lc.worst:.6g} / {lc.limit:.6g} {lc.unit}  {lc.name} at {lc.time_s:.3f} s")
+        if self.tendons:
+            L.append("tendons (count, worst tension at the spool / design force, when):")
+            for tl in self.tendons:
+                L.append(f"  {tl.name:20s} {'ok  ' if tl.ok else 'FAIL'} {tl.count:6d}  "
+                         f"{tl.worst_n:.4g} / {tl.limit_n:.4g} N at {tl.time_s:.3f} s")
         return "\n".join(L)
 
 

@@ -13,7 +13,7 @@ may give lengths in inches (keys ending ``_in``) and angles in degrees
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -113,6 +113,9 @@ class Actuator:
     efficiency: float
     radius_m: float = 0.0
     mk5: Mk5Coupling | None = None  # nonlinear: q_motor from the leverism chain
+    # a tendon's design force (N): the largest tension its cable may carry anywhere
+    # (planner.hand.tendon); None for a motor that pulls no tendon
+    tendon_force_n: float | None = None
 
 
 @dataclass(frozen=True)
@@ -320,7 +323,14 @@ def build_mount_rail_wrist(data: dict[str, Any], links: list[Link], joints: list
 
 def assemble_spec(data: dict[str, Any], links, joints, couplings, actuators, T_world_root,
                   rail_enabled: bool, finger_joints) -> HandSpec:
-    """The HandSpec of a built hand, with the file's name, description and sources."""
+    """The HandSpec of a built hand, with the file's name, description and sources.
+
+    Every ``tendon`` actuator gets the cable's design force, ``[tendon] design_force_n``
+    (required when the hand has tendons; seed 000, line 96: 40 N, PBO cable 0.25 mm)."""
+    if any(a.kind == "tendon" for a in actuators):
+        force = _positive(_get(data, "tendon", dict), "design_force_n")
+        actuators = [replace(a, tendon_force_n=force) if a.kind == "tendon" else a
+                     for a in actuators]
     src = data.get("sources", {})
     sources = tuple(sorted((str(k), str(v)) for k, v in src.items())) if isinstance(src, dict) else ()
     return HandSpec(

@@ -20,8 +20,9 @@ every ``STEP_M`` around each finger's natural place and solves, by single-finger
 An entry is kept when the four converge (1 mm), every joint is within its limits, and
 the straight joint-space moves high -> hover -> press, high -> press and rise -> press
 keep the tip clear of every other key (forward kinematics, sampled). Its ``max_force_n`` is the largest key force the
-motors hold at the press pose (tau = J^T f plus gravity, through the actuator model):
-a note asking more is not pressed there.
+motors hold at the press pose (tau = J^T f plus gravity, through the actuator model),
+each within its capacity (its peak torque, or its tendon's design force at the spool:
+``planner.hand.tendon``): a note asking more is not pressed there.
 
 Entries are solved on first use and kept for the process (``Atlas`` is built once per
 hand). ``dx`` off the grid snaps to the nearest sample: the tip lands at most
@@ -38,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.hand.model import HandModel
+from planner.hand.tendon import actuator_capacity
 from planner.ik import PREPARE_HEIGHT_M, HandIK, PressTarget, press_target, surfaces_under
 from planner.music import keyboard as kb
 
@@ -212,6 +214,8 @@ class Atlas:
                            "base_hover_z_m": BASE_HOVER_Z_M, "curl": CURL,
                            "clearance_m": CLEARANCE_M, "tip_radius_m": TIP_RADIUS_M,
                            "path_samples": PATH_SAMPLES, "canon_octave": CANON_OCTAVE,
+                           "capacity_nm": [round(float(x), 12) for x in
+                                           actuator_capacity(self.hand).torque_nm],
                            "base": [round(float(x), 12) for x in self.base]}, sort_keys=True)
 
     def _load(self, path: Path) -> None:
@@ -301,10 +305,11 @@ def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,
 
 def max_key_force_n(hand: HandModel, q: np.ndarray, finger: str) -> float:
     """The largest upward key force (N) on ``finger``'s tip that every motor holds at
-    ``q`` with gravity: tau(f) = tau(0) + f (tau(1) - tau(0)), each |tau_m| <= peak."""
+    ``q`` with gravity: tau(f) = tau(0) + f (tau(1) - tau(0)), each |tau_m| <= its
+    capacity (``actuator_capacity``: peak torque, or tendon force x spool radius)."""
     tau0 = hand.press_torques(q, {})
     tau1 = hand.press_torques(q, {finger: 1.0}) - tau0
-    peak = hand.motor_peak_torque
+    peak = actuator_capacity(hand).torque_nm
     best = math.inf
     for t0, t1, p in zip(tau0, tau1, peak):
         if abs(t0) > p:
