@@ -69,9 +69,11 @@ class BatchSummary:
 
 def batch_plan(songs_dir: str | os.PathLike, out_dir: str | os.PathLike, workers: int = 2,
                hand: str = "default", address: str | None = None,
-               on_result: Callable[[SongResult], None] | None = None) -> BatchSummary:
+               on_result: Callable[[SongResult], None] | None = None,
+               on_progress: Callable[[int, int], None] | None = None) -> BatchSummary:
     """Plan and check every song of ``songs_dir`` into ``out_dir`` (see the module
-    docstring); ``on_result`` is called as each song finishes (or is found done)."""
+    docstring); ``on_result`` is called as each song finishes (or is found done), then
+    ``on_progress(songs done, songs)``."""
     if not Path(songs_dir).is_dir():
         raise InputError(f"{songs_dir}: no such folder")
     songs = sorted(Path(songs_dir).glob("*.mid"))
@@ -85,19 +87,23 @@ def batch_plan(songs_dir: str | os.PathLike, out_dir: str | os.PathLike, workers
     except OSError as e:
         raise InputError(f"cannot create {out}: {e.strerror}") from None
     results: dict[Path, SongResult] = {}
+
+    def record(s: Path, r: SongResult) -> None:
+        results[s] = r
+        if on_result:
+            on_result(r)
+        if on_progress:
+            on_progress(len(results), len(songs))
+
     todo = []
     for s in songs:
         done = _done(s, out, hand)
         if done is None:
             todo.append(s)
         else:
-            results[s] = done
-            if on_result:
-                on_result(done)
+            record(s, done)
     for s, r in _run(todo, out, hand, workers, address):
-        results[s] = r
-        if on_result:
-            on_result(r)
+        record(s, r)
     summary = BatchSummary(tuple(results[s] for s in songs))
     _write_summary(summary, out)
     return summary
@@ -212,9 +218,12 @@ def _write_summary(summary: BatchSummary, out: Path) -> None:
 
 
 def batch_cli(a) -> int:
-    """``batch``: a line per song on stderr as it finishes (or one JSON object on stdout
-    with ``--json``), the summary files; 0 when every song has a plan its check passes."""
+    """``batch``: a line per song on stderr as it finishes, under a progress bar on a
+    terminal (or one JSON object on stdout with ``--json``), the summary files; 0 when
+    every song has a plan its check passes."""
     import sys
+
+    from planner.progress import progress_bar
 
     def line(r: SongResult) -> None:
         if r.error:
@@ -223,10 +232,12 @@ def batch_cli(a) -> int:
             msg = (f"{r.played}/{r.notes} played, frame F1 {r.frame_f1:.4f}, check "
                    f"{'OK' if r.check_ok else 'FAILED'}"
                    + (" (done before)" if r.skipped else f", {r.realtime_factor:.0f}x"))
-        sys.stderr.write(f"{r.song}: {msg}\n")
+        bar.write(f"{r.song}: {msg}")
 
-    summary = batch_plan(a.songs, a.out, workers=a.workers, hand=a.hand, address=a.address,
-                         on_result=None if a.json else line)
+    with progress_bar("song", enabled=not a.json) as bar:
+        summary = batch_plan(a.songs, a.out, workers=a.workers, hand=a.hand,
+                             address=a.address, on_result=None if a.json else line,
+                             on_progress=bar.update)
     if a.json:
         sys.stdout.write(json.dumps({"command": "batch", "planned": summary.planned,
                                      "skipped": summary.skipped, "failed": summary.failed,

@@ -6,7 +6,6 @@ note it calls played the check finds hit, every other note is named with its rea
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
@@ -16,6 +15,7 @@ from planner.errors import InputError
 from planner.hand.model import load_hand
 from planner.music.midi import load_song, pitch_name
 from planner.play.stream import PlayPlan, plan_song
+from planner.progress import progress_bar
 
 
 def _timing(notes, plan: PlayPlan) -> tuple[float, float | None, int]:
@@ -77,14 +77,14 @@ def play_cli(a) -> int:
     # (by default into the current directory, never beside the song: it may be read-only)
     out = a.output if a.output is not None else os.path.splitext(name)[0] + ".csv"
     as_json = getattr(a, "json", False)
-    with _progress(len(song.notes), enabled=sys.stderr.isatty() and not as_json) as progress:
-        plan = plan_song(song, hand, out, a.rate, song_name=name, on_progress=progress)
+    with progress_bar("note", enabled=not as_json) as bar:
+        plan = plan_song(song, hand, out, a.rate, song_name=name, on_progress=bar.update)
     if as_json:
         sys.stdout.write(json.dumps(plan_dict(name, song.notes, plan, out)) + "\n")
     else:
         sys.stderr.write(format_summary(name, song.notes, plan, out) + "\n")
     if a.report or a.html:
-        write_reports(out, a.song, a.report, a.html)
+        write_reports(out, a.song, a.report, a.html, enabled=not as_json)
         if not as_json:
             sys.stderr.write("".join(f"{what} -> {path}\n" for what, path in
                                      (("report", a.report), ("html", a.html)) if path))
@@ -94,35 +94,11 @@ def play_cli(a) -> int:
     return 0
 
 
-@contextlib.contextmanager
-def _progress(total: int, enabled: bool):
-    """A progress bar with its rate and time left on a terminal (stderr), for the notes
-    decided; nothing otherwise (a pipe, a log file, ``--json``)."""
-    if not enabled or total == 0:
-        yield None
-        return
-    from tqdm import tqdm
-
-    bar = tqdm(total=total, unit="note", file=sys.stderr, leave=False, mininterval=0.2)
-
-    def update(done: int, _total: int) -> None:
-        bar.update(done - bar.n)
-
-    try:
-        yield update
-    finally:
-        bar.close()
-
-
 def write_reports(traj_path: str, song_path: str, report_dir: str | None,
-                  html_path: str | None) -> None:
+                  html_path: str | None, enabled: bool = True) -> None:
     """``--report DIR`` and ``--html FILE`` of a written plan: the independent check's
-    replay of it, plotted and animated."""
+    replay of it, plotted and animated (with a progress bar on a terminal)."""
     from planner.check import check_trajectory
-    from planner.report import write_check_report, write_html
+    from planner.report import draw_reports
 
-    rep = check_trajectory(traj_path, song_path)
-    if report_dir:
-        write_check_report(rep, report_dir)
-    if html_path:
-        write_html(rep, html_path)
+    draw_reports(check_trajectory(traj_path, song_path), report_dir, html_path, enabled)

@@ -42,6 +42,24 @@ verifies that the file's motor columns equal them within 1e-5 rad).
 """
 
 from planner.report.html import write_html
-from planner.report.plots import write_check_report
+from planner.report.plots import plot_count, write_check_report
 
-__all__ = ["write_check_report", "write_html"]
+__all__ = ["draw_reports", "write_check_report", "write_html"]
+
+
+def draw_reports(report, report_dir: str | None, html_path: str | None,
+                 enabled: bool = True) -> None:
+    """``--report DIR`` (the plots) and ``--html FILE`` (the animation) of a checked
+    trajectory, with a progress bar over the pictures on a terminal (``enabled``)."""
+    from planner.progress import progress_bar
+
+    total = (plot_count(report) if report_dir else 0) + (1 if html_path else 0)
+    with progress_bar("picture", enabled) as bar:
+        bar.update(0, total)
+        done = 0
+        if report_dir:
+            write_check_report(report, report_dir, lambda i, _n: bar.update(i, total))
+            done = plot_count(report)
+        if html_path:
+            write_html(report, html_path)
+            bar.update(done + 1, total)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import math
 import os
+from collections.abc import Callable
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -45,34 +46,43 @@ from planner.report.context import (
 # ====================================================================== PNG plots
 
 
-def write_check_report(report: CheckReport, out_dir: str) -> list[str]:
+def write_check_report(report: CheckReport, out_dir: str,
+                       on_progress: Callable[[int, int], None] | None = None) -> list[str]:
     """Write the PNG plots of ``report`` into ``out_dir`` (created if needed).
 
     Returns the paths written, in a fixed order: the task's plots (play: piano
     roll, fingertip heights; catch: paths, closing timeline) then joint
-    positions, joint speeds, motor angles, motor speeds.
+    positions, joint speeds, motor angles, motor speeds. ``on_progress(done, total)``
+    is called after each plot.
     """
     ctx = _context(report)
     os.makedirs(out_dir, exist_ok=True)
-    figs: list[tuple[str, Figure]] = []
+    figs: list[tuple[str, Callable[[], Figure]]] = []
     if report.play is not None:
-        figs.append(("play_piano_roll.png", _fig_piano_roll(report)))
-        figs.append(("play_fingertip_heights.png", _fig_tip_heights(report)))
+        figs.append(("play_piano_roll.png", lambda: _fig_piano_roll(report)))
+        figs.append(("play_fingertip_heights.png", lambda: _fig_tip_heights(report)))
     if report.catch is not None:
-        figs.append(("catch_paths.png", _fig_catch_paths(report, ctx)))
-        figs.append(("catch_closing.png", _fig_catch_closing(report, ctx)))
-    figs.append(("joint_positions.png", _fig_joint_positions(report, ctx)))
-    figs.append(("joint_speeds.png", _fig_joint_speeds(report, ctx)))
-    figs.append(("motor_angles.png", _fig_motor_angles(report, ctx)))
-    figs.append(("motor_speeds.png", _fig_motor_speeds(report, ctx)))
+        figs.append(("catch_paths.png", lambda: _fig_catch_paths(report, ctx)))
+        figs.append(("catch_closing.png", lambda: _fig_catch_closing(report, ctx)))
+    figs.append(("joint_positions.png", lambda: _fig_joint_positions(report, ctx)))
+    figs.append(("joint_speeds.png", lambda: _fig_joint_speeds(report, ctx)))
+    figs.append(("motor_angles.png", lambda: _fig_motor_angles(report, ctx)))
+    figs.append(("motor_speeds.png", lambda: _fig_motor_speeds(report, ctx)))
     paths = []
-    for name, fig in figs:
+    for i, (name, draw) in enumerate(figs):
         path = os.path.join(out_dir, name)
         buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=DPI, metadata={"Software": None})
+        draw().savefig(buf, format="png", dpi=DPI, metadata={"Software": None})
         write_file(path, buf.getvalue())
         paths.append(path)
+        if on_progress is not None:
+            on_progress(i + 1, len(figs))
     return paths
+
+
+def plot_count(report: CheckReport) -> int:
+    """How many plots ``write_check_report`` draws of ``report``."""
+    return 4 + 2 * (report.play is not None) + 2 * (report.catch is not None)
 
 
 def _limit(report: CheckReport, category: str) -> LimitCheck | None:
