@@ -131,8 +131,14 @@ def _run_ray(songs: list[Path], out: Path, hand: str, address: str):
         import ray
     except ImportError:
         raise InputError('--address needs Ray: pip install -e ".[batch]" (or ray)') from None
-    ray.init(address=None if address == "local" else address, ignore_reinit_error=True,
-             log_to_driver=False)
+    try:
+        ray.init(address=None if address == "local" else address, ignore_reinit_error=True,
+                 log_to_driver=False)
+    except (ConnectionError, ValueError, RuntimeError) as e:
+        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        raise InputError(f"--address {address}: cannot join the Ray cluster ({first}); a "
+                         "cluster started with token authentication (Ray >= 2.52) needs "
+                         "RAY_AUTH_MODE=token and its token (ray get-auth-token)") from None
     task = ray.remote(plan_one)
     pending = {task.remote(str(s), str(out), hand): s for s in songs}
     while pending:

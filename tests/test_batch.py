@@ -95,3 +95,18 @@ def test_a_cluster_address_without_ray_is_refused(songs, tmp_path):
     else:
         s = batch_plan(songs, tmp_path / "out", address="local")
         assert s.planned == 3
+
+
+def test_a_cluster_that_cannot_be_joined_is_one_clear_error(songs, tmp_path, monkeypatch):
+    """Ray's ConnectionError (no cluster there, or a token it does not accept) becomes an
+    InputError naming the address (exit 2, one line), not a traceback."""
+    import types
+
+    def init(**kwargs):
+        raise ConnectionError(f"Failed to connect to Ray cluster at {kwargs['address']}")
+
+    monkeypatch.setitem(sys.modules, "ray", types.SimpleNamespace(init=init))
+    with pytest.raises(InputError, match=r"--address 10\.0\.0\.9:6379: cannot join the Ray "
+                       r"cluster \(Failed to connect to Ray cluster at 10\.0\.0\.9:6379\)"):
+        batch_plan(songs, tmp_path / "out", address="10.0.0.9:6379")
+    assert not (tmp_path / "out" / "summary.json").exists()
