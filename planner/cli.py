@@ -22,6 +22,7 @@ EPILOG = """examples:
   hand-planner check twinkle.csv songs/twinkle.mid --strict
   hand-planner catch --angle 30 --dist 1.5 -o catch.csv --json
   hand-planner hand --urdf hand.urdf
+  hand-planner simulate twinkle.csv songs/twinkle.mid --json
 
 exit status: 0 success; 2 bad input (one line on stderr); 1 anything else, or what
 --strict rejects; 141 when the reader of the output goes away (| head); 128 + the
@@ -145,6 +146,25 @@ def _build_parser() -> argparse.ArgumentParser:
     k.add_argument("--played", metavar="OUT.mid", help="write the keys pressed as a MIDI file")
     k.add_argument("--report", metavar="DIR", help="write PNG plots here")
     k.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+    sm = sub.add_parser("simulate", help="replay a trajectory in MuJoCo physics and score it",
+                        epilog="needs MuJoCo: pip install -e \".[physics]\"")
+    sm.add_argument("trajectory", help="hand-trajectory v1 file")
+    sm.add_argument("song", nargs="?", default=None, help="the MIDI file it was planned from")
+    sm.add_argument("--contact", choices=("full", "pads"), default="full",
+                    help="collision shapes: full (finger segments, palm, pads; default) or pads "
+                         "(only the pad points, the kinematic check's contact model)")
+    sm.add_argument("--allow-incomplete", action="store_true",
+                    help="replay a file without its end marker")
+    sm.add_argument("--min-f1", type=float, default=None, help="fail under this physics F1")
+    sm.add_argument("--strict", action="store_true",
+                    help="fail on any note missed or late in physics")
+    sm.add_argument("--track", type=int, default=None,
+                    help="read only this track of the song (default: as the plan was made)")
+    sm.add_argument("--channel", type=int, default=None,
+                    help="read only this channel (default: as the plan was made)")
+    sm.add_argument("--transpose", action="store_true",
+                    help="move notes outside A0-C8 by octaves (default: as the plan was made)")
+    sm.add_argument("--json", action="store_true", help="one JSON object on stdout")
     return p
 
 
@@ -197,6 +217,12 @@ def _cmd_batch(a: argparse.Namespace) -> int:
     return batch_cli(a)
 
 
+def _cmd_simulate(a: argparse.Namespace) -> int:
+    from planner.simulate import simulate_cli
+
+    return simulate_cli(a)
+
+
 def _cmd_check(a: argparse.Namespace) -> int:
     from planner.check import check_cli
 
@@ -225,7 +251,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         _refuse_json_with_stdout(args)
         rc = {"hand": _cmd_hand, "play": _cmd_play, "catch": _cmd_catch, "check": _cmd_check,
-              "batch": _cmd_batch}[
+              "batch": _cmd_batch, "simulate": _cmd_simulate}[
             args.command
         ](args)
         sys.stdout.flush()

@@ -1,0 +1,134 @@
+"""The physics replay: a trajectory run in MuJoCo, scored from the physics.
+
+``simulate_trajectory(path, song)`` reads a ``hand-trajectory`` v1 file as ``check``
+does (the same reader, hand, URDF hash, columns and ``T_world_root`` rules), builds the
+scene (``scene``: the hand from its URDF, ``keyboard``: 88 hinged keys, or the catch's
+ball; ``actuators``: a torque-limited position servo per motor, couplings as equality
+constraints), runs it (``replay``) and scores it (``scores``), with the kinematic
+check's F1 of the same file beside the physics F1. The modules: ``hand_mjcf`` (URDF ->
+MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay``, ``scores``, ``report``.
+
+Verdict (``SimulateReport.ok``): fails on wrong keys, on notes the plan's end marker
+claims played that the physics misses, on a motor saturated longer than
+``scores.SATURATION_MAX_S``, on a catch not held, on F1 under ``min_f1``; ``strict``
+also on any missed or late note. MuJoCo is an optional dependency
+(``pip install -e ".[physics]"``); without it the command says so (exit 2).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any
+
+from planner.errors import InputError
+
+__all__ = ["simulate_cli", "simulate_trajectory"]
+
+
+def _problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
+    out = []
+    if play is not None:
+        if play.wrong_keys:
+            w = play.wrong_keys[0]
+            out.append(f"{len(play.wrong_keys)} wrong keys in physics (first: {w.name} at "
+                       f"{w.start_s:.3f} s, {'+'.join(w.fingers) or 'no finger'})")
+        if claims:
+            m = claims[0]
+            out.append(f"{len(claims)} notes the plan claims played are missed in physics "
+                       f"(first: {m.name} at {m.onset_s:.3f} s: {m.reason})")
+        if min_f1 is not None and play.f1 is not None and play.f1 < min_f1:
+            out.append(f"physics frame F1 {play.f1:.4f} < {min_f1:g}")
+        if strict and play.missed:
+            out.append(f"{len(play.missed)} notes missed in physics")
+        if strict and play.late:
+            out.append(f"{len(play.late)} notes late in physics")
+    from planner.simulate.scores import SATURATION_MAX_S
+
+    for m in motors:
+        if m.saturated_s > SATURATION_MAX_S:
+            out.append(f"{m.name} short of torque for {m.saturated_s * 1000:.0f} ms from "
+                       f"{m.at_s:.3f} s (asked {m.peak_demand_nm:.3f} N m at peak, gives "
+                       f"{m.limit_nm:.3f})")
+    if catch is not None and not catch.held:
+        out.append(f"ball not held in physics: {catch.end_distance_m * 1000:.1f} mm from the "
+                   f"palm centre at the end")
+    return out
+
+
+def simulate_trajectory(traj_path, song_path=None, *, contact: str = "full",
+                        min_f1: float | None = None, strict: bool = False,
+                        allow_incomplete: bool = False,
+                        song_options: dict[str, Any] | None = None):
+    """Replay ``traj_path`` in MuJoCo and score it (see the package docstring)."""
+    from planner.check import check_trajectory
+    from planner.simulate.replay import simulate
+    from planner.simulate.report import SimulateReport
+    from planner.simulate.scene import Ball, _mujoco, build_scene
+    from planner.simulate.scores import motor_efforts, score_catch, score_play, tracking
+    from planner.trajfile import Trajectory, read_trajectory
+
+    _mujoco()  # the clear message before any work
+    if isinstance(traj_path, Trajectory):
+        tr, name = traj_path, "<memory>"
+    else:
+        tr, name = read_trajectory(traj_path, allow_incomplete=allow_incomplete), traj_path
+    # the kinematic check validates the file (hand, hash, columns, pose, song) and gives
+    # the F1 to compare with
+    kin = check_trajectory(tr, song_path, allow_incomplete=allow_incomplete,
+                           song_options=song_options)
+    from planner.check import _load_hand, _song_notes, _T_world_root
+
+    meta = tr.metadata
+    hand = _load_hand(meta, name, None)
+    T = _T_world_root(meta, hand, name)
+    task = meta["task"]
+    ball = None
+    if task == "catch":
+        from planner.check.ball import ball_params
+
+        b = ball_params(meta, name)
+        ball = Ball(tuple(b["p0"]), tuple(b["v0"]), float(b["radius"]), float(b["mass"]),
+                    float(b["drag"]))
+        hand = hand.mounted(T)
+    scene = build_scene(hand, T, keyboard=task == "play", ball=ball, contact=contact)
+    rec = simulate(scene, hand, tr.t_s, tr.q, ball=ball)
+    notes = None if song_path is None else _song_notes(song_path, meta, name, song_options or {})
+    play = catch = None
+    claims: list = []
+    if task == "play":
+        play = score_play(rec, notes, float(meta["rate_hz"]))
+        if notes is not None:
+            from planner.check import _left_out
+
+            left = _left_out(tr.end, len(notes), name) or set()
+            claims = [m for m in play.missed if m.note not in left]
+    else:
+        catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)
+    motors = motor_efforts(rec, hand)
+    problems = _problems(play, motors, catch, min_f1, strict, claims)
+    song_name = None if song_path is None else (
+        os.fspath(song_path) if isinstance(song_path, (str, os.PathLike)) else song_path.source)
+    return SimulateReport(
+        trajectory=os.fspath(name), song=song_name, task=task, hand=hand.name, contact=contact,
+        rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), wall_s=rec.wall_s,
+        play=play, catch=catch, motors=motors, tracking=tracking(rec, hand),
+        kinematic_f1=None if kin.play is None else kin.play.f1, problems=tuple(problems))
+
+
+def simulate_cli(args) -> int:
+    """``cli.py simulate``: the summary (or one JSON object with --json); 0 when the
+    physics passes the plan, 1 otherwise."""
+    if getattr(args, "min_f1", None) is not None and not 0.0 <= args.min_f1 <= 1.0:
+        raise InputError(f"--min-f1 must be within 0..1, got {args.min_f1}")
+    options = {"track": getattr(args, "track", None), "channel": getattr(args, "channel", None),
+               "transpose": True if getattr(args, "transpose", False) else None}
+    report = simulate_trajectory(args.trajectory, args.song, contact=args.contact,
+                                 min_f1=args.min_f1, strict=bool(args.strict),
+                                 allow_incomplete=bool(args.allow_incomplete),
+                                 song_options=options)
+    if args.json:
+        print(json.dumps(report.to_dict()))
+    else:
+        print(report.summary())
+    return 0 if report.ok else 1

@@ -1,0 +1,110 @@
+"""The motors of the replay: one position servo per motor of the hand's actuator model,
+on the joint it drives, limited to the torque that motor gives through its transmission.
+
+* Torque limit. A motor of peak torque ``tau_m`` moving its driven joint through the
+  transmission ratio ``r = dq_motor/dq_joint`` (``HandModel.motor_ratio``: spool and
+  moment arms, gears, belt, the coupled joints included) at efficiency ``eta`` gives the
+  joint ``tau_m r eta`` (by virtual work, as ``HandModel.motor_torques`` maps torques
+  back): the servo's force range, updated every row (the Mk5 law's ratio varies with q).
+  A coupled joint (DIP = k PIP) gets its torque through the equality constraint, so the
+  servo's generalised force on the coupled pair is what the motor gives.
+* Reflected rotor inertia (armature) ``J r^2``: tendon motors are the seed's Faulhaber
+  3564 B (seed 002: stall 0.41-0.43 N m, the hand's 0.4 N m; rotor 34.9 g cm^2), the
+  wrist and rail motors its 4490 B (stall 2.6 N m, the hand's 2 N m; rotor 130 g cm^2);
+  the splay servos' gearing is not documented: no armature.
+* Gains. Stiffness: the servo reaches its motor's peak torque at ``MOTOR_ERROR_AT_PEAK_RAD``
+  of motor-shaft error (a design choice of the replay's controller, not of the plan:
+  ``kp = tau_m eta r^2 / e``). Damping: critical for the joint's own inertia (its
+  diagonal of the mass matrix at the neutral pose, armature included).
+* Control law (PD with feedforward, what a joint servo with a model runs):
+  ``force = kp (q_ref - q) + kv (qd_ref - qd) + g(q_ref)``, clamped to the force range;
+  ``qd_ref`` is the rows' central difference, ``g`` the gravity torque of the reference
+  pose on the driven joint (and its coupled joints). It is realised through MuJoCo's
+  position-servo form (``ctrl = q_ref + kv/kp qd_ref + g/kp``) so that the damping is
+  integrated implicitly. The control moves linearly from one row's value to the next
+  (a speed reference held constant over a row would jump by a*dt at every row: 0.4 m/s
+  on the rail at 40 m/s^2, a 770 N step through its damping).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.hand.model import HandModel
+
+ROTOR_INERTIA_KG_M2 = {  # by actuator kind (see the module docstring)
+    "tendon": 34.9e-7,  # Faulhaber 3564 B (seed 002), 34.9 g cm^2
+    "gear": 130e-7,  # Faulhaber 4490 B (seed 002), 130 g cm^2
+    "belt": 130e-7,
+    "servo": 0.0,
+}
+MOTOR_ERROR_AT_PEAK_RAD = 0.06  # motor-shaft error (3.4 deg) at which a servo gives its peak
+DAMPING_RATIO = 1.0  # critical
+
+
+@dataclass(frozen=True)
+class ServoSet:
+    """The servos of a hand: per motor, its driven joint (index into the hand's joints),
+    transmission ratio, efficiency and peak torque at the neutral pose, armature."""
+
+    names: tuple[str, ...]
+    drive: np.ndarray  # (n_motor,) joint index
+    ratio: np.ndarray  # (n_motor,) dq_motor / dq_joint at the neutral pose
+    efficiency: np.ndarray
+    peak_torque_nm: np.ndarray
+    armature: np.ndarray  # (n_motor,) kg m^2 (kg for the rail) on the driven joint
+    kp: np.ndarray  # (n_motor,) N m/rad (N/m for the rail)
+
+    def force_limit(self, ratio: np.ndarray) -> np.ndarray:
+        """Joint-side force range of every servo at transmission ``ratio`` (n_motor,)."""
+        return self.peak_torque_nm * np.abs(ratio) * self.efficiency
+
+
+def servo_set(hand: HandModel) -> ServoSet:
+    ratio = np.abs(hand.motor_ratio(hand.q_neutral))
+    eff = np.array([a.efficiency for a in hand.actuators])
+    peak = np.array(hand.motor_peak_torque, dtype=float)
+    arm = np.array([ROTOR_INERTIA_KG_M2.get(a.kind, 0.0) for a in hand.actuators]) * ratio ** 2
+    kp = peak * eff * ratio ** 2 / MOTOR_ERROR_AT_PEAK_RAD
+    return ServoSet(hand.motor_names, np.array(hand._drive), ratio, eff, peak, arm, kp)
+
+
+def critical_damping(kp: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """``kv = 2 zeta sqrt(kp I)`` for each servo."""
+    return 2.0 * DAMPING_RATIO * np.sqrt(kp * inertia)
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The servos' reference, row by row: what each servo is asked for."""
+
+    q_rad: np.ndarray  # (T, n_motor) driven joints' positions (m for the rail)
+    qd_rad_s: np.ndarray  # (T, n_motor) their speeds (central differences of the rows)
+    gravity_nm: np.ndarray  # (T, n_motor) gravity torque on the driven joint and its coupled
+    ratio: np.ndarray  # (T, n_motor) transmission ratio at the row's pose
+
+
+def reference(hand: HandModel, q: np.ndarray, t_s: np.ndarray) -> Reference:
+    """The servo reference of trajectory rows ``q`` (T, n) at times ``t_s`` (the hand
+    mounted as the file says: ``hand`` is ``HandModel.mounted`` for a catch)."""
+    drive = np.array(hand._drive)
+    qd = np.gradient(q, t_s, axis=0) if len(t_s) > 2 else np.zeros_like(q)
+    grav = np.empty((len(q), hand.n_motor))
+    ratio = np.empty((len(q), hand.n_motor))
+    col = {int(j): k for k, j in enumerate(hand.independent)}
+    for i, row in enumerate(q):
+        g = hand.gravity_torques(row)
+        S = hand.dq_dindependent(row)
+        grav[i] = [float(S[:, col[int(d)]] @ g) for d in drive]
+        ratio[i] = np.abs(hand.motor_ratio(row))
+    return Reference(q[:, drive], qd[:, drive], grav, ratio)
+
+
+def motor_torques_nm(hand: HandModel, q: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Motor torques (N m) behind servo forces ``force`` (n_motor,) on the driven joints
+    at ``q``: ``HandModel.motor_torques`` of those joint torques."""
+    tau = np.zeros(hand.n)
+    tau[np.array(hand._drive)] = force
+    return hand.motor_torques(q, tau)

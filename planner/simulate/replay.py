@@ -1,0 +1,184 @@
+"""Run a trajectory in the scene: the servos track its rows, the physics does the rest.
+
+The replay starts at rest in the first row's pose (keys up, the ball at its launch
+state), then steps ``scene.TIMESTEP_S`` at a time. Between two rows the servos' position
+reference moves linearly (what a controller interpolating 100 Hz setpoints does); the
+speed and gravity feedforward move likewise (``actuators.Reference``).
+At every row's time the state is sampled: the hand's joints, every key's angle and
+the finger touching it, the servos' forces and what they asked for (before the clamp
+to their motor's torque), the pad points, the ball and its contacts. A ball with drag
+gets ``-m k |v| v`` as an applied force at every step (spec section 4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.hand.model import HandModel
+from planner.simulate import actuators as act
+from planner.simulate.scene import TIMESTEP_S, Ball, Scene
+
+N_KEYS = 88
+
+
+@dataclass(frozen=True)
+class SimRecord:
+    """The sampled replay, one entry per trajectory row (arrays, SI units)."""
+
+    t_s: np.ndarray  # (T,)
+    q_ref: np.ndarray  # (T, n) the rows
+    q_sim: np.ndarray  # (T, n) the simulated joints
+    key_angle_rad: np.ndarray  # (T, 88) (empty columns without a keyboard)
+    key_finger: np.ndarray  # (T, 88) int8: the finger touching a key (FINGERS index), -1
+    servo_force: np.ndarray  # (T, n_motor) joint-side force the servo applied
+    servo_demand: np.ndarray  # (T, n_motor) what the control law asked for (unclamped)
+    force_limit: np.ndarray  # (T, n_motor) the servo's joint-side limit at that row
+    tips_m: np.ndarray  # (T, 5, 3) pad points, world
+    palm_m: np.ndarray  # (T, 3) palm_center, world
+    ball_m: np.ndarray  # (T, 3) ball centre (NaN without a ball)
+    ball_speed_m_s: np.ndarray  # (T,)
+    ball_contacts: np.ndarray  # (T,) int: hand geoms touching the ball
+    ball_force_n: np.ndarray  # (T,) sum of normal contact forces on the ball
+    substeps: int
+    wall_s: float
+
+
+def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray]:
+    """Per row: the servo control at the row and its change to the next row."""
+    kp = scene.servos.kp
+    kv = -np.asarray(scene.model.actuator_biasprm[:, 2])
+    base = ref.q_rad + (kv / kp) * ref.qd_rad_s + ref.gravity_nm / kp
+    slope = np.zeros_like(base)
+    slope[:-1] = np.diff(base, axis=0)
+    return base, slope
+
+
+def _contacts(scene: Scene, data, mujoco, out_finger: np.ndarray, ball_geom: int):
+    """Fill ``out_finger`` (88,) with the finger touching each key; return the ball's
+    hand contacts and their summed normal force (N)."""
+    out_finger.fill(-1)
+    n = data.ncon
+    if n == 0:
+        return 0, 0.0
+    geoms = np.asarray(data.contact.geom[:n])
+    g1, g2 = geoms[:, 0], geoms[:, 1]
+    k1, k2 = scene.key_geom_key[g1], scene.key_geom_key[g2]
+    f1, f2 = scene.geom_finger[g1], scene.geom_finger[g2]
+    key = np.where(k1 >= 0, k1, k2)
+    fin = np.where(k1 >= 0, f2, f1)
+    sel = (key >= 0) & (fin >= 0)
+    out_finger[key[sel]] = fin[sel]
+    if ball_geom < 0:
+        return 0, 0.0
+    on_ball = np.flatnonzero((g1 == ball_geom) | (g2 == ball_geom))
+    force = 0.0
+    wrench = np.zeros(6)
+    for i in on_ball:
+        mujoco.mj_contactForce(scene.model, data, int(i), wrench)
+        force += abs(float(wrench[0]))
+    return len(on_ball), force
+
+
+def _rest_keys_on_fingers(scene: Scene, data, mujoco) -> None:
+    """Start every key a pad point is pressing in the first row as far down as the pad
+    holds it (at most to its bed): the replay starts at rest with the plan's first pose."""
+    from planner.check.criteria import key_contacts
+    from planner.simulate.keyboard import key_bodies
+
+    tips = np.array(data.site_xpos[scene.tip_sites])
+    kc = key_contacts(tips[None])
+    keys = key_bodies()
+    for f, k in enumerate(kc.tip_key[0]):
+        depth = kc.tip_depth[0, f]
+        if k < 0 or not depth > 0:
+            continue
+        kb = keys[int(k)]
+        angle = min(kb.dip_angle_rad, float(np.arctan2(depth, kb.pivot_m[1] - tips[f, 1])))
+        adr = scene.key_qpos[int(k)]
+        data.qpos[adr] = max(data.qpos[adr], angle)
+    mujoco.mj_forward(scene.model, data)
+
+
+def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
+             ball: Ball | None = None,
+             on_progress: Callable[[int, int], None] | None = None) -> SimRecord:
+    """Replay rows ``q`` (T, n) at times ``t_s`` in ``scene`` (built for ``hand``
+    mounted where the rows were planned)."""
+    import time
+
+    import mujoco
+
+    wall0 = time.perf_counter()
+    model = scene.model
+    data = mujoco.MjData(model)
+    data.qpos[scene.hand_qpos] = q[0]
+    if scene.ball_body >= 0:
+        adr = model.jnt_qposadr[model.body_jntadr[scene.ball_body]]
+        vadr = model.jnt_dofadr[model.body_jntadr[scene.ball_body]]
+        data.qpos[adr:adr + 3] = model.body_pos[scene.ball_body]
+        data.qpos[adr + 3:adr + 7] = (1.0, 0.0, 0.0, 0.0)
+        if ball is not None:
+            data.qvel[vadr:vadr + 3] = ball.v0_m_s
+    mujoco.mj_forward(model, data)
+    if len(scene.key_qpos):
+        _rest_keys_on_fingers(scene, data, mujoco)
+    T = len(t_s)
+    dt_row = float(np.median(np.diff(t_s))) if T > 1 else 0.01
+    n_sub = max(1, round(dt_row / TIMESTEP_S))
+    ref = act.reference(hand, q, t_s)
+    base, slope = _ctrl_rows(scene, ref)
+    kp = scene.servos.kp
+    kv = -np.asarray(model.actuator_biasprm[:, 2])
+    n, nm = q.shape[1], len(kp)
+    rec = {k: np.empty(s) for k, s in (
+        ("q_sim", (T, n)), ("key", (T, N_KEYS)), ("force", (T, nm)), ("demand", (T, nm)),
+        ("limit", (T, nm)), ("tips", (T, 5, 3)), ("palm", (T, 3)), ("ball", (T, 3)),
+        ("ball_v", (T,)), ("ball_n", (T,)), ("ball_f", (T,)))}
+    key_finger = np.full((T, N_KEYS), -1, dtype=np.int8)
+    finger_now = np.full(N_KEYS, -1, dtype=np.int64)
+    has_keys = len(scene.key_qpos) > 0
+    ball_mass = float(model.body_mass[scene.ball_body]) if scene.ball_body >= 0 else 0.0
+    drag = ball.drag_per_m if ball is not None else 0.0
+    for k in range(T):
+        lim = scene.servos.force_limit(ref.ratio[k])
+        model.actuator_forcerange[:, 0] = -lim
+        model.actuator_forcerange[:, 1] = lim
+        # the sample at the row's time (the state the row's setpoint meets)
+        rec["q_sim"][k] = data.qpos[scene.hand_qpos]
+        rec["key"][k] = data.qpos[scene.key_qpos] if has_keys else 0.0
+        demand = kp * (base[k] - data.actuator_length) - kv * data.actuator_velocity
+        rec["demand"][k] = demand
+        rec["force"][k] = np.clip(demand, -lim, lim)
+        rec["limit"][k] = lim
+        rec["tips"][k] = data.site_xpos[scene.tip_sites]
+        rec["palm"][k] = data.site_xpos[scene.palm_site]
+        nb, fb = _contacts(scene, data, mujoco, finger_now, scene.ball_geom)
+        key_finger[k] = finger_now
+        if scene.ball_body >= 0:
+            rec["ball"][k] = data.xpos[scene.ball_body]
+            rec["ball_v"][k] = float(np.linalg.norm(data.cvel[scene.ball_body][3:]))
+        rec["ball_n"][k], rec["ball_f"][k] = nb, fb
+        if k == T - 1:
+            break
+        for j in range(n_sub):
+            data.ctrl[:] = base[k] + slope[k] * (j / n_sub)
+            if drag > 0.0:
+                v = data.qvel[vadr:vadr + 3]
+                data.xfrc_applied[scene.ball_body, :3] = -ball_mass * drag * \
+                    np.linalg.norm(v) * v
+            mujoco.mj_step(model, data)
+        if on_progress is not None and k % 100 == 0:
+            on_progress(k, T)
+    if scene.ball_body < 0:
+        rec["ball"][:] = np.nan
+        rec["ball_v"][:] = np.nan
+    return SimRecord(t_s=np.asarray(t_s, dtype=float), q_ref=q, q_sim=rec["q_sim"],
+                     key_angle_rad=rec["key"], key_finger=key_finger,
+                     servo_force=rec["force"], servo_demand=rec["demand"],
+                     force_limit=rec["limit"], tips_m=rec["tips"], palm_m=rec["palm"],
+                     ball_m=rec["ball"], ball_speed_m_s=rec["ball_v"],
+                     ball_contacts=rec["ball_n"].astype(int), ball_force_n=rec["ball_f"],
+                     substeps=n_sub, wall_s=time.perf_counter() - wall0)

@@ -1,0 +1,84 @@
+"""The physics replay's report: frozen, its verdict, summary and JSON form (the shape
+conventions of ``check``: ``ok``, ``problems``, the task's section, SI units)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from planner.check.results import _listing, _plain
+from planner.simulate.scores import JointTracking, MotorEffort, PhysicsCatch, PhysicsPlay
+
+
+@dataclass(frozen=True)
+class SimulateReport:
+    trajectory: str
+    song: str | None
+    task: str
+    hand: str
+    contact: str
+    rows: int
+    duration_s: float
+    wall_s: float
+    play: PhysicsPlay | None
+    catch: PhysicsCatch | None
+    motors: tuple[MotorEffort, ...]
+    tracking: tuple[JointTracking, ...]
+    kinematic_f1: float | None  # the kinematic check's F1 of the same file and song
+    problems: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+    @property
+    def realtime_factor(self) -> float:
+        return self.duration_s / self.wall_s if self.wall_s > 0 else float("inf")
+
+    def to_dict(self) -> dict[str, Any]:
+        d = _plain(self)
+        d["command"] = "simulate"
+        d["ok"] = self.ok
+        d["realtime_factor"] = self.realtime_factor
+        for m, dd in zip(self.motors, d["motors"]):
+            dd["ratio"] = m.ratio
+        return d
+
+    def summary(self) -> str:
+        L = [f"simulate {self.trajectory}: {'OK' if self.ok else 'FAILED'}"]
+        L.extend(f"  - {p}" for p in self.problems)
+        L.append(f"task {self.task}, hand {self.hand}, contact {self.contact}, {self.rows} rows, "
+                 f"{self.duration_s:.3f} s simulated in {self.wall_s:.2f} s "
+                 f"({self.realtime_factor:.1f}x real time)")
+        p = self.play
+        if p is not None:
+            L.append(f"keys: {len(p.played)} key presses in physics")
+            if p.f1 is not None:
+                kin = "" if self.kinematic_f1 is None else f"; kinematic F1 {self.kinematic_f1:.4f}"
+                L.append(f"song {self.song}: physics frame F1 {p.f1:.4f} over {p.song_frames} "
+                         f"frames (precision {p.precision:.4f}, recall {p.recall:.4f}){kin}; "
+                         f"notes hit {p.notes_hit}/{p.notes}, {len(p.late)} late, "
+                         f"{len(p.wrong_keys)} wrong keys, {len(p.overhangs)} overhangs")
+            _listing(L, "wrong keys", p.wrong_keys, lambda w: (
+                f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
+                f"{'+'.join(w.fingers) or 'no finger (the key returning)'}"))
+            _listing(L, "missed notes", p.missed, lambda m: (
+                f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
+                f"down {m.fraction_down:.0%}  {m.reason}"))
+        c = self.catch
+        if c is not None:
+            L.append(f"catch: ball {'HELD' if c.held else 'NOT held'} from {c.held_from_s:.3f} s "
+                     f"to the end ({c.end_distance_m * 1000:.1f} mm from the palm centre at the "
+                     f"end, {c.contacts_at_end} contacts); peak contact force "
+                     f"{c.peak_contact_force_n:.1f} N")
+        L.append("motors (peak demand / limit, longest saturation):")
+        for m in self.motors:
+            L.append(f"  {m.name:22s} {m.peak_demand_nm:8.3f} / {m.limit_nm:.3f} N m "
+                     f"({m.ratio:5.2f})  {m.saturated_s * 1000:5.0f} ms at {m.at_s:.3f} s")
+        L.append("tracking error per joint (max, rms):")
+        for j in self.tracking:
+            unit = "mm" if j.name == "rail" else "deg"
+            f = 1000.0 if unit == "mm" else 57.29577951308232
+            L.append(f"  {j.name:18s} {j.max_error * f:8.2f} {unit}  rms {j.rms_error * f:6.2f}"
+                     f"  worst at {j.at_s:.3f} s")
+        return "\n".join(L)

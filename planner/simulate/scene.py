@@ -1,0 +1,229 @@
+"""The MuJoCo scene of a replay, built as MJCF text by our code (nothing downloaded):
+the hand from its URDF placed at the file's ``T_world_root``, its servos, its couplings
+as equality constraints, and the task's world -- the keyboard (play) or the ball (catch).
+
+``build_scene`` returns the compiled model and the indices the replay reads. Solver
+settings: 1 ms steps (10 per row at 100 Hz; the stiffest servo, a PIP with its DIP,
+has a natural period of about 10 ms), the implicit-in-velocity integrator
+(``implicitfast``: the servos' damping is integrated implicitly), an elliptic friction
+cone (a grasp's friction as a cone, not a pyramid).
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.errors import InputError
+from planner.hand.model import GRAVITY_WORLD, HandModel
+from planner.hand.spec import FINGERS
+from planner.simulate import actuators as act
+from planner.simulate.hand_mjcf import (
+    HAND_CONAFFINITY,
+    HAND_CONTYPE,
+    _v,
+    hand_bodies,
+    matrix_quat,
+)
+from planner.simulate.keyboard import KEY_STIFFNESS_NM_RAD, key_bodies
+
+TIMESTEP_S = 0.001
+CONTACT_MODELS = ("full", "pads")
+WORLD_CONTYPE, WORLD_CONAFFINITY = 2, 1  # keys and ball touch the hand, not each other
+COUPLING_POLY_DEGREE = 4  # MuJoCo's joint equality: a quartic (a nonlinear law is fitted)
+# Contacts, key stops and couplings as near-rigid constraints: MuJoCo's default (a 20 ms
+# time constant, impedance 0.95) lets a 40 g key pass its bed by 0.09 rad under a 4 N m
+# push; impedance 0.999 at the smallest stable time constant (2 steps) leaves 2e-5 rad.
+HARD_SOLREF = (2 * TIMESTEP_S, 1.0)
+HARD_SOLIMP = (0.99, 0.999, 0.001)
+KEY_FRICTION = 0.5  # pad on a key top (the pad's 0.8 applies: MuJoCo takes the larger)
+
+
+@dataclass(frozen=True)
+class Ball:
+    """The catch's ball: initial state (catch frame), radius, mass, drag k (1/m)."""
+
+    p0_m: tuple[float, float, float]
+    v0_m_s: tuple[float, float, float]
+    radius_m: float
+    mass_kg: float
+    drag_per_m: float
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A compiled scene and where its parts are in MuJoCo's arrays."""
+
+    model: object  # mujoco.MjModel
+    xml: str
+    hand_qpos: np.ndarray  # (n,) qpos address of each hand joint, the hand's order
+    hand_dof: np.ndarray  # (n,) dof address of each hand joint
+    key_qpos: np.ndarray  # (88,) qpos address of each key hinge (empty without keys)
+    key_geom_key: np.ndarray  # (ngeom,) key index of a geom, -1 for none
+    geom_finger: np.ndarray  # (ngeom,) finger index (FINGERS) of a hand geom, -1 for none
+    tip_sites: np.ndarray  # (5,) site ids of the pad points, FINGERS order
+    palm_site: int
+    ball_body: int  # -1 without a ball
+    ball_geom: int
+    servos: act.ServoSet
+
+
+def _f(x) -> str:
+    return f"{float(x):.12g}"
+
+
+def _mujoco():
+    try:
+        import mujoco
+    except ImportError:
+        raise InputError("simulate needs MuJoCo: pip install -e \".[physics]\"") from None
+    return mujoco
+
+
+def _keyboard(world: ET.Element) -> None:
+    for k in key_bodies():
+        body = ET.SubElement(world, "body", name=k.name, pos=_v(k.pivot_m))
+        ET.SubElement(body, "joint", name=f"{k.name}_hinge", type="hinge", axis="1 0 0",
+                      limited="true", range=_v((0.0, k.dip_angle_rad)),
+                      stiffness=_f(KEY_STIFFNESS_NM_RAD), springref=_f(k.springref_rad),
+                      damping=_f(k.damping_nms_rad))
+        ET.SubElement(body, "inertial", pos=_v(c - p for c, p in zip(k.com_m, k.pivot_m)),
+                      mass=_f(k.mass_kg),
+                      # (the hinge's own value exactly; the other two axes do not move)
+                      diaginertia=_v([k.inertia_kg_m2] * 3))
+        for i, b in enumerate(k.boxes):
+            ET.SubElement(body, "geom", name=f"{k.name}_{i}", type="box",
+                          pos=_v(c - p for c, p in zip(b.center_m, k.pivot_m)),
+                          size=_v(b.half_m), mass="0",
+                          contype=str(WORLD_CONTYPE), conaffinity=str(WORLD_CONAFFINITY),
+                          friction=f"{KEY_FRICTION} 0.005 0.0001",
+                          rgba="0.1 0.1 0.1 1" if k.black else "0.95 0.95 0.92 1")
+        h = k.hidden
+        ET.SubElement(body, "geom", name=f"{k.name}_hidden", type="box",
+                      pos=_v(c - p for c, p in zip(h.center_m, k.pivot_m)), size=_v(h.half_m),
+                      mass="0", contype="0", conaffinity="0", group="3")
+
+
+def _ball(world: ET.Element, ball: Ball) -> None:
+    body = ET.SubElement(world, "body", name="ball", pos=_v(ball.p0_m))
+    ET.SubElement(body, "freejoint", name="ball_free")
+    ET.SubElement(body, "geom", name="ball", type="sphere", size=_f(ball.radius_m),
+                  mass=_f(ball.mass_kg), contype=str(WORLD_CONTYPE),
+                  conaffinity=str(WORLD_CONAFFINITY), friction="0.8 0.005 0.0001",
+                  rgba="0.8 0.9 0.2 1")
+
+
+def _couplings(eq: ET.Element, hand: HandModel, joints) -> None:
+    """Each coupling as ``dep = poly(src)``: the URDF's mimic (linear) as it is; a
+    nonlinear law (Mk5) fitted by a quartic over the source joint's range."""
+    mimic = {j.name: j.mimic for j in joints if j.mimic is not None}
+    for c in hand.couplings:
+        dep, src = hand.joint_names[c.dep], hand.joint_names[c.src]
+        if dep in mimic and mimic[dep][0] == src:
+            coef = [mimic[dep][2], mimic[dep][1], 0.0, 0.0, 0.0]
+        else:
+            x = np.linspace(hand.lower[c.src], hand.upper[c.src], 200)
+            coef = list(np.polyfit(x, c.value(x), COUPLING_POLY_DEGREE)[::-1])
+        ET.SubElement(eq, "joint", name=f"couple_{dep}", joint1=dep, joint2=src,
+                      polycoef=" ".join(f"{v:.12g}" for v in coef))
+
+
+def scene_xml(hand: HandModel, T_world_root: np.ndarray, keyboard: bool,
+              ball: Ball | None, servos: act.ServoSet,
+              contact: str = "full") -> tuple[str, list]:
+    root = ET.Element("mujoco", model=f"replay_{hand.name}")
+    ET.SubElement(root, "compiler", angle="radian", autolimits="true", boundmass="1e-6",
+                  boundinertia="1e-12")
+    ET.SubElement(root, "option", timestep=_f(TIMESTEP_S), integrator="implicitfast",
+                  cone="elliptic", gravity=" ".join(f"{float(g):g}" for g in GRAVITY_WORLD))
+    ET.SubElement(root, "size", memory="64M")
+    default = ET.SubElement(root, "default")
+    ET.SubElement(default, "geom", solref=_v(HARD_SOLREF), solimp=_v(HARD_SOLIMP))
+    ET.SubElement(default, "joint", solreflimit=_v(HARD_SOLREF), solimplimit=_v(HARD_SOLIMP))
+    ET.SubElement(default, "equality", solref=_v(HARD_SOLREF), solimp=_v(HARD_SOLIMP))
+    world = ET.SubElement(root, "worldbody")
+    T = np.asarray(T_world_root, dtype=float)
+    mount = ET.SubElement(world, "body", name="mount", pos=" ".join(f"{float(v):.12g}" for v in T[:3, 3]),
+                          quat=_v(matrix_quat(T[:3, :3])))
+    armature = {hand.joint_names[int(d)]: float(a) for d, a in zip(servos.drive, servos.armature)}
+    joints = hand_bodies(hand.urdf, mount, tuple(hand.tip_frames), armature,
+                         pads_only=contact == "pads")
+    ET.SubElement(_find_body(mount, "palm_center") or mount, "site", name="palm_center_site",
+                  size="0.002")
+    if keyboard:
+        _keyboard(world)
+    if ball is not None:
+        _ball(world, ball)
+    _couplings(ET.SubElement(root, "equality"), hand, joints)
+    acts = ET.SubElement(root, "actuator")
+    for m, name in enumerate(servos.names):
+        kp = servos.kp[m]
+        lim = servos.force_limit(servos.ratio)[m]
+        ET.SubElement(acts, "general", name=f"motor.{name}",
+                      joint=hand.joint_names[int(servos.drive[m])], gaintype="fixed",
+                      gainprm=_f(float(kp)), biastype="affine", biasprm=_v((0.0, -kp, 0.0)),
+                      forcelimited="true", forcerange=_v((-lim, lim)))
+    return ET.tostring(root, encoding="unicode"), joints
+
+
+def _find_body(el: ET.Element, name: str) -> ET.Element | None:
+    for b in el.iter("body"):
+        if b.get("name") == name:
+            return b
+    return None
+
+
+def build_scene(hand: HandModel, T_world_root: np.ndarray, *, keyboard: bool = False,
+                ball: Ball | None = None, contact: str = "full") -> Scene:
+    """Compile the scene; the servos' damping is set from the compiled mass matrix.
+
+    ``contact``: "full" (every finger segment, the palm, the pads: the URDF's shapes) or
+    "pads" (only the pad points, as the kinematic check: the dynamics without the
+    geometry of the fingers' bodies)."""
+    if contact not in CONTACT_MODELS:
+        raise InputError(f"contact model must be one of {', '.join(CONTACT_MODELS)}: {contact!r}")
+    mujoco = _mujoco()
+    servos = act.servo_set(hand)
+    xml, _ = scene_xml(hand, T_world_root, keyboard, ball, servos, contact)
+    model = mujoco.MjModel.from_xml_string(xml)
+    hand_qpos = np.array([model.jnt_qposadr[model.joint(n).id] for n in hand.joint_names])
+    hand_dof = np.array([model.jnt_dofadr[model.joint(n).id] for n in hand.joint_names])
+    data = mujoco.MjData(model)
+    data.qpos[hand_qpos] = hand.q_neutral
+    mujoco.mj_forward(model, data)
+    # a driven joint's inertia with its coupled joints moving along: v^T M v, v = S's column
+    S = hand.dq_dindependent(hand.q_neutral)
+    col = {int(j): k for k, j in enumerate(hand.independent)}
+    inertia = np.empty(len(servos.drive))
+    Mv = np.zeros(model.nv)
+    for m, d in enumerate(servos.drive):
+        v = np.zeros(model.nv)
+        v[hand_dof] = S[:, col[int(d)]]
+        mujoco.mj_mulM(model, data, Mv, v)
+        inertia[m] = float(v @ Mv)
+    kv = act.critical_damping(servos.kp, inertia)
+    model.actuator_biasprm[:, 2] = -kv
+    key_qpos = np.array([model.jnt_qposadr[model.joint(f"{k.name}_hinge").id]
+                         for k in key_bodies()] if keyboard else [], dtype=int)
+    key_geom = np.full(model.ngeom, -1, dtype=int)
+    geom_finger = np.full(model.ngeom, -1, dtype=int)
+    for g in range(model.ngeom):
+        name = model.geom(g).name
+        body = model.body(model.geom_bodyid[g]).name
+        if name.startswith("key_"):
+            key_geom[g] = int(name.split("_")[1]) - 21
+        elif model.geom_contype[g] == HAND_CONTYPE and model.geom_conaffinity[g] == \
+                HAND_CONAFFINITY:
+            geom_finger[g] = next((i for i, f in enumerate(FINGERS) if body.startswith(f)), -1)
+    ball_body = model.body("ball").id if ball is not None else -1
+    return Scene(model=model, xml=xml, hand_qpos=hand_qpos, hand_dof=hand_dof,
+                 key_qpos=key_qpos, key_geom_key=key_geom, geom_finger=geom_finger,
+                 tip_sites=np.array([model.site(f).id for f in hand.tip_frames]),
+                 palm_site=model.site("palm_center_site").id, ball_body=ball_body,
+                 ball_geom=model.geom("ball").id if ball is not None else -1, servos=servos)
+
+
+def servo_kv(scene: Scene) -> np.ndarray:
+    return -np.asarray(scene.model.actuator_biasprm[:, 2])

@@ -1,0 +1,204 @@
+"""The physics replay (planner.simulate): scene, keys, servos, a real plan, edited plans."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+import planner
+from planner.check import check_trajectory, key_contacts
+from planner.cli import main
+from planner.hand.model import load_hand
+from planner.music import keyboard as kb
+from planner.simulate import simulate_trajectory
+from planner.simulate.keyboard import front_force_n, key_bodies, key_body
+from planner.simulate.scene import build_scene
+from planner.trajfile import TrajectoryWriter, read_trajectory
+
+SONG = "songs/twinkle.mid"
+
+
+@pytest.fixture(scope="module")
+def hand():
+    return load_hand("default")
+
+
+@pytest.fixture(scope="module")
+def twinkle(tmp_path_factory, hand):
+    path = tmp_path_factory.mktemp("sim") / "twinkle.csv"
+    planner.plan_song(planner.load_song(SONG), hand, str(path))
+    return path
+
+
+def _write(path, tr, q, hand, end=None, t=None):
+    w = TrajectoryWriter(str(path), {k: v for k, v in tr.metadata.items()
+                                     if k not in ("format", "version")},
+                         hand.joint_names, hand.motor_names)
+    w.write_rows(tr.t_s if t is None else t, q, hand.motor_angles(q))
+    w.close(end if end is not None else {k: v for k, v in tr.end.items()
+                                          if k not in ("end", "rows")})
+    return path
+
+
+def test_scene_pad_points_are_the_urdf_pad_points(hand):
+    scene = build_scene(hand, hand.T_world_root, keyboard=True)
+    data = mujoco.MjData(scene.model)
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        q = hand.apply_couplings(rng.uniform(hand.lower, hand.upper))
+        data.qpos[scene.hand_qpos] = q
+        mujoco.mj_kinematics(scene.model, data)
+        assert np.allclose(data.site_xpos[scene.tip_sites], hand.tip_positions(q), atol=1e-9)
+    assert scene.model.nu == hand.n_motor and scene.model.neq == len(hand.couplings)
+    assert len(scene.key_qpos) == 88
+
+
+def test_servo_limits_are_the_motors_through_their_transmission(hand):
+    scene = build_scene(hand, hand.T_world_root)
+    m = hand.motor_names.index("index_pip")
+    ratio = 2.2 + 1.5 * 0.667  # spool over PIP and DIP moment arms, DIP coupled
+    assert scene.model.actuator_forcerange[m, 1] == pytest.approx(0.4 * ratio * 0.5, rel=1e-3)
+    assert scene.model.actuator_forcerange[hand.motor_names.index("rail"), 1] == \
+        pytest.approx(200.0)  # 2 N m through a 10 mm pulley
+
+
+def test_key_geometry_down_angle_and_down_weight():
+    for k in key_bodies():
+        assert k.lever_m * math.tan(k.down_angle_rad) == pytest.approx(kb.DOWN_DEPTH_M)
+        assert k.lever_m * math.tan(k.dip_angle_rad) == pytest.approx(kb.KEY_DIP_M)
+        assert front_force_n(k, 0.0) == pytest.approx(0.5)
+    c4, cs4 = key_body(60), key_body(61)
+    front, back = c4.boxes  # C4's back part ends where C#4 begins
+    assert 2 * front.half_m[0] == pytest.approx(kb.WHITE_WIDTH_M)
+    assert 2 * back.half_m[0] == pytest.approx(kb.key(61).x_min_m - kb.key(60).x_min_m)
+    assert cs4.boxes[0].center_m[2] + cs4.boxes[0].half_m[2] == pytest.approx(kb.BLACK_TOP_Z_M)
+
+
+def test_key_rests_up_and_returns_from_its_bed(hand):
+    scene = build_scene(hand, hand.T_world_root, keyboard=True)
+    model, data = scene.model, mujoco.MjData(scene.model)
+    data.qpos[scene.hand_qpos] = hand.q_neutral
+    k = 60 - 21
+    adr = scene.key_qpos[k]
+    mujoco.mj_forward(model, data)
+    for _ in range(200):
+        mujoco.mj_step(model, data)
+    assert abs(data.qpos[adr]) < 1e-4  # held up by its preload
+    data.qpos[adr] = key_body(60).dip_angle_rad
+    steps = 0
+    while data.qpos[adr] >= key_body(60).down_angle_rad:
+        mujoco.mj_step(model, data)
+        steps += 1
+    # spring and critical damping bring it above the key-down angle in 10-40 ms
+    assert 10 <= steps * model.opt.timestep * 1000 <= 40
+
+
+def test_real_plan_in_physics(twinkle, capsys):
+    rep = simulate_trajectory(str(twinkle), SONG, contact="pads")
+    assert rep.ok, rep.problems
+    assert rep.play.f1 >= 0.95 and not rep.play.wrong_keys
+    assert rep.play.notes_hit == rep.play.notes == 14
+    assert rep.kinematic_f1 == pytest.approx(1.0)
+    track = {j.name: j for j in rep.tracking}
+    assert track["rail"].max_error < 0.002  # m
+    rc = main(["simulate", str(twinkle), SONG, "--contact", "pads", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert rc == 0 and out["command"] == "simulate" and out["ok"] is True
+    assert set(out) >= {"play", "motors", "tracking", "problems", "kinematic_f1",
+                        "realtime_factor"}
+    assert out["play"]["f1"] == pytest.approx(rep.play.f1)
+
+
+def test_coupling_holds_in_physics(twinkle, hand):
+    from planner.simulate.replay import simulate
+
+    tr = read_trajectory(str(twinkle))
+    scene = build_scene(hand, hand.T_world_root, keyboard=True, contact="pads")
+    rec = simulate(scene, hand, tr.t_s[:200], tr.q[:200])
+    err = hand.coupling_errors(rec.q_sim)
+    # the equality constraint (as stiff as a contact): 1 deg at worst, while a pad pushes
+    # its key into the bed, well under 0.1 deg on average
+    assert np.max(np.abs(err)) < 0.025 and np.sqrt(np.mean(err ** 2)) < 2e-3
+
+
+def test_wrist_beyond_its_motor_is_caught_where_the_kinematic_check_passes(twinkle, hand,
+                                                                         tmp_path):
+    """The wrist swung sideways at its speed and acceleration limits: within every
+    kinematic limit, beyond what its motor gives to the hand's inertia."""
+    tr = read_trajectory(str(twinkle))
+    i = hand.index["wrist_dev"]
+    q = np.repeat(tr.q[:1], 150, axis=0)  # the first pose held (no key down after 10 ms)
+    q[:, hand.index["index_mcp_flex"]] = q[0, hand.index["middle_mcp_flex"]]
+    q[:, hand.index["index_pip"]] = q[0, hand.index["middle_pip"]]
+    q = hand.apply_couplings(q)
+    t = np.arange(len(q)) / 100.0
+    v, a = 0.97 * hand.velocity[i], 0.97 * hand.acceleration[i]
+    w = a / v
+    amp = v / w
+    q[:, i] = q[0, i] - amp * np.sin(w * t)  # speed v and acceleration a at most
+    tr2 = read_trajectory(str(_write(tmp_path / "wrist.csv", tr, q, hand, end={}, t=t)))
+    kin = check_trajectory(tr2)
+    assert kin.ok, kin.problems
+    rep = simulate_trajectory(tr2, contact="pads")
+    assert not rep.ok
+    assert any("motor.wrist_dev short of torque" in p for p in rep.problems)
+    wd = next(m for m in rep.motors if m.name == "motor.wrist_dev")
+    assert wd.ratio > 1.0 and wd.saturated_s > 0.02
+    rc = main(["simulate", str(tmp_path / "wrist.csv"), "--contact", "pads"])
+    assert rc == 1
+
+
+def test_shallow_press_misses_in_physics(twinkle, hand, tmp_path):
+    """Note 2 (G4, ring) pressed only 1.5 mm below the key's top: short of the key-down
+    angle, the note the plan claims played is missed in physics (exit 1)."""
+    tr = read_trajectory(str(twinkle))
+    tips = np.array([hand.tip_positions(r) for r in tr.q])
+    kc = key_contacts(tips)
+    f = 3  # ring
+    k = 67 - 21
+    rows = np.flatnonzero((kc.tip_key[:, f] == k) & (kc.tip_depth[:, f] > 0.0015))
+    assert len(rows) > 20
+    hover = tr.q[rows[0] - 1]
+    js = hand.joint_slice("ring")
+    q = tr.q.copy()
+    for r in rows:
+        lo, hi = 0.0, 1.0
+        for _ in range(40):  # the blend of hover -> press that puts the pad 1.5 mm down
+            mid = 0.5 * (lo + hi)
+            qq = q[r].copy()
+            qq[js] = hover[js] + mid * (tr.q[r, js] - hover[js])
+            depth = -hand.tip_positions(qq)[f, 2]  # (a white key's top is z = 0)
+            lo, hi = (mid, hi) if depth < 0.0015 else (lo, mid)
+        q[r, js] = hover[js] + lo * (tr.q[r, js] - hover[js])
+    path = _write(tmp_path / "shallow.csv", tr, q, hand)
+    rep = simulate_trajectory(str(path), SONG, contact="pads")
+    assert any(m.pitch == 67 and m.note == 2 for m in rep.play.missed)
+    assert not rep.ok and any("claims played are missed" in p for p in rep.problems)
+
+
+def test_missing_mujoco_is_one_line_exit_2(twinkle, monkeypatch, capsys):
+    import builtins
+
+    real = builtins.__import__
+
+    def no_mujoco(name, *a, **k):
+        if name == "mujoco":
+            raise ImportError("no mujoco")
+        return real(name, *a, **k)
+
+    monkeypatch.setattr(builtins, "__import__", no_mujoco)
+    rc = main(["simulate", str(twinkle)])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and "pip install" in err
+
+
+def test_bad_input_exit_2(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("not a trajectory\n")
+    assert main(["simulate", str(bad)]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
