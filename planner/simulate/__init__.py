@@ -10,7 +10,7 @@ MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay``, ``scores``, ``report`
 
 Verdict (``SimulateReport.ok``): fails on wrong keys, on notes the plan's end marker
 claims played that the physics misses, on a motor saturated longer than
-``scores.SATURATION_MAX_S``, on a catch not held, on F1 under ``min_f1``; ``strict``
+``scores.SATURATION_MAX_S``, on a catch not held, on F1 under ``min_f1``, on a diverged simulation; ``strict``
 also on any missed or late note. MuJoCo is an optional dependency
 (``pip install -e ".[physics]"``); without it the command says so (exit 2).
 """
@@ -107,6 +107,9 @@ def simulate_trajectory(traj_path, song_path=None, *, contact: str = "full",
         catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)
     motors = motor_efforts(rec, hand)
     problems = _problems(play, motors, catch, min_f1, strict, claims)
+    if rec.unstable_at_s is not None:
+        problems.insert(0, f"the simulation diverged near {rec.unstable_at_s:.3f} s (MuJoCo "
+                           "reset its state: forces beyond what the solver can resolve)")
     song_name = None if song_path is None else (
         os.fspath(song_path) if isinstance(song_path, (str, os.PathLike)) else song_path.source)
     return SimulateReport(

@@ -44,6 +44,7 @@ class SimRecord:
     ball_force_n: np.ndarray  # (T,) sum of normal contact forces on the ball
     substeps: int
     wall_s: float
+    unstable_at_s: float | None = None  # MuJoCo reset a diverging state here (first time)
 
 
 def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray]:
@@ -112,6 +113,8 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     import mujoco
 
     wall0 = time.perf_counter()
+    # MuJoCo's warnings would print on stdout (--json owns it): counted in data.warning
+    mujoco.set_mju_user_warning(lambda _msg: None)
     model = scene.model
     data = mujoco.MjData(model)
     data.qpos[scene.hand_qpos] = q[0]
@@ -140,6 +143,8 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     key_finger = np.full((T, N_KEYS), -1, dtype=np.int8)
     finger_now = np.full(N_KEYS, -1, dtype=np.int64)
     has_keys = len(scene.key_qpos) > 0
+    bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
+    unstable = None
     ball_mass = float(model.body_mass[scene.ball_body]) if scene.ball_body >= 0 else 0.0
     drag = ball.drag_per_m if ball is not None else 0.0
     for k in range(T):
@@ -170,6 +175,8 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
                 data.xfrc_applied[scene.ball_body, :3] = -ball_mass * drag * \
                     np.linalg.norm(v) * v
             mujoco.mj_step(model, data)
+        if unstable is None and data.warning[bad_qacc].number > 0:
+            unstable = float(t_s[k])
         if on_progress is not None and k % 100 == 0:
             on_progress(k, T)
     if scene.ball_body < 0:
@@ -181,4 +188,5 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
                      force_limit=rec["limit"], tips_m=rec["tips"], palm_m=rec["palm"],
                      ball_m=rec["ball"], ball_speed_m_s=rec["ball_v"],
                      ball_contacts=rec["ball_n"].astype(int), ball_force_n=rec["ball_f"],
-                     substeps=n_sub, wall_s=time.perf_counter() - wall0)
+                     substeps=n_sub, wall_s=time.perf_counter() - wall0,
+                     unstable_at_s=unstable)
