@@ -1,0 +1,74 @@
+"""The hand's joints as a catch uses them: the arm (rail, wrist flexion and deviation),
+which puts the palm on the ball's path, and the fingers (abduction, flexion), which
+close on it; and the poses every throw starts from (zero, rest, open)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.errors import PlannerError
+from planner.hand.model import HandModel
+
+REST_CURL = 0.3  # rest pose: flexion joints at this fraction of their upper limit
+WRIST = ("wrist_flex", "wrist_dev")
+
+
+@dataclass(frozen=True)
+class CatchJoints:
+    """Indices (into the hand's joints) of the arm and of the fingers' joints."""
+
+    i_flex: int
+    i_dev: int
+    i_rail: int | None
+    arm: tuple[int, ...]  # rail (if any), wrist flexion, wrist deviation
+    finger_idx: np.ndarray  # every other joint
+    abd_idx: np.ndarray  # the fingers' abduction joints
+    flexion_idx: np.ndarray  # the fingers' flexion joints
+    locked: tuple[str, ...]  # names of the arm joints (masked while the fingers close)
+
+
+def catch_joints(hand: HandModel) -> CatchJoints:
+    """The joint groups of ``hand``; PlannerError without the 2-DOF wrist."""
+    idx = hand.index
+    for n in WRIST:
+        if n not in idx:
+            raise PlannerError(f"hand {hand.name!r} has no joint {n!r}: the catch planner "
+                               "needs the 2-DOF wrist")
+    i_flex, i_dev, i_rail = idx["wrist_flex"], idx["wrist_dev"], idx.get("rail")
+    arm = tuple(i for i in (i_rail, i_flex, i_dev) if i is not None)
+    finger_idx = np.array(sorted(set(range(hand.n)) - set(arm)))
+    abd = [i for i in finger_idx if "abd" in hand.joint_names[i]]
+    flexion = [i for i in finger_idx if i not in set(abd)]
+    return CatchJoints(i_flex, i_dev, i_rail, arm, finger_idx, np.array(abd, dtype=int),
+                       np.array(flexion, dtype=int), tuple(hand.joint_names[i] for i in arm))
+
+
+def zero_pose(hand: HandModel) -> np.ndarray:
+    """Every joint at 0 (inside its limits), couplings applied."""
+    return hand.apply_couplings(np.clip(np.zeros(hand.n), hand.lower, hand.upper))
+
+
+def rest_pose(hand: HandModel, joints: CatchJoints) -> np.ndarray:
+    """The hand before the throw: the zero pose with the fingers curled ``REST_CURL``."""
+    q = zero_pose(hand)
+    for i in joints.flexion_idx:
+        q[i] = REST_CURL * hand.upper[i] if hand.upper[i] > 0 else 0.0
+    return hand.apply_couplings(np.clip(q, hand.lower, hand.upper))
+
+
+def open_from(hand: HandModel, joints: CatchJoints, q_arm: np.ndarray,
+              q_closed: np.ndarray) -> np.ndarray:
+    """Open hand: the arm joints of ``q_arm``, abduction as in ``q_closed``, flexion 0."""
+    q = zero_pose(hand)
+    q[list(joints.arm)] = q_arm[list(joints.arm)]
+    q[joints.abd_idx] = q_closed[joints.abd_idx]
+    return hand.apply_couplings(np.clip(q, hand.lower, hand.upper))
+
+
+def palm_target(hand: HandModel, q: np.ndarray, r: float) -> np.ndarray:
+    """Where the centre of a ball of radius ``r`` resting on the palm is: palm_center +
+    r n (n the palm's normal), in the hand's frame."""
+    P = hand.palm_pose(q)
+    return P[:3, 3] + r * P[:3, 2]

@@ -1,0 +1,134 @@
+"""How the hand closes on a ball: the closing move per ball size (fingertip targets on the
+ball, IK with the arm locked, the grasp condition along the move) and when it starts
+for a throw (grasp once the ball has stopped, no fingertip touching it before)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from planner.catch.arm import CatchJoints, open_from, zero_pose
+from planner.catch.flight import Flight
+from planner.catch.geometry import unit
+from planner.catch.intercept import Wrist
+from planner.catch.results import Closing
+from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M
+from planner.hand.model import HandModel
+from planner.ik import HandIK, PressTarget
+from planner.trajectory import min_jerk, phase_duration
+
+GRASP_MARGIN_M = 0.002  # planned with this much to spare
+TOUCH_CLEAR_M = 0.002  # before intercept_t fingertips stay this far outside the ball
+TIP_GAP_M = 0.003  # closed fingertips: this far outside the ball's surface
+TIP_ELEVATION_DEG = 40.0  # closed fingertips: above the ball's equator (palm = south pole)
+_N_CLOSE = 201  # samples of the closing move (palm frame table)
+_N_CAND = 25  # candidate starts of the closing move
+
+
+def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
+                 r: float) -> Closing:
+    """The closing move for a ball of radius ``r`` on the palm (``planner.catch.plan``,
+    step 2): fingertips ``TIP_GAP_M`` outside the ball, each ``TIP_ELEVATION_DEG`` above
+    its equator on its finger's side (IK, the arm locked); the grasp condition along the
+    min-jerk move in the palm frame."""
+    h = hand
+    q0 = zero_pose(h)
+    centre = wrist.pc0 + r * wrist.n0
+    T_pc = h.palm_pose(q0)
+    el = math.radians(TIP_ELEVATION_DEG)
+    # targets: each fingertip at TIP_ELEVATION above the ball's equator, on the side
+    # of its finger's base
+    targets = []
+    for f in h.fingers:
+        base = h.frame_pose(q0, h.spec.joints_of(f)[0])[:3, 3]
+        d = base - centre
+        d = d - (d @ wrist.n0) * wrist.n0
+        d = unit(d) if np.linalg.norm(d) > 1e-9 else wrist.b0
+        p = centre + (r + TIP_GAP_M) * (math.cos(el) * d + math.sin(el) * wrist.n0)
+        targets.append(p)
+    q_init = q0.copy()
+    for i in joints.flexion_idx:
+        q_init[i] = 0.5 * (h.lower[i] + h.upper[i])
+    q_init = h.apply_couplings(np.clip(q_init, h.lower, h.upper))
+    for n in joints.locked:
+        ik.solver.mask_dof(n)
+    try:
+        res = ik.solve([PressTarget(f, 0, tuple(p), (p[1], p[1]))
+                        for f, p in zip(h.fingers, targets)], q_init, q_init, hover=(),
+                       max_iter=150)
+        q = res.q
+        # fingertips that cannot reach their target: the nearest point of the sphere
+        for _ in range(2):
+            tips = h.tip_positions(q)
+            tg = [centre + (r + TIP_GAP_M) * unit(tp - centre) for tp in tips]
+            res = ik.solve([PressTarget(f, 0, tuple(p), (p[1], p[1]))
+                            for f, p in zip(h.fingers, tg)], q, q, hover=(), max_iter=80)
+            q = res.q
+    finally:
+        for n in joints.locked:
+            ik.solver.unmask_dof(n)
+    q_closed = q.copy()
+    q_closed[list(joints.arm)] = q0[list(joints.arm)]
+    q_open = open_from(h, joints, q0, q_closed)
+    dist = np.linalg.norm(h.tip_positions(q_closed) - centre, axis=1)
+    # table of the closing move in the palm frame
+    u = np.linspace(0.0, 1.0, _N_CLOSE)
+    s = min_jerk(u)[:, None]
+    Q = h.apply_couplings(q_open + (q_closed - q_open) * s)
+    Tinv = np.linalg.inv(T_pc)
+    tips_pc = np.empty((len(u), len(h.fingers), 3))
+    for k in range(len(u)):
+        tw = h.tip_positions(Q[k])
+        tips_pc[k] = tw @ Tinv[:3, :3].T + Tinv[:3, 3]
+    c_pc = np.array([0.0, 0.0, r])
+    d_tab = np.linalg.norm(tips_pc - c_pc, axis=-1)
+    within = d_tab <= r + GRASP_TOL_M - GRASP_MARGIN_M
+    thumb = h.fingers.index("thumb")
+    ok = within[:, thumb] & (within.sum(axis=1) >= GRASP_MIN_TIPS)
+    u_g = None
+    reason = None
+    if ok[-1]:
+        bad = np.flatnonzero(~ok)
+        u_g = float(u[bad[-1] + 1]) if bad.size else 0.0
+    else:
+        near = [f"{f} {1000 * (d - r):+.1f} mm" for f, d in zip(h.fingers, dist)]
+        why = ("the thumb" if not within[-1, thumb] else
+               f"{GRASP_MIN_TIPS} fingertips")
+        reason = (f"grasp: {why} cannot reach within radius + "
+                  f"{1000 * (GRASP_TOL_M - GRASP_MARGIN_M):.0f} mm of the ball centre "
+                  f"on the palm (closest fingertip-to-surface: {', '.join(near)})")
+    fingers = tuple(f for k, f in enumerate(h.fingers) if within[-1, k])
+    T_c = phase_duration(q_closed - q_open, h.velocity, h.acceleration)
+    return Closing(r, q_closed, T_c, u_g, dist, fingers, u, tips_pc, reason,
+                   float(d_tab.max()), (d_tab - r).min(axis=0))
+
+
+def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarray,
+                closing: Closing, t_i: float, ready: float, stop_t: float, r: float) -> float:
+    """Start of the closing move: grasp when the ball has stopped in the palm, not
+    before the open pose is reached, later if a fingertip would touch the ball
+    before intercept_t."""
+    if closing.u_grasp is None:
+        return max(ready, t_i)
+    T_c = closing.duration_s
+    want = max(ready, t_i + stop_t - closing.u_grasp * T_c)
+    if want >= t_i:
+        return want
+    # the ball can only meet a fingertip in the last stretch before the palm
+    speed = float(np.linalg.norm(flight.velocity(t_i)))
+    tt = np.arange(max(want, t_i - (closing.reach_m + r) / speed), t_i, 0.001)
+    if tt.size == 0:
+        return want
+    Tinv = np.linalg.inv(hand.palm_pose(q_open))
+    b_pc = (flight.position(tt) - C) @ Tinv[:3, :3].T + Tinv[:3, 3]
+    # candidate starts, earliest first; fingertips from the closing table (the more
+    # closed of the two neighbouring samples)
+    cands = np.linspace(want, t_i, _N_CAND)
+    n_tab = len(closing.u)
+    U = np.clip((tt[None, :] - cands[:, None]) / closing.duration_s, 0.0, 1.0)
+    k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
+    d = np.linalg.norm(closing.tips_pc[k] - b_pc[None, :, None, :], axis=-1)
+    ok = ~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2))
+    good = np.flatnonzero(ok)
+    return float(cands[good[0]]) if good.size else float(t_i)

@@ -1,0 +1,243 @@
+"""Where the palm meets the ball: the wrist's geometry in the reference frame (the catch
+point at the origin) and the closed-form intercept it allows (``planner.catch.plan``,
+step 1): flexion from the ball's direction, the time from its height above the palm
+plane, deviation and rail in closed form; the palm's position alone (misaligned) where
+no pose faces the ball; out of reach where neither exists."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.catch.arm import CatchJoints, zero_pose
+from planner.catch.flight import Flight
+from planner.catch.geometry import bracketed_secant, cross, rot, rot1, unit
+from planner.errors import PlannerError
+from planner.hand.model import HandModel
+
+MAX_MISALIGN_DEG = 80.0  # beyond this the ball grazes the palm: out of reach
+_N_SEARCH = 46  # samples of the ball's path in the intercept search
+
+
+@dataclass(frozen=True)
+class Intercept:
+    """The palm's pose meeting the ball: time, wrist flexion and deviation, rail; how far
+    the palm normal is off the ball's path; None or why the ball is out of reach."""
+
+    t: float
+    theta: float
+    dev: float
+    rail: float
+    misalign: float  # rad
+    aligned: bool
+    reason: str | None
+
+
+class Wrist:
+    """Wrist geometry in the reference frame at zero flexion, deviation and rail, checked
+    against the structure the closed-form intercept assumes (flexion across the rail,
+    then deviation about the palm normal, through one point)."""
+
+    def __init__(self, hand: HandModel, joints: CatchJoints) -> None:
+        h, q0 = hand, zero_pose(hand)
+        self.i_rail = joints.i_rail
+        spec = h.spec
+
+        def axis(name: str) -> np.ndarray:
+            T = h.frame_pose(q0, name)
+            return unit(T[:3, :3] @ np.array(spec.joint(name).axis, dtype=float))
+
+        self.e_f = axis("wrist_flex")
+        self.u_d = axis("wrist_dev")
+        self.e_r = axis("rail") if joints.i_rail is not None else self.e_f.copy()
+        self.W = h.frame_pose(q0, "wrist_flex")[:3, 3].copy()
+        D = h.frame_pose(q0, "wrist_dev")[:3, 3]
+        P = h.palm_pose(q0)
+        self.pc0, self.n0 = P[:3, 3].copy(), P[:3, 2].copy()
+        self.g0 = self.pc0 - self.W
+        ok = (np.linalg.norm(D - self.W) < 1e-9 and abs(abs(self.u_d @ self.n0) - 1.0) < 1e-9
+              and abs(self.e_f @ self.n0) < 1e-9 and abs(abs(self.e_r @ self.e_f) - 1.0) < 1e-9)
+        if not ok:
+            raise PlannerError("catch planner: the wrist must be flexion (across the rail) then "
+                               "deviation about the palm normal, through one point")
+        self.b0 = unit(np.cross(self.n0, self.e_r))
+        self._e_t = tuple(float(x) for x in self.e_f)
+        self._n0_t = tuple(float(x) for x in self.n0)
+        self._W_t = tuple(float(x) for x in self.W)
+        g0p = self.g0 - (self.g0 @ self.n0) * self.n0
+        self._dev_A = float(g0p @ self.b0)
+        self._dev_B = float(np.cross(self.u_d, g0p) @ self.b0)
+        self._g0n = float(self.g0 @ self.n0)
+        lo, hi = hand.lower, hand.upper
+        self.flex_lim = (float(lo[joints.i_flex]), float(hi[joints.i_flex]))
+        self.dev_lim = (float(lo[joints.i_dev]), float(hi[joints.i_dev]))
+        self.rail_lim = ((float(lo[joints.i_rail]), float(hi[joints.i_rail]))
+                         if joints.i_rail is not None else (0.0, 0.0))
+
+    def aligned(self, b: np.ndarray, v: np.ndarray, r: float):
+        """For path samples (positions b, velocities v, reference frame): flexion that
+        turns the normal against v, and h = height of the ball above the palm plane minus r."""
+        e, n0 = self.e_f, self.n0
+        m = -v - np.outer(-v @ e, e)
+        m = unit(m)
+        theta = np.arctan2(cross(np.broadcast_to(n0, m.shape), m) @ e, m @ n0)
+        s = rot(e, -theta, b - self.W)
+        return theta, s, s @ n0 - (self._g0n + r)
+
+    def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float
+                  ) -> tuple[float, np.ndarray, float]:
+        """``_aligned`` for one time (plain float arithmetic: no numpy call overhead)."""
+        bx, by, bz = (float(x) for x in flight.position(t) - C)
+        vx, vy, vz = (float(x) for x in flight.velocity(t))
+        ex, ey, ez = self._e_t
+        nx, ny, nz = self._n0_t
+        wx, wy, wz = self._W_t
+        d = -(vx * ex + vy * ey + vz * ez)
+        mx, my, mz = -vx - d * ex, -vy - d * ey, -vz - d * ez
+        mn = math.sqrt(mx * mx + my * my + mz * mz)
+        mx, my, mz = mx / mn, my / mn, mz / mn
+        cx, cy, cz = ny * mz - nz * my, nz * mx - nx * mz, nx * my - ny * mx
+        th = math.atan2(cx * ex + cy * ey + cz * ez, mx * nx + my * ny + mz * nz)
+        # s = Rot(e, -th) (b - W)
+        px, py, pz = bx - wx, by - wy, bz - wz
+        c, sn = math.cos(-th), math.sin(-th)
+        kx, ky, kz = ey * pz - ez * py, ez * px - ex * pz, ex * py - ey * px
+        kp = (px * ex + py * ey + pz * ez) * (1.0 - c)
+        s = np.array([px * c + kx * sn + kp * ex, py * c + ky * sn + kp * ey,
+                      pz * c + kz * sn + kp * ez])
+        h = float(s[0] * nx + s[1] * ny + s[2] * nz) - (self._g0n + r)
+        return th, s, h
+
+    def dev_rail(self, s: np.ndarray, r: float) -> tuple[float, float] | None:
+        """Deviation and rail that put palm_center + r n0 at ``s`` (zero-flexion frame)."""
+        rho = math.hypot(self._dev_A, self._dev_B)
+        phi = math.atan2(self._dev_B, self._dev_A)
+        x = float(s @ self.b0) / rho
+        if abs(x) > 1.0:
+            return None
+        best = None
+        lo, hi = self.dev_lim
+        for dev in (phi + math.acos(x), phi - math.acos(x)):
+            dev = math.atan2(math.sin(dev), math.cos(dev))
+            margin = min(dev - lo, hi - dev)
+            if margin < 0:
+                continue
+            rail = self.rail_for(s, dev, r)
+            if not (self.rail_lim[0] <= rail <= self.rail_lim[1]):
+                continue
+            if best is None or margin > best[0]:
+                best = (margin, dev, rail)
+        return None if best is None else (best[1], best[2])
+
+    def rail_for(self, s: np.ndarray, dev: float, r: float) -> float:
+        if self.i_rail is None:
+            return 0.0
+        a = rot1(self.u_d, dev, self.g0) + r * self.n0
+        return float((s - a) @ self.e_r)
+
+
+def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float) -> Intercept:
+    """Where and when the palm meets the ball near ``C`` (``planner.catch.plan``, step 1),
+    searched around ``t_c`` (the throw's time at the catch point)."""
+    t = np.linspace(max(0.0, t_c - 0.30), t_c + 0.15, _N_SEARCH)
+    b = flight.position(t) - C
+    v = flight.velocity(t)
+    _, _, hgt = wr.aligned(b, v, r)
+    # first crossing of the palm plane (+ before, - after)
+    down = np.flatnonzero((hgt[:-1] > 0) & (hgt[1:] <= 0))
+    if down.size:
+        k = int(down[0])
+        ta, tb, fa, fb = float(t[k]), float(t[k + 1]), float(hgt[k]), float(hgt[k + 1])
+        # h is smooth (~ the ball's height above the palm plane): a bracketed
+        # secant converges in 2-4 steps to 1e-8 m
+        ti, (th, s_vec, _) = bracketed_secant(
+            lambda tm: wr.aligned1(flight, C, tm, r), ta, tb, fa, fb)
+        sol = wr.dev_rail(s_vec, r)
+        if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
+            return Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
+    return _position_only(wr, flight, C, r, t)
+
+
+def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, tb: float,
+              fa: float, fb: float) -> float:
+    """Time in [ta, tb] at which the ball is ``rho`` from the flexion axis (secant)."""
+    e = wr.e_f
+
+    def f(t: float) -> tuple[float]:
+        w = flight.position(t) - C - wr.W
+        return (float(np.linalg.norm(w - (w @ e) * e)) - rho,)
+
+    return bracketed_secant(f, ta, tb, fa, fb)[0]
+
+
+def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
+                   t: np.ndarray) -> Intercept:
+    """No pose faces the ball exactly: put the palm point on the path with the
+    deviation at each candidate value and pick the least misaligned reachable one."""
+    b = flight.position(t) - C
+    e = wr.e_f
+    w = b - wr.W
+    w_p = w - np.outer(w @ e, e)
+    dist = np.linalg.norm(w_p, axis=1)
+    lo, hi = wr.dev_lim
+    best: Intercept | None = None
+    closest = (np.inf, None)
+    for dev in (lo, 0.5 * lo, 0.0, 0.5 * hi, hi):
+        a = rot1(wr.u_d, dev, wr.g0) + r * wr.n0
+        a_p = a - (a @ e) * e
+        rho = float(np.linalg.norm(a_p))
+        f = dist - rho
+        inward = np.flatnonzero((f[:-1] > 0) & (f[1:] <= 0))
+        k_near = int(np.argmin(np.abs(f)))
+        if abs(f[k_near]) < closest[0]:
+            closest = (float(abs(f[k_near])), float(t[k_near]))
+        if not inward.size:
+            continue
+        k = int(inward[0])
+        tk = _crossing(wr, flight, C, rho, float(t[k]), float(t[k + 1]), float(f[k]),
+                       float(f[k + 1]))
+        bk = flight.position(tk) - C
+        vk = flight.velocity(tk)
+        wk = bk - wr.W
+        wk_p = wk - (wk @ e) * e
+        th = float(math.atan2(np.cross(a_p, wk_p) @ e, a_p @ wk_p))
+        if not wr.flex_lim[0] <= th <= wr.flex_lim[1]:
+            continue
+        n = rot1(e, th, wr.n0)
+        mis = float(math.acos(np.clip(-(vk @ n) / np.linalg.norm(vk), -1.0, 1.0)))
+        rail = float((wk - rot1(e, th, a)) @ wr.e_r) if wr.i_rail is not None else 0.0
+        if not (wr.rail_lim[0] <= rail <= wr.rail_lim[1]):
+            continue
+        if mis > math.radians(MAX_MISALIGN_DEG):
+            continue
+        if best is None or mis < best.misalign:
+            best = Intercept(tk, th, dev, rail, mis, False, None)
+    if best is not None:
+        return best
+    # out of reach: keep the open hand at its reference pose, meet the ball where
+    # it passes closest
+    tk = closest[1] if closest[1] is not None else float(t[len(t) // 2])
+    return Intercept(tk, 0.0, 0.0, 0.0, 0.0, False,
+                     f"out of reach: no wrist/rail pose puts the palm on the ball's path "
+                     f"facing it (closest {1000 * closest[0]:.0f} mm off the palm's circle)")
+
+
+def closest_time(flight: Flight, C: np.ndarray) -> float:
+    """When the ball passes closest to ``C`` (a throw that never reaches its x)."""
+    t = np.linspace(0.0, 3.0, 601)
+    d = np.linalg.norm(flight.position(t) - C, axis=1)
+    return float(t[int(np.argmin(d))])
+
+
+def refine_time(flight: Flight, C: np.ndarray, P: np.ndarray, t: float) -> float:
+    """The time near ``t`` at which the ball passes closest to ``P`` (Newton steps)."""
+    for _ in range(3):
+        b = flight.position(t) - C
+        v = flight.velocity(t)
+        step = float((P - b) @ v / (v @ v))
+        t += step
+        if abs(step) < 1e-9:
+            break
+    return float(t)
