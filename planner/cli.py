@@ -83,6 +83,8 @@ def _build_parser() -> argparse.ArgumentParser:
     h.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
     h.add_argument("--list", action="store_true", help="list the shipped hands")
     h.add_argument("--urdf", metavar="PATH", help="write the hand's URDF here ('-' for stdout)")
+    h.add_argument("--strength", action="store_true",
+                   help="the hand's strength from its model beside the seed's requirements")
     h.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
     pl = sub.add_parser("play", help="plan a MIDI song")
@@ -172,6 +174,10 @@ def _cmd_hand(a: argparse.Namespace) -> int:
     from planner.hand.model import load_hand
     from planner.hand.spec import list_hands
 
+    if a.strength and (a.list or a.urdf):
+        from planner.errors import InputError
+
+        raise InputError("--strength cannot be combined with --list or --urdf")
     if a.list:
         from planner.hand.spec import load_hand_spec
 
@@ -194,6 +200,12 @@ def _cmd_hand(a: argparse.Namespace) -> int:
         if a.json:
             print(json.dumps({"command": "hand", "name": hand.name, "urdf": a.urdf,
                               "urdf_sha256": hand.urdf_sha256}))
+        return 0
+    if a.strength:
+        from planner.hand.strength import hand_strength
+
+        st = hand_strength(hand)
+        print(json.dumps(st.to_dict()) if a.json else st.summary())
         return 0
     print(json.dumps(hand.to_dict()) if a.json else hand.summary())
     return 0
