@@ -28,6 +28,7 @@ from planner.play.costs import (
     ONSET_TOL_S,
     RAIL_STEP_M,
     TIE_DX_PER_M,
+    TIE_RAIL_PER_M,
     Costs,
     Prev,
     Skip,
@@ -217,6 +218,7 @@ class FingeringProblem(Costs):
         new = sorted(new, key=lambda n: self.notes[n].pitch)
         for size in range(min(len(new), len(self.atlas.hand.fingers)), 0, -1):
             layer: dict[State, tuple[float, State | None]] = {}
+            self._shape_best: dict[tuple, float] = {}  # the cheapest state of each shape
             # (of fewer notes, those next to each other in pitch: one hand's span)
             for i in range(len(new) - size + 1):
                 self._extend(layer, prev, t, new[i:i + size])
@@ -273,6 +275,8 @@ class FingeringProblem(Costs):
 
     def _try(self, layer, ctx: Prev | None, cost: float, kept, new: dict[int, str],
              t: float) -> None:
+        """Every transition from ``ctx`` that strikes ``new`` (note -> finger) and keeps
+        ``kept`` held, into ``layer``."""
         order_of, pitch = self._order, self.pitch
         sounding = sorted([*kept, *new.items()], key=lambda mf: pitch[mf[0]])
         order = [order_of[f] for _, f in sounding]
@@ -280,19 +284,21 @@ class FingeringProblem(Costs):
             return
         p = None if ctx is None else ctx.state
         sounding_t = tuple(sorted(sounding))
+        rails = self._moves_to(self._candidates(new), p)
+        if p is not None:
+            # (the pruning keeps one state per shape, the cheapest: a transition that
+            # cannot cost less than the cheapest state of its shape so far is not weighed)
+            best, per_step = self._shape_best, TIE_RAIL_PER_M * RAIL_STEP_M
+            rails = [(r, tie) for r, tie in rails if cost + tie + per_step * abs(r - p.rail_i)
+                     <= best.get((r, sounding_t), math.inf)]
+            if not rails:
+                return
         busy = {f for _, f in sounding}
-        # fingers that left their keys within RECENT_S are still over them: the new
-        # fingers keep the hand's order with them too (no finger crosses another)
-        left = [] if p is None else [(m, f) for m, f, r in ctx.fresh
-                                     if f not in busy and r == p.rail_i]
-        near = sorted([*sounding, *left], key=lambda mf: pitch[mf[0]])
-        # (the thumb on a white key presses in front of the black keys, 30 mm and more
-        # before the long fingers' tips: they pass behind it, it passes under them)
-        order_near = [order_of[f] for m, f in near
-                      if not (f == THUMB and not kb.is_black(pitch[m]))]
-        crossing = any(b <= a for a, b in itertools.pairwise(order_near))
+        crossing = p is not None and any(r == p.rail_i for r, _ in rails) and \
+            self._crosses(ctx, sounding, busy)
         recent = None
-        for rail_i, tie in self._moves_to(self._candidates(new), p):
+        shape_best = self._shape_best
+        for rail_i, tie in rails:
             if crossing and rail_i == p.rail_i:
                 continue
             if p is None:
@@ -310,6 +316,22 @@ class FingeringProblem(Costs):
             old = layer.get(s)
             if old is None or total < old[0]:
                 layer[s] = (total, p)
+                shape = (rail_i, sounding_t)
+                if total < shape_best.get(shape, math.inf):
+                    shape_best[shape] = total
+
+    def _crosses(self, ctx: Prev, sounding, busy: set[str]) -> bool:
+        """Whether the fingers sounding, with those that left their keys within
+        RECENT_S (still over them), are out of the hand's order: a finger would cross
+        another without moving the rail."""
+        order_of, pitch, rail_i = self._order, self.pitch, ctx.state.rail_i
+        left = [(m, f) for m, f, r in ctx.fresh if f not in busy and r == rail_i]
+        near = sorted([*sounding, *left], key=lambda mf: pitch[mf[0]])
+        # (the thumb on a white key presses in front of the black keys, 30 mm and more
+        # before the long fingers' tips: they pass behind it, it passes under them)
+        order_near = [order_of[f] for m, f in near
+                      if not (f == THUMB and not kb.is_black(pitch[m]))]
+        return any(b <= a for a, b in itertools.pairwise(order_near))
 
     @staticmethod
     def _moves_to(cands, p: State | None):
