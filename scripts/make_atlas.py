@@ -3,9 +3,14 @@ crossing-height poses over every key, at every sampled place relative to the rai
 where the planner loads it from (``planner/tables/atlas-<URDF hash>.npz``). Without it
 the planner solves the entries it needs when it first needs them (single-finger IK,
 about 1 ms a pose); the table saves that time and holds exactly what the solver gives.
-Run from the repository root after changing a hand, the IK or the atlas:
+It also writes the key crossings of every entry's descents and lifts
+(``planner.play.moves``: ``planner/tables/crossings-<URDF hash>.npz``), which the
+planner would otherwise find by forward kinematics when it first needs them. Run from
+the repository root after changing a hand, the IK, the atlas or the moves:
 
-    python scripts/make_atlas.py [--hand NAME]
+    python scripts/make_atlas.py [--hand NAME] [--crossings-only]
+
+(``--crossings-only``: keep the shipped atlas, write the crossings of its entries.)
 """
 
 import argparse
@@ -17,22 +22,33 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner.hand.model import load_hand
 from planner.play.atlas import Atlas, table_path
+from planner.play.moves import Moves, crossings_path
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hand", default="default")
+    ap.add_argument("--crossings-only", action="store_true",
+                    help="keep the shipped atlas; write the crossings of its entries")
     a = ap.parse_args()
     hand = load_hand(a.hand)
     path = table_path(hand.urdf_sha256)
     atlas = Atlas(hand)
-    atlas._entries.clear()  # (solved afresh, not read back from an older table)
     t0 = time.perf_counter()
+    if not a.crossings_only:
+        atlas._entries.clear()  # (solved afresh, not read back from an older table)
     n = atlas.solve_all()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atlas.save(path)
-    print(f"{path}: {n} entries of {len(atlas._entries)} samples, {atlas.solves} IK solves, "
-          f"{time.perf_counter() - t0:.1f} s")
+    if not a.crossings_only:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atlas.save(path)
+        print(f"{path}: {n} entries of {len(atlas._entries)} samples, {atlas.solves} IK "
+              f"solves, {time.perf_counter() - t0:.1f} s")
+    t1 = time.perf_counter()
+    moves = Moves(hand, atlas)
+    moves._crossings.clear()  # (found afresh, not read back from an older table)
+    out = crossings_path(hand.urdf_sha256)
+    moves.save_crossings(out)
+    print(f"{out}: the key crossings of {n} entries, {time.perf_counter() - t1:.1f} s")
     return 0
 
 

@@ -20,8 +20,10 @@ part-way (``up_s``). From them:
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -31,11 +33,13 @@ from planner.music import keyboard as kb
 from planner.play.atlas import (
     CLEARANCE_M,
     PATH_SAMPLES,
+    TABLE_DIR,
     TIP_RADIUS_M,
     Atlas,
     AtlasEntry,
 )
-from planner.play.profile import Move, straight_move
+from planner.play.atlas import STEP_M as ATLAS_STEP_M
+from planner.play.profile import LIMIT_FRACTION, Move, straight_move
 
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
 HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
@@ -58,8 +62,14 @@ class Timed:
         return self.move.duration_s
 
 
+_ENDS = ("high", "hover", "rise")  # the poses a descent starts from and a lift ends at
+
+
 class Moves:
-    """Timed moves of one hand's fingers over its atlas (memoised per entry)."""
+    """Timed moves of one hand's fingers over its atlas (memoised per entry). The key
+    crossings of every entry's descents and lifts (``_cross``: forward kinematics, a few
+    evaluations each) are shipped beside the atlas (``crossings_path``, written by
+    ``scripts/make_atlas.py``); without the table they are found when first needed."""
 
     def __init__(self, hand: HandModel, atlas: Atlas) -> None:
         self.hand = hand
@@ -68,6 +78,54 @@ class Moves:
         self._lat: dict = {}
         self.descend = lru_cache(maxsize=None)(self._descend)
         self.lift = lru_cache(maxsize=None)(self._lift)
+        self._crossings: dict[tuple[str, int, int], np.ndarray] = {}
+        self._load_crossings(crossings_path(hand.urdf_sha256))
+
+    # ------------------------------------------------------------------ the table
+    def _entry_key(self, e: AtlasEntry) -> tuple[str, int, int]:
+        return (e.finger, e.pitch_class,
+                round((e.dx_m - self.atlas.natural_dx[e.finger]) / ATLAS_STEP_M))
+
+    def _params(self) -> str:
+        """What the crossings depend on besides the atlas (a table made otherwise is not
+        used): the atlas's own parameters, the search's tolerance, the joints' limits."""
+        h = self.hand
+        return json.dumps({"atlas": self.atlas._params(), "cross_tol": CROSS_TOL,
+                           "limit_fraction": LIMIT_FRACTION,
+                           "velocity": [round(float(x), 12) for x in h.velocity],
+                           "acceleration": [round(float(x), 12) for x in h.acceleration]},
+                          sort_keys=True)
+
+    def crossing_table(self) -> tuple[np.ndarray, np.ndarray]:
+        """(keys, times) of every solved entry: the key crossings of its descents from,
+        and lifts to, each of ``_ENDS`` (s after the move's start)."""
+        keys, times = [], []
+        for key, e in sorted(self.atlas._entries.items(), key=lambda kv: (
+                self.hand.fingers.index(kv[0][0]), kv[0][1], kv[0][2])):
+            if e is None:
+                continue
+            keys.append((self.hand.fingers.index(key[0]), key[1], key[2]))
+            times.append([self.descend(e, p).cross_s for p in _ENDS]
+                         + [self.lift(e, p).cross_s for p in _ENDS])
+        return np.array(keys, dtype=np.int16).reshape(-1, 3), np.array(times).reshape(-1, 6)
+
+    def save_crossings(self, path: Path) -> None:
+        keys, times = self.crossing_table()
+        with open(path, "wb") as fh:
+            np.savez_compressed(fh, key=keys, cross_s=times, params=np.array(self._params()))
+
+    def _load_crossings(self, path: Path) -> None:
+        if not path.exists():
+            return
+        with np.load(path, allow_pickle=False) as z:
+            if str(z["params"]) != self._params():
+                return
+            for (fi, pc, k), row in zip(z["key"], z["cross_s"]):
+                self._crossings[(self.hand.fingers[int(fi)], int(pc), int(k))] = row
+
+    def _shipped(self, e: AtlasEntry, column: int) -> float | None:
+        row = self._crossings.get(self._entry_key(e))
+        return None if row is None else float(row[column])
 
     def _move(self, finger: str, qa: np.ndarray, qb: np.ndarray) -> Move:
         js = self.js[finger]
@@ -105,13 +163,15 @@ class Moves:
         """From ``start`` ("high", "hover" or "rise") down to the press pose."""
         qa = getattr(e, start)
         m = self._move(e.finger, qa, e.press)
-        return Timed(m, self._cross(e, qa, e.press, m, True))
+        c = self._shipped(e, _ENDS.index(start))
+        return Timed(m, self._cross(e, qa, e.press, m, True) if c is None else c)
 
     def _lift(self, e: AtlasEntry, end: str) -> Timed:
         """From the press pose up to ``end`` ("high", "hover" or "rise")."""
         qb = getattr(e, end)
         m = self._move(e.finger, e.press, qb)
-        return Timed(m, self._cross(e, e.press, qb, m, False))
+        c = self._shipped(e, 3 + _ENDS.index(end))
+        return Timed(m, self._cross(e, e.press, qb, m, False) if c is None else c)
 
     def across(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
         """The finger from high over one key to high over another; None when the
@@ -250,3 +310,8 @@ def _crossing(g, g0: float, g1: float, tol: float) -> float:
             if run >= 2:
                 glo *= 0.5
     return lo if glo >= 0.0 else hi
+
+
+def crossings_path(urdf_sha256: str) -> Path:
+    """Where the key crossings of a hand's atlas are shipped (beside the atlas)."""
+    return TABLE_DIR / f"crossings-{urdf_sha256[:16]}.npz"
