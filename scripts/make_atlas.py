@@ -3,14 +3,16 @@ crossing-height poses over every key, at every sampled place relative to the rai
 where the planner loads it from (``planner/tables/atlas-<URDF hash>.npz``). Without it
 the planner solves the entries it needs when it first needs them (single-finger IK,
 about 1 ms a pose); the table saves that time and holds exactly what the solver gives.
-It also writes the key crossings of every entry's descents and lifts
-(``planner.play.moves``: ``planner/tables/crossings-<URDF hash>.npz``), which the
-planner would otherwise find by forward kinematics when it first needs them. Run from
-the repository root after changing a hand, the IK, the atlas or the moves:
+It also writes the hand's move table (``planner.play.movetable``: every entry's key
+crossings, which pairs of entries a finger moves between clear of the keys, which it
+can hold a key down between while the rail moves: ``planner/tables/moves-<URDF
+hash>.npz``), which the planner would otherwise find by forward kinematics when it first
+needs them. Run from the repository root after changing a hand, the IK, the atlas or
+the moves:
 
-    python scripts/make_atlas.py [--hand NAME] [--crossings-only]
+    python scripts/make_atlas.py [--hand NAME] [--moves-only]
 
-(``--crossings-only``: keep the shipped atlas, write the crossings of its entries.)
+(``--moves-only``: keep the shipped atlas, write the move table of its entries.)
 """
 
 import argparse
@@ -22,33 +24,35 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner.hand.model import load_hand
 from planner.play.atlas import Atlas, table_path
-from planner.play.moves import Moves, crossings_path
+from planner.play.moves import Moves
+from planner.play.movetable import MoveTable, make_table
+from planner.play.movetable import table_path as moves_path
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hand", default="default")
-    ap.add_argument("--crossings-only", action="store_true",
-                    help="keep the shipped atlas; write the crossings of its entries")
+    ap.add_argument("--moves-only", action="store_true",
+                    help="keep the shipped atlas; write the move table of its entries")
     a = ap.parse_args()
     hand = load_hand(a.hand)
     path = table_path(hand.urdf_sha256)
     atlas = Atlas(hand)
     t0 = time.perf_counter()
-    if not a.crossings_only:
+    if not a.moves_only:
         atlas._entries.clear()  # (solved afresh, not read back from an older table)
     n = atlas.solve_all()
-    if not a.crossings_only:
+    if not a.moves_only:
         path.parent.mkdir(parents=True, exist_ok=True)
         atlas.save(path)
         print(f"{path}: {n} entries of {len(atlas._entries)} samples, {atlas.solves} IK "
               f"solves, {time.perf_counter() - t0:.1f} s")
     t1 = time.perf_counter()
     moves = Moves(hand, atlas)
-    moves._crossings.clear()  # (found afresh, not read back from an older table)
-    out = crossings_path(hand.urdf_sha256)
-    moves.save_crossings(out)
-    print(f"{out}: the key crossings of {n} entries, {time.perf_counter() - t1:.1f} s")
+    moves.table = MoveTable(hand.fingers, atlas.natural_dx)  # (found afresh, not read back)
+    out = moves_path(hand.urdf_sha256)
+    make_table(moves, out, moves.params())
+    print(f"{out}: the moves of {n} entries, {time.perf_counter() - t1:.1f} s")
     return 0
 
 

@@ -1,14 +1,16 @@
-"""planner.play.moves: the shipped key crossings are what the forward kinematics finds,
-and a table made with other parameters is not used."""
+"""planner.play.moves and its shipped table (planner.play.movetable): what the table
+says is what the forward kinematics finds, and a table made otherwise is not used."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from planner.hand.chain import FrameChain
 from planner.hand.model import load_hand
 from planner.play.atlas import Atlas
-from planner.play.moves import Moves, crossings_path
+from planner.play.moves import Moves
+from planner.play.movetable import MoveTable, make_table, table_path
 
 
 @pytest.fixture(scope="module")
@@ -17,39 +19,86 @@ def moves():
     return Moves(hand, Atlas(hand))
 
 
-def test_the_default_hand_ships_its_crossings(moves):
-    assert crossings_path(moves.hand.urdf_sha256).exists()
-    assert len(moves._crossings) > 1000
+@pytest.fixture(scope="module")
+def by_fk(moves):
+    """The same hand's moves with no table: everything found by forward kinematics."""
+    m = Moves(moves.hand, moves.atlas)
+    m.table = MoveTable(moves.hand.fingers, moves.atlas.natural_dx)
+    return m
 
 
-def test_shipped_crossings_equal_the_forward_kinematics(moves):
+def _entries(moves):
+    return [e for e in moves.atlas._entries.values() if e is not None]
+
+
+def test_the_default_hand_ships_its_move_table(moves):
+    assert table_path(moves.hand.urdf_sha256).exists()
+    assert len(moves.table.crossings) == len(_entries(moves)) > 1000
+
+
+def test_frame_chain_is_pinocchio_forward_kinematics(moves):
+    h = moves.hand
+    rng = np.random.default_rng(1)
+    Q = h.apply_couplings(h.lower + (h.upper - h.lower) * rng.random((40, h.n)))
+    for i, f in enumerate(h.fingers):
+        ref = np.array([h.tip_position(q, i) for q in Q])
+        np.testing.assert_allclose(FrameChain(h, f"{f}_tip").positions(Q), ref, atol=1e-14)
+
+
+def test_shipped_crossings_equal_the_forward_kinematics(moves, by_fk):
     rng = np.random.default_rng(3)
-    keys = list(moves._crossings)
-    for i in rng.choice(len(keys), 25, replace=False):
-        f, pc, k = keys[i]
-        e = moves.atlas.entry_at(f, pc, k)
-        row = moves._crossings[keys[i]]
-        for c, start in enumerate(("high", "hover", "rise")):
-            qa = getattr(e, start)
-            m = moves._move(f, qa, e.press)
-            assert row[c] == moves._cross(e, qa, e.press, m, True)
-            qb = getattr(e, start)
-            m = moves._move(f, e.press, qb)
-            assert row[3 + c] == moves._cross(e, e.press, qb, m, False)
-        # and a crossing lies inside its move
+    E = _entries(moves)
+    for i in rng.choice(len(E), 25, replace=False):
+        e = E[i]
+        for p in ("high", "hover", "rise"):
+            assert moves.descend(e, p).cross_s == by_fk.descend(e, p).cross_s
+            assert moves.lift(e, p).cross_s == by_fk.lift(e, p).cross_s
         d = moves.descend(e, "high")
         assert 0.0 < d.cross_s <= d.duration_s
 
 
+def test_shipped_paths_across_equal_the_forward_kinematics(moves, by_fk):
+    rng = np.random.default_rng(4)
+    E = _entries(moves)
+    seen = {True: 0, False: 0}
+    for _ in range(300):
+        a = E[rng.integers(len(E))]
+        mine = [e for e in E if e.finger == a.finger]
+        b = mine[rng.integers(len(mine))]
+        fk = by_fk.across(a, b) is not None
+        assert moves.table.across_clear(a, b) is fk
+        seen[fk] += 1
+    assert seen[True] and seen[False]  # (both answers occur: the test can fail)
+
+
+def test_shipped_follows_equal_the_forward_kinematics(moves, by_fk):
+    rng = np.random.default_rng(5)
+    E = _entries(moves)
+    seen = {True: 0, False: 0}
+    for _ in range(300):
+        a = E[rng.integers(len(E))]
+        same_key = [e for e in E if e.finger == a.finger and e.pitch_class == a.pitch_class]
+        b = same_key[rng.integers(len(same_key))]
+        fk = by_fk._follow(a, b) is not None
+        assert moves.table.follow_clear(a, b) is fk
+        seen[fk] += 1
+    assert seen[True] and seen[False]
+
+
 def test_a_table_of_other_parameters_is_not_used(moves, tmp_path):
-    keys, times = moves.crossing_table()
-    path = tmp_path / "crossings.npz"
-    np.savez_compressed(path, key=keys, cross_s=times + 1.0,
-                        params=np.array(moves._params().replace("cross_tol", "tol")))
-    fresh = Moves.__new__(Moves)
-    fresh.hand, fresh.atlas, fresh._crossings = moves.hand, moves.atlas, {}
-    fresh._load_crossings(path)
-    assert fresh._crossings == {}
-    np.savez_compressed(path, key=keys, cross_s=times, params=np.array(moves._params()))
-    fresh._load_crossings(path)
-    assert len(fresh._crossings) == len(keys)
+    hand = load_hand("default")
+    small = Moves(hand, Atlas(hand))
+    keep = {k: e for k, e in small.atlas._entries.items()
+            if e is not None and k[0] == "index" and k[1] in (0, 1)}
+    small.atlas._entries = keep
+    small.table = MoveTable(hand.fingers, small.atlas.natural_dx)
+    path = tmp_path / "moves.npz"
+    assert make_table(small, path, small.params()) == len(keep)
+    other = MoveTable(hand.fingers, small.atlas.natural_dx)
+    other.load(path, small.params().replace("cross_tol", "tol"))
+    assert other.crossings == {}
+    same = MoveTable(hand.fingers, small.atlas.natural_dx)
+    same.load(path, small.params())
+    assert len(same.crossings) == len(keep)
+    e = next(iter(keep.values()))
+    assert same.crossing(e, 0) == moves.descend(e, "high").cross_s

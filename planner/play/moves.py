@@ -23,7 +23,6 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
@@ -33,12 +32,11 @@ from planner.music import keyboard as kb
 from planner.play.atlas import (
     CLEARANCE_M,
     PATH_SAMPLES,
-    TABLE_DIR,
     TIP_RADIUS_M,
     Atlas,
     AtlasEntry,
 )
-from planner.play.atlas import STEP_M as ATLAS_STEP_M
+from planner.play.movetable import ENDS, MoveTable, table_path
 from planner.play.profile import LIMIT_FRACTION, Move, straight_move
 
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
@@ -62,14 +60,11 @@ class Timed:
         return self.move.duration_s
 
 
-_ENDS = ("high", "hover", "rise")  # the poses a descent starts from and a lift ends at
-
-
 class Moves:
-    """Timed moves of one hand's fingers over its atlas (memoised per entry). The key
-    crossings of every entry's descents and lifts (``_cross``: forward kinematics, a few
-    evaluations each) are shipped beside the atlas (``crossings_path``, written by
-    ``scripts/make_atlas.py``); without the table they are found when first needed."""
+    """Timed moves of one hand's fingers over its atlas (memoised per entry). What
+    forward kinematics decides (key crossings, clear paths across and while following a
+    key) is read from the hand's shipped move table (``planner.play.movetable``) when
+    there is one, and found when first needed otherwise."""
 
     def __init__(self, hand: HandModel, atlas: Atlas) -> None:
         self.hand = hand
@@ -78,54 +73,21 @@ class Moves:
         self._lat: dict = {}
         self.descend = lru_cache(maxsize=None)(self._descend)
         self.lift = lru_cache(maxsize=None)(self._lift)
-        self._crossings: dict[tuple[str, int, int], np.ndarray] = {}
-        self._load_crossings(crossings_path(hand.urdf_sha256))
+        self.table = MoveTable(hand.fingers, atlas.natural_dx)
+        self.table.load(table_path(hand.urdf_sha256), self.params())
 
-    # ------------------------------------------------------------------ the table
-    def _entry_key(self, e: AtlasEntry) -> tuple[str, int, int]:
-        return (e.finger, e.pitch_class,
-                round((e.dx_m - self.atlas.natural_dx[e.finger]) / ATLAS_STEP_M))
-
-    def _params(self) -> str:
-        """What the crossings depend on besides the atlas (a table made otherwise is not
-        used): the atlas's own parameters, the search's tolerance, the joints' limits."""
+    def params(self) -> str:
+        """What the move table depends on besides the atlas (a table made otherwise is not
+        used): the atlas's own parameters, the tests' samples and margins, the search's
+        tolerance, the joints' limits."""
         h = self.hand
         return json.dumps({"atlas": self.atlas._params(), "cross_tol": CROSS_TOL,
-                           "limit_fraction": LIMIT_FRACTION,
+                           "limit_fraction": LIMIT_FRACTION, "path_samples": PATH_SAMPLES,
+                           "across_samples": ACROSS_SAMPLES, "high_safe_z_m": HIGH_SAFE_Z_M,
+                           "hold_margin_m": HOLD_MARGIN_M,
                            "velocity": [round(float(x), 12) for x in h.velocity],
                            "acceleration": [round(float(x), 12) for x in h.acceleration]},
                           sort_keys=True)
-
-    def crossing_table(self) -> tuple[np.ndarray, np.ndarray]:
-        """(keys, times) of every solved entry: the key crossings of its descents from,
-        and lifts to, each of ``_ENDS`` (s after the move's start)."""
-        keys, times = [], []
-        for key, e in sorted(self.atlas._entries.items(), key=lambda kv: (
-                self.hand.fingers.index(kv[0][0]), kv[0][1], kv[0][2])):
-            if e is None:
-                continue
-            keys.append((self.hand.fingers.index(key[0]), key[1], key[2]))
-            times.append([self.descend(e, p).cross_s for p in _ENDS]
-                         + [self.lift(e, p).cross_s for p in _ENDS])
-        return np.array(keys, dtype=np.int16).reshape(-1, 3), np.array(times).reshape(-1, 6)
-
-    def save_crossings(self, path: Path) -> None:
-        keys, times = self.crossing_table()
-        with open(path, "wb") as fh:
-            np.savez_compressed(fh, key=keys, cross_s=times, params=np.array(self._params()))
-
-    def _load_crossings(self, path: Path) -> None:
-        if not path.exists():
-            return
-        with np.load(path, allow_pickle=False) as z:
-            if str(z["params"]) != self._params():
-                return
-            for (fi, pc, k), row in zip(z["key"], z["cross_s"]):
-                self._crossings[(self.hand.fingers[int(fi)], int(pc), int(k))] = row
-
-    def _shipped(self, e: AtlasEntry, column: int) -> float | None:
-        row = self._crossings.get(self._entry_key(e))
-        return None if row is None else float(row[column])
 
     def _move(self, finger: str, qa: np.ndarray, qb: np.ndarray) -> Move:
         js = self.js[finger]
@@ -163,14 +125,14 @@ class Moves:
         """From ``start`` ("high", "hover" or "rise") down to the press pose."""
         qa = getattr(e, start)
         m = self._move(e.finger, qa, e.press)
-        c = self._shipped(e, _ENDS.index(start))
+        c = self.table.crossing(e, ENDS.index(start))
         return Timed(m, self._cross(e, qa, e.press, m, True) if c is None else c)
 
     def _lift(self, e: AtlasEntry, end: str) -> Timed:
         """From the press pose up to ``end`` ("high", "hover" or "rise")."""
         qb = getattr(e, end)
         m = self._move(e.finger, e.press, qb)
-        c = self._shipped(e, 3 + _ENDS.index(end))
+        c = self.table.crossing(e, 3 + ENDS.index(end))
         return Timed(m, self._cross(e, e.press, qb, m, False) if c is None else c)
 
     def across(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
@@ -179,14 +141,16 @@ class Moves:
         top, wherever the rail is: the arm may have moved since the finger rose)."""
         key = (a.finger, id(a), id(b))
         if key not in self._lat:
-            f = self.hand.fingers.index(a.finger)
-            q = self.atlas.base.copy()
-            js = self.js[a.finger]
-            ok = True
-            for s in ACROSS_SAMPLES:
-                q[js] = a.high + s * (b.high - a.high)
-                z = self.hand.tip_position(self.hand.apply_couplings(q), f)[2]
-                ok &= bool(z >= HIGH_SAFE_Z_M)
+            ok = self.table.across_clear(a, b)
+            if ok is None:
+                f = self.hand.fingers.index(a.finger)
+                q = self.atlas.base.copy()
+                js = self.js[a.finger]
+                ok = True
+                for s in ACROSS_SAMPLES:
+                    q[js] = a.high + s * (b.high - a.high)
+                    z = self.hand.tip_position(self.hand.apply_couplings(q), f)[2]
+                    ok &= bool(z >= HIGH_SAFE_Z_M)
             self._lat[key] = self._move(a.finger, a.high, b.high) if ok else None
         return self._lat[key]
 
@@ -226,8 +190,11 @@ class Moves:
         h, r = self.hand, self.atlas.rail
         if r is None:
             return None
-        k = kb.key(60 + a.pitch_class)
         qa, qb, move, cols = self._follow_ends(a, b)
+        ok = self.table.follow_clear(a, b)
+        if ok is not None:
+            return move if ok else None
+        k = kb.key(60 + a.pitch_class)
         f = h.fingers.index(a.finger)
         q = qa.copy()
         tips = np.empty((PATH_SAMPLES, 3))
@@ -311,7 +278,3 @@ def _crossing(g, g0: float, g1: float, tol: float) -> float:
                 glo *= 0.5
     return lo if glo >= 0.0 else hi
 
-
-def crossings_path(urdf_sha256: str) -> Path:
-    """Where the key crossings of a hand's atlas are shipped (beside the atlas)."""
-    return TABLE_DIR / f"crossings-{urdf_sha256[:16]}.npz"

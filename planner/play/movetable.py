@@ -1,0 +1,202 @@
+"""What ``planner.play.moves`` finds by forward kinematics, for every atlas entry and pair
+of entries, found once per hand and shipped beside the atlas
+(``planner/tables/moves-<URDF hash>.npz``, written by ``scripts/make_atlas.py``):
+
+* the key crossings of every entry's descents (from high, hover, rise) and lifts (to
+  the same), ``Moves._cross``;
+* for every pair of one finger's entries, whether its move across at crossing height
+  is clear of the keys (``Moves.across``);
+* for every pair of one finger's entries on one key (two places relative to the rail),
+  whether the finger can hold the key down while the rail carries it from one to the
+  other (``Moves.follow``).
+
+A planner that meets a hand without a table finds each of these when first needed
+(about 4 000 pairs a song, most of a cold plan's time: ``docs/play-second-design.md``).
+The pair tests are the very tests of ``Moves`` on the very samples, evaluated for all
+pairs at once with ``planner.hand.chain.FrameChain`` (the same rigid transforms as
+Pinocchio's, to 2e-16 m); ``tests/test_play_moves.py`` checks them against
+``Moves``' own forward kinematics. A table made with other parameters is not used.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from planner.hand.chain import FrameChain
+from planner.ik import surfaces_under
+from planner.music import keyboard as kb
+from planner.play.atlas import PATH_SAMPLES, STEP_M, TABLE_DIR, TIP_RADIUS_M, AtlasEntry
+
+ENDS = ("high", "hover", "rise")  # the poses a descent starts from and a lift ends at
+_BATCH = 60000  # configurations evaluated at once while the table is made
+
+
+def table_path(urdf_sha256: str) -> Path:
+    """Where the move table of a hand's atlas is shipped (beside the atlas)."""
+    return TABLE_DIR / f"moves-{urdf_sha256[:16]}.npz"
+
+
+class MoveTable:
+    """The shipped answers (empty when there is no table for the hand, or it was made
+    with other parameters); ``None`` from a lookup: not in the table."""
+
+    def __init__(self, fingers: tuple[str, ...], natural_dx: dict[str, float]) -> None:
+        self.fingers = fingers
+        self.natural_dx = natural_dx
+        self.crossings: dict[tuple[str, int, int], np.ndarray] = {}
+        self._index: dict[tuple[str, int, int], tuple[int, int]] = {}  # in finger, in key
+        self._across: dict[str, np.ndarray] = {}
+        self._follow: dict[tuple[str, int], np.ndarray] = {}
+
+    def key(self, e: AtlasEntry) -> tuple[str, int, int]:
+        return (e.finger, e.pitch_class, round((e.dx_m - self.natural_dx[e.finger]) / STEP_M))
+
+    def crossing(self, e: AtlasEntry, column: int) -> float | None:
+        row = self.crossings.get(self.key(e))
+        return None if row is None else float(row[column])
+
+    def across_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool | None:
+        ia, ib = self._index.get(self.key(a)), self._index.get(self.key(b))
+        if ia is None or ib is None or a.finger not in self._across:
+            return None
+        return bool(self._across[a.finger][ia[0], ib[0]])
+
+    def follow_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool | None:
+        ia, ib = self._index.get(self.key(a)), self._index.get(self.key(b))
+        m = self._follow.get((a.finger, a.pitch_class))
+        if ia is None or ib is None or m is None or a.pitch_class != b.pitch_class:
+            return None
+        return bool(m[ia[1], ib[1]])
+
+    # ------------------------------------------------------------------ file
+    def load(self, path: Path, params: str) -> None:
+        if not path.exists():
+            return
+        with np.load(path, allow_pickle=False) as z:
+            if str(z["params"]) != params:
+                return
+            keys = [(self.fingers[int(f)], int(pc), int(k)) for f, pc, k in z["key"]]
+            for key, row in zip(keys, z["cross_s"]):
+                self.crossings[key] = row
+            self._index = _indices(keys)
+            for f in self.fingers:
+                n = sum(k[0] == f for k in keys)
+                if f"across_{f}" in z:
+                    self._across[f] = _unpack(z[f"across_{f}"], n)
+                for pc in range(12):
+                    name = f"follow_{f}_{pc}"
+                    if name in z:
+                        m = sum(k[0] == f and k[1] == pc for k in keys)
+                        self._follow[(f, pc)] = _unpack(z[name], m)
+
+
+def _indices(keys) -> dict[tuple[str, int, int], tuple[int, int]]:
+    """Each entry's place among its finger's entries and among its finger's on its key."""
+    out, per_f, per_key = {}, {}, {}
+    for f, pc, k in keys:
+        out[(f, pc, k)] = (per_f.get(f, 0), per_key.get((f, pc), 0))
+        per_f[f] = per_f.get(f, 0) + 1
+        per_key[(f, pc)] = per_key.get((f, pc), 0) + 1
+    return out
+
+
+def _unpack(bits: np.ndarray, n: int) -> np.ndarray:
+    return np.unpackbits(bits, count=n * n).astype(bool).reshape(n, n)
+
+
+# ---------------------------------------------------------------------- making it
+def make_table(moves, path: Path, params: str) -> int:
+    """Find every answer for ``moves``' atlas (solved in full) and write the table;
+    returns the number of entries."""
+    atlas, hand = moves.atlas, moves.hand
+    order = sorted((k for k, e in atlas._entries.items() if e is not None),
+                   key=lambda k: (hand.fingers.index(k[0]), k[1], k[2]))
+    entries = [atlas._entries[k] for k in order]
+    arrays: dict[str, np.ndarray] = {
+        "key": np.array([(hand.fingers.index(f), pc, k) for f, pc, k in order],
+                        dtype=np.int16).reshape(-1, 3),
+        "cross_s": np.array([[moves.descend(e, p).cross_s for p in ENDS]
+                             + [moves.lift(e, p).cross_s for p in ENDS] for e in entries]
+                            ).reshape(-1, 6),
+        "params": np.array(params)}
+    for f in hand.fingers:
+        mine = [e for e in entries if e.finger == f]
+        arrays[f"across_{f}"] = np.packbits(_across_matrix(moves, f, mine))
+        if atlas.rail is None:
+            continue
+        for pc in range(12):
+            on_key = [e for e in mine if e.pitch_class == pc]
+            if on_key:
+                arrays[f"follow_{f}_{pc}"] = np.packbits(_follow_matrix(moves, f, pc, on_key))
+    with open(path, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
+    return len(entries)
+
+
+def _tip_z_batches(moves, finger: str, rows_fn, n_rows: int) -> np.ndarray:
+    """The finger's tip positions at ``n_rows`` configurations built by ``rows_fn(lo,
+    hi)`` (finger joints in ``moves.js`` order, or the rail first then them)."""
+    chain = FrameChain(moves.hand, f"{finger}_tip")
+    out = np.empty((n_rows, 3))
+    for lo in range(0, n_rows, _BATCH):
+        hi = min(n_rows, lo + _BATCH)
+        out[lo:hi] = chain.positions(moves.hand.apply_couplings(rows_fn(lo, hi)))
+    return out
+
+
+def _across_matrix(moves, finger: str, E: list[AtlasEntry]) -> np.ndarray:
+    """``Moves.across``' test for every pair (i, j) of ``E``: the tip at least
+    ``HIGH_SAFE_Z_M`` high at each of ``ACROSS_SAMPLES`` along high_i -> high_j."""
+    from planner.play.moves import ACROSS_SAMPLES, HIGH_SAFE_Z_M
+
+    js, base = moves.js[finger], moves.atlas.base
+    H = np.array([e.high for e in E])
+    n, S = len(E), np.array(ACROSS_SAMPLES)
+    I, J = np.divmod(np.arange(n * n), n)
+
+    def rows(lo: int, hi: int) -> np.ndarray:
+        p = np.arange(lo, hi)  # row = pair * len(S) + sample
+        pair, s = np.divmod(p, len(S))
+        Q = np.repeat(base[None, :], hi - lo, axis=0)
+        a, b = H[I[pair]], H[J[pair]]
+        Q[:, js] = a + S[s][:, None] * (b - a)
+        return Q
+
+    z = _tip_z_batches(moves, finger, rows, n * n * len(S))[:, 2]
+    return (z >= HIGH_SAFE_Z_M).reshape(n * n, len(S)).all(axis=1).reshape(n, n)
+
+
+def _follow_matrix(moves, finger: str, pc: int, E: list[AtlasEntry]) -> np.ndarray:
+    """``Moves._follow``'s test for every pair (i, j) of ``E`` (one finger, one key): the
+    tip inside the key's footprint with the key down (within ``HOLD_MARGIN_M``) at each
+    of ``PATH_SAMPLES`` along the joint rail + finger move, off the black keys beside a
+    white one."""
+    from planner.play.moves import HOLD_MARGIN_M
+
+    r, js = moves.atlas.rail, moves.js[finger]
+    k = kb.key(60 + pc)
+    cols = np.r_[r, js]
+    A = np.array([np.r_[k.center_x_m - e.dx_m, e.press] for e in E])  # rail, finger joints
+    n, S = len(E), np.linspace(0.0, 1.0, PATH_SAMPLES)
+    I, J = np.divmod(np.arange(n * n), n)
+    base = moves.atlas.base
+
+    def rows(lo: int, hi: int) -> np.ndarray:
+        pair, s = np.divmod(np.arange(lo, hi), len(S))
+        Q = np.repeat(base[None, :], hi - lo, axis=0)
+        a, b = A[I[pair]], A[J[pair]]
+        Q[:, cols] = a + S[s][:, None] * (b - a)
+        return Q
+
+    tips = _tip_z_batches(moves, finger, rows, n * n * len(S))
+    x, y, z = tips[:, 0], tips[:, 1], tips[:, 2]
+    depth = k.top_z_m - z
+    ok = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
+          & (k.y_min_m + TIP_RADIUS_M <= y) & (y <= k.y_max_m - TIP_RADIUS_M)
+          & (kb.DOWN_DEPTH_M + HOLD_MARGIN_M <= depth)
+          & (depth <= kb.KEY_BED_DEPTH_M - HOLD_MARGIN_M))
+    if k.black is False:
+        ok &= ~(surfaces_under(x, y, TIP_RADIUS_M) > k.top_z_m)
+    return ok.reshape(n * n, len(S)).all(axis=1).reshape(n, n)
