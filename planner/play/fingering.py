@@ -41,7 +41,9 @@ THUMB = "thumb"
 BEAM = 20  # states kept per event (measured: docs/play-second-design.md, "Speed")
 WINDOW = 48  # events the programme looks over at once ...
 LOOKAHEAD = 16  # ... the last of which it decides only in the next window
-FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows start sooner
+FIRST_WINDOW, FIRST_LOOKAHEAD = 12, 6  # the first window is short: the rows start sooner
+# (decides 6 events, then 48/16; on 47 songs the first row median 63 -> 39 ms after set-up,
+# F1 as with 16/8 or better on each: docs/play-second-design.md, "First row")
 PER_RAIL = 6  # ... at most this many at one rail position
 PER_SHAPE = 1  # ... and one of each hand shape (rail and fingers on the notes sounding):
 # states that differ only in the notes just let go (``State.recent``) crowd out others

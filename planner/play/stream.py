@@ -171,8 +171,9 @@ class _Rows:
 
     def commit_to(self, t_s: float) -> None:
         """The motion fixed up to ``t_s`` and its rows written, when that is more than
-        ``COMMIT_LAG_S`` past the rows written already (rows go out in chunks)."""
-        if t_s > self.written_to_s + COMMIT_LAG_S:
+        ``COMMIT_LAG_S`` past the rows written already (rows go out in chunks; the first
+        ones as soon as there are any)."""
+        if t_s > self.written_to_s + (COMMIT_LAG_S if self.next_row else 0.0):
             self.motion.commit(t_s)
             self.write_to(t_s)
 
