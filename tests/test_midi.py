@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from planner.errors import InputError
 from planner.music import midi
+from planner.music import smf as smf_module
 from planner.music.midi import (
     Note,
     Song,
@@ -416,7 +417,7 @@ def test_riff_wrapped_midi():
 
 
 def test_too_many_notes(monkeypatch):
-    monkeypatch.setattr(midi, "MAX_NOTES", 10)
+    monkeypatch.setattr(smf_module, "MAX_NOTES", 10)
     msgs = []
     for i in range(11):
         msgs += [on(60 + i), off(60 + i, time=10)]
@@ -425,7 +426,7 @@ def test_too_many_notes(monkeypatch):
 
 
 def test_too_many_events(monkeypatch):
-    monkeypatch.setattr(midi, "MAX_EVENTS", 100)
+    monkeypatch.setattr(smf_module, "MAX_EVENTS", 100)
     msgs = [cc(7, i % 128, time=1) for i in range(150)] + [on(60), off(60, time=10)]
     assert_input_error(smf(msgs), "more than 100 MIDI events")
 
