@@ -41,9 +41,8 @@ THUMB = "thumb"
 BEAM = 20  # states kept per event (measured: docs/play-second-design.md, "Speed")
 WINDOW = 48  # events the programme looks over at once ...
 LOOKAHEAD = 16  # ... the last of which it decides only in the next window
-FIRST_WINDOW, FIRST_LOOKAHEAD = 12, 6  # the first window is short: the rows start sooner
-# (decides 6 events, then 48/16; on 47 songs the first row median 63 -> 39 ms after set-up,
-# F1 as with 16/8 or better on each: docs/play-second-design.md, "First row")
+FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows start sooner
+# (shorter ones were tried: docs/play-second-design.md, "Speed ... session 21", item 3)
 PER_RAIL = 6  # ... at most this many at one rail position
 PER_SHAPE = 1  # ... and one of each hand shape (rail and fingers on the notes sounding):
 # states that differ only in the notes just let go (``State.recent``) crowd out others
