@@ -3,8 +3,8 @@ MJCF body tree: links -> bodies, revolute/prismatic joints -> hinge/slide joints
 the URDF's limits, inertials as they are, ``<mimic>`` -> joint equality constraints.
 
 Collision geometry (the URDF has visual boxes only, as the kinematic check uses only
-the fingertip pad points): a finger segment (a box longest along its link's y) is a
-capsule of the box's thickness along it; the distal segment's capsule ends in the
+the fingertip pad points): a finger segment (a link whose subtree holds some of the
+fingertips but not all, its box longest along its link's y) is a capsule of the box's thickness along it; the distal segment's capsule ends in the
 fingertip pad, a sphere whose bottom is the pad point (the tip link's origin, a pad
 radius below the segment's axis: ``planner.hand.spec``'s pad); the palm, wrist and
 forearm are their boxes. The hand's own parts do not collide with each other (the
@@ -117,8 +117,10 @@ def _v(xs) -> str:
     return " ".join(f"{float(x):.12g}" for x in xs)
 
 
-def _geoms(body: ET.Element, link: UrdfLink, pad: tuple[float, float, float] | None) -> None:
-    """Collision geoms of a link (see the module docstring)."""
+def _geoms(body: ET.Element, link: UrdfLink, pad: tuple[float, float, float] | None,
+           segment: bool) -> None:
+    """Collision geoms of a link (see the module docstring); ``segment``: the link is a
+    finger segment (its subtree holds some of the fingertips, not all of them)."""
     common = {"contype": str(HAND_CONTYPE), "conaffinity": str(HAND_CONAFFINITY),
               "friction": f"{PAD_FRICTION:g} 0.005 0.0001", "mass": "0",
               "rgba": "0.75 0.6 0.5 1"}
@@ -126,7 +128,7 @@ def _geoms(body: ET.Element, link: UrdfLink, pad: tuple[float, float, float] | N
         return
     sx, sy, sz = link.box_size_m
     cx, cy, cz = link.box_center_m
-    if sy > sx and sy > sz:  # a finger segment: a capsule along y
+    if segment and sy > sx and sy > sz:  # a finger segment: a capsule along y
         r = 0.5 * min(sx, sz)
         y0 = cy - 0.5 * sy + r
         y1 = cy + 0.5 * sy - r if pad is None else pad[1]
@@ -159,6 +161,16 @@ def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
             r = PAD_POINT_RADIUS_M if pads_only else abs(j.xyz_m[2])
             pads[j.parent] = (j.xyz_m[0], j.xyz_m[1], j.xyz_m[2], r, j.child)
 
+    tips_below: dict[str, set[str]] = {}
+
+    def below(link_name: str) -> set[str]:
+        if link_name not in tips_below:
+            out = {link_name} if link_name in tip_links else set()
+            for j in children.get(link_name, []):
+                out |= below(j.child)
+            tips_below[link_name] = out
+        return tips_below[link_name]
+
     def add(body_el: ET.Element, link_name: str) -> None:
         link = links[link_name]
         if link.mass_kg > 0:
@@ -166,7 +178,8 @@ def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
                           diaginertia=_v(link.inertia_diag))
         pad = pads.get(link_name)
         if not pads_only:
-            _geoms(body_el, link, None if pad is None else (pad[0], pad[1], pad[2] + pad[3]))
+            _geoms(body_el, link, None if pad is None else (pad[0], pad[1], pad[2] + pad[3]),
+                   segment=0 < len(below(link_name)) < len(tip_links))
         if pad is not None:
             x, y, z, r, tip = pad
             ET.SubElement(body_el, "geom", name=f"{tip.removesuffix('_tip')}_pad", type="sphere",

@@ -3,7 +3,7 @@
 The replay starts at rest in the first row's pose (keys up, the ball at its launch
 state), then steps ``scene.TIMESTEP_S`` at a time. Between two rows the servos' position
 reference moves linearly (what a controller interpolating 100 Hz setpoints does); the
-speed and gravity feedforward move likewise (``actuators.Reference``).
+speed and inverse-dynamics feedforward move likewise (``actuators.Reference``).
 At every row's time the state is sampled: the hand's joints, every key's angle and
 the finger touching it, the servos' forces and what they asked for (before the clamp
 to their motor's torque), the pad points, the ball and its contacts. A ball with drag
@@ -19,7 +19,7 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.simulate import actuators as act
-from planner.simulate.scene import TIMESTEP_S, Ball, Scene
+from planner.simulate.scene import TIMESTEP_S, Ball, Scene, inverse_dynamics
 
 N_KEYS = 88
 
@@ -41,7 +41,7 @@ class SimRecord:
     ball_m: np.ndarray  # (T, 3) ball centre (NaN without a ball)
     ball_speed_m_s: np.ndarray  # (T,)
     ball_contacts: np.ndarray  # (T,) int: hand geoms touching the ball
-    ball_force_n: np.ndarray  # (T,) sum of normal contact forces on the ball
+    ball_force_n: np.ndarray  # (T,) sum of normal forces on the ball, the peak since the last row
     substeps: int
     wall_s: float
     unstable_at_s: float | None = None  # MuJoCo reset a diverging state here (first time)
@@ -51,7 +51,7 @@ def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray
     """Per row: the servo control at the row and its change to the next row."""
     kp = scene.servos.kp
     kv = -np.asarray(scene.model.actuator_biasprm[:, 2])
-    base = ref.q_rad + (kv / kp) * ref.qd_rad_s + ref.gravity_nm / kp
+    base = ref.q_rad + (kv / kp) * ref.qd_rad_s + ref.feedforward_nm / kp
     slope = np.zeros_like(base)
     slope[:-1] = np.diff(base, axis=0)
     return base, slope
@@ -74,7 +74,16 @@ def _contacts(scene: Scene, data, mujoco, out_finger: np.ndarray, ball_geom: int
     out_finger[key[sel]] = fin[sel]
     if ball_geom < 0:
         return 0, 0.0
-    on_ball = np.flatnonzero((g1 == ball_geom) | (g2 == ball_geom))
+    return _ball_contacts(scene, data, mujoco, geoms)
+
+
+def _ball_contacts(scene: Scene, data, mujoco, geoms: np.ndarray | None = None):
+    """The ball's contacts with the hand and their summed normal force (N)."""
+    if geoms is None:
+        geoms = np.asarray(data.contact.geom[:data.ncon])
+    if len(geoms) == 0:
+        return 0, 0.0
+    on_ball = np.flatnonzero((geoms[:, 0] == scene.ball_geom) | (geoms[:, 1] == scene.ball_geom))
     force = 0.0
     wrench = np.zeros(6)
     for i in on_ball:
@@ -131,11 +140,13 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     T = len(t_s)
     dt_row = float(np.median(np.diff(t_s))) if T > 1 else 0.01
     n_sub = max(1, round(dt_row / TIMESTEP_S))
-    ref = act.reference(hand, q, t_s)
+    ref = act.reference(hand, q, t_s, inverse_dynamics(scene))
     base, slope = _ctrl_rows(scene, ref)
     kp = scene.servos.kp
     kv = -np.asarray(model.actuator_biasprm[:, 2])
     n, nm = q.shape[1], len(kp)
+    drive_qpos = scene.hand_qpos[scene.servos.drive]
+    drive_dof = scene.hand_dof[scene.servos.drive]
     rec = {k: np.empty(s) for k, s in (
         ("q_sim", (T, n)), ("key", (T, N_KEYS)), ("force", (T, nm)), ("demand", (T, nm)),
         ("limit", (T, nm)), ("tips", (T, 5, 3)), ("palm", (T, 3)), ("ball", (T, 3)),
@@ -147,6 +158,7 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     unstable = None
     ball_mass = float(model.body_mass[scene.ball_body]) if scene.ball_body >= 0 else 0.0
     drag = ball.drag_per_m if ball is not None else 0.0
+    peak_f = 0.0
     for k in range(T):
         lim = scene.servos.force_limit(ref.ratio[k])
         model.actuator_forcerange[:, 0] = -lim
@@ -154,7 +166,9 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
         # the sample at the row's time (the state the row's setpoint meets)
         rec["q_sim"][k] = data.qpos[scene.hand_qpos]
         rec["key"][k] = data.qpos[scene.key_qpos] if has_keys else 0.0
-        demand = kp * (base[k] - data.actuator_length) - kv * data.actuator_velocity
+        # (from the state itself: data.actuator_length and _velocity are those of the
+        # last step's start, 1 ms old -- at 250 rad/s^2 a 0.3 N m error of the demand)
+        demand = kp * (base[k] - data.qpos[drive_qpos]) - kv * data.qvel[drive_dof]
         rec["demand"][k] = demand
         rec["force"][k] = np.clip(demand, -lim, lim)
         rec["limit"][k] = lim
@@ -165,9 +179,11 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
         if scene.ball_body >= 0:
             rec["ball"][k] = data.xpos[scene.ball_body]
             rec["ball_v"][k] = float(np.linalg.norm(data.cvel[scene.ball_body][3:]))
-        rec["ball_n"][k], rec["ball_f"][k] = nb, fb
+        # the force: the largest since the previous row (an impact lasts a few steps)
+        rec["ball_n"][k], rec["ball_f"][k] = nb, max(fb, peak_f)
         if k == T - 1:
             break
+        peak_f = 0.0
         for j in range(n_sub):
             data.ctrl[:] = base[k] + slope[k] * (j / n_sub)
             if drag > 0.0:
@@ -175,6 +191,8 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
                 data.xfrc_applied[scene.ball_body, :3] = -ball_mass * drag * \
                     np.linalg.norm(v) * v
             mujoco.mj_step(model, data)
+            if scene.ball_body >= 0:
+                peak_f = max(peak_f, _ball_contacts(scene, data, mujoco)[1])
         if unstable is None and data.warning[bad_qacc].number > 0:
             unstable = float(t_s[k])
         if on_progress is not None and k % 100 == 0:

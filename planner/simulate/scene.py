@@ -150,7 +150,8 @@ def scene_xml(hand: HandModel, T_world_root: np.ndarray, keyboard: bool,
     armature = {hand.joint_names[int(d)]: float(a) for d, a in zip(servos.drive, servos.armature)}
     joints = hand_bodies(hand.urdf, mount, tuple(hand.tip_frames), armature,
                          pads_only=contact == "pads")
-    ET.SubElement(_find_body(mount, "palm_center") or mount, "site", name="palm_center_site",
+    palm = _find_body(mount, "palm_center")  # (an empty Element is falsy: no `or`)
+    ET.SubElement(mount if palm is None else palm, "site", name="palm_center_site",
                   size="0.002")
     if keyboard:
         _keyboard(world)
@@ -227,3 +228,33 @@ def build_scene(hand: HandModel, T_world_root: np.ndarray, *, keyboard: bool = F
 
 def servo_kv(scene: Scene) -> np.ndarray:
     return -np.asarray(scene.model.actuator_biasprm[:, 2])
+
+
+def inverse_dynamics(scene: Scene):
+    """``f(q, qd, qdd) -> tau`` (n,): the generalised forces on the hand's joints that
+    give it acceleration ``qdd`` at ``q, qd`` in this scene's model without contacts
+    (``M(q) qdd + c(q, qd)``: links, rotor inertia as armature, Coriolis, gravity). The
+    couplings' constraint forces are left out: a servo's feedforward sums its coupled
+    joints' forces (``actuators.reference``)."""
+    mujoco = _mujoco()
+    model = scene.model
+    data = mujoco.MjData(model)
+    acc = np.zeros(model.nv)
+    out = np.zeros(model.nv)
+
+    def f(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        data.qpos[scene.hand_qpos] = q
+        data.qvel[:] = 0.0
+        data.qvel[scene.hand_dof] = qd
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        mujoco.mj_makeM(model, data)  # (the armature included)
+        mujoco.mj_comVel(model, data)
+        mujoco.mj_rne(model, data, 0, out)  # c(q, qd): Coriolis, centrifugal, gravity
+        bias = out[scene.hand_dof].copy()
+        acc[:] = 0.0
+        acc[scene.hand_dof] = qdd
+        mujoco.mj_mulM(model, data, out, acc)
+        return out[scene.hand_dof] + bias
+
+    return f
