@@ -40,19 +40,40 @@ def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips:
                 ball_load: np.ndarray | None) -> tuple[list[LimitCheck], tuple[TendonLoad, ...]]:
     """The limit checks (one per category) and the worst tension of every tendon."""
     t, Q, QM = tr.t_s, tr.q, tr.q_motor
-    jn, mn = hand.joint_names, tuple(f"motor.{m}" for m in hand.motor_names)
-    out = []
+    out = [_position_check(hand, t, Q), *_rate_checks(hand, t, Q, QM),
+           _motor_consistency(hand, t, Q, QM), _coupling_check(hand, t, Q)]
+    TM = _motor_torques(hand, Q, _joint_torques(kin, Q, pressing_tips, ball_load))
+    ratio = np.abs(TM) / hand.motor_peak_torque
+    out.append(_worst("motor_torque", ratio, np.abs(TM), hand.motor_peak_torque,
+                      RATE_TOL * hand.motor_peak_torque, _motor_columns(hand), t, "N m"))
+    tendon_check, tendons = _tendon_audit(hand, TM, t)
+    out.append(tendon_check)
+    return out, tendons
 
-    # positions: excess beyond the nearer bound (<= 0 inside); infinite bounds never bind
+
+def _motor_columns(hand: HandModel) -> tuple[str, ...]:
+    return tuple(f"motor.{m}" for m in hand.motor_names)
+
+
+def _position_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck:
+    """Excess beyond the nearer bound (<= 0 inside); infinite bounds never bind."""
     lo = np.where(np.isfinite(hand.lower), hand.lower, -np.inf)
     hi = np.where(np.isfinite(hand.upper), hand.upper, np.inf)
     below, above = lo - Q, Q - hi
     excess = np.maximum(below, above)
     bound = np.where(below > above, lo, hi)
     r, c = np.unravel_index(int(np.argmax(excess)), excess.shape)
-    out.append(LimitCheck("joint_position", int(np.count_nonzero(excess > POSITION_TOL)),
-                          float(Q[r, c]), float(bound[r, c]), jn[c], float(t[r]), "rad|m"))
+    return LimitCheck("joint_position", int(np.count_nonzero(excess > POSITION_TOL)),
+                      float(Q[r, c]), float(bound[r, c]), hand.joint_names[c], float(t[r]),
+                      "rad|m")
 
+
+def _rate_checks(hand: HandModel, t: np.ndarray, Q: np.ndarray, QM: np.ndarray
+                 ) -> list[LimitCheck]:
+    """Joint and motor speeds (row differences), joint accelerations (second
+    differences), each with the file's rounding in its tolerance."""
+    jn, mn = hand.joint_names, _motor_columns(hand)
+    out = []
     dt = np.diff(t)
     if len(t) >= 2:
         V = np.diff(Q, axis=0) / dt[:, None]
@@ -75,8 +96,12 @@ def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips:
                           hand.acceleration, tol, jn, t[1:-1], "rad/s^2|m/s^2"))
     else:
         out.append(LimitCheck("joint_acceleration", 0, 0.0, 0.0, "", 0.0, "rad/s^2|m/s^2"))
+    return out
 
-    # motor columns vs the joints: tolerance plus the rounding of the file
+
+def _motor_consistency(hand: HandModel, t: np.ndarray, Q: np.ndarray, QM: np.ndarray
+                       ) -> LimitCheck:
+    """The motor columns against the joints: tolerance plus the rounding of the file."""
     QMc = hand.motor_angles(Q)
     sens = np.zeros_like(QMc)
     step = 1e-4
@@ -86,19 +111,23 @@ def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips:
         sens += np.abs(hand.motor_angles(Qp) - QMc) / step
     err = np.abs(QM - QMc)
     tol = MOTOR_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + sens)
-    out.append(_worst("motor_consistency", err / tol, err, tol, 0.0, mn, t, "rad"))
+    return _worst("motor_consistency", err / tol, err, tol, 0.0, _motor_columns(hand), t, "rad")
 
-    # couplings
-    if hand.couplings:
-        ce = np.abs(hand.coupling_errors(Q))
-        slope = np.stack([np.abs(c.slope(Q[:, c.src])) for c in hand.couplings], axis=-1)
-        tol = COUPLING_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + slope)
-        names = [jn[c.dep] for c in hand.couplings]
-        out.append(_worst("coupling", ce / tol, ce, tol, 0.0, names, t, "rad"))
-    else:
-        out.append(LimitCheck("coupling", 0, 0.0, COUPLING_TOL_RAD, "", 0.0, "rad"))
 
-    # static motor torque
+def _coupling_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck:
+    if not hand.couplings:
+        return LimitCheck("coupling", 0, 0.0, COUPLING_TOL_RAD, "", 0.0, "rad")
+    ce = np.abs(hand.coupling_errors(Q))
+    slope = np.stack([np.abs(c.slope(Q[:, c.src])) for c in hand.couplings], axis=-1)
+    tol = COUPLING_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + slope)
+    names = [hand.joint_names[c.dep] for c in hand.couplings]
+    return _worst("coupling", ce / tol, ce, tol, 0.0, names, t, "rad")
+
+
+def _joint_torques(kin: Kinematics, Q: np.ndarray, pressing_tips: np.ndarray | None,
+                   ball_load: np.ndarray | None) -> np.ndarray:
+    """Static joint torques of every row: gravity, the keys pushing back on the pressing
+    fingertips (``KEY_FORCE_N``), the ball's weight on the palm."""
     tau = np.array([kin.gravity(q) for q in Q])
     if pressing_tips is not None:
         tip_ids = kin.tip_ids
@@ -110,13 +139,7 @@ def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips:
         for k in np.flatnonzero(ball_load > 0):
             (J,) = kin.point_jacobians(Q[k], [kin.palm_id])
             tau[k] -= J.T @ (ball_load[k] * GRAVITY)
-    TM = _motor_torques(hand, Q, tau)
-    ratio = np.abs(TM) / hand.motor_peak_torque
-    out.append(_worst("motor_torque", ratio, np.abs(TM), hand.motor_peak_torque,
-                      RATE_TOL * hand.motor_peak_torque, mn, t, "N m"))
-    tendon_check, tendons = _tendon_audit(hand, TM, t)
-    out.append(tendon_check)
-    return out, tendons
+    return tau
 
 
 def _tendon_audit(hand: HandModel, TM: np.ndarray, t: np.ndarray
