@@ -3,6 +3,9 @@
     python bench/bench_simulate.py               # simulated seconds per wall second, 60 s song
     python bench/bench_simulate.py --agreement   # every sample song: kinematic vs physics F1
                                                  # (both contact models), notes that differ
+    python bench/bench_simulate.py --notes       # pads contact, note by note: each note's
+                                                 # share of the F1 difference and its cause
+    python bench/bench_simulate.py --catch-grid  # the default catch grid in physics
 
 The 60 s song is a random walk (``bench/random_songs.py``, seed 0) repeated to 60 s or more,
 planned once into a temporary folder. Needs MuJoCo (``pip install -e ".[physics]"``).
@@ -90,13 +93,60 @@ def bench_agreement() -> None:
         print(line)
 
 
+def bench_notes() -> None:
+    from planner.simulate import run_replay
+    from planner.simulate.compare import note_differences
+
+    hand = planner.load_hand("default")
+    with tempfile.TemporaryDirectory() as d:
+        for song in sorted((ROOT / "songs").glob("*.mid")):
+            traj = Path(d) / f"{song.stem}.csv"
+            planner.plan_song(planner.load_song(str(song)), hand, str(traj))
+            r = run_replay(str(traj), str(song), contact="pads")
+            diffs = note_differences(r)
+            print(f"{song.stem}: kinematic F1 {r.report.kinematic_f1:.4f}, physics (pads) "
+                  f"{r.report.play.f1:.4f}, {len(diffs)} notes or keys differ", flush=True)
+            for x in diffs:
+                what = f"note {x.note}" if x.note >= 0 else "wrong key"
+                print(f"  {x.name:4s} @{x.onset_s:6.2f} s {what:9s} {x.lost_f1:+.4f}  {x.cause}; "
+                      f"{'+'.join(x.fingers) or 'no finger'}, pad {x.pad_error_mm:.1f} mm off "
+                      f"plan (dz {x.pad_dz_mm:+.1f})", flush=True)
+
+
+def bench_catch_grid() -> None:
+    """Angles 20-60 deg x distances 1-3 m (tests/test_catch.py's grid), height 0, tennis
+    ball: each feasible plan in physics."""
+    with tempfile.TemporaryDirectory() as d:
+        for a in range(20, 61, 10):
+            for dist in (1.0, 1.5, 2.0, 2.5, 3.0):
+                path = Path(d) / f"c{a}_{dist}.csv"
+                res = planner.plan_catch(float(a), dist, 0.0, "default", str(path))
+                if not res.feasible:
+                    print(f"{a} deg {dist} m: infeasible plan, not simulated", flush=True)
+                    continue
+                c = simulate_trajectory(str(path)).catch
+                print(f"{a} deg {dist} m: {'held' if c.held else 'NOT held'}, peak contact "
+                      f"{c.peak_contact_force_n:.1f} N, {c.end_distance_m * 1000:.1f} mm from "
+                      f"the palm centre at the end", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--agreement", action="store_true",
                     help="kinematic vs physics F1 on every sample song")
+    ap.add_argument("--notes", action="store_true",
+                    help="pads contact: every note's share of the F1 difference")
+    ap.add_argument("--catch-grid", action="store_true", help="the default catch grid")
     a = ap.parse_args()
     sys.path.insert(0, str(ROOT / "bench"))
-    bench_agreement() if a.agreement else bench_speed()
+    if a.agreement:
+        bench_agreement()
+    elif a.notes:
+        bench_notes()
+    elif a.catch_grid:
+        bench_catch_grid()
+    else:
+        bench_speed()
 
 
 if __name__ == "__main__":

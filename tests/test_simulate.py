@@ -287,3 +287,18 @@ def test_ball_at_rest_in_the_closed_hand_is_held_only_where_planned(catch30, tmp
     assert at.held and at.contacts_at_end >= 3 and at.end_distance_m < 0.0335 + 0.003
     off = _ball_in_closed_hand(catch30, tmp_path, 0.010)
     assert not off.held and off.end_distance_m > 0.1
+
+
+def test_note_differences_add_up_to_the_f1_difference(twinkle):
+    """compare.note_differences: the notes' shares sum to kinematic F1 - physics F1; in
+    pads contact twinkle's difference is key timing only (late onsets, keys returning),
+    no wrong key."""
+    from planner.simulate import run_replay
+    from planner.simulate.compare import note_differences
+
+    r = run_replay(str(twinkle), SONG, contact="pads")
+    diffs = note_differences(r)
+    total = r.report.kinematic_f1 - r.report.play.f1
+    assert total > 0 and sum(d.lost_f1 for d in diffs) == pytest.approx(total, abs=1e-12)
+    assert all(d.note >= 0 for d in diffs)  # every difference belongs to a note
+    assert all(d.onset_frames + d.release_frames + d.middle_frames > 0 for d in diffs)

@@ -19,11 +19,12 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import dataclass
 from typing import Any
 
 from planner.errors import InputError
 
-__all__ = ["simulate_cli", "simulate_trajectory"]
+__all__ = ["Replay", "run_replay", "simulate_cli", "simulate_trajectory"]
 
 
 def _problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
@@ -61,6 +62,27 @@ def simulate_trajectory(traj_path, song_path=None, *, contact: str = "full",
                         allow_incomplete: bool = False,
                         song_options: dict[str, Any] | None = None):
     """Replay ``traj_path`` in MuJoCo and score it (see the package docstring)."""
+    return run_replay(traj_path, song_path, contact=contact, min_f1=min_f1, strict=strict,
+                      allow_incomplete=allow_incomplete, song_options=song_options).report
+
+
+@dataclass(frozen=True)
+class Replay:
+    """A replay's report with what it was made from: the record (every row's simulated
+    state), the hand (mounted as the file says), the trajectory, the song's notes."""
+
+    report: Any  # SimulateReport
+    record: Any  # replay.SimRecord
+    hand: Any  # HandModel
+    trajectory: Any  # trajfile.Trajectory
+    notes: tuple | None
+
+
+def run_replay(traj_path, song_path=None, *, contact: str = "full",
+               min_f1: float | None = None, strict: bool = False,
+               allow_incomplete: bool = False,
+               song_options: dict[str, Any] | None = None) -> Replay:
+    """``simulate_trajectory`` keeping the record (for pictures and comparisons)."""
     from planner.check import check_trajectory
     from planner.simulate.replay import simulate
     from planner.simulate.report import SimulateReport
@@ -112,11 +134,12 @@ def simulate_trajectory(traj_path, song_path=None, *, contact: str = "full",
                            "reset its state: forces beyond what the solver can resolve)")
     song_name = None if song_path is None else (
         os.fspath(song_path) if isinstance(song_path, (str, os.PathLike)) else song_path.source)
-    return SimulateReport(
+    report = SimulateReport(
         trajectory=os.fspath(name), song=song_name, task=task, hand=hand.name, contact=contact,
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), wall_s=rec.wall_s,
         play=play, catch=catch, motors=motors, tracking=tracking(rec, hand),
         kinematic_f1=None if kin.play is None else kin.play.f1, problems=tuple(problems))
+    return Replay(report, rec, hand, tr, None if notes is None else tuple(notes))
 
 
 def simulate_cli(args) -> int:

@@ -1,0 +1,141 @@
+"""Physics against the kinematic check, note by note: where the two F1s differ and why.
+
+The frame F1 is a mean over the song's frames of each frame's F1, so the difference
+``kinematic F1 - physics F1`` is a sum over frames. A frame's difference is shared
+equally among the keys whose state differs in it (down in one replay, up in the other),
+and each such (frame, key) goes to the note of that key it belongs to: the note sounding
+then, or the nearest note of that key within ``NEAR_NOTE_S`` (a key still rising after
+its note, down a frame early); what is left is a wrong key of its own. The shares add up
+to the whole difference (tested).
+
+For each note or wrong key the physics' own account: the frames it lost at the onset
+(the key went down later than the kinematic rule says), in the middle, at the release
+(kept down after the note: the key returning), the finger on it and how far that
+finger's pad was from its planned place (simulated minus planned, mm, the largest over
+the frames concerned).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.check.criteria import (
+    expected_keys,
+    frame_scores,
+    key_contacts,
+    pitch_name,
+    song_frames,
+)
+from planner.hand.spec import FINGERS
+from planner.music.keyboard import LOWEST_PITCH
+from planner.simulate.scores import key_down
+
+NEAR_NOTE_S = 0.1  # a key state this close to a note of its key belongs to that note
+
+
+@dataclass(frozen=True)
+class NoteDifference:
+    """One note (``onset_s`` >= 0 and its index) or a wrong key (``note`` = -1)."""
+
+    note: int
+    name: str
+    pitch: int
+    onset_s: float
+    lost_f1: float  # its share of kinematic F1 - physics F1
+    onset_frames: int  # down in the kinematic replay, not yet in physics, at the start
+    middle_frames: int  # down in the kinematic replay, up in physics, within the note
+    release_frames: int  # down in physics after the kinematic release (or the note's end)
+    extra_frames: int  # down in physics where the kinematic replay is up (wrong key)
+    fingers: tuple[str, ...]  # fingers touching the key in physics over those frames
+    pad_error_mm: float  # largest |simulated - planned| pad point of those fingers
+    pad_dz_mm: float  # its height error there (simulated - planned: > 0 above the plan)
+
+    @property
+    def cause(self) -> str:
+        parts = []
+        if self.onset_frames:
+            parts.append(f"down {self.onset_frames} frames late")
+        if self.middle_frames:
+            parts.append(f"up {self.middle_frames} frames within the note")
+        if self.release_frames:
+            parts.append(f"still down {self.release_frames} frames after its release")
+        if self.extra_frames:
+            parts.append(f"down {self.extra_frames} frames outside any note")
+        return ", ".join(parts) or "physics down where the kinematic replay is not"
+
+
+def _owner(notes_of_key: list[tuple[int, float, float]], t: float) -> int:
+    """Index of the note of a key that frame time ``t`` belongs to, -1 for none."""
+    best, gap = -1, NEAR_NOTE_S
+    for i, on, off in notes_of_key:
+        if on <= t < off:
+            return i
+        d = on - t if t < on else t - off
+        if d <= gap:
+            best, gap = i, d
+    return best
+
+
+def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifference, ...]:
+    """The notes and wrong keys behind the F1 difference of a play ``run_replay``
+    (largest share first)."""
+    rec, notes = replay.record, replay.notes
+    if notes is None:
+        return ()
+    rate = rate_hz or float(replay.trajectory.metadata["rate_hz"])
+    frames = song_frames(notes, rate)
+    n = min(len(frames), len(rec.t_s))
+    planned = np.array([replay.hand.tip_positions(q) for q in rec.q_ref[:n]])
+    kin = np.zeros((len(frames), 88), dtype=bool)
+    phys = np.zeros_like(kin)
+    kin[:n] = key_contacts(planned).down
+    phys[:n] = key_down(rec)[:n]
+    expected = expected_keys(notes, frames)
+    f1k = frame_scores(expected, kin)[2]
+    f1p = frame_scores(expected, phys)[2]
+    loss = (f1k - f1p) / len(frames)
+    by_key: dict[int, list] = {}
+    for i, nt in enumerate(notes):
+        by_key.setdefault(nt.pitch - LOWEST_PITCH, []).append((i, nt.onset_s, nt.offset_s))
+    acc: dict[tuple, dict] = {}
+    pad_err = np.linalg.norm(rec.tips_m[:n] - planned, axis=2) * 1000.0  # (n, 5) mm
+    for t, k in zip(*np.nonzero(kin != phys)):
+        share = loss[t] / np.count_nonzero(kin[t] != phys[t])
+        i = _owner(by_key.get(int(k), []), float(frames[t]))
+        key = ("note", i) if i >= 0 else ("wrong", int(k))
+        a = acc.setdefault(key, {"lost": 0.0, "onset": 0, "middle": 0, "release": 0,
+                                 "extra": 0, "fingers": set(), "err": 0.0, "dz": 0.0,
+                                 "k": int(k),
+                                 "t0": float(frames[t])})
+        a["lost"] += share
+        if i >= 0:
+            on, off = notes[i].onset_s, notes[i].offset_s
+            inside = on <= frames[t] < off
+            if kin[t, k] and inside:
+                first = not phys[int(np.searchsorted(frames, on)):t + 1, k].any()
+                a["onset" if first else "middle"] += 1
+            elif phys[t, k]:
+                a["release" if frames[t] >= on else "onset"] += 1
+            else:
+                a["middle"] += 1
+        else:
+            a["extra"] += 1
+        if t < n:
+            f = int(rec.key_finger[t, k])
+            if f >= 0:
+                a["fingers"].add(FINGERS[f])
+                if pad_err[t, f] > a["err"]:
+                    a["err"] = float(pad_err[t, f])
+                    a["dz"] = float(rec.tips_m[t, f, 2] - planned[t, f, 2]) * 1000.0
+    out = []
+    for (kind, i), a in acc.items():
+        p = a["k"] + LOWEST_PITCH
+        out.append(NoteDifference(
+            i if kind == "note" else -1, pitch_name(p), p,
+            float(notes[i].onset_s) if kind == "note" else a["t0"], float(a["lost"]),
+            a["onset"], a["middle"], a["release"], a["extra"],
+            tuple(sorted(a["fingers"], key=FINGERS.index)), a["err"], a["dz"]))
+    out.sort(key=lambda d: -d.lost_f1)
+    return tuple(out)
