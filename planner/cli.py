@@ -105,12 +105,15 @@ def _build_parser() -> argparse.ArgumentParser:
                     help="the summary as one JSON object on stdout (needs -o FILE)")
 
     c = sub.add_parser("catch", help="plan a catch of a thrown ball")
-    c.add_argument("--angle", type=float, required=True, help="launch angle above horizontal, deg")
+    c.add_argument("--angle", type=float, default=None,
+                   help="launch angle above horizontal, deg (required unless --live)")
     c.add_argument("--dist", type=float, required=True, help="horizontal distance to the hand, m")
     c.add_argument("--height", type=float, default=0.0, help="hand height above the launch point, m")
-    c.add_argument("--ball", default="tennis", help="ball: tennis, baseball, seed")
+    c.add_argument("--ball", default="tennis", help="ball: tennis, baseball, golf, seed")
     c.add_argument("--drag", action="store_true", help="model quadratic air drag")
     c.add_argument("--observations", metavar="CSV", help="fit the flight to t,x,y,z observations")
+    c.add_argument("--live", action="store_true",
+                   help="re-plan after each t,x,y,z observation read from stdin as it arrives")
     c.add_argument("-o", "--output", default="catch.csv",
                    help="trajectory CSV ('-' for stdout; default catch.csv)")
     c.add_argument("--hand", default="default", help="hand name or hand file (.toml)")

@@ -328,7 +328,7 @@ def test_too_fast():
 
 
 def test_unknown_ball():
-    with pytest.raises(InputError, match="baseball, seed, tennis, vacuum"):
+    with pytest.raises(InputError, match="baseball, golf, seed, tennis, vacuum"):
         predict_throw(30.0, 1.5, ball="football")
     with pytest.raises(InputError):
         predict_throw(30.0, 1.5, ball=3)

@@ -201,10 +201,14 @@ def test_grip_scales_with_the_tendon_force(tmp_path, hand) -> None:
     assert all(lim.startswith("motor torque") for lim in strong.limiting)
 
 
-def test_grip_mk5_meets_the_side(mk5) -> None:
+def test_grip_mk5_at_its_own_scale(mk5) -> None:
+    """On its true-size palm (seed 000 Table 2's 4.75 in, issue 17 item 1) the Mk5's four
+    fingers close on the cylinder; the tendons' 40 N limit the grip (on the 1.5x palm they
+    met only its side: 0 N)."""
     g = grip(mk5)
-    assert g.force_n == pytest.approx(0.0, abs=1e-6) and g.fingers
-    assert g.limiting[0].startswith("no motor: the pads meet the cylinder's side")
+    assert g.force_n == pytest.approx(1.45797, rel=1e-4)
+    assert g.fingers == ("index", "middle", "ring", "pinky")
+    assert all(lim.startswith("tendon force") for lim in g.limiting)
 
 
 def test_strength_table_and_json(hand) -> None:

@@ -151,6 +151,10 @@ BALLS: dict[str, Ball] = {
     # The seed's ball: 2.5 in = 63.5 mm diameter. The seed gives no mass: we assume
     # 57 g (a tennis ball) and Cd 0.5 (a smooth sphere at moderate Re).
     "seed": Ball("seed", 0.057, 0.0635 / 2, 0.5),
+    # Golf ball (Rules of Golf, Equipment Rules: at most 45.93 g, at least 42.67 mm); Cd ~0.25,
+    # typical of a dimpled ball. The seed's 2.5 in ball scaled to a true-size hand (the 1.5x
+    # hand's ball / 1.5 = 42.3 mm): the ball the mk5 (seed 003, true size) catches.
+    "golf": Ball("golf", 0.04593, 0.04267 / 2, 0.25),
     # The seed's ball in a vacuum: k = 0.
     "vacuum": Ball("vacuum", 0.057, 0.0635 / 2, 0.0),
 }

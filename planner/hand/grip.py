@@ -112,10 +112,12 @@ def _finger_points(hand: HandModel, q: np.ndarray, finger: str) -> tuple[np.ndar
 
 
 def flexion_joints(hand: HandModel, finger: str) -> list[int]:
-    """The finger's independent joints a tendon motor drives (its flexion joints)."""
+    """The finger's independent joints a tendon motor or a finger's geared motor drives (its
+    flexion joints; not the abduction servos). The AGH's paired base joint is the
+    flexion joint of its shaft's source finger only: the other finger's follows it."""
     own = set(hand.spec.joints_of(finger))
     return [hand.index[a.drives] for a in hand.actuators
-            if a.tendon_force_n is not None and a.drives in own]
+            if (a.tendon_force_n is not None or a.kind == "gear") and a.drives in own]
 
 
 def curled(hand: HandModel, q0: np.ndarray, finger: str, s: float) -> np.ndarray:

@@ -18,7 +18,6 @@ import pinocchio as pin
 
 from planner.errors import InputError
 from planner.hand.spec import (
-    FINGERS,
     PALM_FRAME,
     HandSpec,
     LinearCoupling,
@@ -82,7 +81,8 @@ class HandModel:
             [self.pin_model.idx_qs[self.pin_model.getJointId(n)] for n in self.joint_names]
         )
         self.tip_frames = spec.tip_frames
-        self.fingers = FINGERS
+        # the hand's fingers (a prefix of FINGERS, in that order: five, or the AGH's four)
+        self.fingers: tuple[str, ...] = tuple(f for f, _ in spec.finger_joints)
         self._tip_ids = [self.pin_model.getFrameId(f) for f in self.tip_frames]
         self._palm_id = self.pin_model.getFrameId(PALM_FRAME)
 

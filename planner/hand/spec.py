@@ -249,7 +249,11 @@ def build_spec(data: dict[str, Any]) -> HandSpec:
         from planner.hand.mk5_hand import build_mk5_hand
 
         return build_mk5_hand(data)
-    raise InputError(f"unknown hand kind {kind!r}; valid kinds: tendon, mk5")
+    if kind == "agh":
+        from planner.hand.agh_hand import build_agh_hand
+
+        return build_agh_hand(data)
+    raise InputError(f"unknown hand kind {kind!r}; valid kinds: tendon, mk5, agh")
 
 
 def build_mount_rail_wrist(data: dict[str, Any], links: list[Link], joints: list[Joint],
@@ -331,6 +335,10 @@ def assemble_spec(data: dict[str, Any], links, joints, couplings, actuators, T_w
         force = _positive(_get(data, "tendon", dict), "design_force_n")
         actuators = [replace(a, tendon_force_n=force) if a.kind == "tendon" else a
                      for a in actuators]
+    names = tuple(f for f, _ in finger_joints)
+    if names != FINGERS[:len(names)] or not names:
+        raise InputError(f"fingers must be a prefix of {', '.join(FINGERS)} in that order; "
+                         f"got {', '.join(names) or 'none'}")
     src = data.get("sources", {})
     sources = tuple(sorted((str(k), str(v)) for k, v in src.items())) if isinstance(src, dict) else ()
     return HandSpec(
@@ -341,7 +349,9 @@ def assemble_spec(data: dict[str, Any], links, joints, couplings, actuators, T_w
         couplings=tuple(couplings),
         actuators=tuple(actuators),
         T_world_root=T_world_root,
-        tip_frames=TIP_FRAMES,
+        # one pad per finger, in the fingers' order (a prefix of FINGERS: ``check`` reads
+        # the tips in FINGERS order)
+        tip_frames=tuple(f"{f}_tip" for f, _ in finger_joints),
         rail_enabled=rail_enabled,
         sources=sources,
         finger_joints=tuple(finger_joints),

@@ -126,8 +126,11 @@ class HandStrength:
 
 
 def _finger_motors(hand: HandModel, finger: str) -> list[int]:
+    """The motors that move the finger: those driving one of its joints, or the source of
+    a coupling one of its joints follows (the AGH's shaft of a paired base joint)."""
     own = set(hand.spec.joints_of(finger))
-    return [m for m, a in enumerate(hand.actuators) if a.drives in own]
+    moved = own | {c.source for c in hand.spec.couplings if c.joint in own}
+    return [m for m, a in enumerate(hand.actuators) if a.drives in moved]
 
 
 def finger_posture(hand: HandModel, finger: str, flex_rad: float) -> np.ndarray:
