@@ -33,7 +33,7 @@ from planner.errors import InputError
 from planner.hand.model import load_hand
 from planner.music.keyboard import key
 from planner.music.midi import Note, load_song, write_notes_midi
-from planner.trajfile import TrajectoryWriter
+from planner.trajfile import TrajectoryWriter, read_trajectory
 
 FORBIDDEN = ("planner.play", "planner.ik", "planner.trajectory", "planner.catch",
              "planner.selfcheck")
@@ -574,6 +574,10 @@ def grasp_posture():
     return q, C, P[:3, 2]
 
 
+STOP_M = 0.10  # this test ball (0.2 kg at 6 m/s) stopped over 10 cm: 36 N, within the
+# wrist flexion motor's 2 N m (over the catch planner's 2 cm it would need 180 N)
+
+
 def catch_file(path, hand, offset=(0.0, 0.0, 0.0), close_from=T_I - 0.12, close_s=0.25,
                hold_to=None, t_end=T_I + 0.4):
     """A catch: the ball arrives along -normal at SPEED onto the palm (plus
@@ -592,7 +596,8 @@ def catch_file(path, hand, offset=(0.0, 0.0, 0.0), close_from=T_I - 0.12, close_
         times = [0.0, close_from, close_from + close_s, hold_to, hold_to + 0.25, t_end + 1]
     q = hand.apply_couplings(min_jerk(times, frames, t))
     m = meta(hand, "catch", ball={"p0": p0.tolist(), "v0": v0.tolist(), "radius": BALL_R,
-                                  "mass": 0.2, "drag": 0.0}, intercept_t=T_I)
+                                  "mass": 0.2, "drag": 0.0}, intercept_t=T_I,
+             catch={"stop_distance_m": STOP_M})
     return write_traj(path, hand, t, q, metadata=m)
 
 
@@ -771,3 +776,47 @@ def test_a_gap_in_the_rows_is_refused_naming_the_row(tmp_path, hand, good):
     w.close()
     with pytest.raises(InputError, match=r"row 61 is at t=1.100000 s, not 0.600000 s"):
         check_trajectory(str(tmp_path / "gap.csv"), song)
+
+
+def test_catch_stopping_force_judged(tmp_path, hand):
+    """The dynamic judgment: the same catch stopped over 2 cm needs 5x the force of 10 cm,
+    more than the wrist flexion motor can give; the loads are reported per phase."""
+    ok = check_trajectory(catch_file(tmp_path / "c.csv", hand))
+    stop, hold = ok.catch.loads
+    assert stop.phase == "stop" and hold.phase == "hold"
+    assert stop.speed_m_s == pytest.approx(SPEED, rel=1e-3)
+    # F = m (v^2 / (2 d) n - g): against the arrival (along -n), and the weight
+    n = grasp_posture()[2]
+    want = np.linalg.norm(0.2 * (SPEED**2 / (2 * STOP_M) * n + np.array([0.0, 0.0, 9.81])))
+    assert stop.force_n == pytest.approx(want, rel=1e-3)
+    assert 0.0 < stop.headroom < 1.0 and ok.ok
+    tr = read_trajectory(str(tmp_path / "c.csv"))
+    meta = dict(tr.metadata, catch={"stop_distance_m": 0.02})
+    bad = write_traj(tmp_path / "hard.csv", hand, tr.t_s, tr.q, metadata=meta)
+    rep = check_trajectory(bad)
+    assert not rep.ok and rep.catch.loads[0].headroom < 0
+    assert any(p.startswith("stopping the ball needs") and "motor.wrist_flex" in p
+               for p in rep.problems)
+    del meta["catch"]
+    rep = check_trajectory(write_traj(tmp_path / "none.csv", hand, tr.t_s, tr.q, metadata=meta))
+    assert not rep.ok and any("no stopping distance" in p for p in rep.problems)
+
+
+def test_catch_plan_edited_to_stop_over_2_mm_rejected(tmp_path):
+    """Issue 15: the planner's feasible plan (30 deg from 1.5 m) passes; the same rows
+    with its metadata edited to stop the ball over 2 mm instead of 2 cm do not."""
+    from planner.catch.plan import plan_catch
+
+    res = plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "c.csv"))
+    assert res.feasible
+    good = check_trajectory(str(tmp_path / "c.csv"))
+    assert good.ok, good.problems
+    assert good.catch.loads[0].headroom == pytest.approx(res.plan.stop.headroom, abs=0.03)
+    text = (tmp_path / "c.csv").read_text()
+    assert text.count('"stop_distance_m": 0.02') == 1
+    (tmp_path / "e.csv").write_text(text.replace('"stop_distance_m": 0.02',
+                                                 '"stop_distance_m": 0.002'))
+    rep = check_trajectory(str(tmp_path / "e.csv"))
+    assert not rep.ok
+    assert rep.catch.loads[0].force_n > 9 * good.catch.loads[0].force_n
+    assert rep.problems == tuple(p for p in rep.problems if p.startswith("stopping the ball"))

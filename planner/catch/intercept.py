@@ -19,6 +19,7 @@ from planner.hand.model import HandModel
 
 MAX_MISALIGN_DEG = 80.0  # beyond this the ball grazes the palm: out of reach
 _N_SEARCH = 46  # samples of the ball's path in the intercept search
+_N_NEAR = 5  # ... and in the window of a warm-started one
 
 
 @dataclass(frozen=True)
@@ -160,6 +161,29 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
     return _position_only(wr, flight, C, r, t)
 
 
+def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev: Intercept,
+                        t_prev: float, half_width_s: float) -> Intercept:
+    """``find_intercept`` warm-started from a previous intercept time ``t_prev`` (a live
+    re-plan: the flight moved a little): the palm-plane crossing bracketed within
+    ``half_width_s`` of it and found by the same secant, or (no aligned pose) the palm's
+    position alone searched on ``_N_NEAR`` samples of that window (at the previous
+    deviation only when ``prev`` was such an intercept); the full search when neither
+    finds it there."""
+    ta, tb = max(0.0, t_prev - half_width_s), t_prev + half_width_s
+    fa, fb = wr.aligned1(flight, C, ta, r)[2], wr.aligned1(flight, C, tb, r)[2]
+    if fa > 0 >= fb:
+        ti, (th, s_vec, _) = bracketed_secant(
+            lambda tm: wr.aligned1(flight, C, tm, r), ta, tb, fa, fb)
+        sol = wr.dev_rail(s_vec, r)
+        if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
+            return Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
+    devs = (prev.dev,) if not prev.aligned and prev.reason is None else None
+    ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR), devs)
+    if ic.reason is not None and devs is not None:
+        ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR))
+    return ic if ic.reason is None else find_intercept(wr, flight, C, r, t_prev)
+
+
 def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, tb: float,
               fa: float, fb: float) -> float:
     """Time in [ta, tb] at which the ball is ``rho`` from the flexion axis (secant)."""
@@ -173,9 +197,10 @@ def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, t
 
 
 def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
-                   t: np.ndarray) -> Intercept:
+                   t: np.ndarray, devs: tuple[float, ...] | None = None) -> Intercept:
     """No pose faces the ball exactly: put the palm point on the path with the
-    deviation at each candidate value and pick the least misaligned reachable one."""
+    deviation at each candidate value (``devs``; default five across its range) and pick
+    the least misaligned reachable one."""
     b = flight.position(t) - C
     e = wr.e_f
     w = b - wr.W
@@ -184,7 +209,7 @@ def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
     lo, hi = wr.dev_lim
     best: Intercept | None = None
     closest = (np.inf, None)
-    for dev in (lo, 0.5 * lo, 0.0, 0.5 * hi, hi):
+    for dev in devs if devs is not None else (lo, 0.5 * lo, 0.0, 0.5 * hi, hi):
         a = rot1(wr.u_d, dev, wr.g0) + r * wr.n0
         a_p = a - (a @ e) * e
         rho = float(np.linalg.norm(a_p))

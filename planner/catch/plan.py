@@ -99,6 +99,7 @@ import numpy as np
 from planner.catch.arm import REST_CURL
 from planner.catch.closing import GRASP_MARGIN_M, TIP_ELEVATION_DEG, TIP_GAP_M, TOUCH_CLEAR_M
 from planner.catch.flight import (
+    MAX_HEIGHT,
     Ball,
     check_throw,
     fit_observations,
@@ -138,7 +139,7 @@ __all__ = [
     "MAX_MISALIGN_DEG", "PLAN_BUDGET_S", "REST_CURL", "SIGNAL_S", "TIP_ELEVATION_DEG",
     "TIP_GAP_M", "TOUCH_CLEAR_M", "CatchMount", "CatchPlan", "CatchPlanner", "CatchResult",
     "Closing", "catch_mount", "default_mount", "get_planner", "mount_from_file", "plan_catch",
-    "plan_throw", "validate_throw", "write_plan",
+    "plan_throw", "validate_live", "validate_throw", "write_plan",
 ]
 
 _PLANNERS: dict[tuple, CatchPlanner] = {}
@@ -182,6 +183,22 @@ def validate_throw(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any
     if not 1.0 <= rate <= 10000.0:
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate:g}")
     return a, d, hgt, rate
+
+
+def validate_live(dist_m: Any, height_m: Any, rate_hz: Any) -> tuple[float, float, float]:
+    """``validate_throw``'s rules for a live catch, whose throw comes from the observations:
+    where the hand is (dist, height) and the rate."""
+    d = _finite("--dist", dist_m)
+    if not MIN_DIST_M <= d <= MAX_DIST_M:
+        raise InputError(f"--dist must be between {MIN_DIST_M:g} and {MAX_DIST_M:g} m, got {d:g}")
+    hgt = _finite("--height", height_m)
+    if not abs(hgt) < MAX_HEIGHT:
+        raise InputError(f"--height must be between -{MAX_HEIGHT:g} and {MAX_HEIGHT:g} m "
+                         f"(exclusive), got {hgt:g}")
+    rate = _finite("--rate", rate_hz)
+    if not 1.0 <= rate <= 10000.0:
+        raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate:g}")
+    return d, hgt, rate
 
 
 def plan_throw(angle_deg: float, dist_m: float, height_m: float = 0.0,

@@ -108,7 +108,8 @@ class CatchPlanner:
                 flight_time_s = float(flight.time_at_x(float(C[0])))
             except InfeasibleError:
                 flight_time_s = None
-        pose = self._meet(flight, C, r, closing, flight_time_s)
+        t_c = flight_time_s if flight_time_s is not None else closest_time(flight, C)
+        pose = self.meet(flight, C, r, closing, find_intercept(self.wrist, flight, C, r, t_c))
         if pose.ic.reason:
             reasons.append(pose.ic.reason)
         # timing: the move to the open pose, then the closing move
@@ -126,9 +127,9 @@ class CatchPlanner:
             flight, C, r, t, Q, pose.t_i, s_c + closing.duration_s, rate_hz,
             closing.reason is not None)
         reasons += check_reasons
-        stop, hold, force_reasons, centre_i = self._forces(flight, pose, t, Q, r)
+        stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r)
         reasons += force_reasons
-        unc = None if fit is None else _uncertainty(fit, float(C[0] + centre_i[0]))
+        unc = None if fit is None else uncertainty(fit, float(C[0] + centre_i[0]))
         return CatchPlan(
             feasible=not reasons, reasons=reasons, flight=flight, catch_point=C,
             T_world_root=self.mount.T_world_root(C), base_hand=self.base_hand,
@@ -142,13 +143,12 @@ class CatchPlanner:
             q_motor=h.motor_angles(Q), ik_iterations=pose.ik_iterations,
             t_info_s=float(t_info), uncertainty=unc, planning_s=time.perf_counter() - t0)
 
-    def _meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
-              flight_time_s: float | None) -> _Pose:
-        """The intercept, its pose confirmed with placo (warm-started: usually zero or one
-        iteration) and the intercept time refined on the confirmed pose."""
+    def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
+             ic: Intercept) -> _Pose:
+        """The hand meeting the ball at the intercept ``ic`` (``find_intercept``): its pose
+        confirmed with placo (warm-started: usually zero or one iteration) and the
+        intercept time refined on the confirmed pose."""
         h, j = self.hand, self.joints
-        t_c = flight_time_s if flight_time_s is not None else closest_time(flight, C)
-        ic = find_intercept(self.wrist, flight, C, r, t_c)
         q_arm = self.q_zero.copy()
         q_arm[j.i_flex], q_arm[j.i_dev] = ic.theta, ic.dev
         if j.i_rail is not None:
@@ -186,7 +186,7 @@ class CatchPlanner:
         Q = h.apply_couplings(sample(phases, np.array([t_react, s_c]), t, self.q_rest))
         return t, Q
 
-    def _forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float):
+    def forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float):
         """Stopping the ball on the palm and holding it in the closed hand (the grasp QPs):
         their results (None where infeasible), the reasons, and the ball's centre on the
         palm at the intercept."""
@@ -216,7 +216,7 @@ def _kind(e: InfeasibleError) -> str:
     return "torque" if "needs motor." in str(e) else "friction"
 
 
-def _uncertainty(fit: FitResult, x_plane: float) -> dict[str, float] | None:
+def uncertainty(fit: FitResult, x_plane: float) -> dict[str, float] | None:
     try:
         t, _, cov, sig_t = predict_intercept(fit, x_plane)
     except PlannerError:

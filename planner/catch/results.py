@@ -104,6 +104,7 @@ class CatchPlan:
             "catch": {
                 "throw": self.throw,
                 "catch_point": [float(x) for x in self.catch_point],
+                "stop_distance_m": gq.STOP_DISTANCE_M,
                 "close_start": float(self.close_start_s),
                 "grasp_t": None if self.grasp_t is None else float(self.grasp_t),
                 "feasible": bool(self.feasible),

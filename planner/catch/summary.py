@@ -123,6 +123,13 @@ def catch_cli(args) -> int:
     ``--report DIR`` / ``--html FILE``: the written plan is replayed by the
     independent check and drawn by ``planner.report`` (``write_check_report``,
     ``write_html``); both need a file output (not ``-``)."""
+    if getattr(args, "live", False):
+        from planner.catch.livecli import live_cli
+
+        return live_cli(args)
+    if args.angle is None:
+        raise InputError("catch needs --angle (or --live, which takes the throw from the "
+                         "observations)")
     report = getattr(args, "report", None)
     html = getattr(args, "html", None)
     if report or html:

@@ -1,5 +1,7 @@
-"""The ball of a catch replay: its flight from the file's metadata, and the catch
-audit (intercept, early touches, grasp closing and holding)."""
+"""The ball of a catch replay: its flight from the file's metadata (a live plan's end
+marker: the flight it was last re-planned for), and the catch audit (intercept, early
+touches, grasp closing and holding, and the force and motor torques of stopping and
+holding the ball, ``ball_loads``)."""
 
 from __future__ import annotations
 
@@ -10,12 +12,16 @@ import numpy as np
 
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
 from planner.check.kinematics import GRAVITY, Kinematics
-from planner.check.results import CatchResult, TipTouch
+from planner.check.limits import RATE_TOL
+from planner.check.results import BallLoad, CatchResult, TipTouch
 from planner.errors import InputError
 from planner.hand.spec import FINGERS
+from planner.hand.tendon import actuator_capacity
 from planner.trajfile import Trajectory
 
 BALL_STEP_S = 1e-3  # RK4 step of the ball flight with drag
+STOP_DIFF_S = 1e-4  # central differences of the ball and the palm at the intercept (s): the
+# ball's speed changes by g h = 1 mm/s over it, the palm's rows are piecewise linear
 
 
 def ball_params(meta: dict[str, Any], path: str) -> dict[str, Any]:
@@ -85,8 +91,11 @@ def ball_positions(p0, v0, drag: float, times) -> np.ndarray:
 def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndarray, path: str
            ) -> tuple[CatchResult, np.ndarray]:
     meta = tr.metadata
-    ball = ball_params(meta, path)
-    ti = meta.get("intercept_t")
+    # a live plan's end marker carries the flight it was last re-planned for
+    live = "ball" in tr.end and "intercept_t" in tr.end
+    src = {**meta, "ball": tr.end["ball"], "intercept_t": tr.end["intercept_t"]} if live else meta
+    ball = ball_params(src, path)
+    ti = src.get("intercept_t")
     if not is_num(ti) or not math.isfinite(ti):
         raise InputError(f"{path}: catch metadata 'intercept_t' must be a finite number")
     ti = float(ti)
@@ -145,11 +154,90 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
         problems.append(f"no grasp within {GRASP_WINDOW_S * 1000:g} ms of the intercept "
                         f"(needs {GRASP_MIN_TIPS} fingertips including the thumb within "
                         f"radius + {GRASP_TOL_M * 1000:g} mm; best row had {best})")
+    loads: tuple[BallLoad, ...] = ()
+    stop_m = _stop_distance(meta, path)
+    if stop_m is None:
+        problems.append("the plan states no stopping distance (catch.stop_distance_m): the "
+                        "force of stopping the ball cannot be judged")
+    elif err is not None:
+        loads = ball_loads(tr, kin, palm, ball, ti, stop_m)
+        for ld in loads:
+            if ld.headroom < -RATE_TOL:
+                problems.append(f"{'stopping' if ld.phase == 'stop' else 'holding'} the ball "
+                                f"needs {ld.force_n:.1f} N at {ld.time_s:.3f} s: motor."
+                                f"{ld.motor} {abs(ld.torque_nm):.2f} N m > its "
+                                f"{ld.limiting_part} limit {ld.capacity_nm:.2f} N m")
     load = np.where(t >= ti, ball["mass"], 0.0)
     res = CatchResult(ti, r, tuple(float(x) for x in b_i), tuple(float(x) for x in target), err,
                       err is not None and err <= INTERCEPT_TOL_M, tuple(touches), g_time,
                       g_fingers, held,
-                      float(d_after.min()) if d_after.size else None, tuple(problems))
+                      float(d_after.min()) if d_after.size else None, tuple(problems), loads,
+                      {k: tr.end.get(k) for k in ("catch", "reason")} if live else None)
     return res, load
+
+
+def _stop_distance(meta: dict[str, Any], path: str) -> float | None:
+    """The plan's stopping distance (m): its metadata's ``catch.stop_distance_m`` (None
+    when it states none; InputError when it is not a positive number)."""
+    c = meta.get("catch")
+    d = c.get("stop_distance_m") if isinstance(c, dict) else None
+    if d is None:
+        return None
+    if not is_num(d) or not math.isfinite(d) or d <= 0:
+        raise InputError(f"{path}: catch.stop_distance_m must be a positive number, got {d!r}")
+    return float(d)
+
+
+def ball_loads(tr: Trajectory, kin: Kinematics, palm: np.ndarray, ball: dict[str, Any],
+               ti: float, stop_m: float) -> tuple[BallLoad, BallLoad]:
+    """The ball's load on the hand (see the package docstring, "Catch"): stopping it, its
+    velocity relative to the palm target at ``ti`` taken to rest over ``stop_m`` at a
+    constant deceleration (F = m v^2 / (2 d) against that velocity, plus its weight), all
+    on the palm centre; holding it, riding the palm target of each row after the stop
+    (F = m (a - g), a from the rows' second differences). Joint torques g(q) + J^T F
+    through the hand's transmissions, each motor against its capacity."""
+    t, Q, r, m = tr.t_s, tr.q, ball["radius"], ball["mass"]
+    h = STOP_DIFF_S
+    b = ball_positions(ball["p0"], ball["v0"], ball["drag"], [ti - h, ti + h])
+    q_i = np.array([np.interp(ti, t, Q[:, j]) for j in range(Q.shape[1])])
+    qa = np.array([[np.interp(x, t, Q[:, j]) for j in range(Q.shape[1])] for x in (ti - h, ti + h)])
+    _, P = kin.frames(qa)
+    c = P[:, :3, 3] + r * P[:, :3, 2]
+    v_rel = (b[1] - b[0] - (c[1] - c[0])) / (2 * h)
+    speed = float(np.linalg.norm(v_rel))
+    a_stop = -speed / (2.0 * stop_m) * v_rel
+    F_stop = m * (a_stop - GRAVITY)
+    stop = _load("stop", kin, q_i, ti, F_stop, speed, stop_m)
+    # holding: the rows after the stop (2 d / v) with a row on either side
+    t_held = ti + (2.0 * stop_m / speed if speed > 0 else 0.0)
+    k = np.flatnonzero(t >= t_held)
+    k = k[(k >= 1) & (k <= len(t) - 2)]
+    hold = None
+    if k.size:
+        centre = palm[:, :3, 3] + r * palm[:, :3, 2]
+        dt0, dt1 = t[k] - t[k - 1], t[k + 1] - t[k]
+        acc = 2.0 * ((centre[k + 1] - centre[k]) / dt1[:, None]
+                     - (centre[k] - centre[k - 1]) / dt0[:, None]) / (dt0 + dt1)[:, None]
+        for j, kk in enumerate(k):
+            ld = _load("hold", kin, Q[kk], float(t[kk]), m * (acc[j] - GRAVITY), 0.0, 0.0)
+            if hold is None or ld.headroom < hold.headroom:
+                hold = ld
+    if hold is None:
+        hold = _load("hold", kin, Q[-1], float(t[-1]), -m * GRAVITY, 0.0, 0.0)
+    return stop, hold
+
+
+def _load(phase: str, kin: Kinematics, q: np.ndarray, time_s: float, F: np.ndarray,
+          speed: float, dist: float) -> BallLoad:
+    """The hand applying ``F`` to the ball at the palm centre at ``q``: the motor closest
+    to its capacity."""
+    hand = kin.hand
+    (J,) = kin.point_jacobians(q, [kin.palm_id])
+    tau = hand.motor_torques(q, kin.gravity(q) + J.T @ F)
+    cap = actuator_capacity(hand)
+    ratio = np.abs(tau) / cap.torque_nm
+    i = int(np.argmax(ratio))
+    return BallLoad(phase, float(time_s), float(np.linalg.norm(F)), float(speed), float(dist),
+                    hand.motor_names[i], float(tau[i]), float(cap.torque_nm[i]), cap.limiting(i))
 
 

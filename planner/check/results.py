@@ -147,6 +147,29 @@ class TipTouch:
 
 
 @dataclass(frozen=True)
+class BallLoad:
+    """The ball's load on the hand in one phase of a catch (``stop``: decelerated from its
+    speed relative to the palm over the planned stopping distance; ``hold``: riding the
+    palm, at the worst row): the force the hand applies (N), where the rows need it, and
+    the motor closest to its capacity (``planner.hand.tendon.actuator_capacity``)."""
+
+    phase: str
+    time_s: float
+    force_n: float
+    speed_m_s: float  # stop: the ball's speed relative to the palm; hold: 0
+    distance_m: float  # stop: the stopping distance; hold: 0
+    motor: str
+    torque_nm: float
+    capacity_nm: float
+    limiting_part: str
+
+    @property
+    def headroom(self) -> float:
+        """1 - |torque| / capacity of the motor closest to its capacity."""
+        return 1.0 - abs(self.torque_nm) / self.capacity_nm
+
+
+@dataclass(frozen=True)
 class CatchResult:
     """The catch audit; ``ok`` when the ball meets the palm, nothing touches it
     early, and the grasp closes within the window and holds."""
@@ -163,6 +186,8 @@ class CatchResult:
     grasp_held: bool
     min_tip_distance_after_m: float | None
     problems: tuple[str, ...]
+    loads: tuple[BallLoad, ...] = ()  # stopping and holding the ball: force and motors
+    live: dict[str, Any] | None = None  # a live plan's end marker: outcome, reason
 
     @property
     def ok(self) -> bool:
@@ -221,6 +246,8 @@ class CheckReport:
             d["play"]["hit_rate"] = self.play.hit_rate
         if self.catch is not None:
             d["catch"]["ok"] = self.catch.ok
+            for ld, dd in zip(self.catch.loads, d["catch"]["loads"]):
+                dd["headroom"] = ld.headroom
         for lc, dd in zip(self.limits, d["limits"]):
             dd["ok"] = lc.ok
         for tl, dd in zip(self.tendons, d["tendons"]):
@@ -266,6 +293,14 @@ class CheckReport:
                      + (f"grasp at {c.grasp_time_s:.3f} s by {'+'.join(c.grasp_fingers)}"
                         + ("" if c.grasp_held else ", NOT held")
                         if c.grasp_time_s is not None else "no grasp"))
+            for ld in c.loads:
+                what = (f"{ld.speed_m_s:.2f} m/s relative to the palm over "
+                        f"{1000 * ld.distance_m:g} mm" if ld.phase == "stop" else "on the palm")
+                L.append(f"  {ld.phase}: {ld.force_n:.1f} N at {ld.time_s:.3f} s ({what}): "
+                         f"motor.{ld.motor} {abs(ld.torque_nm):.3f} of {ld.capacity_nm:.3f} N m "
+                         f"({ld.limiting_part}), headroom {100 * ld.headroom:.0f} %")
+            if c.live:
+                L.append(f"  live plan: {c.live.get('catch')}: {c.live.get('reason')}")
             _listing(L, "early touches", c.early_touches, lambda e: (
                 f"{e.time_s:8.3f} s  {e.finger:6s} {e.distance_m * 1000:.1f} mm from the centre"))
         L.append("limits (count, worst / limit, where):")

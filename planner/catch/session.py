@@ -1,0 +1,328 @@
+"""A live catch: the plan re-made after every camera observation of the ball
+(``cli.py catch --live``; ``CatchSession.observe(t_s, xyz)`` returns the new rows).
+
+Time is the catch frame's (spec section 5): t = 0 when the ball leaves the launch
+point, positions in metres from it. An observation seen at ``t`` can change the hand
+from ``t_react = t + SIGNAL_S + PLAN_BUDGET_S`` on (the seed's 25 ms of signal
+processing, the planning budget): every row up to then is written already, and after
+each observation the rows are written up to ``t_react`` plus the last interval between
+observations (the time the next observation can act from), so the hardware always has
+the rows it is executing and a row, once written, never changes.
+
+After each observation (``observe``):
+
+1. Fit (``livefit.LiveFit``): the flight's state and its covariance from every
+   observation so far (vacuum, or drag with the ball's k), once there are
+   ``LiveFit.min_obs`` of them (before that there is no file: the hand rests, and the
+   first rows are written from t = 0 with the first fit).
+2. Intercept: ``intercept.find_intercept_near`` from the previous intercept time
+   (``NEAR_S``), the pose confirmed by ``CatchPlanner.meet`` (placo, warm: the previous
+   pose is the closed form's).
+3. Motion (``livemotion.LiveMotion``): until the hand moves, it waits while waiting for
+   the next observation would not make it late (the open pose reached before the closing
+   move must start, ``closing.close_start``), then starts the planner's move to the open
+   pose; afterwards the arm is re-aimed at each new intercept pose from the state of the
+   rows written, and the closing start is re-timed until it has begun.
+4. Rows: only the ones not yet written are sampled, guarded and appended.
+
+The session ends (``finish``; the end marker) when an observation can no longer act
+before the ball reaches the palm (its ``t_react`` is past the planned intercept), or
+when the observations end (``finish()`` at the end of the input: the rest of the rows
+follow the last estimate). Then the rest of the plan is written and judged once by the
+planner's own self-check on every row (``RowCheck``) and its grasp forces (stopping and
+holding, ``CatchPlanner.forces``): the end marker says ``"catch": "held"`` when that
+plan catches the ball it last estimated, ``"given_up"`` with the reasons otherwise, and
+carries that estimate (``ball``, ``intercept_t``), which ``check`` judges. The file's
+metadata holds the first fit's (spec section 4 asks for one on the first line).
+
+The force QPs change no row, so they run on the final plan only; the latency of an
+observation (to its rows) is the fit, the intercept, the motion and the new rows.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner.catch import grasp as gq
+from planner.catch.arm import open_from
+from planner.catch.closing import close_start
+from planner.catch.flight import Ball, Flight, _finite, get_ball
+from planner.catch.intercept import closest_time, find_intercept, find_intercept_near
+from planner.catch.livefit import LiveFit
+from planner.catch.livemotion import LiveMotion, guard_rows
+from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
+from planner.catch.results import CatchPlan
+from planner.errors import InfeasibleError, InputError
+from planner.hand.model import HandModel
+from planner.trajectory import phase_duration
+from planner.trajfile import TrajectoryWriter
+
+NEAR_S = 0.020  # the intercept is searched this close to the previous one first (an
+# observation moves it by a few ms: sigma_t of a 5 mm camera late in the flight is ~1 ms)
+HELD = "held"
+GIVEN_UP = "given_up"
+
+
+class CatchSession:
+    """One throw, planned live: ``observe`` each observation, ``finish`` at the end of
+    the input. ``out_path``: a file, '-' (stdout) or None (in memory: ``text``)."""
+
+    def __init__(self, dist_m: float, height_m: float = 0.0,
+                 hand: HandModel | str = "default", ball: Ball | str = "tennis",
+                 drag: bool = False, rate_hz: float = 100.0, out_path: str | None = None,
+                 planner: CatchPlanner | None = None) -> None:
+        from planner.catch.plan import get_planner, validate_live
+
+        d, hgt, rate = validate_live(dist_m, height_m, rate_hz)
+        self.ball = get_ball(ball)
+        self.drag = bool(drag)
+        self.pl = planner or get_planner(hand)
+        self.closing = self.pl.closing(self.ball.radius_m)
+        self.C = np.array([d, 0.0, hgt])
+        self.rate_hz, self.dt = rate, 1.0 / rate
+        if out_path is not None and out_path != "-":
+            parent = Path(out_path).parent
+            if not parent.is_dir():
+                raise InputError(f"cannot write {out_path}: no such directory {parent}")
+        self.out_path = out_path
+        self.latencies_s: list[float] = []  # per observation: to its rows written
+        self.fit = LiveFit(self.ball, self.ball.drag_per_m if drag else 0.0)
+        h, j = self.pl.hand, self.pl.joints
+        q_open = open_from(h, j, self.pl.q_zero, self.closing.q_closed)
+        self.motion = LiveMotion(h, j.arm, self.pl.q_rest, q_open, self.closing.q_closed)
+        self.writer: TrajectoryWriter | None = None
+        self._t: list[np.ndarray] = []
+        self._q: list[np.ndarray] = []
+        self.next_row = 0
+        self.pose = self.flight = None
+        self.t_i: float | None = None
+        self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
+        self.uncertainty: dict[str, float] | None = None
+        self.kept_targets = 0  # re-aims refused by the limits (the older target kept)
+        self.outcome: str | None = None
+        self.reason = ""
+        self.plan: CatchPlan | None = None
+        self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
+
+    # ------------------------------------------------------------ observations
+    @property
+    def done(self) -> bool:
+        return self.outcome is not None
+
+    @property
+    def written_to_s(self) -> float:
+        """Time of the last row written (-inf before any)."""
+        return (self.next_row - 1) * self.dt if self.next_row else -math.inf
+
+    @property
+    def text(self) -> str | None:
+        """The file's text, for a session kept in memory, once finished."""
+        return None if self.writer is None else self.writer.text
+
+    def observe(self, t_s: Any, xyz: Any) -> np.ndarray:
+        """One observation: the ball's centre ``xyz`` (m, catch frame) at ``t_s`` (s from
+        the launch). Refits, re-plans and writes the rows the plan adds; returns them as
+        the file holds them, (n, columns) (none before the first fit, nor after the end).
+        InputError (one line) on an observation that cannot follow the ones before."""
+        if self.done:
+            return np.empty((0, 0))
+        t0 = time.perf_counter()
+        rows = self._observe(t_s, xyz)
+        self.latencies_s.append((self.rows_out_s if len(rows) else time.perf_counter()) - t0)
+        return rows
+
+    def _observe(self, t_s: Any, xyz: Any) -> np.ndarray:
+        t = _finite("t", t_s)
+        p = _point(xyz)
+        period = t - self.fit.times[-1] if self.fit.n else 0.0
+        fit = self.fit.add(t, p)
+        if fit is None:
+            return np.empty((0, 0))
+        t_react = t + SIGNAL_S + PLAN_BUDGET_S
+        t_b = max(self.written_to_s, t_react)
+        if self.t_i is not None and t_b >= self.t_i:  # too late to act before the ball
+            return self._finish(f"the observation at t = {t:.3f} s acts after the intercept")
+        old_seg = self.motion.seg
+        self._replan(fit.flight, t_b, period)
+        if self.writer is None:
+            self._open()
+        return self._write_to(t_react + period, t_b, old_seg)
+
+    def finish(self) -> np.ndarray:
+        """The end of the observations: the rest of the plan follows the last estimate
+        (InputError when there were too few to fit a flight)."""
+        if self.done:
+            return np.empty((0, 0))
+        if self.flight is None:
+            raise InputError(f"{self.fit.n} observation{'' if self.fit.n == 1 else 's'} of the "
+                             f"ball: at least {self.fit.min_obs} are needed to fit its flight")
+        last = float(self.fit.times[-1])
+        return self._finish(f"the observations ended at t = {last:.3f} s")
+
+    def abort(self, discard: bool = False) -> None:
+        """Stop without the end marker (the file stays visibly incomplete)."""
+        if self.writer is not None:
+            self.writer.abort(discard=discard)
+
+    # ------------------------------------------------------------ re-plan
+    def _replan(self, flight: Flight, t_b: float, period: float) -> None:
+        """Steps 2-3 of the module docstring for the newest ``flight``, acting from ``t_b``."""
+        pl, h, r, cl = self.pl, self.pl.hand, self.ball.radius_m, self.closing
+        if self.t_i is None:
+            try:
+                t_c = float(flight.time_at_x(float(self.C[0])))
+            except InfeasibleError:
+                t_c = closest_time(flight, self.C)
+            ic = find_intercept(pl.wrist, flight, self.C, r, t_c)
+        else:
+            ic = find_intercept_near(pl.wrist, flight, self.C, r, self.pose.ic, self.t_i, NEAR_S)
+        pose = pl.meet(flight, self.C, r, cl, ic)
+        stop_t = gq.stop_time(pose.v_i)
+        m = self.motion
+        if not m.moving:
+            T_m = phase_duration(pose.q_open - pl.q_rest, h.velocity, h.acceleration)
+            s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i, t_b + T_m, stop_t, r)
+            # wait for a better estimate while waiting one more observation costs nothing
+            if t_b + period + T_m >= s_c or t_b + period + T_m >= pose.t_i:
+                m.start(t_b, pose.q_open, T_m)
+                m.set_closing(s_c, cl.duration_s)
+        else:
+            if not m.reaim(t_b, pose.q_open):
+                self.kept_targets += 1
+            if m.close_start_s > t_b:
+                s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i,
+                                  m.fingers_open_s, stop_t, r)
+                m.set_closing(max(s_c, t_b), cl.duration_s)
+        self.pose, self.flight, self.t_i = pose, flight, pose.t_i
+        self.uncertainty = self._sigma(flight, pose.t_i)
+
+    def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
+        """The intercept's 1-sigma from the fit (``LiveFit.sigma_at``): across the path at
+        the palm, and in time along it (sigma_x / |v_x|)."""
+        sig = self.fit.sigma_at(t_i)
+        vx = abs(float(flight.velocity(t_i)[0]))
+        return {"x_plane_m": float(flight.position(t_i)[0]), "t_s": float(t_i),
+                "sigma_t_s": float(sig[0] / vx) if vx > 0 else math.inf,
+                "sigma_y_m": float(sig[1]), "sigma_z_m": float(sig[2])}
+
+    # ------------------------------------------------------------ rows
+    def _open(self) -> None:
+        fl = self.flight
+        self.first = {"ball": fl.to_metadata(), "intercept_t": float(self.t_i),
+                      "observations": self.fit.n}
+        meta = {"task": "catch", "hand": self.pl.base_hand.name,
+                "urdf_sha256": self.pl.base_hand.urdf_sha256,
+                "T_world_root": self.pl.mount.T_world_root(self.C).tolist(),
+                "rate_hz": self.rate_hz, "ball": fl.to_metadata(),
+                "intercept_t": float(self.t_i),
+                "catch": {"live": True, "throw": self._throw(),
+                          "catch_point": [float(x) for x in self.C],
+                          "stop_distance_m": gq.STOP_DISTANCE_M,
+                          "observations": self.fit.n}}
+        h = self.pl.base_hand
+        self.writer = TrajectoryWriter(self.out_path, meta, h.joint_names, h.motor_names)
+
+    def _throw(self) -> dict[str, Any]:
+        v = self.flight.v0
+        return {"angle_deg": math.degrees(math.atan2(float(v[2]), math.hypot(v[0], v[1]))),
+                "dist_m": float(self.C[0]), "height_m": float(self.C[2]),
+                "ball": self.ball.name, "drag": self.drag, "observations": self.fit.n,
+                "live": True}
+
+    def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:
+        """Rows up to ``t_end_s`` (those up to ``t_b`` on the arm's move ``old_seg``, from
+        before this re-plan), guarded, written; returns them as written."""
+        n = math.floor(t_end_s / self.dt + 1e-9) + 1
+        if n <= self.next_row:
+            return np.empty((0, 0))
+        t = np.arange(self.next_row, n) * self.dt
+        Q = self.motion.rows(t)
+        early = t <= t_b
+        if old_seg is not None and early.any():
+            Q[early] = self.motion.rows(t[early], old_seg)
+        guard_rows(self.pl.hand, Q, self._q[-1][-1] if self._q else None, self.dt)
+        out = self.writer.write_rows(t, Q, self.pl.hand.motor_angles(Q))
+        self.rows_out_s = time.perf_counter()
+        self._t.append(t)
+        self._q.append(Q)
+        self.next_row = n
+        return out
+
+    # ------------------------------------------------------------ the end
+    def _finish(self, why: str) -> np.ndarray:
+        """The rest of the plan (started now if the hand is still waiting), written; then
+        judged, and the end marker."""
+        m, cl = self.motion, self.closing
+        pose, h = self.pose, self.pl.hand
+        t_b = max(self.written_to_s, 0.0)
+        if not m.moving:
+            T_m = phase_duration(pose.q_open - self.pl.q_rest, h.velocity, h.acceleration)
+            m.start(t_b, pose.q_open, T_m)
+            m.set_closing(close_start(h, self.flight, self.C, pose.q_open, cl, pose.t_i,
+                                      t_b + T_m, gq.stop_time(pose.v_i), self.ball.radius_m),
+                          cl.duration_s)
+        t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s)
+        rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
+        self.plan = self._judge(t_static)
+        if self.plan.feasible:
+            self.outcome = HELD
+            g = self.plan
+            self.reason = (f"grasp at t = {g.grasp_t:.3f} s ({', '.join(g.grasp_fingers)}) of "
+                           f"the ball estimated from {self.fit.n} observations; {why}")
+        else:
+            self.outcome = GIVEN_UP
+            self.reason = "; ".join(self.plan.reasons) + f" ({why})"
+        self.writer.close({"catch": self.outcome, "reason": self.reason,
+                           "observations": self.fit.n,
+                           "last_observation_s": float(self.fit.times[-1]),
+                           "ball": self.flight.to_metadata(), "intercept_t": float(pose.t_i)})
+        return rows
+
+    def _judge(self, t_static: float) -> CatchPlan:
+        """The final plan: every row through the planner's self-check, the grasp forces."""
+        pl, pose, fl, r, m = self.pl, self.pose, self.flight, self.ball.radius_m, self.motion
+        t, Q = np.concatenate(self._t), np.concatenate(self._q)
+        err, clear, g_t, g_f, reasons = pl.rows.check(
+            fl, self.C, r, t, Q, pose.t_i, t_static, self.rate_hz, self.closing.reason is not None)
+        reasons = ([self.closing.reason] if self.closing.reason else []) + reasons
+        if pose.ic.reason:
+            reasons.append(pose.ic.reason)
+        stop, hold, force_reasons, _ = pl.forces(fl, pose, t, Q, r)
+        reasons += force_reasons
+        try:
+            t_f = float(fl.time_at_x(float(self.C[0])))
+        except InfeasibleError:
+            t_f = None
+        notes = [(f"live: {self.fit.n} observations (rms residual "
+                  f"{1000 * self.fit.result.residual_rms:.1f} mm), the first plan from "
+                  f"{self.first['observations']}")]
+        if self.kept_targets:
+            notes.append(f"{self.kept_targets} re-aims left the joint limits: the older "
+                         "target kept")
+        return CatchPlan(
+            feasible=not reasons, reasons=reasons, flight=fl, catch_point=self.C,
+            T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand,
+            rate_hz=self.rate_hz, throw=self._throw(), launch_speed=fl.speed,
+            flight_time_s=t_f, intercept_t=float(pose.t_i),
+            intercept_point=fl.position(pose.t_i), arrival_velocity=pose.v_i,
+            intercept_error_m=err, misalignment_deg=pose.misalign_deg, q_rest=pl.q_rest,
+            q_open=pose.q_open, q_closed=pose.q_closed, move_start_s=m.t_move,
+            move_s=m.open_s, close_start_s=m.close_start_s, close_s=m.close_s, grasp_t=g_t,
+            grasp_fingers=g_f, min_clearance_before_m=clear, stop=stop, hold=hold, t=t, q=Q,
+            q_motor=pl.hand.motor_angles(Q), ik_iterations=pose.ik_iterations,
+            t_info_s=float(self.fit.times[-1]), uncertainty=self.uncertainty, notes=notes)
+
+
+def _point(xyz: Any) -> np.ndarray:
+    try:
+        p = np.array(xyz, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"an observation's position must be 3 numbers, got {xyz!r}") from None
+    if p.shape != (3,):
+        raise InputError(f"an observation's position must be 3 numbers, got {p.size}")
+    return p
