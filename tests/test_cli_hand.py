@@ -78,7 +78,7 @@ def test_unknown_hand() -> None:
     assert r.returncode == 2 and r.stdout == ""
     lines = r.stderr.splitlines()
     assert len(lines) == 1 and r.stderr.endswith("\n")
-    assert "unknown hand" in lines[0] and "default, mk5" in lines[0]
+    assert "unknown hand" in lines[0] and "default, agh, mk5" in lines[0]
 
 
 @pytest.mark.parametrize("content, needle", [

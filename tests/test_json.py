@@ -86,7 +86,7 @@ def test_hand_json(tmp_path):
         _shaped(j, JOINT)
         assert j["lower"] <= j["upper"]
     rc, out, _ = _run("hand", "--list", "--json", cwd=tmp_path)
-    assert rc == 0 and [h["name"] for h in json.loads(out)["hands"]][:2] == ["default", "mk5"]
+    assert rc == 0 and [h["name"] for h in json.loads(out)["hands"]] == ["default", "agh", "mk5"]
     rc, out, _ = _run("hand", "--urdf", tmp_path / "h.urdf", "--json", cwd=tmp_path)
     assert rc == 0 and json.loads(out)["urdf"] == str(tmp_path / "h.urdf")
 

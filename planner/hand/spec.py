@@ -154,8 +154,9 @@ def hands_dir() -> Path:
 
 
 def list_hands() -> list[str]:
-    """Names of the hands shipped with the planner (one TOML file each)."""
-    return sorted(p.stem for p in hands_dir().glob("*.toml"))
+    """Names of the hands shipped with the planner (one TOML file each): ``default``
+    first (the hand every command uses unless told otherwise), then the others by name."""
+    return sorted((p.stem for p in hands_dir().glob("*.toml")), key=lambda n: (n != "default", n))
 
 
 def load_hand_spec(name_or_path: str) -> HandSpec:
