@@ -31,7 +31,7 @@ def test_hand_list() -> None:
     r = run_cli("hand", "--list")
     assert r.returncode == 0 and r.stderr == ""
     names = [line.split()[0] for line in r.stdout.splitlines() if line.strip()]
-    assert names == ["agh", "default", "mk5"]
+    assert names == ["default", "agh", "mk5"]
     assert "Seed hand (000_776cdc32671efdf6)" in r.stdout
 
 
