@@ -56,7 +56,9 @@ def start_entries(atlas: Atlas, rail_m: float) -> dict[str, AtlasEntry]:
     """Each finger's atlas entry over the key nearest its natural place that it can press
     from ``rail_m``; where no key is in its reach (the rail near an end of the keyboard),
     the entry nearest its natural place of any key: its crossing height is above every
-    key top wherever it is."""
+    key top wherever it is. A finger that presses no key at all (a hand whose fingers do
+    not all reach the keyboard) has none: it keeps the natural hand's pose and plays
+    nothing (the fingering names its notes)."""
     out = {}
     for f in atlas.hand.fingers:
         x = rail_m + atlas.natural_dx[f]
@@ -67,9 +69,10 @@ def start_entries(atlas: Atlas, rail_m: float) -> dict[str, AtlasEntry]:
             n = round(SPAN_M / STEP_M)
             e = next((e for k in sorted(range(-n, n + 1), key=abs) for pc in range(12)
                       if (e := atlas.entry_at(f, pc, k)) is not None), None)
-        if e is None:
-            raise PlannerError(f"the atlas has no pose of the {f} at all")
-        out[f] = e
+        if e is not None:
+            out[f] = e
+    if not out:
+        raise PlannerError("the atlas has no pose of any finger: the hand reaches no key")
     return out
 
 
