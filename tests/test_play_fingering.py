@@ -119,3 +119,18 @@ def test_the_programme_runs_over_a_receding_window(hand_parts):
     for c in chunks:
         seen |= {a.note for a in c.assignments}
         assert all(n in seen for n, _ in c.cuts)
+
+
+def test_a_short_note_is_given_up_for_a_long_one_held_through_it(hand_parts):
+    """C5 tied over 8 s (held by the index, the thumb on B4 beside it) under a melody that
+    climbs to C6, out of the pinky's reach while C5 is held: striking C6 would cut C5
+    (500 frames lost), leaving C6 out loses its 30. The programme leaves out C6, named
+    HELD, and holds C5 to its end (before it always struck every note it could)."""
+    notes = [Note(72, 0.0, 8.0, 80), Note(71, 0.0, 0.3, 80)] + [
+        Note(p, 1.0 + i, 1.3 + i, 80) for i, p in enumerate((76, 79, 84, 79, 76))]
+    fg = plan(hand_parts, notes)
+    c5 = next(a for a in fg.assignments if a.note == 0)
+    assert c5.release_s is None  # held to its end
+    assert [(s.note, s.reason) for s in fg.skipped] == [(4, SkipReason.HELD)]
+    assert "holds C5 through it" in fg.skipped[0].detail
+    assert fg.expected_loss_frames <= 30.0 + 0.5  # (C6's 30 frames, tie-breaks)

@@ -39,6 +39,8 @@ class SkipReason(enum.Enum):
     OUT_OF_REACH = "out_of_reach"  # no finger presses the key from any rail position
     TORQUE = "torque"  # the fingers that reach it cannot press with the note's force
     CHORD = "chord"  # more notes at once than the hand can hold from one position
+    HELD = "held"  # the fingers that could strike it hold longer notes through it (each
+    # left-out note costs its frames: the programme gives up the fewer)
     TOO_SHORT = "too_short"  # a press cannot go down and up again inside it (the fingering
     # names the notes shorter than every press of every finger and rail that reach them)
     TOO_LATE = "too_late"  # its key cannot go down before half of it is over
@@ -81,10 +83,12 @@ class Prev:
     """What a state of the event before tells every transition from it, worked out once
     (the programme weighs hundreds of transitions from each state)."""
 
-    __slots__ = ("around", "fresh", "held", "last", "on_key", "release", "state")
+    __slots__ = ("around", "cut_up", "fresh", "held", "last", "on_key", "release", "state")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
+        # (a held note let go at this event: its key comes up when the new notes' go down)
+        self.cut_up = (math.ceil(t / costs.dt - 1e-9) - 0.5) * costs.dt
         pitch, t_up = costs.pitch, costs._t_up
         self.held = [(m, f) for m, f in state.fingers if costs.offset[m] > t + ONSET_TOL_S]
         self.last = {f: (m, r) for m, f, r in state.last_notes}
@@ -254,7 +258,7 @@ class Costs:
         move is not made (inf)."""
         got = prev.release.get(rail_i)
         if got is None:
-            got = prev.release[rail_i] = self._release_of(prev.state, rail_i)
+            got = prev.release[rail_i] = self._release_of(prev, rail_i)
         release_t, followers = got
         if not followers.issuperset(kept):
             return math.inf
@@ -289,9 +293,11 @@ class Costs:
             loss += max(0.0, late) / self.dt
         return loss
 
-    def _release_of(self, prev: State, rail_i: int) -> tuple[float, frozenset]:
-        """When the rail arrives at ``rail_i`` after ``prev`` (the lifters' key up, lift,
-        and the move), and which notes ride along."""
+    def _release_of(self, ctx: Prev, rail_i: int) -> tuple[float, frozenset]:
+        """When the rail arrives at ``rail_i`` after ``ctx``'s state (the lifters' key up,
+        a held note's at this event, their lift, and the move), and which notes ride
+        along."""
+        prev = ctx.state
         di = abs(rail_i - prev.rail_i)
         T = self._rail_time.get(di)
         if T is None:
@@ -307,7 +313,8 @@ class Costs:
                     and self.moves.follow(a, b) is not None):
                 followers.add((m, f))
                 T = max(T, follow_s)
-        release = max((self.moves.before_rail_s(self.entry(m, f, r)) + self._t_up[m]
+        cut_up, t_up = ctx.cut_up, self._t_up
+        release = max((self.moves.before_rail_s(self.entry(m, f, r)) + min(t_up[m], cut_up)
                        for m, f, r in prev.last_notes if (m, f) not in followers),
                       default=-math.inf)
         return release + T, frozenset(followers)

@@ -10,9 +10,11 @@ excepted: it presses in front of the black keys). A held note keeps its finger, 
 rail unless its finger can follow its key, or is cut at the event. Transitions cost what
 ``planner.play.costs`` says.
 
-When no state holds every new note of an event (more notes than fingers, a chord wider
-than the hand), the largest subset that fits is kept and the rest are left out
-(``CHORD``). The ``BEAM`` best states of each event go on (at most ``PER_RAIL`` at one
+A state may also strike fewer of an event's new notes (a run of them in pitch order) or
+none, each note left out costing its frames: more notes than fingers or a chord wider
+than the hand (``CHORD``), a short note whose finger would have to let go of a long note
+held through it (``HELD``: a tie held under a melody), a note the moves reach too late
+to be worth its frames (``TOO_LATE``). The ``BEAM`` best states of each event go on (at most ``PER_RAIL`` at one
 rail position, one of each hand shape), over a receding window (``chunks``).
 """
 
@@ -23,6 +25,7 @@ import math
 from dataclasses import dataclass
 
 from planner.music import keyboard as kb
+from planner.music.midi import pitch_name
 from planner.play.atlas import Atlas
 from planner.play.costs import (
     ONSET_TOL_S,
@@ -46,6 +49,8 @@ FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows sta
 PER_RAIL = 6  # ... at most this many at one rail position
 PER_SHAPE = 1  # ... and one of each hand shape (rail and fingers on the notes sounding):
 # states that differ only in the notes just let go (``State.recent``) crowd out others
+PER_NOTES = 10  # ... and at most this many holding the same notes (so that a state that
+# lets a note go, or leaves one out, is not crowded out by the ways of holding it)
 BOUND_EVERY = 8  # the beam's cost bound is renewed after this many states before
 
 
@@ -199,9 +204,8 @@ class FingeringProblem(Costs):
         prev = before
         for (t, layer, new), state in zip(layers, path):
             here = {n for n, _ in state.fingers}
-            skipped.extend(Skip(n, SkipReason.CHORD, f"{len(new)} notes at t={t:.3f} s: the "
-                                f"hand holds {sum(m in here for m in new)} of them from one "
-                                "position") for n in new if n not in here)
+            skipped.extend(self._left_out(n, t, new, here, layer) for n in new
+                           if n not in here)
             if prev is not None:
                 cuts.extend((n, t) for n, _ in prev.fingers
                             if n not in here and self.notes[n].offset_s > t + ONSET_TOL_S)
@@ -213,19 +217,40 @@ class FingeringProblem(Costs):
         loss = layers[-1][1][path[-1]][0]
         return FingeringChunk(tuple(assignments), tuple(skipped), tuple(cuts), float(loss))
 
+    def _left_out(self, n: int, t: float, new: list[int], here: set[int], layer) -> Skip:
+        """Why the state chosen at ``t`` does not strike ``n``: longer notes held through
+        it (``HELD``); striking it loses more frames than it has, the moves there taking
+        too long (``TOO_LATE``: another state of the event strikes it with the notes struck
+        here); or a chord the hand does not hold from one position (``CHORD``)."""
+        frames = (self._t_up[n] - self._t_down[n]) / self.dt
+        longer = sorted(m for m in here if (self._t_up[m] - t) / self.dt > frames)
+        if longer:
+            names = ", ".join(pitch_name(self.pitch[m]) for m in longer)
+            return Skip(n, SkipReason.HELD, f"at t={t:.3f} s the hand holds {names} through "
+                        f"it: its finger would have to let go of more than its {frames:.0f} "
+                        "frames")
+        struck = {m for m in here if m in new} | {n}
+        if any(struck <= {m for m, _ in s.fingers} for s in layer):
+            return Skip(n, SkipReason.TOO_LATE, f"striking it at t={t:.3f} s would lose more "
+                        f"than its {frames:.0f} frames: the moves there take longer")
+        return Skip(n, SkipReason.CHORD, f"{len(new)} notes at t={t:.3f} s: the hand holds "
+                    f"{sum(m in here for m in new)} of them from one position")
+
     def _layer(self, prev, t: float, new: list[int]):
-        """The states of one event that hold the most notes of ``new`` any state holds (a
-        run of them in pitch order when not all), the ``BEAM`` cheapest."""
+        """The ``BEAM`` cheapest states of one event: striking every note of ``new`` the
+        hand can hold at once, or fewer (a run of them in pitch order: one hand's span),
+        or none, each note left out costing its frames (a short note given up for a long
+        one held through it is the better music, in the frame currency)."""
         new = sorted(new, key=lambda n: self.notes[n].pitch)
-        for size in range(min(len(new), len(self.atlas.hand.fingers)), 0, -1):
-            layer: dict[State, tuple[float, State | None]] = {}
-            self._shape_best: dict[tuple, float] = {}  # the cheapest state of each shape
-            # (of fewer notes, those next to each other in pitch: one hand's span)
+        layer: dict[State, tuple[float, State | None]] = {}
+        self._shape_best: dict[tuple, float] = {}  # the cheapest state of each shape
+        frames = {n: (self._t_up[n] - self._t_down[n]) / self.dt for n in new}
+        for size in range(min(len(new), len(self.atlas.hand.fingers)), -1, -1):
             for i in range(len(new) - size + 1):
-                self._extend(layer, prev, t, new[i:i + size])
-            if layer:
-                return self._prune(layer)
-        return {}
+                sub = new[i:i + size]
+                left_out = sum(frames[n] for n in new if n not in sub)
+                self._extend(layer, prev, t, sub, left_out)
+        return self._prune(layer)
 
     @classmethod
     def _beam_bound(cls, layer) -> float:
@@ -237,25 +262,35 @@ class FingeringProblem(Costs):
     @staticmethod
     def _prune(layer):
         """The ``BEAM`` cheapest states, at most ``PER_RAIL`` of them at one rail position
-        (so that the programme keeps other hand positions in view)."""
-        out, per, shape = {}, {}, {}
-        for s, v in sorted(layer.items(), key=lambda kv: kv[1][0]):
-            k = (s.rail_i, s.fingers)
-            if per.get(s.rail_i, 0) < PER_RAIL and shape.get(k, 0) < PER_SHAPE:
-                out[s] = v
-                per[s.rail_i] = per.get(s.rail_i, 0) + 1
-                shape[k] = shape.get(k, 0) + 1
-                if len(out) == BEAM:
-                    break
-        return out
+        (so that the programme keeps other hand positions in view) and one of each hand
+        shape; of those holding the same notes at most ``PER_NOTES`` while states holding
+        other notes (a held note let go, a note left out) are there to fill the beam."""
+        ranked = sorted(layer.items(), key=lambda kv: kv[1][0])
+        out, per, shape, sets = {}, {}, {}, {}
+        for capped in (True, False):
+            for s, v in ranked:
+                if s in out:
+                    continue
+                k = (s.rail_i, s.fingers)
+                notes = tuple(n for n, _ in s.fingers)
+                if (per.get(s.rail_i, 0) < PER_RAIL and shape.get(k, 0) < PER_SHAPE
+                        and (not capped or sets.get(notes, 0) < PER_NOTES)):
+                    out[s] = v
+                    per[s.rail_i] = per.get(s.rail_i, 0) + 1
+                    shape[k] = shape.get(k, 0) + 1
+                    sets[notes] = sets.get(notes, 0) + 1
+                    if len(out) == BEAM:
+                        return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
+        return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
 
-    def _extend(self, layer, prev, t: float, new: list[int]) -> None:
+    def _extend(self, layer, prev, t: float, new: list[int], left_out: float = 0.0) -> None:
         fingers = self.atlas.hand.fingers
         new = sorted(new, key=lambda n: self.pitch[n])
         offset = self.offset
         starts = prev.items() if prev else [(None, (0.0, None))]
         bound = math.inf
         for i, (p, (cost, _)) in enumerate(starts):
+            cost += left_out
             # (the states before come cheapest first, and no step costs less than
             # nothing: once ``BEAM`` states are cheaper than this one's cost, no state
             # it leads to is kept, nor are those of the states after it)
@@ -285,7 +320,12 @@ class FingeringProblem(Costs):
             return
         p = None if ctx is None else ctx.state
         sounding_t = tuple(sorted(sounding))
-        rails = self._moves_to(self._candidates(new), p)
+        if not new:  # (every new note left out: the hand stays)
+            if p is None:
+                return
+            rails = [(p.rail_i, 0.0)]
+        else:
+            rails = self._moves_to(self._candidates(new), p)
         if p is not None:
             # (the pruning keeps one state per shape, the cheapest: a transition that
             # cannot cost less than the cheapest state of its shape so far is not weighed)
