@@ -24,6 +24,7 @@ from tests.test_check import (
     RATE,
     SONG,
     SPEED,
+    STOP_M,
     T_I,
     grasp_posture,
     meta,
@@ -78,7 +79,8 @@ def tilted_catch_file(path, hand, tilt_deg=120.0):
     q = hand.apply_couplings(min_jerk([0.0, T_I - 0.12, T_I + 0.13, T_I + 2.0],
                                       [q_open, q_open, q_grasp, q_grasp], t))
     m = meta(hand, "catch", ball={"p0": [0.0, 0.0, 0.0], "v0": v0.tolist(), "radius": BALL_R,
-                                  "mass": 0.2, "drag": 0.0}, intercept_t=T_I)
+                                  "mass": 0.2, "drag": 0.0}, intercept_t=T_I,
+             catch={"stop_distance_m": STOP_M})
     m["T_world_root"] = T.tolist()
     return write_traj(path, hand, t, q, metadata=m)
 
