@@ -391,13 +391,13 @@ class Motion:
         if holds:
             qa, qb = [np.array([r0])], [np.array([rail_m])]
             vmax = [self.hand.velocity[[self.atlas.rail]]]
-            amax = [self.hand.acceleration[[self.atlas.rail]]]
+            amax = [self.moves.acceleration[[self.atlas.rail]]]
             for st, e in holds:
                 js = self.hand.joint_slice(st.entry.finger)
                 qa.append(st.entry.press)
                 qb.append(e.press)
                 vmax.append(self.hand.velocity[js])
-                amax.append(self.hand.acceleration[js])
+                amax.append(self.moves.acceleration[js])
             move = straight_move(np.concatenate(qa), np.concatenate(qb), np.concatenate(vmax),
                                  np.concatenate(amax))
         ready = max(self.rail.free_s, self.committed_s)

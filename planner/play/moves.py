@@ -25,8 +25,11 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+import pinocchio as pin
 
+from planner.errors import PlannerError
 from planner.hand.model import HandModel
+from planner.hand.tendon import actuator_capacity
 from planner.ik import surfaces_under
 from planner.music import keyboard as kb
 from planner.play.atlas import (
@@ -75,6 +78,11 @@ class Moves:
         self.lift = lru_cache(maxsize=None)(self._lift)
         self.table = MoveTable(hand.fingers, atlas.natural_dx)
         self.table.load(table_path(hand.urdf_sha256), self.params())
+        # every joint's acceleration limit, the rail's also within what the wrist holds
+        self.acceleration = np.array(hand.acceleration, dtype=float)
+        if atlas.rail is not None:
+            cap = rail_acceleration_cap(hand, [atlas.base, atlas.park()])
+            self.acceleration[atlas.rail] = min(self.acceleration[atlas.rail], cap)
 
     def params(self) -> str:
         """What the move table depends on besides the atlas (a table made otherwise is not
@@ -91,7 +99,7 @@ class Moves:
 
     def _move(self, finger: str, qa: np.ndarray, qb: np.ndarray) -> Move:
         js = self.js[finger]
-        return straight_move(qa, qb, self.hand.velocity[js], self.hand.acceleration[js])
+        return straight_move(qa, qb, self.hand.velocity[js], self.acceleration[js])
 
     def _cross(self, e: AtlasEntry, qa: np.ndarray, qb: np.ndarray, move: Move,
                going_down: bool) -> float:
@@ -182,7 +190,7 @@ class Moves:
             qa, qb = self.atlas.base.copy(), self.atlas.base.copy()
             qa[r], qb[r] = k.center_x_m - a.dx_m, k.center_x_m - b.dx_m
             qa[js], qb[js] = a.press, b.press
-            move = straight_move(qa[cols], qb[cols], h.velocity[cols], h.acceleration[cols])
+            move = straight_move(qa[cols], qb[cols], h.velocity[cols], self.acceleration[cols])
             got = self._lat[key] = (qa, qb, move, cols)
         return got
 
@@ -249,7 +257,7 @@ class Moves:
         if r is None:  # (a fixed mount: the rail stays at 0)
             return Move(np.array([rail_a]), np.zeros(1), 0.0, 1.0, 1.0)
         return straight_move(np.array([rail_a]), np.array([rail_b]),
-                             self.hand.velocity[[r]], self.hand.acceleration[[r]])
+                             self.hand.velocity[[r]], self.acceleration[[r]])
 
 
 def _crossing(g, g0: float, g1: float, tol: float) -> float:
@@ -278,3 +286,38 @@ def _crossing(g, g0: float, g1: float, tol: float) -> float:
                 glo *= 0.5
     return lo if glo >= 0.0 else hi
 
+
+RAIL_TORQUE_SHARE = 0.9  # the rail accelerates at most so hard that the motors holding the
+# hand against its inertia and gravity use 90 % of their capacity: the rest for the
+# fingers' own moves and postures other than the natural one. Without it the default
+# hand's 40 m/s^2 rail asks the wrist deviation motor 1.19 x its capacity (inverse
+# dynamics here; the MuJoCo replay of `leaps` saturates it for 350 ms: docs/physics-replay.md)
+
+
+def rail_acceleration_cap(hand: HandModel, postures) -> float:
+    """The largest rail acceleration (m/s^2) at which, in each of ``postures`` (the hand
+    still otherwise), every motor's torque (inverse dynamics, RNEA: gravity plus the
+    hand's inertia carried by the rail, through the actuator model) stays within
+    ``RAIL_TORQUE_SHARE`` of its capacity (peak torque or tendon force:
+    ``planner.hand.tendon.actuator_capacity``)."""
+    r = hand.index["rail"]
+    m = hand.pin_model
+    data = m.createData()
+    cap = RAIL_TORQUE_SHARE * actuator_capacity(hand).torque_nm
+    vi = hand._pin_v_idx
+    best = np.inf
+    for q in postures:
+        qp, v = hand._pin_q(q), np.zeros(m.nv)
+        unit = np.zeros(m.nv)
+        unit[vi[r]] = 1.0
+        tau_g = pin.rnea(m, data, qp, v, np.zeros(m.nv))[vi]
+        tau_1 = pin.rnea(m, data, qp, v, unit)[vi] - tau_g
+        g, k = hand.motor_torques(q, tau_g), hand.motor_torques(q, tau_1)
+        room = cap - np.abs(g)
+        if np.any(room <= 0.0):
+            raise PlannerError(f"hand {hand.name!r}: a motor is past {RAIL_TORQUE_SHARE:.0%} "
+                               "of its capacity holding the natural hand still")
+        with np.errstate(divide="ignore"):
+            best = min(best, float(np.min(np.where(np.abs(k) > 1e-12, room / np.abs(k),
+                                                   np.inf))))
+    return best
