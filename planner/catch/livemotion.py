@@ -23,7 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.errors import SolverError
 from planner.hand.model import HandModel
 from planner.trajectory import Phase, phase_duration, sample
 
@@ -149,23 +148,3 @@ class LiveMotion:
         Q = sample(phases, np.array([self.t_move, self.close_start_s]), t_s, self.q_rest)
         Q[:, self.arm] = (seg or self.seg).state(t_s)[0]
         return self.hand.apply_couplings(Q)
-
-
-def guard_rows(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -> None:
-    """Refuse (never clamp) rows outside the joint position or speed limits: a planner
-    bug must stop the plan, not reach the hand (as ``planner.play.stream.guard_rows``)."""
-    if not np.all(np.isfinite(q)):
-        raise SolverError("live catch: a non-finite setpoint")
-    bad = np.argwhere((q < hand.lower - 1e-9) | (q > hand.upper + 1e-9))
-    if bad.size:
-        i, j = bad[0]
-        raise SolverError(f"live catch bug: {hand.joint_names[j]} = {q[i, j]:.6f} outside "
-                          f"[{hand.lower[j]:.6f}, {hand.upper[j]:.6f}]", problem=q)
-    rows = q if prev is None else np.vstack([prev, q])
-    if len(rows) > 1:
-        v = np.abs(np.diff(rows, axis=0)) / dt
-        over = np.argwhere(v > hand.velocity * (1.0 + 1e-6) + 1e-9)
-        if over.size:
-            i, j = over[0]
-            raise SolverError(f"live catch bug: {hand.joint_names[j]} speed {v[i, j]:.4f} above "
-                              f"{hand.velocity[j]:.4f}", problem=q)

@@ -54,10 +54,11 @@ from planner.catch.closing import close_start
 from planner.catch.flight import Ball, Flight, _finite, get_ball
 from planner.catch.intercept import closest_time, find_intercept, find_intercept_near
 from planner.catch.livefit import LiveFit
-from planner.catch.livemotion import LiveMotion, guard_rows
+from planner.catch.livemotion import LiveMotion
 from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
 from planner.catch.results import CatchPlan
 from planner.errors import InfeasibleError, InputError
+from planner.guard import guard_rows
 from planner.hand.model import HandModel
 from planner.trajectory import phase_duration
 from planner.trajfile import TrajectoryWriter
