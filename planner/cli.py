@@ -78,7 +78,13 @@ def _build_parser() -> argparse.ArgumentParser:
                 description="Task planner for a tendon-driven robot hand",
                 epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in (_add_hand, _add_play, _add_catch, _add_batch, _add_check, _add_simulate):
+        add(sub)
+    return p
 
+
+def _add_hand(sub) -> None:
+    """``hand``: describe, list, URDF, strength."""
     h = sub.add_parser("hand", help="describe a hand, list hands, write its URDF")
     h.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
     h.add_argument("--list", action="store_true", help="list the shipped hands")
@@ -87,6 +93,9 @@ def _build_parser() -> argparse.ArgumentParser:
                    help="the hand's strength from its model beside the seed's requirements")
     h.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
+
+def _add_play(sub) -> None:
+    """``play``: plan a MIDI song."""
     pl = sub.add_parser("play", help="plan a MIDI song")
     pl.add_argument("song", help="MIDI file")
     pl.add_argument("-o", "--output", default=None,
@@ -104,6 +113,9 @@ def _build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--json", action="store_true",
                     help="the summary as one JSON object on stdout (needs -o FILE)")
 
+
+def _add_catch(sub) -> None:
+    """``catch``: plan a catch (once, or live from observations)."""
     c = sub.add_parser("catch", help="plan a catch of a thrown ball")
     c.add_argument("--angle", type=float, default=None,
                    help="launch angle above horizontal, deg (required unless --live)")
@@ -124,6 +136,9 @@ def _build_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", action="store_true",
                    help="the summary as one JSON object on stdout (needs -o FILE)")
 
+
+def _add_batch(sub) -> None:
+    """``batch``: a folder of songs."""
     b = sub.add_parser("batch", help="plan and check every song of a folder (resumable)")
     b.add_argument("songs", help="folder of MIDI files (*.mid)")
     b.add_argument("out", help="folder for the trajectories, per-song records and summary")
@@ -133,44 +148,43 @@ def _build_parser() -> argparse.ArgumentParser:
                    help="run on a Ray cluster at this address ('local': a local Ray)")
     b.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
+
+def _replay_options(parser, what: str) -> None:
+    """The options ``check`` and ``simulate`` share: how to read the file and the song,
+    what fails, the output."""
+    parser.add_argument("trajectory", help="hand-trajectory v1 file")
+    parser.add_argument("song", nargs="?", default=None, help="the MIDI file it was planned from")
+    parser.add_argument("--allow-incomplete", action="store_true",
+                        help="replay a file without its end marker (still being written, or cut)")
+    parser.add_argument("--min-f1", type=float, default=None, help=f"fail under this {what} F1")
+    parser.add_argument("--strict", action="store_true",
+                        help="fail on any missed or late note, not only wrong ones")
+    parser.add_argument("--track", type=int, default=None,
+                        help="read only this track of the song (default: as the plan was made)")
+    parser.add_argument("--channel", type=int, default=None,
+                        help="read only this channel (default: as the plan was made)")
+    parser.add_argument("--transpose", action="store_true",
+                        help="move notes outside A0-C8 by octaves (default: as the plan was made)")
+    parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
+
+
+def _add_check(sub) -> None:
+    """``check``: replay a trajectory by kinematics and verify it."""
     k = sub.add_parser("check", help="replay a trajectory and verify it")
-    k.add_argument("trajectory", help="hand-trajectory v1 file")
-    k.add_argument("song", nargs="?", default=None, help="the MIDI file it was planned from")
-    k.add_argument("--allow-incomplete", action="store_true",
-                   help="replay a file without its end marker (still being written, or cut)")
-    k.add_argument("--min-f1", type=float, default=None, help="fail under this frame F1")
-    k.add_argument("--strict", action="store_true",
-                   help="fail on any missed or late note, not only wrong ones")
-    k.add_argument("--track", type=int, default=None,
-                   help="read only this track of the song (default: as the plan was made)")
-    k.add_argument("--channel", type=int, default=None,
-                   help="read only this channel (default: as the plan was made)")
-    k.add_argument("--transpose", action="store_true",
-                   help="move notes outside A0-C8 by octaves (default: as the plan was made)")
-    k.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    _replay_options(k, "frame")
     k.add_argument("--played", metavar="OUT.mid", help="write the keys pressed as a MIDI file")
     k.add_argument("--report", metavar="DIR", help="write PNG plots here")
     k.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+
+
+def _add_simulate(sub) -> None:
+    """``simulate``: replay a trajectory in MuJoCo."""
     sm = sub.add_parser("simulate", help="replay a trajectory in MuJoCo physics and score it",
                         epilog="needs MuJoCo: pip install -e \".[physics]\"")
-    sm.add_argument("trajectory", help="hand-trajectory v1 file")
-    sm.add_argument("song", nargs="?", default=None, help="the MIDI file it was planned from")
+    _replay_options(sm, "physics")
     sm.add_argument("--contact", choices=("full", "pads"), default="full",
                     help="collision shapes: full (finger segments, palm, pads; default) or pads "
                          "(only the pad points, the kinematic check's contact model)")
-    sm.add_argument("--allow-incomplete", action="store_true",
-                    help="replay a file without its end marker")
-    sm.add_argument("--min-f1", type=float, default=None, help="fail under this physics F1")
-    sm.add_argument("--strict", action="store_true",
-                    help="fail on any note missed or late in physics")
-    sm.add_argument("--track", type=int, default=None,
-                    help="read only this track of the song (default: as the plan was made)")
-    sm.add_argument("--channel", type=int, default=None,
-                    help="read only this channel (default: as the plan was made)")
-    sm.add_argument("--transpose", action="store_true",
-                    help="move notes outside A0-C8 by octaves (default: as the plan was made)")
-    sm.add_argument("--json", action="store_true", help="one JSON object on stdout")
-    return p
 
 
 def _cmd_hand(a: argparse.Namespace) -> int:
