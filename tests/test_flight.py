@@ -15,14 +15,16 @@ from planner.catch.flight import (
     GRAVITY,
     RHO_AIR,
     Ball,
-    FitResult,
     Flight,
-    fit_observations,
     flight_time_to,
     get_ball,
+    predict_throw,
+)
+from planner.catch.observe import (
+    FitResult,
+    fit_observations,
     load_observations_csv,
     predict_intercept,
-    predict_throw,
 )
 from planner.errors import InfeasibleError, InputError, PlannerError
 

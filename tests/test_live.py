@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.catch.flight import fit_observations, get_ball, predict_throw
+from planner.catch.flight import get_ball, predict_throw
 from planner.catch.livefit import LiveFit
+from planner.catch.observe import fit_observations
 from planner.catch.plan import get_planner
 from planner.catch.planner import PLAN_BUDGET_S, SIGNAL_S
 from planner.catch.session import HELD, CatchSession

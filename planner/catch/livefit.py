@@ -3,7 +3,7 @@
 covariance, in O(1) for a vacuum and in one or two warm-started iterations with drag.
 
 Vacuum (k = 0). The model p(t) = p0 + v0 t + g t^2 / 2 is linear in (p0, v0), so the
-least squares of ``flight.fit_observations`` are kept as running sums: per axis the
+least squares of ``observe.fit_observations`` are kept as running sums: per axis the
 normal equations M [p0; v0] = [sum y; sum t y] with y = p - g t^2 / 2 and M =
 [[N, sum t], [sum t, sum t^2]] (the same M for the three axes). Adding an observation
 adds to the sums; the solution is a 2x2 solve. The residual sum of squares comes from
@@ -41,10 +41,10 @@ from planner.catch.flight import (
     MAX_OBS_RANGE_M,
     MAX_TIME,
     Ball,
-    FitResult,
     Flight,
     _step_for,
 )
+from planner.catch.observe import FitResult
 from planner.errors import InputError
 
 # ``fit_observations``' minimum number of observations: 3 positions fix the 6 numbers of

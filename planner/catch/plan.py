@@ -102,9 +102,7 @@ from planner.catch.flight import (
     MAX_HEIGHT,
     Ball,
     check_throw,
-    fit_observations,
     get_ball,
-    load_observations_csv,
     predict_throw,
 )
 from planner.catch.flight import _finite as flight_finite
@@ -117,6 +115,7 @@ from planner.catch.mount import (
     default_mount,
     mount_from_file,
 )
+from planner.catch.observe import fit_observations, load_observations_csv
 from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
 from planner.catch.results import CatchPlan, CatchResult, Closing
 from planner.check.criteria import (

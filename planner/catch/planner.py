@@ -15,10 +15,11 @@ import numpy as np
 from planner.catch import grasp as gq
 from planner.catch.arm import catch_joints, open_from, palm_target, rest_pose, zero_pose
 from planner.catch.closing import close_start, make_closing
-from planner.catch.flight import FitResult, Flight, predict_intercept
+from planner.catch.flight import Flight
 from planner.catch.geometry import interp_row, rot1
 from planner.catch.intercept import Intercept, Wrist, closest_time, find_intercept, refine_time
 from planner.catch.mount import CatchMount
+from planner.catch.observe import FitResult, predict_intercept
 from planner.catch.results import CatchPlan, Closing
 from planner.catch.rowcheck import RowCheck
 from planner.check.criteria import GRASP_TOL_M
