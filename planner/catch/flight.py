@@ -1,4 +1,5 @@
-"""Ball flight for the catch planner: throws, drag, and camera observations.
+"""Ball flight for the catch planner: throws in a vacuum and with drag (fitting a flight to
+camera observations: ``planner.catch.observe``).
 
 Catch frame (spec section 5): origin at the ball's launch point, +x horizontal
 towards the hand, z up. The ball leaves at t = 0 in the x-z plane at ``angle``
