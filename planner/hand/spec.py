@@ -372,6 +372,24 @@ def _tip(finger: str, parent: str, length: float, width: float) -> tuple[Link, J
     return link, joint
 
 
+@dataclass(frozen=True)
+class _TendonDrive:
+    """What every tendon finger of a hand file shares: the spool and its motor, the
+    tendons' efficiency, the abduction servos, the fingers' speed and acceleration caps."""
+
+    spool: float
+    w_motor: float
+    eff: float
+    tau_peak: float
+    servo: dict
+    v_cap: float
+    a_max: float
+
+    def speed(self, arm: float) -> float:
+        """A joint's speed cap: the motor's speed through its moment arm, or the cap."""
+        return min(self.v_cap, self.w_motor * self.spool / arm)
+
+
 def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
     links: list[Link] = []
     joints: list[Joint] = []
@@ -383,26 +401,27 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
     p_len = _length(palm, "length")
     tendon = _get(data, "tendon", dict)
     spool = _positive(tendon, "spool_radius_m")
-    w_motor = _get(tendon, "motor_speed_rad_s")
     eff = _get(tendon, "efficiency")
     if not 0 < eff <= 1:
         raise InputError("tendon efficiency must be in (0, 1]")
-    tau_peak = _get(tendon, "motor_peak_torque_nm")
-    servo = _get(data, "servo", dict)
     fs = _get(data, "finger_speed", dict)
-    v_cap, a_max = _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2")
-
-    def tendon_speed(arm: float) -> float:
-        return min(v_cap, w_motor * spool / arm)
-
+    tp = _TendonDrive(spool, _get(tendon, "motor_speed_rad_s"), eff,
+                      _get(tendon, "motor_peak_torque_nm"), _get(data, "servo", dict),
+                      _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2"))
     finger_joints: list[tuple[str, tuple[str, ...]]] = []
     fingers = _get(data, "finger", list)
     names = [f.get("name") for f in fingers]
     if sorted(map(str, names)) != sorted(FINGERS[1:]):
         raise InputError(f"[[finger]] entries must be exactly {', '.join(FINGERS[1:])}; got {names}")
+    _tendon_thumb(_get(data, "thumb", dict), tp, links, joints, actuators, finger_joints)
+    for f in sorted(fingers, key=lambda f: FINGERS.index(f["name"])):
+        _tendon_finger(f, tp, p_len, links, joints, actuators, couplings, finger_joints)
+    return assemble_spec(data, links, joints, couplings, actuators, T_world_root, rail_enabled,
+                         finger_joints)
 
-    # thumb
-    th = _get(data, "thumb", dict)
+
+def _tendon_thumb(th: dict, tp: _TendonDrive, links, joints, actuators, finger_joints) -> None:
+    """The thumb: a CMC abduction servo, CMC flexion and IP on tendons."""
     tb, tt, tw = _length(th, "base"), _length(th, "top"), _length(th, "width")
     tarm = _get(th, "moment_arm_m", dict)
     for k in ("cmc_flex", "ip"):
@@ -415,83 +434,84 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
               _seg_link("thumb_top", tt, tw * 0.9, _get(tm, "top"))]
     lo, hi = _range(th, "cmc_abd")
     joints.append(Joint("thumb_cmc_abd", "revolute", "palm", "thumb_cmc", cmc_xyz, cmc_rpy,
-                        (0.0, 0.0, 1.0), lo, hi, min(v_cap, _get(servo, "speed_rad_s")), a_max,
-                        _get(servo, "peak_torque_nm")))
+                        (0.0, 0.0, 1.0), lo, hi, min(tp.v_cap, _get(tp.servo, "speed_rad_s")), tp.a_max,
+                        _get(tp.servo, "peak_torque_nm")))
     lo, hi = _range(th, "cmc_flex")
     joints.append(Joint("thumb_cmc_flex", "revolute", "thumb_cmc", "thumb_base", (0.0, 0.0, 0.0),
                         axis=(-1.0, 0.0, 0.0), lower=lo, upper=hi,
-                        velocity=tendon_speed(_get(tarm, "cmc_flex")), acceleration=a_max,
-                        effort=tau_peak * eff / spool * _get(tarm, "cmc_flex")))
+                        velocity=tp.speed(_get(tarm, "cmc_flex")), acceleration=tp.a_max,
+                        effort=tp.tau_peak * tp.eff / tp.spool * _get(tarm, "cmc_flex")))
     lo, hi = _range(th, "ip")
     joints.append(Joint("thumb_ip", "revolute", "thumb_base", "thumb_top", (0.0, tb, 0.0),
                         axis=(-1.0, 0.0, 0.0), lower=lo, upper=hi,
-                        velocity=tendon_speed(_get(tarm, "ip")), acceleration=a_max,
-                        effort=tau_peak * eff / spool * _get(tarm, "ip")))
+                        velocity=tp.speed(_get(tarm, "ip")), acceleration=tp.a_max,
+                        effort=tp.tau_peak * tp.eff / tp.spool * _get(tarm, "ip")))
     tl, tj = _tip("thumb", "thumb_top", tt, tw * 0.9)
     links.append(tl)
     joints.append(tj)
     actuators += [
         Actuator("thumb_cmc_abd", "servo", "thumb_cmc_abd",
-                 (("thumb_cmc_abd", _get(servo, "gear_ratio")),), _get(servo, "speed_rad_s"),
-                 _get(servo, "peak_torque_nm"), 1.0),
+                 (("thumb_cmc_abd", _get(tp.servo, "gear_ratio")),), _get(tp.servo, "speed_rad_s"),
+                 _get(tp.servo, "peak_torque_nm"), 1.0),
         Actuator("thumb_cmc_flex", "tendon", "thumb_cmc_flex",
-                 (("thumb_cmc_flex", _get(tarm, "cmc_flex") / spool),), w_motor, tau_peak, eff, spool),
-        Actuator("thumb_ip", "tendon", "thumb_ip", (("thumb_ip", _get(tarm, "ip") / spool),),
-                 w_motor, tau_peak, eff, spool),
+                 (("thumb_cmc_flex", _get(tarm, "cmc_flex") / tp.spool),), tp.w_motor, tp.tau_peak, tp.eff, tp.spool),
+        Actuator("thumb_ip", "tendon", "thumb_ip", (("thumb_ip", _get(tarm, "ip") / tp.spool),),
+                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool),
     ]
     finger_joints.append(("thumb", ("thumb_cmc_abd", "thumb_cmc_flex", "thumb_ip")))
 
-    for f in sorted(fingers, key=lambda f: FINGERS.index(f["name"])):
-        n = f["name"]
-        lb, lm, lt, w = _length(f, "base"), _length(f, "middle"), _length(f, "top"), _length(f, "width")
-        arm = _get(f, "moment_arm_m", dict)
-        ms = _get(f, "masses_kg", dict)
-        ratio = _get(f, "dip_ratio")
-        if not 0.0 < ratio <= 1.5:
-            raise InputError(f"{n}: dip_ratio must be in (0, 1.5] (the seed uses 0.667, 0.556, 0.333)")
-        links += [Link(f"{n}_knuckle", 0.005, (0.0, 0.0, 0.0), (0.01, 0.01, 0.01)),
-                  _seg_link(f"{n}_base", lb, w, _get(ms, "base")),
-                  _seg_link(f"{n}_middle", lm, w * 0.95, _get(ms, "middle")),
-                  _seg_link(f"{n}_top", lt, w * 0.9, _get(ms, "top"))]
-        lo_a, hi_a = _range(f, "abd")
-        joints.append(Joint(f"{n}_mcp_abd", "revolute", "palm", f"{n}_knuckle",
-                            (_get(f, "mcp_x_m"), p_len, float(f.get("mcp_z_m", 0.0))),
-                            axis=(0.0, 0.0, 1.0), lower=lo_a,
-                            upper=hi_a, velocity=min(v_cap, _get(servo, "speed_rad_s")),
-                            acceleration=a_max, effort=_get(servo, "peak_torque_nm")))
-        a_mcp, a_pip, a_dip = _positive(arm, "mcp"), _positive(arm, "pip"), _positive(arm, "dip")
-        # one tendon crosses the PIP and the DIP: its motor turns
-        # (a_pip + ratio a_dip) / spool per PIP radian
-        a_pip_eff = a_pip + ratio * a_dip
-        v_pip = tendon_speed(a_pip_eff)
-        for jn, parent, child, xyz, key, v, a in (
-            ("mcp_flex", f"{n}_knuckle", f"{n}_base", (0.0, 0.0, 0.0), "mcp", tendon_speed(a_mcp), a_mcp),
-            ("pip", f"{n}_base", f"{n}_middle", (0.0, lb, 0.0), "pip", v_pip, a_pip),
-            ("dip", f"{n}_middle", f"{n}_top", (0.0, lm, 0.0), "dip", ratio * v_pip, a_dip),
-        ):
-            lo, hi = _range(f, key)
-            joints.append(Joint(f"{n}_{jn}", "revolute", parent, child, xyz, axis=(-1.0, 0.0, 0.0),
-                                lower=lo, upper=hi, velocity=v, acceleration=a_max,
-                                effort=tau_peak * eff / spool * a))
-        # the DIP follows the PIP: its range must hold ratio x the PIP's range
-        pip, dip = joints[-2], joints[-1]
-        if not (dip.lower <= ratio * pip.lower + 1e-12 and ratio * pip.upper <= dip.upper + 1e-12):
-            raise InputError(f"{n}: dip range does not contain dip_ratio x pip range")
-        couplings.append(LinearCoupling(f"{n}_dip", f"{n}_pip", ratio))
-        tl, tj = _tip(n, f"{n}_top", lt, w * 0.9)
-        links.append(tl)
-        joints.append(tj)
-        actuators += [
-            Actuator(f"{n}_abd", "servo", f"{n}_mcp_abd", ((f"{n}_mcp_abd", _get(servo, "gear_ratio")),),
-                     _get(servo, "speed_rad_s"), _get(servo, "peak_torque_nm"), 1.0),
-            Actuator(f"{n}_mcp", "tendon", f"{n}_mcp_flex", ((f"{n}_mcp_flex", a_mcp / spool),),
-                     w_motor, tau_peak, eff, spool),
-            # one tendon crosses the PIP and the DIP
-            Actuator(f"{n}_pip", "tendon", f"{n}_pip",
-                     ((f"{n}_pip", a_pip / spool), (f"{n}_dip", a_dip / spool)),
-                     w_motor, tau_peak, eff, spool),
-        ]
-        finger_joints.append((n, (f"{n}_mcp_abd", f"{n}_mcp_flex", f"{n}_pip", f"{n}_dip")))
 
-    return assemble_spec(data, links, joints, couplings, actuators, T_world_root, rail_enabled,
-                         finger_joints)
+def _tendon_finger(f: dict, tp: _TendonDrive, p_len: float, links, joints, actuators,
+                   couplings, finger_joints) -> None:
+    """A long finger: an MCP abduction servo, MCP flexion on one tendon, PIP and DIP on
+    another (the DIP coupled to the PIP)."""
+    n = f["name"]
+    lb, lm, lt, w = _length(f, "base"), _length(f, "middle"), _length(f, "top"), _length(f, "width")
+    arm = _get(f, "moment_arm_m", dict)
+    ms = _get(f, "masses_kg", dict)
+    ratio = _get(f, "dip_ratio")
+    if not 0.0 < ratio <= 1.5:
+        raise InputError(f"{n}: dip_ratio must be in (0, 1.5] (the seed uses 0.667, 0.556, 0.333)")
+    links += [Link(f"{n}_knuckle", 0.005, (0.0, 0.0, 0.0), (0.01, 0.01, 0.01)),
+              _seg_link(f"{n}_base", lb, w, _get(ms, "base")),
+              _seg_link(f"{n}_middle", lm, w * 0.95, _get(ms, "middle")),
+              _seg_link(f"{n}_top", lt, w * 0.9, _get(ms, "top"))]
+    lo_a, hi_a = _range(f, "abd")
+    joints.append(Joint(f"{n}_mcp_abd", "revolute", "palm", f"{n}_knuckle",
+                        (_get(f, "mcp_x_m"), p_len, float(f.get("mcp_z_m", 0.0))),
+                        axis=(0.0, 0.0, 1.0), lower=lo_a,
+                        upper=hi_a, velocity=min(tp.v_cap, _get(tp.servo, "speed_rad_s")),
+                        acceleration=tp.a_max, effort=_get(tp.servo, "peak_torque_nm")))
+    a_mcp, a_pip, a_dip = _positive(arm, "mcp"), _positive(arm, "pip"), _positive(arm, "dip")
+    # one tendon crosses the PIP and the DIP: its motor turns
+    # (a_pip + ratio a_dip) / tp.spool per PIP radian
+    a_pip_eff = a_pip + ratio * a_dip
+    v_pip = tp.speed(a_pip_eff)
+    for jn, parent, child, xyz, key, v, a in (
+        ("mcp_flex", f"{n}_knuckle", f"{n}_base", (0.0, 0.0, 0.0), "mcp", tp.speed(a_mcp), a_mcp),
+        ("pip", f"{n}_base", f"{n}_middle", (0.0, lb, 0.0), "pip", v_pip, a_pip),
+        ("dip", f"{n}_middle", f"{n}_top", (0.0, lm, 0.0), "dip", ratio * v_pip, a_dip),
+    ):
+        lo, hi = _range(f, key)
+        joints.append(Joint(f"{n}_{jn}", "revolute", parent, child, xyz, axis=(-1.0, 0.0, 0.0),
+                            lower=lo, upper=hi, velocity=v, acceleration=tp.a_max,
+                            effort=tp.tau_peak * tp.eff / tp.spool * a))
+    # the DIP follows the PIP: its range must hold ratio x the PIP's range
+    pip, dip = joints[-2], joints[-1]
+    if not (dip.lower <= ratio * pip.lower + 1e-12 and ratio * pip.upper <= dip.upper + 1e-12):
+        raise InputError(f"{n}: dip range does not contain dip_ratio x pip range")
+    couplings.append(LinearCoupling(f"{n}_dip", f"{n}_pip", ratio))
+    tl, tj = _tip(n, f"{n}_top", lt, w * 0.9)
+    links.append(tl)
+    joints.append(tj)
+    actuators += [
+        Actuator(f"{n}_abd", "servo", f"{n}_mcp_abd", ((f"{n}_mcp_abd", _get(tp.servo, "gear_ratio")),),
+                 _get(tp.servo, "speed_rad_s"), _get(tp.servo, "peak_torque_nm"), 1.0),
+        Actuator(f"{n}_mcp", "tendon", f"{n}_mcp_flex", ((f"{n}_mcp_flex", a_mcp / tp.spool),),
+                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool),
+        # one tendon crosses the PIP and the DIP
+        Actuator(f"{n}_pip", "tendon", f"{n}_pip",
+                 ((f"{n}_pip", a_pip / tp.spool), (f"{n}_dip", a_dip / tp.spool)),
+                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool),
+    ]
+    finger_joints.append((n, (f"{n}_mcp_abd", f"{n}_mcp_flex", f"{n}_pip", f"{n}_dip")))
