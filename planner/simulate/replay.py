@@ -112,6 +112,27 @@ def _rest_keys_on_fingers(scene: Scene, data, mujoco) -> None:
     mujoco.mj_forward(scene.model, data)
 
 
+def _start(scene: Scene, q: np.ndarray, ball: Ball | None, mujoco):
+    """The simulation's first state: the hand at the first row, the ball (if any) at its
+    launch with its initial velocity, the keys resting on the fingers that start on them;
+    and the ball's first velocity index (None without a ball)."""
+    model = scene.model
+    data = mujoco.MjData(model)
+    data.qpos[scene.hand_qpos] = q[0]
+    vadr = None
+    if scene.ball_body >= 0:
+        adr = model.jnt_qposadr[model.body_jntadr[scene.ball_body]]
+        vadr = model.jnt_dofadr[model.body_jntadr[scene.ball_body]]
+        data.qpos[adr:adr + 3] = model.body_pos[scene.ball_body]
+        data.qpos[adr + 3:adr + 7] = (1.0, 0.0, 0.0, 0.0)
+        if ball is not None:
+            data.qvel[vadr:vadr + 3] = ball.v0_m_s
+    mujoco.mj_forward(model, data)
+    if len(scene.key_qpos):
+        _rest_keys_on_fingers(scene, data, mujoco)
+    return data, vadr
+
+
 def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
              ball: Ball | None = None,
              on_progress: Callable[[int, int], None] | None = None) -> SimRecord:
@@ -125,18 +146,7 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     # MuJoCo's warnings would print on stdout (--json owns it): counted in data.warning
     mujoco.set_mju_user_warning(lambda _msg: None)
     model = scene.model
-    data = mujoco.MjData(model)
-    data.qpos[scene.hand_qpos] = q[0]
-    if scene.ball_body >= 0:
-        adr = model.jnt_qposadr[model.body_jntadr[scene.ball_body]]
-        vadr = model.jnt_dofadr[model.body_jntadr[scene.ball_body]]
-        data.qpos[adr:adr + 3] = model.body_pos[scene.ball_body]
-        data.qpos[adr + 3:adr + 7] = (1.0, 0.0, 0.0, 0.0)
-        if ball is not None:
-            data.qvel[vadr:vadr + 3] = ball.v0_m_s
-    mujoco.mj_forward(model, data)
-    if len(scene.key_qpos):
-        _rest_keys_on_fingers(scene, data, mujoco)
+    data, vadr = _start(scene, q, ball, mujoco)
     T = len(t_s)
     dt_row = float(np.median(np.diff(t_s))) if T > 1 else 0.01
     n_sub = max(1, round(dt_row / TIMESTEP_S))
