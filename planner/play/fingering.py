@@ -250,38 +250,7 @@ class FingeringProblem(Costs):
                 sub = new[i:i + size]
                 left_out = sum(frames[n] for n in new if n not in sub)
                 self._extend(layer, prev, t, sub, left_out)
-        return self._prune(layer)
-
-    @classmethod
-    def _beam_bound(cls, layer) -> float:
-        """The cost of the last state ``_prune`` keeps of ``layer`` (inf when it keeps
-        fewer than ``BEAM``)."""
-        kept = cls._prune(layer)
-        return max(v[0] for v in kept.values()) if len(kept) == BEAM else math.inf
-
-    @staticmethod
-    def _prune(layer):
-        """The ``BEAM`` cheapest states, at most ``PER_RAIL`` of them at one rail position
-        (so that the programme keeps other hand positions in view) and one of each hand
-        shape; of those holding the same notes at most ``PER_NOTES`` while states holding
-        other notes (a held note let go, a note left out) are there to fill the beam."""
-        ranked = sorted(layer.items(), key=lambda kv: kv[1][0])
-        out, per, shape, sets = {}, {}, {}, {}
-        for capped in (True, False):
-            for s, v in ranked:
-                if s in out:
-                    continue
-                k = (s.rail_i, s.fingers)
-                notes = tuple(n for n, _ in s.fingers)
-                if (per.get(s.rail_i, 0) < PER_RAIL and shape.get(k, 0) < PER_SHAPE
-                        and (not capped or sets.get(notes, 0) < PER_NOTES)):
-                    out[s] = v
-                    per[s.rail_i] = per.get(s.rail_i, 0) + 1
-                    shape[k] = shape.get(k, 0) + 1
-                    sets[notes] = sets.get(notes, 0) + 1
-                    if len(out) == BEAM:
-                        return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
-        return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
+        return _prune(layer)
 
     def _extend(self, layer, prev, t: float, new: list[int], left_out: float = 0.0) -> None:
         fingers = self.atlas.hand.fingers
@@ -295,7 +264,7 @@ class FingeringProblem(Costs):
             # nothing: once ``BEAM`` states are cheaper than this one's cost, no state
             # it leads to is kept, nor are those of the states after it)
             if i % BOUND_EVERY == 0 and len(layer) >= BEAM:
-                bound = self._beam_bound(layer)
+                bound = _beam_bound(layer)
             if cost > bound:
                 break
             ctx = None if p is None else Prev(self, p, t)
@@ -422,6 +391,36 @@ class FingeringProblem(Costs):
             if f not in busy:
                 last[f] = (m, r)
         return tuple(sorted((m, f, r) for f, (m, r) in last.items()))
+
+
+def _beam_bound(layer) -> float:
+    """The cost of the last state ``_prune`` keeps of ``layer`` (inf when it keeps
+    fewer than ``BEAM``)."""
+    kept = _prune(layer)
+    return max(v[0] for v in kept.values()) if len(kept) == BEAM else math.inf
+
+def _prune(layer):
+    """The ``BEAM`` cheapest states, at most ``PER_RAIL`` of them at one rail position
+    (so that the programme keeps other hand positions in view) and one of each hand
+    shape; of those holding the same notes at most ``PER_NOTES`` while states holding
+    other notes (a held note let go, a note left out) are there to fill the beam."""
+    ranked = sorted(layer.items(), key=lambda kv: kv[1][0])
+    out, per, shape, sets = {}, {}, {}, {}
+    for capped in (True, False):
+        for s, v in ranked:
+            if s in out:
+                continue
+            k = (s.rail_i, s.fingers)
+            notes = tuple(n for n, _ in s.fingers)
+            if (per.get(s.rail_i, 0) < PER_RAIL and shape.get(k, 0) < PER_SHAPE
+                    and (not capped or sets.get(notes, 0) < PER_NOTES)):
+                out[s] = v
+                per[s.rail_i] = per.get(s.rail_i, 0) + 1
+                shape[k] = shape.get(k, 0) + 1
+                sets[notes] = sets.get(notes, 0) + 1
+                if len(out) == BEAM:
+                    return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
+    return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
 
 
 def plan_fingering(notes, atlas: Atlas, moves: Moves, rate_hz: float) -> Fingering:
