@@ -4,6 +4,8 @@ difference of the joint torques and against the motors' capacity."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -12,6 +14,8 @@ from planner.hand.model import load_hand
 from planner.hand.tendon import actuator_capacity
 from planner.play import Planner
 from planner.play.moves import RAIL_TORQUE_SHARE, rail_acceleration_cap
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -51,3 +55,30 @@ def test_the_planner_moves_the_rail_within_the_cap(planner):
     assert planner.moves.acceleration[r] < planner.hand.acceleration[r]
     move = planner.moves.rail_move(0.0, 0.3)
     assert move.a * abs(move.dq[0]) <= planner.moves.acceleration[r] + 1e-9
+
+
+def test_check_judges_the_inertia_a_play_asks_of_the_motors(planner, tmp_path):
+    """``check`` on a play adds the torques that move the hand through its rows (RNEA,
+    central differences) to gravity and the keys: leaps planned with the rail capped
+    passes; planned with the hand file's 40 m/s^2 rail (as before the cap) the wrist
+    deviation motor is over its capacity while the rail carries the hand sideways."""
+    from planner.check import check_trajectory
+    from planner.music.midi import load_song
+    from planner.play import plan_song
+
+    song = ROOT / "songs" / "leaps.mid"
+    ok = tmp_path / "capped.csv"
+    plan_song(load_song(song), planner.hand, str(ok), planner=planner)
+    rep = check_trajectory(str(ok), str(song))
+    torque = next(lc for lc in rep.limits if lc.category == "motor_torque")
+    assert torque.count == 0 and torque.worst <= 2.0
+
+    fast = Planner(planner.hand)
+    r = fast.atlas.rail
+    fast.moves.acceleration[r] = planner.hand.acceleration[r]  # 40 m/s^2: no cap
+    bad = tmp_path / "uncapped.csv"
+    plan_song(load_song(song), fast.hand, str(bad), planner=fast)
+    rep = check_trajectory(str(bad), str(song))
+    torque = next(lc for lc in rep.limits if lc.category == "motor_torque")
+    assert torque.count > 0 and torque.name == "motor.wrist_dev" and torque.worst > 2.0
+    assert not rep.ok

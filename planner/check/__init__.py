@@ -13,7 +13,8 @@ kinematics and reports
 * **catch**: the ball's flight (integrated here), where it meets the palm,
   fingertips touching it early and the grasp after the intercept;
 * **both**: a limit audit (joint positions, speeds, accelerations, motor
-  speeds, motor columns against the joints, static motor torque, couplings, tendon
+  speeds, motor columns against the joints, motor torque (with the hand's inertia on a
+  play), couplings, tendon
   tensions).
 
 The package: ``criteria`` (the rules, imported by the planners' self-checks
@@ -70,13 +71,14 @@ Choices (each one a named constant below):
   (``1e-6/dt`` for speeds, ``2e-6/dt^2`` for second differences: 0.02 rad/s^2
   at 100 Hz). The speed is reported at the later row of its pair, the
   acceleration at the middle row of its triple.
-* Motor torque: the static torque only -- gravity (with the file's
-  ``T_world_root`` orientation) plus, for play, a nominal
-  ``KEY_FORCE_N`` = 0.5 N upward on every fingertip that holds a key down
-  (the planner may press harder), and for a catch, after the intercept, the
-  ball's weight on the palm centre -- mapped to the motors with
-  ``HandModel.motor_torques`` and compared with ``motor_peak_torque`` (1 %).
-  Inertial torques are not counted.
+* Motor torque: gravity (with the file's ``T_world_root`` orientation) plus,
+  for play, a nominal ``KEY_FORCE_N`` = 0.5 N upward on every fingertip that
+  holds a key down (the planner may press harder) and the torques that move
+  the hand through its rows (RNEA on central differences of the rows: the
+  rail carrying the hand sideways loads the wrist), and for a catch, after the
+  intercept, the ball's weight on the palm centre (the arm's own inertia is not
+  counted there) -- mapped to the motors with ``HandModel.motor_torques`` and
+  compared with ``motor_peak_torque`` (1 %).
 * Motor columns must equal ``HandModel.motor_angles(q)`` of the row's joints
   within ``MOTOR_TOL_RAD`` (1e-5 rad) plus the rounding of the file (half a
   unit of the 6th decimal on the motor value and on each joint, weighted by
@@ -376,7 +378,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         catch, ball_load = catch_audit(tr, kin, tips, palm, traj_path)
         problems.extend(catch.problems)
 
-    limits, tendons = limit_audit(hand, kin, tr, pressing, ball_load)
+    limits, tendons = limit_audit(hand, kin, tr, pressing, ball_load, inertia=task == "play")
     for lc in limits:
         if not lc.ok:
             problems.append(f"{lc.count} {lc.category.replace('_', ' ')} violations (worst "

@@ -61,6 +61,15 @@ class Kinematics:
     def gravity(self, q: np.ndarray) -> np.ndarray:
         return pin.computeGeneralizedGravity(self.model, self.data, self.pin_q(q))[self.idx]
 
+    def inertial(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Joint torques that move the hand at speeds ``v`` and accelerations ``a`` (our
+        joint order), gravity apart: RNEA(q, v, a) - RNEA(q, 0, 0)."""
+        qp, z = self.pin_q(q), np.zeros(self.model.nv)
+        vp, ap = z.copy(), z.copy()
+        vp[self.idx], ap[self.idx] = v, a
+        return (pin.rnea(self.model, self.data, qp, vp, ap)
+                - pin.rnea(self.model, self.data, qp, z, z))[self.idx]
+
     def point_jacobians(self, q: np.ndarray, frame_ids: list[int]) -> list[np.ndarray]:
         """World position Jacobians (3, n) of frames, our joint order."""
         pin.computeJointJacobians(self.model, self.data, self.pin_q(q))

@@ -37,12 +37,17 @@ def _worst(category: str, excess: np.ndarray, value: np.ndarray, limit: np.ndarr
 
 @np.errstate(over="ignore", invalid="ignore")  # absurd values give inf: counted, not printed
 def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips: np.ndarray | None,
-                ball_load: np.ndarray | None) -> tuple[list[LimitCheck], tuple[TendonLoad, ...]]:
-    """The limit checks (one per category) and the worst tension of every tendon."""
+                ball_load: np.ndarray | None, inertia: bool = False
+                ) -> tuple[list[LimitCheck], tuple[TendonLoad, ...]]:
+    """The limit checks (one per category) and the worst tension of every tendon; with
+    ``inertia`` the motor torques also move the hand as its rows do (a play)."""
     t, Q, QM = tr.t_s, tr.q, tr.q_motor
     out = [_position_check(hand, t, Q), *_rate_checks(hand, t, Q, QM),
            _motor_consistency(hand, t, Q, QM), _coupling_check(hand, t, Q)]
-    TM = _motor_torques(hand, Q, _joint_torques(kin, Q, pressing_tips, ball_load))
+    tau = _joint_torques(kin, Q, pressing_tips, ball_load)
+    if inertia:
+        tau += _inertial_torques(kin, t, Q)
+    TM = _motor_torques(hand, Q, tau)
     ratio = np.abs(TM) / hand.motor_peak_torque
     out.append(_worst("motor_torque", ratio, np.abs(TM), hand.motor_peak_torque,
                       RATE_TOL * hand.motor_peak_torque, _motor_columns(hand), t, "N m"))
@@ -122,6 +127,22 @@ def _coupling_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck
     tol = COUPLING_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + slope)
     names = [hand.joint_names[c.dep] for c in hand.couplings]
     return _worst("coupling", ce / tol, ce, tol, 0.0, names, t, "rad")
+
+
+def _inertial_torques(kin: Kinematics, t: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Joint torques moving the hand through its rows (gravity apart): speeds and
+    accelerations by central differences of the rows (none at the first and last row);
+    only the rows where something moves are computed."""
+    out = np.zeros_like(Q)
+    if len(t) < 3:
+        return out
+    dt0, dt1 = np.diff(t)[:-1, None], np.diff(t)[1:, None]
+    V = (Q[2:] - Q[:-2]) / (dt0 + dt1)
+    A = 2.0 * ((Q[2:] - Q[1:-1]) / dt1 - (Q[1:-1] - Q[:-2]) / dt0) / (dt0 + dt1)
+    moving = np.flatnonzero(np.any(V != 0.0, axis=1) | np.any(A != 0.0, axis=1))
+    for k in moving:
+        out[k + 1] = kin.inertial(Q[k + 1], V[k], A[k])
+    return out
 
 
 def _joint_torques(kin: Kinematics, Q: np.ndarray, pressing_tips: np.ndarray | None,

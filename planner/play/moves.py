@@ -287,11 +287,12 @@ def _crossing(g, g0: float, g1: float, tol: float) -> float:
     return lo if glo >= 0.0 else hi
 
 
-RAIL_TORQUE_SHARE = 0.9  # the rail accelerates at most so hard that the motors holding the
-# hand against its inertia and gravity use 90 % of their capacity: the rest for the
-# fingers' own moves and postures other than the natural one. Without it the default
-# hand's 40 m/s^2 rail asks the wrist deviation motor 1.19 x its capacity (inverse
-# dynamics here; the MuJoCo replay of `leaps` saturates it for 350 ms: docs/physics-replay.md)
+RAIL_TORQUE_SHARE = 0.7  # the rail accelerates at most so hard that the motors holding the
+# hand against its inertia and gravity use 70 % of their capacity: the rest for the fingers'
+# own moves, whose reactions on the wrist reach 0.5 N m in the rows (at 90 % the check's
+# inverse dynamics found 8 of 71 songs 3-16 % over the wrist deviation motor's 2 N m).
+# Without it the default hand's 40 m/s^2 rail asks that motor 1.19 x its capacity (the
+# MuJoCo replay of `leaps` saturates it for 350 ms: docs/physics-replay.md)
 
 
 def rail_acceleration_cap(hand: HandModel, postures) -> float:
