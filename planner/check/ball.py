@@ -131,7 +131,35 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
         problems.append(f"{len(touches)} fingertip contacts with the ball before the intercept "
                         f"(first: {touches[0].finger} at {touches[0].time_s:.3f} s)")
 
-    # after: the ball rides on the palm; the grasp must close and hold
+    g_time, g_fingers, held, d_after = _grasp_after(t, ti, tips, palm, r, problems)
+    loads: tuple[BallLoad, ...] = ()
+    stop_m = _stop_distance(meta, path)
+    if stop_m is None:
+        problems.append("the plan states no stopping distance (catch.stop_distance_m): the "
+                        "force of stopping the ball cannot be judged")
+    elif err is not None:
+        loads = ball_loads(tr, kin, palm, ball, ti, stop_m)
+        for ld in loads:
+            if ld.headroom < -RATE_TOL:
+                problems.append(f"{'stopping' if ld.phase == 'stop' else 'holding'} the ball "
+                                f"needs {ld.force_n:.1f} N at {ld.time_s:.3f} s: motor."
+                                f"{ld.motor} {abs(ld.torque_nm):.2f} N m > its "
+                                f"{ld.limiting_part} limit {ld.capacity_nm:.2f} N m")
+    load = np.where(t >= ti, ball["mass"], 0.0)
+    res = CatchResult(ti, r, tuple(float(x) for x in b_i), tuple(float(x) for x in target), err,
+                      err is not None and err <= INTERCEPT_TOL_M, tuple(touches), g_time,
+                      g_fingers, held,
+                      float(d_after.min()) if d_after.size else None, tuple(problems), loads,
+                      {k: tr.end.get(k) for k in ("catch", "reason")} if live else None)
+    return res, load
+
+
+def _grasp_after(t: np.ndarray, ti: float, tips: np.ndarray, palm: np.ndarray, r: float,
+                 problems: list[str]):
+    """After the intercept the ball rides on the palm; the grasp must close within
+    ``GRASP_WINDOW_S`` and hold to the end: its time, fingers, whether it holds, and every
+    fingertip's distance from the ball's centre on the palm (rows from the intercept on).
+    Its failures are appended to ``problems``."""
     after = np.flatnonzero(t >= ti)
     centre = palm[after, :3, 3] + r * palm[after, :3, 2]
     d_after = np.linalg.norm(tips[after] - centre[:, None, :], axis=-1)
@@ -154,26 +182,7 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
         problems.append(f"no grasp within {GRASP_WINDOW_S * 1000:g} ms of the intercept "
                         f"(needs {GRASP_MIN_TIPS} fingertips including the thumb within "
                         f"radius + {GRASP_TOL_M * 1000:g} mm; best row had {best})")
-    loads: tuple[BallLoad, ...] = ()
-    stop_m = _stop_distance(meta, path)
-    if stop_m is None:
-        problems.append("the plan states no stopping distance (catch.stop_distance_m): the "
-                        "force of stopping the ball cannot be judged")
-    elif err is not None:
-        loads = ball_loads(tr, kin, palm, ball, ti, stop_m)
-        for ld in loads:
-            if ld.headroom < -RATE_TOL:
-                problems.append(f"{'stopping' if ld.phase == 'stop' else 'holding'} the ball "
-                                f"needs {ld.force_n:.1f} N at {ld.time_s:.3f} s: motor."
-                                f"{ld.motor} {abs(ld.torque_nm):.2f} N m > its "
-                                f"{ld.limiting_part} limit {ld.capacity_nm:.2f} N m")
-    load = np.where(t >= ti, ball["mass"], 0.0)
-    res = CatchResult(ti, r, tuple(float(x) for x in b_i), tuple(float(x) for x in target), err,
-                      err is not None and err <= INTERCEPT_TOL_M, tuple(touches), g_time,
-                      g_fingers, held,
-                      float(d_after.min()) if d_after.size else None, tuple(problems), loads,
-                      {k: tr.end.get(k) for k in ("catch", "reason")} if live else None)
-    return res, load
+    return g_time, g_fingers, held, d_after
 
 
 def _stop_distance(meta: dict[str, Any], path: str) -> float | None:
