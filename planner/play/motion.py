@@ -27,7 +27,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from planner.errors import PlannerError
 from planner.music import keyboard as kb
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
@@ -71,8 +70,6 @@ def start_entries(atlas: Atlas, rail_m: float) -> dict[str, AtlasEntry]:
                       if (e := atlas.entry_at(f, pc, k)) is not None), None)
         if e is not None:
             out[f] = e
-    if not out:
-        raise PlannerError("the atlas has no pose of any finger: the hand reaches no key")
     return out
 
 
@@ -215,8 +212,9 @@ class Motion:
 
     def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float,
                  rail0_m: float, park: bool = False) -> None:
-        """``park``: the hand has nothing to play; it waits with every tip at crossing
-        height (``Atlas.park``) and never moves."""
+        """``park``: the hand has nothing to play (asked, or none of its fingers presses
+        any key); it waits with every tip at crossing height (``Atlas.park``) and never
+        moves."""
         self.notes, self.atlas, self.moves = notes, atlas, moves
         self.hand = atlas.hand
         self.dt = 1.0 / rate_hz
@@ -226,21 +224,22 @@ class Motion:
         self.rail = _Track(np.array([rail0_m]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
                         for f in self.hand.fingers}
-        if park:
+        entries = {} if park else start_entries(atlas, rail0_m)
+        if not entries:
             self.q0 = atlas.park()
             if atlas.rail is not None:
                 self.q0[atlas.rail] = rail0_m
             for f, st in self.fingers.items():
                 st.track.q = self.q0[self.hand.joint_slice(f)].copy()
         else:
-            self._start_high()
+            self._start_high(entries)
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
         self.outcomes: dict[int, Outcome] = {}
 
-    def _start_high(self) -> None:
+    def _start_high(self, entries: dict[str, AtlasEntry]) -> None:
         """The hand starts with every finger at crossing height over the key nearest its
-        natural place (the first row: no tip near a key)."""
-        for f, e in start_entries(self.atlas, self.rail.q[0]).items():
+        natural place (``entries``, ``start_entries``; the first row: no tip near a key)."""
+        for f, e in entries.items():
             st = self.fingers[f]
             st.entry = e
             st.track.q = e.high.copy()

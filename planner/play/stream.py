@@ -128,9 +128,9 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
             motion.prepare(ch.assignments)
             rows = _Rows(hand, writer, motion, rate_hz)
         elif motion is None and math.isfinite(ch.until_s):  # (nothing playable yet, more
-            # to come: the hand waits at its natural place, the rows go on; still, if no
+            # to come: the hand waits at its natural place, the rows go on; parked if no
             # finger reaches any key: then nothing ever will be)
-            motion = _waiting(notes, pl, rate_hz)
+            motion = Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base))
             rows = _Rows(hand, writer, motion, rate_hz)
         for _, item in steps:
             if isinstance(item, Assignment):
@@ -154,16 +154,6 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     fingering = Fingering(tuple(done[n] for n in sorted(done)),
                           tuple(sorted(skipped, key=lambda s: s.note)), loss)
     return motion, rows, fingering
-
-
-def _waiting(notes, pl: Planner, rate_hz: float) -> Motion:
-    """The hand at its natural place before its first playable note: at crossing height
-    where its fingers reach keys, still (parked) when none reaches any."""
-    rail = pl.atlas.rail_of(pl.atlas.base)
-    try:
-        return Motion(notes, pl.atlas, pl.moves, rate_hz, rail)
-    except PlannerError:
-        return Motion(notes, pl.atlas, pl.moves, rate_hz, rail, park=True)
 
 
 class _Rows:
