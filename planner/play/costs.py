@@ -187,6 +187,10 @@ class Costs:
         """When the key should go down: half a frame before the note's first row."""
         return self._t_down[note]
 
+    def frames(self, note: int) -> float:
+        """The frames ``note`` sounds (what leaving it out costs)."""
+        return (self._t_up[note] - self._t_down[note]) / self.dt
+
     def t_up(self, note: int) -> float:
         """When it should come up: half a frame before the first row at or after its end."""
         return self._t_up[note]

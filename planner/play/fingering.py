@@ -222,7 +222,7 @@ class FingeringProblem(Costs):
         it (``HELD``); striking it loses more frames than it has, the moves there taking
         too long (``TOO_LATE``: another state of the event strikes it with the notes struck
         here); or a chord the hand does not hold from one position (``CHORD``)."""
-        frames = (self._t_up[n] - self._t_down[n]) / self.dt
+        frames = self.frames(n)
         longer = sorted(m for m in here if (self._t_up[m] - t) / self.dt > frames)
         if longer:
             names = ", ".join(pitch_name(self.pitch[m]) for m in longer)
@@ -244,11 +244,10 @@ class FingeringProblem(Costs):
         new = sorted(new, key=lambda n: self.notes[n].pitch)
         layer: dict[State, tuple[float, State | None]] = {}
         self._shape_best: dict[tuple, float] = {}  # the cheapest state of each shape
-        frames = {n: (self._t_up[n] - self._t_down[n]) / self.dt for n in new}
         for size in range(min(len(new), len(self.atlas.hand.fingers)), -1, -1):
             for i in range(len(new) - size + 1):
                 sub = new[i:i + size]
-                left_out = sum(frames[n] for n in new if n not in sub)
+                left_out = sum(self.frames(n) for n in new if n not in sub)
                 self._extend(layer, prev, t, sub, left_out)
         return _prune(layer)
 
