@@ -135,14 +135,23 @@ def make_table(moves, path: Path, params: str) -> int:
     return len(entries)
 
 
-def _tip_z_batches(moves, finger: str, rows_fn, n_rows: int) -> np.ndarray:
-    """The finger's tip positions at ``n_rows`` configurations built by ``rows_fn(lo,
-    hi)`` (finger joints in ``moves.js`` order, or the rail first then them)."""
+def _pair_tips(moves, finger: str, cols: np.ndarray, A: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """The finger's tip positions (n * n * len(S), 3) along the straight move between
+    every pair (i, j) of the rows of ``A`` (values of the joints ``cols``, the rest of
+    the hand at the atlas's natural posture), at each path parameter of ``S``: row
+    (i * n + j) * len(S) + s."""
+    n = len(A)
+    I, J = np.divmod(np.arange(n * n), n)
     chain = FrameChain(moves.hand, f"{finger}_tip")
-    out = np.empty((n_rows, 3))
-    for lo in range(0, n_rows, _BATCH):
-        hi = min(n_rows, lo + _BATCH)
-        out[lo:hi] = chain.positions(moves.hand.apply_couplings(rows_fn(lo, hi)))
+    base = moves.atlas.base
+    out = np.empty((n * n * len(S), 3))
+    for lo in range(0, len(out), _BATCH):
+        hi = min(len(out), lo + _BATCH)
+        pair, s = np.divmod(np.arange(lo, hi), len(S))
+        Q = np.repeat(base[None, :], hi - lo, axis=0)
+        a, b = A[I[pair]], A[J[pair]]
+        Q[:, cols] = a + S[s][:, None] * (b - a)
+        out[lo:hi] = chain.positions(moves.hand.apply_couplings(Q))
     return out
 
 
@@ -151,20 +160,9 @@ def _across_matrix(moves, finger: str, E: list[AtlasEntry]) -> np.ndarray:
     ``HIGH_SAFE_Z_M`` high at each of ``ACROSS_SAMPLES`` along high_i -> high_j."""
     from planner.play.moves import ACROSS_SAMPLES, HIGH_SAFE_Z_M
 
-    js, base = moves.js[finger], moves.atlas.base
-    H = np.array([e.high for e in E])
-    n, S = len(E), np.array(ACROSS_SAMPLES)
-    I, J = np.divmod(np.arange(n * n), n)
-
-    def rows(lo: int, hi: int) -> np.ndarray:
-        p = np.arange(lo, hi)  # row = pair * len(S) + sample
-        pair, s = np.divmod(p, len(S))
-        Q = np.repeat(base[None, :], hi - lo, axis=0)
-        a, b = H[I[pair]], H[J[pair]]
-        Q[:, js] = a + S[s][:, None] * (b - a)
-        return Q
-
-    z = _tip_z_batches(moves, finger, rows, n * n * len(S))[:, 2]
+    S = np.array(ACROSS_SAMPLES)
+    z = _pair_tips(moves, finger, moves.js[finger], np.array([e.high for e in E]), S)[:, 2]
+    n = len(E)
     return (z >= HIGH_SAFE_Z_M).reshape(n * n, len(S)).all(axis=1).reshape(n, n)
 
 
@@ -175,22 +173,11 @@ def _follow_matrix(moves, finger: str, pc: int, E: list[AtlasEntry]) -> np.ndarr
     white one."""
     from planner.play.moves import HOLD_MARGIN_M
 
-    r, js = moves.atlas.rail, moves.js[finger]
     k = kb.key(60 + pc)
-    cols = np.r_[r, js]
+    cols = np.r_[moves.atlas.rail, moves.js[finger]]
     A = np.array([np.r_[k.center_x_m - e.dx_m, e.press] for e in E])  # rail, finger joints
     n, S = len(E), np.linspace(0.0, 1.0, PATH_SAMPLES)
-    I, J = np.divmod(np.arange(n * n), n)
-    base = moves.atlas.base
-
-    def rows(lo: int, hi: int) -> np.ndarray:
-        pair, s = np.divmod(np.arange(lo, hi), len(S))
-        Q = np.repeat(base[None, :], hi - lo, axis=0)
-        a, b = A[I[pair]], A[J[pair]]
-        Q[:, cols] = a + S[s][:, None] * (b - a)
-        return Q
-
-    tips = _tip_z_batches(moves, finger, rows, n * n * len(S))
+    tips = _pair_tips(moves, finger, cols, A, S)
     x, y, z = tips[:, 0], tips[:, 1], tips[:, 2]
     depth = k.top_z_m - z
     ok = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
