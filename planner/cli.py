@@ -108,10 +108,15 @@ def _add_play(sub) -> None:
     pl.add_argument("--transpose", action="store_true", help="move notes outside A0-C8 by octaves")
     pl.add_argument("--strict", action="store_true",
                     help="exit 1 if any note is not played, late, or a key is pressed wrongly")
-    pl.add_argument("--report", metavar="DIR", help="write PNG plots here")
-    pl.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+    _pictures(pl)
     pl.add_argument("--json", action="store_true",
                     help="the summary as one JSON object on stdout (needs -o FILE)")
+
+
+def _pictures(parser) -> None:
+    """``--report DIR`` and ``--html FILE`` (play, catch, check: the checked plan drawn)."""
+    parser.add_argument("--report", metavar="DIR", help="write PNG plots here")
+    parser.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
 
 
 def _add_catch(sub) -> None:
@@ -131,8 +136,7 @@ def _add_catch(sub) -> None:
     c.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
     c.add_argument("--rate", type=float, default=100.0, help="setpoint rate, Hz (default 100)")
     c.add_argument("--strict", action="store_true", help="exit 1 if the catch is infeasible")
-    c.add_argument("--report", metavar="DIR", help="write PNG plots here")
-    c.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+    _pictures(c)
     c.add_argument("--json", action="store_true",
                    help="the summary as one JSON object on stdout (needs -o FILE)")
 
@@ -173,8 +177,7 @@ def _add_check(sub) -> None:
     k = sub.add_parser("check", help="replay a trajectory and verify it")
     _replay_options(k, "frame")
     k.add_argument("--played", metavar="OUT.mid", help="write the keys pressed as a MIDI file")
-    k.add_argument("--report", metavar="DIR", help="write PNG plots here")
-    k.add_argument("--html", metavar="FILE", help="write a 3D animation (HTML)")
+    _pictures(k)
 
 
 def _add_simulate(sub) -> None:
