@@ -417,8 +417,8 @@ def _prune(layer):
                 per[s.rail_i] = per.get(s.rail_i, 0) + 1
                 shape[k] = shape.get(k, 0) + 1
                 sets[notes] = sets.get(notes, 0) + 1
-                if len(out) == BEAM:
-                    return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
+                if len(out) == BEAM:  # (the first pass adds in cost order: sorted)
+                    return out if capped else dict(sorted(out.items(), key=lambda kv: kv[1][0]))
     return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
 
 
