@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from planner.music import keyboard as kb
 from planner.music.midi import pitch_name
@@ -58,44 +58,75 @@ class Skip:
 
 
 
-@dataclass(frozen=True)
 class State:
-    rail_i: int
-    fingers: tuple[tuple[int, str], ...]  # (note, finger), by note: the notes sounding
-    recent: tuple[tuple[int, str, int], ...] = ()  # (note, finger, rail index it was at):
-    # the last notes of fingers not sounding, ended within RECENT_S
-    last_notes: tuple[tuple[int, str, int], ...] = field(init=False, compare=False,
-                                                         repr=False)
-    # every finger's note that still matters to its next move, sounding or recent, with
-    # the rail index it is (or was last) pressed from
-    _hash: int = field(init=False, compare=False, repr=False)
+    """A state of the programme: the rail (index on the ``RAIL_STEP_M`` grid), the notes
+    sounding with their fingers (``fingers``: (note, finger), by note) and ``recent``:
+    (note, finger, rail index it was at), the last notes of fingers not sounding, ended
+    within RECENT_S. Immutable (its slots are set once; it is hashed many times, its
+    hash kept). ``notes`` are the notes sounding; ``last_notes`` every finger's note that
+    still matters to its next move, sounding or recent, with the rail index it is (or
+    was last) pressed from."""
 
-    def __post_init__(self) -> None:  # (the programme hashes a state many times)
-        object.__setattr__(self, "last_notes", self.recent + tuple(
-            (m, f, self.rail_i) for m, f in self.fingers))
-        object.__setattr__(self, "_hash", hash((self.rail_i, self.fingers, self.recent)))
+    __slots__ = ("rail_i", "fingers", "recent", "notes", "last_notes", "_hash")
+
+    def __init__(self, rail_i: int, fingers: tuple[tuple[int, str], ...],
+                 recent: tuple[tuple[int, str, int], ...] = ()) -> None:
+        object.__setattr__(self, "rail_i", rail_i)
+        object.__setattr__(self, "fingers", fingers)
+        object.__setattr__(self, "recent", recent)
+        object.__setattr__(self, "_hash", hash((rail_i, fingers, recent)))
+
+    def __setattr__(self, name, value):
+        raise AttributeError("State is immutable")
+
+    def __getattr__(self, name: str):  # (the derived fields, made when first read)
+        if name == "notes":
+            value = tuple(n for n, _ in self.fingers)
+        elif name == "last_notes":
+            value = self.recent + tuple((m, f, self.rail_i) for m, f in self.fingers)
+        else:
+            raise AttributeError(name)
+        object.__setattr__(self, name, value)
+        return value
+
+    def __eq__(self, other) -> bool:
+        return (self is other or isinstance(other, State) and self._hash == other._hash
+                and self.rail_i == other.rail_i and self.fingers == other.fingers
+                and self.recent == other.recent)
 
     def __hash__(self) -> int:
         return self._hash
+
+    def __repr__(self) -> str:
+        return f"State(rail_i={self.rail_i}, fingers={self.fingers}, recent={self.recent})"
 
 
 class Prev:
     """What a state of the event before tells every transition from it, worked out once
     (the programme weighs hundreds of transitions from each state)."""
 
-    __slots__ = ("around", "cut_up", "fresh", "held", "last", "on_key", "release", "state")
+    __slots__ = ("around", "cut_up", "fresh", "held", "last", "lifts", "follows", "on_key",
+                 "release", "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
         # (a held note let go at this event: its key comes up when the new notes' go down)
-        self.cut_up = (math.ceil(t / costs.dt - 1e-9) - 0.5) * costs.dt
-        pitch, t_up = costs.pitch, costs._t_up
+        self.cut_up = cut_up = (math.ceil(t / costs.dt - 1e-9) - 0.5) * costs.dt
+        pitch, t_up, t_down = costs.pitch, costs._t_up, costs._t_down
         self.held = [(m, f) for m, f in state.fingers if costs.offset[m] > t + ONSET_TOL_S]
         self.last = {f: (m, r) for m, f, r in state.last_notes}
         self.on_key = {pitch[m]: (m, f) for m, f, r in state.last_notes if r == state.rail_i}
         self.fresh = [(m, f, r) for m, f, r in state.last_notes if t_up[m] > t - RECENT_S]
+        # (before a move of the rail: when each finger's lift ends, latest first)
+        self.lifts = sorted(((costs.before_rail_s(m, f, r) + min(t_up[m], cut_up), m, f)
+                             for m, f, r in state.last_notes), key=lambda x: -x[0])
+        # (the notes sounding that might ride along: their entry, frames and press)
+        self.follows = [] if costs.atlas.rail is None else [
+            (m, f, a, t_up[m] - t_down[m], costs.moves.press_min_s(a))
+            for m, f in state.fingers if (a := costs.entry(m, f, state.rail_i)) is not None]
         self.release: dict[int, tuple[float, frozenset]] = {}  # by rail index
-        self.around: dict[int, tuple] = {}  # by rail index
+        self.around: dict[frozenset, tuple] = {}  # by the notes riding along
+        self.steps: dict[tuple, float] = {}  # a transition's loss, by (notes, rail, kept)
 
 
 class Costs:
@@ -112,10 +143,14 @@ class Costs:
         self.rail_hi = 0 if r is None else math.floor(h.upper[r] / RAIL_STEP_M)
         self._rails: dict[tuple[str, int], frozenset[int]] = {}
         self._entry: dict = {}
+        self._timing: dict = {}
         self._rail_time: dict[int, float] = {}
-        self._cands: dict = {}
+        self._cands: dict = {}  # (bounded: by keys, forces and fingers, as the two below)
+        self._rails_to: dict = {}
+        self._ctx: dict[float, dict[State, Prev]] = {}
         self._shortest: dict[tuple[int, float], float] = {}
         self.pitch = [n.pitch for n in notes]
+        self.force = [press_force_n(n.velocity) for n in notes]
         self.offset = [n.offset_s for n in notes]
         self._t_down = [(math.ceil(n.onset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
         self._t_up = [(math.ceil(n.offset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
@@ -202,10 +237,37 @@ class Costs:
             e = self._entry[key] = self.atlas.entry(finger, key[0], rail_i * RAIL_STEP_M)
         return e
 
-    def forget(self) -> None:
-        """Drop what only the states of a window just decided can use (memory stays
-        bounded on a long song)."""
-        self._cands.clear()
+    def _times(self, note: int, finger: str, rail_i: int) -> tuple[float, float]:
+        """(``Moves.before_rail_s``, ``Moves.after_rail_s``) of the entry (memoised: the
+        programme reads them for every transition)."""
+        key = (self.pitch[note], finger, rail_i)
+        got = self._timing.get(key)
+        if got is None:
+            e = self.entry(note, finger, rail_i)
+            got = self._timing[key] = (self.moves.before_rail_s(e), self.moves.after_rail_s(e))
+        return got
+
+    def before_rail_s(self, note: int, finger: str, rail_i: int) -> float:
+        return self._times(note, finger, rail_i)[0]
+
+    def after_rail_s(self, note: int, finger: str, rail_i: int) -> float:
+        return self._times(note, finger, rail_i)[1]
+
+    def forget(self, until_s: float = math.inf) -> None:
+        """Drop what only the events before ``until_s``, decided, can use (memory stays
+        bounded on a long song; the next window, which starts there, keeps the rest)."""
+        self._ctx = {t: v for t, v in self._ctx.items() if t >= until_s}
+
+    def prev(self, state: State, t: float) -> Prev:
+        """The ``Prev`` of ``state`` before the event at ``t`` (memoised: the subsets of an
+        event's notes, and the next window over the same events, weigh it again)."""
+        at = self._ctx.get(t)
+        if at is None:
+            at = self._ctx[t] = {}
+        got = at.get(state)
+        if got is None:
+            got = at[state] = Prev(self, state, t)
+        return got
 
     def _same_rail_loss(self, prev: Prev, new_notes: dict[int, str]) -> float:
         """Frames lost by the new notes struck with the rail where it is: each key down
@@ -247,8 +309,7 @@ class Costs:
         """Seconds late when finger ``f`` strikes ``n`` on the key another finger has
         (``other``: its note and finger): that one lifts first, then this one descends."""
         m2, g = other
-        gap = (self.moves.before_rail_s(self.entry(m2, g, rail_i))
-               + self.moves.after_rail_s(self.entry(n, f, rail_i)))
+        gap = self.before_rail_s(m2, g, rail_i) + self.after_rail_s(n, f, rail_i)
         return max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
 
     def _rail_loss(self, prev: Prev, new: dict[int, str], rail_i: int, kept=()) -> float:
@@ -264,63 +325,60 @@ class Costs:
         if got is None:
             got = prev.release[rail_i] = self._release_of(prev, rail_i)
         release_t, followers = got
-        if not followers.issuperset(kept):
+        if kept and not followers.issuperset(kept):
             return math.inf
-        around = prev.around.get(rail_i)
+        around = prev.around.get(followers)
         if around is None:
-            around = prev.around[rail_i] = (
+            around = prev.around[followers] = (
                 {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
                 {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
         by_finger, by_key, lifted = around
+        t_down, t_up, dt = self._t_down, self._t_up, self.dt
         loss = TIE_RAIL_PER_M * abs(rail_i - prev.state.rail_i) * RAIL_STEP_M
         for n, f in new.items():
-            e = self.entry(n, f, rail_i)
-            late = release_t + self.moves.after_rail_s(e) - self._t_down[n]
+            after_s = self._times(n, f, rail_i)[1]
+            late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
                 m, r = lifted[f]
-                a = self.entry(m, f, r)
-                across = self.moves.across(a, e)
+                across = self.moves.across(self.entry(m, f, r), self.entry(n, f, rail_i))
                 if across is None:
                     return math.inf
-                late = max(late, self.moves.before_rail_s(a) + across.duration_s
-                           + self.moves.after_rail_s(e) - (self._t_down[n] - self._t_up[m]))
+                late = max(late, self._times(m, f, r)[0] + across.duration_s
+                           + after_s - (t_down[n] - t_up[m]))
             elif m is not None:  # (it followed its key: it is at rail_i now)
                 early, again = self._strike_again(m, rail_i, n, f, rail_i)
                 if math.isinf(again):
                     return math.inf
-                loss += early / self.dt
+                loss += early / dt
                 late = max(late, again)
-            other = by_key.get(self.pitch[n])
-            if other is not None and other[1] != f:
-                late = max(late, self._leave_key_s(other, n, f, rail_i))
-            loss += max(0.0, late) / self.dt
+            if by_key:
+                other = by_key.get(self.pitch[n])
+                if other is not None and other[1] != f:
+                    late = max(late, self._leave_key_s(other, n, f, rail_i))
+            loss += max(0.0, late) / dt
         return loss
 
     def _release_of(self, ctx: Prev, rail_i: int) -> tuple[float, frozenset]:
         """When the rail arrives at ``rail_i`` after ``ctx``'s state (the lifters' key up,
         a held note's at this event, their lift, and the move), and which notes ride
         along."""
-        prev = ctx.state
-        di = abs(rail_i - prev.rail_i)
+        di = abs(rail_i - ctx.state.rail_i)
         T = self._rail_time.get(di)
         if T is None:
             T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
-        followers = set()
-        for m, f in prev.fingers:
-            a, b = self.entry(m, f, prev.rail_i), self.entry(m, f, rail_i)
-            if b is None or self.atlas.rail is None:
+        followers = _NONE
+        for m, f, a, window_s, press_s in ctx.follows:
+            b = self.entry(m, f, rail_i)
+            if b is None:
                 continue
             # (the move fits inside the note, after its press and before its lift)
             follow_s = self.moves.follow_s(a, b)
-            if (self._t_up[m] - self._t_down[m] >= follow_s + self.moves.press_min_s(a)
-                    and self.moves.follow(a, b) is not None):
-                followers.add((m, f))
+            if window_s >= follow_s + press_s and self.moves.follow(a, b) is not None:
+                followers = followers | {(m, f)}
                 T = max(T, follow_s)
-        cut_up, t_up = ctx.cut_up, self._t_up
-        release = max((self.moves.before_rail_s(self.entry(m, f, r)) + min(t_up[m], cut_up)
-                       for m, f, r in prev.last_notes if (m, f) not in followers),
-                      default=-math.inf)
-        return release + T, frozenset(followers)
+        release = next((v for v, m, f in ctx.lifts if (m, f) not in followers), -math.inf)
+        return release + T, followers
 
-    # ------------------------------------------------------------------ the programme
+
+_NONE: frozenset = frozenset()  # (no note rides along)

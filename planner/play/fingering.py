@@ -47,8 +47,9 @@ LOOKAHEAD = 16  # ... the last of which it decides only in the next window
 FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows start sooner
 # (shorter ones were tried: docs/play-second-design.md, "Speed ... session 21", item 3)
 PER_RAIL = 6  # ... at most this many at one rail position
-PER_SHAPE = 1  # ... and one of each hand shape (rail and fingers on the notes sounding):
-# states that differ only in the notes just let go (``State.recent``) crowd out others
+# (and one of each hand shape, rail and fingers on the notes sounding: a layer keeps the
+# cheapest state of each, so that states that differ only in the notes just let go,
+# ``State.recent``, do not crowd out others)
 PER_NOTES = 10  # ... and at most this many holding the same notes (so that a state that
 # lets a note go, or leaves one out, is not crowded out by the ways of holding it)
 BOUND_EVERY = 8  # the beam's cost bound is renewed after this many states before
@@ -110,6 +111,8 @@ class FingeringProblem(Costs):
     def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float) -> None:
         super().__init__(notes, atlas, moves, rate_hz)
         self._order = {f: i for i, f in enumerate(atlas.hand.fingers)}
+        self._bound = math.inf  # the beam's cost bound of the layer being made
+        self._bound_at: tuple = (None, 0, math.inf)  # (layer, its size, its bound)
 
     def solve(self) -> Fingering:
         """The whole song's answer (the chunks of ``chunks`` put together)."""
@@ -170,7 +173,7 @@ class FingeringProblem(Costs):
             start = {last: (layers[k - 1][1][last][0], None)}
             del ahead_evs[:k]
             first = False
-            self.forget()
+            self.forget(ahead_evs[0][0] if ahead_evs else math.inf)
         if skips:
             yield FingeringChunk((), tuple(s for _, s in skips), (), loss)
 
@@ -242,8 +245,9 @@ class FingeringProblem(Costs):
         or none, each note left out costing its frames (a short note given up for a long
         one held through it is the better music, in the frame currency)."""
         new = sorted(new, key=lambda n: self.notes[n].pitch)
-        layer: dict[State, tuple[float, State | None]] = {}
-        self._shape_best: dict[tuple, float] = {}  # the cheapest state of each shape
+        # (by hand shape, the rail and the fingers on the notes sounding: the cheapest
+        # state of each, the only one the pruning can keep; (cost, state before, state))
+        layer: dict[tuple, tuple[float, State | None, State]] = {}
         for size in range(min(len(new), len(self.atlas.hand.fingers)), -1, -1):
             for i in range(len(new) - size + 1):
                 sub = new[i:i + size]
@@ -256,17 +260,17 @@ class FingeringProblem(Costs):
         new = sorted(new, key=lambda n: self.pitch[n])
         offset = self.offset
         starts = prev.items() if prev else [(None, (0.0, None))]
-        bound = math.inf
+        self._bound = math.inf
         for i, (p, (cost, _)) in enumerate(starts):
             cost += left_out
             # (the states before come cheapest first, and no step costs less than
             # nothing: once ``BEAM`` states are cheaper than this one's cost, no state
             # it leads to is kept, nor are those of the states after it)
-            if i % BOUND_EVERY == 0 and len(layer) >= BEAM:
-                bound = _beam_bound(layer)
-            if cost > bound:
+            if i % BOUND_EVERY == 0:
+                self._bound = self._beam_bound(layer)
+            if cost > self._bound:
                 break
-            ctx = None if p is None else Prev(self, p, t)
+            ctx = None if p is None else self.prev(p, t)
             held = [] if p is None else ctx.held
             for k in range(len(held), -1, -1):
                 for kept in itertools.combinations(held, k):
@@ -277,57 +281,76 @@ class FingeringProblem(Costs):
                     for combo in itertools.combinations(free, len(new)):
                         self._try(layer, ctx, cost + cut, kept, dict(zip(new, combo)), t)
 
+    def _beam_bound(self, layer) -> float:
+        """The cost of the last state ``_prune`` keeps of ``layer`` (inf when it keeps
+        fewer than ``BEAM``), worked out again only when the layer has grown since (a
+        state made cheaper in place only lowers it: the bound kept is safe)."""
+        if len(layer) < BEAM:
+            return math.inf
+        if self._bound_at[0] is not layer or self._bound_at[1] != len(layer):
+            kept = _prune(layer)
+            bound = max(v[0] for v in kept.values()) if len(kept) == BEAM else math.inf
+            self._bound_at = (layer, len(layer), bound)
+        return self._bound_at[2]
+
     def _try(self, layer, ctx: Prev | None, cost: float, kept, new: dict[int, str],
              t: float) -> None:
         """Every transition from ``ctx`` that strikes ``new`` (note -> finger) and keeps
         ``kept`` held, into ``layer``."""
-        order_of, pitch = self._order, self.pitch
-        sounding = sorted([*kept, *new.items()], key=lambda mf: pitch[mf[0]])
-        order = [order_of[f] for _, f in sounding]
-        if any(b <= a for a, b in itertools.pairwise(order)):
-            return
+        if kept or len(new) > 1:
+            order_of, pitch = self._order, self.pitch
+            sounding = sorted([*kept, *new.items()], key=lambda mf: pitch[mf[0]])
+            order = [order_of[f] for _, f in sounding]
+            if any(b <= a for a, b in itertools.pairwise(order)):
+                return
+            sounding_t = tuple(sorted(sounding))
+        else:
+            sounding = sounding_t = tuple(new.items())
         p = None if ctx is None else ctx.state
-        sounding_t = tuple(sorted(sounding))
         if not new:  # (every new note left out: the hand stays)
             if p is None:
                 return
             rails = [(p.rail_i, 0.0)]
         else:
-            rails = self._moves_to(self._candidates(new), p)
+            rails = self._moves_to(new, p)
+        bound = self._bound
         if p is not None:
             # (the pruning keeps one state per shape, the cheapest: a transition that
-            # cannot cost less than the cheapest state of its shape so far is not weighed)
-            best, per_step = self._shape_best, TIE_RAIL_PER_M * RAIL_STEP_M
-            rails = [(r, tie) for r, tie in rails if cost + tie + per_step * abs(r - p.rail_i)
-                     <= best.get((r, sounding_t), math.inf)]
+            # cannot cost less than the cheapest state of its shape so far is not weighed,
+            # nor one that cannot cost less than the beam's last state)
+            per_step = TIE_RAIL_PER_M * RAIL_STEP_M
+            rails = [(r, tie) for r, tie in rails
+                     if (c := cost + tie + per_step * abs(r - p.rail_i)) <= bound
+                     and ((o := layer.get((r, sounding_t))) is None or c <= o[0])]
             if not rails:
                 return
         busy = {f for _, f in sounding}
         crossing = p is not None and any(r == p.rail_i for r, _ in rails) and \
             self._crosses(ctx, sounding, busy)
         recent = None
-        shape_best = self._shape_best
         for rail_i, tie in rails:
             if crossing and rail_i == p.rail_i:
                 continue
             if p is None:
                 step = 0.0
-            elif rail_i == p.rail_i:
-                step = self._same_rail_loss(ctx, new)
             else:
-                step = self._rail_loss(ctx, new, rail_i, kept)
-            if math.isinf(step):
+                key = (sounding_t, rail_i, kept)
+                step = ctx.steps.get(key)
+                if step is None:
+                    step = ctx.steps[key] = self._same_rail_loss(ctx, new) \
+                        if rail_i == p.rail_i else self._rail_loss(ctx, new, rail_i, kept)
+            total = cost + step + tie
+            if step == math.inf or total > bound:  # (inf: no move gets there)
                 continue
             if recent is None:
                 recent = self._recent(ctx, busy)
-            s = State(rail_i, sounding_t, recent)
-            total = cost + step + tie
-            old = layer.get(s)
+            shape = (rail_i, sounding_t)
+            old = layer.get(shape)
             if old is None or total < old[0]:
-                layer[s] = (total, p)
-                shape = (rail_i, sounding_t)
-                if total < shape_best.get(shape, math.inf):
-                    shape_best[shape] = total
+                s = State(rail_i, sounding_t, recent)
+                if old is not None and old[2] != s:
+                    del layer[shape]  # (another state of the shape: it comes after)
+                layer[shape] = (total, p, s)
 
     def _crosses(self, ctx: Prev, sounding, busy: set[str]) -> bool:
         """Whether the fingers sounding, with those that left their keys within
@@ -342,28 +365,34 @@ class FingeringProblem(Costs):
                       if not (f == THUMB and not kb.is_black(pitch[m]))]
         return any(b <= a for a, b in itertools.pairwise(order_near))
 
-    @staticmethod
-    def _moves_to(cands, p: State | None):
-        """The rails worth a transition from ``p``: staying, when the new notes can be
-        played from there; else, of the moves, the shortest one each way and the one
-        with the fingers nearest their natural places (a longer move to a place no
-        better for the fingers is never cheaper: the arm's time grows with the distance,
-        the fingers' lifts and descents do not change)."""
-        if p is None or len(cands) <= 3:
-            return cands
-        here = [c for c in cands if c[0] == p.rail_i]
-        below = [c for c in cands if c[0] < p.rail_i]
-        above = [c for c in cands if c[0] > p.rail_i]
-        keep = here + below[-1:] + above[:1]
-        best = min(cands, key=lambda c: c[1])
-        if best not in keep:
-            keep.append(best)
+    def _moves_to(self, new: dict[int, str], p: State | None) -> list[tuple[int, float]]:
+        """The rails worth a transition from ``p`` (memoised per rail before): staying,
+        when the new notes can be played from there; else, of the moves, the shortest one
+        each way and the one with the fingers nearest their natural places (a longer move
+        to a place no better for the fingers is never cheaper: the arm's time grows with
+        the distance, the fingers' lifts and descents do not change)."""
+        key = (self._press_key(new), None if p is None else p.rail_i)
+        keep = self._rails_to.get(key)
+        if keep is None:
+            cands = self._candidates(new)
+            if p is None or len(cands) <= 3:
+                keep = cands
+            else:
+                here = [c for c in cands if c[0] == p.rail_i]
+                below = [c for c in cands if c[0] < p.rail_i]
+                above = [c for c in cands if c[0] > p.rail_i]
+                keep = here + below[-1:] + above[:1]
+                best = min(cands, key=lambda c: c[1])
+                if best not in keep:
+                    keep.append(best)
+            self._rails_to[key] = keep
         return keep
 
     def _candidates(self, new: dict[int, str]) -> list[tuple[int, float]]:
         """(rail index, tie-break) of every rail from which the fingers of
-        ``new`` press their notes (memoised: it does not depend on the state before)."""
-        key = tuple(sorted(new.items()))
+        ``new`` press their notes (memoised by keys, forces and fingers: it does not
+        depend on the state before)."""
+        key = self._press_key(new)
         out = self._cands.get(key)
         if out is None:
             rails = None
@@ -377,6 +406,12 @@ class FingeringProblem(Costs):
                 out.append((rail_i, tie))
             self._cands[key] = out
         return out
+
+    def _press_key(self, new: dict[int, str]) -> tuple:
+        """What the rails that press ``new`` depend on: each note's key and force, and its
+        finger."""
+        pitch, force = self.pitch, self.force
+        return tuple((pitch[n], force[n], f) for n, f in new.items())
 
     @staticmethod
     def _recent(ctx: Prev | None, busy: set[str]) -> tuple[tuple[int, str, int], ...]:
@@ -392,30 +427,23 @@ class FingeringProblem(Costs):
         return tuple(sorted((m, f, r) for f, (m, r) in last.items()))
 
 
-def _beam_bound(layer) -> float:
-    """The cost of the last state ``_prune`` keeps of ``layer`` (inf when it keeps
-    fewer than ``BEAM``)."""
-    kept = _prune(layer)
-    return max(v[0] for v in kept.values()) if len(kept) == BEAM else math.inf
-
 def _prune(layer):
-    """The ``BEAM`` cheapest states, at most ``PER_RAIL`` of them at one rail position
-    (so that the programme keeps other hand positions in view) and one of each hand
-    shape; of those holding the same notes at most ``PER_NOTES`` while states holding
-    other notes (a held note let go, a note left out) are there to fill the beam."""
-    ranked = sorted(layer.items(), key=lambda kv: kv[1][0])
-    out, per, shape, sets = {}, {}, {}, {}
+    """The ``BEAM`` cheapest states of ``layer`` (the cheapest of each hand shape), at
+    most ``PER_RAIL`` of them at one rail position (so that the programme keeps other
+    hand positions in view); of those holding the same notes at most ``PER_NOTES`` while
+    states holding other notes (a held note let go, a note left out) are there to fill
+    the beam. As {state: (cost, state before)}, cheapest first."""
+    ranked = sorted(layer.values(), key=lambda v: v[0])
+    out, per, sets = {}, {}, {}
     for capped in (True, False):
-        for s, v in ranked:
+        for v in ranked:
+            s = v[2]
             if s in out:
                 continue
-            k = (s.rail_i, s.fingers)
-            notes = tuple(n for n, _ in s.fingers)
-            if (per.get(s.rail_i, 0) < PER_RAIL and shape.get(k, 0) < PER_SHAPE
-                    and (not capped or sets.get(notes, 0) < PER_NOTES)):
-                out[s] = v
+            notes = s.notes
+            if per.get(s.rail_i, 0) < PER_RAIL and (not capped or sets.get(notes, 0) < PER_NOTES):
+                out[s] = (v[0], v[1])
                 per[s.rail_i] = per.get(s.rail_i, 0) + 1
-                shape[k] = shape.get(k, 0) + 1
                 sets[notes] = sets.get(notes, 0) + 1
                 if len(out) == BEAM:  # (the first pass adds in cost order: sorted)
                     return out if capped else dict(sorted(out.items(), key=lambda kv: kv[1][0]))
