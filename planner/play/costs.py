@@ -144,6 +144,8 @@ class Costs:
         self._rails: dict[tuple[str, int], frozenset[int]] = {}
         self._entry: dict = {}
         self._timing: dict = {}
+        self._gaps: dict = {}
+        self._follows: dict = {}
         self._rail_time: dict[int, float] = {}
         self._cands: dict = {}  # (bounded: by keys, forces and fingers, as the two below)
         self._rails_to: dict = {}
@@ -296,14 +298,23 @@ class Costs:
         key again from the same place is a repeat (the motion lets the key up in time for
         it), another key a lift, a move across and a descent (the key down late); late
         inf when no checked move gets there."""
-        a, b = self.entry(m, f, r), self.entry(n, f, rail_i)
-        room = self.t_down(n) - self.t_up(m)
+        room = self._t_down[n] - self._t_up[m]
         if self.pitch[m] == self.pitch[n] and r == rail_i:
-            return max(0.0, self.moves.repeat_gap_s(a) - room), 0.0
-        gap = self.moves.move_gap_s(a, b)
+            return max(0.0, self.moves.repeat_gap_s(self.entry(m, f, r)) - room), 0.0
+        gap = self._move_gap_s(m, f, r, n, rail_i)
         if gap is None:
             return 0.0, math.inf
         return 0.0, max(0.0, gap - room)
+
+    def _move_gap_s(self, m: int, f: str, r: int, n: int, rail_i: int) -> float | None:
+        """``Moves.move_gap_s`` from finger ``f``'s entry on ``m`` at rail ``r`` to its
+        entry on ``n`` at ``rail_i`` (memoised by keys and rails)."""
+        key = (self.pitch[m], f, r, self.pitch[n], rail_i)
+        got = self._gaps.get(key, False)
+        if got is False:
+            got = self._gaps[key] = self.moves.move_gap_s(self.entry(m, f, r),
+                                                          self.entry(n, f, rail_i))
+        return got
 
     def _leave_key_s(self, other: tuple[int, str], n: int, f: str, rail_i: int) -> float:
         """Seconds late when finger ``f`` strikes ``n`` on the key another finger has
@@ -341,11 +352,10 @@ class Costs:
             m = by_finger.get(f)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
                 m, r = lifted[f]
-                across = self.moves.across(self.entry(m, f, r), self.entry(n, f, rail_i))
-                if across is None:
+                gap = self._move_gap_s(m, f, r, n, rail_i)
+                if gap is None:
                     return math.inf
-                late = max(late, self._times(m, f, r)[0] + across.duration_s
-                           + after_s - (t_down[n] - t_up[m]))
+                late = max(late, gap - (t_down[n] - t_up[m]))
             elif m is not None:  # (it followed its key: it is at rail_i now)
                 early, again = self._strike_again(m, rail_i, n, f, rail_i)
                 if math.isinf(again):
@@ -369,15 +379,22 @@ class Costs:
             T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
         followers = _NONE
         for m, f, a, window_s, press_s in ctx.follows:
-            b = self.entry(m, f, rail_i)
-            if b is None:
-                continue
+            key = (a, rail_i)
+            follow_s = self._follows.get(key)
+            if follow_s is None:
+                b = self.entry(m, f, rail_i)
+                follow_s = self._follows[key] = math.inf if b is None else \
+                    self.moves.follow_s(a, b)
             # (the move fits inside the note, after its press and before its lift)
-            follow_s = self.moves.follow_s(a, b)
-            if window_s >= follow_s + press_s and self.moves.follow(a, b) is not None:
+            if window_s >= follow_s + press_s and \
+                    self.moves.follow(a, self.entry(m, f, rail_i)) is not None:
                 followers = followers | {(m, f)}
                 T = max(T, follow_s)
-        release = next((v for v, m, f in ctx.lifts if (m, f) not in followers), -math.inf)
+        lifts = ctx.lifts
+        if not followers:
+            release = lifts[0][0] if lifts else -math.inf
+        else:
+            release = next((v for v, m, f in lifts if (m, f) not in followers), -math.inf)
         return release + T, followers
 
 

@@ -261,6 +261,7 @@ class FingeringProblem(Costs):
         offset = self.offset
         starts = prev.items() if prev else [(None, (0.0, None))]
         self._bound = math.inf
+        assign: dict[frozenset, list] = {}  # by the fingers holding kept notes
         for i, (p, (cost, _)) in enumerate(starts):
             cost += left_out
             # (the states before come cheapest first, and no step costs less than
@@ -276,10 +277,15 @@ class FingeringProblem(Costs):
                 for kept in itertools.combinations(held, k):
                     cut = sum(offset[m] - t for m, _ in held
                               if (m, _) not in kept) / self.dt
-                    busy = {f for _, f in kept}
-                    free = [f for f in fingers if f not in busy]
-                    for combo in itertools.combinations(free, len(new)):
-                        self._try(layer, ctx, cost + cut, kept, dict(zip(new, combo)), t)
+                    busy = frozenset(f for _, f in kept)
+                    got = assign.get(busy)
+                    if got is None:  # (the new notes' fingers, and their press keys)
+                        free = [f for f in fingers if f not in busy]
+                        got = assign[busy] = [(d, self._press_key(d)) for d in (
+                            dict(zip(new, combo))
+                            for combo in itertools.combinations(free, len(new)))]
+                    for d, key in got:
+                        self._try(layer, ctx, cost + cut, kept, d, key, t)
 
     def _beam_bound(self, layer) -> float:
         """The cost of the last state ``_prune`` keeps of ``layer`` (inf when it keeps
@@ -294,9 +300,9 @@ class FingeringProblem(Costs):
         return self._bound_at[2]
 
     def _try(self, layer, ctx: Prev | None, cost: float, kept, new: dict[int, str],
-             t: float) -> None:
-        """Every transition from ``ctx`` that strikes ``new`` (note -> finger) and keeps
-        ``kept`` held, into ``layer``."""
+             press_key: tuple, t: float) -> None:
+        """Every transition from ``ctx`` that strikes ``new`` (note -> finger: its
+        ``_press_key``) and keeps ``kept`` held, into ``layer``."""
         if kept or len(new) > 1:
             order_of, pitch = self._order, self.pitch
             sounding = sorted([*kept, *new.items()], key=lambda mf: pitch[mf[0]])
@@ -312,7 +318,7 @@ class FingeringProblem(Costs):
                 return
             rails = [(p.rail_i, 0.0)]
         else:
-            rails = self._moves_to(new, p)
+            rails = self._moves_to(new, press_key, p)
         bound = self._bound
         if p is not None:
             # (the pruning keeps one state per shape, the cheapest: a transition that
@@ -365,16 +371,17 @@ class FingeringProblem(Costs):
                       if not (f == THUMB and not kb.is_black(pitch[m]))]
         return any(b <= a for a, b in itertools.pairwise(order_near))
 
-    def _moves_to(self, new: dict[int, str], p: State | None) -> list[tuple[int, float]]:
+    def _moves_to(self, new: dict[int, str], press_key: tuple,
+                  p: State | None) -> list[tuple[int, float]]:
         """The rails worth a transition from ``p`` (memoised per rail before): staying,
         when the new notes can be played from there; else, of the moves, the shortest one
         each way and the one with the fingers nearest their natural places (a longer move
         to a place no better for the fingers is never cheaper: the arm's time grows with
         the distance, the fingers' lifts and descents do not change)."""
-        key = (self._press_key(new), None if p is None else p.rail_i)
+        key = (press_key, None if p is None else p.rail_i)
         keep = self._rails_to.get(key)
         if keep is None:
-            cands = self._candidates(new)
+            cands = self._candidates(new, press_key)
             if p is None or len(cands) <= 3:
                 keep = cands
             else:
@@ -388,11 +395,10 @@ class FingeringProblem(Costs):
             self._rails_to[key] = keep
         return keep
 
-    def _candidates(self, new: dict[int, str]) -> list[tuple[int, float]]:
+    def _candidates(self, new: dict[int, str], key: tuple) -> list[tuple[int, float]]:
         """(rail index, tie-break) of every rail from which the fingers of
-        ``new`` press their notes (memoised by keys, forces and fingers: it does not
-        depend on the state before)."""
-        key = self._press_key(new)
+        ``new`` press their notes (memoised by ``key``, their keys, forces and fingers:
+        it does not depend on the state before)."""
         out = self._cands.get(key)
         if out is None:
             rails = None
