@@ -106,7 +106,7 @@ class Prev:
     (the programme weighs hundreds of transitions from each state)."""
 
     __slots__ = ("around", "cut_up", "fresh", "held", "last", "lifts", "follows", "on_key",
-                 "release", "state", "steps")
+                 "recent", "release", "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -127,6 +127,7 @@ class Prev:
         self.release: dict[int, tuple[float, frozenset]] = {}  # by rail index
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
         self.steps: dict[tuple, float] = {}  # a transition's loss, by (notes, rail, kept)
+        self.recent: dict[frozenset, tuple] = {}  # ``State.recent`` after, by fingers sounding
 
 
 class Costs:

@@ -53,6 +53,7 @@ PER_RAIL = 6  # ... at most this many at one rail position
 PER_NOTES = 10  # ... and at most this many holding the same notes (so that a state that
 # lets a note go, or leaves one out, is not crowded out by the ways of holding it)
 BOUND_EVERY = 8  # the beam's cost bound is renewed after this many states before
+_PER_STEP = TIE_RAIL_PER_M * RAIL_STEP_M  # a move's tie-break, per step of the rail grid
 
 
 @dataclass(frozen=True)
@@ -319,40 +320,42 @@ class FingeringProblem(Costs):
             rails = [(p.rail_i, 0.0)]
         else:
             rails = self._moves_to(new, press_key, p)
-        bound = self._bound
-        if p is not None:
+        if p is None:  # (the song's first notes: from anywhere, no move lost)
+            for rail_i, tie in rails:
+                total, shape = cost + 0.0 + tie, (rail_i, sounding_t)
+                old = layer.get(shape)
+                if total <= self._bound and (old is None or total < old[0]):
+                    layer[shape] = (total, None, State(rail_i, sounding_t))
+            return
+        bound, here, steps = self._bound, p.rail_i, ctx.steps
+        busy = crossing = recent = None
+        for rail_i, tie in rails:
             # (the pruning keeps one state per shape, the cheapest: a transition that
             # cannot cost less than the cheapest state of its shape so far is not weighed,
             # nor one that cannot cost less than the beam's last state)
-            per_step = TIE_RAIL_PER_M * RAIL_STEP_M
-            rails = [(r, tie) for r, tie in rails
-                     if (c := cost + tie + per_step * abs(r - p.rail_i)) <= bound
-                     and ((o := layer.get((r, sounding_t))) is None or c <= o[0])]
-            if not rails:
-                return
-        busy = {f for _, f in sounding}
-        crossing = p is not None and any(r == p.rail_i for r, _ in rails) and \
-            self._crosses(ctx, sounding, busy)
-        recent = None
-        for rail_i, tie in rails:
-            if crossing and rail_i == p.rail_i:
+            low = cost + tie + _PER_STEP * abs(rail_i - here)
+            shape = (rail_i, sounding_t)
+            old = layer.get(shape)
+            if low > bound or old is not None and low > old[0]:
                 continue
-            if p is None:
-                step = 0.0
-            else:
-                key = (sounding_t, rail_i, kept)
-                step = ctx.steps.get(key)
-                if step is None:
-                    step = ctx.steps[key] = self._same_rail_loss(ctx, new) \
-                        if rail_i == p.rail_i else self._rail_loss(ctx, new, rail_i, kept)
+            if busy is None:
+                busy = frozenset(f for _, f in sounding)
+            if rail_i == here:
+                if crossing is None:
+                    crossing = self._crosses(ctx, sounding, busy)
+                if crossing:
+                    continue
+            key = (sounding_t, rail_i, kept)
+            step = steps.get(key)
+            if step is None:
+                step = steps[key] = self._same_rail_loss(ctx, new) if rail_i == here \
+                    else self._rail_loss(ctx, new, rail_i, kept)
             total = cost + step + tie
             if step == math.inf or total > bound:  # (inf: no move gets there)
                 continue
-            if recent is None:
-                recent = self._recent(ctx, busy)
-            shape = (rail_i, sounding_t)
-            old = layer.get(shape)
             if old is None or total < old[0]:
+                if recent is None:
+                    recent = self._recent(ctx, busy)
                 s = State(rail_i, sounding_t, recent)
                 if old is not None and old[2] != s:
                     del layer[shape]  # (another state of the shape: it comes after)
@@ -420,17 +423,19 @@ class FingeringProblem(Costs):
         return tuple((pitch[n], force[n], f) for n, f in new.items())
 
     @staticmethod
-    def _recent(ctx: Prev | None, busy: set[str]) -> tuple[tuple[int, str, int], ...]:
+    def _recent(ctx: Prev, busy: frozenset[str]) -> tuple[tuple[int, str, int], ...]:
         """The last notes of the fingers not sounding now (``busy``: those sounding),
         ended within RECENT_S of the event (a note of the state before that is not
-        sounding now has just ended), with the rail they were pressed from."""
-        if ctx is None:
-            return ()
-        last: dict[str, tuple[int, int]] = {}
-        for m, f, r in ctx.fresh:
-            if f not in busy:
-                last[f] = (m, r)
-        return tuple(sorted((m, f, r) for f, (m, r) in last.items()))
+        sounding now has just ended), with the rail they were pressed from (memoised
+        per state before and fingers sounding)."""
+        got = ctx.recent.get(busy)
+        if got is None:
+            last: dict[str, tuple[int, int]] = {}
+            for m, f, r in ctx.fresh:
+                if f not in busy:
+                    last[f] = (m, r)
+            got = ctx.recent[busy] = tuple(sorted((m, f, r) for f, (m, r) in last.items()))
+        return got
 
 
 def _prune(layer):
