@@ -78,12 +78,16 @@ def straight_move(q_a: np.ndarray, q_b: np.ndarray, v_max: np.ndarray,
     acceleration limits (any joints: a finger's, the arm's, the whole hand's)."""
     q_a = np.asarray(q_a, dtype=float)
     dq = np.asarray(q_b, dtype=float) - q_a
-    d = np.abs(dq)
-    moving = d > 0.0
-    if not moving.any():
+    v = a = math.inf  # (the tightest joint's caps; a few joints: floats, not arrays)
+    moving = False
+    for d, vj, aj in zip(dq.tolist(), np.asarray(v_max, dtype=float).tolist(),
+                         np.asarray(a_max, dtype=float).tolist()):
+        if d != 0.0:
+            d, moving = abs(d), True
+            v = min(v, LIMIT_FRACTION * vj / d)
+            a = min(a, LIMIT_FRACTION * aj / d)
+    if not moving:
         return Move(q_a, dq, 0.0, 1.0, 1.0)
-    v = float(np.min(LIMIT_FRACTION * np.asarray(v_max)[moving] / d[moving]))
-    a = float(np.min(LIMIT_FRACTION * np.asarray(a_max)[moving] / d[moving]))
     return Move(q_a, dq, move_time_s(v, a), v, a)
 
 
