@@ -134,3 +134,37 @@ def test_a_short_note_is_given_up_for_a_long_one_held_through_it(hand_parts):
     assert [(s.note, s.reason) for s in fg.skipped] == [(4, SkipReason.HELD)]
     assert "holds C5 through it" in fg.skipped[0].detail
     assert fg.expected_loss_frames <= 30.0 + 0.5  # (C6's 30 frames, tie-breaks)
+
+
+def test_a_state_is_immutable_and_equal_by_value():
+    from planner.play.costs import State
+
+    a = State(3, ((0, "index"),), ((1, "thumb", 2),))
+    b = State(3, ((0, "index"),), ((1, "thumb", 2),))
+    assert a == b and hash(a) == hash(b) and len({a, b}) == 1
+    assert a != State(3, ((0, "index"),)) and a != State(4, ((0, "index"),), a.recent)
+    assert a.notes == (0,) and a.last_notes == ((1, "thumb", 2), (0, "index", 3))
+    with pytest.raises(AttributeError):
+        a.rail_i = 4
+
+
+def test_a_layer_holds_one_state_per_hand_shape_cheapest_first(hand_parts):
+    """The programme's layers (what each event keeps): at most BEAM states, one of each
+    hand shape (rail and fingers on the notes sounding), at most PER_RAIL at one rail,
+    in cost order, each reached from a state of the layer before."""
+    from planner.play.fingering import BEAM, PER_RAIL, FingeringProblem, events
+
+    at, mv = hand_parts
+    notes = [Note(60 + (k * 7) % 15, 0.2 * k, 0.2 * k + 0.3, 80) for k in range(30)]
+    fp = FingeringProblem(notes, at, mv, 100.0)
+    prev = {}
+    for t, new in events(notes)[:12]:
+        layer = fp._layer(prev, t, new)
+        costs = [v[0] for v in layer.values()]
+        shapes = [(s.rail_i, s.fingers) for s in layer]
+        assert 0 < len(layer) <= BEAM and costs == sorted(costs)
+        assert len(set(shapes)) == len(shapes)
+        assert max(sum(s.rail_i == r for s in layer) for r, _ in shapes) <= PER_RAIL
+        assert all((p is None) == (not prev) and (p is None or p in prev)
+                   for _, p in layer.values())
+        prev = layer
