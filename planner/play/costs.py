@@ -130,10 +130,25 @@ class Prev:
         self.recent: dict[frozenset, tuple] = {}  # ``State.recent`` after, by fingers sounding
 
 
-class Costs:
-    """The cost model of one song on one hand (memoised: built once per song)."""
+class CostMemo:
+    """What the cost model works out that depends on the hand alone, not on the song:
+    by keys, forces, fingers and rail positions (bounded), kept across the songs of one
+    hand (``planner.play.Planner`` holds one)."""
 
-    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float) -> None:
+    __slots__ = ("rails", "entry", "timing", "gaps", "follows", "rail_time", "cands",
+                 "rails_to", "shortest")
+
+    def __init__(self) -> None:
+        for name in self.__slots__:
+            setattr(self, name, {})
+
+
+class Costs:
+    """The cost model of one song on one hand (memoised: what depends on the hand alone
+    in ``memo``, kept across songs when one is given)."""
+
+    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float,
+                 memo: CostMemo | None = None) -> None:
         self.notes = notes
         self.atlas = atlas
         self.moves = moves
@@ -142,16 +157,17 @@ class Costs:
         r = atlas.rail
         self.rail_lo = 0 if r is None else math.ceil(h.lower[r] / RAIL_STEP_M)
         self.rail_hi = 0 if r is None else math.floor(h.upper[r] / RAIL_STEP_M)
-        self._rails: dict[tuple[str, int], frozenset[int]] = {}
-        self._entry: dict = {}
-        self._timing: dict = {}
-        self._gaps: dict = {}
-        self._follows: dict = {}
-        self._rail_time: dict[int, float] = {}
-        self._cands: dict = {}  # (bounded: by keys, forces and fingers, as the two below)
-        self._rails_to: dict = {}
-        self._ctx: dict[float, dict[State, Prev]] = {}
-        self._shortest: dict[tuple[int, float], float] = {}
+        m = memo or CostMemo()
+        self._rails: dict[tuple[str, int, float], frozenset[int]] = m.rails
+        self._entry: dict = m.entry
+        self._timing: dict = m.timing
+        self._gaps: dict = m.gaps
+        self._follows: dict = m.follows
+        self._rail_time: dict[int, float] = m.rail_time
+        self._cands: dict = m.cands
+        self._rails_to: dict = m.rails_to
+        self._shortest: dict[tuple[int, float], float] = m.shortest
+        self._ctx: dict[float, dict[State, Prev]] = {}  # (the song's: by event time)
         self.pitch = [n.pitch for n in notes]
         self.force = [press_force_n(n.velocity) for n in notes]
         self.offset = [n.offset_s for n in notes]
@@ -381,16 +397,19 @@ class Costs:
         followers = _NONE
         for m, f, a, window_s, press_s in ctx.follows:
             key = (a, rail_i)
-            follow_s = self._follows.get(key)
-            if follow_s is None:
+            got = self._follows.get(key)  # (its time, and whether its path is clear:
+            if got is None:  # found only when a note's time fits the move)
                 b = self.entry(m, f, rail_i)
-                follow_s = self._follows[key] = math.inf if b is None else \
-                    self.moves.follow_s(a, b)
+                got = self._follows[key] = [math.inf if b is None else
+                                            self.moves.follow_s(a, b), None]
+            follow_s = got[0]
             # (the move fits inside the note, after its press and before its lift)
-            if window_s >= follow_s + press_s and \
-                    self.moves.follow(a, self.entry(m, f, rail_i)) is not None:
-                followers = followers | {(m, f)}
-                T = max(T, follow_s)
+            if window_s >= follow_s + press_s:
+                if got[1] is None:
+                    got[1] = self.moves.follow(a, self.entry(m, f, rail_i)) is not None
+                if got[1]:
+                    followers = followers | {(m, f)}
+                    T = max(T, follow_s)
         lifts = ctx.lifts
         if not followers:
             release = lifts[0][0] if lifts else -math.inf

@@ -32,6 +32,7 @@ from planner.play.costs import (
     RAIL_STEP_M,
     TIE_DX_PER_M,
     TIE_RAIL_PER_M,
+    CostMemo,
     Costs,
     Prev,
     Skip,
@@ -109,8 +110,9 @@ class FingeringProblem(Costs):
     """The programme for one song on one hand (built, then ``solve``d or streamed in
     ``chunks``); its costs are ``Costs``'."""
 
-    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float) -> None:
-        super().__init__(notes, atlas, moves, rate_hz)
+    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float,
+                 memo: CostMemo | None = None) -> None:
+        super().__init__(notes, atlas, moves, rate_hz, memo)
         self._order = {f: i for i, f in enumerate(atlas.hand.fingers)}
         self._bound = math.inf  # the beam's cost bound of the layer being made
         self._bound_at: tuple = (None, 0, math.inf)  # (layer, its size, its bound)

@@ -18,6 +18,7 @@ from planner.hand.model import HandModel
 from planner.music.midi import Song
 from planner.output import write_file
 from planner.play.atlas import Atlas
+from planner.play.costs import CostMemo
 from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.moves import Moves
@@ -72,6 +73,7 @@ class Planner:
         self.hand = hand
         self.atlas = Atlas(hand)
         self.moves = Moves(hand, self.atlas)
+        self.memo = CostMemo()  # (the fingering's costs that depend on the hand alone)
 
 
 def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz: float = 100.0,
@@ -108,7 +110,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     """Fingering chunk by chunk (``FingeringProblem.chunks``), each chunk's notes placed
     in time order (a cut before the notes that start with it), rows written up to where
     nothing can change any more."""
-    problem = FingeringProblem(notes, pl.atlas, pl.moves, rate_hz)
+    problem = FingeringProblem(notes, pl.atlas, pl.moves, rate_hz, pl.memo)
     motion: Motion | None = None
     rows: _Rows | None = None
     done: dict[int, Assignment] = {}
