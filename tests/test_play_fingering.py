@@ -152,7 +152,8 @@ def test_a_layer_holds_one_state_per_hand_shape_cheapest_first(hand_parts):
     """The programme's layers (what each event keeps): at most BEAM states, one of each
     hand shape (rail and fingers on the notes sounding), at most PER_RAIL at one rail,
     in cost order, each reached from a state of the layer before."""
-    from planner.play.fingering import BEAM, PER_RAIL, FingeringProblem, events
+    from planner.play.fingering import FingeringProblem, events
+    from planner.play.layers import BEAM, PER_RAIL
 
     at, mv = hand_parts
     notes = [Note(60 + (k * 7) % 15, 0.2 * k, 0.2 * k + 0.3, 80) for k in range(30)]

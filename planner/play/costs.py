@@ -67,7 +67,7 @@ class State:
     still matters to its next move, sounding or recent, with the rail index it is (or
     was last) pressed from."""
 
-    __slots__ = ("rail_i", "fingers", "recent", "notes", "last_notes", "_hash")
+    __slots__ = ("_hash", "fingers", "last_notes", "notes", "rail_i", "recent")
 
     def __init__(self, rail_i: int, fingers: tuple[tuple[int, str], ...],
                  recent: tuple[tuple[int, str, int], ...] = ()) -> None:
@@ -105,7 +105,7 @@ class Prev:
     """What a state of the event before tells every transition from it, worked out once
     (the programme weighs hundreds of transitions from each state)."""
 
-    __slots__ = ("around", "cut_up", "fresh", "held", "last", "lifts", "follows", "on_key",
+    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lifts", "on_key",
                  "recent", "release", "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
@@ -135,8 +135,8 @@ class CostMemo:
     by keys, forces, fingers and rail positions (bounded), kept across the songs of one
     hand (``planner.play.Planner`` holds one)."""
 
-    __slots__ = ("rails", "entry", "timing", "gaps", "follows", "rail_time", "cands",
-                 "rails_to", "shortest")
+    __slots__ = ("cands", "entry", "follows", "gaps", "rail_time", "rails", "rails_to",
+                 "shortest", "timing")
 
     def __init__(self) -> None:
         for name in self.__slots__:
