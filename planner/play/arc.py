@@ -34,7 +34,7 @@ ARC_TOL_RAD = 1e-10  # a crossing is bisected to this
 
 def arc_joint(hand: HandModel, finger: str) -> int | None:
     """The finger's one independent joint, or None when it has more than one."""
-    own = [int(j) for j in hand.joint_slice(finger) if j in set(hand.independent.tolist())]
+    own = hand.own_independent(finger)
     return own[0] if len(own) == 1 else None
 
 

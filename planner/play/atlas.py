@@ -40,8 +40,14 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.hand.tendon import actuator_capacity
-from planner.ik import (PREPARE_HEIGHT_M, HandIK, PressTarget, press_target, press_x_range,
-                        surfaces_under)
+from planner.ik import (
+    PREPARE_HEIGHT_M,
+    HandIK,
+    PressTarget,
+    press_target,
+    press_x_range,
+    surfaces_under,
+)
 from planner.music import keyboard as kb
 from planner.play.arc import Arc, arc_joint
 
@@ -221,8 +227,13 @@ class Atlas:
                                 **poses)
 
     def _params(self) -> str:
-        """What the entries depend on besides the URDF: a table made otherwise is not used."""
+        """What the entries depend on besides the URDF: a table made otherwise is not used.
+        The mount (the root's pose over the keyboard) is not in the URDF: a hand file whose
+        mount moves keeps its URDF and its table's name, and the pose makes the old table
+        stale."""
         return json.dumps({"urdf_sha256": self.hand.urdf_sha256, "step_m": STEP_M,
+                           "T_world_root": [round(float(x), 12)
+                                            for x in self.hand.T_world_root.ravel()],
                            "span_m": SPAN_M, "high_z_m": HIGH_Z_M, "repeat_depth_m": REPEAT_DEPTH_M,
                            "base_hover_z_m": BASE_HOVER_Z_M, "curl": CURL,
                            "clearance_m": CLEARANCE_M, "tip_radius_m": TIP_RADIUS_M,
