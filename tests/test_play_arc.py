@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from planner.hand.model import HandModel, load_hand
-from planner.ik import PREPARE_HEIGHT_M, press_target, press_x_range
+from planner.ik import PREPARE_HEIGHT_M, exposed_range_x, press_target, press_x_range
 from planner.music import keyboard as kb
 from planner.play.arc import ARC_TOL_RAD, Arc, arc_joint
-from planner.play.atlas import HIGH_Z_M, REPEAT_DEPTH_M, TIP_RADIUS_M, Atlas
+from planner.play.atlas import BASE_HOVER_Z_M, HIGH_Z_M, REPEAT_DEPTH_M, TIP_RADIUS_M, Atlas
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -57,6 +57,30 @@ def test_mk5_poses_are_on_the_arc_at_their_heights(mk5_atlas, pitch):
         assert np.allclose(h.coupling_errors(a.full_q(e, "press", rail)), 0.0, atol=1e-12)
     # the press x is where the rail puts the tip: the samples are the key's x window
     assert len(ks) == pytest.approx((x_hi - x_lo) / 0.001, abs=1.5)
+
+
+def test_press_x_range_is_the_part_press_target_presses():
+    d = kb.key(62)  # D4: a white key between two black keys
+    assert press_x_range("index", 62, 0.002) == pytest.approx(
+        (exposed_range_x(62)[0] + 0.002, exposed_range_x(62)[1] - 0.002))
+    assert exposed_range_x(62)[1] - exposed_range_x(62)[0] < d.x_max_m - d.x_min_m
+    # the thumb presses a white key in front of the black keys: its whole width
+    assert press_x_range("thumb", 62, 0.002) == pytest.approx((d.x_min_m + 0.002,
+                                                               d.x_max_m - 0.002))
+    b = kb.key(61)
+    assert press_x_range("index", 61, 0.0) == (b.x_min_m, b.x_max_m)
+
+
+def test_mk5_natural_hand_hovers_on_the_arcs(mk5_atlas):
+    """Every finger flexed from open until its tip is down at the hover height, the wrist
+    at 0 (no finger of the mk5 takes part in the wrist's fit); the thumb (which presses no
+    key) waits there over the white keys' front, clear of the black keys."""
+    h, a = mk5_atlas.hand, mk5_atlas
+    tips = h.tip_positions(a.base)
+    assert np.allclose(tips[:, 2], BASE_HOVER_Z_M, atol=1e-7)
+    assert a.base[h.index["wrist_flex"]] == 0.0 and a.base[h.index["wrist_dev"]] == 0.0
+    assert all(a.base[h.index[f"{f}_q1"]] > 0.0 for f in h.fingers)
+    assert 0.0 < tips[0, 1] < kb.BLACK_Y0_M - TIP_RADIUS_M
 
 
 def test_arc_crossings_bisect_to_their_tolerance():

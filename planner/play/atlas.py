@@ -112,8 +112,9 @@ class Atlas:
         ``BASE_HOVER_Z_M`` above the white tops, midway between full dip and crossing
         height, so that each finger has room both ways. A finger of one degree of
         freedom (``planner.play.arc``) takes no part in the fit: its one joint is what
-        sets its height, flexed from open until its tip is down at that height (the
-        wrist stays at its neutral when every finger is such)."""
+        sets its height, flexed from open until its tip is down at that height (open
+        if its arc never comes down to it; the wrist stays at its neutral when every
+        finger is such)."""
         h = self.hand
         q0 = h.q_neutral.copy()
         for f in h.fingers:
