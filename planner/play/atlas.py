@@ -17,6 +17,11 @@ every ``STEP_M`` around each finger's natural place and solves, by single-finger
 * ``high``: straight above it at ``HIGH_Z_M`` (7.5 mm above the black keys' tops), from
   where the finger moves sideways over any key.
 
+A finger of one degree of freedom (one independent joint: the Mk5's) has the same four
+poses at the same heights, found on its tip's one arc instead (``planner.play.arc``):
+the press where flexing brings the tip to full dip, on the part of the key it presses,
+the others where opening brings it back up (not straight above: it cannot hold x, y).
+
 An entry is kept when the four converge (1 mm), every joint is within its limits, and
 the straight joint-space moves high -> hover -> press, high -> press and rise -> press
 keep the tip clear of every other key (forward kinematics, sampled). Its ``max_force_n`` is the largest key force the
