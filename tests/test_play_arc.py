@@ -130,3 +130,25 @@ def test_mk5_catches_a_tennis_ball_and_check_confirms(tmp_path):
     assert p.feasible, p.reasons
     assert p.grasp_fingers == ("thumb", "middle", "ring")
     assert check.check_trajectory(str(tmp_path / "c.csv")).ok
+
+
+def test_the_shipped_mk5_table_is_the_arcs_own(mk5_atlas):
+    """planner/tables/atlas-<hash>.npz of the mk5 (scripts/make_atlas.py) holds what the
+    arc gives: every entry of two keys solved afresh matches it to the bit."""
+    from planner.play.atlas import table_path
+
+    h = mk5_atlas.hand
+    assert table_path(h.urdf_sha256).exists(), "run python scripts/make_atlas.py --hand mk5"
+    fresh = Atlas(h)
+    fresh._entries.clear()
+    n = 0
+    for f, pc in (("middle", 0), ("ring", 6)):
+        for k in range(-45, 46):
+            a, b = mk5_atlas.entry_at(f, pc, k), fresh.entry_at(f, pc, k)
+            assert (a is None) == (b is None), (f, pc, k)
+            if a is not None:
+                n += 1
+                for pose in ("press", "rise", "hover", "high"):
+                    assert np.array_equal(getattr(a, pose), getattr(b, pose)), (f, pc, k)
+                assert a.max_force_n == b.max_force_n
+    assert n >= 10
