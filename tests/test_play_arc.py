@@ -152,3 +152,18 @@ def test_the_shipped_mk5_table_is_the_arcs_own(mk5_atlas):
                     assert np.array_equal(getattr(a, pose), getattr(b, pose)), (f, pc, k)
                 assert a.max_force_n == b.max_force_n
     assert n >= 10
+
+
+def test_mk5_white_press_holds_the_keys_weight_down_its_stroke(mk5_atlas):
+    """From the key-down depth to full dip, the index's white-key press holds at least a
+    key's weight (play's 0.5 N, check's key force): 0.70 N at 5 mm, rising to its 3.35 N
+    at full dip, the arc's bottom, where play asks the note's force."""
+    from planner.play.atlas import max_key_force_n
+    from planner.play.force import MAX_FORCE_N, MIN_FORCE_N
+
+    h, arc = mk5_atlas.hand, mk5_atlas._arcs["index"]
+    s_down, s_press = arc.descend(-kb.DOWN_DEPTH_M), arc.descend(-kb.KEY_DIP_M)
+    forces = [max_key_force_n(h, arc.q(s), "index") for s in np.linspace(s_down, s_press, 9)]
+    assert min(forces) == pytest.approx(0.70, abs=0.01) and min(forces) > MIN_FORCE_N
+    assert forces == sorted(forces)
+    assert forces[-1] == pytest.approx(3.35, abs=0.01) and forces[-1] > MAX_FORCE_N
