@@ -49,7 +49,10 @@ class Arc:
         if rail is not None:
             self.q_base[rail] = 0.0
         self.s = np.linspace(hand.lower[joint], hand.upper[joint], ARC_SAMPLES)
-        self.z = np.array([self.tip(s)[2] for s in self.s])
+        Q = np.repeat(self.q_base[None, :], ARC_SAMPLES, axis=0)
+        Q[:, joint] = self.s
+        Q = hand.apply_couplings(Q)  # (every law at once, vectorised over the samples)
+        self.z = np.array([hand.tip_position(q, self.tip_index)[2] for q in Q])
         self._cross: dict[tuple[float, float], float | None] = {}
 
     def q(self, s: float, rail_m: float = 0.0) -> np.ndarray:
