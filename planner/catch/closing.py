@@ -117,10 +117,10 @@ def _close_one_dof(hand: HandModel, q: np.ndarray, centre: np.ndarray, reach_m: 
             continue
         j = own[0]
         s = np.linspace(hand.lower[j], hand.upper[j], _N_CLOSE)
-        d = np.empty(len(s))
-        for i, si in enumerate(s):
-            q[j] = si
-            d[i] = np.linalg.norm(hand.tip_positions(hand.apply_couplings(q))[k] - centre)
+        Q = np.repeat(q[None, :], len(s), axis=0)
+        Q[:, j] = s
+        Q = hand.apply_couplings(Q)
+        d = np.array([np.linalg.norm(hand.tip_position(qs, k) - centre) for qs in Q])
         hit = np.flatnonzero(d <= reach_m)
         q[j] = s[hit[0]] if hit.size else s[int(np.argmin(d))]
     return hand.apply_couplings(q)
