@@ -81,6 +81,16 @@ def press_target(finger: str, pitch: int) -> PressTarget:
     return PressTarget(finger, pitch, (x, 0.095, z), (kb.BLACK_Y0_M + 0.012, kb.WHITE_LENGTH_M - 0.020))
 
 
+def press_x_range(finger: str, pitch: int, inset_m: float) -> tuple[float, float]:
+    """x range (m) of the part of key ``pitch`` that ``press_target`` has ``finger`` press,
+    ``inset_m`` in from each side: a black key, or a white key in front of the black keys
+    (the thumb's), across its whole width; a white key between the black keys (the long
+    fingers'), between its black neighbours (``exposed_range_x``)."""
+    k = kb.key(pitch)
+    lo, hi = (k.x_min_m, k.x_max_m) if k.black or finger == "thumb" else exposed_range_x(pitch)
+    return lo + inset_m, hi - inset_m
+
+
 def exposed_range_x(pitch: int) -> tuple[float, float]:
     """x range (m) of the part of a key no other key overhangs: for a white key, between
     its black neighbours; for a black key, the key itself."""

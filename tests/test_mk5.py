@@ -8,9 +8,6 @@ import numpy as np
 import pytest
 
 from planner.hand.mk5 import (
-    FINGERS,
-    MK5_TABLES,
-    Mk5FingerParams,
     derive_c_point,
     dq1_dq0,
     dq2_dq1,
@@ -21,9 +18,9 @@ from planner.hand.mk5 import (
     q1_span_upper_bound,
     q2_of_q1,
     qmot_of_q0,
-    table_consistency,
     with_c_point,
 )
+from planner.hand.mk5_tables import FINGERS, MK5_TABLES, Mk5FingerParams, table_consistency
 
 DEG = math.pi / 180.0
 ALL = [(v, f) for v in ("mk5.0", "mk5.1") for f in FINGERS]

@@ -14,11 +14,12 @@ import pytest
 
 from planner.hand import mk5
 from planner.hand.mk5_hand import Q2_MARGIN_RAD
+from planner.hand.mk5_tables import MK5_TABLES
 from planner.hand.model import load_hand
 from planner.hand.spec import FINGERS, PALM_FRAME, TIP_FRAMES, Mk5Coupling, load_hand_spec
 
 ROOT = Path(__file__).resolve().parents[1]
-TABLE = mk5.MK5_TABLES["mk5.1"]
+TABLE = MK5_TABLES["mk5.1"]
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +48,7 @@ def test_qmot_of_q1_is_the_documented_linear_stand_in(finger: str) -> None:
 
 
 def test_qmot_of_q1_needs_r_mot() -> None:
-    p = mk5.MK5_TABLES["mk5.0"]["index"]
+    p = MK5_TABLES["mk5.0"]["index"]
     with pytest.raises(ValueError, match="r_mot"):
         mk5.qmot_of_q1(p, 0.1)
     with pytest.raises(ValueError, match="r_mot"):
@@ -56,7 +57,7 @@ def test_qmot_of_q1_needs_r_mot() -> None:
 
 def test_qmot_of_q1_inverts_the_exact_law_when_c_is_known() -> None:
     """Mk5.0 thumb: the only finger with a crank pivot C (r_mot borrowed from Mk5.1)."""
-    p = replace(mk5.with_c_point(mk5.MK5_TABLES["mk5.0"]["thumb"]), r_mot=0.005)
+    p = replace(mk5.with_c_point(MK5_TABLES["mk5.0"]["thumb"]), r_mot=0.005)
     q1 = np.linspace(0.0, p.q1_max, 13)
     qm = np.asarray(mk5.qmot_of_q1(p, q1))
     assert np.allclose(mk5.q1_of_q0(p, mk5.q0_of_qmot(p, qm)), q1, atol=1e-12)

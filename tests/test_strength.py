@@ -119,6 +119,9 @@ def test_close_time_by_hand(hand, mk5) -> None:
         d, v, a = mk5.upper[j], mk5.velocity[j], mk5.acceleration[j]
         want = d / v + v / a if d >= v * v / a else 2 * math.sqrt(d / a)
         assert close_time(mk5, f)[0] == pytest.approx(want, rel=1e-12)
+        # 90 deg at 80 rad/s^2 never reaches the 20 rad/s cap: the acceleration is named
+        assert d < v * v / a and close_time(mk5, f)[1] == f"{f}_q1 at its 80 rad/s^2 " \
+            "(it never reaches its 20 rad/s)"
 
 
 def test_press_is_the_weakest_atlas_pose(hand) -> None:
@@ -139,10 +142,27 @@ def test_press_is_the_weakest_atlas_pose(hand) -> None:
         assert 0 < need < 0.144  # the seed's 0.144 N m: its 20 mm pulley, our 5 mm spool
 
 
-def test_mk5_presses_no_key(mk5) -> None:
-    """The Mk5's true-size fingers on the 1.5x hand's mount reach no key (issue 17)."""
-    assert all(v == (None, "no press pose: the finger reaches no key from the mount", None)
-               for v in press_strength(mk5).values())
+def test_mk5_press_is_its_weakest_arc_pose(mk5) -> None:
+    """The Mk5's fingers press on their arc (planner.play.arc): the thumb reaches no key
+    from the mount; the others' weakest press poses (the black keys', on the arc's steep
+    part) are their tendons' limit, and a 1 N key needs more motor torque there than the
+    seed's 0.144 N m (q1 gets 0.227 of the motor's turn)."""
+    press = press_strength(mk5)
+    assert press["thumb"] == (None, "no press pose: the finger reaches no key from the mount",
+                              None)
+    atlas = Atlas(mk5)
+    n = round(SPAN_M / STEP_M)
+    cap = np.array([_capacity(a) for a in mk5.actuators])
+    for f in FINGERS[1:]:
+        entries = [e for pc in range(12) for k in range(-n, n + 1)
+                   if (e := atlas.entry_at(f, pc, k)) is not None]
+        weakest = min(entries, key=lambda e: e.max_force_n)
+        force, part, need = press[f]
+        assert force == weakest.max_force_n and part == f"tendon force (motor.{f})"
+        q = atlas.full_q(weakest, "press", 0.0)
+        load = lambda F: np.max(np.abs(mk5.press_torques(q, {f: F})) / cap)  # noqa: B023
+        assert load(0.99 * force) < 1.0 < load(1.01 * force)
+        assert need > 0.144
 
 
 def test_grip_default(hand) -> None:

@@ -68,6 +68,7 @@ def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
     finally:
         for n in joints.locked:
             ik.solver.unmask_dof(n)
+    q = _close_one_dof(h, q, centre, r + TIP_GAP_M)
     q_closed = q.copy()
     q_closed[list(joints.arm)] = q0[list(joints.arm)]
     q_open = open_from(h, joints, q0, q_closed)
@@ -102,6 +103,27 @@ def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
     T_c = phase_duration(q_closed - q_open, h.velocity, h.acceleration)
     return Closing(r, q_closed, T_c, u_g, dist, fingers, u, tips_pc, reason,
                    float(d_tab.max()), (d_tab - r).min(axis=0))
+
+
+def _close_one_dof(hand: HandModel, q: np.ndarray, centre: np.ndarray, reach_m: float
+                   ) -> np.ndarray:
+    """A finger of one degree of freedom closes along its one arc, which the IK's point
+    targets can only approach: its joint is set where its tip, flexing from open, first
+    comes within ``reach_m`` of the ball's centre, or where it comes nearest."""
+    q = q.copy()
+    for k, f in enumerate(hand.fingers):
+        own = hand.own_independent(f)
+        if len(own) != 1:
+            continue
+        j = own[0]
+        s = np.linspace(hand.lower[j], hand.upper[j], _N_CLOSE)
+        Q = np.repeat(q[None, :], len(s), axis=0)
+        Q[:, j] = s
+        Q = hand.apply_couplings(Q)
+        d = np.array([np.linalg.norm(hand.tip_position(qs, k) - centre) for qs in Q])
+        hit = np.flatnonzero(d <= reach_m)
+        q[j] = s[hit[0]] if hit.size else s[int(np.argmin(d))]
+    return hand.apply_couplings(q)
 
 
 def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarray,

@@ -26,12 +26,14 @@ phalanx length is not in the table and is ``second_phalanx_ratio x d``
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from planner.errors import InputError
 from planner.hand import mk5
+from planner.hand.mk5_tables import MK5_TABLES, Mk5FingerParams
 from planner.hand.spec import (
     FINGERS,
     Actuator,
@@ -53,7 +55,7 @@ Q2_MARGIN_RAD = 1e-4  # widening of the q2 joint range beyond the coupling's min
 _SAMPLES = 4001  # grid over [0, q1_max] for the q2 range and the speed bounds
 
 
-def _finger_law(p: mk5.Mk5FingerParams) -> dict[str, float]:
+def _finger_law(p: Mk5FingerParams) -> dict[str, float]:
     """Range and bounds of the coupling and the motor ratio over ``q1 in [0, q1_max]``."""
     q1 = np.linspace(0.0, p.q1_max, _SAMPLES)
     rel = np.asarray(mk5.q2_of_q1(p, q1)) - q1
@@ -70,20 +72,27 @@ def _finger_law(p: mk5.Mk5FingerParams) -> dict[str, float]:
     }
 
 
-def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
-    """Build the Mk5 hand from its parsed TOML (see ``hands/mk5.toml``)."""
-    links: list[Link] = []
-    joints: list[Joint] = []
-    actuators: list[Actuator] = []
-    couplings: list[LinearCoupling | Mk5Coupling] = []
-    T_world_root, rail_enabled = build_mount_rail_wrist(data, links, joints, actuators)
+@dataclass(frozen=True)
+class _Mk5Drive:
+    """What every finger of an Mk5 hand file shares: the table, the phalanx sizes, the
+    forearm motor and its tendon, the finger's speed and acceleration caps."""
 
-    palm = _get(data, "palm", dict)
-    p_len = _length(palm, "length")
+    table: str
+    scale: float
+    ratio2: float
+    w_motor: float
+    tau_peak: float
+    eff: float
+    v_cap: float
+    a_max: float
+
+
+def _drive(data: dict[str, Any]) -> _Mk5Drive:
+    """The ``[mk5]``, ``[tendon]`` and ``[finger_speed]`` sections, checked."""
     m5 = _get(data, "mk5", dict)
     table = _get(m5, "table", str)
-    if table not in mk5.MK5_TABLES:
-        raise InputError(f"mk5 table {table!r} unknown; valid: {', '.join(mk5.MK5_TABLES)}")
+    if table not in MK5_TABLES:
+        raise InputError(f"mk5 table {table!r} unknown; valid: {', '.join(MK5_TABLES)}")
     scale = _get(m5, "scale")
     ratio2 = _get(m5, "second_phalanx_ratio")
     if scale <= 0 or ratio2 <= 0:
@@ -97,8 +106,19 @@ def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
     if w_motor <= 0 or tau_peak <= 0:
         raise InputError("tendon motor speed and peak torque must be positive")
     fs = _get(data, "finger_speed", dict)
-    v_cap, a_max = _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2")
+    return _Mk5Drive(table, scale, ratio2, w_motor, tau_peak, eff,
+                     _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2"))
 
+
+def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
+    """Build the Mk5 hand from its parsed TOML (see ``hands/mk5.toml``)."""
+    links: list[Link] = []
+    joints: list[Joint] = []
+    actuators: list[Actuator] = []
+    couplings: list[LinearCoupling | Mk5Coupling] = []
+    T_world_root, rail_enabled = build_mount_rail_wrist(data, links, joints, actuators)
+    p_len = _length(_get(data, "palm", dict), "length")
+    d = _drive(data)
     fingers = _get(data, "finger", list)
     names = [f.get("name") for f in fingers]
     if sorted(names) != sorted(FINGERS[1:]):
@@ -107,55 +127,62 @@ def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
         )
     by_name: dict[str, dict[str, Any]] = {f["name"]: f for f in fingers}
     by_name["thumb"] = _get(data, "thumb", dict)
-
     finger_joints: list[tuple[str, tuple[str, ...]]] = []
     for n in FINGERS:
-        fd = by_name[n]
-        p = mk5.MK5_TABLES[table][n]
-        if p.r_mot is None:
-            raise InputError(f"mk5 table {table!r} has no r_mot: the motor map is undefined")
-        law = _finger_law(p)
-        l1 = scale * p.d_geom
-        l2 = ratio2 * l1
-        w = _get(fd, "width_m")
-        ms = _get(fd, "masses_kg", dict)
-        if n == "thumb":
-            xyz = _vec(fd, "base_xyz_m")
-            rpy = tuple(math.radians(a) for a in _vec(fd, "base_rpy_deg"))
-        else:
-            xyz = (_get(fd, "mcp_x_m"), p_len, 0.0)
-            rpy = (0.0, 0.0, 0.0)
-        links += [_seg_link(f"{n}_proximal", l1, w, _get(ms, "proximal")),
-                  _seg_link(f"{n}_distal", l2, 0.9 * w, _get(ms, "distal"))]
-
-        # motor-limited speed of q1 (the motor ratio is largest where the motor
-        # turns fastest per q1 radian), then the mechanical cap
-        v1 = min(v_cap, w_motor / law["ratio_max"])
-        # q2 follows q1: its speed / acceleration limits are those the coupling
-        # induces at the q1 limits (|s| v1 and |s| a1 + |s'| v1^2), so any q1
-        # motion within q1's limits respects q2's
-        v2 = law["slope_max"] * v1
-        a2 = law["slope_max"] * a_max + law["curv_max"] * v1 * v1
-        # effort: joint torque the motor can hold everywhere in the range
-        e1 = tau_peak * eff / law["ratio_max"]
-        e2 = e1 / law["slope_max"]
-        joints += [
-            Joint(f"{n}_q1", "revolute", "palm", f"{n}_proximal", xyz, rpy,
-                  axis=(-1.0, 0.0, 0.0), lower=0.0, upper=p.q1_max, velocity=v1,
-                  acceleration=a_max, effort=e1),
-            Joint(f"{n}_q2", "revolute", f"{n}_proximal", f"{n}_distal", (0.0, l1, 0.0),
-                  axis=(-1.0, 0.0, 0.0), lower=law["q2_lo"], upper=law["q2_hi"], velocity=v2,
-                  acceleration=a2, effort=e2),
-        ]
-        tl, tj = _tip(n, f"{n}_distal", l2, 0.9 * w)
-        links.append(tl)
-        joints.append(tj)
-        c = Mk5Coupling(joint=f"{n}_q2", source=f"{n}_q1", table=table, finger=n)
+        fl, fj, c, a = _finger(n, by_name[n], p_len, d)
+        links += fl
+        joints += fj
         couplings.append(c)
-        actuators.append(Actuator(name=n, kind="tendon", drives=f"{n}_q1", coefficients=(),
-                                  speed_rad_s=w_motor, peak_torque_nm=tau_peak, efficiency=eff,
-                                  radius_m=p.r_mot, mk5=c))
+        actuators.append(a)
         finger_joints.append((n, (f"{n}_q1", f"{n}_q2")))
-
     return assemble_spec(data, links, joints, couplings, actuators, T_world_root, rail_enabled,
                          finger_joints)
+
+
+def _finger(n: str, fd: dict[str, Any], p_len: float, d: _Mk5Drive
+            ) -> tuple[list[Link], list[Joint], Mk5Coupling, Actuator]:
+    """One finger: its two phalanges and pad, its q1 and q2 joints (limits from the
+    leverism and the motor), the coupling and the finger's motor."""
+    p = MK5_TABLES[d.table][n]
+    if p.r_mot is None:
+        raise InputError(f"mk5 table {d.table!r} has no r_mot: the motor map is undefined")
+    law = _finger_law(p)
+    l1 = d.scale * p.d_geom
+    l2 = d.ratio2 * l1
+    w = _get(fd, "width_m")
+    ms = _get(fd, "masses_kg", dict)
+    if n == "thumb":
+        xyz = _vec(fd, "base_xyz_m")
+        rpy = tuple(math.radians(a) for a in _vec(fd, "base_rpy_deg"))
+    else:
+        xyz = (_get(fd, "mcp_x_m"), p_len, 0.0)
+        rpy = (0.0, 0.0, 0.0)
+    links = [_seg_link(f"{n}_proximal", l1, w, _get(ms, "proximal")),
+             _seg_link(f"{n}_distal", l2, 0.9 * w, _get(ms, "distal"))]
+    # motor-limited speed of q1 (the motor ratio is largest where the motor
+    # turns fastest per q1 radian), then the mechanical cap
+    v1 = min(d.v_cap, d.w_motor / law["ratio_max"])
+    # q2 follows q1: its speed / acceleration limits are those the coupling
+    # induces at the q1 limits (|s| v1 and |s| a1 + |s'| v1^2), so any q1
+    # motion within q1's limits respects q2's
+    v2 = law["slope_max"] * v1
+    a2 = law["slope_max"] * d.a_max + law["curv_max"] * v1 * v1
+    # effort: joint torque the motor can hold everywhere in the range
+    e1 = d.tau_peak * d.eff / law["ratio_max"]
+    e2 = e1 / law["slope_max"]
+    joints = [
+        Joint(f"{n}_q1", "revolute", "palm", f"{n}_proximal", xyz, rpy,
+              axis=(-1.0, 0.0, 0.0), lower=0.0, upper=p.q1_max, velocity=v1,
+              acceleration=d.a_max, effort=e1),
+        Joint(f"{n}_q2", "revolute", f"{n}_proximal", f"{n}_distal", (0.0, l1, 0.0),
+              axis=(-1.0, 0.0, 0.0), lower=law["q2_lo"], upper=law["q2_hi"], velocity=v2,
+              acceleration=a2, effort=e2),
+    ]
+    tl, tj = _tip(n, f"{n}_distal", l2, 0.9 * w)
+    links.append(tl)
+    joints.append(tj)
+    c = Mk5Coupling(joint=f"{n}_q2", source=f"{n}_q1", table=d.table, finger=n)
+    a = Actuator(name=n, kind="tendon", drives=f"{n}_q1", coefficients=(),
+                 speed_rad_s=d.w_motor, peak_torque_nm=d.tau_peak, efficiency=d.eff,
+                 radius_m=p.r_mot, mk5=c)
+    return links, joints, c, a

@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from planner.errors import InputError
+from planner.hand.mk5_tables import MK5_TABLES
 from planner.hand.spec import (
     PALM_FRAME,
     HandSpec,
@@ -93,10 +94,8 @@ class HandModel:
                 laws.append(CouplingLaw(self.index[c.joint], self.index[c.source], "linear",
                                         c.ratio, c.offset))
             elif isinstance(c, Mk5Coupling):
-                from planner.hand import mk5
-
                 laws.append(CouplingLaw(self.index[c.joint], self.index[c.source], "mk5",
-                                        mk5=mk5.MK5_TABLES[c.table][c.finger]))
+                                        mk5=MK5_TABLES[c.table][c.finger]))
         self.couplings: tuple[CouplingLaw, ...] = tuple(laws)
         dep = {c.dep for c in laws}
         # the linear laws at once (none of their sources is a dependent joint: no chain),
@@ -142,6 +141,12 @@ class HandModel:
     def joint_slice(self, finger: str) -> np.ndarray:
         """Indices of a finger's joints (thumb: cmc_abd, cmc_flex, ip; others: abd, mcp, pip, dip)."""
         return np.array([self.index[j] for j in self.spec.joints_of(finger)])
+
+    def own_independent(self, finger: str) -> list[int]:
+        """The finger's joints that no coupling drives: its degrees of freedom (one for
+        the Mk5's fingers, and for the AGH's whose base follows another finger's)."""
+        dep = set(self.dependent.tolist())
+        return [int(j) for j in self.joint_slice(finger) if int(j) not in dep]
 
     def apply_couplings(self, q: np.ndarray) -> np.ndarray:
         """A copy of ``q`` with every dependent joint set from its source."""
@@ -241,7 +246,7 @@ class HandModel:
             if a.mk5 is not None:
                 from planner.hand import mk5
 
-                qm[..., m] = mk5.qmot_of_q1(mk5.MK5_TABLES[a.mk5.table][a.mk5.finger],
+                qm[..., m] = mk5.qmot_of_q1(MK5_TABLES[a.mk5.table][a.mk5.finger],
                                             q[..., self.index[a.mk5.source]])
         return qm
 
@@ -254,7 +259,7 @@ class HandModel:
             if a.mk5 is not None:
                 from planner.hand import mk5
 
-                p = mk5.MK5_TABLES[a.mk5.table][a.mk5.finger]
+                p = MK5_TABLES[a.mk5.table][a.mk5.finger]
                 r[m] = mk5.dqmot_dq1(p, q[self._drive[m]])
             else:
                 r[m] = float(self._C[m] @ S[:, col[int(self._drive[m])]])

@@ -20,7 +20,8 @@ Per finger (thumb included):
   to its upper limit, rest to rest at its speed and acceleration limits
   (``d >= v^2/a``: ``d/v + v/a``, else ``2 sqrt(d/a)``), the slowest joint of the
   finger; its speed limit named: the motor's speed through the transmission, or the
-  joint's mechanical cap.
+  joint's mechanical cap (or its acceleration limit, when the move never reaches that
+  speed).
 
 For the hand: the **grip force** on a 2.5 in cylinder (``planner.hand.grip``).
 
@@ -168,9 +169,12 @@ def close_time(hand: HandModel, finger: str) -> tuple[float, str]:
     worst, part = 0.0, ""
     for j in flexion_joints(hand, finger):
         d, v, a = hand.upper[j] - hand.lower[j], hand.velocity[j], hand.acceleration[j]
-        t = d / v + v / a if d >= v * v / a else 2.0 * math.sqrt(d / a)
+        cruise = d >= v * v / a
+        t = d / v + v / a if cruise else 2.0 * math.sqrt(d / a)
         if t > worst:
-            worst, part = t, _speed_source(hand, j)
+            worst, part = t, (_speed_source(hand, j) if cruise else
+                              f"{hand.joint_names[j]} at its {a:g} rad/s^2 (it never "
+                              f"reaches its {v:g} rad/s)")
     return worst, part
 
 

@@ -17,6 +17,11 @@ every ``STEP_M`` around each finger's natural place and solves, by single-finger
 * ``high``: straight above it at ``HIGH_Z_M`` (7.5 mm above the black keys' tops), from
   where the finger moves sideways over any key.
 
+A finger of one degree of freedom (one independent joint: the Mk5's) has the same four
+poses at the same heights, found on its tip's one arc instead (``planner.play.arc``):
+the press where flexing brings the tip to full dip, on the part of the key it presses,
+the others where opening brings it back up (not straight above: it cannot hold x, y).
+
 An entry is kept when the four converge (1 mm), every joint is within its limits, and
 the straight joint-space moves high -> hover -> press, high -> press and rise -> press
 keep the tip clear of every other key (forward kinematics, sampled). Its ``max_force_n`` is the largest key force the
@@ -40,8 +45,16 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.hand.tendon import actuator_capacity
-from planner.ik import PREPARE_HEIGHT_M, HandIK, PressTarget, press_target, surfaces_under
+from planner.ik import (
+    PREPARE_HEIGHT_M,
+    HandIK,
+    PressTarget,
+    press_target,
+    press_x_range,
+    surfaces_under,
+)
 from planner.music import keyboard as kb
+from planner.play.arc import Arc, arc_joint
 
 STEP_M = 0.001  # the atlas samples dx this often
 SPAN_M = 0.045  # ... this far either side of a finger's natural place
@@ -81,7 +94,10 @@ class Atlas:
         self.hand = hand
         self.ik = ik or HandIK(hand)
         self.rail = hand.index.get("rail")  # None: a hand on a fixed mount (rail at 0)
+        # the fingers with one independent joint: their poses are found on their arc
+        self.arc_joint = {f: j for f in hand.fingers if (j := arc_joint(hand, f)) is not None}
         self.base = self._natural_hand()
+        self._arcs = {f: Arc(hand, f, j, self.base) for f, j in self.arc_joint.items()}
         tips = hand.tip_positions(self.base)
         self.natural_dx = {f: float(tips[i, 0] - self.rail_of(self.base))
                            for i, f in enumerate(hand.fingers)}
@@ -99,7 +115,11 @@ class Atlas:
         """The natural hand at rail 0: every finger ``CURL`` flexed with no abduction, and
         the wrist (flexion, deviation) that puts the tips, in the least-squares sense,
         ``BASE_HOVER_Z_M`` above the white tops, midway between full dip and crossing
-        height, so that each finger has room both ways."""
+        height, so that each finger has room both ways. A finger of one degree of
+        freedom (``planner.play.arc``) takes no part in the fit: its one joint is what
+        sets its height, flexed from open until its tip is down at that height (open
+        if its arc never comes down to it; the wrist stays at its neutral when every
+        finger is such)."""
         h = self.hand
         q0 = h.q_neutral.copy()
         for f in h.fingers:
@@ -109,14 +129,15 @@ class Atlas:
             q0[js[0]] = min(max(0.0, h.lower[js[0]]), h.upper[js[0]])
         q0 = h.apply_couplings(q0)
         wrist = [h.index[n] for n in ("wrist_flex", "wrist_dev")]
+        fit = [i for i, f in enumerate(h.fingers) if f not in self.arc_joint]
 
         def heights(w: np.ndarray) -> np.ndarray:
             q = q0.copy()
             q[wrist] = w
-            return h.tip_positions(q)[:, 2] - z_m
+            return h.tip_positions(q)[fit, 2] - z_m
 
         w = q0[wrist].copy()
-        for _ in range(50):  # Gauss-Newton on two angles, finite-difference Jacobian
+        for _ in range(50 if fit else 0):  # Gauss-Newton on two angles, finite differences
             r = heights(w)
             J = np.stack([(heights(w + 1e-6 * e) - r) / 1e-6 for e in np.eye(2)], axis=1)
             step = np.linalg.lstsq(J, -r, rcond=None)[0]
@@ -124,7 +145,11 @@ class Atlas:
             if np.max(np.abs(step)) < 1e-10:
                 break
         q0[wrist] = w
-        return q0
+        for f, j in self.arc_joint.items():
+            s = Arc(h, f, j, q0).descend(z_m)
+            if s is not None:
+                q0[j] = s
+        return h.apply_couplings(q0)
 
     def rail_of(self, q: np.ndarray) -> float:
         """The rail position of a configuration (0 on a fixed mount)."""
@@ -208,8 +233,13 @@ class Atlas:
                                 **poses)
 
     def _params(self) -> str:
-        """What the entries depend on besides the URDF: a table made otherwise is not used."""
+        """What the entries depend on besides the URDF: a table made otherwise is not used.
+        The mount (the root's pose over the keyboard) is not in the URDF: a hand file whose
+        mount moves keeps its URDF and its table's name, and the pose makes the old table
+        stale."""
         return json.dumps({"urdf_sha256": self.hand.urdf_sha256, "step_m": STEP_M,
+                           "T_world_root": [round(float(x), 12)
+                                            for x in self.hand.T_world_root.ravel()],
                            "span_m": SPAN_M, "high_z_m": HIGH_Z_M, "repeat_depth_m": REPEAT_DEPTH_M,
                            "base_hover_z_m": BASE_HOVER_Z_M, "curl": CURL,
                            "clearance_m": CLEARANCE_M, "tip_radius_m": TIP_RADIUS_M,
@@ -247,12 +277,29 @@ class Atlas:
             if not h.lower[self.rail] <= rail <= h.upper[self.rail]:
                 return None
             base[self.rail] = rail
+        poses = (self._arc_poses(finger, pitch, rail) if finger in self.arc_joint
+                 else self._ik_poses(finger, pitch, base))
+        if poses is None:
+            return None
+        js = h.joint_slice(finger)
+        if not all(h.within_limits(q) for q in poses):
+            return None
+        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
+                       (poses[1], poses[0])):
+            if not path_clear(h, qa, qb, finger, pitch):
+                return None
+        return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
+                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger))
+
+    def _ik_poses(self, finger: str, pitch: int, base: np.ndarray) -> list[np.ndarray] | None:
+        """Press, rise, hover and high by single-finger IK: the tip on the key's press
+        point, then straight above it at each height."""
         target = press_target(finger, pitch)
         self.solves += 1
         r = self.ik.solve_finger(target, base)
         if not r.converged:
             return None
-        tip = h.tip_positions(r.q)[h.fingers.index(finger)]
+        tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
         top = kb.key(pitch).top_z_m
         poses = [r.q]
         for z in (top - REPEAT_DEPTH_M, top + PREPARE_HEIGHT_M, HIGH_Z_M):
@@ -263,15 +310,29 @@ class Atlas:
             if not up.converged:
                 return None
             poses.append(up.q)
-        js = h.joint_slice(finger)
-        if not all(h.within_limits(q) for q in poses):
+        return poses
+
+    def _arc_poses(self, finger: str, pitch: int, rail: float) -> list[np.ndarray] | None:
+        """Press, rise, hover and high of a one-DOF finger on its arc
+        (``planner.play.arc``): the press where flexing brings the tip down to full dip,
+        which must be on the part of the key the finger presses (``press_x_range``, inset
+        by the pad's radius, and the press target's y range); the others where opening
+        from there brings it back up to each height."""
+        arc = self._arcs[finger]
+        top = kb.key(pitch).top_z_m
+        s = [arc.descend(top - kb.KEY_DIP_M)]
+        if s[0] is None:
             return None
-        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
-                       (poses[1], poses[0])):
-            if not path_clear(h, qa, qb, finger, pitch):
+        x, y, _ = arc.tip(s[0], rail)
+        x_lo, x_hi = press_x_range(finger, pitch, TIP_RADIUS_M)
+        y_lo, y_hi = press_target(finger, pitch).y_range_m
+        if not (x_lo <= x <= x_hi and y_lo <= y <= y_hi):
+            return None
+        for z in (top - REPEAT_DEPTH_M, top + PREPARE_HEIGHT_M, HIGH_Z_M):
+            s.append(arc.ascend(z, s[-1]))
+            if s[-1] is None:
                 return None
-        return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
-                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger))
+        return [arc.q(si, rail) for si in s]
 
 
 def table_path(urdf_sha256: str) -> Path:
@@ -288,7 +349,8 @@ def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,
     it may press down to full dip."""
     f = hand.fingers.index(finger)
     s = np.linspace(0.0, 1.0, PATH_SAMPLES)
-    tips = np.array([hand.tip_positions(qa + si * (qb - qa))[f] for si in s])
+    tips = np.array([hand.tip_positions(hand.apply_couplings(qa + si * (qb - qa)))[f]
+                     for si in s])
     x, y, z = tips[:, 0], tips[:, 1], tips[:, 2]
     over = surfaces_under(x, y, TIP_RADIUS_M)
     ok = z >= over + CLEARANCE_M
