@@ -38,6 +38,8 @@ import math
 from dataclasses import dataclass
 from functools import cache
 
+import numpy as np
+
 from planner.music import keyboard as kb
 
 WHITE_KEY_MASS_KG = 0.040  # RoboPianist (Zakka et al. 2023), piano_constants.WHITE_KEY_MASS
@@ -160,3 +162,19 @@ def front_force_n(key: KeyBody, angle_rad: float) -> float:
     spring = KEY_STIFFNESS_NM_RAD * (angle_rad - key.springref_rad)
     weight = key.mass_kg * GRAVITY_M_S2 * (key.pivot_m[1] - key.com_m[1]) * math.cos(angle_rad)
     return (spring - weight) / key.lever_m
+
+
+def planned_key_angles(tips_m, contacts) -> np.ndarray:
+    """(T, 88) each key's hinge angle under pad points ``tips_m`` (T, 5, 3), as far down
+    as the deepest pad on it holds it (``contacts``: ``check.criteria.key_contacts`` of
+    those points), at most to its bed: the keys of a kinematic replay, as angles."""
+    keys = key_bodies()
+    out = np.zeros((len(tips_m), len(keys)))
+    T, F = np.nonzero((contacts.tip_key >= 0) & (np.nan_to_num(contacts.tip_depth) > 0))
+    for t, f in zip(T, F):
+        kb_ = keys[int(contacts.tip_key[t, f])]
+        angle = min(kb_.dip_angle_rad, math.atan2(float(contacts.tip_depth[t, f]),
+                                                  kb_.pivot_m[1] - float(tips_m[t, f, 1])))
+        k = int(contacts.tip_key[t, f])
+        out[t, k] = max(out[t, k], angle)
+    return out

@@ -96,19 +96,11 @@ def _rest_keys_on_fingers(scene: Scene, data, mujoco) -> None:
     """Start every key a pad point is pressing in the first row as far down as the pad
     holds it (at most to its bed): the replay starts at rest with the plan's first pose."""
     from planner.check.criteria import key_contacts
-    from planner.simulate.keyboard import key_bodies
+    from planner.simulate.keyboard import planned_key_angles
 
-    tips = np.array(data.site_xpos[scene.tip_sites])
-    kc = key_contacts(tips[None])
-    keys = key_bodies()
-    for f, k in enumerate(kc.tip_key[0]):
-        depth = kc.tip_depth[0, f]
-        if k < 0 or not depth > 0:
-            continue
-        kb = keys[int(k)]
-        angle = min(kb.dip_angle_rad, float(np.arctan2(depth, kb.pivot_m[1] - tips[f, 1])))
-        adr = scene.key_qpos[int(k)]
-        data.qpos[adr] = max(data.qpos[adr], angle)
+    tips = np.array(data.site_xpos[scene.tip_sites])[None]
+    angles = planned_key_angles(tips, key_contacts(tips))[0]
+    data.qpos[scene.key_qpos] = np.maximum(data.qpos[scene.key_qpos], angles)
     mujoco.mj_forward(scene.model, data)
 
 

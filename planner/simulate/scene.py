@@ -79,6 +79,12 @@ def _mujoco():
         import mujoco
     except ImportError:
         raise InputError("simulate needs MuJoCo: pip install -e \".[physics]\"") from None
+    except (AttributeError, OSError, RuntimeError) as e:  # MUJOCO_GL names a missing library
+        import os
+
+        raise InputError(f"MuJoCo does not load with MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
+                         f" ({type(e).__name__}: {e}): set it to egl, osmesa or glfw, or "
+                         "unset it") from None
     return mujoco
 
 
