@@ -93,7 +93,7 @@ def bench_agreement() -> None:
         print(line)
 
 
-def bench_notes() -> None:
+def bench_notes(contact: str = "pads") -> None:
     from planner.simulate import run_replay
     from planner.simulate.compare import note_differences
 
@@ -102,9 +102,9 @@ def bench_notes() -> None:
         for song in sorted((ROOT / "songs").glob("*.mid")):
             traj = Path(d) / f"{song.stem}.csv"
             planner.plan_song(planner.load_song(str(song)), hand, str(traj))
-            r = run_replay(str(traj), str(song), contact="pads")
+            r = run_replay(str(traj), str(song), contact=contact)
             diffs = note_differences(r)
-            print(f"{song.stem}: kinematic F1 {r.report.kinematic_f1:.4f}, physics (pads) "
+            print(f"{song.stem}: kinematic F1 {r.report.kinematic_f1:.4f}, physics ({contact}) "
                   f"{r.report.play.f1:.4f}, {len(diffs)} notes or keys differ", flush=True)
             for x in diffs:
                 what = f"note {x.note}" if x.note >= 0 else "wrong key"
@@ -137,12 +137,14 @@ def main() -> None:
     ap.add_argument("--notes", action="store_true",
                     help="pads contact: every note's share of the F1 difference")
     ap.add_argument("--catch-grid", action="store_true", help="the default catch grid")
+    ap.add_argument("--contact", choices=("full", "pads"), default="pads",
+                    help="--notes: the contact model (default pads)")
     a = ap.parse_args()
     sys.path.insert(0, str(ROOT / "bench"))
     if a.agreement:
         bench_agreement()
     elif a.notes:
-        bench_notes()
+        bench_notes(a.contact)
     elif a.catch_grid:
         bench_catch_grid()
     else:

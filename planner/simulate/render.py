@@ -98,10 +98,10 @@ def _planned_ball(replay, data, mujoco, scene, t: float) -> np.ndarray:
     return np.asarray(data.site_xpos[scene.palm_site]) + float(b["radius"]) * R[:, 2]
 
 
-def _set_state(scene, data, mujoco, q, key_angle, ball) -> None:
+def _set_state(scene, data, mujoco, q, key_dip, ball) -> None:
     data.qpos[scene.hand_qpos] = q
     if len(scene.key_qpos):
-        data.qpos[scene.key_qpos] = key_angle
+        data.qpos[scene.key_qpos] = key_dip
     mujoco.mj_kinematics(scene.model, data)
     if scene.ball_body >= 0 and ball is not None:
         adr = scene.model.jnt_qposadr[scene.model.body_jntadr[scene.ball_body]]
@@ -135,18 +135,18 @@ class _KeyTint:
 
 
 def _key_states(replay):
-    """(planned key angles, planned down, physics down, expected) per row; Nones for a
+    """(planned key travel, planned down, physics down, expected) per row; Nones for a
     catch (expected None without a song)."""
     if replay.report.task != "play":
         return None, None, None, None
     from planner.check.criteria import expected_keys, key_contacts
-    from planner.simulate.keyboard import planned_key_angles
+    from planner.simulate.keyboard import planned_key_travel
     from planner.simulate.scores import key_down
 
     planned_tips = np.array([replay.hand.tip_positions(q) for q in replay.record.q_ref])
     kc = key_contacts(planned_tips)
     expected = None if replay.notes is None else expected_keys(replay.notes, replay.record.t_s)
-    return planned_key_angles(planned_tips, kc), kc.down, key_down(replay.record), expected
+    return planned_key_travel(kc), kc.down, key_down(replay.record), expected
 
 
 def _label(img: np.ndarray, lines: list[str]) -> np.ndarray:
@@ -195,7 +195,7 @@ def render_frames(replay, frames: Frames) -> Iterator[np.ndarray]:
     renderer = _renderer(mujoco, scene.model)
     plan, phys = mujoco.MjData(scene.model), mujoco.MjData(scene.model)
     tint = _KeyTint(scene)
-    angles, plan_down, phys_down, expected = _key_states(replay)
+    travel, plan_down, phys_down, expected = _key_states(replay)
     catch = replay.report.task == "catch"
     offset = CATCH_CAMERA_OFFSET_M if catch else PLAY_CAMERA_OFFSET_M
     what = f"physics (MuJoCo, contact {replay.report.contact})"
@@ -204,10 +204,10 @@ def render_frames(replay, frames: Frames) -> Iterator[np.ndarray]:
             cam = _camera(mujoco, lookat, offset)
             t = float(rec.t_s[r])
             exp = None if expected is None else expected[r]
-            _set_state(scene, plan, mujoco, rec.q_ref[r], None if angles is None else angles[r],
+            _set_state(scene, plan, mujoco, rec.q_ref[r], None if travel is None else travel[r],
                        (lambda d, t=t: _planned_ball(replay, d, mujoco, scene, t)) if catch
                        else None)
-            _set_state(scene, phys, mujoco, rec.q_sim[r], rec.key_angle_rad[r],
+            _set_state(scene, phys, mujoco, rec.q_sim[r], rec.key_dip_m[r],
                        rec.ball_m[r] if catch else None)
             panels = []
             for data, down, name in ((plan, plan_down, "plan (kinematic check)"),

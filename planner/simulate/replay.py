@@ -4,7 +4,7 @@ The replay starts at rest in the first row's pose (keys up, the ball at its laun
 state), then steps ``scene.TIMESTEP_S`` at a time. Between two rows the servos' position
 reference moves linearly (what a controller interpolating 100 Hz setpoints does); the
 speed and inverse-dynamics feedforward move likewise (``actuators.Reference``).
-At every row's time the state is sampled: the hand's joints, every key's angle and
+At every row's time the state is sampled: the hand's joints, every key's travel and
 the finger touching it, the servos' forces and what they asked for (before the clamp
 to their motor's torque), the pad points, the ball and its contacts. A ball with drag
 gets ``-m k |v| v`` as an applied force at every step (spec section 4).
@@ -31,7 +31,7 @@ class SimRecord:
     t_s: np.ndarray  # (T,)
     q_ref: np.ndarray  # (T, n) the rows
     q_sim: np.ndarray  # (T, n) the simulated joints
-    key_angle_rad: np.ndarray  # (T, 88) (empty columns without a keyboard)
+    key_dip_m: np.ndarray  # (T, 88) each key's travel down (zeros without a keyboard)
     key_finger: np.ndarray  # (T, 88) int8: the finger touching a key (FINGERS index), -1
     servo_force: np.ndarray  # (T, n_motor) joint-side force the servo applied
     servo_demand: np.ndarray  # (T, n_motor) what the control law asked for (unclamped)
@@ -96,11 +96,11 @@ def _rest_keys_on_fingers(scene: Scene, data, mujoco) -> None:
     """Start every key a pad point is pressing in the first row as far down as the pad
     holds it (at most to its bed): the replay starts at rest with the plan's first pose."""
     from planner.check.criteria import key_contacts
-    from planner.simulate.keyboard import planned_key_angles
+    from planner.simulate.keyboard import planned_key_travel
 
     tips = np.array(data.site_xpos[scene.tip_sites])[None]
-    angles = planned_key_angles(tips, key_contacts(tips))[0]
-    data.qpos[scene.key_qpos] = np.maximum(data.qpos[scene.key_qpos], angles)
+    travel = planned_key_travel(key_contacts(tips))[0]
+    data.qpos[scene.key_qpos] = np.maximum(data.qpos[scene.key_qpos], travel)
     mujoco.mj_forward(scene.model, data)
 
 
@@ -203,7 +203,7 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
         rec["ball"][:] = np.nan
         rec["ball_v"][:] = np.nan
     return SimRecord(t_s=np.asarray(t_s, dtype=float), q_ref=q, q_sim=rec["q_sim"],
-                     key_angle_rad=rec["key"], key_finger=key_finger,
+                     key_dip_m=rec["key"], key_finger=key_finger,
                      servo_force=rec["force"], servo_demand=rec["demand"],
                      force_limit=rec["limit"], tips_m=rec["tips"], palm_m=rec["palm"],
                      ball_m=rec["ball"], ball_speed_m_s=rec["ball_v"],
