@@ -29,10 +29,21 @@ from planner.check.criteria import (
     song_frames,
 )
 from planner.hand.spec import FINGERS
-from planner.music.keyboard import LOWEST_PITCH
+from planner.music.keyboard import LOWEST_PITCH, WHITE_WIDTH_M
 from planner.simulate.scores import key_down
 
 NEAR_NOTE_S = 0.1  # a key state this close to a note of its key belongs to that note
+WIDE_MM = 1000.0 * WHITE_WIDTH_M - 1e-6  # narrower (mm) than a white key's front: named
+
+
+def _width_mm(pitch: int, y_m: float) -> float:
+    """The width of a key's footprint at ``y_m`` (its box there), mm."""
+    from planner.simulate.keyboard import key_body
+
+    for b in key_body(pitch).boxes:
+        if abs(y_m - b.center_m[1]) <= b.half_m[1]:
+            return 2000.0 * b.half_m[0]
+    return float("nan")
 
 
 @dataclass(frozen=True)
@@ -51,6 +62,9 @@ class NoteDifference:
     fingers: tuple[str, ...]  # fingers touching the key in physics over those frames
     pad_error_mm: float  # largest |simulated - planned| pad point of those fingers
     pad_dz_mm: float  # its height error there (simulated - planned: > 0 above the plan)
+    plan_y_mm: float = float("nan")  # the planned pressing pad's y on the key (mm back)
+    key_width_mm: float = float("nan")  # the key's footprint width at that y
+    touched: tuple[str, ...] = ()  # other keys the planned finger touches in physics then
 
     @property
     def cause(self) -> str:
@@ -63,6 +77,11 @@ class NoteDifference:
             parts.append(f"still down {self.release_frames} frames after its release")
         if self.extra_frames:
             parts.append(f"down {self.extra_frames} frames outside any note")
+        if self.touched:
+            parts.append(f"the finger on {'+'.join(self.touched)}")
+        if self.key_width_mm == self.key_width_mm and self.key_width_mm < WIDE_MM:
+            parts.append(f"pressed {self.plan_y_mm:.0f} mm back, where the key is "
+                         f"{self.key_width_mm:.1f} mm wide")
         return ", ".join(parts) or "physics down where the kinematic replay is not"
 
 
@@ -90,7 +109,8 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
     planned = np.array([replay.hand.tip_positions(q) for q in rec.q_ref[:n]])
     kin = np.zeros((len(frames), 88), dtype=bool)
     phys = np.zeros_like(kin)
-    kin[:n] = key_contacts(planned).down
+    kc = key_contacts(planned)
+    kin[:n] = kc.down
     phys[:n] = key_down(rec)[:n]
     expected = expected_keys(notes, frames)
     f1k = frame_scores(expected, kin)[2]
@@ -107,8 +127,10 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
         key = ("note", i) if i >= 0 else ("wrong", int(k))
         a = acc.setdefault(key, {"lost": 0.0, "onset": 0, "middle": 0, "release": 0,
                                  "extra": 0, "fingers": set(), "err": 0.0, "dz": 0.0,
-                                 "k": int(k),
+                                 "k": int(k), "y": float("nan"), "touched": set(),
                                  "t0": float(frames[t])})
+        if t < n and i >= 0 and kin[t, k]:
+            _plan_finger(a, kc, planned, rec, t, int(k))
         a["lost"] += share
         if i >= 0:
             on, off = notes[i].onset_s, notes[i].offset_s
@@ -136,6 +158,21 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
             i if kind == "note" else -1, pitch_name(p), p,
             float(notes[i].onset_s) if kind == "note" else a["t0"], float(a["lost"]),
             a["onset"], a["middle"], a["release"], a["extra"],
-            tuple(sorted(a["fingers"], key=FINGERS.index)), a["err"], a["dz"]))
+            tuple(sorted(a["fingers"], key=FINGERS.index)), a["err"], a["dz"], a["y"] * 1000.0,
+            _width_mm(p, a["y"]) if a["y"] == a["y"] else float("nan"),
+            tuple(pitch_name(q) for q in sorted(a["touched"]))))
     out.sort(key=lambda d: -d.lost_f1)
     return tuple(out)
+
+
+def _plan_finger(a: dict, kc, planned: np.ndarray, rec, t: int, k: int) -> None:
+    """Note in ``a`` where the plan presses key ``k`` at frame ``t`` (the first pad on it)
+    and which other keys that finger touches in physics then."""
+    on = np.flatnonzero(kc.tip_key[t] == k)
+    if not len(on):
+        return
+    f = int(on[0])
+    if a["y"] != a["y"]:
+        a["y"] = float(planned[t, f, 1])
+    others = np.flatnonzero(rec.key_finger[t] == f)
+    a["touched"].update(int(q) + LOWEST_PITCH for q in others if q != k)

@@ -18,16 +18,18 @@ spec's key gives 0.990; docs/physics-replay.md.)
 
 Constants (each a physical value with its source):
 
-* ``WHITE_KEY_MASS_KG`` 0.040, ``BLACK_KEY_MASS_KG`` 0.020: RoboPianist's key masses,
-  here the whole mass moving with the press (a conservative, slow key: a lever key's
-  mass at its front is a third of it).
+* Moving mass: RoboPianist's key (``WHITE_KEY_MASS_KG`` 0.040, ``BLACK_KEY_MASS_KG``
+  0.020, a uniform stick hinged at its back end: ``I = m L^2 / 3``) at its front, as its
+  spring is: ``I / L^2 = m / 3`` (13.3 g, 6.7 g). (The whole 40 g moving straight down
+  returned a released key 20 ms after its pad left, the hinged key 12 ms.)
 * ``DOWN_WEIGHT_N`` 0.5: the force on the key that just starts it down (a grand
   piano's down-weight is about 50 g, 0.49 N; ``planner.play.force.MIN_FORCE_N`` is the
   same 0.5 N, "a real key's weight"). It sets the spring's preload.
 * ``KEY_STIFFNESS_N_M``: RoboPianist's key return spring (2 N m/rad about its hinge at
   the back of its 0.150 m key) at that key's front, where the spec measures the dip:
   2 / 0.150^2 = 88.9 N/m (0.5 N at rest, 1.39 N at the bed).
-* Damping: critical (no bounce at the rest stop) for the key's mass: ``2 sqrt(k m)``.
+* Damping: critical (no bounce at the rest stop) for that mass: ``2 sqrt(k m)`` = 2.18
+  N s/m for a white key; RoboPianist's 0.05 N m s/rad at its front is 2.22.
 * No hammer action: the key alone (a digital keyboard's action).
 """
 
@@ -46,6 +48,7 @@ BLACK_KEY_MASS_KG = 0.020  # RoboPianist, piano_constants.BLACK_KEY_MASS
 ROBOPIANIST_KEY_STIFFNESS_NM_RAD = 2.0  # RoboPianist, piano_constants.WHITE_KEY_STIFFNESS
 ROBOPIANIST_KEY_LENGTH_M = 0.150  # its hinge at the back of the visible key
 KEY_STIFFNESS_N_M = ROBOPIANIST_KEY_STIFFNESS_NM_RAD / ROBOPIANIST_KEY_LENGTH_M ** 2
+FRONT_MASS_SHARE = 1.0 / 3.0  # a uniform stick hinged at one end, at its other end: I / L^2
 DOWN_WEIGHT_N = 0.5  # grand piano down-weight ~50 g (0.49 N); play.force.MIN_FORCE_N
 KEY_THICKNESS_M = kb.WHITE_WIDTH_M  # a key stick as tall as a white key is wide (RoboPianist)
 GRAVITY_M_S2 = 9.81
@@ -70,7 +73,7 @@ class KeyBody:
     pitch: int
     black: bool
     boxes: tuple[KeyBox, ...]  # the visible key (collides)
-    mass_kg: float
+    mass_kg: float  # moving with the press (see the module docstring)
     com_m: tuple[float, float, float]
     down_m: float  # travel at which it sounds: the spec's DOWN_DEPTH_M
     dip_m: float  # travel to the key bed: KEY_DIP_M
@@ -114,7 +117,7 @@ def key_body(pitch: int) -> KeyBody:
     """The physical key of a MIDI pitch 21..108."""
     k = kb.key(pitch)
     boxes = _boxes(pitch)
-    mass = BLACK_KEY_MASS_KG if k.black else WHITE_KEY_MASS_KG
+    mass = FRONT_MASS_SHARE * (BLACK_KEY_MASS_KG if k.black else WHITE_KEY_MASS_KG)
     vol = sum(b.volume_m3 for b in boxes)
     com = tuple(sum(b.center_m[i] * b.volume_m3 for b in boxes) / vol for i in range(3))
     # at rest the spring holds the key up with the down-weight beyond its own weight:
