@@ -113,9 +113,36 @@ def bench_notes(contact: str = "pads") -> None:
                       f"plan (dz {x.pad_dz_mm:+.1f})", flush=True)
 
 
+def _catch_facts(r) -> str:
+    """Why a catch is or is not held, from the plan and the physics: the palm's tilt
+    from horizontal at the intercept (plan), the fingertips' smallest gap to the planned
+    ball's surface in the last row (plan), the ball's distance from the palm centre 150 ms
+    after the intercept and the last row it touches the hand (physics)."""
+    rec, hand = r.record, r.hand
+    meta = r.trajectory.metadata
+    t_int = float(meta["intercept_t"])
+    radius = float(r.scene.model.geom_size[r.scene.ball_geom][0])
+    i = int(np.argmin(np.abs(rec.t_s - t_int)))
+    T = hand.palm_pose(rec.q_ref[i])
+    tilt = np.degrees(np.arccos(np.clip(T[2, 2], -1.0, 1.0)))
+    Tend = hand.palm_pose(rec.q_ref[-1])
+    ball_plan = Tend[:3, 3] + radius * Tend[:3, 2]
+    gap = np.linalg.norm(hand.tip_positions(rec.q_ref[-1]) - ball_plan, axis=1) - radius
+    j = int(np.argmin(np.abs(rec.t_s - (t_int + 0.15))))
+    d150 = float(np.linalg.norm(rec.ball_m[j] - rec.palm_m[j]))
+    touching = np.flatnonzero(rec.ball_contacts > 0)
+    last = f"{rec.t_s[touching[-1]] - t_int:+.3f} s" if len(touching) else "never"
+    return (f"palm tilt {tilt:.0f} deg, planned tips {gap.min() * 1000:.1f}-"
+            f"{gap.max() * 1000:.1f} mm off the ball, ball {d150 * 1000:.0f} mm from the palm "
+            f"centre at +150 ms, last touch {last} from the intercept")
+
+
 def bench_catch_grid() -> None:
     """Angles 20-60 deg x distances 1-3 m (tests/test_catch.py's grid), height 0, tennis
     ball: each feasible plan in physics."""
+    from planner.simulate import run_replay
+
+    held = feasible = 0
     with tempfile.TemporaryDirectory() as d:
         for a in range(20, 61, 10):
             for dist in (1.0, 1.5, 2.0, 2.5, 3.0):
@@ -124,10 +151,14 @@ def bench_catch_grid() -> None:
                 if not res.feasible:
                     print(f"{a} deg {dist} m: infeasible plan, not simulated", flush=True)
                     continue
-                c = simulate_trajectory(str(path)).catch
+                r = run_replay(str(path))
+                c = r.report.catch
+                feasible += 1
+                held += c.held
                 print(f"{a} deg {dist} m: {'held' if c.held else 'NOT held'}, peak contact "
                       f"{c.peak_contact_force_n:.1f} N, {c.end_distance_m * 1000:.1f} mm from "
-                      f"the palm centre at the end", flush=True)
+                      f"the palm centre at the end; {_catch_facts(r)}", flush=True)
+    print(f"held {held} of {feasible} feasible plans")
 
 
 def main() -> None:
