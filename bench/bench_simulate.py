@@ -98,6 +98,7 @@ def bench_notes(contact: str = "pads") -> None:
     from planner.simulate.compare import note_differences
 
     hand = planner.load_hand("default")
+    summaries = []
     with tempfile.TemporaryDirectory() as d:
         for song in sorted((ROOT / "songs").glob("*.mid")):
             traj = Path(d) / f"{song.stem}.csv"
@@ -111,6 +112,25 @@ def bench_notes(contact: str = "pads") -> None:
                 print(f"  {x.name:4s} @{x.onset_s:6.2f} s {what:9s} {x.lost_f1:+.4f}  {x.cause}; "
                       f"{'+'.join(x.fingers) or 'no finger'}, pad {x.pad_error_mm:.1f} mm off "
                       f"plan (dz {x.pad_dz_mm:+.1f})", flush=True)
+            summaries.append(_by_kind(song.stem, r.report, diffs))
+    print()
+    for line in summaries:
+        print(line)
+
+
+def _by_kind(name: str, rep, diffs) -> str:
+    """One markdown line: the song's differences by cause, note by note."""
+    parts = []
+    for kind in ("narrow", "wrong", "lifted", "timing"):
+        xs = sorted((x for x in diffs if x.kind == kind), key=lambda x: x.onset_s)
+        if xs:
+            lost = sum(x.lost_f1 for x in xs)
+            notes = ", ".join(f"{x.name}@{x.onset_s:.2f}"
+                              + (f" ({'+'.join(x.fingers)})" if kind == "wrong" and x.fingers
+                                 else "") for x in xs)
+            parts.append(f"**{kind}** {len(xs)} ({lost:.4f}): {notes}")
+    return (f"* {name} (kinematic {rep.kinematic_f1:.4f}, physics {rep.play.f1:.4f}): "
+            + ("; ".join(parts) or "no difference"))
 
 
 def _catch_facts(r) -> str:
