@@ -2,11 +2,13 @@
 
 ``simulate_trajectory(path, song)`` reads a ``hand-trajectory`` v1 file as ``check``
 does (the same reader, hand, URDF hash, columns and ``T_world_root`` rules), builds the
-scene (``scene``: the hand from its URDF, ``keyboard``: 88 hinged keys, or the catch's
+scene (``scene``: the hand from its URDF, ``keyboard``: 88 keys, or the catch's
 ball; ``actuators``: a torque-limited position servo per motor, couplings as equality
 constraints), runs it (``replay``) and scores it (``scores``), with the kinematic
 check's F1 of the same file beside the physics F1. The modules: ``hand_mjcf`` (URDF ->
-MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay``, ``scores``, ``report``.
+MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay``, ``scores``, ``report``,
+``compare``; the pictures (``--video``, ``--html``): ``render``, ``video``, ``page``,
+``pictures``.
 
 Verdict (``SimulateReport.ok``): fails on wrong keys, on notes the plan's end marker
 claims played that the physics misses, on a motor saturated longer than

@@ -20,8 +20,8 @@ Constants (each a physical value with its source):
 
 * Moving mass: RoboPianist's key (``WHITE_KEY_MASS_KG`` 0.040, ``BLACK_KEY_MASS_KG``
   0.020, a uniform stick hinged at its back end: ``I = m L^2 / 3``) at its front, as its
-  spring is: ``I / L^2 = m / 3`` (13.3 g, 6.7 g). (The whole 40 g moving straight down
-  returned a released key 20 ms after its pad left, the hinged key 12 ms.)
+  spring is: ``I / L^2 = m / 3`` (13.3 g, 6.7 g). A released key passes back above 5 mm
+  14 ms after leaving its bed (the whole 40 g moving straight down: 20 ms).
 * ``DOWN_WEIGHT_N`` 0.5: the force on the key that just starts it down (a grand
   piano's down-weight is about 50 g, 0.49 N; ``planner.play.force.MIN_FORCE_N`` is the
   same 0.5 N, "a real key's weight"). It sets the spring's preload.
