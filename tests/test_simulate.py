@@ -76,6 +76,9 @@ def test_key_geometry_down_travel_and_down_weight():
     assert 2 * front.half_m[0] == pytest.approx(kb.WHITE_WIDTH_M)
     assert 2 * back.half_m[0] == pytest.approx(kb.key(61).x_min_m - kb.key(60).x_min_m)
     assert cs4.boxes[0].center_m[2] + cs4.boxes[0].half_m[2] == pytest.approx(kb.BLACK_TOP_Z_M)
+    # both stand on the key frame: the black key's sides wall the slot down to it
+    for b in (front, back, cs4.boxes[0]):
+        assert b.center_m[2] - b.half_m[2] == pytest.approx(-kb.WHITE_WIDTH_M)
 
 
 def test_key_rests_up_and_returns_from_its_bed(hand):

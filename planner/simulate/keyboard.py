@@ -50,7 +50,7 @@ ROBOPIANIST_KEY_LENGTH_M = 0.150  # its hinge at the back of the visible key
 KEY_STIFFNESS_N_M = ROBOPIANIST_KEY_STIFFNESS_NM_RAD / ROBOPIANIST_KEY_LENGTH_M ** 2
 FRONT_MASS_SHARE = 1.0 / 3.0  # a uniform stick hinged at one end, at its other end: I / L^2
 DOWN_WEIGHT_N = 0.5  # grand piano down-weight ~50 g (0.49 N); play.force.MIN_FORCE_N
-KEY_THICKNESS_M = kb.WHITE_WIDTH_M  # a key stick as tall as a white key is wide (RoboPianist)
+KEY_THICKNESS_M = kb.WHITE_WIDTH_M  # a white key as tall as it is wide (RoboPianist)
 GRAVITY_M_S2 = 9.81
 
 
@@ -97,8 +97,13 @@ def _white_back_x(pitch: int) -> tuple[float, float]:
 
 
 def _boxes(pitch: int) -> tuple[KeyBox, ...]:
+    """Every key stands on the key frame, ``KEY_THICKNESS_M`` below the white tops: a
+    black key is taller by its 12.5 mm rise, so its sides wall the slot between the
+    black keys down to the frame (a box as thick as a white key, hanging 10 mm below the
+    white tops, offered its bottom face to a finger pressing a white key to its bed)."""
     k = kb.key(pitch)
-    hz = 0.5 * KEY_THICKNESS_M
+    bottom = -KEY_THICKNESS_M  # (the white keys' resting top is z = 0)
+    hz = 0.5 * (k.top_z_m - bottom)
     zc = k.top_z_m - hz
 
     def box(x0: float, x1: float, y0: float, y1: float) -> KeyBox:
