@@ -4,8 +4,11 @@
     python bench/bench_simulate.py --agreement   # every sample song: kinematic vs physics F1
                                                  # (both contact models), notes that differ
     python bench/bench_simulate.py --notes       # pads contact, note by note: each note's
-                                                 # share of the F1 difference and its cause
-    python bench/bench_simulate.py --catch-grid  # the default catch grid in physics
+                                                 # share of the F1 difference and its cause,
+                                                 # then each song's notes by cause
+    python bench/bench_simulate.py --notes --contact full   # the same, full contact
+    python bench/bench_simulate.py --catch-grid  # the default catch grid in physics, throw
+                                                 # by throw (palm tilt, the ball at +150 ms)
 
 The 60 s song is a random walk (``bench/random_songs.py``, seed 0) repeated to 60 s or more,
 planned once into a temporary folder. Needs MuJoCo (``pip install -e ".[physics]"``).
