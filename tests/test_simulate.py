@@ -327,3 +327,25 @@ def test_note_differences_add_up_to_the_f1_difference(twinkle):
     assert total > 0 and sum(d.lost_f1 for d in diffs) == pytest.approx(total, abs=1e-12)
     assert all(d.note >= 0 for d in diffs)  # every difference belongs to a note
     assert all(d.onset_frames + d.release_frames + d.middle_frames > 0 for d in diffs)
+
+
+def test_full_contact_misses_are_presses_narrower_than_the_finger(twinkle):
+    """Full contact: twinkle's G4 at 1.20 s is pressed by the ring 127 mm back, between
+    F#4 and G#4 where G4 is 13.5 mm wide, with a finger end 17.1 mm wide (its pad
+    sphere): it is named 'narrow', and the black neighbour it sounds a wrong key."""
+    from planner.simulate import run_replay
+    from planner.simulate.compare import note_differences
+
+    r = run_replay(str(twinkle), SONG, contact="full")
+    diffs = note_differences(r)
+    total = r.report.kinematic_f1 - r.report.play.f1
+    assert sum(d.lost_f1 for d in diffs) == pytest.approx(total, abs=1e-12)
+    g4 = next(d for d in diffs if d.pitch == 67 and abs(d.onset_s - 1.2) < 1e-6)
+    assert g4.kind == "narrow" and g4.plan_finger == "ring"
+    assert g4.key_width_mm == pytest.approx(13.5, abs=0.05)
+    assert g4.finger_width_mm == pytest.approx(17.145, abs=0.01) and g4.plan_y_mm > 60.0
+    wrong = [d for d in diffs if d.kind == "wrong"]
+    assert wrong and all(kb.is_black(d.pitch) for d in wrong)
+    # with pads only the same press is no narrower than the 2 mm pad point
+    assert all(d.kind != "narrow" for d in note_differences(run_replay(str(twinkle), SONG,
+                                                                       contact="pads")))
