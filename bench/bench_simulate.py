@@ -4,8 +4,11 @@
     python bench/bench_simulate.py --agreement   # every sample song: kinematic vs physics F1
                                                  # (both contact models), notes that differ
     python bench/bench_simulate.py --notes       # pads contact, note by note: each note's
-                                                 # share of the F1 difference and its cause
-    python bench/bench_simulate.py --catch-grid  # the default catch grid in physics
+                                                 # share of the F1 difference and its cause,
+                                                 # then each song's notes by cause
+    python bench/bench_simulate.py --notes --contact full   # the same, full contact
+    python bench/bench_simulate.py --catch-grid  # the default catch grid in physics, throw
+                                                 # by throw (palm tilt, the ball at +150 ms)
 
 The 60 s song is a random walk (``bench/random_songs.py``, seed 0) repeated to 60 s or more,
 planned once into a temporary folder. Needs MuJoCo (``pip install -e ".[physics]"``).
@@ -93,29 +96,76 @@ def bench_agreement() -> None:
         print(line)
 
 
-def bench_notes() -> None:
+def bench_notes(contact: str = "pads") -> None:
     from planner.simulate import run_replay
     from planner.simulate.compare import note_differences
 
     hand = planner.load_hand("default")
+    summaries = []
     with tempfile.TemporaryDirectory() as d:
         for song in sorted((ROOT / "songs").glob("*.mid")):
             traj = Path(d) / f"{song.stem}.csv"
             planner.plan_song(planner.load_song(str(song)), hand, str(traj))
-            r = run_replay(str(traj), str(song), contact="pads")
+            r = run_replay(str(traj), str(song), contact=contact)
             diffs = note_differences(r)
-            print(f"{song.stem}: kinematic F1 {r.report.kinematic_f1:.4f}, physics (pads) "
+            print(f"{song.stem}: kinematic F1 {r.report.kinematic_f1:.4f}, physics ({contact}) "
                   f"{r.report.play.f1:.4f}, {len(diffs)} notes or keys differ", flush=True)
             for x in diffs:
                 what = f"note {x.note}" if x.note >= 0 else "wrong key"
                 print(f"  {x.name:4s} @{x.onset_s:6.2f} s {what:9s} {x.lost_f1:+.4f}  {x.cause}; "
                       f"{'+'.join(x.fingers) or 'no finger'}, pad {x.pad_error_mm:.1f} mm off "
                       f"plan (dz {x.pad_dz_mm:+.1f})", flush=True)
+            summaries.append(_by_kind(song.stem, r.report, diffs))
+    print()
+    for line in summaries:
+        print(line)
+
+
+def _by_kind(name: str, rep, diffs) -> str:
+    """One markdown line: the song's differences by cause, note by note."""
+    parts = []
+    for kind in ("narrow", "wrong", "lifted", "timing"):
+        xs = sorted((x for x in diffs if x.kind == kind), key=lambda x: x.onset_s)
+        if xs:
+            lost = sum(x.lost_f1 for x in xs)
+            notes = ", ".join(f"{x.name}@{x.onset_s:.2f}"
+                              + (f" ({'+'.join(x.fingers)})" if kind == "wrong" and x.fingers
+                                 else "") for x in xs)
+            parts.append(f"**{kind}** {len(xs)} ({lost:.4f}): {notes}")
+    return (f"* {name} (kinematic {rep.kinematic_f1:.4f}, physics {rep.play.f1:.4f}): "
+            + ("; ".join(parts) or "no difference"))
+
+
+def _catch_facts(r) -> str:
+    """Why a catch is or is not held, from the plan and the physics: the palm's tilt
+    from horizontal at the intercept (plan), the fingertips' smallest gap to the planned
+    ball's surface in the last row (plan), the ball's distance from the palm centre 150 ms
+    after the intercept and the last row it touches the hand (physics)."""
+    rec, hand = r.record, r.hand
+    meta = r.trajectory.metadata
+    t_int = float(meta["intercept_t"])
+    radius = float(r.scene.model.geom_size[r.scene.ball_geom][0])
+    i = int(np.argmin(np.abs(rec.t_s - t_int)))
+    T = hand.palm_pose(rec.q_ref[i])
+    tilt = np.degrees(np.arccos(np.clip(T[2, 2], -1.0, 1.0)))
+    Tend = hand.palm_pose(rec.q_ref[-1])
+    ball_plan = Tend[:3, 3] + radius * Tend[:3, 2]
+    gap = np.linalg.norm(hand.tip_positions(rec.q_ref[-1]) - ball_plan, axis=1) - radius
+    j = int(np.argmin(np.abs(rec.t_s - (t_int + 0.15))))
+    d150 = float(np.linalg.norm(rec.ball_m[j] - rec.palm_m[j]))
+    touching = np.flatnonzero(rec.ball_contacts > 0)
+    last = f"{rec.t_s[touching[-1]] - t_int:+.3f} s" if len(touching) else "never"
+    return (f"palm tilt {tilt:.0f} deg, planned tips {gap.min() * 1000:.1f}-"
+            f"{gap.max() * 1000:.1f} mm off the ball, ball {d150 * 1000:.0f} mm from the palm "
+            f"centre at +150 ms, last touch {last} from the intercept")
 
 
 def bench_catch_grid() -> None:
     """Angles 20-60 deg x distances 1-3 m (tests/test_catch.py's grid), height 0, tennis
     ball: each feasible plan in physics."""
+    from planner.simulate import run_replay
+
+    held = feasible = 0
     with tempfile.TemporaryDirectory() as d:
         for a in range(20, 61, 10):
             for dist in (1.0, 1.5, 2.0, 2.5, 3.0):
@@ -124,10 +174,14 @@ def bench_catch_grid() -> None:
                 if not res.feasible:
                     print(f"{a} deg {dist} m: infeasible plan, not simulated", flush=True)
                     continue
-                c = simulate_trajectory(str(path)).catch
+                r = run_replay(str(path))
+                c = r.report.catch
+                feasible += 1
+                held += c.held
                 print(f"{a} deg {dist} m: {'held' if c.held else 'NOT held'}, peak contact "
                       f"{c.peak_contact_force_n:.1f} N, {c.end_distance_m * 1000:.1f} mm from "
-                      f"the palm centre at the end", flush=True)
+                      f"the palm centre at the end; {_catch_facts(r)}", flush=True)
+    print(f"held {held} of {feasible} feasible plans")
 
 
 def main() -> None:
@@ -137,12 +191,14 @@ def main() -> None:
     ap.add_argument("--notes", action="store_true",
                     help="pads contact: every note's share of the F1 difference")
     ap.add_argument("--catch-grid", action="store_true", help="the default catch grid")
+    ap.add_argument("--contact", choices=("full", "pads"), default="pads",
+                    help="--notes: the contact model (default pads)")
     a = ap.parse_args()
     sys.path.insert(0, str(ROOT / "bench"))
     if a.agreement:
         bench_agreement()
     elif a.notes:
-        bench_notes()
+        bench_notes(a.contact)
     elif a.catch_grid:
         bench_catch_grid()
     else:

@@ -188,6 +188,10 @@ def _add_simulate(sub) -> None:
     sm.add_argument("--contact", choices=("full", "pads"), default="full",
                     help="collision shapes: full (finger segments, palm, pads; default) or pads "
                          "(only the pad points, the kinematic check's contact model)")
+    sm.add_argument("--video", metavar="FILE.mp4",
+                    help="write an mp4 of the run: the plan beside the physics")
+    sm.add_argument("--html", metavar="FILE",
+                    help="write the run's frames as an offline HTML page (play, scrub)")
 
 
 def _cmd_hand(a: argparse.Namespace) -> int:

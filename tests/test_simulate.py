@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
@@ -67,16 +66,19 @@ def test_servo_limits_are_the_motors_through_their_transmission(hand):
         pytest.approx(200.0)  # 2 N m through a 10 mm pulley
 
 
-def test_key_geometry_down_angle_and_down_weight():
-    for k in key_bodies():
-        assert k.lever_m * math.tan(k.down_angle_rad) == pytest.approx(kb.DOWN_DEPTH_M)
-        assert k.lever_m * math.tan(k.dip_angle_rad) == pytest.approx(kb.KEY_DIP_M)
+def test_key_geometry_down_travel_and_down_weight():
+    for k in key_bodies():  # the spec's key: 5 mm down sounds, the bed 10 mm down
+        assert (k.down_m, k.dip_m) == (kb.DOWN_DEPTH_M, kb.KEY_DIP_M) == (0.005, 0.010)
         assert front_force_n(k, 0.0) == pytest.approx(0.5)
+        assert front_force_n(k, k.dip_m) == pytest.approx(0.5 + 0.010 * 2.0 / 0.15 ** 2)
     c4, cs4 = key_body(60), key_body(61)
     front, back = c4.boxes  # C4's back part ends where C#4 begins
     assert 2 * front.half_m[0] == pytest.approx(kb.WHITE_WIDTH_M)
     assert 2 * back.half_m[0] == pytest.approx(kb.key(61).x_min_m - kb.key(60).x_min_m)
     assert cs4.boxes[0].center_m[2] + cs4.boxes[0].half_m[2] == pytest.approx(kb.BLACK_TOP_Z_M)
+    # both stand on the key frame: the black key's sides wall the slot down to it
+    for b in (front, back, cs4.boxes[0]):
+        assert b.center_m[2] - b.half_m[2] == pytest.approx(-kb.WHITE_WIDTH_M)
 
 
 def test_key_rests_up_and_returns_from_its_bed(hand):
@@ -89,12 +91,12 @@ def test_key_rests_up_and_returns_from_its_bed(hand):
     for _ in range(200):
         mujoco.mj_step(model, data)
     assert abs(data.qpos[adr]) < 1e-4  # held up by its preload
-    data.qpos[adr] = key_body(60).dip_angle_rad
+    data.qpos[adr] = key_body(60).dip_m
     steps = 0
-    while data.qpos[adr] >= key_body(60).down_angle_rad:
+    while data.qpos[adr] >= key_body(60).down_m:
         mujoco.mj_step(model, data)
         steps += 1
-    # spring and critical damping bring it above the key-down angle in 10-40 ms
+    # spring and critical damping bring it above the key-down travel in 10-40 ms
     assert 10 <= steps * model.opt.timestep * 1000 <= 40
 
 
@@ -159,7 +161,7 @@ def test_wrist_beyond_its_motor_is_caught_by_the_physics_and_the_check(twinkle, 
 
 def test_shallow_press_misses_in_physics(twinkle, hand, tmp_path):
     """Note 2 (G4, ring) pressed only 1.5 mm below the key's top: short of the key-down
-    angle, the note the plan claims played is missed in physics (exit 1)."""
+    travel (5 mm), the note the plan claims played is missed in physics (exit 1)."""
     tr = read_trajectory(str(twinkle))
     tips = np.array([hand.tip_positions(r) for r in tr.q])
     kc = key_contacts(tips)
@@ -183,6 +185,25 @@ def test_shallow_press_misses_in_physics(twinkle, hand, tmp_path):
     rep = simulate_trajectory(str(path), SONG, contact="pads")
     assert any(m.pitch == 67 and m.note == 2 for m in rep.play.missed)
     assert not rep.ok and any("claims played are missed" in p for p in rep.problems)
+
+
+def test_a_repeated_key_rises_between_its_presses(tmp_path):
+    """Chords' F4 at 2.40 s and again at 3.60 s (middle finger): between them the plan
+    lifts the pad to 2.7 mm below the key's top; the spec's key follows it up past the
+    5 mm key-down travel (the first, hinged key model kept its front 5.6 mm down there:
+    the second note never sounded) and sounds again at 3.60 s."""
+    song = "songs/chords.mid"
+    path = tmp_path / "chords.csv"
+    planner.plan_song(planner.load_song(song), load_hand("default"), str(path))
+    from planner.simulate import run_replay
+
+    r = run_replay(str(path), song, contact="pads")
+    rec, k = r.record, 65 - 21
+    between = (rec.t_s > 3.50) & (rec.t_s < 3.58)
+    assert np.all(rec.key_dip_m[between, k] < key_body(65).down_m)
+    assert np.all(rec.key_dip_m[(rec.t_s >= 3.61) & (rec.t_s < 3.9), k] >= key_body(65).down_m)
+    assert not any(m.pitch == 65 and abs(m.onset_s - 3.6) < 1e-6
+                   for m in (*r.report.play.missed, *r.report.play.late))
 
 
 def test_missing_mujoco_is_one_line_exit_2(twinkle, monkeypatch, capsys):
@@ -306,3 +327,25 @@ def test_note_differences_add_up_to_the_f1_difference(twinkle):
     assert total > 0 and sum(d.lost_f1 for d in diffs) == pytest.approx(total, abs=1e-12)
     assert all(d.note >= 0 for d in diffs)  # every difference belongs to a note
     assert all(d.onset_frames + d.release_frames + d.middle_frames > 0 for d in diffs)
+
+
+def test_full_contact_misses_are_presses_narrower_than_the_finger(twinkle):
+    """Full contact: twinkle's G4 at 1.20 s is pressed by the ring 127 mm back, between
+    F#4 and G#4 where G4 is 13.5 mm wide, with a finger end 17.1 mm wide (its pad
+    sphere): it is named 'narrow', and the black neighbour it sounds a wrong key."""
+    from planner.simulate import run_replay
+    from planner.simulate.compare import note_differences
+
+    r = run_replay(str(twinkle), SONG, contact="full")
+    diffs = note_differences(r)
+    total = r.report.kinematic_f1 - r.report.play.f1
+    assert sum(d.lost_f1 for d in diffs) == pytest.approx(total, abs=1e-12)
+    g4 = next(d for d in diffs if d.pitch == 67 and abs(d.onset_s - 1.2) < 1e-6)
+    assert g4.kind == "narrow" and g4.plan_finger == "ring"
+    assert g4.key_width_mm == pytest.approx(13.5, abs=0.05)
+    assert g4.finger_width_mm == pytest.approx(17.145, abs=0.01) and g4.plan_y_mm > 60.0
+    wrong = [d for d in diffs if d.kind == "wrong"]
+    assert wrong and all(kb.is_black(d.pitch) for d in wrong)
+    # with pads only the same press is no narrower than the 2 mm pad point
+    assert all(d.kind != "narrow" for d in note_differences(run_replay(str(twinkle), SONG,
+                                                                       contact="pads")))

@@ -2,11 +2,13 @@
 
 ``simulate_trajectory(path, song)`` reads a ``hand-trajectory`` v1 file as ``check``
 does (the same reader, hand, URDF hash, columns and ``T_world_root`` rules), builds the
-scene (``scene``: the hand from its URDF, ``keyboard``: 88 hinged keys, or the catch's
+scene (``scene``: the hand from its URDF, ``keyboard``: 88 keys, or the catch's
 ball; ``actuators``: a torque-limited position servo per motor, couplings as equality
 constraints), runs it (``replay``) and scores it (``scores``), with the kinematic
 check's F1 of the same file beside the physics F1. The modules: ``hand_mjcf`` (URDF ->
-MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay``, ``scores``, ``report``.
+MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay``, ``scores``, ``report``,
+``compare``; the pictures (``--video``, ``--html``): ``render``, ``video``, ``page``,
+``pictures``.
 
 Verdict (``SimulateReport.ok``): fails on wrong keys, on notes the plan's end marker
 claims played that the physics misses, on a motor saturated longer than
@@ -69,13 +71,15 @@ def simulate_trajectory(traj_path, song_path=None, *, contact: str = "full",
 @dataclass(frozen=True)
 class Replay:
     """A replay's report with what it was made from: the record (every row's simulated
-    state), the hand (mounted as the file says), the trajectory, the song's notes."""
+    state), the hand (mounted as the file says), the trajectory, the song's notes, the
+    scene it ran in."""
 
     report: Any  # SimulateReport
     record: Any  # replay.SimRecord
     hand: Any  # HandModel
     trajectory: Any  # trajfile.Trajectory
     notes: tuple | None
+    scene: Any = None  # scene.Scene
 
 
 def run_replay(traj_path, song_path=None, *, contact: str = "full",
@@ -139,22 +143,29 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), wall_s=rec.wall_s,
         play=play, catch=catch, motors=motors, tracking=tracking(rec, hand),
         kinematic_f1=None if kin.play is None else kin.play.f1, problems=tuple(problems))
-    return Replay(report, rec, hand, tr, None if notes is None else tuple(notes))
+    return Replay(report, rec, hand, tr, None if notes is None else tuple(notes), scene)
 
 
 def simulate_cli(args) -> int:
-    """``cli.py simulate``: the summary (or one JSON object with --json); 0 when the
-    physics passes the plan, 1 otherwise."""
+    """``cli.py simulate``: the summary (or one JSON object with --json), the pictures
+    (--video, --html); 0 when the physics passes the plan, 1 otherwise."""
+    from planner.simulate.pictures import prepare, write_pictures
+
     if getattr(args, "min_f1", None) is not None and not 0.0 <= args.min_f1 <= 1.0:
         raise InputError(f"--min-f1 must be within 0..1, got {args.min_f1}")
+    video, html = getattr(args, "video", None), getattr(args, "html", None)
+    prepare(video, html)
     options = {"track": getattr(args, "track", None), "channel": getattr(args, "channel", None),
                "transpose": True if getattr(args, "transpose", False) else None}
-    report = simulate_trajectory(args.trajectory, args.song, contact=args.contact,
-                                 min_f1=args.min_f1, strict=bool(args.strict),
-                                 allow_incomplete=bool(args.allow_incomplete),
-                                 song_options=options)
+    replay = run_replay(args.trajectory, args.song, contact=args.contact,
+                        min_f1=args.min_f1, strict=bool(args.strict),
+                        allow_incomplete=bool(args.allow_incomplete), song_options=options)
+    write_pictures(replay, video, html, progress=not args.json)
+    report = replay.report
     if args.json:
-        print(json.dumps(report.to_dict()))
+        d = report.to_dict()
+        d["video"], d["html"] = video, html
+        print(json.dumps(d))
     else:
         print(report.summary())
     return 0 if report.ok else 1

@@ -17,6 +17,7 @@ the frames concerned).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,10 +30,22 @@ from planner.check.criteria import (
     song_frames,
 )
 from planner.hand.spec import FINGERS
-from planner.music.keyboard import LOWEST_PITCH
+from planner.music.keyboard import LOWEST_PITCH, WHITE_WIDTH_M
 from planner.simulate.scores import key_down
 
 NEAR_NOTE_S = 0.1  # a key state this close to a note of its key belongs to that note
+WIDE_MM = 1000.0 * WHITE_WIDTH_M - 1e-6  # narrower (mm) than a white key's front: named
+LIFTED_MM = 2.0  # a pad this far above its plan is held up by more than its servo's give
+
+
+def _width_mm(pitch: int, y_m: float) -> float:
+    """The width of a key's footprint at ``y_m`` (its box there), mm."""
+    from planner.simulate.keyboard import key_body
+
+    for b in key_body(pitch).boxes:
+        if abs(y_m - b.center_m[1]) <= b.half_m[1]:
+            return 2000.0 * b.half_m[0]
+    return float("nan")
 
 
 @dataclass(frozen=True)
@@ -51,6 +64,23 @@ class NoteDifference:
     fingers: tuple[str, ...]  # fingers touching the key in physics over those frames
     pad_error_mm: float  # largest |simulated - planned| pad point of those fingers
     pad_dz_mm: float  # its height error there (simulated - planned: > 0 above the plan)
+    plan_y_mm: float = float("nan")  # the planned pressing pad's y on the key (mm back)
+    key_width_mm: float = float("nan")  # the key's footprint width at that y
+    touched: tuple[str, ...] = ()  # other keys the planned finger touches in physics then
+    plan_finger: str = ""  # the finger the plan presses the note with
+    finger_width_mm: float = 0.0  # that finger's end in the scene (its pad sphere's diameter)
+
+    @property
+    def kind(self) -> str:
+        """One cause per difference: ``wrong`` (a key down outside its notes), ``narrow``
+        (pressed where the key is narrower than the finger's end), ``lifted`` (the pad
+        held over ``LIFTED_MM`` above its plan: a finger's end or segment on a key bed),
+        ``timing`` (the key's own onset and return)."""
+        if self.note < 0:
+            return "wrong"
+        if self.key_width_mm < self.finger_width_mm:
+            return "narrow"
+        return "lifted" if self.pad_dz_mm > LIFTED_MM else "timing"
 
     @property
     def cause(self) -> str:
@@ -63,6 +93,12 @@ class NoteDifference:
             parts.append(f"still down {self.release_frames} frames after its release")
         if self.extra_frames:
             parts.append(f"down {self.extra_frames} frames outside any note")
+        if self.touched:
+            parts.append(f"the finger on {'+'.join(self.touched)}")
+        if math.isfinite(self.key_width_mm) and self.key_width_mm < WIDE_MM:
+            parts.append(f"pressed {self.plan_y_mm:.0f} mm back, where the key is "
+                         f"{self.key_width_mm:.1f} mm wide (the {self.plan_finger}'s end "
+                         f"{self.finger_width_mm:.1f} mm)")
         return ", ".join(parts) or "physics down where the kinematic replay is not"
 
 
@@ -90,7 +126,8 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
     planned = np.array([replay.hand.tip_positions(q) for q in rec.q_ref[:n]])
     kin = np.zeros((len(frames), 88), dtype=bool)
     phys = np.zeros_like(kin)
-    kin[:n] = key_contacts(planned).down
+    kc = key_contacts(planned)
+    kin[:n] = kc.down
     phys[:n] = key_down(rec)[:n]
     expected = expected_keys(notes, frames)
     f1k = frame_scores(expected, kin)[2]
@@ -101,14 +138,19 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
         by_key.setdefault(nt.pitch - LOWEST_PITCH, []).append((i, nt.onset_s, nt.offset_s))
     acc: dict[tuple, dict] = {}
     pad_err = np.linalg.norm(rec.tips_m[:n] - planned, axis=2) * 1000.0  # (n, 5) mm
+    press = _plan_presses(notes, frames[:n], kc, planned)
+    widths = _finger_widths_mm(replay.scene)
     for t, k in zip(*np.nonzero(kin != phys)):
         share = loss[t] / np.count_nonzero(kin[t] != phys[t])
         i = _owner(by_key.get(int(k), []), float(frames[t]))
         key = ("note", i) if i >= 0 else ("wrong", int(k))
         a = acc.setdefault(key, {"lost": 0.0, "onset": 0, "middle": 0, "release": 0,
                                  "extra": 0, "fingers": set(), "err": 0.0, "dz": 0.0,
-                                 "k": int(k),
-                                 "t0": float(frames[t])})
+                                 "k": int(k), "touched": set(), "t0": float(frames[t])})
+        if t < n and i >= 0 and kin[t, k]:
+            f = press.get(i, (-1, 0.0))[0]
+            a["touched"].update(int(q) + LOWEST_PITCH for q in np.flatnonzero(
+                rec.key_finger[t] == f) if f >= 0 and q != k)
         a["lost"] += share
         if i >= 0:
             on, off = notes[i].onset_s, notes[i].offset_s
@@ -132,10 +174,37 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
     out = []
     for (kind, i), a in acc.items():
         p = a["k"] + LOWEST_PITCH
+        f, y = press.get(i, (-1, float("nan"))) if kind == "note" else (-1, float("nan"))
         out.append(NoteDifference(
             i if kind == "note" else -1, pitch_name(p), p,
             float(notes[i].onset_s) if kind == "note" else a["t0"], float(a["lost"]),
             a["onset"], a["middle"], a["release"], a["extra"],
-            tuple(sorted(a["fingers"], key=FINGERS.index)), a["err"], a["dz"]))
+            tuple(sorted(a["fingers"], key=FINGERS.index)), a["err"], a["dz"], y * 1000.0,
+            _width_mm(p, y) if math.isfinite(y) else float("nan"),
+            tuple(pitch_name(q) for q in sorted(a["touched"])),
+            FINGERS[f] if f >= 0 else "", widths[f] if f >= 0 else 0.0))
     out.sort(key=lambda d: -d.lost_f1)
     return tuple(out)
+
+
+def _plan_presses(notes, frames: np.ndarray, kc, planned: np.ndarray) -> dict:
+    """Note index -> (finger, pad y) where the plan first presses it (key down by a pad
+    on it), for the notes the plan presses."""
+    out = {}
+    for i, nt in enumerate(notes):
+        k = nt.pitch - LOWEST_PITCH
+        a, b = np.searchsorted(frames, [nt.onset_s, nt.offset_s])
+        for t in range(int(a), int(b)):
+            on = np.flatnonzero(kc.tip_key[t] == k)
+            if kc.down[t, k] and len(on):
+                f = int(on[np.argmax(np.nan_to_num(kc.tip_depth[t, on]))])
+                out[i] = (f, float(planned[t, f, 1]))
+                break
+    return out
+
+
+def _finger_widths_mm(scene) -> list[float]:
+    """Each finger's end in the scene: its pad sphere's diameter (mm; 2 with pads only)."""
+    if scene is None:
+        return [0.0] * len(FINGERS)
+    return [2000.0 * float(scene.model.geom(f"{f}_pad").size[0]) for f in FINGERS]

@@ -118,10 +118,12 @@ def _v(xs) -> str:
 
 
 def _geoms(body: ET.Element, link: UrdfLink, pad: tuple[float, float, float] | None,
-           segment: bool) -> None:
+           segment: bool, collide: bool = True) -> None:
     """Collision geoms of a link (see the module docstring); ``segment``: the link is a
-    finger segment (its subtree holds some of the fingertips, not all of them)."""
-    common = {"contype": str(HAND_CONTYPE), "conaffinity": str(HAND_CONAFFINITY),
+    finger segment (its subtree holds some of the fingertips, not all of them);
+    ``collide`` False: the same shapes drawn only (contact "pads": the pictures)."""
+    common = {"contype": str(HAND_CONTYPE if collide else 0),
+              "conaffinity": str(HAND_CONAFFINITY if collide else 0),
               "friction": f"{PAD_FRICTION:g} 0.005 0.0001", "mass": "0",
               "rgba": "0.75 0.6 0.5 1"}
     if link.box_size_m is None:
@@ -177,9 +179,9 @@ def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
             ET.SubElement(body_el, "inertial", pos=_v(link.com_m), mass=f"{link.mass_kg:.12g}",
                           diaginertia=_v(link.inertia_diag))
         pad = pads.get(link_name)
-        if not pads_only:
-            _geoms(body_el, link, None if pad is None else (pad[0], pad[1], pad[2] + pad[3]),
-                   segment=0 < len(below(link_name)) < len(tip_links))
+        # (with pads only, the same shapes without contact: drawn in the pictures)
+        _geoms(body_el, link, None if pad is None else (pad[0], pad[1], pad[2] + pad[3]),
+               segment=0 < len(below(link_name)) < len(tip_links), collide=not pads_only)
         if pad is not None:
             x, y, z, r, tip = pad
             ET.SubElement(body_el, "geom", name=f"{tip.removesuffix('_tip')}_pad", type="sphere",

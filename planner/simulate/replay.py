@@ -4,7 +4,7 @@ The replay starts at rest in the first row's pose (keys up, the ball at its laun
 state), then steps ``scene.TIMESTEP_S`` at a time. Between two rows the servos' position
 reference moves linearly (what a controller interpolating 100 Hz setpoints does); the
 speed and inverse-dynamics feedforward move likewise (``actuators.Reference``).
-At every row's time the state is sampled: the hand's joints, every key's angle and
+At every row's time the state is sampled: the hand's joints, every key's travel and
 the finger touching it, the servos' forces and what they asked for (before the clamp
 to their motor's torque), the pad points, the ball and its contacts. A ball with drag
 gets ``-m k |v| v`` as an applied force at every step (spec section 4).
@@ -19,7 +19,7 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.simulate import actuators as act
-from planner.simulate.scene import TIMESTEP_S, Ball, Scene, inverse_dynamics
+from planner.simulate.scene import TIMESTEP_S, Ball, Scene, inverse_dynamics, servo_kv
 
 N_KEYS = 88
 
@@ -31,7 +31,7 @@ class SimRecord:
     t_s: np.ndarray  # (T,)
     q_ref: np.ndarray  # (T, n) the rows
     q_sim: np.ndarray  # (T, n) the simulated joints
-    key_angle_rad: np.ndarray  # (T, 88) (empty columns without a keyboard)
+    key_dip_m: np.ndarray  # (T, 88) each key's travel down (zeros without a keyboard)
     key_finger: np.ndarray  # (T, 88) int8: the finger touching a key (FINGERS index), -1
     servo_force: np.ndarray  # (T, n_motor) joint-side force the servo applied
     servo_demand: np.ndarray  # (T, n_motor) what the control law asked for (unclamped)
@@ -50,8 +50,7 @@ class SimRecord:
 def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray]:
     """Per row: the servo control at the row and its change to the next row."""
     kp = scene.servos.kp
-    kv = -np.asarray(scene.model.actuator_biasprm[:, 2])
-    base = ref.q_rad + (kv / kp) * ref.qd_rad_s + ref.feedforward_nm / kp
+    base = ref.q_rad + (servo_kv(scene) / kp) * ref.qd_rad_s + ref.feedforward_nm / kp
     slope = np.zeros_like(base)
     slope[:-1] = np.diff(base, axis=0)
     return base, slope
@@ -96,19 +95,11 @@ def _rest_keys_on_fingers(scene: Scene, data, mujoco) -> None:
     """Start every key a pad point is pressing in the first row as far down as the pad
     holds it (at most to its bed): the replay starts at rest with the plan's first pose."""
     from planner.check.criteria import key_contacts
-    from planner.simulate.keyboard import key_bodies
+    from planner.simulate.keyboard import planned_key_travel
 
-    tips = np.array(data.site_xpos[scene.tip_sites])
-    kc = key_contacts(tips[None])
-    keys = key_bodies()
-    for f, k in enumerate(kc.tip_key[0]):
-        depth = kc.tip_depth[0, f]
-        if k < 0 or not depth > 0:
-            continue
-        kb = keys[int(k)]
-        angle = min(kb.dip_angle_rad, float(np.arctan2(depth, kb.pivot_m[1] - tips[f, 1])))
-        adr = scene.key_qpos[int(k)]
-        data.qpos[adr] = max(data.qpos[adr], angle)
+    tips = np.array(data.site_xpos[scene.tip_sites])[None]
+    travel = planned_key_travel(key_contacts(tips))[0]
+    data.qpos[scene.key_qpos] = np.maximum(data.qpos[scene.key_qpos], travel)
     mujoco.mj_forward(scene.model, data)
 
 
@@ -133,6 +124,61 @@ def _start(scene: Scene, q: np.ndarray, ball: Ball | None, mujoco):
     return data, vadr
 
 
+def _arrays(T: int, n: int, nm: int) -> dict[str, np.ndarray]:
+    """The record's arrays, one entry per row."""
+    rec = {k: np.empty(s) for k, s in (
+        ("q_sim", (T, n)), ("key", (T, N_KEYS)), ("force", (T, nm)), ("demand", (T, nm)),
+        ("limit", (T, nm)), ("tips", (T, 5, 3)), ("palm", (T, 3)), ("ball", (T, 3)),
+        ("ball_v", (T,)), ("ball_n", (T,)), ("ball_f", (T,)))}
+    rec["key_finger"] = np.full((T, N_KEYS), -1, dtype=np.int8)
+    return rec
+
+
+def _sample(rec: dict, k: int, scene: Scene, data, mujoco, ctrl: np.ndarray,
+            lim: np.ndarray, peak_f: float) -> None:
+    """Row ``k``'s sample: the state the row's setpoint meets."""
+    servos = scene.servos
+    drive_qpos, drive_dof = scene.hand_qpos[servos.drive], scene.hand_dof[servos.drive]
+    rec["q_sim"][k] = data.qpos[scene.hand_qpos]
+    rec["key"][k] = data.qpos[scene.key_qpos] if len(scene.key_qpos) else 0.0
+    # (from the state itself: data.actuator_length and _velocity are those of the last
+    # step's start, 1 ms old -- at 250 rad/s^2 a 0.3 N m error of the demand)
+    demand = servos.kp * (ctrl - data.qpos[drive_qpos]) - \
+        servo_kv(scene) * data.qvel[drive_dof]
+    rec["demand"][k] = demand
+    rec["force"][k] = np.clip(demand, -lim, lim)
+    rec["limit"][k] = lim
+    rec["tips"][k] = data.site_xpos[scene.tip_sites]
+    rec["palm"][k] = data.site_xpos[scene.palm_site]
+    finger_now = np.full(N_KEYS, -1, dtype=np.int64)
+    nb, fb = _contacts(scene, data, mujoco, finger_now, scene.ball_geom)
+    rec["key_finger"][k] = finger_now
+    if scene.ball_body >= 0:
+        rec["ball"][k] = data.xpos[scene.ball_body]
+        rec["ball_v"][k] = float(np.linalg.norm(data.cvel[scene.ball_body][3:]))
+    # the force: the largest since the previous row (an impact lasts a few steps)
+    rec["ball_n"][k], rec["ball_f"][k] = nb, max(fb, peak_f)
+
+
+def _step_row(scene: Scene, data, mujoco, ctrl: np.ndarray, slope: np.ndarray, n_sub: int,
+              ball: Ball | None, vadr: int | None) -> float:
+    """Step from one row to the next (the control moving linearly, the ball's drag
+    applied every step); returns the ball's peak contact force over the steps (N)."""
+    model = scene.model
+    drag = ball.drag_per_m if ball is not None else 0.0
+    mass = float(model.body_mass[scene.ball_body]) if scene.ball_body >= 0 else 0.0
+    peak_f = 0.0
+    for j in range(n_sub):
+        data.ctrl[:] = ctrl + slope * (j / n_sub)
+        if drag > 0.0:
+            v = data.qvel[vadr:vadr + 3]
+            data.xfrc_applied[scene.ball_body, :3] = -mass * drag * np.linalg.norm(v) * v
+        mujoco.mj_step(model, data)
+        if scene.ball_body >= 0:
+            peak_f = max(peak_f, _ball_contacts(scene, data, mujoco)[1])
+    return peak_f
+
+
 def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
              ball: Ball | None = None,
              on_progress: Callable[[int, int], None] | None = None) -> SimRecord:
@@ -152,57 +198,18 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     n_sub = max(1, round(dt_row / TIMESTEP_S))
     ref = act.reference(hand, q, t_s, inverse_dynamics(scene))
     base, slope = _ctrl_rows(scene, ref)
-    kp = scene.servos.kp
-    kv = -np.asarray(model.actuator_biasprm[:, 2])
-    n, nm = q.shape[1], len(kp)
-    drive_qpos = scene.hand_qpos[scene.servos.drive]
-    drive_dof = scene.hand_dof[scene.servos.drive]
-    rec = {k: np.empty(s) for k, s in (
-        ("q_sim", (T, n)), ("key", (T, N_KEYS)), ("force", (T, nm)), ("demand", (T, nm)),
-        ("limit", (T, nm)), ("tips", (T, 5, 3)), ("palm", (T, 3)), ("ball", (T, 3)),
-        ("ball_v", (T,)), ("ball_n", (T,)), ("ball_f", (T,)))}
-    key_finger = np.full((T, N_KEYS), -1, dtype=np.int8)
-    finger_now = np.full(N_KEYS, -1, dtype=np.int64)
-    has_keys = len(scene.key_qpos) > 0
+    rec = _arrays(T, q.shape[1], len(scene.servos.kp))
     bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
     unstable = None
-    ball_mass = float(model.body_mass[scene.ball_body]) if scene.ball_body >= 0 else 0.0
-    drag = ball.drag_per_m if ball is not None else 0.0
     peak_f = 0.0
     for k in range(T):
         lim = scene.servos.force_limit(ref.ratio[k])
         model.actuator_forcerange[:, 0] = -lim
         model.actuator_forcerange[:, 1] = lim
-        # the sample at the row's time (the state the row's setpoint meets)
-        rec["q_sim"][k] = data.qpos[scene.hand_qpos]
-        rec["key"][k] = data.qpos[scene.key_qpos] if has_keys else 0.0
-        # (from the state itself: data.actuator_length and _velocity are those of the
-        # last step's start, 1 ms old -- at 250 rad/s^2 a 0.3 N m error of the demand)
-        demand = kp * (base[k] - data.qpos[drive_qpos]) - kv * data.qvel[drive_dof]
-        rec["demand"][k] = demand
-        rec["force"][k] = np.clip(demand, -lim, lim)
-        rec["limit"][k] = lim
-        rec["tips"][k] = data.site_xpos[scene.tip_sites]
-        rec["palm"][k] = data.site_xpos[scene.palm_site]
-        nb, fb = _contacts(scene, data, mujoco, finger_now, scene.ball_geom)
-        key_finger[k] = finger_now
-        if scene.ball_body >= 0:
-            rec["ball"][k] = data.xpos[scene.ball_body]
-            rec["ball_v"][k] = float(np.linalg.norm(data.cvel[scene.ball_body][3:]))
-        # the force: the largest since the previous row (an impact lasts a few steps)
-        rec["ball_n"][k], rec["ball_f"][k] = nb, max(fb, peak_f)
+        _sample(rec, k, scene, data, mujoco, base[k], lim, peak_f)
         if k == T - 1:
             break
-        peak_f = 0.0
-        for j in range(n_sub):
-            data.ctrl[:] = base[k] + slope[k] * (j / n_sub)
-            if drag > 0.0:
-                v = data.qvel[vadr:vadr + 3]
-                data.xfrc_applied[scene.ball_body, :3] = -ball_mass * drag * \
-                    np.linalg.norm(v) * v
-            mujoco.mj_step(model, data)
-            if scene.ball_body >= 0:
-                peak_f = max(peak_f, _ball_contacts(scene, data, mujoco)[1])
+        peak_f = _step_row(scene, data, mujoco, base[k], slope[k], n_sub, ball, vadr)
         if unstable is None and data.warning[bad_qacc].number > 0:
             unstable = float(t_s[k])
         if on_progress is not None and k % 100 == 0:
@@ -211,7 +218,7 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
         rec["ball"][:] = np.nan
         rec["ball_v"][:] = np.nan
     return SimRecord(t_s=np.asarray(t_s, dtype=float), q_ref=q, q_sim=rec["q_sim"],
-                     key_angle_rad=rec["key"], key_finger=key_finger,
+                     key_dip_m=rec["key"], key_finger=rec["key_finger"],
                      servo_force=rec["force"], servo_demand=rec["demand"],
                      force_limit=rec["limit"], tips_m=rec["tips"], palm_m=rec["palm"],
                      ball_m=rec["ball"], ball_speed_m_s=rec["ball_v"],

@@ -44,12 +44,15 @@ class SimulateReport:
             dd["ratio"] = m.ratio
         return d
 
-    def summary(self) -> str:
+    def summary(self, timing: bool = True) -> str:
+        """The report as text; ``timing`` False leaves out the wall time (a picture's
+        page: the same bytes for the same input)."""
         L = [f"simulate {self.trajectory}: {'OK' if self.ok else 'FAILED'}"]
         L.extend(f"  - {p}" for p in self.problems)
+        took = (f" in {self.wall_s:.2f} s ({self.realtime_factor:.1f}x real time)" if timing
+                else "")
         L.append(f"task {self.task}, hand {self.hand}, contact {self.contact}, {self.rows} rows, "
-                 f"{self.duration_s:.3f} s simulated in {self.wall_s:.2f} s "
-                 f"({self.realtime_factor:.1f}x real time)")
+                 f"{self.duration_s:.3f} s simulated{took}")
         p = self.play
         if p is not None:
             L.append(f"keys: {len(p.played)} key presses in physics")

@@ -27,7 +27,7 @@ from planner.simulate.hand_mjcf import (
     hand_bodies,
     matrix_quat,
 )
-from planner.simulate.keyboard import KEY_STIFFNESS_NM_RAD, key_bodies
+from planner.simulate.keyboard import KEY_STIFFNESS_N_M, key_bodies
 
 TIMESTEP_S = 0.001
 CONTACT_MODELS = ("full", "pads")
@@ -79,31 +79,32 @@ def _mujoco():
         import mujoco
     except ImportError:
         raise InputError("simulate needs MuJoCo: pip install -e \".[physics]\"") from None
+    except (AttributeError, OSError, RuntimeError) as e:  # MUJOCO_GL names a missing library
+        import os
+
+        raise InputError(f"MuJoCo does not load with MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
+                         f" ({type(e).__name__}: {e}): set it to egl, osmesa or glfw, or "
+                         "unset it") from None
     return mujoco
 
 
 def _keyboard(world: ET.Element) -> None:
     for k in key_bodies():
-        body = ET.SubElement(world, "body", name=k.name, pos=_v(k.pivot_m))
-        ET.SubElement(body, "joint", name=f"{k.name}_hinge", type="hinge", axis="1 0 0",
-                      limited="true", range=_v((0.0, k.dip_angle_rad)),
-                      stiffness=_f(KEY_STIFFNESS_NM_RAD), springref=_f(k.springref_rad),
-                      damping=_f(k.damping_nms_rad))
-        ET.SubElement(body, "inertial", pos=_v(c - p for c, p in zip(k.com_m, k.pivot_m)),
-                      mass=_f(k.mass_kg),
-                      # (the hinge's own value exactly; the other two axes do not move)
-                      diaginertia=_v([k.inertia_kg_m2] * 3))
+        body = ET.SubElement(world, "body", name=k.name, pos="0 0 0")
+        # straight down (qpos = the key's travel, m), from its rest stop to its bed
+        ET.SubElement(body, "joint", name=f"{k.name}_slide", type="slide", axis="0 0 -1",
+                      limited="true", range=_v((0.0, k.dip_m)),
+                      stiffness=_f(KEY_STIFFNESS_N_M), springref=_f(k.springref_m),
+                      damping=_f(k.damping_ns_m))
+        box = np.array([2 * h for h in k.boxes[0].half_m])  # (its inertia does not act)
+        ET.SubElement(body, "inertial", pos=_v(k.com_m), mass=_f(k.mass_kg),
+                      diaginertia=_v([k.mass_kg * float(box @ box) / 12.0] * 3))
         for i, b in enumerate(k.boxes):
-            ET.SubElement(body, "geom", name=f"{k.name}_{i}", type="box",
-                          pos=_v(c - p for c, p in zip(b.center_m, k.pivot_m)),
+            ET.SubElement(body, "geom", name=f"{k.name}_{i}", type="box", pos=_v(b.center_m),
                           size=_v(b.half_m), mass="0",
                           contype=str(WORLD_CONTYPE), conaffinity=str(WORLD_CONAFFINITY),
                           friction=f"{KEY_FRICTION} 0.005 0.0001",
                           rgba="0.1 0.1 0.1 1" if k.black else "0.95 0.95 0.92 1")
-        h = k.hidden
-        ET.SubElement(body, "geom", name=f"{k.name}_hidden", type="box",
-                      pos=_v(c - p for c, p in zip(h.center_m, k.pivot_m)), size=_v(h.half_m),
-                      mass="0", contype="0", conaffinity="0", group="3")
 
 
 def _ball(world: ET.Element, ball: Ball) -> None:
@@ -206,7 +207,7 @@ def build_scene(hand: HandModel, T_world_root: np.ndarray, *, keyboard: bool = F
         inertia[m] = float(v @ Mv)
     kv = act.critical_damping(servos.kp, inertia)
     model.actuator_biasprm[:, 2] = -kv
-    key_qpos = np.array([model.jnt_qposadr[model.joint(f"{k.name}_hinge").id]
+    key_qpos = np.array([model.jnt_qposadr[model.joint(f"{k.name}_slide").id]
                          for k in key_bodies()] if keyboard else [], dtype=int)
     key_geom = np.full(model.ngeom, -1, dtype=int)
     geom_finger = np.full(model.ngeom, -1, dtype=int)

@@ -3,8 +3,7 @@ rules (``planner.check.keys.score_song``: frame F1 over the song's frames, notes
 late, keys down where no note sounds), the servos' effort against their motors' limits,
 tracking error per joint, and for a catch whether the ball stays in the hand.
 
-* A key sounds while its hinge is past its key-down angle (``KeyBody.down_angle_rad``:
-  the spec's 5 mm at the key front).
+* A key sounds while it is ``KeyBody.down_m`` (the spec's 5 mm) or more down.
 * Wrong keys: key-down episodes outside that key's notes that do not touch one of its
   notes. An episode that continues a note of its key (the key still rising after the
   note's end, or down a frame before its onset) is an overhang: it costs F1 frames but
@@ -84,9 +83,9 @@ class PhysicsCatch:
 
 
 def key_down(rec: SimRecord) -> np.ndarray:
-    """(T, 88) bool: each key past its key-down angle."""
-    down_angle = np.array([k.down_angle_rad for k in key_bodies()])
-    return rec.key_angle_rad >= down_angle
+    """(T, 88) bool: each key down by its key-down travel or more."""
+    down_m = np.array([k.down_m for k in key_bodies()])
+    return rec.key_dip_m >= down_m
 
 
 def _split_overhangs(episodes, down: np.ndarray, expected: np.ndarray, t_s: np.ndarray):
