@@ -116,11 +116,12 @@ def _wait_for_rows(path: Path, n: int, p: subprocess.Popen, timeout_s: float = 1
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
+# (a song of 15 minutes: it is still being planned when the signal comes, however fast)
 def test_signal_stops_cleanly_and_leaves_a_visibly_incomplete_file(tmp_path, sig):
     long_song = tmp_path / "long.mid"
     from planner.music.midi import Note, write_notes_midi
 
-    write_notes_midi([Note(60 + (k % 5) * 2, 0.3 * k, 0.3 * k + 0.25, 80) for k in range(600)],
+    write_notes_midi([Note(60 + (k % 5) * 2, 0.3 * k, 0.3 * k + 0.25, 80) for k in range(3000)],
                      long_song)
     out = tmp_path / "o.csv"
     p = _cli("play", long_song, "-o", out, stderr=subprocess.PIPE, text=True)
