@@ -91,6 +91,7 @@ reach a ball on its 1.5x palm at all. Stopping a ball that arrives faster than
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -203,14 +204,16 @@ def validate_live(dist_m: Any, height_m: Any, rate_hz: Any) -> tuple[float, floa
 def plan_throw(angle_deg: float, dist_m: float, height_m: float = 0.0,
                hand: HandModel | str = "default", ball: Ball | str = "tennis",
                drag: bool = False, observations: Any = None, rate_hz: float = 100.0,
-               planner: CatchPlanner | None = None) -> CatchPlan:
+               planner: CatchPlanner | None = None, soft: bool = True) -> CatchPlan:
     """Validate, predict (or fit) the flight and plan; no file is written.
 
-    ``observations``: None, a CSV path (``t,x,y,z``) or a pair (ts, ps)."""
+    ``observations``: None, a CSV path (``t,x,y,z``) or a pair (ts, ps); ``soft`` False:
+    the palm waits for the ball at rest (the catch before issue 15, for comparison)."""
     a, d, hgt, rate = validate_throw(angle_deg, dist_m, height_m, rate_hz)
     b = get_ball(ball)
     pl = planner or get_planner(hand)
-    return _plan_validated(pl, a, d, hgt, b, bool(drag), _load_obs(observations, drag), rate)
+    return _plan_validated(pl, a, d, hgt, b, bool(drag), _load_obs(observations, drag), rate,
+                           soft)
 
 
 def _load_obs(observations: Any, drag: bool):
@@ -226,7 +229,7 @@ def _load_obs(observations: Any, drag: bool):
 
 
 def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, drag: bool,
-                    obs, rate: float) -> CatchPlan:
+                    obs, rate: float, soft: bool = True) -> CatchPlan:
     t_start = time.perf_counter()
     C = np.array([d, 0.0, hgt])
     nominal = predict_throw(a, d, hgt, b, drag)  # also validates the throw itself
@@ -244,12 +247,13 @@ def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, d
         t_f = None
     throw = {"angle_deg": a, "dist_m": d, "height_m": hgt, "ball": b.name, "drag": drag,
              "observations": None if fit is None else fit.n_observations}
-    plan = pl.plan(flight, C, rate, t_info=t_info, throw=throw, flight_time_s=t_f, fit=fit)
+    plan = pl.plan(flight, C, rate, t_info=t_info, throw=throw, flight_time_s=t_f, fit=fit,
+                   soft=soft)
+    notes = plan.notes
     if fit is not None:
-        plan.notes.append(f"fitted to {fit.n_observations} observations "
-                          f"(rms residual {1000 * fit.residual_rms:.1f} mm)")
-    plan.planning_s = time.perf_counter() - t_start
-    return plan
+        notes += (f"fitted to {fit.n_observations} observations "
+                  f"(rms residual {1000 * fit.residual_rms:.1f} mm)",)
+    return replace(plan, notes=notes, planning_s=time.perf_counter() - t_start)
 
 
 def write_plan(plan: CatchPlan, out_path: str) -> int:

@@ -162,6 +162,9 @@ class BallLoad:
     torque_nm: float
     capacity_nm: float
     limiting_part: str
+    motor_headroom: tuple[float, ...] = ()  # 1 - |torque| / capacity of every motor (worst)
+    cone_margin_n: float | None = None  # mu F_n - |F_t| on the palm before the grasp (least;
+    # None: the fingers hold the ball throughout)
 
     @property
     def headroom(self) -> float:
