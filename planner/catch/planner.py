@@ -36,6 +36,8 @@ SIGNAL_S = 0.025  # seed (Markus): 25 ms of signal processing
 PLAN_BUDGET_S = 0.005  # planning latency budget (bench target p99)
 INTERCEPT_PLAN_TOL_M = 0.001  # what the planner aims for
 HOLD_AFTER_S = 0.5  # rows until intercept_t + this
+_CLOSE_STEP_S = 0.005  # a closing that would touch the arriving ball starts this much later
+_CLOSE_TRIES = 8  # ... up to this many times
 
 
 @dataclass(frozen=True)
@@ -141,10 +143,17 @@ class CatchPlanner:
                                   f"(t = {pose.t_i:.3f} s)"))
         s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
                           pad_time_s(soft_stop.v_rel), r)
-        t, Q = self._rows(pose, q_pre, soft_stop, closing, t_react, T_m, s_c, rate_hz)
-        t_static = max(s_c + closing.duration_s, soft_stop.end_s)
-        err, clear, g_t, g_f, check_reasons = self.rows.check(
-            flight, C, r, t, Q, pose.t_i, t_static, rate_hz, closing.reason is not None)
+        for _ in range(_CLOSE_TRIES):
+            t, Q = self._rows(pose, q_pre, soft_stop, closing, t_react, T_m, s_c, rate_hz)
+            t_static = max(s_c + closing.duration_s, soft_stop.end_s)
+            err, clear, g_t, g_f, check_reasons = self.rows.check(
+                flight, C, r, t, Q, pose.t_i, t_static, rate_hz, closing.reason is not None)
+            # ``close_start`` sees the palm at rest: a palm moving with the ball keeps it near
+            # the fingers longer, so the closing waits a little more when a tip meets it
+            if not any(x.startswith("fingers in the way") for x in check_reasons) or \
+                    soft_stop.ramp_in_s == 0 or s_c >= pose.t_i:
+                break
+            s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
         reasons += [Reason(_row_kind(x), x) for x in check_reasons]
         q_closed = pose.q_closed.copy()
         q_closed[arm] += soft_stop.last_offset

@@ -247,13 +247,16 @@ def _candidate(dyn: StopDynamics, flight: Flight, C: np.ndarray, r: float, q_zer
         if not np.any(qd):
             break
         lo, hi = h.lower[arm], h.upper[arm]
-        ends = [q_open[arm] + stop.first_offset, q_open[arm] + stop.last_offset]
-        fits = all(np.all(e >= lo) and np.all(e <= hi) for e in ends)
+        out = np.zeros(len(arm), dtype=bool)
+        for e in (q_open[arm] + stop.first_offset, q_open[arm] + stop.last_offset):
+            out |= (e < lo) | (e > hi)
         pre = q_open.copy()
         pre[arm] += stop.first_offset
-        if fits and math.isfinite(t_in) and math.isfinite(t_out) and ready_by(pre) <= stop.start_s:
+        timely = math.isfinite(t_in) and math.isfinite(t_out) and ready_by(pre) <= stop.start_s
+        if timely and not out.any():
             break
-        bound = _SHRINK * np.abs(qd)
+        # the joints that leave their range slow down (all of them when time is short)
+        bound = np.where(out | (not timely), _SHRINK * np.abs(qd), bound)
         stop = None
     if stop is None:  # no moving profile fits: the palm waits at rest
         return _candidate(dyn, flight, C, r, q_zero, closing, ic, ready_by, row_s, False, tilt_rad)
