@@ -27,6 +27,7 @@ from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
 from planner.check.kinematics import Kinematics
+from planner.check.limits import RATE_TOL
 from planner.errors import InfeasibleError, PlannerError
 from planner.hand.model import HandModel
 from planner.ik import HandIK
@@ -235,7 +236,7 @@ class CatchPlanner:
         q_i = interp_row(t, Q, pose.t_i)
         centre_i = palm_target(h, q_i, r)
         stop = self._stop_load(flight, pose, t, Q, grasp_t)
-        if stop.headroom < 0:
+        if stop.headroom < -RATE_TOL:  # the check's tolerance (one rule)
             reasons.append(Reason(CatchReason.TOO_FAST_TO_STOP, (
                 f"too fast to stop (over the palm's {100 * PAD_GIVE_M:g} cm and the arm's "
                 f"stopping motion): {stop.force_n:.1f} N needs motor.{stop.motor} at "

@@ -213,7 +213,8 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
     ``ti`` stopped by the pad over ``pad_m`` (at ``ti`` and at every row within the pad's
     time after it), then the ball riding the palm target of every later row (the rows'
     second differences); at each, the joint torques g(q) + J^T F + the hand's own inertia
-    (RNEA of the rows' central differences) through the transmissions, each motor against
+    as its arm moves (RNEA of the rows' central differences of the joints outside the
+    fingers) through the transmissions, each motor against
     its capacity, and while the ball slows (until the grasp at ``grasp_t``) F inside the
     palm's friction cone.
     ``stop``: the worst instant while the palm target still moves (the stopping motion);
@@ -230,11 +231,18 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
     v_rel = (b[1] - b[0] - (c[2] - c[0])) / (2 * h)
     t_pad = pad_time_s(v_rel, pad_m)
     V, A, centre_v, centre_a = _row_rates(t, Q, palm, r)
+    # the hand's inertia of the arm's motion (the stopping motion); the fingers' own moves
+    # are not the ball's load (nor judged dynamically elsewhere in a catch)
+    hand = kin.hand
+    fingers = {n for f in hand.fingers for n in hand.spec.joints_of(f)}
+    still_fingers = np.array([n in fingers for n in hand.joint_names])
+    V[:, still_fingers] = 0.0
+    A[:, still_fingers] = 0.0
     # at the intercept: the rows' rates there (speed of its segment, acceleration of the
     # nearer row)
     k0 = int(np.clip(np.searchsorted(t, ti, side="right") - 1, 0, len(t) - 2))
     kn = k0 if ti - t[k0] <= t[k0 + 1] - ti else k0 + 1
-    v_i = (Q[k0 + 1] - Q[k0]) / (t[k0 + 1] - t[k0])
+    v_i = np.where(still_fingers, 0.0, (Q[k0 + 1] - Q[k0]) / (t[k0 + 1] - t[k0]))
     held = grasp_t if grasp_t is not None else math.inf
     cap = actuator_capacity(kin.hand)
     inst = [_load("stop", kin, qa[1], ti, pad_force_n(m, v_rel, centre_a[kn], pad_m),
