@@ -71,8 +71,8 @@ class CatchPlanner:
         self.q_rest = rest_pose(self.hand, self.joints)
         self.near_m = self._tip_reach()
         self.rows = RowCheck(self.hand, self.T_ref, self.near_m)
-        self.dyn = StopDynamics(self.hand, self.joints)
         self.kin = Kinematics(self.base_hand, self.T_ref)
+        self.dyn = StopDynamics(self.hand, self.joints, self.kin)
         self._closings: dict[float, Closing] = {}
 
     def _tip_reach(self) -> float:
@@ -137,7 +137,7 @@ class CatchPlanner:
         q_pre[arm] += soft_stop.first_offset
         T_m = phase_duration(q_pre - self.q_rest, h.velocity, h.acceleration)
         ready = t_react + T_m
-        if ready > min(pose.t_i, soft_stop.start_s if soft_stop.ramp_in_s else pose.t_i):
+        if ready > min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i):
             reasons.append(Reason(CatchReason.TOO_SOON,
                                   f"too fast: the open pre-catch pose is reached at {ready:.3f} s, "
                                   f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
@@ -152,7 +152,7 @@ class CatchPlanner:
             # ``close_start`` sees the palm at rest: a palm moving with the ball keeps it near
             # the fingers longer, so the closing waits a little more when a tip meets it
             if not any(x.startswith("fingers in the way") for x in check_reasons) or \
-                    soft_stop.ramp_in_s == 0 or s_c >= pose.t_i:
+                    not np.any(soft_stop.qd) or s_c >= pose.t_i:
                 break
             s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
         reasons += [Reason(_row_kind(x), x) for x in check_reasons]
@@ -174,7 +174,7 @@ class CatchPlanner:
             grasp_fingers=g_f, min_clearance_before_m=clear, stop=stop, hold=hold, t=t, q=Q,
             q_motor=h.motor_angles(Q), ik_iterations=pose.ik_iterations,
             t_info_s=float(t_info), uncertainty=unc, planning_s=time.perf_counter() - t0,
-            soft=soft_stop if soft_stop.ramp_in_s else None)
+            soft=soft_stop if np.any(soft_stop.qd) else None)
 
     def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
              ic: Intercept) -> _Pose:

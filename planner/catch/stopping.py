@@ -38,7 +38,9 @@ from planner.catch.flight import Flight
 from planner.catch.grasp import motor_torque_matrix, palm_jacobian
 from planner.catch.intercept import Intercept, Wrist, find_intercept
 from planner.catch.results import Closing
-from planner.check.ballstop import cone_margin_n, pad_force_n, pad_time_s
+from planner.check.ball import ball_loads
+from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
+from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
 from planner.hand.tendon import actuator_capacity
 from planner.qp import DenseQp
@@ -47,8 +49,12 @@ from planner.trajectory import LIMIT_MARGIN, MIN_PHASE_S, PEAK_ACC, PEAK_VEL
 STOP_SHARE = 0.8  # the ramps load every motor to at most 80 % of its capacity: issue 15's
 # 20 % headroom, left for what the model does not see (friction, the fingers' moves)
 TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
-_SHRINK = 0.85  # a profile that leaves the joints' range is tried with speeds this much lower
-_MAX_SHRINK = 12
+CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6)  # the arm's speed when it meets the ball, tried as a
+# share of its speed after the recoil
+_SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
+# the speeds its overshoot asks for, times this (the travel is not quite quadratic)
+_MAX_SHRINK = 6
+_MIN_SPEED = 0.05  # arm speeds below this share of their limits are not worth a motion
 _FD_M = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
 _QP = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True)
 
@@ -62,21 +68,33 @@ def ramp_integral(u: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class SoftStop:
-    """The arm's stopping motion of one catch (see the module docstring)."""
+    """The arm's stopping motion of one catch (see the module docstring): its speed factor
+    sigma' rises (min-jerk, ``ramp_in_s``) to ``contact_share`` one row before the
+    intercept, holds it to the intercept, rises linearly to 1 over ``recoil_s`` (the hand
+    recoiling under the ball's push), holds 1 for ``hold_s``, falls to rest (min-jerk,
+    ``ramp_out_s``). The arm's speeds at factor 1 are ``qd``."""
 
     tilt_rad: float
     arm: tuple[int, ...]  # the arm joints' indices (hand order)
-    qd_c: np.ndarray  # their speeds when the palm meets the ball
+    qd: np.ndarray  # their speeds at factor 1 (after the recoil)
+    contact_share: float  # the speed factor when the palm meets the ball
     t_i: float
-    row_s: float  # one row interval: the speed is held this long on either side
+    row_s: float  # one row interval: the contact speed is held this long before the ball
     ramp_in_s: float
-    pad_s: float
+    recoil_s: float
+    hold_s: float
     ramp_out_s: float
+    pad_s: float  # how long the pad takes to stop the ball relative to the palm
     v_palm: np.ndarray  # palm target velocity at the intercept (m/s)
     v_rel: np.ndarray  # the ball's velocity relative to it (m/s)
     force_n: np.ndarray  # the pad's force on the ball (N)
     motor_ratio: np.ndarray  # |torque| / capacity of every motor while the pad stops it
     cone_margin_n: float
+
+    @property
+    def qd_c(self) -> np.ndarray:
+        """The arm's speeds when the palm meets the ball."""
+        return self.contact_share * self.qd
 
     @property
     def start_s(self) -> float:
@@ -86,43 +104,60 @@ class SoftStop:
     @property
     def end_s(self) -> float:
         """When the arm is at rest with the ball."""
-        return self.t_i + self.pad_s + self.row_s + self.ramp_out_s
+        return self.t_i + self.recoil_s + self.hold_s + self.ramp_out_s
+
+    def _knots(self) -> tuple[float, float, float, float, float, float]:
+        """sigma at the ramp-in's start and end, the recoil's end, the hold's end, the end;
+        and the time the hold ends."""
+        c, t4 = self.contact_share, self.t_i + self.recoil_s + self.hold_s
+        s2 = -c * self.row_s
+        s1 = s2 - 0.5 * c * self.ramp_in_s
+        s3 = 0.5 * self.recoil_s * (1.0 + c)
+        s4 = s3 + self.hold_s
+        return s1, s2, s3, s4, s4 + 0.5 * self.ramp_out_s, t4
 
     def sigma(self, t_s: np.ndarray) -> np.ndarray:
         """The profile's time-like scalar at ``t_s`` (0 at the intercept)."""
-        t = np.asarray(t_s, dtype=float)
-        a, b = self.t_i - self.row_s, self.t_i + self.pad_s + self.row_s
-        s0 = -(0.5 * self.ramp_in_s + self.row_s)
-        out = np.clip(t, a, b) - self.t_i
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        c, ti = self.contact_share, self.t_i
+        s1, s2, s3, s4, _, t4 = self._knots()
+        out = np.full(t.shape, s1)
         if self.ramp_in_s > 0:
-            rise = s0 + self.ramp_in_s * ramp_integral((t - self.start_s) / self.ramp_in_s)
-            out = np.where(t < a, rise, out)
+            u = (t - self.start_s) / self.ramp_in_s
+            out = np.where(t > self.start_s, s1 + c * self.ramp_in_s * ramp_integral(u), out)
+        tau = t - ti
+        out = np.where(t > ti - self.row_s, np.minimum(tau, 0.0) * c, out)
+        if self.recoil_s > 0:
+            w = np.clip(tau, 0.0, self.recoil_s)
+            out = np.where(t > ti, c * w + (1.0 - c) * w * w / (2.0 * self.recoil_s), out)
+        out = np.where(t > ti + self.recoil_s, s3 + np.minimum(t - ti - self.recoil_s,
+                                                                self.hold_s), out)
         if self.ramp_out_s > 0:
-            u = np.clip((t - b) / self.ramp_out_s, 0.0, 1.0)
-            fall = (b - self.t_i) + self.ramp_out_s * (u - ramp_integral(u))
-            out = np.where(t > b, fall, out)
+            u = np.clip((t - t4) / self.ramp_out_s, 0.0, 1.0)
+            out = np.where(t > t4, s4 + self.ramp_out_s * (u - ramp_integral(u)), out)
         return out
 
     def offset(self, t_s: np.ndarray, n: int) -> np.ndarray:
         """(T, n) joint offsets from the intercept pose (only the arm joints move)."""
-        out = np.zeros((len(np.atleast_1d(t_s)), n))
-        out[:, list(self.arm)] = np.outer(self.sigma(np.atleast_1d(t_s)), self.qd_c)
+        t = np.atleast_1d(t_s)
+        out = np.zeros((len(t), n))
+        out[:, list(self.arm)] = np.outer(self.sigma(t), self.qd)
         return out
 
     @property
     def first_offset(self) -> np.ndarray:
-        return self.qd_c * -(0.5 * self.ramp_in_s + self.row_s)
+        return self.qd * self._knots()[0]
 
     @property
     def last_offset(self) -> np.ndarray:
-        return self.qd_c * (self.pad_s + self.row_s + 0.5 * self.ramp_out_s)
+        return self.qd * self._knots()[4]
 
 
 class StopDynamics:
     """The hand's dynamics the stopping motion needs (one hand, reference-mounted)."""
 
-    def __init__(self, hand: HandModel, joints: CatchJoints) -> None:
-        self.hand, self.joints = hand, joints
+    def __init__(self, hand: HandModel, joints: CatchJoints, kin: Kinematics) -> None:
+        self.hand, self.joints, self.kin = hand, joints, kin
         self.arm = tuple(joints.arm)
         m = hand.pin_model
         self._idx = np.array([m.idx_qs[m.getJointId(n)] for n in hand.joint_names])
@@ -173,6 +208,23 @@ class StopDynamics:
                     float(np.min(self.a_max / np.maximum(np.abs(qd), 1e-12))))
         return max(MIN_PHASE_S, PEAK_VEL / s_max)
 
+    def judge(self, stop: SoftStop, q_open: np.ndarray, flight: Flight, r: float
+              ) -> tuple[bool, float]:
+        """The check's rule (``planner.check.ball.ball_loads``) on the rows around the
+        intercept that ``stop`` gives the arm (the fingers open): whether the ball stays in
+        the palm's friction cone while the pad stops it, and the least motor headroom."""
+        dt = stop.row_s
+        k0 = math.floor(stop.t_i / dt)
+        n = math.ceil((stop.pad_s + stop.recoil_s) / dt) + 3
+        t = np.arange(k0 - 2, k0 + n) * dt
+        Q = np.tile(q_open, (len(t), 1)) + stop.offset(t, self.hand.n)
+        _, palm = self.kin.frames(Q)
+        b = flight.to_metadata()
+        ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
+                "radius": float(r), "mass": float(b["mass"]), "drag": float(b["drag"])}
+        ld = ball_loads(t, Q, self.kin, palm, ball, stop.t_i, PAD_GIVE_M)[0]
+        return ld.cone_margin_n is None or ld.cone_margin_n >= 0, float(ld.headroom)
+
     def pad_load(self, q: np.ndarray, qd: np.ndarray, v_rel: np.ndarray, mass: float,
                  normal: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         """The pad's force on the ball, every motor's |torque| / capacity while it acts (the
@@ -201,24 +253,45 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     a function of the pre-catch pose -> when the hand can be there. ``soft`` False: the palm
     waits at rest (the stopping is the pad's alone)."""
     best = None
-    for tilt in (TILTS_DEG if soft else (0.0,)):
-        ic = find_intercept(wrist, flight, C, r, t_c, math.radians(tilt))
-        if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
-            continue
-        cand = _candidate(dyn, flight, C, r, q_zero, closing, ic, ready_by, row_s, soft,
-                          math.radians(tilt))
-        key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
-        if best is None or key < best[0]:
+    for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
+        # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
+        # the wrist changes smoothly with it)
+        for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):
+            ic = find_intercept(wrist, flight, C, r, t_c, math.radians(tilt))
+            if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
+                break
+            cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
+                              math.radians(tilt), 1.0)
+            key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
+            if best is not None and key >= best[0]:
+                break
             best = (key, cand)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
-        return _candidate(dyn, flight, C, r, q_zero, closing, ic, ready_by, row_s, False, 0.0)
-    return best[1]
+        return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0)
+    ic, q_open, stop = best[1]
+    if not np.any(stop.qd):
+        return best[1]
+    # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
+    judged = (dyn.judge(stop, q_open, flight, r), stop)
+    for share in CONTACT_SHARES:  # slower while it helps
+        cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
+                          stop.tilt_rad, share)[2]
+        if cand.contact_share == 1.0:
+            break
+        j = (dyn.judge(cand, q_open, flight, r), cand)
+        if j[0] <= judged[0]:
+            break
+        judged = j
+    return ic, q_open, judged[1]
 
 
-def _candidate(dyn: StopDynamics, flight: Flight, C: np.ndarray, r: float, q_zero: np.ndarray,
+def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
                closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
-               tilt_rad: float):
+               tilt_rad: float, share: float):
+    """The stopping motion at the intercept ``ic`` meeting the ball at ``share`` of the
+    arm's full speeds (those speeds by the QP), the ramps as short as the motors allow,
+    slowed where the joints' range or the time before the ball is short."""
     h, j = dyn.hand, dyn.joints
     q = q_zero.copy()
     q[j.i_flex], q[j.i_dev] = ic.theta, ic.dev
@@ -231,33 +304,53 @@ def _candidate(dyn: StopDynamics, flight: Flight, C: np.ndarray, r: float, q_zer
     J = dyn.target_jacobian(q_open, r)
     arm = list(dyn.arm)
     bound = dyn.v_max.copy() if soft else np.zeros(len(arm))
-    ride = mass * J.T @ J  # joint torque per unit arm acceleration of the riding ball
-    stop = None
+    load = np.zeros((h.n, len(arm)))
+    load[arm] = mass * J.T @ J  # joint torque per unit arm acceleration of the riding ball
+    lo, hi = h.lower[arm], h.upper[arm]
     for _ in range(_MAX_SHRINK + 1):
-        qd = _contact_speeds(J, v_ball, bound) if np.any(bound) else np.zeros(len(arm))
-        v_rel = v_ball - J @ qd
-        F, ratio, cone = dyn.pad_load(q_open, qd, v_rel, mass, normal)
-        t_in = dyn.ramp_time(q_open, qd)
-        load = np.zeros((h.n, len(arm)))
-        load[arm] = ride
-        t_out = dyn.ramp_time(q_open, qd, load)
-        stop = SoftStop(tilt_rad, tuple(arm), qd, float(ic.t), row_s if np.any(qd) else 0.0,
-                        t_in, pad_time_s(v_rel) if np.any(qd) else 0.0, t_out, J @ qd, v_rel,
-                        F, ratio, cone)
-        if not np.any(qd):
-            break
-        lo, hi = h.lower[arm], h.upper[arm]
-        out = np.zeros(len(arm), dtype=bool)
-        for e in (q_open[arm] + stop.first_offset, q_open[arm] + stop.last_offset):
-            out |= (e < lo) | (e > hi)
+        qd_c = _contact_speeds(J, v_ball, share * bound) if np.any(bound) else 0.0 * bound
+        moving = bool(np.any(qd_c))
+        v_rel = v_ball - J @ qd_c
+        F, ratio, cone = dyn.pad_load(q_open, qd_c, v_rel, mass, normal)
+        t_pad = pad_time_s(v_rel)
+        qd = qd_c / share
+        recoil = max(t_pad, row_s) if moving and share < 1.0 else 0.0
+        if recoil and np.any((1.0 - share) * np.abs(qd) > dyn.a_max * recoil):
+            return ic, q_open, _at_rest(ic, tilt_rad, arm, v_rel, F, ratio, cone, t_pad)
+        stop = SoftStop(tilt_rad, tuple(arm), qd, share if moving else 1.0, float(ic.t),
+                        row_s if moving else 0.0, dyn.ramp_time(q_open, qd_c), recoil,
+                        max(0.0, t_pad - recoil) + row_s if moving else 0.0,
+                        dyn.ramp_time(q_open, qd, load) if moving else 0.0, t_pad, J @ qd_c,
+                        v_rel, F, ratio, cone)
+        if not moving:
+            return ic, q_open, stop
+        # how much slower each joint must go: its travel grows about as its speed squared
+        # (the ramps last in proportion to it), the time the ramp-in takes as its speed
+        scale = np.ones(len(arm))
+        for off in (stop.first_offset, stop.last_offset):
+            e = q_open[arm] + off
+            room = np.where(off < 0, q_open[arm] - lo, hi - q_open[arm])
+            over = (e < lo) | (e > hi)
+            scale[over] = np.minimum(scale[over], np.sqrt(np.maximum(room[over], 0.0)
+                                                          / np.abs(off[over])))
         pre = q_open.copy()
         pre[arm] += stop.first_offset
-        timely = math.isfinite(t_in) and math.isfinite(t_out) and ready_by(pre) <= stop.start_s
-        if timely and not out.any():
+        finite = math.isfinite(stop.ramp_in_s) and math.isfinite(stop.ramp_out_s)
+        late = ready_by(pre) - stop.start_s if finite else math.inf
+        if late <= 0 and np.all(scale >= 1.0):
+            return ic, q_open, stop
+        if late > 0:  # every joint slower, its ramp shorter by the time missing
+            scale = np.minimum(scale, max(0.0, 1.0 - late / max(stop.ramp_in_s, 1e-9))
+                               if finite else 0.0)
+        bound = np.where(scale < 1.0, _SHRINK * scale * np.abs(qd), bound)
+        if not np.any(bound > _MIN_SPEED * dyn.v_max):
             break
-        # the joints that leave their range slow down (all of them when time is short)
-        bound = np.where(out | (not timely), _SHRINK * np.abs(qd), bound)
-        stop = None
-    if stop is None:  # no moving profile fits: the palm waits at rest
-        return _candidate(dyn, flight, C, r, q_zero, closing, ic, ready_by, row_s, False, tilt_rad)
-    return ic, q_open, stop
+    return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, tilt_rad, 1.0)
+
+
+def _at_rest(ic: Intercept, tilt_rad: float, arm: list[int], v_rel, F, ratio, cone,
+             t_pad: float) -> SoftStop:
+    """A palm waiting at rest (no stopping motion)."""
+    z = np.zeros(len(arm))
+    return SoftStop(tilt_rad, tuple(arm), z, 1.0, float(ic.t), 0.0, 0.0, 0.0, 0.0, 0.0, t_pad,
+                    z.copy(), v_rel, F, ratio, cone)

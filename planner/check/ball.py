@@ -233,9 +233,7 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
     V, A, centre_v, centre_a = _row_rates(t, Q, palm, r)
     # the hand's inertia of the arm's motion (the stopping motion); the fingers' own moves
     # are not the ball's load (nor judged dynamically elsewhere in a catch)
-    hand = kin.hand
-    fingers = {n for f in hand.fingers for n in hand.spec.joints_of(f)}
-    still_fingers = np.array([n in fingers for n in hand.joint_names])
+    still_fingers = _finger_mask(kin.hand)
     V[:, still_fingers] = 0.0
     A[:, still_fingers] = 0.0
     # at the intercept: the rows' rates there (speed of its segment, acceleration of the
@@ -255,9 +253,10 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
         if still is None and t[k] >= ti + t_pad and np.linalg.norm(centre_v[k]) < STILL_M_S:
             still = k
         phase = "stop" if still is None else "hold"
-        if phase == "hold" and k > still and k < len(t) - 1 and np.array_equal(Q[k], Q[k - 1]) \
-                and np.array_equal(Q[k], Q[k + 1]):
-            continue  # a row like its neighbours loads the hand like the one before it
+        if phase == "hold" and k > still and not np.any(V[k]) and not np.any(A[k]) \
+                and not np.any(centre_a[k]):
+            continue  # the arm still: the ball's weight on the palm, judged on every row by
+            # the limit audit (``planner.check.limits``, its static torques)
         slows = sp > 0 or float(np.linalg.norm(centre_a[k])) > G  # the arm, not gravity, sets F
         inst.append(_load(phase, kin, Q[k], float(t[k]), F, sp, dist, V[k], A[k],
                           palm[k, :3, 2], phase == "stop" and slows and t[k] < held, cap))
@@ -268,6 +267,20 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
                                              np.zeros(Q.shape[1]), np.zeros(Q.shape[1]),
                                              palm[-1, :3, 2], False, cap)
     return stop, hold
+
+
+_FINGER_MASKS: dict[tuple[str, str], np.ndarray] = {}
+
+
+def _finger_mask(hand) -> np.ndarray:
+    """True for the joints of the hand's fingers (once per hand)."""
+    key = (hand.name, hand.urdf_sha256)
+    mask = _FINGER_MASKS.get(key)
+    if mask is None:
+        fingers = {n for f in hand.fingers for n in hand.spec.joints_of(f)}
+        mask = _FINGER_MASKS[key] = np.array([n in fingers for n in hand.joint_names])
+        mask.setflags(write=False)
+    return mask
 
 
 def _row_rates(t: np.ndarray, Q: np.ndarray, palm: np.ndarray, r: float):
