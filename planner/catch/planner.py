@@ -104,7 +104,25 @@ class CatchPlanner:
              soft: bool = True) -> CatchPlan:
         """Plan the catch of ``flight`` with the hand mounted at ``catch_point`` (catch
         frame). ``t_info``: when the flight is known (last observation); the hand moves
-        from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written."""
+        from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written. ``soft``: the
+        soft catch (``planner.catch.stopping``), or the palm waiting at rest when that
+        alone passes the self-check (a palm that moves can bring the ball to a fingertip
+        the closing would miss otherwise); False: the palm at rest."""
+        t0 = time.perf_counter()
+        args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
+        plan = self._plan(*args, soft=soft)
+        if soft and not plan.feasible:
+            still = self._plan(*args, soft=False)
+            if still.feasible:
+                plan = replace(still, notes=still.notes + (
+                    "the palm waits at rest: the soft catch failed (" +
+                    "; ".join(plan.reasons) + ")",))
+        return replace(plan, planning_s=time.perf_counter() - t0)
+
+    def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
+              throw: dict[str, Any] | None, flight_time_s: float | None,
+              fit: FitResult | None, soft: bool) -> CatchPlan:
+        """``plan`` with the soft catch on or off."""
         t0 = time.perf_counter()
         h = self.hand
         C = np.asarray(catch_point, dtype=float)

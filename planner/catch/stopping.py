@@ -52,7 +52,7 @@ TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the fle
 CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6)  # the arm's speed when it meets the ball, tried as a
 # share of its speed after the recoil
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
-# the speeds its overshoot asks for, times this (the travel is not quite quadratic)
+# the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
 _MIN_SPEED = 0.05  # arm speeds below this share of their limits are not worth a motion
 _FD_M = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
@@ -275,20 +275,22 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
     judged = (dyn.judge(stop, q_open, flight, r), stop)
     for share in CONTACT_SHARES:  # slower while it helps
+        # from the speeds the last one found within the joints' range
+        warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
         cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
-                          stop.tilt_rad, share)[2]
+                          stop.tilt_rad, share, warm)[2]
         if cand.contact_share == 1.0:
             break
         j = (dyn.judge(cand, q_open, flight, r), cand)
         if j[0] <= judged[0]:
             break
-        judged = j
+        judged, stop = j, cand
     return ic, q_open, judged[1]
 
 
 def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
                closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
-               tilt_rad: float, share: float):
+               tilt_rad: float, share: float, bound0: np.ndarray | None = None):
     """The stopping motion at the intercept ``ic`` meeting the ball at ``share`` of the
     arm's full speeds (those speeds by the QP), the ramps as short as the motors allow,
     slowed where the joints' range or the time before the ball is short."""
@@ -303,7 +305,8 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
     normal = h.palm_pose(q_open)[:3, 2]
     J = dyn.target_jacobian(q_open, r)
     arm = list(dyn.arm)
-    bound = dyn.v_max.copy() if soft else np.zeros(len(arm))
+    bound = (dyn.v_max.copy() if bound0 is None else bound0.copy()) if soft \
+        else np.zeros(len(arm))
     load = np.zeros((h.n, len(arm)))
     load[arm] = mass * J.T @ J  # joint torque per unit arm acceleration of the riding ball
     lo, hi = h.lower[arm], h.upper[arm]
@@ -324,15 +327,15 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
                         v_rel, F, ratio, cone)
         if not moving:
             return ic, q_open, stop
-        # how much slower each joint must go: its travel grows about as its speed squared
-        # (the ramps last in proportion to it), the time the ramp-in takes as its speed
+        # how much slower each joint must go: its travel grows with its speed (the ramps'
+        # durations are set by the joint that needs the longest), the ramp-in's time too
         scale = np.ones(len(arm))
         for off in (stop.first_offset, stop.last_offset):
             e = q_open[arm] + off
             room = np.where(off < 0, q_open[arm] - lo, hi - q_open[arm])
             over = (e < lo) | (e > hi)
-            scale[over] = np.minimum(scale[over], np.sqrt(np.maximum(room[over], 0.0)
-                                                          / np.abs(off[over])))
+            scale[over] = np.minimum(scale[over], np.maximum(room[over], 0.0)
+                                     / np.abs(off[over]))
         pre = q_open.copy()
         pre[arm] += stop.first_offset
         finite = math.isfinite(stop.ramp_in_s) and math.isfinite(stop.ramp_out_s)

@@ -15,6 +15,7 @@ from planner.check.ballstop import PALM_MU, cone_margin_n, pad_force_n, pad_time
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
 from planner.check.kinematics import GRAVITY, G, Kinematics
 from planner.check.limits import RATE_TOL
+from planner.check.motormap import motor_torque_matrix
 from planner.check.results import BallLoad, CatchResult, TipTouch
 from planner.errors import InputError
 from planner.hand.spec import FINGERS
@@ -319,7 +320,7 @@ def _load(phase: str, kin: Kinematics, q: np.ndarray, time_s: float, F: np.ndarr
     tau_j = kin.gravity(q) + J.T @ F
     if np.any(v != 0.0) or np.any(a != 0.0):
         tau_j = tau_j + kin.inertial(q, v, a)
-    tau = hand.motor_torques(q, tau_j)
+    tau = motor_torque_matrix(hand, q) @ tau_j
     ratio = np.abs(tau) / cap.torque_nm
     i = int(np.argmax(ratio))
     cone = cone_margin_n(F, normal) if on_palm else None
