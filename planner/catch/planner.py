@@ -141,7 +141,7 @@ class CatchPlanner:
         t_react = max(0.0, t_info) + SIGNAL_S + PLAN_BUDGET_S
 
         def ready_by(q_pre: np.ndarray) -> float:
-            return t_react + phase_duration(q_pre - self.q_rest, h.velocity, h.acceleration)
+            return t_react + self.dyn.move_time(self.q_rest, q_pre)
 
         ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing,
                                      t_c, ready_by, 1.0 / rate_hz, soft)
@@ -153,7 +153,7 @@ class CatchPlanner:
         arm = list(self.joints.arm)
         q_pre = pose.q_open.copy()
         q_pre[arm] += soft_stop.first_offset
-        T_m = phase_duration(q_pre - self.q_rest, h.velocity, h.acceleration)
+        T_m = self.dyn.move_time(self.q_rest, q_pre)
         ready = t_react + T_m
         if ready > min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i):
             reasons.append(Reason(CatchReason.TOO_SOON,

@@ -44,7 +44,7 @@ from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
 from planner.hand.tendon import actuator_capacity
 from planner.qp import DenseQp
-from planner.trajectory import LIMIT_MARGIN, MIN_PHASE_S, PEAK_ACC, PEAK_VEL
+from planner.trajectory import LIMIT_MARGIN, MIN_PHASE_S, PEAK_ACC, PEAK_VEL, phase_duration
 
 STOP_SHARE = 0.8  # the ramps load every motor to at most 80 % of its capacity: issue 15's
 # 20 % headroom, left for what the model does not see (friction, the fingers' moves)
@@ -187,6 +187,29 @@ class StopDynamics:
         vp, ap = np.zeros(m.nv), np.zeros(m.nv)
         vp[self._idx[list(self.arm)]], ap[self._idx[list(self.arm)]] = v, a
         return pin.rnea(m, self._data, self._pq(q), vp, ap)[self._idx]
+
+    def move_time(self, q_from: np.ndarray, q_to: np.ndarray) -> float:
+        """Shortest min-jerk move ``q_from`` -> ``q_to`` within every joint's speed and
+        acceleration limits (``phase_duration``) and every motor within ``STOP_SHARE`` of
+        its capacity while it moves the hand (its inertia at the peak acceleration PEAK_ACC
+        |dq| / T^2, at either end, against gravity)."""
+        dq = q_to - q_from
+        T = phase_duration(dq, self.hand.velocity, self.hand.acceleration)
+        m = self.hand.pin_model
+        for q in (q_from, q_to):
+            M = motor_torque_matrix(self.hand, q)
+            z = np.zeros(m.nv)
+            ap = z.copy()
+            ap[self._idx] = dq
+            g = pin.rnea(m, self._data, self._pq(q), z, z)
+            per = np.abs(M @ (pin.rnea(m, self._data, self._pq(q), z, ap) - g)[self._idx])
+            room = STOP_SHARE * self.cap - np.abs(M @ g[self._idx])
+            need = per > 1e-12
+            if np.any(room[need] <= 0):
+                return math.inf
+            if need.any():
+                T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
+        return T
 
     def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None) -> float:
         """Shortest min-jerk speed ramp between rest and ``qd`` (peak acceleration PEAK_ACC
