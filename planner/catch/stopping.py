@@ -49,7 +49,7 @@ from planner.trajectory import LIMIT_MARGIN, MIN_PHASE_S, PEAK_ACC, PEAK_VEL, ph
 STOP_SHARE = 0.8  # the ramps load every motor to at most 80 % of its capacity: issue 15's
 # 20 % headroom, left for what the model does not see (friction, the fingers' moves)
 TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
-CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6)  # the arm's speed when it meets the ball, tried as a
+CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)  # the arm's speed when it meets the ball, tried as a
 # share of its speed after the recoil
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
