@@ -133,8 +133,9 @@ def test_check_judges_the_stopping_motion(tmp_path, far):
 
 
 def test_cli_json_reports_headroom_per_motor(tmp_path, capsys):
-    from cli import main as cli_main
     import json
+
+    from cli import main as cli_main
 
     assert cli_main(["catch", "--angle", "30", "--dist", "3", "-o", str(tmp_path / "c.csv"),
                      "--json"]) == 0
@@ -148,6 +149,6 @@ def test_cli_json_reports_headroom_per_motor(tmp_path, capsys):
 
 def test_same_bytes(tmp_path):
     a = plan_catch(30.0, 3.0, 0.0, "default", str(tmp_path / "a.csv"))
-    b = plan_catch(30.0, 3.0, 0.0, "default", str(tmp_path / "b.csv"))
+    plan_catch(30.0, 3.0, 0.0, "default", str(tmp_path / "b.csv"))
     assert a.feasible and (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
     assert math.isfinite(a.plan.soft.ramp_out_s) and a.plan.soft.ramp_out_s > 0

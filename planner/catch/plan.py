@@ -254,8 +254,8 @@ def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, d
                    soft=soft)
     notes = plan.notes
     if fit is not None:
-        notes += (f"fitted to {fit.n_observations} observations "
-                  f"(rms residual {1000 * fit.residual_rms:.1f} mm)",)
+        notes += ((f"fitted to {fit.n_observations} observations "
+                   f"(rms residual {1000 * fit.residual_rms:.1f} mm)"),)
     return replace(plan, notes=notes, planning_s=time.perf_counter() - t_start)
 
 

@@ -17,12 +17,12 @@ from planner.catch.arm import catch_joints, open_from, palm_target, rest_pose, z
 from planner.catch.closing import close_start, make_closing
 from planner.catch.flight import Flight
 from planner.catch.geometry import interp_row, rot1
-from planner.catch.intercept import Intercept, Wrist, closest_time, find_intercept, refine_time
+from planner.catch.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.mount import CatchMount
 from planner.catch.observe import FitResult, predict_intercept
 from planner.catch.results import CatchPlan, CatchReason, Closing, Reason
-from planner.catch.stopping import SoftStop, StopDynamics, plan_stop
 from planner.catch.rowcheck import RowCheck
+from planner.catch.stopping import SoftStop, StopDynamics, plan_stop
 from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
@@ -31,7 +31,7 @@ from planner.check.limits import RATE_TOL
 from planner.errors import InfeasibleError, PlannerError
 from planner.hand.model import HandModel
 from planner.ik import HandIK
-from planner.trajectory import Phase, phase_duration, sample
+from planner.trajectory import Phase, sample
 
 SIGNAL_S = 0.025  # seed (Markus): 25 ms of signal processing
 PLAN_BUDGET_S = 0.005  # planning latency budget (bench target p99)
@@ -291,7 +291,7 @@ def _row_kind(reason: str) -> CatchReason:
     """The kind of a reason of the row self-check (``RowCheck.check``)."""
     if reason.startswith("fingers in the way"):
         return CatchReason.FINGERS
-    if reason.startswith("too slow to close") or reason.startswith("grasp"):
+    if reason.startswith(("too slow to close", "grasp")):
         return CatchReason.GRASP
     return CatchReason.MISS
 

@@ -41,7 +41,7 @@ class Reason(str):
 
     __slots__ = ("kind",)
 
-    def __new__(cls, kind: CatchReason, detail: str) -> Reason:
+    def __new__(cls, kind: CatchReason, detail: str) -> Reason:  # noqa: PYI034
         out = super().__new__(cls, detail)
         out.kind = kind
         return out

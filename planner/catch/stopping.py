@@ -120,7 +120,7 @@ class SoftStop:
         """The profile's time-like scalar at ``t_s`` (0 at the intercept)."""
         t = np.atleast_1d(np.asarray(t_s, dtype=float))
         c, ti = self.contact_share, self.t_i
-        s1, s2, s3, s4, _, t4 = self._knots()
+        s1, _, s3, s4, _, t4 = self._knots()
         out = np.full(t.shape, s1)
         if self.ramp_in_s > 0:
             u = (t - self.start_s) / self.ramp_in_s
@@ -212,10 +212,10 @@ class StopDynamics:
         return T
 
     def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None) -> float:
-        """Shortest min-jerk speed ramp between rest and ``qd`` (peak acceleration PEAK_ACC
-        / T times qd ... here 15/8 qd / T) within the acceleration limits and every motor
-        within ``STOP_SHARE`` of its capacity; ``load``: (n, k) extra joint torque per unit
-        arm acceleration (the riding ball). inf when gravity and speed alone leave no room."""
+        """Shortest min-jerk speed ramp between rest and ``qd`` (its peak acceleration is
+        PEAK_VEL |qd| / T) within the acceleration limits and every motor within
+        ``STOP_SHARE`` of its capacity; ``load``: (n, k) extra joint torque per unit arm
+        acceleration (the riding ball). inf when gravity and speed alone leave no room."""
         if not np.any(qd):
             return 0.0
         M = motor_torque_matrix(self.hand, q)
