@@ -56,7 +56,8 @@ _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried
 _MAX_SHRINK = 6
 _MIN_SPEED = 0.05  # arm speeds below this share of their limits are not worth a motion
 _FD_M = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
-_QP = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True)
+_QP = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True, warm_starting=False)
+# (cold: a plan does not depend on the throws planned before it)
 
 
 def ramp_integral(u: np.ndarray) -> np.ndarray:
