@@ -225,8 +225,7 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
     r, m = ball["radius"], ball["mass"]
     h = STOP_DIFF_S
     b = ball_positions(ball["p0"], ball["v0"], ball["drag"], [ti - h, ti + h])
-    qa = np.array([[np.interp(x, t, Q[:, j]) for j in range(Q.shape[1])]
-                   for x in (ti - h, ti, ti + h)])
+    qa = _rows_at(t, Q, np.array([ti - h, ti, ti + h]))
     _, P = kin.frames(qa)
     c = P[:, :3, 3] + r * P[:, :3, 2]
     v_rel = (b[1] - b[0] - (c[2] - c[0])) / (2 * h)
@@ -268,6 +267,16 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
                                              np.zeros(Q.shape[1]), np.zeros(Q.shape[1]),
                                              palm[-1, :3, 2], False, cap)
     return stop, hold
+
+
+def _rows_at(t: np.ndarray, Q: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """The rows interpolated linearly at ``times`` (held at the ends), like ``np.interp``
+    on every column."""
+    if len(t) < 2:
+        return np.repeat(Q[:1], len(times), axis=0)
+    k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
+    w = np.clip((times - t[k]) / (t[k + 1] - t[k]), 0.0, 1.0)[:, None]
+    return (1.0 - w) * Q[k] + w * Q[k + 1]
 
 
 _FINGER_MASKS: dict[tuple[str, str], np.ndarray] = {}
