@@ -77,17 +77,18 @@ class Wrist:
         self.rail_lim = ((float(lo[joints.i_rail]), float(hi[joints.i_rail]))
                          if joints.i_rail is not None else (0.0, 0.0))
 
-    def aligned(self, b: np.ndarray, v: np.ndarray, r: float):
+    def aligned(self, b: np.ndarray, v: np.ndarray, r: float, tilt: float = 0.0):
         """For path samples (positions b, velocities v, reference frame): flexion that
-        turns the normal against v, and h = height of the ball above the palm plane minus r."""
+        turns the normal against v (then ``tilt`` rad further about the flexion axis), and
+        h = height of the ball above the palm plane minus r."""
         e, n0 = self.e_f, self.n0
         m = -v - np.outer(-v @ e, e)
         m = unit(m)
-        theta = np.arctan2(cross(np.broadcast_to(n0, m.shape), m) @ e, m @ n0)
+        theta = np.arctan2(cross(np.broadcast_to(n0, m.shape), m) @ e, m @ n0) + tilt
         s = rot(e, -theta, b - self.W)
         return theta, s, s @ n0 - (self._g0n + r)
 
-    def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float
+    def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float, tilt: float = 0.0
                   ) -> tuple[float, np.ndarray, float]:
         """``_aligned`` for one time (plain float arithmetic: no numpy call overhead)."""
         bx, by, bz = (float(x) for x in flight.position(t) - C)
@@ -100,7 +101,7 @@ class Wrist:
         mn = math.sqrt(mx * mx + my * my + mz * mz)
         mx, my, mz = mx / mn, my / mn, mz / mn
         cx, cy, cz = ny * mz - nz * my, nz * mx - nx * mz, nx * my - ny * mx
-        th = math.atan2(cx * ex + cy * ey + cz * ez, mx * nx + my * ny + mz * nz)
+        th = math.atan2(cx * ex + cy * ey + cz * ez, mx * nx + my * ny + mz * nz) + tilt
         # s = Rot(e, -th) (b - W)
         px, py, pz = bx - wx, by - wy, bz - wz
         c, sn = math.cos(-th), math.sin(-th)
@@ -139,13 +140,16 @@ class Wrist:
         return float((s - a) @ self.e_r)
 
 
-def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float) -> Intercept:
+def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float,
+                   tilt: float = 0.0) -> Intercept:
     """Where and when the palm meets the ball near ``C`` (``planner.catch.plan``, step 1),
-    searched around ``t_c`` (the throw's time at the catch point)."""
+    searched around ``t_c`` (the throw's time at the catch point); ``tilt``: the palm
+    normal turned this far (rad, about the flexion axis) from facing the ball (the soft
+    catch's choice, ``planner.catch.stopping``); 0 faces it."""
     t = np.linspace(max(0.0, t_c - 0.30), t_c + 0.15, _N_SEARCH)
     b = flight.position(t) - C
     v = flight.velocity(t)
-    _, _, hgt = wr.aligned(b, v, r)
+    _, _, hgt = wr.aligned(b, v, r, tilt)
     # first crossing of the palm plane (+ before, - after)
     down = np.flatnonzero((hgt[:-1] > 0) & (hgt[1:] <= 0))
     if down.size:
@@ -154,10 +158,10 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
         # h is smooth (~ the ball's height above the palm plane): a bracketed
         # secant converges in 2-4 steps to 1e-8 m
         ti, (th, s_vec, _) = bracketed_secant(
-            lambda tm: wr.aligned1(flight, C, tm, r), ta, tb, fa, fb)
+            lambda tm: wr.aligned1(flight, C, tm, r, tilt), ta, tb, fa, fb)
         sol = wr.dev_rail(s_vec, r)
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
-            return Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
+            return Intercept(ti, th, sol[0], sol[1], abs(tilt), True, None)
     return _position_only(wr, flight, C, r, t)
 
 
