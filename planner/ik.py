@@ -336,20 +336,6 @@ class HandIK:
         point = np.asarray(point_m, dtype=float)
         nrm = np.asarray(normal, dtype=float)
         nrm = nrm / np.linalg.norm(nrm)
-        posture = q_start if posture is None else posture
-        self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
-        self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
-        # the arm (rail, wrist) is pulled towards ``posture``'s, not held where it is
-        self.arm_task.set_joints({n: float(posture[self.hand.index[n]]) for n in self._arm})
-        self.set_q(q_start)
-        for f in list(self._tasks):
-            self.solver.remove_task(self._tasks.pop(f))
-        pos = self.solver.add_position_task("palm_center", point - offset_m * nrm)
-        pos.configure("palm_position", "soft", 1e3)
-        ax = self.solver.add_axisalign_task("palm_center", np.array([0.0, 0.0, 1.0]), nrm)
-        ax.configure("palm_normal", "soft", float(normal_weight))
-        for n in locked:
-            self.solver.mask_dof(n)
 
         def errors() -> tuple[float, float]:
             T = self.robot.get_T_world_frame("palm_center")
@@ -358,7 +344,25 @@ class HandIK:
             a = float(np.arccos(np.clip(z @ nrm, -1.0, 1.0)))
             return e, a
 
+        self.set_q(q_start)
         err, ang = errors()
+        if err <= tol_m and ang <= tol_rad:  # q_start meets the task (a warm start usually
+            # does: the catch's closed form): no iteration, so no task to set up
+            q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
+            return IKResult(q, True, 0, err, float(np.inf))
+        posture = q_start if posture is None else posture
+        self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
+        self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
+        # the arm (rail, wrist) is pulled towards ``posture``'s, not held where it is
+        self.arm_task.set_joints({n: float(posture[self.hand.index[n]]) for n in self._arm})
+        for f in list(self._tasks):
+            self.solver.remove_task(self._tasks.pop(f))
+        pos = self.solver.add_position_task("palm_center", point - offset_m * nrm)
+        pos.configure("palm_position", "soft", 1e3)
+        ax = self.solver.add_axisalign_task("palm_center", np.array([0.0, 0.0, 1.0]), nrm)
+        ax.configure("palm_normal", "soft", float(normal_weight))
+        for n in locked:
+            self.solver.mask_dof(n)
         it = 0
         try:
             for it in range(1, max_iter + 1):

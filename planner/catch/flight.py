@@ -75,6 +75,7 @@ MAX_TIME (vacuum): an observation farther off is no ball of a throw, m."""
 _MAX_STEP = 0.01  # s, coarsest RK4 step of a drag table
 _STEP_SCALE = 0.005  # step <= _STEP_SCALE / (k * speed scale)
 _SHOOT_TOL = 1e-9  # m, height miss accepted by the shooting
+_HALF_GZ = 0.5 * -G  # z of 0.5 * GRAVITY
 _FD_STEP = 1e-6  # m and m/s, central finite-difference step on [p0, v0]
 
 
@@ -260,6 +261,7 @@ class _Table:
         self.fwd = ([0.0], [0.0], [u0], [w0])
         self.bwd = ([0.0], [0.0], [u0], [w0])
         self._arrays: tuple | None = None
+        self._lists: tuple | None = None
 
     def _grow(self, lists: tuple, h: float, n: int) -> None:
         n0 = len(lists[0])
@@ -273,7 +275,7 @@ class _Table:
                 f"the drag flight cannot be integrated to t = {t_end:.3g} s (its speed "
                 "diverges going back in time); ask for later times"
             )
-        self._arrays = None
+        self._arrays = self._lists = None
 
     def ensure(self, t_lo: float, t_hi: float) -> None:
         """Integrate until the nodes bracket [t_lo, t_hi]."""
@@ -282,7 +284,7 @@ class _Table:
         if need > 0:
             self._grow(self.fwd, h, max(need, len(self.fwd[0]) // 2))
         need = math.ceil(-t_lo / h) + 1 - (len(self.bwd[0]) - 1)
-        if need > 0:
+        if need > 0 and t_lo < 0.0:  # (t >= 0 is looked up on the forward nodes)
             self._grow(self.bwd, -h, max(need, len(self.bwd[0]) // 2))
 
     def arrays(self) -> tuple:
@@ -297,6 +299,21 @@ class _Table:
             AW = -G - self.k * sp * W
             self._arrays = (-(len(self.bwd[0]) - 1), S, Z, U, W, AS, AW)
         return self._arrays
+
+    def lists(self) -> tuple:
+        """``arrays`` as Python lists (the same numbers), for one time at a time."""
+        if self._lists is None:
+            i_lo, *cols = self.arrays()
+            self._lists = (i_lo, *(c.tolist() for c in cols))
+        return self._lists
+
+    def node1(self, t: float) -> tuple:
+        """``Flight._lookup`` for one time: (j, th, lists) with plain floats."""
+        self.ensure(t, t)
+        lists = self.lists()
+        q = t / self.h - lists[0]
+        j = min(max(math.floor(q), 0), len(lists[1]) - 2)
+        return j, q - j, lists
 
 
 def _hermite_np(y0, y1, d0, d1, h, th):
@@ -335,6 +352,11 @@ class Flight:
         if k < 0:
             raise InputError(f"drag_per_m must be >= 0, got {k}")
         object.__setattr__(self, "drag_per_m", k)
+        object.__setattr__(self, "_p0_t", tuple(self.p0.tolist()))
+        object.__setattr__(self, "_v0_t", tuple(self.v0.tolist()))
+        vx, vy = self._v0_t[0], self._v0_t[1]
+        u = math.hypot(vx, vy)
+        object.__setattr__(self, "_dir", (vx / u, vy / u) if u > 0 else (1.0, 0.0))
         if k == 0.0:
             object.__setattr__(self, "step_s", None)
             return
@@ -348,13 +370,6 @@ class Flight:
                 raise InputError(f"step_s must be > 0, got {h}")
         object.__setattr__(self, "step_s", h)
         object.__setattr__(self, "_table", _Table(u0, vz, k, h))
-
-    # -- geometry of the planar solution
-    @property
-    def _dir(self) -> tuple[float, float]:
-        vx, vy = float(self.v0[0]), float(self.v0[1])
-        u = math.hypot(vx, vy)
-        return (vx / u, vy / u) if u > 0 else (1.0, 0.0)
 
     @property
     def speed(self) -> float:
@@ -383,8 +398,52 @@ class Flight:
         th = q - j
         return j, th, tab.h, (S, Z, U, W, AS, AW)
 
+    def integrate_to(self, t_s: float) -> None:
+        """A drag flight's table made to cover [0, ``t_s``] in one run (a look-up there then
+        integrates nothing; growing on demand may integrate up to half again as far)."""
+        if self._table is not None:
+            self._table.ensure(0.0, min(float(t_s), MAX_TIME))
+
+    def _time1(self, t: float) -> float:
+        """``_times`` for one time (a float): the same checks without numpy."""
+        if not math.isfinite(t):
+            raise InputError("t must be finite")
+        if self._table is not None and abs(t) > MAX_TIME:
+            raise InputError(f"t must be within +-{MAX_TIME:g} s for a drag flight")
+        return float(t)
+
+    def position1(self, t: float) -> tuple[float, float, float]:
+        """``position`` at one time as three floats (the same arithmetic, no arrays: the
+        live re-plan evaluates the flight at one time at a time, a few us each)."""
+        t = self._time1(t)
+        px, py, pz = self._p0_t
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ * t * t
+        j, th, (_, S, Z, U, W, _, _) = self._table.node1(t)
+        h = self._table.h
+        s = _hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        ex, ey = self._dir
+        return px + ex * s, py + ey * s, pz + z
+
+    def velocity1(self, t: float) -> tuple[float, float, float]:
+        """``velocity`` at one time as three floats."""
+        t = self._time1(t)
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return vx, vy, vz - G * t
+        j, th, (_, _, _, U, W, AS, AW) = self._table.node1(t)
+        h = self._table.h
+        u = _hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = _hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        ex, ey = self._dir
+        return ex * u, ey * u, w
+
     def position(self, t: Any) -> np.ndarray:
         """Ball centre at time(s) t, shape t.shape + (3,)."""
+        if isinstance(t, float):
+            return np.array(self.position1(t))
         ta = self._times(t)
         if self._table is None:
             tt = ta[..., None]
@@ -397,6 +456,8 @@ class Flight:
 
     def velocity(self, t: Any) -> np.ndarray:
         """Ball velocity at time(s) t, shape t.shape + (3,)."""
+        if isinstance(t, float):
+            return np.array(self.velocity1(t))
         ta = self._times(t)
         if self._table is None:
             return self.v0 + GRAVITY * ta[..., None]

@@ -90,8 +90,9 @@ class Wrist:
     def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float
                   ) -> tuple[float, np.ndarray, float]:
         """``_aligned`` for one time (plain float arithmetic: no numpy call overhead)."""
-        bx, by, bz = (float(x) for x in flight.position(t) - C)
-        vx, vy, vz = (float(x) for x in flight.velocity(t))
+        px, py, pz = flight.position1(t)
+        bx, by, bz = px - float(C[0]), py - float(C[1]), pz - float(C[2])
+        vx, vy, vz = flight.velocity1(t)
         ex, ey, ez = self._e_t
         nx, ny, nz = self._n0_t
         wx, wy, wz = self._W_t
@@ -187,11 +188,14 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
 def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, tb: float,
               fa: float, fb: float) -> float:
     """Time in [ta, tb] at which the ball is ``rho`` from the flexion axis (secant)."""
-    e = wr.e_f
+    ex, ey, ez = wr._e_t
+    ox, oy, oz = (float(c + w) for c, w in zip(C, wr.W))
 
     def f(t: float) -> tuple[float]:
-        w = flight.position(t) - C - wr.W
-        return (float(np.linalg.norm(w - (w @ e) * e)) - rho,)
+        px, py, pz = flight.position1(t)
+        wx, wy, wz = px - ox, py - oy, pz - oz
+        d = wx * ex + wy * ey + wz * ez
+        return (math.sqrt((wx - d * ex) ** 2 + (wy - d * ey) ** 2 + (wz - d * ez) ** 2) - rho,)
 
     return bracketed_secant(f, ta, tb, fa, fb)[0]
 

@@ -55,6 +55,12 @@ MIN_OBS_DRAG = 6
 CHORD_TOL_M = 1e-7  # drag: iterate until the fit moves the ball by less than this
 # (0.1 um at the last observation: 20 000 times below a 2 mm camera noise)
 MAX_CHORD_STEPS = 4  # (contraction ~ k|v|t ~ 0.04: one step gains ~1.4 digits)
+LIVE_STEP_FACTOR = 4.0  # the fit's drag tables take 4x the planner's RK4 step
+# (``flight._step_for``): the error goes as h^4, 256 x the planner's 1.5e-10 m, i.e.
+# 4e-8 m in position and 1.5e-7 m/s in velocity over 1.5 s against a 1 ms-step
+# reference for tennis-ball throws of 15-75 deg over 1-4 m (measured; tests/test_live.py
+# holds it below 1e-6 m), five orders below a 2 mm camera's noise; the table of a
+# re-fitted flight then costs a quarter of the integration
 
 
 class LiveFit:
@@ -153,7 +159,7 @@ class LiveFit:
         if self.k == 0.0:
             return Flight(theta[0], theta[1], self.ball, 0.0)
         if self._step_s is None:  # the table's step from the first fit's speed, then kept
-            self._step_s = _step_for(self.k, float(np.linalg.norm(theta[1])))
+            self._step_s = LIVE_STEP_FACTOR * _step_for(self.k, float(np.linalg.norm(theta[1])))
         return Flight(theta[0], theta[1], self.ball, self.k, step_s=self._step_s)
 
     def _chord(self, minv: np.ndarray, theta_vac: np.ndarray):

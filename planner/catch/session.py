@@ -174,6 +174,8 @@ class CatchSession:
     def _replan(self, flight: Flight, t_b: float, period: float) -> None:
         """Steps 2-3 of the module docstring for the newest ``flight``, acting from ``t_b``."""
         pl, h, r, cl = self.pl, self.pl.hand, self.ball.radius_m, self.closing
+        if self.t_i is not None:  # the drag table integrated once, as far as it is needed
+            flight.integrate_to(self.t_i + NEAR_S)
         if self.t_i is None:
             try:
                 t_c = float(flight.time_at_x(float(self.C[0])))
