@@ -35,11 +35,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from planner.errors import InfeasibleError, InputError, SolverError
+from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
 
 __all__ = [
     "BALLS",
@@ -76,6 +76,7 @@ _MAX_STEP = 0.01  # s, coarsest RK4 step of a drag table
 _STEP_SCALE = 0.005  # step <= _STEP_SCALE / (k * speed scale)
 _SHOOT_TOL = 1e-9  # m, height miss accepted by the shooting
 _HALF_GZ = 0.5 * -G  # z of 0.5 * GRAVITY
+_S_S_Z = np.array([0, 0, 1])  # (s, z) -> (s, s, z)
 _FD_STEP = 1e-6  # m and m/s, central finite-difference step on [p0, v0]
 
 
@@ -262,6 +263,7 @@ class _Table:
         self.bwd = ([0.0], [0.0], [u0], [w0])
         self._arrays: tuple | None = None
         self._lists: tuple | None = None
+        self._pairs: tuple | None = None
 
     def _grow(self, lists: tuple, h: float, n: int) -> None:
         n0 = len(lists[0])
@@ -275,7 +277,7 @@ class _Table:
                 f"the drag flight cannot be integrated to t = {t_end:.3g} s (its speed "
                 "diverges going back in time); ask for later times"
             )
-        self._arrays = self._lists = None
+        self._arrays = self._lists = self._pairs = None
 
     def ensure(self, t_lo: float, t_hi: float) -> None:
         """Integrate until the nodes bracket [t_lo, t_hi]."""
@@ -299,6 +301,15 @@ class _Table:
             AW = -G - self.k * sp * W
             self._arrays = (-(len(self.bwd[0]) - 1), S, Z, U, W, AS, AW)
         return self._arrays
+
+    def pairs(self) -> tuple:
+        """``arrays`` as (i_lo, [S Z], [U W], [AS AW]) (n, 2) each: s and z interpolated
+        together."""
+        if self._pairs is None:
+            i_lo, S, Z, U, W, AS, AW = self.arrays()
+            self._pairs = (i_lo, np.column_stack([S, Z]), np.column_stack([U, W]),
+                           np.column_stack([AS, AW]))
+        return self._pairs
 
     def lists(self) -> tuple:
         """``arrays`` as Python lists (the same numbers), for one time at a time."""
@@ -324,6 +335,20 @@ def _hermite_np(y0, y1, d0, d1, h, th):
 
 
 # --------------------------------------------------------------------------- flight
+
+
+class DragNodes(NamedTuple):
+    """A drag flight's RK4 table (``Flight.nodes``): its step, the array index of the node
+    at t = 0, per node s and z (along the launch direction and up, from p0) and their rates
+    u and w, and the launch direction's horizontal unit vector (ex, ey)."""
+
+    step_s: float
+    i0: int
+    s: np.ndarray
+    z: np.ndarray
+    u: np.ndarray
+    w: np.ndarray
+    direction: tuple[float, float]
 
 
 @dataclass(frozen=True, eq=False)
@@ -357,6 +382,7 @@ class Flight:
         vx, vy = self._v0_t[0], self._v0_t[1]
         u = math.hypot(vx, vy)
         object.__setattr__(self, "_dir", (vx / u, vy / u) if u > 0 else (1.0, 0.0))
+        object.__setattr__(self, "_dir3", np.array([*self._dir, 1.0]))
         if k == 0.0:
             object.__setattr__(self, "step_s", None)
             return
@@ -392,17 +418,26 @@ class Flight:
         assert tab is not None
         if ta.size:
             tab.ensure(float(ta.min()), float(ta.max()))
-        i_lo, S, Z, U, W, AS, AW = tab.arrays()
+        i_lo, P, D, A = tab.pairs()
         q = ta / tab.h - i_lo
-        j = np.clip(np.floor(q).astype(np.intp), 0, S.size - 2)
-        th = q - j
-        return j, th, tab.h, (S, Z, U, W, AS, AW)
+        j = np.minimum(np.maximum(np.floor(q).astype(np.intp), 0), len(P) - 2)
+        th = (q - j)[..., None]
+        return j, j + 1, th, tab.h, (P, D, A)
 
     def integrate_to(self, t_s: float) -> None:
         """A drag flight's table made to cover [0, ``t_s``] in one run (a look-up there then
         integrates nothing; growing on demand may integrate up to half again as far)."""
         if self._table is not None:
             self._table.ensure(0.0, min(float(t_s), MAX_TIME))
+
+    def nodes(self, t_hi: float) -> DragNodes:
+        """A drag flight's table, integrated to cover [0, ``t_hi``] (PlannerError for a
+        vacuum flight: it has none)."""
+        if self._table is None:
+            raise PlannerError("a vacuum flight has no drag table")
+        self._table.ensure(0.0, t_hi)
+        i_lo, S, Z, U, W, _, _ = self._table.arrays()
+        return DragNodes(self._table.h, -i_lo, S, Z, U, W, self._dir)
 
     def _time1(self, t: float) -> float:
         """``_times`` for one time (a float): the same checks without numpy."""
@@ -448,11 +483,9 @@ class Flight:
         if self._table is None:
             tt = ta[..., None]
             return self.p0 + self.v0 * tt + 0.5 * GRAVITY * tt * tt
-        j, th, h, (S, Z, U, W, _, _) = self._lookup(ta)
-        s = _hermite_np(S[j], S[j + 1], U[j], U[j + 1], h, th)
-        z = _hermite_np(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
-        ex, ey = self._dir
-        return self.p0 + np.stack([ex * s, ey * s, z], axis=-1)
+        j, j1, th, h, (P, D, _) = self._lookup(ta)
+        sz = _hermite_np(P[j], P[j1], D[j], D[j1], h, th)  # (s, z)
+        return self.p0 + sz[..., _S_S_Z] * self._dir3  # (ex s, ey s, z)
 
     def velocity(self, t: Any) -> np.ndarray:
         """Ball velocity at time(s) t, shape t.shape + (3,)."""
@@ -461,11 +494,9 @@ class Flight:
         ta = self._times(t)
         if self._table is None:
             return self.v0 + GRAVITY * ta[..., None]
-        j, th, h, (_, _, U, W, AS, AW) = self._lookup(ta)
-        u = _hermite_np(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
-        w = _hermite_np(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
-        ex, ey = self._dir
-        return np.stack([ex * u, ey * u, w], axis=-1)
+        j, j1, th, h, (_, D, A) = self._lookup(ta)
+        uw = _hermite_np(D[j], D[j1], A[j], A[j1], h, th)  # (u, w)
+        return uw[..., _S_S_Z] * self._dir3  # (ex u, ey u, w)
 
     def time_at_x(self, x: Any) -> Any:
         """Time t >= 0 at which the ball crosses the plane x = ``x`` (float, or array).

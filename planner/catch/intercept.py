@@ -213,10 +213,16 @@ def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
     lo, hi = wr.dev_lim
     best: Intercept | None = None
     closest = (np.inf, None)
+    ex, ey, ez = wr._e_t
+    er = tuple(float(x) for x in wr.e_r)
+    W = wr._W_t
+    Cx, Cy, Cz = (float(c) for c in C)
     for dev in devs if devs is not None else (lo, 0.5 * lo, 0.0, 0.5 * hi, hi):
-        a = rot1(wr.u_d, dev, wr.g0) + r * wr.n0
-        a_p = a - (a @ e) * e
-        rho = float(np.linalg.norm(a_p))
+        # 3-vectors as floats below (numpy's per-call cost dominates at this size)
+        ax, ay, az = (rot1(wr.u_d, dev, wr.g0) + r * wr.n0).tolist()
+        d = ax * ex + ay * ey + az * ez
+        apx, apy, apz = ax - d * ex, ay - d * ey, az - d * ez
+        rho = math.sqrt(apx * apx + apy * apy + apz * apz)
         f = dist - rho
         inward = np.flatnonzero((f[:-1] > 0) & (f[1:] <= 0))
         k_near = int(np.argmin(np.abs(f)))
@@ -227,16 +233,24 @@ def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
         k = int(inward[0])
         tk = _crossing(wr, flight, C, rho, float(t[k]), float(t[k + 1]), float(f[k]),
                        float(f[k + 1]))
-        bk = flight.position(tk) - C
-        vk = flight.velocity(tk)
-        wk = bk - wr.W
-        wk_p = wk - (wk @ e) * e
-        th = float(math.atan2(np.cross(a_p, wk_p) @ e, a_p @ wk_p))
+        px, py, pz = flight.position1(tk)
+        vx, vy, vz = flight.velocity1(tk)
+        wx, wy, wz = px - Cx - W[0], py - Cy - W[1], pz - Cz - W[2]
+        d = wx * ex + wy * ey + wz * ez
+        qx, qy, qz = wx - d * ex, wy - d * ey, wz - d * ez
+        # flexion turning a_p onto the ball's offset wk_p about e
+        th = math.atan2((apy * qz - apz * qy) * ex + (apz * qx - apx * qz) * ey
+                        + (apx * qy - apy * qx) * ez, apx * qx + apy * qy + apz * qz)
         if not wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             continue
-        n = rot1(e, th, wr.n0)
-        mis = float(math.acos(np.clip(-(vk @ n) / np.linalg.norm(vk), -1.0, 1.0)))
-        rail = float((wk - rot1(e, th, a)) @ wr.e_r) if wr.i_rail is not None else 0.0
+        nx, ny, nz = rot1(e, th, wr.n0).tolist()
+        mis = math.acos(min(1.0, max(-1.0, -(vx * nx + vy * ny + vz * nz)
+                                     / math.sqrt(vx * vx + vy * vy + vz * vz))))
+        if wr.i_rail is not None:
+            bx, by, bz = rot1(e, th, np.array([ax, ay, az])).tolist()
+            rail = (wx - bx) * er[0] + (wy - by) * er[1] + (wz - bz) * er[2]
+        else:
+            rail = 0.0
         if not (wr.rail_lim[0] <= rail <= wr.rail_lim[1]):
             continue
         if mis > math.radians(MAX_MISALIGN_DEG):

@@ -45,6 +45,7 @@ from planner.catch.flight import (
     _step_for,
 )
 from planner.catch.observe import FitResult
+from planner.catch.tablesums import IntervalSums
 from planner.errors import InputError
 
 # ``fit_observations``' minimum number of observations: 3 positions fix the 6 numbers of
@@ -63,6 +64,9 @@ LIVE_STEP_FACTOR = 4.0  # the fit's drag tables take 4x the planner's RK4 step
 # re-fitted flight then costs a quarter of the integration
 
 
+_AX = np.arange(3)
+
+
 class LiveFit:
     """Observations so far and the flight fitted to them (``fit``), updated by ``add``."""
 
@@ -76,6 +80,9 @@ class LiveFit:
         self._s = np.zeros(3)  # N, sum t, sum t^2
         self._sy = np.zeros((2, 3))  # sum y, sum t y
         self._syy = np.zeros(3)  # sum y^2 (per axis)
+        self._st3 = 0.0  # sum t^3
+        self._spp = np.zeros(3)  # sum p^2 (per axis)
+        self._table_sums: IntervalSums | None = None  # drag: from the first fit on
         self._theta: np.ndarray | None = None
         self._step_s: float | None = None
         self.flight: Flight | None = None
@@ -115,9 +122,13 @@ class LiveFit:
         self.n += 1
         y = p - 0.5 * GRAVITY * (t_s * t_s)
         self._s += (1.0, t_s, t_s * t_s)
+        self._st3 += t_s * t_s * t_s
         self._sy[0] += y
         self._sy[1] += t_s * y
         self._syy += y * y
+        self._spp += p * p
+        if self._table_sums is not None:
+            self._table_sums.add(t_s, p)
         if self.n < self.min_obs:
             return None
         self.result = self._solve()
@@ -136,8 +147,7 @@ class LiveFit:
         n = self.n
         theta = minv @ self._sy  # (2, 3): p0, v0
         if self.k > 0.0:
-            theta, res = self._chord(minv, theta)
-            rss = np.sum(res * res, axis=0)
+            theta, rss = self._chord(minv, theta)
         else:
             rss = np.maximum(self._syy - np.sum(theta * self._sy, axis=0), 0.0)
         speed = float(np.linalg.norm(theta[1]))
@@ -146,10 +156,11 @@ class LiveFit:
                              f"any throw (at most {MAX_LAUNCH_SPEED:g} m/s)")
         self._theta = theta
         sigma = np.sqrt(rss / max(n - 2, 1))
-        cov = np.zeros((6, 6))
-        for ax in range(3):
-            idx = [ax, 3 + ax]
-            cov[np.ix_(idx, idx)] = sigma[ax] ** 2 * minv
+        cov = np.zeros((6, 6))  # per axis a: sigma_a^2 minv at (a, a), (a, 3 + a),
+        # (3 + a, a), (3 + a, 3 + a); zero across axes
+        s2 = sigma * sigma
+        for (r, c), m in np.ndenumerate(minv):
+            cov[_AX + 3 * r, _AX + 3 * c] = s2 * m
         cov.setflags(write=False)
         sigma.setflags(write=False)
         flight = self._flight(theta)
@@ -164,24 +175,51 @@ class LiveFit:
 
     def _chord(self, minv: np.ndarray, theta_vac: np.ndarray):
         """The drag fit: (p0, v0) = LSQ_vacuum(y - d), d the drag displacement of the
-        current estimate. The first fit iterates from the vacuum fit until the ball moves by
-        less than ``CHORD_TOL_M``; later ones take one step from the previous fit, on its
-        flight (already integrated). Residuals against the model of the last step."""
-        t, p = self.times, self.positions
+        current estimate at the observations. The first fit iterates from the vacuum fit
+        until the ball moves by less than ``CHORD_TOL_M``; later ones take one step from the
+        previous fit, on its flight (already integrated). Every sum over the observations
+        of the flight's table comes from ``IntervalSums`` (module docstring). Returns the
+        new (p0, v0) and the residual sum of squares per axis against the model of the last
+        step."""
         first = self.flight is None or self._theta is None
         theta = theta_vac if first else self._theta
-        tt = (t * t)[:, None]
-        d = np.zeros_like(p)
+        if self._table_sums is None:
+            self._flight(theta_vac)  # (fixes the table's step)
+            self._table_sums = IntervalSums(self._step_s)
+            for t, p in zip(self.times.tolist(), self.positions):
+                self._table_sums.add(t, p)
+        t_last = float(self._t[self.n - 1])
         for i in range(MAX_CHORD_STEPS if first else 1):
             flight = self.flight if not first and i == 0 else self._flight(theta)
-            d = flight.position(t) - (theta[0] + np.outer(t, theta[1]) + 0.5 * GRAVITY * tt)
-            new = minv @ (self._sy - np.stack([d.sum(axis=0), t @ d]))
-            moved = float(np.max(np.abs((new[0] - theta[0]) + (new[1] - theta[1]) * t[-1])))
+            v_old = theta[1]
+            m, m_t, pm, mm = self._table_moments(flight, t_last)
+            # sum of d and t d: d = m - v0 t - g t^2 / 2 (p0 cancels)
+            n, s1, s2 = self._s
+            d_sum = m - v_old * s1 - 0.5 * GRAVITY * s2
+            td_sum = m_t - v_old * s2 - 0.5 * GRAVITY * self._st3
+            new = minv @ (self._sy - np.stack([d_sum, td_sum]))
+            moved = float(np.max(np.abs((new[0] - theta[0]) + (new[1] - theta[1]) * t_last)))
             theta = new
             if moved < CHORD_TOL_M:
                 break
-        res = p - (theta[0] + np.outer(t, theta[1]) + 0.5 * GRAVITY * tt + d)
-        return theta, res
+        # residual p - (p0 + v0 t + g t^2 / 2 + d) = p - p0 - (v0 - v_old) t - m, squared
+        n, s1, s2 = self._s
+        c, e = theta[0], theta[1] - v_old
+        sp = self._sy[0] + 0.5 * GRAVITY * s2
+        stp = self._sy[1] + 0.5 * GRAVITY * self._st3
+        rss = (self._spp - 2 * c * sp - 2 * e * stp + c * c * n + 2 * c * e * s1 + e * e * s2
+               - 2 * (pm - c * m - e * m_t) + mm)
+        return theta, np.maximum(rss, 0.0)
+
+    def _table_moments(self, flight: Flight, t_last: float):
+        """The drag part m = (ex s, ey s, z) of ``flight`` (its position less p0) summed
+        over the observations, per axis: sum m, sum t m, sum p m, sum m^2."""
+        nodes = flight.nodes(t_last)
+        S = self._table_sums.sums(nodes)
+        ex, ey = nodes.direction
+        return (np.array([ex * S.s, ey * S.s, S.z]), np.array([ex * S.ts, ey * S.ts, S.tz]),
+                np.array([ex * S.pxs, ey * S.pys, S.pzz]),
+                np.array([ex * ex * S.ss, ey * ey * S.ss, S.zz]))
 
     def sigma_at(self, t_s: float) -> np.ndarray:
         """1-sigma of the fitted ball's position at ``t_s`` per axis (m), from the

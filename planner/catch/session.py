@@ -92,6 +92,8 @@ class CatchSession:
                 raise InputError(f"cannot write {out_path}: no such directory {parent}")
         self.out_path = out_path
         self.latencies_s: list[float] = []  # per observation: to its rows written
+        self.cpu_s: list[float] = []  # ... and the CPU time of this thread in it (the
+        # latency less the time the machine ran other work)
         self.fit = LiveFit(self.ball, self.ball.drag_per_m if drag else 0.0)
         h, j = self.pl.hand, self.pl.joints
         q_open = open_from(h, j, self.pl.q_zero, self.closing.q_closed)
@@ -109,6 +111,7 @@ class CatchSession:
         self.reason = ""
         self.plan: CatchPlan | None = None
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
+        self.rows_cpu_s = math.nan  # thread_time then
 
     # ------------------------------------------------------------ observations
     @property
@@ -132,9 +135,10 @@ class CatchSession:
         InputError (one line) on an observation that cannot follow the ones before."""
         if self.done:
             return np.empty((0, 0))
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         rows = self._observe(t_s, xyz)
         self.latencies_s.append((self.rows_out_s if len(rows) else time.perf_counter()) - t0)
+        self.cpu_s.append((self.rows_cpu_s if len(rows) else time.thread_time()) - c0)
         return rows
 
     def _observe(self, t_s: Any, xyz: Any) -> np.ndarray:
@@ -244,13 +248,10 @@ class CatchSession:
         if n <= self.next_row:
             return np.empty((0, 0))
         t = np.arange(self.next_row, n) * self.dt
-        Q = self.motion.rows(t)
-        early = t <= t_b
-        if old_seg is not None and early.any():
-            Q[early] = self.motion.rows(t[early], old_seg)
+        Q = self.motion.rows(t, old_seg, t_b)
         guard_rows(self.pl.hand, Q, self._q[-1][-1] if self._q else None, self.dt)
         out = self.writer.write_rows(t, Q, self.pl.hand.motor_angles(Q))
-        self.rows_out_s = time.perf_counter()
+        self.rows_out_s, self.rows_cpu_s = time.perf_counter(), time.thread_time()
         self._t.append(t)
         self._q.append(Q)
         self.next_row = n
