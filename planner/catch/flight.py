@@ -316,12 +316,16 @@ class _Table:
         if self._lists is None:
             i_lo, *cols = self.arrays()
             self._lists = (i_lo, *(c.tolist() for c in cols))
+            # the times ``ensure`` leaves as they are (each bound a node short of the ends)
+            self._covered = ((i_lo + 1) * self.h, (len(cols[0]) + i_lo - 2) * self.h)
         return self._lists
 
     def node1(self, t: float) -> tuple:
         """``Flight._lookup`` for one time: (j, th, lists) with plain floats."""
-        self.ensure(t, t)
-        lists = self.lists()
+        lists = self._lists
+        if lists is None or not self._covered[0] <= t <= self._covered[1]:
+            self.ensure(t, t)
+            lists = self.lists()
         q = t / self.h - lists[0]
         j = min(max(math.floor(q), 0), len(lists[1]) - 2)
         return j, q - j, lists
@@ -461,6 +465,22 @@ class Flight:
         z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
         ex, ey = self._dir
         return px + ex * s, py + ey * s, pz + z
+
+    def state1(self, t: float) -> tuple[float, float, float, float, float, float]:
+        """``position1`` and ``velocity1`` at one time, from one look-up."""
+        t = self._time1(t)
+        px, py, pz = self._p0_t
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return (px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ * t * t, vx, vy, vz - G * t)
+        j, th, (_, S, Z, U, W, AS, AW) = self._table.node1(t)
+        h = self._table.h
+        s = _hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        u = _hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = _hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        ex, ey = self._dir
+        return px + ex * s, py + ey * s, pz + z, ex * u, ey * u, w
 
     def velocity1(self, t: float) -> tuple[float, float, float]:
         """``velocity`` at one time as three floats."""

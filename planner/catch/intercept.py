@@ -90,9 +90,8 @@ class Wrist:
     def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float
                   ) -> tuple[float, np.ndarray, float]:
         """``_aligned`` for one time (plain float arithmetic: no numpy call overhead)."""
-        px, py, pz = flight.position1(t)
+        px, py, pz, vx, vy, vz = flight.state1(t)
         bx, by, bz = px - float(C[0]), py - float(C[1]), pz - float(C[2])
-        vx, vy, vz = flight.velocity1(t)
         ex, ey, ez = self._e_t
         nx, ny, nz = self._n0_t
         wx, wy, wz = self._W_t
@@ -276,10 +275,10 @@ def closest_time(flight: Flight, C: np.ndarray) -> float:
 
 def refine_time(flight: Flight, C: np.ndarray, P: np.ndarray, t: float) -> float:
     """The time near ``t`` at which the ball passes closest to ``P`` (Newton steps)."""
+    ox, oy, oz = (float(p + c) for p, c in zip(P, C))  # P in the catch frame
     for _ in range(3):
-        b = flight.position(t) - C
-        v = flight.velocity(t)
-        step = float((P - b) @ v / (v @ v))
+        px, py, pz, vx, vy, vz = flight.state1(float(t))
+        step = ((ox - px) * vx + (oy - py) * vy + (oz - pz) * vz) / (vx * vx + vy * vy + vz * vz)
         t += step
         if abs(step) < 1e-9:
             break

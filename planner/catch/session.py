@@ -206,7 +206,6 @@ class CatchSession:
                                   m.fingers_open_s, stop_t, r)
                 m.set_closing(max(s_c, t_b), cl.duration_s)
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
-        self.uncertainty = self._sigma(flight, pose.t_i)
 
     def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
         """The intercept's 1-sigma from the fit (``LiveFit.sigma_at``): across the path at
@@ -272,6 +271,8 @@ class CatchSession:
                           cl.duration_s)
         t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
+        self.uncertainty = self._sigma(self.flight, pose.t_i)  # (of the last estimate only:
+        # what the plan reports)
         self.plan = self._judge(t_static)
         if self.plan.feasible:
             self.outcome = HELD
