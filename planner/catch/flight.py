@@ -343,15 +343,13 @@ def _hermite_np(y0, y1, d0, d1, h, th):
 
 class DragNodes(NamedTuple):
     """A drag flight's RK4 table (``Flight.nodes``): its step, the array index of the node
-    at t = 0, per node s and z (along the launch direction and up, from p0) and their rates
-    u and w, and the launch direction's horizontal unit vector (ex, ey)."""
+    at t = 0, per node (s, z) (along the launch direction and up, from p0) and their rates
+    (u, w), (n, 2) each, and the launch direction's horizontal unit vector (ex, ey)."""
 
     step_s: float
     i0: int
-    s: np.ndarray
-    z: np.ndarray
-    u: np.ndarray
-    w: np.ndarray
+    sz: np.ndarray
+    uw: np.ndarray
     direction: tuple[float, float]
 
 
@@ -440,8 +438,8 @@ class Flight:
         if self._table is None:
             raise PlannerError("a vacuum flight has no drag table")
         self._table.ensure(0.0, t_hi)
-        i_lo, S, Z, U, W, _, _ = self._table.arrays()
-        return DragNodes(self._table.h, -i_lo, S, Z, U, W, self._dir)
+        i_lo, P, D, _ = self._table.pairs()
+        return DragNodes(self._table.h, -i_lo, P, D, self._dir)
 
     def _time1(self, t: float) -> float:
         """``_times`` for one time (a float): the same checks without numpy."""

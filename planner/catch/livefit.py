@@ -135,6 +135,15 @@ class LiveFit:
         self.flight = self.result.flight
         return self.result
 
+    def vacuum_flight(self) -> Flight | None:
+        """The vacuum least squares of the observations so far (O(1), from the running
+        sums), or None before ``MIN_OBS_VACUUM`` of them: a first look at the flight while a
+        drag fit still waits for its ``MIN_OBS_DRAG``."""
+        if self.n < MIN_OBS_VACUUM:
+            return None
+        theta = self._minv() @ self._sy
+        return Flight(theta[0], theta[1], self.ball, 0.0)
+
     def _minv(self) -> np.ndarray:
         n, s1, s2 = self._s
         det = n * s2 - s1 * s1

@@ -17,7 +17,10 @@ After each observation (``observe``):
    first rows are written from t = 0 with the first fit).
 2. Intercept: ``intercept.find_intercept_near`` from the previous intercept time
    (``NEAR_S``), the pose confirmed by ``CatchPlanner.meet`` (placo, warm: the previous
-   pose is the closed form's).
+   pose is the closed form's). The first fit's starts from the intercept of the vacuum
+   fit of the observations before it (searched along the whole path at the observation
+   before the first drag fit, which plans nothing else), so that no observation carries
+   both the whole search and the first plan.
 3. Motion (``livemotion.LiveMotion``): until the hand moves, it waits while waiting for
    the next observation would not make it late (the open pose reached before the closing
    move must start, ``closing.close_start``), then starts the planner's move to the open
@@ -52,7 +55,12 @@ from planner.catch import grasp as gq
 from planner.catch.arm import open_from
 from planner.catch.closing import close_start
 from planner.catch.flight import Ball, Flight, _finite, get_ball
-from planner.catch.intercept import closest_time, find_intercept, find_intercept_near
+from planner.catch.intercept import (
+    Intercept,
+    closest_time,
+    find_intercept,
+    find_intercept_near,
+)
 from planner.catch.livefit import LiveFit
 from planner.catch.livemotion import LiveMotion
 from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
@@ -104,6 +112,8 @@ class CatchSession:
         self.next_row = 0
         self.pose = self.flight = None
         self.t_i: float | None = None
+        self._prior: Intercept | None = None  # the vacuum fit's intercept, before the first
+        # (drag) fit: that fit's search starts from it
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
         self.kept_targets = 0  # re-aims refused by the limits (the older target kept)
@@ -147,6 +157,8 @@ class CatchSession:
         period = t - self.fit.times[-1] if self.fit.n else 0.0
         fit = self.fit.add(t, p)
         if fit is None:
+            if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
+                self._prior = self._search(self.fit.vacuum_flight())
             return np.empty((0, 0))
         t_react = t + SIGNAL_S + PLAN_BUDGET_S
         t_b = max(self.written_to_s, t_react)
@@ -180,14 +192,13 @@ class CatchSession:
         pl, h, r, cl = self.pl, self.pl.hand, self.ball.radius_m, self.closing
         if self.t_i is not None:  # the drag table integrated once, as far as it is needed
             flight.integrate_to(self.t_i + NEAR_S)
-        if self.t_i is None:
-            try:
-                t_c = float(flight.time_at_x(float(self.C[0])))
-            except InfeasibleError:
-                t_c = closest_time(flight, self.C)
-            ic = find_intercept(pl.wrist, flight, self.C, r, t_c)
-        else:
+        if self.t_i is not None:
             ic = find_intercept_near(pl.wrist, flight, self.C, r, self.pose.ic, self.t_i, NEAR_S)
+        elif self._prior is not None:  # from the vacuum fit of the observations before
+            ic = find_intercept_near(pl.wrist, flight, self.C, r, self._prior,
+                                     self._prior.t, NEAR_S)
+        else:
+            ic = self._search(flight)
         pose = pl.meet(flight, self.C, r, cl, ic)
         stop_t = gq.stop_time(pose.v_i)
         m = self.motion
@@ -206,6 +217,17 @@ class CatchSession:
                                   m.fingers_open_s, stop_t, r)
                 m.set_closing(max(s_c, t_b), cl.duration_s)
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
+
+    def _search(self, flight: Flight | None) -> Intercept | None:
+        """The intercept searched along the whole of ``flight`` near the catch point (the
+        first plan's; ``find_intercept_near`` warm-starts every later one)."""
+        if flight is None:
+            return None
+        try:
+            t_c = float(flight.time_at_x(float(self.C[0])))
+        except InfeasibleError:
+            t_c = closest_time(flight, self.C)
+        return find_intercept(self.pl.wrist, flight, self.C, self.ball.radius_m, t_c)
 
     def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
         """The intercept's 1-sigma from the fit (``LiveFit.sigma_at``): across the path at

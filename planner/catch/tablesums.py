@@ -82,15 +82,12 @@ class IntervalSums:
     def sums(self, nodes: DragNodes) -> TableSums:
         """The sums for the table ``nodes`` (its step this one's, covering the last
         observation's interval)."""
-        k = self.n_int
-        idx = np.arange(k) + nodes.i0
-        XS = np.stack([nodes.s[idx], nodes.s[idx + 1], nodes.u[idx], nodes.u[idx + 1]], axis=1)
-        XZ = np.stack([nodes.z[idx], nodes.z[idx + 1], nodes.w[idx], nodes.w[idx + 1]], axis=1)
+        k, i0 = self.n_int, nodes.i0
+        P, D = nodes.sz[i0:i0 + k + 1], nodes.uw[i0:i0 + k + 1]
+        X = np.stack([P[:-1], P[1:], D[:-1], D[1:]], axis=-1)  # (k, (s z), 4): b's nodes
         B, tB, pB, M = self.B[:k], self.tB[:k], self.pB[:k], self.M[:k]
-        ps = np.einsum("nai,ni->a", pB, XS)
-        return TableSums(
-            s=float(np.vdot(B, XS)), ts=float(np.vdot(tB, XS)), pxs=float(ps[0]),
-            pys=float(ps[1]), ss=float(np.einsum("ni,nij,nj->", XS, M, XS)),
-            z=float(np.vdot(B, XZ)), tz=float(np.vdot(tB, XZ)),
-            pzz=float(np.einsum("ni,ni->", pB[:, 2], XZ)),
-            zz=float(np.einsum("ni,nij,nj->", XZ, M, XZ)))
+        (s, z), (ts, tz) = np.einsum("ni,nci->c", B, X), np.einsum("ni,nci->c", tB, X)
+        pm = np.einsum("nai,nci->ac", pB, X)  # (p_x, p_y, p_z) x (s, z)
+        ss, zz = np.einsum("nci,nij,ncj->c", X, M, X)
+        return TableSums(float(s), float(ts), float(pm[0, 0]), float(pm[1, 0]), float(ss),
+                         float(z), float(tz), float(pm[2, 1]), float(zz))
