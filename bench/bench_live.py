@@ -76,7 +76,7 @@ def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng):
 
 def run_config(pl, ball, throws, rate, noise, seed) -> dict:
     """Every throw at one rate and noise level (its noise from its own seed)."""
-    rng = np.random.default_rng([seed, int(rate), int(round(noise * 1e4))])
+    rng = np.random.default_rng([seed, int(rate), round(noise * 1e4)])
     ok, lat, cpu, fails = [], [], [], {}
     for th in throws:
         caught, ls, cs, outcome, problems = run_throw(pl, ball, *th, noise, rate, rng)

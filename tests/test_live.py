@@ -127,7 +127,7 @@ def test_session_catches_the_true_ball(live_run):
 def test_session_first_plan_starts_from_the_vacuum_fit(live_run):
     """The observation before the first drag fit searches the vacuum fit's whole path; the
     first fit's search, warm-started from it, finds what the whole search finds."""
-    _, s, per_obs = live_run
+    _, s, _ = live_run
     lf = LiveFit(BALL, BALL.drag_per_m)
     for t, p in zip(*_observations()[1:]):
         if lf.add(t, p) is not None:

@@ -25,11 +25,10 @@ def test_interval_sums_are_the_sums_over_the_observations(step_s):
                step_s=step_s)
     got = sums.sums(f.nodes(float(ts[-1])))
     m = f.position(ts) - f.p0  # (ex s, ey s, z)
-    ex, ey = f.nodes(float(ts[-1])).direction
-    s = m[:, 0] / ex
+    s = m[:, 0] / f.nodes(float(ts[-1])).direction[0]
     z = m[:, 2]
-    want = dict(s=s.sum(), ts=ts @ s, pxs=ps[:, 0] @ s, pys=ps[:, 1] @ s, ss=s @ s,
-                z=z.sum(), tz=ts @ z, pzz=ps[:, 2] @ z, zz=z @ z)
+    want = {"s": s.sum(), "ts": ts @ s, "pxs": ps[:, 0] @ s, "pys": ps[:, 1] @ s,
+            "ss": s @ s, "z": z.sum(), "tz": ts @ z, "pzz": ps[:, 2] @ z, "zz": z @ z}
     for k, v in want.items():
         assert getattr(got, k) == pytest.approx(v, rel=1e-12, abs=1e-12), k
 
