@@ -35,11 +35,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from planner.errors import InfeasibleError, InputError, SolverError
+from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
 
 __all__ = [
     "BALLS",
@@ -75,6 +75,8 @@ MAX_TIME (vacuum): an observation farther off is no ball of a throw, m."""
 _MAX_STEP = 0.01  # s, coarsest RK4 step of a drag table
 _STEP_SCALE = 0.005  # step <= _STEP_SCALE / (k * speed scale)
 _SHOOT_TOL = 1e-9  # m, height miss accepted by the shooting
+_HALF_GZ = 0.5 * -G  # z of 0.5 * GRAVITY
+_S_S_Z = np.array([0, 0, 1])  # (s, z) -> (s, s, z)
 _FD_STEP = 1e-6  # m and m/s, central finite-difference step on [p0, v0]
 
 
@@ -260,6 +262,8 @@ class _Table:
         self.fwd = ([0.0], [0.0], [u0], [w0])
         self.bwd = ([0.0], [0.0], [u0], [w0])
         self._arrays: tuple | None = None
+        self._lists: tuple | None = None
+        self._pairs: tuple | None = None
 
     def _grow(self, lists: tuple, h: float, n: int) -> None:
         n0 = len(lists[0])
@@ -273,7 +277,7 @@ class _Table:
                 f"the drag flight cannot be integrated to t = {t_end:.3g} s (its speed "
                 "diverges going back in time); ask for later times"
             )
-        self._arrays = None
+        self._arrays = self._lists = self._pairs = None
 
     def ensure(self, t_lo: float, t_hi: float) -> None:
         """Integrate until the nodes bracket [t_lo, t_hi]."""
@@ -282,7 +286,7 @@ class _Table:
         if need > 0:
             self._grow(self.fwd, h, max(need, len(self.fwd[0]) // 2))
         need = math.ceil(-t_lo / h) + 1 - (len(self.bwd[0]) - 1)
-        if need > 0:
+        if need > 0 and t_lo < 0.0:  # (t >= 0 is looked up on the forward nodes)
             self._grow(self.bwd, -h, max(need, len(self.bwd[0]) // 2))
 
     def arrays(self) -> tuple:
@@ -298,6 +302,34 @@ class _Table:
             self._arrays = (-(len(self.bwd[0]) - 1), S, Z, U, W, AS, AW)
         return self._arrays
 
+    def pairs(self) -> tuple:
+        """``arrays`` as (i_lo, [S Z], [U W], [AS AW]) (n, 2) each: s and z interpolated
+        together."""
+        if self._pairs is None:
+            i_lo, S, Z, U, W, AS, AW = self.arrays()
+            self._pairs = (i_lo, np.column_stack([S, Z]), np.column_stack([U, W]),
+                           np.column_stack([AS, AW]))
+        return self._pairs
+
+    def lists(self) -> tuple:
+        """``arrays`` as Python lists (the same numbers), for one time at a time."""
+        if self._lists is None:
+            i_lo, *cols = self.arrays()
+            self._lists = (i_lo, *(c.tolist() for c in cols))
+            # the times ``ensure`` leaves as they are (each bound a node short of the ends)
+            self._covered = ((i_lo + 1) * self.h, (len(cols[0]) + i_lo - 2) * self.h)
+        return self._lists
+
+    def node1(self, t: float) -> tuple:
+        """``Flight._lookup`` for one time: (j, th, lists) with plain floats."""
+        lists = self._lists
+        if lists is None or not self._covered[0] <= t <= self._covered[1]:
+            self.ensure(t, t)
+            lists = self.lists()
+        q = t / self.h - lists[0]
+        j = min(max(math.floor(q), 0), len(lists[1]) - 2)
+        return j, q - j, lists
+
 
 def _hermite_np(y0, y1, d0, d1, h, th):
     m0 = h * d0
@@ -307,6 +339,18 @@ def _hermite_np(y0, y1, d0, d1, h, th):
 
 
 # --------------------------------------------------------------------------- flight
+
+
+class DragNodes(NamedTuple):
+    """A drag flight's RK4 table (``Flight.nodes``): its step, the array index of the node
+    at t = 0, per node (s, z) (along the launch direction and up, from p0) and their rates
+    (u, w), (n, 2) each, and the launch direction's horizontal unit vector (ex, ey)."""
+
+    step_s: float
+    i0: int
+    sz: np.ndarray
+    uw: np.ndarray
+    direction: tuple[float, float]
 
 
 @dataclass(frozen=True, eq=False)
@@ -335,6 +379,12 @@ class Flight:
         if k < 0:
             raise InputError(f"drag_per_m must be >= 0, got {k}")
         object.__setattr__(self, "drag_per_m", k)
+        object.__setattr__(self, "_p0_t", tuple(self.p0.tolist()))
+        object.__setattr__(self, "_v0_t", tuple(self.v0.tolist()))
+        vx, vy = self._v0_t[0], self._v0_t[1]
+        u = math.hypot(vx, vy)
+        object.__setattr__(self, "_dir", (vx / u, vy / u) if u > 0 else (1.0, 0.0))
+        object.__setattr__(self, "_dir3", np.array([*self._dir, 1.0]))
         if k == 0.0:
             object.__setattr__(self, "step_s", None)
             return
@@ -348,13 +398,6 @@ class Flight:
                 raise InputError(f"step_s must be > 0, got {h}")
         object.__setattr__(self, "step_s", h)
         object.__setattr__(self, "_table", _Table(u0, vz, k, h))
-
-    # -- geometry of the planar solution
-    @property
-    def _dir(self) -> tuple[float, float]:
-        vx, vy = float(self.v0[0]), float(self.v0[1])
-        u = math.hypot(vx, vy)
-        return (vx / u, vy / u) if u > 0 else (1.0, 0.0)
 
     @property
     def speed(self) -> float:
@@ -377,34 +420,101 @@ class Flight:
         assert tab is not None
         if ta.size:
             tab.ensure(float(ta.min()), float(ta.max()))
-        i_lo, S, Z, U, W, AS, AW = tab.arrays()
+        i_lo, P, D, A = tab.pairs()
         q = ta / tab.h - i_lo
-        j = np.clip(np.floor(q).astype(np.intp), 0, S.size - 2)
-        th = q - j
-        return j, th, tab.h, (S, Z, U, W, AS, AW)
+        j = np.minimum(np.maximum(np.floor(q).astype(np.intp), 0), len(P) - 2)
+        th = (q - j)[..., None]
+        return j, j + 1, th, tab.h, (P, D, A)
+
+    def integrate_to(self, t_s: float) -> None:
+        """A drag flight's table made to cover [0, ``t_s``] in one run (a look-up there then
+        integrates nothing; growing on demand may integrate up to half again as far)."""
+        if self._table is not None:
+            self._table.ensure(0.0, min(float(t_s), MAX_TIME))
+
+    def nodes(self, t_hi: float) -> DragNodes:
+        """A drag flight's table, integrated to cover [0, ``t_hi``] (PlannerError for a
+        vacuum flight: it has none)."""
+        if self._table is None:
+            raise PlannerError("a vacuum flight has no drag table")
+        self._table.ensure(0.0, t_hi)
+        i_lo, P, D, _ = self._table.pairs()
+        return DragNodes(self._table.h, -i_lo, P, D, self._dir)
+
+    def _time1(self, t: float) -> float:
+        """``_times`` for one time (a float): the same checks without numpy."""
+        if not math.isfinite(t):
+            raise InputError("t must be finite")
+        if self._table is not None and abs(t) > MAX_TIME:
+            raise InputError(f"t must be within +-{MAX_TIME:g} s for a drag flight")
+        return float(t)
+
+    def position1(self, t: float) -> tuple[float, float, float]:
+        """``position`` at one time as three floats (the same arithmetic, no arrays: the
+        live re-plan evaluates the flight at one time at a time, a few us each)."""
+        t = self._time1(t)
+        px, py, pz = self._p0_t
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ * t * t
+        j, th, (_, S, Z, U, W, _, _) = self._table.node1(t)
+        h = self._table.h
+        s = _hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        ex, ey = self._dir
+        return px + ex * s, py + ey * s, pz + z
+
+    def state1(self, t: float) -> tuple[float, float, float, float, float, float]:
+        """``position1`` and ``velocity1`` at one time, from one look-up."""
+        t = self._time1(t)
+        px, py, pz = self._p0_t
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return (px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ * t * t, vx, vy, vz - G * t)
+        j, th, (_, S, Z, U, W, AS, AW) = self._table.node1(t)
+        h = self._table.h
+        s = _hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        u = _hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = _hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        ex, ey = self._dir
+        return px + ex * s, py + ey * s, pz + z, ex * u, ey * u, w
+
+    def velocity1(self, t: float) -> tuple[float, float, float]:
+        """``velocity`` at one time as three floats."""
+        t = self._time1(t)
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return vx, vy, vz - G * t
+        j, th, (_, _, _, U, W, AS, AW) = self._table.node1(t)
+        h = self._table.h
+        u = _hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = _hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        ex, ey = self._dir
+        return ex * u, ey * u, w
 
     def position(self, t: Any) -> np.ndarray:
         """Ball centre at time(s) t, shape t.shape + (3,)."""
+        if isinstance(t, float):
+            return np.array(self.position1(t))
         ta = self._times(t)
         if self._table is None:
             tt = ta[..., None]
             return self.p0 + self.v0 * tt + 0.5 * GRAVITY * tt * tt
-        j, th, h, (S, Z, U, W, _, _) = self._lookup(ta)
-        s = _hermite_np(S[j], S[j + 1], U[j], U[j + 1], h, th)
-        z = _hermite_np(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
-        ex, ey = self._dir
-        return self.p0 + np.stack([ex * s, ey * s, z], axis=-1)
+        j, j1, th, h, (P, D, _) = self._lookup(ta)
+        sz = _hermite_np(P[j], P[j1], D[j], D[j1], h, th)  # (s, z)
+        return self.p0 + sz[..., _S_S_Z] * self._dir3  # (ex s, ey s, z)
 
     def velocity(self, t: Any) -> np.ndarray:
         """Ball velocity at time(s) t, shape t.shape + (3,)."""
+        if isinstance(t, float):
+            return np.array(self.velocity1(t))
         ta = self._times(t)
         if self._table is None:
             return self.v0 + GRAVITY * ta[..., None]
-        j, th, h, (_, _, U, W, AS, AW) = self._lookup(ta)
-        u = _hermite_np(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
-        w = _hermite_np(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
-        ex, ey = self._dir
-        return np.stack([ex * u, ey * u, w], axis=-1)
+        j, j1, th, h, (_, D, A) = self._lookup(ta)
+        uw = _hermite_np(D[j], D[j1], A[j], A[j1], h, th)  # (u, w)
+        return uw[..., _S_S_Z] * self._dir3  # (ex u, ey u, w)
 
     def time_at_x(self, x: Any) -> Any:
         """Time t >= 0 at which the ball crosses the plane x = ``x`` (float, or array).

@@ -91,8 +91,8 @@ class Wrist:
     def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float, tilt: float = 0.0
                   ) -> tuple[float, np.ndarray, float]:
         """``_aligned`` for one time (plain float arithmetic: no numpy call overhead)."""
-        bx, by, bz = (float(x) for x in flight.position(t) - C)
-        vx, vy, vz = (float(x) for x in flight.velocity(t))
+        px, py, pz, vx, vy, vz = flight.state1(t)
+        bx, by, bz = px - float(C[0]), py - float(C[1]), pz - float(C[2])
         ex, ey, ez = self._e_t
         nx, ny, nz = self._n0_t
         wx, wy, wz = self._W_t
@@ -191,11 +191,14 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
 def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, tb: float,
               fa: float, fb: float) -> float:
     """Time in [ta, tb] at which the ball is ``rho`` from the flexion axis (secant)."""
-    e = wr.e_f
+    ex, ey, ez = wr._e_t
+    ox, oy, oz = (float(c + w) for c, w in zip(C, wr.W))
 
     def f(t: float) -> tuple[float]:
-        w = flight.position(t) - C - wr.W
-        return (float(np.linalg.norm(w - (w @ e) * e)) - rho,)
+        px, py, pz = flight.position1(t)
+        wx, wy, wz = px - ox, py - oy, pz - oz
+        d = wx * ex + wy * ey + wz * ez
+        return (math.sqrt((wx - d * ex) ** 2 + (wy - d * ey) ** 2 + (wz - d * ez) ** 2) - rho,)
 
     return bracketed_secant(f, ta, tb, fa, fb)[0]
 
@@ -213,10 +216,16 @@ def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
     lo, hi = wr.dev_lim
     best: Intercept | None = None
     closest = (np.inf, None)
+    ex, ey, ez = wr._e_t
+    er = tuple(float(x) for x in wr.e_r)
+    W = wr._W_t
+    Cx, Cy, Cz = (float(c) for c in C)
     for dev in devs if devs is not None else (lo, 0.5 * lo, 0.0, 0.5 * hi, hi):
-        a = rot1(wr.u_d, dev, wr.g0) + r * wr.n0
-        a_p = a - (a @ e) * e
-        rho = float(np.linalg.norm(a_p))
+        # 3-vectors as floats below (numpy's per-call cost dominates at this size)
+        ax, ay, az = (rot1(wr.u_d, dev, wr.g0) + r * wr.n0).tolist()
+        d = ax * ex + ay * ey + az * ez
+        apx, apy, apz = ax - d * ex, ay - d * ey, az - d * ez
+        rho = math.sqrt(apx * apx + apy * apy + apz * apz)
         f = dist - rho
         inward = np.flatnonzero((f[:-1] > 0) & (f[1:] <= 0))
         k_near = int(np.argmin(np.abs(f)))
@@ -227,16 +236,24 @@ def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
         k = int(inward[0])
         tk = _crossing(wr, flight, C, rho, float(t[k]), float(t[k + 1]), float(f[k]),
                        float(f[k + 1]))
-        bk = flight.position(tk) - C
-        vk = flight.velocity(tk)
-        wk = bk - wr.W
-        wk_p = wk - (wk @ e) * e
-        th = float(math.atan2(np.cross(a_p, wk_p) @ e, a_p @ wk_p))
+        px, py, pz = flight.position1(tk)
+        vx, vy, vz = flight.velocity1(tk)
+        wx, wy, wz = px - Cx - W[0], py - Cy - W[1], pz - Cz - W[2]
+        d = wx * ex + wy * ey + wz * ez
+        qx, qy, qz = wx - d * ex, wy - d * ey, wz - d * ez
+        # flexion turning a_p onto the ball's offset wk_p about e
+        th = math.atan2((apy * qz - apz * qy) * ex + (apz * qx - apx * qz) * ey
+                        + (apx * qy - apy * qx) * ez, apx * qx + apy * qy + apz * qz)
         if not wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             continue
-        n = rot1(e, th, wr.n0)
-        mis = float(math.acos(np.clip(-(vk @ n) / np.linalg.norm(vk), -1.0, 1.0)))
-        rail = float((wk - rot1(e, th, a)) @ wr.e_r) if wr.i_rail is not None else 0.0
+        nx, ny, nz = rot1(e, th, wr.n0).tolist()
+        mis = math.acos(min(1.0, max(-1.0, -(vx * nx + vy * ny + vz * nz)
+                                     / math.sqrt(vx * vx + vy * vy + vz * vz))))
+        if wr.i_rail is not None:
+            bx, by, bz = rot1(e, th, np.array([ax, ay, az])).tolist()
+            rail = (wx - bx) * er[0] + (wy - by) * er[1] + (wz - bz) * er[2]
+        else:
+            rail = 0.0
         if not (wr.rail_lim[0] <= rail <= wr.rail_lim[1]):
             continue
         if mis > math.radians(MAX_MISALIGN_DEG):
@@ -262,10 +279,10 @@ def closest_time(flight: Flight, C: np.ndarray) -> float:
 
 def refine_time(flight: Flight, C: np.ndarray, P: np.ndarray, t: float) -> float:
     """The time near ``t`` at which the ball passes closest to ``P`` (Newton steps)."""
+    ox, oy, oz = (float(p + c) for p, c in zip(P, C))  # P in the catch frame
     for _ in range(3):
-        b = flight.position(t) - C
-        v = flight.velocity(t)
-        step = float((P - b) @ v / (v @ v))
+        px, py, pz, vx, vy, vz = flight.state1(float(t))
+        step = ((ox - px) * vx + (oy - py) * vy + (oz - pz) * vz) / (vx * vx + vy * vy + vz * vz)
         t += step
         if abs(step) < 1e-9:
             break

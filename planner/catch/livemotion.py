@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.hand.model import HandModel
-from planner.trajectory import Phase, phase_duration, sample
+from planner.trajectory import min_jerk, phase_duration
 
 GROW = 1.25  # a re-aim that leaves the limits is tried this much longer ...
 MAX_GROW = 8  # ... up to this many times (1.25^8 ~ 6x the shortest duration)
@@ -74,6 +74,28 @@ class Quintic:
         a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
         after = (np.asarray(t_s) >= self.end_s)[:, None]
         return q, np.where(after, 0.0, v), np.where(after, 0.0, a)
+
+    def positions(self, t_s: np.ndarray) -> np.ndarray:
+        """``state``'s positions alone (what a row needs)."""
+        tau = np.minimum(np.maximum(t_s - self.t0, 0.0), self.duration_s)[:, None]
+        c3, c4, c5 = self.c
+        return self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
+
+    def within(self, lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+               step_s: float) -> bool:
+        """Positions in [lo, hi], |speed| <= v_max, |acceleration| <= a_max on a grid of
+        ``step_s`` over the move (both ends included)."""
+        n = max(2, math.ceil(self.duration_s / step_s) + 1)
+        tau = np.linspace(0.0, self.duration_s, n)[:, None]
+        c3, c4, c5 = self.c
+        a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
+        if np.any(np.abs(a) > a_max):
+            return False
+        v = self.v0 + tau * (self.a0 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))
+        if np.any(np.abs(v) > v_max):
+            return False
+        q = self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
+        return bool(np.all(q >= lo - 1e-12) and np.all(q <= hi + 1e-12))
 
 
 class LiveMotion:
@@ -129,22 +151,23 @@ class LiveMotion:
         D = max(D, VERIFY_STEP_S)
         for _ in range(MAX_GROW + 1):
             seg = Quintic.between(t_s, D, q, v, a, q1)
-            if self._within(seg):
+            if seg.within(self._lo, self._hi, self._v, self._a, VERIFY_STEP_S):
                 self.seg = seg
                 return True
             D *= GROW
         return False
 
-    def _within(self, seg: Quintic) -> bool:
-        n = max(2, math.ceil(seg.duration_s / VERIFY_STEP_S) + 1)
-        q, v, a = seg.state(seg.t0 + np.linspace(0.0, seg.duration_s, n))
-        return bool(np.all(q >= self._lo - 1e-12) and np.all(q <= self._hi + 1e-12)
-                    and np.all(np.abs(v) <= self._v) and np.all(np.abs(a) <= self._a))
-
-    def rows(self, t_s: np.ndarray, seg: Quintic | None = None) -> np.ndarray:
-        """Joint positions at times ``t_s`` (couplings applied); ``seg``: the arm's move
-        to use instead of the newest."""
-        phases = [Phase(self._open, self.open_s or 1.0), Phase(self._close, self.close_s or 1.0)]
-        Q = sample(phases, np.array([self.t_move, self.close_start_s]), t_s, self.q_rest)
-        Q[:, self.arm] = (seg or self.seg).state(t_s)[0]
+    def rows(self, t_s: np.ndarray, seg: Quintic | None = None, t_new_s: float = math.inf
+             ) -> np.ndarray:
+        """Joint positions at times ``t_s`` (couplings applied): the fingers' phases
+        (``trajectory.sample``'s sum, on the finger joints) and the arm on ``seg`` (the arm's
+        move to use instead of the newest) up to ``t_new_s``, on the newest after it."""
+        Q = self.q_rest + min_jerk((t_s - self.t_move) / (self.open_s or 1.0))[:, None] * self._open
+        Q += min_jerk((t_s - self.close_start_s) / (self.close_s or 1.0))[:, None] * self._close
+        arm = self.seg.positions(t_s)
+        if seg is not None:
+            old = t_s <= t_new_s
+            if old.any():
+                arm[old] = seg.positions(t_s[old])
+        Q[:, self.arm] = arm
         return self.hand.apply_couplings(Q)
