@@ -15,7 +15,7 @@ from planner.catch.arm import open_from
 from planner.catch.flight import Flight, _step_for, get_ball, predict_throw
 from planner.catch.intercept import find_intercept
 from planner.catch.livefit import LIVE_STEP_FACTOR, LiveFit
-from planner.catch.livemotion import LiveMotion
+from planner.catch.livemotion import LiveMotion, rest_by_s
 from planner.catch.observe import fit_observations
 from planner.catch.plan import get_planner
 from planner.catch.planner import PLAN_BUDGET_S, SIGNAL_S
@@ -156,11 +156,11 @@ def test_motion_rows_are_the_phases_and_the_arm_move():
     q_arm = pl.q_zero.copy()
     q_arm[j.i_flex], q_arm[j.i_dev] = 0.3, 0.1
     q_open = open_from(h, j, q_arm, cl.q_closed)
-    m = LiveMotion(h, j.arm, pl.q_rest, q_open, cl.q_closed)
+    m = LiveMotion(h, j.arm, pl.q_rest, q_open, cl.q_closed, pl.dyn)
     m.start(0.05, q_open, 0.2)
     m.set_closing(0.3, cl.duration_s)
     old = m.seg
-    assert m.reaim(0.12, q_open + 0.02 * np.isin(np.arange(h.n), j.arm))
+    assert m.reaim(0.12, q_open + 0.02 * np.isin(np.arange(h.n), j.arm)) == 1.0
     t = np.arange(0, 61) * 0.01
     fingers = [Phase(m._open, m.open_s), Phase(m._close, m.close_s)]
     want = sample(fingers, np.array([m.t_move, m.close_start_s]), t, pl.q_rest)
@@ -173,6 +173,51 @@ def test_motion_rows_are_the_phases_and_the_arm_move():
                     and np.all(np.abs(v) <= vm) and np.all(np.abs(a) <= am))
         assert seg.within(lo, hi, vm, am, seg.duration_s / 300) == grid
         assert not seg.within(lo, hi, vm, 0.5 * np.abs(a).max(axis=0), seg.duration_s / 300)
+
+
+def test_reaim_ends_at_rest_in_time_within_the_motors():
+    """A re-aim keeps every motor within 80 % of its capacity as it moves the hand's
+    inertia (StopDynamics.accel_room at both ends, the fingers' phases included), ends at
+    rest by ``rest_by``, and is refused (the old move kept) when it cannot."""
+    pl = get_planner("default")
+    h, j = pl.hand, pl.joints
+    cl = pl.closing(BALL.radius_m)
+    q_arm = pl.q_zero.copy()
+    q_arm[j.i_flex], q_arm[j.i_dev] = 0.3, 0.1
+    q_open = open_from(h, j, q_arm, cl.q_closed)
+    m = LiveMotion(h, j.arm, pl.q_rest, q_open, cl.q_closed, pl.dyn)
+    m.start(0.05, q_open, pl.dyn.move_time(pl.q_rest, q_open))
+    m.set_closing(0.3, cl.duration_s)
+    old = m.seg
+    target = q_open + 0.02 * np.isin(np.arange(h.n), j.arm)
+    assert m.reaim(0.12, target, rest_by=0.125) == 0.0 and m.seg is old
+    assert m.reaim(0.12, target, rest_by=0.5) == 1.0 and m.seg.end_s <= 0.5 + 1e-12
+    t = np.linspace(0.12, m.seg.end_s, 2001)
+    acc = m.finger_accelerations(t)
+    acc[:, m.arm] = m.seg.state(t)[2]
+    worst = 0.0
+    for q in (m.rows(np.array([0.12]))[0], target):
+        MH, room = pl.dyn.accel_room(q)
+        worst = max(worst, float(np.max(np.abs(acc @ MH.T) / room)))
+    assert 0.2 < worst <= 1.0 + 1e-9  # within the bound, and the bound not idle
+    # the fingers' accelerations are their phases' second differences
+    dt = 1e-4
+    Q = m.rows(np.array([0.1 - dt, 0.1, 0.1 + dt]))
+    fingers = np.setdiff1d(np.arange(h.n), m.arm)
+    fd = (Q[2] - 2 * Q[1] + Q[0]) / dt ** 2
+    np.testing.assert_allclose(m.finger_accelerations(np.array([0.1]))[0, fingers], fd[fingers],
+                               rtol=1e-4, atol=1e-3)
+
+
+def test_session_arm_at_rest_when_the_ball_arrives(live_run):
+    """The rows the check's stopping load reads around the intercept: the arm still."""
+    _, s, _ = live_run
+    tr = parse_trajectory(s.text)
+    arm = list(s.pl.joints.arm)
+    t_i = tr.end["intercept_t"]
+    near = (tr.t_s >= rest_by_s(t_i, s.dt)) & (tr.t_s <= t_i + 0.05)
+    assert near.sum() >= 6 and rest_by_s(t_i, s.dt) <= (math.floor(t_i / s.dt) - 1) * s.dt + 1e-12
+    np.testing.assert_array_equal(tr.q[near][:, arm], np.tile(tr.q[near][0, arm], (near.sum(), 1)))
 
 
 def test_session_needs_enough_observations():

@@ -152,3 +152,26 @@ def test_same_bytes(tmp_path):
     plan_catch(30.0, 3.0, 0.0, "default", str(tmp_path / "b.csv"))
     assert a.feasible and (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
     assert math.isfinite(a.plan.soft.ramp_out_s) and a.plan.soft.ramp_out_s > 0
+
+
+def test_accel_room_is_the_hands_inertia_through_the_motors(pl):
+    """StopDynamics.accel_room: MH @ a is every motor's torque of the hand's inertia at
+    joint accelerations a (RNEA less gravity, through the transmissions); room = 80 % of
+    the capacity less gravity's torque (move_time's rule)."""
+    import pinocchio as pin
+
+    dyn = pl.dyn
+    h, m = dyn.hand, dyn.hand.pin_model
+    q = pl.q_rest.copy()
+    MH, room = dyn.accel_room(q)
+    qp, z = dyn._pq(q), np.zeros(m.nv)
+    g = pin.rnea(m, m.createData(), qp, z, z)[dyn._idx]
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        a = rng.normal(0.0, 50.0, h.n)
+        ap = z.copy()
+        ap[dyn._idx] = a
+        tau = pin.rnea(m, m.createData(), qp, z, ap)[dyn._idx] - g
+        assert np.allclose(MH @ a, h.motor_torques(q, tau), atol=1e-9)
+    assert np.allclose(room, 0.8 * dyn.cap - np.abs(h.motor_torques(q, g)), atol=1e-12)
+    assert np.all(room > 0)

@@ -12,8 +12,14 @@ the open pose, the arm re-aimed at every newer intercept, the fingers' closing m
   rows never change. Its duration: the longer of the old one's remaining time and the
   min-jerk duration of the change (``trajectory.phase_duration``), lengthened by
   ``GROW`` until its speed, acceleration and position stay within every arm joint's
-  limits on a grid of ``VERIFY_STEP_S`` (a quintic that starts moving may overshoot);
-  when none does, the old target is kept.
+  limits, and its accelerations keep every motor within ``STOP_SHARE`` of its capacity
+  as it moves the hand's inertia (``StopDynamics.accel_room``: the rule of the planner's
+  own moves), on a grid of ``VERIFY_STEP_S`` (a quintic that starts moving may
+  overshoot); and it must end, the arm at rest, by ``rest_by_s`` (the check judges the
+  stopping of the ball on the rows with the hand's inertia, ``planner.check.ball``: an
+  arm still re-aiming when the ball arrives adds its acceleration's torque to the
+  pad's). When none does, the arm goes part of the way (``PART_SHARES``), or keeps
+  the old target.
 """
 
 from __future__ import annotations
@@ -23,12 +29,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.catch.stopping import StopDynamics
 from planner.hand.model import HandModel
-from planner.trajectory import min_jerk, phase_duration
+from planner.trajectory import min_jerk, min_jerk_rates, phase_duration
 
 GROW = 1.25  # a re-aim that leaves the limits is tried this much longer ...
 MAX_GROW = 8  # ... up to this many times (1.25^8 ~ 6x the shortest duration)
 VERIFY_STEP_S = 0.001  # the limits are verified on this grid (rows are 2-10 ms apart)
+PART_SHARES = (1.0, 0.5, 0.25)  # a re-aim that cannot reach its target in time goes this
+# share of the way (the arm closer to the newest estimate than the older target)
+STILL_MARGIN_S = 0.002  # the arm at rest this much before the rows the check reads at the
+# intercept: 2 sigma of the intercept time late in the flight (~1 ms for a 5 mm camera),
+# which later estimates may move
+
+
+def rest_by_s(t_i: float, dt: float) -> float:
+    """When the arm must be at rest for a ball meeting the palm at ``t_i`` on rows ``dt``
+    apart: the check's stopping load (``planner.check.ball.ball_loads``) takes the arm's
+    speed from the rows around ``t_i`` and its accelerations from their central
+    differences, the first of them at the row at or before ``t_i`` (its neighbours with
+    it); so the arm holds still from the row before that one (``STILL_MARGIN_S``
+    earlier)."""
+    return (math.floor((t_i - STILL_MARGIN_S) / dt + 1e-9) - 1) * dt
 
 
 @dataclass(frozen=True)
@@ -82,14 +104,17 @@ class Quintic:
         return self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
 
     def within(self, lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
-               step_s: float) -> bool:
+               step_s: float, accel_ok=None) -> bool:
         """Positions in [lo, hi], |speed| <= v_max, |acceleration| <= a_max on a grid of
-        ``step_s`` over the move (both ends included)."""
+        ``step_s`` over the move (both ends included); ``accel_ok(t_s, a)``: whether the
+        accelerations ``a`` (T, k) at the grid's times ``t_s`` are also acceptable."""
         n = max(2, math.ceil(self.duration_s / step_s) + 1)
         tau = np.linspace(0.0, self.duration_s, n)[:, None]
         c3, c4, c5 = self.c
         a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
         if np.any(np.abs(a) > a_max):
+            return False
+        if accel_ok is not None and not accel_ok(self.t0 + tau[:, 0], a):
             return False
         v = self.v0 + tau * (self.a0 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))
         if np.any(np.abs(v) > v_max):
@@ -102,8 +127,9 @@ class LiveMotion:
     """The rows' motion: rest, the fingers' phases, the arm's newest ``Quintic``."""
 
     def __init__(self, hand: HandModel, arm: tuple[int, ...], q_rest: np.ndarray,
-                 q_open_fingers: np.ndarray, q_closed_fingers: np.ndarray) -> None:
-        self.hand = hand
+                 q_open_fingers: np.ndarray, q_closed_fingers: np.ndarray,
+                 dyn: StopDynamics) -> None:
+        self.hand, self.dyn = hand, dyn
         self.arm = np.array(arm, dtype=int)
         self.q_rest = q_rest.copy()
         fingers = np.setdiff1d(np.arange(hand.n), self.arm)
@@ -138,24 +164,51 @@ class LiveMotion:
     def set_closing(self, start_s: float, duration_s: float) -> None:
         self.close_start_s, self.close_s = float(start_s), float(duration_s)
 
-    def reaim(self, t_s: float, q_target: np.ndarray) -> bool:
-        """The arm re-aimed at ``q_target``'s arm joints from its state at ``t_s``: the
-        shortest quintic (see the module docstring) within the limits; False (the old
-        target kept) when none is."""
+    def reaim(self, t_s: float, q_target: np.ndarray, rest_by: float = math.inf) -> float:
+        """The arm re-aimed at ``q_target``'s arm joints from its state at ``t_s``, at rest
+        by ``rest_by`` (s): the shortest quintic (see the module docstring) within the
+        limits and the motors' room. When none reaches the target in time, the arm goes
+        as far towards it as one does (``PART_SHARES`` of the change of target). Returns
+        the share of the change made (0: the old target kept)."""
         q1 = q_target[self.arm]
         if np.array_equal(q1, self.seg.q1):
-            return True
+            return 1.0
         q, v, a = (x[0] for x in self.seg.state(np.array([t_s])))
-        D = max(self.seg.end_s - t_s,
-                phase_duration(q1 - q, self._v, self._a) if np.any(q1 != q) else 0.0)
-        D = max(D, VERIFY_STEP_S)
-        for _ in range(MAX_GROW + 1):
-            seg = Quintic.between(t_s, D, q, v, a, q1)
-            if seg.within(self._lo, self._hi, self._v, self._a, VERIFY_STEP_S):
-                self.seg = seg
-                return True
-            D *= GROW
-        return False
+        D_max = rest_by - t_s
+        ends = [self.dyn.accel_room(x) for x in (self.rows(np.array([t_s]))[0], q_target)]
+
+        def motors_ok(t: np.ndarray, a_arm: np.ndarray) -> bool:
+            """Every motor within the room at either end (``StopDynamics.accel_room``) as
+            the arm accelerates by ``a_arm`` and the fingers by their phases at ``t``."""
+            acc = self.finger_accelerations(t)
+            acc[:, self.arm] = a_arm
+            return all(bool(np.all(np.abs(acc @ MH.T) <= room)) for MH, room in ends)
+
+        for share in PART_SHARES:
+            goal = self.seg.q1 + share * (q1 - self.seg.q1)
+            # no sooner than the move it replaces would end (unless that is too late)
+            D = max(min(self.seg.end_s - t_s, D_max), VERIFY_STEP_S,
+                    phase_duration(goal - q, self._v, self._a) if np.any(goal != q) else 0.0)
+            for _ in range(MAX_GROW + 1):
+                if D > D_max + 1e-12:
+                    break
+                seg = Quintic.between(t_s, D, q, v, a, goal)
+                if seg.within(self._lo, self._hi, self._v, self._a, VERIFY_STEP_S, motors_ok):
+                    self.seg = seg
+                    return share
+                if D >= D_max:
+                    break
+                D = min(D * GROW, D_max)
+        return 0.0
+
+    def finger_accelerations(self, t_s: np.ndarray) -> np.ndarray:
+        """(T, n) joint accelerations of the fingers' phases at ``t_s`` (0 on the arm)."""
+        out = np.zeros((len(t_s), self.hand.n))
+        for t0, T, delta in ((self.t_move, self.open_s, self._open),
+                             (self.close_start_s, self.close_s, self._close)):
+            if T > 0 and math.isfinite(t0):
+                out += np.outer(min_jerk_rates((t_s - t0) / T)[1] / (T * T), delta)
+        return out
 
     def rows(self, t_s: np.ndarray, seg: Quintic | None = None, t_new_s: float = math.inf
              ) -> np.ndarray:

@@ -62,13 +62,12 @@ from planner.catch.intercept import (
     find_intercept_near,
 )
 from planner.catch.livefit import LiveFit
-from planner.catch.livemotion import LiveMotion
+from planner.catch.livemotion import LiveMotion, rest_by_s
 from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
 from planner.catch.results import CatchPlan
 from planner.errors import InfeasibleError, InputError
 from planner.guard import guard_rows
 from planner.hand.model import HandModel
-from planner.trajectory import phase_duration
 from planner.trajfile import TrajectoryWriter
 
 NEAR_S = 0.020  # the intercept is searched this close to the previous one first (an
@@ -105,7 +104,8 @@ class CatchSession:
         self.fit = LiveFit(self.ball, self.ball.drag_per_m if drag else 0.0)
         h, j = self.pl.hand, self.pl.joints
         q_open = open_from(h, j, self.pl.q_zero, self.closing.q_closed)
-        self.motion = LiveMotion(h, j.arm, self.pl.q_rest, q_open, self.closing.q_closed)
+        self.motion = LiveMotion(h, j.arm, self.pl.q_rest, q_open, self.closing.q_closed,
+                                 self.pl.dyn)
         self.writer: TrajectoryWriter | None = None
         self._t: list[np.ndarray] = []
         self._q: list[np.ndarray] = []
@@ -116,7 +116,8 @@ class CatchSession:
         # (drag) fit: that fit's search starts from it
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
-        self.kept_targets = 0  # re-aims refused by the limits (the older target kept)
+        self.kept_targets = 0  # re-aims that could not reach their target at rest before
+        # the ball within the limits (part of the way made, or the older target kept)
         self.outcome: str | None = None
         self.reason = ""
         self.plan: CatchPlan | None = None
@@ -202,15 +203,16 @@ class CatchSession:
         pose = pl.meet(flight, self.C, r, cl, ic)
         stop_t = gq.stop_time(pose.v_i)
         m = self.motion
+        rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives
         if not m.moving:
-            T_m = phase_duration(pose.q_open - pl.q_rest, h.velocity, h.acceleration)
+            T_m = pl.dyn.move_time(pl.q_rest, pose.q_open)
             s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i, t_b + T_m, stop_t, r)
             # wait for a better estimate while waiting one more observation costs nothing
-            if t_b + period + T_m >= s_c or t_b + period + T_m >= pose.t_i:
+            if t_b + period + T_m >= s_c or t_b + period + T_m >= rest_by:
                 m.start(t_b, pose.q_open, T_m)
                 m.set_closing(s_c, cl.duration_s)
         else:
-            if not m.reaim(t_b, pose.q_open):
+            if m.reaim(t_b, pose.q_open, rest_by) < 1.0:
                 self.kept_targets += 1
             if m.close_start_s > t_b:
                 s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i,
@@ -286,7 +288,7 @@ class CatchSession:
         pose, h = self.pose, self.pl.hand
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
-            T_m = phase_duration(pose.q_open - self.pl.q_rest, h.velocity, h.acceleration)
+            T_m = self.pl.dyn.move_time(self.pl.q_rest, pose.q_open)
             m.start(t_b, pose.q_open, T_m)
             m.set_closing(close_start(h, self.flight, self.C, pose.q_open, cl, pose.t_i,
                                       t_b + T_m, gq.stop_time(pose.v_i), self.ball.radius_m),
@@ -329,7 +331,8 @@ class CatchSession:
                   f"{1000 * self.fit.result.residual_rms:.1f} mm), the first plan from "
                   f"{self.first['observations']}")]
         if self.kept_targets:
-            notes.append(f"{self.kept_targets} re-aims left the joint limits: the older "
+            notes.append(f"{self.kept_targets} re-aims could not reach their target at rest "
+                         "before the ball within the limits: part of the way, or the older "
                          "target kept")
         return CatchPlan(
             feasible=not reasons, reasons=reasons, flight=fl, catch_point=self.C,

@@ -193,24 +193,33 @@ class StopDynamics:
         """Shortest min-jerk move ``q_from`` -> ``q_to`` within every joint's speed and
         acceleration limits (``phase_duration``) and every motor within ``STOP_SHARE`` of
         its capacity while it moves the hand (its inertia at the peak acceleration PEAK_ACC
-        |dq| / T^2, at either end, against gravity)."""
+        |dq| / T^2, at either end, against gravity: ``accel_room``)."""
         dq = q_to - q_from
         T = phase_duration(dq, self.hand.velocity, self.hand.acceleration)
-        m = self.hand.pin_model
         for q in (q_from, q_to):
-            M = motor_torque_matrix(self.hand, q)
-            z = np.zeros(m.nv)
-            ap = z.copy()
-            ap[self._idx] = dq
-            g = pin.rnea(m, self._data, self._pq(q), z, z)
-            per = np.abs(M @ (pin.rnea(m, self._data, self._pq(q), z, ap) - g)[self._idx])
-            room = STOP_SHARE * self.cap - np.abs(M @ g[self._idx])
+            MH, room = self.accel_room(q)
+            per = np.abs(MH @ dq)
             need = per > 1e-12
             if np.any(room[need] <= 0):
                 return math.inf
             if need.any():
                 T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
         return T
+
+    def accel_room(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The motors' room for the hand's accelerations at ``q`` (``move_time``'s rule; a
+        live re-aim's too): (MH, room), MH (n_motor, n) every motor's torque per unit joint
+        acceleration (the hand's inertia: the motor map of the mass matrix), room =
+        STOP_SHARE x its capacity - |its gravity torque|. Accelerations a with |MH @ a| <=
+        room keep every motor within STOP_SHARE of its capacity at low speed."""
+        m = self.hand.pin_model
+        qp = self._pq(q)
+        Hp = pin.crba(m, self._data, qp)
+        Hp = np.triu(Hp) + np.triu(Hp, 1).T  # (crba fills the upper triangle)
+        M = motor_torque_matrix(self.hand, q)
+        z = np.zeros(m.nv)
+        g = pin.rnea(m, self._data, qp, z, z)[self._idx]
+        return M @ Hp[np.ix_(self._idx, self._idx)], STOP_SHARE * self.cap - np.abs(M @ g)
 
     def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None) -> float:
         """Shortest min-jerk speed ramp between rest and ``qd`` (its peak acceleration is
