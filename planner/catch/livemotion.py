@@ -10,8 +10,8 @@ the open pose, the arm re-aimed at every newer intercept, the fingers' closing m
   as the fingers' phase; each re-plan replaces it by one from the state of the rows
   already written, so the rows stay twice continuously differentiable and the written
   rows never change. Its duration: the longer of the old one's remaining time and the
-  min-jerk duration of the change (``trajectory.phase_duration``), lengthened by
-  ``GROW`` until its speed, acceleration and position stay within every arm joint's
+  min-jerk duration of the change (``trajectory.phase_duration``), lengthened (up to
+  ``GROW ** MAX_GROW`` times, by bisection) until its speed, acceleration and position stay within every arm joint's
   limits, and its accelerations keep every motor within ``STOP_SHARE`` of its capacity
   as it moves the hand's inertia (``StopDynamics.accel_room``: the rule of the planner's
   own moves), on a grid of ``VERIFY_STEP_S`` (a quintic that starts moving may
@@ -31,10 +31,11 @@ import numpy as np
 
 from planner.catch.stopping import StopDynamics
 from planner.hand.model import HandModel
-from planner.trajectory import min_jerk, min_jerk_rates, phase_duration
+from planner.trajectory import PEAK_ACC, min_jerk, phase_duration
 
-GROW = 1.25  # a re-aim that leaves the limits is tried this much longer ...
-MAX_GROW = 8  # ... up to this many times (1.25^8 ~ 6x the shortest duration)
+GROW = 1.25  # a re-aim that leaves the limits may last up to GROW^MAX_GROW (~6x) its
+MAX_GROW = 8  # shortest duration ...
+BISECT = 3  # ... the shortest that holds found to 1/8 of the span by bisection
 VERIFY_STEP_S = 0.001  # the limits are verified on this grid (rows are 2-10 ms apart)
 PART_SHARES = (1.0, 0.5, 0.25)  # a re-aim that cannot reach its target in time goes this
 # share of the way (the arm closer to the newest estimate than the older target)
@@ -175,40 +176,63 @@ class LiveMotion:
             return 1.0
         q, v, a = (x[0] for x in self.seg.state(np.array([t_s])))
         D_max = rest_by - t_s
-        ends = [self.dyn.accel_room(x) for x in (self.rows(np.array([t_s]))[0], q_target)]
+        ends = self._ends(self.rows(np.array([t_s]))[0], q_target)
+        # (the acceleration it starts with is the move's it replaces: allowed as it is)
+        ends = [(MH, np.maximum(room, np.abs(MH @ a))) for MH, room in ends]
 
         def motors_ok(t: np.ndarray, a_arm: np.ndarray) -> bool:
-            """Every motor within the room at either end (``StopDynamics.accel_room``) as
-            the arm accelerates by ``a_arm`` and the fingers by their phases at ``t``."""
-            acc = self.finger_accelerations(t)
-            acc[:, self.arm] = a_arm
-            return all(bool(np.all(np.abs(acc @ MH.T) <= room)) for MH, room in ends)
+            """Every motor within the room at either end as the arm accelerates."""
+            return all(bool(np.all(np.abs(a_arm @ MH.T) <= room)) for MH, room in ends)
+
+        def ok(D: float, goal: np.ndarray) -> Quintic | None:
+            seg = Quintic.between(t_s, D, q, v, a, goal)
+            return seg if seg.within(self._lo, self._hi, self._v, self._a, VERIFY_STEP_S,
+                                     motors_ok) else None
 
         for share in PART_SHARES:
             goal = self.seg.q1 + share * (q1 - self.seg.q1)
             # no sooner than the move it replaces would end (unless that is too late)
             D = max(min(self.seg.end_s - t_s, D_max), VERIFY_STEP_S,
                     phase_duration(goal - q, self._v, self._a) if np.any(goal != q) else 0.0)
-            for _ in range(MAX_GROW + 1):
-                if D > D_max + 1e-12:
-                    break
-                seg = Quintic.between(t_s, D, q, v, a, goal)
-                if seg.within(self._lo, self._hi, self._v, self._a, VERIFY_STEP_S, motors_ok):
-                    self.seg = seg
-                    return share
-                if D >= D_max:
-                    break
-                D = min(D * GROW, D_max)
+            if D > D_max + 1e-12:
+                continue
+            seg = ok(D, goal)
+            if seg is None:  # the longest allowed, then the shortest between that holds
+                hi = min(D * GROW ** MAX_GROW, D_max)
+                seg = ok(hi, goal) if hi > D else None
+                for _ in range(BISECT if seg is not None else 0):
+                    mid = 0.5 * (D + hi)
+                    s_mid = ok(mid, goal)
+                    if s_mid is None:
+                        D = mid
+                    else:
+                        hi, seg = mid, s_mid
+            if seg is not None:
+                self.seg = seg
+                return share
         return 0.0
 
-    def finger_accelerations(self, t_s: np.ndarray) -> np.ndarray:
-        """(T, n) joint accelerations of the fingers' phases at ``t_s`` (0 on the arm)."""
-        out = np.zeros((len(t_s), self.hand.n))
-        for t0, T, delta in ((self.t_move, self.open_s, self._open),
-                             (self.close_start_s, self.close_s, self._close)):
-            if T > 0 and math.isfinite(t0):
-                out += np.outer(min_jerk_rates((t_s - t0) / T)[1] / (T * T), delta)
-        return out
+    def _ends(self, q_from: np.ndarray, q_to: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The motors' room for the arm's accelerations at either end of a move
+        (``StopDynamics.accel_room``; the arm's columns: the fingers' own phases are not
+        the arm's to bound, as in the check's stopping load)."""
+        return [(MH[:, self.arm], room) for MH, room in map(self.dyn.accel_room, (q_from, q_to))]
+
+    def move_time(self, q_from: np.ndarray, q_to: np.ndarray) -> float:
+        """The first move's duration (min-jerk, from rest): the planner's
+        (``StopDynamics.move_time``), and the arm's peak accelerations (PEAK_ACC |dq| / T^2)
+        within the motors' room as every re-aim's (``_ends``), so that a re-aim can start
+        from it."""
+        T = self.dyn.move_time(q_from, q_to)
+        dq = (q_to - q_from)[self.arm]
+        for MH, room in self._ends(q_from, q_to):
+            per = np.abs(MH @ dq)
+            need = per > 1e-12
+            if np.any(room[need] <= 0):
+                return math.inf
+            if need.any():
+                T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
+        return T
 
     def rows(self, t_s: np.ndarray, seg: Quintic | None = None, t_new_s: float = math.inf
              ) -> np.ndarray:

@@ -205,7 +205,7 @@ class CatchSession:
         m = self.motion
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives
         if not m.moving:
-            T_m = pl.dyn.move_time(pl.q_rest, pose.q_open)
+            T_m = m.move_time(pl.q_rest, pose.q_open)
             s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i, t_b + T_m, stop_t, r)
             # wait for a better estimate while waiting one more observation costs nothing
             if t_b + period + T_m >= s_c or t_b + period + T_m >= rest_by:
@@ -288,7 +288,7 @@ class CatchSession:
         pose, h = self.pose, self.pl.hand
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
-            T_m = self.pl.dyn.move_time(self.pl.q_rest, pose.q_open)
+            T_m = m.move_time(self.pl.q_rest, pose.q_open)
             m.start(t_b, pose.q_open, T_m)
             m.set_closing(close_start(h, self.flight, self.C, pose.q_open, cl, pose.t_i,
                                       t_b + T_m, gq.stop_time(pose.v_i), self.ball.radius_m),
