@@ -31,7 +31,7 @@ import numpy as np
 
 from planner.catch.stopping import StopDynamics
 from planner.hand.model import HandModel
-from planner.trajectory import PEAK_ACC, min_jerk, phase_duration
+from planner.trajectory import min_jerk, phase_duration
 
 GROW = 1.25  # a re-aim that leaves the limits may last up to GROW^MAX_GROW (~6x) its
 MAX_GROW = 8  # shortest duration ...
@@ -220,19 +220,9 @@ class LiveMotion:
 
     def move_time(self, q_from: np.ndarray, q_to: np.ndarray) -> float:
         """The first move's duration (min-jerk, from rest): the planner's
-        (``StopDynamics.move_time``), and the arm's peak accelerations (PEAK_ACC |dq| / T^2)
-        within the motors' room as every re-aim's (``_ends``), so that a re-aim can start
-        from it."""
-        T = self.dyn.move_time(q_from, q_to)
-        dq = (q_to - q_from)[self.arm]
-        for MH, room in self._ends(q_from, q_to):
-            per = np.abs(MH @ dq)
-            need = per > 1e-12
-            if np.any(room[need] <= 0):
-                return math.inf
-            if need.any():
-                T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
-        return T
+        (``StopDynamics.move_time``), the arm's accelerations alone within the motors' room
+        too, as every re-aim's (``_ends``), so that a re-aim can start from it."""
+        return self.dyn.move_time(q_from, q_to, arm_alone=True)
 
     def rows(self, t_s: np.ndarray, seg: Quintic | None = None, t_new_s: float = math.inf
              ) -> np.ndarray:

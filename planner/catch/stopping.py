@@ -163,6 +163,7 @@ class StopDynamics:
         m = hand.pin_model
         self._idx = np.array([m.idx_qs[m.getJointId(n)] for n in hand.joint_names])
         self._data = m.createData()
+        self._upper = np.triu(np.ones((m.nv, m.nv), dtype=bool))
         self.cap = actuator_capacity(hand).torque_nm
         self.v_max = LIMIT_MARGIN * hand.velocity[list(self.arm)]
         self.a_max = LIMIT_MARGIN * hand.acceleration[list(self.arm)]
@@ -189,16 +190,22 @@ class StopDynamics:
         vp[self._idx[list(self.arm)]], ap[self._idx[list(self.arm)]] = v, a
         return pin.rnea(m, self._data, self._pq(q), vp, ap)[self._idx]
 
-    def move_time(self, q_from: np.ndarray, q_to: np.ndarray) -> float:
+    def move_time(self, q_from: np.ndarray, q_to: np.ndarray, arm_alone: bool = False
+                  ) -> float:
         """Shortest min-jerk move ``q_from`` -> ``q_to`` within every joint's speed and
         acceleration limits (``phase_duration``) and every motor within ``STOP_SHARE`` of
         its capacity while it moves the hand (its inertia at the peak acceleration PEAK_ACC
-        |dq| / T^2, at either end, against gravity: ``accel_room``)."""
+        |dq| / T^2, at either end, against gravity: ``accel_room``). ``arm_alone``: the
+        arm's part of that acceleration alone within the room too (how a live session
+        bounds its re-aims, ``planner.catch.livemotion``)."""
         dq = q_to - q_from
         T = phase_duration(dq, self.hand.velocity, self.hand.acceleration)
+        arm = list(self.arm)
         for q in (q_from, q_to):
             MH, room = self.accel_room(q)
             per = np.abs(MH @ dq)
+            if arm_alone:
+                per = np.maximum(per, np.abs(MH[:, arm] @ dq[arm]))
             need = per > 1e-12
             if np.any(room[need] <= 0):
                 return math.inf
@@ -215,7 +222,7 @@ class StopDynamics:
         m = self.hand.pin_model
         qp = self._pq(q)
         Hp = pin.crba(m, self._data, qp)
-        Hp = np.triu(Hp) + np.triu(Hp, 1).T  # (crba fills the upper triangle)
+        Hp = np.where(self._upper, Hp, Hp.T)  # (crba fills the upper triangle)
         M = motor_torque_matrix(self.hand, q)
         z = np.zeros(m.nv)
         g = pin.rnea(m, self._data, qp, z, z)[self._idx]
