@@ -147,16 +147,22 @@ def test_session_first_plan_starts_from_the_vacuum_fit(live_run):
     assert abs(ic.dev - full.dev) < 1e-6 and abs(ic.rail - full.rail) < 1e-6
 
 
-def test_motion_rows_are_the_phases_and_the_arm_move():
-    """LiveMotion.rows: the min-jerk phases (trajectory.sample) on the fingers and the arm's
-    quintic (its positions as Quintic.state gives them); within() as the grid check."""
+def _motion():
+    """The planner, its hand, joints and closing, an open pose (wrist 0.3 / 0.1 rad) and a
+    LiveMotion towards it."""
     pl = get_planner("default")
     h, j = pl.hand, pl.joints
     cl = pl.closing(BALL.radius_m)
     q_arm = pl.q_zero.copy()
     q_arm[j.i_flex], q_arm[j.i_dev] = 0.3, 0.1
     q_open = open_from(h, j, q_arm, cl.q_closed)
-    m = LiveMotion(h, j.arm, pl.q_rest, q_open, cl.q_closed, pl.dyn)
+    return pl, h, j, cl, q_open, LiveMotion(h, j.arm, pl.q_rest, q_open, cl.q_closed, pl.dyn)
+
+
+def test_motion_rows_are_the_phases_and_the_arm_move():
+    """LiveMotion.rows: the min-jerk phases (trajectory.sample) on the fingers and the arm's
+    quintic (its positions as Quintic.state gives them); within() as the grid check."""
+    pl, h, j, cl, q_open, m = _motion()
     m.start(0.05, q_open, 0.2)
     m.set_closing(0.3, cl.duration_s)
     old = m.seg
@@ -179,13 +185,7 @@ def test_reaim_ends_at_rest_in_time_within_the_motors():
     """The first move and a re-aim keep every motor within 80 % of its capacity as the arm
     moves the hand's inertia (StopDynamics.accel_room at both ends), a re-aim ends at rest
     by ``rest_by``, and is refused (the old move kept) when it cannot."""
-    pl = get_planner("default")
-    h, j = pl.hand, pl.joints
-    cl = pl.closing(BALL.radius_m)
-    q_arm = pl.q_zero.copy()
-    q_arm[j.i_flex], q_arm[j.i_dev] = 0.3, 0.1
-    q_open = open_from(h, j, q_arm, cl.q_closed)
-    m = LiveMotion(h, j.arm, pl.q_rest, q_open, cl.q_closed, pl.dyn)
+    pl, h, j, cl, q_open, m = _motion()
     T = m.move_time(pl.q_rest, q_open)
     assert T >= pl.dyn.move_time(pl.q_rest, q_open)
     m.start(0.05, q_open, T)
