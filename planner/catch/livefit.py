@@ -19,7 +19,8 @@ iteration (the vacuum's normal matrix for the drag model's), contracting by abou
 k |v| t per step. Its fixed point solves J_vac^T r = 0 instead of the drag model's
 J^T r = 0 (``fit_observations``): the two differ by O(k |v| t) of the residuals'
 projection (5 um on a 5 mm-noise tennis throw, tests/test_live.py). The first fit
-iterates from the vacuum fit to ``CHORD_TOL_M``; every later observation takes one
+iterates from the vacuum fit (to ``CHORD_TOL_M``, at most ``MAX_CHORD_STEPS``); every
+later observation takes one
 step from the previous fit, on that fit's flight (integrated already for the plan); the
 estimate lags the fixed point by the contraction factor times the last observation's
 change. The covariance is the vacuum's sigma^2 M^-1 with sigma from the drag model's
@@ -62,7 +63,11 @@ MIN_OBS_VACUUM = 3
 MIN_OBS_DRAG = 6
 CHORD_TOL_M = 1e-7  # drag: iterate until the fit moves the ball by less than this
 # (0.1 um at the last observation: 20 000 times below a 2 mm camera noise)
-MAX_CHORD_STEPS = 4  # (contraction ~ k|v|t ~ 0.04: one step gains ~1.4 digits)
+MAX_CHORD_STEPS = 2  # ... or at most this many steps at the first fit (contraction ~
+# k|v|t ~ 0.04: one step gains ~1.4 digits): after 2 the first fit's ball at the palm
+# (t = 0.45 s) is 0.5 um or less from the fixed point (throws of 20-60 deg, 1-2.5 m, 6
+# observations at 100 or 500 Hz, measured), where those 6 observations leave it
+# centimetres uncertain; every later observation takes one more step
 LIVE_STEP_FACTOR = 4.0  # the fit's drag tables take 4x the planner's RK4 step
 # (``flight._step_for``): the error goes as h^4, 256 x the planner's 1.5e-10 m, i.e.
 # 4e-8 m in position and 1.5e-7 m/s in velocity over 1.5 s against a 1 ms-step
@@ -196,7 +201,8 @@ class LiveFit:
     def _chord(self, minv: np.ndarray, theta_vac: np.ndarray):
         """The drag fit: (p0, v0) = LSQ_vacuum(y - d), d the drag displacement of the
         current estimate at the observations. The first fit iterates from the vacuum fit
-        until the ball moves by less than ``CHORD_TOL_M``; later ones take one step from the
+        until the ball moves by less than ``CHORD_TOL_M`` (at most ``MAX_CHORD_STEPS``
+        steps); later ones take one step from the
         previous fit, on its flight (already integrated). Every sum over the observations
         of the flight's table comes from ``IntervalSums`` (module docstring). Returns the
         new (p0, v0) and the residual sum of squares per axis against the model of the last

@@ -98,6 +98,18 @@ class Quintic:
         after = (np.asarray(t_s) >= self.end_s)[:, None]
         return q, np.where(after, 0.0, v), np.where(after, 0.0, a)
 
+    def state1(self, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``state`` at one time (k,) each, with the time's arithmetic in floats."""
+        tau = min(max(t_s - self.t0, 0.0), self.duration_s)
+        c3, c4, c5 = self.c
+        q = self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
+        if t_s >= self.end_s:
+            z = np.zeros_like(q)
+            return q, z, z
+        v = self.v0 + tau * (self.a0 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))
+        a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
+        return q, v, a
+
     def positions(self, t_s: np.ndarray) -> np.ndarray:
         """``state``'s positions alone (what a row needs)."""
         tau = np.minimum(np.maximum(t_s - self.t0, 0.0), self.duration_s)[:, None]
@@ -174,7 +186,7 @@ class LiveMotion:
         q1 = q_target[self.arm]
         if np.array_equal(q1, self.seg.q1):
             return 1.0
-        q, v, a = (x[0] for x in self.seg.state(np.array([t_s])))
+        q, v, a = self.seg.state1(t_s)
         D_max = rest_by - t_s
         ends = self._ends(self.rows(np.array([t_s]))[0], q_target)
         # (the acceleration it starts with is the move's it replaces: allowed as it is)

@@ -159,7 +159,9 @@ class CatchSession:
         fit = self.fit.add(t, p)
         if fit is None:
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
-                self._prior = self._search(self.fit.vacuum_flight())
+                prior = self._search(self.fit.vacuum_flight())
+                # (a pose to start from: an intercept out of reach is none)
+                self._prior = prior if prior is not None and prior.reason is None else None
             return np.empty((0, 0))
         t_react = t + SIGNAL_S + PLAN_BUDGET_S
         t_b = max(self.written_to_s, t_react)
