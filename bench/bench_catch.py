@@ -9,6 +9,14 @@ a 0.42 s flight (30 deg over 1.5 m) less the 300 ms actuation time and the
 25 ms signal handling leaves 95 ms for planning.
 
     /work/.venv/bin/python bench/bench_catch.py [--n 1000] [--hand default] [--ball tennis]
+
+``--grid`` instead: issue 15's envelope, angles 15-75 deg (step 10) x distances 0.5-4 m
+(step 0.5) x heights -0.3/0/+0.3 m, planned twice in one run, the palm waiting at rest
+(``soft=False``: the catch before issue 15, judged by today's rule) and with the soft catch;
+each cell the stopping headroom (%) or why not; the count of throws named with a reason no
+motion of the hand overcomes (out of reach, too soon, too fast to stop); the headroom per
+motor at 30 deg from 1.5 and 3 m; with ``--check`` every feasible soft plan written and
+judged by ``planner.check``.
 """
 
 from __future__ import annotations
@@ -25,13 +33,86 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner.catch.flight import get_ball
-from planner.catch.plan import get_planner, plan_throw
+from planner.catch.plan import get_planner, plan_throw, write_plan
+from planner.catch.results import CatchReason
+from planner.errors import InputError
 
 BUDGET_S = 0.420 - 0.300 - 0.025  # seed flight time - actuation time - signal handling
 
 
 def _category(reason: str) -> str:
     return reason.split(":")[0].split(" (")[0]
+
+
+HARD_LIMITS = {CatchReason.OUT_OF_REACH, CatchReason.TOO_SOON, CatchReason.TOO_FAST_TO_STOP}
+_SHORT = {CatchReason.OUT_OF_REACH: "reach", CatchReason.TOO_SOON: "soon",
+          CatchReason.TOO_FAST_TO_STOP: "fast"}
+
+
+def _cell(p) -> str:
+    if p is None:
+        return "-"
+    if p.feasible:
+        return f"{100 * p.stop.headroom:.0f}"
+    hard = [k for k in p.reason_kinds if k in HARD_LIMITS]
+    return _SHORT[hard[0]] if hard else p.reason_kinds[0].value
+
+
+def grid(pl, ball, check: bool) -> int:
+    """The ``--grid`` run (module docstring)."""
+    import tempfile
+
+    heights, angles, dists = (-0.3, 0.0, 0.3), range(15, 76, 10), np.arange(0.5, 4.01, 0.5)
+    tmp = Path(tempfile.mkdtemp(prefix="bench_catch_"))
+    for soft in (False, True):
+        counts: Counter[str] = Counter()
+        cpu = []
+        rejected = []
+        print(f"\n{'soft catch' if soft else 'palm at rest (before issue 15)'}: stopping "
+              "headroom % (feasible) or why not (reach / soon / fast); '-' no such throw")
+        print("  h(m) deg " + " ".join(f"{d:>5.1f}" for d in dists))
+        for h in heights:
+            for a in angles:
+                cells = []
+                for d in dists:
+                    c = time.process_time()
+                    try:
+                        p = plan_throw(a, d, h, planner=pl, ball=ball, soft=soft)
+                    except InputError:
+                        p = None
+                    cpu.append(time.process_time() - c)
+                    cells.append(_cell(p))
+                    if p is None:
+                        counts["no such throw"] += 1
+                        continue
+                    named = bool(set(p.reason_kinds) & HARD_LIMITS)
+                    counts["feasible" if p.feasible else "named" if named else "other"] += 1
+                    if check and soft and p.feasible:
+                        from planner.check import check_trajectory
+
+                        path = tmp / "c.csv"
+                        write_plan(p, str(path))
+                        rep = check_trajectory(str(path))
+                        counts["check ok"] += rep.ok
+                        if not rep.ok:
+                            rejected.append((a, d, h, rep.problems))
+                print(f"  {h:+.1f} {a:3d} " + " ".join(f"{x:>5s}" for x in cells))
+        n = sum(counts[k] for k in ("feasible", "named", "other"))
+        print(f"  {n} throws: feasible {counts['feasible']}, infeasible for a hard limit "
+              f"{counts['named']}, otherwise {counts['other']} ({counts['no such throw']} "
+              f"grid points are no throw); planning CPU p50 "
+              f"{1000 * np.percentile(cpu, 50):.1f} ms, p99 {1000 * np.percentile(cpu, 99):.1f} ms")
+        if check and soft:
+            print(f"  check: {counts['check ok']} of {counts['feasible']} feasible plans pass; "
+                  f"rejected {rejected[:3]}")
+        for d in (1.5, 3.0):
+            p = plan_throw(30.0, d, 0.0, planner=pl, ball=ball, soft=soft)
+            st = p.stop
+            worst = sorted(zip(p.hand.motor_names, st.motor_headroom), key=lambda x: x[1])[:4]
+            print(f"  30 deg from {d:g} m: feasible {p.feasible}, stopping {st.force_n:.1f} N, "
+                  f"headroom {100 * st.headroom:.1f} % (motor.{st.motor}); least per motor: "
+                  + ", ".join(f"{m} {100 * x:.1f} %" for m, x in worst))
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -41,6 +122,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--ball", default="tennis")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--warmup", type=int, default=20)
+    ap.add_argument("--grid", action="store_true", help="issue 15's envelope, before/after")
+    ap.add_argument("--check", action="store_true", help="with --grid: check every feasible plan")
     a = ap.parse_args(argv)
 
     t0 = time.perf_counter()
@@ -48,6 +131,8 @@ def main(argv: list[str] | None = None) -> int:
     ball = get_ball(a.ball)
     pl.closing(ball.radius_m)
     setup = time.perf_counter() - t0
+    if a.grid:
+        return grid(pl, ball, a.check)
 
     rng = np.random.default_rng(a.seed)
     throws = np.column_stack([rng.uniform(20, 60, a.n), rng.uniform(1, 3, a.n),

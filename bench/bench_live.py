@@ -13,10 +13,17 @@ ball within 15 mm of the palm at the planned intercept, no fingertip inside it b
 the grasp in time and held, the stopping and holding forces within every motor. Shown
 over every throw and over those the planner calls feasible from the true flight (the
 others are out of the hand's strength whatever the camera sees). Latency: from an
-observation to its new rows (``CatchSession.latencies_s``), after the set-up (hand, IK,
-closing table, one warm-up session), p50 and p99.
+observation to its new rows (``CatchSession.latencies_s``, wall clock), after the set-up
+(hand, IK, closing table, one warm-up session), p50 and p99; beside it the CPU time of
+the same span (``CatchSession.cpu_s``: the latency less the time the machine gave other
+processes; sessions without it show none).
 
-    /work/.venv/bin/python bench/bench_live.py [--n 20] [--seed 0]
+``--against DIR`` also runs every configuration with the planner of another checkout
+(``git worktree add DIR REV``), in a child process (``PYTHONPATH=DIR``) right before this
+one's, on the same throws and the same noise: before and after side by side under the
+same load.
+
+    python bench/bench_live.py [--n 20] [--seed 0] [--against DIR]
 """
 
 from __future__ import annotations
@@ -24,26 +31,33 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-from planner.catch.flight import get_ball, predict_throw
-from planner.catch.plan import get_planner, plan_throw
-from planner.catch.session import CatchSession
-from planner.check import check_trajectory
-from planner.trajfile import parse_trajectory
-
+ROOT = Path(__file__).resolve().parent.parent
 NOISES_M = (0.002, 0.005, 0.010)
 RATES_HZ = (100.0, 500.0)
+CODE_ENV = "BENCH_LIVE_CODE"  # a worker's checkout (its planner)
+
+
+def throws_of(n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.column_stack([rng.uniform(20, 60, n), rng.uniform(1.0, 2.5, n),
+                            rng.uniform(-0.2, 0.2, n)])
 
 
 def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng):
-    """One throw: (caught against the true ball, latencies (s), outcome)."""
+    """One throw: (caught against the true ball, wall latencies (s), CPU times (s) or
+    None, outcome, the check's problems)."""
+    from planner.catch.flight import predict_throw
+    from planner.catch.session import CatchSession
+    from planner.check import check_trajectory
+    from planner.trajfile import parse_trajectory
+
     fl = predict_throw(angle, dist, height, ball, drag=True)
     s = CatchSession(dist, height, ball=ball, drag=True, rate_hz=100.0, planner=pl)
     for k in range(1, int(3.0 * rate_hz)):
@@ -57,52 +71,104 @@ def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng):
     end = parse_trajectory(s.text).end
     end = dict(end, ball=fl.to_metadata())  # judged against the true ball
     rep = check_trajectory(parse_trajectory(head + "\n# " + json.dumps(end) + "\n"))
-    return rep.ok, s.latencies_s, s.outcome, rep.problems
+    return rep.ok, s.latencies_s, getattr(s, "cpu_s", None), s.outcome, rep.problems
+
+
+def run_config(pl, ball, throws, rate, noise, seed) -> dict:
+    """Every throw at one rate and noise level (its noise from its own seed)."""
+    rng = np.random.default_rng([seed, int(rate), round(noise * 1e4)])
+    ok, lat, cpu, fails = [], [], [], {}
+    for th in throws:
+        caught, ls, cs, outcome, problems = run_throw(pl, ball, *th, noise, rate, rng)
+        ok.append(bool(caught))
+        lat.extend(ls)
+        cpu.extend(cs or [])
+        if not caught:
+            key = problems[0].split(":")[0][:50] if problems else outcome
+            fails[key] = fails.get(key, 0) + 1
+    return {"ok": ok, "lat": lat, "cpu": cpu, "fails": fails}
+
+
+def setup():
+    from planner.catch.flight import get_ball
+    from planner.catch.plan import get_planner
+
+    t0 = time.perf_counter()
+    pl = get_planner("default")
+    ball = get_ball("tennis")
+    pl.closing(ball.radius_m)
+    run_throw(pl, ball, 30.0, 1.5, 0.0, 0.005, 100.0, np.random.default_rng(0))  # warm-up
+    return pl, ball, time.perf_counter() - t0
+
+
+def worker(n: int, seed: int, rate: float, noise: float) -> None:
+    pl, ball, _ = setup()
+    sys.stdout.write(json.dumps(run_config(pl, ball, throws_of(n, seed), rate, noise, seed)))
+
+
+def run_against(tree: Path, a, rate: float, noise: float) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(tree), **{CODE_ENV: str(tree)})
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--n", str(a.n),
+                          "--seed", str(a.seed), "--worker", f"{rate},{noise}"],
+                         cwd=tree, env=env, check=True, capture_output=True, text=True).stdout
+    return json.loads(out)
+
+
+def line(label: str, r: dict, feasible: np.ndarray) -> str:
+    ok, lat, cpu = np.array(r["ok"]), np.array(r["lat"]), np.array(r["cpu"])
+    p50, p99 = np.percentile(lat, [50, 99]) * 1000
+    c = (f", CPU p50 {np.percentile(cpu, 50) * 1000:.2f} p99 {np.percentile(cpu, 99) * 1000:.2f}"
+         if cpu.size else "")
+    rate_f = ok[feasible].mean() if feasible.any() else float("nan")
+    return (f"{label}caught {ok.sum():3d}/{ok.size} ({ok.mean():.0%}; of the feasible "
+            f"{rate_f:.0%}); latency p50 {p50:.2f} ms, p99 {p99:.2f} ms{c} over {lat.size} "
+            "observations" + (f"; misses: {r['fails']}" if r["fails"] else ""))
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=20, help="throws per noise level and rate")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--against", type=Path, default=None, metavar="DIR",
+                    help="also run the planner of this checkout, configuration by configuration")
+    ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)  # RATE,NOISE: one config
     a = ap.parse_args(argv)
-    t0 = time.perf_counter()
-    pl = get_planner("default")
-    ball = get_ball("tennis")
-    pl.closing(ball.radius_m)
-    rng = np.random.default_rng(a.seed)
-    run_throw(pl, ball, 30.0, 1.5, 0.0, 0.005, 100.0, rng)  # warm-up
-    setup = time.perf_counter() - t0
-    throws = np.column_stack([rng.uniform(20, 60, a.n), rng.uniform(1.0, 2.5, a.n),
-                              rng.uniform(-0.2, 0.2, a.n)])
+    sys.path.insert(0, os.environ.get(CODE_ENV, str(ROOT)))
+    if a.worker:
+        rate, noise = (float(x) for x in a.worker.split(","))
+        worker(a.n, a.seed, rate, noise)
+        return 0
+    from planner.catch.plan import plan_throw
+
+    pl, ball, set_up = setup()
+    throws = throws_of(a.n, a.seed)
     feasible = np.array([plan_throw(*th, planner=pl, ball=ball, drag=True).feasible
                          for th in throws])
     print(f"live catch, hand default, tennis ball with drag, {a.n} throws (angle 20-60 deg, "
           f"dist 1-2.5 m, height -0.2..0.2 m; {feasible.sum()} feasible from the true flight); "
-          f"set-up {setup:.2f} s")
-    all_lat = []
+          f"set-up {set_up:.2f} s" + (f"; before: {a.against}" if a.against else ""))
+    all_lat, all_cpu, before = [], [], []
     for rate in RATES_HZ:
         for noise in NOISES_M:
-            ok, lat, fails = [], [], {}
-            for th in throws:
-                caught, ls, outcome, problems = run_throw(pl, ball, *th, noise, rate, rng)
-                ok.append(caught)
-                lat.extend(ls)
-                if not caught:
-                    key = problems[0].split(":")[0][:50] if problems else outcome
-                    fails[key] = fails.get(key, 0) + 1
-            ok = np.array(ok)
-            lat = np.array(lat)
-            all_lat.append(lat)
-            p50, p99 = np.percentile(lat, [50, 99]) * 1000
-            rate_f = ok[feasible].mean() if feasible.any() else float("nan")
-            print(f"  {rate:4.0f} Hz, noise {1000 * noise:4.1f} mm: caught {ok.sum():3d}/{a.n} "
-                  f"({ok.mean():.0%}; of the feasible {rate_f:.0%}); latency p50 {p50:.2f} ms, "
-                  f"p99 {p99:.2f} ms over {lat.size} observations"
-                  + (f"; misses: {fails}" if fails else ""))
-    lat = np.concatenate(all_lat)
+            head = f"  {rate:4.0f} Hz, noise {1000 * noise:4.1f} mm: "
+            if a.against:
+                b = run_against(a.against.resolve(), a, rate, noise)
+                before.append(b["lat"])
+                print(line(head + "before ", b, feasible))
+                head = " " * len(head) + "after  "
+            r = run_config(pl, ball, throws, rate, noise, a.seed)
+            all_lat.append(r["lat"])
+            all_cpu.append(r["cpu"])
+            print(line(head, r, feasible))
+    lat, cpu = np.concatenate(all_lat), np.concatenate(all_cpu)
     p50, p99 = np.percentile(lat, [50, 99]) * 1000
-    print(f"  all: latency p50 {p50:.2f} ms, p99 {p99:.2f} ms (target p99 <= 2 ms: "
-          f"{'met' if p99 <= 2.0 else 'NOT met'})")
+    if before:
+        b50, b99 = np.percentile(np.concatenate(before), [50, 99]) * 1000
+        print(f"  all, before: latency p50 {b50:.2f} ms, p99 {b99:.2f} ms")
+    c50, c99 = np.percentile(cpu, [50, 99]) * 1000 if cpu.size else (np.nan, np.nan)
+    print(f"  all: latency p50 {p50:.2f} ms, p99 {p99:.2f} ms (CPU p50 {c50:.2f}, p99 "
+          f"{c99:.2f}); target p99 <= 2 ms: {'met' if p99 <= 2.0 else 'NOT met'}")
     if hasattr(os, "getloadavg"):
         print(f"  load average at the end: {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
     return 0

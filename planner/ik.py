@@ -21,6 +21,7 @@ Per step the QP holds:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -346,12 +347,27 @@ class HandIK:
         point = np.asarray(point_m, dtype=float)
         nrm = np.asarray(normal, dtype=float)
         nrm = nrm / np.linalg.norm(nrm)
+
+        def errors(T: np.ndarray | None = None) -> tuple[float, float]:
+            T = self.robot.get_T_world_frame("palm_center") if T is None else T
+            z = T[:3, 2]
+            d = T[:3, 3] + offset_m * z - point
+            return math.sqrt(float(d @ d)), math.acos(min(1.0, max(-1.0, float(z @ nrm))))
+
+        # q_start meeting the task already (a warm start usually does: the catch's closed
+        # form) needs no iteration, so no solver set-up: the hand model's forward kinematics
+        # (the same URDF and mount) tell
+        err, ang = errors(self.hand.frame_pose(q_start, "palm_center"))
+        if err <= tol_m and ang <= tol_rad:
+            q = self.hand.apply_couplings(np.clip(q_start, self.hand.lower, self.hand.upper))
+            return IKResult(q, True, 0, err, float(np.inf))
+        self.set_q(q_start)
+        err, ang = errors()
         posture = q_start if posture is None else posture
         self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
         self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
         # the arm (rail, wrist) is pulled towards ``posture``'s, not held where it is
         self.arm_task.set_joints({n: float(posture[self.hand.index[n]]) for n in self._arm})
-        self.set_q(q_start)
         for f in list(self._tasks):
             self.solver.remove_task(self._tasks.pop(f))
         pos = self.solver.add_position_task("palm_center", point - offset_m * nrm)
@@ -360,15 +376,6 @@ class HandIK:
         ax.configure("palm_normal", "soft", float(normal_weight))
         for n in locked:
             self.solver.mask_dof(n)
-
-        def errors() -> tuple[float, float]:
-            T = self.robot.get_T_world_frame("palm_center")
-            z = T[:3, 2]
-            e = float(np.linalg.norm(T[:3, 3] + offset_m * z - point))
-            a = float(np.arccos(np.clip(z @ nrm, -1.0, 1.0)))
-            return e, a
-
-        err, ang = errors()
         it = 0
         try:
             for it in range(1, max_iter + 1):

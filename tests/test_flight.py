@@ -119,6 +119,40 @@ def test_vectorised_evaluation():
         )
 
 
+@pytest.mark.parametrize("drag", [False, True])
+def test_one_time_evaluation_is_the_array_evaluation(drag):
+    """position1 / velocity1 / state1 (floats, for the live re-plan) give the very numbers
+    of the array path, inside the table, beyond it (it grows) and before t = 0."""
+    f = Flight(np.array([0.1, -0.2, 0.3]), np.array([3.0, 0.7, 2.5]), BALLS["tennis"],
+               BALLS["tennis"].drag_per_m if drag else 0.0)
+    ts = np.concatenate([np.linspace(0.0, 1.3, 131), [2.7, -0.05, 0.0137]])
+    for t in ts.tolist():
+        p, v = f.position1(t), f.velocity1(t)
+        assert p == tuple(f.position(np.array([t]))[0]) and v == tuple(f.velocity(np.array([t]))[0])
+        assert f.state1(t) == p + v
+        np.testing.assert_array_equal(f.position(t), p)  # a float goes the one-time way
+    with pytest.raises(InputError, match="finite"):
+        f.position1(math.nan)
+    if drag:
+        with pytest.raises(InputError, match="within"):
+            f.velocity1(1e3)
+
+
+def test_nodes_are_the_table_the_flight_interpolates():
+    f = predict_throw(30.0, 1.5, ball="tennis", drag=True)
+    nd = f.nodes(0.5)
+    h, i0 = nd.step_s, nd.i0
+    n = int(0.5 / h)
+    assert len(nd.sz) - i0 > n + 1
+    np.testing.assert_allclose(f.position(n * h) - f.p0,
+                               [nd.direction[0] * nd.sz[i0 + n, 0],
+                                nd.direction[1] * nd.sz[i0 + n, 0], nd.sz[i0 + n, 1]],
+                               atol=1e-15)
+    np.testing.assert_allclose(f.velocity(n * h)[2], nd.uw[i0 + n, 1], atol=1e-15)
+    with pytest.raises(PlannerError, match="no drag table"):
+        predict_throw(30.0, 1.5).nodes(0.5)
+
+
 def test_velocity_is_derivative_of_position():
     f = predict_throw(50.0, 3.0, 0.5, ball="tennis", drag=True)
     eps = 1e-5

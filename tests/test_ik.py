@@ -52,3 +52,22 @@ def test_the_thumb_presses_every_black_key_within_its_reach():
             assert tip[1] >= kb.BLACK_Y0_M + THUMB_BLACK_EDGE_M - 0.001
         tried += 1
     assert tried >= 30
+
+
+def test_solve_palm_returns_a_start_that_meets_the_task_unchanged():
+    """A warm start already within tolerance (the catch's closed form) takes no iteration
+    and comes back as it went in; one 5 cm off along the rail is solved by iterating."""
+    import numpy as np
+
+    from planner.catch.plan import get_planner
+
+    pl = get_planner("default")
+    h, q = pl.hand, pl.q_rest.copy()
+    T = h.palm_pose(q)
+    point, n = T[:3, 3] + 0.03 * T[:3, 2], T[:3, 2]
+    res = pl.ik.solve_palm(point, n, q, q, offset_m=0.03, max_iter=5)
+    assert res.converged and res.iterations == 0
+    np.testing.assert_array_equal(res.q, h.apply_couplings(np.clip(q, h.lower, h.upper)))
+    moved = pl.ik.solve_palm(point + np.array([0.0, 0.05, 0.0]), n, q, q, offset_m=0.03,
+                             max_iter=20)
+    assert moved.iterations > 0 and moved.converged and moved.press_error_m < 0.001  # (rail)

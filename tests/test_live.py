@@ -11,14 +11,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.catch.flight import get_ball, predict_throw
-from planner.catch.livefit import LiveFit
+from planner.catch.arm import open_from
+from planner.catch.flight import Flight, _step_for, get_ball, predict_throw
+from planner.catch.intercept import find_intercept
+from planner.catch.livefit import LIVE_STEP_FACTOR, LiveFit
+from planner.catch.livemotion import LiveMotion, rest_by_s
 from planner.catch.observe import fit_observations
 from planner.catch.plan import get_planner
 from planner.catch.planner import PLAN_BUDGET_S, SIGNAL_S
 from planner.catch.session import HELD, CatchSession
 from planner.check import check_trajectory
 from planner.errors import InputError
+from planner.trajectory import Phase, sample
 from planner.trajfile import parse_trajectory, read_trajectory
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -48,6 +52,19 @@ def test_live_fit_matches_the_batch_fit(drag):
     d = lf.result.flight.position(0.41) - ref.flight.position(0.41)
     assert np.linalg.norm(d) < 1e-4
     np.testing.assert_allclose(lf.result.sigma_axis, ref.sigma_axis, rtol=1e-3)
+
+
+@pytest.mark.parametrize("angle,dist", [(15.0, 1.0), (45.0, 2.5), (75.0, 4.0), (30.0, 4.0)])
+def test_live_fit_table_step_is_well_below_the_camera_noise(angle, dist):
+    """The fit's drag tables take LIVE_STEP_FACTOR x the planner's step: within 1 um and
+    1 um/s of the planner's table over 1.5 s (a camera's noise is >= 2 mm)."""
+    fl = predict_throw(angle, dist, 0.0, BALL, drag=True)
+    live = Flight(fl.p0, fl.v0, BALL, fl.drag_per_m,
+                  step_s=LIVE_STEP_FACTOR * _step_for(fl.drag_per_m, fl.speed))
+    assert live.step_s == pytest.approx(LIVE_STEP_FACTOR * fl.step_s)
+    ts = np.linspace(0.0, 1.5, 1501)
+    assert np.abs(live.position(ts) - fl.position(ts)).max() < 1e-6
+    assert np.abs(live.velocity(ts) - fl.velocity(ts)).max() < 1e-6
 
 
 def test_live_fit_refuses_bad_observations():
@@ -105,6 +122,97 @@ def test_session_catches_the_true_ball(live_run):
                             + "\n")
     rep = check_trajectory(true)
     assert rep.catch.intercept_error_m < 0.015 and rep.ok, rep.problems
+
+
+def test_session_first_plan_starts_from_the_vacuum_fit(live_run):
+    """The observation before the first drag fit searches the vacuum fit's whole path; the
+    first fit's search, warm-started from it, finds what the whole search finds."""
+    _, s, _ = live_run
+    lf = LiveFit(BALL, BALL.drag_per_m)
+    for t, p in zip(*_observations()[1:]):
+        if lf.add(t, p) is not None:
+            break
+    pl = s.pl
+    first = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=pl)
+    for t, p in zip(*_observations()[1:]):
+        first.observe(t, p)
+        if first.fit.n == lf.min_obs - 1:
+            assert first._prior is not None and first.t_i is None
+        if first.t_i is not None:
+            break
+    full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m,
+                          float(lf.flight.time_at_x(1.5)))
+    ic = first.pose.ic
+    assert abs(ic.t - full.t) < 1e-6 and abs(ic.theta - full.theta) < 1e-6
+    assert abs(ic.dev - full.dev) < 1e-6 and abs(ic.rail - full.rail) < 1e-6
+
+
+def _motion():
+    """The planner, its hand, joints and closing, an open pose (wrist 0.3 / 0.1 rad) and a
+    LiveMotion towards it."""
+    pl = get_planner("default")
+    h, j = pl.hand, pl.joints
+    cl = pl.closing(BALL.radius_m)
+    q_arm = pl.q_zero.copy()
+    q_arm[j.i_flex], q_arm[j.i_dev] = 0.3, 0.1
+    q_open = open_from(h, j, q_arm, cl.q_closed)
+    return pl, h, j, cl, q_open, LiveMotion(h, j.arm, pl.q_rest, q_open, cl.q_closed, pl.dyn)
+
+
+def test_motion_rows_are_the_phases_and_the_arm_move():
+    """LiveMotion.rows: the min-jerk phases (trajectory.sample) on the fingers and the arm's
+    quintic (its positions as Quintic.state gives them); within() as the grid check."""
+    pl, h, j, cl, q_open, m = _motion()
+    m.start(0.05, q_open, 0.2)
+    m.set_closing(0.3, cl.duration_s)
+    old = m.seg
+    assert m.reaim(0.12, q_open + 0.02 * np.isin(np.arange(h.n), j.arm)) == 1.0
+    t = np.arange(0, 61) * 0.01
+    fingers = [Phase(m._open, m.open_s), Phase(m._close, m.close_s)]
+    want = sample(fingers, np.array([m.t_move, m.close_start_s]), t, pl.q_rest)
+    want[:, list(j.arm)] = np.where((t <= 0.12)[:, None], old.state(t)[0], m.seg.state(t)[0])
+    np.testing.assert_allclose(m.rows(t, old, 0.12), h.apply_couplings(want), atol=1e-15)
+    for seg in (old, m.seg):
+        q, v, a = seg.state(seg.t0 + np.linspace(0.0, seg.duration_s, 301))
+        lo, hi, vm, am = h.lower[m.arm], h.upper[m.arm], h.velocity[m.arm], h.acceleration[m.arm]
+        grid = bool(np.all(q >= lo - 1e-12) and np.all(q <= hi + 1e-12)
+                    and np.all(np.abs(v) <= vm) and np.all(np.abs(a) <= am))
+        assert seg.within(lo, hi, vm, am, seg.duration_s / 300) == grid
+        assert not seg.within(lo, hi, vm, 0.5 * np.abs(a).max(axis=0), seg.duration_s / 300)
+
+
+def test_reaim_ends_at_rest_in_time_within_the_motors():
+    """The first move and a re-aim keep every motor within 80 % of its capacity as the arm
+    moves the hand's inertia (StopDynamics.accel_room at both ends), a re-aim ends at rest
+    by ``rest_by``, and is refused (the old move kept) when it cannot."""
+    pl, h, j, cl, q_open, m = _motion()
+    T = m.move_time(pl.q_rest, q_open)
+    assert T >= pl.dyn.move_time(pl.q_rest, q_open)
+    m.start(0.05, q_open, T)
+    m.set_closing(0.3, cl.duration_s)
+
+    def worst(seg, q_from, q_to):
+        _, _, a = seg.state(np.linspace(seg.t0, seg.end_s, 2001))
+        return max(float(np.max(np.abs(a @ MH[:, m.arm].T) / room))
+                   for MH, room in map(pl.dyn.accel_room, (q_from, q_to)))
+
+    assert 0.9 < worst(m.seg, pl.q_rest, q_open) <= 1.0 + 1e-6  # the first move: at the bound
+    old = m.seg
+    target = q_open + 0.02 * np.isin(np.arange(h.n), j.arm)
+    assert m.reaim(0.2, target, rest_by=0.205) == 0.0 and m.seg is old
+    assert m.reaim(0.2, target, rest_by=0.5) == 1.0 and m.seg.end_s <= 0.5 + 1e-12
+    assert m.seg.t0 == 0.2 and worst(m.seg, m.rows(np.array([0.2]))[0], target) <= 1.0 + 1e-9
+
+
+def test_session_arm_at_rest_when_the_ball_arrives(live_run):
+    """The rows the check's stopping load reads around the intercept: the arm still."""
+    _, s, _ = live_run
+    tr = parse_trajectory(s.text)
+    arm = list(s.pl.joints.arm)
+    t_i = tr.end["intercept_t"]
+    near = (tr.t_s >= rest_by_s(t_i, s.dt)) & (tr.t_s <= t_i + 0.05)
+    assert near.sum() >= 6 and rest_by_s(t_i, s.dt) <= (math.floor(t_i / s.dt) - 1) * s.dt + 1e-12
+    np.testing.assert_array_equal(tr.q[near][:, arm], np.tile(tr.q[near][0, arm], (near.sum(), 1)))
 
 
 def test_session_needs_enough_observations():

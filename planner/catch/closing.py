@@ -24,6 +24,8 @@ TIP_GAP_M = 0.003  # closed fingertips: this far outside the ball's surface
 TIP_ELEVATION_DEG = 40.0  # closed fingertips: above the ball's equator (palm = south pole)
 _N_CLOSE = 201  # samples of the closing move (palm frame table)
 _N_CAND = 25  # candidate starts of the closing move
+_CAND_CHUNK = 4  # ... judged this many at a time, earliest first (the first clear one is
+# among the first four in 93 % of a live catch's re-plans: bench_live throws, 100 Hz)
 
 
 def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
@@ -148,9 +150,14 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
     # closed of the two neighbouring samples)
     cands = np.linspace(want, t_i, _N_CAND)
     n_tab = len(closing.u)
-    U = np.clip((tt[None, :] - cands[:, None]) / closing.duration_s, 0.0, 1.0)
-    k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
-    d = np.linalg.norm(closing.tips_pc[k] - b_pc[None, :, None, :], axis=-1)
-    ok = ~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2))
-    good = np.flatnonzero(ok)
-    return float(cands[good[0]]) if good.size else float(t_i)
+    for lo in range(0, _N_CAND, _CAND_CHUNK):  # the first clear one is nearly always early
+        c = cands[lo:lo + _CAND_CHUNK]
+        U = np.clip((tt[None, :] - c[:, None]) / closing.duration_s, 0.0, 1.0)
+        k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
+        dd = closing.tips_pc[k] - b_pc[None, :, None, :]
+        dd *= dd  # (the norm over the last axis, written out: np.linalg.norm is slow there)
+        d = np.sqrt(dd[..., 0] + dd[..., 1] + dd[..., 2])
+        good = np.flatnonzero(~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2)))
+        if good.size:
+            return float(c[good[0]])
+    return float(t_i)

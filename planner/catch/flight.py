@@ -9,7 +9,7 @@ degrees above horizontal. In flight its acceleration is::
 
 with rho_air = 1.204 kg/m^3 (dry air, 20 degC, sea level) and k = 0 in a vacuum.
 
-Vacuum flights are closed form. Drag flights are integrated once with a
+Vacuum flights are closed form. Drag flights are integrated once (``dragtable``) with a
 fixed-step RK4 into a table of nodes (position and velocity along the flight);
 ``position`` and ``velocity`` interpolate the table with cubic Hermite
 polynomials (positions with the stored velocities, velocities with the stored
@@ -39,7 +39,17 @@ from typing import Any
 
 import numpy as np
 
-from planner.errors import InfeasibleError, InputError, SolverError
+from planner.catch.dragtable import (  # (the RK4 table of a drag flight)
+    DragNodes,
+    G,
+    _cross_fraction,
+    _hermite,
+    _hermite_np,
+    _rk4_run,
+    _step_for,
+    _Table,
+)
+from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
 
 __all__ = [
     "BALLS",
@@ -56,8 +66,6 @@ __all__ = [
     "predict_throw",
 ]
 
-G = 9.81
-"""Gravity, m/s^2 (down, along -z)."""
 GRAVITY = np.array([0.0, 0.0, -G])
 GRAVITY.setflags(write=False)
 RHO_AIR = 1.204
@@ -72,9 +80,9 @@ MAX_OBS_RANGE_M = MAX_LAUNCH_SPEED * MAX_TIME + 0.5 * G * MAX_TIME**2
 """The farthest a ball launched at MAX_LAUNCH_SPEED gets from the launch point within
 MAX_TIME (vacuum): an observation farther off is no ball of a throw, m."""
 
-_MAX_STEP = 0.01  # s, coarsest RK4 step of a drag table
-_STEP_SCALE = 0.005  # step <= _STEP_SCALE / (k * speed scale)
 _SHOOT_TOL = 1e-9  # m, height miss accepted by the shooting
+_HALF_GZ = 0.5 * -G  # z of 0.5 * GRAVITY
+_S_S_Z = np.array([0, 0, 1])  # (s, z) -> (s, s, z)
 _FD_STEP = 1e-6  # m and m/s, central finite-difference step on [p0, v0]
 
 
@@ -172,140 +180,6 @@ def get_ball(ball: Ball | str | None) -> Ball:
     )
 
 
-def _step_for(k: float, speed: float) -> float:
-    """RK4 step for a drag flight: small against the drag time 1/(k v)."""
-    scale = max(speed, math.sqrt(G / k))
-    return min(_MAX_STEP, _STEP_SCALE / (k * scale))
-
-
-def _rk4_run(S, Z, U, W, k, h, n_steps, s_stop=math.inf, z_floor=-math.inf):
-    """Append up to ``n_steps`` RK4 steps of size ``h`` (may be < 0) to the lists.
-
-    State (s, z, u, w) = horizontal distance, height and their rates;
-    du/dt = -k|v|u, dw/dt = -g - k|v|w. Stops after the step where s >= s_stop,
-    or where the ball descends below z_floor (it never climbs back: w < 0 stays < 0).
-    """
-    g = G
-    s, z, u, w = S[-1], Z[-1], U[-1], W[-1]
-    h2 = 0.5 * h
-    h6 = h / 6.0
-    sqrt = math.sqrt
-    for _ in range(n_steps):
-        sp = sqrt(u * u + w * w)
-        a1u = -k * sp * u
-        a1w = -g - k * sp * w
-        u2 = u + h2 * a1u
-        w2 = w + h2 * a1w
-        sp = sqrt(u2 * u2 + w2 * w2)
-        a2u = -k * sp * u2
-        a2w = -g - k * sp * w2
-        u3 = u + h2 * a2u
-        w3 = w + h2 * a2w
-        sp = sqrt(u3 * u3 + w3 * w3)
-        a3u = -k * sp * u3
-        a3w = -g - k * sp * w3
-        u4 = u + h * a3u
-        w4 = w + h * a3w
-        sp = sqrt(u4 * u4 + w4 * w4)
-        a4u = -k * sp * u4
-        a4w = -g - k * sp * w4
-        s += h6 * (u + 2.0 * (u2 + u3) + u4)
-        z += h6 * (w + 2.0 * (w2 + w3) + w4)
-        u += h6 * (a1u + 2.0 * (a2u + a3u) + a4u)
-        w += h6 * (a1w + 2.0 * (a2w + a3w) + a4w)
-        S.append(s)
-        Z.append(z)
-        U.append(u)
-        W.append(w)
-        if s >= s_stop or (z < z_floor and w < 0.0):
-            break
-
-
-def _hermite(y0: float, y1: float, d0: float, d1: float, h: float, th: float) -> float:
-    """Cubic Hermite on one step: values y0, y1, derivatives d0, d1, fraction th."""
-    m0 = h * d0
-    m1 = h * d1
-    dy = y1 - y0
-    return y0 + th * (m0 + th * ((3.0 * dy - 2.0 * m0 - m1) + th * (m0 + m1 - 2.0 * dy)))
-
-
-def _cross_fraction(s0: float, s1: float, u0: float, u1: float, h: float, target: float) -> float:
-    """Fraction th in [0, 1] of the step where the Hermite s(th) equals ``target``."""
-    m0 = h * u0
-    m1 = h * u1
-    ds = s1 - s0
-    c2 = 3.0 * ds - 2.0 * m0 - m1
-    c3 = m0 + m1 - 2.0 * ds
-    r = target - s0
-    th = r / ds if ds > 0 else 0.0
-    th = min(1.0, max(0.0, th))
-    for _ in range(30):
-        f = th * (m0 + th * (c2 + th * c3)) - r
-        df = m0 + th * (2.0 * c2 + 3.0 * th * c3)
-        if df <= 0:
-            break
-        step = f / df
-        th = min(1.0, max(0.0, th - step))
-        if abs(step) <= 1e-15:
-            break
-    return th
-
-
-class _Table:
-    """RK4 nodes of a drag flight at t = i h (i in [-len(bwd)+1, len(fwd)-1]), grown on demand."""
-
-    def __init__(self, u0: float, w0: float, k: float, h: float) -> None:
-        self.k = k
-        self.h = h
-        self.fwd = ([0.0], [0.0], [u0], [w0])
-        self.bwd = ([0.0], [0.0], [u0], [w0])
-        self._arrays: tuple | None = None
-
-    def _grow(self, lists: tuple, h: float, n: int) -> None:
-        n0 = len(lists[0])
-        _rk4_run(*lists, self.k, h, n)
-        last = (lists[0][-1], lists[1][-1], lists[2][-1], lists[3][-1])
-        if not all(map(math.isfinite, last)) or math.hypot(last[2], last[3]) > 1e6:
-            t_end = h * (len(lists[0]) - 1)
-            for col in lists:  # keep the table as it was
-                del col[n0:]
-            raise InputError(
-                f"the drag flight cannot be integrated to t = {t_end:.3g} s (its speed "
-                "diverges going back in time); ask for later times"
-            )
-        self._arrays = None
-
-    def ensure(self, t_lo: float, t_hi: float) -> None:
-        """Integrate until the nodes bracket [t_lo, t_hi]."""
-        h = self.h
-        need = math.ceil(t_hi / h) + 1 - (len(self.fwd[0]) - 1)
-        if need > 0:
-            self._grow(self.fwd, h, max(need, len(self.fwd[0]) // 2))
-        need = math.ceil(-t_lo / h) + 1 - (len(self.bwd[0]) - 1)
-        if need > 0:
-            self._grow(self.bwd, -h, max(need, len(self.bwd[0]) // 2))
-
-    def arrays(self) -> tuple:
-        """(i_lo, S, Z, U, W, AS, AW) as numpy arrays over all nodes."""
-        if self._arrays is None:
-            cols = []
-            for f, b in zip(self.fwd, self.bwd):
-                cols.append(np.array(b[:0:-1] + f, dtype=float))
-            S, Z, U, W = cols
-            sp = np.hypot(U, W)
-            AS = -self.k * sp * U
-            AW = -G - self.k * sp * W
-            self._arrays = (-(len(self.bwd[0]) - 1), S, Z, U, W, AS, AW)
-        return self._arrays
-
-
-def _hermite_np(y0, y1, d0, d1, h, th):
-    m0 = h * d0
-    m1 = h * d1
-    dy = y1 - y0
-    return y0 + th * (m0 + th * ((3.0 * dy - 2.0 * m0 - m1) + th * (m0 + m1 - 2.0 * dy)))
-
-
 # --------------------------------------------------------------------------- flight
 
 
@@ -335,6 +209,12 @@ class Flight:
         if k < 0:
             raise InputError(f"drag_per_m must be >= 0, got {k}")
         object.__setattr__(self, "drag_per_m", k)
+        object.__setattr__(self, "_p0_t", tuple(self.p0.tolist()))
+        object.__setattr__(self, "_v0_t", tuple(self.v0.tolist()))
+        vx, vy = self._v0_t[0], self._v0_t[1]
+        u = math.hypot(vx, vy)
+        object.__setattr__(self, "_dir", (vx / u, vy / u) if u > 0 else (1.0, 0.0))
+        object.__setattr__(self, "_dir3", np.array([*self._dir, 1.0]))
         if k == 0.0:
             object.__setattr__(self, "step_s", None)
             return
@@ -348,13 +228,6 @@ class Flight:
                 raise InputError(f"step_s must be > 0, got {h}")
         object.__setattr__(self, "step_s", h)
         object.__setattr__(self, "_table", _Table(u0, vz, k, h))
-
-    # -- geometry of the planar solution
-    @property
-    def _dir(self) -> tuple[float, float]:
-        vx, vy = float(self.v0[0]), float(self.v0[1])
-        u = math.hypot(vx, vy)
-        return (vx / u, vy / u) if u > 0 else (1.0, 0.0)
 
     @property
     def speed(self) -> float:
@@ -377,34 +250,101 @@ class Flight:
         assert tab is not None
         if ta.size:
             tab.ensure(float(ta.min()), float(ta.max()))
-        i_lo, S, Z, U, W, AS, AW = tab.arrays()
+        i_lo, P, D, A = tab.pairs()
         q = ta / tab.h - i_lo
-        j = np.clip(np.floor(q).astype(np.intp), 0, S.size - 2)
-        th = q - j
-        return j, th, tab.h, (S, Z, U, W, AS, AW)
+        j = np.minimum(np.maximum(np.floor(q).astype(np.intp), 0), len(P) - 2)
+        th = (q - j)[..., None]
+        return j, j + 1, th, tab.h, (P, D, A)
+
+    def integrate_to(self, t_s: float) -> None:
+        """A drag flight's table made to cover [0, ``t_s``] in one run (a look-up there then
+        integrates nothing; growing on demand may integrate up to half again as far)."""
+        if self._table is not None:
+            self._table.ensure(0.0, min(float(t_s), MAX_TIME))
+
+    def nodes(self, t_hi: float) -> DragNodes:
+        """A drag flight's table, integrated to cover [0, ``t_hi``] (PlannerError for a
+        vacuum flight: it has none)."""
+        if self._table is None:
+            raise PlannerError("a vacuum flight has no drag table")
+        self._table.ensure(0.0, t_hi)
+        i_lo, P, D, _ = self._table.pairs()
+        return DragNodes(self._table.h, -i_lo, P, D, self._dir)
+
+    def _time1(self, t: float) -> float:
+        """``_times`` for one time (a float): the same checks without numpy."""
+        if not math.isfinite(t):
+            raise InputError("t must be finite")
+        if self._table is not None and abs(t) > MAX_TIME:
+            raise InputError(f"t must be within +-{MAX_TIME:g} s for a drag flight")
+        return float(t)
+
+    def position1(self, t: float) -> tuple[float, float, float]:
+        """``position`` at one time as three floats (the same arithmetic, no arrays: the
+        live re-plan evaluates the flight at one time at a time, a few us each)."""
+        t = self._time1(t)
+        px, py, pz = self._p0_t
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ * t * t
+        j, th, (_, S, Z, U, W, _, _) = self._table.node1(t)
+        h = self._table.h
+        s = _hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        ex, ey = self._dir
+        return px + ex * s, py + ey * s, pz + z
+
+    def state1(self, t: float) -> tuple[float, float, float, float, float, float]:
+        """``position1`` and ``velocity1`` at one time, from one look-up."""
+        t = self._time1(t)
+        px, py, pz = self._p0_t
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return (px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ * t * t, vx, vy, vz - G * t)
+        j, th, (_, S, Z, U, W, AS, AW) = self._table.node1(t)
+        h = self._table.h
+        s = _hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        u = _hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = _hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        ex, ey = self._dir
+        return px + ex * s, py + ey * s, pz + z, ex * u, ey * u, w
+
+    def velocity1(self, t: float) -> tuple[float, float, float]:
+        """``velocity`` at one time as three floats."""
+        t = self._time1(t)
+        if self._table is None:
+            vx, vy, vz = self._v0_t
+            return vx, vy, vz - G * t
+        j, th, (_, _, _, U, W, AS, AW) = self._table.node1(t)
+        h = self._table.h
+        u = _hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = _hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        ex, ey = self._dir
+        return ex * u, ey * u, w
 
     def position(self, t: Any) -> np.ndarray:
         """Ball centre at time(s) t, shape t.shape + (3,)."""
+        if isinstance(t, float):
+            return np.array(self.position1(t))
         ta = self._times(t)
         if self._table is None:
             tt = ta[..., None]
             return self.p0 + self.v0 * tt + 0.5 * GRAVITY * tt * tt
-        j, th, h, (S, Z, U, W, _, _) = self._lookup(ta)
-        s = _hermite_np(S[j], S[j + 1], U[j], U[j + 1], h, th)
-        z = _hermite_np(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
-        ex, ey = self._dir
-        return self.p0 + np.stack([ex * s, ey * s, z], axis=-1)
+        j, j1, th, h, (P, D, _) = self._lookup(ta)
+        sz = _hermite_np(P[j], P[j1], D[j], D[j1], h, th)  # (s, z)
+        return self.p0 + sz[..., _S_S_Z] * self._dir3  # (ex s, ey s, z)
 
     def velocity(self, t: Any) -> np.ndarray:
         """Ball velocity at time(s) t, shape t.shape + (3,)."""
+        if isinstance(t, float):
+            return np.array(self.velocity1(t))
         ta = self._times(t)
         if self._table is None:
             return self.v0 + GRAVITY * ta[..., None]
-        j, th, h, (_, _, U, W, AS, AW) = self._lookup(ta)
-        u = _hermite_np(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
-        w = _hermite_np(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
-        ex, ey = self._dir
-        return np.stack([ex * u, ey * u, w], axis=-1)
+        j, j1, th, h, (_, D, A) = self._lookup(ta)
+        uw = _hermite_np(D[j], D[j1], A[j], A[j1], h, th)  # (u, w)
+        return uw[..., _S_S_Z] * self._dir3  # (ex u, ey u, w)
 
     def time_at_x(self, x: Any) -> Any:
         """Time t >= 0 at which the ball crosses the plane x = ``x`` (float, or array).

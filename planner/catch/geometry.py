@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -32,7 +34,14 @@ def interp_row(t: np.ndarray, Q: np.ndarray, ti: float) -> np.ndarray:
 
 
 def rot1(axis: np.ndarray, ang: float, v: np.ndarray) -> np.ndarray:
-    return rot(axis, np.array([ang]), v[None])[0]
+    """``rot`` of one vector by one angle (plain float arithmetic: no array overhead)."""
+    ex, ey, ez = axis.tolist()
+    vx, vy, vz = v.tolist()
+    c, s = math.cos(ang), math.sin(ang)
+    kx, ky, kz = ey * vz - ez * vy, ez * vx - ex * vz, ex * vy - ey * vx
+    d = vx * ex + vy * ey + vz * ez
+    return np.array([vx * c + kx * s + d * ex * (1.0 - c), vy * c + ky * s + d * ey * (1.0 - c),
+                     vz * c + kz * s + d * ez * (1.0 - c)])
 
 
 def unit(v: np.ndarray) -> np.ndarray:

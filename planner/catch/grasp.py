@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from planner.check.motormap import motor_torque_matrix
 from planner.errors import InfeasibleError, InputError, SolverError
 from planner.hand.model import GRAVITY_WORLD, HandModel
 from planner.hand.spec import PALM_FRAME
@@ -209,24 +210,6 @@ def ball_contacts(hand: HandModel, q: np.ndarray, centre: np.ndarray, radius: fl
         if dist <= radius + tip_tol_m and dist > 1e-9:
             out.append(Contact(f, tip.copy(), d / dist, jacs[k + 1]))
     return out
-
-
-_LINEAR_M: dict[str, np.ndarray] = {}
-
-
-def motor_torque_matrix(hand: HandModel, q: np.ndarray) -> np.ndarray:
-    """(n_motor, n): ``hand.motor_torques(q, tau) == M @ tau``, built column by column
-    from unit joint torques. When every coupling and transmission is linear the map
-    does not depend on q and is built once per hand (cached by URDF hash)."""
-    linear = (all(c.kind == "linear" for c in hand.couplings)
-              and all(getattr(a, "mk5", None) is None for a in hand.actuators))
-    if linear and hand.urdf_sha256 in _LINEAR_M:
-        return _LINEAR_M[hand.urdf_sha256]
-    M = np.stack([hand.motor_torques(q, e) for e in np.eye(hand.n)], axis=1)
-    if linear:
-        M.setflags(write=False)
-        _LINEAR_M[hand.urdf_sha256] = M
-    return M
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

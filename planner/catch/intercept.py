@@ -77,21 +77,22 @@ class Wrist:
         self.rail_lim = ((float(lo[joints.i_rail]), float(hi[joints.i_rail]))
                          if joints.i_rail is not None else (0.0, 0.0))
 
-    def aligned(self, b: np.ndarray, v: np.ndarray, r: float):
+    def aligned(self, b: np.ndarray, v: np.ndarray, r: float, tilt: float = 0.0):
         """For path samples (positions b, velocities v, reference frame): flexion that
-        turns the normal against v, and h = height of the ball above the palm plane minus r."""
+        turns the normal against v (then ``tilt`` rad further about the flexion axis), and
+        h = height of the ball above the palm plane minus r."""
         e, n0 = self.e_f, self.n0
         m = -v - np.outer(-v @ e, e)
         m = unit(m)
-        theta = np.arctan2(cross(np.broadcast_to(n0, m.shape), m) @ e, m @ n0)
+        theta = np.arctan2(cross(np.broadcast_to(n0, m.shape), m) @ e, m @ n0) + tilt
         s = rot(e, -theta, b - self.W)
         return theta, s, s @ n0 - (self._g0n + r)
 
-    def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float
+    def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float, tilt: float = 0.0
                   ) -> tuple[float, np.ndarray, float]:
         """``_aligned`` for one time (plain float arithmetic: no numpy call overhead)."""
-        bx, by, bz = (float(x) for x in flight.position(t) - C)
-        vx, vy, vz = (float(x) for x in flight.velocity(t))
+        px, py, pz, vx, vy, vz = flight.state1(t)
+        bx, by, bz = px - float(C[0]), py - float(C[1]), pz - float(C[2])
         ex, ey, ez = self._e_t
         nx, ny, nz = self._n0_t
         wx, wy, wz = self._W_t
@@ -100,7 +101,7 @@ class Wrist:
         mn = math.sqrt(mx * mx + my * my + mz * mz)
         mx, my, mz = mx / mn, my / mn, mz / mn
         cx, cy, cz = ny * mz - nz * my, nz * mx - nx * mz, nx * my - ny * mx
-        th = math.atan2(cx * ex + cy * ey + cz * ez, mx * nx + my * ny + mz * nz)
+        th = math.atan2(cx * ex + cy * ey + cz * ez, mx * nx + my * ny + mz * nz) + tilt
         # s = Rot(e, -th) (b - W)
         px, py, pz = bx - wx, by - wy, bz - wz
         c, sn = math.cos(-th), math.sin(-th)
@@ -139,13 +140,16 @@ class Wrist:
         return float((s - a) @ self.e_r)
 
 
-def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float) -> Intercept:
+def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float,
+                   tilt: float = 0.0) -> Intercept:
     """Where and when the palm meets the ball near ``C`` (``planner.catch.plan``, step 1),
-    searched around ``t_c`` (the throw's time at the catch point)."""
+    searched around ``t_c`` (the throw's time at the catch point); ``tilt``: the palm
+    normal turned this far (rad, about the flexion axis) from facing the ball (the soft
+    catch's choice, ``planner.catch.stopping``); 0 faces it."""
     t = np.linspace(max(0.0, t_c - 0.30), t_c + 0.15, _N_SEARCH)
     b = flight.position(t) - C
     v = flight.velocity(t)
-    _, _, hgt = wr.aligned(b, v, r)
+    _, _, hgt = wr.aligned(b, v, r, tilt)
     # first crossing of the palm plane (+ before, - after)
     down = np.flatnonzero((hgt[:-1] > 0) & (hgt[1:] <= 0))
     if down.size:
@@ -154,10 +158,10 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
         # h is smooth (~ the ball's height above the palm plane): a bracketed
         # secant converges in 2-4 steps to 1e-8 m
         ti, (th, s_vec, _) = bracketed_secant(
-            lambda tm: wr.aligned1(flight, C, tm, r), ta, tb, fa, fb)
+            lambda tm: wr.aligned1(flight, C, tm, r, tilt), ta, tb, fa, fb)
         sol = wr.dev_rail(s_vec, r)
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
-            return Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
+            return Intercept(ti, th, sol[0], sol[1], abs(tilt), True, None)
     return _position_only(wr, flight, C, r, t)
 
 
@@ -187,11 +191,14 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
 def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, tb: float,
               fa: float, fb: float) -> float:
     """Time in [ta, tb] at which the ball is ``rho`` from the flexion axis (secant)."""
-    e = wr.e_f
+    ex, ey, ez = wr._e_t
+    ox, oy, oz = (float(c + w) for c, w in zip(C, wr.W))
 
     def f(t: float) -> tuple[float]:
-        w = flight.position(t) - C - wr.W
-        return (float(np.linalg.norm(w - (w @ e) * e)) - rho,)
+        px, py, pz = flight.position1(t)
+        wx, wy, wz = px - ox, py - oy, pz - oz
+        d = wx * ex + wy * ey + wz * ez
+        return (math.sqrt((wx - d * ex) ** 2 + (wy - d * ey) ** 2 + (wz - d * ez) ** 2) - rho,)
 
     return bracketed_secant(f, ta, tb, fa, fb)[0]
 
@@ -209,10 +216,16 @@ def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
     lo, hi = wr.dev_lim
     best: Intercept | None = None
     closest = (np.inf, None)
+    ex, ey, ez = wr._e_t
+    er = tuple(float(x) for x in wr.e_r)
+    W = wr._W_t
+    Cx, Cy, Cz = (float(c) for c in C)
     for dev in devs if devs is not None else (lo, 0.5 * lo, 0.0, 0.5 * hi, hi):
-        a = rot1(wr.u_d, dev, wr.g0) + r * wr.n0
-        a_p = a - (a @ e) * e
-        rho = float(np.linalg.norm(a_p))
+        # 3-vectors as floats below (numpy's per-call cost dominates at this size)
+        ax, ay, az = (rot1(wr.u_d, dev, wr.g0) + r * wr.n0).tolist()
+        d = ax * ex + ay * ey + az * ez
+        apx, apy, apz = ax - d * ex, ay - d * ey, az - d * ez
+        rho = math.sqrt(apx * apx + apy * apy + apz * apz)
         f = dist - rho
         inward = np.flatnonzero((f[:-1] > 0) & (f[1:] <= 0))
         k_near = int(np.argmin(np.abs(f)))
@@ -223,16 +236,24 @@ def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
         k = int(inward[0])
         tk = _crossing(wr, flight, C, rho, float(t[k]), float(t[k + 1]), float(f[k]),
                        float(f[k + 1]))
-        bk = flight.position(tk) - C
-        vk = flight.velocity(tk)
-        wk = bk - wr.W
-        wk_p = wk - (wk @ e) * e
-        th = float(math.atan2(np.cross(a_p, wk_p) @ e, a_p @ wk_p))
+        px, py, pz = flight.position1(tk)
+        vx, vy, vz = flight.velocity1(tk)
+        wx, wy, wz = px - Cx - W[0], py - Cy - W[1], pz - Cz - W[2]
+        d = wx * ex + wy * ey + wz * ez
+        qx, qy, qz = wx - d * ex, wy - d * ey, wz - d * ez
+        # flexion turning a_p onto the ball's offset wk_p about e
+        th = math.atan2((apy * qz - apz * qy) * ex + (apz * qx - apx * qz) * ey
+                        + (apx * qy - apy * qx) * ez, apx * qx + apy * qy + apz * qz)
         if not wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             continue
-        n = rot1(e, th, wr.n0)
-        mis = float(math.acos(np.clip(-(vk @ n) / np.linalg.norm(vk), -1.0, 1.0)))
-        rail = float((wk - rot1(e, th, a)) @ wr.e_r) if wr.i_rail is not None else 0.0
+        nx, ny, nz = rot1(e, th, wr.n0).tolist()
+        mis = math.acos(min(1.0, max(-1.0, -(vx * nx + vy * ny + vz * nz)
+                                     / math.sqrt(vx * vx + vy * vy + vz * vz))))
+        if wr.i_rail is not None:
+            bx, by, bz = rot1(e, th, np.array([ax, ay, az])).tolist()
+            rail = (wx - bx) * er[0] + (wy - by) * er[1] + (wz - bz) * er[2]
+        else:
+            rail = 0.0
         if not (wr.rail_lim[0] <= rail <= wr.rail_lim[1]):
             continue
         if mis > math.radians(MAX_MISALIGN_DEG):
@@ -258,10 +279,10 @@ def closest_time(flight: Flight, C: np.ndarray) -> float:
 
 def refine_time(flight: Flight, C: np.ndarray, P: np.ndarray, t: float) -> float:
     """The time near ``t`` at which the ball passes closest to ``P`` (Newton steps)."""
+    ox, oy, oz = (float(p + c) for p, c in zip(P, C))  # P in the catch frame
     for _ in range(3):
-        b = flight.position(t) - C
-        v = flight.velocity(t)
-        step = float((P - b) @ v / (v @ v))
+        px, py, pz, vx, vy, vz = flight.state1(float(t))
+        step = ((ox - px) * vx + (oy - py) * vy + (oz - pz) * vz) / (vx * vx + vy * vy + vz * vz)
         t += step
         if abs(step) < 1e-9:
             break

@@ -19,14 +19,21 @@ iteration (the vacuum's normal matrix for the drag model's), contracting by abou
 k |v| t per step. Its fixed point solves J_vac^T r = 0 instead of the drag model's
 J^T r = 0 (``fit_observations``): the two differ by O(k |v| t) of the residuals'
 projection (5 um on a 5 mm-noise tennis throw, tests/test_live.py). The first fit
-iterates from the vacuum fit to ``CHORD_TOL_M``; every later observation takes one
-step from the previous fit, on that fit's flight (integrated already for the plan), so
-an observation costs one integration of the flight (``flight.Flight``'s RK4 table)
-and its evaluation at the N observation times; the estimate lags the fixed point by
-the contraction factor times the last observation's change. The
-covariance is the vacuum's sigma^2 M^-1 with sigma from the drag model's residuals
-(the drag model's sensitivity to the state differs from the vacuum's by the same
-O(k |v| t)).
+iterates from the vacuum fit (to ``CHORD_TOL_M``, at most ``MAX_CHORD_STEPS``); every
+later observation takes one
+step from the previous fit, on that fit's flight (integrated already for the plan); the
+estimate lags the fixed point by the contraction factor times the last observation's
+change. The covariance is the vacuum's sigma^2 M^-1 with sigma from the drag model's
+residuals (the drag model's sensitivity to the state differs from the vacuum's by the
+same O(k |v| t)).
+
+Cost. A step needs sums over the N observations of the flight's drag part at their
+times (sum d, sum t d) and, for the residuals, sum p d and sum d^2: kept per interval of
+the flight's RK4 table (``tablesums.IntervalSums``: the Hermite weights of an
+observation depend on its time only), a step costs a few array operations over the
+table's ~30 intervals whatever N (500 Hz: up to ~500), and every other sum is a running
+one. The tables take ``LIVE_STEP_FACTOR`` times the planner's RK4 step (error h^4:
+4e-8 m), so a new flight integrates in ~15 steps.
 """
 
 from __future__ import annotations
@@ -42,9 +49,11 @@ from planner.catch.flight import (
     MAX_TIME,
     Ball,
     Flight,
+    G,
     _step_for,
 )
 from planner.catch.observe import FitResult
+from planner.catch.tablesums import IntervalSums
 from planner.errors import InputError
 
 # ``fit_observations``' minimum number of observations: 3 positions fix the 6 numbers of
@@ -54,7 +63,23 @@ MIN_OBS_VACUUM = 3
 MIN_OBS_DRAG = 6
 CHORD_TOL_M = 1e-7  # drag: iterate until the fit moves the ball by less than this
 # (0.1 um at the last observation: 20 000 times below a 2 mm camera noise)
-MAX_CHORD_STEPS = 4  # (contraction ~ k|v|t ~ 0.04: one step gains ~1.4 digits)
+MAX_CHORD_STEPS = 2  # ... or at most this many steps at the first fit (contraction ~
+# k|v|t ~ 0.04: one step gains ~1.4 digits): after 2 the first fit's ball at the palm
+# (t = 0.45 s) is 0.5 um or less from the fixed point (throws of 20-60 deg, 1-2.5 m, 6
+# observations at 100 or 500 Hz, measured), where those 6 observations leave it
+# centimetres uncertain; every later observation takes one more step
+LIVE_STEP_FACTOR = 4.0  # the fit's drag tables take 4x the planner's RK4 step
+# (``flight._step_for``): the error goes as h^4, 256 x the planner's 1.5e-10 m, i.e.
+# 4e-8 m in position and 1.5e-7 m/s in velocity over 1.5 s against a 1 ms-step
+# reference for tennis-ball throws of 15-75 deg over 1-4 m (measured; tests/test_live.py
+# holds it below 1e-6 m), five orders below a 2 mm camera's noise; the table of a
+# re-fitted flight then costs a quarter of the integration
+
+
+# the covariance's entries from minv (r, c) and the axis a: (a + 3 r, a + 3 c), in the
+# order of minv's entries, then the axes
+_COV_I = np.array([a + 3 * r for r in (0, 1) for c in (0, 1) for a in range(3)])
+_COV_J = np.array([a + 3 * c for r in (0, 1) for c in (0, 1) for a in range(3)])
 
 
 class LiveFit:
@@ -67,9 +92,14 @@ class LiveFit:
         self._t = np.empty(256)
         self._p = np.empty((256, 3))
         self.n = 0
-        self._s = np.zeros(3)  # N, sum t, sum t^2
-        self._sy = np.zeros((2, 3))  # sum y, sum t y
-        self._syy = np.zeros(3)  # sum y^2 (per axis)
+        # the running sums, one array (an observation adds one row to it): N, sum t,
+        # sum t^2, sum t^3; per axis sum y, sum t y, sum y^2, sum p^2
+        self._acc = np.zeros(16)
+        self._s = self._acc[0:3]  # N, sum t, sum t^2 (views of _acc)
+        self._sy = self._acc[4:10].reshape(2, 3)  # sum y, sum t y
+        self._syy = self._acc[10:13]  # sum y^2 (per axis)
+        self._spp = self._acc[13:16]  # sum p^2 (per axis)
+        self._table_sums: IntervalSums | None = None  # drag: from the first fit on
         self._theta: np.ndarray | None = None
         self._step_s: float | None = None
         self.flight: Flight | None = None
@@ -86,7 +116,9 @@ class LiveFit:
     def check(self, t_s: float, p: np.ndarray) -> None:
         """InputError (one line) unless ``(t_s, p)`` can follow the observations so far:
         finite, 0 <= t <= MAX_TIME, after the previous one, within any throw's range."""
-        if not (math.isfinite(t_s) and np.all(np.isfinite(p))):
+        px, py, pz = p.tolist()
+        if not (math.isfinite(t_s) and math.isfinite(px) and math.isfinite(py)
+                and math.isfinite(pz)):
             raise InputError("an observation must be finite (no NaN or inf)")
         if not 0.0 <= t_s <= MAX_TIME:
             raise InputError(f"t = {t_s:.6g} s is outside 0..{MAX_TIME:g} s (the ball leaves "
@@ -94,9 +126,10 @@ class LiveFit:
         if self.n and t_s <= self._t[self.n - 1]:
             raise InputError(f"t = {t_s:.6g} s is not after the previous observation's "
                              f"{self._t[self.n - 1]:.6g} s (times must increase)")
-        if float(np.max(np.abs(p))) > MAX_OBS_RANGE_M:
-            raise InputError(f"the ball {float(np.max(np.abs(p))):.6g} m off the launch point "
-                             f"along an axis, farther than any throw reaches")
+        far = max(abs(px), abs(py), abs(pz))
+        if far > MAX_OBS_RANGE_M:
+            raise InputError(f"the ball {far:.6g} m off the launch point along an axis, "
+                             "farther than any throw reaches")
 
     def add(self, t_s: float, p: np.ndarray) -> FitResult | None:
         """Add one observation (``check``-ed) and refit; the fit once there are enough."""
@@ -107,16 +140,27 @@ class LiveFit:
         self._t[self.n] = t_s
         self._p[self.n] = p
         self.n += 1
-        y = p - 0.5 * GRAVITY * (t_s * t_s)
-        self._s += (1.0, t_s, t_s * t_s)
-        self._sy[0] += y
-        self._sy[1] += t_s * y
-        self._syy += y * y
+        px, py, pz = p.tolist()
+        t2 = t_s * t_s
+        yz = pz + 0.5 * G * t2  # y = p - g t^2 / 2
+        self._acc += (1.0, t_s, t2, t2 * t_s, px, py, yz, t_s * px, t_s * py, t_s * yz,
+                      px * px, py * py, yz * yz, px * px, py * py, pz * pz)
+        if self._table_sums is not None:
+            self._table_sums.add(t_s, p)
         if self.n < self.min_obs:
             return None
         self.result = self._solve()
         self.flight = self.result.flight
         return self.result
+
+    def vacuum_flight(self) -> Flight | None:
+        """The vacuum least squares of the observations so far (O(1), from the running
+        sums), or None before ``MIN_OBS_VACUUM`` of them: a first look at the flight while a
+        drag fit still waits for its ``MIN_OBS_DRAG``."""
+        if self.n < MIN_OBS_VACUUM:
+            return None
+        theta = self._minv() @ self._sy
+        return Flight(theta[0], theta[1], self.ball, 0.0)
 
     def _minv(self) -> np.ndarray:
         n, s1, s2 = self._s
@@ -130,8 +174,7 @@ class LiveFit:
         n = self.n
         theta = minv @ self._sy  # (2, 3): p0, v0
         if self.k > 0.0:
-            theta, res = self._chord(minv, theta)
-            rss = np.sum(res * res, axis=0)
+            theta, rss = self._chord(minv, theta)
         else:
             rss = np.maximum(self._syy - np.sum(theta * self._sy, axis=0), 0.0)
         speed = float(np.linalg.norm(theta[1]))
@@ -140,10 +183,9 @@ class LiveFit:
                              f"any throw (at most {MAX_LAUNCH_SPEED:g} m/s)")
         self._theta = theta
         sigma = np.sqrt(rss / max(n - 2, 1))
-        cov = np.zeros((6, 6))
-        for ax in range(3):
-            idx = [ax, 3 + ax]
-            cov[np.ix_(idx, idx)] = sigma[ax] ** 2 * minv
+        cov = np.zeros((6, 6))  # per axis a: sigma_a^2 minv at (a, a), (a, 3 + a),
+        # (3 + a, a), (3 + a, 3 + a); zero across axes
+        cov[_COV_I, _COV_J] = (minv.reshape(4, 1) * (sigma * sigma)).ravel()
         cov.setflags(write=False)
         sigma.setflags(write=False)
         flight = self._flight(theta)
@@ -153,29 +195,57 @@ class LiveFit:
         if self.k == 0.0:
             return Flight(theta[0], theta[1], self.ball, 0.0)
         if self._step_s is None:  # the table's step from the first fit's speed, then kept
-            self._step_s = _step_for(self.k, float(np.linalg.norm(theta[1])))
+            self._step_s = LIVE_STEP_FACTOR * _step_for(self.k, float(np.linalg.norm(theta[1])))
         return Flight(theta[0], theta[1], self.ball, self.k, step_s=self._step_s)
 
     def _chord(self, minv: np.ndarray, theta_vac: np.ndarray):
         """The drag fit: (p0, v0) = LSQ_vacuum(y - d), d the drag displacement of the
-        current estimate. The first fit iterates from the vacuum fit until the ball moves by
-        less than ``CHORD_TOL_M``; later ones take one step from the previous fit, on its
-        flight (already integrated). Residuals against the model of the last step."""
-        t, p = self.times, self.positions
+        current estimate at the observations. The first fit iterates from the vacuum fit
+        until the ball moves by less than ``CHORD_TOL_M`` (at most ``MAX_CHORD_STEPS``
+        steps); later ones take one step from the
+        previous fit, on its flight (already integrated). Every sum over the observations
+        of the flight's table comes from ``IntervalSums`` (module docstring). Returns the
+        new (p0, v0) and the residual sum of squares per axis against the model of the last
+        step."""
         first = self.flight is None or self._theta is None
         theta = theta_vac if first else self._theta
-        tt = (t * t)[:, None]
-        d = np.zeros_like(p)
+        if self._table_sums is None:
+            self._flight(theta_vac)  # (fixes the table's step)
+            self._table_sums = IntervalSums(self._step_s)
+            for t, p in zip(self.times.tolist(), self.positions):
+                self._table_sums.add(t, p)
+        t_last = float(self._t[self.n - 1])
         for i in range(MAX_CHORD_STEPS if first else 1):
             flight = self.flight if not first and i == 0 else self._flight(theta)
-            d = flight.position(t) - (theta[0] + np.outer(t, theta[1]) + 0.5 * GRAVITY * tt)
-            new = minv @ (self._sy - np.stack([d.sum(axis=0), t @ d]))
-            moved = float(np.max(np.abs((new[0] - theta[0]) + (new[1] - theta[1]) * t[-1])))
+            v_old = theta[1]
+            m, m_t, pm, mm = self._table_moments(flight, t_last)
+            # sum of d and t d: d = m - v0 t - g t^2 / 2 (p0 cancels)
+            n, s1, s2 = self._s
+            d_sum = m - v_old * s1 - 0.5 * GRAVITY * s2
+            td_sum = m_t - v_old * s2 - 0.5 * GRAVITY * self._acc[3]
+            new = minv @ (self._sy - np.stack([d_sum, td_sum]))
+            moved = float(np.max(np.abs((new[0] - theta[0]) + (new[1] - theta[1]) * t_last)))
             theta = new
             if moved < CHORD_TOL_M:
                 break
-        res = p - (theta[0] + np.outer(t, theta[1]) + 0.5 * GRAVITY * tt + d)
-        return theta, res
+        # residual p - (p0 + v0 t + g t^2 / 2 + d) = p - p0 - (v0 - v_old) t - m, squared
+        n, s1, s2 = self._s
+        c, e = theta[0], theta[1] - v_old
+        sp = self._sy[0] + 0.5 * GRAVITY * s2
+        stp = self._sy[1] + 0.5 * GRAVITY * self._acc[3]
+        rss = (self._spp - 2 * c * sp - 2 * e * stp + c * c * n + 2 * c * e * s1 + e * e * s2
+               - 2 * (pm - c * m - e * m_t) + mm)
+        return theta, np.maximum(rss, 0.0)
+
+    def _table_moments(self, flight: Flight, t_last: float):
+        """The drag part m = (ex s, ey s, z) of ``flight`` (its position less p0) summed
+        over the observations, per axis: sum m, sum t m, sum p m, sum m^2."""
+        nodes = flight.nodes(t_last)
+        S = self._table_sums.sums(nodes)
+        ex, ey = nodes.direction
+        return (np.array([ex * S.s, ey * S.s, S.z]), np.array([ex * S.ts, ey * S.ts, S.tz]),
+                np.array([ex * S.pxs, ey * S.pys, S.pzz]),
+                np.array([ex * ex * S.ss, ey * ey * S.ss, S.zz]))
 
     def sigma_at(self, t_s: float) -> np.ndarray:
         """1-sigma of the fitted ball's position at ``t_s`` per axis (m), from the

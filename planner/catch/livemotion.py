@@ -10,10 +10,16 @@ the open pose, the arm re-aimed at every newer intercept, the fingers' closing m
   as the fingers' phase; each re-plan replaces it by one from the state of the rows
   already written, so the rows stay twice continuously differentiable and the written
   rows never change. Its duration: the longer of the old one's remaining time and the
-  min-jerk duration of the change (``trajectory.phase_duration``), lengthened by
-  ``GROW`` until its speed, acceleration and position stay within every arm joint's
-  limits on a grid of ``VERIFY_STEP_S`` (a quintic that starts moving may overshoot);
-  when none does, the old target is kept.
+  min-jerk duration of the change (``trajectory.phase_duration``), lengthened (up to
+  ``GROW ** MAX_GROW`` times, by bisection) until its speed, acceleration and position stay within every arm joint's
+  limits, and its accelerations keep every motor within ``STOP_SHARE`` of its capacity
+  as it moves the hand's inertia (``StopDynamics.accel_room``: the rule of the planner's
+  own moves), on a grid of ``VERIFY_STEP_S`` (a quintic that starts moving may
+  overshoot); and it must end, the arm at rest, by ``rest_by_s`` (the check judges the
+  stopping of the ball on the rows with the hand's inertia, ``planner.check.ball``: an
+  arm still re-aiming when the ball arrives adds its acceleration's torque to the
+  pad's). When none does, the arm goes part of the way (``PART_SHARES``), or keeps
+  the old target.
 """
 
 from __future__ import annotations
@@ -23,12 +29,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.catch.stopping import StopDynamics
 from planner.hand.model import HandModel
-from planner.trajectory import Phase, phase_duration, sample
+from planner.trajectory import min_jerk, phase_duration
 
-GROW = 1.25  # a re-aim that leaves the limits is tried this much longer ...
-MAX_GROW = 8  # ... up to this many times (1.25^8 ~ 6x the shortest duration)
+GROW = 1.25  # a re-aim that leaves the limits may last up to GROW^MAX_GROW (~6x) its
+MAX_GROW = 8  # shortest duration ...
+BISECT = 3  # ... the shortest that holds found to 1/8 of the span by bisection
 VERIFY_STEP_S = 0.001  # the limits are verified on this grid (rows are 2-10 ms apart)
+PART_SHARES = (1.0, 0.5, 0.25)  # a re-aim that cannot reach its target in time goes this
+# share of the way (the arm closer to the newest estimate than the older target)
+STILL_MARGIN_S = 0.002  # the arm at rest this much before the rows the check reads at the
+# intercept: 2 sigma of the intercept time late in the flight (~1 ms for a 5 mm camera),
+# which later estimates may move
+
+
+def rest_by_s(t_i: float, dt: float) -> float:
+    """When the arm must be at rest for a ball meeting the palm at ``t_i`` on rows ``dt``
+    apart: the check's stopping load (``planner.check.ball.ball_loads``) takes the arm's
+    speed from the rows around ``t_i`` and its accelerations from their central
+    differences, the first of them at the row at or before ``t_i`` (its neighbours with
+    it); so the arm holds still from the row before that one (``STILL_MARGIN_S``
+    earlier)."""
+    return (math.floor((t_i - STILL_MARGIN_S) / dt + 1e-9) - 1) * dt
 
 
 @dataclass(frozen=True)
@@ -75,13 +98,51 @@ class Quintic:
         after = (np.asarray(t_s) >= self.end_s)[:, None]
         return q, np.where(after, 0.0, v), np.where(after, 0.0, a)
 
+    def state1(self, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``state`` at one time (k,) each, with the time's arithmetic in floats."""
+        tau = min(max(t_s - self.t0, 0.0), self.duration_s)
+        c3, c4, c5 = self.c
+        q = self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
+        if t_s >= self.end_s:
+            z = np.zeros_like(q)
+            return q, z, z
+        v = self.v0 + tau * (self.a0 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))
+        a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
+        return q, v, a
+
+    def positions(self, t_s: np.ndarray) -> np.ndarray:
+        """``state``'s positions alone (what a row needs)."""
+        tau = np.minimum(np.maximum(t_s - self.t0, 0.0), self.duration_s)[:, None]
+        c3, c4, c5 = self.c
+        return self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
+
+    def within(self, lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+               step_s: float, accel_ok=None) -> bool:
+        """Positions in [lo, hi], |speed| <= v_max, |acceleration| <= a_max on a grid of
+        ``step_s`` over the move (both ends included); ``accel_ok(t_s, a)``: whether the
+        accelerations ``a`` (T, k) at the grid's times ``t_s`` are also acceptable."""
+        n = max(2, math.ceil(self.duration_s / step_s) + 1)
+        tau = np.linspace(0.0, self.duration_s, n)[:, None]
+        c3, c4, c5 = self.c
+        a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
+        if np.any(np.abs(a) > a_max):
+            return False
+        if accel_ok is not None and not accel_ok(self.t0 + tau[:, 0], a):
+            return False
+        v = self.v0 + tau * (self.a0 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))
+        if np.any(np.abs(v) > v_max):
+            return False
+        q = self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
+        return bool(np.all(q >= lo - 1e-12) and np.all(q <= hi + 1e-12))
+
 
 class LiveMotion:
     """The rows' motion: rest, the fingers' phases, the arm's newest ``Quintic``."""
 
     def __init__(self, hand: HandModel, arm: tuple[int, ...], q_rest: np.ndarray,
-                 q_open_fingers: np.ndarray, q_closed_fingers: np.ndarray) -> None:
-        self.hand = hand
+                 q_open_fingers: np.ndarray, q_closed_fingers: np.ndarray,
+                 dyn: StopDynamics) -> None:
+        self.hand, self.dyn = hand, dyn
         self.arm = np.array(arm, dtype=int)
         self.q_rest = q_rest.copy()
         fingers = np.setdiff1d(np.arange(hand.n), self.arm)
@@ -116,35 +177,76 @@ class LiveMotion:
     def set_closing(self, start_s: float, duration_s: float) -> None:
         self.close_start_s, self.close_s = float(start_s), float(duration_s)
 
-    def reaim(self, t_s: float, q_target: np.ndarray) -> bool:
-        """The arm re-aimed at ``q_target``'s arm joints from its state at ``t_s``: the
-        shortest quintic (see the module docstring) within the limits; False (the old
-        target kept) when none is."""
+    def reaim(self, t_s: float, q_target: np.ndarray, rest_by: float = math.inf) -> float:
+        """The arm re-aimed at ``q_target``'s arm joints from its state at ``t_s``, at rest
+        by ``rest_by`` (s): the shortest quintic (see the module docstring) within the
+        limits and the motors' room. When none reaches the target in time, the arm goes
+        as far towards it as one does (``PART_SHARES`` of the change of target). Returns
+        the share of the change made (0: the old target kept)."""
         q1 = q_target[self.arm]
         if np.array_equal(q1, self.seg.q1):
-            return True
-        q, v, a = (x[0] for x in self.seg.state(np.array([t_s])))
-        D = max(self.seg.end_s - t_s,
-                phase_duration(q1 - q, self._v, self._a) if np.any(q1 != q) else 0.0)
-        D = max(D, VERIFY_STEP_S)
-        for _ in range(MAX_GROW + 1):
-            seg = Quintic.between(t_s, D, q, v, a, q1)
-            if self._within(seg):
+            return 1.0
+        q, v, a = self.seg.state1(t_s)
+        D_max = rest_by - t_s
+        ends = self._ends(self.rows(np.array([t_s]))[0], q_target)
+        # (the acceleration it starts with is the move's it replaces: allowed as it is)
+        ends = [(MH, np.maximum(room, np.abs(MH @ a))) for MH, room in ends]
+
+        def motors_ok(t: np.ndarray, a_arm: np.ndarray) -> bool:
+            """Every motor within the room at either end as the arm accelerates."""
+            return all(bool(np.all(np.abs(a_arm @ MH.T) <= room)) for MH, room in ends)
+
+        def ok(D: float, goal: np.ndarray) -> Quintic | None:
+            seg = Quintic.between(t_s, D, q, v, a, goal)
+            return seg if seg.within(self._lo, self._hi, self._v, self._a, VERIFY_STEP_S,
+                                     motors_ok) else None
+
+        for share in PART_SHARES:
+            goal = self.seg.q1 + share * (q1 - self.seg.q1)
+            # no sooner than the move it replaces would end (unless that is too late)
+            D = max(min(self.seg.end_s - t_s, D_max), VERIFY_STEP_S,
+                    phase_duration(goal - q, self._v, self._a) if np.any(goal != q) else 0.0)
+            if D > D_max + 1e-12:
+                continue
+            seg = ok(D, goal)
+            if seg is None:  # the longest allowed, then the shortest between that holds
+                hi = min(D * GROW ** MAX_GROW, D_max)
+                seg = ok(hi, goal) if hi > D else None
+                for _ in range(BISECT if seg is not None else 0):
+                    mid = 0.5 * (D + hi)
+                    s_mid = ok(mid, goal)
+                    if s_mid is None:
+                        D = mid
+                    else:
+                        hi, seg = mid, s_mid
+            if seg is not None:
                 self.seg = seg
-                return True
-            D *= GROW
-        return False
+                return share
+        return 0.0
 
-    def _within(self, seg: Quintic) -> bool:
-        n = max(2, math.ceil(seg.duration_s / VERIFY_STEP_S) + 1)
-        q, v, a = seg.state(seg.t0 + np.linspace(0.0, seg.duration_s, n))
-        return bool(np.all(q >= self._lo - 1e-12) and np.all(q <= self._hi + 1e-12)
-                    and np.all(np.abs(v) <= self._v) and np.all(np.abs(a) <= self._a))
+    def _ends(self, q_from: np.ndarray, q_to: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The motors' room for the arm's accelerations at either end of a move
+        (``StopDynamics.accel_room``; the arm's columns: the fingers' own phases are not
+        the arm's to bound, as in the check's stopping load)."""
+        return [(MH[:, self.arm], room) for MH, room in map(self.dyn.accel_room, (q_from, q_to))]
 
-    def rows(self, t_s: np.ndarray, seg: Quintic | None = None) -> np.ndarray:
-        """Joint positions at times ``t_s`` (couplings applied); ``seg``: the arm's move
-        to use instead of the newest."""
-        phases = [Phase(self._open, self.open_s or 1.0), Phase(self._close, self.close_s or 1.0)]
-        Q = sample(phases, np.array([self.t_move, self.close_start_s]), t_s, self.q_rest)
-        Q[:, self.arm] = (seg or self.seg).state(t_s)[0]
+    def move_time(self, q_from: np.ndarray, q_to: np.ndarray) -> float:
+        """The first move's duration (min-jerk, from rest): the planner's
+        (``StopDynamics.move_time``), the arm's accelerations alone within the motors' room
+        too, as every re-aim's (``_ends``), so that a re-aim can start from it."""
+        return self.dyn.move_time(q_from, q_to, arm_alone=True)
+
+    def rows(self, t_s: np.ndarray, seg: Quintic | None = None, t_new_s: float = math.inf
+             ) -> np.ndarray:
+        """Joint positions at times ``t_s`` (couplings applied): the fingers' phases
+        (``trajectory.sample``'s sum, on the finger joints) and the arm on ``seg`` (the arm's
+        move to use instead of the newest) up to ``t_new_s``, on the newest after it."""
+        Q = self.q_rest + min_jerk((t_s - self.t_move) / (self.open_s or 1.0))[:, None] * self._open
+        Q += min_jerk((t_s - self.close_start_s) / (self.close_s or 1.0))[:, None] * self._close
+        arm = self.seg.positions(t_s)
+        if seg is not None:
+            old = t_s <= t_new_s
+            if old.any():
+                arm[old] = seg.positions(t_s[old])
+        Q[:, self.arm] = arm
         return self.hand.apply_couplings(Q)

@@ -55,27 +55,31 @@ Per throw (``CatchPlanner.plan``):
    the fraction of the move after which it holds for good is ``u_grasp``.
    Open = the closed pose's abduction joints with every flexion joint at 0
    (extended), so the closing move is pure flexion.
-3. Timing: the hand starts from ``rest`` at t = 0 and begins to move after
-   ``SIGNAL_S`` (25 ms, seed) + ``PLAN_BUDGET_S`` (5 ms, the planning latency
-   budget) -- later with observations: after the last observation. The move to
-   the open pose lasts ``phase_duration`` (min-jerk within speed and
-   acceleration limits). The closing move (also ``phase_duration``; seed: 150-
-   300 ms) is placed so that the grasp condition is met when the ball has
-   stopped in the palm (``stop_time`` after the intercept), then delayed if a
-   fingertip would come within ``TOUCH_CLEAR_M`` of the still-arriving ball;
-   it must complete the grasp within ``GRASP_WINDOW_S`` (150 ms) of the
-   intercept. Rows at ``rate_hz`` until ``intercept_t + HOLD_AFTER_S``.
-4. Forces (``planner.catch.grasp``): stopping the ball on the palm (2 cm give)
-   and holding it in the closed hand, each a QP with friction cones and every
-   motor within its capacity (its peak torque, or its tendon's design force at the
-   spool: ``planner.hand.tendon``); headroom and the limiting motor are reported.
+3. Timing and the soft catch (``stopping.plan_stop``): the hand starts from ``rest`` at
+   t = 0 and begins to move after ``SIGNAL_S`` (25 ms, seed) + ``PLAN_BUDGET_S`` (5 ms,
+   the planning latency budget) -- later with observations: after the last observation
+   -- to the pre-catch pose (min-jerk within speed and acceleration limits). From there
+   the arm draws back along the ball's path so that the palm meets it moving (the arm's
+   speeds by a QP, the recoil under the ball's push, the palm's tilt) and brings it to
+   rest within every motor's capacity (``planner.catch.stopping``). The closing move
+   (seed: 150-300 ms) is placed so that the grasp condition is met when the pad has
+   stopped the ball on the palm, then delayed if a fingertip would come within
+   ``TOUCH_CLEAR_M`` of the still-arriving ball; it must complete the grasp within
+   ``GRASP_WINDOW_S`` (150 ms) of the intercept. Rows at ``rate_hz`` until
+   ``intercept_t + HOLD_AFTER_S`` (and the arm at rest).
+4. Forces: stopping the ball judged on the rows by the check's own rule
+   (``planner.check.ball.ball_loads``: the pad, the ball riding the palm, the arm's
+   inertia, the friction cone, every motor's headroom), holding it in the closed hand by
+   the grasp QP (friction cones, every motor within its capacity: its peak torque, or its
+   tendon's design force at the spool: ``planner.hand.tendon``).
 5. Self-check on the rows (same criteria as the independent check): the ball
    within ``INTERCEPT_TOL_M`` of ``palm_center + radius * n`` at intercept_t
    (joints interpolated), no fingertip inside the ball before it, the grasp
    within the window and held to the end.
 
-Infeasible throws (out of reach, too fast, fingers in the way, grasp, torque)
-are planned as far as they go; ``CatchPlan.reasons`` says why.
+Infeasible throws (out of reach, too soon, too fast to stop, fingers in the way, grasp,
+friction, torque) are planned as far as they go; ``CatchPlan.reasons`` says why, each with
+its ``CatchReason`` kind.
 
 Known limits of the shipped hands (reported, not hidden): the default hand's
 thumb cannot come within radius + 10 mm of a ball held on the palm (its CMC
@@ -83,14 +87,14 @@ sits 3 cm proud of the palm; with CMC flexion at 90 deg and IP at 80 deg, both
 at their limits, the tip stays ~17 mm outside a tennis ball), so every catch
 with it fails the grasp criterion; a CMC flexion range of 110 deg (or the CMC
 1 cm closer to the palm) would reach. The mk5 hand's true-size fingers do not
-reach a ball on its 1.5x palm at all. Stopping a ball that arrives faster than
-~5.3 m/s over the palm's 2 cm give needs more than the wrist flexion motor's
-2 N m peak.
+reach a ball on its 1.5x palm at all. The soft catch stops balls of up to ~6-7 m/s at
+the palm within the wrist flexion motor's 2 N m peak (``docs/soft-catch.md``).
 """
 
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -203,14 +207,16 @@ def validate_live(dist_m: Any, height_m: Any, rate_hz: Any) -> tuple[float, floa
 def plan_throw(angle_deg: float, dist_m: float, height_m: float = 0.0,
                hand: HandModel | str = "default", ball: Ball | str = "tennis",
                drag: bool = False, observations: Any = None, rate_hz: float = 100.0,
-               planner: CatchPlanner | None = None) -> CatchPlan:
+               planner: CatchPlanner | None = None, soft: bool = True) -> CatchPlan:
     """Validate, predict (or fit) the flight and plan; no file is written.
 
-    ``observations``: None, a CSV path (``t,x,y,z``) or a pair (ts, ps)."""
+    ``observations``: None, a CSV path (``t,x,y,z``) or a pair (ts, ps); ``soft`` False:
+    the palm waits for the ball at rest (the catch before issue 15, for comparison)."""
     a, d, hgt, rate = validate_throw(angle_deg, dist_m, height_m, rate_hz)
     b = get_ball(ball)
     pl = planner or get_planner(hand)
-    return _plan_validated(pl, a, d, hgt, b, bool(drag), _load_obs(observations, drag), rate)
+    return _plan_validated(pl, a, d, hgt, b, bool(drag), _load_obs(observations, drag), rate,
+                           soft)
 
 
 def _load_obs(observations: Any, drag: bool):
@@ -226,7 +232,7 @@ def _load_obs(observations: Any, drag: bool):
 
 
 def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, drag: bool,
-                    obs, rate: float) -> CatchPlan:
+                    obs, rate: float, soft: bool = True) -> CatchPlan:
     t_start = time.perf_counter()
     C = np.array([d, 0.0, hgt])
     nominal = predict_throw(a, d, hgt, b, drag)  # also validates the throw itself
@@ -244,12 +250,13 @@ def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, d
         t_f = None
     throw = {"angle_deg": a, "dist_m": d, "height_m": hgt, "ball": b.name, "drag": drag,
              "observations": None if fit is None else fit.n_observations}
-    plan = pl.plan(flight, C, rate, t_info=t_info, throw=throw, flight_time_s=t_f, fit=fit)
+    plan = pl.plan(flight, C, rate, t_info=t_info, throw=throw, flight_time_s=t_f, fit=fit,
+                   soft=soft)
+    notes = plan.notes
     if fit is not None:
-        plan.notes.append(f"fitted to {fit.n_observations} observations "
-                          f"(rms residual {1000 * fit.residual_rms:.1f} mm)")
-    plan.planning_s = time.perf_counter() - t_start
-    return plan
+        notes += ((f"fitted to {fit.n_observations} observations "
+                   f"(rms residual {1000 * fit.residual_rms:.1f} mm)"),)
+    return replace(plan, notes=notes, planning_s=time.perf_counter() - t_start)
 
 
 def write_plan(plan: CatchPlan, out_path: str) -> int:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import pairwise
 from typing import Any
 
@@ -17,21 +17,28 @@ from planner.catch.arm import catch_joints, open_from, palm_target, rest_pose, z
 from planner.catch.closing import close_start, make_closing
 from planner.catch.flight import Flight
 from planner.catch.geometry import interp_row, rot1
-from planner.catch.intercept import Intercept, Wrist, closest_time, find_intercept, refine_time
+from planner.catch.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.mount import CatchMount
 from planner.catch.observe import FitResult, predict_intercept
-from planner.catch.results import CatchPlan, Closing
+from planner.catch.results import CatchPlan, CatchReason, Closing, Reason
 from planner.catch.rowcheck import RowCheck
+from planner.catch.stopping import SoftStop, StopDynamics, plan_stop
+from planner.check.ball import ball_loads
+from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
+from planner.check.kinematics import Kinematics
+from planner.check.limits import RATE_TOL
 from planner.errors import InfeasibleError, PlannerError
 from planner.hand.model import HandModel
 from planner.ik import HandIK
-from planner.trajectory import Phase, phase_duration, sample
+from planner.trajectory import Phase, sample
 
 SIGNAL_S = 0.025  # seed (Markus): 25 ms of signal processing
 PLAN_BUDGET_S = 0.005  # planning latency budget (bench target p99)
 INTERCEPT_PLAN_TOL_M = 0.001  # what the planner aims for
 HOLD_AFTER_S = 0.5  # rows until intercept_t + this
+_CLOSE_STEP_S = 0.005  # a closing that would touch the arriving ball starts this much later
+_CLOSE_TRIES = 8  # ... up to this many times
 
 
 @dataclass(frozen=True)
@@ -64,6 +71,8 @@ class CatchPlanner:
         self.q_rest = rest_pose(self.hand, self.joints)
         self.near_m = self._tip_reach()
         self.rows = RowCheck(self.hand, self.T_ref, self.near_m)
+        self.kin = Kinematics(self.base_hand, self.T_ref)
+        self.dyn = StopDynamics(self.hand, self.joints, self.kin)
         self._closings: dict[float, Closing] = {}
 
     def _tip_reach(self) -> float:
@@ -91,58 +100,99 @@ class CatchPlanner:
     # ------------------------------------------------------------ plan
     def plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float = 100.0,
              t_info: float = 0.0, throw: dict[str, Any] | None = None,
-             flight_time_s: float | None = None, fit: FitResult | None = None) -> CatchPlan:
+             flight_time_s: float | None = None, fit: FitResult | None = None,
+             soft: bool = True) -> CatchPlan:
         """Plan the catch of ``flight`` with the hand mounted at ``catch_point`` (catch
         frame). ``t_info``: when the flight is known (last observation); the hand moves
-        from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written."""
+        from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written. ``soft``: the
+        soft catch (``planner.catch.stopping``), or the palm waiting at rest when that
+        alone passes the self-check (a palm that moves can bring the ball to a fingertip
+        the closing would miss otherwise); False: the palm at rest."""
+        t0 = time.perf_counter()
+        args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
+        plan = self._plan(*args, soft=soft)
+        if soft and not plan.feasible:
+            still = self._plan(*args, soft=False)
+            if still.feasible:
+                plan = replace(still, notes=still.notes + (
+                    "the palm waits at rest: the soft catch failed (" +
+                    "; ".join(plan.reasons) + ")",))
+        return replace(plan, planning_s=time.perf_counter() - t0)
+
+    def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
+              throw: dict[str, Any] | None, flight_time_s: float | None,
+              fit: FitResult | None, soft: bool) -> CatchPlan:
+        """``plan`` with the soft catch on or off."""
         t0 = time.perf_counter()
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
         closing = self.closing(r)
-        reasons = [closing.reason] if closing.reason else []
-        reasons += [f"fingers in the way: the {f} tip passes {1000 * -gap:.1f} mm inside the "
-                    "ball while the hand closes" for f, gap in zip(h.fingers, closing.min_gap_m)
-                    if gap < 0]
+        reasons = [Reason(CatchReason.GRASP, closing.reason)] if closing.reason else []
+        reasons += [Reason(CatchReason.FINGERS, f"fingers in the way: the {f} tip passes "
+                           f"{1000 * -gap:.1f} mm inside the ball while the hand closes")
+                    for f, gap in zip(h.fingers, closing.min_gap_m) if gap < 0]
         if flight_time_s is None:
             try:
                 flight_time_s = float(flight.time_at_x(float(C[0])))
             except InfeasibleError:
                 flight_time_s = None
         t_c = flight_time_s if flight_time_s is not None else closest_time(flight, C)
-        pose = self.meet(flight, C, r, closing, find_intercept(self.wrist, flight, C, r, t_c))
-        if pose.ic.reason:
-            reasons.append(pose.ic.reason)
-        # timing: the move to the open pose, then the closing move
         t_react = max(0.0, t_info) + SIGNAL_S + PLAN_BUDGET_S
-        T_m = phase_duration(pose.q_open - self.q_rest, h.velocity, h.acceleration)
+
+        def ready_by(q_pre: np.ndarray) -> float:
+            return t_react + self.dyn.move_time(self.q_rest, q_pre)
+
+        ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing,
+                                     t_c, ready_by, 1.0 / rate_hz, soft)
+        pose = self.meet(flight, C, r, closing, ic)
+        soft_stop = replace(soft_stop, t_i=float(pose.t_i))
+        if pose.ic.reason:
+            reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
+        # timing: the move to the pre-catch pose, the stopping motion, the closing move
+        arm = list(self.joints.arm)
+        q_pre = pose.q_open.copy()
+        q_pre[arm] += soft_stop.first_offset
+        T_m = self.dyn.move_time(self.q_rest, q_pre)
         ready = t_react + T_m
-        if ready > pose.t_i:
-            reasons.append(f"too fast: the open pre-catch pose is reached at {ready:.3f} s, "
-                           f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
-                           f"(t = {pose.t_i:.3f} s)")
+        if ready > min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i):
+            reasons.append(Reason(CatchReason.TOO_SOON,
+                                  f"too fast: the open pre-catch pose is reached at {ready:.3f} s, "
+                                  f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
+                                  f"(t = {pose.t_i:.3f} s)"))
         s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
-                          gq.stop_time(pose.v_i), r)
-        t, Q = self._rows(pose, closing, t_react, T_m, s_c, rate_hz)
-        err, clear, g_t, g_f, check_reasons = self.rows.check(
-            flight, C, r, t, Q, pose.t_i, s_c + closing.duration_s, rate_hz,
-            closing.reason is not None)
-        reasons += check_reasons
-        stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r)
+                          pad_time_s(soft_stop.v_rel), r)
+        for _ in range(_CLOSE_TRIES):
+            t, Q = self._rows(pose, q_pre, soft_stop, closing, t_react, T_m, s_c, rate_hz)
+            t_static = max(s_c + closing.duration_s, soft_stop.end_s)
+            err, clear, g_t, g_f, check_reasons = self.rows.check(
+                flight, C, r, t, Q, pose.t_i, t_static, rate_hz, closing.reason is not None)
+            # ``close_start`` sees the palm at rest: a palm moving with the ball keeps it near
+            # the fingers longer, so the closing waits a little more when a tip meets it
+            if not any(x.startswith("fingers in the way") for x in check_reasons) or \
+                    not np.any(soft_stop.qd) or s_c >= pose.t_i:
+                break
+            s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
+        reasons += [Reason(_row_kind(x), x) for x in check_reasons]
+        q_closed = pose.q_closed.copy()
+        q_closed[arm] += soft_stop.last_offset
+        pose = replace(pose, q_closed=q_closed)
+        stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r, g_t)
         reasons += force_reasons
         unc = None if fit is None else uncertainty(fit, float(C[0] + centre_i[0]))
         return CatchPlan(
-            feasible=not reasons, reasons=reasons, flight=flight, catch_point=C,
+            feasible=not reasons, reasons=tuple(reasons), flight=flight, catch_point=C,
             T_world_root=self.mount.T_world_root(C), base_hand=self.base_hand,
             rate_hz=float(rate_hz), throw=dict(throw or {}), launch_speed=flight.speed,
             flight_time_s=flight_time_s, intercept_t=float(pose.t_i),
             intercept_point=flight.position(pose.t_i), arrival_velocity=pose.v_i,
             intercept_error_m=err, misalignment_deg=pose.misalign_deg, q_rest=self.q_rest,
-            q_open=pose.q_open, q_closed=pose.q_closed, move_start_s=t_react, move_s=T_m,
+            q_open=q_pre, q_closed=pose.q_closed, move_start_s=t_react, move_s=T_m,
             close_start_s=float(s_c), close_s=closing.duration_s, grasp_t=g_t,
             grasp_fingers=g_f, min_clearance_before_m=clear, stop=stop, hold=hold, t=t, q=Q,
             q_motor=h.motor_angles(Q), ik_iterations=pose.ik_iterations,
-            t_info_s=float(t_info), uncertainty=unc, planning_s=time.perf_counter() - t0)
+            t_info_s=float(t_info), uncertainty=unc, planning_s=time.perf_counter() - t0,
+            soft=soft_stop if np.any(soft_stop.qd) else None)
 
     def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
              ic: Intercept) -> _Pose:
@@ -175,40 +225,75 @@ class CatchPlanner:
         misalign = math.degrees(math.acos(np.clip(-(v_i @ n_i) / np.linalg.norm(v_i), -1, 1)))
         return _Pose(ic, q_open, q_closed, t_i, v_i, misalign, ik_iter)
 
-    def _rows(self, pose: _Pose, closing: Closing, t_react: float, T_m: float, s_c: float,
-              rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
-        """The rows: rest -> open from ``t_react`` (``T_m``), open -> closed from ``s_c``,
-        until ``HOLD_AFTER_S`` after the intercept."""
+    def _rows(self, pose: _Pose, q_pre: np.ndarray, stop: SoftStop, closing: Closing,
+              t_react: float, T_m: float, s_c: float, rate_hz: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """The rows: rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
+        stopping motion (``stop``), open -> closed fingers from ``s_c``, until
+        ``HOLD_AFTER_S`` after the intercept (and the arm at rest)."""
         h = self.hand
-        phases = [Phase(delta=pose.q_open - self.q_rest, duration_s=T_m),
+        phases = [Phase(delta=q_pre - self.q_rest, duration_s=T_m),
                   Phase(delta=pose.q_closed - pose.q_open, duration_s=closing.duration_s)]
-        n_rows = math.floor((pose.t_i + HOLD_AFTER_S) * rate_hz + 1e-9) + 1
+        t_end = max(pose.t_i + HOLD_AFTER_S, stop.end_s + 2.0 / rate_hz)
+        n_rows = math.floor(t_end * rate_hz + 1e-9) + 1
         t = np.arange(n_rows) * (1.0 / rate_hz)
-        Q = h.apply_couplings(sample(phases, np.array([t_react, s_c]), t, self.q_rest))
-        return t, Q
+        Q = sample(phases, np.array([t_react, s_c]), t, self.q_rest)
+        Q += stop.offset(t, h.n)
+        Q[:, list(self.joints.arm)] -= stop.first_offset
+        return t, h.apply_couplings(Q)
 
-    def forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float):
-        """Stopping the ball on the palm and holding it in the closed hand (the grasp QPs):
-        their results (None where infeasible), the reasons, and the ball's centre on the
-        palm at the intercept."""
+    def forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float,
+               grasp_t: float | None = None):
+        """Stopping the ball (the check's rule on the rows, ``planner.check.ball.ball_loads``:
+        the pad, the hand's inertia, the friction cone) and holding it in the closed hand
+        (the grasp QP): their results (None where infeasible), the reasons, and the ball's
+        centre on the palm at the intercept."""
         h, mass = self.hand, float(flight.ball.mass_kg)
-        stop = hold = None
+        hold = None
         reasons = []
         q_i = interp_row(t, Q, pose.t_i)
         centre_i = palm_target(h, q_i, r)
-        try:
-            stop = gq.grasp_forces(h, q_i, centre_i, r, gq.stop_force(mass, pose.v_i),
-                                   case="stop", tip_tol_m=0.001, moment_balance=False)
-        except InfeasibleError as e:
-            reasons.append(f"{_kind(e)} (stopping the ball over {100 * gq.STOP_DISTANCE_M:g} "
-                           f"cm): {e}")
+        stop = self._stop_load(flight, pose, t, Q, grasp_t)
+        if stop.headroom < -RATE_TOL:  # the check's tolerance (one rule)
+            reasons.append(Reason(CatchReason.TOO_FAST_TO_STOP, (
+                f"too fast to stop (over the palm's {100 * PAD_GIVE_M:g} cm and the arm's "
+                f"stopping motion): {stop.force_n:.1f} N needs motor.{stop.motor} at "
+                f"{abs(stop.torque_nm):.2f} N m > its {stop.limiting_part} limit "
+                f"{stop.capacity_nm:.2f} N m")))
+        if stop.cone_margin_n is not None and stop.cone_margin_n < 0:
+            reasons.append(Reason(CatchReason.FRICTION, (
+                f"friction (stopping the ball): the palm's force leaves its friction cone by "
+                f"{-stop.cone_margin_n:.2f} N: the ball slides off")))
         try:
             hold = gq.grasp_forces(h, pose.q_closed, palm_target(h, pose.q_closed, r), r,
                                    gq.hold_force(mass), case="hold", tip_tol_m=GRASP_TOL_M,
                                    moment_balance=True)
         except InfeasibleError as e:
-            reasons.append(f"{_kind(e)} (holding the ball): {e}")
+            kind = CatchReason.TORQUE if _kind(e) == "torque" else CatchReason.FRICTION
+            reasons.append(Reason(kind, f"{_kind(e)} (holding the ball): {e}"))
         return stop, hold, reasons, centre_i
+
+    def _stop_load(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray,
+                   grasp_t: float | None):
+        """The check's stopping load on the rows from the one before the intercept (only the
+        ball's velocity enters it: its launch point needs no shift to the reference frame)."""
+        k0 = max(0, int(np.searchsorted(t, pose.t_i, side="right")) - 2)
+        b = flight.to_metadata()
+        ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
+                "radius": float(b["radius"]), "mass": float(b["mass"]),
+                "drag": float(b["drag"])}
+        _, palm = self.kin.frames(Q[k0:])
+        return ball_loads(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i), PAD_GIVE_M,
+                          grasp_t)[0]
+
+
+def _row_kind(reason: str) -> CatchReason:
+    """The kind of a reason of the row self-check (``RowCheck.check``)."""
+    if reason.startswith("fingers in the way"):
+        return CatchReason.FINGERS
+    if reason.startswith(("too slow to close", "grasp")):
+        return CatchReason.GRASP
+    return CatchReason.MISS
 
 
 def _kind(e: InfeasibleError) -> str:

@@ -3,16 +3,51 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from enum import Enum
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planner.catch import grasp as gq
 from planner.catch.flight import Flight
+from planner.check.ballstop import PAD_GIVE_M
 from planner.check.criteria import GRASP_WINDOW_S
 from planner.hand.model import HandModel
+
+if TYPE_CHECKING:
+    from planner.catch.stopping import SoftStop
+
+
+class CatchReason(Enum):
+    """Why a catch is infeasible. Only the first three are limits no motion of the hand
+    overcomes; the others are this plan's shortfalls."""
+
+    OUT_OF_REACH = "out of reach"  # no wrist/rail pose puts the palm on the ball's path
+    TOO_SOON = "too soon"  # the ball arrives before the hand can open
+    TOO_FAST_TO_STOP = "too fast to stop"  # no stopping motion within the joints' limits
+    # keeps every motor within its capacity
+    FRICTION = "friction"  # the ball would slide off the palm
+    TORQUE = "torque"  # holding the ball needs more than a motor gives
+    GRASP = "grasp"  # the fingers do not close around the ball (in time)
+    FINGERS = "fingers in the way"  # a fingertip would hit the arriving ball
+    MISS = "miss"  # the rows put the palm elsewhere
+
+
+class Reason(str):
+    """A reason a catch is infeasible: the text (``str``: what the summary prints) and its
+    ``kind`` (a ``CatchReason``)."""
+
+    __slots__ = ("kind",)
+
+    def __new__(cls, kind: CatchReason, detail: str) -> Reason:  # noqa: PYI034
+        out = super().__new__(cls, detail)
+        out.kind = kind
+        return out
+
+    def __reduce__(self):
+        return (Reason, (self.kind, str(self)))
 
 
 @dataclass(frozen=True)
@@ -32,12 +67,14 @@ class Closing:
     min_gap_m: np.ndarray  # (5,) closest each fingertip comes to the ball's surface
 
 
-@dataclass
+@dataclass(frozen=True)
 class CatchPlan:
-    """A planned catch (no file written yet)."""
+    """A planned catch (no file written yet). ``stop``: the stopping load on the rows (the
+    check's ``BallLoad``: worst motor, every motor's headroom, the friction cone's margin);
+    ``soft``: the arm's stopping motion (None when the palm waits at rest)."""
 
     feasible: bool
-    reasons: list[str]
+    reasons: tuple[Reason, ...]
     flight: Flight
     catch_point: np.ndarray
     T_world_root: np.ndarray
@@ -61,7 +98,7 @@ class CatchPlan:
     grasp_t: float | None  # first row time with the grasp
     grasp_fingers: tuple[str, ...]
     min_clearance_before_m: float  # min fingertip distance to the ball surface before intercept
-    stop: gq.GraspResult | None
+    stop: Any
     hold: gq.GraspResult | None
     t: np.ndarray
     q: np.ndarray
@@ -70,7 +107,16 @@ class CatchPlan:
     t_info_s: float
     uncertainty: dict[str, float] | None = None
     planning_s: float = 0.0
-    notes: list[str] = field(default_factory=list)
+    notes: tuple[str, ...] = ()
+    soft: SoftStop | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "reasons", tuple(self.reasons))
+        object.__setattr__(self, "notes", tuple(self.notes))
+
+    @property
+    def reason_kinds(self) -> tuple[CatchReason, ...]:
+        return tuple(getattr(r, "kind", CatchReason.MISS) for r in self.reasons)
 
     @cached_property
     def hand(self) -> HandModel:
@@ -104,7 +150,7 @@ class CatchPlan:
             "catch": {
                 "throw": self.throw,
                 "catch_point": [float(x) for x in self.catch_point],
-                "stop_distance_m": gq.STOP_DISTANCE_M,
+                "stop_distance_m": PAD_GIVE_M,
                 "close_start": float(self.close_start_s),
                 "grasp_t": None if self.grasp_t is None else float(self.grasp_t),
                 "feasible": bool(self.feasible),
@@ -129,7 +175,7 @@ class CatchResult:
         return self.plan.feasible
 
     @property
-    def reasons(self) -> list[str]:
+    def reasons(self) -> tuple[str, ...]:
         return self.plan.reasons
 
     def __getattr__(self, name: str) -> Any:  # convenience: result.intercept_t etc.

@@ -17,7 +17,10 @@ After each observation (``observe``):
    first rows are written from t = 0 with the first fit).
 2. Intercept: ``intercept.find_intercept_near`` from the previous intercept time
    (``NEAR_S``), the pose confirmed by ``CatchPlanner.meet`` (placo, warm: the previous
-   pose is the closed form's).
+   pose is the closed form's). The first fit's starts from the intercept of the vacuum
+   fit of the observations before it (searched along the whole path at the observation
+   before the first drag fit, which plans nothing else), so that no observation carries
+   both the whole search and the first plan.
 3. Motion (``livemotion.LiveMotion``): until the hand moves, it waits while waiting for
    the next observation would not make it late (the open pose reached before the closing
    move must start, ``closing.close_start``), then starts the planner's move to the open
@@ -52,15 +55,19 @@ from planner.catch import grasp as gq
 from planner.catch.arm import open_from
 from planner.catch.closing import close_start
 from planner.catch.flight import Ball, Flight, _finite, get_ball
-from planner.catch.intercept import closest_time, find_intercept, find_intercept_near
+from planner.catch.intercept import (
+    Intercept,
+    closest_time,
+    find_intercept,
+    find_intercept_near,
+)
 from planner.catch.livefit import LiveFit
-from planner.catch.livemotion import LiveMotion
+from planner.catch.livemotion import LiveMotion, rest_by_s
 from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
 from planner.catch.results import CatchPlan
 from planner.errors import InfeasibleError, InputError
 from planner.guard import guard_rows
 from planner.hand.model import HandModel
-from planner.trajectory import phase_duration
 from planner.trajfile import TrajectoryWriter
 
 NEAR_S = 0.020  # the intercept is searched this close to the previous one first (an
@@ -92,23 +99,30 @@ class CatchSession:
                 raise InputError(f"cannot write {out_path}: no such directory {parent}")
         self.out_path = out_path
         self.latencies_s: list[float] = []  # per observation: to its rows written
+        self.cpu_s: list[float] = []  # ... and the CPU time of this thread in it (the
+        # latency less the time the machine ran other work)
         self.fit = LiveFit(self.ball, self.ball.drag_per_m if drag else 0.0)
         h, j = self.pl.hand, self.pl.joints
         q_open = open_from(h, j, self.pl.q_zero, self.closing.q_closed)
-        self.motion = LiveMotion(h, j.arm, self.pl.q_rest, q_open, self.closing.q_closed)
+        self.motion = LiveMotion(h, j.arm, self.pl.q_rest, q_open, self.closing.q_closed,
+                                 self.pl.dyn)
         self.writer: TrajectoryWriter | None = None
         self._t: list[np.ndarray] = []
         self._q: list[np.ndarray] = []
         self.next_row = 0
         self.pose = self.flight = None
         self.t_i: float | None = None
+        self._prior: Intercept | None = None  # the vacuum fit's intercept, before the first
+        # (drag) fit: that fit's search starts from it
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
-        self.kept_targets = 0  # re-aims refused by the limits (the older target kept)
+        self.kept_targets = 0  # re-aims that could not reach their target at rest before
+        # the ball within the limits (part of the way made, or the older target kept)
         self.outcome: str | None = None
         self.reason = ""
         self.plan: CatchPlan | None = None
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
+        self.rows_cpu_s = math.nan  # thread_time then
 
     # ------------------------------------------------------------ observations
     @property
@@ -132,9 +146,10 @@ class CatchSession:
         InputError (one line) on an observation that cannot follow the ones before."""
         if self.done:
             return np.empty((0, 0))
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         rows = self._observe(t_s, xyz)
         self.latencies_s.append((self.rows_out_s if len(rows) else time.perf_counter()) - t0)
+        self.cpu_s.append((self.rows_cpu_s if len(rows) else time.thread_time()) - c0)
         return rows
 
     def _observe(self, t_s: Any, xyz: Any) -> np.ndarray:
@@ -143,6 +158,10 @@ class CatchSession:
         period = t - self.fit.times[-1] if self.fit.n else 0.0
         fit = self.fit.add(t, p)
         if fit is None:
+            if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
+                prior = self._search(self.fit.vacuum_flight())
+                # (a pose to start from: an intercept out of reach is none)
+                self._prior = prior if prior is not None and prior.reason is None else None
             return np.empty((0, 0))
         t_react = t + SIGNAL_S + PLAN_BUDGET_S
         t_b = max(self.written_to_s, t_react)
@@ -174,33 +193,45 @@ class CatchSession:
     def _replan(self, flight: Flight, t_b: float, period: float) -> None:
         """Steps 2-3 of the module docstring for the newest ``flight``, acting from ``t_b``."""
         pl, h, r, cl = self.pl, self.pl.hand, self.ball.radius_m, self.closing
-        if self.t_i is None:
-            try:
-                t_c = float(flight.time_at_x(float(self.C[0])))
-            except InfeasibleError:
-                t_c = closest_time(flight, self.C)
-            ic = find_intercept(pl.wrist, flight, self.C, r, t_c)
-        else:
+        if self.t_i is not None:  # the drag table integrated once, as far as it is needed
+            flight.integrate_to(self.t_i + NEAR_S)
+        if self.t_i is not None:
             ic = find_intercept_near(pl.wrist, flight, self.C, r, self.pose.ic, self.t_i, NEAR_S)
+        elif self._prior is not None:  # from the vacuum fit of the observations before
+            ic = find_intercept_near(pl.wrist, flight, self.C, r, self._prior,
+                                     self._prior.t, NEAR_S)
+        else:
+            ic = self._search(flight)
         pose = pl.meet(flight, self.C, r, cl, ic)
         stop_t = gq.stop_time(pose.v_i)
         m = self.motion
+        rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives
         if not m.moving:
-            T_m = phase_duration(pose.q_open - pl.q_rest, h.velocity, h.acceleration)
+            T_m = m.move_time(pl.q_rest, pose.q_open)
             s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i, t_b + T_m, stop_t, r)
             # wait for a better estimate while waiting one more observation costs nothing
-            if t_b + period + T_m >= s_c or t_b + period + T_m >= pose.t_i:
+            if t_b + period + T_m >= s_c or t_b + period + T_m >= rest_by:
                 m.start(t_b, pose.q_open, T_m)
                 m.set_closing(s_c, cl.duration_s)
         else:
-            if not m.reaim(t_b, pose.q_open):
+            if m.reaim(t_b, pose.q_open, rest_by) < 1.0:
                 self.kept_targets += 1
             if m.close_start_s > t_b:
                 s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i,
                                   m.fingers_open_s, stop_t, r)
                 m.set_closing(max(s_c, t_b), cl.duration_s)
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
-        self.uncertainty = self._sigma(flight, pose.t_i)
+
+    def _search(self, flight: Flight | None) -> Intercept | None:
+        """The intercept searched along the whole of ``flight`` near the catch point (the
+        first plan's; ``find_intercept_near`` warm-starts every later one)."""
+        if flight is None:
+            return None
+        try:
+            t_c = float(flight.time_at_x(float(self.C[0])))
+        except InfeasibleError:
+            t_c = closest_time(flight, self.C)
+        return find_intercept(self.pl.wrist, flight, self.C, self.ball.radius_m, t_c)
 
     def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
         """The intercept's 1-sigma from the fit (``LiveFit.sigma_at``): across the path at
@@ -242,13 +273,10 @@ class CatchSession:
         if n <= self.next_row:
             return np.empty((0, 0))
         t = np.arange(self.next_row, n) * self.dt
-        Q = self.motion.rows(t)
-        early = t <= t_b
-        if old_seg is not None and early.any():
-            Q[early] = self.motion.rows(t[early], old_seg)
+        Q = self.motion.rows(t, old_seg, t_b)
         guard_rows(self.pl.hand, Q, self._q[-1][-1] if self._q else None, self.dt)
         out = self.writer.write_rows(t, Q, self.pl.hand.motor_angles(Q))
-        self.rows_out_s = time.perf_counter()
+        self.rows_out_s, self.rows_cpu_s = time.perf_counter(), time.thread_time()
         self._t.append(t)
         self._q.append(Q)
         self.next_row = n
@@ -262,13 +290,15 @@ class CatchSession:
         pose, h = self.pose, self.pl.hand
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
-            T_m = phase_duration(pose.q_open - self.pl.q_rest, h.velocity, h.acceleration)
+            T_m = m.move_time(self.pl.q_rest, pose.q_open)
             m.start(t_b, pose.q_open, T_m)
             m.set_closing(close_start(h, self.flight, self.C, pose.q_open, cl, pose.t_i,
                                       t_b + T_m, gq.stop_time(pose.v_i), self.ball.radius_m),
                           cl.duration_s)
         t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
+        self.uncertainty = self._sigma(self.flight, pose.t_i)  # (of the last estimate only:
+        # what the plan reports)
         self.plan = self._judge(t_static)
         if self.plan.feasible:
             self.outcome = HELD
@@ -303,7 +333,8 @@ class CatchSession:
                   f"{1000 * self.fit.result.residual_rms:.1f} mm), the first plan from "
                   f"{self.first['observations']}")]
         if self.kept_targets:
-            notes.append(f"{self.kept_targets} re-aims left the joint limits: the older "
+            notes.append(f"{self.kept_targets} re-aims could not reach their target at rest "
+                         "before the ball within the limits: part of the way, or the older "
                          "target kept")
         return CatchPlan(
             feasible=not reasons, reasons=reasons, flight=fl, catch_point=self.C,

@@ -51,7 +51,17 @@ def format_summary(res: CatchResult) -> str:
     lines.append(f"  margins: open hand waits {m['wait_open_s'] * ms:.0f} ms, closing starts "
                  f"{m['close_lead_s'] * ms:.0f} ms before the ball, {g}; fingertips clear the "
                  f"ball by {p.min_clearance_before_m * ms:.1f} mm before it")
-    for name, gr in (("stopping", p.stop), ("holding", p.hold)):
+    if p.stop is not None:
+        st, soft = p.stop, p.soft
+        how = ("the palm at rest" if soft is None else
+               f"the palm meeting it at {np.linalg.norm(soft.v_palm):.2f} m/s, "
+               f"{np.linalg.norm(soft.v_rel):.2f} m/s relative, tilt "
+               f"{np.degrees(soft.tilt_rad):+.0f} deg, at rest {1000 * (soft.end_s - p.intercept_t):.0f} ms after")
+        per = ", ".join(f"{m} {100 * x:.0f} %" for m, x in
+                        sorted(zip(p.hand.motor_names, st.motor_headroom), key=lambda z: z[1])[:3])
+        lines.append(f"  stopping: {st.force_n:.1f} N ({how}); torque headroom "
+                     f"{100 * st.headroom:.0f} % (least: {per})")
+    for name, gr in (("holding", p.hold),):
         if gr is not None:
             lines.append(f"  {name}: {np.linalg.norm(gr.total_force):.1f} N over "
                          f"{', '.join(c.name for c in gr.problem.contacts)}; torque headroom "
@@ -90,6 +100,19 @@ def _grasp_dict(gr) -> dict[str, Any] | None:
             "limiting_part": gr.limiting_part}
 
 
+def _stop_dict(p) -> dict[str, Any] | None:
+    st = p.stop
+    if st is None:
+        return None
+    return {"force_n": float(st.force_n), "torque_headroom": float(st.headroom),
+            "limiting_motor": st.motor, "limiting_part": st.limiting_part,
+            "motor_headroom": dict(zip(p.hand.motor_names, map(float, st.motor_headroom))),
+            "cone_margin_n": st.cone_margin_n,
+            "palm_speed_m_s": None if p.soft is None else float(np.linalg.norm(p.soft.v_palm)),
+            "relative_speed_m_s": float(st.speed_m_s),
+            "tilt_deg": None if p.soft is None else float(np.degrees(p.soft.tilt_rad))}
+
+
 def catch_dict(res: CatchResult) -> dict[str, Any]:
     """``catch --json``: the summary's facts, one JSON object (units in the names)."""
     p = res.plan
@@ -108,7 +131,7 @@ def catch_dict(res: CatchResult) -> dict[str, Any]:
         "grasp_t_s": None if p.grasp_t is None else float(p.grasp_t),
         "grasp_fingers": list(p.grasp_fingers), "margins_s": {k: float(v) for k, v in m.items()},
         "min_clearance_before_m": float(p.min_clearance_before_m),
-        "stopping": _grasp_dict(p.stop), "holding": _grasp_dict(p.hold),
+        "stopping": _stop_dict(p), "holding": _grasp_dict(p.hold),
         "uncertainty": None if not p.uncertainty else {k: float(v) for k, v in
                                                        p.uncertainty.items()},
         "notes": list(p.notes), "rows": int(res.rows), "rate_hz": float(p.rate_hz),

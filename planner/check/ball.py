@@ -6,13 +6,16 @@ holding the ball, ``ball_loads``)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
+from planner.check.ballstop import PALM_MU, cone_margin_n, pad_force_n, pad_time_s, ride_force_n
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
-from planner.check.kinematics import GRAVITY, Kinematics
+from planner.check.kinematics import GRAVITY, G, Kinematics
 from planner.check.limits import RATE_TOL
+from planner.check.motormap import motor_torque_matrix
 from planner.check.results import BallLoad, CatchResult, TipTouch
 from planner.errors import InputError
 from planner.hand.spec import FINGERS
@@ -20,6 +23,8 @@ from planner.hand.tendon import actuator_capacity
 from planner.trajfile import Trajectory
 
 BALL_STEP_S = 1e-3  # RK4 step of the ball flight with drag
+CONE_TOL_N = 1e-3  # the cone margin's tolerance (N): the file's rounding of the rows
+STILL_M_S = 1e-3  # the palm target slower than this (1 mm/s) has brought the ball to rest
 STOP_DIFF_S = 1e-4  # central differences of the ball and the palm at the intercept (s): the
 # ball's speed changes by g h = 1 mm/s over it, the palm's rows are piecewise linear
 
@@ -138,13 +143,17 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
         problems.append("the plan states no stopping distance (catch.stop_distance_m): the "
                         "force of stopping the ball cannot be judged")
     elif err is not None:
-        loads = ball_loads(tr, kin, palm, ball, ti, stop_m)
+        loads = ball_loads(tr.t_s, tr.q, kin, palm, ball, ti, stop_m, g_time)
         for ld in loads:
+            what = "stopping" if ld.phase == "stop" else "holding"
             if ld.headroom < -RATE_TOL:
-                problems.append(f"{'stopping' if ld.phase == 'stop' else 'holding'} the ball "
-                                f"needs {ld.force_n:.1f} N at {ld.time_s:.3f} s: motor."
-                                f"{ld.motor} {abs(ld.torque_nm):.2f} N m > its "
+                problems.append(f"{what} the ball needs {ld.force_n:.1f} N at {ld.time_s:.3f} s: "
+                                f"motor.{ld.motor} {abs(ld.torque_nm):.2f} N m > its "
                                 f"{ld.limiting_part} limit {ld.capacity_nm:.2f} N m")
+            if ld.cone_margin_n is not None and ld.cone_margin_n < -CONE_TOL_N:
+                problems.append(f"{what} the ball: the palm's force leaves its friction cone "
+                                f"(mu {PALM_MU:g}) by {-ld.cone_margin_n:.2f} N before the "
+                                "grasp: the ball slides off the palm")
     load = np.where(t >= ti, ball["mass"], 0.0)
     res = CatchResult(ti, r, tuple(float(x) for x in b_i), tuple(float(x) for x in target), err,
                       err is not None and err <= INTERCEPT_TOL_M, tuple(touches), g_time,
@@ -197,56 +206,133 @@ def _stop_distance(meta: dict[str, Any], path: str) -> float | None:
     return float(d)
 
 
-def ball_loads(tr: Trajectory, kin: Kinematics, palm: np.ndarray, ball: dict[str, Any],
-               ti: float, stop_m: float) -> tuple[BallLoad, BallLoad]:
-    """The ball's load on the hand (see the package docstring, "Catch"): stopping it, its
-    velocity relative to the palm target at ``ti`` taken to rest over ``stop_m`` at a
-    constant deceleration (F = m v^2 / (2 d) against that velocity, plus its weight), all
-    on the palm centre; holding it, riding the palm target of each row after the stop
-    (F = m (a - g), a from the rows' second differences). Joint torques g(q) + J^T F
-    through the hand's transmissions, each motor against its capacity."""
-    t, Q, r, m = tr.t_s, tr.q, ball["radius"], ball["mass"]
+def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
+               ball: dict[str, Any], ti: float, pad_m: float, grasp_t: float | None = None
+               ) -> tuple[BallLoad, BallLoad]:
+    """The ball's load on the hand (``planner.check.ballstop``, one definition with the
+    planner), judged on the rows as they move: its velocity relative to the palm target at
+    ``ti`` stopped by the pad over ``pad_m`` (at ``ti`` and at every row within the pad's
+    time after it), then the ball riding the palm target of every later row (the rows'
+    second differences); at each, the joint torques g(q) + J^T F + the hand's own inertia
+    as its arm moves (RNEA of the rows' central differences of the joints outside the
+    fingers) through the transmissions, each motor against
+    its capacity, and while the ball slows (until the grasp at ``grasp_t``) F inside the
+    palm's friction cone.
+    ``stop``: the worst instant while the palm target still moves (the stopping motion);
+    ``hold``: the worst after it comes to rest. The cone is judged where the ball slows: at
+    the pad and where the palm target decelerates faster than g (slower than that the ball
+    lies on the palm as on one at rest, which the closing fingers catch)."""
+    r, m = ball["radius"], ball["mass"]
     h = STOP_DIFF_S
     b = ball_positions(ball["p0"], ball["v0"], ball["drag"], [ti - h, ti + h])
-    q_i = np.array([np.interp(ti, t, Q[:, j]) for j in range(Q.shape[1])])
-    qa = np.array([[np.interp(x, t, Q[:, j]) for j in range(Q.shape[1])] for x in (ti - h, ti + h)])
+    qa = _rows_at(t, Q, np.array([ti - h, ti, ti + h]))
     _, P = kin.frames(qa)
     c = P[:, :3, 3] + r * P[:, :3, 2]
-    v_rel = (b[1] - b[0] - (c[1] - c[0])) / (2 * h)
-    speed = float(np.linalg.norm(v_rel))
-    a_stop = -speed / (2.0 * stop_m) * v_rel
-    F_stop = m * (a_stop - GRAVITY)
-    stop = _load("stop", kin, q_i, ti, F_stop, speed, stop_m)
-    # holding: the rows after the stop (2 d / v) with a row on either side
-    t_held = ti + (2.0 * stop_m / speed if speed > 0 else 0.0)
-    k = np.flatnonzero(t >= t_held)
-    k = k[(k >= 1) & (k <= len(t) - 2)]
-    hold = None
-    if k.size:
-        centre = palm[:, :3, 3] + r * palm[:, :3, 2]
-        dt0, dt1 = t[k] - t[k - 1], t[k + 1] - t[k]
-        acc = 2.0 * ((centre[k + 1] - centre[k]) / dt1[:, None]
-                     - (centre[k] - centre[k - 1]) / dt0[:, None]) / (dt0 + dt1)[:, None]
-        for j, kk in enumerate(k):
-            ld = _load("hold", kin, Q[kk], float(t[kk]), m * (acc[j] - GRAVITY), 0.0, 0.0)
-            if hold is None or ld.headroom < hold.headroom:
-                hold = ld
-    if hold is None:
-        hold = _load("hold", kin, Q[-1], float(t[-1]), -m * GRAVITY, 0.0, 0.0)
+    v_rel = (b[1] - b[0] - (c[2] - c[0])) / (2 * h)
+    t_pad = pad_time_s(v_rel, pad_m)
+    V, A, centre_v, centre_a = _row_rates(t, Q, palm, r)
+    # the hand's inertia of the arm's motion (the stopping motion); the fingers' own moves
+    # are not the ball's load (nor judged dynamically elsewhere in a catch)
+    still_fingers = _finger_mask(kin.hand)
+    V[:, still_fingers] = 0.0
+    A[:, still_fingers] = 0.0
+    # at the intercept: the rows' rates there (speed of its segment, acceleration of the
+    # nearer row)
+    k0 = int(np.clip(np.searchsorted(t, ti, side="right") - 1, 0, len(t) - 2))
+    kn = k0 if ti - t[k0] <= t[k0 + 1] - ti else k0 + 1
+    v_i = np.where(still_fingers, 0.0, (Q[k0 + 1] - Q[k0]) / (t[k0 + 1] - t[k0]))
+    held = grasp_t if grasp_t is not None else math.inf
+    cap = actuator_capacity(kin.hand)
+    inst = [_load("stop", kin, qa[1], ti, pad_force_n(m, v_rel, centre_a[kn], pad_m),
+                  float(np.linalg.norm(v_rel)), pad_m, v_i, A[kn], P[1, :3, 2], ti < held, cap)]
+    still = None
+    for k in np.flatnonzero(t > ti):
+        F, sp, dist = ride_force_n(m, centre_a[k]), 0.0, 0.0
+        if t[k] < ti + t_pad:
+            F, sp, dist = pad_force_n(m, v_rel, centre_a[k], pad_m), inst[0].speed_m_s, pad_m
+        if still is None and t[k] >= ti + t_pad and np.linalg.norm(centre_v[k]) < STILL_M_S:
+            still = k
+        phase = "stop" if still is None else "hold"
+        if phase == "hold" and k > still and not np.any(V[k]) and not np.any(A[k]) \
+                and not np.any(centre_a[k]):
+            continue  # the arm still: the ball's weight on the palm, judged on every row by
+            # the limit audit (``planner.check.limits``, its static torques)
+        slows = sp > 0 or float(np.linalg.norm(centre_a[k])) > G  # the arm, not gravity, sets F
+        inst.append(_load(phase, kin, Q[k], float(t[k]), F, sp, dist, V[k], A[k],
+                          palm[k, :3, 2], phase == "stop" and slows and t[k] < held, cap))
+    stop = _worst([x for x in inst if x.phase == "stop"])
+    holds = [x for x in inst if x.phase == "hold"]
+    hold = _worst(holds) if holds else _load("hold", kin, Q[-1], float(t[-1]),
+                                             ride_force_n(m, np.zeros(3)), 0.0, 0.0,
+                                             np.zeros(Q.shape[1]), np.zeros(Q.shape[1]),
+                                             palm[-1, :3, 2], False, cap)
     return stop, hold
 
 
+def _rows_at(t: np.ndarray, Q: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """The rows interpolated linearly at ``times`` (held at the ends), like ``np.interp``
+    on every column."""
+    if len(t) < 2:
+        return np.repeat(Q[:1], len(times), axis=0)
+    k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
+    w = np.clip((times - t[k]) / (t[k + 1] - t[k]), 0.0, 1.0)[:, None]
+    return (1.0 - w) * Q[k] + w * Q[k + 1]
+
+
+_FINGER_MASKS: dict[tuple[str, str], np.ndarray] = {}
+
+
+def _finger_mask(hand) -> np.ndarray:
+    """True for the joints of the hand's fingers (once per hand)."""
+    key = (hand.name, hand.urdf_sha256)
+    mask = _FINGER_MASKS.get(key)
+    if mask is None:
+        fingers = {n for f in hand.fingers for n in hand.spec.joints_of(f)}
+        mask = _FINGER_MASKS[key] = np.array([n in fingers for n in hand.joint_names])
+        mask.setflags(write=False)
+    return mask
+
+
+def _row_rates(t: np.ndarray, Q: np.ndarray, palm: np.ndarray, r: float):
+    """Joint speeds and accelerations of every row (central differences; zero at the first
+    and the last row) and the palm target's velocity and acceleration likewise."""
+    centre = palm[:, :3, 3] + r * palm[:, :3, 2]
+    out = []
+    for X in (Q, centre):
+        Vx, Ax = np.zeros_like(X), np.zeros_like(X)
+        if len(t) >= 3:
+            dt0, dt1 = np.diff(t)[:-1, None], np.diff(t)[1:, None]
+            Vx[1:-1] = (X[2:] - X[:-2]) / (dt0 + dt1)
+            Ax[1:-1] = 2.0 * ((X[2:] - X[1:-1]) / dt1 - (X[1:-1] - X[:-2]) / dt0) / (dt0 + dt1)
+        out += [Vx, Ax]
+    return out[0], out[1], out[2], out[3]
+
+
+def _worst(loads: list[BallLoad]) -> BallLoad:
+    """The instant closest to a motor's capacity, carrying the phase's worst headroom of
+    every motor and its least cone margin."""
+    w = min(loads, key=lambda x: x.headroom)
+    per = tuple(float(x) for x in np.min([x.motor_headroom for x in loads], axis=0))
+    cones = [x.cone_margin_n for x in loads if x.cone_margin_n is not None]
+    cone = min(cones) if cones else None
+    return replace(w, motor_headroom=per, cone_margin_n=cone)
+
+
 def _load(phase: str, kin: Kinematics, q: np.ndarray, time_s: float, F: np.ndarray,
-          speed: float, dist: float) -> BallLoad:
-    """The hand applying ``F`` to the ball at the palm centre at ``q``: the motor closest
-    to its capacity."""
+          speed: float, dist: float, v: np.ndarray, a: np.ndarray, normal: np.ndarray,
+          on_palm: bool, cap) -> BallLoad:
+    """The hand applying ``F`` to the ball at the palm centre at ``q``, moving at joint speeds
+    ``v`` and accelerations ``a``: every motor's headroom, the one closest to its capacity;
+    the cone margin of ``F`` when the palm alone holds the ball (``on_palm``)."""
     hand = kin.hand
     (J,) = kin.point_jacobians(q, [kin.palm_id])
-    tau = hand.motor_torques(q, kin.gravity(q) + J.T @ F)
-    cap = actuator_capacity(hand)
+    tau_j = kin.gravity(q) + J.T @ F
+    if np.any(v != 0.0) or np.any(a != 0.0):
+        tau_j = tau_j + kin.inertial(q, v, a)
+    tau = motor_torque_matrix(hand, q) @ tau_j
     ratio = np.abs(tau) / cap.torque_nm
     i = int(np.argmax(ratio))
+    cone = cone_margin_n(F, normal) if on_palm else None
     return BallLoad(phase, float(time_s), float(np.linalg.norm(F)), float(speed), float(dist),
-                    hand.motor_names[i], float(tau[i]), float(cap.torque_nm[i]), cap.limiting(i))
-
-
+                    hand.motor_names[i], float(tau[i]), float(cap.torque_nm[i]), cap.limiting(i),
+                    tuple(float(x) for x in 1.0 - ratio), cone)

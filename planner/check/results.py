@@ -162,6 +162,9 @@ class BallLoad:
     torque_nm: float
     capacity_nm: float
     limiting_part: str
+    motor_headroom: tuple[float, ...] = ()  # 1 - |torque| / capacity of every motor (worst)
+    cone_margin_n: float | None = None  # mu F_n - |F_t| on the palm before the grasp (least;
+    # None: the fingers hold the ball throughout)
 
     @property
     def headroom(self) -> float:
@@ -295,7 +298,8 @@ class CheckReport:
                         if c.grasp_time_s is not None else "no grasp"))
             for ld in c.loads:
                 what = (f"{ld.speed_m_s:.2f} m/s relative to the palm over "
-                        f"{1000 * ld.distance_m:g} mm" if ld.phase == "stop" else "on the palm")
+                        f"{1000 * ld.distance_m:g} mm" if ld.distance_m > 0 else
+                        "riding the palm as it slows" if ld.phase == "stop" else "on the palm")
                 L.append(f"  {ld.phase}: {ld.force_n:.1f} N at {ld.time_s:.3f} s ({what}): "
                          f"motor.{ld.motor} {abs(ld.torque_nm):.3f} of {ld.capacity_nm:.3f} N m "
                          f"({ld.limiting_part}), headroom {100 * ld.headroom:.0f} %")

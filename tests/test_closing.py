@@ -1,0 +1,58 @@
+"""planner.catch.closing.close_start: the earliest clear start among its candidates,
+judged a few at a time, is the one judging them all at once finds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner.catch import grasp as gq
+from planner.catch.closing import _N_CAND, TOUCH_CLEAR_M, close_start
+from planner.catch.flight import get_ball, predict_throw
+from planner.catch.plan import get_planner
+from planner.catch.session import CatchSession
+
+BALL = get_ball("tennis")
+
+
+def _all_at_once(hand, flight, C, q_open, closing, t_i, ready, stop_t, r):
+    """Every candidate judged together (the definition)."""
+    want = max(ready, t_i + stop_t - closing.u_grasp * closing.duration_s)
+    if want >= t_i:
+        return want
+    speed = float(np.linalg.norm(flight.velocity(t_i)))
+    tt = np.arange(max(want, t_i - (closing.reach_m + r) / speed), t_i, 0.001)
+    Tinv = np.linalg.inv(hand.palm_pose(q_open))
+    b_pc = (flight.position(tt) - C) @ Tinv[:3, :3].T + Tinv[:3, 3]
+    cands = np.linspace(want, t_i, _N_CAND)
+    n_tab = len(closing.u)
+    U = np.clip((tt[None, :] - cands[:, None]) / closing.duration_s, 0.0, 1.0)
+    k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
+    d = np.linalg.norm(closing.tips_pc[k] - b_pc[None, :, None, :], axis=-1)
+    good = np.flatnonzero(~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2)))
+    return float(cands[good[0]]) if good.size else float(t_i)
+
+
+@pytest.mark.parametrize("angle,dist,height", [(30.0, 1.5, 0.0), (52.0, 2.3, -0.2),
+                                               (22.0, 1.1, 0.15), (45.0, 1.8, 0.1)])
+def test_close_start_is_the_earliest_clear_candidate(angle, dist, height):
+    pl = get_planner("default")
+    cl = pl.closing(BALL.radius_m)
+    fl = predict_throw(angle, dist, height, BALL, drag=True)
+    s = CatchSession(dist, height, ball=BALL, drag=True, planner=pl)
+    rng = np.random.default_rng(2)
+    n = 0
+    for k in range(1, 40):
+        s.observe(k / 100, fl.position(k / 100) + rng.normal(0.0, 0.005, 3))
+        if s.pose is None:
+            continue
+        p = s.pose
+        for ready in (s.motion.fingers_open_s if s.motion.moving else k / 100 + 0.2,
+                      p.t_i - 0.3, p.t_i - 0.05):
+            args = (pl.hand, s.flight, s.C, p.q_open, cl, p.t_i, ready, gq.stop_time(p.v_i),
+                    BALL.radius_m)
+            assert close_start(*args) == _all_at_once(*args)
+            n += 1
+        if s.done:
+            break
+    assert n > 20
