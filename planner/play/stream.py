@@ -5,6 +5,8 @@ planner's own replay (``planner.selfcheck``) as its summary and its end marker's
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import math
 import time
 from collections.abc import Callable
@@ -92,7 +94,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
     writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
                               hand.joint_names, hand.motor_names, on_rows=selfcheck.add_rows)
     try:
-        motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
+        with _cyclic_gc_paused():
+            motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
         left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}
         left_out.update({o.note: (o.skip, o.detail)
                          for o in motion.outcomes.values() if o.skip is not None})
@@ -103,6 +106,24 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
         raise
     return PlayPlan(writer.rows, writer.rows / rate_hz, fingering, verdict,
                     time.perf_counter() - t_start, rows.first_row_s - t_start, writer.text)
+
+
+@contextlib.contextmanager
+def _cyclic_gc_paused():
+    """Python's cyclic garbage collector paused while a song is planned (as it was
+    before, after). The programme keeps long-lived containers (the hand's cost memo, a
+    window's states before and their losses) that every full collection scans again:
+    measured on the 38 corpus songs planned by one Planner, with the check between
+    songs, 6.7 s of collection against 1.1 s at d387769, median CPU real-time factor
+    50x against 65x paused. Planning makes no reference cycles (a test counts the
+    unreachable objects it leaves: none), so reference counting frees all it drops."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
 
 
 def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: TrajectoryWriter,
