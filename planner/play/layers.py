@@ -49,7 +49,6 @@ class Layers(Costs):
                  memo: CostMemo | None = None) -> None:
         super().__init__(notes, atlas, moves, rate_hz, memo)
         self._order = {f: i for i, f in enumerate(atlas.hand.fingers)}
-        self._bound = math.inf  # the beam's cost bound of the layer being made
         self._bound_at: tuple = (None, 0, math.inf)  # (layer, its size, its bound)
 
     def _layer(self, prev, t: float, new: list[int]):
@@ -73,7 +72,7 @@ class Layers(Costs):
         new = sorted(new, key=lambda n: self.pitch[n])
         offset = self.offset
         starts = prev.items() if prev else [(None, (0.0, None))]
-        self._bound = math.inf
+        bound = math.inf  # the beam's cost bound of the layer being made
         assign: dict[frozenset, list] = {}  # by the fingers holding kept notes
         for i, (p, (cost, _)) in enumerate(starts):
             cost += left_out
@@ -81,8 +80,8 @@ class Layers(Costs):
             # nothing: once ``BEAM`` states are cheaper than this one's cost, no state
             # it leads to is kept, nor are those of the states after it)
             if i % BOUND_EVERY == 0:
-                self._bound = self._beam_bound(layer)
-            if cost > self._bound:
+                bound = self._beam_bound(layer)
+            if cost > bound:
                 break
             ctx = None if p is None else self.prev(p, t)
             held = [] if p is None else ctx.held
@@ -98,7 +97,7 @@ class Layers(Costs):
                             dict(zip(new, combo))
                             for combo in itertools.combinations(free, len(new)))]
                     for d, key in got:
-                        self._try(layer, ctx, cost + cut, kept, d, key, t)
+                        self._try(layer, ctx, cost + cut, bound, kept, d, key)
 
     def _beam_bound(self, layer) -> float:
         """The cost of the last state ``_prune`` keeps of ``layer`` (inf when it keeps
@@ -112,10 +111,11 @@ class Layers(Costs):
             self._bound_at = (layer, len(layer), bound)
         return self._bound_at[2]
 
-    def _try(self, layer, ctx: Prev | None, cost: float, kept, new: dict[int, str],
-             press_key: tuple, t: float) -> None:
-        """Every transition from ``ctx`` that strikes ``new`` (note -> finger: its
-        ``_press_key``) and keeps ``kept`` held, into ``layer``."""
+    def _try(self, layer, ctx: Prev | None, cost: float, bound: float, kept,
+             new: dict[int, str], press_key: tuple) -> None:
+        """Every transition from ``ctx`` (its cost so far ``cost``) that strikes ``new``
+        (note -> finger: its ``_press_key``) and keeps ``kept`` held, into ``layer``; none
+        costing more than ``bound``, the beam's (no such state is kept)."""
         if kept or len(new) > 1:
             order_of, pitch = self._order, self.pitch
             sounding = sorted([*kept, *new.items()], key=lambda mf: pitch[mf[0]])
@@ -134,12 +134,12 @@ class Layers(Costs):
             rails = self._moves_to(new, press_key, p)
         if p is None:  # (the song's first notes: from anywhere, no move lost)
             for rail_i, tie in rails:
-                total, shape = cost + 0.0 + tie, (rail_i, sounding_t)
+                total, shape = cost + tie, (rail_i, sounding_t)
                 old = layer.get(shape)
-                if total <= self._bound and (old is None or total < old[0]):
+                if total <= bound and (old is None or total < old[0]):
                     layer[shape] = (total, None, State(rail_i, sounding_t))
             return
-        bound, here, steps = self._bound, p.rail_i, ctx.steps
+        here, steps = p.rail_i, ctx.steps
         busy = crossing = recent = None
         for rail_i, tie in rails:
             # (the pruning keeps one state per shape, the cheapest: a transition that
