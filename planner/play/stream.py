@@ -115,7 +115,7 @@ def _cyclic_gc_paused():
     window's states before and their losses) that every full collection scans again:
     measured on the 38 corpus songs planned by one Planner, with the check between
     songs, 6.7 s of collection against 1.1 s at d387769, median CPU real-time factor
-    50x against 65x paused. Planning makes no reference cycles (a test counts the
+    50x against 68x paused. Planning makes no reference cycles (a test counts the
     unreachable objects it leaves: none), so reference counting frees all it drops."""
     was = gc.isenabled()
     gc.disable()
