@@ -117,6 +117,25 @@ def _v(xs) -> str:
     return " ".join(f"{float(x):.12g}" for x in xs)
 
 
+def segment_capsule(link: UrdfLink, pad: tuple[float, float, float] | None
+                    ) -> tuple[tuple[float, ...], tuple[float, ...], float] | None:
+    """A finger segment's capsule in its link's frame (its two end points and radius), or
+    None when the link's box is not a segment's (not longest along its y): the box's
+    thickness, along y, ending at the pad sphere's centre ``pad`` on the distal segment.
+    (The one definition of the finger's body: the MJCF's geoms and the planner's body
+    clearance, ``planner.play.fingerbody``.)"""
+    if link.box_size_m is None:
+        return None
+    sx, sy, sz = link.box_size_m
+    cx, cy, cz = link.box_center_m
+    if not (sy > sx and sy > sz):
+        return None
+    r = 0.5 * min(sx, sz)
+    y0 = cy - 0.5 * sy + r
+    y1 = cy + 0.5 * sy - r if pad is None else pad[1]
+    return (cx, y0, cz), (cx, max(y1, y0 + 1e-4), cz), r
+
+
 def _geoms(body: ET.Element, link: UrdfLink, pad: tuple[float, float, float] | None,
            segment: bool, collide: bool = True) -> None:
     """Collision geoms of a link (see the module docstring); ``segment``: the link is a
@@ -128,16 +147,13 @@ def _geoms(body: ET.Element, link: UrdfLink, pad: tuple[float, float, float] | N
               "rgba": "0.75 0.6 0.5 1"}
     if link.box_size_m is None:
         return
-    sx, sy, sz = link.box_size_m
-    cx, cy, cz = link.box_center_m
-    if segment and sy > sx and sy > sz:  # a finger segment: a capsule along y
-        r = 0.5 * min(sx, sz)
-        y0 = cy - 0.5 * sy + r
-        y1 = cy + 0.5 * sy - r if pad is None else pad[1]
+    cap = segment_capsule(link, pad) if segment else None
+    if cap is not None:
+        p0, p1, r = cap
         ET.SubElement(body, "geom", name=f"{link.name}_capsule", type="capsule",
-                      fromto=_v((cx, y0, cz, cx, max(y1, y0 + 1e-4), cz)), size=f"{r:.12g}",
-                      **common)
+                      fromto=_v((*p0, *p1)), size=f"{r:.12g}", **common)
         return
+    sx, sy, sz = link.box_size_m
     ET.SubElement(body, "geom", name=f"{link.name}_box", type="box", pos=_v(link.box_center_m),
                   size=_v((0.5 * sx, 0.5 * sy, 0.5 * sz)), **common)
 

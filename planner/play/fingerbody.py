@@ -1,0 +1,128 @@
+"""A finger's body against the keys: its segments and pad as the physics replay's shapes.
+
+The spec's key-down rule (and so ``check``) and the atlas's tip clearance are about a
+fingertip point; the physics replay's fingers are bodies (``planner.simulate.hand_mjcf``:
+each finger segment a capsule of its URDF box's thickness, the distal one ending in the
+pad sphere whose bottom, in its link's frame, is the pad point). A 1.5x hand's finger
+end (17.1 mm thick on the default hand) does not fit between two black keys (13.5 mm of
+white key there), and a curled distal segment's sphere reaches below its pad point. The
+atlas keeps an entry only when its finger's body, at each pose and along its moves,
+stays out of every key but its own (``body_clear``), as the replay's physical keys are
+(``planner.simulate.keyboard``: a white key's front and back boxes, a black key's box,
+each standing on the key frame). The shapes are read from the same URDF by the same rule
+(``hand_mjcf.segment_capsule``): one definition of the finger's body.
+
+Tolerances (each a physical value with its source):
+
+* ``OTHER_KEY_TOLERANCE_M`` 0.5 mm: a key the body touches by that much is pushed down
+  0.5 mm at most, a tenth of the spec's 5 mm key-down depth (it does not sound); it is
+  also the atlas's grid (``STEP_M / 2``: where a tip lands at most off its sample).
+* ``OWN_BED_MARGIN_M`` 2 mm: the pressed key's bed is 10 mm down (spec: key dip); the
+  spec allows a tip 12 mm below the key's top (``KEY_BED_DEPTH_M``): a body reaching
+  more than 2 mm past the bed would be held up by it before its pad point is down.
+
+The knuckles' small boxes and the palm are not tested (the physics replay's palm is far
+above the keys in every play pose; the knuckles are inside the segments' capsules).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.hand.model import HandModel
+from planner.music import keyboard as kb
+from planner.simulate.hand_mjcf import parse_urdf, segment_capsule
+from planner.simulate.keyboard import key_bodies
+
+OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
+OWN_BED_MARGIN_M = kb.KEY_BED_DEPTH_M - kb.KEY_DIP_M  # 2 mm: spec section 2
+AXIS_SAMPLES = 9  # a capsule's axis is tested at this many points (its ends included)
+
+
+@dataclass(frozen=True)
+class FingerShapes:
+    """One finger's capsules (a sphere: both ends equal), each in its link's frame."""
+
+    frames: tuple[int, ...]  # Pinocchio frame ids
+    p0: np.ndarray  # (k, 3) link frame, m
+    p1: np.ndarray  # (k, 3)
+    radius_m: np.ndarray  # (k,)
+
+
+class FingerBodies:
+    """Every finger's shapes of one hand and the keys' boxes (see the module docstring)."""
+
+    def __init__(self, hand: HandModel) -> None:
+        self.hand = hand
+        links, joints = parse_urdf(hand.urdf)
+        parent_of = {j.child: j for j in joints}
+        tip_link = {f: hand.tip_frames[i] for i, f in enumerate(hand.fingers)}
+        self.shapes: dict[str, FingerShapes] = {}
+        for f in hand.fingers:
+            tj = parent_of[tip_link[f]]  # the tip's fixed joint: the pad point in the distal link
+            r_pad = abs(tj.xyz_m[2])
+            centre = (tj.xyz_m[0], tj.xyz_m[1], tj.xyz_m[2] + r_pad)
+            frames, p0, p1, rad = [hand.pin_model.getFrameId(tj.parent)], [centre], [centre], [r_pad]
+            name = tj.parent
+            while name in parent_of and name not in ("palm", "palm_center"):
+                link = links[name]
+                cap = segment_capsule(link, centre if name == tj.parent else None)
+                if cap is not None:
+                    frames.append(hand.pin_model.getFrameId(name))
+                    p0.append(cap[0])
+                    p1.append(cap[1])
+                    rad.append(cap[2])
+                name = parent_of[name].parent
+            self.shapes[f] = FingerShapes(tuple(frames), np.array(p0), np.array(p1),
+                                          np.array(rad))
+        boxes = [(k.pitch, b) for k in key_bodies() for b in k.boxes]
+        self.box_pitch = np.array([p for p, _ in boxes])
+        c = np.array([b.center_m for _, b in boxes])
+        h = np.array([b.half_m for _, b in boxes])
+        self.box_lo, self.box_hi = c - h, c + h
+        self._t = np.linspace(0.0, 1.0, AXIS_SAMPLES)[:, None]
+
+    def points(self, q: np.ndarray, finger: str, update: bool = True
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """The finger's shapes at ``q`` as sampled axis points (world, (m, 3)) and each
+        point's radius (m,); ``update`` False: the hand's kinematics are at ``q`` already
+        (another finger's call at the same ``q`` just before)."""
+        h, s = self.hand, self.shapes[finger]
+        if update:
+            h._update(q)
+        R, t = h.T_world_root[:3, :3], h.T_world_root[:3, 3]
+        pts, rad = [], []
+        for fid, a, b, r in zip(s.frames, s.p0, s.p1, s.radius_m):
+            M = h.pin_data.oMf[fid]
+            wa = R @ (M.rotation @ a + M.translation) + t
+            wb = R @ (M.rotation @ b + M.translation) + t
+            n = 1 if np.allclose(a, b) else AXIS_SAMPLES
+            pts.append(wa + self._t[:n] * (wb - wa))
+            rad.append(np.full(n, r))
+        return np.concatenate(pts), np.concatenate(rad)
+
+    def penetration(self, q: np.ndarray, finger: str, own_pitch: int | None,
+                    update: bool = True) -> np.ndarray:
+        """How deep (m) the finger's body reaches into each key box (keys at rest; key
+        ``own_pitch`` pressed to its bed), (boxes,); <= 0 where it is clear."""
+        p, r = self.points(q, finger, update)
+        lo, hi = self.box_lo, self.box_hi
+        if own_pitch is not None:
+            own = self.box_pitch == own_pitch
+            lo, hi = lo.copy(), hi.copy()
+            lo[own, 2] -= kb.KEY_DIP_M
+            hi[own, 2] -= kb.KEY_DIP_M
+        d = np.maximum(np.maximum(lo[None] - p[:, None], p[:, None] - hi[None]), 0.0)
+        dist = np.sqrt((d * d).sum(axis=2))  # (points, boxes); 0 inside
+        return (r[:, None] - dist).max(axis=0)
+
+    def clear(self, q: np.ndarray, finger: str, own_pitch: int | None) -> bool:
+        """True when the finger's body at ``q`` reaches no key but ``own_pitch`` by more
+        than ``OTHER_KEY_TOLERANCE_M``, and its own key (pressed) by at most
+        ``OWN_BED_MARGIN_M``."""
+        pen = self.penetration(q, finger, own_pitch)
+        own = self.box_pitch == own_pitch
+        return bool(np.all(pen[~own] <= OTHER_KEY_TOLERANCE_M)
+                    and np.all(pen[own] <= OWN_BED_MARGIN_M))

@@ -1,0 +1,121 @@
+"""The fingers' bodies against the keys (planner.play.fingerbody, planner.simulate.planbody):
+the physics replay's shapes, measured without the physics."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+import planner
+from planner.hand.model import load_hand
+from planner.music import keyboard as kb
+from planner.play.atlas import Atlas
+from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M, FingerBodies
+from planner.simulate.scene import build_scene
+from planner.trajfile import read_trajectory
+
+SONG = "songs/twinkle.mid"
+
+
+@pytest.fixture(scope="module")
+def hand():
+    return load_hand("default")
+
+
+@pytest.fixture(scope="module")
+def bodies(hand):
+    return FingerBodies(hand)
+
+
+@pytest.fixture(scope="module")
+def twinkle_rows(tmp_path_factory, hand):
+    path = tmp_path_factory.mktemp("body") / "twinkle.csv"
+    planner.plan_song(planner.load_song(SONG), hand, str(path))
+    return read_trajectory(str(path)).q
+
+
+def test_shapes_are_the_replays_geoms(hand, bodies):
+    """Each finger: its pad sphere and segment capsules, the MJCF's (same radii, the pad
+    sphere's centre a pad radius above the pad point in the distal link's frame)."""
+    scene = build_scene(hand, hand.T_world_root, keyboard=True, contact="full")
+    m = scene.model
+    for f in hand.fingers:
+        s = bodies.shapes[f]
+        assert s.radius_m[0] == pytest.approx(float(m.geom(f"{f}_pad").size[0]), abs=1e-12)
+        caps = sorted(float(m.geom_size[g][0]) for g in range(m.ngeom)
+                      if m.geom(g).name.endswith("_capsule") and scene.geom_finger[g]
+                      == planner.hand.spec.FINGERS.index(f))
+        assert sorted(s.radius_m[1:]) == pytest.approx(caps, abs=1e-12)
+
+
+def test_penetration_agrees_with_mujoco(hand, bodies, twinkle_rows):
+    """Over twinkle's planned rows (keys at rest): where MuJoCo finds a finger geom into a
+    key by up to 5 mm, ``penetration`` finds the same depth within 0.7 mm (its capsule
+    axes sampled at 9 points); where MuJoCo finds none, at most 0.7 mm."""
+    scene = build_scene(hand, hand.T_world_root, keyboard=True, contact="full")
+    m, data = scene.model, mujoco.MjData(scene.model)
+    worst, compared = 0.0, 0
+    for q in twinkle_rows[::40]:
+        data.qpos[:] = 0.0
+        data.qpos[scene.hand_qpos] = q
+        mujoco.mj_forward(m, data)
+        depth: dict[tuple[int, int], float] = {}
+        for c in data.contact[:data.ncon]:
+            g = [x for x in c.geom if scene.geom_finger[x] >= 0]
+            k = [scene.key_geom_key[x] for x in c.geom if scene.key_geom_key[x] >= 0]
+            if g and k:
+                key = (int(scene.geom_finger[g[0]]), int(k[0]) + kb.LOWEST_PITCH)
+                depth[key] = max(depth.get(key, 0.0), -float(c.dist))
+        for fi, f in enumerate(hand.fingers):
+            pen = bodies.penetration(q, f, None)
+            for p in np.unique(bodies.box_pitch):
+                ours = max(float(pen[bodies.box_pitch == p].max()), 0.0)
+                theirs = depth.get((fi, int(p)), 0.0)
+                if theirs < 0.005 and max(ours, theirs) > 0.0:
+                    worst = max(worst, abs(ours - theirs))
+                    compared += 1
+    assert compared > 50 and worst < 0.0007
+
+
+def test_shipped_press_poses_reach_below_their_pad_point(hand, bodies):
+    """The finding (docs/play-second-design.md, "The fingers' bodies"): the shipped atlas's
+    press poses curl the distal segment past vertical, so the pad sphere's bottom lies
+    below the pad point and the key's bed holds the finger up before the point is down."""
+    atlas = Atlas(hand)
+    e = atlas.entry("middle", 64, kb.key(64).center_x_m - atlas.natural_dx["middle"])
+    assert e is not None
+    q = atlas.full_q(e, "press", atlas.rail_of(atlas.base) + kb.key(64).center_x_m
+                     - atlas.natural_dx["middle"] - atlas.rail_of(atlas.base))
+    p, r = bodies.points(q, "middle")
+    tip = hand.tip_positions(q)[hand.fingers.index("middle")]
+    assert tip[2] - (p[0, 2] - r[0]) > 0.002  # more than the spec's 2 mm below the bed
+    assert not bodies.clear(q, "middle", 64)
+
+
+def test_a_straight_finger_rests_on_its_pad_point(hand, bodies):
+    """The neutral hand (every joint 0: the distal segments level): the pad sphere's
+    lowest point is the pad point."""
+    q = hand.q_neutral
+    for f in hand.fingers[1:]:
+        p, r = bodies.points(q, f)
+        tip = hand.tip_positions(q)[hand.fingers.index(f)]
+        R = hand.frame_pose(q, f"{f}_tip")[:3, :3]
+        if abs(R[2, 2]) > 1 - 1e-9:  # its pad faces straight down
+            assert p[0, 2] - r[0] == pytest.approx(tip[2], abs=1e-9)
+
+
+def test_plan_body_keys_flags_the_black_keys_beside_a_narrow_press(hand, twinkle_rows):
+    """Twinkle's D4 at 7.20 s is pressed between C#4 and D#4 (13.5 mm of white key, a
+    17.1 mm finger end): the plan's own bodies reach a black neighbour there, before any
+    physics; at the first row (the hand at C4-G4, every tip at crossing height) it
+    reaches neither (but G#4: a curled pad reaches below its point, see above)."""
+    from planner.check import key_contacts
+    from planner.simulate.planbody import plan_body_keys
+
+    rows = twinkle_rows[[0] + list(range(715, 735))]  # 100 Hz rows: 0 s, 7.15-7.34 s
+    kc = key_contacts(np.array([hand.tip_positions(q) for q in rows]))
+    flagged = plan_body_keys(hand, rows, kc)
+    black = [p - kb.LOWEST_PITCH for p in (61, 63)]
+    assert not flagged[0, black].any() and flagged[1:, black].any()
