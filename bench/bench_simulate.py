@@ -131,7 +131,9 @@ def _by_kind(name: str, rep, diffs) -> str:
             notes = ", ".join(f"{x.name}@{x.onset_s:.2f}"
                               + (f" ({'+'.join(x.fingers)})" if kind == "wrong" and x.fingers
                                  else "") for x in xs)
-            parts.append(f"**{kind}** {len(xs)} ({lost:.4f}): {notes}")
+            planned = (f", {sum(x.plan_frames > 0 for x in xs)} with the plan's finger body on "
+                       "the key" if kind == "wrong" and rep.contact == "full" else "")
+            parts.append(f"**{kind}** {len(xs)} ({lost:.4f}{planned}): {notes}")
     return (f"* {name} (kinematic {rep.kinematic_f1:.4f}, physics {rep.play.f1:.4f}): "
             + ("; ".join(parts) or "no difference"))
 

@@ -31,6 +31,7 @@ from planner.check.criteria import (
 )
 from planner.hand.spec import FINGERS
 from planner.music.keyboard import LOWEST_PITCH, WHITE_WIDTH_M
+from planner.simulate.planbody import plan_body_keys
 from planner.simulate.scores import key_down
 
 NEAR_NOTE_S = 0.1  # a key state this close to a note of its key belongs to that note
@@ -69,6 +70,9 @@ class NoteDifference:
     touched: tuple[str, ...] = ()  # other keys the planned finger touches in physics then
     plan_finger: str = ""  # the finger the plan presses the note with
     finger_width_mm: float = 0.0  # that finger's end in the scene (its pad sphere's diameter)
+    plan_frames: int = 0  # of its frames, those where the plan's own finger bodies reach
+    # the key (``planner.simulate.planbody``; full contact only): a wrong key the plan puts
+    # a finger's body on, before any dynamics
 
     @property
     def kind(self) -> str:
@@ -95,6 +99,8 @@ class NoteDifference:
             parts.append(f"down {self.extra_frames} frames outside any note")
         if self.touched:
             parts.append(f"the finger on {'+'.join(self.touched)}")
+        if self.plan_frames:
+            parts.append(f"the plan's finger body on it in {self.plan_frames} of them")
         if math.isfinite(self.key_width_mm) and self.key_width_mm < WIDE_MM:
             parts.append(f"pressed {self.plan_y_mm:.0f} mm back, where the key is "
                          f"{self.key_width_mm:.1f} mm wide (the {self.plan_finger}'s end "
@@ -140,13 +146,18 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
     pad_err = np.linalg.norm(rec.tips_m[:n] - planned, axis=2) * 1000.0  # (n, 5) mm
     press = _plan_presses(notes, frames[:n], kc, planned)
     widths = _finger_widths_mm(replay.scene)
+    in_plan = (plan_body_keys(replay.hand, rec.q_ref[:n], kc)
+               if replay.report.contact == "full" else np.zeros((n, 88), dtype=bool))
     for t, k in zip(*np.nonzero(kin != phys)):
         share = loss[t] / np.count_nonzero(kin[t] != phys[t])
         i = _owner(by_key.get(int(k), []), float(frames[t]))
         key = ("note", i) if i >= 0 else ("wrong", int(k))
         a = acc.setdefault(key, {"lost": 0.0, "onset": 0, "middle": 0, "release": 0,
                                  "extra": 0, "fingers": set(), "err": 0.0, "dz": 0.0,
-                                 "k": int(k), "touched": set(), "t0": float(frames[t])})
+                                 "k": int(k), "touched": set(), "t0": float(frames[t]),
+                                 "plan": 0})
+        if t < n and in_plan[t, k]:
+            a["plan"] += 1
         if t < n and i >= 0 and kin[t, k]:
             f = press.get(i, (-1, 0.0))[0]
             a["touched"].update(int(q) + LOWEST_PITCH for q in np.flatnonzero(
@@ -182,7 +193,7 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
             tuple(sorted(a["fingers"], key=FINGERS.index)), a["err"], a["dz"], y * 1000.0,
             _width_mm(p, y) if math.isfinite(y) else float("nan"),
             tuple(pitch_name(q) for q in sorted(a["touched"])),
-            FINGERS[f] if f >= 0 else "", widths[f] if f >= 0 else 0.0))
+            FINGERS[f] if f >= 0 else "", widths[f] if f >= 0 else 0.0, a["plan"]))
     out.sort(key=lambda d: -d.lost_f1)
     return tuple(out)
 
