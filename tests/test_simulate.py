@@ -335,7 +335,8 @@ def test_note_differences_add_up_to_the_f1_difference(twinkle):
 def test_full_contact_misses_are_presses_narrower_than_the_finger(twinkle):
     """Full contact: twinkle's G4 at 1.20 s is pressed by the ring 127 mm back, between
     F#4 and G#4 where G4 is 13.5 mm wide, with a finger end 17.1 mm wide (its pad
-    sphere): it is named 'narrow', and the black neighbour it sounds a wrong key."""
+    sphere): it is named 'narrow', and the black neighbour it sounds a wrong key, which
+    the plan's own finger bodies already reach."""
     from planner.simulate import run_replay
     from planner.simulate.compare import note_differences
 
@@ -349,6 +350,8 @@ def test_full_contact_misses_are_presses_narrower_than_the_finger(twinkle):
     assert g4.finger_width_mm == pytest.approx(17.145, abs=0.01) and g4.plan_y_mm > 60.0
     wrong = [d for d in diffs if d.kind == "wrong"]
     assert wrong and all(kb.is_black(d.pitch) for d in wrong)
+    # ... each already reached by the plan's own finger bodies (planner.simulate.planbody)
+    assert all(d.plan_frames > 0 for d in wrong)
     # with pads only the same press is no narrower than the 2 mm pad point
     assert all(d.kind != "narrow" for d in note_differences(run_replay(str(twinkle), SONG,
                                                                        contact="pads")))

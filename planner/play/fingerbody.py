@@ -64,7 +64,8 @@ class FingerBodies:
             tj = parent_of[tip_link[f]]  # the tip's fixed joint: the pad point in the distal link
             r_pad = abs(tj.xyz_m[2])
             centre = (tj.xyz_m[0], tj.xyz_m[1], tj.xyz_m[2] + r_pad)
-            frames, p0, p1, rad = [hand.pin_model.getFrameId(tj.parent)], [centre], [centre], [r_pad]
+            frames = [hand.pin_model.getFrameId(tj.parent)]
+            p0, p1, rad = [centre], [centre], [r_pad]
             name = tj.parent
             while name in parent_of and name not in ("palm", "palm_center"):
                 link = links[name]
