@@ -22,7 +22,7 @@ from planner.catch.mount import CatchMount
 from planner.catch.observe import FitResult, predict_intercept
 from planner.catch.results import CatchPlan, CatchReason, Closing, Reason
 from planner.catch.rowcheck import RowCheck
-from planner.catch.stopping import SoftStop, StopDynamics, plan_stop
+from planner.catch.stopping import ROLL_WEIGHT, SoftStop, StopDynamics, hold_turn, plan_stop
 from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
@@ -107,10 +107,18 @@ class CatchPlanner:
         from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written. ``soft``: the
         soft catch (``planner.catch.stopping``), or the palm waiting at rest when that
         alone passes the self-check (a palm that moves can bring the ball to a fingertip
-        the closing would miss otherwise); False: the palm at rest."""
+        the closing would miss otherwise); False: the palm at rest. The hold (the roll term
+        of the contact speeds, the wrist's turn after the stop: ``planner.catch.stopping``)
+        is given up for a throw only that plans without it alone."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._plan(*args, soft=soft)
+        if not plan.feasible:
+            bare = self._plan(*args, soft=soft, hold=False)
+            if bare.feasible:
+                plan = replace(bare, notes=bare.notes + (
+                    "no turn to hold the ball: with it the plan failed (" +
+                    "; ".join(plan.reasons) + ")",))
         if soft and not plan.feasible:
             still = self._plan(*args, soft=False)
             if still.feasible:
@@ -121,8 +129,8 @@ class CatchPlanner:
 
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: dict[str, Any] | None, flight_time_s: float | None,
-              fit: FitResult | None, soft: bool) -> CatchPlan:
-        """``plan`` with the soft catch on or off."""
+              fit: FitResult | None, soft: bool, hold: bool = True) -> CatchPlan:
+        """``plan`` with the soft catch on or off, the hold on or off."""
         t0 = time.perf_counter()
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
@@ -144,7 +152,8 @@ class CatchPlanner:
             return t_react + self.dyn.move_time(self.q_rest, q_pre)
 
         ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing,
-                                     t_c, ready_by, 1.0 / rate_hz, soft)
+                                     t_c, ready_by, 1.0 / rate_hz, soft,
+                                     ROLL_WEIGHT if hold else 1.0)
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:
@@ -162,9 +171,12 @@ class CatchPlanner:
                                   f"(t = {pose.t_i:.3f} s)"))
         s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
                           pad_time_s(soft_stop.v_rel), r)
+        turn = self._turn(pose, soft_stop) if hold else (np.zeros(h.n), 0.0)
         for _ in range(_CLOSE_TRIES):
-            t, Q = self._rows(pose, q_pre, soft_stop, closing, t_react, T_m, s_c, rate_hz)
-            t_static = max(s_c + closing.duration_s, soft_stop.end_s)
+            t, Q = self._rows(pose, q_pre, soft_stop, closing, t_react, T_m, s_c, rate_hz,
+                              turn)
+            t_static = max(s_c + closing.duration_s, soft_stop.end_s,
+                           _turn_start(soft_stop, closing, s_c) + turn[1])
             err, clear, g_t, g_f, check_reasons = self.rows.check(
                 flight, C, r, t, Q, pose.t_i, t_static, rate_hz, closing.reason is not None)
             # ``close_start`` sees the palm at rest: a palm moving with the ball keeps it near
@@ -176,6 +188,7 @@ class CatchPlanner:
         reasons += [Reason(_row_kind(x), x) for x in check_reasons]
         q_closed = pose.q_closed.copy()
         q_closed[arm] += soft_stop.last_offset
+        q_closed += turn[0]  # the pose the ball is held in
         pose = replace(pose, q_closed=q_closed)
         stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r, g_t)
         reasons += force_reasons
@@ -226,21 +239,37 @@ class CatchPlanner:
         return _Pose(ic, q_open, q_closed, t_i, v_i, misalign, ik_iter)
 
     def _rows(self, pose: _Pose, q_pre: np.ndarray, stop: SoftStop, closing: Closing,
-              t_react: float, T_m: float, s_c: float, rate_hz: float
-              ) -> tuple[np.ndarray, np.ndarray]:
+              t_react: float, T_m: float, s_c: float, rate_hz: float,
+              turn: tuple[np.ndarray, float]) -> tuple[np.ndarray, np.ndarray]:
         """The rows: rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
-        stopping motion (``stop``), open -> closed fingers from ``s_c``, until
-        ``HOLD_AFTER_S`` after the intercept (and the arm at rest)."""
+        stopping motion (``stop``), open -> closed fingers from ``s_c``, the wrist's ``turn``
+        (delta, duration) that holds the ball, until ``HOLD_AFTER_S`` after the intercept
+        (and the arm at rest)."""
         h = self.hand
         phases = [Phase(delta=q_pre - self.q_rest, duration_s=T_m),
                   Phase(delta=pose.q_closed - pose.q_open, duration_s=closing.duration_s)]
+        starts = [t_react, s_c]
         t_end = max(pose.t_i + HOLD_AFTER_S, stop.end_s + 2.0 / rate_hz)
+        delta, T_turn = turn
+        if T_turn > 0:
+            t_turn = _turn_start(stop, closing, s_c)
+            phases.append(Phase(delta=delta, duration_s=T_turn))
+            starts.append(t_turn)
+            t_end = max(t_end, t_turn + T_turn + 2.0 / rate_hz)
         n_rows = math.floor(t_end * rate_hz + 1e-9) + 1
         t = np.arange(n_rows) * (1.0 / rate_hz)
-        Q = sample(phases, np.array([t_react, s_c]), t, self.q_rest)
+        Q = sample(phases, np.array(starts), t, self.q_rest)
         Q += stop.offset(t, h.n)
         Q[:, list(self.joints.arm)] -= stop.first_offset
         return t, h.apply_couplings(Q)
+
+    def _turn(self, pose: _Pose, stop: SoftStop) -> tuple[np.ndarray, float]:
+        """The wrist's turn that holds the ball (``stopping.hold_turn``) from the closed hand
+        where the stopping motion leaves it; it starts once the fingers have closed and the
+        arm is at rest (``_turn_start``)."""
+        q_end = pose.q_closed.copy()
+        q_end[list(self.joints.arm)] += stop.last_offset
+        return hold_turn(self.dyn, q_end)
 
     def forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float,
                grasp_t: float | None = None):
@@ -285,6 +314,13 @@ class CatchPlanner:
         _, palm = self.kin.frames(Q[k0:])
         return ball_loads(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i), PAD_GIVE_M,
                           grasp_t)[0]
+
+
+def _turn_start(stop: SoftStop, closing: Closing, s_c: float) -> float:
+    """When the wrist's turn starts: the arm at rest and the grasp made (``u_grasp`` of the
+    closing from ``s_c``): before the grasp the ball lies on the palm alone, whose friction
+    cone the check judges then."""
+    return max(stop.end_s, s_c + (closing.u_grasp or 1.0) * closing.duration_s)
 
 
 def _row_kind(reason: str) -> CatchReason:
