@@ -422,11 +422,12 @@ HOLD_TILT_DEG = 5.0  # the held palm's downhill: this far from level towards the
 # 8 -> 18; ROLL_WEIGHT 1 (no roll term): no turn 9, 10 deg -> 14, 20 deg -> 13
 
 
-TURN_SHARE = 0.6  # the turn loads every motor to at most 60 % of its capacity with the hand's
-# inertia (less than the stop's STOP_SHARE): it runs with the ball in the hand, whose weight
-# the room of move_time does not carry; at 80 % the 30 deg / 1.5 m catch's wrist flexion had
-# 19.1 % headroom left (under issue 15's 20 %), at 60 % 38.3 % (bench_catch.py --grid);
-# held in physics 19 / 18 / 16 of 25 at 80 / 60 / 40 %
+TURN_SHARE = 0.75  # the turn loads every motor to at most 75 % of its capacity with the
+# hand's inertia (5 % under the stop's STOP_SHARE): it runs with the ball in the hand, whose
+# weight the room of move_time does not carry. Measured (bench_catch.py --grid; 30 deg /
+# 1.5 m wrist flexion headroom; bench_simulate.py --catch-grid held of 25): 0.8 -> 19.1 %
+# (under issue 15's 20 %), 19 held; 0.75 -> 23.5 %, 19; 0.7 -> 29.0 %, 18; 0.6 -> 38.3 %,
+# 18; 0.45 -> 16; 0.3 -> 13 (a slower turn leaves the ball longer on the tilted palm)
 
 
 def hold_turn(dyn: StopDynamics, q_end: np.ndarray, tilt_deg: float = HOLD_TILT_DEG
