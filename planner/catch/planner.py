@@ -139,9 +139,8 @@ class CatchPlanner:
               throw: dict[str, Any] | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_EARLY
               ) -> CatchPlan:
-        """``plan`` with the soft catch on or off, the wrist's turn from the grasp
-        (``TURN_EARLY``), after the arm's stop (``TURN_LATE``) or none (None: nor the roll
-        term of the contact speeds)."""
+        """``plan`` with the soft catch on or off, the wrist's turn from the grasp (TURN_EARLY),
+        after the arm's stop (TURN_LATE) or none (None: nor the contact speeds' roll term)."""
         t0 = time.perf_counter()
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
@@ -162,9 +161,8 @@ class CatchPlanner:
         def ready_by(q_pre: np.ndarray) -> float:
             return t_react + self.dyn.move_time(self.q_rest, q_pre)
 
-        ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing,
-                                     t_c, ready_by, 1.0 / rate_hz, soft,
-                                     ROLL_WEIGHT if turn_mode else 1.0)
+        ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
+                                     ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0)
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:
@@ -184,13 +182,8 @@ class CatchPlanner:
                           pad_time_s(soft_stop.v_rel), r)
         turn0 = self._turn(pose, soft_stop) if turn_mode else (np.zeros(h.n), 0.0)
         for _ in range(_CLOSE_TRIES):
-            start = _turn_start(soft_stop, closing, s_c, turn_mode == TURN_EARLY)
-            turn = (*turn0, start)
-            t, Q = self._rows(pose, q_pre, soft_stop, closing, t_react, T_m, s_c, rate_hz,
-                              turn)
-            if turn_mode == TURN_EARLY and turn0[1] > 0:
-                turn, t, Q = self._fit_turn(turn, (pose, q_pre, soft_stop, closing, t_react,
-                                                   T_m, s_c, rate_hz), t, Q)
+            turn, t, Q = self._turned_rows(turn0, turn_mode, (pose, q_pre, soft_stop, closing,
+                                                              t_react, T_m, s_c, rate_hz))
             t_static = max(s_c + closing.duration_s, soft_stop.end_s, turn[2] + turn[1])
             err, clear, g_t, g_f, check_reasons = self.rows.check(
                 flight, C, r, t, Q, pose.t_i, t_static, rate_hz, closing.reason is not None)
@@ -285,12 +278,19 @@ class CatchPlanner:
         q_end[list(self.joints.arm)] += stop.last_offset
         return hold_turn(self.dyn, q_end)
 
-    def _fit_turn(self, turn: tuple[np.ndarray, float, float], rows_args: tuple,
-                  t: np.ndarray, Q: np.ndarray):
-        """An early turn (from the grasp, while the arm may still be stopping) adds its speeds
-        and accelerations to the stop's: lengthened by ``_TURN_GROW`` until every joint is
-        within its speed and acceleration limits on the rows (at most ``_TURN_TRIES``
-        times; then as it is, for the self-check to refuse); returns the turn and rows."""
+    def _turned_rows(self, turn0: tuple[np.ndarray, float], mode: str | None,
+                     rows_args: tuple):
+        """The rows (``_rows(*rows_args, turn)``) with the wrist's turn (delta, duration)
+        started as ``mode`` says (``_turn_start``). An early turn (from the grasp, while the
+        arm may still be stopping) adds its speeds and accelerations to the stop's: it is
+        lengthened by ``_TURN_GROW`` until every joint is within its speed and acceleration
+        limits on the rows (at most ``_TURN_TRIES`` times; then as it is, for the self-check
+        to refuse). Returns the turn (delta, duration, start) and the rows."""
+        _, _, stop, closing, _, _, s_c, _ = rows_args
+        turn = (*turn0, _turn_start(stop, closing, s_c, mode == TURN_EARLY))
+        t, Q = self._rows(*rows_args, turn)
+        if mode != TURN_EARLY or turn0[1] <= 0:
+            return turn, t, Q
         h, dt = self.hand, float(t[1] - t[0])
         for _ in range(_TURN_TRIES):
             v = np.abs(np.diff(Q, axis=0)) / dt

@@ -23,6 +23,14 @@ What is chosen, by optimisation:
 
 The rows' dynamics are then judged by the check's own rule (``planner.check.ball``); a
 ball that no such motion stops within every motor's capacity is "too fast to stop".
+
+Holding the ball (``docs/physics-replay.md``, "Catch"): nothing on the palm's wrist side
+stops a ball rolling there, so (1) the QP weighs the relative speed along the palm
+``ROLL_WEIGHT`` times its normal part (a tangential speed is not absorbed by the pad: the
+ball keeps 5/7 of it as a roll), and (2) once the grasp is made the wrist turns the closed
+hand (``hold_turn``: flexion alone, within its range, every motor within ``TURN_SHARE``)
+until the palm faces up with its downhill ``HOLD_TILT_DEG`` towards the fingers: the ball
+rolls into the closed fingers and the palm carries its weight.
 """
 
 from __future__ import annotations
@@ -55,9 +63,8 @@ ROLL_WEIGHT = 30.0  # the contact-speed QP weighs the ball's speed along the pal
 # times its speed into it: the pad absorbs the normal part (its force grows with its square),
 # nothing absorbs the tangential part -- a sphere keeps 5/7 of it as a roll (rolling, no
 # friction stops it) that leaves the open wrist side before the fingers close. Measured
-# (bench_simulate.py --catch-grid, held of 25): hold tilt 10 deg: weight 1 -> 14, 10 -> 15,
-# 100 -> 17; hold tilt 5 deg: 30 -> 19, 100 -> 17 (100 gives up the soft catch's normal
-# speed too: the ball meets a palm nearly at rest)
+# (bench_simulate.py --catch-grid, held of 25, the planner as committed): weight 1 -> 15,
+# 10 -> 18, 30 -> 23, 100 -> 18 (100 gives up the soft catch's normal speed as well)
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -418,16 +425,16 @@ def _at_rest(ic: Intercept, tilt_rad: float, arm: list[int], v_rel, F, ratio, co
 
 HOLD_TILT_DEG = 5.0  # the held palm's downhill: this far from level towards the fingers
 # (a ball on it rolls at 5/7 g sin 5 deg = 0.6 m/s^2 into the closed fingers). Measured
-# (bench_simulate.py --catch-grid, held of 25): ROLL_WEIGHT 30: 0 -> 18, 3 -> 19, 5 -> 19,
-# 8 -> 18; ROLL_WEIGHT 1 (no roll term): no turn 9, 10 deg -> 14, 20 deg -> 13
+# (bench_simulate.py --catch-grid, held of 25): 0 -> 21, 5 -> 23, 10 -> 23
 
 
 TURN_SHARE = 0.75  # the turn loads every motor to at most 75 % of its capacity with the
 # hand's inertia (5 % under the stop's STOP_SHARE): it runs with the ball in the hand, whose
-# weight the room of move_time does not carry. Measured (bench_catch.py --grid; 30 deg /
-# 1.5 m wrist flexion headroom; bench_simulate.py --catch-grid held of 25): 0.8 -> 19.1 %
-# (under issue 15's 20 %), 19 held; 0.75 -> 23.5 %, 19; 0.7 -> 29.0 %, 18; 0.6 -> 38.3 %,
-# 18; 0.45 -> 16; 0.3 -> 13 (a slower turn leaves the ball longer on the tilted palm)
+# weight the room of move_time does not carry. Measured (bench_catch.py --grid: 30 deg /
+# 1.5 m wrist flexion headroom), a turn after the arm's stop: 0.8 -> 19.1 % (under issue
+# 15's 20 %), 0.75 -> 23.5 %; the turn from the grasp (the plans' first choice, its length
+# also set by the joints' limits on top of the stop): 0.6 / 0.75 / 0.8 -> 52.0 / 54.7 /
+# 52.5 %, 23 of 25 held each
 
 
 def hold_turn(dyn: StopDynamics, q_end: np.ndarray, tilt_deg: float = HOLD_TILT_DEG
