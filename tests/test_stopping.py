@@ -175,3 +175,60 @@ def test_accel_room_is_the_hands_inertia_through_the_motors(pl):
         assert np.allclose(MH @ a, h.motor_torques(q, tau), atol=1e-9)
     assert np.allclose(room, 0.8 * dyn.cap - np.abs(h.motor_torques(q, g)), atol=1e-12)
     assert np.all(room > 0)
+
+
+def _along_palm(pl, q, v):
+    """``v`` in the palm frame of the reference-mounted hand at ``q``."""
+    return pl.hand.palm_pose(q)[:3, :3].T @ v
+
+
+def test_the_ball_held_rolls_into_the_fingers_not_off_the_wrist(pl):
+    """The hold (``stopping.ROLL_WEIGHT``, ``hold_turn``): 60 deg from 1.5 m met by the palm
+    with the contact speeds of the old QP (weight 1) leaves the ball rolling towards the
+    wrist (the palm's +y) at 0.56 m/s; with the roll weighed at 0.10 m/s, under a quarter of
+    that. The plan's last row (every joint at rest) has the palm facing up, its downhill
+    HOLD_TILT_DEG towards the fingers (gravity's share along +y = -sin 5 deg), and the
+    plan stays feasible with the turn inside its rows."""
+    from planner.catch.flight import get_ball, predict_throw
+    from planner.catch.stopping import HOLD_TILT_DEG, plan_stop
+
+    fl = predict_throw(60.0, 1.5, 0.0, get_ball("tennis"), False)
+    C = np.array([1.5, 0.0, 0.0])
+    r = fl.ball.radius_m
+    clo = pl.closing(r)
+    ready = lambda q: 0.03 + pl.dyn.move_time(pl.q_rest, q)
+    rolls = {}
+    for w in (1.0, None):
+        kw = {} if w is None else {"roll_weight": w}
+        _, q_open, stop = plan_stop(pl.dyn, pl.wrist, fl, C, r, pl.q_zero, clo,
+                                    fl.time_at_x(1.5), ready, 0.01, True, **kw)
+        rolls[w] = _along_palm(pl, q_open, stop.v_rel)[1]
+    assert rolls[1.0] > 0.3 and rolls[None] < 0.25 * rolls[1.0]
+    plan = plan_throw(60.0, 1.5, 0.0, planner=pl)
+    assert plan.feasible, plan.reasons
+    R = pl.hand.palm_pose(plan.q[-1])[:3, :3]
+    assert R[2, 2] > 0.9  # faces up
+    assert -R[2, 1] == pytest.approx(-math.sin(math.radians(HOLD_TILT_DEG)), abs=0.01)
+    assert np.allclose(plan.q[-1], plan.q[-2])  # at rest at the end
+    assert np.allclose(plan.q_closed, plan.q[-1], atol=1e-9)  # the pose the grasp QP holds
+
+
+def test_hold_turn_within_the_motors(pl):
+    """``hold_turn``: only the wrist flexion turns, within its range; its duration keeps every
+    motor within TURN_SHARE of its capacity with the hand's inertia (the peak acceleration
+    PEAK_ACC |dq| / T^2 at either end), and the speed and acceleration limits."""
+    from planner.catch.stopping import STOP_SHARE, TURN_SHARE, hold_turn
+    from planner.trajectory import PEAK_ACC
+
+    plan = plan_throw(30.0, 1.5, 0.0, planner=pl)
+    q_end = plan.q[-1].copy()
+    i = pl.joints.i_flex
+    q_end[i] -= 0.5  # a palm half a radian from the hold
+    dq, T = hold_turn(pl.dyn, q_end)
+    assert np.count_nonzero(dq) == 1 and dq[i] != 0.0 and T > 0
+    assert pl.hand.lower[i] <= q_end[i] + dq[i] <= pl.hand.upper[i]
+    for q in (q_end, q_end + dq):
+        MH, room = pl.dyn.accel_room(q)
+        room = room - (STOP_SHARE - TURN_SHARE) * pl.dyn.cap
+        assert np.all(np.abs(MH @ dq) * PEAK_ACC / T ** 2 <= room + 1e-9)
+    assert abs(dq[i]) / T * 1.875 <= pl.hand.velocity[i]  # min-jerk peak speed

@@ -65,8 +65,10 @@ Per throw (``CatchPlanner.plan``):
    (seed: 150-300 ms) is placed so that the grasp condition is met when the pad has
    stopped the ball on the palm, then delayed if a fingertip would come within
    ``TOUCH_CLEAR_M`` of the still-arriving ball; it must complete the grasp within
-   ``GRASP_WINDOW_S`` (150 ms) of the intercept. Rows at ``rate_hz`` until
-   ``intercept_t + HOLD_AFTER_S`` (and the arm at rest).
+   ``GRASP_WINDOW_S`` (150 ms) of the intercept. Once the grasp is made the wrist turns the
+   closed hand palm up, its downhill 5 deg into the fingers (``stopping.hold_turn``: a ball
+   rolling on the palm rolls into the fingers, not off the open wrist side). Rows at
+   ``rate_hz`` until ``intercept_t + HOLD_AFTER_S`` (and the arm at rest).
 4. Forces: stopping the ball judged on the rows by the check's own rule
    (``planner.check.ball.ball_loads``: the pad, the ball riding the palm, the arm's
    inertia, the friction cone, every motor's headroom), holding it in the closed hand by

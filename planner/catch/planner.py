@@ -22,7 +22,7 @@ from planner.catch.mount import CatchMount
 from planner.catch.observe import FitResult, predict_intercept
 from planner.catch.results import CatchPlan, CatchReason, Closing, Reason
 from planner.catch.rowcheck import RowCheck
-from planner.catch.stopping import SoftStop, StopDynamics, plan_stop
+from planner.catch.stopping import ROLL_WEIGHT, SoftStop, StopDynamics, hold_turn, plan_stop
 from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
@@ -31,7 +31,7 @@ from planner.check.limits import RATE_TOL
 from planner.errors import InfeasibleError, PlannerError
 from planner.hand.model import HandModel
 from planner.ik import HandIK
-from planner.trajectory import Phase, sample
+from planner.trajectory import LIMIT_MARGIN, Phase, sample
 
 SIGNAL_S = 0.025  # seed (Markus): 25 ms of signal processing
 PLAN_BUDGET_S = 0.005  # planning latency budget (bench target p99)
@@ -39,6 +39,11 @@ INTERCEPT_PLAN_TOL_M = 0.001  # what the planner aims for
 HOLD_AFTER_S = 0.5  # rows until intercept_t + this
 _CLOSE_STEP_S = 0.005  # a closing that would touch the arriving ball starts this much later
 _CLOSE_TRIES = 8  # ... up to this many times
+TURN_EARLY, TURN_LATE = "early", "late"  # when the wrist's turn that holds the ball starts
+_TURN_GROW = 1.25  # an early turn too fast on top of the stop is made this much longer
+_TURN_TRIES = 6  # ... up to this many times (1.25^6 = 3.8 x)
+_NOT_THE_TURN = {CatchReason.OUT_OF_REACH, CatchReason.TOO_SOON}  # before the ball: no turn
+# changes them (a plan failing only for these is not tried again without its turn)
 
 
 @dataclass(frozen=True)
@@ -107,10 +112,21 @@ class CatchPlanner:
         from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written. ``soft``: the
         soft catch (``planner.catch.stopping``), or the palm waiting at rest when that
         alone passes the self-check (a palm that moves can bring the ball to a fingertip
-        the closing would miss otherwise); False: the palm at rest."""
+        the closing would miss otherwise); False: the palm at rest. The hold (the roll term
+        of the contact speeds, the wrist's turn: ``planner.catch.stopping``): the turn from
+        the grasp on (``TURN_EARLY``), else after the arm has stopped (``TURN_LATE``), else
+        none (the plan without the hold) -- the first of those that is feasible."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._plan(*args, soft=soft)
+        for mode in (TURN_LATE, None):
+            if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
+                break
+            other = self._plan(*args, soft=soft, turn_mode=mode)
+            if other.feasible:
+                what = "after the arm has stopped" if mode else "no turn to hold the ball"
+                plan = replace(other, notes=other.notes + (
+                    f"{what}: the earlier turn failed (" + "; ".join(plan.reasons) + ")",))
         if soft and not plan.feasible:
             still = self._plan(*args, soft=False)
             if still.feasible:
@@ -121,8 +137,10 @@ class CatchPlanner:
 
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: dict[str, Any] | None, flight_time_s: float | None,
-              fit: FitResult | None, soft: bool) -> CatchPlan:
-        """``plan`` with the soft catch on or off."""
+              fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_EARLY
+              ) -> CatchPlan:
+        """``plan`` with the soft catch on or off, the wrist's turn from the grasp (TURN_EARLY),
+        after the arm's stop (TURN_LATE) or none (None: nor the contact speeds' roll term)."""
         t0 = time.perf_counter()
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
@@ -143,8 +161,8 @@ class CatchPlanner:
         def ready_by(q_pre: np.ndarray) -> float:
             return t_react + self.dyn.move_time(self.q_rest, q_pre)
 
-        ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing,
-                                     t_c, ready_by, 1.0 / rate_hz, soft)
+        ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
+                                     ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0)
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:
@@ -162,9 +180,11 @@ class CatchPlanner:
                                   f"(t = {pose.t_i:.3f} s)"))
         s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
                           pad_time_s(soft_stop.v_rel), r)
+        turn0 = self._turn(pose, soft_stop) if turn_mode else (np.zeros(h.n), 0.0)
         for _ in range(_CLOSE_TRIES):
-            t, Q = self._rows(pose, q_pre, soft_stop, closing, t_react, T_m, s_c, rate_hz)
-            t_static = max(s_c + closing.duration_s, soft_stop.end_s)
+            turn, t, Q = self._turned_rows(turn0, turn_mode, (pose, q_pre, soft_stop, closing,
+                                                              t_react, T_m, s_c, rate_hz))
+            t_static = max(s_c + closing.duration_s, soft_stop.end_s, turn[2] + turn[1])
             err, clear, g_t, g_f, check_reasons = self.rows.check(
                 flight, C, r, t, Q, pose.t_i, t_static, rate_hz, closing.reason is not None)
             # ``close_start`` sees the palm at rest: a palm moving with the ball keeps it near
@@ -176,6 +196,7 @@ class CatchPlanner:
         reasons += [Reason(_row_kind(x), x) for x in check_reasons]
         q_closed = pose.q_closed.copy()
         q_closed[arm] += soft_stop.last_offset
+        q_closed += turn[0]  # the pose the ball is held in (the turn ends at rest)
         pose = replace(pose, q_closed=q_closed)
         stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r, g_t)
         reasons += force_reasons
@@ -226,21 +247,60 @@ class CatchPlanner:
         return _Pose(ic, q_open, q_closed, t_i, v_i, misalign, ik_iter)
 
     def _rows(self, pose: _Pose, q_pre: np.ndarray, stop: SoftStop, closing: Closing,
-              t_react: float, T_m: float, s_c: float, rate_hz: float
-              ) -> tuple[np.ndarray, np.ndarray]:
+              t_react: float, T_m: float, s_c: float, rate_hz: float,
+              turn: tuple[np.ndarray, float, float]) -> tuple[np.ndarray, np.ndarray]:
         """The rows: rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
-        stopping motion (``stop``), open -> closed fingers from ``s_c``, until
-        ``HOLD_AFTER_S`` after the intercept (and the arm at rest)."""
+        stopping motion (``stop``), open -> closed fingers from ``s_c``, the wrist's ``turn``
+        (delta, duration, start) that holds the ball, until ``HOLD_AFTER_S`` after the intercept
+        (and the arm at rest)."""
         h = self.hand
         phases = [Phase(delta=q_pre - self.q_rest, duration_s=T_m),
                   Phase(delta=pose.q_closed - pose.q_open, duration_s=closing.duration_s)]
+        starts = [t_react, s_c]
         t_end = max(pose.t_i + HOLD_AFTER_S, stop.end_s + 2.0 / rate_hz)
+        delta, T_turn, t_turn = turn
+        if T_turn > 0:
+            phases.append(Phase(delta=delta, duration_s=T_turn))
+            starts.append(t_turn)
+            t_end = max(t_end, t_turn + T_turn + 2.0 / rate_hz)
         n_rows = math.floor(t_end * rate_hz + 1e-9) + 1
         t = np.arange(n_rows) * (1.0 / rate_hz)
-        Q = sample(phases, np.array([t_react, s_c]), t, self.q_rest)
+        Q = sample(phases, np.array(starts), t, self.q_rest)
         Q += stop.offset(t, h.n)
         Q[:, list(self.joints.arm)] -= stop.first_offset
         return t, h.apply_couplings(Q)
+
+    def _turn(self, pose: _Pose, stop: SoftStop) -> tuple[np.ndarray, float]:
+        """The wrist's turn that holds the ball (``stopping.hold_turn``) from the closed hand
+        where the stopping motion leaves it; it starts once the fingers have closed and the
+        arm is at rest (``_turn_start``)."""
+        q_end = pose.q_closed.copy()
+        q_end[list(self.joints.arm)] += stop.last_offset
+        return hold_turn(self.dyn, q_end)
+
+    def _turned_rows(self, turn0: tuple[np.ndarray, float], mode: str | None,
+                     rows_args: tuple):
+        """The rows (``_rows(*rows_args, turn)``) with the wrist's turn (delta, duration)
+        started as ``mode`` says (``_turn_start``). An early turn (from the grasp, while the
+        arm may still be stopping) adds its speeds and accelerations to the stop's: it is
+        lengthened by ``_TURN_GROW`` until every joint is within its speed and acceleration
+        limits on the rows (at most ``_TURN_TRIES`` times; then as it is, for the self-check
+        to refuse). Returns the turn (delta, duration, start) and the rows."""
+        _, _, stop, closing, _, _, s_c, _ = rows_args
+        turn = (*turn0, _turn_start(stop, closing, s_c, mode == TURN_EARLY))
+        t, Q = self._rows(*rows_args, turn)
+        if mode != TURN_EARLY or turn0[1] <= 0:
+            return turn, t, Q
+        h, dt = self.hand, float(t[1] - t[0])
+        for _ in range(_TURN_TRIES):
+            v = np.abs(np.diff(Q, axis=0)) / dt
+            a = np.abs(np.diff(Q, 2, axis=0)) / (dt * dt)
+            if np.all(v <= LIMIT_MARGIN * h.velocity) and \
+                    np.all(a <= LIMIT_MARGIN * h.acceleration):
+                break
+            turn = (turn[0], turn[1] * _TURN_GROW, turn[2])
+            t, Q = self._rows(*rows_args, turn)
+        return turn, t, Q
 
     def forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float,
                grasp_t: float | None = None):
@@ -285,6 +345,14 @@ class CatchPlanner:
         _, palm = self.kin.frames(Q[k0:])
         return ball_loads(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i), PAD_GIVE_M,
                           grasp_t)[0]
+
+
+def _turn_start(stop: SoftStop, closing: Closing, s_c: float, early: bool) -> float:
+    """When the wrist's turn starts: once the grasp is made (``u_grasp`` of the closing from
+    ``s_c``; before it the ball lies on the palm alone, whose friction cone the check judges
+    then) and the pad has stopped the ball; not ``early``: also the arm at rest."""
+    grasp = s_c + (closing.u_grasp or 1.0) * closing.duration_s
+    return max(stop.t_i + stop.pad_s if early else stop.end_s, grasp)
 
 
 def _row_kind(reason: str) -> CatchReason:

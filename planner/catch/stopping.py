@@ -23,6 +23,14 @@ What is chosen, by optimisation:
 
 The rows' dynamics are then judged by the check's own rule (``planner.check.ball``); a
 ball that no such motion stops within every motor's capacity is "too fast to stop".
+
+Holding the ball (``docs/physics-replay.md``, "Catch"): nothing on the palm's wrist side
+stops a ball rolling there, so (1) the QP weighs the relative speed along the palm
+``ROLL_WEIGHT`` times its normal part (a tangential speed is not absorbed by the pad: the
+ball keeps 5/7 of it as a roll), and (2) once the grasp is made the wrist turns the closed
+hand (``hold_turn``: flexion alone, within its range, every motor within ``TURN_SHARE``)
+until the palm faces up with its downhill ``HOLD_TILT_DEG`` towards the fingers: the ball
+rolls into the closed fingers and the palm carries its weight.
 """
 
 from __future__ import annotations
@@ -51,6 +59,12 @@ STOP_SHARE = 0.8  # the ramps load every motor to at most 80 % of its capacity: 
 TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
 CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)  # the arm's speed when it meets the ball, tried as a
 # share of its speed after the recoil
+ROLL_WEIGHT = 30.0  # the contact-speed QP weighs the ball's speed along the palm this many
+# times its speed into it: the pad absorbs the normal part (its force grows with its square),
+# nothing absorbs the tangential part -- a sphere keeps 5/7 of it as a roll (rolling, no
+# friction stops it) that leaves the open wrist side before the fingers close. Measured
+# (bench_simulate.py --catch-grid, held of 25, the planner as committed): weight 1 -> 15,
+# 10 -> 18, 30 -> 23, 100 -> 18 (100 gives up the soft catch's normal speed as well)
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -275,11 +289,16 @@ class StopDynamics:
         return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
 
 
-def _contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray) -> np.ndarray:
-    """The QP: min |v_ball - J x|^2 + 1e-6 |x|^2, -bound <= x <= bound."""
+def _contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
+                    normal: np.ndarray, roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
+    """The QP: min |W^1/2 (v_ball - J x)|^2 + 1e-6 |x|^2, -bound <= x <= bound, W weighting
+    the relative velocity's part along the palm ``ROLL_WEIGHT`` times its part along the
+    palm's ``normal`` (``roll_weight``: that factor)."""
     k = J.shape[1]
-    P = 2.0 * (J.T @ J + 1e-6 * np.eye(k))
-    c = -2.0 * J.T @ v_ball
+    n = normal / np.linalg.norm(normal)
+    W = roll_weight * np.eye(3) + (1.0 - roll_weight) * np.outer(n, n)
+    P = 2.0 * (J.T @ W @ J + 1e-6 * np.eye(k))
+    c = -2.0 * J.T @ W @ v_ball
     res = _QP.solve(P, c, np.eye(k), -bound, bound)
     if not res.solved:
         return np.zeros(k)
@@ -288,10 +307,12 @@ def _contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray) -> np.
 
 def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
-              soft: bool = True) -> tuple[Intercept, np.ndarray, SoftStop]:
+              soft: bool = True, roll_weight: float = ROLL_WEIGHT
+              ) -> tuple[Intercept, np.ndarray, SoftStop]:
     """The intercept, its open pose and the stopping motion (module docstring). ``ready_by``:
     a function of the pre-catch pose -> when the hand can be there. ``soft`` False: the palm
-    waits at rest (the stopping is the pad's alone)."""
+    waits at rest (the stopping is the pad's alone). ``roll_weight``: the contact-speed QP's
+    weight on the ball's speed along the palm (1: none above its speed into it)."""
     best = None
     for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
         # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
@@ -301,14 +322,15 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
             if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
                 break
             cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
-                              math.radians(tilt), 1.0)
+                              math.radians(tilt), 1.0, rw=roll_weight)
             key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
             if best is not None and key >= best[0]:
                 break
             best = (key, cand)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
-        return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0)
+        return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
+                          rw=roll_weight)
     ic, q_open, stop = best[1]
     if not np.any(stop.qd):
         return best[1]
@@ -318,7 +340,7 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
         # from the speeds the last one found within the joints' range
         warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
         cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
-                          stop.tilt_rad, share, warm)[2]
+                          stop.tilt_rad, share, warm, rw=roll_weight)[2]
         if cand.contact_share == 1.0:
             break
         j = (dyn.judge(cand, q_open, flight, r), cand)
@@ -330,7 +352,8 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
 
 def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
                closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
-               tilt_rad: float, share: float, bound0: np.ndarray | None = None):
+               tilt_rad: float, share: float, bound0: np.ndarray | None = None,
+               rw: float = ROLL_WEIGHT):
     """The stopping motion at the intercept ``ic`` meeting the ball at ``share`` of the
     arm's full speeds (those speeds by the QP), the ramps as short as the motors allow,
     slowed where the joints' range or the time before the ball is short."""
@@ -351,7 +374,7 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
     load[arm] = mass * J.T @ J  # joint torque per unit arm acceleration of the riding ball
     lo, hi = h.lower[arm], h.upper[arm]
     for _ in range(_MAX_SHRINK + 1):
-        qd_c = _contact_speeds(J, v_ball, share * bound) if np.any(bound) else 0.0 * bound
+        qd_c = _contact_speeds(J, v_ball, share * bound, normal, rw) if np.any(bound) else 0.0 * bound
         moving = bool(np.any(qd_c))
         v_rel = v_ball - J @ qd_c
         F, ratio, cone = dyn.pad_load(q_open, qd_c, v_rel, mass, normal)
@@ -388,7 +411,8 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
         bound = np.where(scale < 1.0, _SHRINK * scale * np.abs(qd), bound)
         if not np.any(bound > _MIN_SPEED * dyn.v_max):
             break
-    return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, tilt_rad, 1.0)
+    return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, tilt_rad, 1.0,
+                      rw=rw)
 
 
 def _at_rest(ic: Intercept, tilt_rad: float, arm: list[int], v_rel, F, ratio, cone,
@@ -397,3 +421,70 @@ def _at_rest(ic: Intercept, tilt_rad: float, arm: list[int], v_rel, F, ratio, co
     z = np.zeros(len(arm))
     return SoftStop(tilt_rad, tuple(arm), z, 1.0, float(ic.t), 0.0, 0.0, 0.0, 0.0, 0.0, t_pad,
                     z.copy(), v_rel, F, ratio, cone)
+
+
+HOLD_TILT_DEG = 5.0  # the held palm's downhill: this far from level towards the fingers
+# (a ball on it rolls at 5/7 g sin 5 deg = 0.6 m/s^2 into the closed fingers). Measured
+# (bench_simulate.py --catch-grid, held of 25): 0 -> 21, 5 -> 23, 10 -> 23
+
+
+TURN_SHARE = 0.75  # the turn loads every motor to at most 75 % of its capacity with the
+# hand's inertia (5 % under the stop's STOP_SHARE): it runs with the ball in the hand, whose
+# weight the room of move_time does not carry. Measured (bench_catch.py --grid: 30 deg /
+# 1.5 m wrist flexion headroom), a turn after the arm's stop: 0.8 -> 19.1 % (under issue
+# 15's 20 %), 0.75 -> 23.5 %; the turn from the grasp (the plans' first choice, its length
+# also set by the joints' limits on top of the stop): 0.6 / 0.75 / 0.8 -> 52.0 / 54.7 /
+# 52.5 %, 23 of 25 held each
+
+
+def hold_turn(dyn: StopDynamics, q_end: np.ndarray, tilt_deg: float = HOLD_TILT_DEG
+              ) -> tuple[np.ndarray, float]:
+    """The wrist's turn after the stop that holds the ball in the fingers' cage: the arm
+    at rest in ``q_end``, its flexion turned (within its range, keeping LIMIT_MARGIN) so
+    that the palm faces up and its downhill points ``tilt_deg`` from level towards the
+    fingers (a ball on it rolls into the closed fingers, not off the open wrist side).
+    Returns the joint delta and the move's duration (the speed and acceleration limits,
+    every motor within ``TURN_SHARE`` of its capacity); no turn (zeros, 0) when gravity
+    alone leaves a motor no room."""
+    h, i = dyn.hand, dyn.joints.i_flex
+    z = np.zeros(h.n)
+    lo, hi = h.lower[i], h.upper[i]
+    pad = 0.5 * (1.0 - LIMIT_MARGIN) * (hi - lo)
+    want = -math.sin(math.radians(tilt_deg))
+    coarse = np.linspace(lo + pad, hi - pad, 53)  # ~0.05 rad apart, then 0.005 about the best
+    best = _best_flex(h, q_end, i, coarse, want)
+    if best is None:
+        return z, 0.0
+    d = float(coarse[1] - coarse[0])
+    best = _best_flex(h, q_end, i, np.clip(np.linspace(best - d, best + d, 21), lo + pad,
+                                           hi - pad), want)
+    z[i] = best - q_end[i]
+    T = phase_duration(z, h.velocity, h.acceleration)
+    for q in (q_end, q_end + z):  # move_time's rule within TURN_SHARE of every motor
+        MH, room = dyn.accel_room(q)
+        room = room - (STOP_SHARE - TURN_SHARE) * dyn.cap
+        per = np.abs(MH @ z)
+        need = per > 1e-12
+        if np.any(room[need] <= 0):
+            return np.zeros(h.n), 0.0
+        if need.any():
+            T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
+    return z, T
+
+
+def _best_flex(h: HandModel, q_end: np.ndarray, i: int, cand: np.ndarray, want: float
+               ) -> float | None:
+    """Among flexion angles ``cand`` (joint ``i``; the rest as ``q_end``) the one whose palm
+    faces up with gravity's share along its +y (towards the wrist) nearest ``want``, the
+    nearest to ``q_end``'s between equals; None when the palm faces up at none."""
+    best, best_err = None, math.inf
+    for f in cand:
+        q = q_end.copy()
+        q[i] = f
+        R = h.palm_pose(q)[:3, :3]
+        if R[2, 2] <= 0.0:
+            continue
+        err = abs(-R[2, 1] - want) + 1e-3 * abs(f - q_end[i])  # gravity (0, 0, -1) . y
+        if err < best_err:
+            best, best_err = float(f), err
+    return best
