@@ -105,8 +105,8 @@ class Prev:
     """What a state of the event before tells every transition from it, worked out once
     (the programme weighs hundreds of transitions from each state)."""
 
-    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lifts", "on_key",
-                 "recent", "release", "state", "steps")
+    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lift_end", "lifts",
+                 "on_key", "recent", "release", "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -118,8 +118,11 @@ class Prev:
         self.on_key = {pitch[m]: (m, f) for m, f, r in state.last_notes if r == state.rail_i}
         self.fresh = [(m, f, r) for m, f, r in state.last_notes if t_up[m] > t - RECENT_S]
         # (before a move of the rail: when each finger's lift ends, latest first)
-        self.lifts = sorted(((costs.before_rail_s(m, f, r) + min(t_up[m], cut_up), m, f)
+        timing = costs._timing  # (``Costs._times``' memo, read here: most find it)
+        self.lifts = sorted((((timing.get((pitch[m], f, r)) or costs._times(m, f, r))[0]
+                              + min(t_up[m], cut_up), m, f)
                              for m, f, r in state.last_notes), key=lambda x: -x[0])
+        self.lift_end = self.lifts[0][0] if self.lifts else -math.inf  # (the latest)
         # (the notes sounding that might ride along: their entry, frames and press)
         self.follows = [] if costs.atlas.rail is None else [
             (m, f, a, t_up[m] - t_down[m], costs.moves.press_min_s(a))
@@ -361,15 +364,19 @@ class Costs:
                 {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
                 {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
         by_finger, by_key, lifted = around
-        t_down, t_up, dt = self._t_down, self._t_up, self.dt
+        t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
+        timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
         loss = TIE_RAIL_PER_M * abs(rail_i - prev.state.rail_i) * RAIL_STEP_M
         for n, f in new.items():
-            after_s = self._times(n, f, rail_i)[1]
+            times = timing.get((pitch[n], f, rail_i))
+            after_s = (times or self._times(n, f, rail_i))[1]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
                 m, r = lifted[f]
-                gap = self._move_gap_s(m, f, r, n, rail_i)
+                gap = gaps.get((pitch[m], f, r, pitch[n], rail_i), False)
+                if gap is False:
+                    gap = self._move_gap_s(m, f, r, n, rail_i)
                 if gap is None:
                     return math.inf
                 late = max(late, gap - (t_down[n] - t_up[m]))
@@ -394,6 +401,8 @@ class Costs:
         T = self._rail_time.get(di)
         if T is None:
             T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
+        if not ctx.follows:  # (no note sounding that could ride along: the last lift)
+            return ctx.lift_end + T, _NONE
         followers = _NONE
         for m, f, a, window_s, press_s in ctx.follows:
             key = (a, rail_i)

@@ -108,14 +108,18 @@ class FingeringProblem(Layers):
         """The programme over a receding window: the best path over the next ``WINDOW``
         events (``FIRST_WINDOW`` at the start) decides its first ones (all but
         ``LOOKAHEAD``), which are yielded (``FingeringChunk``, with the notes no state can
-        play that start before the next event) and fixed; the next window starts from the
-        state it reached. Events are read as the windows need them, so the motion and the
+        play that start before the next event) and fixed; the next window goes on from the
+        look-ahead's states that lead back to the last state decided (``_descendants``:
+        every event is weighed once). Events are read as the windows need them, so the motion and the
         rows can start after the first window, not the song."""
         source = self._events()
         ahead_evs: list[tuple[float, list[int]]] = []  # playable events not decided yet
         skips: list[tuple[float, Skip]] = []  # notes no state plays, not yet yielded
         done, first, loss = False, True, 0.0
-        start: dict[State, tuple[float, State | None]] = {}
+        # (the window's layers not decided yet, each {state: (cost, state before)}, and
+        # the last state decided)
+        layers: list[tuple[float, dict, list[int]]] = []
+        before: State | None = None
         while True:
             window, ahead = (FIRST_WINDOW, FIRST_LOOKAHEAD) if first else (WINDOW, LOOKAHEAD)
             while not done and len(ahead_evs) <= window:  # (one more: the next event's time)
@@ -132,8 +136,9 @@ class FingeringProblem(Layers):
                         skips = []
             if not ahead_evs:
                 break
-            layers, prev = [], start
-            for t, new in ahead_evs[:window]:
+            prev = layers[-1][1] if layers else {} if before is None else \
+                {before: (loss, None)}
+            for t, new in ahead_evs[len(layers):window]:
                 prev = self._layer(prev, t, new)
                 layers.append((t, prev, new))
             k = len(layers) if done and len(ahead_evs) <= window else max(1, len(layers) - ahead)
@@ -141,11 +146,13 @@ class FingeringProblem(Layers):
             until = ahead_evs[k][0] if k < len(ahead_evs) else math.inf
             mine = tuple(s for t, s in skips if t < until)
             skips = [(t, s) for t, s in skips if t >= until]
-            ch = self._chunk(layers[:k], path[:k], next(iter(start)) if start else None)
+            ch = self._chunk(layers[:k], path[:k], before)
             loss = ch.loss_frames
             yield FingeringChunk(ch.assignments, mine + ch.skipped, ch.cuts, loss, until)
-            last = path[k - 1]
-            start = {last: (layers[k - 1][1][last][0], None)}
+            before = path[k - 1]
+            # (the first window's look-ahead, pruned with 8 events in view, is weighed
+            # again from the state decided: kept, it lost on trills, trill_3 0.998 -> 0.971)
+            layers = [] if first else _descendants(layers[k:], before)
             del ahead_evs[:k]
             first = False
             self.forget(ahead_evs[0][0] if ahead_evs else math.inf)
@@ -164,7 +171,8 @@ class FingeringProblem(Layers):
                     skipped.append(why)
             yield t, playable, skipped
 
-    def _path(self, layers) -> list[State]:
+    @staticmethod
+    def _path(layers) -> list[State]:
         """The best path through a window's layers, one state per layer."""
         state = min(layers[-1][1].items(), key=lambda kv: kv[1][0])[0]
         out = [state]
@@ -213,6 +221,18 @@ class FingeringProblem(Layers):
                         f"than its {frames:.0f} frames: the moves there take longer")
         return Skip(n, SkipReason.CHORD, f"{len(new)} notes at t={t:.3f} s: the hand holds "
                     f"{sum(m in here for m in new)} of them from one position")
+
+def _descendants(layers, before: State):
+    """``layers`` (those after a decided state ``before``) with only the states whose
+    path leads back to ``before``: the next window goes on from them, its events weighed
+    once (a window restarted from ``before`` alone weighed its look-ahead again)."""
+    out, allowed = [], {before}
+    for t, layer, new in layers:
+        kept = {s: v for s, v in layer.items() if v[1] in allowed}
+        out.append((t, kept, new))
+        allowed = kept.keys()
+    return out
+
 
 def plan_fingering(notes, atlas: Atlas, moves: Moves, rate_hz: float) -> Fingering:
     """The fingering and hand positions of ``notes`` (see the module docstring)."""

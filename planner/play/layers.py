@@ -41,6 +41,22 @@ BOUND_EVERY = 8  # the beam's cost bound is renewed after this many states befor
 _PER_STEP = TIE_RAIL_PER_M * RAIL_STEP_M  # a move's tie-break, per step of the rail grid
 
 
+class _Strike:
+    """The new notes of a transition and their fingers (``new``: note -> finger, by
+    pitch), with what every state before asks of them, made once per event: their
+    ``press_key`` (``Layers._press_key``), the (note, finger) ``items`` by pitch and
+    ``by_note``, and the fingers (``busy``)."""
+
+    __slots__ = ("busy", "by_note", "items", "new", "press_key")
+
+    def __init__(self, new: dict[int, str], press_key: tuple) -> None:
+        self.new = new
+        self.press_key = press_key
+        self.items = tuple(new.items())
+        self.by_note = tuple(sorted(self.items))
+        self.busy = frozenset(new.values())
+
+
 class Layers(Costs):
     """The layers of one song's programme (``_layer``: one event's states from the
     layer before); the windows over them are ``planner.play.fingering``'s."""
@@ -91,13 +107,15 @@ class Layers(Costs):
                               if (m, _) not in kept) / self.dt
                     busy = frozenset(f for _, f in kept)
                     got = assign.get(busy)
-                    if got is None:  # (the new notes' fingers, and their press keys)
+                    if got is None:  # (the new notes' fingers, once per event and kept
+                        # fingers: their press keys, as items by pitch and by note, and the
+                        # fingers)
                         free = [f for f in fingers if f not in busy]
-                        got = assign[busy] = [(d, self._press_key(d)) for d in (
+                        got = assign[busy] = [_Strike(d, self._press_key(d)) for d in (
                             dict(zip(new, combo))
                             for combo in itertools.combinations(free, len(new)))]
-                    for d, key in got:
-                        self._try(layer, ctx, cost + cut, bound, kept, d, key)
+                    for d in got:
+                        self._try(layer, ctx, cost + cut, bound, kept, d)
 
     def _beam_bound(self, layer) -> float:
         """The cost of the last state ``_prune`` keeps of ``layer`` (inf when it keeps
@@ -112,26 +130,30 @@ class Layers(Costs):
         return self._bound_at[2]
 
     def _try(self, layer, ctx: Prev | None, cost: float, bound: float, kept,
-             new: dict[int, str], press_key: tuple) -> None:
-        """Every transition from ``ctx`` (its cost so far ``cost``) that strikes ``new``
-        (note -> finger: its ``_press_key``) and keeps ``kept`` held, into ``layer``; none
+             strike: _Strike) -> None:
+        """Every transition from ``ctx`` (its cost so far ``cost``) that strikes
+        ``strike.new`` (note -> finger) and keeps ``kept`` held, into ``layer``; none
         costing more than ``bound``, the beam's (no such state is kept)."""
-        if kept or len(new) > 1:
+        new = strike.new
+        if kept:
             order_of, pitch = self._order, self.pitch
-            sounding = sorted([*kept, *new.items()], key=lambda mf: pitch[mf[0]])
+            sounding = sorted([*kept, *strike.items], key=lambda mf: pitch[mf[0]])
             order = [order_of[f] for _, f in sounding]
             if any(b <= a for a, b in itertools.pairwise(order)):
                 return
             sounding_t = tuple(sorted(sounding))
-        else:
-            sounding = sounding_t = tuple(new.items())
+            busy = None
+        else:  # (the new notes' fingers are in the hand's order, as their pitches)
+            sounding, sounding_t, busy = strike.items, strike.by_note, strike.busy
         p = None if ctx is None else ctx.state
         if not new:  # (every new note left out: the hand stays)
             if p is None:
                 return
             rails = [(p.rail_i, 0.0)]
-        else:
-            rails = self._moves_to(new, press_key, p)
+        else:  # (``_moves_to``'s memo read here: most calls find it)
+            rails = self._rails_to.get((strike.press_key, None if p is None else p.rail_i))
+            if rails is None:
+                rails = self._moves_to(new, strike.press_key, p)
         if p is None:  # (the song's first notes: from anywhere, no move lost)
             for rail_i, tie in rails:
                 total, shape = cost + tie, (rail_i, sounding_t)
@@ -140,7 +162,7 @@ class Layers(Costs):
                     layer[shape] = (total, None, State(rail_i, sounding_t))
             return
         here, steps = p.rail_i, ctx.steps
-        busy = crossing = recent = None
+        crossing = recent = None
         for rail_i, tie in rails:
             # (the pruning keeps one state per shape, the cheapest: a transition that
             # cannot cost less than the cheapest state of its shape so far is not weighed,
@@ -256,18 +278,32 @@ def _prune(layer):
     hand positions in view); of those holding the same notes at most ``PER_NOTES`` while
     states holding other notes (a held note let go, a note left out) are there to fill
     the beam. As {state: (cost, state before)}, cheapest first."""
-    ranked = sorted(layer.values(), key=lambda v: v[0])
+    ranked = sorted(layer.values(), key=_cost)
     out, per, sets = {}, {}, {}
-    for capped in (True, False):
-        for v in ranked:
-            s = v[2]
-            if s in out:
-                continue
-            notes = s.notes
-            if per.get(s.rail_i, 0) < PER_RAIL and (not capped or sets.get(notes, 0) < PER_NOTES):
-                out[s] = (v[0], v[1])
-                per[s.rail_i] = per.get(s.rail_i, 0) + 1
-                sets[notes] = sets.get(notes, 0) + 1
-                if len(out) == BEAM:  # (the first pass adds in cost order: sorted)
-                    return out if capped else dict(sorted(out.items(), key=lambda kv: kv[1][0]))
+    capped = []  # (skipped for their notes only: the second pass's candidates, in order)
+    for v in ranked:  # (one state per shape: every state is new to ``out``)
+        s = v[2]
+        rail_i = s.rail_i
+        if per.get(rail_i, 0) >= PER_RAIL:  # (a rail's count only grows: out for good)
+            continue
+        notes = s.notes
+        if sets.get(notes, 0) >= PER_NOTES:
+            capped.append(v)
+            continue
+        out[s] = (v[0], v[1])
+        per[rail_i] = per.get(rail_i, 0) + 1
+        sets[notes] = sets.get(notes, 0) + 1
+        if len(out) == BEAM:  # (added in cost order: sorted)
+            return out
+    for v in capped:
+        s = v[2]
+        if per.get(s.rail_i, 0) < PER_RAIL:
+            out[s] = (v[0], v[1])
+            per[s.rail_i] = per.get(s.rail_i, 0) + 1
+            if len(out) == BEAM:
+                break
     return dict(sorted(out.items(), key=lambda kv: kv[1][0]))
+
+
+def _cost(v) -> float:
+    return v[0]
