@@ -67,6 +67,8 @@ class Wrist:
         self._e_t = tuple(float(x) for x in self.e_f)
         self._n0_t = tuple(float(x) for x in self.n0)
         self._W_t = tuple(float(x) for x in self.W)
+        self._e_r_t = tuple(float(x) for x in self.e_r)
+        self._circles: dict[float, tuple] = {}  # palm_circles' default rows, per radius
         g0p = self.g0 - (self.g0 @ self.n0) * self.n0
         self._dev_A = float(g0p @ self.b0)
         self._dev_B = float(np.cross(self.u_d, g0p) @ self.b0)
@@ -133,6 +135,30 @@ class Wrist:
                 best = (margin, dev, rail)
         return None if best is None else (best[1], best[2])
 
+    def palm_circles(self, r: float, devs: tuple[float, ...] | None = None
+                     ) -> tuple[tuple[float, ...], list, list, list]:
+        """The palm point (palm centre + r n0) at each deviation of ``devs`` (default five
+        across its range: kept per radius, a hand's constants): ``_position_only``'s
+        deviations, the points (zero-flexion frame), their parts across the flexion axis,
+        and their distances from it (the circles the flexion moves them on)."""
+        if devs is None and r in self._circles:
+            return self._circles[r]
+        lo, hi = self.dev_lim
+        ds = devs if devs is not None else (lo, 0.5 * lo, 0.0, 0.5 * hi, hi)
+        ex, ey, ez = self._e_t
+        A, AP, rho = [], [], []
+        for dev in ds:  # (floats: numpy's per-call cost dominates at this size)
+            ax, ay, az = (rot1(self.u_d, dev, self.g0) + r * self.n0).tolist()
+            d = ax * ex + ay * ey + az * ez
+            apx, apy, apz = ax - d * ex, ay - d * ey, az - d * ez
+            A.append((ax, ay, az))
+            AP.append((apx, apy, apz))
+            rho.append(math.sqrt(apx * apx + apy * apy + apz * apz))
+        out = (tuple(ds), A, AP, rho)
+        if devs is None:
+            self._circles[r] = out
+        return out
+
     def rail_for(self, s: np.ndarray, dev: float, r: float) -> float:
         if self.i_rail is None:
             return 0.0
@@ -162,7 +188,7 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
         sol = wr.dev_rail(s_vec, r)
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             return Intercept(ti, th, sol[0], sol[1], abs(tilt), True, None)
-    return _position_only(wr, flight, C, r, t)
+    return _position_only(wr, flight, C, r, t, b=b)
 
 
 def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev: Intercept,
@@ -204,37 +230,41 @@ def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, t
 
 
 def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
-                   t: np.ndarray, devs: tuple[float, ...] | None = None) -> Intercept:
+                   t: np.ndarray, devs: tuple[float, ...] | None = None,
+                   b: np.ndarray | None = None) -> Intercept:
     """No pose faces the ball exactly: put the palm point on the path with the
     deviation at each candidate value (``devs``; default five across its range) and pick
-    the least misaligned reachable one."""
-    b = flight.position(t) - C
+    the least misaligned reachable one. ``b``: the ball at ``t`` less ``C`` when known."""
+    if b is None:
+        b = flight.position(t) - C
     e = wr.e_f
     w = b - wr.W
     w_p = w - np.outer(w @ e, e)
     dist = np.linalg.norm(w_p, axis=1)
-    lo, hi = wr.dev_lim
     best: Intercept | None = None
     closest = (np.inf, None)
     ex, ey, ez = wr._e_t
-    er = tuple(float(x) for x in wr.e_r)
+    er = wr._e_r_t
     W = wr._W_t
     Cx, Cy, Cz = (float(c) for c in C)
-    for dev in devs if devs is not None else (lo, 0.5 * lo, 0.0, 0.5 * hi, hi):
-        # 3-vectors as floats below (numpy's per-call cost dominates at this size)
-        ax, ay, az = (rot1(wr.u_d, dev, wr.g0) + r * wr.n0).tolist()
-        d = ax * ex + ay * ey + az * ez
-        apx, apy, apz = ax - d * ex, ay - d * ey, az - d * ez
-        rho = math.sqrt(apx * apx + apy * apy + apz * apz)
-        f = dist - rho
-        inward = np.flatnonzero((f[:-1] > 0) & (f[1:] <= 0))
-        k_near = int(np.argmin(np.abs(f)))
-        if abs(f[k_near]) < closest[0]:
-            closest = (float(abs(f[k_near])), float(t[k_near]))
-        if not inward.size:
+    devs, A, AP, rho = wr.palm_circles(r, devs)
+    # every deviation at once: the ball's distance from the flexion axis less the palm
+    # point's, its first inward crossing and its nearest sample
+    f_all = dist[None, :] - np.array(rho)[:, None]
+    cross_in = (f_all[:, :-1] > 0) & (f_all[:, 1:] <= 0)
+    k_near = np.abs(f_all).argmin(axis=1).tolist()
+    has_in = cross_in.any(axis=1).tolist()
+    k_in = cross_in.argmax(axis=1).tolist()
+    for i, dev in enumerate(devs):
+        f = f_all[i]
+        if abs(f[k_near[i]]) < closest[0]:
+            closest = (float(abs(f[k_near[i]])), float(t[k_near[i]]))
+        if not has_in[i]:
             continue
-        k = int(inward[0])
-        tk = _crossing(wr, flight, C, rho, float(t[k]), float(t[k + 1]), float(f[k]),
+        ax, ay, az = A[i]
+        apx, apy, apz = AP[i]
+        k = k_in[i]
+        tk = _crossing(wr, flight, C, rho[i], float(t[k]), float(t[k + 1]), float(f[k]),
                        float(f[k + 1]))
         px, py, pz = flight.position1(tk)
         vx, vy, vz = flight.velocity1(tk)

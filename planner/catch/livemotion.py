@@ -117,23 +117,40 @@ class Quintic:
         return self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
 
     def within(self, lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
-               step_s: float, accel_ok=None) -> bool:
+               step_s: float, motors: np.ndarray | None = None,
+               room: np.ndarray | None = None) -> bool:
         """Positions in [lo, hi], |speed| <= v_max, |acceleration| <= a_max on a grid of
-        ``step_s`` over the move (both ends included); ``accel_ok(t_s, a)``: whether the
-        accelerations ``a`` (T, k) at the grid's times ``t_s`` are also acceptable."""
+        ``step_s`` over the move (both ends included); ``motors`` (m, k), ``room`` (m,):
+        also |motors @ acceleration| <= room there (``LiveMotion.reaim``'s motor rule)."""
+        return self.within_bounds(*_bounds(lo, hi, v_max, a_max, room), step_s, motors)
+
+    def within_bounds(self, lb: np.ndarray, ub: np.ndarray, step_s: float,
+                      motors: np.ndarray | None = None) -> bool:
+        """``within`` with its bounds as two rows (``_bounds``: positions, speeds,
+        accelerations, then the motors' torques): every quantity on the grid is a
+        polynomial in tau of degree <= 5, so the grid's powers of tau (n, 6) times one
+        coefficient matrix (6, 3k + m) give all of them in one product."""
         n = max(2, math.ceil(self.duration_s / step_s) + 1)
-        tau = np.linspace(0.0, self.duration_s, n)[:, None]
+        T = np.vander(np.linspace(0.0, self.duration_s, n), 6, increasing=True)
+        q0, v0, a0 = self.q0, self.v0, self.a0
         c3, c4, c5 = self.c
-        a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
-        if np.any(np.abs(a) > a_max):
-            return False
-        if accel_ok is not None and not accel_ok(self.t0 + tau[:, 0], a):
-            return False
-        v = self.v0 + tau * (self.a0 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))
-        if np.any(np.abs(v) > v_max):
-            return False
-        q = self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
-        return bool(np.all(q >= lo - 1e-12) and np.all(q <= hi + 1e-12))
+        z = np.zeros_like(c3)
+        acc = np.stack([a0, 6.0 * c3, 12.0 * c4, 20.0 * c5, z, z])
+        cols = [np.stack([q0, v0, 0.5 * a0, c3, c4, c5]),
+                np.stack([v0, a0, 3.0 * c3, 4.0 * c4, 5.0 * c5, z]), acc]
+        if motors is not None:
+            cols.append(acc @ motors.T)
+        P = T @ np.concatenate(cols, axis=1)
+        return bool(np.all(P >= lb) and np.all(P <= ub))
+
+
+def _bounds(lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+            room: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``Quintic.within_bounds``' rows: positions in [lo, hi] (1e-12 rad of rounding),
+    speeds and accelerations within +-their limits, motor torques within +-``room``."""
+    up = [hi + 1e-12, v_max, a_max] + ([room] if room is not None else [])
+    down = [lo - 1e-12, -v_max, -a_max] + ([-room] if room is not None else [])
+    return np.concatenate(down), np.concatenate(up)
 
 
 class LiveMotion:
@@ -188,18 +205,15 @@ class LiveMotion:
             return 1.0
         q, v, a = self.seg.state1(t_s)
         D_max = rest_by - t_s
-        ends = self._ends(self.rows(np.array([t_s]))[0], q_target)
+        # every motor at either end of the move (rows: the start's, then the end's)
+        MH, room = (np.concatenate(x) for x in zip(*self._ends(
+            self.rows(np.array([t_s]))[0], q_target)))
         # (the acceleration it starts with is the move's it replaces: allowed as it is)
-        ends = [(MH, np.maximum(room, np.abs(MH @ a))) for MH, room in ends]
-
-        def motors_ok(t: np.ndarray, a_arm: np.ndarray) -> bool:
-            """Every motor within the room at either end as the arm accelerates."""
-            return all(bool(np.all(np.abs(a_arm @ MH.T) <= room)) for MH, room in ends)
+        lb, ub = _bounds(self._lo, self._hi, self._v, self._a, np.maximum(room, np.abs(MH @ a)))
 
         def ok(D: float, goal: np.ndarray) -> Quintic | None:
             seg = Quintic.between(t_s, D, q, v, a, goal)
-            return seg if seg.within(self._lo, self._hi, self._v, self._a, VERIFY_STEP_S,
-                                     motors_ok) else None
+            return seg if seg.within_bounds(lb, ub, VERIFY_STEP_S, MH) else None
 
         for share in PART_SHARES:
             goal = self.seg.q1 + share * (q1 - self.seg.q1)
