@@ -72,11 +72,13 @@ class Quintic:
     def between(cls, t0: float, duration_s: float, q0: np.ndarray, v0: np.ndarray,
                 a0: np.ndarray, q1: np.ndarray) -> Quintic:
         D = float(duration_s)
-        h = q1 - q0
-        c3 = (20.0 * h - 12.0 * v0 * D - 3.0 * a0 * D * D) / (2.0 * D ** 3)
-        c4 = (-30.0 * h + 16.0 * v0 * D + 3.0 * a0 * D * D) / (2.0 * D ** 4)
-        c5 = (12.0 * h - 6.0 * v0 * D - a0 * D * D) / (2.0 * D ** 5)
-        return cls(float(t0), D, q0, v0, a0, q1, np.stack([c3, c4, c5]))
+        D2, D3 = D * D, D * D * D
+        # (c3, c4, c5) = B(D) [q1 - q0; v0; a0]: the boundary conditions' solution, one
+        # product for the k joints
+        B = np.array([[10.0 / D3, -6.0 / D2, -1.5 / D],
+                      [-15.0 / (D3 * D), 8.0 / D3, 1.5 / D2],
+                      [6.0 / (D3 * D2), -3.0 / (D3 * D), -0.5 / D3]])
+        return cls(float(t0), D, q0, v0, a0, q1, B @ np.stack([q1 - q0, v0, a0]))
 
     @classmethod
     def hold(cls, q: np.ndarray) -> Quintic:
@@ -132,16 +134,23 @@ class Quintic:
         coefficient matrix (6, 3k + m) give all of them in one product."""
         n = max(2, math.ceil(self.duration_s / step_s) + 1)
         T = np.vander(np.linspace(0.0, self.duration_s, n), 6, increasing=True)
-        q0, v0, a0 = self.q0, self.v0, self.a0
-        c3, c4, c5 = self.c
-        z = np.zeros_like(c3)
-        acc = np.stack([a0, 6.0 * c3, 12.0 * c4, 20.0 * c5, z, z])
-        cols = [np.stack([q0, v0, 0.5 * a0, c3, c4, c5]),
-                np.stack([v0, a0, 3.0 * c3, 4.0 * c4, 5.0 * c5, z]), acc]
+        k = len(self.q0)
+        # the coefficients of tau^0..5 of q, v and a (3 blocks of 6 rows): _POWERS times
+        # (q0, v0, a0, c3, c4, c5)
+        qva = (_POWERS @ np.concatenate([self.q0, self.v0, self.a0, self.c.ravel()]
+                                        ).reshape(6, k)).reshape(3, 6, k)
+        cols = [qva[0], qva[1], qva[2]]
         if motors is not None:
-            cols.append(acc @ motors.T)
+            cols.append(qva[2] @ motors.T)
         P = T @ np.concatenate(cols, axis=1)
         return bool(np.all(P >= lb) and np.all(P <= ub))
+
+
+# (q0, v0, a0, c3, c4, c5) -> the coefficients of tau^0..5 in q, then v, then a
+_POWERS = np.zeros((18, 6))
+_POWERS[[0, 1, 2, 3, 4, 5], [0, 1, 2, 3, 4, 5]] = (1.0, 1.0, 0.5, 1.0, 1.0, 1.0)
+_POWERS[[6, 7, 8, 9, 10], [1, 2, 3, 4, 5]] = (1.0, 1.0, 3.0, 4.0, 5.0)
+_POWERS[[12, 13, 14, 15], [2, 3, 4, 5]] = (1.0, 6.0, 12.0, 20.0)
 
 
 def _bounds(lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
