@@ -124,27 +124,60 @@ def test_session_catches_the_true_ball(live_run):
     assert rep.catch.intercept_error_m < 0.015 and rep.ok, rep.problems
 
 
-def test_session_first_plan_starts_from_the_vacuum_fit(live_run):
-    """The observation before the first drag fit searches the vacuum fit's whole path; the
-    first fit's search, warm-started from it, finds what the whole search finds."""
+def test_session_first_plan_starts_from_the_first_look(live_run):
+    """The observation before the first drag fit iterates the drag chord on the
+    observations so far (``LiveFit.first_look``) and searches that flight's whole path;
+    the first fit continues the chord by one step, and its search, warm-started from that
+    intercept, finds what the whole search finds (a throw whose first look is in reach)."""
     _, s, _ = live_run
     lf = LiveFit(BALL, BALL.drag_per_m)
-    for t, p in zip(*_observations()[1:]):
+    for t, p in zip(*_observations(seed=2)[1:]):
+        if lf.n == lf.min_obs - 1:
+            assert lf.first_look() is not None
         if lf.add(t, p) is not None:
             break
     pl = s.pl
     first = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=pl)
-    for t, p in zip(*_observations()[1:]):
+    for t, p in zip(*_observations(seed=2)[1:]):
         first.observe(t, p)
         if first.fit.n == lf.min_obs - 1:
             assert first._prior is not None and first.t_i is None
         if first.t_i is not None:
             break
+    np.testing.assert_array_equal(first.flight.v0, lf.flight.v0)
     full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m,
                           float(lf.flight.time_at_x(1.5)))
     ic = first.pose.ic
     assert abs(ic.t - full.t) < 1e-6 and abs(ic.theta - full.theta) < 1e-6
     assert abs(ic.dev - full.dev) < 1e-6 and abs(ic.rail - full.rail) < 1e-6
+
+
+@pytest.mark.parametrize("angle,dist,rate", [(20, 2.5, 100.0), (45, 1.5, 500.0),
+                                             (60, 2.5, 500.0)])
+def test_first_look_lags_the_first_fit_far_less_than_its_error(angle, dist, rate):
+    """The first fit one chord step on from ``first_look`` (as every later fit) is, at the
+    catch point, within 5 % of its distance from the true ball of the fixed point of its
+    observations (measured: <= 2.2 %, median 0.16 %, 120 throws); without it, the first
+    fit's 2 steps from the vacuum reach that point to 1 um."""
+    fl = predict_throw(angle, dist, 0.0, BALL, drag=True)
+    rng = np.random.default_rng(3)
+    obs = [(k / rate, fl.position(k / rate) + rng.normal(0.0, 0.01, 3)) for k in range(1, 7)]
+    warm, cold, fixed = (LiveFit(BALL, BALL.drag_per_m) for _ in range(3))
+    for t, p in obs[:5]:
+        warm.add(t, p)
+    warm.first_look()
+    got, cold_fit = warm.add(*obs[5]), [cold.add(t, p) for t, p in obs][-1]
+    for t, p in obs:
+        fixed.add(t, p)
+    theta = fixed._theta
+    for _ in range(30):  # the chord to its fixed point
+        fixed._theta_flight = fixed._flight(theta)
+        theta, _ = fixed._chord(fixed._minv(), theta)
+    t_c = float(fl.time_at_x(dist))
+    p_fix = fixed._flight(theta).position(t_c)
+    err = np.linalg.norm(p_fix - fl.position(t_c))
+    assert np.linalg.norm(got.flight.position(t_c) - p_fix) < 0.05 * err
+    assert np.linalg.norm(cold_fit.flight.position(t_c) - p_fix) < 1e-6
 
 
 def _motion():
