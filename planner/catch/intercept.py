@@ -109,10 +109,10 @@ class Wrist:
         c, sn = math.cos(-th), math.sin(-th)
         kx, ky, kz = ey * pz - ez * py, ez * px - ex * pz, ex * py - ey * px
         kp = (px * ex + py * ey + pz * ez) * (1.0 - c)
-        s = np.array([px * c + kx * sn + kp * ex, py * c + ky * sn + kp * ey,
-                      pz * c + kz * sn + kp * ez])
-        h = float(s[0] * nx + s[1] * ny + s[2] * nz) - (self._g0n + r)
-        return th, s, h
+        sx, sy, sz = (px * c + kx * sn + kp * ex, py * c + ky * sn + kp * ey,
+                      pz * c + kz * sn + kp * ez)
+        h = (sx * nx + sy * ny + sz * nz) - (self._g0n + r)
+        return th, np.array([sx, sy, sz]), h
 
     def dev_rail(self, s: np.ndarray, r: float) -> tuple[float, float] | None:
         """Deviation and rail that put palm_center + r n0 at ``s`` (zero-flexion frame)."""
@@ -235,8 +235,9 @@ def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
     """No pose faces the ball exactly: put the palm point on the path with the
     deviation at each candidate value (``devs``; default five across its range) and pick
     the least misaligned reachable one. ``b``: the ball at ``t`` less ``C`` when known."""
-    if b is None:
-        b = flight.position(t) - C
+    if b is None:  # (a few samples: one at a time in floats, ``Flight.position1``)
+        b = (np.array([flight.position1(x) for x in t.tolist()]) if len(t) <= _N_NEAR
+             else flight.position(t)) - C
     e = wr.e_f
     w = b - wr.W
     w_p = w - np.outer(w @ e, e)
