@@ -13,7 +13,7 @@ import numpy as np
 
 from planner.catch.arm import CatchJoints, zero_pose
 from planner.catch.flight import Flight
-from planner.catch.geometry import bracketed_secant, cross, rot, rot1, unit
+from planner.catch.geometry import bracketed_secant, rot1, unit
 from planner.errors import PlannerError
 from planner.hand.model import HandModel
 
@@ -73,22 +73,29 @@ class Wrist:
         self._dev_A = float(g0p @ self.b0)
         self._dev_B = float(np.cross(self.u_d, g0p) @ self.b0)
         self._g0n = float(self.g0 @ self.n0)
+        e_n = np.cross(self.e_f, self.n0)  # (aligned's projections: e, n0, e x n0)
+        self._frame = np.column_stack([self.e_f, self.n0, e_n])
+        self._e_n0, self._e_en = float(self.e_f @ self.n0), float(self.e_f @ e_n)
         lo, hi = hand.lower, hand.upper
         self.flex_lim = (float(lo[joints.i_flex]), float(hi[joints.i_flex]))
         self.dev_lim = (float(lo[joints.i_dev]), float(hi[joints.i_dev]))
         self.rail_lim = ((float(lo[joints.i_rail]), float(hi[joints.i_rail]))
                          if joints.i_rail is not None else (0.0, 0.0))
 
-    def aligned(self, b: np.ndarray, v: np.ndarray, r: float, tilt: float = 0.0):
+    def aligned(self, b: np.ndarray, v: np.ndarray, r: float, tilt: float = 0.0
+                ) -> tuple[np.ndarray, np.ndarray]:
         """For path samples (positions b, velocities v, reference frame): flexion that
         turns the normal against v (then ``tilt`` rad further about the flexion axis), and
-        h = height of the ball above the palm plane minus r."""
-        e, n0 = self.e_f, self.n0
-        m = -v - np.outer(-v @ e, e)
-        m = unit(m)
-        theta = np.arctan2(cross(np.broadcast_to(n0, m.shape), m) @ e, m @ n0) + tilt
-        s = rot(e, -theta, b - self.W)
-        return theta, s, s @ n0 - (self._g0n + r)
+        h = height of the ball above the palm plane minus r. With m = -(v's part across
+        the flexion axis e) the flexion is atan2(m . (e x n0), m . n0), and the ball's
+        height above the turned palm (b - W) . Rot(e, theta) n0 (Rodrigues): projections
+        on e, n0 and e x n0 alone, no rotated points."""
+        ve, vn, ven = (v @ self._frame).T
+        theta = np.arctan2(-ven + ve * self._e_en, -vn + ve * self._e_n0) + tilt
+        we, wn, wen = ((b - self.W) @ self._frame).T
+        c = np.cos(theta)
+        return theta, c * wn + np.sin(theta) * wen + (1.0 - c) * self._e_n0 * we - (
+            self._g0n + r)
 
     def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float, tilt: float = 0.0
                   ) -> tuple[float, np.ndarray, float]:
@@ -175,7 +182,7 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
     t = np.linspace(max(0.0, t_c - 0.30), t_c + 0.15, _N_SEARCH)
     b = flight.position(t) - C
     v = flight.velocity(t)
-    _, _, hgt = wr.aligned(b, v, r, tilt)
+    _, hgt = wr.aligned(b, v, r, tilt)
     # first crossing of the palm plane (+ before, - after)
     down = np.flatnonzero((hgt[:-1] > 0) & (hgt[1:] <= 0))
     if down.size:
