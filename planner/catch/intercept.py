@@ -205,7 +205,10 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
     ``half_width_s`` of it and found by the same secant, or (no aligned pose) the palm's
     position alone searched on ``_N_NEAR`` samples of that window (at the previous
     deviation only when ``prev`` was such an intercept); the full search when neither
-    finds it there."""
+    finds it there. A previous intercept out of reach is no pose to start from (as the
+    first plan's ``session._prior``): the full search at once (around ``t_prev``)."""
+    if prev.reason is not None:
+        return find_intercept(wr, flight, C, r, t_prev)
     ta, tb = max(0.0, t_prev - half_width_s), t_prev + half_width_s
     fa, fb = wr.aligned1(flight, C, ta, r)[2], wr.aligned1(flight, C, tb, r)[2]
     if fa > 0 >= fb:
@@ -214,7 +217,7 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
         sol = wr.dev_rail(s_vec, r)
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             return Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
-    devs = (prev.dev,) if not prev.aligned and prev.reason is None else None
+    devs = (prev.dev,) if not prev.aligned else None
     ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR), devs)
     if ic.reason is not None and devs is not None:
         ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR))
