@@ -212,6 +212,8 @@ def test_motion_rows_are_the_phases_and_the_arm_move():
                     and np.all(np.abs(v) <= vm) and np.all(np.abs(a) <= am))
         assert seg.within(lo, hi, vm, am, seg.duration_s / 300) == grid
         assert not seg.within(lo, hi, vm, 0.5 * np.abs(a).max(axis=0), seg.duration_s / 300)
+    for tk in t.tolist():  # one time in floats: the same numbers
+        np.testing.assert_array_equal(m.row1(tk, m.seg.state1(tk)[0]), m.rows(np.array([tk]))[0])
 
 
 def test_reaim_ends_at_rest_in_time_within_the_motors():

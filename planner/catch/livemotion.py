@@ -153,6 +153,12 @@ _POWERS[[6, 7, 8, 9, 10], [1, 2, 3, 4, 5]] = (1.0, 1.0, 3.0, 4.0, 5.0)
 _POWERS[[12, 13, 14, 15], [2, 3, 4, 5]] = (1.0, 6.0, 12.0, 20.0)
 
 
+def _min_jerk1(u: float) -> float:
+    """``trajectory.min_jerk`` of one float (its arithmetic, no array)."""
+    u = min(max(u, 0.0), 1.0)
+    return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
+
+
 def _bounds(lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
             room: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``Quintic.within_bounds``' rows: positions in [lo, hi] (1e-12 rad of rounding),
@@ -215,8 +221,7 @@ class LiveMotion:
         q, v, a = self.seg.state1(t_s)
         D_max = rest_by - t_s
         # every motor at either end of the move (rows: the start's, then the end's)
-        MH, room = (np.concatenate(x) for x in zip(*self._ends(
-            self.rows(np.array([t_s]))[0], q_target)))
+        MH, room = (np.concatenate(x) for x in zip(*self._ends(self.row1(t_s, q), q_target)))
         # (the acceleration it starts with is the move's it replaces: allowed as it is)
         lb, ub = _bounds(self._lo, self._hi, self._v, self._a, np.maximum(room, np.abs(MH @ a)))
 
@@ -258,6 +263,14 @@ class LiveMotion:
         (``StopDynamics.move_time``), the arm's accelerations alone within the motors' room
         too, as every re-aim's (``_ends``), so that a re-aim can start from it."""
         return self.dyn.move_time(q_from, q_to, arm_alone=True)
+
+    def row1(self, t_s: float, q_arm: np.ndarray) -> np.ndarray:
+        """``rows`` at one time whose arm joints are at ``q_arm`` (the newest move's
+        ``Quintic.state1`` there), the fingers' phases in floats: the same numbers."""
+        Q = self.q_rest + _min_jerk1((t_s - self.t_move) / (self.open_s or 1.0)) * self._open
+        Q += _min_jerk1((t_s - self.close_start_s) / (self.close_s or 1.0)) * self._close
+        Q[self.arm] = q_arm
+        return self.hand.apply_couplings(Q)
 
     def rows(self, t_s: np.ndarray, seg: Quintic | None = None, t_new_s: float = math.inf
              ) -> np.ndarray:
