@@ -18,11 +18,11 @@ state, so the fit is the fixed point p0, v0 = LSQ_vacuum(y - d(t; p0, v0)): a ch
 iteration (the vacuum's normal matrix for the drag model's), contracting by about
 k |v| t per step. Its fixed point solves J_vac^T r = 0 instead of the drag model's
 J^T r = 0 (``fit_observations``): the two differ by O(k |v| t) of the residuals'
-projection (5 um on a 5 mm-noise tennis throw, tests/test_live.py). The first fit
-iterates from the vacuum fit (to ``CHORD_TOL_M``, at most ``MAX_CHORD_STEPS``); every
-later observation takes one
-step from the previous fit, on that fit's flight (integrated already for the plan); the
-estimate lags the fixed point by the contraction factor times the last observation's
+projection (5 um on a 5 mm-noise tennis throw, tests/test_live.py). The first estimate
+iterates from the vacuum fit (to ``CHORD_TOL_M``, at most ``MAX_CHORD_STEPS``): the first
+fit's, or, in a session, ``first_look``'s on the observations before it; every later
+observation (the first fit after a first look too) takes one step from the previous
+estimate, on its flight (integrated already for the plan); the estimate lags the fixed point by the contraction factor times the last observation's
 change. The covariance is the vacuum's sigma^2 M^-1 with sigma from the drag model's
 residuals (the drag model's sensitivity to the state differs from the vacuum's by the
 same O(k |v| t)).
