@@ -124,27 +124,60 @@ def test_session_catches_the_true_ball(live_run):
     assert rep.catch.intercept_error_m < 0.015 and rep.ok, rep.problems
 
 
-def test_session_first_plan_starts_from_the_vacuum_fit(live_run):
-    """The observation before the first drag fit searches the vacuum fit's whole path; the
-    first fit's search, warm-started from it, finds what the whole search finds."""
+def test_session_first_plan_starts_from_the_first_look(live_run):
+    """The observation before the first drag fit iterates the drag chord on the
+    observations so far (``LiveFit.first_look``) and searches that flight's whole path;
+    the first fit continues the chord by one step, and its search, warm-started from that
+    intercept, finds what the whole search finds (a throw whose first look is in reach)."""
     _, s, _ = live_run
     lf = LiveFit(BALL, BALL.drag_per_m)
-    for t, p in zip(*_observations()[1:]):
+    for t, p in zip(*_observations(seed=2)[1:]):
+        if lf.n == lf.min_obs - 1:
+            assert lf.first_look() is not None
         if lf.add(t, p) is not None:
             break
     pl = s.pl
     first = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=pl)
-    for t, p in zip(*_observations()[1:]):
+    for t, p in zip(*_observations(seed=2)[1:]):
         first.observe(t, p)
         if first.fit.n == lf.min_obs - 1:
             assert first._prior is not None and first.t_i is None
         if first.t_i is not None:
             break
+    np.testing.assert_array_equal(first.flight.v0, lf.flight.v0)
     full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m,
                           float(lf.flight.time_at_x(1.5)))
     ic = first.pose.ic
     assert abs(ic.t - full.t) < 1e-6 and abs(ic.theta - full.theta) < 1e-6
     assert abs(ic.dev - full.dev) < 1e-6 and abs(ic.rail - full.rail) < 1e-6
+
+
+@pytest.mark.parametrize("angle,dist,rate", [(20, 2.5, 100.0), (45, 1.5, 500.0),
+                                             (60, 2.5, 500.0)])
+def test_first_look_lags_the_first_fit_far_less_than_its_error(angle, dist, rate):
+    """The first fit one chord step on from ``first_look`` (as every later fit) is, at the
+    catch point, within 5 % of its distance from the true ball of the fixed point of its
+    observations (measured: <= 2.2 %, median 0.16 %, 120 throws); without it, the first
+    fit's 2 steps from the vacuum reach that point to 1 um."""
+    fl = predict_throw(angle, dist, 0.0, BALL, drag=True)
+    rng = np.random.default_rng(3)
+    obs = [(k / rate, fl.position(k / rate) + rng.normal(0.0, 0.01, 3)) for k in range(1, 7)]
+    warm, cold, fixed = (LiveFit(BALL, BALL.drag_per_m) for _ in range(3))
+    for t, p in obs[:5]:
+        warm.add(t, p)
+    warm.first_look()
+    got, cold_fit = warm.add(*obs[5]), [cold.add(t, p) for t, p in obs][-1]
+    for t, p in obs:
+        fixed.add(t, p)
+    theta = fixed._theta
+    for _ in range(30):  # the chord to its fixed point
+        fixed._theta_flight = fixed._flight(theta)
+        theta, _ = fixed._chord(fixed._minv(), theta)
+    t_c = float(fl.time_at_x(dist))
+    p_fix = fixed._flight(theta).position(t_c)
+    err = np.linalg.norm(p_fix - fl.position(t_c))
+    assert np.linalg.norm(got.flight.position(t_c) - p_fix) < 0.05 * err
+    assert np.linalg.norm(cold_fit.flight.position(t_c) - p_fix) < 1e-6
 
 
 def _motion():
@@ -179,6 +212,8 @@ def test_motion_rows_are_the_phases_and_the_arm_move():
                     and np.all(np.abs(v) <= vm) and np.all(np.abs(a) <= am))
         assert seg.within(lo, hi, vm, am, seg.duration_s / 300) == grid
         assert not seg.within(lo, hi, vm, 0.5 * np.abs(a).max(axis=0), seg.duration_s / 300)
+    for tk in t.tolist():  # one time in floats: the same numbers
+        np.testing.assert_array_equal(m.row1(tk, m.seg.state1(tk)[0]), m.rows(np.array([tk]))[0])
 
 
 def test_reaim_ends_at_rest_in_time_within_the_motors():
@@ -277,3 +312,83 @@ def test_cli_live_refuses_angle_and_too_few(tmp_path):
     r = _cli(["--dist", "1.5", "-o", "c.csv"], "t,x,y,z\n0.01,0.03,0,0.02\n", tmp_path)
     assert r.returncode == 2 and "at least 3" in r.stderr
     assert not (tmp_path / "c.csv").exists()
+
+
+def test_palm_heights_are_the_rotated_points():
+    """Wrist.aligned's flexion and heights (projections on e, n0, e x n0) are those of the
+    rotated points it no longer forms: theta = atan2((n0 x m) . e, m . n0), h = (Rot(e,
+    -theta) (b - W)) . n0 - (g0 . n0 + r)."""
+    from planner.catch.geometry import cross, rot, unit
+
+    wr = get_planner("default").wrist
+    rng = np.random.default_rng(5)
+    b, v = 0.3 * rng.normal(size=(40, 3)), 4.0 * rng.normal(size=(40, 3))
+    for tilt in (0.0, 0.3):
+        theta, h = wr.aligned(b, v, BALL.radius_m, tilt)
+        m = unit(-v - np.outer(-v @ wr.e_f, wr.e_f))
+        want = np.arctan2(cross(np.broadcast_to(wr.n0, m.shape), m) @ wr.e_f, m @ wr.n0) + tilt
+        s = rot(wr.e_f, -want, b - wr.W)
+        np.testing.assert_allclose(theta, want, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(h, s @ wr.n0 - (wr.g0 @ wr.n0 + BALL.radius_m), rtol=0,
+                                   atol=1e-12)
+
+
+def test_warm_start_from_out_of_reach_is_the_full_search():
+    """find_intercept_near from an intercept out of reach (no pose): the full search."""
+    from planner.catch.intercept import Intercept, find_intercept_near
+
+    wr = get_planner("default").wrist
+    C = np.array([1.5, 0.0, 0.0])
+    for angle in (30.0, 55.0):
+        fl = predict_throw(angle, 1.5, 0.0, BALL, drag=True)
+        t_c = float(fl.time_at_x(1.5))
+        prev = Intercept(t_c + 0.01, 0.0, 0.0, 0.0, 0.0, False, "out of reach: test")
+        assert (find_intercept_near(wr, fl, C, BALL.radius_m, prev, t_c + 0.01, 0.02)
+                == find_intercept(wr, fl, C, BALL.radius_m, t_c + 0.01))
+    # a path the palm cannot reach: out of reach, at its closest sample over every deviation
+    fl = predict_throw(40.0, 1.5, 0.0, BALL, drag=True)
+    C_far, t_c = C + np.array([0.0, 0.0, 0.5]), float(fl.time_at_x(1.5))
+    far = find_intercept(wr, fl, C_far, BALL.radius_m, t_c)
+    assert far.reason is not None and far.reason.startswith("out of reach")
+    t = np.linspace(t_c - 0.30, t_c + 0.15, 46)  # (find_intercept's samples)
+    w = fl.position(t) - C_far - wr.W
+    dist = np.linalg.norm(w - np.outer(w @ wr.e_f, wr.e_f), axis=1)
+    gap = np.abs(dist[None, :] - np.array(wr.palm_circles(BALL.radius_m)[3])[:, None])
+    assert far.t == t[np.unravel_index(np.argmin(gap), gap.shape)[1]]
+    assert f"closest {1000 * gap.min():.0f} mm" in far.reason
+
+
+def test_within_bounds_is_the_grid_of_state_with_the_motors():
+    """Quintic.within with motor rows: |motors @ a| <= room on the grid, as state() gives a."""
+    pl, h, _, _, q_open, m = _motion()
+    m.start(0.05, q_open, 0.2)
+    seg = m.seg
+    MH = pl.dyn.accel_room(q_open)[0]
+    MH = MH[:, m.arm]
+    lo, hi, vm, am = h.lower[m.arm], h.upper[m.arm], h.velocity[m.arm], h.acceleration[m.arm]
+    _, _, a = seg.state(seg.t0 + np.linspace(0.0, seg.duration_s, 201))
+    need = np.abs(a @ MH.T).max(axis=0)
+    step = seg.duration_s / 200
+    assert seg.within(lo, hi, vm, am, step, MH, need * (1 + 1e-9))
+    k = int(np.argmax(need))
+    tight = need.copy()
+    tight[k] *= 0.99
+    assert not seg.within(lo, hi, vm, am, step, MH, tight)
+
+
+def test_accel_room_kept_by_q_is_the_same():
+    """StopDynamics.accel_room's kept results: the numbers of a fresh computation,
+    read-only; another q is computed anew."""
+    from planner.catch.stopping import StopDynamics
+
+    pl = get_planner("default")
+    dyn = pl.dyn
+    fresh = StopDynamics(dyn.hand, dyn.joints, dyn.kin)
+    q = pl.q_rest.copy()
+    first = dyn.accel_room(q)
+    assert dyn.accel_room(q.copy())[0] is first[0] and not first[0].flags.writeable
+    q2 = q + 0.01
+    for got, want in zip(dyn.accel_room(q2), fresh.accel_room(q2)):
+        np.testing.assert_array_equal(got, want)
+    for got, want in zip(dyn.accel_room(q), fresh.accel_room(q)):
+        np.testing.assert_array_equal(got, want)

@@ -13,7 +13,7 @@ import numpy as np
 
 from planner.catch.arm import CatchJoints, zero_pose
 from planner.catch.flight import Flight
-from planner.catch.geometry import bracketed_secant, cross, rot, rot1, unit
+from planner.catch.geometry import bracketed_secant, rot1, unit
 from planner.errors import PlannerError
 from planner.hand.model import HandModel
 
@@ -67,26 +67,35 @@ class Wrist:
         self._e_t = tuple(float(x) for x in self.e_f)
         self._n0_t = tuple(float(x) for x in self.n0)
         self._W_t = tuple(float(x) for x in self.W)
+        self._e_r_t = tuple(float(x) for x in self.e_r)
+        self._circles: dict[float, tuple] = {}  # palm_circles' default rows, per radius
         g0p = self.g0 - (self.g0 @ self.n0) * self.n0
         self._dev_A = float(g0p @ self.b0)
         self._dev_B = float(np.cross(self.u_d, g0p) @ self.b0)
         self._g0n = float(self.g0 @ self.n0)
+        e_n = np.cross(self.e_f, self.n0)  # (aligned's projections: e, n0, e x n0)
+        self._frame = np.column_stack([self.e_f, self.n0, e_n])
+        self._e_n0, self._e_en = float(self.e_f @ self.n0), float(self.e_f @ e_n)
         lo, hi = hand.lower, hand.upper
         self.flex_lim = (float(lo[joints.i_flex]), float(hi[joints.i_flex]))
         self.dev_lim = (float(lo[joints.i_dev]), float(hi[joints.i_dev]))
         self.rail_lim = ((float(lo[joints.i_rail]), float(hi[joints.i_rail]))
                          if joints.i_rail is not None else (0.0, 0.0))
 
-    def aligned(self, b: np.ndarray, v: np.ndarray, r: float, tilt: float = 0.0):
+    def aligned(self, b: np.ndarray, v: np.ndarray, r: float, tilt: float = 0.0
+                ) -> tuple[np.ndarray, np.ndarray]:
         """For path samples (positions b, velocities v, reference frame): flexion that
         turns the normal against v (then ``tilt`` rad further about the flexion axis), and
-        h = height of the ball above the palm plane minus r."""
-        e, n0 = self.e_f, self.n0
-        m = -v - np.outer(-v @ e, e)
-        m = unit(m)
-        theta = np.arctan2(cross(np.broadcast_to(n0, m.shape), m) @ e, m @ n0) + tilt
-        s = rot(e, -theta, b - self.W)
-        return theta, s, s @ n0 - (self._g0n + r)
+        h = height of the ball above the palm plane minus r. With m = -(v's part across
+        the flexion axis e) the flexion is atan2(m . (e x n0), m . n0), and the ball's
+        height above the turned palm (b - W) . Rot(e, theta) n0 (Rodrigues): projections
+        on e, n0 and e x n0 alone, no rotated points."""
+        ve, vn, ven = (v @ self._frame).T
+        theta = np.arctan2(-ven + ve * self._e_en, -vn + ve * self._e_n0) + tilt
+        we, wn, wen = ((b - self.W) @ self._frame).T
+        c = np.cos(theta)
+        return theta, c * wn + np.sin(theta) * wen + (1.0 - c) * self._e_n0 * we - (
+            self._g0n + r)
 
     def aligned1(self, flight: Flight, C: np.ndarray, t: float, r: float, tilt: float = 0.0
                   ) -> tuple[float, np.ndarray, float]:
@@ -107,10 +116,10 @@ class Wrist:
         c, sn = math.cos(-th), math.sin(-th)
         kx, ky, kz = ey * pz - ez * py, ez * px - ex * pz, ex * py - ey * px
         kp = (px * ex + py * ey + pz * ez) * (1.0 - c)
-        s = np.array([px * c + kx * sn + kp * ex, py * c + ky * sn + kp * ey,
-                      pz * c + kz * sn + kp * ez])
-        h = float(s[0] * nx + s[1] * ny + s[2] * nz) - (self._g0n + r)
-        return th, s, h
+        sx, sy, sz = (px * c + kx * sn + kp * ex, py * c + ky * sn + kp * ey,
+                      pz * c + kz * sn + kp * ez)
+        h = (sx * nx + sy * ny + sz * nz) - (self._g0n + r)
+        return th, np.array([sx, sy, sz]), h
 
     def dev_rail(self, s: np.ndarray, r: float) -> tuple[float, float] | None:
         """Deviation and rail that put palm_center + r n0 at ``s`` (zero-flexion frame)."""
@@ -133,6 +142,30 @@ class Wrist:
                 best = (margin, dev, rail)
         return None if best is None else (best[1], best[2])
 
+    def palm_circles(self, r: float, devs: tuple[float, ...] | None = None
+                     ) -> tuple[tuple[float, ...], list, list, list]:
+        """The palm point (palm centre + r n0) at each deviation of ``devs`` (default five
+        across its range: kept per radius, a hand's constants): ``_position_only``'s
+        deviations, the points (zero-flexion frame), their parts across the flexion axis,
+        and their distances from it (the circles the flexion moves them on)."""
+        if devs is None and r in self._circles:
+            return self._circles[r]
+        lo, hi = self.dev_lim
+        ds = devs if devs is not None else (lo, 0.5 * lo, 0.0, 0.5 * hi, hi)
+        ex, ey, ez = self._e_t
+        A, AP, rho = [], [], []
+        for dev in ds:  # (floats: numpy's per-call cost dominates at this size)
+            ax, ay, az = (rot1(self.u_d, dev, self.g0) + r * self.n0).tolist()
+            d = ax * ex + ay * ey + az * ez
+            apx, apy, apz = ax - d * ex, ay - d * ey, az - d * ez
+            A.append((ax, ay, az))
+            AP.append((apx, apy, apz))
+            rho.append(math.sqrt(apx * apx + apy * apy + apz * apz))
+        out = (tuple(ds), A, AP, rho)
+        if devs is None:
+            self._circles[r] = out
+        return out
+
     def rail_for(self, s: np.ndarray, dev: float, r: float) -> float:
         if self.i_rail is None:
             return 0.0
@@ -149,7 +182,7 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
     t = np.linspace(max(0.0, t_c - 0.30), t_c + 0.15, _N_SEARCH)
     b = flight.position(t) - C
     v = flight.velocity(t)
-    _, _, hgt = wr.aligned(b, v, r, tilt)
+    _, hgt = wr.aligned(b, v, r, tilt)
     # first crossing of the palm plane (+ before, - after)
     down = np.flatnonzero((hgt[:-1] > 0) & (hgt[1:] <= 0))
     if down.size:
@@ -162,7 +195,7 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
         sol = wr.dev_rail(s_vec, r)
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             return Intercept(ti, th, sol[0], sol[1], abs(tilt), True, None)
-    return _position_only(wr, flight, C, r, t)
+    return _position_only(wr, flight, C, r, t, b=b)
 
 
 def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev: Intercept,
@@ -172,7 +205,10 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
     ``half_width_s`` of it and found by the same secant, or (no aligned pose) the palm's
     position alone searched on ``_N_NEAR`` samples of that window (at the previous
     deviation only when ``prev`` was such an intercept); the full search when neither
-    finds it there."""
+    finds it there. A previous intercept out of reach is no pose to start from (as the
+    first plan's ``session._prior``): the full search at once (around ``t_prev``)."""
+    if prev.reason is not None:
+        return find_intercept(wr, flight, C, r, t_prev)
     ta, tb = max(0.0, t_prev - half_width_s), t_prev + half_width_s
     fa, fb = wr.aligned1(flight, C, ta, r)[2], wr.aligned1(flight, C, tb, r)[2]
     if fa > 0 >= fb:
@@ -181,7 +217,7 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
         sol = wr.dev_rail(s_vec, r)
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             return Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
-    devs = (prev.dev,) if not prev.aligned and prev.reason is None else None
+    devs = (prev.dev,) if not prev.aligned else None
     ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR), devs)
     if ic.reason is not None and devs is not None:
         ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR))
@@ -204,37 +240,42 @@ def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, t
 
 
 def _position_only(wr: Wrist, flight: Flight, C: np.ndarray, r: float,
-                   t: np.ndarray, devs: tuple[float, ...] | None = None) -> Intercept:
+                   t: np.ndarray, devs: tuple[float, ...] | None = None,
+                   b: np.ndarray | None = None) -> Intercept:
     """No pose faces the ball exactly: put the palm point on the path with the
     deviation at each candidate value (``devs``; default five across its range) and pick
-    the least misaligned reachable one."""
-    b = flight.position(t) - C
+    the least misaligned reachable one. ``b``: the ball at ``t`` less ``C`` when known."""
+    if b is None:  # (a few samples: one at a time in floats, ``Flight.position1``)
+        b = (np.array([flight.position1(x) for x in t.tolist()]) if len(t) <= _N_NEAR
+             else flight.position(t)) - C
     e = wr.e_f
     w = b - wr.W
     w_p = w - np.outer(w @ e, e)
     dist = np.linalg.norm(w_p, axis=1)
-    lo, hi = wr.dev_lim
     best: Intercept | None = None
     closest = (np.inf, None)
     ex, ey, ez = wr._e_t
-    er = tuple(float(x) for x in wr.e_r)
+    er = wr._e_r_t
     W = wr._W_t
     Cx, Cy, Cz = (float(c) for c in C)
-    for dev in devs if devs is not None else (lo, 0.5 * lo, 0.0, 0.5 * hi, hi):
-        # 3-vectors as floats below (numpy's per-call cost dominates at this size)
-        ax, ay, az = (rot1(wr.u_d, dev, wr.g0) + r * wr.n0).tolist()
-        d = ax * ex + ay * ey + az * ez
-        apx, apy, apz = ax - d * ex, ay - d * ey, az - d * ez
-        rho = math.sqrt(apx * apx + apy * apy + apz * apz)
-        f = dist - rho
-        inward = np.flatnonzero((f[:-1] > 0) & (f[1:] <= 0))
-        k_near = int(np.argmin(np.abs(f)))
-        if abs(f[k_near]) < closest[0]:
-            closest = (float(abs(f[k_near])), float(t[k_near]))
-        if not inward.size:
+    devs, A, AP, rho = wr.palm_circles(r, devs)
+    # every deviation at once: the ball's distance from the flexion axis less the palm
+    # point's, its first inward crossing and its nearest sample
+    f_all = dist[None, :] - np.array(rho)[:, None]
+    cross_in = (f_all[:, :-1] > 0) & (f_all[:, 1:] <= 0)
+    k_near = np.abs(f_all).argmin(axis=1).tolist()
+    has_in = cross_in.any(axis=1).tolist()
+    k_in = cross_in.argmax(axis=1).tolist()
+    for i, dev in enumerate(devs):
+        f = f_all[i]
+        if abs(f[k_near[i]]) < closest[0]:
+            closest = (float(abs(f[k_near[i]])), float(t[k_near[i]]))
+        if not has_in[i]:
             continue
-        k = int(inward[0])
-        tk = _crossing(wr, flight, C, rho, float(t[k]), float(t[k + 1]), float(f[k]),
+        ax, ay, az = A[i]
+        apx, apy, apz = AP[i]
+        k = k_in[i]
+        tk = _crossing(wr, flight, C, rho[i], float(t[k]), float(t[k + 1]), float(f[k]),
                        float(f[k + 1]))
         px, py, pz = flight.position1(tk)
         vx, vy, vz = flight.velocity1(tk)

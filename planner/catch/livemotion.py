@@ -72,11 +72,13 @@ class Quintic:
     def between(cls, t0: float, duration_s: float, q0: np.ndarray, v0: np.ndarray,
                 a0: np.ndarray, q1: np.ndarray) -> Quintic:
         D = float(duration_s)
-        h = q1 - q0
-        c3 = (20.0 * h - 12.0 * v0 * D - 3.0 * a0 * D * D) / (2.0 * D ** 3)
-        c4 = (-30.0 * h + 16.0 * v0 * D + 3.0 * a0 * D * D) / (2.0 * D ** 4)
-        c5 = (12.0 * h - 6.0 * v0 * D - a0 * D * D) / (2.0 * D ** 5)
-        return cls(float(t0), D, q0, v0, a0, q1, np.stack([c3, c4, c5]))
+        D2, D3 = D * D, D * D * D
+        # (c3, c4, c5) = B(D) [q1 - q0; v0; a0]: the boundary conditions' solution, one
+        # product for the k joints
+        B = np.array([[10.0 / D3, -6.0 / D2, -1.5 / D],
+                      [-15.0 / (D3 * D), 8.0 / D3, 1.5 / D2],
+                      [6.0 / (D3 * D2), -3.0 / (D3 * D), -0.5 / D3]])
+        return cls(float(t0), D, q0, v0, a0, q1, B @ np.stack([q1 - q0, v0, a0]))
 
     @classmethod
     def hold(cls, q: np.ndarray) -> Quintic:
@@ -117,23 +119,53 @@ class Quintic:
         return self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
 
     def within(self, lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
-               step_s: float, accel_ok=None) -> bool:
+               step_s: float, motors: np.ndarray | None = None,
+               room: np.ndarray | None = None) -> bool:
         """Positions in [lo, hi], |speed| <= v_max, |acceleration| <= a_max on a grid of
-        ``step_s`` over the move (both ends included); ``accel_ok(t_s, a)``: whether the
-        accelerations ``a`` (T, k) at the grid's times ``t_s`` are also acceptable."""
+        ``step_s`` over the move (both ends included); ``motors`` (m, k), ``room`` (m,):
+        also |motors @ acceleration| <= room there (``LiveMotion.reaim``'s motor rule)."""
+        return self.within_bounds(*_bounds(lo, hi, v_max, a_max, room), step_s, motors)
+
+    def within_bounds(self, lb: np.ndarray, ub: np.ndarray, step_s: float,
+                      motors: np.ndarray | None = None) -> bool:
+        """``within`` with its bounds as two rows (``_bounds``: positions, speeds,
+        accelerations, then the motors' torques): every quantity on the grid is a
+        polynomial in tau of degree <= 5, so the grid's powers of tau (n, 6) times one
+        coefficient matrix (6, 3k + m) give all of them in one product."""
         n = max(2, math.ceil(self.duration_s / step_s) + 1)
-        tau = np.linspace(0.0, self.duration_s, n)[:, None]
-        c3, c4, c5 = self.c
-        a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
-        if np.any(np.abs(a) > a_max):
-            return False
-        if accel_ok is not None and not accel_ok(self.t0 + tau[:, 0], a):
-            return False
-        v = self.v0 + tau * (self.a0 + tau * (3 * c3 + tau * (4 * c4 + tau * 5 * c5)))
-        if np.any(np.abs(v) > v_max):
-            return False
-        q = self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
-        return bool(np.all(q >= lo - 1e-12) and np.all(q <= hi + 1e-12))
+        T = np.vander(np.linspace(0.0, self.duration_s, n), 6, increasing=True)
+        k = len(self.q0)
+        # the coefficients of tau^0..5 of q, v and a (3 blocks of 6 rows): _POWERS times
+        # (q0, v0, a0, c3, c4, c5)
+        qva = (_POWERS @ np.concatenate([self.q0, self.v0, self.a0, self.c.ravel()]
+                                        ).reshape(6, k)).reshape(3, 6, k)
+        cols = [qva[0], qva[1], qva[2]]
+        if motors is not None:
+            cols.append(qva[2] @ motors.T)
+        P = T @ np.concatenate(cols, axis=1)
+        return bool(np.all(P >= lb) and np.all(P <= ub))
+
+
+# (q0, v0, a0, c3, c4, c5) -> the coefficients of tau^0..5 in q, then v, then a
+_POWERS = np.zeros((18, 6))
+_POWERS[[0, 1, 2, 3, 4, 5], [0, 1, 2, 3, 4, 5]] = (1.0, 1.0, 0.5, 1.0, 1.0, 1.0)
+_POWERS[[6, 7, 8, 9, 10], [1, 2, 3, 4, 5]] = (1.0, 1.0, 3.0, 4.0, 5.0)
+_POWERS[[12, 13, 14, 15], [2, 3, 4, 5]] = (1.0, 6.0, 12.0, 20.0)
+
+
+def _min_jerk1(u: float) -> float:
+    """``trajectory.min_jerk`` of one float (its arithmetic, no array)."""
+    u = min(max(u, 0.0), 1.0)
+    return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
+
+
+def _bounds(lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+            room: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``Quintic.within_bounds``' rows: positions in [lo, hi] (1e-12 rad of rounding),
+    speeds and accelerations within +-their limits, motor torques within +-``room``."""
+    up = [hi + 1e-12, v_max, a_max] + ([room] if room is not None else [])
+    down = [lo - 1e-12, -v_max, -a_max] + ([-room] if room is not None else [])
+    return np.concatenate(down), np.concatenate(up)
 
 
 class LiveMotion:
@@ -188,18 +220,14 @@ class LiveMotion:
             return 1.0
         q, v, a = self.seg.state1(t_s)
         D_max = rest_by - t_s
-        ends = self._ends(self.rows(np.array([t_s]))[0], q_target)
+        # every motor at either end of the move (rows: the start's, then the end's)
+        MH, room = (np.concatenate(x) for x in zip(*self._ends(self.row1(t_s, q), q_target)))
         # (the acceleration it starts with is the move's it replaces: allowed as it is)
-        ends = [(MH, np.maximum(room, np.abs(MH @ a))) for MH, room in ends]
-
-        def motors_ok(t: np.ndarray, a_arm: np.ndarray) -> bool:
-            """Every motor within the room at either end as the arm accelerates."""
-            return all(bool(np.all(np.abs(a_arm @ MH.T) <= room)) for MH, room in ends)
+        lb, ub = _bounds(self._lo, self._hi, self._v, self._a, np.maximum(room, np.abs(MH @ a)))
 
         def ok(D: float, goal: np.ndarray) -> Quintic | None:
             seg = Quintic.between(t_s, D, q, v, a, goal)
-            return seg if seg.within(self._lo, self._hi, self._v, self._a, VERIFY_STEP_S,
-                                     motors_ok) else None
+            return seg if seg.within_bounds(lb, ub, VERIFY_STEP_S, MH) else None
 
         for share in PART_SHARES:
             goal = self.seg.q1 + share * (q1 - self.seg.q1)
@@ -235,6 +263,14 @@ class LiveMotion:
         (``StopDynamics.move_time``), the arm's accelerations alone within the motors' room
         too, as every re-aim's (``_ends``), so that a re-aim can start from it."""
         return self.dyn.move_time(q_from, q_to, arm_alone=True)
+
+    def row1(self, t_s: float, q_arm: np.ndarray) -> np.ndarray:
+        """``rows`` at one time whose arm joints are at ``q_arm`` (the newest move's
+        ``Quintic.state1`` there), the fingers' phases in floats: the same numbers."""
+        Q = self.q_rest + _min_jerk1((t_s - self.t_move) / (self.open_s or 1.0)) * self._open
+        Q += _min_jerk1((t_s - self.close_start_s) / (self.close_s or 1.0)) * self._close
+        Q[self.arm] = q_arm
+        return self.hand.apply_couplings(Q)
 
     def rows(self, t_s: np.ndarray, seg: Quintic | None = None, t_new_s: float = math.inf
              ) -> np.ndarray:

@@ -17,10 +17,12 @@ After each observation (``observe``):
    first rows are written from t = 0 with the first fit).
 2. Intercept: ``intercept.find_intercept_near`` from the previous intercept time
    (``NEAR_S``), the pose confirmed by ``CatchPlanner.meet`` (placo, warm: the previous
-   pose is the closed form's). The first fit's starts from the intercept of the vacuum
-   fit of the observations before it (searched along the whole path at the observation
-   before the first drag fit, which plans nothing else), so that no observation carries
-   both the whole search and the first plan.
+   pose is the closed form's). The first fit's starts from the intercept of the flight
+   fitted to the observations before it (``LiveFit.first_look``: with drag, the chord
+   iteration the first fit would do, which it then continues by one step; its intercept
+   searched along the whole path), both at the observation before the first fit, which
+   plans nothing else, so that no observation carries the whole search or the fit's
+   iteration together with the first plan.
 3. Motion (``livemotion.LiveMotion``): until the hand moves, it waits while waiting for
    the next observation would not make it late (the open pose reached before the closing
    move must start, ``closing.close_start``), then starts the planner's move to the open
@@ -112,8 +114,8 @@ class CatchSession:
         self.next_row = 0
         self.pose = self.flight = None
         self.t_i: float | None = None
-        self._prior: Intercept | None = None  # the vacuum fit's intercept, before the first
-        # (drag) fit: that fit's search starts from it
+        self._prior: Intercept | None = None  # the intercept of the flight seen before the
+        # first fit (``LiveFit.first_look``): that fit's search starts from it
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
         self.kept_targets = 0  # re-aims that could not reach their target at rest before
@@ -159,7 +161,7 @@ class CatchSession:
         fit = self.fit.add(t, p)
         if fit is None:
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
-                prior = self._search(self.fit.vacuum_flight())
+                prior = self._search(self.fit.first_look())
                 # (a pose to start from: an intercept out of reach is none)
                 self._prior = prior if prior is not None and prior.reason is None else None
             return np.empty((0, 0))
@@ -197,7 +199,7 @@ class CatchSession:
             flight.integrate_to(self.t_i + NEAR_S)
         if self.t_i is not None:
             ic = find_intercept_near(pl.wrist, flight, self.C, r, self.pose.ic, self.t_i, NEAR_S)
-        elif self._prior is not None:  # from the vacuum fit of the observations before
+        elif self._prior is not None:  # from the first look at the observations before
             ic = find_intercept_near(pl.wrist, flight, self.C, r, self._prior,
                                      self._prior.t, NEAR_S)
         else:

@@ -81,6 +81,9 @@ def ramp_integral(u: np.ndarray) -> np.ndarray:
     return u ** 4 * (2.5 - 3.0 * u + u * u)
 
 
+_ROOMS_KEPT = 4  # accel_room results kept (the rest pose and the latest few)
+
+
 @dataclass(frozen=True)
 class SoftStop:
     """The arm's stopping motion of one catch (see the module docstring): its speed factor
@@ -178,6 +181,9 @@ class StopDynamics:
         self._idx = np.array([m.idx_qs[m.getJointId(n)] for n in hand.joint_names])
         self._data = m.createData()
         self._upper = np.triu(np.ones((m.nv, m.nv), dtype=bool))
+        self._rooms: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}  # accel_room's last
+        # results by q (a live session asks for the rest pose's at every observation
+        # until the hand moves)
         self.cap = actuator_capacity(hand).torque_nm
         self.v_max = LIMIT_MARGIN * hand.velocity[list(self.arm)]
         self.a_max = LIMIT_MARGIN * hand.acceleration[list(self.arm)]
@@ -233,6 +239,10 @@ class StopDynamics:
         acceleration (the hand's inertia: the motor map of the mass matrix), room =
         STOP_SHARE x its capacity - |its gravity torque|. Accelerations a with |MH @ a| <=
         room keep every motor within STOP_SHARE of its capacity at low speed."""
+        key = q.tobytes()
+        hit = self._rooms.get(key)
+        if hit is not None:
+            return hit
         m = self.hand.pin_model
         qp = self._pq(q)
         Hp = pin.crba(m, self._data, qp)
@@ -240,7 +250,13 @@ class StopDynamics:
         M = motor_torque_matrix(self.hand, q)
         z = np.zeros(m.nv)
         g = pin.rnea(m, self._data, qp, z, z)[self._idx]
-        return M @ Hp[np.ix_(self._idx, self._idx)], STOP_SHARE * self.cap - np.abs(M @ g)
+        out = (M @ Hp[np.ix_(self._idx, self._idx)], STOP_SHARE * self.cap - np.abs(M @ g))
+        for a in out:
+            a.setflags(write=False)
+        if len(self._rooms) >= _ROOMS_KEPT:
+            self._rooms.pop(next(iter(self._rooms)))
+        self._rooms[key] = out
+        return out
 
     def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None) -> float:
         """Shortest min-jerk speed ramp between rest and ``qd`` (its peak acceleration is
