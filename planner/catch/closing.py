@@ -24,6 +24,7 @@ TIP_GAP_M = 0.003  # closed fingertips: this far outside the ball's surface
 TIP_ELEVATION_DEG = 40.0  # closed fingertips: above the ball's equator (palm = south pole)
 _N_CLOSE = 201  # samples of the closing move (palm frame table)
 _N_CAND = 25  # candidate starts of the closing move
+_CAND_STEPS = np.arange(_N_CAND, dtype=float)
 _CAND_CHUNK = 4  # ... judged this many at a time, earliest first (the first clear one is
 # among the first four in 93 % of a live catch's re-plans: bench_live throws, 100 Hz)
 
@@ -140,15 +141,16 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
     if want >= t_i:
         return want
     # the ball can only meet a fingertip in the last stretch before the palm
-    speed = float(np.linalg.norm(flight.velocity(t_i)))
+    speed = math.hypot(*flight.velocity1(t_i))
     tt = np.arange(max(want, t_i - (closing.reach_m + r) / speed), t_i, 0.001)
     if tt.size == 0:
         return want
-    Tinv = np.linalg.inv(hand.palm_pose(q_open))
-    b_pc = (flight.position(tt) - C) @ Tinv[:3, :3].T + Tinv[:3, 3]
-    # candidate starts, earliest first; fingertips from the closing table (the more
-    # closed of the two neighbouring samples)
-    cands = np.linspace(want, t_i, _N_CAND)
+    T = hand.palm_pose(q_open)  # a rigid pose: its inverse maps x to R^T (x - p)
+    b_pc = (flight.position(tt) - (C + T[:3, 3])) @ T[:3, :3]
+    # candidate starts, earliest first (np.linspace's numbers, written out); fingertips
+    # from the closing table (the more closed of the two neighbouring samples)
+    cands = _CAND_STEPS * ((t_i - want) / (_N_CAND - 1)) + want
+    cands[-1] = t_i
     n_tab = len(closing.u)
     for lo in range(0, _N_CAND, _CAND_CHUNK):  # the first clear one is nearly always early
         c = cands[lo:lo + _CAND_CHUNK]

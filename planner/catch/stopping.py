@@ -180,7 +180,10 @@ class StopDynamics:
         m = hand.pin_model
         self._idx = np.array([m.idx_qs[m.getJointId(n)] for n in hand.joint_names])
         self._data = m.createData()
-        self._upper = np.triu(np.ones((m.nv, m.nv), dtype=bool))
+        i, j = self._idx[:, None], self._idx[None, :]  # the mass matrix of our joints in
+        # one take from crba's result, which fills the upper triangle only: (i, j) at
+        # (min, max)
+        self._h_flat = np.minimum(i, j) * m.nv + np.maximum(i, j)
         self._rooms: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}  # accel_room's last
         # results by q (a live session asks for the rest pose's at every observation
         # until the hand moves)
@@ -245,12 +248,11 @@ class StopDynamics:
             return hit
         m = self.hand.pin_model
         qp = self._pq(q)
-        Hp = pin.crba(m, self._data, qp)
-        Hp = np.where(self._upper, Hp, Hp.T)  # (crba fills the upper triangle)
+        H = pin.crba(m, self._data, qp).take(self._h_flat)
         M = motor_torque_matrix(self.hand, q)
         z = np.zeros(m.nv)
         g = pin.rnea(m, self._data, qp, z, z)[self._idx]
-        out = (M @ Hp[np.ix_(self._idx, self._idx)], STOP_SHARE * self.cap - np.abs(M @ g))
+        out = (M @ H, STOP_SHARE * self.cap - np.abs(M @ g))
         for a in out:
             a.setflags(write=False)
         if len(self._rooms) >= _ROOMS_KEPT:
