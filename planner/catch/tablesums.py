@@ -53,14 +53,13 @@ class IntervalSums:
         self._alloc(32)
 
     def _alloc(self, cap: int) -> None:
-        old = None if not hasattr(self, "B") else (self.B, self.tB, self.pB, self.M)
-        self.B = np.zeros((cap, 4))
-        self.tB = np.zeros((cap, 4))
-        self.pB = np.zeros((cap, 3, 4))
-        self.M = np.zeros((cap, 4, 4))
+        old = None if not hasattr(self, "W") else (self.W, self.M)
+        self.W = np.zeros((cap, 5, 4))  # per interval: the sums of b, t b, p_x b, p_y b,
+        # p_z b (one array: an observation adds one outer product to it)
+        self.M = np.zeros((cap, 4, 4))  # ... and of b b^T
         if old is not None:
             k = len(old[0])
-            self.B[:k], self.tB[:k], self.pB[:k], self.M[:k] = old
+            self.W[:k], self.M[:k] = old
 
     def add(self, t_s: float, p: np.ndarray) -> None:
         """One observation (t >= 0) at position ``p``."""
@@ -71,11 +70,10 @@ class IntervalSums:
         th3 = th2 * th
         b = np.array([1.0 - 3.0 * th2 + 2.0 * th3, 3.0 * th2 - 2.0 * th3,
                       self.h * (th - 2.0 * th2 + th3), self.h * (th3 - th2)])
-        if n >= len(self.B):
+        if n >= len(self.W):
             self._alloc(2 * (n + 1))
-        self.B[n] += b
-        self.tB[n] += t_s * b
-        self.pB[n] += np.outer(p, b)
+        px, py, pz = p.tolist()
+        self.W[n] += np.outer((1.0, t_s, px, py, pz), b)
         self.M[n] += np.outer(b, b)
         self.n_int = max(self.n_int, n + 1)
 
@@ -85,9 +83,8 @@ class IntervalSums:
         k, i0 = self.n_int, nodes.i0
         P, D = nodes.sz[i0:i0 + k + 1], nodes.uw[i0:i0 + k + 1]
         X = np.stack([P[:-1], P[1:], D[:-1], D[1:]], axis=-1)  # (k, (s z), 4): b's nodes
-        B, tB, pB, M = self.B[:k], self.tB[:k], self.pB[:k], self.M[:k]
-        (s, z), (ts, tz) = np.einsum("ni,nci->c", B, X), np.einsum("ni,nci->c", tB, X)
-        pm = np.einsum("nai,nci->ac", pB, X)  # (p_x, p_y, p_z) x (s, z)
-        ss, zz = np.einsum("nci,nij,ncj->c", X, M, X)
-        return TableSums(float(s), float(ts), float(pm[0, 0]), float(pm[1, 0]), float(ss),
-                         float(z), float(tz), float(pm[2, 1]), float(zz))
+        # (1, t, p_x, p_y, p_z) x (s, z)
+        (s, z), (ts, tz), (pxs, _), (pys, _), (_, pzz) = np.einsum(
+            "nri,nci->rc", self.W[:k], X).tolist()
+        ss, zz = np.einsum("nci,nij,ncj->c", X, self.M[:k], X).tolist()
+        return TableSums(s, ts, pxs, pys, ss, z, tz, pzz, zz)
