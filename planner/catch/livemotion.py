@@ -24,6 +24,7 @@ the open pose, the arm re-aimed at every newer intercept, the fingers' closing m
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -132,17 +133,20 @@ class Quintic:
         accelerations, then the motors' torques): every quantity on the grid is a
         polynomial in tau of degree <= 5, so the grid's powers of tau (n, 6) times one
         coefficient matrix (6, 3k + m) give all of them in one product."""
-        n = max(2, math.ceil(self.duration_s / step_s) + 1)
-        T = np.vander(np.linspace(0.0, self.duration_s, n), 6, increasing=True)
+        D = self.duration_s
+        n = max(2, math.ceil(D / step_s) + 1)
         k = len(self.q0)
-        # the coefficients of tau^0..5 of q, v and a (3 blocks of 6 rows): _POWERS times
-        # (q0, v0, a0, c3, c4, c5)
-        qva = (_POWERS @ np.concatenate([self.q0, self.v0, self.a0, self.c.ravel()]
-                                        ).reshape(6, k)).reshape(3, 6, k)
+        # the coefficients of u^0..5 (u = tau / D in [0, 1]: the grid's powers one table
+        # per n, ``_unit_grid``) of q, v and a (3 blocks of 6 rows): _POWERS times (q0, v0,
+        # a0, c3, c4, c5), row p times D^p
+        D2 = D * D
+        qva = ((_POWERS @ np.concatenate([self.q0, self.v0, self.a0, self.c.ravel()]
+                                         ).reshape(6, k)).reshape(3, 6, k)
+               * np.array([1.0, D, D2, D2 * D, D2 * D2, D2 * D2 * D])[:, None])
         cols = [qva[0], qva[1], qva[2]]
         if motors is not None:
             cols.append(qva[2] @ motors.T)
-        P = T @ np.concatenate(cols, axis=1)
+        P = _unit_grid(n) @ np.concatenate(cols, axis=1)
         return bool(np.all(P >= lb) and np.all(P <= ub))
 
 
@@ -151,6 +155,16 @@ _POWERS = np.zeros((18, 6))
 _POWERS[[0, 1, 2, 3, 4, 5], [0, 1, 2, 3, 4, 5]] = (1.0, 1.0, 0.5, 1.0, 1.0, 1.0)
 _POWERS[[6, 7, 8, 9, 10], [1, 2, 3, 4, 5]] = (1.0, 1.0, 3.0, 4.0, 5.0)
 _POWERS[[12, 13, 14, 15], [2, 3, 4, 5]] = (1.0, 6.0, 12.0, 20.0)
+
+
+@functools.lru_cache(maxsize=256)
+def _unit_grid(n: int) -> np.ndarray:
+    """The powers u^0..5 of n points evenly over [0, 1] (n, 6), read-only: a re-aim's
+    grid of any duration (``Quintic.within_bounds``); kept per n (a grid of 1 ms steps:
+    a move of up to 0.25 s has one of 256 sizes)."""
+    T = np.vander(np.linspace(0.0, 1.0, n), 6, increasing=True)
+    T.setflags(write=False)
+    return T
 
 
 def _min_jerk1(u: float) -> float:
