@@ -70,5 +70,9 @@ def open_from(hand: HandModel, joints: CatchJoints, q_arm: np.ndarray,
 def palm_target(hand: HandModel, q: np.ndarray, r: float) -> np.ndarray:
     """Where the centre of a ball of radius ``r`` resting on the palm is: palm_center +
     r n (n the palm's normal), in the hand's frame."""
-    P = hand.palm_pose(q)
+    return palm_target_of(hand.palm_pose(q), r)
+
+
+def palm_target_of(P: np.ndarray, r: float) -> np.ndarray:
+    """``palm_target`` from the palm's pose ``P`` (4x4) already at hand."""
     return P[:3, 3] + r * P[:3, 2]

@@ -203,6 +203,7 @@ class LiveMotion:
         self.open_s = 0.0
         self.close_start_s = math.inf
         self.close_s = 0.0
+        dyn.accel_room(self.q_rest)  # (kept by q: the first move's start, set up here)
 
     @property
     def moving(self) -> bool:

@@ -13,7 +13,14 @@ from typing import Any
 import numpy as np
 
 from planner.catch import grasp as gq
-from planner.catch.arm import catch_joints, open_from, palm_target, rest_pose, zero_pose
+from planner.catch.arm import (
+    catch_joints,
+    open_from,
+    palm_target,
+    palm_target_of,
+    rest_pose,
+    zero_pose,
+)
 from planner.catch.closing import close_start, make_closing
 from planner.catch.flight import Flight
 from planner.catch.geometry import interp_row, rot1
@@ -238,11 +245,12 @@ class CatchPlanner:
             if res.iterations:
                 q_open = open_from(h, j, res.q, closing.q_closed)
         # intercept time on the confirmed pose: closest approach to palm_center + r n
-        t_i = refine_time(flight, C, palm_target(h, q_open, r), ic.t)
+        P = h.palm_pose(q_open)
+        t_i = refine_time(flight, C, palm_target_of(P, r), ic.t)
         q_closed = q_open.copy()
         q_closed[j.finger_idx] = closing.q_closed[j.finger_idx]
         v_i = flight.velocity(t_i)
-        n_i = h.palm_pose(q_open)[:3, 2]
+        n_i = P[:3, 2]
         misalign = math.degrees(math.acos(np.clip(-(v_i @ n_i) / np.linalg.norm(v_i), -1, 1)))
         return _Pose(ic, q_open, q_closed, t_i, v_i, misalign, ik_iter)
 

@@ -109,6 +109,7 @@ class CatchSession:
         self.motion = LiveMotion(h, j.arm, self.pl.q_rest, q_open, self.closing.q_closed,
                                  self.pl.dyn)
         self.writer: TrajectoryWriter | None = None
+        self._T_root = self.pl.mount.T_world_root(self.C).tolist()  # (the file's metadata)
         self._t: list[np.ndarray] = []
         self._q: list[np.ndarray] = []
         self.next_row = 0
@@ -246,13 +247,12 @@ class CatchSession:
 
     # ------------------------------------------------------------ rows
     def _open(self) -> None:
-        fl = self.flight
-        self.first = {"ball": fl.to_metadata(), "intercept_t": float(self.t_i),
+        ball = self.flight.to_metadata()
+        self.first = {"ball": dict(ball), "intercept_t": float(self.t_i),
                       "observations": self.fit.n}
         meta = {"task": "catch", "hand": self.pl.base_hand.name,
-                "urdf_sha256": self.pl.base_hand.urdf_sha256,
-                "T_world_root": self.pl.mount.T_world_root(self.C).tolist(),
-                "rate_hz": self.rate_hz, "ball": fl.to_metadata(),
+                "urdf_sha256": self.pl.base_hand.urdf_sha256, "T_world_root": self._T_root,
+                "rate_hz": self.rate_hz, "ball": ball,
                 "intercept_t": float(self.t_i),
                 "catch": {"live": True, "throw": self._throw(),
                           "catch_point": [float(x) for x in self.C],

@@ -81,7 +81,8 @@ def ramp_integral(u: np.ndarray) -> np.ndarray:
     return u ** 4 * (2.5 - 3.0 * u + u * u)
 
 
-_ROOMS_KEPT = 4  # accel_room results kept (the rest pose and the latest few)
+_ROOMS_KEPT = 4  # accel_room results kept (the rest pose and the latest few; the least
+# recently used dropped)
 
 
 @dataclass(frozen=True)
@@ -243,8 +244,9 @@ class StopDynamics:
         STOP_SHARE x its capacity - |its gravity torque|. Accelerations a with |MH @ a| <=
         room keep every motor within STOP_SHARE of its capacity at low speed."""
         key = q.tobytes()
-        hit = self._rooms.get(key)
-        if hit is not None:
+        hit = self._rooms.pop(key, None)
+        if hit is not None:  # kept as the newest: the least recently asked for goes first
+            self._rooms[key] = hit
             return hit
         m = self.hand.pin_model
         qp = self._pq(q)
