@@ -212,8 +212,12 @@ def test_motion_rows_are_the_phases_and_the_arm_move():
                     and np.all(np.abs(v) <= vm) and np.all(np.abs(a) <= am))
         assert seg.within(lo, hi, vm, am, seg.duration_s / 300) == grid
         assert not seg.within(lo, hi, vm, 0.5 * np.abs(a).max(axis=0), seg.duration_s / 300)
-    for tk in t.tolist():  # one time in floats: the same numbers
-        np.testing.assert_array_equal(m.row1(tk, m.seg.state1(tk)[0]), m.rows(np.array([tk]))[0])
+    many = m.rows(t, old, 0.12)
+    for k, tk in enumerate(t.tolist()):  # one time in floats: the same numbers
+        np.testing.assert_array_equal(m.row1(tk, m.seg.state1(tk)[0]), m.rows(t)[k])
+        # (rows of one time take that path, on the older move up to its end time)
+        np.testing.assert_array_equal(m.rows(np.array([tk]), old, 0.12)[0], many[k])
+        np.testing.assert_array_equal(m.seg.position1(tk), m.seg.positions(np.array([tk]))[0])
 
 
 def test_reaim_ends_at_rest_in_time_within_the_motors():

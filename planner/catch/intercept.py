@@ -20,6 +20,8 @@ from planner.hand.model import HandModel
 MAX_MISALIGN_DEG = 80.0  # beyond this the ball grazes the palm: out of reach
 _N_SEARCH = 46  # samples of the ball's path in the intercept search
 _N_NEAR = 5  # ... and in the window of a warm-started one
+SEARCH_BEFORE_S, SEARCH_AFTER_S = 0.30, 0.15  # the whole-path search's span around the
+# throw's time at the catch point
 
 
 @dataclass(frozen=True)
@@ -179,7 +181,7 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
     searched around ``t_c`` (the throw's time at the catch point); ``tilt``: the palm
     normal turned this far (rad, about the flexion axis) from facing the ball (the soft
     catch's choice, ``planner.catch.stopping``); 0 faces it."""
-    t = np.linspace(max(0.0, t_c - 0.30), t_c + 0.15, _N_SEARCH)
+    t = np.linspace(max(0.0, t_c - SEARCH_BEFORE_S), t_c + SEARCH_AFTER_S, _N_SEARCH)
     b = flight.position(t) - C
     v = flight.velocity(t)
     _, hgt = wr.aligned(b, v, r, tilt)

@@ -113,6 +113,13 @@ class Quintic:
         a = self.a0 + tau * (6 * c3 + tau * (12 * c4 + tau * 20 * c5))
         return q, v, a
 
+    def position1(self, t_s: float) -> np.ndarray:
+        """``positions`` at one time (k,), the time's arithmetic in floats (the same
+        numbers: the same operations on the same doubles)."""
+        tau = min(max(t_s - self.t0, 0.0), self.duration_s)
+        c3, c4, c5 = self.c
+        return self.q0 + tau * (self.v0 + tau * (0.5 * self.a0 + tau * (c3 + tau * (c4 + tau * c5))))
+
     def positions(self, t_s: np.ndarray) -> np.ndarray:
         """``state``'s positions alone (what a row needs)."""
         tau = np.minimum(np.maximum(t_s - self.t0, 0.0), self.duration_s)[:, None]
@@ -291,7 +298,12 @@ class LiveMotion:
              ) -> np.ndarray:
         """Joint positions at times ``t_s`` (couplings applied): the fingers' phases
         (``trajectory.sample``'s sum, on the finger joints) and the arm on ``seg`` (the arm's
-        move to use instead of the newest) up to ``t_new_s``, on the newest after it."""
+        move to use instead of the newest) up to ``t_new_s``, on the newest after it. One
+        time (a live observation's usual row) in floats, ``row1``: the same numbers."""
+        if len(t_s) == 1:
+            t = float(t_s[0])
+            arm_seg = seg if seg is not None and t <= t_new_s else self.seg
+            return self.row1(t, arm_seg.position1(t))[None, :]
         Q = self.q_rest + min_jerk((t_s - self.t_move) / (self.open_s or 1.0))[:, None] * self._open
         Q += min_jerk((t_s - self.close_start_s) / (self.close_s or 1.0))[:, None] * self._close
         arm = self.seg.positions(t_s)

@@ -58,6 +58,7 @@ from planner.catch.arm import open_from
 from planner.catch.closing import close_start
 from planner.catch.flight import Ball, Flight, _finite, get_ball
 from planner.catch.intercept import (
+    SEARCH_AFTER_S,
     Intercept,
     closest_time,
     find_intercept,
@@ -197,7 +198,8 @@ class CatchSession:
         """Steps 2-3 of the module docstring for the newest ``flight``, acting from ``t_b``."""
         pl, h, r, cl = self.pl, self.pl.hand, self.ball.radius_m, self.closing
         if self.t_i is not None:  # the drag table integrated once, as far as it is needed
-            flight.integrate_to(self.t_i + NEAR_S)
+            # (from an intercept out of reach, the whole-path search's span)
+            flight.integrate_to(self.t_i + (SEARCH_AFTER_S if self.pose.ic.reason else NEAR_S))
         if self.t_i is not None:
             ic = find_intercept_near(pl.wrist, flight, self.C, r, self.pose.ic, self.t_i, NEAR_S)
         elif self._prior is not None:  # from the first look at the observations before
