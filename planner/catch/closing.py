@@ -24,9 +24,9 @@ TIP_GAP_M = 0.003  # closed fingertips: this far outside the ball's surface
 TIP_ELEVATION_DEG = 40.0  # closed fingertips: above the ball's equator (palm = south pole)
 _N_CLOSE = 201  # samples of the closing move (palm frame table)
 _N_CAND = 25  # candidate starts of the closing move
-_CAND_STEPS = np.arange(_N_CAND, dtype=float)
 _CAND_CHUNK = 4  # ... judged this many at a time, earliest first (the first clear one is
 # among the first four in 93 % of a live catch's re-plans: bench_live throws, 100 Hz)
+_CAND_STEPS = np.arange(_N_CAND, dtype=float)  # the candidates' steps from the earliest
 
 
 def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
