@@ -16,12 +16,20 @@ from planner.catch.results import Closing
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M
 from planner.hand.model import HandModel
 from planner.ik import HandIK, PressTarget
+from planner.play.fingerbody import FingerBodies
 from planner.trajectory import min_jerk, phase_duration
 
 GRASP_MARGIN_M = 0.002  # planned with this much to spare
 TOUCH_CLEAR_M = 0.002  # before intercept_t fingertips stay this far outside the ball
-TIP_GAP_M = 0.003  # closed fingertips: this far outside the ball's surface
+TIP_GAP_M = 0.003  # closed fingertips (pad points): this far outside the ball's surface
+BODY_CLEAR_M = 0.0015  # closed fingers' bodies (the physics replay's capsules and pad spheres,
+# ``planner.play.fingerbody``): at least this far outside it -- the ball lies 1-2 mm off its
+# plan when the fingers close (replay, 40 deg / 2.0 m); a body inside it is a servo pressing
+# a rigid ball (the middle and ring pads were 3.4-3.6 mm inside: ring MCP 0.49 of 0.40 N m)
 TIP_ELEVATION_DEG = 40.0  # closed fingertips: above the ball's equator (palm = south pole)
+TIP_ELEVATION_MAX_DEG = 70.0  # ... raised up to this for a finger whose body is in the ball
+ELEVATION_STEP_DEG = 10.0  # ... in these steps
+_ELEVATION_TRIES = 4  # 40, 50, 60, 70 deg
 _N_CLOSE = 201  # samples of the closing move (palm frame table)
 _N_CAND = 25  # candidate starts of the closing move
 _CAND_CHUNK = 4  # ... judged this many at a time, earliest first (the first clear one is
@@ -29,48 +37,32 @@ _CAND_CHUNK = 4  # ... judged this many at a time, earliest first (the first cle
 
 
 def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
-                 r: float) -> Closing:
+                 r: float, bodies: bool = True) -> Closing:
     """The closing move for a ball of radius ``r`` on the palm (``planner.catch.plan``,
     step 2): fingertips ``TIP_GAP_M`` outside the ball, each ``TIP_ELEVATION_DEG`` above
     its equator on its finger's side (IK, the arm locked); the grasp condition along the
-    min-jerk move in the palm frame."""
+    min-jerk move in the palm frame. ``bodies``: the fingers' bodies, too, kept
+    ``BODY_CLEAR_M`` outside the ball (False: the fingertips alone, the closing before
+    the bodies were judged; the planner's fallback when the later grasp is too late)."""
     h = hand
     q0 = zero_pose(h)
     centre = wrist.pc0 + r * wrist.n0
     T_pc = h.palm_pose(q0)
-    el = math.radians(TIP_ELEVATION_DEG)
-    # targets: each fingertip at TIP_ELEVATION above the ball's equator, on the side
-    # of its finger's base
-    targets = []
-    for f in h.fingers:
-        base = h.frame_pose(q0, h.spec.joints_of(f)[0])[:3, 3]
-        d = base - centre
-        d = d - (d @ wrist.n0) * wrist.n0
-        d = unit(d) if np.linalg.norm(d) > 1e-9 else wrist.b0
-        p = centre + (r + TIP_GAP_M) * (math.cos(el) * d + math.sin(el) * wrist.n0)
-        targets.append(p)
-    q_init = q0.copy()
-    for i in joints.flexion_idx:
-        q_init[i] = 0.5 * (h.lower[i] + h.upper[i])
-    q_init = h.apply_couplings(np.clip(q_init, h.lower, h.upper))
-    for n in joints.locked:
-        ik.solver.mask_dof(n)
-    try:
-        res = ik.solve([PressTarget(f, 0, tuple(p), (p[1], p[1]))
-                        for f, p in zip(h.fingers, targets)], q_init, q_init, hover=(),
-                       max_iter=150)
-        q = res.q
-        # fingertips that cannot reach their target: the nearest point of the sphere
-        for _ in range(2):
-            tips = h.tip_positions(q)
-            tg = [centre + (r + TIP_GAP_M) * unit(tp - centre) for tp in tips]
-            res = ik.solve([PressTarget(f, 0, tuple(p), (p[1], p[1]))
-                            for f, p in zip(h.fingers, tg)], q, q, hover=(), max_iter=80)
-            q = res.q
-    finally:
-        for n in joints.locked:
-            ik.solver.unmask_dof(n)
+    # each fingertip TIP_ELEVATION_DEG above the ball's equator; a finger whose body is
+    # then inside the ball (its pad sphere curled into it) higher, in steps, up to
+    # TIP_ELEVATION_MAX_DEG, before its flexion is opened (``_bodies_clear``)
+    el_deg = np.full(len(h.fingers), TIP_ELEVATION_DEG)
+    fb = FingerBodies(h)
+    for _ in range(_ELEVATION_TRIES if bodies else 1):
+        q = _tips_on_ball(h, ik, joints, q0, centre, r, wrist, el_deg)
+        low = (body_gaps_m(h, q, centre, r + BODY_CLEAR_M, fb) < 0.0) & \
+            (el_deg < TIP_ELEVATION_MAX_DEG - 1e-9)
+        if not bodies or not low.any():
+            break
+        el_deg[low] += ELEVATION_STEP_DEG
     q = _close_one_dof(h, q, centre, r + TIP_GAP_M)
+    if bodies:
+        q = _bodies_clear(h, set(joints.flexion_idx), q0, q, centre, r + BODY_CLEAR_M)
     q_closed = q.copy()
     q_closed[list(joints.arm)] = q0[list(joints.arm)]
     q_open = open_from(h, joints, q0, q_closed)
@@ -81,9 +73,13 @@ def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
     Q = h.apply_couplings(q_open + (q_closed - q_open) * s)
     Tinv = np.linalg.inv(T_pc)
     tips_pc = np.empty((len(u), len(h.fingers), 3))
+    bodies_pc = []
     for k in range(len(u)):
         tw = h.tip_positions(Q[k])
         tips_pc[k] = tw @ Tinv[:3, :3].T + Tinv[:3, 3]
+        pts = [fb.points(Q[k], f, update=i == 0) for i, f in enumerate(h.fingers)]
+        bodies_pc.append(np.concatenate([p for p, _ in pts]) @ Tinv[:3, :3].T + Tinv[:3, 3])
+    bodies_r = np.concatenate([rad for _, rad in pts])
     c_pc = np.array([0.0, 0.0, r])
     d_tab = np.linalg.norm(tips_pc - c_pc, axis=-1)
     within = d_tab <= r + GRASP_TOL_M - GRASP_MARGIN_M
@@ -104,7 +100,42 @@ def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
     fingers = tuple(f for k, f in enumerate(h.fingers) if within[-1, k])
     T_c = phase_duration(q_closed - q_open, h.velocity, h.acceleration)
     return Closing(r, q_closed, T_c, u_g, dist, fingers, u, tips_pc, reason,
-                   float(d_tab.max()), (d_tab - r).min(axis=0))
+                   float(d_tab.max()), (d_tab - r).min(axis=0), np.array(bodies_pc), bodies_r)
+
+
+def _tips_on_ball(h: HandModel, ik: HandIK, joints: CatchJoints, q0: np.ndarray,
+                  centre: np.ndarray, r: float, wrist: Wrist, el_deg: np.ndarray) -> np.ndarray:
+    """The IK (the arm locked) of the fingertips ``TIP_GAP_M`` outside the ball, each
+    ``el_deg`` above its equator on the side of its finger's base; a fingertip that cannot
+    reach its target: the nearest point of that sphere."""
+    targets = []
+    for f, el in zip(h.fingers, np.radians(el_deg)):
+        base = h.frame_pose(q0, h.spec.joints_of(f)[0])[:3, 3]
+        d = base - centre
+        d = d - (d @ wrist.n0) * wrist.n0
+        d = unit(d) if np.linalg.norm(d) > 1e-9 else wrist.b0
+        targets.append(centre + (r + TIP_GAP_M) * (math.cos(el) * d + math.sin(el) * wrist.n0))
+    q_init = q0.copy()
+    for i in joints.flexion_idx:
+        q_init[i] = 0.5 * (h.lower[i] + h.upper[i])
+    q_init = h.apply_couplings(np.clip(q_init, h.lower, h.upper))
+    for n in joints.locked:
+        ik.solver.mask_dof(n)
+    try:
+        res = ik.solve([PressTarget(f, 0, tuple(p), (p[1], p[1]))
+                        for f, p in zip(h.fingers, targets)], q_init, q_init, hover=(),
+                       max_iter=150)
+        q = res.q
+        for _ in range(2):
+            tips = h.tip_positions(q)
+            tg = [centre + (r + TIP_GAP_M) * unit(tp - centre) for tp in tips]
+            res = ik.solve([PressTarget(f, 0, tuple(p), (p[1], p[1]))
+                            for f, p in zip(h.fingers, tg)], q, q, hover=(), max_iter=80)
+            q = res.q
+    finally:
+        for n in joints.locked:
+            ik.solver.unmask_dof(n)
+    return q
 
 
 def _close_one_dof(hand: HandModel, q: np.ndarray, centre: np.ndarray, reach_m: float
@@ -128,6 +159,53 @@ def _close_one_dof(hand: HandModel, q: np.ndarray, centre: np.ndarray, reach_m: 
     return hand.apply_couplings(q)
 
 
+def body_gaps_m(hand: HandModel, q: np.ndarray, centre: np.ndarray, r: float,
+                bodies: FingerBodies | None = None) -> np.ndarray:
+    """Each finger's body (segments' capsules, pad sphere) at ``q``: its smallest distance
+    to the surface of the ball of radius ``r`` at ``centre`` (m, (fingers,); < 0 inside)."""
+    fb = bodies if bodies is not None else FingerBodies(hand)
+    out = np.empty(len(hand.fingers))
+    for k, f in enumerate(hand.fingers):
+        p, rad = fb.points(q, f, update=k == 0)
+        out[k] = float((np.linalg.norm(p - centre, axis=1) - rad).min()) - r
+    return out
+
+
+_CLEAR_BISECT = 20  # bisection steps of a finger's opening (2^-20 of its travel)
+
+
+def _bodies_clear(hand: HandModel, flexion: set[int], q_from: np.ndarray, q: np.ndarray,
+                  centre: np.ndarray, reach_m: float) -> np.ndarray:
+    """The closed pose with every finger's body at least ``reach_m`` from the ball's
+    centre: the IK's targets are the pad points, and a curled distal segment's pad sphere
+    (or a segment) can reach into the ball where its pad point is outside it (default hand:
+    the middle and ring pads 3.4-3.6 mm inside a tennis ball, the servos pressing a rigid
+    ball); such a finger's own joints are opened towards ``q_from`` (straight, clear) by
+    bisection to the most closed pose that is clear."""
+    fb = FingerBodies(hand)
+    q = q.copy()
+    gaps = body_gaps_m(hand, q, centre, reach_m, fb)
+    for k, f in enumerate(hand.fingers):
+        if gaps[k] >= 0.0:
+            continue
+        idx = [j for j in hand.own_independent(f) if j in flexion]
+        if not idx:
+            continue
+        lo_s, hi_s = 0.0, 1.0  # share of the closing from q_from kept: lo clear, hi not
+        for _ in range(_CLEAR_BISECT):
+            mid = 0.5 * (lo_s + hi_s)
+            qm = q.copy()
+            qm[idx] = q_from[idx] + mid * (q[idx] - q_from[idx])
+            qm = hand.apply_couplings(qm)
+            if body_gaps_m(hand, qm, centre, reach_m, fb)[k] >= 0.0:
+                lo_s = mid
+            else:
+                hi_s = mid
+        q[idx] = q_from[idx] + lo_s * (q[idx] - q_from[idx])
+        q = hand.apply_couplings(q)
+    return q
+
+
 def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarray,
                 closing: Closing, t_i: float, ready: float, stop_t: float, r: float) -> float:
     """Start of the closing move: grasp when the ball has stopped in the palm, not
@@ -146,18 +224,19 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
         return want
     Tinv = np.linalg.inv(hand.palm_pose(q_open))
     b_pc = (flight.position(tt) - C) @ Tinv[:3, :3].T + Tinv[:3, 3]
-    # candidate starts, earliest first; fingertips from the closing table (the more
-    # closed of the two neighbouring samples)
+    # candidate starts, earliest first; the fingers' bodies from the closing table (the
+    # more closed of the two neighbouring samples): their points' radii from the ball
+    near = r + TOUCH_CLEAR_M + closing.bodies_r_m
     cands = np.linspace(want, t_i, _N_CAND)
     n_tab = len(closing.u)
     for lo in range(0, _N_CAND, _CAND_CHUNK):  # the first clear one is nearly always early
         c = cands[lo:lo + _CAND_CHUNK]
         U = np.clip((tt[None, :] - c[:, None]) / closing.duration_s, 0.0, 1.0)
         k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
-        dd = closing.tips_pc[k] - b_pc[None, :, None, :]
+        dd = closing.bodies_pc[k] - b_pc[None, :, None, :]
         dd *= dd  # (the norm over the last axis, written out: np.linalg.norm is slow there)
         d = np.sqrt(dd[..., 0] + dd[..., 1] + dd[..., 2])
-        good = np.flatnonzero(~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2)))
+        good = np.flatnonzero(~np.any(d < near, axis=(1, 2)))
         if good.size:
             return float(c[good[0]])
     return float(t_i)

@@ -65,6 +65,9 @@ class Closing:
     reason: str | None
     reach_m: float  # farthest fingertip from the ball centre during the move
     min_gap_m: np.ndarray  # (5,) closest each fingertip comes to the ball's surface
+    bodies_pc: np.ndarray  # (K, P, 3) the fingers' bodies' points (``FingerBodies.points``)
+    # in the palm_center frame
+    bodies_r_m: np.ndarray  # (P,) each point's radius
 
 
 @dataclass(frozen=True)
