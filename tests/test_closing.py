@@ -38,8 +38,11 @@ def _all_at_once(hand, flight, C, q_open, closing, t_i, ready, stop_t, r):
     n_tab = len(closing.u)
     U = np.clip((tt[None, :] - cands[:, None]) / closing.duration_s, 0.0, 1.0)
     k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
-    d = np.linalg.norm(closing.bodies_pc[k] - b_pc[None, :, None, :], axis=-1)
-    good = np.flatnonzero(~np.any(d < r + TOUCH_CLEAR_M + closing.bodies_r_m, axis=(1, 2)))
+    K, n_f, P, _ = closing.bodies_pc.shape
+    pts = closing.bodies_pc.reshape(K, n_f * P, 3)
+    d = np.linalg.norm(pts[k] - b_pc[None, :, None, :], axis=-1)
+    near = r + TOUCH_CLEAR_M + closing.bodies_r_m.reshape(-1)
+    good = np.flatnonzero(~np.any(d < near, axis=(1, 2)))
     return float(cands[good[0]]) if good.size else float(t_i)
 
 

@@ -16,7 +16,7 @@ from planner.catch.results import Closing
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M
 from planner.hand.model import HandModel
 from planner.ik import HandIK, PressTarget
-from planner.play.fingerbody import FingerBodies
+from planner.play.fingerbody import AXIS_SAMPLES, FingerBodies
 from planner.trajectory import min_jerk, phase_duration
 
 GRASP_MARGIN_M = 0.002  # planned with this much to spare
@@ -73,13 +73,10 @@ def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
     Q = h.apply_couplings(q_open + (q_closed - q_open) * s)
     Tinv = np.linalg.inv(T_pc)
     tips_pc = np.empty((len(u), len(h.fingers), 3))
-    bodies_pc = []
     for k in range(len(u)):
         tw = h.tip_positions(Q[k])
         tips_pc[k] = tw @ Tinv[:3, :3].T + Tinv[:3, 3]
-        pts = [fb.points(Q[k], f, update=i == 0) for i, f in enumerate(h.fingers)]
-        bodies_pc.append(np.concatenate([p for p, _ in pts]) @ Tinv[:3, :3].T + Tinv[:3, 3])
-    bodies_r = np.concatenate([rad for _, rad in pts])
+    bodies = _body_table(h, fb, Q, Tinv)
     c_pc = np.array([0.0, 0.0, r])
     d_tab = np.linalg.norm(tips_pc - c_pc, axis=-1)
     within = d_tab <= r + GRASP_TOL_M - GRASP_MARGIN_M
@@ -100,7 +97,33 @@ def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
     fingers = tuple(f for k, f in enumerate(h.fingers) if within[-1, k])
     T_c = phase_duration(q_closed - q_open, h.velocity, h.acceleration)
     return Closing(r, q_closed, T_c, u_g, dist, fingers, u, tips_pc, reason,
-                   float(d_tab.max()), (d_tab - r).min(axis=0), np.array(bodies_pc), bodies_r)
+                   float(d_tab.max()), (d_tab - r).min(axis=0), *bodies)
+
+
+def _body_table(h: HandModel, fb: FingerBodies, Q: np.ndarray, Tinv: np.ndarray):
+    """The fingers' bodies along the closing move ``Q`` in the palm frame (``Tinv``: world
+    -> palm), shape by shape (a pad sphere, a segment's capsule): points (K, G, P, 3), a
+    shape with fewer repeating its first, their radii (G, P), each shape's bounding sphere
+    (centres (K, G, 3), radii (K, G))."""
+    splits = []  # per finger: its shapes' point counts (``FingerBodies.points``' order)
+    for f in h.fingers:
+        sh = fb.shapes[f]
+        splits.append([1 if np.allclose(a, b) else AXIS_SAMPLES for a, b in zip(sh.p0, sh.p1)])
+    G, P = sum(len(x) for x in splits), max(max(x) for x in splits)
+    pts = np.empty((len(Q), G, P, 3))
+    rad = np.empty((G, P))
+    for k in range(len(Q)):
+        g = 0
+        for i, f in enumerate(h.fingers):
+            p, ri = fb.points(Q[k], f, update=i == 0)
+            p = p @ Tinv[:3, :3].T + Tinv[:3, 3]
+            for n, a in zip(splits[i], np.cumsum([0] + splits[i][:-1])):
+                pts[k, g, :n], pts[k, g, n:] = p[a:a + n], p[a]
+                rad[g, :n], rad[g, n:] = ri[a:a + n], ri[a]
+                g += 1
+    centre = pts.mean(axis=2)
+    bound = (np.linalg.norm(pts - centre[:, :, None, :], axis=-1) + rad[None]).max(axis=2)
+    return pts, rad, centre, bound
 
 
 def _tips_on_ball(h: HandModel, ik: HandIK, joints: CatchJoints, q0: np.ndarray,
@@ -225,18 +248,42 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
     Tinv = np.linalg.inv(hand.palm_pose(q_open))
     b_pc = (flight.position(tt) - C) @ Tinv[:3, :3].T + Tinv[:3, 3]
     # candidate starts, earliest first; the fingers' bodies from the closing table (the
-    # more closed of the two neighbouring samples): their points' radii from the ball
-    near = r + TOUCH_CLEAR_M + closing.bodies_r_m
+    # more closed of the two neighbouring samples): no point within its radius +
+    # TOUCH_CLEAR_M of the ball's surface. The pad point is on its pad sphere, so a start
+    # whose fingertips touch the ball has a body touching it: the tips are judged first
+    # (cheap), the bodies only for the starts whose tips are clear.
     cands = np.linspace(want, t_i, _N_CAND)
     n_tab = len(closing.u)
     for lo in range(0, _N_CAND, _CAND_CHUNK):  # the first clear one is nearly always early
         c = cands[lo:lo + _CAND_CHUNK]
         U = np.clip((tt[None, :] - c[:, None]) / closing.duration_s, 0.0, 1.0)
         k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
-        dd = closing.bodies_pc[k] - b_pc[None, :, None, :]
+        dd = closing.tips_pc[k] - b_pc[None, :, None, :]
         dd *= dd  # (the norm over the last axis, written out: np.linalg.norm is slow there)
         d = np.sqrt(dd[..., 0] + dd[..., 1] + dd[..., 2])
-        good = np.flatnonzero(~np.any(d < near, axis=(1, 2)))
-        if good.size:
-            return float(c[good[0]])
+        g = np.flatnonzero(~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2)))
+        if g.size:
+            g = g[~_bodies_touch(closing, k[g], b_pc, r + TOUCH_CLEAR_M)]
+            if g.size:
+                return float(c[g[0]])
     return float(t_i)
+
+
+def _bodies_touch(closing: Closing, k: np.ndarray, b_pc: np.ndarray, reach_m: float
+                  ) -> np.ndarray:
+    """(candidates,) whether any finger's body, at the table samples ``k`` (candidates,
+    times), comes within ``reach_m`` (+ its points' radii) of the ball centres ``b_pc``
+    (times, 3): the bounding spheres first, the points only where one is near."""
+    dd = closing.bound_pc[k] - b_pc[None, :, None, :]
+    dd *= dd  # (the norm over the last axis, written out: np.linalg.norm is slow there)
+    near = np.sqrt(dd[..., 0] + dd[..., 1] + dd[..., 2]) < closing.bound_r_m[k] + reach_m
+    out = np.zeros(k.shape[0], dtype=bool)
+    if not near.any():
+        return out
+    ic, it, jf = np.nonzero(near)
+    p = closing.bodies_pc[k[ic, it], jf] - b_pc[it][:, None, :]  # (m, P, 3)
+    p *= p
+    hit = np.any(np.sqrt(p[..., 0] + p[..., 1] + p[..., 2]) <
+                 closing.bodies_r_m[jf] + reach_m, axis=1)
+    out[ic[hit]] = True
+    return out
