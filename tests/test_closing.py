@@ -7,16 +7,26 @@ import numpy as np
 import pytest
 
 from planner.catch import grasp as gq
-from planner.catch.closing import _N_CAND, TOUCH_CLEAR_M, close_start
+from planner.catch.closing import (
+    _N_CAND,
+    BODY_CLEAR_M,
+    TIP_GAP_M,
+    TOUCH_CLEAR_M,
+    body_gaps_m,
+    close_start,
+    make_closing,
+)
 from planner.catch.flight import get_ball, predict_throw
 from planner.catch.plan import get_planner
 from planner.catch.session import CatchSession
+from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M
 
 BALL = get_ball("tennis")
 
 
 def _all_at_once(hand, flight, C, q_open, closing, t_i, ready, stop_t, r):
-    """Every candidate judged together (the definition)."""
+    """Every candidate judged together (the definition: no point of a finger's body
+    within its radius + ``TOUCH_CLEAR_M`` of the arriving ball's surface)."""
     want = max(ready, t_i + stop_t - closing.u_grasp * closing.duration_s)
     if want >= t_i:
         return want
@@ -28,8 +38,11 @@ def _all_at_once(hand, flight, C, q_open, closing, t_i, ready, stop_t, r):
     n_tab = len(closing.u)
     U = np.clip((tt[None, :] - cands[:, None]) / closing.duration_s, 0.0, 1.0)
     k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
-    d = np.linalg.norm(closing.tips_pc[k] - b_pc[None, :, None, :], axis=-1)
-    good = np.flatnonzero(~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2)))
+    K, n_f, P, _ = closing.bodies_pc.shape
+    pts = closing.bodies_pc.reshape(K, n_f * P, 3)
+    d = np.linalg.norm(pts[k] - b_pc[None, :, None, :], axis=-1)
+    near = r + TOUCH_CLEAR_M + closing.bodies_r_m.reshape(-1)
+    good = np.flatnonzero(~np.any(d < near, axis=(1, 2)))
     return float(cands[good[0]]) if good.size else float(t_i)
 
 
@@ -56,3 +69,23 @@ def test_close_start_is_the_earliest_clear_candidate(angle, dist, height):
         if s.done:
             break
     assert n > 20
+
+
+def test_closed_fingers_bodies_clear_of_the_ball():
+    """The closed pose keeps every finger's body (the replay's capsules and pad spheres)
+    ``BODY_CLEAR_M`` outside the ball on the palm and still grasps it (thumb + 2 tips within
+    radius + ``GRASP_TOL_M``); the fingertips' closing (``bodies=False``, the fallback)
+    has its tips ``TIP_GAP_M`` out but the middle and ring pad spheres inside the ball."""
+    pl = get_planner("default")
+    r = BALL.radius_m
+    centre = pl.wrist.pc0 + r * pl.wrist.n0
+    cl = pl.closing(r)
+    gaps = body_gaps_m(pl.hand, cl.q_closed, centre, r)
+    assert np.all(gaps >= BODY_CLEAR_M - 1e-5), gaps
+    assert cl.u_grasp is not None and "thumb" in cl.grasp_fingers
+    assert np.sum(cl.tip_dist_m <= r + GRASP_TOL_M) >= GRASP_MIN_TIPS
+    tips_only = make_closing(pl.hand, pl.ik, pl.joints, pl.wrist, r, bodies=False)
+    assert np.allclose(tips_only.tip_dist_m[:4], r + TIP_GAP_M, atol=0.002)
+    fingers = pl.hand.fingers
+    inside = body_gaps_m(pl.hand, tips_only.q_closed, centre, r)
+    assert inside[fingers.index("middle")] < -0.003 and inside[fingers.index("ring")] < -0.003

@@ -59,7 +59,7 @@ from planner.check import check_trajectory
 from planner.errors import InputError
 from planner.hand.model import load_hand
 from planner.music.midi import MAX_DURATION_S, Note, load_song, parse_song_bytes, write_notes_midi
-from planner.trajfile import read_trajectory
+from planner.trajfile import MIN_ROWS, read_trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
 SONGS = sorted((ROOT / "songs").glob("*.mid"))
@@ -963,7 +963,8 @@ def test_check_the_undamaged_file_passes(capsys, planned):
 @given(frac=st.one_of(st.floats(0.0, 1.0, exclude_max=True), st.just(1.0 - 1e-16)))
 def test_check_truncated_anywhere(capsys, planned, frac):
     """Cut the file anywhere: refused without --allow-incomplete; with it, exactly the
-    complete rows are read (a half-written last row is not a row)."""
+    complete rows are read (a half-written last row is not a row), fewer than
+    ``MIN_ROWS`` refused."""
     data = planned.read_bytes()
     cut = data[:int(frac * len(data))]
     complete_rows = max(cut.count(b"\n") - 2, 0)
@@ -977,7 +978,7 @@ def test_check_truncated_anywhere(capsys, planned, frac):
         assert rc == 2 and out == "", (rc, err)
         one_line(err)
         rc, out, err = run_cli(capsys, "check", path, "--allow-incomplete", "--json")
-        if complete_rows == 0:
+        if complete_rows < MIN_ROWS:  # (one row is no trajectory: trajfile.MIN_ROWS)
             assert rc == 2 and out == "", (rc, err)
             one_line(err)
         else:

@@ -278,6 +278,21 @@ def test_catch_in_physics_held_motors_within_peak(catch30, capsys):
     assert out["catch"]["held"] is True and out["ok"] is True
 
 
+def test_closing_fingers_do_not_press_the_ball_in_physics(tmp_path):
+    """40 deg / 2.0 m: the closed fingers' bodies (pad spheres, segments) are planned
+    ``BODY_CLEAR_M`` outside the ball, so no finger's servo presses the rigid ball and no
+    motor is ever short of torque. (With the fingertips' closing alone the middle and ring
+    pads were 3.4-3.6 mm inside the ball: ``motor.ring_mcp`` short of torque for 20 ms,
+    0.49 of 0.40 N m, middle MCP/PIP 10 ms.)"""
+    path = tmp_path / "c40.csv"
+    assert planner.plan_catch(40.0, 2.0, 0.0, "default", str(path)).feasible
+    rep = simulate_trajectory(str(path))
+    assert rep.catch is not None and rep.catch.held
+    assert all(m.saturated_s == 0.0 for m in rep.motors), \
+        [(m.name, m.peak_demand_nm, m.saturated_s) for m in rep.motors if m.saturated_s]
+    assert rep.problems == ()
+
+
 def _ball_in_closed_hand(catch30, tmp_path, wrist_m: float, tilt_to_wrist_deg=None):
     """The catch file's last pose (the closed hand after the wrist's turn) held 0.6 s, the
     ball at rest on the palm centre moved ``wrist_m`` along the palm towards the wrist (the

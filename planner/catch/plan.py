@@ -49,7 +49,9 @@ Per throw (``CatchPlanner.plan``):
    fingertips sit ``TIP_GAP_M`` outside the ball's surface, each at 40 deg
    above the ball's equator on its own finger's side (IK, wrist and rail
    locked; fingers that cannot reach are pulled to the nearest point of the
-   sphere). The grasp condition of the independent check (thumb plus two more
+   sphere), every finger's body (the replay's capsules and pad spheres)
+   ``BODY_CLEAR_M`` outside it (aimed higher, up to 70 deg, then opened; the
+   fingertips' closing is the fallback when that grasps too late). The grasp condition of the independent check (thumb plus two more
    fingertips within radius + 10 mm of the ball centre, here planned with 2 mm
    to spare) is evaluated along the min-jerk closing move in the palm frame;
    the fraction of the move after which it holds for good is ``u_grasp``.

@@ -85,7 +85,7 @@ class CatchPlanner:
         self.rows = RowCheck(self.hand, self.T_ref, self.near_m)
         self.kin = Kinematics(self.base_hand, self.T_ref)
         self.dyn = StopDynamics(self.hand, self.joints, self.kin)
-        self._closings: dict[float, Closing] = {}
+        self._closings: dict[tuple[float, bool], Closing] = {}
 
     def _tip_reach(self) -> float:
         """Bound on any fingertip's distance from palm_center over the joint box (m):
@@ -100,13 +100,14 @@ class CatchPlanner:
             best = max(best, sum(float(np.linalg.norm(b - a)) for a, b in pairwise(pts)))
         return best + 0.01
 
-    def closing(self, radius: float) -> Closing:
-        """The closing move for a ball of ``radius`` (cached)."""
-        key = round(float(radius), 9)
+    def closing(self, radius: float, bodies: bool = True) -> Closing:
+        """The closing move for a ball of ``radius`` (cached); ``bodies``: the fingers'
+        bodies kept clear of the ball, not only their tips (``make_closing``)."""
+        key = (round(float(radius), 9), bool(bodies))
         c = self._closings.get(key)
         if c is None:
             c = self._closings[key] = make_closing(self.hand, self.ik, self.joints,
-                                                   self.wrist, float(radius))
+                                                   self.wrist, float(radius), bool(bodies))
         return c
 
     # ------------------------------------------------------------ plan
@@ -125,34 +126,48 @@ class CatchPlanner:
         none (the plan without the hold) -- the first of those that is feasible."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
-        plan = self._plan(*args, soft=soft)
+        plan = self._plans(args, soft, True)
+        if not plan.feasible and CatchReason.GRASP in plan.reason_kinds:
+            # the closing with the fingers' bodies clear of the ball grasps a little later
+            # (its fingertips end a few mm further out): the fingertips' closing, if that is
+            # what was too late
+            other = self._plans(args, soft, False)
+            if other.feasible:
+                plan = replace(other, notes=other.notes + (
+                    "the fingertips' closing (bodies not kept clear of the ball): the "
+                    "closing failed (" + "; ".join(plan.reasons) + ")",))
+        return replace(plan, planning_s=time.perf_counter() - t0)
+
+    def _plans(self, args: tuple, soft: bool, bodies: bool) -> CatchPlan:
+        """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing."""
+        plan = self._plan(*args, soft=soft, bodies=bodies)
         for mode in (TURN_LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
-            other = self._plan(*args, soft=soft, turn_mode=mode)
+            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies)
             if other.feasible:
                 what = "after the arm has stopped" if mode else "no turn to hold the ball"
                 plan = replace(other, notes=other.notes + (
                     f"{what}: the earlier turn failed (" + "; ".join(plan.reasons) + ")",))
         if soft and not plan.feasible:
-            still = self._plan(*args, soft=False)
+            still = self._plan(*args, soft=False, bodies=bodies)
             if still.feasible:
                 plan = replace(still, notes=still.notes + (
                     "the palm waits at rest: the soft catch failed (" +
                     "; ".join(plan.reasons) + ")",))
-        return replace(plan, planning_s=time.perf_counter() - t0)
+        return plan
 
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: dict[str, Any] | None, flight_time_s: float | None,
-              fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_EARLY
-              ) -> CatchPlan:
+              fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_EARLY,
+              bodies: bool = True) -> CatchPlan:
         """``plan`` with the soft catch on or off, the wrist's turn from the grasp (TURN_EARLY),
         after the arm's stop (TURN_LATE) or none (None: nor the contact speeds' roll term)."""
         t0 = time.perf_counter()
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
-        closing = self.closing(r)
+        closing = self.closing(r, bodies)
         reasons = [Reason(CatchReason.GRASP, closing.reason)] if closing.reason else []
         reasons += [Reason(CatchReason.FINGERS, f"fingers in the way: the {f} tip passes "
                            f"{1000 * -gap:.1f} mm inside the ball while the hand closes")

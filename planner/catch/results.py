@@ -65,6 +65,11 @@ class Closing:
     reason: str | None
     reach_m: float  # farthest fingertip from the ball centre during the move
     min_gap_m: np.ndarray  # (5,) closest each fingertip comes to the ball's surface
+    bodies_pc: np.ndarray  # (K, G, P, 3) the fingers' bodies, shape by shape (pad spheres,
+    # segments' capsules), as points (``FingerBodies.points``) in the palm_center frame
+    bodies_r_m: np.ndarray  # (G, P) each point's radius
+    bound_pc: np.ndarray  # (K, G, 3) a sphere around each shape: its centre
+    bound_r_m: np.ndarray  # (K, G) ... and radius (the points' radii included)
 
 
 @dataclass(frozen=True)
