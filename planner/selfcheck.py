@@ -20,6 +20,7 @@ from planner.check.criteria import key_contacts
 from planner.check.keys import SongScore, score_song
 from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
+from planner.trajfile import distinct_rows
 
 
 class SkipReason(enum.Enum):
@@ -84,11 +85,9 @@ class SelfCheck:
         q = rows[:, 1:1 + self._nj]
         # (the rule is row by row: a row equal to the one before it, a hand holding still,
         # is judged once; about three rows in four on the corpus)
-        new = np.ones(len(q), dtype=bool)
-        new[1:] = np.any(q[1:] != q[:-1], axis=1)
-        tips, _ = self._kin.frames(q[new])
+        new, of = distinct_rows(q)
+        tips, _ = self._kin.frames_of(q[new])
         kc = key_contacts(tips)
-        of = np.cumsum(new) - 1
         self._t.append(rows[:, 0].copy())
         self._down.append(kc.down[of])
         self._finger.append(kc.finger[of])

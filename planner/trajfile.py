@@ -28,6 +28,16 @@ VERSION = 1
 _MAX_META_CHARS = 1 << 20  # a metadata line longer than this is not one (e.g. /dev/zero)
 
 
+def distinct_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which rows differ from the row before them (the first always does: a hand holding
+    still repeats its row), and each row's index among those: ``rows[new][of]`` is
+    ``rows``. Row-by-row work (formatting, forward kinematics, the key-down rule) is done
+    on ``rows[new]`` and spread back by ``of``."""
+    new = np.ones(len(rows), dtype=bool)
+    new[1:] = np.any(rows[1:] != rows[:-1], axis=1)
+    return new, np.cumsum(new) - 1
+
+
 class TrajectoryWriter:
     """Streams a trajectory: the constructor opens the path and writes metadata and
     header, ``write_rows`` appends setpoints, ``close`` writes the end marker."""
@@ -59,11 +69,10 @@ class TrajectoryWriter:
         self._last_t = float(t_s[-1])
         body = np.column_stack([q, q_motor])
         # a row whose setpoints equal the row's before is formatted (and read back) once
-        new = np.ones(len(body), dtype=bool)
-        new[1:] = np.any(body[1:] != body[:-1], axis=1)
+        new, of_row = distinct_rows(body)
         fmt = ",".join(["%.6f"] * body.shape[1])
         distinct = [fmt % tuple(r) for r in body[new].tolist()]
-        of = (np.cumsum(new) - 1).tolist()
+        of = of_row.tolist()
         times = [f"{t:.6f}" for t in t_s.tolist()]
         text = "\n".join([f"{a},{distinct[j]}" for a, j in zip(times, of)]) + "\n"
         self._out.write(text)

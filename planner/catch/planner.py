@@ -67,6 +67,19 @@ class _Pose:
     ik_iterations: int
 
 
+def tip_reach_m(h: HandModel, q0: np.ndarray) -> float:
+    """Bound on any fingertip's distance from palm_center over the joint box (m): the sum
+    of each finger's segment lengths from the palm centre at ``q0`` (triangle inequality),
+    plus 1 cm."""
+    pc = h.palm_pose(q0)[:3, 3]
+    tips = h.tip_positions(q0)
+    best = 0.0
+    for k, f in enumerate(h.fingers):
+        pts = [pc] + [h.frame_pose(q0, j)[:3, 3] for j in h.spec.joints_of(f)] + [tips[k]]
+        best = max(best, sum(float(np.linalg.norm(b - a)) for a, b in pairwise(pts)))
+    return best + 0.01
+
+
 class CatchPlanner:
     """Everything built once per hand and mount: reference-mounted hand, IK, poses,
     wrist geometry, closing tables (per ball radius, on first use)."""
@@ -81,24 +94,11 @@ class CatchPlanner:
         self.q_zero = zero_pose(self.hand)
         self.wrist = Wrist(self.hand, self.joints)
         self.q_rest = rest_pose(self.hand, self.joints)
-        self.near_m = self._tip_reach()
+        self.near_m = tip_reach_m(self.hand, self.q_zero)
         self.rows = RowCheck(self.hand, self.T_ref, self.near_m)
         self.kin = Kinematics(self.base_hand, self.T_ref)
         self.dyn = StopDynamics(self.hand, self.joints, self.kin)
         self._closings: dict[tuple[float, bool], Closing] = {}
-
-    def _tip_reach(self) -> float:
-        """Bound on any fingertip's distance from palm_center over the joint box (m):
-        the sum of each finger's segment lengths from the palm centre (triangle
-        inequality), plus 1 cm."""
-        h, q0 = self.hand, self.q_zero
-        pc = h.palm_pose(q0)[:3, 3]
-        tips = h.tip_positions(q0)
-        best = 0.0
-        for k, f in enumerate(h.fingers):
-            pts = [pc] + [h.frame_pose(q0, j)[:3, 3] for j in h.spec.joints_of(f)] + [tips[k]]
-            best = max(best, sum(float(np.linalg.norm(b - a)) for a, b in pairwise(pts)))
-        return best + 0.01
 
     def closing(self, radius: float, bodies: bool = True) -> Closing:
         """The closing move for a ball of ``radius`` (cached); ``bodies``: the fingers'

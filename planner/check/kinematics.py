@@ -9,6 +9,7 @@ import pinocchio as pin
 from planner.check.criteria import key_contacts
 from planner.hand.model import HandModel
 from planner.hand.spec import PALM_FRAME
+from planner.trajfile import distinct_rows
 
 G = 9.81
 GRAVITY = np.array([0.0, 0.0, -G])
@@ -39,9 +40,12 @@ class Kinematics:
         """World tips (T, 5, 3) and palm poses (T, 4, 4) of every row of ``Q``."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         # a row equal to the one before it has its frames (a hand holding still: once)
-        new = np.ones(len(Q), dtype=bool)
-        new[1:] = np.any(Q[1:] != Q[:-1], axis=1)
-        U = Q[new]
+        new, of = distinct_rows(Q)
+        tips, palm = self.frames_of(Q[new])
+        return tips[of], palm[of]
+
+    def frames_of(self, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``frames`` of every row of ``U`` (rows already distinct: each one computed)."""
         T = len(U)
         tips = np.empty((T, len(self.tip_ids), 3))
         palm = np.empty((T, 4, 4))
@@ -55,8 +59,7 @@ class Kinematics:
             palm[k] = d.oMf[self.palm_id].homogeneous
         tips = tips @ self.R.T + self.p
         palm = np.einsum("ij,tjk->tik", self.T, palm)
-        of = np.cumsum(new) - 1  # each row's distinct row
-        return tips[of], palm[of]
+        return tips, palm
 
     def gravity(self, q: np.ndarray) -> np.ndarray:
         return pin.computeGeneralizedGravity(self.model, self.data, self.pin_q(q))[self.idx]

@@ -419,11 +419,10 @@ class Costs:
                 if got[1]:
                     followers = followers | {(m, f)}
                     T = max(T, follow_s)
-        lifts = ctx.lifts
         if not followers:
-            release = lifts[0][0] if lifts else -math.inf
+            release = ctx.lift_end
         else:
-            release = next((v for v, m, f in lifts if (m, f) not in followers), -math.inf)
+            release = next((v for v, m, f in ctx.lifts if (m, f) not in followers), -math.inf)
         return release + T, followers
 
 

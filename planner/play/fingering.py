@@ -136,8 +136,10 @@ class FingeringProblem(Layers):
                         skips = []
             if not ahead_evs:
                 break
-            prev = layers[-1][1] if layers else {} if before is None else \
-                {before: (loss, None)}
+            if layers:  # (the look-ahead kept from the window before)
+                prev = layers[-1][1]
+            else:  # (the song's start: from anywhere; else from the state decided)
+                prev = {} if before is None else {before: (loss, None)}
             for t, new in ahead_evs[len(layers):window]:
                 prev = self._layer(prev, t, new)
                 layers.append((t, prev, new))
