@@ -41,11 +41,6 @@ RATE = 100.0
 RAMP_S = 0.08  # press / release ramp; the 5 mm threshold is crossed at its middle
 
 
-@pytest.fixture(scope="module")
-def hand():
-    return load_hand("default")
-
-
 def meta(h, task="play", **extra):
     return {"task": task, "hand": "default", "urdf_sha256": h.urdf_sha256,
             "T_world_root": h.T_world_root.tolist(), "rate_hz": RATE, **extra}

@@ -9,7 +9,6 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 
 import planner
-from planner.hand.model import load_hand
 from planner.music import keyboard as kb
 from planner.play.atlas import Atlas
 from planner.play.fingerbody import FingerBodies
@@ -17,11 +16,6 @@ from planner.simulate.scene import build_scene
 from planner.trajfile import read_trajectory
 
 SONG = "songs/twinkle.mid"
-
-
-@pytest.fixture(scope="module")
-def hand():
-    return load_hand("default")
 
 
 @pytest.fixture(scope="module")

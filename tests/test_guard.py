@@ -8,12 +8,6 @@ import pytest
 
 from planner.errors import SolverError
 from planner.guard import guard_rows
-from planner.hand.model import load_hand
-
-
-@pytest.fixture(scope="module")
-def hand():
-    return load_hand("default")
 
 
 def _rows(hand, n=4):

@@ -51,11 +51,6 @@ TABLE2_PALM_IN = (7.125, 5.25)  # length, breadth
 
 
 @pytest.fixture(scope="module")
-def hand() -> HandModel:
-    return load_hand("default")
-
-
-@pytest.fixture(scope="module")
 def toml_data() -> dict:
     return tomllib.loads(DEFAULT_TOML.read_text(encoding="utf-8"))
 

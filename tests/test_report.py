@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 
 from planner.check import ball_positions, check_trajectory
-from planner.hand.model import load_hand
 from planner.report import write_check_report, write_html
 from planner.report.html import _frame_rows
 from tests.test_check import (
@@ -39,11 +38,6 @@ PLAY_PNGS = ("play_piano_roll.png", "play_fingertip_heights.png", "joint_positio
              "joint_speeds.png", "motor_angles.png", "motor_speeds.png")
 CATCH_PNGS = ("catch_paths.png", "catch_closing.png", "joint_positions.png",
               "joint_speeds.png", "motor_angles.png", "motor_speeds.png")
-
-
-@pytest.fixture(scope="module")
-def hand():
-    return load_hand("default")
 
 
 @pytest.fixture(scope="module")

@@ -32,16 +32,6 @@ ROOT = Path(__file__).resolve().parents[1]
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
 
 
-@pytest.fixture(scope="module")
-def hand() -> HandModel:
-    return load_hand("default")
-
-
-@pytest.fixture(scope="module")
-def mk5() -> HandModel:
-    return load_hand("mk5")
-
-
 def _capacity(a) -> float:
     """Independently: the motor's peak, or its cable's design force x spool radius."""
     return a.peak_torque_nm if a.tendon_force_n is None else min(a.peak_torque_nm,

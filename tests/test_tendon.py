@@ -13,7 +13,7 @@ import pytest
 
 from planner.check import check_trajectory
 from planner.errors import InputError
-from planner.hand.model import HandModel, load_hand
+from planner.hand.model import HandModel
 from planner.hand.spec import hands_dir, load_hand_spec
 from planner.hand.tendon import (
     GEAR,
@@ -26,16 +26,6 @@ from planner.hand.tendon import (
 )
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-@pytest.fixture(scope="module")
-def hand() -> HandModel:
-    return load_hand("default")
-
-
-@pytest.fixture(scope="module")
-def mk5() -> HandModel:
-    return load_hand("mk5")
 
 
 def _tau(hand: HandModel, **joint_torques_nm: float) -> np.ndarray:
