@@ -645,6 +645,10 @@ def test_error_wrong_finger_names(tmp_path: Path) -> None:
     # a [[finger]] without a name
     text = edit(default_text(), 'name = "pinky"\n', "")
     _one_line_error(tmp_path, text, "[[finger]] entries must be exactly", "None")
+    # the Mk5 and AGH-free builders share the rule (the Mk5's once sorted None with str)
+    mk5 = (DEFAULT_TOML.parent / "mk5.toml").read_text(encoding="utf-8")
+    _one_line_error(tmp_path, edit(mk5, 'name = "pinky"\n', ""),
+                    "[[finger]] entries must be exactly", "None")
 
 
 def test_error_zero_or_negative_transmission(tmp_path: Path) -> None:

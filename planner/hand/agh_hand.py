@@ -31,14 +31,13 @@ from planner.hand.spec import (
     Joint,
     LinearCoupling,
     Link,
-    Mk5Coupling,
     _get,
     _length,
     _positive,
     _range,
     _tip,
     assemble_spec,
-    build_mount_rail_wrist,
+    start_hand,
 )
 
 AGH_FINGERS = FINGERS[:4]
@@ -68,12 +67,8 @@ def _motor(d: dict[str, Any], key: str) -> tuple[float, float]:
 
 def build_agh_hand(data: dict[str, Any]) -> HandSpec:
     """Build the AGH hand from its parsed TOML (see ``hands/agh.toml``)."""
-    links: list[Link] = []
-    joints: list[Joint] = []
-    actuators: list[Actuator] = []
-    couplings: list[LinearCoupling | Mk5Coupling] = []
-    T_world_root, rail_enabled = build_mount_rail_wrist(data, links, joints, actuators)
-
+    hp = start_hand(data)
+    links, joints, actuators, couplings = hp.links, hp.joints, hp.actuators, hp.couplings
     palm = _get(data, "palm", dict)
     p_len, p_thk = _length(palm, "length"), _get(palm, "thickness_m")
     g = _get(data, "agh", dict)
@@ -94,7 +89,6 @@ def build_agh_hand(data: dict[str, Any]) -> HandSpec:
     ranges = {"base": _range(g, "base"), "end": _range(g, "end")}
 
     shaft_y = {"near": p_len / 2 - spacing / 2, "far": p_len / 2 + spacing / 2}
-    finger_joints: list[tuple[str, tuple[str, ...]]] = []
     for f, shaft, sx in _LAYOUT:
         prox, dist = f"{f}_proximal", f"{f}_distal"
         links += [Link(prox, m_ab, (0.0, c_ab, 0.0), (width, l_ab, 0.8 * width)),
@@ -113,10 +107,9 @@ def build_agh_hand(data: dict[str, Any]) -> HandSpec:
         joints.append(tj)
         actuators.append(Actuator(f"{f}_end", "gear", f"{f}_end", ((f"{f}_end", ratio),), end_w,
                                   end_tau, eff))
-        finger_joints.append((f, (f"{f}_base", f"{f}_end")))
+        hp.finger_joints.append((f, (f"{f}_base", f"{f}_end")))
     for shaft, (src, dep) in _PAIRS.items():
         couplings.append(LinearCoupling(f"{dep}_base", f"{src}_base", 1.0))
         actuators.append(Actuator(f"shaft_{shaft}", "gear", f"{src}_base",
                                   ((f"{src}_base", ratio),), base_w, base_tau, eff))
-    return assemble_spec(data, links, joints, couplings, actuators, T_world_root, rail_enabled,
-                         finger_joints)
+    return assemble_spec(data, hp)

@@ -20,7 +20,7 @@ placed along the finger's +y axis (the 1.5 mm offset of ``P1`` from the
 phalanx axis, 2.2-2.5 deg, is not modelled in the URDF); the second
 phalanx length is not in the table and is ``second_phalanx_ratio x d``
 (0.8). Mount, rail, forearm, wrist and palm are shared with every hand
-(:func:`planner.hand.spec.build_mount_rail_wrist`).
+(:func:`planner.hand.spec.start_hand`).
 """
 
 from __future__ import annotations
@@ -39,7 +39,6 @@ from planner.hand.spec import (
     Actuator,
     HandSpec,
     Joint,
-    LinearCoupling,
     Link,
     Mk5Coupling,
     _get,
@@ -48,7 +47,8 @@ from planner.hand.spec import (
     _tip,
     _vec,
     assemble_spec,
-    build_mount_rail_wrist,
+    long_fingers,
+    start_hand,
 )
 
 Q2_MARGIN_RAD = 1e-4  # widening of the q2 joint range beyond the coupling's min/max
@@ -112,31 +112,19 @@ def _drive(data: dict[str, Any]) -> _Mk5Drive:
 
 def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
     """Build the Mk5 hand from its parsed TOML (see ``hands/mk5.toml``)."""
-    links: list[Link] = []
-    joints: list[Joint] = []
-    actuators: list[Actuator] = []
-    couplings: list[LinearCoupling | Mk5Coupling] = []
-    T_world_root, rail_enabled = build_mount_rail_wrist(data, links, joints, actuators)
+    hp = start_hand(data)
     p_len = _length(_get(data, "palm", dict), "length")
     d = _drive(data)
-    fingers = _get(data, "finger", list)
-    names = [f.get("name") for f in fingers]
-    if sorted(names) != sorted(FINGERS[1:]):
-        raise InputError(
-            f"[[finger]] entries must be exactly {', '.join(FINGERS[1:])}; got {names}"
-        )
-    by_name: dict[str, dict[str, Any]] = {f["name"]: f for f in fingers}
+    by_name: dict[str, dict[str, Any]] = {f["name"]: f for f in long_fingers(data)}
     by_name["thumb"] = _get(data, "thumb", dict)
-    finger_joints: list[tuple[str, tuple[str, ...]]] = []
     for n in FINGERS:
         fl, fj, c, a = _finger(n, by_name[n], p_len, d)
-        links += fl
-        joints += fj
-        couplings.append(c)
-        actuators.append(a)
-        finger_joints.append((n, (f"{n}_q1", f"{n}_q2")))
-    return assemble_spec(data, links, joints, couplings, actuators, T_world_root, rail_enabled,
-                         finger_joints)
+        hp.links += fl
+        hp.joints += fj
+        hp.couplings.append(c)
+        hp.actuators.append(a)
+        hp.finger_joints.append((n, (f"{n}_q1", f"{n}_q2")))
+    return assemble_spec(data, hp)
 
 
 def _finger(n: str, fd: dict[str, Any], p_len: float, d: _Mk5Drive

@@ -257,11 +257,23 @@ def build_spec(data: dict[str, Any]) -> HandSpec:
     raise InputError(f"unknown hand kind {kind!r}; valid kinds: tendon, mk5, agh")
 
 
-def build_mount_rail_wrist(data: dict[str, Any], links: list[Link], joints: list[Joint],
-                           actuators: list[Actuator]) -> tuple[tuple[tuple[float, ...], ...], bool]:
-    """Common part of every hand: mount pose, optional rail, forearm, 2-DOF wrist, palm.
+@dataclass
+class HandParts:
+    """What a hand's builder fills, from the part every hand has (``start_hand``) on;
+    ``assemble_spec`` makes its ``HandSpec``."""
 
-    Appends to ``links``, ``joints`` and ``actuators``; returns (T_world_root, rail_enabled).
+    T_world_root: tuple[tuple[float, ...], ...]
+    rail_enabled: bool
+    links: list[Link] = field(default_factory=list)
+    joints: list[Joint] = field(default_factory=list)
+    actuators: list[Actuator] = field(default_factory=list)
+    couplings: list[LinearCoupling | Mk5Coupling] = field(default_factory=list)
+    finger_joints: list[tuple[str, tuple[str, ...]]] = field(default_factory=list)
+
+
+def start_hand(data: dict[str, Any]) -> HandParts:
+    """The part every hand has: mount pose, optional rail, forearm, 2-DOF wrist, palm.
+
     The palm link is ``palm`` with its frame at the wrist axis, y towards the
     fingers, z out of the back of the hand; ``palm_center`` sits on the palmar
     surface with +z the outward palm normal.
@@ -270,10 +282,10 @@ def build_mount_rail_wrist(data: dict[str, Any], links: list[Link], joints: list
     T = np.eye(4)
     T[:3, :3] = rpy_matrix(tuple(math.radians(a) for a in _vec(mount, "rpy_deg")))
     T[:3, 3] = _vec(mount, "xyz_m")
-    T_world_root = tuple(tuple(float(x) for x in row) for row in T)
-
     rail = _get(data, "rail", dict)
     rail_enabled = _get(rail, "enabled", bool)
+    parts = HandParts(tuple(tuple(float(x) for x in row) for row in T), rail_enabled)
+    links, joints, actuators = parts.links, parts.joints, parts.actuators
     fa = _get(data, "forearm", dict)
     fa_len, fa_r = _get(fa, "length_m"), _get(fa, "radius_m")
     links.append(Link("rail_base", 0.0, (0.0, 0.0, 0.0), (0.01, 0.01, 0.01)))
@@ -323,15 +335,24 @@ def build_mount_rail_wrist(data: dict[str, Any], links: list[Link], joints: list
     links.append(Link("palm_center", 0.0, (0.0, 0.0, 0.0), (0.001, 0.001, 0.001)))
     joints.append(Joint("palm_center_fixed", "fixed", "palm", "palm_center",
                         (0.0, p_len / 2, -p_thk / 2), rpy_rad=(math.pi, 0.0, 0.0)))
-    return T_world_root, rail_enabled
+    return parts
 
 
-def assemble_spec(data: dict[str, Any], links, joints, couplings, actuators, T_world_root,
-                  rail_enabled: bool, finger_joints) -> HandSpec:
+def long_fingers(data: dict[str, Any]) -> list[dict[str, Any]]:
+    """The hand file's ``[[finger]]`` tables: exactly one of each finger but the thumb."""
+    fingers = _get(data, "finger", list)
+    names = [f.get("name") if isinstance(f, dict) else None for f in fingers]
+    if sorted(map(str, names)) != sorted(FINGERS[1:]):
+        raise InputError(f"[[finger]] entries must be exactly {', '.join(FINGERS[1:])}; got {names}")
+    return fingers
+
+
+def assemble_spec(data: dict[str, Any], parts: HandParts) -> HandSpec:
     """The HandSpec of a built hand, with the file's name, description and sources.
 
     Every ``tendon`` actuator gets the cable's design force, ``[tendon] design_force_n``
     (required when the hand has tendons; seed 000, line 96: 40 N, PBO cable 0.25 mm)."""
+    actuators, finger_joints = parts.actuators, parts.finger_joints
     if any(a.kind == "tendon" for a in actuators):
         force = _positive(_get(data, "tendon", dict), "design_force_n")
         actuators = [replace(a, tendon_force_n=force) if a.kind == "tendon" else a
@@ -345,15 +366,15 @@ def assemble_spec(data: dict[str, Any], links, joints, couplings, actuators, T_w
     return HandSpec(
         name=_get(data, "name", str),
         description=str(data.get("description", "")),
-        links=tuple(links),
-        joints=tuple(joints),
-        couplings=tuple(couplings),
+        links=tuple(parts.links),
+        joints=tuple(parts.joints),
+        couplings=tuple(parts.couplings),
         actuators=tuple(actuators),
-        T_world_root=T_world_root,
+        T_world_root=parts.T_world_root,
         # one pad per finger, in the fingers' order (a prefix of FINGERS: ``check`` reads
         # the tips in FINGERS order)
         tip_frames=tuple(f"{f}_tip" for f, _ in finger_joints),
-        rail_enabled=rail_enabled,
+        rail_enabled=parts.rail_enabled,
         sources=sources,
         finger_joints=tuple(finger_joints),
     )
@@ -391,12 +412,7 @@ class _TendonDrive:
 
 
 def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
-    links: list[Link] = []
-    joints: list[Joint] = []
-    actuators: list[Actuator] = []
-    couplings: list[LinearCoupling | Mk5Coupling] = []
-    T_world_root, rail_enabled = build_mount_rail_wrist(data, links, joints, actuators)
-
+    hp = start_hand(data)
     palm = _get(data, "palm", dict)
     p_len = _length(palm, "length")
     tendon = _get(data, "tendon", dict)
@@ -408,16 +424,13 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
     tp = _TendonDrive(spool, _get(tendon, "motor_speed_rad_s"), eff,
                       _get(tendon, "motor_peak_torque_nm"), _get(data, "servo", dict),
                       _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2"))
-    finger_joints: list[tuple[str, tuple[str, ...]]] = []
-    fingers = _get(data, "finger", list)
-    names = [f.get("name") for f in fingers]
-    if sorted(map(str, names)) != sorted(FINGERS[1:]):
-        raise InputError(f"[[finger]] entries must be exactly {', '.join(FINGERS[1:])}; got {names}")
-    _tendon_thumb(_get(data, "thumb", dict), tp, links, joints, actuators, finger_joints)
+    fingers = long_fingers(data)
+    _tendon_thumb(_get(data, "thumb", dict), tp, hp.links, hp.joints, hp.actuators,
+                  hp.finger_joints)
     for f in sorted(fingers, key=lambda f: FINGERS.index(f["name"])):
-        _tendon_finger(f, tp, p_len, links, joints, actuators, couplings, finger_joints)
-    return assemble_spec(data, links, joints, couplings, actuators, T_world_root, rail_enabled,
-                         finger_joints)
+        _tendon_finger(f, tp, p_len, hp.links, hp.joints, hp.actuators, hp.couplings,
+                       hp.finger_joints)
+    return assemble_spec(data, hp)
 
 
 def _tendon_thumb(th: dict, tp: _TendonDrive, links, joints, actuators, finger_joints) -> None:
