@@ -12,6 +12,7 @@ import planner
 from planner.music import keyboard as kb
 from planner.play.atlas import Atlas
 from planner.play.fingerbody import FingerBodies
+from planner.simulate.keyboard import key_bodies
 from planner.simulate.scene import build_scene
 from planner.trajfile import read_trajectory
 
@@ -113,3 +114,23 @@ def test_plan_body_keys_flags_the_black_keys_beside_a_narrow_press(hand, twinkle
     flagged = plan_body_keys(hand, rows, kc)
     black = [p - kb.LOWEST_PITCH for p in (61, 63)]
     assert not flagged[0, black].any() and flagged[1:, black].any()
+
+
+def test_the_seed_hand_cannot_press_between_two_black_keys(hand, bodies):
+    """A seed inconsistency, kept visible: seed 000's 1.5x hand (Table 2's upper-limit
+    widths) on the spec's keyboard (section 2). Between C#4 and D#4 the D4 key is
+    13.5 mm wide; a pad sphere wider than that enters the slot only by its cap (the
+    pinky's 13.7 mm one 5.6 mm, the index's to ring's 17.1 mm 3.3 mm, the thumb's 24 mm
+    2.0 mm), where it has to reach the black keys' 12.5 mm above the white tops plus the
+    spec's 5 mm key-down depth. So no posture of any finger presses D, G or A between the black keys: they are
+    pressed in front of them (docs/play-second-design.md, "The fingers' bodies")."""
+    boxes = {k.pitch: k.boxes for k in key_bodies()}
+    c_sharp, d_sharp = boxes[61][0], boxes[63][0]  # (a black key is one box)
+    slot_m = (d_sharp.center_m[0] - d_sharp.half_m[0]) - (c_sharp.center_m[0] + c_sharp.half_m[0])
+    assert slot_m == pytest.approx(0.0135, abs=1e-4)
+    needed_m = kb.BLACK_TOP_Z_M + kb.DOWN_DEPTH_M  # below the black tops
+    for f in hand.fingers:
+        r = float(bodies.shapes[f].radius_m[0])  # the pad sphere: the finger's end
+        assert 2 * r > slot_m, f
+        cap_m = r - np.sqrt(r * r - (slot_m / 2) ** 2)  # how far the sphere enters the slot
+        assert cap_m < needed_m, (f, cap_m)
