@@ -49,3 +49,48 @@ def test_closing_time_deferred_is_the_same_plan(throw):
     assert lazy.text == full.text
     assert lazy.closings_computed < full.closings_computed / 3, (
         lazy.closings_computed, full.closings_computed)
+
+
+def _reach_log(s):
+    """Record each re-plan's (observation time, intercept out of reach) in ``s.reach_log``."""
+    s.reach_log = []
+    inner = s._intercept
+
+    def logged(flight, t_s):
+        ic = inner(flight, t_s)
+        s.reach_log.append((t_s, ic.reason is not None))
+        return ic
+
+    s._intercept = logged
+
+
+def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
+    """While the estimate is out of reach the whole-path search runs once per
+    ``REACH_RETRY_S`` of observations, not at each: an estimate that comes back in reach
+    is planned at most that much later than searching at every observation, and the throw
+    is caught as well."""
+    import planner.catch.intercept as ic_mod
+    import planner.catch.session as sm
+
+    throw = (45.48, 2.22, -0.19, 0.005, 500.0)  # out of reach at its first estimates
+    searches = []
+    full = ic_mod.find_intercept
+
+    def counted(*a, **k):
+        searches.append(1)
+        return full(*a, **k)
+
+    monkeypatch.setattr(ic_mod, "find_intercept", counted)
+    kept = _session(*throw, seed=1, patch=_reach_log)
+    n_kept = len(searches)
+    retry_s = sm.REACH_RETRY_S
+    monkeypatch.setattr(sm, "REACH_RETRY_S", 0.0)  # searched at every observation
+    every = _session(*throw, seed=1, patch=_reach_log)
+    n_every = len(searches) - n_kept
+    assert any(out for _, out in every.reach_log), "the throw's first estimates are in reach"
+    assert n_kept < n_every
+    # back in reach for good: the re-plan after the last one out of reach
+    back = [s.reach_log[max(i for i, (_, out) in enumerate(s.reach_log) if out) + 1][0]
+            for s in (kept, every)]
+    assert back[1] <= back[0] <= back[1] + retry_s + 1e-9, back
+    assert kept.outcome == every.outcome == "held", (kept.reason, every.reason)

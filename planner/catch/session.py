@@ -75,6 +75,11 @@ from planner.trajfile import TrajectoryWriter
 
 NEAR_S = 0.020  # the intercept is searched this close to the previous one first (an
 # observation moves it by a few ms: sigma_t of a 5 mm camera late in the flight is ~1 ms)
+REACH_RETRY_S = 0.010  # an estimate out of reach is searched again along the whole path
+# (~0.4 ms) after this much camera time, not at every observation: the cadence of a 100 Hz
+# camera, the slowest the session is for, at which it meets the catch target (bench_live:
+# 19-20 of 20 at 2-10 mm noise); a 500 Hz camera's estimate coming back in reach is then acted on at most
+# 8 ms later than at once, within the signal delay's 25 ms
 HELD = "held"
 GIVEN_UP = "given_up"
 
@@ -132,6 +137,7 @@ class CatchSession:
         # first fit (``LiveFit.first_look``): that fit's search starts from it
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
+        self._searched_s = -math.inf  # the last whole-path search from out of reach
         self._close_ask: _CloseAsk | None = None  # the closing's start deferred
         # (``_retime_closing``): the inputs of the estimate it is for
         self.closings_computed = 0  # re-plans' closing starts computed (``close_start``)
@@ -187,7 +193,7 @@ class CatchSession:
         if self.t_i is not None and t_b >= self.t_i:  # too late to act before the ball
             return self._finish(f"the observation at t = {t:.3f} s acts after the intercept")
         old_seg = self.motion.seg
-        self._replan(fit.flight, t_b, period, self._last_row_s(t_react + period))
+        self._replan(fit.flight, t, t_b, period, self._last_row_s(t_react + period))
         if self.writer is None:
             self._open()
         return self._write_to(t_react + period, t_b, old_seg)
@@ -209,21 +215,12 @@ class CatchSession:
             self.writer.abort(discard=discard)
 
     # ------------------------------------------------------------ re-plan
-    def _replan(self, flight: Flight, t_b: float, period: float, rows_to_s: float) -> None:
-        """Steps 2-3 of the module docstring for the newest ``flight``, acting from ``t_b``
-        (this observation's rows end at ``rows_to_s``)."""
+    def _replan(self, flight: Flight, t_s: float, t_b: float, period: float,
+                rows_to_s: float) -> None:
+        """Steps 2-3 of the module docstring for the newest ``flight`` (observed up to
+        ``t_s``), acting from ``t_b`` (this observation's rows end at ``rows_to_s``)."""
         pl, h, r, cl = self.pl, self.pl.hand, self.ball.radius_m, self.closing
-        if self.t_i is not None:  # the drag table integrated once, as far as it is needed
-            # (from an intercept out of reach, the whole-path search's span)
-            flight.integrate_to(self.t_i + (SEARCH_AFTER_S if self.pose.ic.reason else NEAR_S))
-        if self.t_i is not None:
-            ic = find_intercept_near(pl.wrist, flight, self.C, r, self.pose.ic, self.t_i, NEAR_S)
-        elif self._prior is not None:  # from the first look at the observations before
-            ic = find_intercept_near(pl.wrist, flight, self.C, r, self._prior,
-                                     self._prior.t, NEAR_S)
-        else:
-            ic = self._search(flight)
-        pose = pl.meet(flight, self.C, r, cl, ic)
+        pose = pl.meet(flight, self.C, r, cl, self._intercept(flight, t_s))
         stop_t = gq.stop_time(pose.v_i)
         m = self.motion
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives
@@ -277,6 +274,29 @@ class CatchSession:
         m.set_closing(max(s_c, ask.t_b), cl.duration_s)
         self._close_ask = None
         self.closings_computed += 1
+
+    def _intercept(self, flight: Flight, t_s: float) -> Intercept:
+        """The newest flight's intercept (step 2), warm-started from the last one. From an
+        intercept out of reach the search is the whole path's (``find_intercept_near``),
+        run at most every ``REACH_RETRY_S`` of observations; in between the estimate stays
+        out of reach (``meet`` refines its time on the new flight)."""
+        pl, r = self.pl, self.ball.radius_m
+        if self.t_i is None:
+            if self._prior is not None:  # from the first look at the observations before
+                return find_intercept_near(pl.wrist, flight, self.C, r, self._prior,
+                                           self._prior.t, NEAR_S)
+            return self._search(flight)
+        prev = self.pose.ic
+        if prev.reason is not None and t_s < self._searched_s + REACH_RETRY_S - 1e-9:
+            flight.integrate_to(self.t_i + NEAR_S)
+            return prev
+        # the drag table integrated once, as far as it is needed (from an intercept out of
+        # reach, the whole-path search's span)
+        flight.integrate_to(self.t_i + (SEARCH_AFTER_S if prev.reason else NEAR_S))
+        ic = find_intercept_near(pl.wrist, flight, self.C, r, prev, self.t_i, NEAR_S)
+        if ic.reason is not None:  # (out of reach: the whole path was searched)
+            self._searched_s = t_s
+        return ic
 
     def _search(self, flight: Flight | None) -> Intercept | None:
         """The intercept searched along the whole of ``flight`` near the catch point (the
