@@ -230,16 +230,22 @@ def _bodies_clear(hand: HandModel, flexion: set[int], q_from: np.ndarray, q: np.
     return q
 
 
+def earliest_close_start(closing: Closing, t_i: float, ready: float, stop_t: float) -> float:
+    """The earliest start ``close_start`` can return (its first candidate): the grasp when
+    the ball has stopped, not before ``ready`` (and not before ``t_i`` for a closing that
+    never grasps). Cheap: no geometry."""
+    if closing.u_grasp is None:
+        return max(ready, t_i)
+    return max(ready, t_i + stop_t - closing.u_grasp * closing.duration_s)
+
+
 def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarray,
                 closing: Closing, t_i: float, ready: float, stop_t: float, r: float) -> float:
     """Start of the closing move: grasp when the ball has stopped in the palm, not
     before the open pose is reached, later if a fingertip would touch the ball
     before intercept_t."""
-    if closing.u_grasp is None:
-        return max(ready, t_i)
-    T_c = closing.duration_s
-    want = max(ready, t_i + stop_t - closing.u_grasp * T_c)
-    if want >= t_i:
+    want = earliest_close_start(closing, t_i, ready, stop_t)
+    if closing.u_grasp is None or want >= t_i:
         return want
     # the ball can only meet a fingertip in the last stretch before the palm
     speed = math.hypot(*flight.velocity1(t_i))

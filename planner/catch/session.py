@@ -49,13 +49,13 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from planner.catch import grasp as gq
 from planner.catch.arm import open_from
-from planner.catch.closing import close_start
+from planner.catch.closing import close_start, earliest_close_start
 from planner.catch.flight import Ball, Flight, _finite, get_ball
 from planner.catch.intercept import (
     SEARCH_AFTER_S,
@@ -75,8 +75,25 @@ from planner.trajfile import TrajectoryWriter
 
 NEAR_S = 0.020  # the intercept is searched this close to the previous one first (an
 # observation moves it by a few ms: sigma_t of a 5 mm camera late in the flight is ~1 ms)
+REACH_RETRY_S = 0.010  # an estimate out of reach is searched again along the whole path
+# (~0.4 ms) after this much camera time, not at every observation: the cadence of a 100 Hz
+# camera, the slowest the session is for, at which it meets the catch target (bench_live:
+# 19-20 of 20 at 2-10 mm noise); a 500 Hz camera's estimate coming back in reach is then acted on at most
+# 8 ms later than at once, within the signal delay's 25 ms
 HELD = "held"
 GIVEN_UP = "given_up"
+
+
+class _CloseAsk(NamedTuple):
+    """``close_start``'s inputs of one re-plan (the flight, the open pose, the intercept,
+    the fingers open, the ball's stop) and the time that re-plan acted from."""
+
+    flight: Flight
+    q_open: np.ndarray
+    t_i: float
+    ready: float
+    stop_t: float
+    t_b: float
 
 
 class CatchSession:
@@ -120,6 +137,10 @@ class CatchSession:
         # first fit (``LiveFit.first_look``): that fit's search starts from it
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
+        self._searched_s = -math.inf  # the last whole-path search from out of reach
+        self._close_ask: _CloseAsk | None = None  # the closing's start deferred
+        # (``_retime_closing``): the inputs of the estimate it is for
+        self.closings_computed = 0  # re-plans' closing starts computed (``close_start``)
         self.kept_targets = 0  # re-aims that could not reach their target at rest before
         # the ball within the limits (part of the way made, or the older target kept)
         self.outcome: str | None = None
@@ -172,7 +193,7 @@ class CatchSession:
         if self.t_i is not None and t_b >= self.t_i:  # too late to act before the ball
             return self._finish(f"the observation at t = {t:.3f} s acts after the intercept")
         old_seg = self.motion.seg
-        self._replan(fit.flight, t_b, period)
+        self._replan(fit.flight, t, t_b, period, self._last_row_s(t_react + period))
         if self.writer is None:
             self._open()
         return self._write_to(t_react + period, t_b, old_seg)
@@ -194,38 +215,88 @@ class CatchSession:
             self.writer.abort(discard=discard)
 
     # ------------------------------------------------------------ re-plan
-    def _replan(self, flight: Flight, t_b: float, period: float) -> None:
-        """Steps 2-3 of the module docstring for the newest ``flight``, acting from ``t_b``."""
+    def _replan(self, flight: Flight, t_s: float, t_b: float, period: float,
+                rows_to_s: float) -> None:
+        """Steps 2-3 of the module docstring for the newest ``flight`` (observed up to
+        ``t_s``), acting from ``t_b`` (this observation's rows end at ``rows_to_s``)."""
         pl, h, r, cl = self.pl, self.pl.hand, self.ball.radius_m, self.closing
-        if self.t_i is not None:  # the drag table integrated once, as far as it is needed
-            # (from an intercept out of reach, the whole-path search's span)
-            flight.integrate_to(self.t_i + (SEARCH_AFTER_S if self.pose.ic.reason else NEAR_S))
-        if self.t_i is not None:
-            ic = find_intercept_near(pl.wrist, flight, self.C, r, self.pose.ic, self.t_i, NEAR_S)
-        elif self._prior is not None:  # from the first look at the observations before
-            ic = find_intercept_near(pl.wrist, flight, self.C, r, self._prior,
-                                     self._prior.t, NEAR_S)
-        else:
-            ic = self._search(flight)
-        pose = pl.meet(flight, self.C, r, cl, ic)
+        pose = pl.meet(flight, self.C, r, cl, self._intercept(flight, t_s))
         stop_t = gq.stop_time(pose.v_i)
         m = self.motion
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives
         if not m.moving:
             T_m = m.move_time(pl.q_rest, pose.q_open)
-            s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i, t_b + T_m, stop_t, r)
-            # wait for a better estimate while waiting one more observation costs nothing
-            if t_b + period + T_m >= s_c or t_b + period + T_m >= rest_by:
-                m.start(t_b, pose.q_open, T_m)
-                m.set_closing(s_c, cl.duration_s)
+            go = t_b + period + T_m  # the open pose reached if the hand waits one more
+            # observation; wait while that is early enough: before the arm must be at rest
+            # and before the closing's start, which is no earlier than its earliest (then
+            # no closing time is needed: the same decision as with it)
+            if go < rest_by and go < earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
+                pass
+            else:
+                s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i, t_b + T_m,
+                                  stop_t, r)
+                self.closings_computed += 1
+                if go >= s_c or go >= rest_by:
+                    m.start(t_b, pose.q_open, T_m)
+                    m.set_closing(s_c, cl.duration_s)
         else:
+            self._close_due(t_b)
             if m.reaim(t_b, pose.q_open, rest_by) < 1.0:
                 self.kept_targets += 1
             if m.close_start_s > t_b:
-                s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i,
-                                  m.fingers_open_s, stop_t, r)
-                m.set_closing(max(s_c, t_b), cl.duration_s)
+                self._retime_closing(_CloseAsk(flight, pose.q_open, pose.t_i, m.fingers_open_s,
+                                               stop_t, t_b), rows_to_s)
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
+
+    def _retime_closing(self, ask: _CloseAsk, rows_to_s: float) -> None:
+        """The closing's start re-timed for the newest estimate (``ask``). Its time changes
+        no row before it (the fingers' closing phase is zero there), so when even its
+        earliest (``earliest_close_start``) lies beyond this observation's rows, that
+        earliest is set in its place and ``close_start`` runs only once a row or a
+        decision needs the time (``_close_due``): the same rows and decisions."""
+        cl, m = self.closing, self.motion
+        low = earliest_close_start(cl, ask.t_i, ask.ready, ask.stop_t)
+        self._close_ask = ask
+        if low > rows_to_s:
+            m.set_closing(low, cl.duration_s)
+        else:
+            self._close_due(math.inf)
+
+    def _close_due(self, t_b: float) -> None:
+        """The closing's start of the last deferred estimate (``_retime_closing``),
+        computed when its earliest is no longer after ``t_b`` (it may have begun by then:
+        the re-plan's test ``close_start_s > t_b`` needs the time itself)."""
+        ask, m, cl = self._close_ask, self.motion, self.closing
+        if ask is None or m.close_start_s > t_b:
+            return
+        s_c = close_start(self.pl.hand, ask.flight, self.C, ask.q_open, cl, ask.t_i, ask.ready,
+                          ask.stop_t, self.ball.radius_m)
+        m.set_closing(max(s_c, ask.t_b), cl.duration_s)
+        self._close_ask = None
+        self.closings_computed += 1
+
+    def _intercept(self, flight: Flight, t_s: float) -> Intercept:
+        """The newest flight's intercept (step 2), warm-started from the last one. From an
+        intercept out of reach the search is the whole path's (``find_intercept_near``),
+        run at most every ``REACH_RETRY_S`` of observations; in between the estimate stays
+        out of reach (``meet`` refines its time on the new flight)."""
+        pl, r = self.pl, self.ball.radius_m
+        if self.t_i is None:
+            if self._prior is not None:  # from the first look at the observations before
+                return find_intercept_near(pl.wrist, flight, self.C, r, self._prior,
+                                           self._prior.t, NEAR_S)
+            return self._search(flight)
+        prev = self.pose.ic
+        if prev.reason is not None and t_s < self._searched_s + REACH_RETRY_S - 1e-9:
+            flight.integrate_to(self.t_i + NEAR_S)
+            return prev
+        # the drag table integrated once, as far as it is needed (from an intercept out of
+        # reach, the whole-path search's span)
+        flight.integrate_to(self.t_i + (SEARCH_AFTER_S if prev.reason else NEAR_S))
+        ic = find_intercept_near(pl.wrist, flight, self.C, r, prev, self.t_i, NEAR_S)
+        if ic.reason is not None:  # (out of reach: the whole path was searched)
+            self._searched_s = t_s
+        return ic
 
     def _search(self, flight: Flight | None) -> Intercept | None:
         """The intercept searched along the whole of ``flight`` near the catch point (the
@@ -270,6 +341,10 @@ class CatchSession:
                 "ball": self.ball.name, "drag": self.drag, "observations": self.fit.n,
                 "live": True}
 
+    def _last_row_s(self, t_end_s: float) -> float:
+        """The time of the last row ``_write_to(t_end_s)`` writes."""
+        return math.floor(t_end_s / self.dt + 1e-9) * self.dt
+
     def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:
         """Rows up to ``t_end_s`` (those up to ``t_b`` on the arm's move ``old_seg``, from
         before this re-plan), guarded, written; returns them as written."""
@@ -292,6 +367,7 @@ class CatchSession:
         judged, and the end marker."""
         m, cl = self.motion, self.closing
         pose, h = self.pose, self.pl.hand
+        self._close_due(math.inf)
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
             T_m = m.move_time(self.pl.q_rest, pose.q_open)

@@ -1,0 +1,96 @@
+"""The live session's skip rules (docs/live-catch.md, "Fewer steps per observation"): what
+a re-plan no longer computes at every observation, and that the plan is the one computed
+in full (the same bytes) or within the rule's stated tolerance. No wall-clock assertions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner.catch.flight import get_ball, predict_throw
+from planner.catch.plan import get_planner
+from planner.catch.session import CatchSession
+
+BALL = get_ball("tennis")
+
+
+def _session(angle, dist, height, noise_m, rate_hz, seed=0, patch=None):
+    """One throw fed to a session one observation at a time; ``patch(session)`` before."""
+    fl = predict_throw(angle, dist, height, BALL, drag=True)
+    s = CatchSession(dist, height, ball=BALL, drag=True, planner=get_planner("default"))
+    if patch is not None:
+        patch(s)
+    rng = np.random.default_rng(seed)
+    for k in range(1, int(1.5 * rate_hz)):
+        t = k / rate_hz
+        s.observe(t, fl.position(t) + rng.normal(0.0, noise_m, 3))
+        if s.done:
+            break
+    if not s.done:
+        s.finish()
+    return s
+
+
+THROWS = [(30.0, 1.5, 0.0, 0.005, 500.0), (45.0, 2.2, 0.15, 0.010, 500.0),
+          (22.0, 1.1, -0.1, 0.002, 100.0)]
+
+
+@pytest.mark.parametrize("throw", THROWS)
+def test_closing_time_deferred_is_the_same_plan(throw):
+    """The closing's start is computed only when a row or a decision needs it (its
+    earliest, ``earliest_close_start``, not beyond this observation's rows): the same file
+    as computing it at every re-plan, with fewer ``close_start`` calls."""
+    lazy = _session(*throw)
+
+    def every_time(s):  # every re-plan's rows "reach" the closing: computed each time
+        s._last_row_s = lambda t_end_s: np.inf
+
+    full = _session(*throw, patch=every_time)
+    assert lazy.text == full.text
+    assert lazy.closings_computed < full.closings_computed / 3, (
+        lazy.closings_computed, full.closings_computed)
+
+
+def _reach_log(s):
+    """Record each re-plan's (observation time, intercept out of reach) in ``s.reach_log``."""
+    s.reach_log = []
+    inner = s._intercept
+
+    def logged(flight, t_s):
+        ic = inner(flight, t_s)
+        s.reach_log.append((t_s, ic.reason is not None))
+        return ic
+
+    s._intercept = logged
+
+
+def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
+    """While the estimate is out of reach the whole-path search runs once per
+    ``REACH_RETRY_S`` of observations, not at each: an estimate that comes back in reach
+    is planned at most that much later than searching at every observation, and the throw
+    is caught as well."""
+    import planner.catch.intercept as ic_mod
+    import planner.catch.session as sm
+
+    throw = (45.48, 2.22, -0.19, 0.005, 500.0)  # out of reach at its first estimates
+    searches = []
+    full = ic_mod.find_intercept
+
+    def counted(*a, **k):
+        searches.append(1)
+        return full(*a, **k)
+
+    monkeypatch.setattr(ic_mod, "find_intercept", counted)
+    kept = _session(*throw, seed=1, patch=_reach_log)
+    n_kept = len(searches)
+    retry_s = sm.REACH_RETRY_S
+    monkeypatch.setattr(sm, "REACH_RETRY_S", 0.0)  # searched at every observation
+    every = _session(*throw, seed=1, patch=_reach_log)
+    n_every = len(searches) - n_kept
+    assert any(out for _, out in every.reach_log), "the throw's first estimates are in reach"
+    assert n_kept < n_every
+    # back in reach for good: the re-plan after the last one out of reach
+    back = [s.reach_log[max(i for i, (_, out) in enumerate(s.reach_log) if out) + 1][0]
+            for s in (kept, every)]
+    assert back[1] <= back[0] <= back[1] + retry_s + 1e-9, back
+    assert kept.outcome == every.outcome == "held", (kept.reason, every.reason)
