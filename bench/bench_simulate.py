@@ -9,6 +9,9 @@
     python bench/bench_simulate.py --notes --contact full   # the same, full contact
     python bench/bench_simulate.py --catch-grid  # the default catch grid in physics, throw
                                                  # by throw (palm tilt, the ball at +150 ms)
+    python bench/bench_simulate.py --catch-phases 10   # each feasible plan of that grid
+                                                 # replayed with its ball arriving at 10
+                                                 # phases of the physics' 1 ms step
 
 The 60 s song is a random walk (``bench/random_songs.py``, seed 0) repeated to 60 s or more,
 planned once into a temporary folder. Needs MuJoCo (``pip install -e ".[physics]"``).
@@ -186,6 +189,44 @@ def bench_catch_grid() -> None:
     print(f"held {held} of {feasible} feasible plans")
 
 
+def bench_catch_phases(n: int) -> None:
+    """The default catch grid's feasible plans, each replayed ``n`` times with its ball
+    launched k/n of one physics step later along its flight (``planner.simulate.phase``):
+    the same rows, the ball's first contact at another depth into the palm (its rebound,
+    0 to ~1/4 of its normal speed, is set by that phase). Per throw: held (H) or not (.)
+    at each phase, and the ball's largest distance from the palm centre from +150 ms."""
+    from planner.simulate import run_replay
+    from planner.simulate.phase import ball_advanced
+    from planner.simulate.scene import TIMESTEP_S
+    from planner.trajfile import read_trajectory
+
+    totals = np.zeros(n, dtype=int)
+    feasible = 0
+    with tempfile.TemporaryDirectory() as d:
+        for a in range(20, 61, 10):
+            for dist in (1.0, 1.5, 2.0, 2.5, 3.0):
+                path = Path(d) / f"c{a}_{dist}.csv"
+                res = planner.plan_catch(float(a), dist, 0.0, "default", str(path))
+                if not res.feasible:
+                    print(f"{a} deg {dist} m: infeasible plan, not simulated", flush=True)
+                    continue
+                feasible += 1
+                tr = read_trajectory(str(path))
+                marks, far = [], []
+                for k in range(n):
+                    r = run_replay(ball_advanced(tr, k / n * TIMESTEP_S))
+                    c, rec = r.report.catch, r.record
+                    after = rec.t_s >= c.held_from_s
+                    far.append(float(np.max(np.linalg.norm(rec.ball_m - rec.palm_m,
+                                                           axis=1)[after])))
+                    marks.append("H" if c.held else ".")
+                    totals[k] += c.held
+                print(f"{a} deg {dist} m: {''.join(marks)}  held at {marks.count('H')} of {n} "
+                      f"phases; ball at most {min(far) * 1000:.0f}-{max(far) * 1000:.0f} mm "
+                      "from the palm centre from +150 ms", flush=True)
+    print(f"held per phase (of {feasible}): {' '.join(str(x) for x in totals)}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--agreement", action="store_true",
@@ -193,6 +234,8 @@ def main() -> None:
     ap.add_argument("--notes", action="store_true",
                     help="pads contact: every note's share of the F1 difference")
     ap.add_argument("--catch-grid", action="store_true", help="the default catch grid")
+    ap.add_argument("--catch-phases", type=int, metavar="N", default=0,
+                    help="the default catch grid replayed at N phases of the physics' step")
     ap.add_argument("--contact", choices=("full", "pads"), default="pads",
                     help="--notes: the contact model (default pads)")
     a = ap.parse_args()
@@ -203,6 +246,8 @@ def main() -> None:
         bench_notes(a.contact)
     elif a.catch_grid:
         bench_catch_grid()
+    elif a.catch_phases > 0:
+        bench_catch_phases(a.catch_phases)
     else:
         bench_speed()
 
