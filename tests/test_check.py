@@ -233,6 +233,26 @@ def test_key_rule_white_black_and_depths():
     assert kc.finger[0, 61 - 21] == 3  # the deepest of the two fingers on C#4
 
 
+def test_frames_are_pinocchio_frames_bit_for_bit(hand):
+    """``Kinematics.frames_of`` (the joints' placements, then only the tips' and the
+    palm's frames) gives exactly what ``framesForwardKinematics`` of every frame does."""
+    import pinocchio as pin
+
+    from planner.check.kinematics import Kinematics
+
+    kin = Kinematics(hand, hand.T_world_root)
+    rng = np.random.default_rng(7)
+    lo, hi = np.asarray(hand.lower), np.asarray(hand.upper)
+    U = lo + rng.uniform(size=(50, hand.n)) * (hi - lo)
+    tips, palm = kin.frames_of(U)
+    m, d = kin.model, kin.model.createData()
+    for k, q in enumerate(U):
+        pin.framesForwardKinematics(m, d, kin.pin_q(q))
+        want = np.array([d.oMf[f].translation for f in kin.tip_ids]) @ kin.R.T + kin.p
+        assert np.array_equal(tips[k], want)
+        assert np.array_equal(palm[k], kin.T @ d.oMf[kin.palm_id].homogeneous)
+
+
 def test_keys_down_from_joints(hand):
     q = press_posture(64, "ring", 0.008)
     down, finger = keys_down(hand, np.zeros(1), q[None])

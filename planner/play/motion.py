@@ -32,7 +32,7 @@ from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
 from planner.play.moves import Moves
-from planner.play.profile import Move, straight_move
+from planner.play.profile import Move, path_s, straight_move
 
 DROP_FRACTION = 0.5  # a note whose key cannot go down before this much of it is over is left out
 WAIT_MARGIN_S = 0.005  # a finger reaches its waiting pose at least this long before it descends
@@ -116,16 +116,22 @@ class _Track:
         i0 = max(0, bisect.bisect_right(self.starts, t_s[0]) - 1)
         idx = np.searchsorted(self.starts[i0:], t_s, side="right") - 1 + i0
         first = int(np.searchsorted(idx, 0, side="left"))  # (rows before every segment:
-        # q_start); the rows of segment i are a contiguous run, the times being sorted
-        for i in range(int(idx[first]) if first < len(idx) else 0, int(idx[-1]) + 1):
-            lo, hi = np.searchsorted(idx, [i, i + 1], side="left")
-            if lo == hi:
-                continue
-            seg = self.segments[i]
-            tt = t_s[lo:hi]
-            moving = int(np.searchsorted(tt, seg.t1_s, side="left"))  # tt < t1: moving
-            out[lo:lo + moving] = seg.move.at(tt[:moving] - seg.t0_s)
-            out[lo + moving:hi] = seg.move.q_a + seg.move.dq
+        # q_start)
+        if first == len(idx):
+            return out
+        # (every row after the first segment's start at once: each row's segment, the
+        # one running or the last ended, its move's profile, or its end once it is over)
+        lo = int(idx[first])
+        segs = self.segments[lo:int(idx[-1]) + 1]
+        of = idx[first:] - lo
+        t0, dur, v, a = np.array([(g.t0_s, g.move.duration_s, g.move.v, g.move.a)
+                                  for g in segs]).T[:, of]
+        q_a = np.array([g.move.q_a for g in segs])[of]
+        dq = np.array([g.move.dq for g in segs])[of]
+        tt = t_s[first:]
+        s = path_s(tt - t0, dur, v, a)
+        moving = (tt < t0 + dur)[:, None]  # (before its end, ``Segment.t1_s``)
+        out[first:] = np.where(moving, q_a + s[:, None] * dq, q_a + dq)
         return out
 
 

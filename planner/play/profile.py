@@ -39,17 +39,7 @@ class Move:
 
     def s(self, t_s: np.ndarray) -> np.ndarray:
         """Path parameter in [0, 1] at times ``t_s`` after the move's start (clamped)."""
-        t = np.clip(np.asarray(t_s, dtype=float), 0.0, self.duration_s)
-        if self.duration_s == 0.0:
-            return np.ones_like(t)
-        a, v, T = self.a, self.v, self.duration_s
-        ta = min(v / a, 0.5 * T)  # end of the acceleration phase
-        vp = a * ta  # the peak speed reached
-        s_acc = 0.5 * a * t * t
-        s_mid = 0.5 * a * ta * ta + vp * (t - ta)
-        tr = T - t
-        s_dec = 1.0 - 0.5 * a * tr * tr
-        return np.where(t < ta, s_acc, np.where(t <= T - ta, s_mid, s_dec))
+        return path_s(np.asarray(t_s, dtype=float), self.duration_s, self.v, self.a)
 
     def at(self, t_s) -> np.ndarray:
         """Joint positions (len(t), n) at times after the start."""
@@ -70,6 +60,22 @@ class Move:
         if s_target <= 1.0 - s_ta:
             return ta + (s_target - s_ta) / vp
         return T - math.sqrt(max(0.0, 2.0 * (1.0 - s_target) / a))
+
+
+def path_s(t_s: np.ndarray, duration_s, v, a) -> np.ndarray:
+    """Path parameter in [0, 1] at times ``t_s`` after the start of trapezoid moves of
+    ``duration_s`` with caps ``v`` and ``a`` (clamped): element by element, one move's
+    floats for every time or one move per time (``planner.play.motion`` samples a track's
+    segments at once). A move of zero length is at its end (1)."""
+    t = np.clip(t_s, 0.0, duration_s)
+    ta = np.minimum(v / a, 0.5 * duration_s)  # end of the acceleration phase
+    vp = a * ta  # the peak speed reached
+    s_acc = 0.5 * a * t * t
+    s_mid = 0.5 * a * ta * ta + vp * (t - ta)
+    tr = duration_s - t
+    s_dec = 1.0 - 0.5 * a * tr * tr
+    s = np.where(t < ta, s_acc, np.where(t <= duration_s - ta, s_mid, s_dec))
+    return np.where(np.equal(duration_s, 0.0), 1.0, s)
 
 
 def straight_move(q_a: np.ndarray, q_b: np.ndarray, v_max: np.ndarray,
