@@ -165,12 +165,10 @@ def _catch_facts(r) -> str:
             f"centre at +150 ms, last touch {last} from the intercept")
 
 
-def bench_catch_grid() -> None:
-    """Angles 20-60 deg x distances 1-3 m (tests/test_catch.py's grid), height 0, tennis
-    ball: each feasible plan in physics."""
-    from planner.simulate import run_replay
-
-    held = feasible = 0
+def _grid_plans():
+    """(angle deg, distance m, plan path) of each feasible plan of the default catch grid
+    (angles 20-60 deg x distances 1-3 m, tests/test_catch.py's grid, height 0, tennis
+    ball), planned into a temporary directory; the infeasible ones are named and skipped."""
     with tempfile.TemporaryDirectory() as d:
         for a in range(20, 61, 10):
             for dist in (1.0, 1.5, 2.0, 2.5, 3.0):
@@ -179,13 +177,23 @@ def bench_catch_grid() -> None:
                 if not res.feasible:
                     print(f"{a} deg {dist} m: infeasible plan, not simulated", flush=True)
                     continue
-                r = run_replay(str(path))
-                c = r.report.catch
-                feasible += 1
-                held += c.held
-                print(f"{a} deg {dist} m: {'held' if c.held else 'NOT held'}, peak contact "
-                      f"{c.peak_contact_force_n:.1f} N, {c.end_distance_m * 1000:.1f} mm from "
-                      f"the palm centre at the end; {_catch_facts(r)}", flush=True)
+                yield a, dist, path
+
+
+def bench_catch_grid() -> None:
+    """Angles 20-60 deg x distances 1-3 m (tests/test_catch.py's grid), height 0, tennis
+    ball: each feasible plan in physics."""
+    from planner.simulate import run_replay
+
+    held = feasible = 0
+    for a, dist, path in _grid_plans():
+        r = run_replay(str(path))
+        c = r.report.catch
+        feasible += 1
+        held += c.held
+        print(f"{a} deg {dist} m: {'held' if c.held else 'NOT held'}, peak contact "
+              f"{c.peak_contact_force_n:.1f} N, {c.end_distance_m * 1000:.1f} mm from "
+              f"the palm centre at the end; {_catch_facts(r)}", flush=True)
     print(f"held {held} of {feasible} feasible plans")
 
 
@@ -202,28 +210,20 @@ def bench_catch_phases(n: int) -> None:
 
     totals = np.zeros(n, dtype=int)
     feasible = 0
-    with tempfile.TemporaryDirectory() as d:
-        for a in range(20, 61, 10):
-            for dist in (1.0, 1.5, 2.0, 2.5, 3.0):
-                path = Path(d) / f"c{a}_{dist}.csv"
-                res = planner.plan_catch(float(a), dist, 0.0, "default", str(path))
-                if not res.feasible:
-                    print(f"{a} deg {dist} m: infeasible plan, not simulated", flush=True)
-                    continue
-                feasible += 1
-                tr = read_trajectory(str(path))
-                marks, far = [], []
-                for k in range(n):
-                    r = run_replay(ball_advanced(tr, k / n * TIMESTEP_S))
-                    c, rec = r.report.catch, r.record
-                    after = rec.t_s >= c.held_from_s
-                    far.append(float(np.max(np.linalg.norm(rec.ball_m - rec.palm_m,
-                                                           axis=1)[after])))
-                    marks.append("H" if c.held else ".")
-                    totals[k] += c.held
-                print(f"{a} deg {dist} m: {''.join(marks)}  held at {marks.count('H')} of {n} "
-                      f"phases; ball at most {min(far) * 1000:.0f}-{max(far) * 1000:.0f} mm "
-                      "from the palm centre from +150 ms", flush=True)
+    for a, dist, path in _grid_plans():
+        feasible += 1
+        tr = read_trajectory(str(path))
+        marks, far = [], []
+        for k in range(n):
+            r = run_replay(ball_advanced(tr, k / n * TIMESTEP_S))
+            c, rec = r.report.catch, r.record
+            after = rec.t_s >= c.held_from_s
+            far.append(float(np.max(np.linalg.norm(rec.ball_m - rec.palm_m, axis=1)[after])))
+            marks.append("H" if c.held else ".")
+            totals[k] += c.held
+        print(f"{a} deg {dist} m: {''.join(marks)}  held at {marks.count('H')} of {n} "
+              f"phases; ball at most {min(far) * 1000:.0f}-{max(far) * 1000:.0f} mm "
+              "from the palm centre from +150 ms", flush=True)
     print(f"held per phase (of {feasible}): {' '.join(str(x) for x in totals)}")
 
 

@@ -96,6 +96,47 @@ class _CloseAsk(NamedTuple):
     t_b: float
 
 
+class _DeferredClosing:
+    """A moving hand's closing start, re-timed for each estimate (``retime``) but computed
+    (``close_start``) only once a row or a decision needs it (``due``). Its time changes no
+    row before it (the fingers' closing phase is zero there), so while even its earliest
+    (``earliest_close_start``) lies beyond the rows written, that earliest stands in its
+    place: the same rows and decisions."""
+
+    def __init__(self, hand: HandModel, C: np.ndarray, closing, radius_m: float) -> None:
+        self.hand, self.C, self.closing, self.radius_m = hand, C, closing, radius_m
+        self.ask: _CloseAsk | None = None  # the inputs of the estimate deferred
+        self.computed = 0  # closing starts computed (``close_start``)
+
+    def compute(self, flight: Flight, q_open: np.ndarray, t_i: float, ready: float,
+                stop_t: float) -> float:
+        """``close_start`` for these inputs, counted."""
+        self.computed += 1
+        return close_start(self.hand, flight, self.C, q_open, self.closing, t_i, ready,
+                           stop_t, self.radius_m)
+
+    def retime(self, m: LiveMotion, ask: _CloseAsk, rows_to_s: float) -> None:
+        """The closing re-timed for the newest estimate; this observation's rows end at
+        ``rows_to_s``."""
+        low = earliest_close_start(self.closing, ask.t_i, ask.ready, ask.stop_t)
+        self.ask = ask
+        if low > rows_to_s:
+            m.set_closing(low, self.closing.duration_s)
+        else:
+            self.due(m, math.inf)
+
+    def due(self, m: LiveMotion, t_b: float) -> None:
+        """The deferred estimate's closing start, computed when its earliest is no longer
+        after ``t_b`` (it may have begun by then: the re-plan's test ``close_start_s >
+        t_b`` needs the time itself)."""
+        ask = self.ask
+        if ask is None or m.close_start_s > t_b:
+            return
+        s_c = self.compute(ask.flight, ask.q_open, ask.t_i, ask.ready, ask.stop_t)
+        m.set_closing(max(s_c, ask.t_b), self.closing.duration_s)
+        self.ask = None
+
+
 class CatchSession:
     """One throw, planned live: ``observe`` each observation, ``finish`` at the end of
     the input. ``out_path``: a file, '-' (stdout) or None (in memory: ``text``)."""
@@ -138,9 +179,7 @@ class CatchSession:
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
         self._searched_s = -math.inf  # the last whole-path search from out of reach
-        self._close_ask: _CloseAsk | None = None  # the closing's start deferred
-        # (``_retime_closing``): the inputs of the estimate it is for
-        self.closings_computed = 0  # re-plans' closing starts computed (``close_start``)
+        self._closings = _DeferredClosing(h, self.C, self.closing, self.ball.radius_m)
         self.kept_targets = 0  # re-aims that could not reach their target at rest before
         # the ball within the limits (part of the way made, or the older target kept)
         self.outcome: str | None = None
@@ -219,7 +258,7 @@ class CatchSession:
                 rows_to_s: float) -> None:
         """Steps 2-3 of the module docstring for the newest ``flight`` (observed up to
         ``t_s``), acting from ``t_b`` (this observation's rows end at ``rows_to_s``)."""
-        pl, h, r, cl = self.pl, self.pl.hand, self.ball.radius_m, self.closing
+        pl, r, cl = self.pl, self.ball.radius_m, self.closing
         pose = pl.meet(flight, self.C, r, cl, self._intercept(flight, t_s))
         stop_t = gq.stop_time(pose.v_i)
         m = self.motion
@@ -230,50 +269,19 @@ class CatchSession:
             # observation; wait while that is early enough: before the arm must be at rest
             # and before the closing's start, which is no earlier than its earliest (then
             # no closing time is needed: the same decision as with it)
-            if go < rest_by and go < earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
-                pass
-            else:
-                s_c = close_start(h, flight, self.C, pose.q_open, cl, pose.t_i, t_b + T_m,
-                                  stop_t, r)
-                self.closings_computed += 1
+            if go >= rest_by or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
+                s_c = self._closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t)
                 if go >= s_c or go >= rest_by:
                     m.start(t_b, pose.q_open, T_m)
                     m.set_closing(s_c, cl.duration_s)
         else:
-            self._close_due(t_b)
+            self._closings.due(m, t_b)
             if m.reaim(t_b, pose.q_open, rest_by) < 1.0:
                 self.kept_targets += 1
             if m.close_start_s > t_b:
-                self._retime_closing(_CloseAsk(flight, pose.q_open, pose.t_i, m.fingers_open_s,
-                                               stop_t, t_b), rows_to_s)
+                self._closings.retime(m, _CloseAsk(flight, pose.q_open, pose.t_i,
+                                                   m.fingers_open_s, stop_t, t_b), rows_to_s)
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
-
-    def _retime_closing(self, ask: _CloseAsk, rows_to_s: float) -> None:
-        """The closing's start re-timed for the newest estimate (``ask``). Its time changes
-        no row before it (the fingers' closing phase is zero there), so when even its
-        earliest (``earliest_close_start``) lies beyond this observation's rows, that
-        earliest is set in its place and ``close_start`` runs only once a row or a
-        decision needs the time (``_close_due``): the same rows and decisions."""
-        cl, m = self.closing, self.motion
-        low = earliest_close_start(cl, ask.t_i, ask.ready, ask.stop_t)
-        self._close_ask = ask
-        if low > rows_to_s:
-            m.set_closing(low, cl.duration_s)
-        else:
-            self._close_due(math.inf)
-
-    def _close_due(self, t_b: float) -> None:
-        """The closing's start of the last deferred estimate (``_retime_closing``),
-        computed when its earliest is no longer after ``t_b`` (it may have begun by then:
-        the re-plan's test ``close_start_s > t_b`` needs the time itself)."""
-        ask, m, cl = self._close_ask, self.motion, self.closing
-        if ask is None or m.close_start_s > t_b:
-            return
-        s_c = close_start(self.pl.hand, ask.flight, self.C, ask.q_open, cl, ask.t_i, ask.ready,
-                          ask.stop_t, self.ball.radius_m)
-        m.set_closing(max(s_c, ask.t_b), cl.duration_s)
-        self._close_ask = None
-        self.closings_computed += 1
 
     def _intercept(self, flight: Flight, t_s: float) -> Intercept:
         """The newest flight's intercept (step 2), warm-started from the last one. From an
@@ -341,6 +349,11 @@ class CatchSession:
                 "ball": self.ball.name, "drag": self.drag, "observations": self.fit.n,
                 "live": True}
 
+    @property
+    def closings_computed(self) -> int:
+        """Re-plans' closing starts computed (``close_start``; the rest deferred)."""
+        return self._closings.computed
+
     def _last_row_s(self, t_end_s: float) -> float:
         """The time of the last row ``_write_to(t_end_s)`` writes."""
         return math.floor(t_end_s / self.dt + 1e-9) * self.dt
@@ -367,7 +380,7 @@ class CatchSession:
         judged, and the end marker."""
         m, cl = self.motion, self.closing
         pose, h = self.pose, self.pl.hand
-        self._close_due(math.inf)
+        self._closings.due(m, math.inf)
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
             T_m = m.move_time(self.pl.q_rest, pose.q_open)
