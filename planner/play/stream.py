@@ -84,11 +84,12 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
     """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout;
     None: keep it in memory, ``PlayPlan.text``).
     ``on_progress(notes_decided, notes)`` is called as the notes are decided (played or
-    left out), chunk by chunk."""
+    left out), chunk by chunk. The clock (``planning_s``, ``first_row_s``) starts after
+    the hand's set-up (``Planner``, built here when none is given)."""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
-    t_start = time.perf_counter()
     pl = planner or Planner(hand)
+    t_start = time.perf_counter()
     notes = list(song.notes)
     selfcheck = SelfCheck(hand, rate_hz)
     writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
