@@ -102,3 +102,32 @@ def test_a_table_of_other_parameters_is_not_used(moves, tmp_path):
     assert len(same.crossings) == len(keep)
     e = next(iter(keep.values()))
     assert same.crossing(e, 0) == moves.descend(e, "high").cross_s
+
+
+def test_the_programmes_durations_are_the_moves_own(moves):
+    """``across_s`` and ``follow_s`` (no Move made) are, bit for bit, the durations of the
+    moves ``across`` and ``follow`` make (the motion plays those: the programme's costs
+    are their times); ``follow_clear`` is whether ``follow`` makes one."""
+    rng = np.random.default_rng(6)
+    E = _entries(moves)
+    seen = {"across": 0, "across None": 0, "follow": 0, "follow None": 0}
+    for _ in range(400):
+        a = E[rng.integers(len(E))]
+        mine = [e for e in E if e.finger == a.finger]
+        b = mine[rng.integers(len(mine))]
+        lat = moves.across(a, b)
+        assert moves.across_s(a, b) == (None if lat is None else lat.duration_s)
+        seen["across" if lat is not None else "across None"] += 1
+        same_key = [e for e in mine if e.pitch_class == a.pitch_class]
+        c = same_key[rng.integers(len(same_key))]
+        fol = moves.follow(a, c)
+        assert moves.follow_s(a, c) == moves._follow_ends(a, c)[2].duration_s
+        assert moves.follow_clear(a, c) is (fol is not None)
+        if fol is not None:
+            assert moves.follow_s(a, c) == fol.duration_s
+        seen["follow" if fol is not None else "follow None"] += 1
+    a, b = next((a, b) for a in E for b in E  # (a move across the table says is not clear)
+                if a.finger == b.finger and moves.table.across_clear(a, b) is False)
+    assert moves.across_s(a, b) is None and moves.across(a, b) is None
+    seen["across None"] += 1
+    assert all(seen.values()), seen

@@ -415,7 +415,7 @@ class Costs:
             # (the move fits inside the note, after its press and before its lift)
             if window_s >= follow_s + press_s:
                 if got[1] is None:
-                    got[1] = self.moves.follow(a, self.entry(m, f, rail_i)) is not None
+                    got[1] = self.moves.follow_clear(a, self.entry(m, f, rail_i))
                 if got[1]:
                     followers = followers | {(m, f)}
                     T = max(T, follow_s)

@@ -40,7 +40,7 @@ from planner.play.atlas import (
     AtlasEntry,
 )
 from planner.play.movetable import ENDS, MoveTable, table_path
-from planner.play.profile import LIMIT_FRACTION, Move, straight_move
+from planner.play.profile import LIMIT_FRACTION, Move, move_time_s, path_caps, straight_move
 
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
 HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
@@ -83,6 +83,18 @@ class Moves:
         if atlas.rail is not None:
             cap = rail_acceleration_cap(hand, [atlas.base, atlas.park()])
             self.acceleration[atlas.rail] = min(self.acceleration[atlas.rail], cap)
+        # (each finger's limits as floats, alone and after the rail's: the durations the
+        # programme asks for, ``across_s`` and ``follow_s``, are worked out without a Move)
+        self._limits = {f: (hand.velocity[js].tolist(), self.acceleration[js].tolist())
+                        for f, js in self.js.items()}
+        self._follow_limits = {}
+        if atlas.rail is not None:
+            for f, js in self.js.items():
+                cols = np.r_[atlas.rail, js]
+                self._follow_limits[f] = (hand.velocity[cols].tolist(),
+                                          self.acceleration[cols].tolist())
+        self._across_s: dict[tuple[int, int], float | None] = {}
+        self._follow_s: dict[tuple[int, int], float] = {}
 
     def params(self) -> str:
         """What the move table depends on besides the atlas (a table made otherwise is not
@@ -149,18 +161,36 @@ class Moves:
         top, wherever the rail is: the arm may have moved since the finger rose)."""
         key = (a.finger, id(a), id(b))
         if key not in self._lat:
-            ok = self.table.across_clear(a, b)
-            if ok is None:
-                f = self.hand.fingers.index(a.finger)
-                q = self.atlas.base.copy()
-                js = self.js[a.finger]
-                ok = True
-                for s in ACROSS_SAMPLES:
-                    q[js] = a.high + s * (b.high - a.high)
-                    z = self.hand.tip_position(self.hand.apply_couplings(q), f)[2]
-                    ok &= bool(z >= HIGH_SAFE_Z_M)
-            self._lat[key] = self._move(a.finger, a.high, b.high) if ok else None
+            self._lat[key] = None if self.across_s(a, b) is None else \
+                self._move(a.finger, a.high, b.high)
         return self._lat[key]
+
+    def across_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
+        """``across(a, b)``'s duration (None: not clear), without making the move (the
+        programme asks this of thousands of pairs; ``path_caps``, as ``straight_move``)."""
+        key = (id(a), id(b))
+        got = self._across_s.get(key, False)
+        if got is False:
+            got = None
+            if self._across_clear(a, b):
+                caps = path_caps((b.high - a.high).tolist(), *self._limits[a.finger])
+                got = 0.0 if caps is None else move_time_s(*caps)
+            self._across_s[key] = got
+        return got
+
+    def _across_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool:
+        """The move table's answer, or forward kinematics at ``ACROSS_SAMPLES``."""
+        ok = self.table.across_clear(a, b)
+        if ok is None:
+            f = self.hand.fingers.index(a.finger)
+            q = self.atlas.base.copy()
+            js = self.js[a.finger]
+            ok = True
+            for s in ACROSS_SAMPLES:
+                q[js] = a.high + s * (b.high - a.high)
+                z = self.hand.tip_position(self.hand.apply_couplings(q), f)[2]
+                ok &= bool(z >= HIGH_SAFE_Z_M)
+        return ok
 
     def follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
         """The rail and a finger holding its key together, from entry ``a`` to entry
@@ -175,9 +205,24 @@ class Moves:
         return self._lat[key]
 
     def follow_s(self, a: AtlasEntry, b: AtlasEntry) -> float:
-        """How long ``follow(a, b)`` takes if its path is clear (no forward kinematics:
-        the programme asks this first, and the path only of the moves that fit)."""
-        return self._follow_ends(a, b)[2].duration_s
+        """How long ``follow(a, b)`` takes if its path is clear (no forward kinematics,
+        no Move: the programme asks this first, and the path only of the moves that
+        fit): the move of ``_follow_ends``, its rail from the key's centre less each
+        entry's ``dx``."""
+        key = (id(a), id(b))
+        got = self._follow_s.get(key)
+        if got is None:
+            x = kb.key(60 + a.pitch_class).center_x_m
+            caps = path_caps([(x - b.dx_m) - (x - a.dx_m), *(b.press - a.press).tolist()],
+                             *self._follow_limits[a.finger])
+            got = self._follow_s[key] = 0.0 if caps is None else move_time_s(*caps)
+        return got
+
+    def follow_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool:
+        """Whether ``follow(a, b)`` is a move (the move table's answer, without making
+        it; forward kinematics when the table has none)."""
+        ok = self.table.follow_clear(a, b)
+        return self.follow(a, b) is not None if ok is None else ok
 
     def _follow_ends(self, a: AtlasEntry, b: AtlasEntry):
         key = ("ends", id(a), id(b))
@@ -240,10 +285,10 @@ class Moves:
         return (u.duration_s - u.cross_s) + d.cross_s
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
-        lat = self.across(a, b)
+        lat = self.across_s(a, b)
         if lat is None:
             return None
-        return self.before_rail_s(a) + lat.duration_s + self.after_rail_s(b)
+        return self.before_rail_s(a) + lat + self.after_rail_s(b)
 
     def before_rail_s(self, e: AtlasEntry) -> float:
         u = self.lift(e, "high")

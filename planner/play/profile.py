@@ -84,17 +84,26 @@ def straight_move(q_a: np.ndarray, q_b: np.ndarray, v_max: np.ndarray,
     acceleration limits (any joints: a finger's, the arm's, the whole hand's)."""
     q_a = np.asarray(q_a, dtype=float)
     dq = np.asarray(q_b, dtype=float) - q_a
-    v = a = math.inf  # (the tightest joint's caps; a few joints: floats, not arrays)
+    caps = path_caps(dq.tolist(), np.asarray(v_max, dtype=float).tolist(),
+                     np.asarray(a_max, dtype=float).tolist())
+    if caps is None:
+        return Move(q_a, dq, 0.0, 1.0, 1.0)
+    return Move(q_a, dq, move_time_s(*caps), *caps)
+
+
+def path_caps(dq: list[float], v_max: list[float], a_max: list[float]) -> tuple[float, float] | None:
+    """The path parameter's speed and acceleration caps of a straight move by ``dq``
+    (floats: a few joints), set by its tightest joint; None when it does not move.
+    ``move_time_s(*caps)`` is its duration (the programme asks only that, for many
+    moves: no ``Move`` made)."""
+    v = a = math.inf
     moving = False
-    for d, vj, aj in zip(dq.tolist(), np.asarray(v_max, dtype=float).tolist(),
-                         np.asarray(a_max, dtype=float).tolist()):
+    for d, vj, aj in zip(dq, v_max, a_max):
         if d != 0.0:
             d, moving = abs(d), True
             v = min(v, LIMIT_FRACTION * vj / d)
             a = min(a, LIMIT_FRACTION * aj / d)
-    if not moving:
-        return Move(q_a, dq, 0.0, 1.0, 1.0)
-    return Move(q_a, dq, move_time_s(v, a), v, a)
+    return (v, a) if moving else None
 
 
 def move_time_s(v: float, a: float) -> float:
