@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from planner.hand.model import load_hand
@@ -169,3 +171,41 @@ def test_a_layer_holds_one_state_per_hand_shape_cheapest_first(hand_parts):
         assert all((p is None) == (not prev) and (p is None or p in prev)
                    for _, p in layer.values())
         prev = layer
+
+
+def test_the_first_window_stops_once_its_decision_is_made(hand_parts):
+    """The first window stops weighing its look-ahead once every state of a layer
+    descends from one state of its last decided event (``_converged``): its first chunk
+    is the one the whole window gives (the window's own layers and path, worked out
+    here), and on these songs some first windows stop early."""
+    from planner.music.midi import load_song
+    from planner.play.fingering import FIRST_LOOKAHEAD, FIRST_WINDOW, FingeringProblem
+
+    at, mv = hand_parts
+    songs = Path(__file__).resolve().parents[1] / "songs"
+    early = 0
+    for name in ("fast.mid", "fur_elise.mid", "ode_to_joy.mid"):
+        notes = list(load_song(songs / name).notes)
+
+        class Counted(FingeringProblem):
+            layers = 0
+
+            def _layer(self, prev, t, new):
+                Counted.layers += 1
+                return super()._layer(prev, t, new)
+
+        p = Counted(notes, at, mv, 100.0)
+        first = next(p.chunks())
+        early += Counted.layers < FIRST_WINDOW
+        whole = FingeringProblem(notes, at, mv, 100.0)
+        evs = [(t, new) for t, new, _ in whole._events() if new][:FIRST_WINDOW]
+        layers, prev = [], {}
+        for t, new in evs:
+            prev = whole._layer(prev, t, new)
+            layers.append((t, prev, new))
+        k = FIRST_WINDOW - FIRST_LOOKAHEAD
+        ch = whole._chunk(layers[:k], whole._path(layers)[:k], None)
+        assert (first.assignments, first.cuts, first.loss_frames) == \
+            (ch.assignments, ch.cuts, ch.loss_frames)
+        assert first.skipped == ch.skipped
+    assert early >= 1

@@ -140,10 +140,14 @@ class FingeringProblem(Layers):
                 prev = layers[-1][1]
             else:  # (the song's start: from anywhere; else from the state decided)
                 prev = {} if before is None else {before: (loss, None)}
+            n = min(window, len(ahead_evs))  # (the window's layers, and the ``k`` it decides)
+            k = n if done and len(ahead_evs) <= window else max(1, n - ahead)
             for t, new in ahead_evs[len(layers):window]:
                 prev = self._layer(prev, t, new)
                 layers.append((t, prev, new))
-            k = len(layers) if done and len(ahead_evs) <= window else max(1, len(layers) - ahead)
+                if first and k < len(layers) < n and _converged(layers, k):
+                    break  # (the first window's decision is made: its look-ahead is
+                    # weighed again from the state decided anyway; the rows start sooner)
             path = self._path(layers)
             until = ahead_evs[k][0] if k < len(ahead_evs) else math.inf
             mine = tuple(s for t, s in skips if t < until)
@@ -223,6 +227,16 @@ class FingeringProblem(Layers):
                         f"than its {frames:.0f} frames: the moves there take longer")
         return Skip(n, SkipReason.CHORD, f"{len(new)} notes at t={t:.3f} s: the hand holds "
                     f"{sum(m in here for m in new)} of them from one position")
+
+def _converged(layers, k: int) -> bool:
+    """Whether every state of the last layer descends from one state of layer ``k - 1``:
+    then the best path through any later layers goes through it too, and the first
+    ``k`` layers' path is decided (exact: the same path as the whole window's)."""
+    states = layers[-1][1].keys()
+    for _, layer, _ in reversed(layers[k:]):
+        states = {layer[s][1] for s in states}
+    return len(states) == 1
+
 
 def _descendants(layers, before: State):
     """``layers`` (those after a decided state ``before``) with only the states whose
