@@ -131,3 +131,17 @@ def test_the_programmes_durations_are_the_moves_own(moves):
     assert moves.across_s(a, b) is None and moves.across(a, b) is None
     seen["across None"] += 1
     assert all(seen.values()), seen
+
+
+def test_entry_times_made_at_once_are_those_made_one_by_one(moves):
+    """The set-up's ``entry_times`` of every entry (``move_times_s`` over arrays) are, bit
+    for bit, what the entry's own lifts and descents give (``entry_times`` when first
+    asked)."""
+    E = _entries(moves)
+    assert len(moves._times) == len(E)
+    for e in E[::7]:
+        made = moves.entry_times(e)
+        del moves._times[id(e)]
+        assert moves.entry_times(e) == made
+        d, u = moves.descend(e, "high"), moves.lift(e, "high")
+        assert made[2] == (d.duration_s - d.cross_s) + u.cross_s and made[1] == d.cross_s

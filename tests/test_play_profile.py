@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from planner.play.profile import LIMIT_FRACTION, move_time_s, straight_move
+from planner.play.profile import LIMIT_FRACTION, move_time_s, move_times_s, straight_move
 
 V = np.array([20.0, 10.5, 2.78])
 A = np.array([500.0, 500.0, 40.0])
@@ -84,3 +84,13 @@ def test_caps_are_those_of_the_joints_vectorised():
         assert m.v == float(np.min(LIMIT_FRACTION * v[moving] / d[moving]))
         assert m.a == float(np.min(LIMIT_FRACTION * a[moving] / d[moving]))
         assert m.duration_s == move_time_s(m.v, m.a)
+
+
+def test_move_times_are_straight_moves_durations_bit_for_bit():
+    rng = np.random.default_rng(8)
+    v, a = rng.uniform(1.0, 8.0, 4), rng.uniform(20.0, 300.0, 4)
+    dq = rng.normal(0.0, 0.3, (500, 4)) * (rng.random((500, 4)) < 0.8)  # (joints not moving)
+    dq[0] = 0.0  # (a move of zero length)
+    times = move_times_s(dq, v, a)
+    assert times[0] == 0.0
+    assert times.tolist() == [straight_move(np.zeros(4), d, v, a).duration_s for d in dq]

@@ -40,7 +40,14 @@ from planner.play.atlas import (
     AtlasEntry,
 )
 from planner.play.movetable import ENDS, MoveTable, table_path
-from planner.play.profile import LIMIT_FRACTION, Move, move_time_s, path_caps, straight_move
+from planner.play.profile import (
+    LIMIT_FRACTION,
+    Move,
+    move_time_s,
+    move_times_s,
+    path_caps,
+    straight_move,
+)
 
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
 HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
@@ -95,6 +102,8 @@ class Moves:
                                           self.acceleration[cols].tolist())
         self._across_s: dict[tuple[int, int], float | None] = {}
         self._follow_s: dict[tuple[int, int], float] = {}
+        self._times: dict[int, tuple] = {}  # ``entry_times`` by entry id (with the entry)
+        self._all_entry_times()
 
     def params(self) -> str:
         """What the move table depends on besides the atlas (a table made otherwise is not
@@ -276,13 +285,48 @@ class Moves:
         return self._move(e.finger, e.high, e.hover)
 
     # ------------------------------------------------------------------ gaps
+    def entry_times(self, e: AtlasEntry) -> tuple[float, float, float, float]:
+        """(``before_rail_s``, ``after_rail_s``, ``press_min_s``, ``repeat_gap_s``) of an
+        entry: its lifts and descents at crossing height and at ``rise``, timed at their
+        key crossings (worked out for every entry of the move table when the hand is set
+        up, ``_all_entry_times``; for another entry when first asked)."""
+        got = self._times.get(id(e))
+        if got is None or got[0] is not e:
+            d, u = self.descend(e, "high"), self.lift(e, "high")
+            ur, dr = self.lift(e, "rise"), self.descend(e, "rise")
+            got = self._times[id(e)] = (e, u.duration_s - u.cross_s, d.cross_s,
+                                        (d.duration_s - d.cross_s) + u.cross_s,
+                                        (ur.duration_s - ur.cross_s) + dr.cross_s)
+        return got[1:]
+
+    def _all_entry_times(self) -> None:
+        """``entry_times`` of every entry the move table has crossings for, at once: the
+        same floats (a lift and its descent are one move each way, of one duration;
+        ``move_times_s`` is ``straight_move``'s, bit for bit), so that no plan spends
+        its first window on them (``tests/test_play_moves.py`` holds them equal)."""
+        cols = {p: i for i, p in enumerate(ENDS)}
+        for f, js in self.js.items():
+            es = [e for e in self.atlas._entries.values() if e is not None and e.finger == f
+                  and self.table.crossings.get(self.table.key(e)) is not None]
+            if not es:
+                continue
+            press = np.array([e.press for e in es])
+            c = np.array([self.table.crossings[self.table.key(e)] for e in es])
+            vel, acc = self.hand.velocity[js], self.acceleration[js]
+            t_high = move_times_s(np.array([e.high for e in es]) - press, vel, acc)
+            t_rise = move_times_s(np.array([e.rise for e in es]) - press, vel, acc)
+            d_high, u_high = c[:, cols["high"]], c[:, 3 + cols["high"]]
+            d_rise, u_rise = c[:, cols["rise"]], c[:, 3 + cols["rise"]]
+            for e, *times in zip(es, (t_high - u_high).tolist(), d_high.tolist(),
+                                 ((t_high - d_high) + u_high).tolist(),
+                                 ((t_rise - u_rise) + d_rise).tolist()):
+                self._times[id(e)] = (e, *times)
+
     def press_min_s(self, e: AtlasEntry) -> float:
-        d, u = self.descend(e, "high"), self.lift(e, "high")
-        return (d.duration_s - d.cross_s) + u.cross_s
+        return self.entry_times(e)[2]
 
     def repeat_gap_s(self, e: AtlasEntry) -> float:
-        u, d = self.lift(e, "rise"), self.descend(e, "rise")
-        return (u.duration_s - u.cross_s) + d.cross_s
+        return self.entry_times(e)[3]
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         lat = self.across_s(a, b)
@@ -291,11 +335,10 @@ class Moves:
         return self.before_rail_s(a) + lat + self.after_rail_s(b)
 
     def before_rail_s(self, e: AtlasEntry) -> float:
-        u = self.lift(e, "high")
-        return u.duration_s - u.cross_s
+        return self.entry_times(e)[0]
 
     def after_rail_s(self, e: AtlasEntry) -> float:
-        return self.descend(e, "high").cross_s
+        return self.entry_times(e)[1]
 
     def rail_move(self, rail_a: float, rail_b: float) -> Move:
         r = self.atlas.rail

@@ -49,9 +49,14 @@ class MoveTable:
         self._index: dict[tuple[str, int, int], tuple[int, int]] = {}  # in finger, in key
         self._across: dict[str, np.ndarray] = {}
         self._follow: dict[tuple[str, int], np.ndarray] = {}
+        self._keys: dict[int, tuple] = {}  # (entry, its ``key``) by the entry's id
 
     def key(self, e: AtlasEntry) -> tuple[str, int, int]:
-        return (e.finger, e.pitch_class, round((e.dx_m - self.natural_dx[e.finger]) / STEP_M))
+        got = self._keys.get(id(e))  # (by the entry, held: its id is not reused)
+        if got is None or got[0] is not e:
+            got = self._keys[id(e)] = (e, (e.finger, e.pitch_class,
+                                           round((e.dx_m - self.natural_dx[e.finger]) / STEP_M)))
+        return got[1]
 
     def crossing(self, e: AtlasEntry, column: int) -> float | None:
         row = self.crossings.get(self.key(e))

@@ -106,6 +106,20 @@ def path_caps(dq: list[float], v_max: list[float], a_max: list[float]) -> tuple[
     return (v, a) if moving else None
 
 
+def move_times_s(dq: np.ndarray, v_max: np.ndarray, a_max: np.ndarray) -> np.ndarray:
+    """``straight_move``'s durations of the moves by the rows of ``dq`` (n, joints), all
+    at once and bit for bit: ``path_caps`` per row and ``move_time_s`` in the same float
+    operations, element by element (``tests/test_play_profile.py`` holds them equal)."""
+    d = np.abs(dq)
+    moving = d != 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = np.where(moving, LIMIT_FRACTION * np.asarray(v_max, dtype=float) / d, math.inf)
+        a = np.where(moving, LIMIT_FRACTION * np.asarray(a_max, dtype=float) / d, math.inf)
+        v, a = v.min(axis=1), a.min(axis=1)
+        t = np.where(v * v >= a, 2.0 / np.sqrt(a), 1.0 / v + v / a)
+    return np.where(moving.any(axis=1), t, 0.0)
+
+
 def move_time_s(v: float, a: float) -> float:
     """Duration of a unit move on a trapezoid with caps ``v`` and ``a`` (triangle if
     the unit distance is reached before ``v``)."""
