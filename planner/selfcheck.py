@@ -22,6 +22,8 @@ from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
 from planner.trajfile import distinct_rows
 
+BATCH_ROWS = 2000  # rows judged at once (20 s at 100 Hz: 0.7 MB of rows waiting at most)
+
 
 class SkipReason(enum.Enum):
     """Why a note is not played, beside the planner's own reasons (the enum of its
@@ -77,11 +79,26 @@ class SelfCheck:
         self._t: list[np.ndarray] = []
         self._down: list[np.ndarray] = []
         self._finger: list[np.ndarray] = []
+        self._pending: list[np.ndarray] = []  # (rows not judged yet, t and joints)
+        self._pending_rows = 0
 
     def add_rows(self, rows: np.ndarray) -> None:
-        """Rows as written: (n, 1 + joints + motors), t first."""
+        """Rows as written: (n, 1 + joints + motors), t first. They are judged
+        ``BATCH_ROWS`` at a time (the planner writes a few dozen rows at once: the key
+        rule's array work per call would cost more than the rows), the rest by
+        ``verdict``."""
         if len(rows) == 0:
             return
+        self._pending.append(rows[:, :1 + self._nj])
+        self._pending_rows += len(rows)
+        if self._pending_rows >= BATCH_ROWS:
+            self._judge()
+
+    def _judge(self) -> None:
+        if not self._pending:
+            return
+        rows = np.concatenate(self._pending)
+        self._pending, self._pending_rows = [], 0
         q = rows[:, 1:1 + self._nj]
         # (the rule is row by row: a row equal to the one before it, a hand holding still,
         # is judged once; about three rows in four on the corpus)
@@ -96,6 +113,7 @@ class SelfCheck:
         """Score the rows against ``notes``; ``left_out`` are the planner's own skips
         (note index -> (reason, detail)). Every note the replay finds missed is skipped:
         with the planner's reason when it left the note out, else as ``MISSED``."""
+        self._judge()
         t = np.concatenate(self._t) if self._t else np.zeros(1)
         down = np.concatenate(self._down) if self._down else np.zeros((1, 88), dtype=bool)
         finger = np.concatenate(self._finger) if self._finger else None

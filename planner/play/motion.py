@@ -108,6 +108,9 @@ class _Track:
         """Positions at sorted times ``t_s`` (each segment's rows at once: a hold of an
         hour costs what a hold of a second does)."""
         t_s = np.asarray(t_s, dtype=float)
+        if self.segments and len(t_s) and t_s[0] >= self.free_s:  # (all after its last
+            # segment: where that one ended, ``self.q``, as below; most tracks, most rows)
+            return np.tile(self.q, (len(t_s), 1))
         out = np.tile(q_start, (len(t_s), 1))
         if not self.segments or len(t_s) == 0:
             return out
