@@ -138,8 +138,8 @@ class CostMemo:
     by keys, forces, fingers and rail positions (bounded), kept across the songs of one
     hand (``planner.play.Planner`` holds one)."""
 
-    __slots__ = ("cands", "entry", "follows", "gaps", "rail_time", "rails", "rails_to",
-                 "shortest", "timing")
+    __slots__ = ("cand_rails", "cands", "entry", "follows", "gaps", "rail_time", "rails",
+                 "rails_to", "shortest", "timing")
 
     def __init__(self) -> None:
         for name in self.__slots__:
@@ -168,6 +168,7 @@ class Costs:
         self._follows: dict = m.follows
         self._rail_time: dict[int, float] = m.rail_time
         self._cands: dict = m.cands
+        self._cand_rails: dict = m.cand_rails  # (``_cands``' rails, and its best, by key)
         self._rails_to: dict = m.rails_to
         self._shortest: dict[tuple[int, float], float] = m.shortest
         self._ctx: dict[float, dict[State, Prev]] = {}  # (the song's: by event time)

@@ -13,6 +13,7 @@ fingers on the notes sounding), the cheapest state, and of those the ``BEAM`` ch
 
 from __future__ import annotations
 
+import bisect
 import itertools
 import math
 
@@ -221,12 +222,12 @@ class Layers(Costs):
             cands = self._candidates(new, press_key)
             if p is None or len(cands) <= 3:
                 keep = cands
-            else:
-                here = [c for c in cands if c[0] == p.rail_i]
-                below = [c for c in cands if c[0] < p.rail_i]
-                above = [c for c in cands if c[0] > p.rail_i]
-                keep = here + below[-1:] + above[:1]
-                best = min(cands, key=lambda c: c[1])
+            else:  # (the candidates by rail, found by bisection: here, the nearest
+                # below and above, and the best for the fingers)
+                rails, best = self._cand_rails[press_key]
+                i = bisect.bisect_left(rails, p.rail_i)
+                j = i + 1 if i < len(rails) and rails[i] == p.rail_i else i
+                keep = cands[i:j] + cands[max(0, i - 1):i] + cands[j:j + 1]
                 if best not in keep:
                     keep.append(best)
             self._rails_to[key] = keep
@@ -248,6 +249,8 @@ class Layers(Costs):
                           for n, f in new.items()) * TIE_DX_PER_M
                 out.append((rail_i, tie))
             self._cands[key] = out
+            self._cand_rails[key] = ([r for r, _ in out],
+                                     min(out, key=lambda c: c[1]) if out else None)
         return out
 
     def _press_key(self, new: dict[int, str]) -> tuple:

@@ -290,6 +290,10 @@ class Moves:
         entry: its lifts and descents at crossing height and at ``rise``, timed at their
         key crossings (worked out for every entry of the move table when the hand is set
         up, ``_all_entry_times``; for another entry when first asked)."""
+        return self._times_of(e)[1:]
+
+    def _times_of(self, e: AtlasEntry) -> tuple:
+        """(the entry, then its ``entry_times``), as kept."""
         got = self._times.get(id(e))
         if got is None or got[0] is not e:
             d, u = self.descend(e, "high"), self.lift(e, "high")
@@ -297,7 +301,7 @@ class Moves:
             got = self._times[id(e)] = (e, u.duration_s - u.cross_s, d.cross_s,
                                         (d.duration_s - d.cross_s) + u.cross_s,
                                         (ur.duration_s - ur.cross_s) + dr.cross_s)
-        return got[1:]
+        return got
 
     def _all_entry_times(self) -> None:
         """``entry_times`` of every entry the move table has crossings for, at once: the
@@ -323,10 +327,10 @@ class Moves:
                 self._times[id(e)] = (e, *times)
 
     def press_min_s(self, e: AtlasEntry) -> float:
-        return self.entry_times(e)[2]
+        return self._times_of(e)[3]
 
     def repeat_gap_s(self, e: AtlasEntry) -> float:
-        return self.entry_times(e)[3]
+        return self._times_of(e)[4]
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         lat = self.across_s(a, b)
@@ -335,10 +339,10 @@ class Moves:
         return self.before_rail_s(a) + lat + self.after_rail_s(b)
 
     def before_rail_s(self, e: AtlasEntry) -> float:
-        return self.entry_times(e)[0]
+        return self._times_of(e)[1]
 
     def after_rail_s(self, e: AtlasEntry) -> float:
-        return self.entry_times(e)[1]
+        return self._times_of(e)[2]
 
     def rail_move(self, rail_a: float, rail_b: float) -> Move:
         r = self.atlas.rail
