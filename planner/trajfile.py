@@ -38,6 +38,28 @@ def distinct_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return new, np.cumsum(new) - 1
 
 
+AS_TEXT_ABS = 1e12  # values past this are read from their text (a time of 30,000 years)
+
+
+def as_written(x: np.ndarray) -> np.ndarray:
+    """What a file holds for each value of ``x``, ``float("%.6f" % v)``, bit for bit,
+    without reading the text back (the writer hands its rows to a self-check): ``n``,
+    ``x * 1e6`` rounded to an integer, is the text's digits (both round half to even)
+    unless the product's own rounding could decide, within its float spacing of a half
+    (those, and any value not finite or past ``AS_TEXT_ABS``, are read from their text);
+    and ``n / 1e6`` is the double nearest the text's number, as reading it gives (both
+    correctly rounded: ``n`` and 1e6 are exact)."""
+    x = np.asarray(x, dtype=float)
+    y = x * 1e6
+    n = np.rint(y)
+    out = n / 1e6
+    with np.errstate(invalid="ignore"):
+        odd = ~(np.abs(np.abs(y - n) - 0.5) > np.spacing(np.abs(y))) | ~(np.abs(x) < AS_TEXT_ABS)
+    if odd.any():
+        out[odd] = [float(f"{v:.6f}") for v in x[odd].tolist()]
+    return out
+
+
 class TrajectoryWriter:
     """Streams a trajectory: the constructor opens the path and writes metadata and
     header, ``write_rows`` appends setpoints, ``close`` writes the end marker."""
@@ -78,8 +100,7 @@ class TrajectoryWriter:
         self._out.write(text)
         self.rows += len(body)
         self._out.flush()
-        values = np.array(",".join(distinct).split(","), dtype=float).reshape(-1, body.shape[1])
-        written = np.column_stack([np.array(times, dtype=float), values[of]])
+        written = np.column_stack([as_written(t_s), as_written(body[new])[of_row]])
         if self._on_rows is not None:
             self._on_rows(written)
         return written
