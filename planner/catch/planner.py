@@ -28,8 +28,16 @@ from planner.catch.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.mount import CatchMount
 from planner.catch.observe import FitResult, predict_intercept
 from planner.catch.results import CatchPlan, CatchReason, Closing, Reason
+from planner.catch.roll import ROLL_ROOM_M, roll_towards_wrist_m
 from planner.catch.rowcheck import RowCheck
-from planner.catch.stopping import ROLL_WEIGHT, SoftStop, StopDynamics, hold_turn, plan_stop
+from planner.catch.stopping import (
+    ROLL_WEIGHT,
+    SoftStop,
+    StopDynamics,
+    hold_turn,
+    plan_stop,
+    turn_time,
+)
 from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
@@ -38,7 +46,7 @@ from planner.check.limits import RATE_TOL
 from planner.errors import InfeasibleError, PlannerError
 from planner.hand.model import HandModel
 from planner.ik import HandIK
-from planner.trajectory import LIMIT_MARGIN, Phase, sample
+from planner.trajectory import LIMIT_MARGIN, Phase, min_jerk, sample
 
 SIGNAL_S = 0.025  # seed (Markus): 25 ms of signal processing
 PLAN_BUDGET_S = 0.005  # planning latency budget (bench target p99)
@@ -46,7 +54,12 @@ INTERCEPT_PLAN_TOL_M = 0.001  # what the planner aims for
 HOLD_AFTER_S = 0.5  # rows until intercept_t + this
 _CLOSE_STEP_S = 0.005  # a closing that would touch the arriving ball starts this much later
 _CLOSE_TRIES = 8  # ... up to this many times
-TURN_EARLY, TURN_LATE = "early", "late"  # when the wrist's turn that holds the ball starts
+TURN_AHEAD, TURN_EARLY, TURN_LATE = "ahead", "early", "late"  # when the wrist's turn that
+# holds the ball starts: by the roll rule (``_ahead_rows``), from the grasp, after the stop
+_AHEAD_STEP_S = 0.010  # the roll rule's candidate starts: from the grasp's back this far apart
+_AHEAD_MAX_S = 0.150  # ... to this long before the intercept (rows edited by hand that started
+# the turn 80-120 ms before it held 20 deg / 1.0 and 1.5 m in physics: docs/physics-replay.md)
+_AHEAD_ITER = 6  # fixed-point steps of an early turn's length (its share before the ball)
 _TURN_GROW = 1.25  # an early turn too fast on top of the stop is made this much longer
 _TURN_TRIES = 6  # ... up to this many times (1.25^6 = 3.8 x)
 _NOT_THE_TURN = {CatchReason.OUT_OF_REACH, CatchReason.TOO_SOON}  # before the ball: no turn
@@ -122,8 +135,11 @@ class CatchPlanner:
         alone passes the self-check (a palm that moves can bring the ball to a fingertip
         the closing would miss otherwise); False: the palm at rest. The hold (the roll term
         of the contact speeds, the wrist's turn: ``planner.catch.stopping``): the turn from
-        the grasp on (``TURN_EARLY``), else after the arm has stopped (``TURN_LATE``), else
-        none (the plan without the hold) -- the first of those that is feasible."""
+        the grasp on or earlier, so that the ball does not roll off the palm's wrist side before
+        the turn has levelled it (``TURN_AHEAD``: ``_ahead_rows``), else from the grasp on
+        (``TURN_EARLY``, when the rule started it earlier), else after the arm has stopped
+        (``TURN_LATE``), else none (the plan without the hold) -- the first of those that is
+        feasible."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._plans(args, soft, True)
@@ -140,17 +156,18 @@ class CatchPlanner:
 
     def _plans(self, args: tuple, soft: bool, bodies: bool) -> CatchPlan:
         """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing."""
-        plan = self._plan(*args, soft=soft, bodies=bodies)
-        for mode in (TURN_LATE, None):
+        plan, ahead = self._plan(*args, soft=soft, bodies=bodies)
+        for mode in ((TURN_EARLY,) if ahead else ()) + (TURN_LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
-            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies)
+            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies)[0]
             if other.feasible:
-                what = "after the arm has stopped" if mode else "no turn to hold the ball"
+                what = {TURN_EARLY: "the turn from the grasp", TURN_LATE:
+                        "after the arm has stopped", None: "no turn to hold the ball"}[mode]
                 plan = replace(other, notes=other.notes + (
                     f"{what}: the earlier turn failed (" + "; ".join(plan.reasons) + ")",))
         if soft and not plan.feasible:
-            still = self._plan(*args, soft=False, bodies=bodies)
+            still = self._plan(*args, soft=False, bodies=bodies)[0]
             if still.feasible:
                 plan = replace(still, notes=still.notes + (
                     "the palm waits at rest: the soft catch failed (" +
@@ -159,10 +176,12 @@ class CatchPlanner:
 
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: dict[str, Any] | None, flight_time_s: float | None,
-              fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_EARLY,
-              bodies: bool = True) -> CatchPlan:
-        """``plan`` with the soft catch on or off, the wrist's turn from the grasp (TURN_EARLY),
-        after the arm's stop (TURN_LATE) or none (None: nor the contact speeds' roll term)."""
+              fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_AHEAD,
+              bodies: bool = True) -> tuple[CatchPlan, bool]:
+        """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
+        (TURN_AHEAD), from the grasp (TURN_EARLY), after the arm's stop (TURN_LATE) or none
+        (None: nor the contact speeds' roll term); and whether the turn starts before the
+        grasp (the roll rule moved it)."""
         t0 = time.perf_counter()
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
@@ -204,8 +223,11 @@ class CatchPlanner:
                           pad_time_s(soft_stop.v_rel), r)
         turn0 = self._turn(pose, soft_stop) if turn_mode else (np.zeros(h.n), 0.0)
         for _ in range(_CLOSE_TRIES):
-            turn, t, Q = self._turned_rows(turn0, turn_mode, (pose, q_pre, soft_stop, closing,
-                                                              t_react, T_m, s_c, rate_hz))
+            rows_args = (pose, q_pre, soft_stop, closing, t_react, T_m, s_c, rate_hz)
+            if turn_mode == TURN_AHEAD:
+                turn, t, Q, rows_args = self._ahead_rows(turn0, rows_args, flight)
+            else:
+                turn, t, Q = self._turned_rows(turn0, turn_mode, rows_args)
             t_static = max(s_c + closing.duration_s, soft_stop.end_s, turn[2] + turn[1])
             err, clear, g_t, g_f, check_reasons = self.rows.check(
                 flight, C, r, t, Q, pose.t_i, t_static, rate_hz, closing.reason is not None)
@@ -216,6 +238,10 @@ class CatchPlanner:
                 break
             s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
         reasons += [Reason(_row_kind(x), x) for x in check_reasons]
+        s_i = _turn_share(turn, pose.t_i)  # the roll rule's early turn: its share before the
+        q_pre, T_m = q_pre - s_i * turn[0] / (1.0 - s_i), rows_args[5]  # ball is taken off
+        # the pre-catch pose (``_rows``)
+        ahead = turn_mode == TURN_AHEAD and turn[2] < _turn_start(soft_stop, closing, s_c, True)
         q_closed = pose.q_closed.copy()
         q_closed[arm] += soft_stop.last_offset
         q_closed += turn[0]  # the pose the ball is held in (the turn ends at rest)
@@ -223,6 +249,9 @@ class CatchPlanner:
         stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r, g_t)
         reasons += force_reasons
         unc = None if fit is None else uncertainty(fit, float(C[0] + centre_i[0]))
+        notes = ((f"the wrist's turn starts {1000 * (pose.t_i - turn[2]):.0f} ms before the "
+                 "intercept: from the grasp the ball would roll off the palm's wrist side"),
+                 ) if ahead else ()
         return CatchPlan(
             feasible=not reasons, reasons=tuple(reasons), flight=flight, catch_point=C,
             T_world_root=self.mount.T_world_root(C), base_hand=self.base_hand,
@@ -235,7 +264,7 @@ class CatchPlanner:
             grasp_fingers=g_f, min_clearance_before_m=clear, stop=stop, hold=hold, t=t, q=Q,
             q_motor=h.motor_angles(Q), ik_iterations=pose.ik_iterations,
             t_info_s=float(t_info), uncertainty=unc, planning_s=time.perf_counter() - t0,
-            soft=soft_stop if np.any(soft_stop.qd) else None)
+            notes=notes, soft=soft_stop if np.any(soft_stop.qd) else None), ahead
 
     def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
              ic: Intercept) -> _Pose:
@@ -275,15 +304,20 @@ class CatchPlanner:
         """The rows: rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
         stopping motion (``stop``), open -> closed fingers from ``s_c``, the wrist's ``turn``
         (delta, duration, start) that holds the ball, until ``HOLD_AFTER_S`` after the intercept
-        (and the arm at rest)."""
+        (and the arm at rest). A turn started before the intercept has made the share s of
+        its move by then (``_turn_share``): the move is delta / (1 - s), the pre-catch pose
+        short of it by s times that, so that the rows pass the intercept pose at the
+        intercept (the turn's speed added to the stop's) and end turned by delta."""
         h = self.hand
-        phases = [Phase(delta=q_pre - self.q_rest, duration_s=T_m),
+        delta, T_turn, t_turn = turn
+        s_i = _turn_share(turn, pose.t_i)
+        move = delta / (1.0 - s_i)
+        phases = [Phase(delta=q_pre - s_i * move - self.q_rest, duration_s=T_m),
                   Phase(delta=pose.q_closed - pose.q_open, duration_s=closing.duration_s)]
         starts = [t_react, s_c]
         t_end = max(pose.t_i + HOLD_AFTER_S, stop.end_s + 2.0 / rate_hz)
-        delta, T_turn, t_turn = turn
         if T_turn > 0:
-            phases.append(Phase(delta=delta, duration_s=T_turn))
+            phases.append(Phase(delta=move, duration_s=T_turn))
             starts.append(t_turn)
             t_end = max(t_end, t_turn + T_turn + 2.0 / rate_hz)
         n_rows = math.floor(t_end * rate_hz + 1e-9) + 1
@@ -311,8 +345,13 @@ class CatchPlanner:
         to refuse). Returns the turn (delta, duration, start) and the rows."""
         _, _, stop, closing, _, _, s_c, _ = rows_args
         turn = (*turn0, _turn_start(stop, closing, s_c, mode == TURN_EARLY))
+        return self._fit_turn(turn, rows_args, mode == TURN_EARLY)
+
+    def _fit_turn(self, turn: tuple[np.ndarray, float, float], rows_args: tuple, fit: bool):
+        """``_turned_rows``'s rows with ``turn`` (delta, duration, start), lengthened while
+        ``fit`` and a joint leaves its limits (the start kept)."""
         t, Q = self._rows(*rows_args, turn)
-        if mode != TURN_EARLY or turn0[1] <= 0:
+        if not fit or turn[1] <= 0:
             return turn, t, Q
         h, dt = self.hand, float(t[1] - t[0])
         for _ in range(_TURN_TRIES):
@@ -324,6 +363,71 @@ class CatchPlanner:
             turn = (turn[0], turn[1] * _TURN_GROW, turn[2])
             t, Q = self._rows(*rows_args, turn)
         return turn, t, Q
+
+    def _ahead_rows(self, turn0: tuple[np.ndarray, float], rows_args: tuple, flight: Flight):
+        """The roll rule (TURN_AHEAD): the wrist's turn (delta, duration) started at the latest
+        of the candidates -- the grasp (TURN_EARLY's start), then every ``_AHEAD_STEP_S``
+        earlier to ``_AHEAD_MAX_S`` before the intercept -- on whose rows the ball, landing on
+        the palm, rolls at most ``ROLL_ROOM_M`` towards the wrist before the turn has
+        levelled the palm (``planner.catch.roll``: the ball's inertia, gravity and the rows'
+        accelerations); the least rolling when none does. A start before the intercept
+        moves the pre-catch pose back by the turn's share before the ball (``_rows``),
+        which the hand must reach (its move ``move_time``) before the turn and the stop
+        begin, within the joints' range; its length is set for the longer move
+        (``turn_time``, fixed point) and fitted to the joints' limits on the rows. Returns
+        the turn (delta, duration, start), the rows and their ``rows_args`` (the move-in's
+        duration for the pre-catch pose it reaches)."""
+        pose, _, stop, closing, _, _, s_c, _ = rows_args
+        first = _turn_start(stop, closing, s_c, True)
+        best = None
+        for k in range(math.floor((first - pose.t_i + _AHEAD_MAX_S) / _AHEAD_STEP_S
+                                      + 1e-9) + 1):
+            start = first - k * _AHEAD_STEP_S
+            turn, args = (*turn0, start), rows_args
+            if start < pose.t_i and turn0[1] > 0:
+                got = self._ahead_turn(turn0, start, rows_args)
+                if got is None:
+                    break
+                turn, args = got
+            turn, t, Q = self._fit_turn(turn, args, True)
+            _, palm = self.kin.frames(Q)
+            rolled = roll_towards_wrist_m(t, palm, float(flight.ball.radius_m), pose.t_i,
+                                          flight.velocity(pose.t_i),
+                                          flight.ball.inertia_ratio)
+            if best is None or rolled < best[0]:
+                best = (rolled, turn, t, Q, args)
+            if rolled <= ROLL_ROOM_M or turn0[1] <= 0:
+                break
+        return best[1], best[2], best[3], best[4]
+
+    def _ahead_turn(self, turn0: tuple[np.ndarray, float], start: float, rows_args: tuple):
+        """The turn ``turn0`` (delta, duration) started at ``start`` before the intercept:
+        its duration for the move delta / (1 - s) it then makes (s its share before the
+        ball, ``_turn_share``; a fixed point: the duration only grows), and ``rows_args``
+        with the move-in to the pre-catch pose less s times that move. None when that pose
+        leaves the flexion's range or is not reached before the turn (or the stop) starts."""
+        pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz = rows_args
+        h, i = self.hand, self.joints.i_flex
+        delta, T = turn0
+        q_end = pose.q_closed.copy()
+        q_end[list(self.joints.arm)] += stop.last_offset
+        for _ in range(_AHEAD_ITER):
+            s = _turn_share((delta, T, start), pose.t_i)
+            if s >= 1.0 - 1e-6:
+                return None
+            move = delta / (1.0 - s)
+            T = max(T, turn_time(self.dyn, q_end + delta - move, move))
+            if not math.isfinite(T):
+                return None
+        s = _turn_share((delta, T, start), pose.t_i)
+        pre = q_pre - s * delta / (1.0 - s)
+        pad = 0.5 * (1.0 - LIMIT_MARGIN) * (h.upper[i] - h.lower[i])
+        if not h.lower[i] + pad <= pre[i] <= h.upper[i] - pad:
+            return None
+        T_m = self.dyn.move_time(self.q_rest, pre)
+        if t_react + T_m > min(start, stop.start_s if np.any(stop.qd) else pose.t_i):
+            return None
+        return (delta, T, start), (pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz)
 
     def forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float,
                grasp_t: float | None = None):
@@ -368,6 +472,14 @@ class CatchPlanner:
         _, palm = self.kin.frames(Q[k0:])
         return ball_loads(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i), PAD_GIVE_M,
                           grasp_t)[0]
+
+
+def _turn_share(turn: tuple[np.ndarray, float, float], t_i: float) -> float:
+    """The share of the wrist's turn (delta, duration, start) made by ``t_i`` (min-jerk)."""
+    _, T, start = turn
+    if T <= 0 or start >= t_i:
+        return 0.0
+    return float(min_jerk(np.array([(t_i - start) / T]))[0])
 
 
 def _turn_start(stop: SoftStop, closing: Closing, s_c: float, early: bool) -> float:

@@ -479,17 +479,26 @@ def hold_turn(dyn: StopDynamics, q_end: np.ndarray, tilt_deg: float = HOLD_TILT_
     best = _best_flex(h, q_end, i, np.clip(np.linspace(best - d, best + d, 21), lo + pad,
                                            hi - pad), want)
     z[i] = best - q_end[i]
-    T = phase_duration(z, h.velocity, h.acceleration)
-    for q in (q_end, q_end + z):  # move_time's rule within TURN_SHARE of every motor
+    T = turn_time(dyn, q_end, z)
+    return (z, T) if math.isfinite(T) else (np.zeros(h.n), 0.0)
+
+
+def turn_time(dyn: StopDynamics, q_from: np.ndarray, delta: np.ndarray) -> float:
+    """The shortest min-jerk turn ``delta`` from ``q_from`` within every joint's speed and
+    acceleration limit and every motor within ``TURN_SHARE`` of its capacity with the
+    hand's inertia at either end (``move_time``'s rule); inf when gravity alone leaves a
+    motor no room."""
+    T = phase_duration(delta, dyn.hand.velocity, dyn.hand.acceleration)
+    for q in (q_from, q_from + delta):
         MH, room = dyn.accel_room(q)
         room = room - (STOP_SHARE - TURN_SHARE) * dyn.cap
-        per = np.abs(MH @ z)
+        per = np.abs(MH @ delta)
         need = per > 1e-12
         if np.any(room[need] <= 0):
-            return np.zeros(h.n), 0.0
+            return math.inf
         if need.any():
             T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
-    return z, T
+    return T
 
 
 def _best_flex(h: HandModel, q_end: np.ndarray, i: int, cand: np.ndarray, want: float
