@@ -262,10 +262,11 @@ class StopDynamics:
         self._rooms[key] = out
         return out
 
-    def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None) -> float:
+    def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None,
+                  share: float = STOP_SHARE) -> float:
         """Shortest min-jerk speed ramp between rest and ``qd`` (its peak acceleration is
-        PEAK_VEL |qd| / T) within the acceleration limits and every motor within
-        ``STOP_SHARE`` of its capacity; ``load``: (n, k) extra joint torque per unit arm
+        PEAK_VEL |qd| / T) within the acceleration limits and every motor within ``share``
+        (``STOP_SHARE``) of its capacity; ``load``: (n, k) extra joint torque per unit arm
         acceleration (the riding ball). inf when gravity and speed alone leave no room."""
         if not np.any(qd):
             return 0.0
@@ -274,7 +275,7 @@ class StopDynamics:
         base = M @ self.joint_torques(q, qd, z)
         per = M @ (self.joint_torques(q, z, qd) - self.joint_torques(q, z, z)
                    + (load @ qd if load is not None else 0.0))
-        room = STOP_SHARE * self.cap - np.abs(base)
+        room = share * self.cap - np.abs(base)
         need = np.abs(per) > 1e-12
         if np.any(room[need] <= 0):
             return math.inf
