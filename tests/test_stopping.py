@@ -232,3 +232,46 @@ def test_hold_turn_within_the_motors(pl):
         room = room - (STOP_SHARE - TURN_SHARE) * pl.dyn.cap
         assert np.all(np.abs(MH @ dq) * PEAK_ACC / T ** 2 <= room + 1e-9)
     assert abs(dq[i]) / T * 1.875 <= pl.hand.velocity[i]  # min-jerk peak speed
+
+
+def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
+    """20 deg from 1.0 m lands on a palm 73 deg from level: with the turn from the grasp
+    (TURN_EARLY) the ball would roll 0.34 m towards the wrist (``planner.catch.roll``), so the
+    roll rule plans the turn under way when the ball lands (``planner.catch.turnahead``): the
+    rows pass the intercept pose at the intercept, the flexion already turning towards level
+    at 5.9 rad/s, the pre-catch pose short of it on the other side; the roll is under half;
+    ``check`` confirms the catch. 30 deg from 1.5 m, whose turn from the grasp keeps the roll
+    within ``ROLL_ROOM_M``, has the same rows as before the rule."""
+    from planner.catch.plan import write_plan
+    from planner.catch.roll import ROLL_ROOM_M, roll_towards_wrist_m
+    from planner.catch.turnahead import TURN_EARLY
+
+    def early(p):
+        return pl._plan(p.flight, p.catch_point, p.rate_hz, 0.0, None, p.flight_time_s, None,
+                        True, TURN_EARLY)[0]
+
+    def rolled(p):
+        return roll_towards_wrist_m(p.t, pl.kin.frames(p.q)[1], p.flight.ball.radius_m,
+                                    p.intercept_t, p.flight.velocity(p.intercept_t),
+                                    p.flight.ball.inertia_ratio)
+
+    plan = plan_throw(20.0, 1.0, 0.0, planner=pl)
+    before = early(plan)
+    assert before.feasible and rolled(before) > 5 * ROLL_ROOM_M
+    assert plan.feasible, plan.reasons
+    assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 5.9 rad/s")
+    assert rolled(plan) < 0.5 * rolled(before)
+    i = pl.joints.i_flex
+    k = int(np.searchsorted(plan.t, plan.intercept_t))
+    speed = (plan.q[k, i] - plan.q[k - 1, i]) / (plan.t[k] - plan.t[k - 1])
+    level = plan.q[-1, i]
+    assert abs(speed) > 5.0 and speed * (level - plan.q[k, i]) > 0  # turning towards level
+    assert (plan.q_open[i] - plan.q[k, i]) * (level - plan.q[k, i]) < 0  # pre-catch: behind
+    assert plan.intercept_error_m < 0.002
+    path = tmp_path / "c.csv"
+    write_plan(plan, str(path))
+    rep = check_trajectory(str(path))
+    assert rep.ok, rep.problems
+    assert rep.catch.loads[0].headroom >= 0.2
+    near = plan_throw(30.0, 1.5, 0.0, planner=pl)
+    assert not near.notes and np.array_equal(near.q, early(near).q)

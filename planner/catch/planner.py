@@ -178,8 +178,11 @@ class CatchPlanner:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
         (TURN_AHEAD), from the grasp (TURN_EARLY), after the arm's stop (TURN_LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
-        grasp (the roll rule moved it)."""
+        grasp (the roll rule moved it). Without the soft catch the palm waits for the ball at
+        rest: no turn under way then (the roll rule's turn is the grasp's)."""
         t0 = time.perf_counter()
+        if not soft and turn_mode == TURN_AHEAD:
+            turn_mode = TURN_EARLY
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
