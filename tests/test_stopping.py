@@ -268,6 +268,21 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     assert abs(speed) > 5.0 and speed * (level - plan.q[k, i]) > 0  # turning towards level
     assert (plan.q_open[i] - plan.q[k, i]) * (level - plan.q[k, i]) < 0  # pre-catch: behind
     assert plan.intercept_error_m < 0.002
+    # before the ball the arm's motors stay within their capacity with the whole hand's
+    # inverse dynamics on the rows (speeds and the closing fingers included; measured 0.785)
+    import pinocchio as pin
+
+    from planner.catch.grasp import motor_torque_matrix
+
+    m, dyn = pl.hand.pin_model, pl.dyn
+    data, dt = m.createData(), plan.t[1] - plan.t[0]
+    for j in range(1, k):
+        v, a = np.zeros(m.nv), np.zeros(m.nv)
+        v[dyn._idx] = (plan.q[j + 1] - plan.q[j - 1]) / (2 * dt)
+        a[dyn._idx] = (plan.q[j + 1] - 2 * plan.q[j] + plan.q[j - 1]) / dt ** 2
+        tau = pin.rnea(m, data, dyn._pq(plan.q[j]), v, a)[dyn._idx]
+        ratio = np.abs(motor_torque_matrix(pl.hand, plan.q[j]) @ tau) / dyn.cap
+        assert np.all(ratio[pl.turn._arm_motors] <= 0.85), (plan.t[j], ratio.max())
     path = tmp_path / "c.csv"
     write_plan(plan, str(path))
     rep = check_trajectory(str(path))

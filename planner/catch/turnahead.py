@@ -6,21 +6,22 @@ the grasp (``TURN_EARLY``), after the arm's stop (``TURN_LATE``) or, by the roll
 
 A palm steep at the intercept (66-73 deg from level on the 20 deg throws: the geometry of
 the wrist and the path fixes the palm's angle where the ball meets the palm centre) lets
-the landed ball roll towards the wrist at up to 5/7 g sin(tilt) (``planner.catch.roll``)
-while a turn from rest (``stopping.hold_turn``) is still slow. Started before the ball,
-the turn passes the intercept pose at speed: the flexion's speed rises (min-jerk) to w
-exactly at the intercept, holds it and falls to rest (min-jerk) where the hold's pose is
-(palm up, ``HOLD_TILT_DEG`` downhill into the fingers; a turning palm also carries the ball
-outwards, towards the fingers, at w^2 times its distance from the wrist axis). It does not
-speed up after the intercept: a palm turning away from the ball faster than gravity's part
-along its normal (g cos(tilt): 2.9 m/s^2 at 73 deg) lifts off it (the check's friction
-cone refuses it). The pre-catch pose lies the ramp's travel (w T_up / 2) short of the
-intercept pose, so the
-rows pass the intercept pose at the intercept, turning: the ball's crossing of the moving
-palm, judged by the check's rule on the rows (the contact point and the relative velocity
-at the crossing, the pad's force and friction cone there).
+the landed ball roll towards the wrist at up to k g sin(tilt) (``planner.catch.roll``: k
+= 5/7 a solid ball, 0.62 a tennis ball) while a turn from rest (``stopping.hold_turn``) is
+still slow. Started before the ball, the turn passes the intercept pose at speed: the
+flexion's speed rises (min-jerk) to w exactly at the intercept, holds it and falls to rest
+(min-jerk) where the hold's pose is (palm up, ``HOLD_TILT_DEG`` downhill into the fingers;
+a turning palm also carries the ball outwards, towards the fingers, at w^2 times its
+distance from the wrist axis); the stop's own flexion speed, when it turns the same way, is
+kept after the stop's ramp to rest. It does not speed up after the intercept: a palm turning
+away from the ball faster than gravity's part along its normal (g cos(tilt): 2.9 m/s^2 at
+73 deg) lifts off it (the check's friction cone refuses it). The pre-catch pose lies the
+ramp's travel (w T_up / 2) short of the intercept pose, so that the rows pass the intercept
+pose at the intercept, turning: the ball's crossing of the moving palm, judged by the
+check's rule on the rows (the contact point and the relative velocity at the crossing, the
+pad's force and friction cone there, the motors).
 
-The profile is the stopping motion's (``stopping.SoftStop``: contact share 1, no recoil,
+The profiles are the stopping motion's (``stopping.SoftStop``: contact share 1, no recoil,
 no pad), over the flexion alone: one speed profile of the arm, not two.
 """
 
@@ -149,9 +150,10 @@ class HoldTurn:
         its travel before the ball, within the flexion's range and reached (``move_time``)
         before the stop begins (the move-in and the turn's ramp may overlap), its rows within
         every joint's speed and acceleration limit and, from the turn's start to the
-        intercept (the check judges the hand's inertia from there on), every motor within
-        ``STOP_SHARE`` of its capacity (``accel_room``); a candidate that is not is skipped. Returns the turn (delta,
-        duration, start, profile), the rows and the move-in's duration."""
+        intercept (the check judges the hand's inertia from there on), the arm's motors within
+        ``STOP_SHARE`` of their capacity, the closing fingers' reaction included (``_within``);
+        a candidate that is not is skipped. Returns the turn (delta, duration, start,
+        profiles), the rows and the move-in's duration."""
         pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz = rows_args
         turn, t, Q = self.turned_rows(turn0, TURN_EARLY, rows_args)
         best = (self._rolled(t, Q, pose.t_i, flight), turn, t, Q, T_m)
