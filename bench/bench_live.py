@@ -53,20 +53,15 @@ def throws_of(n: int, seed: int) -> np.ndarray:
 def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng):
     """One throw: (caught against the true ball, wall latencies (s), CPU times (s) or
     None, outcome, the check's problems)."""
+    from planner.catch.camera import observe_throw
     from planner.catch.flight import predict_throw
     from planner.catch.session import CatchSession
     from planner.check import check_trajectory
     from planner.trajfile import parse_trajectory
 
     fl = predict_throw(angle, dist, height, ball, drag=True)
-    s = CatchSession(dist, height, ball=ball, drag=True, rate_hz=100.0, planner=pl)
-    for k in range(1, int(3.0 * rate_hz)):
-        t = k / rate_hz
-        s.observe(t, fl.position(t) + rng.normal(0.0, noise_m, 3))
-        if s.done:
-            break
-    if not s.done:
-        s.finish()
+    s = observe_throw(CatchSession(dist, height, ball=ball, drag=True, rate_hz=100.0,
+                                   planner=pl), fl, noise_m, rate_hz, rng, until_s=3.0)
     head, _ = s.text.rstrip("\n").rsplit("\n", 1)
     end = parse_trajectory(s.text).end
     end = dict(end, ball=fl.to_metadata())  # judged against the true ball

@@ -141,7 +141,7 @@ def test_session_first_plan_starts_from_the_first_look(live_run):
     for t, p in zip(*_observations(seed=2)[1:]):
         first.observe(t, p)
         if first.fit.n == lf.min_obs - 1:
-            assert first._prior is not None and first.t_i is None
+            assert first._search.prior is not None and first.t_i is None
         if first.t_i is not None:
             break
     np.testing.assert_array_equal(first.flight.v0, lf.flight.v0)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from planner.catch.camera import observe_throw
 from planner.catch.flight import get_ball, predict_throw
 from planner.catch.plan import get_planner
 from planner.catch.session import CatchSession
@@ -20,15 +21,7 @@ def _session(angle, dist, height, noise_m, rate_hz, seed=0, patch=None):
     s = CatchSession(dist, height, ball=BALL, drag=True, planner=get_planner("default"))
     if patch is not None:
         patch(s)
-    rng = np.random.default_rng(seed)
-    for k in range(1, int(1.5 * rate_hz)):
-        t = k / rate_hz
-        s.observe(t, fl.position(t) + rng.normal(0.0, noise_m, 3))
-        if s.done:
-            break
-    if not s.done:
-        s.finish()
-    return s
+    return observe_throw(s, fl, noise_m, rate_hz, np.random.default_rng(seed), until_s=1.5)
 
 
 THROWS = [(30.0, 1.5, 0.0, 0.005, 500.0), (45.0, 2.2, 0.15, 0.010, 500.0),
@@ -54,14 +47,14 @@ def test_closing_time_deferred_is_the_same_plan(throw):
 def _reach_log(s):
     """Record each re-plan's (observation time, intercept out of reach) in ``s.reach_log``."""
     s.reach_log = []
-    inner = s._intercept
+    inner = s._search.next
 
-    def logged(flight, t_s):
-        ic = inner(flight, t_s)
+    def logged(flight, t_s, prev, t_i):
+        ic = inner(flight, t_s, prev, t_i)
         s.reach_log.append((t_s, ic.reason is not None))
         return ic
 
-    s._intercept = logged
+    s._search.next = logged
 
 
 def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
@@ -70,7 +63,7 @@ def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
     is planned at most that much later than searching at every observation, and the throw
     is caught as well."""
     import planner.catch.intercept as ic_mod
-    import planner.catch.session as sm
+    import planner.catch.livesearch as sm
 
     throw = (45.48, 2.22, -0.19, 0.005, 500.0)  # out of reach at its first estimates
     searches = []
