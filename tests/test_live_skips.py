@@ -4,6 +4,8 @@ in full (the same bytes) or within the rule's stated tolerance. No wall-clock as
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -87,3 +89,42 @@ def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
             for s in (kept, every)]
     assert back[1] <= back[0] <= back[1] + retry_s + 1e-9, back
     assert kept.outcome == every.outcome == "held", (kept.reason, every.reason)
+
+
+@pytest.mark.parametrize("throw", THROWS)
+def test_first_rows_formatted_ahead_are_the_same_file(throw):
+    """The rest rows up to the reaction time of the observation before the first fit are
+    formatted at that observation (before the file exists) and written with the first
+    plan's: the same file as formatting all of them at the first plan."""
+    ahead = _session(*throw)
+    skipped = []
+
+    def no_ahead(s):
+        inner = s._format
+
+        def fmt(t_end_s, t_b=-math.inf, old_seg=None):
+            if s.writer is None:  # the observation before the first fit
+                skipped.append(t_end_s)
+                return None
+            return inner(t_end_s, t_b, old_seg)
+
+        s._format = fmt
+
+    full = _session(*throw, patch=no_ahead)
+    assert len(skipped) == 1 and ahead.text == full.text
+
+
+def test_first_plan_returns_every_row_from_zero():
+    """The first plan's observation returns the rows formatted ahead with its own: every
+    row from t = 0, as the file holds them; the observation before writes none."""
+    fl = predict_throw(30.0, 1.5, 0.0, BALL, drag=True)
+    s = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=get_planner("default"))
+    rng = np.random.default_rng(3)
+    k, rows = 0, np.empty((0, 0))
+    while s.writer is None:
+        k += 1
+        before = s._ahead
+        rows = s.observe(k / 100, fl.position(k / 100) + rng.normal(0.0, 0.005, 3))
+    assert before is not None and len(before.t) == 9  # rows 0..0.08 s: t_look + 30 ms
+    assert len(rows) == s.next_row == 11  # ... and 0.09, 0.10 (t + 30 ms + 10 ms)
+    np.testing.assert_allclose(rows[:, 0], np.arange(11) * 0.01, atol=1e-9)

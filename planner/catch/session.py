@@ -14,7 +14,8 @@ After each observation (``observe``):
 1. Fit (``livefit.LiveFit``): the flight's state and its covariance from every
    observation so far (vacuum, or drag with the ball's k), once there are
    ``LiveFit.min_obs`` of them (before that there is no file: the hand rests, and the
-   first rows are written from t = 0 with the first fit).
+   first rows are written from t = 0 with the first fit; those up to the observation
+   before it's ``t_react``, rest rows whatever it finds, formatted at that observation).
 2. Intercept (``livesearch.LiveSearch``): near the previous intercept time, the whole
    path searched from out of reach once per ``REACH_RETRY_S``; the pose confirmed by
    ``CatchPlanner.meet`` (placo, warm: the previous pose is the closed form's). The first
@@ -66,7 +67,7 @@ from planner.catch.results import CatchPlan
 from planner.errors import InfeasibleError, InputError
 from planner.guard import guard_rows
 from planner.hand.model import HandModel
-from planner.trajfile import TrajectoryWriter
+from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
 
 HELD = "held"
 GIVEN_UP = "given_up"
@@ -82,6 +83,14 @@ class _CloseAsk(NamedTuple):
     ready: float
     stop_t: float
     t_b: float
+
+
+class _Chunk(NamedTuple):
+    """Rows sampled, guarded and formatted (``trajfile.format_rows``), to be written."""
+
+    t: np.ndarray
+    Q: np.ndarray
+    rows: FormattedRows
 
 
 class _DeferredClosing:
@@ -159,6 +168,7 @@ class CatchSession:
         self._T_root = self.pl.mount.T_world_root(self.C).tolist()  # (the file's metadata)
         self._t: list[np.ndarray] = []
         self._q: list[np.ndarray] = []
+        self._ahead: _Chunk | None = None  # rows formatted before the file is opened
         self.next_row = 0
         self.pose = self.flight = None
         self.t_i: float | None = None
@@ -210,6 +220,9 @@ class CatchSession:
         if fit is None:
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
                 self._search.look(self.fit.first_look())
+                # the hand rests at least until this observation could act: those rows
+                # formatted here, written with the first fit's
+                self._ahead = self._format(t + SIGNAL_S + PLAN_BUDGET_S)
             return np.empty((0, 0))
         t_react = t + SIGNAL_S + PLAN_BUDGET_S
         t_b = max(self.written_to_s, t_react)
@@ -309,21 +322,35 @@ class CatchSession:
         """The time of the last row ``_write_to(t_end_s)`` writes."""
         return math.floor(t_end_s / self.dt + 1e-9) * self.dt
 
-    def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:
-        """Rows up to ``t_end_s`` (those up to ``t_b`` on the arm's move ``old_seg``, from
-        before this re-plan), guarded, written; returns them as written."""
+    def _format(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> _Chunk | None:
+        """The rows after those written (and formatted ahead) up to ``t_end_s`` (those up
+        to ``t_b`` on the arm's move ``old_seg``, from before this re-plan), guarded and
+        formatted, not written (None: no row)."""
+        ahead = self._ahead
+        first = self.next_row + (len(ahead.t) if ahead else 0)
         n = math.floor(t_end_s / self.dt + 1e-9) + 1
-        if n <= self.next_row:
-            return np.empty((0, 0))
-        t = np.arange(self.next_row, n) * self.dt
+        if n <= first:
+            return None
+        t = np.arange(first, n) * self.dt
         Q = self.motion.rows(t, old_seg, t_b)
-        guard_rows(self.pl.hand, Q, self._q[-1][-1] if self._q else None, self.dt)
-        out = self.writer.write_rows(t, Q, self.pl.hand.motor_angles(Q))
+        guard_rows(self.pl.hand, Q, ahead.Q[-1] if ahead else self._q[-1][-1] if self._q
+                   else None, self.dt)
+        return _Chunk(t, Q, format_rows(t, Q, self.pl.hand.motor_angles(Q)))
+
+    def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:
+        """The rows formatted ahead and the rest up to ``t_end_s`` (``_format``), written;
+        returns them as written."""
+        chunks = [c for c in (self._ahead, self._format(t_end_s, t_b, old_seg)) if c]
+        self._ahead = None
+        if not chunks:
+            return np.empty((0, 0))
+        out = [self.writer.append(c.rows) for c in chunks]
         self.rows_out_s, self.rows_cpu_s = time.perf_counter(), time.thread_time()
-        self._t.append(t)
-        self._q.append(Q)
-        self.next_row = n
-        return out
+        for c in chunks:
+            self._t.append(c.t)
+            self._q.append(c.Q)
+            self.next_row += len(c.t)
+        return out[0] if len(out) == 1 else np.concatenate(out)
 
     # ------------------------------------------------------------ the end
     def _finish(self, why: str) -> np.ndarray:
