@@ -54,6 +54,10 @@ def format_rows(t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> Formatte
     t_s = np.asarray(t_s, dtype=float)
     if len(t_s) == 0:
         return FormattedRows(t_s, "", np.empty((0, 0)))
+    if len(t_s) == 1:  # (a live observation's usual row: no repeats to look for)
+        line = f"{float(t_s[0]):.6f}," + ",".join(["%.6f"] * (q.shape[1] + q_motor.shape[1])
+                                                  ) % (*q[0].tolist(), *q_motor[0].tolist())
+        return FormattedRows(t_s, line + "\n", np.array([line.split(",")], dtype=float))
     if not np.all(np.diff(t_s) > 0):
         raise PlannerError(f"trajectory time not increasing near t={t_s[0]}")
     body = np.column_stack([q, q_motor])

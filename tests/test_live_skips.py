@@ -93,7 +93,7 @@ def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
 
 @pytest.mark.parametrize("throw", THROWS)
 def test_first_rows_formatted_ahead_are_the_same_file(throw):
-    """The rest rows up to the reaction time of the observation before the first fit are
+    """The rest rows up to the reaction time of each observation before the first fit are
     formatted at that observation (before the file exists) and written with the first
     plan's: the same file as formatting all of them at the first plan."""
     ahead = _session(*throw)
@@ -111,7 +111,7 @@ def test_first_rows_formatted_ahead_are_the_same_file(throw):
         s._format = fmt
 
     full = _session(*throw, patch=no_ahead)
-    assert len(skipped) == 1 and ahead.text == full.text
+    assert len(skipped) == full.fit.min_obs - 1 and ahead.text == full.text
 
 
 def test_first_plan_returns_every_row_from_zero():
@@ -120,11 +120,13 @@ def test_first_plan_returns_every_row_from_zero():
     fl = predict_throw(30.0, 1.5, 0.0, BALL, drag=True)
     s = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=get_planner("default"))
     rng = np.random.default_rng(3)
-    k, rows = 0, np.empty((0, 0))
+    k, rows, ahead = 0, np.empty((0, 0)), []
     while s.writer is None:
         k += 1
-        before = s._ahead
+        ahead.append(sum(len(c.t) for c in s._ahead))
         rows = s.observe(k / 100, fl.position(k / 100) + rng.normal(0.0, 0.005, 3))
-    assert before is not None and len(before.t) == 9  # rows 0..0.08 s: t_look + 30 ms
-    assert len(rows) == s.next_row == 11  # ... and 0.09, 0.10 (t + 30 ms + 10 ms)
+    # rows 0..0.04 s formatted at the first observation (t + 30 ms), one more at each
+    # until 0.08 s, then written with 0.09 and 0.10 (the first fit's t + 30 ms + 10 ms)
+    assert ahead == [0, 5, 6, 7, 8, 9], ahead
+    assert len(rows) == s.next_row == 11
     np.testing.assert_allclose(rows[:, 0], np.arange(11) * 0.01, atol=1e-9)

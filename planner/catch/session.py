@@ -14,8 +14,8 @@ After each observation (``observe``):
 1. Fit (``livefit.LiveFit``): the flight's state and its covariance from every
    observation so far (vacuum, or drag with the ball's k), once there are
    ``LiveFit.min_obs`` of them (before that there is no file: the hand rests, and the
-   first rows are written from t = 0 with the first fit; those up to the observation
-   before it's ``t_react``, rest rows whatever it finds, formatted at that observation).
+   first rows are written from t = 0 with the first fit; those up to an earlier
+   observation's ``t_react``, rest rows whatever the fit finds, formatted at that one).
 2. Intercept (``livesearch.LiveSearch``): near the previous intercept time, the whole
    path searched from out of reach once per ``REACH_RETRY_S``; the pose confirmed by
    ``CatchPlanner.meet`` (placo, warm: the previous pose is the closed form's). The first
@@ -168,7 +168,7 @@ class CatchSession:
         self._T_root = self.pl.mount.T_world_root(self.C).tolist()  # (the file's metadata)
         self._t: list[np.ndarray] = []
         self._q: list[np.ndarray] = []
-        self._ahead: _Chunk | None = None  # rows formatted before the file is opened
+        self._ahead: list[_Chunk] = []  # rows formatted before the file is opened
         self.next_row = 0
         self.pose = self.flight = None
         self.t_i: float | None = None
@@ -220,9 +220,10 @@ class CatchSession:
         if fit is None:
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
                 self._search.look(self.fit.first_look())
-                # the hand rests at least until this observation could act: those rows
-                # formatted here, written with the first fit's
-                self._ahead = self._format(t + SIGNAL_S + PLAN_BUDGET_S)
+            # the hand rests at least until this observation could act: those rows
+            # formatted here, written with the first fit's
+            chunk = self._format(t + SIGNAL_S + PLAN_BUDGET_S)
+            self._ahead += [chunk] if chunk else []
             return np.empty((0, 0))
         t_react = t + SIGNAL_S + PLAN_BUDGET_S
         t_b = max(self.written_to_s, t_react)
@@ -327,21 +328,21 @@ class CatchSession:
         to ``t_b`` on the arm's move ``old_seg``, from before this re-plan), guarded and
         formatted, not written (None: no row)."""
         ahead = self._ahead
-        first = self.next_row + (len(ahead.t) if ahead else 0)
+        first = self.next_row + sum(len(c.t) for c in ahead)
         n = math.floor(t_end_s / self.dt + 1e-9) + 1
         if n <= first:
             return None
         t = np.arange(first, n) * self.dt
         Q = self.motion.rows(t, old_seg, t_b)
-        guard_rows(self.pl.hand, Q, ahead.Q[-1] if ahead else self._q[-1][-1] if self._q
+        guard_rows(self.pl.hand, Q, ahead[-1].Q[-1] if ahead else self._q[-1][-1] if self._q
                    else None, self.dt)
         return _Chunk(t, Q, format_rows(t, Q, self.pl.hand.motor_angles(Q)))
 
     def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:
         """The rows formatted ahead and the rest up to ``t_end_s`` (``_format``), written;
         returns them as written."""
-        chunks = [c for c in (self._ahead, self._format(t_end_s, t_b, old_seg)) if c]
-        self._ahead = None
+        chunks = self._ahead + [c for c in (self._format(t_end_s, t_b, old_seg),) if c]
+        self._ahead = []
         if not chunks:
             return np.empty((0, 0))
         out = [self.writer.append(c.rows) for c in chunks]
