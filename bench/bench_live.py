@@ -19,7 +19,8 @@ the same span (``CatchSession.cpu_s``: the latency less the time the machine gav
 processes; sessions without it show none).
 
 ``--against DIR`` also runs every configuration with the planner of another checkout
-(``git worktree add DIR REV``), in a child process (``PYTHONPATH=DIR``) right before this
+(``git worktree add DIR REV``), in a child process (``PYTHONPATH=DIR``, that checkout's
+own ``bench/bench_live.py --worker``: its planner with the loop it has) right before this
 one's, on the same throws and the same noise: before and after side by side under the
 same load.
 
@@ -104,7 +105,7 @@ def worker(n: int, seed: int, rate: float, noise: float) -> None:
 def run_against(tree: Path, a, rate: float, noise: float) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree), **{CODE_ENV: str(tree)})
     env.pop("PYTHONDONTWRITEBYTECODE", None)
-    out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--n", str(a.n),
+    out = subprocess.run([sys.executable, str(tree / "bench" / "bench_live.py"), "--n", str(a.n),
                           "--seed", str(a.seed), "--worker", f"{rate},{noise}"],
                          cwd=tree, env=env, check=True, capture_output=True, text=True).stdout
     return json.loads(out)
