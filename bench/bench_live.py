@@ -19,7 +19,8 @@ the same span (``CatchSession.cpu_s``: the latency less the time the machine gav
 processes; sessions without it show none).
 
 ``--against DIR`` also runs every configuration with the planner of another checkout
-(``git worktree add DIR REV``), in a child process (``PYTHONPATH=DIR``) right before this
+(``git worktree add DIR REV``), in a child process (``PYTHONPATH=DIR``, that checkout's
+own ``bench/bench_live.py --worker``: its planner with the loop it has) right before this
 one's, on the same throws and the same noise: before and after side by side under the
 same load.
 
@@ -53,20 +54,15 @@ def throws_of(n: int, seed: int) -> np.ndarray:
 def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng):
     """One throw: (caught against the true ball, wall latencies (s), CPU times (s) or
     None, outcome, the check's problems)."""
+    from planner.catch.camera import observe_throw
     from planner.catch.flight import predict_throw
     from planner.catch.session import CatchSession
     from planner.check import check_trajectory
     from planner.trajfile import parse_trajectory
 
     fl = predict_throw(angle, dist, height, ball, drag=True)
-    s = CatchSession(dist, height, ball=ball, drag=True, rate_hz=100.0, planner=pl)
-    for k in range(1, int(3.0 * rate_hz)):
-        t = k / rate_hz
-        s.observe(t, fl.position(t) + rng.normal(0.0, noise_m, 3))
-        if s.done:
-            break
-    if not s.done:
-        s.finish()
+    s = observe_throw(CatchSession(dist, height, ball=ball, drag=True, rate_hz=100.0,
+                                   planner=pl), fl, noise_m, rate_hz, rng, until_s=3.0)
     head, _ = s.text.rstrip("\n").rsplit("\n", 1)
     end = parse_trajectory(s.text).end
     end = dict(end, ball=fl.to_metadata())  # judged against the true ball
@@ -109,7 +105,7 @@ def worker(n: int, seed: int, rate: float, noise: float) -> None:
 def run_against(tree: Path, a, rate: float, noise: float) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree), **{CODE_ENV: str(tree)})
     env.pop("PYTHONDONTWRITEBYTECODE", None)
-    out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--n", str(a.n),
+    out = subprocess.run([sys.executable, str(tree / "bench" / "bench_live.py"), "--n", str(a.n),
                           "--seed", str(a.seed), "--worker", f"{rate},{noise}"],
                          cwd=tree, env=env, check=True, capture_output=True, text=True).stdout
     return json.loads(out)

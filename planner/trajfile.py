@@ -16,7 +16,7 @@ import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -60,6 +60,41 @@ def as_written(x: np.ndarray) -> np.ndarray:
     return out
 
 
+class FormattedRows(NamedTuple):
+    """Rows as a file's text (``text``: one line each) and as the file holds them
+    (``written``: (n, columns), times and values rounded to its 6 decimals)."""
+
+    t_s: np.ndarray
+    text: str
+    written: np.ndarray
+
+
+def format_rows(t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> FormattedRows:
+    """Rows (times in s, joint positions, motor angles) as ``TrajectoryWriter.append``
+    writes them: a pure function of the rows, so that a live plan can format rows no
+    estimate changes ahead of the observation that writes them."""
+    t_s = np.asarray(t_s, dtype=float)
+    if len(t_s) == 0:
+        return FormattedRows(t_s, "", np.empty((0, 0)))
+    if len(t_s) == 1:  # (a live observation's usual row: no repeats to look for)
+        line = f"{float(t_s[0]):.6f}," + ",".join(["%.6f"] * (q.shape[1] + q_motor.shape[1])
+                                                  ) % (*q[0].tolist(), *q_motor[0].tolist())
+        return FormattedRows(t_s, line + "\n", np.array([line.split(",")], dtype=float))
+    if not np.all(np.diff(t_s) > 0):
+        raise PlannerError(f"trajectory time not increasing near t={t_s[0]}")
+    body = np.column_stack([q, q_motor])
+    # a row whose setpoints equal the row's before is formatted (and read back) once
+    new, of_row = distinct_rows(body)
+    fmt = ",".join(["%.6f"] * body.shape[1])
+    distinct = [fmt % tuple(r) for r in body[new].tolist()]
+    of = of_row.tolist()
+    times = [f"{t:.6f}" for t in t_s.tolist()]
+    text = "\n".join([f"{a},{distinct[j]}" for a, j in zip(times, of)]) + "\n"
+    # (the values as written, without reading the text back: ``as_written``)
+    return FormattedRows(t_s, text, np.column_stack([as_written(t_s),
+                                                     as_written(body[new])[of_row]]))
+
+
 class TrajectoryWriter:
     """Streams a trajectory: the constructor opens the path and writes metadata and
     header, ``write_rows`` appends setpoints, ``close`` writes the end marker."""
@@ -83,27 +118,22 @@ class TrajectoryWriter:
     def write_rows(self, t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> np.ndarray:
         """Append rows (times in s, joint positions, motor angles) and flush. Returns
         the rows as the file holds them (rounded to its 6 decimals), (n, columns)."""
-        t_s = np.asarray(t_s, dtype=float)
-        if len(t_s) == 0:
+        return self.append(format_rows(t_s, q, q_motor))
+
+    def append(self, rows: FormattedRows) -> np.ndarray:
+        """Append rows formatted ahead (``format_rows``) and flush; returns them as the
+        file holds them."""
+        if len(rows.t_s) == 0:
             return np.empty((0, len(self.columns)))
-        if not (t_s[0] > self._last_t and np.all(np.diff(t_s) > 0)):
-            raise PlannerError(f"trajectory time not increasing near t={t_s[0]}")
-        self._last_t = float(t_s[-1])
-        body = np.column_stack([q, q_motor])
-        # a row whose setpoints equal the row's before is formatted (and read back) once
-        new, of_row = distinct_rows(body)
-        fmt = ",".join(["%.6f"] * body.shape[1])
-        distinct = [fmt % tuple(r) for r in body[new].tolist()]
-        of = of_row.tolist()
-        times = [f"{t:.6f}" for t in t_s.tolist()]
-        text = "\n".join([f"{a},{distinct[j]}" for a, j in zip(times, of)]) + "\n"
-        self._out.write(text)
-        self.rows += len(body)
+        if not rows.t_s[0] > self._last_t:
+            raise PlannerError(f"trajectory time not increasing near t={rows.t_s[0]}")
+        self._last_t = float(rows.t_s[-1])
+        self._out.write(rows.text)
+        self.rows += len(rows.t_s)
         self._out.flush()
-        written = np.column_stack([as_written(t_s), as_written(body[new])[of_row]])
         if self._on_rows is not None:
-            self._on_rows(written)
-        return written
+            self._on_rows(rows.written)
+        return rows.written
 
     def close(self, end_info: dict[str, Any] | None = None) -> None:
         """Write the end marker (with ``end_info``'s keys after ``end`` and ``rows``)."""

@@ -141,7 +141,7 @@ def test_session_first_plan_starts_from_the_first_look(live_run):
     for t, p in zip(*_observations(seed=2)[1:]):
         first.observe(t, p)
         if first.fit.n == lf.min_obs - 1:
-            assert first._prior is not None and first.t_i is None
+            assert first._search.prior is not None and first.t_i is None
         if first.t_i is not None:
             break
     np.testing.assert_array_equal(first.flight.v0, lf.flight.v0)
@@ -396,3 +396,39 @@ def test_accel_room_kept_by_q_is_the_same():
         np.testing.assert_array_equal(got, want)
     for got, want in zip(dyn.accel_room(q), fresh.accel_room(q)):
         np.testing.assert_array_equal(got, want)
+
+
+def test_move_check_tries_durations_from_one_start():
+    """``MoveCheck`` (a re-aim's durations tried from one start and target): each verdict
+    is the grid check of ``Quintic.between``'s move of that duration, against the grid of
+    ``state()`` too, and the move it keeps is that move (the same coefficients)."""
+    from planner.catch.livemotion import MoveCheck, Quintic, _bounds
+
+    pl, h, _, _, _, m = _motion()
+    arm = m.arm
+    lo, hi, vm, am = h.lower[arm], h.upper[arm], h.velocity[arm], h.acceleration[arm]
+    MH = pl.dyn.accel_room(pl.q_rest)[0][:, arm]
+    rng = np.random.default_rng(5)
+    seen = set()
+    for _ in range(60):
+        q0 = lo + (hi - lo) * rng.uniform(0.3, 0.7, len(arm))
+        q1 = lo + (hi - lo) * rng.uniform(0.2, 0.8, len(arm))
+        v0, a0 = rng.normal(0.0, 1.0, len(arm)), rng.normal(0.0, 20.0, len(arm))
+        room = np.full(len(MH), rng.uniform(0.5, 3.0))
+        lb, ub = _bounds(lo, hi, vm, am, room)
+        check = MoveCheck(q0, v0, a0, q1, lb, ub, 0.001, MH)
+        for D in rng.uniform(0.02, 0.3, 4):
+            seg = Quintic.between(0.4, D, q0, v0, a0, q1)
+            ok = check.holds(D)
+            assert ok == seg.within_bounds(lb, ub, 0.001, MH)
+            q, v, a = seg.state(0.4 + np.linspace(0.0, D, max(2, math.ceil(D / 0.001) + 1)))
+            grid = bool(np.all((q >= lo - 1e-9) & (q <= hi + 1e-9) & (np.abs(v) <= vm + 1e-9)
+                               & (np.abs(a) <= am + 1e-9))
+                        and np.all(np.abs(a @ MH.T) <= room + 1e-9))
+            assert ok == grid  # (state()'s grid, to 1e-9 of a bound)
+            if ok:
+                kept = check.move(0.4)
+                assert kept.duration_s == seg.duration_s
+                np.testing.assert_array_equal(kept.c, seg.c)
+            seen.add(ok)
+    assert seen == {True, False}

@@ -4,9 +4,12 @@ in full (the same bytes) or within the rule's stated tolerance. No wall-clock as
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from planner.catch.camera import observe_throw
 from planner.catch.flight import get_ball, predict_throw
 from planner.catch.plan import get_planner
 from planner.catch.session import CatchSession
@@ -20,15 +23,7 @@ def _session(angle, dist, height, noise_m, rate_hz, seed=0, patch=None):
     s = CatchSession(dist, height, ball=BALL, drag=True, planner=get_planner("default"))
     if patch is not None:
         patch(s)
-    rng = np.random.default_rng(seed)
-    for k in range(1, int(1.5 * rate_hz)):
-        t = k / rate_hz
-        s.observe(t, fl.position(t) + rng.normal(0.0, noise_m, 3))
-        if s.done:
-            break
-    if not s.done:
-        s.finish()
-    return s
+    return observe_throw(s, fl, noise_m, rate_hz, np.random.default_rng(seed), until_s=1.5)
 
 
 THROWS = [(30.0, 1.5, 0.0, 0.005, 500.0), (45.0, 2.2, 0.15, 0.010, 500.0),
@@ -54,14 +49,14 @@ def test_closing_time_deferred_is_the_same_plan(throw):
 def _reach_log(s):
     """Record each re-plan's (observation time, intercept out of reach) in ``s.reach_log``."""
     s.reach_log = []
-    inner = s._intercept
+    inner = s._search.next
 
-    def logged(flight, t_s):
-        ic = inner(flight, t_s)
+    def logged(flight, t_s, prev, t_i):
+        ic = inner(flight, t_s, prev, t_i)
         s.reach_log.append((t_s, ic.reason is not None))
         return ic
 
-    s._intercept = logged
+    s._search.next = logged
 
 
 def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
@@ -70,7 +65,7 @@ def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
     is planned at most that much later than searching at every observation, and the throw
     is caught as well."""
     import planner.catch.intercept as ic_mod
-    import planner.catch.session as sm
+    import planner.catch.livesearch as sm
 
     throw = (45.48, 2.22, -0.19, 0.005, 500.0)  # out of reach at its first estimates
     searches = []
@@ -94,3 +89,44 @@ def test_out_of_reach_searched_again_every_retry_interval(monkeypatch):
             for s in (kept, every)]
     assert back[1] <= back[0] <= back[1] + retry_s + 1e-9, back
     assert kept.outcome == every.outcome == "held", (kept.reason, every.reason)
+
+
+@pytest.mark.parametrize("throw", THROWS)
+def test_first_rows_formatted_ahead_are_the_same_file(throw):
+    """The rest rows up to the reaction time of each observation before the first fit are
+    formatted at that observation (before the file exists) and written with the first
+    plan's: the same file as formatting all of them at the first plan."""
+    ahead = _session(*throw)
+    skipped = []
+
+    def no_ahead(s):
+        inner = s._format
+
+        def fmt(t_end_s, t_b=-math.inf, old_seg=None):
+            if s.writer is None:  # the observation before the first fit
+                skipped.append(t_end_s)
+                return None
+            return inner(t_end_s, t_b, old_seg)
+
+        s._format = fmt
+
+    full = _session(*throw, patch=no_ahead)
+    assert len(skipped) == full.fit.min_obs - 1 and ahead.text == full.text
+
+
+def test_first_plan_returns_every_row_from_zero():
+    """The first plan's observation returns the rows formatted ahead with its own: every
+    row from t = 0, as the file holds them; the observation before writes none."""
+    fl = predict_throw(30.0, 1.5, 0.0, BALL, drag=True)
+    s = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=get_planner("default"))
+    rng = np.random.default_rng(3)
+    k, rows, ahead = 0, np.empty((0, 0)), []
+    while s.writer is None:
+        k += 1
+        ahead.append(sum(len(c.t) for c in s._ahead))
+        rows = s.observe(k / 100, fl.position(k / 100) + rng.normal(0.0, 0.005, 3))
+    # rows 0..0.04 s formatted at the first observation (t + 30 ms), one more at each
+    # until 0.08 s, then written with 0.09 and 0.10 (the first fit's t + 30 ms + 10 ms)
+    assert ahead == [0, 5, 6, 7, 8, 9], ahead
+    assert len(rows) == s.next_row == 11
+    np.testing.assert_allclose(rows[:, 0], np.arange(11) * 0.01, atol=1e-9)

@@ -232,3 +232,61 @@ def test_hold_turn_within_the_motors(pl):
         room = room - (STOP_SHARE - TURN_SHARE) * pl.dyn.cap
         assert np.all(np.abs(MH @ dq) * PEAK_ACC / T ** 2 <= room + 1e-9)
     assert abs(dq[i]) / T * 1.875 <= pl.hand.velocity[i]  # min-jerk peak speed
+
+
+def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
+    """20 deg from 1.0 m lands on a palm 73 deg from level: with the turn from the grasp
+    (TURN_EARLY) the ball would roll 0.34 m towards the wrist (``planner.catch.roll``), so the
+    roll rule plans the turn under way when the ball lands (``planner.catch.turnahead``): the
+    rows pass the intercept pose at the intercept, the flexion already turning towards level
+    at 5.9 rad/s, the pre-catch pose short of it on the other side; the roll is under half;
+    ``check`` confirms the catch. 30 deg from 1.5 m, whose turn from the grasp keeps the roll
+    within ``ROLL_ROOM_M``, has the same rows as before the rule."""
+    from planner.catch.plan import write_plan
+    from planner.catch.roll import ROLL_ROOM_M, roll_towards_wrist_m
+    from planner.catch.turnahead import TURN_EARLY
+
+    def early(p):
+        return pl._plan(p.flight, p.catch_point, p.rate_hz, 0.0, None, p.flight_time_s, None,
+                        True, TURN_EARLY)[0]
+
+    def rolled(p):
+        return roll_towards_wrist_m(p.t, pl.kin.frames(p.q)[1], p.flight.ball.radius_m,
+                                    p.intercept_t, p.flight.velocity(p.intercept_t),
+                                    p.flight.ball.inertia_ratio)
+
+    plan = plan_throw(20.0, 1.0, 0.0, planner=pl)
+    before = early(plan)
+    assert before.feasible and rolled(before) > 5 * ROLL_ROOM_M
+    assert plan.feasible, plan.reasons
+    assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 5.9 rad/s")
+    assert rolled(plan) < 0.5 * rolled(before)
+    i = pl.joints.i_flex
+    k = int(np.searchsorted(plan.t, plan.intercept_t))
+    speed = (plan.q[k, i] - plan.q[k - 1, i]) / (plan.t[k] - plan.t[k - 1])
+    level = plan.q[-1, i]
+    assert abs(speed) > 5.0 and speed * (level - plan.q[k, i]) > 0  # turning towards level
+    assert (plan.q_open[i] - plan.q[k, i]) * (level - plan.q[k, i]) < 0  # pre-catch: behind
+    assert plan.intercept_error_m < 0.002
+    # before the ball the arm's motors stay within their capacity with the whole hand's
+    # inverse dynamics on the rows (speeds and the closing fingers included; measured 0.785)
+    import pinocchio as pin
+
+    from planner.catch.grasp import motor_torque_matrix
+
+    m, dyn = pl.hand.pin_model, pl.dyn
+    data, dt = m.createData(), plan.t[1] - plan.t[0]
+    for j in range(1, k):
+        v, a = np.zeros(m.nv), np.zeros(m.nv)
+        v[dyn._idx] = (plan.q[j + 1] - plan.q[j - 1]) / (2 * dt)
+        a[dyn._idx] = (plan.q[j + 1] - 2 * plan.q[j] + plan.q[j - 1]) / dt ** 2
+        tau = pin.rnea(m, data, dyn._pq(plan.q[j]), v, a)[dyn._idx]
+        ratio = np.abs(motor_torque_matrix(pl.hand, plan.q[j]) @ tau) / dyn.cap
+        assert np.all(ratio[pl.turn._arm_motors] <= 0.85), (plan.t[j], ratio.max())
+    path = tmp_path / "c.csv"
+    write_plan(plan, str(path))
+    rep = check_trajectory(str(path))
+    assert rep.ok, rep.problems
+    assert rep.catch.loads[0].headroom >= 0.2
+    near = plan_throw(30.0, 1.5, 0.0, planner=pl)
+    assert not near.notes and np.array_equal(near.q, early(near).q)

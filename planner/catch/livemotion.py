@@ -73,13 +73,7 @@ class Quintic:
     def between(cls, t0: float, duration_s: float, q0: np.ndarray, v0: np.ndarray,
                 a0: np.ndarray, q1: np.ndarray) -> Quintic:
         D = float(duration_s)
-        D2, D3 = D * D, D * D * D
-        # (c3, c4, c5) = B(D) [q1 - q0; v0; a0]: the boundary conditions' solution, one
-        # product for the k joints
-        B = np.array([[10.0 / D3, -6.0 / D2, -1.5 / D],
-                      [-15.0 / (D3 * D), 8.0 / D3, 1.5 / D2],
-                      [6.0 / (D3 * D2), -3.0 / (D3 * D), -0.5 / D3]])
-        return cls(float(t0), D, q0, v0, a0, q1, B @ np.stack([q1 - q0, v0, a0]))
+        return cls(float(t0), D, q0, v0, a0, q1, _coefficients(D, np.stack([q1 - q0, v0, a0])))
 
     @classmethod
     def hold(cls, q: np.ndarray) -> Quintic:
@@ -137,24 +131,64 @@ class Quintic:
     def within_bounds(self, lb: np.ndarray, ub: np.ndarray, step_s: float,
                       motors: np.ndarray | None = None) -> bool:
         """``within`` with its bounds as two rows (``_bounds``: positions, speeds,
-        accelerations, then the motors' torques): every quantity on the grid is a
-        polynomial in tau of degree <= 5, so the grid's powers of tau (n, 6) times one
-        coefficient matrix (6, 3k + m) give all of them in one product."""
-        D = self.duration_s
-        n = max(2, math.ceil(D / step_s) + 1)
-        k = len(self.q0)
-        # the coefficients of u^0..5 (u = tau / D in [0, 1]: the grid's powers one table
-        # per n, ``_unit_grid``) of q, v and a (3 blocks of 6 rows): _POWERS times (q0, v0,
-        # a0, c3, c4, c5), row p times D^p
+        accelerations, then the motors' torques): ``MoveCheck.holds`` of this move."""
+        return MoveCheck(self.q0, self.v0, self.a0, self.q1, lb, ub, step_s, motors).holds(
+            self.duration_s, self.c)
+
+
+def _coefficients(D: float, X: np.ndarray) -> np.ndarray:
+    """(c3, c4, c5) (3, k) of the quintic lasting ``D`` with the boundary conditions ``X``
+    = [q1 - q0; v0; a0]: B(D) X, their solution, one product for the k joints."""
+    D2, D3 = D * D, D * D * D
+    B = np.array([[10.0 / D3, -6.0 / D2, -1.5 / D],
+                  [-15.0 / (D3 * D), 8.0 / D3, 1.5 / D2],
+                  [6.0 / (D3 * D2), -3.0 / (D3 * D), -0.5 / D3]])
+    return B @ X
+
+
+class MoveCheck:
+    """The grid check of the arm's moves from (q0, v0, a0) to rest at q1, whatever their
+    duration (``LiveMotion.reaim`` tries several): positions, speeds, accelerations and
+    ``motors`` @ accelerations within [lb, ub] (``_bounds``) on a grid of ``step_s`` over
+    the move (both ends included). Every quantity on the grid is a polynomial in tau of
+    degree <= 5, so the grid's powers of u = tau / D (one table per number of points,
+    ``_unit_grid``) times one coefficient matrix (6, 3k + m) give all of them in one
+    product; the start's part of it (q0, v0, a0) is set once."""
+
+    def __init__(self, q0: np.ndarray, v0: np.ndarray, a0: np.ndarray, q1: np.ndarray,
+                 lb: np.ndarray, ub: np.ndarray, step_s: float,
+                 motors: np.ndarray | None = None) -> None:
+        self.ends = (q0, v0, a0, q1)
+        self.X = np.stack([q1 - q0, v0, a0])  # the boundary conditions (``_coefficients``)
+        self.rows = np.empty((6, len(q0)))  # (q0, v0, a0, c3, c4, c5)
+        self.rows[0], self.rows[1], self.rows[2] = q0, v0, a0
+        self.lb, self.ub, self.step_s, self.motors = lb, ub, step_s, motors
+        self.held: tuple[float, np.ndarray] | None = None  # the last move that held: D, c
+
+    def move(self, t0: float) -> Quintic:
+        """The last move that held, from ``t0`` (``Quintic.between``'s: the same c)."""
+        D, c = self.held
+        return Quintic(float(t0), D, *self.ends, c)
+
+    def holds(self, D: float, c: np.ndarray | None = None) -> bool:
+        """Whether the move lasting ``D`` (its (c3, c4, c5) ``c``, else computed as
+        ``Quintic.between`` does) stays within the bounds on its grid."""
+        c = _coefficients(D, self.X) if c is None else c
+        self.rows[3:] = c
+        k = self.rows.shape[1]
+        # the coefficients of u^0..5 of q, v and a (3 blocks of 6 rows): _POWERS times
+        # (q0, v0, a0, c3, c4, c5), row p times D^p
         D2 = D * D
-        qva = ((_POWERS @ np.concatenate([self.q0, self.v0, self.a0, self.c.ravel()]
-                                         ).reshape(6, k)).reshape(3, 6, k)
+        qva = ((_POWERS @ self.rows).reshape(3, 6, k)
                * np.array([1.0, D, D2, D2 * D, D2 * D2, D2 * D2 * D])[:, None])
         cols = [qva[0], qva[1], qva[2]]
-        if motors is not None:
-            cols.append(qva[2] @ motors.T)
-        P = _unit_grid(n) @ np.concatenate(cols, axis=1)
-        return bool(np.all(P >= lb) and np.all(P <= ub))
+        if self.motors is not None:
+            cols.append(qva[2] @ self.motors.T)
+        P = _unit_grid(max(2, math.ceil(D / self.step_s) + 1)) @ np.concatenate(cols, axis=1)
+        if np.all(P >= self.lb) and np.all(P <= self.ub):
+            self.held = (D, c)
+            return True
+        return False
 
 
 # (q0, v0, a0, c3, c4, c5) -> the coefficients of tau^0..5 in q, then v, then a
@@ -247,10 +281,6 @@ class LiveMotion:
         # (the acceleration it starts with is the move's it replaces: allowed as it is)
         lb, ub = _bounds(self._lo, self._hi, self._v, self._a, np.maximum(room, np.abs(MH @ a)))
 
-        def ok(D: float, goal: np.ndarray) -> Quintic | None:
-            seg = Quintic.between(t_s, D, q, v, a, goal)
-            return seg if seg.within_bounds(lb, ub, VERIFY_STEP_S, MH) else None
-
         for share in PART_SHARES:
             goal = self.seg.q1 + share * (q1 - self.seg.q1)
             # no sooner than the move it replaces would end (unless that is too late)
@@ -258,20 +288,19 @@ class LiveMotion:
                     phase_duration(goal - q, self._v, self._a) if np.any(goal != q) else 0.0)
             if D > D_max + 1e-12:
                 continue
-            seg = ok(D, goal)
-            if seg is None:  # the longest allowed, then the shortest between that holds
+            check = MoveCheck(q, v, a, goal, lb, ub, VERIFY_STEP_S, MH)
+            if not check.holds(D):  # the longest allowed, then the shortest between that holds
                 hi = min(D * GROW ** MAX_GROW, D_max)
-                seg = ok(hi, goal) if hi > D else None
-                for _ in range(BISECT if seg is not None else 0):
+                if not (hi > D and check.holds(hi)):
+                    continue
+                for _ in range(BISECT):
                     mid = 0.5 * (D + hi)
-                    s_mid = ok(mid, goal)
-                    if s_mid is None:
-                        D = mid
+                    if check.holds(mid):
+                        hi = mid
                     else:
-                        hi, seg = mid, s_mid
-            if seg is not None:
-                self.seg = seg
-                return share
+                        D = mid
+            self.seg = check.move(t_s)  # (the last that held: D, or the bisection's hi)
+            return share
         return 0.0
 
     def _ends(self, q_from: np.ndarray, q_to: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -69,7 +69,9 @@ Per throw (``CatchPlanner.plan``):
    ``TOUCH_CLEAR_M`` of the still-arriving ball; it must complete the grasp within
    ``GRASP_WINDOW_S`` (150 ms) of the intercept. Once the grasp is made the wrist turns the
    closed hand palm up, its downhill 5 deg into the fingers (``stopping.hold_turn``: a ball
-   rolling on the palm rolls into the fingers, not off the open wrist side). Rows at
+   rolling on the palm rolls into the fingers, not off the open wrist side) -- or, where
+   the ball would roll off the wrist side before that turn has levelled the palm
+   (``roll``), the turn is already under way when the ball lands (``turnahead``). Rows at
    ``rate_hz`` until ``intercept_t + HOLD_AFTER_S`` (and the arm at rest).
 4. Forces: stopping the ball judged on the rows by the check's own rule
    (``planner.check.ball.ball_loads``: the pad, the ball riding the palm, the arm's

@@ -29,7 +29,19 @@ from planner.catch.mount import CatchMount
 from planner.catch.observe import FitResult, predict_intercept
 from planner.catch.results import CatchPlan, CatchReason, Closing, Reason
 from planner.catch.rowcheck import RowCheck
-from planner.catch.stopping import ROLL_WEIGHT, SoftStop, StopDynamics, hold_turn, plan_stop
+from planner.catch.stopping import (
+    ROLL_WEIGHT,
+    SoftStop,
+    StopDynamics,
+    plan_stop,
+)
+from planner.catch.turnahead import (
+    TURN_AHEAD,
+    TURN_EARLY,
+    TURN_LATE,
+    HoldTurn,
+    ahead_shift,
+)
 from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
@@ -38,7 +50,7 @@ from planner.check.limits import RATE_TOL
 from planner.errors import InfeasibleError, PlannerError
 from planner.hand.model import HandModel
 from planner.ik import HandIK
-from planner.trajectory import LIMIT_MARGIN, Phase, sample
+from planner.trajectory import Phase, sample
 
 SIGNAL_S = 0.025  # seed (Markus): 25 ms of signal processing
 PLAN_BUDGET_S = 0.005  # planning latency budget (bench target p99)
@@ -46,9 +58,6 @@ INTERCEPT_PLAN_TOL_M = 0.001  # what the planner aims for
 HOLD_AFTER_S = 0.5  # rows until intercept_t + this
 _CLOSE_STEP_S = 0.005  # a closing that would touch the arriving ball starts this much later
 _CLOSE_TRIES = 8  # ... up to this many times
-TURN_EARLY, TURN_LATE = "early", "late"  # when the wrist's turn that holds the ball starts
-_TURN_GROW = 1.25  # an early turn too fast on top of the stop is made this much longer
-_TURN_TRIES = 6  # ... up to this many times (1.25^6 = 3.8 x)
 _NOT_THE_TURN = {CatchReason.OUT_OF_REACH, CatchReason.TOO_SOON}  # before the ball: no turn
 # changes them (a plan failing only for these is not tried again without its turn)
 
@@ -98,6 +107,7 @@ class CatchPlanner:
         self.rows = RowCheck(self.hand, self.T_ref, self.near_m)
         self.kin = Kinematics(self.base_hand, self.T_ref)
         self.dyn = StopDynamics(self.hand, self.joints, self.kin)
+        self.turn = HoldTurn(self.hand, self.joints, self.dyn, self.kin, self.q_rest, self._rows)
         self._closings: dict[tuple[float, bool], Closing] = {}
 
     def closing(self, radius: float, bodies: bool = True) -> Closing:
@@ -122,8 +132,11 @@ class CatchPlanner:
         alone passes the self-check (a palm that moves can bring the ball to a fingertip
         the closing would miss otherwise); False: the palm at rest. The hold (the roll term
         of the contact speeds, the wrist's turn: ``planner.catch.stopping``): the turn from
-        the grasp on (``TURN_EARLY``), else after the arm has stopped (``TURN_LATE``), else
-        none (the plan without the hold) -- the first of those that is feasible."""
+        the grasp on or earlier, so that the ball does not roll off the palm's wrist side before
+        the turn has levelled it (``TURN_AHEAD``: ``HoldTurn.ahead_rows``), else from the grasp on
+        (``TURN_EARLY``, when the rule started it earlier), else after the arm has stopped
+        (``TURN_LATE``), else none (the plan without the hold) -- the first of those that is
+        feasible."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._plans(args, soft, True)
@@ -140,17 +153,18 @@ class CatchPlanner:
 
     def _plans(self, args: tuple, soft: bool, bodies: bool) -> CatchPlan:
         """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing."""
-        plan = self._plan(*args, soft=soft, bodies=bodies)
-        for mode in (TURN_LATE, None):
+        plan, ahead = self._plan(*args, soft=soft, bodies=bodies)
+        for mode in ((TURN_EARLY,) if ahead else ()) + (TURN_LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
-            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies)
+            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies)[0]
             if other.feasible:
-                what = "after the arm has stopped" if mode else "no turn to hold the ball"
+                what = {TURN_EARLY: "the turn from the grasp", TURN_LATE:
+                        "after the arm has stopped", None: "no turn to hold the ball"}[mode]
                 plan = replace(other, notes=other.notes + (
                     f"{what}: the earlier turn failed (" + "; ".join(plan.reasons) + ")",))
         if soft and not plan.feasible:
-            still = self._plan(*args, soft=False, bodies=bodies)
+            still = self._plan(*args, soft=False, bodies=bodies)[0]
             if still.feasible:
                 plan = replace(still, notes=still.notes + (
                     "the palm waits at rest: the soft catch failed (" +
@@ -159,11 +173,16 @@ class CatchPlanner:
 
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: dict[str, Any] | None, flight_time_s: float | None,
-              fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_EARLY,
-              bodies: bool = True) -> CatchPlan:
-        """``plan`` with the soft catch on or off, the wrist's turn from the grasp (TURN_EARLY),
-        after the arm's stop (TURN_LATE) or none (None: nor the contact speeds' roll term)."""
+              fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_AHEAD,
+              bodies: bool = True) -> tuple[CatchPlan, bool]:
+        """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
+        (TURN_AHEAD), from the grasp (TURN_EARLY), after the arm's stop (TURN_LATE) or none
+        (None: nor the contact speeds' roll term); and whether the turn starts before the
+        grasp (the roll rule moved it). Without the soft catch the palm waits for the ball at
+        rest: no turn under way then (the roll rule's turn is the grasp's)."""
         t0 = time.perf_counter()
+        if not soft and turn_mode == TURN_AHEAD:
+            turn_mode = TURN_EARLY
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
@@ -202,20 +221,14 @@ class CatchPlanner:
                                   f"(t = {pose.t_i:.3f} s)"))
         s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
                           pad_time_s(soft_stop.v_rel), r)
-        turn0 = self._turn(pose, soft_stop) if turn_mode else (np.zeros(h.n), 0.0)
-        for _ in range(_CLOSE_TRIES):
-            turn, t, Q = self._turned_rows(turn0, turn_mode, (pose, q_pre, soft_stop, closing,
-                                                              t_react, T_m, s_c, rate_hz))
-            t_static = max(s_c + closing.duration_s, soft_stop.end_s, turn[2] + turn[1])
-            err, clear, g_t, g_f, check_reasons = self.rows.check(
-                flight, C, r, t, Q, pose.t_i, t_static, rate_hz, closing.reason is not None)
-            # ``close_start`` sees the palm at rest: a palm moving with the ball keeps it near
-            # the fingers longer, so the closing waits a little more when a tip meets it
-            if not any(x.startswith("fingers in the way") for x in check_reasons) or \
-                    not np.any(soft_stop.qd) or s_c >= pose.t_i:
-                break
-            s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
+        turn0 = self.turn.hold(pose, soft_stop) if turn_mode else (np.zeros(h.n), 0.0)
+        turn, t, Q, T_m, s_c, (err, clear, g_t, g_f, check_reasons) = self._closing_rows(
+            flight, C, turn0, turn_mode, (pose, q_pre, soft_stop, closing, t_react, T_m, s_c,
+                                          rate_hz))
         reasons += [Reason(_row_kind(x), x) for x in check_reasons]
+        ahead = turn[3] is not None  # the roll rule's turn under way at the intercept: the
+        if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
+            q_pre = q_pre + ahead_shift(turn[3], pose.t_i, h.n)
         q_closed = pose.q_closed.copy()
         q_closed[arm] += soft_stop.last_offset
         q_closed += turn[0]  # the pose the ball is held in (the turn ends at rest)
@@ -235,7 +248,32 @@ class CatchPlanner:
             grasp_fingers=g_f, min_clearance_before_m=clear, stop=stop, hold=hold, t=t, q=Q,
             q_motor=h.motor_angles(Q), ik_iterations=pose.ik_iterations,
             t_info_s=float(t_info), uncertainty=unc, planning_s=time.perf_counter() - t0,
-            soft=soft_stop if np.any(soft_stop.qd) else None)
+            notes=_turn_note(turn, pose.t_i), soft=soft_stop if np.any(soft_stop.qd) else None
+        ), ahead
+
+    def _closing_rows(self, flight: Flight, C: np.ndarray, turn0: tuple[np.ndarray, float],
+                      turn_mode: str | None, rows_args: tuple):
+        """The rows with the wrist's turn as ``turn_mode`` says and their self-check
+        (``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
+        keeps it near the fingers longer, so the closing waits a little more when a tip meets
+        it. Returns the turn, the rows, the move-in's duration, the closing's start and the
+        self-check's results."""
+        pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz = rows_args
+        r = float(flight.ball.radius_m)
+        for _ in range(_CLOSE_TRIES):
+            args = (pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz)
+            if turn_mode == TURN_AHEAD:
+                turn, t, Q, T_used = self.turn.ahead_rows(turn0, args, flight)
+            else:
+                (turn, t, Q), T_used = self.turn.turned_rows(turn0, turn_mode, args), T_m
+            t_static = max(s_c + closing.duration_s, stop.end_s, turn[2] + turn[1])
+            checked = self.rows.check(flight, C, r, t, Q, pose.t_i, t_static, rate_hz,
+                                      closing.reason is not None)
+            if not any(x.startswith("fingers in the way") for x in checked[4]) or \
+                    not np.any(stop.qd) or s_c >= pose.t_i:
+                break
+            s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
+        return turn, t, Q, T_used, s_c, checked
 
     def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
              ic: Intercept) -> _Pose:
@@ -271,59 +309,34 @@ class CatchPlanner:
 
     def _rows(self, pose: _Pose, q_pre: np.ndarray, stop: SoftStop, closing: Closing,
               t_react: float, T_m: float, s_c: float, rate_hz: float,
-              turn: tuple[np.ndarray, float, float]) -> tuple[np.ndarray, np.ndarray]:
+              turn: tuple) -> tuple[np.ndarray, np.ndarray]:
         """The rows: rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
         stopping motion (``stop``), open -> closed fingers from ``s_c``, the wrist's ``turn``
-        (delta, duration, start) that holds the ball, until ``HOLD_AFTER_S`` after the intercept
-        (and the arm at rest)."""
+        (delta, duration, start, profiles) that holds the ball, until ``HOLD_AFTER_S`` after
+        the intercept (and the arm at rest). The turn is a min-jerk move, or (its profiles,
+        ``SoftStop``s of the flexion: ``planner.catch.turnahead``) under way at the intercept:
+        the move-in then ends short of ``q_pre`` by the turn's travel before the ball."""
         h = self.hand
-        phases = [Phase(delta=q_pre - self.q_rest, duration_s=T_m),
+        delta, T_turn, t_turn, prof = turn
+        arm = list(self.joints.arm)
+        shift = ahead_shift(prof, pose.t_i, h.n) if prof is not None else np.zeros(h.n)
+        phases = [Phase(delta=q_pre + shift - self.q_rest, duration_s=T_m),
                   Phase(delta=pose.q_closed - pose.q_open, duration_s=closing.duration_s)]
         starts = [t_react, s_c]
         t_end = max(pose.t_i + HOLD_AFTER_S, stop.end_s + 2.0 / rate_hz)
-        delta, T_turn, t_turn = turn
-        if T_turn > 0:
+        if T_turn > 0 and prof is None:
             phases.append(Phase(delta=delta, duration_s=T_turn))
             starts.append(t_turn)
+        if T_turn > 0:
             t_end = max(t_end, t_turn + T_turn + 2.0 / rate_hz)
         n_rows = math.floor(t_end * rate_hz + 1e-9) + 1
         t = np.arange(n_rows) * (1.0 / rate_hz)
         Q = sample(phases, np.array(starts), t, self.q_rest)
         Q += stop.offset(t, h.n)
-        Q[:, list(self.joints.arm)] -= stop.first_offset
+        Q[:, arm] -= stop.first_offset
+        for p in prof or ():
+            Q += p.offset(t, h.n) - p.offset(np.array([-math.inf]), h.n)[0]
         return t, h.apply_couplings(Q)
-
-    def _turn(self, pose: _Pose, stop: SoftStop) -> tuple[np.ndarray, float]:
-        """The wrist's turn that holds the ball (``stopping.hold_turn``) from the closed hand
-        where the stopping motion leaves it; it starts once the fingers have closed and the
-        arm is at rest (``_turn_start``)."""
-        q_end = pose.q_closed.copy()
-        q_end[list(self.joints.arm)] += stop.last_offset
-        return hold_turn(self.dyn, q_end)
-
-    def _turned_rows(self, turn0: tuple[np.ndarray, float], mode: str | None,
-                     rows_args: tuple):
-        """The rows (``_rows(*rows_args, turn)``) with the wrist's turn (delta, duration)
-        started as ``mode`` says (``_turn_start``). An early turn (from the grasp, while the
-        arm may still be stopping) adds its speeds and accelerations to the stop's: it is
-        lengthened by ``_TURN_GROW`` until every joint is within its speed and acceleration
-        limits on the rows (at most ``_TURN_TRIES`` times; then as it is, for the self-check
-        to refuse). Returns the turn (delta, duration, start) and the rows."""
-        _, _, stop, closing, _, _, s_c, _ = rows_args
-        turn = (*turn0, _turn_start(stop, closing, s_c, mode == TURN_EARLY))
-        t, Q = self._rows(*rows_args, turn)
-        if mode != TURN_EARLY or turn0[1] <= 0:
-            return turn, t, Q
-        h, dt = self.hand, float(t[1] - t[0])
-        for _ in range(_TURN_TRIES):
-            v = np.abs(np.diff(Q, axis=0)) / dt
-            a = np.abs(np.diff(Q, 2, axis=0)) / (dt * dt)
-            if np.all(v <= LIMIT_MARGIN * h.velocity) and \
-                    np.all(a <= LIMIT_MARGIN * h.acceleration):
-                break
-            turn = (turn[0], turn[1] * _TURN_GROW, turn[2])
-            t, Q = self._rows(*rows_args, turn)
-        return turn, t, Q
 
     def forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float,
                grasp_t: float | None = None):
@@ -370,12 +383,13 @@ class CatchPlanner:
                           grasp_t)[0]
 
 
-def _turn_start(stop: SoftStop, closing: Closing, s_c: float, early: bool) -> float:
-    """When the wrist's turn starts: once the grasp is made (``u_grasp`` of the closing from
-    ``s_c``; before it the ball lies on the palm alone, whose friction cone the check judges
-    then) and the pad has stopped the ball; not ``early``: also the arm at rest."""
-    grasp = s_c + (closing.u_grasp or 1.0) * closing.duration_s
-    return max(stop.t_i + stop.pad_s if early else stop.end_s, grasp)
+def _turn_note(turn: tuple, t_i: float) -> tuple[str, ...]:
+    """The plan's note on a turn under way at the intercept (the roll rule's), else none."""
+    if turn[3] is None:
+        return ()
+    return ((f"the wrist's turn under way at {np.abs(turn[3][0].qd).max():.1f} rad/s when the "
+            f"ball lands (from {1000 * (t_i - turn[2]):.0f} ms before it): from the grasp the "
+            "ball would roll off the palm's wrist side"),)
 
 
 def _row_kind(reason: str) -> CatchReason:

@@ -14,15 +14,17 @@ After each observation (``observe``):
 1. Fit (``livefit.LiveFit``): the flight's state and its covariance from every
    observation so far (vacuum, or drag with the ball's k), once there are
    ``LiveFit.min_obs`` of them (before that there is no file: the hand rests, and the
-   first rows are written from t = 0 with the first fit).
-2. Intercept: ``intercept.find_intercept_near`` from the previous intercept time
-   (``NEAR_S``), the pose confirmed by ``CatchPlanner.meet`` (placo, warm: the previous
-   pose is the closed form's). The first fit's starts from the intercept of the flight
-   fitted to the observations before it (``LiveFit.first_look``: with drag, the chord
-   iteration the first fit would do, which it then continues by one step; its intercept
-   searched along the whole path), both at the observation before the first fit, which
-   plans nothing else, so that no observation carries the whole search or the fit's
-   iteration together with the first plan.
+   first rows are written from t = 0 with the first fit; those up to an earlier
+   observation's ``t_react``, rest rows whatever the fit finds, formatted at that one).
+2. Intercept (``livesearch.LiveSearch``): near the previous intercept time, the whole
+   path searched from out of reach once per ``REACH_RETRY_S``; the pose confirmed by
+   ``CatchPlanner.meet`` (placo, warm: the previous pose is the closed form's). The first
+   fit's starts from the intercept of the flight fitted to the observations before it
+   (``LiveFit.first_look``: with drag, the chord iteration the first fit would do, which
+   it then continues by one step; its intercept searched along the whole path), both at
+   the observation before the first fit, which plans nothing else, so that no
+   observation carries the whole search or the fit's iteration together with the first
+   plan.
 3. Motion (``livemotion.LiveMotion``): until the hand moves, it waits while waiting for
    the next observation would not make it late (the open pose reached before the closing
    move must start, ``closing.close_start``), then starts the planner's move to the open
@@ -57,29 +59,16 @@ from planner.catch import grasp as gq
 from planner.catch.arm import open_from
 from planner.catch.closing import close_start, earliest_close_start
 from planner.catch.flight import Ball, Flight, _finite, get_ball
-from planner.catch.intercept import (
-    SEARCH_AFTER_S,
-    Intercept,
-    closest_time,
-    find_intercept,
-    find_intercept_near,
-)
 from planner.catch.livefit import LiveFit
 from planner.catch.livemotion import LiveMotion, rest_by_s
+from planner.catch.livesearch import LiveSearch
 from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
 from planner.catch.results import CatchPlan
 from planner.errors import InfeasibleError, InputError
 from planner.guard import guard_rows
 from planner.hand.model import HandModel
-from planner.trajfile import TrajectoryWriter
+from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
 
-NEAR_S = 0.020  # the intercept is searched this close to the previous one first (an
-# observation moves it by a few ms: sigma_t of a 5 mm camera late in the flight is ~1 ms)
-REACH_RETRY_S = 0.010  # an estimate out of reach is searched again along the whole path
-# (~0.4 ms) after this much camera time, not at every observation: the cadence of a 100 Hz
-# camera, the slowest the session is for, at which it meets the catch target (bench_live:
-# 19-20 of 20 at 2-10 mm noise); a 500 Hz camera's estimate coming back in reach is then acted on at most
-# 8 ms later than at once, within the signal delay's 25 ms
 HELD = "held"
 GIVEN_UP = "given_up"
 
@@ -94,6 +83,14 @@ class _CloseAsk(NamedTuple):
     ready: float
     stop_t: float
     t_b: float
+
+
+class _Chunk(NamedTuple):
+    """Rows sampled, guarded and formatted (``trajfile.format_rows``), to be written."""
+
+    t: np.ndarray
+    Q: np.ndarray
+    rows: FormattedRows
 
 
 class _DeferredClosing:
@@ -171,14 +168,13 @@ class CatchSession:
         self._T_root = self.pl.mount.T_world_root(self.C).tolist()  # (the file's metadata)
         self._t: list[np.ndarray] = []
         self._q: list[np.ndarray] = []
+        self._ahead: list[_Chunk] = []  # rows formatted before the file is opened
         self.next_row = 0
         self.pose = self.flight = None
         self.t_i: float | None = None
-        self._prior: Intercept | None = None  # the intercept of the flight seen before the
-        # first fit (``LiveFit.first_look``): that fit's search starts from it
+        self._search = LiveSearch(self.pl.wrist, self.C, self.ball.radius_m)  # (step 2)
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
-        self._searched_s = -math.inf  # the last whole-path search from out of reach
         self._closings = _DeferredClosing(h, self.C, self.closing, self.ball.radius_m)
         self.kept_targets = 0  # re-aims that could not reach their target at rest before
         # the ball within the limits (part of the way made, or the older target kept)
@@ -223,9 +219,11 @@ class CatchSession:
         fit = self.fit.add(t, p)
         if fit is None:
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
-                prior = self._search(self.fit.first_look())
-                # (a pose to start from: an intercept out of reach is none)
-                self._prior = prior if prior is not None and prior.reason is None else None
+                self._search.look(self.fit.first_look())
+            # the hand rests at least until this observation could act: those rows
+            # formatted here, written with the first fit's
+            chunk = self._format(t + SIGNAL_S + PLAN_BUDGET_S)
+            self._ahead += [chunk] if chunk else []
             return np.empty((0, 0))
         t_react = t + SIGNAL_S + PLAN_BUDGET_S
         t_b = max(self.written_to_s, t_react)
@@ -259,7 +257,8 @@ class CatchSession:
         """Steps 2-3 of the module docstring for the newest ``flight`` (observed up to
         ``t_s``), acting from ``t_b`` (this observation's rows end at ``rows_to_s``)."""
         pl, r, cl = self.pl, self.ball.radius_m, self.closing
-        pose = pl.meet(flight, self.C, r, cl, self._intercept(flight, t_s))
+        prev = None if self.pose is None else self.pose.ic
+        pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
         stop_t = gq.stop_time(pose.v_i)
         m = self.motion
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives
@@ -282,40 +281,6 @@ class CatchSession:
                 self._closings.retime(m, _CloseAsk(flight, pose.q_open, pose.t_i,
                                                    m.fingers_open_s, stop_t, t_b), rows_to_s)
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
-
-    def _intercept(self, flight: Flight, t_s: float) -> Intercept:
-        """The newest flight's intercept (step 2), warm-started from the last one. From an
-        intercept out of reach the search is the whole path's (``find_intercept_near``),
-        run at most every ``REACH_RETRY_S`` of observations; in between the estimate stays
-        out of reach (``meet`` refines its time on the new flight)."""
-        pl, r = self.pl, self.ball.radius_m
-        if self.t_i is None:
-            if self._prior is not None:  # from the first look at the observations before
-                return find_intercept_near(pl.wrist, flight, self.C, r, self._prior,
-                                           self._prior.t, NEAR_S)
-            return self._search(flight)
-        prev = self.pose.ic
-        if prev.reason is not None and t_s < self._searched_s + REACH_RETRY_S - 1e-9:
-            flight.integrate_to(self.t_i + NEAR_S)
-            return prev
-        # the drag table integrated once, as far as it is needed (from an intercept out of
-        # reach, the whole-path search's span)
-        flight.integrate_to(self.t_i + (SEARCH_AFTER_S if prev.reason else NEAR_S))
-        ic = find_intercept_near(pl.wrist, flight, self.C, r, prev, self.t_i, NEAR_S)
-        if ic.reason is not None:  # (out of reach: the whole path was searched)
-            self._searched_s = t_s
-        return ic
-
-    def _search(self, flight: Flight | None) -> Intercept | None:
-        """The intercept searched along the whole of ``flight`` near the catch point (the
-        first plan's; ``find_intercept_near`` warm-starts every later one)."""
-        if flight is None:
-            return None
-        try:
-            t_c = float(flight.time_at_x(float(self.C[0])))
-        except InfeasibleError:
-            t_c = closest_time(flight, self.C)
-        return find_intercept(self.pl.wrist, flight, self.C, self.ball.radius_m, t_c)
 
     def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
         """The intercept's 1-sigma from the fit (``LiveFit.sigma_at``): across the path at
@@ -358,21 +323,35 @@ class CatchSession:
         """The time of the last row ``_write_to(t_end_s)`` writes."""
         return math.floor(t_end_s / self.dt + 1e-9) * self.dt
 
-    def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:
-        """Rows up to ``t_end_s`` (those up to ``t_b`` on the arm's move ``old_seg``, from
-        before this re-plan), guarded, written; returns them as written."""
+    def _format(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> _Chunk | None:
+        """The rows after those written (and formatted ahead) up to ``t_end_s`` (those up
+        to ``t_b`` on the arm's move ``old_seg``, from before this re-plan), guarded and
+        formatted, not written (None: no row)."""
+        ahead = self._ahead
+        first = self.next_row + sum(len(c.t) for c in ahead)
         n = math.floor(t_end_s / self.dt + 1e-9) + 1
-        if n <= self.next_row:
-            return np.empty((0, 0))
-        t = np.arange(self.next_row, n) * self.dt
+        if n <= first:
+            return None
+        t = np.arange(first, n) * self.dt
         Q = self.motion.rows(t, old_seg, t_b)
-        guard_rows(self.pl.hand, Q, self._q[-1][-1] if self._q else None, self.dt)
-        out = self.writer.write_rows(t, Q, self.pl.hand.motor_angles(Q))
+        guard_rows(self.pl.hand, Q, ahead[-1].Q[-1] if ahead else self._q[-1][-1] if self._q
+                   else None, self.dt)
+        return _Chunk(t, Q, format_rows(t, Q, self.pl.hand.motor_angles(Q)))
+
+    def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:
+        """The rows formatted ahead and the rest up to ``t_end_s`` (``_format``), written;
+        returns them as written."""
+        chunks = self._ahead + [c for c in (self._format(t_end_s, t_b, old_seg),) if c]
+        self._ahead = []
+        if not chunks:
+            return np.empty((0, 0))
+        out = [self.writer.append(c.rows) for c in chunks]
         self.rows_out_s, self.rows_cpu_s = time.perf_counter(), time.thread_time()
-        self._t.append(t)
-        self._q.append(Q)
-        self.next_row = n
-        return out
+        for c in chunks:
+            self._t.append(c.t)
+            self._q.append(c.Q)
+            self.next_row += len(c.t)
+        return out[0] if len(out) == 1 else np.concatenate(out)
 
     # ------------------------------------------------------------ the end
     def _finish(self, why: str) -> np.ndarray:

@@ -262,10 +262,11 @@ class StopDynamics:
         self._rooms[key] = out
         return out
 
-    def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None) -> float:
+    def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None,
+                  share: float = STOP_SHARE) -> float:
         """Shortest min-jerk speed ramp between rest and ``qd`` (its peak acceleration is
-        PEAK_VEL |qd| / T) within the acceleration limits and every motor within
-        ``STOP_SHARE`` of its capacity; ``load``: (n, k) extra joint torque per unit arm
+        PEAK_VEL |qd| / T) within the acceleration limits and every motor within ``share``
+        (``STOP_SHARE``) of its capacity; ``load``: (n, k) extra joint torque per unit arm
         acceleration (the riding ball). inf when gravity and speed alone leave no room."""
         if not np.any(qd):
             return 0.0
@@ -274,7 +275,7 @@ class StopDynamics:
         base = M @ self.joint_torques(q, qd, z)
         per = M @ (self.joint_torques(q, z, qd) - self.joint_torques(q, z, z)
                    + (load @ qd if load is not None else 0.0))
-        room = STOP_SHARE * self.cap - np.abs(base)
+        room = share * self.cap - np.abs(base)
         need = np.abs(per) > 1e-12
         if np.any(room[need] <= 0):
             return math.inf
@@ -479,17 +480,26 @@ def hold_turn(dyn: StopDynamics, q_end: np.ndarray, tilt_deg: float = HOLD_TILT_
     best = _best_flex(h, q_end, i, np.clip(np.linspace(best - d, best + d, 21), lo + pad,
                                            hi - pad), want)
     z[i] = best - q_end[i]
-    T = phase_duration(z, h.velocity, h.acceleration)
-    for q in (q_end, q_end + z):  # move_time's rule within TURN_SHARE of every motor
+    T = turn_time(dyn, q_end, z)
+    return (z, T) if math.isfinite(T) else (np.zeros(h.n), 0.0)
+
+
+def turn_time(dyn: StopDynamics, q_from: np.ndarray, delta: np.ndarray) -> float:
+    """The shortest min-jerk turn ``delta`` from ``q_from`` within every joint's speed and
+    acceleration limit and every motor within ``TURN_SHARE`` of its capacity with the
+    hand's inertia at either end (``move_time``'s rule); inf when gravity alone leaves a
+    motor no room."""
+    T = phase_duration(delta, dyn.hand.velocity, dyn.hand.acceleration)
+    for q in (q_from, q_from + delta):
         MH, room = dyn.accel_room(q)
         room = room - (STOP_SHARE - TURN_SHARE) * dyn.cap
-        per = np.abs(MH @ z)
+        per = np.abs(MH @ delta)
         need = per > 1e-12
         if np.any(room[need] <= 0):
-            return np.zeros(h.n), 0.0
+            return math.inf
         if need.any():
             T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
-    return z, T
+    return T
 
 
 def _best_flex(h: HandModel, q_end: np.ndarray, i: int, cand: np.ndarray, want: float

@@ -1,0 +1,60 @@
+"""The ball rolling along the palm after the pad has stopped it (``docs/physics-replay.md``,
+"Catch"): nothing on the palm's wrist side stops a ball that rolls there, so the plan must
+keep its roll towards the wrist short until the wrist's turn has levelled the palm.
+
+A ball of mass m, radius R and moment of inertia I = ``Ball.inertia_ratio`` m R^2 rolling
+without slipping on a plane that accelerates at a (the palm target's acceleration: its
+translation and the turn's centripetal part) moves along the plane at
+(g - a) . y / (1 + I / (m R^2)) (5/7 g sin(tilt) for a solid ball on a still incline),
+y the plane's direction towards the wrist; it starts with the same share of its speed along
+the palm when it lands (a sliding ball's speed once it rolls, without spin at the landing).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.hand.model import GRAVITY_WORLD
+
+ROLL_ROOM_M = 0.042  # how far the ball may roll from the palm target towards the wrist: there
+# it meets the forearm (measured in the replay, 20 deg / 1.0 m at 92f563c: the ball touches
+# the forearm's box 42 mm from the palm centre and rides up it, out of the hand)
+
+
+def roll_factor(inertia_ratio: float) -> float:
+    """The share of the tangential force a rolling ball's centre follows: 1 / (1 + I/(m R^2))
+    (5/7 for a solid ball, 3/5 for a thin shell)."""
+    return 1.0 / (1.0 + float(inertia_ratio))
+
+
+def roll_towards_wrist_m(t: np.ndarray, palm: np.ndarray, r: float, t_i: float,
+                         v_ball: np.ndarray, inertia_ratio: float) -> float:
+    """The ball's largest roll towards the wrist (m, along the palm's +y from the palm
+    target) on rows ``t`` with palm poses ``palm`` (T, 4, 4) from its landing at ``t_i``
+    (at velocity ``v_ball``; the palm target's is its row segment's there) to the last row;
+    the closing fingers on its far side stop it at the palm target (the roll is not
+    negative). Integrated row to row with the rows' accelerations (second differences of
+    the palm target)."""
+    k_roll = roll_factor(inertia_ratio)
+    centre = palm[:, :3, 3] + r * palm[:, :3, 2]
+    after = np.flatnonzero(t > t_i)
+    if len(after) < 2 or after[0] < 1:
+        return 0.0
+    dt = np.diff(t)
+    k0 = int(after[0])
+    v_rel = np.asarray(v_ball, dtype=float) - (centre[k0] - centre[k0 - 1]) / dt[k0 - 1]
+    acc = np.zeros_like(centre)
+    acc[1:-1] = 2.0 * ((centre[2:] - centre[1:-1]) / dt[1:, None]
+                       - (centre[1:-1] - centre[:-2]) / dt[:-1, None]) / (dt[1:] + dt[:-1])[:, None]
+    along = k_roll * np.einsum("ij,ij->i", GRAVITY_WORLD - acc, palm[:, :3, 1])
+    x, v = 0.0, k_roll * float(v_rel @ palm[k0 - 1, :3, 1])
+    worst, tau = 0.0, float(t[k0] - t_i)  # the first step: from the landing to row k0
+    for k in range(k0, len(t)):
+        a = float(along[k])
+        x += v * tau + 0.5 * a * tau * tau
+        v += a * tau
+        if x < 0.0:
+            x, v = 0.0, max(v, 0.0)
+        worst = max(worst, x)
+        tau = float(dt[k]) if k < len(dt) else 0.0
+    return worst
