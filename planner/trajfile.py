@@ -79,7 +79,8 @@ def format_rows(t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> Formatte
     if len(t_s) == 1:  # (a live observation's usual row: no repeats to look for)
         line = f"{float(t_s[0]):.6f}," + ",".join(["%.6f"] * (q.shape[1] + q_motor.shape[1])
                                                   ) % (*q[0].tolist(), *q_motor[0].tolist())
-        return FormattedRows(t_s, line + "\n", np.array([line.split(",")], dtype=float))
+        return FormattedRows(t_s, line + "\n",
+                             as_written(np.concatenate([t_s, q[0], q_motor[0]]))[None])
     if not np.all(np.diff(t_s) > 0):
         raise PlannerError(f"trajectory time not increasing near t={t_s[0]}")
     body = np.column_stack([q, q_motor])
