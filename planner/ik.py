@@ -237,8 +237,9 @@ class HandIK:
         half-spaces are set from it; the solver keeps nothing between steps), so once a
         configuration comes back bit for bit, the steps cycle through the same ones: the
         configuration the ``max_iter``-th step reaches is known without taking it. (The
-        catch's closed pose, whose fingertip targets are partly out of reach, cycles
-        after 29-58 of its 80-150 steps at rounding level: ``planner.catch.closing``.)"""
+        catch's closed pose, whose fingertip targets are partly out of reach, comes back
+        after 38-59 of its 80-150 steps, a cycle of 3-18 at rounding level:
+        ``planner.catch.closing``.)"""
         seen: dict[bytes, int] = {}  # a configuration -> the step that reached it
         states: list[tuple[np.ndarray, float, float]] = []  # after step 1, 2, ...
         tips = {p.finger: self._tip(p.finger) for p in presses}
