@@ -30,7 +30,7 @@ CASES = {
     "catch": (["catch", "--angle", "30", "--dist", "1.5", "-o", "{out}/c.csv"],
               "import planner.cli, planner.catch.summary"),
     "play twinkle": (["play", str(ROOT / "songs" / "twinkle.mid"), "-o", "{out}/t.csv"],
-                     "import planner.cli, planner.play"),
+                     "import planner.cli, planner.play.stream"),
     "check twinkle": (["check", "{out}/t.csv", str(ROOT / "songs" / "twinkle.mid")],
                       "import planner.cli, planner.check"),
 }

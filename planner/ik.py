@@ -223,13 +223,31 @@ class HandIK:
             t = self.solver.add_position_task(f"{p.finger}_tip", np.array(p.point_m))
             t.configure(f"press_{p.finger}", "soft", 1e5)
             self._tasks[p.finger] = t
-        err = np.inf
-        clearance = np.inf
-        it = 0
+        err, clearance, it = self._iterate(presses, hover, max_iter, tol_m)
+        q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
+        self._clear_half_spaces()
+        return IKResult(q, bool(err <= tol_m and clearance >= 0.005 - 1e-9), it, float(err), float(clearance))
+
+    def _iterate(self, presses: list[PressTarget], hover: tuple[str, ...], max_iter: int,
+                 tol_m: float) -> tuple[float, float, int]:
+        """``solve``'s Newton steps from the robot's configuration: (press error,
+        clearance, iterations) of the configuration they end at (the robot left there).
+
+        A step is a function of the configuration alone (the targets' y and the
+        half-spaces are set from it; the solver keeps nothing between steps), so once a
+        configuration comes back bit for bit, the steps cycle through the same ones: the
+        configuration the ``max_iter``-th step reaches is known without taking it. (The
+        catch's closed pose, whose fingertip targets are partly out of reach, comes back
+        after 38-59 of its 80-150 steps, a cycle of 3-18 at rounding level:
+        ``planner.catch.closing``.)"""
+        seen: dict[bytes, int] = {}  # a configuration -> the step that reached it
+        states: list[tuple[np.ndarray, float, float]] = []  # after step 1, 2, ...
+        tips = {p.finger: self._tip(p.finger) for p in presses}
+        err = clearance = np.inf
         for it in range(1, max_iter + 1):
             # slide each target's y within its range to the tip's current y
             for p in presses:
-                y = float(np.clip(self._tip(p.finger)[1], *p.y_range_m))
+                y = min(max(float(tips[p.finger][1]), p.y_range_m[0]), p.y_range_m[1])
                 self._tasks[p.finger].target_world = np.array([p.point_m[0], y, p.point_m[2]])
             self._set_half_spaces(hover)
             try:
@@ -239,19 +257,29 @@ class HandIK:
                 self._clear_half_spaces()
                 self.solver.solve(True)
             self.robot.update_kinematics()
-            err = self._press_error(presses)
+            tips = {p.finger: self._tip(p.finger) for p in presses}
+            err = self._press_error(presses, tips)
             clearance = self._clearance(hover)
             if err <= tol_m and clearance >= 0.005 - 1e-9:
-                break
-        q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
-        self._clear_half_spaces()
-        return IKResult(q, bool(err <= tol_m and clearance >= 0.005 - 1e-9), it, float(err), float(clearance))
+                return err, clearance, it
+            q = self.robot.state.q
+            key = q.tobytes()
+            if key in seen:  # a cycle of it - seen[key] steps, none converged
+                j = seen[key]
+                q_end, err, clearance = states[j - 1 + (max_iter - j) % (it - j)]
+                self.robot.state.q = q_end
+                self.robot.update_kinematics()
+                return err, clearance, max_iter
+            seen[key] = it
+            states.append((q.copy(), err, clearance))
+        return err, clearance, max_iter
 
-    def _press_error(self, presses: list[PressTarget]) -> float:
+    @staticmethod
+    def _press_error(presses: list[PressTarget], tips: dict[str, np.ndarray]) -> float:
         e = 0.0
         for p in presses:
-            tip = self._tip(p.finger)
-            y = float(np.clip(tip[1], *p.y_range_m))
+            tip = tips[p.finger]
+            y = min(max(float(tip[1]), p.y_range_m[0]), p.y_range_m[1])
             e = max(e, float(np.linalg.norm(tip - np.array([p.point_m[0], y, p.point_m[2]]))))
         return e
 

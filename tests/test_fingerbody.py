@@ -134,3 +134,15 @@ def test_the_seed_hand_cannot_press_between_two_black_keys(hand, bodies):
         assert 2 * r > slot_m, f
         cap_m = r - np.sqrt(r * r - (slot_m / 2) ** 2)  # how far the sphere enters the slot
         assert cap_m < needed_m, (f, cap_m)
+
+
+def test_points_many_are_points_at_each_configuration(hand, bodies):
+    """``FingerBodies.points_many`` (``FrameChain``, many configurations at once) gives
+    ``points`` (Pinocchio, one at a time) at each, to rounding."""
+    rng = np.random.default_rng(3)
+    Q = hand.apply_couplings(rng.uniform(hand.lower, hand.upper, (40, hand.n)))
+    for f in hand.fingers:
+        many = bodies.points_many(Q, f)
+        for k in range(len(Q)):
+            p, _ = bodies.points(Q[k], f)
+            np.testing.assert_allclose(many[k], p, rtol=0, atol=1e-15)

@@ -71,3 +71,51 @@ def test_solve_palm_returns_a_start_that_meets_the_task_unchanged():
     moved = pl.ik.solve_palm(point + np.array([0.0, 0.05, 0.0]), n, q, q, offset_m=0.03,
                              max_iter=20)
     assert moved.iterations > 0 and moved.converged and moved.press_error_m < 0.001  # (rail)
+
+
+def test_a_solve_that_cycles_ends_where_every_step_taken_ends():
+    """``HandIK.solve`` stops stepping once a configuration comes back bit for bit (the
+    steps then cycle): the catch's closing targets (the arm locked, the fingertips partly
+    out of reach) cycle well before ``max_iter``, and the configuration, error and
+    iterations returned are those of taking all ``max_iter`` steps one by one."""
+    import numpy as np
+
+    from planner.catch.arm import zero_pose
+    from planner.catch.plan import get_planner
+    from planner.ik import HandIK, PressTarget
+
+    pl = get_planner("default")
+    h = pl.hand
+    ik = HandIK(h)
+    q0 = zero_pose(h)
+    for i in pl.joints.flexion_idx:
+        q0[i] = 0.5 * (h.lower[i] + h.upper[i])
+    q0 = h.apply_couplings(np.clip(q0, h.lower, h.upper))
+    centre = pl.wrist.pc0 + 0.0335 * pl.wrist.n0
+    tips = h.tip_positions(q0)
+    presses = [PressTarget(f, 0, tuple(p), (p[1], p[1]))  # 3.6 cm from the centre
+               for f, p in zip(h.fingers, centre + 0.0365 * (tips - centre) /
+                               np.linalg.norm(tips - centre, axis=1)[:, None])]
+    for n in pl.joints.locked:
+        ik.solver.mask_dof(n)
+    steps = []
+    solve_step = ik.solver.solve
+
+    def counted(apply):
+        steps.append(1)
+        return solve_step(apply)
+
+    ik.solver.solve = counted
+    res = ik.solve(presses, q0, q0, hover=(), max_iter=150)
+    assert len(steps) < 100 and res.iterations == 150 and not res.converged
+    ik.solve(presses, q0, q0, hover=(), max_iter=0)  # the same tasks, at q0; no step
+    for _ in range(150):  # every step, as before the shortcut
+        for p in presses:
+            y = float(np.clip(ik._tip(p.finger)[1], *p.y_range_m))
+            ik._tasks[p.finger].target_world = np.array([p.point_m[0], y, p.point_m[2]])
+        ik._set_half_spaces(())
+        solve_step(True)
+        ik.robot.update_kinematics()
+    q = h.apply_couplings(np.clip(ik.get_q(), h.lower, h.upper))
+    assert q.tobytes() == res.q.tobytes()
+    assert ik._press_error(presses, {f: ik._tip(f) for f in h.fingers}) == res.press_error_m

@@ -16,7 +16,7 @@ from planner.catch.results import Closing
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M
 from planner.hand.model import HandModel
 from planner.ik import HandIK, PressTarget
-from planner.play.fingerbody import AXIS_SAMPLES, FingerBodies
+from planner.play.fingerbody import FingerBodies
 from planner.trajectory import min_jerk, phase_duration
 
 GRASP_MARGIN_M = 0.002  # planned with this much to spare
@@ -105,23 +105,21 @@ def _body_table(h: HandModel, fb: FingerBodies, Q: np.ndarray, Tinv: np.ndarray)
     """The fingers' bodies along the closing move ``Q`` in the palm frame (``Tinv``: world
     -> palm), shape by shape (a pad sphere, a segment's capsule): points (K, G, P, 3), a
     shape with fewer repeating its first, their radii (G, P), each shape's bounding sphere
-    (centres (K, G, 3), radii (K, G))."""
-    splits = []  # per finger: its shapes' point counts (``FingerBodies.points``' order)
-    for f in h.fingers:
-        sh = fb.shapes[f]
-        splits.append([1 if np.allclose(a, b) else AXIS_SAMPLES for a, b in zip(sh.p0, sh.p1)])
-    G, P = sum(len(x) for x in splits), max(max(x) for x in splits)
+    (centres (K, G, 3), radii (K, G)). Every configuration at once
+    (``FingerBodies.points_many``)."""
+    shapes = [(f, a, n) for f in h.fingers
+              for a, n in zip(np.cumsum((0,) + fb.shapes[f].n_points[:-1]),
+                              fb.shapes[f].n_points)]
+    G, P = len(shapes), max(n for _, _, n in shapes)
     pts = np.empty((len(Q), G, P, 3))
     rad = np.empty((G, P))
-    for k in range(len(Q)):
-        g = 0
-        for i, f in enumerate(h.fingers):
-            p, ri = fb.points(Q[k], f, update=i == 0)
-            p = p @ Tinv[:3, :3].T + Tinv[:3, 3]
-            for n, a in zip(splits[i], np.cumsum([0] + splits[i][:-1])):
-                pts[k, g, :n], pts[k, g, n:] = p[a:a + n], p[a]
-                rad[g, :n], rad[g, n:] = ri[a:a + n], ri[a]
-                g += 1
+    world = {f: fb.points_many(Q, f) for f in h.fingers}
+    radii = {f: np.repeat(fb.shapes[f].radius_m, fb.shapes[f].n_points) for f in h.fingers}
+    for g, (f, a, n) in enumerate(shapes):
+        p = world[f][:, a:a + n].reshape(-1, 3) @ Tinv[:3, :3].T + Tinv[:3, 3]
+        pts[:, g, :n] = p.reshape(len(Q), n, 3)
+        pts[:, g, n:] = pts[:, g, :1]
+        rad[g, :n], rad[g, n:] = radii[f][a:a + n], radii[f][a]
     centre = pts.mean(axis=2)
     bound = (np.linalg.norm(pts - centre[:, :, None, :], axis=-1) + rad[None]).max(axis=2)
     return pts, rad, centre, bound

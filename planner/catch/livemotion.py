@@ -232,7 +232,7 @@ class LiveMotion:
         self.hand, self.dyn = hand, dyn
         self.arm = np.array(arm, dtype=int)
         self.q_rest = q_rest.copy()
-        fingers = np.setdiff1d(np.arange(hand.n), self.arm)
+        fingers = np.array([i for i in range(hand.n) if i not in arm], dtype=int)
         self._open = np.zeros(hand.n)
         self._open[fingers] = (q_open_fingers - q_rest)[fingers]
         self._close = np.zeros(hand.n)

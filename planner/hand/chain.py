@@ -17,7 +17,8 @@ _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
 
 
 class FrameChain:
-    """The world position of frame ``frame`` of ``hand`` as a function of its joints."""
+    """The world position of frame ``frame`` of ``hand`` (and of points fixed in it) as a
+    function of its joints."""
 
     def __init__(self, hand: HandModel, frame: str) -> None:
         m = hand.pin_model
@@ -31,7 +32,9 @@ class FrameChain:
             self.joints.append(self._joint(m, j, ours))
             j = m.parents[j]
         self.joints.reverse()
-        self.tip = np.array(m.frames[fid].placement.translation, dtype=float)
+        placement = m.frames[fid].placement
+        self.tip = np.array(placement.translation, dtype=float)
+        self.R_frame = np.array(placement.rotation, dtype=float)
         self.T_world_root = np.array(hand.T_world_root, dtype=float)
 
     @staticmethod
@@ -57,9 +60,21 @@ class FrameChain:
         """World positions (N, 3) of the frame at configurations ``Q`` (N, n), in the
         hand's joint order with its couplings applied."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
-        p = np.broadcast_to(self.tip, (len(Q), 3)).copy()
+        return self._carry(Q, np.broadcast_to(self.tip, (len(Q), 3)).copy(), 1)
+
+    def points(self, Q: np.ndarray, local_m: np.ndarray) -> np.ndarray:
+        """World positions (N, m, 3) of points ``local_m`` (m, 3) fixed in the frame, at
+        configurations ``Q`` (N, n) as in ``positions``."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        local = np.asarray(local_m, dtype=float) @ self.R_frame.T + self.tip
+        p = np.broadcast_to(local, (len(Q),) + local.shape).reshape(-1, 3).copy()
+        return self._carry(Q, p, len(local)).reshape(len(Q), len(local), 3)
+
+    def _carry(self, Q: np.ndarray, p: np.ndarray, m: int) -> np.ndarray:
+        """Points ``p`` (N m, 3; configuration k's in rows k m .. k m + m - 1) in the
+        frame's parent joint, carried to the world through the chain."""
         for i, prismatic, k, R, t in reversed(self.joints):
-            q = np.zeros(len(Q)) if i is None else Q[:, i]
+            q = np.zeros(len(p)) if i is None else (Q[:, i] if m == 1 else np.repeat(Q[:, i], m))
             if prismatic:
                 p = p + q[:, None] * k
             else:  # Rodrigues: p cos + (k x p) sin + k (k . p)(1 - cos)

@@ -7,9 +7,28 @@ and hand positions as one dynamic programme whose costs are frames of music lost
 ``motion`` (the fingering's notes as timed segments of every finger and the rail),
 ``stream`` (rows written as they are final, the planner's own replay as its verdict) and
 ``summary`` (what ``cli.py play`` prints and returns).
+
+The package's names are imported on first use (as ``planner``'s): a catch imports
+``planner.play.fingerbody`` alone, not the play planner (its MIDI reader, mido, the
+fingering's costs: 60 ms of ``cli.py catch``'s start, ``python -X importtime``).
 """
 
-from planner.play.stream import Planner, PlayPlan, plan_song
-from planner.play.summary import format_summary, play_cli
+from __future__ import annotations
+
+import importlib
+
+_API = {
+    "Planner": "planner.play.stream",
+    "PlayPlan": "planner.play.stream",
+    "plan_song": "planner.play.stream",
+    "format_summary": "planner.play.summary",
+    "play_cli": "planner.play.summary",
+}
 
 __all__ = ["Planner", "PlayPlan", "format_summary", "plan_song", "play_cli"]
+
+
+def __getattr__(name: str):
+    if name in _API:
+        return getattr(importlib.import_module(_API[name]), name)
+    raise AttributeError(f"module 'planner.play' has no attribute {name!r}")

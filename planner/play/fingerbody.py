@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.simulate.hand_mjcf import parse_urdf, segment_capsule
@@ -49,6 +50,7 @@ class FingerShapes:
     p0: np.ndarray  # (k, 3) link frame, m
     p1: np.ndarray  # (k, 3)
     radius_m: np.ndarray  # (k,)
+    n_points: tuple[int, ...]  # each shape's axis points: 1 (a sphere) or AXIS_SAMPLES
 
 
 class FingerBodies:
@@ -76,14 +78,16 @@ class FingerBodies:
                     p1.append(cap[1])
                     rad.append(cap[2])
                 name = parent_of[name].parent
+            n = tuple(1 if np.allclose(a, b) else AXIS_SAMPLES for a, b in zip(p0, p1))
             self.shapes[f] = FingerShapes(tuple(frames), np.array(p0), np.array(p1),
-                                          np.array(rad))
+                                          np.array(rad), n)
         boxes = [(k.pitch, b) for k in key_bodies() for b in k.boxes]
         self.box_pitch = np.array([p for p, _ in boxes])
         c = np.array([b.center_m for _, b in boxes])
         h = np.array([b.half_m for _, b in boxes])
         self.box_lo, self.box_hi = c - h, c + h
         self._t = np.linspace(0.0, 1.0, AXIS_SAMPLES)[:, None]
+        self._chains: dict[str, list[FrameChain]] = {}  # per finger, per shape (``points_many``)
 
     def points(self, q: np.ndarray, finger: str, update: bool = True
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -95,14 +99,30 @@ class FingerBodies:
             h._update(q)
         R, t = h.T_world_root[:3, :3], h.T_world_root[:3, 3]
         pts, rad = [], []
-        for fid, a, b, r in zip(s.frames, s.p0, s.p1, s.radius_m):
+        for fid, a, b, r, n in zip(s.frames, s.p0, s.p1, s.radius_m, s.n_points):
             M = h.pin_data.oMf[fid]
             wa = R @ (M.rotation @ a + M.translation) + t
             wb = R @ (M.rotation @ b + M.translation) + t
-            n = 1 if np.allclose(a, b) else AXIS_SAMPLES
             pts.append(wa + self._t[:n] * (wb - wa))
             rad.append(np.full(n, r))
         return np.concatenate(pts), np.concatenate(rad)
+
+    def points_many(self, Q: np.ndarray, finger: str) -> np.ndarray:
+        """``points`` at each of the configurations ``Q`` (K, n) at once (world, (K, m, 3);
+        the radii are ``points``'): the shapes' ends carried by ``FrameChain``, the same
+        rigid transforms as Pinocchio's to rounding (``tests/test_fingerbody.py``)."""
+        s = self.shapes[finger]
+        chains = self._chains.get(finger)
+        if chains is None:
+            names = self.hand.pin_model.frames
+            chains = self._chains[finger] = [FrameChain(self.hand, names[fid].name)
+                                             for fid in s.frames]
+        pts = []
+        for ch, a, b, n in zip(chains, s.p0, s.p1, s.n_points):
+            w = ch.points(Q, np.stack([a, b]))
+            wa, wb = w[:, :1], w[:, 1:]
+            pts.append(wa + self._t[None, :n] * (wb - wa))
+        return np.concatenate(pts, axis=1)
 
     def penetration(self, q: np.ndarray, finger: str, own_pitch: int | None,
                     update: bool = True) -> np.ndarray:
