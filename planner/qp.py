@@ -19,6 +19,7 @@ imported when the first QP is solved, not when the planner starts.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.machinery
 import importlib.util
@@ -97,6 +98,19 @@ class QpResult:
         return self.status in PRIMAL_INFEASIBLE
 
 
+class _Sink:
+    """A text stream that keeps nothing (``write``, ``flush``)."""
+
+    def write(self, text: str) -> int:
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+
+_SINK = _Sink()
+
+
 class DenseQp:
     """One OSQP solver for dense problems of one size: ``solve`` sets it up on the
     first call and afterwards updates the data and warm-starts from the last answer.
@@ -121,7 +135,11 @@ class DenseQp:
         else:
             self._solver.update_data_vec(q=q, l=lower, u=upper)
             self._solver.update_data_mat(P_x=Pc.data, P_i=None, A_x=Ac.data, A_i=None)
-        self._solver.solve()
+        # (OSQP 1.0's polishing writes "Polishing not needed - no active set detected at
+        # optimal point" to Python's standard output, verbose or not: into a trajectory a
+        # plan streams there, ``-o -``; it goes nowhere)
+        with contextlib.redirect_stdout(_SINK):
+            self._solver.solve()
         info = self._solver.info
         status = str(info.status)
         x = np.array(self._solver.solution.x, dtype=float) if status in SOLVED else None

@@ -80,3 +80,26 @@ def test_catch_planner_imports_without_scipy():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "False"
+
+
+def test_polishing_prints_nothing_into_standard_output(capfd):
+    """OSQP 1.0 prints "Polishing not needed ..." with printf when the optimum has no
+    active constraint, verbose or not: a catch streamed to standard output (``-o -``,
+    35 deg from 0.5 m) carried that line inside its trajectory. The solver's own output
+    goes to the null device; what Python wrote before and after stays."""
+    qp = DenseQp(eps_abs=1e-9, eps_rel=1e-9, polishing=True)
+    print("before", flush=True)
+    res = qp.solve(np.eye(2), np.array([-0.1, 0.2]), np.eye(2), -np.ones(2), np.ones(2))
+    print("after", flush=True)
+    assert res.x == pytest.approx([0.1, -0.2], abs=1e-8)  # (interior: no active set)
+    assert capfd.readouterr().out == "before\nafter\n"
+
+
+def test_catch_streamed_to_standard_output_is_only_the_trajectory():
+    out = subprocess.run([sys.executable, "cli.py", "catch", "--angle", "35", "--dist", "0.5",
+                          "-o", "-"], capture_output=True, text=True, check=True,
+                         cwd=str(__import__("pathlib").Path(__file__).resolve().parents[1])).stdout
+    from planner.trajfile import parse_trajectory
+
+    assert "Polishing" not in out
+    assert len(parse_trajectory(out).t_s) > 10
