@@ -145,3 +145,29 @@ def test_entry_times_made_at_once_are_those_made_one_by_one(moves):
         assert moves.entry_times(e) == made
         d, u = moves.descend(e, "high"), moves.lift(e, "high")
         assert made[2] == (d.duration_s - d.cross_s) + u.cross_s and made[1] == d.cross_s
+
+
+def test_the_records_read_the_table_as_it_is(moves):
+    """The programme's questions read each entry's record (its poses as floats, its
+    places in the move table) and the tables as bytes: the same answers as the table's
+    arrays, the same poses as the entry's (after a record made when first asked too)."""
+    rng = np.random.default_rng(7)
+    E = _entries(moves)
+    seen = {True: 0, False: 0}
+    for _ in range(400):
+        a = E[rng.integers(len(E))]
+        mine = [e for e in E if e.finger == a.finger]
+        b = mine[rng.integers(len(mine))]
+        ra, rb = moves._record(a), moves._record(b)
+        ok = moves._across_clear(a, b, ra[7], rb[7])
+        assert ok is moves.table.across_clear(a, b)
+        seen[ok] += 1
+        c = next(e for e in mine[rng.integers(len(mine)):] + mine
+                 if e.pitch_class == a.pitch_class)
+        assert moves.follow_clear(a, c) is moves.table.follow_clear(a, c)
+    assert seen[True] and seen[False]
+    e = E[11]
+    made = moves._record(e)
+    del moves._times[id(e)]
+    assert moves._record(e) == made and made[7] == moves.table.index(e)
+    assert made[5] == e.high.tolist() and made[6] == e.press.tolist()

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from planner.play.profile import LIMIT_FRACTION, move_time_s, move_times_s, straight_move
+from planner.play.profile import LIMIT_FRACTION, move_time_s, move_times_s, path_caps, straight_move
 
 V = np.array([20.0, 10.5, 2.78])
 A = np.array([500.0, 500.0, 40.0])
@@ -94,3 +94,18 @@ def test_move_times_are_straight_moves_durations_bit_for_bit():
     times = move_times_s(dq, v, a)
     assert times[0] == 0.0
     assert times.tolist() == [straight_move(np.zeros(4), d, v, a).duration_s for d in dq]
+
+
+def test_path_caps_is_the_tightest_joints_min():
+    """``path_caps`` (its ``min`` and ``abs`` spelt out) is, bit for bit, the tightest
+    joint's caps by ``min`` over the moving joints, None when none moves."""
+    rng = np.random.default_rng(3)
+    v, a = [2.0, 3.5, 1.25, 4.0], [40.0, 25.0, 60.0, 33.0]
+    for _ in range(2000):
+        dq = [float(x) for x in rng.choice([0.0, -0.3, 1e-300], 4) * rng.random(4)]
+        dq[rng.integers(4)] = float(rng.normal()) if rng.random() < 0.9 else 0.0
+        moving = [(abs(d), vj, aj) for d, vj, aj in zip(dq, v, a) if d != 0.0]
+        want = None if not moving else (
+            min(LIMIT_FRACTION * vj / d for d, vj, _ in moving),
+            min(LIMIT_FRACTION * aj / d for d, _, aj in moving))
+        assert path_caps(dq, v, a) == want

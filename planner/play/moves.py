@@ -102,7 +102,10 @@ class Moves:
                                           self.acceleration[cols].tolist())
         self._across_s: dict[tuple[int, int], float | None] = {}
         self._follow_s: dict[tuple[int, int], float] = {}
-        self._times: dict[int, tuple] = {}  # ``entry_times`` by entry id (with the entry)
+        # ``entry_times`` by entry id, with the entry, its high and press poses as floats
+        # and its place in the finger's across table (``_record``); the table as bytes
+        self._times: dict[int, tuple] = {}
+        self._across_bytes, self._follow_bytes = self.table.as_bytes()
         self._all_entry_times()
 
     def params(self) -> str:
@@ -177,18 +180,30 @@ class Moves:
     def across_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         """``across(a, b)``'s duration (None: not clear), without making the move (the
         programme asks this of thousands of pairs; ``path_caps``, as ``straight_move``)."""
-        key = (id(a), id(b))
-        got = self._across_s.get(key, False)
+        got = self._across_s.get((id(a), id(b)), False)
         if got is False:
-            got = None
-            if self._across_clear(a, b):
-                caps = path_caps((b.high - a.high).tolist(), *self._limits[a.finger])
-                got = 0.0 if caps is None else move_time_s(*caps)
-            self._across_s[key] = got
+            got = self._across_new(a, b, self._record(a), self._record(b))
         return got
 
-    def _across_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool:
-        """The move table's answer, or forward kinematics at ``ACROSS_SAMPLES``."""
+    def _across_new(self, a: AtlasEntry, b: AtlasEntry, ra: tuple, rb: tuple) -> float | None:
+        """``across_s`` not asked before, from the entries' records (``_record``: their
+        high poses as floats, the same differences as the arrays', and their places in
+        the across table as bytes: a fresh process asks a few thousand of these before
+        its first row)."""
+        got = None
+        if self._across_clear(a, b, ra[7], rb[7]):  # (places: ``_record``)
+            caps = path_caps([y - x for x, y in zip(ra[5], rb[5])], *self._limits[a.finger])
+            got = 0.0 if caps is None else move_time_s(*caps)
+        self._across_s[(id(a), id(b))] = got
+        return got
+
+    def _across_clear(self, a: AtlasEntry, b: AtlasEntry, ia: int | None = None,
+                      ib: int | None = None) -> bool:
+        """The move table's answer (at places ``ia``, ``ib`` of the finger's entries when
+        given), or forward kinematics at ``ACROSS_SAMPLES``."""
+        table = self._across_bytes.get(a.finger)
+        if ia is not None and ib is not None and table is not None:
+            return table[0][ia[0] * table[1] + ib[0]] == 1
         ok = self.table.across_clear(a, b)
         if ok is None:
             f = self.hand.fingers.index(a.finger)
@@ -222,7 +237,8 @@ class Moves:
         got = self._follow_s.get(key)
         if got is None:
             x = kb.key(60 + a.pitch_class).center_x_m
-            caps = path_caps([(x - b.dx_m) - (x - a.dx_m), *(b.press - a.press).tolist()],
+            pa, pb = self._record(a)[6], self._record(b)[6]
+            caps = path_caps([(x - b.dx_m) - (x - a.dx_m), *[y - z for z, y in zip(pa, pb)]],
                              *self._follow_limits[a.finger])
             got = self._follow_s[key] = 0.0 if caps is None else move_time_s(*caps)
         return got
@@ -230,6 +246,11 @@ class Moves:
     def follow_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool:
         """Whether ``follow(a, b)`` is a move (the move table's answer, without making
         it; forward kinematics when the table has none)."""
+        ia, ib = self._record(a)[7], self._record(b)[7]
+        table = self._follow_bytes.get((a.finger, a.pitch_class))
+        if ia is not None and ib is not None and table is not None \
+                and a.pitch_class == b.pitch_class:
+            return table[0][ia[1] * table[1] + ib[1]] == 1
         ok = self.table.follow_clear(a, b)
         return self.follow(a, b) is not None if ok is None else ok
 
@@ -290,17 +311,19 @@ class Moves:
         entry: its lifts and descents at crossing height and at ``rise``, timed at their
         key crossings (worked out for every entry of the move table when the hand is set
         up, ``_all_entry_times``; for another entry when first asked)."""
-        return self._times_of(e)[1:]
+        return self._record(e)[1:5]
 
-    def _times_of(self, e: AtlasEntry) -> tuple:
-        """(the entry, then its ``entry_times``), as kept."""
+    def _record(self, e: AtlasEntry) -> tuple:
+        """(the entry, its ``entry_times``, its high and press poses as lists of floats,
+        its places in the move table, ``MoveTable.index``, or None), as kept."""
         got = self._times.get(id(e))
         if got is None or got[0] is not e:
             d, u = self.descend(e, "high"), self.lift(e, "high")
             ur, dr = self.lift(e, "rise"), self.descend(e, "rise")
             got = self._times[id(e)] = (e, u.duration_s - u.cross_s, d.cross_s,
                                         (d.duration_s - d.cross_s) + u.cross_s,
-                                        (ur.duration_s - ur.cross_s) + dr.cross_s)
+                                        (ur.duration_s - ur.cross_s) + dr.cross_s,
+                                        e.high.tolist(), e.press.tolist(), self.table.index(e))
         return got
 
     def _all_entry_times(self) -> None:
@@ -310,39 +333,45 @@ class Moves:
         its first window on them (``tests/test_play_moves.py`` holds them equal)."""
         cols = {p: i for i, p in enumerate(ENDS)}
         for f, js in self.js.items():
-            es = [e for e in self.atlas._entries.values() if e is not None and e.finger == f
-                  and self.table.crossings.get(self.table.key(e)) is not None]
+            es = [(e, k) for e in self.atlas._entries.values() if e is not None
+                  and e.finger == f and (k := self.table.key(e)) in self.table.crossings]
             if not es:
                 continue
-            press = np.array([e.press for e in es])
-            c = np.array([self.table.crossings[self.table.key(e)] for e in es])
+            index = [self.table._index[k] for _, k in es]
+            c = np.array([self.table.crossings[k] for _, k in es])
+            es = [e for e, _ in es]
+            press, high = np.array([e.press for e in es]), np.array([e.high for e in es])
             vel, acc = self.hand.velocity[js], self.acceleration[js]
-            t_high = move_times_s(np.array([e.high for e in es]) - press, vel, acc)
+            t_high = move_times_s(high - press, vel, acc)
             t_rise = move_times_s(np.array([e.rise for e in es]) - press, vel, acc)
             d_high, u_high = c[:, cols["high"]], c[:, 3 + cols["high"]]
             d_rise, u_rise = c[:, cols["rise"]], c[:, 3 + cols["rise"]]
-            for e, *times in zip(es, (t_high - u_high).tolist(), d_high.tolist(),
-                                 ((t_high - d_high) + u_high).tolist(),
-                                 ((t_rise - u_rise) + d_rise).tolist()):
-                self._times[id(e)] = (e, *times)
+            for e, *rec in zip(es, (t_high - u_high).tolist(), d_high.tolist(),
+                               ((t_high - d_high) + u_high).tolist(),
+                               ((t_rise - u_rise) + d_rise).tolist(), high.tolist(),
+                               press.tolist(), index):
+                self._times[id(e)] = (e, *rec)
 
     def press_min_s(self, e: AtlasEntry) -> float:
-        return self._times_of(e)[3]
+        return self._record(e)[3]
 
     def repeat_gap_s(self, e: AtlasEntry) -> float:
-        return self._times_of(e)[4]
+        return self._record(e)[4]
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
-        lat = self.across_s(a, b)
+        ra, rb = self._record(a), self._record(b)
+        lat = self._across_s.get((id(a), id(b)), False)
+        if lat is False:
+            lat = self._across_new(a, b, ra, rb)
         if lat is None:
             return None
-        return self.before_rail_s(a) + lat + self.after_rail_s(b)
+        return ra[1] + lat + rb[2]
 
     def before_rail_s(self, e: AtlasEntry) -> float:
-        return self._times_of(e)[1]
+        return self._record(e)[1]
 
     def after_rail_s(self, e: AtlasEntry) -> float:
-        return self._times_of(e)[2]
+        return self._record(e)[2]
 
     def rail_move(self, rail_a: float, rail_b: float) -> Move:
         r = self.atlas.rail

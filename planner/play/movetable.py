@@ -68,6 +68,19 @@ class MoveTable:
             return None
         return bool(self._across[a.finger][ia[0], ib[0]])
 
+    def as_bytes(self) -> tuple[dict, dict]:
+        """``across_clear`` of every finger's pairs and ``follow_clear`` of every finger's
+        pairs on one key, as bytes (1: clear) with their row length: pair (i, j) at
+        ``i * n + j`` by the entries' places (``index``), read without numpy by the
+        programme's many questions."""
+        return ({f: (m.tobytes(), len(m)) for f, m in self._across.items()},
+                {k: (m.tobytes(), len(m)) for k, m in self._follow.items()})
+
+    def index(self, e: AtlasEntry) -> tuple[int, int] | None:
+        """The entry's places among its finger's entries and among its finger's on its
+        key (None: not in the table)."""
+        return self._index.get(self.key(e))
+
     def follow_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool | None:
         ia, ib = self._index.get(self.key(a)), self._index.get(self.key(b))
         m = self._follow.get((a.finger, a.pitch_class))

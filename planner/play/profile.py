@@ -98,11 +98,17 @@ def path_caps(dq: list[float], v_max: list[float], a_max: list[float]) -> tuple[
     moves: no ``Move`` made)."""
     v = a = math.inf
     moving = False
-    for d, vj, aj in zip(dq, v_max, a_max):
-        if d != 0.0:
-            d, moving = abs(d), True
-            v = min(v, LIMIT_FRACTION * vj / d)
-            a = min(a, LIMIT_FRACTION * aj / d)
+    for d, vj, aj in zip(dq, v_max, a_max):  # (``min`` and ``abs`` spelt out: the same
+        if d:  # floats in less than half the time; a fresh process asks thousands)
+            if d < 0.0:
+                d = -d
+            moving = True
+            x = LIMIT_FRACTION * vj / d
+            if x < v:  # noqa: PLR1730
+                v = x
+            x = LIMIT_FRACTION * aj / d
+            if x < a:  # noqa: PLR1730
+                a = x
     return (v, a) if moving else None
 
 
