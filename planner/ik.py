@@ -33,6 +33,8 @@ from planner.music import keyboard as kb
 
 PRESS_TOL_M = 1e-3  # seed: precision 1 mm
 PREPARE_HEIGHT_M = 0.0055  # a finger about to press waits this far above its key (>= 5 mm)
+MIN_CLEARANCE_M = 0.005  # spec: a hovering tip 5 mm above the keys at least (a solve's
+# success; to 1e-9 m, the solver's rounding)
 HOVER_CLEARANCE_M = 0.007  # spec: 5 mm above the keys, plus 2 mm for linearisation
 _NEAR_M = 0.006  # keys within this distance (x, y) of a hovering tip count as under it
 
@@ -226,7 +228,8 @@ class HandIK:
         err, clearance, it = self._iterate(presses, hover, max_iter, tol_m)
         q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
         self._clear_half_spaces()
-        return IKResult(q, bool(err <= tol_m and clearance >= 0.005 - 1e-9), it, float(err), float(clearance))
+        return IKResult(q, bool(err <= tol_m and clearance >= MIN_CLEARANCE_M - 1e-9), it,
+                        float(err), float(clearance))
 
     def _iterate(self, presses: list[PressTarget], hover: tuple[str, ...], max_iter: int,
                  tol_m: float) -> tuple[float, float, int]:
@@ -260,7 +263,7 @@ class HandIK:
             tips = {p.finger: self._tip(p.finger) for p in presses}
             err = self._press_error(presses, tips)
             clearance = self._clearance(hover)
-            if err <= tol_m and clearance >= 0.005 - 1e-9:
+            if err <= tol_m and clearance >= MIN_CLEARANCE_M - 1e-9:
                 return err, clearance, it
             q = self.robot.state.q
             key = q.tobytes()

@@ -31,6 +31,14 @@ def _entries(moves):
     return [e for e in moves.atlas._entries.values() if e is not None]
 
 
+def _same_finger_pairs(E, rng, n):
+    """``n`` random pairs (a, b, a's finger's entries) of entries of one finger."""
+    for _ in range(n):
+        a = E[rng.integers(len(E))]
+        mine = [e for e in E if e.finger == a.finger]
+        yield a, mine[rng.integers(len(mine))], mine
+
+
 def test_the_default_hand_ships_its_move_table(moves):
     assert table_path(moves.hand.urdf_sha256).exists()
     assert len(moves.table.crossings) == len(_entries(moves)) > 1000
@@ -61,10 +69,7 @@ def test_shipped_paths_across_equal_the_forward_kinematics(moves, by_fk):
     rng = np.random.default_rng(4)
     E = _entries(moves)
     seen = {True: 0, False: 0}
-    for _ in range(300):
-        a = E[rng.integers(len(E))]
-        mine = [e for e in E if e.finger == a.finger]
-        b = mine[rng.integers(len(mine))]
+    for a, b, mine in _same_finger_pairs(E, rng, 300):
         fk = by_fk.across(a, b) is not None
         assert moves.table.across_clear(a, b) is fk
         seen[fk] += 1
@@ -111,10 +116,7 @@ def test_the_programmes_durations_are_the_moves_own(moves):
     rng = np.random.default_rng(6)
     E = _entries(moves)
     seen = {"across": 0, "across None": 0, "follow": 0, "follow None": 0}
-    for _ in range(400):
-        a = E[rng.integers(len(E))]
-        mine = [e for e in E if e.finger == a.finger]
-        b = mine[rng.integers(len(mine))]
+    for a, b, mine in _same_finger_pairs(E, rng, 400):
         lat = moves.across(a, b)
         assert moves.across_s(a, b) == (None if lat is None else lat.duration_s)
         seen["across" if lat is not None else "across None"] += 1
@@ -154,10 +156,7 @@ def test_the_records_read_the_table_as_it_is(moves):
     rng = np.random.default_rng(7)
     E = _entries(moves)
     seen = {True: 0, False: 0}
-    for _ in range(400):
-        a = E[rng.integers(len(E))]
-        mine = [e for e in E if e.finger == a.finger]
-        b = mine[rng.integers(len(mine))]
+    for a, b, mine in _same_finger_pairs(E, rng, 400):
         ra, rb = moves._record(a), moves._record(b)
         ok = moves._across_clear(a, b, ra[7], rb[7])
         assert ok is moves.table.across_clear(a, b)

@@ -99,6 +99,19 @@ def test_the_trajectory_ends_with_the_song(planner, tmp_path):
     assert res.duration_s <= 5.0 + 0.5
 
 
+def test_a_one_note_song_at_1_hz_is_a_file_the_check_reads(planner, tmp_path):
+    """At --rate 1 (the least allowed) a half-second note's plan ends before the second
+    row: the file still has a trajectory's two rows, and the check confirms the note the
+    planner claims (it once wrote one row, which ``check`` refuses)."""
+    song = tmp_path / "one.mid"
+    write_notes_midi([Note(60, 0.0, 0.5, 64)], song)
+    out = tmp_path / "one.csv"
+    res = plan_song(load_song(song), planner.hand, str(out), rate_hz=1.0, planner=planner)
+    assert res.rows == 2 and res.verdict.played == 1
+    rep = check_trajectory(str(out), str(song))
+    assert rep.ok and rep.play.notes_hit == 1 and not rep.play.claim_mismatches, rep.summary()
+
+
 def test_the_cli_layer_summarises_the_replay_and_exits_by_it(tmp_path, capsys):
     """planner.play.summary.play_cli (the second planner behind ``cli.py play``): the
     summary line the hardening tests parse, every note left out named, --strict exit 1."""

@@ -290,3 +290,16 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     assert rep.catch.loads[0].headroom >= 0.2
     near = plan_throw(30.0, 1.5, 0.0, planner=pl)
     assert not near.notes and np.array_equal(near.q, early(near).q)
+
+
+def test_the_summary_does_not_call_a_turning_palm_at_rest(tmp_path, capsys):
+    """20 deg from 1.0 m: no stopping motion (``soft`` None), but the palm is turning with
+    the roll rule's turn when the ball lands: the summary's stopping line does not say the
+    palm is at rest (it once did, above the note of the turn at 5.9 rad/s)."""
+    from cli import main as cli_main
+
+    assert cli_main(["catch", "--angle", "20", "--dist", "1", "-o", str(tmp_path / "c.csv")]) == 0
+    err = capsys.readouterr().err
+    (stopping,) = [x for x in err.splitlines() if x.lstrip().startswith("stopping:")]
+    assert "(the palm not giving with the ball)" in stopping and "at rest" not in stopping
+    assert "note: the wrist's turn under way at 5.9 rad/s" in err

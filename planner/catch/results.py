@@ -76,7 +76,8 @@ class Closing:
 class CatchPlan:
     """A planned catch (no file written yet). ``stop``: the stopping load on the rows (the
     check's ``BallLoad``: worst motor, every motor's headroom, the friction cone's margin);
-    ``soft``: the arm's stopping motion (None when the palm waits at rest)."""
+    ``soft``: the arm's stopping motion (None when the palm does not give with the ball: at
+    rest, or turning with the wrist's turn under way, ``planner.catch.turnahead``)."""
 
     feasible: bool
     reasons: tuple[Reason, ...]

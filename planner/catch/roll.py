@@ -27,29 +27,29 @@ def roll_factor(inertia_ratio: float) -> float:
     return 1.0 / (1.0 + float(inertia_ratio))
 
 
-def roll_towards_wrist_m(t: np.ndarray, palm: np.ndarray, r: float, t_i: float,
-                         v_ball: np.ndarray, inertia_ratio: float) -> float:
+def roll_towards_wrist_m(t_s: np.ndarray, palm: np.ndarray, radius_m: float, t_land_s: float,
+                         v_ball_m_s: np.ndarray, inertia_ratio: float) -> float:
     """The ball's largest roll towards the wrist (m, along the palm's +y from the palm
-    target) on rows ``t`` with palm poses ``palm`` (T, 4, 4) from its landing at ``t_i``
-    (at velocity ``v_ball``; the palm target's is its row segment's there) to the last row;
-    the closing fingers on its far side stop it at the palm target (the roll is not
-    negative). Integrated row to row with the rows' accelerations (second differences of
-    the palm target)."""
+    target) on rows at times ``t_s`` with palm poses ``palm`` (T, 4, 4) from its landing at
+    ``t_land_s`` (at velocity ``v_ball_m_s``; the palm target's is its row segment's there)
+    to the last row; the closing fingers on its far side stop it at the palm target (the
+    roll is not negative). Integrated row to row with the rows' accelerations (second
+    differences of the palm target)."""
     k_roll = roll_factor(inertia_ratio)
-    centre = palm[:, :3, 3] + r * palm[:, :3, 2]
-    after = np.flatnonzero(t > t_i)
+    centre = palm[:, :3, 3] + radius_m * palm[:, :3, 2]
+    after = np.flatnonzero(t_s > t_land_s)
     if len(after) < 2 or after[0] < 1:
         return 0.0
-    dt = np.diff(t)
+    dt = np.diff(t_s)
     k0 = int(after[0])
-    v_rel = np.asarray(v_ball, dtype=float) - (centre[k0] - centre[k0 - 1]) / dt[k0 - 1]
+    v_rel = np.asarray(v_ball_m_s, dtype=float) - (centre[k0] - centre[k0 - 1]) / dt[k0 - 1]
     acc = np.zeros_like(centre)
     acc[1:-1] = 2.0 * ((centre[2:] - centre[1:-1]) / dt[1:, None]
                        - (centre[1:-1] - centre[:-2]) / dt[:-1, None]) / (dt[1:] + dt[:-1])[:, None]
     along = k_roll * np.einsum("ij,ij->i", GRAVITY_WORLD - acc, palm[:, :3, 1])
     x, v = 0.0, k_roll * float(v_rel @ palm[k0 - 1, :3, 1])
-    worst, tau = 0.0, float(t[k0] - t_i)  # the first step: from the landing to row k0
-    for k in range(k0, len(t)):
+    worst, tau = 0.0, float(t_s[k0] - t_land_s)  # the first step: from the landing to row k0
+    for k in range(k0, len(t_s)):
         a = float(along[k])
         x += v * tau + 0.5 * a * tau * tau
         v += a * tau

@@ -53,7 +53,9 @@ def format_summary(res: CatchResult) -> str:
                  f"ball by {p.min_clearance_before_m * ms:.1f} mm before it")
     if p.stop is not None:
         st, soft = p.stop, p.soft
-        how = ("the palm at rest" if soft is None else
+        # (no stopping motion: the palm at rest, or turning with the wrist's turn already
+        # under way when the ball lands, the roll rule's: a note says so)
+        how = ("the palm not giving with the ball" if soft is None else
                f"the palm meeting it at {np.linalg.norm(soft.v_palm):.2f} m/s, "
                f"{np.linalg.norm(soft.v_rel):.2f} m/s relative, tilt "
                f"{np.degrees(soft.tilt_rad):+.0f} deg, at rest {1000 * (soft.end_s - p.intercept_t):.0f} ms after")

@@ -43,7 +43,8 @@ TURN_AHEAD, TURN_EARLY, TURN_LATE = "ahead", "early", "late"  # when the wrist's
 # holds the ball starts: by the roll rule (``ahead_rows``), from the grasp, after the stop
 _FINE_S = 0.002  # the motors' room before the intercept judged every 2 ms (``_within``)
 AHEAD_SHARES = (0.25, 0.5, 0.75, 1.0)  # the roll rule's turns under way at the intercept:
-# their speed then, as a share of the flexion's speed limit (``planner.catch.turnahead``)
+# their speed then, as a share of what the stop leaves the flexion (its speed limit less the
+# stop's own flexion speed: ``ahead_turn``)
 _TURN_GROW = 1.25  # an early turn too fast on top of the stop is made this much longer
 _TURN_TRIES = 6  # ... up to this many times (1.25^6 = 3.8 x)
 
@@ -110,8 +111,8 @@ class HoldTurn:
 
     def hold(self, pose: Any, stop: SoftStop) -> tuple[np.ndarray, float]:
         """The wrist's turn that holds the ball (``stopping.hold_turn``) from the closed hand
-        where the stopping motion leaves it; it starts once the fingers have closed and the
-        arm is at rest (``turn_start``)."""
+        where the stopping motion leaves it (delta, duration); when it starts is the mode's
+        (``turned_rows``: ``turn_start``; ``ahead_rows``: under way at the intercept)."""
         q_end = pose.q_closed.copy()
         q_end[list(self.joints.arm)] += stop.last_offset
         return hold_turn(self.dyn, q_end)
@@ -123,7 +124,7 @@ class HoldTurn:
         arm may still be stopping) adds its speeds and accelerations to the stop's: it is
         lengthened by ``_TURN_GROW`` until every joint is within its speed and acceleration
         limits on the rows (at most ``_TURN_TRIES`` times; then as it is, for the self-check
-        to refuse). Returns the turn (delta, duration, start) and the rows."""
+        to refuse). Returns the turn (delta, duration, start, None: no profiles) and the rows."""
         _, _, stop, closing, _, _, s_c, _ = rows_args
         turn = (*turn0, turn_start(stop, closing, s_c, mode == TURN_EARLY), None)
         t, Q = self.rows(*rows_args, turn)
@@ -142,8 +143,8 @@ class HoldTurn:
 
     def ahead_rows(self, turn0: tuple[np.ndarray, float], rows_args: tuple, flight: Flight):
         """The roll rule (TURN_AHEAD): the slowest of the wrist's turns -- from the grasp
-        (TURN_EARLY's), then under way at the intercept at ``AHEAD_SHARES`` of the flexion's
-        speed limit (``planner.catch.turnahead``) -- on whose rows the ball, landing on the
+        (TURN_EARLY's), then under way at the intercept at ``AHEAD_SHARES`` of the speed the
+        stop leaves the flexion (``ahead_turn``) -- on whose rows the ball, landing on the
         palm, rolls at most ``ROLL_ROOM_M`` towards the wrist (``planner.catch.roll``: its
         inertia, gravity along the palm and the rows' accelerations); the least rolling when
         none does. A turn under way needs the pre-catch pose short of the intercept pose by

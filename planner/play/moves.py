@@ -197,8 +197,8 @@ class Moves:
         self._across_s[(id(a), id(b))] = got
         return got
 
-    def _across_clear(self, a: AtlasEntry, b: AtlasEntry, ia: int | None = None,
-                      ib: int | None = None) -> bool:
+    def _across_clear(self, a: AtlasEntry, b: AtlasEntry, ia: tuple[int, int] | None = None,
+                      ib: tuple[int, int] | None = None) -> bool:
         """The move table's answer (at places ``ia``, ``ib`` of the finger's entries when
         given), or forward kinematics at ``ACROSS_SAMPLES``."""
         table = self._across_bytes.get(a.finger)

@@ -25,7 +25,7 @@ from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.moves import Moves
 from planner.selfcheck import SelfCheck, Verdict
-from planner.trajfile import Trajectory, TrajectoryWriter, parse_trajectory
+from planner.trajfile import MIN_ROWS, Trajectory, TrajectoryWriter, parse_trajectory
 
 COMMIT_LAG_S = 0.5  # rows are written up to this long before the last note placed
 SETTLE_S = 0.1  # rows go on this long after the hand is still
@@ -174,7 +174,8 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
                         park=True)
         rows = _Rows(hand, writer, motion, rate_hz)
     end = max((n.offset_s for n in notes), default=0.0)
-    rows.write_to(motion.finish(end) + SETTLE_S)
+    # (at least a file's ``MIN_ROWS``: at 1 Hz a short song's end is before the second row)
+    rows.write_to(max(motion.finish(end) + SETTLE_S, (MIN_ROWS - 1) / rate_hz))
     fingering = Fingering(tuple(done[n] for n in sorted(done)),
                           tuple(sorted(skipped, key=lambda s: s.note)), loss)
     return motion, rows, fingering
