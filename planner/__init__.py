@@ -18,9 +18,8 @@ The public API (imported on first use, so that ``import planner`` stays light):
 
 from __future__ import annotations
 
-import importlib
-
 from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
+from planner.lazy import lazy_names
 
 _API = {
     "load_hand": "planner.hand.model",
@@ -55,7 +54,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str):
-    if name in _API:
-        return getattr(importlib.import_module(_API[name]), name)
-    raise AttributeError(f"module 'planner' has no attribute {name!r}")
+__getattr__ = lazy_names(__name__, _API)

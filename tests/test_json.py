@@ -76,6 +76,25 @@ def test_catch_json(tmp_path):
     assert d["feasible"] is True and d["reasons"] == [] and len(d["intercept_point_m"]) == 3
 
 
+def test_catch_json_speeds_are_the_summarys(tmp_path):
+    """``stopping.relative_speed_m_s`` is the ball's speed relative to the palm when the palm
+    meets it, the number the text summary prints ("... m/s relative"; 3.49 m/s on 30 deg /
+    1.5 m), not the speed at the stop's worst moment (``worst_relative_speed_m_s``)."""
+    import re
+
+    rc, out, _ = _run("catch", "--angle", "30", "--dist", "1.5", "-o", tmp_path / "c.csv",
+                      "--json", cwd=tmp_path)
+    st = json.loads(out)["stopping"]
+    rc2, _, err = _run("catch", "--angle", "30", "--dist", "1.5", "-o", tmp_path / "d.csv",
+                       cwd=tmp_path)
+    assert rc == rc2 == 0
+    palm, rel = map(float, re.search(r"meeting it at ([\d.]+) m/s, ([\d.]+) m/s relative",
+                                     err).groups())
+    assert f"{st['palm_speed_m_s']:.2f}" == f"{palm:.2f}"
+    assert f"{st['relative_speed_m_s']:.2f}" == f"{rel:.2f}" and rel > 1.0
+    assert isinstance(st["worst_t_s"], float) and st["worst_relative_speed_m_s"] >= 0.0
+
+
 def test_hand_json(tmp_path):
     rc, out, _ = _run("hand", "--json", cwd=tmp_path)
     assert rc == 0

@@ -236,7 +236,7 @@ def test_hold_turn_within_the_motors(pl):
 
 def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     """20 deg from 1.0 m lands on a palm 73 deg from level: with the turn from the grasp
-    (TURN_EARLY) the ball would roll 0.34 m towards the wrist (``planner.catch.roll``), so the
+    (TurnMode.EARLY) the ball would roll 0.34 m towards the wrist (``planner.catch.roll``), so the
     roll rule plans the turn under way when the ball lands (``planner.catch.turnahead``): the
     rows pass the intercept pose at the intercept, the flexion already turning towards level
     at 5.9 rad/s, the pre-catch pose short of it on the other side; the roll is under half;
@@ -244,11 +244,11 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     within ``ROLL_ROOM_M``, has the same rows as before the rule."""
     from planner.catch.plan import write_plan
     from planner.catch.roll import ROLL_ROOM_M, roll_towards_wrist_m
-    from planner.catch.turnahead import TURN_EARLY
+    from planner.catch.turnahead import TurnMode
 
     def early(p):
         return pl._plan(p.flight, p.catch_point, p.rate_hz, 0.0, None, p.flight_time_s, None,
-                        True, TURN_EARLY)[0]
+                        True, TurnMode.EARLY)[0]
 
     def rolled(p):
         return roll_towards_wrist_m(p.t, pl.kin.frames(p.q)[1], p.flight.ball.radius_m,

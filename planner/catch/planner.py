@@ -36,10 +36,8 @@ from planner.catch.stopping import (
     plan_stop,
 )
 from planner.catch.turnahead import (
-    TURN_AHEAD,
-    TURN_EARLY,
-    TURN_LATE,
     HoldTurn,
+    TurnMode,
     ahead_shift,
 )
 from planner.check.ball import ball_loads
@@ -133,9 +131,9 @@ class CatchPlanner:
         the closing would miss otherwise); False: the palm at rest. The hold (the roll term
         of the contact speeds, the wrist's turn: ``planner.catch.stopping``): the turn from
         the grasp on or earlier, so that the ball does not roll off the palm's wrist side before
-        the turn has levelled it (``TURN_AHEAD``: ``HoldTurn.ahead_rows``), else from the grasp on
-        (``TURN_EARLY``, when the rule started it earlier), else after the arm has stopped
-        (``TURN_LATE``), else none (the plan without the hold) -- the first of those that is
+        the turn has levelled it (``TurnMode.AHEAD``: ``HoldTurn.ahead_rows``), else from the grasp on
+        (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
+        (``TurnMode.LATE``), else none (the plan without the hold) -- the first of those that is
         feasible."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
@@ -154,12 +152,12 @@ class CatchPlanner:
     def _plans(self, args: tuple, soft: bool, bodies: bool) -> CatchPlan:
         """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing."""
         plan, ahead = self._plan(*args, soft=soft, bodies=bodies)
-        for mode in ((TURN_EARLY,) if ahead else ()) + (TURN_LATE, None):
+        for mode in ((TurnMode.EARLY,) if ahead else ()) + (TurnMode.LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
             other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies)[0]
             if other.feasible:
-                what = {TURN_EARLY: "the turn from the grasp", TURN_LATE:
+                what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
                         "after the arm has stopped", None: "no turn to hold the ball"}[mode]
                 plan = replace(other, notes=other.notes + (
                     f"{what}: the earlier turn failed (" + "; ".join(plan.reasons) + ")",))
@@ -173,16 +171,16 @@ class CatchPlanner:
 
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: dict[str, Any] | None, flight_time_s: float | None,
-              fit: FitResult | None, soft: bool, turn_mode: str | None = TURN_AHEAD,
+              fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
               bodies: bool = True) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
-        (TURN_AHEAD), from the grasp (TURN_EARLY), after the arm's stop (TURN_LATE) or none
+        (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
         grasp (the roll rule moved it). Without the soft catch the palm waits for the ball at
         rest: no turn under way then (the roll rule's turn is the grasp's)."""
         t0 = time.perf_counter()
-        if not soft and turn_mode == TURN_AHEAD:
-            turn_mode = TURN_EARLY
+        if not soft and turn_mode == TurnMode.AHEAD:
+            turn_mode = TurnMode.EARLY
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
@@ -252,7 +250,7 @@ class CatchPlanner:
         ), ahead
 
     def _closing_rows(self, flight: Flight, C: np.ndarray, turn0: tuple[np.ndarray, float],
-                      turn_mode: str | None, rows_args: tuple):
+                      turn_mode: TurnMode | None, rows_args: tuple):
         """The rows with the wrist's turn as ``turn_mode`` says and their self-check
         (``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
         keeps it near the fingers longer, so the closing waits a little more when a tip meets
@@ -262,7 +260,7 @@ class CatchPlanner:
         r = float(flight.ball.radius_m)
         for _ in range(_CLOSE_TRIES):
             args = (pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz)
-            if turn_mode == TURN_AHEAD:
+            if turn_mode == TurnMode.AHEAD:
                 turn, t, Q, T_used = self.turn.ahead_rows(turn0, args, flight)
             else:
                 (turn, t, Q), T_used = self.turn.turned_rows(turn0, turn_mode, args), T_m

@@ -110,9 +110,13 @@ def _stop_dict(p) -> dict[str, Any] | None:
             "limiting_motor": st.motor, "limiting_part": st.limiting_part,
             "motor_headroom": dict(zip(p.hand.motor_names, map(float, st.motor_headroom))),
             "cone_margin_n": st.cone_margin_n,
+            # when the palm meets the ball (the summary's "... m/s relative"); None without
+            # a stopping motion, as in the summary
             "palm_speed_m_s": None if p.soft is None else float(np.linalg.norm(p.soft.v_palm)),
-            "relative_speed_m_s": float(st.speed_m_s),
-            "tilt_deg": None if p.soft is None else float(np.degrees(p.soft.tilt_rad))}
+            "relative_speed_m_s": None if p.soft is None else float(np.linalg.norm(p.soft.v_rel)),
+            "tilt_deg": None if p.soft is None else float(np.degrees(p.soft.tilt_rad)),
+            # the moment the force and headroom above are judged at (the check's worst row)
+            "worst_t_s": float(st.time_s), "worst_relative_speed_m_s": float(st.speed_m_s)}
 
 
 def catch_dict(res: CatchResult) -> dict[str, Any]:

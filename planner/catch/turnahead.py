@@ -1,8 +1,8 @@
 """The wrist's turn that holds the ball (``docs/physics-replay.md``, "Catch"): when it starts
 and how it runs. Once the pad has stopped the ball the wrist turns the closed hand palm up,
 its downhill ``HOLD_TILT_DEG`` into the fingers (``stopping.hold_turn``); it starts from
-the grasp (``TURN_EARLY``), after the arm's stop (``TURN_LATE``) or, by the roll rule
-(``TURN_AHEAD``, ``HoldTurn.ahead_rows``), under way before the ball lands.
+the grasp (``TurnMode.EARLY``), after the arm's stop (``TurnMode.LATE``) or, by the roll rule
+(``TurnMode.AHEAD``, ``HoldTurn.ahead_rows``), under way before the ball lands.
 
 A palm steep at the intercept (66-73 deg from level on the 20 deg throws: the geometry of
 the wrist and the path fixes the palm's angle where the ball meets the palm centre) lets
@@ -28,6 +28,7 @@ no pad), over the flexion alone: one speed profile of the arm, not two.
 from __future__ import annotations
 
 import math
+from enum import Enum
 from typing import Any
 
 import numpy as np
@@ -39,8 +40,15 @@ from planner.catch.roll import ROLL_ROOM_M, roll_towards_wrist_m
 from planner.catch.stopping import TURN_SHARE, SoftStop, StopDynamics, hold_turn
 from planner.trajectory import LIMIT_MARGIN
 
-TURN_AHEAD, TURN_EARLY, TURN_LATE = "ahead", "early", "late"  # when the wrist's turn that
-# holds the ball starts: by the roll rule (``ahead_rows``), from the grasp, after the stop
+
+class TurnMode(Enum):
+    """When the wrist's turn that holds the ball starts."""
+
+    AHEAD = "ahead"  # by the roll rule: under way before the ball lands (``ahead_rows``)
+    EARLY = "early"  # from the grasp
+    LATE = "late"  # after the arm's stop
+
+
 _FINE_S = 0.002  # the motors' room before the intercept judged every 2 ms (``_within``)
 AHEAD_SHARES = (0.25, 0.5, 0.75, 1.0)  # the roll rule's turns under way at the intercept:
 # their speed then, as a share of what the stop leaves the flexion (its speed limit less the
@@ -117,7 +125,7 @@ class HoldTurn:
         q_end[list(self.joints.arm)] += stop.last_offset
         return hold_turn(self.dyn, q_end)
 
-    def turned_rows(self, turn0: tuple[np.ndarray, float], mode: str | None,
+    def turned_rows(self, turn0: tuple[np.ndarray, float], mode: TurnMode | None,
                      rows_args: tuple):
         """The rows (``rows(*rows_args, turn)``) with the wrist's turn (delta, duration)
         started as ``mode`` says (``turn_start``). An early turn (from the grasp, while the
@@ -126,9 +134,9 @@ class HoldTurn:
         limits on the rows (at most ``_TURN_TRIES`` times; then as it is, for the self-check
         to refuse). Returns the turn (delta, duration, start, None: no profiles) and the rows."""
         _, _, stop, closing, _, _, s_c, _ = rows_args
-        turn = (*turn0, turn_start(stop, closing, s_c, mode == TURN_EARLY), None)
+        turn = (*turn0, turn_start(stop, closing, s_c, mode == TurnMode.EARLY), None)
         t, Q = self.rows(*rows_args, turn)
-        if mode != TURN_EARLY or turn0[1] <= 0:
+        if mode != TurnMode.EARLY or turn0[1] <= 0:
             return turn, t, Q
         h, dt = self.hand, float(t[1] - t[0])
         for _ in range(_TURN_TRIES):
@@ -142,8 +150,8 @@ class HoldTurn:
         return turn, t, Q
 
     def ahead_rows(self, turn0: tuple[np.ndarray, float], rows_args: tuple, flight: Flight):
-        """The roll rule (TURN_AHEAD): the slowest of the wrist's turns -- from the grasp
-        (TURN_EARLY's), then under way at the intercept at ``AHEAD_SHARES`` of the speed the
+        """The roll rule (TurnMode.AHEAD): the slowest of the wrist's turns -- from the grasp
+        (TurnMode.EARLY's), then under way at the intercept at ``AHEAD_SHARES`` of the speed the
         stop leaves the flexion (``ahead_turn``) -- on whose rows the ball, landing on the
         palm, rolls at most ``ROLL_ROOM_M`` towards the wrist (``planner.catch.roll``: its
         inertia, gravity along the palm and the rows' accelerations); the least rolling when
@@ -156,7 +164,7 @@ class HoldTurn:
         a candidate that is not is skipped. Returns the turn (delta, duration, start,
         profiles), the rows and the move-in's duration."""
         pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz = rows_args
-        turn, t, Q = self.turned_rows(turn0, TURN_EARLY, rows_args)
+        turn, t, Q = self.turned_rows(turn0, TurnMode.EARLY, rows_args)
         best = (self._rolled(t, Q, pose.t_i, flight), turn, t, Q, T_m)
         if best[0] <= ROLL_ROOM_M or turn0[1] <= 0:
             return best[1:]

@@ -15,7 +15,7 @@ fingering's costs: 60 ms of ``cli.py catch``'s start, ``python -X importtime``).
 
 from __future__ import annotations
 
-import importlib
+from planner.lazy import lazy_names
 
 _API = {
     "Planner": "planner.play.stream",
@@ -28,7 +28,4 @@ _API = {
 __all__ = ["Planner", "PlayPlan", "format_summary", "plan_song", "play_cli"]
 
 
-def __getattr__(name: str):
-    if name in _API:
-        return getattr(importlib.import_module(_API[name]), name)
-    raise AttributeError(f"module 'planner.play' has no attribute {name!r}")
+__getattr__ = lazy_names(__name__, _API)
