@@ -158,7 +158,7 @@ def test_the_records_read_the_table_as_it_is(moves):
     seen = {True: 0, False: 0}
     for a, b, mine in _same_finger_pairs(E, rng, 400):
         ra, rb = moves._record(a), moves._record(b)
-        ok = moves._across_clear(a, b, ra[7], rb[7])
+        ok = moves._across_clear(a, b, ra.places, rb.places)
         assert ok is moves.table.across_clear(a, b)
         seen[ok] += 1
         c = next(e for e in mine[rng.integers(len(mine)):] + mine
@@ -168,5 +168,5 @@ def test_the_records_read_the_table_as_it_is(moves):
     e = E[11]
     made = moves._record(e)
     del moves._times[id(e)]
-    assert moves._record(e) == made and made[7] == moves.table.index(e)
-    assert made[5] == e.high.tolist() and made[6] == e.press.tolist()
+    assert moves._record(e) == made and made.places == moves.table.index(e)
+    assert made.high == e.high.tolist() and made.press == e.press.tolist()

@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -70,6 +71,21 @@ class Timed:
         return self.move.duration_s
 
 
+class EntryRecord(NamedTuple):
+    """What the programme reads of an entry, kept by ``Moves``: its ``entry_times`` (its
+    lifts and descents timed at their key crossings), its high and press poses as lists
+    of floats, and its places in the move table (``MoveTable.index``, None: not in it)."""
+
+    entry: AtlasEntry
+    before_rail_s: float
+    after_rail_s: float
+    press_min_s: float
+    repeat_gap_s: float
+    high: list[float]
+    press: list[float]
+    places: tuple[int, int] | None
+
+
 class Moves:
     """Timed moves of one hand's fingers over its atlas (memoised per entry). What
     forward kinematics decides (key crossings, clear paths across and while following a
@@ -102,11 +118,10 @@ class Moves:
                                           self.acceleration[cols].tolist())
         self._across_s: dict[tuple[int, int], float | None] = {}
         self._follow_s: dict[tuple[int, int], float] = {}
-        # ``entry_times`` by entry id, with the entry, its high and press poses as floats
-        # and its place in the finger's across table (``_record``); the table as bytes
-        self._times: dict[int, tuple] = {}
+        # (every entry's record by its id, ``_record``; the table as bytes)
+        self._times: dict[int, EntryRecord] = _table_records(
+            atlas, self.table, self.js, hand.velocity, self.acceleration)
         self._across_bytes, self._follow_bytes = self.table.as_bytes()
-        self._all_entry_times()
 
     def params(self) -> str:
         """What the move table depends on besides the atlas (a table made otherwise is not
@@ -185,14 +200,15 @@ class Moves:
             got = self._across_new(a, b, self._record(a), self._record(b))
         return got
 
-    def _across_new(self, a: AtlasEntry, b: AtlasEntry, ra: tuple, rb: tuple) -> float | None:
+    def _across_new(self, a: AtlasEntry, b: AtlasEntry, ra: EntryRecord,
+                    rb: EntryRecord) -> float | None:
         """``across_s`` not asked before, from the entries' records (``_record``: their
         high poses as floats, the same differences as the arrays', and their places in
         the across table as bytes: a fresh process asks a few thousand of these before
         its first row)."""
         got = None
-        if self._across_clear(a, b, ra[7], rb[7]):  # (places: ``_record``)
-            caps = path_caps([y - x for x, y in zip(ra[5], rb[5])], *self._limits[a.finger])
+        if self._across_clear(a, b, ra.places, rb.places):
+            caps = path_caps([y - x for x, y in zip(ra.high, rb.high)], *self._limits[a.finger])
             got = 0.0 if caps is None else move_time_s(*caps)
         self._across_s[(id(a), id(b))] = got
         return got
@@ -237,7 +253,7 @@ class Moves:
         got = self._follow_s.get(key)
         if got is None:
             x = kb.key(60 + a.pitch_class).center_x_m
-            pa, pb = self._record(a)[6], self._record(b)[6]
+            pa, pb = self._record(a).press, self._record(b).press
             caps = path_caps([(x - b.dx_m) - (x - a.dx_m), *[y - z for z, y in zip(pa, pb)]],
                              *self._follow_limits[a.finger])
             got = self._follow_s[key] = 0.0 if caps is None else move_time_s(*caps)
@@ -246,7 +262,7 @@ class Moves:
     def follow_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool:
         """Whether ``follow(a, b)`` is a move (the move table's answer, without making
         it; forward kinematics when the table has none)."""
-        ia, ib = self._record(a)[7], self._record(b)[7]
+        ia, ib = self._record(a).places, self._record(b).places
         table = self._follow_bytes.get((a.finger, a.pitch_class))
         if ia is not None and ib is not None and table is not None \
                 and a.pitch_class == b.pitch_class:
@@ -310,53 +326,27 @@ class Moves:
         """(``before_rail_s``, ``after_rail_s``, ``press_min_s``, ``repeat_gap_s``) of an
         entry: its lifts and descents at crossing height and at ``rise``, timed at their
         key crossings (worked out for every entry of the move table when the hand is set
-        up, ``_all_entry_times``; for another entry when first asked)."""
-        return self._record(e)[1:5]
+        up, ``_table_records``; for another entry when first asked)."""
+        return tuple(self._record(e)[1:5])
 
-    def _record(self, e: AtlasEntry) -> tuple:
-        """(the entry, its ``entry_times``, its high and press poses as lists of floats,
-        its places in the move table, ``MoveTable.index``, or None), as kept."""
+    def _record(self, e: AtlasEntry) -> EntryRecord:
+        """The entry's record, as kept (made from its own lifts and descents when first
+        asked of an entry the move table has no crossings for)."""
         got = self._times.get(id(e))
-        if got is None or got[0] is not e:
+        if got is None or got.entry is not e:
             d, u = self.descend(e, "high"), self.lift(e, "high")
             ur, dr = self.lift(e, "rise"), self.descend(e, "rise")
-            got = self._times[id(e)] = (e, u.duration_s - u.cross_s, d.cross_s,
-                                        (d.duration_s - d.cross_s) + u.cross_s,
-                                        (ur.duration_s - ur.cross_s) + dr.cross_s,
-                                        e.high.tolist(), e.press.tolist(), self.table.index(e))
+            got = self._times[id(e)] = EntryRecord(
+                e, u.duration_s - u.cross_s, d.cross_s, (d.duration_s - d.cross_s) + u.cross_s,
+                (ur.duration_s - ur.cross_s) + dr.cross_s, e.high.tolist(), e.press.tolist(),
+                self.table.index(e))
         return got
 
-    def _all_entry_times(self) -> None:
-        """``entry_times`` of every entry the move table has crossings for, at once: the
-        same floats (a lift and its descent are one move each way, of one duration;
-        ``move_times_s`` is ``straight_move``'s, bit for bit), so that no plan spends
-        its first window on them (``tests/test_play_moves.py`` holds them equal)."""
-        cols = {p: i for i, p in enumerate(ENDS)}
-        for f, js in self.js.items():
-            es = [(e, k) for e in self.atlas._entries.values() if e is not None
-                  and e.finger == f and (k := self.table.key(e)) in self.table.crossings]
-            if not es:
-                continue
-            index = [self.table._index[k] for _, k in es]
-            c = np.array([self.table.crossings[k] for _, k in es])
-            es = [e for e, _ in es]
-            press, high = np.array([e.press for e in es]), np.array([e.high for e in es])
-            vel, acc = self.hand.velocity[js], self.acceleration[js]
-            t_high = move_times_s(high - press, vel, acc)
-            t_rise = move_times_s(np.array([e.rise for e in es]) - press, vel, acc)
-            d_high, u_high = c[:, cols["high"]], c[:, 3 + cols["high"]]
-            d_rise, u_rise = c[:, cols["rise"]], c[:, 3 + cols["rise"]]
-            for e, *rec in zip(es, (t_high - u_high).tolist(), d_high.tolist(),
-                               ((t_high - d_high) + u_high).tolist(),
-                               ((t_rise - u_rise) + d_rise).tolist(), high.tolist(),
-                               press.tolist(), index):
-                self._times[id(e)] = (e, *rec)
-
     def press_min_s(self, e: AtlasEntry) -> float:
-        return self._record(e)[3]
+        return self._record(e).press_min_s
 
     def repeat_gap_s(self, e: AtlasEntry) -> float:
-        return self._record(e)[4]
+        return self._record(e).repeat_gap_s
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         ra, rb = self._record(a), self._record(b)
@@ -365,13 +355,13 @@ class Moves:
             lat = self._across_new(a, b, ra, rb)
         if lat is None:
             return None
-        return ra[1] + lat + rb[2]
+        return ra.before_rail_s + lat + rb.after_rail_s
 
     def before_rail_s(self, e: AtlasEntry) -> float:
-        return self._record(e)[1]
+        return self._record(e).before_rail_s
 
     def after_rail_s(self, e: AtlasEntry) -> float:
-        return self._record(e)[2]
+        return self._record(e).after_rail_s
 
     def rail_move(self, rail_a: float, rail_b: float) -> Move:
         r = self.atlas.rail
@@ -379,6 +369,37 @@ class Moves:
             return Move(np.array([rail_a]), np.zeros(1), 0.0, 1.0, 1.0)
         return straight_move(np.array([rail_a]), np.array([rail_b]),
                              self.hand.velocity[[r]], self.acceleration[[r]])
+
+
+def _table_records(atlas: Atlas, table: MoveTable, js: dict[str, list[int]],
+                   velocity: np.ndarray, acceleration: np.ndarray) -> dict[int, EntryRecord]:
+    """The record of every entry the move table has crossings for, by its id, at once:
+    the same floats as ``Moves._record`` makes one by one (a lift and its descent are one
+    move each way, of one duration; ``move_times_s`` is ``straight_move``'s, bit for bit),
+    so that no plan spends its first window on them (``tests/test_play_moves.py`` holds
+    them equal)."""
+    cols = {p: i for i, p in enumerate(ENDS)}
+    out: dict[int, EntryRecord] = {}
+    for f, jf in js.items():
+        es = [(e, k) for e in atlas._entries.values() if e is not None
+              and e.finger == f and (k := table.key(e)) in table.crossings]
+        if not es:
+            continue
+        index = [table._index[k] for _, k in es]
+        c = np.array([table.crossings[k] for _, k in es])
+        es = [e for e, _ in es]
+        press, high = np.array([e.press for e in es]), np.array([e.high for e in es])
+        vel, acc = velocity[jf], acceleration[jf]
+        t_high = move_times_s(high - press, vel, acc)
+        t_rise = move_times_s(np.array([e.rise for e in es]) - press, vel, acc)
+        d_high, u_high = c[:, cols["high"]], c[:, 3 + cols["high"]]
+        d_rise, u_rise = c[:, cols["rise"]], c[:, 3 + cols["rise"]]
+        for e, *rec in zip(es, (t_high - u_high).tolist(), d_high.tolist(),
+                           ((t_high - d_high) + u_high).tolist(),
+                           ((t_rise - u_rise) + d_rise).tolist(), high.tolist(),
+                           press.tolist(), index):
+            out[id(e)] = EntryRecord(e, *rec)
+    return out
 
 
 def _crossing(g, g0: float, g1: float, tol: float) -> float:
