@@ -138,12 +138,8 @@ class HoldTurn:
         t, Q = self.rows(*rows_args, turn)
         if mode != TurnMode.EARLY or turn0[1] <= 0:
             return turn, t, Q
-        h, dt = self.hand, float(t[1] - t[0])
         for _ in range(_TURN_TRIES):
-            v = np.abs(np.diff(Q, axis=0)) / dt
-            a = np.abs(np.diff(Q, 2, axis=0)) / (dt * dt)
-            if np.all(v <= LIMIT_MARGIN * h.velocity) and \
-                    np.all(a <= LIMIT_MARGIN * h.acceleration):
+            if rows_within_limits(self.hand, t, Q):
                 break
             turn = (turn[0], turn[1] * _TURN_GROW, turn[2], None)
             t, Q = self.rows(*rows_args, turn)
@@ -214,11 +210,7 @@ class HoldTurn:
         reaction on the wrist (0.8 N m of the wrist flexion motor's 2 N m on 20 deg / 1.5 m,
         where the arm's own part asks 1.4), judged on the same motion sampled every
         ``_FINE_S`` (the rows' second differences smooth the short ramps' peaks)."""
-        h, dt = self.hand, float(t[1] - t[0])
-        v = np.abs(np.diff(Q, axis=0)) / dt
-        a = np.diff(Q, 2, axis=0) / (dt * dt)
-        if np.any(v > LIMIT_MARGIN * h.velocity * (1.0 + 1e-9)) or \
-                np.any(np.abs(a) > LIMIT_MARGIN * h.acceleration * (1.0 + 1e-9)):
+        if not rows_within_limits(self.hand, t, Q, 1e-9):
             return False
         t_f, Q_f = self.rows(*rows_args[:-1], 1.0 / _FINE_S, turn)
         a_f = np.diff(Q_f, 2, axis=0) / (_FINE_S * _FINE_S)
@@ -227,6 +219,16 @@ class HoldTurn:
             if np.any(np.abs(MH[self._arm_motors] @ a_f[k]) > room[self._arm_motors]):
                 return False
         return True
+
+
+def rows_within_limits(hand, t: np.ndarray, Q: np.ndarray, rel: float = 0.0) -> bool:
+    """Every joint's speed and acceleration on the rows ``t``, ``Q`` (their first and second
+    differences) within ``LIMIT_MARGIN`` of its limit (times 1 + ``rel``)."""
+    dt = float(t[1] - t[0])
+    v = np.abs(np.diff(Q, axis=0)) / dt
+    a = np.abs(np.diff(Q, 2, axis=0)) / (dt * dt)
+    return bool(np.all(v <= LIMIT_MARGIN * hand.velocity * (1.0 + rel))
+                and np.all(a <= LIMIT_MARGIN * hand.acceleration * (1.0 + rel)))
 
 
 def ahead_shift(profiles: tuple[SoftStop, ...], t_i: float, n: int) -> np.ndarray:
