@@ -37,6 +37,7 @@ from planner.catch.stopping import (
 )
 from planner.catch.turnahead import (
     HoldTurn,
+    Turn,
     TurnMode,
     ahead_shift,
 )
@@ -224,12 +225,12 @@ class CatchPlanner:
             flight, C, turn0, turn_mode, (pose, q_pre, soft_stop, closing, t_react, T_m, s_c,
                                           rate_hz))
         reasons += [Reason(_row_kind(x), x) for x in check_reasons]
-        ahead = turn[3] is not None  # the roll rule's turn under way at the intercept: the
+        ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
         if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
-            q_pre = q_pre + ahead_shift(turn[3], pose.t_i, h.n)
+            q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
         q_closed = pose.q_closed.copy()
         q_closed[arm] += soft_stop.last_offset
-        q_closed += turn[0]  # the pose the ball is held in (the turn ends at rest)
+        q_closed += turn.delta  # the pose the ball is held in (the turn ends at rest)
         pose = replace(pose, q_closed=q_closed)
         stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r, g_t)
         reasons += force_reasons
@@ -264,7 +265,7 @@ class CatchPlanner:
                 turn, t, Q, T_used = self.turn.ahead_rows(turn0, args, flight)
             else:
                 (turn, t, Q), T_used = self.turn.turned_rows(turn0, turn_mode, args), T_m
-            t_static = max(s_c + closing.duration_s, stop.end_s, turn[2] + turn[1])
+            t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
             checked = self.rows.check(flight, C, r, t, Q, pose.t_i, t_static, rate_hz,
                                       closing.reason is not None)
             if not any(x.startswith("fingers in the way") for x in checked[4]) or \
@@ -307,10 +308,10 @@ class CatchPlanner:
 
     def _rows(self, pose: _Pose, q_pre: np.ndarray, stop: SoftStop, closing: Closing,
               t_react: float, T_m: float, s_c: float, rate_hz: float,
-              turn: tuple) -> tuple[np.ndarray, np.ndarray]:
+              turn: Turn) -> tuple[np.ndarray, np.ndarray]:
         """The rows: rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
         stopping motion (``stop``), open -> closed fingers from ``s_c``, the wrist's ``turn``
-        (delta, duration, start, profiles) that holds the ball, until ``HOLD_AFTER_S`` after
+        (``Turn``) that holds the ball, until ``HOLD_AFTER_S`` after
         the intercept (and the arm at rest). The turn is a min-jerk move, or (its profiles,
         ``SoftStop``s of the flexion: ``planner.catch.turnahead``) under way at the intercept:
         the move-in then ends short of ``q_pre`` by the turn's travel before the ball."""
@@ -381,12 +382,12 @@ class CatchPlanner:
                           grasp_t)[0]
 
 
-def _turn_note(turn: tuple, t_i: float) -> tuple[str, ...]:
+def _turn_note(turn: Turn, t_i: float) -> tuple[str, ...]:
     """The plan's note on a turn under way at the intercept (the roll rule's), else none."""
-    if turn[3] is None:
+    if turn.profiles is None:
         return ()
-    return ((f"the wrist's turn under way at {np.abs(turn[3][0].qd).max():.1f} rad/s when the "
-            f"ball lands (from {1000 * (t_i - turn[2]):.0f} ms before it): from the grasp the "
+    return ((f"the wrist's turn under way at {np.abs(turn.profiles[0].qd).max():.1f} rad/s "
+            f"when the ball lands (from {1000 * (t_i - turn.start_s):.0f} ms before it): from the grasp the "
             "ball would roll off the palm's wrist side"),)
 
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from enum import Enum
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -47,6 +47,18 @@ class TurnMode(Enum):
     AHEAD = "ahead"  # by the roll rule: under way before the ball lands (``ahead_rows``)
     EARLY = "early"  # from the grasp
     LATE = "late"  # after the arm's stop
+
+
+class Turn(NamedTuple):
+    """The wrist's turn that holds the ball, as the rows run it (``CatchPlanner._rows``):
+    its ``delta`` (the joints' travel), ``duration_s`` and ``start_s``; ``profiles``, the
+    flexion's speed profiles of a turn under way at the intercept (``ahead_turn``), or None:
+    one min-jerk move from ``start_s``."""
+
+    delta: np.ndarray
+    duration_s: float
+    start_s: float
+    profiles: tuple[SoftStop, ...] | None = None
 
 
 _FINE_S = 0.002  # the motors' room before the intercept judged every 2 ms (``_within``)
@@ -132,16 +144,16 @@ class HoldTurn:
         arm may still be stopping) adds its speeds and accelerations to the stop's: it is
         lengthened by ``_TURN_GROW`` until every joint is within its speed and acceleration
         limits on the rows (at most ``_TURN_TRIES`` times; then as it is, for the self-check
-        to refuse). Returns the turn (delta, duration, start, None: no profiles) and the rows."""
+        to refuse). Returns the ``Turn`` (no profiles) and the rows."""
         _, _, stop, closing, _, _, s_c, _ = rows_args
-        turn = (*turn0, turn_start(stop, closing, s_c, mode == TurnMode.EARLY), None)
+        turn = Turn(*turn0, turn_start(stop, closing, s_c, mode == TurnMode.EARLY))
         t, Q = self.rows(*rows_args, turn)
         if mode != TurnMode.EARLY or turn0[1] <= 0:
             return turn, t, Q
         for _ in range(_TURN_TRIES):
             if rows_within_limits(self.hand, t, Q):
                 break
-            turn = (turn[0], turn[1] * _TURN_GROW, turn[2], None)
+            turn = turn._replace(duration_s=turn.duration_s * _TURN_GROW)
             t, Q = self.rows(*rows_args, turn)
         return turn, t, Q
 
@@ -157,8 +169,8 @@ class HoldTurn:
         every joint's speed and acceleration limit and, from the turn's start to the
         intercept (the check judges the hand's inertia from there on), the arm's motors within
         ``STOP_SHARE`` of their capacity, the closing fingers' reaction included (``_within``);
-        a candidate that is not is skipped. Returns the turn (delta, duration, start,
-        profiles), the rows and the move-in's duration."""
+        a candidate that is not is skipped. Returns the ``Turn``, the rows and the
+        move-in's duration."""
         pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz = rows_args
         turn, t, Q = self.turned_rows(turn0, TurnMode.EARLY, rows_args)
         best = (self._rolled(t, Q, pose.t_i, flight), turn, t, Q, T_m)
@@ -184,7 +196,7 @@ class HoldTurn:
             T_pre = self.dyn.move_time(self.q_rest, pre)
             if t_react + T_pre > (stop.start_s if np.any(stop.qd) else pose.t_i):
                 continue
-            turn = (turn0[0], max(p.end_s for p in prof) - start, start, prof)
+            turn = Turn(turn0[0], max(p.end_s for p in prof) - start, start, prof)
             args = (pose, q_pre, stop, closing, t_react, T_pre, s_c, rate_hz)
             t, Q = self.rows(*args, turn)
             if not self._within(turn, args, t, Q):
@@ -202,7 +214,7 @@ class HoldTurn:
         return roll_towards_wrist_m(t, palm, float(flight.ball.radius_m), t_i,
                                     flight.velocity(t_i), flight.ball.inertia_ratio)
 
-    def _within(self, turn: tuple, rows_args: tuple, t: np.ndarray, Q: np.ndarray) -> bool:
+    def _within(self, turn: Turn, rows_args: tuple, t: np.ndarray, Q: np.ndarray) -> bool:
         """Every joint within its speed and acceleration limits on the rows ``t``, ``Q``, and
         from the turn's start to the intercept (where the check's rule takes over) the arm's
         motors within ``STOP_SHARE`` of their capacity with the hand's inertia at the rows'
@@ -214,7 +226,7 @@ class HoldTurn:
             return False
         t_f, Q_f = self.rows(*rows_args[:-1], 1.0 / _FINE_S, turn)
         a_f = np.diff(Q_f, 2, axis=0) / (_FINE_S * _FINE_S)
-        for k in np.flatnonzero((t_f[1:-1] >= turn[2]) & (t_f[1:-1] <= rows_args[0].t_i)):
+        for k in np.flatnonzero((t_f[1:-1] >= turn.start_s) & (t_f[1:-1] <= rows_args[0].t_i)):
             MH, room = self.dyn.accel_room(Q_f[k + 1])
             if np.any(np.abs(MH[self._arm_motors] @ a_f[k]) > room[self._arm_motors]):
                 return False
