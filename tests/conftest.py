@@ -4,6 +4,9 @@ import pytest
 
 from planner.hand.model import HandModel, load_hand
 
+# the helper modules' asserts explain their failures as a test module's do
+pytest.register_assert_rewrite("tests.midibytes")
+
 
 @pytest.fixture(scope="module")
 def hand() -> HandModel:
