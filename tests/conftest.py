@@ -5,7 +5,7 @@ import pytest
 from planner.hand.model import HandModel, load_hand
 
 # the helper modules' asserts explain their failures as a test module's do
-pytest.register_assert_rewrite("tests.midibytes", "tests.handfiles")
+pytest.register_assert_rewrite("tests.midibytes", "tests.handfiles", "tests.trajbuild")
 
 
 @pytest.fixture(scope="module")
