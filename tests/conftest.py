@@ -1,8 +1,17 @@
-"""Fixtures shared by the test modules: the shipped hands, loaded once per module."""
+"""Fixtures shared by the test modules: the shipped hands, loaded once per module, and a
+trajectory file as the command line plans it."""
+
+import contextlib
+import io
+from pathlib import Path
 
 import pytest
 
 from planner.hand.model import HandModel, load_hand
+
+# the helper modules' asserts explain their failures as a test module's do
+pytest.register_assert_rewrite("tests.midibytes", "tests.handfiles", "tests.trajbuild",
+                               "tests.hardening")
 
 
 @pytest.fixture(scope="module")
@@ -15,3 +24,16 @@ def hand() -> HandModel:
 def mk5() -> HandModel:
     """The Mk5 hand (four-bar couplings, seed 003)."""
     return load_hand("mk5")
+
+
+@pytest.fixture(scope="module")
+def planned(tmp_path_factory) -> Path:
+    """A real planned trajectory: ``cli.py play songs/scale.mid -o X`` (the hardening
+    tests' undamaged file; test_play_stream.py has a ``planned`` of its own)."""
+    import cli
+    from tests.hardening import SCALE
+
+    path = tmp_path_factory.mktemp("planned") / "scale.csv"
+    with contextlib.redirect_stderr(io.StringIO()):
+        assert cli.main(["play", str(SCALE), "-o", str(path)]) == 0
+    return path

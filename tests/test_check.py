@@ -1,10 +1,7 @@
-"""Tests of planner.check, the independent replay check.
+"""Tests of planner.check, the independent replay check, on play trajectories.
 
-Trajectories are built here without the planner: a tiny damped-least-squares
-IK puts one fingertip on a key (wrist flexed 20 deg, the other fingers
-hyperextended so their tips stay ~10 cm above the keys), and keyframes are
-joined by minimum-jerk segments, which keep speeds and accelerations inside
-the hand's limits.
+The trajectories are built without the planner (tests/trajbuild.py); the catch
+checks are in test_check_catch.py.
 """
 
 from __future__ import annotations
@@ -13,14 +10,12 @@ import argparse
 import importlib.util
 import json
 import sys
-from functools import cache, lru_cache
 
 import numpy as np
 import pytest
 
 from planner import check
 from planner.check import (
-    ball_positions,
     check_cli,
     check_trajectory,
     frame_f1,
@@ -33,133 +28,26 @@ from planner.errors import InputError
 from planner.hand.model import load_hand
 from planner.music.keyboard import key
 from planner.music.midi import Note, load_song, write_notes_midi
-from planner.trajfile import TrajectoryWriter, read_trajectory
+from planner.trajfile import TrajectoryWriter
+from tests.trajbuild import (
+    RATE,
+    SONG,
+    meta,
+    play_trajectory,
+    press_posture,
+    rewrite,
+    song_file,
+    write_traj,
+)
 
 FORBIDDEN = ("planner.play", "planner.ik", "planner.trajectory", "planner.catch",
              "planner.selfcheck")
-RATE = 100.0
-RAMP_S = 0.08  # press / release ramp; the 5 mm threshold is crossed at its middle
-
-
-def meta(h, task="play", **extra):
-    return {"task": task, "hand": "default", "urdf_sha256": h.urdf_sha256,
-            "T_world_root": h.T_world_root.tolist(), "rate_hz": RATE, **extra}
-
-
-def write_traj(path, hand, t, q, qm=None, metadata=None, joint_names=None, motor_names=None):
-    q = np.asarray(q)
-    w = TrajectoryWriter(str(path), metadata or meta(hand),
-                         joint_names or hand.joint_names, motor_names or hand.motor_names)
-    w.write_rows(t, q, hand.motor_angles(q) if qm is None else qm)
-    w.close()
-    return str(path)
-
-
-# ---------------------------------------------------------------- a tiny IK
-
-
-def _idx(hand, *names):
-    return [hand.index[n] for n in names]
-
-
-def base_posture(hand, wrist_deg=20.0):
-    q = hand.q_neutral.copy()
-    for f in ("index", "middle", "ring", "pinky"):
-        q[hand.index[f"{f}_mcp_flex"]] = np.radians(-20.0)
-    q[hand.index["wrist_flex"]] = np.radians(wrist_deg)
-    return hand.apply_couplings(q)
-
-
-@cache
-def _press_posture(pitch, finger, depth):
-    """Joints putting ``finger``'s tip ``depth`` below the top of key ``pitch``
-    (negative: above), rail + that finger's MCP/PIP, the rest at base_posture."""
-    hand = load_hand("default")
-    q = base_posture(hand)
-    fi = hand.fingers.index(finger)
-    act = _idx(hand, "rail", f"{finger}_mcp_flex", f"{finger}_pip")
-    k = key(pitch)
-    y = 0.09 if k.black else 0.12  # inside the footprint, clear of the black keys
-    target = np.array([k.center_x_m, y, k.top_z_m - depth])
-    indep = list(hand.independent)
-    cols = [indep.index(a) for a in act]
-    q[0] += target[0] - hand.tip_positions(q)[fi][0]
-    for _ in range(500):
-        e = target - hand.tip_positions(q)[fi]
-        if np.linalg.norm(e) < 1e-10:
-            break
-        Ja = (hand.tip_jacobians(q)[fi] @ hand.dq_dindependent(q))[:, cols]
-        dq = Ja.T @ np.linalg.solve(Ja @ Ja.T + 1e-6 * np.eye(3), e)
-        dq *= min(1.0, 0.1 / np.max(np.abs(dq)))
-        q[act] += dq
-        q = hand.apply_couplings(np.clip(q, hand.lower, hand.upper))
-    assert np.linalg.norm(target - hand.tip_positions(q)[fi]) < 1e-7, "test IK failed"
-    return q
-
-
-def press_posture(pitch, finger, depth):
-    return _press_posture(pitch, finger, round(depth, 6)).copy()
-
-
-def min_jerk(times, keyframes, t):
-    """Minimum-jerk blend between consecutive (time, q) keyframes, at rest at each."""
-    times = np.asarray(times)
-    Q = np.asarray(keyframes)
-    t = np.clip(t, times[0], times[-1])
-    i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2)
-    s = (t - times[i]) / (times[i + 1] - times[i])
-    b = (10 * s**3 - 15 * s**4 + 6 * s**5)[:, None]
-    return Q[i] * (1 - b) + Q[i + 1] * b
-
-
-def play_trajectory(presses, t_end, depth=0.010):
-    """Rows at RATE for presses = [(pitch, finger, onset, offset[, depth])]: the key
-    goes down at the frame of ``onset`` and up at the frame of ``offset``."""
-    hand = load_hand("default")
-    times, frames = [0.0], [press_posture(presses[0][0], presses[0][1], -0.015)]
-    half = 0.5 / RATE  # the threshold crossing sits between two frames
-    for p in presses:
-        pitch, finger, on, off = p[:4]
-        d = p[4] if len(p) > 4 else depth
-        hover, up, down = (press_posture(pitch, finger, x) for x in (-0.015, 0.0, d))
-        ramp_on = on - half - RAMP_S / 2
-        if times[-1] < ramp_on - 0.1 - 1e-9:
-            times.append(ramp_on - 0.1)
-            frames.append(hover)
-        times += [ramp_on, on - half + RAMP_S / 2, off - half - RAMP_S / 2, off - half + RAMP_S / 2]
-        frames += [up, down, down, up]
-    times.append(times[-1] + 0.1)
-    frames.append(press_posture(presses[-1][0], presses[-1][1], -0.015))
-    assert np.all(np.diff(times) >= RAMP_S - 1e-9), times
-    t = np.arange(round(t_end * RATE) + 1) / RATE
-    q = hand.apply_couplings(min_jerk(times, frames, t))
-    return t, q
-
-
-SONG = [(60, "index", 0.30, 0.60), (62, "middle", 1.10, 1.40),
-        (64, "ring", 1.90, 2.20), (61, "index", 2.70, 3.00)]
-
-
-def song_file(tmp_path, presses=SONG):
-    path = tmp_path / "song.mid"
-    # times on the MIDI tick grid (1/960 s) so that the file reads back exactly
-    write_notes_midi([Note(p, on, off, 80) for p, _, on, off, *_ in presses], path)
-    return str(path)
 
 
 @pytest.fixture()
 def good(tmp_path, hand):
     t, q = play_trajectory(SONG, 3.4)
     return write_traj(tmp_path / "good.csv", hand, t, q), song_file(tmp_path), t, q
-
-
-def rewrite(path, fn):
-    with open(path, encoding="utf-8") as f:
-        lines = f.read().split("\n")
-    lines = fn(lines)
-    with open(path, "w", encoding="utf-8", newline="\n") as f:
-        f.write("\n".join(lines))
-    return path
 
 
 # ---------------------------------------------------------------- independence
@@ -531,162 +419,6 @@ def test_cli_report_needs_report_module(good):
         check_cli(_args(trajectory=good[0], report="out"))
 
 
-# ---------------------------------------------------------------- catch
-
-
-def test_ball_closed_form_and_rk4():
-    p0, v0 = np.array([0.0, 0.1, 1.0]), np.array([4.0, -0.5, 3.0])
-    t = np.array([0.0, 0.1234, 0.5, 0.9])
-    want = p0 + np.outer(t, v0) + 0.5 * np.outer(t**2, [0, 0, -9.81])
-    np.testing.assert_allclose(ball_positions(p0, v0, 0.0, t), want, atol=1e-12)
-    # RK4 with a vanishing drag tends to the closed form
-    np.testing.assert_allclose(ball_positions(p0, v0, 1e-12, t), want, atol=1e-9)
-    # and with drag it matches a tight reference integration
-    from scipy.integrate import solve_ivp
-
-    k = 0.02
-
-    def f(_, s):
-        v = s[3:]
-        return np.r_[v, np.array([0, 0, -9.81]) - k * np.linalg.norm(v) * v]
-
-    ref = solve_ivp(f, (0, 0.9), np.r_[p0, v0], t_eval=t, rtol=1e-12, atol=1e-12).y[:3].T
-    got = ball_positions(p0, v0, k, t[::-1])[::-1]  # any order of times
-    np.testing.assert_allclose(got, ref, atol=1e-9)
-    assert np.linalg.norm(got[-1] - want[-1]) > 1e-3  # drag matters
-
-
-BALL_R = 0.05
-T_I = 0.5
-SPEED = 6.0
-
-
-@lru_cache(maxsize=1)
-def grasp_posture():
-    """Thumb, index and middle tips 4 mm off a ball resting on the palm."""
-    hand = load_hand("default")
-    q = hand.q_neutral.copy()
-    q[_idx(hand, "thumb_cmc_abd", "thumb_cmc_flex", "thumb_ip")] = np.radians([30, 60, 40])
-    P = hand.palm_pose(q)
-    C = P[:3, 3] + BALL_R * P[:3, 2]
-    fj = {f: _idx(hand, *(("thumb_cmc_abd", "thumb_cmc_flex", "thumb_ip") if f == "thumb" else
-                          (f"{f}_mcp_abd", f"{f}_mcp_flex", f"{f}_pip")))
-          for f in ("thumb", "index", "middle")}
-    indep = list(hand.independent)
-    for _ in range(3000):
-        tips = hand.tip_positions(q)
-        Js = hand.tip_jacobians(q) @ hand.dq_dindependent(q)
-        for f, act in fj.items():
-            fi = hand.fingers.index(f)
-            d = tips[fi] - C
-            e = C + (BALL_R + 0.004) * d / np.linalg.norm(d) - tips[fi]
-            Ja = Js[fi][:, [indep.index(a) for a in act]]
-            dq = Ja.T @ np.linalg.solve(Ja @ Ja.T + 1e-4 * np.eye(3), e)
-            q[act] += dq * min(1.0, 0.05 / np.max(np.abs(dq)))
-        q = hand.apply_couplings(np.clip(q, hand.lower, hand.upper))
-    dist = np.linalg.norm(hand.tip_positions(q) - C, axis=1)[:3] - BALL_R
-    assert np.all(np.abs(dist - 0.004) < 1e-4), dist
-    return q, C, P[:3, 2]
-
-
-STOP_M = 0.10  # this test ball (0.2 kg at 6 m/s) stopped over 10 cm: 36 N, within the
-# wrist flexion motor's 2 N m (over the catch planner's 2 cm it would need 180 N)
-
-
-def catch_file(path, hand, offset=(0.0, 0.0, 0.0), close_from=T_I - 0.12, close_s=0.25,
-               hold_to=None, t_end=T_I + 0.4):
-    """A catch: the ball arrives along -normal at SPEED onto the palm (plus
-    ``offset``); the fingers close by min-jerk over [close_from, close_from + close_s]."""
-    q_grasp, C, n = grasp_posture()
-    q_open = hand.q_neutral.copy()
-    v_i = -SPEED * n
-    g = np.array([0, 0, -9.81])
-    v0 = v_i - g * T_I
-    p0 = C + np.asarray(offset) - v0 * T_I - 0.5 * g * T_I**2
-    t = np.arange(round(t_end * RATE) + 1) / RATE
-    frames = [q_open, q_open, q_grasp, q_grasp]
-    times = [0.0, close_from, close_from + close_s, t_end + 1]
-    if hold_to is not None:
-        frames += [q_open, q_open]
-        times = [0.0, close_from, close_from + close_s, hold_to, hold_to + 0.25, t_end + 1]
-    q = hand.apply_couplings(min_jerk(times, frames, t))
-    m = meta(hand, "catch", ball={"p0": p0.tolist(), "v0": v0.tolist(), "radius": BALL_R,
-                                  "mass": 0.2, "drag": 0.0}, intercept_t=T_I,
-             catch={"stop_distance_m": STOP_M})
-    return write_traj(path, hand, t, q, metadata=m)
-
-
-def test_catch_passes(tmp_path, hand):
-    r = check_trajectory(catch_file(tmp_path / "c.csv", hand))
-    assert r.ok, r.summary()
-    c = r.catch
-    assert c.intercept_ok and c.intercept_error_m < 1e-5
-    assert not c.early_touches and c.grasp_held
-    assert c.grasp_time_s <= T_I + 0.150 and {"thumb", "index", "middle"} <= set(c.grasp_fingers)
-    assert r.play is None
-    d = json.loads(json.dumps(r.to_dict()))
-    assert d["catch"]["ok"] is True and d["ok"] is True
-    assert "catch at t=0.500 s" in r.summary()
-
-
-def test_catch_palm_off_by_5cm(tmp_path, hand):
-    _q_grasp, _C, n = grasp_posture()
-    side = np.cross(n, [1.0, 0.0, 0.0])
-    side /= np.linalg.norm(side)
-    r = check_trajectory(catch_file(tmp_path / "c.csv", hand, offset=0.05 * side))
-    assert not r.ok and not r.catch.intercept_ok
-    assert r.catch.intercept_error_m == pytest.approx(0.05, abs=1e-5)
-    assert any("misses the palm: 50.0 mm" in p for p in r.problems)
-
-
-def test_catch_early_touch_late_grasp_and_release(tmp_path, hand):
-    # closed before the ball arrives: the fingertips are in its way
-    r = check_trajectory(catch_file(tmp_path / "a.csv", hand, close_from=0.1))
-    assert not r.ok and r.catch.early_touches
-    assert all(e.time_s < T_I and e.distance_m < BALL_R for e in r.catch.early_touches)
-    # closing too late
-    r = check_trajectory(catch_file(tmp_path / "b.csv", hand, close_from=T_I + 0.1))
-    assert not r.ok and r.catch.grasp_time_s is None
-    assert any("no grasp within 150 ms" in p for p in r.problems)
-    # grasped, then let go
-    r = check_trajectory(catch_file(tmp_path / "c.csv", hand, hold_to=T_I + 0.2))
-    assert not r.ok and r.catch.grasp_time_s is not None and not r.catch.grasp_held
-    assert any("grasp lost" in p for p in r.problems)
-
-
-def test_catch_intercept_outside_and_bad_metadata(tmp_path, hand):
-    path = catch_file(tmp_path / "c.csv", hand, t_end=0.3)
-    r = check_trajectory(path)
-    assert not r.ok and any("outside the trajectory" in p for p in r.problems)
-
-    def drop_radius(ls):
-        m = json.loads(ls[0][2:])
-        del m["ball"]["radius"]
-        return ["# " + json.dumps(m)] + ls[1:]
-
-    with pytest.raises(InputError, match="radius"):
-        check_trajectory(rewrite(path, drop_radius))
-
-
-def test_catch_frame_mount_may_differ(tmp_path, hand):
-    """The catch frame's origin is the launch point: the hand may be mounted anywhere."""
-    path = catch_file(tmp_path / "c.csv", hand)
-    shift = np.array([2.0, 0.0, 1.0])
-
-    def move(ls):
-        m = json.loads(ls[0][2:])
-        T = np.array(m["T_world_root"])
-        T[:3, 3] += shift
-        m["T_world_root"] = T.tolist()
-        m["ball"]["p0"] = (np.array(m["ball"]["p0"]) + shift).tolist()
-        return ["# " + json.dumps(m)] + ls[1:]
-
-    r = check_trajectory(rewrite(path, move))
-    assert r.ok, r.summary()
-    assert r.catch.ball_at_intercept[0] == pytest.approx(
-        check_trajectory(catch_file(tmp_path / "d.csv", hand)).catch.ball_at_intercept[0] + 2.0)
-
-
 # ---------------------------------------------------------------- a long file
 
 
@@ -791,84 +523,3 @@ def test_a_gap_in_the_rows_is_refused_naming_the_row(tmp_path, hand, good):
     w.close()
     with pytest.raises(InputError, match=r"row 61 is at t=1.100000 s, not 0.600000 s"):
         check_trajectory(str(tmp_path / "gap.csv"), song)
-
-
-def test_catch_stopping_force_judged(tmp_path, hand):
-    """The dynamic judgment: the same catch stopped over 2 cm needs 5x the force of 10 cm,
-    more than the wrist flexion motor can give; the loads are reported per phase."""
-    ok = check_trajectory(catch_file(tmp_path / "c.csv", hand))
-    stop, hold = ok.catch.loads
-    assert stop.phase == "stop" and hold.phase == "hold"
-    assert stop.speed_m_s == pytest.approx(SPEED, rel=1e-3)
-    # F = m (v^2 / (2 d) n - g): against the arrival (along -n), and the weight
-    n = grasp_posture()[2]
-    want = np.linalg.norm(0.2 * (SPEED**2 / (2 * STOP_M) * n + np.array([0.0, 0.0, 9.81])))
-    assert stop.force_n == pytest.approx(want, rel=1e-3)
-    assert 0.0 < stop.headroom < 1.0 and ok.ok
-    tr = read_trajectory(str(tmp_path / "c.csv"))
-    meta = dict(tr.metadata, catch={"stop_distance_m": 0.02})
-    bad = write_traj(tmp_path / "hard.csv", hand, tr.t_s, tr.q, metadata=meta)
-    rep = check_trajectory(bad)
-    assert not rep.ok and rep.catch.loads[0].headroom < 0
-    assert any(p.startswith("stopping the ball needs") and "motor.wrist_flex" in p
-               for p in rep.problems)
-    del meta["catch"]
-    rep = check_trajectory(write_traj(tmp_path / "none.csv", hand, tr.t_s, tr.q, metadata=meta))
-    assert not rep.ok and any("no stopping distance" in p for p in rep.problems)
-
-
-def test_catch_plan_edited_to_stop_over_2_mm_rejected(tmp_path):
-    """Issue 15: the planner's feasible plan (30 deg from 1.5 m) passes; the same rows
-    with its metadata edited to stop the ball over 2 mm instead of 2 cm do not."""
-    from planner.catch.plan import plan_catch
-
-    res = plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "c.csv"))
-    assert res.feasible
-    good = check_trajectory(str(tmp_path / "c.csv"))
-    assert good.ok, good.problems
-    assert good.catch.loads[0].headroom == pytest.approx(res.plan.stop.headroom, abs=0.03)
-    text = (tmp_path / "c.csv").read_text()
-    assert text.count('"stop_distance_m": 0.02') == 1
-    (tmp_path / "e.csv").write_text(text.replace('"stop_distance_m": 0.02',
-                                                 '"stop_distance_m": 0.002'))
-    rep = check_trajectory(str(tmp_path / "e.csv"))
-    assert not rep.ok
-    assert rep.catch.loads[0].force_n > 9 * good.catch.loads[0].force_n
-    assert rep.problems == tuple(p for p in rep.problems if p.startswith("stopping the ball"))
-
-
-def test_values_as_written_are_the_files_bit_for_bit():
-    """``as_written`` (the rows the writer hands its self-check) is what reading the
-    file's 6-decimal text gives, bit for bit: on random values of every scale, halves
-    and near-halves of the last decimal, negative zeros, and values a product's
-    rounding could decide."""
-    from planner.trajfile import as_written
-
-    rng = np.random.default_rng(9)
-    x = np.concatenate([rng.normal(0.0, 1.0, 20000), rng.uniform(-0.62, 0.7, 20000),
-                        rng.uniform(-4000.0, 4000.0, 5000),
-                        (np.arange(-3000, 3000) + 0.5) / 1e6,  # (exact halves)
-                        (rng.integers(-10**7, 10**7, 5000) + 0.5) * 1e-6,  # (near halves)
-                        [-4e-7, -0.0, 0.0, 4e-7, 1e12, -2.5e-6, np.inf, -np.inf]])
-    got = as_written(x)
-    want = np.array([float(f"{v:.6f}") for v in x.tolist()])
-    assert np.array_equal(np.signbit(got), np.signbit(want))
-    assert got.tobytes() == want.tobytes()
-
-
-def test_the_rows_a_writer_returns_are_the_files(tmp_path, hand):
-    """``write_rows`` hands back (to the self-check) the rows as the file holds them."""
-    rng = np.random.default_rng(10)
-    t = np.arange(300) / 100.0
-    q = np.clip(hand.lower + (hand.upper - hand.lower) * rng.random((300, hand.n)),
-                hand.lower, hand.upper)
-    q[100:150] = q[99]  # (rows equal to the one before: formatted once)
-    w = TrajectoryWriter(str(tmp_path / "r.csv"), {"task": "play", "hand": hand.name,
-                         "urdf_sha256": hand.urdf_sha256,
-                         "T_world_root": hand.T_world_root.tolist(), "rate_hz": 100.0},
-                         hand.joint_names, hand.motor_names)
-    got = np.concatenate([w.write_rows(t[:120], q[:120], hand.motor_angles(q[:120])),
-                          w.write_rows(t[120:], q[120:], hand.motor_angles(q[120:]))])
-    w.close()
-    tr = read_trajectory(str(tmp_path / "r.csv"))
-    assert got.tobytes() == np.column_stack([tr.t_s, tr.q, tr.q_motor]).tobytes()

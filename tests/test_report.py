@@ -1,6 +1,6 @@
 """Tests of planner.report: PNG plots and the offline meshcat animation of a check.
 
-Inputs are built without the planner (the helpers of test_check.py): a short
+Inputs are built without the planner (tests/trajbuild.py): a short
 play trajectory with one missed note and one wrong press, and a catch with
 the hand mounted tilted so that the ball arrives on a lob.
 """
@@ -18,7 +18,7 @@ import pytest
 from planner.check import ball_positions, check_trajectory
 from planner.report import write_check_report, write_html
 from planner.report.html import _frame_rows
-from tests.test_check import (
+from tests.trajbuild import (
     BALL_R,
     RATE,
     SONG,
