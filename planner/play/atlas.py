@@ -66,6 +66,7 @@ THUMB_Y_M = 0.015  # where the natural hand's thumb tip sits (y): in front of th
 LONG_Y_M = 0.095  # ... and the long fingers' (over the black keys' middle)
 CLEARANCE_M = 0.001  # a tip passing over a key it does not press stays this far above it
 TIP_RADIUS_M = 0.002  # ... counting the pad's size (a key's footprint grows by this)
+WRIST_DIGITS = 9  # the natural wrist's fit is kept to 1e-9 rad (``_natural_hand``)
 PATH_SAMPLES = 12  # a straight move is checked at this many points
 CANON_OCTAVE = 4  # entries are solved on the keys of this octave (C4..B4)
 TABLE_DIR = Path(__file__).parents[1] / "tables"
@@ -144,7 +145,10 @@ class Atlas:
             w = np.clip(w + step, h.lower[wrist], h.upper[wrist])
             if np.max(np.abs(step)) < 1e-10:
                 break
-        q0[wrist] = w
+        # the fit converges to 1e-10 rad; its last digits differ between machines (BLAS,
+        # numpy): kept to 1e-9 rad, the natural hand (and so the shipped tables, which are
+        # used only for the same natural hand) is the same everywhere
+        q0[wrist] = np.round(w, WRIST_DIGITS)
         for f, j in self.arc_joint.items():
             s = Arc(h, f, j, q0).descend(z_m)
             if s is not None:
