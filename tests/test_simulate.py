@@ -259,6 +259,31 @@ def test_scene_palm_centre_and_palm_box(hand):
     assert 2 * scene.model.geom("palm_box").size[0] == pytest.approx(5.25 * 0.0254)  # palm width
 
 
+def test_the_physics_ball_has_the_file_balls_inertia(catch30, hand):
+    """The spec's ``ball`` has radius and mass, not inertia: ``file_inertia_ratio`` takes the
+    ball the plan names when radius and mass are that ball's (the seed's: a tennis ball's
+    shell, 0.61), else the default ball's; the physics ball is given it (MuJoCo's geom would
+    make it a solid sphere, 0.4, and it rolls further on the palm)."""
+    from planner.balls import BALLS, file_inertia_ratio
+    from planner.simulate.scene import Ball as SimBall
+
+    meta = read_trajectory(str(catch30)).metadata
+    seed = BALLS["seed"]  # the default ball (get_ball(None))
+    assert meta["catch"]["throw"]["ball"] == "tennis"
+    assert file_inertia_ratio(meta) == BALLS["tennis"].inertia_ratio == 0.61
+    base = {"ball": {"radius": BALLS["baseball"].radius_m, "mass": BALLS["baseball"].mass_kg},
+            "catch": {"throw": {"ball": "baseball"}}}
+    assert file_inertia_ratio(base) == 0.4
+    base["ball"]["mass"] = 0.2  # not the named ball's mass: the default ball's inertia
+    assert file_inertia_ratio(base) == seed.inertia_ratio
+    assert file_inertia_ratio({}) == seed.inertia_ratio
+    ball = SimBall((0.0, 0.0, 1.0), (0.0, 0.0, 0.0), seed.radius_m, seed.mass_kg, 0.0, 0.61)
+    model = build_scene(hand, hand.T_world_root, ball=ball).model
+    body = model.body("ball")
+    assert body.mass[0] == pytest.approx(seed.mass_kg)
+    assert np.allclose(body.inertia, 0.61 * seed.mass_kg * seed.radius_m ** 2, rtol=1e-9)
+
+
 def test_catch_in_physics_held_motors_within_peak(catch30, capsys):
     """The 30 deg / 1.5 m catch is held in physics: the contact speeds leave the ball no
     roll along the palm, the wrist turns the closed hand so that the palm's downhill points

@@ -113,9 +113,11 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     if task == "catch":
         from planner.check.ball import ball_params
 
+        from planner.balls import file_inertia_ratio
+
         b = ball_params(meta, name)
         ball = Ball(tuple(b["p0"]), tuple(b["v0"]), float(b["radius"]), float(b["mass"]),
-                    float(b["drag"]))
+                    float(b["drag"]), file_inertia_ratio(meta))
         hand = hand.mounted(T)
     scene = build_scene(hand, T, keyboard=task == "play", ball=ball, contact=contact)
     rec = simulate(scene, hand, tr.t_s, tr.q, ball=ball)

@@ -43,13 +43,16 @@ KEY_FRICTION = 0.5  # pad on a key top (the pad's 0.8 applies: MuJoCo takes the 
 
 @dataclass(frozen=True)
 class Ball:
-    """The catch's ball: initial state (catch frame), radius, mass, drag k (1/m)."""
+    """The catch's ball: initial state (catch frame), radius, mass, drag k (1/m) and its
+    moment of inertia over m R^2 (the planner's ``Ball.inertia_ratio``: a catch file's by
+    ``planner.balls.file_inertia_ratio``; 0.4 is MuJoCo's solid sphere)."""
 
     p0_m: tuple[float, float, float]
     v0_m_s: tuple[float, float, float]
     radius_m: float
     mass_kg: float
     drag_per_m: float
+    inertia_ratio: float
 
 
 @dataclass(frozen=True)
@@ -110,8 +113,11 @@ def _keyboard(world: ET.Element) -> None:
 def _ball(world: ET.Element, ball: Ball) -> None:
     body = ET.SubElement(world, "body", name="ball", pos=_v(ball.p0_m))
     ET.SubElement(body, "freejoint", name="ball_free")
+    inertia = ball.inertia_ratio * ball.mass_kg * ball.radius_m ** 2  # about its centre
+    ET.SubElement(body, "inertial", pos="0 0 0", mass=_f(ball.mass_kg),
+                  diaginertia=_v([inertia] * 3))  # (the geom's own would be a solid ball's)
     ET.SubElement(body, "geom", name="ball", type="sphere", size=_f(ball.radius_m),
-                  mass=_f(ball.mass_kg), contype=str(WORLD_CONTYPE),
+                  contype=str(WORLD_CONTYPE),
                   conaffinity=str(WORLD_CONAFFINITY), friction="0.8 0.005 0.0001",
                   rgba="0.8 0.9 0.2 1")
 
