@@ -448,3 +448,23 @@ def test_full_contact_misses_are_presses_narrower_than_the_finger(twinkle):
     # with pads only the same press is no narrower than the 2 mm pad point
     assert all(d.kind != "narrow" for d in note_differences(run_replay(str(twinkle), SONG,
                                                                        contact="pads")))
+
+
+def test_a_four_finger_hand_replays(tmp_path):
+    """The agh hand has four fingers: its play and catch files replay (the record's pad
+    points, the fingers touching keys and the motors' fingers are the hand's own, not five:
+    the replay raised IndexError / KeyError 'pinky' before)."""
+    song = tmp_path / "s.mid"
+    from planner.music.midi import Note, write_notes_midi
+
+    write_notes_midi([Note(60 + 2 * i, 0.5 * i, 0.5 * i + 0.4, 80) for i in range(4)], str(song))
+    play = tmp_path / "p.csv"
+    assert main(["play", str(song), "--hand", "agh", "-o", str(play)]) == 0
+    rep = simulate_trajectory(str(play), str(song))
+    assert rep.task == "play" and rep.song is not None
+    assert [m.name for m in rep.motors] == [f"motor.{m}" for m in load_hand("agh").motor_names]
+    assert not any("pinky" in m.name for m in rep.motors)
+    catch = tmp_path / "c.csv"
+    assert planner.plan_catch(30.0, 1.5, 0.0, "agh", str(catch)).feasible
+    rep = simulate_trajectory(str(catch))
+    assert rep.catch is not None and rep.catch.peak_contact_force_n > 0

@@ -111,9 +111,8 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     task = meta["task"]
     ball = None
     if task == "catch":
-        from planner.check.ball import ball_params
-
         from planner.balls import file_inertia_ratio
+        from planner.check.ball import ball_params
 
         b = ball_params(meta, name)
         ball = Ball(tuple(b["p0"]), tuple(b["v0"]), float(b["radius"]), float(b["mass"]),

@@ -29,7 +29,6 @@ from planner.check.criteria import (
     pitch_name,
     song_frames,
 )
-from planner.hand.spec import FINGERS
 from planner.music.keyboard import LOWEST_PITCH, WHITE_WIDTH_M
 from planner.simulate.planbody import plan_body_keys
 from planner.simulate.scores import key_down
@@ -145,7 +144,8 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
     acc: dict[tuple, dict] = {}
     pad_err = np.linalg.norm(rec.tips_m[:n] - planned, axis=2) * 1000.0  # (n, 5) mm
     press = _plan_presses(notes, frames[:n], kc, planned)
-    widths = _finger_widths_mm(replay.scene)
+    fingers = replay.hand.fingers
+    widths = _finger_widths_mm(replay.scene, fingers)
     in_plan = (plan_body_keys(replay.hand, rec.q_ref[:n], kc)
                if replay.report.contact == "full" else np.zeros((n, 88), dtype=bool))
     for t, k in zip(*np.nonzero(kin != phys)):
@@ -178,7 +178,7 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
         if t < n:
             f = int(rec.key_finger[t, k])
             if f >= 0:
-                a["fingers"].add(FINGERS[f])
+                a["fingers"].add(fingers[f])
                 if pad_err[t, f] > a["err"]:
                     a["err"] = float(pad_err[t, f])
                     a["dz"] = float(rec.tips_m[t, f, 2] - planned[t, f, 2]) * 1000.0
@@ -190,10 +190,10 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
             i if kind == "note" else -1, pitch_name(p), p,
             float(notes[i].onset_s) if kind == "note" else a["t0"], float(a["lost"]),
             a["onset"], a["middle"], a["release"], a["extra"],
-            tuple(sorted(a["fingers"], key=FINGERS.index)), a["err"], a["dz"], y * 1000.0,
+            tuple(sorted(a["fingers"], key=fingers.index)), a["err"], a["dz"], y * 1000.0,
             _width_mm(p, y) if math.isfinite(y) else float("nan"),
             tuple(pitch_name(q) for q in sorted(a["touched"])),
-            FINGERS[f] if f >= 0 else "", widths[f] if f >= 0 else 0.0, a["plan"]))
+            fingers[f] if f >= 0 else "", widths[f] if f >= 0 else 0.0, a["plan"]))
     out.sort(key=lambda d: -d.lost_f1)
     return tuple(out)
 
@@ -214,8 +214,8 @@ def _plan_presses(notes, frames: np.ndarray, kc, planned: np.ndarray) -> dict:
     return out
 
 
-def _finger_widths_mm(scene) -> list[float]:
+def _finger_widths_mm(scene, fingers: tuple[str, ...]) -> list[float]:
     """Each finger's end in the scene: its pad sphere's diameter (mm; 2 with pads only)."""
     if scene is None:
-        return [0.0] * len(FINGERS)
-    return [2000.0 * float(scene.model.geom(f"{f}_pad").size[0]) for f in FINGERS]
+        return [0.0] * len(fingers)
+    return [2000.0 * float(scene.model.geom(f"{f}_pad").size[0]) for f in fingers]

@@ -32,11 +32,11 @@ class SimRecord:
     q_ref: np.ndarray  # (T, n) the rows
     q_sim: np.ndarray  # (T, n) the simulated joints
     key_dip_m: np.ndarray  # (T, 88) each key's travel down (zeros without a keyboard)
-    key_finger: np.ndarray  # (T, 88) int8: the finger touching a key (FINGERS index), -1
+    key_finger: np.ndarray  # (T, 88) int8: the finger touching a key (the hand's index), -1
     servo_force: np.ndarray  # (T, n_motor) joint-side force the servo applied
     servo_demand: np.ndarray  # (T, n_motor) what the control law asked for (unclamped)
     force_limit: np.ndarray  # (T, n_motor) the servo's joint-side limit at that row
-    tips_m: np.ndarray  # (T, 5, 3) pad points, world
+    tips_m: np.ndarray  # (T, fingers, 3) pad points, world
     palm_m: np.ndarray  # (T, 3) palm_center, world
     ball_m: np.ndarray  # (T, 3) ball centre (NaN without a ball)
     ball_speed_m_s: np.ndarray  # (T,)
@@ -124,11 +124,11 @@ def _start(scene: Scene, q: np.ndarray, ball: Ball | None, mujoco):
     return data, vadr
 
 
-def _arrays(T: int, n: int, nm: int) -> dict[str, np.ndarray]:
-    """The record's arrays, one entry per row."""
+def _arrays(T: int, n: int, nm: int, n_tips: int) -> dict[str, np.ndarray]:
+    """The record's arrays, one entry per row (``n_tips``: the hand's fingers)."""
     rec = {k: np.empty(s) for k, s in (
         ("q_sim", (T, n)), ("key", (T, N_KEYS)), ("force", (T, nm)), ("demand", (T, nm)),
-        ("limit", (T, nm)), ("tips", (T, 5, 3)), ("palm", (T, 3)), ("ball", (T, 3)),
+        ("limit", (T, nm)), ("tips", (T, n_tips, 3)), ("palm", (T, 3)), ("ball", (T, 3)),
         ("ball_v", (T,)), ("ball_n", (T,)), ("ball_f", (T,)))}
     rec["key_finger"] = np.full((T, N_KEYS), -1, dtype=np.int8)
     return rec
@@ -198,7 +198,7 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     n_sub = max(1, round(dt_row / TIMESTEP_S))
     ref = act.reference(hand, q, t_s, inverse_dynamics(scene))
     base, slope = _ctrl_rows(scene, ref)
-    rec = _arrays(T, q.shape[1], len(scene.servos.kp))
+    rec = _arrays(T, q.shape[1], len(scene.servos.kp), len(scene.tip_sites))
     bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
     unstable = None
     peak_f = 0.0

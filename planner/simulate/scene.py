@@ -18,7 +18,6 @@ import numpy as np
 
 from planner.errors import InputError
 from planner.hand.model import GRAVITY_WORLD, HandModel
-from planner.hand.spec import FINGERS
 from planner.simulate import actuators as act
 from planner.simulate.hand_mjcf import (
     HAND_CONAFFINITY,
@@ -65,8 +64,8 @@ class Scene:
     hand_dof: np.ndarray  # (n,) dof address of each hand joint
     key_qpos: np.ndarray  # (88,) qpos address of each key hinge (empty without keys)
     key_geom_key: np.ndarray  # (ngeom,) key index of a geom, -1 for none
-    geom_finger: np.ndarray  # (ngeom,) finger index (FINGERS) of a hand geom, -1 for none
-    tip_sites: np.ndarray  # (5,) site ids of the pad points, FINGERS order
+    geom_finger: np.ndarray  # (ngeom,) finger index (the hand's fingers) of a hand geom, -1 none
+    tip_sites: np.ndarray  # site ids of the pad points, the hand's fingers' order
     palm_site: int
     ball_body: int  # -1 without a ball
     ball_geom: int
@@ -224,7 +223,7 @@ def build_scene(hand: HandModel, T_world_root: np.ndarray, *, keyboard: bool = F
             key_geom[g] = int(name.split("_")[1]) - 21
         elif model.geom_contype[g] == HAND_CONTYPE and model.geom_conaffinity[g] == \
                 HAND_CONAFFINITY:
-            geom_finger[g] = next((i for i, f in enumerate(FINGERS) if body.startswith(f)), -1)
+            geom_finger[g] = next((i for i, f in enumerate(hand.fingers) if body.startswith(f)), -1)
     ball_body = model.body("ball").id if ball is not None else -1
     return Scene(model=model, xml=xml, hand_qpos=hand_qpos, hand_dof=hand_dof,
                  key_qpos=key_qpos, key_geom_key=key_geom, geom_finger=geom_finger,

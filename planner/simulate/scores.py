@@ -28,7 +28,6 @@ from planner.check.criteria import GRASP_TOL_M, GRASP_WINDOW_S, LATE_S
 from planner.check.keys import key_episodes, score_song
 from planner.check.results import KeyEpisode, LateNote, MissedNote
 from planner.hand.model import HandModel
-from planner.hand.spec import FINGERS
 from planner.simulate.keyboard import key_bodies
 from planner.simulate.replay import SimRecord
 
@@ -140,11 +139,11 @@ def motor_efforts(rec: SimRecord, hand: HandModel) -> tuple[MotorEffort, ...]:
         tau[drive] = rec.servo_demand[k]
         demand[k] = hand.motor_torques(rec.q_sim[k], tau)
     finger_of = {}
-    for f, name in enumerate(FINGERS):
+    for f, name in enumerate(hand.fingers):
         for j in hand.joint_slice(name):
             finger_of[int(j)] = f
-    touching = np.zeros((T, len(FINGERS)), dtype=bool)
-    for f in range(len(FINGERS)):
+    touching = np.zeros((T, len(hand.fingers)), dtype=bool)
+    for f in range(len(hand.fingers)):
         touching[:, f] = (rec.key_finger == f).any(axis=1)
     dt = float(np.median(np.diff(rec.t_s))) if T > 1 else 0.01
     out = []
