@@ -240,11 +240,11 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     the ball would roll beyond ``ROLL_ROOM_M`` towards the wrist (``planner.check.ballroll``:
     that plan is infeasible for the roll), so the roll rule plans the turn under way when the
     ball lands (``planner.catch.turnahead``): the rows pass the intercept pose at the
-    intercept, the flexion already turning towards level (the turn at 4.4 rad/s), the
+    intercept, the flexion already turning towards level (the turn at 4.1 rad/s), the
     pre-catch pose short of it on the other side; the roll is within the room; ``check``
     confirms the catch. 30 deg from 1.5 m, whose turn from the grasp keeps the roll within
     ``ROLL_ROOM_M``, has the same rows as before the rule. (20 deg from 1.0 m, which this
-    test planned before the roll was a feasibility rule, rolls 161 mm with the least rolling
+    test planned before the roll was a feasibility rule, rolls 104 mm with the least rolling
     turn: infeasible, ``tests/test_roll_rule.py``.)"""
     from planner.catch.plan import write_plan
     from planner.catch.results import CatchReason
@@ -264,7 +264,7 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     before = early(plan)
     assert rolled(before) > ROLL_ROOM_M and before.reason_kinds == (CatchReason.ROLL,)
     assert plan.feasible, plan.reasons
-    assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 4.4 rad/s")
+    assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 4.1 rad/s")
     assert rolled(plan) <= ROLL_ROOM_M
     i = pl.joints.i_flex
     k = int(np.searchsorted(plan.t, plan.intercept_t))
@@ -300,11 +300,11 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
 def test_the_summary_does_not_call_a_turning_palm_at_rest(tmp_path, capsys):
     """20 deg from 1.0 m: no stopping motion (``soft`` None), but the palm is turning with
     the roll rule's turn when the ball lands: the summary's stopping line does not say the
-    palm is at rest (it once did, above the note of the turn at 5.9 rad/s)."""
+    palm is at rest (it once did, above the note of the roll rule's turn)."""
     from cli import main as cli_main
 
     assert cli_main(["catch", "--angle", "20", "--dist", "1", "-o", str(tmp_path / "c.csv")]) == 0
     err = capsys.readouterr().err
     (stopping,) = [x for x in err.splitlines() if x.lstrip().startswith("stopping:")]
     assert "(the palm not giving with the ball)" in stopping and "at rest" not in stopping
-    assert "note: the wrist's turn under way at 5.9 rad/s" in err
+    assert "note: the wrist's turn under way at 6.7 rad/s" in err

@@ -62,9 +62,11 @@ class Turn(NamedTuple):
 
 
 _FINE_S = 0.002  # the motors' room before the intercept judged every 2 ms (``_within``)
-AHEAD_SHARES = (0.25, 0.5, 0.75, 1.0)  # the roll rule's turns under way at the intercept:
-# their speed then, as a share of what the stop leaves the flexion (its speed limit less the
-# stop's own flexion speed: ``ahead_turn``)
+AHEAD_SHARES = tuple(k / 20 for k in range(1, 21))  # the roll rule's turns under way at the
+# intercept, slowest first: their speed then, as a share of what the stop leaves the flexion
+# (its speed limit less the stop's own flexion speed: ``ahead_turn``), in steps of 5 % (with
+# steps of 25 %, 20 deg / 1.5 m had 43 mm of roll at 0.25 and its 0.5 beyond the motors: the
+# 5 % steps find 40 mm within them)
 _TURN_GROW = 1.25  # an early turn too fast on top of the stop is made this much longer
 _TURN_TRIES = 6  # ... up to this many times (1.25^6 = 3.8 x)
 
