@@ -127,3 +127,19 @@ def test_the_physics_ball_has_the_planners_inertia(pl, tmp_path):
     assert m.body_mass[b] == pytest.approx(ball.mass_kg)
     expect = ball.inertia_ratio * ball.mass_kg * ball.radius_m ** 2
     assert np.allclose(m.body_inertia[b], expect, rtol=1e-6)
+
+
+def test_the_rule_judges_only_the_hands_it_is_measured_on(tmp_path):
+    """The room is the default hand's (the replay lost the ball beyond it); on mk5 the
+    modelled roll of 30 deg / 1.5 m exceeds it and the plan is held in physics, so mk5's
+    roll is reported, not judged: the plan is feasible and ``check`` confirms it."""
+    from planner.catch.plan import plan_catch
+    from planner.check.ballroll import roll_judged
+
+    assert roll_judged("default") and not roll_judged("mk5") and not roll_judged(None)
+    out = tmp_path / "m.csv"
+    p = plan_catch(30.0, 1.5, 0.0, "mk5", str(out))
+    assert p.feasible, p.reasons
+    rep = check_trajectory(str(out))
+    assert rep.ok, rep.problems
+    assert rep.catch.roll_m > ROLL_ROOM_M  # reported: 57 mm

@@ -42,7 +42,7 @@ from planner.catch.turnahead import (
     ahead_shift,
 )
 from planner.check.ball import ball_loads
-from planner.check.ballroll import roll_problem
+from planner.check.ballroll import roll_judged, roll_problem
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
 from planner.check.kinematics import Kinematics
@@ -405,9 +405,12 @@ def _row_reasons(turn: HoldTurn, check_reasons, flight: Flight, t: np.ndarray, Q
                  t_i: float) -> list[Reason]:
     """The reasons of the rows: the self-check's (``RowCheck.check``) and the roll rule's
     (``planner.check.ballroll.roll_problem``: the ball, landing at ``t_i``, rolls off the
-    palm's wrist side on these rows, ``HoldTurn.rolled``; the check judges the same rule)."""
+    palm's wrist side on these rows, ``HoldTurn.rolled``, on a hand the rule judges,
+    ``roll_judged``; the check judges the same rule)."""
     out = [Reason(_row_kind(x), x) for x in check_reasons]
-    rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
+    rolled = None
+    if roll_judged(turn.hand.name):
+        rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
     if rolled is not None:
         out.append(Reason(CatchReason.ROLL, rolled))
     return out

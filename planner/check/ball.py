@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from planner.balls import file_inertia_ratio
-from planner.check.ballroll import ROLL_TOL_M, roll_problem, roll_towards_wrist_m
+from planner.check.ballroll import ROLL_TOL_M, roll_judged, roll_problem, roll_towards_wrist_m
 from planner.check.ballstop import PALM_MU, cone_margin_n, pad_force_n, pad_time_s, ride_force_n
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
 from planner.check.kinematics import GRAVITY, G, Kinematics
@@ -143,7 +143,9 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
     # a live plan's rows hold the arm still from the intercept on (no wrist's turn, README
     # "Live catch"): its roll is reported, not judged, until the live session turns the wrist
     # (measured: beyond the room on 9-10 of 10 bench_live throws, docs/physics-replay.md)
-    rolled = None if roll is None or live else roll_problem(roll, ROLL_TOL_M)
+    # (nor on a hand whose room is not measured: ``roll_judged``)
+    judged = roll is not None and not live and roll_judged(meta.get("hand"))
+    rolled = roll_problem(roll, ROLL_TOL_M) if judged else None
     if rolled is not None:
         problems.append(rolled)
     loads: tuple[BallLoad, ...] = ()
