@@ -36,7 +36,7 @@ def _finite(name: str, value: Any) -> float:
 class Ball:
     """A ball: SI units, ``drag_coefficient`` is the sphere's Cd (0 for a vacuum),
     ``inertia_ratio`` its moment of inertia about its centre over m R^2 (2/5 a solid ball,
-    2/3 a thin shell): how fast it rolls on the palm (``planner.catch.roll``)."""
+    2/3 a thin shell): how fast it rolls on the palm (``planner.check.ballroll``)."""
 
     name: str
     mass_kg: float

@@ -211,7 +211,9 @@ def test_default_hand_catch_is_feasible_and_strict_passes(tmp_path):
 def test_grid(hand_kind, thumb110):
     """Angles 20-60 deg (step 10) x distances 1-3 m (step 0.5): with the soft catch every
     throw is reached, closed in time and stopped within every motor (before issue 15 the
-    3 m throws needed 2.07-2.80 N m of the 2 N m wrist flexion motor)."""
+    3 m throws needed 2.07-2.80 N m of the 2 N m wrist flexion motor); the steep short throws
+    whose ball would roll off the palm's wrist side (``planner.check.ballroll``: 20 deg from
+    1.0 and 1.5 m) are infeasible for that alone."""
     from planner.catch.results import CatchReason
 
     pl = get_planner(thumb110)
@@ -222,14 +224,16 @@ def test_grid(hand_kind, thumb110):
             assert p.intercept_error_m < 0.001
             assert p.min_clearance_before_m > 0.0
             assert p.grasp_t is not None and p.grasp_t <= p.intercept_t + GRASP_WINDOW_S
-            if not p.feasible:  # only a ball faster than the joints can stop
-                assert p.reason_kinds == (CatchReason.TOO_FAST_TO_STOP,), (a, d, p.reasons)
+            if not p.feasible:  # only a ball faster than the joints can stop, or its roll
+                assert p.reason_kinds in ((CatchReason.TOO_FAST_TO_STOP,),
+                                          (CatchReason.ROLL,)), (a, d, p.reasons)
+                assert p.reason_kinds == (CatchReason.TOO_FAST_TO_STOP,) or a == 20, (a, d)
                 continue
             n_ok += 1
             assert p.stop.headroom >= 0 and len(p.stop.motor_headroom) == len(p.hand.motor_names)
             if p.soft is not None:  # None: the palm waits at rest (no motion fits, none needed)
                 assert np.linalg.norm(p.soft.v_rel) < np.linalg.norm(p.arrival_velocity)
-    assert n_ok >= 24  # measured: 25 of 25
+    assert n_ok >= 23  # measured: 23 of 25 (25 before the roll rule)
     hard = plan_throw(30, 3.0, 0.0, planner=pl, soft=False)
     soft = plan_throw(30, 3.0, 0.0, planner=pl)
     assert soft.stop.force_n < hard.stop.force_n
@@ -455,9 +459,11 @@ def test_out_of_reach_is_reported(tmp_path, thumb110):
 def test_independent_check_confirms_grid(tmp_path):
     """Issue 4's done-when, with issue 15's dynamic check: the independent replay check
     (planner.check, which shares only the hand model) passes every feasible catch of the
-    grid 20-60 deg x 1-3 m (with the soft catch all of them), and rejects for the stopping
-    force exactly the throws the planner calls infeasible for it."""
+    grid 20-60 deg x 1-3 m, and rejects for the stopping force or the ball's roll
+    (``planner.check.ballroll``, one rule) exactly the throws the planner calls infeasible for
+    them (20 deg from 1.0 and 1.5 m: the roll)."""
     from planner import check
+    from planner.catch.results import CatchReason
 
     pl = get_planner("default")
     disagree, rejected, infeasible = [], 0, 0
@@ -467,15 +473,15 @@ def test_independent_check_confirms_grid(tmp_path):
             path = tmp_path / f"c{a}_{d}.csv"
             write_plan(p, str(path))
             rep = check.check_trajectory(str(path))
-            stop_torque = any(r.startswith("too fast to stop") for r in p.reasons)
-            assert p.feasible or stop_torque, p.reasons
+            assert p.feasible or set(p.reason_kinds) <= {CatchReason.TOO_FAST_TO_STOP,
+                                                         CatchReason.ROLL}, p.reasons
             rejected += not rep.ok
             infeasible += not p.feasible
-            if rep.ok != p.feasible or (not rep.ok and not all(
-                    x.startswith("stopping the ball needs") for x in rep.problems)):
+            if rep.ok != p.feasible or (not rep.ok and not all(x.startswith((
+                    "stopping the ball needs", "the ball rolls off")) for x in rep.problems)):
                 disagree.append((a, d, p.reasons, rep.problems))
     assert disagree == []
-    assert rejected == infeasible <= 1  # measured: none
+    assert rejected == infeasible <= 3  # measured: 2 (the roll)
 
 
 def test_independent_check_rejects_a_hand_elsewhere(tmp_path):

@@ -1,4 +1,4 @@
-"""The ball's roll along the palm (``planner.catch.roll``) and the ball's inertia
+"""The ball's roll along the palm (``planner.check.ballroll``) and the ball's inertia
 (``Ball.inertia_ratio``). No wall-clock assertions."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from planner.catch.flight import BALLS, Ball
-from planner.catch.roll import roll_factor, roll_towards_wrist_m
+from planner.check.ballroll import roll_factor, roll_towards_wrist_m
 from planner.errors import InputError
 
 

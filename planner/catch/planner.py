@@ -42,6 +42,7 @@ from planner.catch.turnahead import (
     ahead_shift,
 )
 from planner.check.ball import ball_loads
+from planner.check.ballroll import roll_judged, roll_problem
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
 from planner.check.kinematics import Kinematics
@@ -224,7 +225,7 @@ class CatchPlanner:
         turn, t, Q, T_m, s_c, (err, clear, g_t, g_f, check_reasons) = self._closing_rows(
             flight, C, turn0, turn_mode, (pose, q_pre, soft_stop, closing, t_react, T_m, s_c,
                                           rate_hz))
-        reasons += [Reason(_row_kind(x), x) for x in check_reasons]
+        reasons += _row_reasons(self.turn, check_reasons, flight, t, Q, pose.t_i)
         ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
         if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
             q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
@@ -398,6 +399,21 @@ def _row_kind(reason: str) -> CatchReason:
     if reason.startswith(("too slow to close", "grasp")):
         return CatchReason.GRASP
     return CatchReason.MISS
+
+
+def _row_reasons(turn: HoldTurn, check_reasons, flight: Flight, t: np.ndarray, Q: np.ndarray,
+                 t_i: float) -> list[Reason]:
+    """The reasons of the rows: the self-check's (``RowCheck.check``) and the roll rule's
+    (``planner.check.ballroll.roll_problem``: the ball, landing at ``t_i``, rolls off the
+    palm's wrist side on these rows, ``HoldTurn.rolled``, on a hand the rule judges,
+    ``roll_judged``; the check judges the same rule)."""
+    out = [Reason(_row_kind(x), x) for x in check_reasons]
+    rolled = None
+    if roll_judged(turn.hand.name):
+        rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
+    if rolled is not None:
+        out.append(Reason(CatchReason.ROLL, rolled))
+    return out
 
 
 def _kind(e: InfeasibleError) -> str:

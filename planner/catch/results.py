@@ -33,6 +33,8 @@ class CatchReason(Enum):
     GRASP = "grasp"  # the fingers do not close around the ball (in time)
     FINGERS = "fingers in the way"  # a fingertip would hit the arriving ball
     MISS = "miss"  # the rows put the palm elsewhere
+    ROLL = "roll"  # the ball rolls off the palm's wrist side before the wrist's turn levels
+    # the palm (``planner.check.ballroll``)
 
 
 class Reason(str):

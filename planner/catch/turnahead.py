@@ -6,7 +6,7 @@ the grasp (``TurnMode.EARLY``), after the arm's stop (``TurnMode.LATE``) or, by 
 
 A palm steep at the intercept (66-73 deg from level on the 20 deg throws: the geometry of
 the wrist and the path fixes the palm's angle where the ball meets the palm centre) lets
-the landed ball roll towards the wrist at up to k g sin(tilt) (``planner.catch.roll``: k
+the landed ball roll towards the wrist at up to k g sin(tilt) (``planner.check.ballroll``: k
 = 5/7 a solid ball, 0.62 a tennis ball) while a turn from rest (``stopping.hold_turn``) is
 still slow. Started before the ball, the turn passes the intercept pose at speed: the
 flexion's speed rises (min-jerk) to w exactly at the intercept, holds it and falls to rest
@@ -36,8 +36,8 @@ import numpy as np
 from planner.catch.flight import Flight
 from planner.catch.grasp import motor_torque_matrix
 from planner.catch.results import Closing
-from planner.catch.roll import ROLL_ROOM_M, roll_towards_wrist_m
 from planner.catch.stopping import TURN_SHARE, SoftStop, StopDynamics, hold_turn
+from planner.check.ballroll import ROLL_ROOM_M, roll_towards_wrist_m
 from planner.trajectory import LIMIT_MARGIN
 
 
@@ -62,9 +62,11 @@ class Turn(NamedTuple):
 
 
 _FINE_S = 0.002  # the motors' room before the intercept judged every 2 ms (``_within``)
-AHEAD_SHARES = (0.25, 0.5, 0.75, 1.0)  # the roll rule's turns under way at the intercept:
-# their speed then, as a share of what the stop leaves the flexion (its speed limit less the
-# stop's own flexion speed: ``ahead_turn``)
+AHEAD_SHARES = tuple(k / 20 for k in range(1, 21))  # the roll rule's turns under way at the
+# intercept, slowest first: their speed then, as a share of what the stop leaves the flexion
+# (its speed limit less the stop's own flexion speed: ``ahead_turn``), in steps of 5 % (with
+# steps of 25 %, 20 deg / 1.5 m had 43 mm of roll at 0.25 and its 0.5 beyond the motors: the
+# 5 % steps find 40 mm within them)
 _TURN_GROW = 1.25  # an early turn too fast on top of the stop is made this much longer
 _TURN_TRIES = 6  # ... up to this many times (1.25^6 = 3.8 x)
 
@@ -161,7 +163,7 @@ class HoldTurn:
         """The roll rule (TurnMode.AHEAD): the slowest of the wrist's turns -- from the grasp
         (TurnMode.EARLY's), then under way at the intercept at ``AHEAD_SHARES`` of the speed the
         stop leaves the flexion (``ahead_turn``) -- on whose rows the ball, landing on the
-        palm, rolls at most ``ROLL_ROOM_M`` towards the wrist (``planner.catch.roll``: its
+        palm, rolls at most ``ROLL_ROOM_M`` towards the wrist (``planner.check.ballroll``: its
         inertia, gravity along the palm and the rows' accelerations); the least rolling when
         none does. A turn under way needs the pre-catch pose short of the intercept pose by
         its travel before the ball, within the flexion's range and reached (``move_time``)
@@ -169,11 +171,12 @@ class HoldTurn:
         every joint's speed and acceleration limit and, from the turn's start to the
         intercept (the check judges the hand's inertia from there on), the arm's motors within
         ``STOP_SHARE`` of their capacity, the closing fingers' reaction included (``_within``);
-        a candidate that is not is skipped. Returns the ``Turn``, the rows and the
+        a candidate that is not is skipped. A plan whose least rolling turn lets the ball roll
+        beyond the room is infeasible (``CatchPlanner._row_reasons``: the rule). Returns the ``Turn``, the rows and the
         move-in's duration."""
         pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz = rows_args
         turn, t, Q = self.turned_rows(turn0, TurnMode.EARLY, rows_args)
-        best = (self._rolled(t, Q, pose.t_i, flight), turn, t, Q, T_m)
+        best = (self.rolled(t, Q, pose.t_i, flight), turn, t, Q, T_m)
         if best[0] <= ROLL_ROOM_M or turn0[1] <= 0:
             return best[1:]
         h, i = self.hand, self.joints.i_flex
@@ -201,14 +204,14 @@ class HoldTurn:
             t, Q = self.rows(*args, turn)
             if not self._within(turn, args, t, Q):
                 continue
-            rolled = self._rolled(t, Q, pose.t_i, flight)
+            rolled = self.rolled(t, Q, pose.t_i, flight)
             if rolled < best[0]:
                 best = (rolled, turn, t, Q, T_pre)
             if rolled <= ROLL_ROOM_M:
                 break
         return best[1:]
 
-    def _rolled(self, t: np.ndarray, Q: np.ndarray, t_i: float, flight: Flight) -> float:
+    def rolled(self, t: np.ndarray, Q: np.ndarray, t_i: float, flight: Flight) -> float:
         """The ball's largest roll towards the wrist on the rows (``roll_towards_wrist_m``)."""
         _, palm = self.kin.frames(Q)
         return roll_towards_wrist_m(t, palm, float(flight.ball.radius_m), t_i,

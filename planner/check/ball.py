@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from planner.balls import file_inertia_ratio
+from planner.check.ballroll import ROLL_TOL_M, roll_judged, roll_problem, roll_towards_wrist_m
 from planner.check.ballstop import PALM_MU, cone_margin_n, pad_force_n, pad_time_s, ride_force_n
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
 from planner.check.kinematics import GRAVITY, G, Kinematics
@@ -137,6 +139,15 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
                         f"(first: {touches[0].finger} at {touches[0].time_s:.3f} s)")
 
     g_time, g_fingers, held, d_after = _grasp_after(t, ti, tips, palm, r, problems)
+    roll = None if err is None else _roll(t, palm, ball, ti, file_inertia_ratio(src))
+    # a live plan's rows hold the arm still from the intercept on (no wrist's turn, README
+    # "Live catch"): its roll is reported, not judged, until the live session turns the wrist
+    # (measured: beyond the room on 9-10 of 10 bench_live throws, docs/physics-replay.md)
+    # (nor on a hand whose room is not measured: ``roll_judged``)
+    judged = roll is not None and not live and roll_judged(meta.get("hand"))
+    rolled = roll_problem(roll, ROLL_TOL_M) if judged else None
+    if rolled is not None:
+        problems.append(rolled)
     loads: tuple[BallLoad, ...] = ()
     stop_m = _stop_distance(meta, path)
     if stop_m is None:
@@ -159,8 +170,18 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
                       err is not None and err <= INTERCEPT_TOL_M, tuple(touches), g_time,
                       g_fingers, held,
                       float(d_after.min()) if d_after.size else None, tuple(problems), loads,
-                      {k: tr.end.get(k) for k in ("catch", "reason")} if live else None)
+                      {k: tr.end.get(k) for k in ("catch", "reason")} if live else None, roll)
     return res, load
+
+
+def _roll(t: np.ndarray, palm: np.ndarray, ball: dict[str, Any], ti: float,
+          inertia_ratio: float) -> float:
+    """The landed ball's largest roll towards the wrist on the rows (``roll_towards_wrist_m``,
+    the planner's model) from its landing at ``ti`` at its flight's velocity there."""
+    h = STOP_DIFF_S
+    b = ball_positions(ball["p0"], ball["v0"], ball["drag"], [ti - h, ti + h])
+    return roll_towards_wrist_m(t, palm, ball["radius"], ti, (b[1] - b[0]) / (2 * h),
+                                inertia_ratio)
 
 
 def _grasp_after(t: np.ndarray, ti: float, tips: np.ndarray, palm: np.ndarray, r: float,

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from planner.check.ballroll import ROLL_ROOM_M
 from planner.check.criteria import INTERCEPT_TOL_M, KEY_BED_DEPTH_M
 
 
@@ -191,6 +192,8 @@ class CatchResult:
     problems: tuple[str, ...]
     loads: tuple[BallLoad, ...] = ()  # stopping and holding the ball: force and motors
     live: dict[str, Any] | None = None  # a live plan's end marker: outcome, reason
+    roll_m: float | None = None  # the landed ball's largest roll towards the wrist on the
+    # rows (``planner.check.ballroll``; None when the intercept is outside the rows)
 
     @property
     def ok(self) -> bool:
@@ -303,6 +306,9 @@ class CheckReport:
                 L.append(f"  {ld.phase}: {ld.force_n:.1f} N at {ld.time_s:.3f} s ({what}): "
                          f"motor.{ld.motor} {abs(ld.torque_nm):.3f} of {ld.capacity_nm:.3f} N m "
                          f"({ld.limiting_part}), headroom {100 * ld.headroom:.0f} %")
+            if c.roll_m is not None:
+                L.append(f"  roll: the ball rolls at most {1000 * c.roll_m:.1f} mm towards the "
+                         f"wrist on the palm (room {1000 * ROLL_ROOM_M:g} mm)")
             if c.live:
                 L.append(f"  live plan: {c.live.get('catch')}: {c.live.get('reason')}")
             _listing(L, "early touches", c.early_touches, lambda e: (
