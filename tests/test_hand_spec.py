@@ -171,6 +171,11 @@ def test_error_zero_or_negative_transmission(tmp_path: Path) -> None:
     _one_line_error(tmp_path, text, "'cmc_flex' must be positive")
 
 
+def test_error_negative_rotor_inertia(tmp_path: Path) -> None:
+    text = edit(default_text(), "motor_rotor_inertia_g_cm2 = 34.9", "motor_rotor_inertia_g_cm2 = -1")
+    _one_line_error(tmp_path, text, "'motor_rotor_inertia_g_cm2' must not be negative")
+
+
 def test_error_unreadable_hand_file(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="cannot read hand file") as e:
         load_hand_spec(str(tmp_path / "missing.toml"))

@@ -67,6 +67,27 @@ def test_servo_limits_are_the_motors_through_their_transmission(hand):
         pytest.approx(200.0)  # 2 N m through a 10 mm pulley
 
 
+
+def test_reflected_rotor_inertia_is_each_motors_own():
+    """The armature is the motor's rotor (the hand file's, seed 002's data sheets) times
+    the transmission ratio squared: the AGH's end joints are 3564 B motors through a 20:1
+    worm (34.9 g cm^2 x 400), its shafts 4490 B (130 g cm^2); the default hand's tendon
+    motors 3564 B, its wrist 4490 B through 2:1. (The AGH's end joints once got the 4490
+    B's rotor, 3.7x theirs, and its thumb fell behind its plan in physics.)"""
+    from planner.simulate.actuators import servo_set
+
+    agh = load_hand("agh")
+    s = servo_set(agh)
+    assert s.armature[agh.motor_names.index("thumb_end")] == pytest.approx(34.9e-7 * 20 ** 2)
+    assert s.armature[agh.motor_names.index("shaft_near")] == pytest.approx(130e-7 * 20 ** 2)
+    d = load_hand("default")
+    s = servo_set(d)
+    assert s.armature[d.motor_names.index("wrist_flex")] == pytest.approx(130e-7 * 2 ** 2)
+    r = abs(d.motor_ratio(d.q_neutral)[d.motor_names.index("index_mcp")])
+    assert s.armature[d.motor_names.index("index_mcp")] == pytest.approx(34.9e-7 * r ** 2)
+    assert s.armature[d.motor_names.index("index_abd")] == 0.0  # servo: not documented
+
+
 def test_key_geometry_down_travel_and_down_weight():
     for k in key_bodies():  # the spec's key: 5 mm down sounds, the bed 10 mm down
         assert (k.down_m, k.dip_m) == (kb.DOWN_DEPTH_M, kb.KEY_DIP_M) == (0.005, 0.010)

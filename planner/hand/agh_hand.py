@@ -37,6 +37,7 @@ from planner.hand.spec import (
     _range,
     _tip,
     assemble_spec,
+    rotor_inertia,
     start_hand,
 )
 
@@ -60,9 +61,10 @@ def _pair3(d: dict[str, Any], key: str) -> tuple[float, float]:
     return float(v[0]), float(v[1])
 
 
-def _motor(d: dict[str, Any], key: str) -> tuple[float, float]:
+def _motor(d: dict[str, Any], key: str) -> tuple[float, float, float]:
+    """A motor table's peak torque (N m), speed (rad/s) and rotor inertia (kg m^2)."""
     m = _get(d, key, dict)
-    return _positive(m, "peak_torque_nm"), _positive(m, "speed_rad_s")
+    return _positive(m, "peak_torque_nm"), _positive(m, "speed_rad_s"), rotor_inertia(m)
 
 
 def build_agh_hand(data: dict[str, Any]) -> HandSpec:
@@ -83,8 +85,8 @@ def build_agh_hand(data: dict[str, Any]) -> HandSpec:
     ratio, eff = _positive(g, "gear_ratio"), _positive(g, "gear_efficiency")
     if eff > 1:
         raise InputError("gear_efficiency must be in (0, 1]")
-    base_tau, base_w = _motor(g, "base_motor")
-    end_tau, end_w = _motor(g, "end_motor")
+    base_tau, base_w, base_rotor = _motor(g, "base_motor")
+    end_tau, end_w, end_rotor = _motor(g, "end_motor")
     acc = _positive(g, "acceleration_rad_s2")
     ranges = {"base": _range(g, "base"), "end": _range(g, "end")}
 
@@ -106,10 +108,11 @@ def build_agh_hand(data: dict[str, Any]) -> HandSpec:
         links.append(tl)
         joints.append(tj)
         actuators.append(Actuator(f"{f}_end", "gear", f"{f}_end", ((f"{f}_end", ratio),), end_w,
-                                  end_tau, eff))
+                                  end_tau, eff, rotor_inertia_kg_m2=end_rotor))
         hp.finger_joints.append((f, (f"{f}_base", f"{f}_end")))
     for shaft, (src, dep) in _PAIRS.items():
         couplings.append(LinearCoupling(f"{dep}_base", f"{src}_base", 1.0))
         actuators.append(Actuator(f"shaft_{shaft}", "gear", f"{src}_base",
-                                  ((f"{src}_base", ratio),), base_w, base_tau, eff))
+                                  ((f"{src}_base", ratio),), base_w, base_tau, eff,
+                                  rotor_inertia_kg_m2=base_rotor))
     return assemble_spec(data, hp)

@@ -36,6 +36,7 @@ from planner.hand import mk5
 from planner.hand.mk5_tables import MK5_TABLES, Mk5FingerParams
 from planner.hand.spec import (
     FINGERS,
+    ROTOR_KEY,
     Actuator,
     HandSpec,
     Joint,
@@ -48,6 +49,7 @@ from planner.hand.spec import (
     _vec,
     assemble_spec,
     long_fingers,
+    rotor_inertia,
     start_hand,
 )
 
@@ -85,6 +87,7 @@ class _Mk5Drive:
     eff: float
     v_cap: float
     a_max: float
+    rotor: float = 0.0  # the forearm motors' rotor inertia, kg m^2
 
 
 def _drive(data: dict[str, Any]) -> _Mk5Drive:
@@ -107,7 +110,8 @@ def _drive(data: dict[str, Any]) -> _Mk5Drive:
         raise InputError("tendon motor speed and peak torque must be positive")
     fs = _get(data, "finger_speed", dict)
     return _Mk5Drive(table, scale, ratio2, w_motor, tau_peak, eff,
-                     _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2"))
+                     _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2"),
+                     rotor_inertia(tendon, "motor_" + ROTOR_KEY))
 
 
 def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
@@ -172,5 +176,5 @@ def _finger(n: str, fd: dict[str, Any], p_len: float, d: _Mk5Drive
     c = Mk5Coupling(joint=f"{n}_q2", source=f"{n}_q1", table=d.table, finger=n)
     a = Actuator(name=n, kind="tendon", drives=f"{n}_q1", coefficients=(),
                  speed_rad_s=d.w_motor, peak_torque_nm=d.tau_peak, efficiency=d.eff,
-                 radius_m=p.r_mot, mk5=c)
+                 radius_m=p.r_mot, mk5=c, rotor_inertia_kg_m2=d.rotor)
     return links, joints, c, a

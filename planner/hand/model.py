@@ -315,7 +315,8 @@ class HandModel:
             "couplings": [coupling(c) for c in self.spec.couplings],
             "actuators": [{"name": a.name, "kind": a.kind, "drives": a.drives,
                            "speed_rad_s": a.speed_rad_s, "peak_torque_nm": a.peak_torque_nm,
-                           "efficiency": a.efficiency} for a in self.actuators],
+                           "efficiency": a.efficiency,
+                           "rotor_inertia_kg_m2": a.rotor_inertia_kg_m2} for a in self.actuators],
         }
 
     def summary(self) -> str:

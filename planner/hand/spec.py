@@ -116,6 +116,9 @@ class Actuator:
     # a tendon's design force (N): the largest tension its cable may carry anywhere
     # (planner.hand.tendon); None for a motor that pulls no tendon
     tendon_force_n: float | None = None
+    # the motor's rotor inertia (kg m^2, on its own shaft: the motor's data sheet);
+    # 0 where the hand file names none (a servo whose gearing is not documented)
+    rotor_inertia_kg_m2: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -204,6 +207,19 @@ def _length(d: dict[str, Any], key: str) -> float:
     if v <= 0:
         raise InputError(f"length {key!r} must be positive")
     return v
+
+
+ROTOR_KEY = "rotor_inertia_g_cm2"  # a motor table's rotor inertia, as data sheets give it
+
+
+def rotor_inertia(d: dict[str, Any], key: str = ROTOR_KEY) -> float:
+    """A motor's rotor inertia (kg m^2) from its table's ``key`` (g cm^2, optional: 0)."""
+    if key not in d:
+        return 0.0
+    v = _get(d, key)
+    if v < 0:
+        raise InputError(f"{key!r} must not be negative, got {v!r}")
+    return v * 1e-7
 
 
 def _positive(d: dict[str, Any], key: str) -> float:
@@ -303,7 +319,8 @@ def start_hand(data: dict[str, Any]) -> HandParts:
                             acceleration=_get(rail, "acceleration_m_s2"),
                             effort=_get(motor, "peak_torque_nm") / r_pulley))
         actuators.append(Actuator("rail", "belt", "rail", (("rail", 1.0 / r_pulley),), v_motor,
-                                  _get(motor, "peak_torque_nm"), 1.0, r_pulley))
+                                  _get(motor, "peak_torque_nm"), 1.0, r_pulley,
+                                  rotor_inertia_kg_m2=rotor_inertia(motor)))
         base = "carriage"
     else:
         base = "rail_base"
@@ -331,7 +348,8 @@ def start_hand(data: dict[str, Any]) -> HandParts:
                             velocity=v, acceleration=_get(d, "acceleration_rad_s2"),
                             effort=_get(wmotor, "peak_torque_nm") * gear))
         actuators.append(Actuator(jname, "gear", jname, ((jname, gear),), _get(wmotor, "speed_rad_s"),
-                                  _get(wmotor, "peak_torque_nm"), 1.0))
+                                  _get(wmotor, "peak_torque_nm"), 1.0,
+                                  rotor_inertia_kg_m2=rotor_inertia(wmotor)))
     links.append(Link("palm_center", 0.0, (0.0, 0.0, 0.0), (0.001, 0.001, 0.001)))
     joints.append(Joint("palm_center_fixed", "fixed", "palm", "palm_center",
                         (0.0, p_len / 2, -p_thk / 2), rpy_rad=(math.pi, 0.0, 0.0)))
@@ -405,6 +423,7 @@ class _TendonDrive:
     servo: dict
     v_cap: float
     a_max: float
+    rotor: float = 0.0  # the tendon motors' rotor inertia, kg m^2
 
     def speed(self, arm: float) -> float:
         """A joint's speed cap: the motor's speed through its moment arm, or the cap."""
@@ -423,7 +442,8 @@ def _build_tendon_hand(data: dict[str, Any]) -> HandSpec:
     fs = _get(data, "finger_speed", dict)
     tp = _TendonDrive(spool, _get(tendon, "motor_speed_rad_s"), eff,
                       _get(tendon, "motor_peak_torque_nm"), _get(data, "servo", dict),
-                      _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2"))
+                      _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2"),
+                      rotor_inertia(tendon, "motor_" + ROTOR_KEY))
     fingers = long_fingers(data)
     _tendon_thumb(_get(data, "thumb", dict), tp, hp.links, hp.joints, hp.actuators,
                   hp.finger_joints)
@@ -467,9 +487,11 @@ def _tendon_thumb(th: dict, tp: _TendonDrive, links, joints, actuators, finger_j
                  (("thumb_cmc_abd", _get(tp.servo, "gear_ratio")),), _get(tp.servo, "speed_rad_s"),
                  _get(tp.servo, "peak_torque_nm"), 1.0),
         Actuator("thumb_cmc_flex", "tendon", "thumb_cmc_flex",
-                 (("thumb_cmc_flex", _get(tarm, "cmc_flex") / tp.spool),), tp.w_motor, tp.tau_peak, tp.eff, tp.spool),
+                 (("thumb_cmc_flex", _get(tarm, "cmc_flex") / tp.spool),), tp.w_motor, tp.tau_peak,
+                 tp.eff, tp.spool, rotor_inertia_kg_m2=tp.rotor),
         Actuator("thumb_ip", "tendon", "thumb_ip", (("thumb_ip", _get(tarm, "ip") / tp.spool),),
-                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool),
+                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool,
+                 rotor_inertia_kg_m2=tp.rotor),
     ]
     finger_joints.append(("thumb", ("thumb_cmc_abd", "thumb_cmc_flex", "thumb_ip")))
 
@@ -521,10 +543,12 @@ def _tendon_finger(f: dict, tp: _TendonDrive, p_len: float, links, joints, actua
         Actuator(f"{n}_abd", "servo", f"{n}_mcp_abd", ((f"{n}_mcp_abd", _get(tp.servo, "gear_ratio")),),
                  _get(tp.servo, "speed_rad_s"), _get(tp.servo, "peak_torque_nm"), 1.0),
         Actuator(f"{n}_mcp", "tendon", f"{n}_mcp_flex", ((f"{n}_mcp_flex", a_mcp / tp.spool),),
-                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool),
+                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool,
+                 rotor_inertia_kg_m2=tp.rotor),
         # one tendon crosses the PIP and the DIP
         Actuator(f"{n}_pip", "tendon", f"{n}_pip",
                  ((f"{n}_pip", a_pip / tp.spool), (f"{n}_dip", a_dip / tp.spool)),
-                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool),
+                 tp.w_motor, tp.tau_peak, tp.eff, tp.spool,
+                 rotor_inertia_kg_m2=tp.rotor),
     ]
     finger_joints.append((n, (f"{n}_mcp_abd", f"{n}_mcp_flex", f"{n}_pip", f"{n}_dip")))

@@ -8,10 +8,12 @@ on the joint it drives, limited to the torque that motor gives through its trans
   back): the servo's force range, updated every row (the Mk5 law's ratio varies with q).
   A coupled joint (DIP = k PIP) gets its torque through the equality constraint, so the
   servo's generalised force on the coupled pair is what the motor gives.
-* Reflected rotor inertia (armature) ``J r^2``: tendon motors are the seed's Faulhaber
-  3564 B (seed 002: stall 0.41-0.43 N m, the hand's 0.4 N m; rotor 34.9 g cm^2), the
-  wrist and rail motors its 4490 B (stall 2.6 N m, the hand's 2 N m; rotor 130 g cm^2);
-  the splay servos' gearing is not documented: no armature.
+* Reflected rotor inertia (armature) ``J r^2``: ``J`` is the motor's rotor inertia as
+  its hand file gives it (``Actuator.rotor_inertia_kg_m2``; the seed's Faulhaber 3564 B,
+  34.9 g cm^2, for the tendon motors and the AGH's end joints, its 4490 B, 130 g cm^2,
+  for the wrist, the rail and the AGH's shafts); the splay servos' gearing is not
+  documented: no armature. (Until session 29 ``J`` came from the actuator's kind, and
+  the AGH's geared 3564 B end motors got the 4490 B's rotor: 3.7x their inertia.)
 * Gains. Stiffness: the servo reaches its motor's peak torque at ``MOTOR_ERROR_AT_PEAK_RAD``
   of motor-shaft error (a design choice of the replay's controller, not of the plan:
   ``kp = tau_m eta r^2 / e``). Damping: critical for the joint's own inertia (its
@@ -39,12 +41,6 @@ import numpy as np
 
 from planner.hand.model import HandModel
 
-ROTOR_INERTIA_KG_M2 = {  # by actuator kind (see the module docstring)
-    "tendon": 34.9e-7,  # Faulhaber 3564 B (seed 002), 34.9 g cm^2
-    "gear": 130e-7,  # Faulhaber 4490 B (seed 002), 130 g cm^2
-    "belt": 130e-7,
-    "servo": 0.0,
-}
 MOTOR_ERROR_AT_PEAK_RAD = 0.06  # motor-shaft error (3.4 deg) at which a servo gives its peak
 DAMPING_RATIO = 1.0  # critical
 
@@ -71,7 +67,7 @@ def servo_set(hand: HandModel) -> ServoSet:
     ratio = np.abs(hand.motor_ratio(hand.q_neutral))
     eff = np.array([a.efficiency for a in hand.actuators])
     peak = np.array(hand.motor_peak_torque, dtype=float)
-    arm = np.array([ROTOR_INERTIA_KG_M2.get(a.kind, 0.0) for a in hand.actuators]) * ratio ** 2
+    arm = np.array([a.rotor_inertia_kg_m2 for a in hand.actuators]) * ratio ** 2
     kp = peak * eff * ratio ** 2 / MOTOR_ERROR_AT_PEAK_RAD
     return ServoSet(hand.motor_names, np.array(hand._drive), ratio, eff, peak, arm, kp)
 
