@@ -222,11 +222,18 @@ class StopDynamics:
         |dq| / T^2, at either end, against gravity: ``accel_room``). ``arm_alone``: the
         arm's part of that acceleration alone within the room too (how a live session
         bounds its re-aims, ``planner.catch.livemotion``)."""
-        dq = q_to - q_from
+        return self.room_time((q_from, q_to), q_to - q_from, STOP_SHARE, arm_alone)
+
+    def room_time(self, ends: tuple[np.ndarray, np.ndarray], dq: np.ndarray, share: float,
+                  arm_alone: bool = False) -> float:
+        """``move_time``'s rule with every motor within ``share`` (at most STOP_SHARE) of
+        its capacity: the shortest min-jerk move by ``dq`` between the poses ``ends``; inf
+        when gravity alone leaves a motor no room."""
         T = phase_duration(dq, self.hand.velocity, self.hand.acceleration)
         arm = list(self.arm)
-        for q in (q_from, q_to):
+        for q in ends:
             MH, room = self.accel_room(q)
+            room = room - (STOP_SHARE - share) * self.cap
             per = np.abs(MH @ dq)
             if arm_alone:
                 per = np.maximum(per, np.abs(MH[:, arm] @ dq[arm]))
@@ -489,17 +496,7 @@ def turn_time(dyn: StopDynamics, q_from: np.ndarray, delta: np.ndarray) -> float
     acceleration limit and every motor within ``TURN_SHARE`` of its capacity with the
     hand's inertia at either end (``move_time``'s rule); inf when gravity alone leaves a
     motor no room."""
-    T = phase_duration(delta, dyn.hand.velocity, dyn.hand.acceleration)
-    for q in (q_from, q_from + delta):
-        MH, room = dyn.accel_room(q)
-        room = room - (STOP_SHARE - TURN_SHARE) * dyn.cap
-        per = np.abs(MH @ delta)
-        need = per > 1e-12
-        if np.any(room[need] <= 0):
-            return math.inf
-        if need.any():
-            T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
-    return T
+    return dyn.room_time((q_from, q_from + delta), delta, TURN_SHARE)
 
 
 def _best_flex(h: HandModel, q_end: np.ndarray, i: int, cand: np.ndarray, want: float
