@@ -258,7 +258,14 @@ class HandIK:
             except RuntimeError:
                 # an infeasible linearisation: drop the half-spaces for this step
                 self._clear_half_spaces()
-                self.solver.solve(True)
+                try:
+                    self.solver.solve(True)
+                except RuntimeError:
+                    # infeasible without them too (the joint limits from here): no step
+                    # is possible, the configuration stays where it is, unconverged
+                    self.robot.update_kinematics()
+                    tips = {p.finger: self._tip(p.finger) for p in presses}
+                    return self._press_error(presses, tips), self._clearance(hover), it
             self.robot.update_kinematics()
             tips = {p.finger: self._tip(p.finger) for p in presses}
             err = self._press_error(presses, tips)

@@ -119,3 +119,24 @@ def test_a_solve_that_cycles_ends_where_every_step_taken_ends():
     q = h.apply_couplings(np.clip(ik.get_q(), h.lower, h.upper))
     assert q.tobytes() == res.q.tobytes()
     assert ik._press_error(presses, {f: ik._tip(f) for f in h.fingers}) == res.press_error_m
+
+
+def test_an_infeasible_step_is_an_unconverged_solve_not_a_crash(tmp_path, capsys):
+    """A hand file whose rail sits low and far back (0.10 m over the keys, 0.52 m in
+    front): from its natural pose some presses' QP is infeasible even without the
+    clearance half-spaces (placo raises RuntimeError). That is no pose for the atlas,
+    not a traceback: every note is reported out of reach."""
+    from tests.handfiles import default_text, edit
+
+    from planner.cli import main
+    from planner.music.midi import Note, write_notes_midi
+
+    hand = tmp_path / "low.toml"
+    hand.write_text(edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]", "xyz_m = [0.0, -0.52, 0.10]"),
+                    encoding="utf-8")
+    song = tmp_path / "s.mid"
+    write_notes_midi([Note(60, 0.0, 0.4, 80), Note(62, 0.5, 0.9, 80)], str(song))
+    out = tmp_path / "s.csv"
+    assert main(["play", str(song), "--hand", str(hand), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "2 notes, 0 played, 2 infeasible" in err and err.count("out_of_reach") == 2
