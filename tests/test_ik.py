@@ -126,10 +126,9 @@ def test_an_infeasible_step_is_an_unconverged_solve_not_a_crash(tmp_path, capsys
     front): from its natural pose some presses' QP is infeasible even without the
     clearance half-spaces (placo raises RuntimeError). That is no pose for the atlas,
     not a traceback: every note is reported out of reach."""
-    from tests.handfiles import default_text, edit
-
     from planner.cli import main
     from planner.music.midi import Note, write_notes_midi
+    from tests.handfiles import default_text, edit
 
     hand = tmp_path / "low.toml"
     hand.write_text(edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]", "xyz_m = [0.0, -0.52, 0.10]"),
