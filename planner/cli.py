@@ -170,6 +170,9 @@ def _replay_options(parser, what: str) -> None:
     parser.add_argument("--transpose", action="store_true",
                         help="move notes outside A0-C8 by octaves (default: as the plan was made)")
     parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    parser.add_argument("--hand", default=None,
+                        help="the hand name or hand file (.toml) the plan was made with "
+                             "(default: the file's hand, by name)")
 
 
 def _add_check(sub) -> None:

@@ -259,3 +259,34 @@ def test_check_an_endless_file_does_not_hang(tmp_path):
     r = run_sub("check", "/dev/zero", cwd=tmp_path, timeout=60, limit_memory=True)
     assert r.returncode == 2 and r.stdout == ""
     one_line(r.stderr)
+
+
+def test_a_plan_of_a_hand_file_is_checked_and_simulated_with_that_file(tmp_path, capsys):
+    """A hand file of the user's own (here the default hand with its rail 1 cm higher)
+    plans a song; the file names the hand 'default', whose shipped mount is another, so
+    ``check`` refuses it by name (exit 2) and checks it with ``--hand FILE``, as
+    ``simulate`` replays it."""
+    from planner.cli import main
+    from planner.music.midi import Note, write_notes_midi
+    from tests.handfiles import default_text, edit
+
+    hand = tmp_path / "high.toml"
+    hand.write_text(edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]", "xyz_m = [0.0, -0.40, 0.18]"),
+                    encoding="utf-8")
+    song = tmp_path / "s.mid"
+    write_notes_midi([Note(60, 0.0, 0.4, 80), Note(64, 0.5, 0.9, 80)], str(song))
+    out = tmp_path / "s.csv"
+    assert main(["play", str(song), "--hand", str(hand), "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["check", str(out), str(song)]) == 2
+    err = capsys.readouterr().err
+    one_line(err)
+    assert "differs from hand 'default''s mount by 0.01" in err
+    assert main(["check", str(out), str(song), "--hand", str(hand), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["ok"] and rep["play"]["f1"] == pytest.approx(1.0)
+    pytest.importorskip("mujoco")
+    from planner.simulate import simulate_trajectory
+
+    sim = simulate_trajectory(str(out), str(song), hand_override=str(hand), contact="pads")
+    assert sim.play is not None and sim.kinematic_f1 == pytest.approx(1.0)

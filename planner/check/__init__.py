@@ -410,7 +410,8 @@ def check_cli(args) -> int:
     report = check_trajectory(args.trajectory, args.song,
                               allow_incomplete=bool(getattr(args, "allow_incomplete", False)),
                               min_f1=getattr(args, "min_f1", None),
-                              strict=bool(getattr(args, "strict", False)), song_options=options)
+                              strict=bool(getattr(args, "strict", False)), song_options=options,
+                              hand_override=getattr(args, "hand", None))
     played = getattr(args, "played", None)
     if played:
         from planner.music.midi import Note, write_notes_midi

@@ -62,10 +62,13 @@ def _problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
 def simulate_trajectory(traj_path, song_path=None, *, contact: str = "full",
                         min_f1: float | None = None, strict: bool = False,
                         allow_incomplete: bool = False,
-                        song_options: dict[str, Any] | None = None):
-    """Replay ``traj_path`` in MuJoCo and score it (see the package docstring)."""
+                        song_options: dict[str, Any] | None = None, hand_override=None):
+    """Replay ``traj_path`` in MuJoCo and score it (see the package docstring).
+    ``hand_override``: as ``check_trajectory``'s (a hand name, hand file or HandModel in
+    place of the file's hand name; its URDF hash must match the file's)."""
     return run_replay(traj_path, song_path, contact=contact, min_f1=min_f1, strict=strict,
-                      allow_incomplete=allow_incomplete, song_options=song_options).report
+                      allow_incomplete=allow_incomplete, song_options=song_options,
+                      hand_override=hand_override).report
 
 
 @dataclass(frozen=True)
@@ -85,7 +88,7 @@ class Replay:
 def run_replay(traj_path, song_path=None, *, contact: str = "full",
                min_f1: float | None = None, strict: bool = False,
                allow_incomplete: bool = False,
-               song_options: dict[str, Any] | None = None) -> Replay:
+               song_options: dict[str, Any] | None = None, hand_override=None) -> Replay:
     """``simulate_trajectory`` keeping the record (for pictures and comparisons)."""
     from planner.check import check_trajectory
     from planner.simulate.replay import simulate
@@ -102,11 +105,11 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     # the kinematic check validates the file (hand, hash, columns, pose, song) and gives
     # the F1 to compare with
     kin = check_trajectory(tr, song_path, allow_incomplete=allow_incomplete,
-                           song_options=song_options)
+                           song_options=song_options, hand_override=hand_override)
     from planner.check import _load_hand, _song_notes, _T_world_root
 
     meta = tr.metadata
-    hand = _load_hand(meta, name, None)
+    hand = _load_hand(meta, name, hand_override)
     T = _T_world_root(meta, hand, name)
     task = meta["task"]
     ball = None
@@ -160,7 +163,8 @@ def simulate_cli(args) -> int:
                "transpose": True if getattr(args, "transpose", False) else None}
     replay = run_replay(args.trajectory, args.song, contact=args.contact,
                         min_f1=args.min_f1, strict=bool(args.strict),
-                        allow_incomplete=bool(args.allow_incomplete), song_options=options)
+                        allow_incomplete=bool(args.allow_incomplete), song_options=options,
+                        hand_override=args.hand)
     write_pictures(replay, video, html, progress=not args.json)
     report = replay.report
     if args.json:
