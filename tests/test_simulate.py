@@ -487,5 +487,17 @@ def test_a_four_finger_hand_replays(tmp_path):
     assert not any("pinky" in m.name for m in rep.motors)
     catch = tmp_path / "c.csv"
     assert planner.plan_catch(30.0, 1.5, 0.0, "agh", str(catch)).feasible
-    rep = simulate_trajectory(str(catch))
+    from planner.simulate import run_replay
+
+    r = run_replay(str(catch))
+    rep = r.report
     assert rep.catch is not None and rep.catch.peak_contact_force_n > 0
+    # held; its end motors stall on the ball as they grip it (a 20:1 worm's servo gives
+    # its peak 0.4 mm into the ball at the tip), which is the grip, not a motor short of
+    # torque: the fingers touching the ball are recorded and their motors excepted (its
+    # index end motor was reported short for 380 ms before)
+    assert rep.catch.held and rep.ok, rep.problems
+    after = r.record.t_s > float(r.trajectory.metadata["intercept_t"]) + 0.15
+    assert r.record.ball_fingers.shape == (len(r.record.t_s), 4)
+    index = r.hand.fingers.index("index")
+    assert r.record.ball_fingers[after, index].all()  # it holds the ball to the end

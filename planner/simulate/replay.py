@@ -42,6 +42,7 @@ class SimRecord:
     ball_speed_m_s: np.ndarray  # (T,)
     ball_contacts: np.ndarray  # (T,) int: hand geoms touching the ball
     ball_force_n: np.ndarray  # (T,) sum of normal forces on the ball, the peak since the last row
+    ball_fingers: np.ndarray  # (T, fingers) bool: the finger touches the ball (any of its geoms)
     substeps: int
     wall_s: float
     unstable_at_s: float | None = None  # MuJoCo reset a diverging state here (first time)
@@ -56,10 +57,13 @@ def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray
     return base, slope
 
 
-def _contacts(scene: Scene, data, mujoco, out_finger: np.ndarray, ball_geom: int):
-    """Fill ``out_finger`` (88,) with the finger touching each key; return the ball's
-    hand contacts and their summed normal force (N)."""
+def _contacts(scene: Scene, data, mujoco, out_finger: np.ndarray, ball_geom: int,
+              out_ball: np.ndarray):
+    """Fill ``out_finger`` (88,) with the finger touching each key and ``out_ball``
+    (fingers,) with the fingers touching the ball; return the ball's hand contacts and
+    their summed normal force (N)."""
     out_finger.fill(-1)
+    out_ball[:] = False
     n = data.ncon
     if n == 0:
         return 0, 0.0
@@ -73,6 +77,9 @@ def _contacts(scene: Scene, data, mujoco, out_finger: np.ndarray, ball_geom: int
     out_finger[key[sel]] = fin[sel]
     if ball_geom < 0:
         return 0, 0.0
+    on = (g1 == ball_geom) | (g2 == ball_geom)
+    fb = np.where(g1 == ball_geom, f2, f1)[on]
+    out_ball[fb[fb >= 0]] = True
     return _ball_contacts(scene, data, mujoco, geoms)
 
 
@@ -131,6 +138,7 @@ def _arrays(T: int, n: int, nm: int, n_tips: int) -> dict[str, np.ndarray]:
         ("limit", (T, nm)), ("tips", (T, n_tips, 3)), ("palm", (T, 3)), ("ball", (T, 3)),
         ("ball_v", (T,)), ("ball_n", (T,)), ("ball_f", (T,)))}
     rec["key_finger"] = np.full((T, N_KEYS), -1, dtype=np.int8)
+    rec["ball_fingers"] = np.zeros((T, n_tips), dtype=bool)
     return rec
 
 
@@ -151,7 +159,7 @@ def _sample(rec: dict, k: int, scene: Scene, data, mujoco, ctrl: np.ndarray,
     rec["tips"][k] = data.site_xpos[scene.tip_sites]
     rec["palm"][k] = data.site_xpos[scene.palm_site]
     finger_now = np.full(N_KEYS, -1, dtype=np.int64)
-    nb, fb = _contacts(scene, data, mujoco, finger_now, scene.ball_geom)
+    nb, fb = _contacts(scene, data, mujoco, finger_now, scene.ball_geom, rec["ball_fingers"][k])
     rec["key_finger"][k] = finger_now
     if scene.ball_body >= 0:
         rec["ball"][k] = data.xpos[scene.ball_body]
@@ -223,5 +231,6 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
                      force_limit=rec["limit"], tips_m=rec["tips"], palm_m=rec["palm"],
                      ball_m=rec["ball"], ball_speed_m_s=rec["ball_v"],
                      ball_contacts=rec["ball_n"].astype(int), ball_force_n=rec["ball_f"],
+                     ball_fingers=rec["ball_fingers"],
                      substeps=n_sub, wall_s=time.perf_counter() - wall0,
                      unstable_at_s=unstable)

@@ -13,7 +13,9 @@ tracking error per joint, and for a catch whether the ball stays in the hand.
   is saturated while the demand exceeds the peak; a saturation that lasts longer than
   ``SATURATION_MAX_S`` is a problem -- except for a finger's motors while that finger
   touches a key (a finger pushing a key into its bed stalls its motors, as a pianist's
-  finger presses into the bed; the key then is down, which is what is scored).
+  finger presses into the bed; the key then is down, which is what is scored) or the
+  ball (a position servo closing on a rigid ball stalls at its torque: the grip's force
+  is then the motor's peak, and whether it holds is what is scored).
 * Catch: the ball is held when, from ``intercept_t + GRASP_WINDOW_S`` to the end, it
   stays within ``radius + GRASP_TOL_M`` of the palm centre (criteria) touching the hand.
 """
@@ -144,7 +146,7 @@ def motor_efforts(rec: SimRecord, hand: HandModel) -> tuple[MotorEffort, ...]:
             finger_of[int(j)] = f
     touching = np.zeros((T, len(hand.fingers)), dtype=bool)
     for f in range(len(hand.fingers)):
-        touching[:, f] = (rec.key_finger == f).any(axis=1)
+        touching[:, f] = (rec.key_finger == f).any(axis=1) | rec.ball_fingers[:, f]
     dt = float(np.median(np.diff(rec.t_s))) if T > 1 else 0.01
     out = []
     for m, name in enumerate(hand.motor_names):
