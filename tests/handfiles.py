@@ -48,3 +48,19 @@ def write_hand(tmp_path: Path, text: str, name: str = "hand.toml") -> Path:
 
 def load_text(tmp_path: Path, text: str) -> HandModel:
     return HandModel(load_hand_spec(str(write_hand(tmp_path, text))))
+
+
+def remounted_play(tmp_path: Path, xyz_m: str, pitches: tuple[int, int]):
+    """A hand file: the default hand with its play mount at ``xyz_m`` (TOML text, e.g.
+    "[0.0, -0.40, 0.18]"); a two-note song of ``pitches``; ``play`` of it with that hand
+    file. Returns (hand file, song, trajectory, play's exit code)."""
+    from planner.cli import main
+    from planner.music.midi import Note, write_notes_midi
+
+    hand = tmp_path / "mounted.toml"
+    hand.write_text(edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]", f"xyz_m = {xyz_m}"),
+                    encoding="utf-8")
+    song = tmp_path / "s.mid"
+    write_notes_midi([Note(pitches[0], 0.0, 0.4, 80), Note(pitches[1], 0.5, 0.9, 80)], str(song))
+    out = tmp_path / "s.csv"
+    return hand, song, out, main(["play", str(song), "--hand", str(hand), "-o", str(out)])

@@ -267,16 +267,10 @@ def test_a_plan_of_a_hand_file_is_checked_and_simulated_with_that_file(tmp_path,
     ``check`` refuses it by name (exit 2) and checks it with ``--hand FILE``, as
     ``simulate`` replays it."""
     from planner.cli import main
-    from planner.music.midi import Note, write_notes_midi
-    from tests.handfiles import default_text, edit
+    from tests.handfiles import remounted_play
 
-    hand = tmp_path / "high.toml"
-    hand.write_text(edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]", "xyz_m = [0.0, -0.40, 0.18]"),
-                    encoding="utf-8")
-    song = tmp_path / "s.mid"
-    write_notes_midi([Note(60, 0.0, 0.4, 80), Note(64, 0.5, 0.9, 80)], str(song))
-    out = tmp_path / "s.csv"
-    assert main(["play", str(song), "--hand", str(hand), "-o", str(out)]) == 0
+    hand, song, out, rc = remounted_play(tmp_path, "[0.0, -0.40, 0.18]", (60, 64))
+    assert rc == 0
     capsys.readouterr()
     assert main(["check", str(out), str(song)]) == 2
     err = capsys.readouterr().err

@@ -126,16 +126,8 @@ def test_an_infeasible_step_is_an_unconverged_solve_not_a_crash(tmp_path, capsys
     front): from its natural pose some presses' QP is infeasible even without the
     clearance half-spaces (placo raises RuntimeError). That is no pose for the atlas,
     not a traceback: every note is reported out of reach."""
-    from planner.cli import main
-    from planner.music.midi import Note, write_notes_midi
-    from tests.handfiles import default_text, edit
+    from tests.handfiles import remounted_play
 
-    hand = tmp_path / "low.toml"
-    hand.write_text(edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]", "xyz_m = [0.0, -0.52, 0.10]"),
-                    encoding="utf-8")
-    song = tmp_path / "s.mid"
-    write_notes_midi([Note(60, 0.0, 0.4, 80), Note(62, 0.5, 0.9, 80)], str(song))
-    out = tmp_path / "s.csv"
-    assert main(["play", str(song), "--hand", str(hand), "-o", str(out)]) == 0
+    assert remounted_play(tmp_path, "[0.0, -0.52, 0.10]", (60, 62))[3] == 0
     err = capsys.readouterr().err
     assert "2 notes, 0 played, 2 infeasible" in err and err.count("out_of_reach") == 2
