@@ -253,6 +253,7 @@ class HandIK:
                 y = min(max(float(tips[p.finger][1]), p.y_range_m[0]), p.y_range_m[1])
                 self._tasks[p.finger].target_world = np.array([p.point_m[0], y, p.point_m[2]])
             self._set_half_spaces(hover)
+            stuck = False
             try:
                 self.solver.solve(True)
             except RuntimeError:
@@ -262,15 +263,13 @@ class HandIK:
                     self.solver.solve(True)
                 except RuntimeError:
                     # infeasible without them too (the joint limits from here): no step
-                    # is possible, the configuration stays where it is, unconverged
-                    self.robot.update_kinematics()
-                    tips = {p.finger: self._tip(p.finger) for p in presses}
-                    return self._press_error(presses, tips), self._clearance(hover), it
+                    # is possible, the configuration stays where it is
+                    stuck = True
             self.robot.update_kinematics()
             tips = {p.finger: self._tip(p.finger) for p in presses}
             err = self._press_error(presses, tips)
             clearance = self._clearance(hover)
-            if err <= tol_m and clearance >= MIN_CLEARANCE_M - 1e-9:
+            if stuck or (err <= tol_m and clearance >= MIN_CLEARANCE_M - 1e-9):
                 return err, clearance, it
             q = self.robot.state.q
             key = q.tobytes()

@@ -57,9 +57,8 @@ def remounted_play(tmp_path: Path, xyz_m: str, pitches: tuple[int, int]):
     from planner.cli import main
     from planner.music.midi import Note, write_notes_midi
 
-    hand = tmp_path / "mounted.toml"
-    hand.write_text(edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]", f"xyz_m = {xyz_m}"),
-                    encoding="utf-8")
+    hand = write_hand(tmp_path, edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]",
+                                     f"xyz_m = {xyz_m}"), "mounted.toml")
     song = tmp_path / "s.mid"
     write_notes_midi([Note(pitches[0], 0.0, 0.4, 80), Note(pitches[1], 0.5, 0.9, 80)], str(song))
     out = tmp_path / "s.csv"
