@@ -1,4 +1,5 @@
-"""The ``hand-trajectory`` version 1 file (interface spec, section 4).
+"""The ``hand-trajectory`` file, version 2 written, 1 and 2 read (interface spec,
+section 4; version 2 adds ``song_start_s``: the song's time 0 in the file's time).
 
 ``TrajectoryWriter`` streams rows into the named path itself as they are
 planned, flushed per chunk, so a reader can follow the file while it grows
@@ -24,7 +25,8 @@ from planner.errors import InputError, PlannerError
 from planner.output import open_stream
 
 FORMAT = "hand-trajectory"
-VERSION = 1
+VERSION = 2  # written; read: READ_VERSIONS
+READ_VERSIONS = (1, 2)  # version 2 adds song_start_s and the end marker's claims
 _MAX_META_CHARS = 1 << 20  # a metadata line longer than this is not one (e.g. /dev/zero)
 
 
@@ -101,9 +103,11 @@ class TrajectoryWriter:
     header, ``write_rows`` appends setpoints, ``close`` writes the end marker."""
 
     def __init__(self, path: str | None, metadata: dict[str, Any], joint_names, motor_names,
-                 on_rows: Callable[[np.ndarray], None] | None = None) -> None:
+                 on_rows: Callable[[np.ndarray], None] | None = None,
+                 defer_header: bool = False) -> None:
         """``on_rows`` is given every chunk of rows as the file holds them (a self-check).
-        ``path`` None: the text is kept in memory (``text`` once closed)."""
+        ``path`` None: the text is kept in memory (``text`` once closed). ``defer_header``:
+        metadata and header are written with the first rows (``add_metadata`` first)."""
         self.path = path
         self._on_rows = on_rows
         self.rows = 0
@@ -111,7 +115,22 @@ class TrajectoryWriter:
         self.columns = ["t", *joint_names, *(f"motor.{m}" for m in motor_names)]
         self._out = io.StringIO() if path is None else open_stream(path)
         self.text: str | None = None
-        meta = {"format": FORMAT, "version": VERSION, **metadata}
+        self._meta: dict[str, Any] | None = {"format": FORMAT, "version": VERSION, **metadata}
+        if not defer_header:
+            self._start()
+
+    def add_metadata(self, **extra: Any) -> None:
+        """Metadata known only once planning has begun (``song_start_s``), added before
+        the first row (a writer made with ``defer_header``)."""
+        if self._meta is None:
+            raise PlannerError("the trajectory's metadata is written already")
+        self._meta.update(extra)
+
+    def _start(self) -> None:
+        """Metadata and header, once."""
+        if self._meta is None:
+            return
+        meta, self._meta = self._meta, None
         self._out.write("# " + json.dumps(meta, sort_keys=False, separators=(", ", ": ")) + "\n")
         self._out.write(",".join(self.columns) + "\n")
         self._out.flush()
@@ -126,6 +145,7 @@ class TrajectoryWriter:
         file holds them."""
         if len(rows.t_s) == 0:
             return np.empty((0, len(self.columns)))
+        self._start()
         if not rows.t_s[0] > self._last_t:
             raise PlannerError(f"trajectory time not increasing near t={rows.t_s[0]}")
         self._last_t = float(rows.t_s[-1])
@@ -138,6 +158,7 @@ class TrajectoryWriter:
 
     def close(self, end_info: dict[str, Any] | None = None) -> None:
         """Write the end marker (with ``end_info``'s keys after ``end`` and ``rows``)."""
+        self._start()
         end = {"end": True, "rows": self.rows, **(end_info or {})}
         self._out.write("# " + json.dumps(end, separators=(", ", ": ")) + "\n")
         if self.path is None:
@@ -232,8 +253,9 @@ def _metadata(line: str, path: str) -> dict[str, Any]:
         raise InputError(f"{path}: metadata line is not valid JSON") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise InputError(f"{path}: not a hand-trajectory file (format is not {FORMAT!r})")
-    if meta.get("version") != VERSION:
-        raise InputError(f"{path}: unsupported version {meta.get('version')!r} (supported: {VERSION})")
+    version = meta.get("version")
+    if isinstance(version, bool) or version not in READ_VERSIONS:
+        raise InputError(f"{path}: unsupported version {version!r} (supported: 1, 2)")
     for key in ("task", "hand", "urdf_sha256", "T_world_root", "rate_hz"):
         if key not in meta:
             raise InputError(f"{path}: metadata lacks required key {key!r}")
@@ -243,7 +265,18 @@ def _metadata(line: str, path: str) -> dict[str, Any]:
     if (not isinstance(rate, (int, float)) or isinstance(rate, bool) or not math.isfinite(rate)
             or not rate > 0):
         raise InputError(f"{path}: rate_hz must be a positive number, got {rate!r}")
+    start = meta.get("song_start_s", 0.0)
+    if (not isinstance(start, (int, float)) or isinstance(start, bool) or not math.isfinite(start)
+            or start < 0 or (start and version != 2)):
+        raise InputError(f"{path}: song_start_s must be a number >= 0 (format version 2), "
+                         f"got {start!r}")
     return meta
+
+
+def song_start_s(metadata: dict[str, Any]) -> float:
+    """The file time at which the song's time 0 falls (version 2; 0 when absent): every
+    reader shifts the song by it."""
+    return float(metadata.get("song_start_s", 0.0))
 
 
 def _end_marker(line: str) -> dict[str, Any] | None:

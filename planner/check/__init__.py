@@ -147,7 +147,7 @@ from planner.check.results import (
 )
 from planner.errors import InputError
 from planner.hand.model import HandModel, load_hand
-from planner.trajfile import Trajectory, read_trajectory
+from planner.trajfile import Trajectory, read_trajectory, song_start_s
 
 if TYPE_CHECKING:
     from planner.music.midi import Song
@@ -247,9 +247,10 @@ def _T_world_root(meta: dict[str, Any], hand: HandModel, path: str) -> np.ndarra
 
 
 def _song_notes(song_path: str, meta: dict[str, Any], path: str, options: dict[str, Any]):
-    """The song's notes, read with the options the plan was made with (the file's
-    metadata) unless given; InputError when the file names another number of notes."""
-    from planner.music.midi import Song, load_song
+    """The song's notes in the file's time (shifted by its ``song_start_s``), read with
+    the options the plan was made with (the file's metadata) unless given; InputError
+    when the file names another number of notes."""
+    from planner.music.midi import Song, load_song, shift_notes
 
     opts = {k: (options.get(k) if options.get(k) is not None else meta.get(k))
             for k in ("track", "channel", "transpose")}
@@ -264,7 +265,7 @@ def _song_notes(song_path: str, meta: dict[str, Any], path: str, options: dict[s
         raise InputError(f"{path}: planned for a song of {int(want)} notes, {song_path} has "
                          f"{len(notes)} (another song, or other --track/--channel/--transpose; "
                          f"options used: {given})")
-    return notes
+    return shift_notes(notes, song_start_s(meta))  # (version 2: the song in the file's time)
 
 
 def _left_out(end: dict[str, Any], n_notes: int, path: str) -> set[int] | None:

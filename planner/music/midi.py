@@ -52,6 +52,7 @@ lasting more than 24 hours are refused.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import os
 from bisect import bisect_right
@@ -132,6 +133,22 @@ class Song:
     track: int | None = None  # the options it was read with (a plan's metadata names them)
     channel: int | None = None
     transpose: bool = False
+
+
+SHIFT_DIGITS = 12  # a shifted note's times are rounded to 1 ps (``shift_notes``)
+
+
+def shift_notes(notes, shift_s: float) -> list[Note]:
+    """The notes ``shift_s`` later (a plan's file time: ``song_start_s``), each time
+    rounded to ``SHIFT_DIGITS`` decimals, so that a sum that is a row's time in exact
+    arithmetic is that row's time as the file's decimals give it (5.4 + 0.12 is
+    5.5200000000000005 in floats, after row 5.52): the planner and every reader shift
+    the song by this one function and agree on the frames each note covers."""
+    if shift_s == 0.0:
+        return list(notes)
+    return [dataclasses.replace(n, onset_s=round(n.onset_s + shift_s, SHIFT_DIGITS),
+                                offset_s=round(n.offset_s + shift_s, SHIFT_DIGITS))
+            for n in notes]
 
 
 def pitch_name(pitch: int) -> str:

@@ -255,29 +255,40 @@ class Motion:
             self.q0[self.hand.joint_slice(f)] = e.high
         self.q0 = self.hand.apply_couplings(self.q0)
 
-    def prepare(self, assignments) -> None:
-        """Before the first row: each finger whose first note is at the start rail waits
-        over its key from t = 0 (crossing height; pressing already when the note starts
-        within the first frame, at t = 0 its key is down from the first row)."""
-        seen = set()
+    def prepared(self, assignments) -> list:
+        """The first assignment of each finger, of those at the start rail (in onset
+        order): the fingers that wait over their first key from the start."""
+        seen, out = set(), []
         for a in sorted(assignments, key=lambda a: self.notes[a.note].onset_s):
             if a.finger in seen:
                 continue
             seen.add(a.finger)
-            if abs(a.rail_m - self.rail.q[0]) > 1e-9:
-                continue
+            if abs(a.rail_m - self.rail.q[0]) <= 1e-9:
+                out.append(a)
+        return out
+
+    def prepare(self, assignments) -> None:
+        """Before the first row: each finger whose first note is at the start rail waits
+        at crossing height over its key (``prepared``); the hand comes there from rest
+        (``planner.play.rest``), so no key is down when the motion starts."""
+        for a in self.prepared(assignments):
             st = self.fingers[a.finger]
             e = self.atlas.entry(a.finger, self.notes[a.note].pitch, a.rail_m)
-            up = self.t_up(a.note, a.release_s)
-            pressed = (self.notes[a.note].onset_s < 0.5 * self.dt
-                       and self.moves.lift(e, "high").cross_s <= up)  # (else TOO_SHORT)
             st.entry = e
-            st.track.q = (e.press if pressed else e.high).copy()
+            st.track.q = e.high.copy()
             self.q0[self.hand.joint_slice(a.finger)] = st.track.q
-            if pressed:
-                st.pose, st.note, st.up_s = "press", a.note, up
-                self.outcomes[a.note] = Outcome(a.note, 0.0, up)
         self.q0 = self.hand.apply_couplings(self.q0)
+
+    def start_after(self, t_s: float, notes) -> None:
+        """The hand reaches ``q0`` at ``t_s`` (its way in from rest): no move starts
+        before then; ``notes`` are the song's notes in the file's time, which the
+        motion times from now on."""
+        self.notes = notes
+        for track in [self.rail] + [st.track for st in self.fingers.values()]:
+            track.free_s = max(track.free_s, t_s)
+        for st in self.fingers.values():
+            st.high_s = max(st.high_s, t_s)
+        self.committed_s = max(self.committed_s, t_s)
 
     # ------------------------------------------------------------------ timing targets
     def t_down(self, note: int) -> float:
@@ -291,8 +302,6 @@ class Motion:
     # ------------------------------------------------------------------ placing
     def place(self, a: Assignment) -> Outcome:
         """Schedule note ``a.note`` (after every note of earlier onset)."""
-        if a.note in self.outcomes:  # (pressed from the first row on: ``prepare``)
-            return self.outcomes[a.note]
         n = self.notes[a.note]
         e = self.atlas.entry(a.finger, n.pitch, a.rail_m)
         if abs(self.rail.q[0] - a.rail_m) > 1e-9:

@@ -439,11 +439,19 @@ RAIL_TORQUE_SHARE = 0.7  # the rail accelerates at most so hard that the motors 
 
 def rail_acceleration_cap(hand: HandModel, postures) -> float:
     """The largest rail acceleration (m/s^2) at which, in each of ``postures`` (the hand
-    still otherwise), every motor's torque (inverse dynamics, RNEA: gravity plus the
-    hand's inertia carried by the rail, through the actuator model) stays within
-    ``RAIL_TORQUE_SHARE`` of its capacity (peak torque or tendon force:
+    still otherwise), every motor stays within ``RAIL_TORQUE_SHARE`` of its capacity
+    (``path_acceleration_cap`` along the rail alone)."""
+    unit = np.zeros(hand.n)
+    unit[hand.index["rail"]] = 1.0
+    return path_acceleration_cap(hand, postures, unit)
+
+
+def path_acceleration_cap(hand: HandModel, postures, dq: np.ndarray) -> float:
+    """The largest acceleration ``s''`` of a move along ``dq`` (every joint, q'' = s'' dq)
+    at which, in each of ``postures``, every motor's torque (inverse dynamics, RNEA:
+    gravity plus the hand's inertia so accelerated, through the actuator model) stays
+    within ``RAIL_TORQUE_SHARE`` of its capacity (peak torque or tendon force:
     ``planner.hand.tendon.actuator_capacity``)."""
-    r = hand.index["rail"]
     m = hand.pin_model
     data = m.createData()
     cap = RAIL_TORQUE_SHARE * actuator_capacity(hand).torque_nm
@@ -452,14 +460,14 @@ def rail_acceleration_cap(hand: HandModel, postures) -> float:
     for q in postures:
         qp, v = hand._pin_q(q), np.zeros(m.nv)
         unit = np.zeros(m.nv)
-        unit[vi[r]] = 1.0
+        unit[vi] = dq
         tau_g = pin.rnea(m, data, qp, v, np.zeros(m.nv))[vi]
         tau_1 = pin.rnea(m, data, qp, v, unit)[vi] - tau_g
         g, k = hand.motor_torques(q, tau_g), hand.motor_torques(q, tau_1)
         room = cap - np.abs(g)
         if np.any(room <= 0.0):
             raise PlannerError(f"hand {hand.name!r}: a motor is past {RAIL_TORQUE_SHARE:.0%} "
-                               "of its capacity holding the natural hand still")
+                               "of its capacity holding the hand still")
         with np.errstate(divide="ignore"):
             best = min(best, float(np.min(np.where(np.abs(k) > 1e-12, room / np.abs(k),
                                                    np.inf))))

@@ -1,6 +1,7 @@
-"""The second play planner, end to end: fingering (one dynamic programme over the atlas),
-motion (time-optimal segments, note by note), rows streamed as they are final, the
-planner's own replay (``planner.selfcheck``) as its summary and its end marker's claims.
+"""The play planner, end to end: fingering (one dynamic programme over the atlas),
+motion (time-optimal segments, note by note) between the way in from rest and the way
+back (``planner.play.rest``), rows streamed as they are final, the planner's own replay
+(``planner.selfcheck``) as its summary and its end marker's claims.
 """
 
 from __future__ import annotations
@@ -17,13 +18,15 @@ import numpy as np
 from planner.errors import InputError, PlannerError
 from planner.guard import guard_rows
 from planner.hand.model import HandModel
-from planner.music.midi import Song
+from planner.music.midi import SHIFT_DIGITS, Song, shift_notes
 from planner.output import write_file
 from planner.play.atlas import Atlas
 from planner.play.costs import CostMemo
 from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.moves import Moves
+from planner.play.profile import Move
+from planner.play.rest import WayIn, rest_pose, way_in, whole_hand_move
 from planner.selfcheck import SelfCheck, Verdict
 from planner.trajfile import MIN_ROWS, Trajectory, TrajectoryWriter, parse_trajectory
 
@@ -44,6 +47,7 @@ class PlayPlan:
     planning_s: float
     first_row_s: float
     text: str | None = None
+    song_start_s: float = 0.0  # the song's time 0 in the file's time (the way in from rest)
 
     @property
     def trajectory(self) -> Trajectory:
@@ -93,20 +97,22 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
     notes = list(song.notes)
     selfcheck = SelfCheck(hand, rate_hz)
     writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
-                              hand.joint_names, hand.motor_names, on_rows=selfcheck.add_rows)
+                              hand.joint_names, hand.motor_names, on_rows=selfcheck.add_rows,
+                              defer_header=True)
     try:
         with _cyclic_gc_paused():
             motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
         left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}
         left_out.update({o.note: (o.skip, o.detail)
                          for o in motion.outcomes.values() if o.skip is not None})
-        verdict = selfcheck.verdict(notes, left_out)
+        verdict = selfcheck.verdict(rows.motion.notes, left_out)  # (in the file's time)
         writer.close(verdict.end_info())
     except BaseException as e:
         writer.abort(discard=isinstance(e, InputError))
         raise
     return PlayPlan(writer.rows, writer.rows / rate_hz, fingering, verdict,
-                    time.perf_counter() - t_start, rows.first_row_s - t_start, writer.text)
+                    time.perf_counter() - t_start, rows.first_row_s - t_start, writer.text,
+                    rows.shift_s)
 
 
 @contextlib.contextmanager
@@ -129,11 +135,13 @@ def _cyclic_gc_paused():
 
 def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: TrajectoryWriter,
           on_progress=None):
-    """Fingering chunk by chunk (``FingeringProblem.chunks``), each chunk's notes placed
-    in time order (a cut before the notes that start with it), rows written up to where
-    nothing can change any more."""
+    """Fingering chunk by chunk (``FingeringProblem.chunks``, in the song's time), each
+    chunk's notes placed in time order (a cut before the notes that start with it) in
+    the file's time (the song shifted by the way in from rest: ``planner.play.rest``),
+    rows written up to where nothing can change any more, then the way back to rest.
+    Returns the motion, the rows, the fingering (song time) and the song's shift."""
     problem = FingeringProblem(notes, pl.atlas, pl.moves, rate_hz, pl.memo)
-    motion: Motion | None = None
+    rest_q = rest_pose(pl.atlas)
     rows: _Rows | None = None
     done: dict[int, Assignment] = {}
     skipped: list = []
@@ -146,51 +154,75 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
         steps = [((notes[a.note].onset_s, 1, notes[a.note].pitch), a) for a in ch.assignments]
         steps += [((t, 0, n), (n, t)) for n, t in ch.cuts]
         steps.sort(key=lambda s: s[0])
-        if motion is None and ch.assignments:
+        if rows is None and ch.assignments:
             first = min(ch.assignments, key=lambda a: (notes[a.note].onset_s, notes[a.note].pitch))
-            motion = Motion(notes, pl.atlas, pl.moves, rate_hz, first.rail_m)
-            motion.prepare(ch.assignments)
-            rows = _Rows(hand, writer, motion, rate_hz)
-        elif motion is None and math.isfinite(ch.until_s):  # (nothing playable yet, more
+            rows = _start(Motion(notes, pl.atlas, pl.moves, rate_hz, first.rail_m), pl, rest_q,
+                          ch.assignments, writer, rate_hz)
+        elif rows is None and math.isfinite(ch.until_s):  # (nothing playable yet, more
             # to come: the hand waits at its natural place, the rows go on; parked if no
             # finger reaches any key: then nothing ever will be)
-            motion = Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base))
-            rows = _Rows(hand, writer, motion, rate_hz)
+            rows = _start(Motion(notes, pl.atlas, pl.moves, rate_hz,
+                                 pl.atlas.rail_of(pl.atlas.base)), pl, rest_q, (), writer,
+                          rate_hz)
+        shift = 0.0 if rows is None else rows.shift_s
         for _, item in steps:
             if isinstance(item, Assignment):
-                motion.place(item)
+                rows.motion.place(_shifted(item, shift))
                 done[item.note] = item
-                rows.commit_to(motion.t_down(item.note) - COMMIT_LAG_S)
+                rows.commit_to(rows.motion.t_down(item.note) - COMMIT_LAG_S)
             else:
                 n, t = item
-                motion.cut(n, t)
+                rows.motion.cut(n, t + shift)
                 a = done[n]
                 done[n] = Assignment(a.note, a.finger, a.rail_m, t)
         # (every note before ``until_s`` is placed: the rows can go on to a lag before it)
         if rows is not None and math.isfinite(ch.until_s):
-            rows.commit_to(ch.until_s - COMMIT_LAG_S)
-    if motion is None:  # nothing to play: the hand waits, still
-        motion = Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base),
-                        park=True)
-        rows = _Rows(hand, writer, motion, rate_hz)
-    end = max((n.offset_s for n in notes), default=0.0)
-    # (at least a file's ``MIN_ROWS``: at 1 Hz a short song's end is before the second row)
-    rows.write_to(max(motion.finish(end) + SETTLE_S, (MIN_ROWS - 1) / rate_hz))
+            rows.commit_to(ch.until_s + shift - COMMIT_LAG_S)
+    if rows is None:  # nothing to play: the hand waits, still
+        rows = _start(Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base),
+                             park=True), pl, rest_q, (), writer, rate_hz)
+    end = max((n.offset_s for n in notes), default=0.0) + rows.shift_s
+    rows.finish(rows.motion.finish(end), rest_q)
     fingering = Fingering(tuple(done[n] for n in sorted(done)),
                           tuple(sorted(skipped, key=lambda s: s.note)), loss)
-    return motion, rows, fingering
+    return rows.motion, rows, fingering
+
+
+def _start(motion: Motion, pl: Planner, rest_q: np.ndarray, assignments,
+           writer: TrajectoryWriter, rate_hz: float) -> _Rows:
+    """The motion's start: its first fingers over their keys, the way in from rest, the
+    song's shift (into the file's metadata, before its first row)."""
+    motion.prepare(assignments)
+    way = way_in(pl.moves, motion, rest_q, motion.notes, assignments, rate_hz)
+    motion.start_after(way.arrive_s, shift_notes(motion.notes, way.song_start_s))
+    writer.add_metadata(song_start_s=way.song_start_s)
+    return _Rows(pl.hand, writer, motion, rate_hz, way)
+
+
+def _shifted(a: Assignment, shift_s: float) -> Assignment:
+    """An assignment in the file's time (its cut, if any, ``shift_s`` later)."""
+    if a.release_s is None or shift_s == 0.0:
+        return a
+    return Assignment(a.note, a.finger, a.rail_m, round(a.release_s + shift_s, SHIFT_DIGITS))
 
 
 class _Rows:
-    """Samples the motion at the rows' clock and writes them, guarded."""
+    """Samples the way in, the motion and the way out at the rows' clock and writes
+    them, guarded."""
 
     def __init__(self, hand: HandModel, writer: TrajectoryWriter, motion: Motion,
-                 rate_hz: float) -> None:
+                 rate_hz: float, way: WayIn) -> None:
         self.hand, self.writer, self.motion = hand, writer, motion
         self.dt = 1.0 / rate_hz
+        self.way = way
+        self.out: tuple[float, Move] | None = None  # (start, move): the way back to rest
         self.next_row = 0
         self.last: np.ndarray | None = None
         self.first_row_s = math.nan
+
+    @property
+    def shift_s(self) -> float:
+        return self.way.song_start_s
 
     @property
     def written_to_s(self) -> float:
@@ -204,6 +236,27 @@ class _Rows:
             self.motion.commit(t_s)
             self.write_to(t_s)
 
+    def finish(self, still_s: float, rest_q: np.ndarray) -> None:
+        """The way back to rest from where the motion is still (at ``still_s``), and the
+        rows to its end and ``SETTLE_S`` after (at least a file's ``MIN_ROWS``)."""
+        still_s = max(still_s, self.way.arrive_s)
+        q_end = self.motion.rows(np.array([still_s]))[0]
+        move = whole_hand_move(self.motion.moves, q_end, rest_q)
+        self.out = (still_s, move)
+        self.write_to(max(still_s + move.duration_s + SETTLE_S, (MIN_ROWS - 1) * self.dt))
+
+    def _sample(self, t: np.ndarray) -> np.ndarray:
+        q = self.motion.rows(t)
+        into = t < self.way.arrive_s
+        if into.any():
+            q[into] = self.way.move.at(t[into])
+        if self.out is not None:
+            t_out, move = self.out
+            back = t >= t_out
+            if back.any():
+                q[back] = move.at(t[back] - t_out)
+        return self.hand.apply_couplings(q)
+
     def write_to(self, t_s: float) -> None:
         """Rows up to ``t_s``, in blocks of at most ``ROW_BLOCK`` (memory stays bounded
         through a long silence)."""
@@ -211,7 +264,7 @@ class _Rows:
         while self.next_row < n:
             end = min(n, self.next_row + ROW_BLOCK)
             t = np.arange(self.next_row, end) * self.dt
-            q = self.motion.rows(t)
+            q = self._sample(t)
             guard_rows(self.hand, q, self.last, self.dt)
             self.writer.write_rows(t, q, self.hand.motor_angles(q))
             if math.isnan(self.first_row_s):

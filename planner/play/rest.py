@@ -1,0 +1,86 @@
+"""The hand's rest pose, and a plan's way in from it and out to it.
+
+Every play plan starts at the hand's rest pose and ends there (spec section 4, version
+2): a controller starts the rows from a known, still pose and leaves the hand in it. The
+rest pose is the natural hand with every fingertip at crossing height (``Atlas.park``:
+above every key, so no key is down in the first or the last row) with the rail at its
+rest position (``REST_RAIL_M``, clamped to its travel).
+
+The way in is one time-optimal straight move of every joint from rest to the pose the
+motion starts from (``Motion.q0``: each finger at crossing height over its first key),
+the way out one from where the motion ends (every finger at crossing height) back to
+rest; each starts and ends with every speed zero. When the song's first notes come too
+soon to be reached from rest, the song starts later in the file: ``song_start_s``, a
+whole number of rows, written in the file's metadata, by which every reader shifts the
+song (``planner.trajfile.song_start_s``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.play.atlas import PATH_SAMPLES, Atlas
+from planner.play.motion import Motion
+from planner.play.moves import Moves, path_acceleration_cap
+from planner.play.profile import Move, move_time_s, straight_move
+
+REST_RAIL_M = 0.0  # the rail rests with the hand over middle C (spec: x = 0), the
+# keyboard's middle: the longest way in to any key is half the keyboard's
+
+
+@dataclass(frozen=True)
+class WayIn:
+    """The move from rest to the motion's start (``move`` from t = 0 to ``arrive_s``)
+    and the song's shift into the file (``song_start_s``, a whole number of rows)."""
+
+    move: Move
+    song_start_s: float
+
+    @property
+    def arrive_s(self) -> float:
+        return self.move.duration_s
+
+
+def rest_pose(atlas: Atlas) -> np.ndarray:
+    """The hand's rest pose: the parked natural hand (every tip at crossing height) with
+    the rail at ``REST_RAIL_M`` within its travel."""
+    h = atlas.hand
+    q = atlas.park()
+    if atlas.rail is not None:
+        q[atlas.rail] = min(max(REST_RAIL_M, h.lower[atlas.rail]), h.upper[atlas.rail])
+    return h.apply_couplings(q)
+
+
+def whole_hand_move(moves: Moves, q_a: np.ndarray, q_b: np.ndarray) -> Move:
+    """The time-optimal straight move of every joint from ``q_a`` to ``q_b``: each joint
+    within its speed and acceleration limits (the rail's within what the wrist holds:
+    ``Moves.acceleration``), and the path's acceleration within what every motor holds
+    with the hand's inertia and gravity at ``PATH_SAMPLES`` points of the line
+    (``path_acceleration_cap``: the wrist turns and the rail runs at once here)."""
+    h = moves.hand
+    move = straight_move(q_a, q_b, h.velocity, moves.acceleration)
+    if move.duration_s == 0.0:
+        return move
+    line = [h.apply_couplings(q_a + s * move.dq) for s in np.linspace(0.0, 1.0, PATH_SAMPLES)]
+    a = min(move.a, path_acceleration_cap(h, line, move.dq))
+    return Move(move.q_a, move.dq, move_time_s(move.v, a), move.v, a)
+
+
+def way_in(moves: Moves, motion: Motion, rest_q: np.ndarray, notes, assignments,
+           rate_hz: float) -> WayIn:
+    """From rest to ``motion.q0``, and the song's shift: the first note of each finger
+    prepared over its key (``Motion.prepare``) can go down on time only if its descent
+    from crossing height starts after the hand has arrived; the song is shifted by the
+    whole rows that make this hold for every such note (0 when it holds already)."""
+    move = whole_hand_move(moves, rest_q, motion.q0)
+    dt = 1.0 / rate_hz
+    need_s = 0.0
+    for a in motion.prepared(assignments):
+        e = motion.atlas.entry(a.finger, notes[a.note].pitch, a.rail_m)
+        t_down = motion.t_down(a.note)  # (song time: the motion's notes are not shifted yet)
+        need_s = max(need_s, move.duration_s + moves.descend(e, "high").cross_s - t_down)
+    rows = math.ceil(need_s / dt - 1e-9) if need_s > 0.0 else 0
+    return WayIn(move, rows * dt)
