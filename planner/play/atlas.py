@@ -112,6 +112,19 @@ class Atlas:
         a hand that plays nothing: it waits clear of the keys)."""
         return self._natural_hand(HIGH_Z_M)
 
+    def raised(self, z_min_m: float) -> np.ndarray:
+        """The natural hand at rail 0 with its wrist fitted so that its lowest fingertip
+        is at ``z_min_m`` (within 0.1 mm; the fit of ``_natural_hand`` is least squares,
+        some tips below its height): a hand held clear of every key."""
+        z = z_min_m
+        for _ in range(8):
+            q = self._natural_hand(z)
+            low = float(np.min(self.hand.tip_positions(q)[:, 2]))
+            if abs(low - z_min_m) < 1e-4:
+                break
+            z += z_min_m - low
+        return q
+
     def _natural_hand(self, z_m: float = BASE_HOVER_Z_M) -> np.ndarray:
         """The natural hand at rail 0: every finger ``CURL`` flexed with no abduction, and
         the wrist (flexion, deviation) that puts the tips, in the least-squares sense,

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.play.atlas import PATH_SAMPLES, Atlas
+from planner.play.atlas import HIGH_Z_M, PATH_SAMPLES, Atlas
 from planner.play.motion import Motion
 from planner.play.moves import Moves, path_acceleration_cap
 from planner.play.profile import Move, move_time_s, straight_move
@@ -32,26 +32,69 @@ REST_RAIL_M = 0.0  # the rail rests with the hand over middle C (spec: x = 0), t
 
 
 @dataclass(frozen=True)
-class WayIn:
-    """The move from rest to the motion's start (``move`` from t = 0 to ``arrive_s``)
-    and the song's shift into the file (``song_start_s``, a whole number of rows)."""
+class Legs:
+    """Straight moves one after the other from ``t0_s``: positions at any time (before
+    the first, its start; after the last, its end)."""
 
-    move: Move
+    t0_s: float
+    moves: tuple[Move, ...]
+
+    @property
+    def end_s(self) -> float:
+        return self.t0_s + sum(m.duration_s for m in self.moves)
+
+    def at(self, t_s: np.ndarray) -> np.ndarray:
+        t_s = np.asarray(t_s, dtype=float)
+        out = np.tile(self.moves[0].q_a, (len(t_s), 1))
+        t0 = self.t0_s
+        for m in self.moves:
+            on = t_s >= t0
+            if on.any():
+                out[on] = m.at(t_s[on] - t0)
+            t0 += m.duration_s
+        return out
+
+
+@dataclass(frozen=True)
+class WayIn:
+    """The legs from rest to the motion's start (from t = 0 to ``arrive_s``) and the
+    song's shift into the file (``song_start_s``, a whole number of rows)."""
+
+    legs: Legs
     song_start_s: float
 
     @property
     def arrive_s(self) -> float:
-        return self.move.duration_s
+        return self.legs.end_s
 
 
 def rest_pose(atlas: Atlas) -> np.ndarray:
-    """The hand's rest pose: the parked natural hand (every tip at crossing height) with
-    the rail at ``REST_RAIL_M`` within its travel."""
+    """The hand's rest pose: the natural hand with its lowest fingertip at crossing
+    height (``Atlas.raised``) and the rail at ``REST_RAIL_M`` within its travel."""
     h = atlas.hand
-    q = atlas.park()
+    q = atlas.raised(HIGH_Z_M)
     if atlas.rail is not None:
         q[atlas.rail] = min(max(REST_RAIL_M, h.lower[atlas.rail]), h.upper[atlas.rail])
     return h.apply_couplings(q)
+
+
+def _at_rail(atlas: Atlas, q: np.ndarray, rail_m: float) -> np.ndarray:
+    out = q.copy()
+    if atlas.rail is not None:
+        out[atlas.rail] = rail_m
+    return out
+
+
+def legs_between(moves: Moves, rest_q: np.ndarray, q: np.ndarray, leaving: bool,
+                 t0_s: float = 0.0) -> Legs:
+    """From rest to ``q`` (or from ``q`` to rest, ``leaving``) in two legs: the rail runs
+    only while the hand is in its rest posture (every tip above crossing height), and
+    the wrist and fingers move only while the rail is still."""
+    atlas = moves.atlas
+    mid = _at_rail(atlas, rest_q, atlas.rail_of(q))
+    if leaving:
+        return Legs(t0_s, (whole_hand_move(moves, q, mid), whole_hand_move(moves, mid, rest_q)))
+    return Legs(t0_s, (whole_hand_move(moves, rest_q, mid), whole_hand_move(moves, mid, q)))
 
 
 def whole_hand_move(moves: Moves, q_a: np.ndarray, q_b: np.ndarray) -> Move:
@@ -69,18 +112,18 @@ def whole_hand_move(moves: Moves, q_a: np.ndarray, q_b: np.ndarray) -> Move:
     return Move(move.q_a, move.dq, move_time_s(move.v, a), move.v, a)
 
 
-def way_in(moves: Moves, motion: Motion, rest_q: np.ndarray, notes, assignments,
+def way_in(moves: Moves, motion: Motion, rest_q: np.ndarray, assignments,
            rate_hz: float) -> WayIn:
     """From rest to ``motion.q0``, and the song's shift: the first note of each finger
     prepared over its key (``Motion.prepare``) can go down on time only if its descent
     from crossing height starts after the hand has arrived; the song is shifted by the
     whole rows that make this hold for every such note (0 when it holds already)."""
-    move = whole_hand_move(moves, rest_q, motion.q0)
+    legs = legs_between(moves, rest_q, motion.q0, leaving=False)
     dt = 1.0 / rate_hz
     need_s = 0.0
     for a in motion.prepared(assignments):
-        e = motion.atlas.entry(a.finger, notes[a.note].pitch, a.rail_m)
+        e = motion.atlas.entry(a.finger, motion.notes[a.note].pitch, a.rail_m)
         t_down = motion.t_down(a.note)  # (song time: the motion's notes are not shifted yet)
-        need_s = max(need_s, move.duration_s + moves.descend(e, "high").cross_s - t_down)
+        need_s = max(need_s, legs.end_s + moves.descend(e, "high").cross_s - t_down)
     rows = math.ceil(need_s / dt - 1e-9) if need_s > 0.0 else 0
-    return WayIn(move, rows * dt)
+    return WayIn(legs, rows * dt)

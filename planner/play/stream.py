@@ -25,8 +25,7 @@ from planner.play.costs import CostMemo
 from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.moves import Moves
-from planner.play.profile import Move
-from planner.play.rest import WayIn, rest_pose, way_in, whole_hand_move
+from planner.play.rest import Legs, WayIn, legs_between, rest_pose, way_in
 from planner.selfcheck import SelfCheck, Verdict
 from planner.trajfile import MIN_ROWS, Trajectory, TrajectoryWriter, parse_trajectory
 
@@ -193,7 +192,7 @@ def _start(motion: Motion, pl: Planner, rest_q: np.ndarray, assignments,
     """The motion's start: its first fingers over their keys, the way in from rest, the
     song's shift (into the file's metadata, before its first row)."""
     motion.prepare(assignments)
-    way = way_in(pl.moves, motion, rest_q, motion.notes, assignments, rate_hz)
+    way = way_in(pl.moves, motion, rest_q, assignments, rate_hz)
     motion.start_after(way.arrive_s, shift_notes(motion.notes, way.song_start_s))
     writer.add_metadata(song_start_s=way.song_start_s)
     return _Rows(pl.hand, writer, motion, rate_hz, way)
@@ -215,7 +214,7 @@ class _Rows:
         self.hand, self.writer, self.motion = hand, writer, motion
         self.dt = 1.0 / rate_hz
         self.way = way
-        self.out: tuple[float, Move] | None = None  # (start, move): the way back to rest
+        self.out: Legs | None = None  # the way back to rest
         self.next_row = 0
         self.last: np.ndarray | None = None
         self.first_row_s = math.nan
@@ -241,20 +240,18 @@ class _Rows:
         rows to its end and ``SETTLE_S`` after (at least a file's ``MIN_ROWS``)."""
         still_s = max(still_s, self.way.arrive_s)
         q_end = self.motion.rows(np.array([still_s]))[0]
-        move = whole_hand_move(self.motion.moves, q_end, rest_q)
-        self.out = (still_s, move)
-        self.write_to(max(still_s + move.duration_s + SETTLE_S, (MIN_ROWS - 1) * self.dt))
+        self.out = legs_between(self.motion.moves, rest_q, q_end, leaving=True, t0_s=still_s)
+        self.write_to(max(self.out.end_s + SETTLE_S, (MIN_ROWS - 1) * self.dt))
 
     def _sample(self, t: np.ndarray) -> np.ndarray:
         q = self.motion.rows(t)
         into = t < self.way.arrive_s
         if into.any():
-            q[into] = self.way.move.at(t[into])
+            q[into] = self.way.legs.at(t[into])
         if self.out is not None:
-            t_out, move = self.out
-            back = t >= t_out
+            back = t >= self.out.t0_s
             if back.any():
-                q[back] = move.at(t[back] - t_out)
+                q[back] = self.out.at(t[back])
         return self.hand.apply_couplings(q)
 
     def write_to(self, t_s: float) -> None:
