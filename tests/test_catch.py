@@ -87,7 +87,7 @@ def test_file_metadata(seed_plan, thumb110):
     for k in ("format", "version", "task", "hand", "urdf_sha256", "T_world_root", "rate_hz",
               "ball", "intercept_t"):
         assert k in m
-    assert m["task"] == "catch" and m["format"] == "hand-trajectory" and m["version"] == 1
+    assert m["task"] == "catch" and m["format"] == "hand-trajectory" and m["version"] == 2
     hand = load_hand(thumb110)
     assert m["hand"] == hand.name and m["urdf_sha256"] == hand.urdf_sha256
     assert set(m["ball"]) >= {"p0", "v0", "radius", "mass", "drag"}

@@ -392,7 +392,8 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         task=task, hand=hand.name, urdf_sha256=hand.urdf_sha256, complete=tr.complete,
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), rate_hz=float(meta["rate_hz"]),
         limits=tuple(limits), play=play, catch=catch, min_f1=min_f1, problems=tuple(problems),
-        replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw), tendons=tendons)
+        replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw), tendons=tendons,
+        song_start_s=song_start_s(meta))
 
 
 def _with_claims(play: PlayResult, mismatches: list[ClaimMismatch]) -> PlayResult:

@@ -238,6 +238,7 @@ class CheckReport:
     problems: tuple[str, ...]
     replay: Replay | None = field(default=None, compare=False, repr=False)
     tendons: tuple[TendonLoad, ...] = ()  # the worst tension of every tendon
+    song_start_s: float = 0.0  # the song's time 0 in the file's time (format version 2)
 
     @property
     def ok(self) -> bool:

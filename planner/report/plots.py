@@ -130,10 +130,10 @@ def _song_notes(report: CheckReport) -> list[tuple[float, float, int]]:
     ``expected`` array's episodes."""
     if report.song:
         try:
-            from planner.music.midi import load_song
+            from planner.music.midi import load_song, shift_notes
 
-            notes = [(float(n.onset_s), float(n.offset_s), int(n.pitch))
-                     for n in load_song(report.song).notes]
+            notes = [(float(n.onset_s), float(n.offset_s), int(n.pitch)) for n in
+                     shift_notes(load_song(report.song).notes, report.song_start_s)]
         except (InputError, OSError, ValueError):
             notes = None  # fall back on the replay's expected keys
         else:
