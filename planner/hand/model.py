@@ -67,6 +67,8 @@ class HandModel:
         mov = spec.movable_joints
         self.joint_names: tuple[str, ...] = tuple(j.name for j in mov)
         self.index = {n: i for i, n in enumerate(self.joint_names)}
+        # the rig's axes (rail along the keyboard, reach towards the player): metres
+        self.rig_joints: tuple[str, ...] = tuple(j.name for j in mov if j.kind == "prismatic")
         self.n = len(mov)
         self.lower = np.array([j.lower for j in mov])
         self.upper = np.array([j.upper for j in mov])
@@ -310,7 +312,7 @@ class HandModel:
             "joints": [{"name": n, "lower": float(self.lower[i]), "upper": float(self.upper[i]),
                         "velocity": float(self.velocity[i]),
                         "acceleration": float(self.acceleration[i]),
-                        "unit": "m" if n == "rail" else "rad"}
+                        "unit": "m" if n in self.rig_joints else "rad"}
                        for i, n in enumerate(self.joint_names)],
             "couplings": [coupling(c) for c in self.spec.couplings],
             "actuators": [{"name": a.name, "kind": a.kind, "drives": a.drives,
@@ -321,14 +323,14 @@ class HandModel:
 
     def summary(self) -> str:
         """A readable description: DOF, joints with limits, couplings, actuators."""
-        hand_dof = sum(1 for n in self.joint_names if n != "rail")
+        hand_dof = sum(1 for n in self.joint_names if n not in self.rig_joints)
         lines = [f"hand {self.name}: {self.spec.description}",
                  f"  {hand_dof} hand joints ({hand_dof - len(self.couplings)} independent)"
-                 + (" + rail" if self.spec.rail_enabled else " (rail off)"),
+                 + (f" + rig: {', '.join(self.rig_joints)}" if self.rig_joints else " (rail off)"),
                  f"  urdf_sha256 {self.urdf_sha256}",
                  "  joints (lower..upper, max speed, max acceleration):"]
         for i, n in enumerate(self.joint_names):
-            if n == "rail":
+            if n in self.rig_joints:
                 lines.append(f"    {n:16s} {self.lower[i]:+.3f}..{self.upper[i]:+.3f} m"
                              f"  {self.velocity[i]:.2f} m/s  {self.acceleration[i]:.1f} m/s^2")
             else:

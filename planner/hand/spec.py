@@ -305,25 +305,15 @@ def start_hand(data: dict[str, Any]) -> HandParts:
     fa = _get(data, "forearm", dict)
     fa_len, fa_r = _get(fa, "length_m"), _get(fa, "radius_m")
     links.append(Link("rail_base", 0.0, (0.0, 0.0, 0.0), (0.01, 0.01, 0.01)))
-    if rail_enabled:
-        lo, hi = _get(rail, "lower_m"), _get(rail, "upper_m")
-        if not lo < hi:
-            raise InputError("rail: lower_m must be below upper_m")
-        motor = _get(rail, "motor", dict)
-        r_pulley = _get(motor, "radius_m")
-        v_motor = _get(motor, "speed_rad_s")
-        v = min(_get(rail, "velocity_m_s"), v_motor * r_pulley)
-        links.append(Link("carriage", _get(rail, "mass_kg"), (0.0, 0.0, 0.0), (0.08, 0.06, 0.04)))
-        joints.append(Joint("rail", "prismatic", "rail_base", "carriage", (0.0, 0.0, 0.0),
-                            axis=(1.0, 0.0, 0.0), lower=lo, upper=hi, velocity=v,
-                            acceleration=_get(rail, "acceleration_m_s2"),
-                            effort=_get(motor, "peak_torque_nm") / r_pulley))
-        actuators.append(Actuator("rail", "belt", "rail", (("rail", 1.0 / r_pulley),), v_motor,
-                                  _get(motor, "peak_torque_nm"), 1.0, r_pulley,
-                                  rotor_inertia_kg_m2=rotor_inertia(motor)))
-        base = "carriage"
-    else:
-        base = "rail_base"
+    base = "rail_base"
+    if rail_enabled:  # along the keyboard (x)
+        base = _rig_axis(parts, rail, "rail", base, "carriage", (1.0, 0.0, 0.0))
+    reach = data.get("reach")
+    if reach is not None:  # towards and away from the player (y), on the rail's carriage
+        if not isinstance(reach, dict):
+            raise InputError("reach: expected a table")
+        if _get(reach, "enabled", bool):
+            base = _rig_axis(parts, reach, "reach", base, "reach_carriage", (0.0, 1.0, 0.0))
     links.append(Link("forearm", _get(fa, "mass_kg"), (0.0, fa_len / 2, 0.0), (2 * fa_r, fa_len, 2 * fa_r)))
     joints.append(Joint("forearm_mount", "fixed", base, "forearm", (0.0, 0.0, 0.0)))
 
@@ -354,6 +344,30 @@ def start_hand(data: dict[str, Any]) -> HandParts:
     joints.append(Joint("palm_center_fixed", "fixed", "palm", "palm_center",
                         (0.0, p_len / 2, -p_thk / 2), rpy_rad=(math.pi, 0.0, 0.0)))
     return parts
+
+
+def _rig_axis(parts: HandParts, table: dict[str, Any], name: str, parent: str, link: str,
+              axis: tuple[float, float, float]) -> str:
+    """One prismatic axis of the rig (``rail``, ``reach``): its carriage link, its joint
+    (travel ``lower_m``..``upper_m``, speed the least of ``velocity_m_s`` and what its
+    belt's motor gives, ``acceleration_m_s2``) and its belt motor. Returns the carriage
+    (the next part's parent)."""
+    lo, hi = _get(table, "lower_m"), _get(table, "upper_m")
+    if not lo < hi:
+        raise InputError(f"{name}: lower_m must be below upper_m")
+    motor = _get(table, "motor", dict)
+    r_pulley = _get(motor, "radius_m")
+    v_motor = _get(motor, "speed_rad_s")
+    v = min(_get(table, "velocity_m_s"), v_motor * r_pulley)
+    parts.links.append(Link(link, _get(table, "mass_kg"), (0.0, 0.0, 0.0), (0.08, 0.06, 0.04)))
+    parts.joints.append(Joint(name, "prismatic", parent, link, (0.0, 0.0, 0.0), axis=axis,
+                              lower=lo, upper=hi, velocity=v,
+                              acceleration=_get(table, "acceleration_m_s2"),
+                              effort=_get(motor, "peak_torque_nm") / r_pulley))
+    parts.actuators.append(Actuator(name, "belt", name, ((name, 1.0 / r_pulley),), v_motor,
+                                    _get(motor, "peak_torque_nm"), 1.0, r_pulley,
+                                    rotor_inertia_kg_m2=rotor_inertia(motor)))
+    return link
 
 
 def long_fingers(data: dict[str, Any]) -> list[dict[str, Any]]:
