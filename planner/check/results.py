@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from planner.check.ballroll import ROLL_ROOM_M
-from planner.check.criteria import INTERCEPT_TOL_M, KEY_BED_DEPTH_M
+from planner.check.criteria import BODY_BED_DEPTH_M, INTERCEPT_TOL_M, KEY_BED_DEPTH_M
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,41 @@ class KeyBedHit:
     pitch: int
     name: str
     depth_m: float
+
+
+@dataclass(frozen=True)
+class BodyBedHit:
+    """Rows ``row``.. (from ``time_s`` to ``end_s``) in which a collision body reaches
+    more than 1 mm past the key bed in a key's footprint (spec section 2): the deepest
+    reach (``depth_m`` below the key's top) and its body."""
+
+    time_s: float
+    row: int
+    end_s: float
+    pitch: int
+    name: str
+    link: str
+    body: str
+    depth_m: float
+
+
+@dataclass(frozen=True)
+class BodyResult:
+    """The body rule (spec section 2, ``planner.check.bodykeys``): the keys the hand's
+    collision bodies press. ``keys_pressed`` key-down episodes; ``bed_hits``; with a song
+    the frame scores over the song's frames, the notes hit and the wrong presses, each
+    episode's ``fingers`` the links whose bodies held the key down. ``verdict``: whether
+    it decides the check (``check --bodies``); otherwise reported only."""
+
+    verdict: bool
+    keys_pressed: int
+    bed_hits: tuple[BodyBedHit, ...]
+    f1: float | None = None
+    precision: float | None = None
+    recall: float | None = None
+    notes: int | None = None
+    notes_hit: int | None = None
+    wrong_presses: tuple[KeyEpisode, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -239,6 +274,7 @@ class CheckReport:
     replay: Replay | None = field(default=None, compare=False, repr=False)
     tendons: tuple[TendonLoad, ...] = ()  # the worst tension of every tendon
     song_start_s: float = 0.0  # the song's time 0 in the file's time (format version 2)
+    bodies: BodyResult | None = None  # play: the body rule (spec section 2)
 
     @property
     def ok(self) -> bool:
@@ -292,6 +328,8 @@ class CheckReport:
             _listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
                 f"{h.time_s:8.3f} s  {h.finger:6s} {h.name:4s} ({h.pitch})  "
                 f"{h.depth_m * 1000:.2f} mm below the top (max {KEY_BED_DEPTH_M * 1000:g})"))
+        if self.bodies is not None:
+            _body_lines(L, self.bodies, self.song)
         if self.catch is not None:
             c = self.catch
             err = "n/a" if c.intercept_error_m is None else f"{c.intercept_error_m * 1000:.1f} mm"
@@ -324,6 +362,21 @@ class CheckReport:
                 L.append(f"  {tl.name:20s} {'ok  ' if tl.ok else 'FAIL'} {tl.count:6d}  "
                          f"{tl.worst_n:.4g} / {tl.limit_n:.4g} N at {tl.time_s:.3f} s")
         return "\n".join(L)
+
+
+def _body_lines(L: list[str], b: BodyResult, song: str | None) -> None:
+    """The body rule's section of the summary."""
+    L.append(f"bodies (spec section 2; {'the verdict' if b.verdict else 'reported, not the verdict: --bodies'}): "
+             f"{b.keys_pressed} key presses, {len(b.bed_hits)} key-bed hits")
+    if b.f1 is not None:
+        L.append(f"  song {song}: body frame F1 {b.f1:.4f} (precision {b.precision:.4f}, "
+                 f"recall {b.recall:.4f}); notes hit {b.notes_hit}/{b.notes}; "
+                 f"{len(b.wrong_presses)} wrong presses by bodies")
+    _listing(L, "  wrong presses by bodies", b.wrong_presses, lambda w: (
+        f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  {'+'.join(w.fingers)}"))
+    _listing(L, "  body key-bed hits", b.bed_hits, lambda h: (
+        f"{h.time_s:8.3f}-{h.end_s:.3f} s (row {h.row})  {h.name:4s} ({h.pitch})  {h.body} "
+        f"{h.depth_m * 1000:.2f} mm below the top (max {BODY_BED_DEPTH_M * 1000:g})"))
 
 
 def _listing(L: list[str], title: str, items, fmt, first: int = 10) -> None:

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InputError
+from planner.hand.bodies import collision_bodies
 from planner.hand.model import GRAVITY_WORLD, HandModel
 from planner.simulate import actuators as act
 from planner.simulate.hand_mjcf import (
@@ -155,7 +156,7 @@ def scene_xml(hand: HandModel, T_world_root: np.ndarray, keyboard: bool,
                           quat=_v(matrix_quat(T[:3, :3])))
     armature = {hand.joint_names[int(d)]: float(a) for d, a in zip(servos.drive, servos.armature)}
     joints = hand_bodies(hand.urdf, mount, tuple(hand.tip_frames), armature,
-                         pads_only=contact == "pads")
+                         collision_bodies(hand.spec), pads_only=contact == "pads")
     palm = _find_body(mount, "palm_center")  # (an empty Element is falsy: no `or`)
     ET.SubElement(mount if palm is None else palm, "site", name="palm_center_site",
                   size="0.002")
