@@ -7,7 +7,6 @@ checks are in test_check_catch.py.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import sys
 
@@ -16,7 +15,6 @@ import pytest
 
 from planner import check
 from planner.check import (
-    check_cli,
     check_trajectory,
     frame_f1,
     frame_scores,
@@ -24,6 +22,7 @@ from planner.check import (
     key_episodes,
     keys_down,
 )
+from planner.cli.check import run as check_cli
 from planner.errors import InputError
 from planner.hand.model import load_hand
 from planner.music.keyboard import key
@@ -375,8 +374,10 @@ def test_incomplete_refused_or_allowed(good):
 
 
 def _args(**kw):
-    base = {"trajectory": None, "song": None, "allow_incomplete": False, "min_f1": None,
-            "json": False, "played": None, "report": None, "html": None}
+    """``check``'s arguments as its parser gives them, with ``kw`` instead."""
+    from planner.cli import build_parser
+
+    base = vars(build_parser().parse_args(["check", "x.csv"]))
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -410,13 +411,6 @@ def test_cli_failure_exit_1_and_input_error_exit_2(tmp_path, hand, good, capsys)
 
     assert cli.main(["check", str(tmp_path / "missing.csv")]) == 2
     assert cli.main(["check", traj, song, "--json"]) == 1
-
-
-@pytest.mark.skipif(importlib.util.find_spec("planner.report") is not None,
-                    reason="planner.report exists")
-def test_cli_report_needs_report_module(good):
-    with pytest.raises(InputError, match="--report needs planner.report"):
-        check_cli(_args(trajectory=good[0], report="out"))
 
 
 # ---------------------------------------------------------------- a long file

@@ -104,7 +104,6 @@ Choices (each one a named constant below):
 
 from __future__ import annotations
 
-import json
 import os
 from typing import TYPE_CHECKING, Any
 
@@ -177,7 +176,6 @@ __all__ = [
     "ball_params",
     "ball_positions",
     "catch_audit",
-    "check_cli",
     "check_trajectory",
     "expected_keys",
     "fk_frames",
@@ -398,32 +396,3 @@ def _with_claims(play: PlayResult, mismatches: list[ClaimMismatch]) -> PlayResul
     import dataclasses
 
     return dataclasses.replace(play, claims=True, claim_mismatches=tuple(mismatches))
-
-
-def check_cli(args) -> int:
-    """``cli.py check``: print the summary (or one JSON object with --json);
-    0 when the check passes, 1 otherwise. ``--played OUT.mid`` writes the
-    key-down episodes as notes (velocity 64). ``--report DIR`` / ``--html FILE``
-    are handed to ``planner.report``."""
-    options = {"track": getattr(args, "track", None), "channel": getattr(args, "channel", None),
-               "transpose": True if getattr(args, "transpose", False) else None}
-    report = check_trajectory(args.trajectory, args.song,
-                              allow_incomplete=bool(getattr(args, "allow_incomplete", False)),
-                              min_f1=getattr(args, "min_f1", None),
-                              strict=bool(getattr(args, "strict", False)), song_options=options,
-                              hand_override=getattr(args, "hand", None))
-    played = getattr(args, "played", None)
-    if played:
-        from planner.music.midi import Note, write_notes_midi
-
-        eps = report.play.played if report.play is not None else ()
-        write_notes_midi([Note(e.pitch, e.start_s, e.end_s, 64) for e in eps], played)
-    if getattr(args, "report", None) or getattr(args, "html", None):
-        from planner.report import draw_reports
-
-        draw_reports(report, args.report, args.html, enabled=not getattr(args, "json", False))
-    if getattr(args, "json", False):
-        print(json.dumps(report.to_dict()))
-    else:
-        print(report.summary())
-    return 0 if report.ok else 1

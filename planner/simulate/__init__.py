@@ -19,14 +19,11 @@ also on any missed or late note. MuJoCo is an optional dependency
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from typing import Any
 
-from planner.errors import InputError
-
-__all__ = ["Replay", "run_replay", "simulate_cli", "simulate_trajectory"]
+__all__ = ["Replay", "run_replay", "simulate_trajectory"]
 
 
 def _problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
@@ -148,29 +145,3 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         play=play, catch=catch, motors=motors, tracking=tracking(rec, hand),
         kinematic_f1=None if kin.play is None else kin.play.f1, problems=tuple(problems))
     return Replay(report, rec, hand, tr, None if notes is None else tuple(notes), scene)
-
-
-def simulate_cli(args) -> int:
-    """``cli.py simulate``: the summary (or one JSON object with --json), the pictures
-    (--video, --html); 0 when the physics passes the plan, 1 otherwise."""
-    from planner.simulate.pictures import prepare, write_pictures
-
-    if getattr(args, "min_f1", None) is not None and not 0.0 <= args.min_f1 <= 1.0:
-        raise InputError(f"--min-f1 must be within 0..1, got {args.min_f1}")
-    video, html = getattr(args, "video", None), getattr(args, "html", None)
-    prepare(video, html)
-    options = {"track": getattr(args, "track", None), "channel": getattr(args, "channel", None),
-               "transpose": True if getattr(args, "transpose", False) else None}
-    replay = run_replay(args.trajectory, args.song, contact=args.contact,
-                        min_f1=args.min_f1, strict=bool(args.strict),
-                        allow_incomplete=bool(args.allow_incomplete), song_options=options,
-                        hand_override=args.hand)
-    write_pictures(replay, video, html, progress=not args.json)
-    report = replay.report
-    if args.json:
-        d = report.to_dict()
-        d["video"], d["html"] = video, html
-        print(json.dumps(d))
-    else:
-        print(report.summary())
-    return 0 if report.ok else 1
