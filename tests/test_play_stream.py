@@ -137,8 +137,9 @@ def test_the_cli_layer_summarises_the_replay_and_exits_by_it(tmp_path, capsys):
 def test_a_hand_on_a_fixed_mount_plays_what_it_reaches(tmp_path):
     """A hand file with ``[rail] enabled = false``: the atlas has one place for the hand;
     notes out of its reach are named, the rest played, nothing pressed wrongly."""
+    from planner.hand.builders import load_hand_spec
     from planner.hand.model import HandModel
-    from planner.hand.spec import hands_dir, load_hand_spec
+    from planner.hand.spec import hands_dir
 
     text = (hands_dir() / "default.toml").read_text(encoding="utf-8")
     p = tmp_path / "norail.toml"

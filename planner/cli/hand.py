@@ -18,7 +18,8 @@ def add_parser(sub) -> None:
 
 
 def _list(as_json: bool) -> int:
-    from planner.hand.spec import list_hands, load_hand_spec
+    from planner.hand.builders import load_hand_spec
+    from planner.hand.spec import list_hands
 
     hands = {n: load_hand_spec(n).description for n in list_hands()}
     if as_json:
