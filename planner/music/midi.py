@@ -66,12 +66,12 @@ from planner.music.smf import (
     MAX_EVENTS,
     MAX_FILE_BYTES,
     MAX_NOTES,
-    _check_high_bit_runs,
-    _limit_text,
-    _one_line,
-    _parse_tracks,
-    _split_chunks,
-    _unwrap_riff,
+    check_high_bit_runs,
+    limit_text,
+    one_line,
+    parse_tracks,
+    split_chunks,
+    unwrap_riff,
 )
 
 __all__ = [
@@ -155,7 +155,7 @@ def load_song(
     try:
         size = os.path.getsize(name)
         if size > MAX_FILE_BYTES:
-            raise InputError(f"{name}: file is {size} bytes; the limit is {_limit_text()}")
+            raise InputError(f"{name}: file is {size} bytes; the limit is {limit_text()}")
         with open(name, "rb") as fh:
             data = fh.read(MAX_FILE_BYTES + 1)
     except InputError:
@@ -167,7 +167,7 @@ def load_song(
     except PermissionError:
         raise InputError(f"{name}: permission denied") from None
     except OSError as exc:
-        raise InputError(f"{name}: cannot read file ({_one_line(exc)})") from None
+        raise InputError(f"{name}: cannot read file ({one_line(exc)})") from None
     return parse_song_bytes(
         data, track=track, channel=channel, transpose=transpose, source=name
     )
@@ -186,12 +186,12 @@ def parse_song_bytes(
     if not data:
         raise InputError(f"{source}: empty file")
     if len(data) > MAX_FILE_BYTES:
-        raise InputError(f"{source}: file is {len(data)} bytes; the limit is {_limit_text()}")
-    data = _unwrap_riff(data, source)
-    _fmt, ntracks, tpb, chunks = _split_chunks(data, source)
+        raise InputError(f"{source}: file is {len(data)} bytes; the limit is {limit_text()}")
+    data = unwrap_riff(data, source)
+    _fmt, ntracks, tpb, chunks = split_chunks(data, source)
     _check_selection(track, channel, ntracks, source)
-    _check_high_bit_runs(data, source)
-    tracks = _parse_tracks(chunks, tpb, source)
+    check_high_bit_runs(data, source)
+    tracks = parse_tracks(chunks, tpb, source)
     tempo_map = _TempoMap(tracks, tpb, source)
 
     end_tick = max((sum(m.time for m in t) for t in tracks), default=0)

@@ -88,26 +88,20 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
                song_options: dict[str, Any] | None = None, hand_override=None) -> Replay:
     """``simulate_trajectory`` keeping the record (for pictures and comparisons)."""
     from planner.check import check_trajectory
+    from planner.planfile import read_plan
     from planner.simulate.replay import simulate
     from planner.simulate.report import SimulateReport
-    from planner.simulate.scene import Ball, _mujoco, build_scene
+    from planner.simulate.scene import Ball, build_scene, require_mujoco
     from planner.simulate.scores import motor_efforts, score_catch, score_play, tracking
-    from planner.trajfile import Trajectory, read_trajectory
 
-    _mujoco()  # the clear message before any work
-    if isinstance(traj_path, Trajectory):
-        tr, name = traj_path, "<memory>"
-    else:
-        tr, name = read_trajectory(traj_path, allow_incomplete=allow_incomplete), traj_path
+    require_mujoco()  # the clear message before any work
+    plan = read_plan(traj_path, allow_incomplete=allow_incomplete, hand_override=hand_override)
+    tr, name, hand, T = plan.trajectory, plan.path, plan.hand, plan.T_world_root
     # the kinematic check validates the file (hand, hash, columns, pose, song) and gives
     # the F1 to compare with
     kin = check_trajectory(tr, song_path, allow_incomplete=allow_incomplete,
                            song_options=song_options, hand_override=hand_override)
-    from planner.check import _load_hand, _song_notes, _T_world_root
-
     meta = tr.metadata
-    hand = _load_hand(meta, name, hand_override)
-    T = _T_world_root(meta, hand, name)
     task = meta["task"]
     ball = None
     if task == "catch":
@@ -120,15 +114,13 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         hand = hand.mounted(T)
     scene = build_scene(hand, T, keyboard=task == "play", ball=ball, contact=contact)
     rec = simulate(scene, hand, tr.t_s, tr.q, ball=ball)
-    notes = None if song_path is None else _song_notes(song_path, meta, name, song_options or {})
+    notes = None if song_path is None else plan.song_notes(song_path, song_options)
     play = catch = None
     claims: list = []
     if task == "play":
         play = score_play(rec, notes, float(meta["rate_hz"]))
         if notes is not None:
-            from planner.check import _left_out
-
-            left = _left_out(tr.end, len(notes), name) or set()
+            left = plan.left_out(len(notes)) or set()
             claims = [m for m in play.missed if m.note not in left]
     else:
         catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)

@@ -113,7 +113,8 @@ def matrix_quat(R: np.ndarray) -> tuple[float, float, float, float]:
     return tuple(float(v) for v in q)
 
 
-def _v(xs) -> str:
+def mjcf_vec(xs) -> str:
+    """Numbers as an MJCF attribute writes them (space-separated, 12 significant digits)."""
     return " ".join(f"{float(x):.12g}" for x in xs)
 
 
@@ -151,11 +152,11 @@ def _geoms(body: ET.Element, link: UrdfLink, pad: tuple[float, float, float] | N
     if cap is not None:
         p0, p1, r = cap
         ET.SubElement(body, "geom", name=f"{link.name}_capsule", type="capsule",
-                      fromto=_v((*p0, *p1)), size=f"{r:.12g}", **common)
+                      fromto=mjcf_vec((*p0, *p1)), size=f"{r:.12g}", **common)
         return
     sx, sy, sz = link.box_size_m
-    ET.SubElement(body, "geom", name=f"{link.name}_box", type="box", pos=_v(link.box_center_m),
-                  size=_v((0.5 * sx, 0.5 * sy, 0.5 * sz)), **common)
+    ET.SubElement(body, "geom", name=f"{link.name}_box", type="box", pos=mjcf_vec(link.box_center_m),
+                  size=mjcf_vec((0.5 * sx, 0.5 * sy, 0.5 * sz)), **common)
 
 
 def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
@@ -192,8 +193,8 @@ def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
     def add(body_el: ET.Element, link_name: str) -> None:
         link = links[link_name]
         if link.mass_kg > 0:
-            ET.SubElement(body_el, "inertial", pos=_v(link.com_m), mass=f"{link.mass_kg:.12g}",
-                          diaginertia=_v(link.inertia_diag))
+            ET.SubElement(body_el, "inertial", pos=mjcf_vec(link.com_m), mass=f"{link.mass_kg:.12g}",
+                          diaginertia=mjcf_vec(link.inertia_diag))
         pad = pads.get(link_name)
         # (with pads only, the same shapes without contact: drawn in the pictures)
         _geoms(body_el, link, None if pad is None else (pad[0], pad[1], pad[2] + pad[3]),
@@ -201,18 +202,18 @@ def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
         if pad is not None:
             x, y, z, r, tip = pad
             ET.SubElement(body_el, "geom", name=f"{tip.removesuffix('_tip')}_pad", type="sphere",
-                          pos=_v((x, y, z + r)), size=f"{r:.12g}",
+                          pos=mjcf_vec((x, y, z + r)), size=f"{r:.12g}",
                           contype=str(HAND_CONTYPE), conaffinity=str(HAND_CONAFFINITY),
                           friction=f"{PAD_FRICTION:g} 0.005 0.0001", mass="0",
                           rgba="0.9 0.5 0.4 1")
         for j in children.get(link_name, []):
-            child = ET.SubElement(body_el, "body", name=j.child, pos=_v(j.xyz_m),
-                                  quat=_v(rpy_quat(j.rpy_rad)))
+            child = ET.SubElement(body_el, "body", name=j.child, pos=mjcf_vec(j.xyz_m),
+                                  quat=mjcf_vec(rpy_quat(j.rpy_rad)))
             if j.kind in ("revolute", "continuous", "prismatic"):
                 attrs = {"name": j.name, "type": "slide" if j.kind == "prismatic" else "hinge",
-                         "axis": _v(j.axis), "armature": f"{armature.get(j.name, 0.0):.6g}"}
+                         "axis": mjcf_vec(j.axis), "armature": f"{armature.get(j.name, 0.0):.6g}"}
                 if j.kind != "continuous" and math.isfinite(j.lower):
-                    attrs.update(limited="true", range=_v((j.lower, j.upper)))
+                    attrs.update(limited="true", range=mjcf_vec((j.lower, j.upper)))
                 ET.SubElement(child, "joint", **attrs)
             if j.child in tip_links:
                 ET.SubElement(child, "site", name=j.child, size="0.002")
