@@ -38,7 +38,7 @@ def twinkle(tmp_path_factory, hand):
 def _write(path, tr, q, hand, end=None, t=None):
     w = TrajectoryWriter(str(path), {k: v for k, v in tr.metadata.items()
                                      if k not in ("format", "version")},
-                         hand.joint_names, hand.motor_names)
+                         hand)
     w.write_rows(tr.t_s if t is None else t, q, hand.motor_angles(q))
     w.close(end if end is not None else {k: v for k, v in tr.end.items()
                                           if k not in ("end", "rows")})
@@ -410,7 +410,7 @@ def _ball_in_closed_hand(catch30, tmp_path, wrist_m: float, tilt_to_wrist_deg=No
     n = 61
     q = np.repeat(q_hold[None], n, axis=0)
     path = tmp_path / f"rest_{wrist_m}_{tilt_to_wrist_deg}.csv"
-    w = TrajectoryWriter(str(path), meta, hand.joint_names, hand.motor_names)
+    w = TrajectoryWriter(str(path), meta, hand)
     w.write_rows(np.arange(n) / 100.0, q, hand.motor_angles(q))
     w.close({})
     return simulate_trajectory(str(path)).catch

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InputError, PlannerError
-from planner.guard import guard_rows
 from planner.hand.model import HandModel
 from planner.music.midi import Song
 from planner.output import write_file
@@ -92,8 +91,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
     t_start = time.perf_counter()
     notes = list(song.notes)
     selfcheck = SelfCheck(hand, rate_hz)
-    writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
-                              hand.joint_names, hand.motor_names, on_rows=selfcheck.add_rows)
+    writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name), hand,
+                              on_rows=selfcheck.add_rows)
     try:
         with _cyclic_gc_paused():
             motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
@@ -182,14 +181,13 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
 
 
 class _Rows:
-    """Samples the motion at the rows' clock and writes them, guarded."""
+    """Samples the motion at the rows' clock and writes them (the writer guards them)."""
 
     def __init__(self, hand: HandModel, writer: TrajectoryWriter, motion: Motion,
                  rate_hz: float) -> None:
         self.hand, self.writer, self.motion = hand, writer, motion
         self.dt = 1.0 / rate_hz
         self.next_row = 0
-        self.last: np.ndarray | None = None
         self.first_row_s = math.nan
 
     @property
@@ -212,9 +210,7 @@ class _Rows:
             end = min(n, self.next_row + ROW_BLOCK)
             t = np.arange(self.next_row, end) * self.dt
             q = self.motion.rows(t)
-            guard_rows(self.hand, q, self.last, self.dt)
-            self.writer.write_rows(t, q, self.hand.motor_angles(q))
+            self.writer.write_rows(t, q, self.hand.motor_angles(q))  # (guarded by the writer)
             if math.isnan(self.first_row_s):
                 self.first_row_s = time.perf_counter()
-            self.last = q[-1].copy()
             self.next_row = end
