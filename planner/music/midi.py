@@ -61,6 +61,7 @@ from dataclasses import dataclass
 import mido
 
 from planner.errors import InputError
+from planner.music.keyboard import pitch_name
 from planner.music.smf import (
     MAX_DURATION_S,
     MAX_EVENTS,
@@ -96,7 +97,6 @@ DRUM_CHANNEL = 9  # "channel 10" in 1-based numbering
 
 
 _DEFAULT_TEMPO_US = 500_000
-_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
 
 
 @dataclass(frozen=True)
@@ -132,11 +132,6 @@ class Song:
     track: int | None = None  # the options it was read with (a plan's metadata names them)
     channel: int | None = None
     transpose: bool = False
-
-
-def pitch_name(pitch: int) -> str:
-    """Scientific pitch name, e.g. 60 -> 'C4', 21 -> 'A0'."""
-    return f"{_NAMES[pitch % 12]}{pitch // 12 - 1}"
 
 
 # --------------------------------------------------------------------------

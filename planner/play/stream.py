@@ -1,4 +1,4 @@
-"""The second play planner, end to end: fingering (one dynamic programme over the atlas),
+"""The play planner, end to end: fingering (one dynamic programme over the atlas),
 motion (time-optimal segments, note by note), rows streamed as they are final, the
 planner's own replay (``planner.selfcheck``) as its summary and its end marker's claims.
 """
@@ -68,7 +68,7 @@ def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -
 
 
 class Planner:
-    """The per-hand part of the second planner (atlas, timed moves), built once."""
+    """The per-hand part of the play planner (atlas, timed moves), built once."""
 
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand

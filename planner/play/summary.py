@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 
-from planner.music.midi import pitch_name
+from planner.music.keyboard import pitch_name
 from planner.play.stream import PlayPlan
 
 
