@@ -268,7 +268,7 @@ def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, d
 def write_plan(plan: CatchPlan, out_path: str) -> int:
     """Write the plan's rows (hand-trajectory v1); returns the number of rows."""
     hand = plan.base_hand
-    writer = TrajectoryWriter(out_path, plan.metadata(), hand.joint_names, hand.motor_names)
+    writer = TrajectoryWriter(out_path, plan.metadata(), hand)
     try:
         writer.write_rows(plan.t, plan.q, plan.q_motor)
     except BaseException as e:

@@ -65,7 +65,6 @@ from planner.catch.livesearch import LiveSearch
 from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
 from planner.catch.results import CatchPlan
 from planner.errors import InfeasibleError, InputError
-from planner.guard import guard_rows
 from planner.hand.model import HandModel
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
 
@@ -305,7 +304,7 @@ class CatchSession:
                           "stop_distance_m": gq.STOP_DISTANCE_M,
                           "observations": self.fit.n}}
         h = self.pl.base_hand
-        self.writer = TrajectoryWriter(self.out_path, meta, h.joint_names, h.motor_names)
+        self.writer = TrajectoryWriter(self.out_path, meta, h)
 
     def _throw(self) -> dict[str, Any]:
         v = self.flight.v0
@@ -333,9 +332,7 @@ class CatchSession:
         if n <= first:
             return None
         t = np.arange(first, n) * self.dt
-        Q = self.motion.rows(t, old_seg, t_b)
-        guard_rows(self.pl.hand, Q, ahead[-1].Q[-1] if ahead else self._q[-1][-1] if self._q
-                   else None, self.dt)
+        Q = self.motion.rows(t, old_seg, t_b)  # (the writer guards them as it writes them)
         return _Chunk(t, Q, format_rows(t, Q, self.pl.hand.motor_angles(Q)))
 
     def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:

@@ -1,11 +1,8 @@
-"""``cli.py catch``: the summary a user reads (or one JSON object, ``--json``), the
-reports, and the exit status of a planned catch (``planner.catch.plan``)."""
+"""A planned catch (``planner.catch.plan``) as the summary a user reads
+(``format_summary``) and as one JSON object (``catch_dict``, ``catch --json``)."""
 
 from __future__ import annotations
 
-import importlib.util
-import json
-import sys
 from typing import Any
 
 import numpy as np
@@ -16,9 +13,7 @@ from planner.catch.plan import (
     PLAN_BUDGET_S,
     SIGNAL_S,
     CatchResult,
-    plan_catch,
 )
-from planner.errors import InputError
 from planner.hand.tendon import TENDON_FORCE
 
 
@@ -144,40 +139,3 @@ def catch_dict(res: CatchResult) -> dict[str, Any]:
         "duration_s": float(p.t[-1]), "trajectory": res.out_path,
         "planning_s": float(res.planning_s), "setup_s": float(res.setup_s),
     }
-
-
-def catch_cli(args) -> int:
-    """``cli.py catch``: plan, write, print the summary on stderr; exit status.
-
-    ``--report DIR`` / ``--html FILE``: the written plan is replayed by the
-    independent check and drawn by ``planner.report`` (``write_check_report``,
-    ``write_html``); both need a file output (not ``-``)."""
-    if getattr(args, "live", False):
-        from planner.catch.livecli import live_cli
-
-        return live_cli(args)
-    if args.angle is None:
-        raise InputError("catch needs --angle (or --live, which takes the throw from the "
-                         "observations)")
-    report = getattr(args, "report", None)
-    html = getattr(args, "html", None)
-    if report or html:
-        for mod in ("planner.report", "planner.check"):
-            if importlib.util.find_spec(mod) is None:
-                raise InputError(f"--report/--html need {mod}, which is not installed")
-        if args.output == "-":
-            raise InputError("--report/--html need a trajectory file (-o FILE), not stdout")
-    res = plan_catch(args.angle, args.dist, args.height, args.hand, args.output,
-                     ball=args.ball, drag=args.drag, observations=args.observations,
-                     rate_hz=args.rate, strict=False)
-    if getattr(args, "json", False):
-        sys.stdout.write(json.dumps(catch_dict(res)) + "\n")
-    else:
-        sys.stderr.write(format_summary(res) + "\n")
-    if report or html:
-        from planner.check import check_trajectory
-        from planner.report import draw_reports
-
-        draw_reports(check_trajectory(args.output, hand_override=args.hand), report, html,
-                     enabled=not getattr(args, "json", False))
-    return 1 if (args.strict and not res.feasible) else 0

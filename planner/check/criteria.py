@@ -35,6 +35,7 @@ from planner.music.keyboard import (
     KEY_DIP_M,
     LOWEST_PITCH,
     key_table,
+    pitch_name,
 )
 
 __all__ = [
@@ -52,13 +53,6 @@ INTERCEPT_TOL_M = 0.015  # ball centre vs palm_center + radius * normal at inter
 GRASP_WINDOW_S = 0.150  # the grasp must close within this after intercept_t
 GRASP_TOL_M = 0.010  # a fingertip "closed around" the ball: distance <= radius + this
 GRASP_MIN_TIPS = 3  # ... at least this many, the thumb among them
-_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
-
-
-def pitch_name(pitch: int) -> str:
-    """Scientific pitch name: 60 -> 'C4', 61 -> 'C#4', 21 -> 'A0'."""
-    return f"{_NAMES[pitch % 12]}{pitch // 12 - 1}"
-
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,12 @@ DOWN_DEPTH_M = 0.005  # a key is down when a fingertip is this far below its top
 KEY_BED_DEPTH_M = 0.012  # deeper than this below the top goes through the key bed
 
 _BLACK_IN_OCTAVE = frozenset({1, 3, 6, 8, 10})
+PITCH_CLASS_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
+
+
+def pitch_name(pitch: int) -> str:
+    """Scientific pitch name: 60 -> 'C4', 61 -> 'C#4', 21 -> 'A0'."""
+    return f"{PITCH_CLASS_NAMES[pitch % 12]}{pitch // 12 - 1}"
 
 
 def is_black(pitch: int) -> bool:

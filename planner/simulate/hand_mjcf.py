@@ -113,7 +113,8 @@ def matrix_quat(R: np.ndarray) -> tuple[float, float, float, float]:
     return tuple(float(v) for v in q)
 
 
-def _v(xs) -> str:
+def mjcf_vec(xs) -> str:
+    """Numbers as an MJCF attribute writes them (space-separated, 12 significant digits)."""
     return " ".join(f"{float(x):.12g}" for x in xs)
 
 
@@ -130,16 +131,16 @@ def _geoms(body: ET.Element, shapes: tuple[Body, ...], pads_only: bool) -> None:
                  "rgba": "0.9 0.5 0.4 1" if pad else "0.75 0.6 0.5 1"}
         if b.kind == CAPSULE:
             ET.SubElement(body, "geom", name=b.name, type="capsule",
-                          fromto=_v((*b.p0_m, *b.p1_m)), size=f"{b.radius_m:.12g}", **attrs)
+                          fromto=mjcf_vec((*b.p0_m, *b.p1_m)), size=f"{b.radius_m:.12g}", **attrs)
         elif b.kind == SPHERE:
             r, (x, y, z) = b.radius_m, b.p0_m
             if pad and pads_only:  # (the sphere's bottom stays on the pad point)
                 z, r = z - r + PAD_POINT_RADIUS_M, PAD_POINT_RADIUS_M
-            ET.SubElement(body, "geom", name=b.name, type="sphere", pos=_v((x, y, z)),
+            ET.SubElement(body, "geom", name=b.name, type="sphere", pos=mjcf_vec((x, y, z)),
                           size=f"{r:.12g}", **attrs)
         else:
-            ET.SubElement(body, "geom", name=b.name, type="box", pos=_v(b.p0_m),
-                          size=_v(b.half_m), **attrs)
+            ET.SubElement(body, "geom", name=b.name, type="box", pos=mjcf_vec(b.p0_m),
+                          size=mjcf_vec(b.half_m), **attrs)
 
 
 def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
@@ -165,17 +166,17 @@ def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
     def add(body_el: ET.Element, link_name: str) -> None:
         link = links[link_name]
         if link.mass_kg > 0:
-            ET.SubElement(body_el, "inertial", pos=_v(link.com_m), mass=f"{link.mass_kg:.12g}",
-                          diaginertia=_v(link.inertia_diag))
+            ET.SubElement(body_el, "inertial", pos=mjcf_vec(link.com_m), mass=f"{link.mass_kg:.12g}",
+                          diaginertia=mjcf_vec(link.inertia_diag))
         _geoms(body_el, tuple(by_link.get(link_name, ())), pads_only)
         for j in children.get(link_name, []):
-            child = ET.SubElement(body_el, "body", name=j.child, pos=_v(j.xyz_m),
-                                  quat=_v(rpy_quat(j.rpy_rad)))
+            child = ET.SubElement(body_el, "body", name=j.child, pos=mjcf_vec(j.xyz_m),
+                                  quat=mjcf_vec(rpy_quat(j.rpy_rad)))
             if j.kind in ("revolute", "continuous", "prismatic"):
                 attrs = {"name": j.name, "type": "slide" if j.kind == "prismatic" else "hinge",
-                         "axis": _v(j.axis), "armature": f"{armature.get(j.name, 0.0):.6g}"}
+                         "axis": mjcf_vec(j.axis), "armature": f"{armature.get(j.name, 0.0):.6g}"}
                 if j.kind != "continuous" and math.isfinite(j.lower):
-                    attrs.update(limited="true", range=_v((j.lower, j.upper)))
+                    attrs.update(limited="true", range=mjcf_vec((j.lower, j.upper)))
                 ET.SubElement(child, "joint", **attrs)
             if j.child in tip_links:
                 ET.SubElement(child, "site", name=j.child, size="0.002")

@@ -24,6 +24,18 @@ import math
 from typing import Any
 
 from planner.errors import InputError
+from planner.hand.builders.common import (
+    assemble_spec,
+    start_hand,
+    tip,
+)
+from planner.hand.builders.values import (
+    get_length,
+    get_positive,
+    get_range,
+    get_value,
+    rotor_inertia,
+)
 from planner.hand.spec import (
     FINGERS,
     Actuator,
@@ -31,14 +43,6 @@ from planner.hand.spec import (
     Joint,
     LinearCoupling,
     Link,
-    _get,
-    _length,
-    _positive,
-    _range,
-    _tip,
-    assemble_spec,
-    rotor_inertia,
-    start_hand,
 )
 
 AGH_FINGERS = FINGERS[:4]
@@ -54,7 +58,7 @@ _RPY = {"far": (-math.pi / 2, 0.0, 0.0), "near": (-math.pi / 2, 0.0, math.pi)}
 
 
 def _pair3(d: dict[str, Any], key: str) -> tuple[float, float]:
-    v = _get(d, key, list)
+    v = get_value(d, key, list)
     if len(v) != 2 or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
                               and math.isfinite(x) and x > 0 for x in v):
         raise InputError(f"{key!r} must be 2 positive numbers (base element, end element)")
@@ -63,32 +67,32 @@ def _pair3(d: dict[str, Any], key: str) -> tuple[float, float]:
 
 def _motor(d: dict[str, Any], key: str) -> tuple[float, float, float]:
     """A motor table's peak torque (N m), speed (rad/s) and rotor inertia (kg m^2)."""
-    m = _get(d, key, dict)
-    return _positive(m, "peak_torque_nm"), _positive(m, "speed_rad_s"), rotor_inertia(m)
+    m = get_value(d, key, dict)
+    return get_positive(m, "peak_torque_nm"), get_positive(m, "speed_rad_s"), rotor_inertia(m)
 
 
 def build_agh_hand(data: dict[str, Any]) -> HandSpec:
     """Build the AGH hand from its parsed TOML (see ``hands/agh.toml``)."""
     hp = start_hand(data)
     links, joints, actuators, couplings = hp.links, hp.joints, hp.actuators, hp.couplings
-    palm = _get(data, "palm", dict)
-    p_len, p_thk = _length(palm, "length"), _get(palm, "thickness_m")
-    g = _get(data, "agh", dict)
-    spacing, x_off = _positive(g, "shaft_spacing_m"), _positive(g, "finger_x_m")
-    width = _positive(g, "finger_width_m")
+    palm = get_value(data, "palm", dict)
+    p_len, p_thk = get_length(palm, "length"), get_value(palm, "thickness_m")
+    g = get_value(data, "agh", dict)
+    spacing, x_off = get_positive(g, "shaft_spacing_m"), get_positive(g, "finger_x_m")
+    width = get_positive(g, "finger_width_m")
     (l_ab, l_bc), (c_ab, c_bc), (m_ab, m_bc) = (_pair3(g, k) for k in ("lengths_m", "com_m",
                                                                        "masses_kg"))
     if c_ab > l_ab or c_bc > l_bc:
         raise InputError("com_m must lie on each element (at most its length)")
     if spacing >= p_len:
         raise InputError("shaft_spacing_m must be shorter than the palm")
-    ratio, eff = _positive(g, "gear_ratio"), _positive(g, "gear_efficiency")
+    ratio, eff = get_positive(g, "gear_ratio"), get_positive(g, "gear_efficiency")
     if eff > 1:
         raise InputError("gear_efficiency must be in (0, 1]")
     base_tau, base_w, base_rotor = _motor(g, "base_motor")
     end_tau, end_w, end_rotor = _motor(g, "end_motor")
-    acc = _positive(g, "acceleration_rad_s2")
-    ranges = {"base": _range(g, "base"), "end": _range(g, "end")}
+    acc = get_positive(g, "acceleration_rad_s2")
+    ranges = {"base": get_range(g, "base"), "end": get_range(g, "end")}
 
     shaft_y = {"near": p_len / 2 - spacing / 2, "far": p_len / 2 + spacing / 2}
     for f, shaft, sx in _LAYOUT:
@@ -104,7 +108,7 @@ def build_agh_hand(data: dict[str, Any]) -> HandSpec:
             # a paired base joint carries half its shaft's torque when both fingers load it
             joints.append(Joint(jn, "revolute", parent, child, xyz, rpy, (-1.0, 0.0, 0.0),
                                 lo, hi, w / ratio, acc, tau * ratio * eff))
-        tl, tj = _tip(f, dist, l_bc, 0.9 * width)
+        tl, tj = tip(f, dist, l_bc, 0.9 * width)
         links.append(tl)
         joints.append(tj)
         actuators.append(Actuator(f"{f}_end", "gear", f"{f}_end", ((f"{f}_end", ratio),), end_w,

@@ -33,6 +33,19 @@ import numpy as np
 
 from planner.errors import InputError
 from planner.hand import mk5
+from planner.hand.builders.common import (
+    assemble_spec,
+    long_fingers,
+    seg_link,
+    start_hand,
+    tip,
+)
+from planner.hand.builders.values import (
+    get_length,
+    get_value,
+    get_vec,
+    rotor_inertia,
+)
 from planner.hand.mk5_tables import MK5_TABLES, Mk5FingerParams
 from planner.hand.spec import (
     FINGERS,
@@ -42,15 +55,6 @@ from planner.hand.spec import (
     Joint,
     Link,
     Mk5Coupling,
-    _get,
-    _length,
-    _seg_link,
-    _tip,
-    _vec,
-    assemble_spec,
-    long_fingers,
-    rotor_inertia,
-    start_hand,
 )
 
 Q2_MARGIN_RAD = 1e-4  # widening of the q2 joint range beyond the coupling's min/max
@@ -92,35 +96,35 @@ class _Mk5Drive:
 
 def _drive(data: dict[str, Any]) -> _Mk5Drive:
     """The ``[mk5]``, ``[tendon]`` and ``[finger_speed]`` sections, checked."""
-    m5 = _get(data, "mk5", dict)
-    table = _get(m5, "table", str)
+    m5 = get_value(data, "mk5", dict)
+    table = get_value(m5, "table", str)
     if table not in MK5_TABLES:
         raise InputError(f"mk5 table {table!r} unknown; valid: {', '.join(MK5_TABLES)}")
-    scale = _get(m5, "scale")
-    ratio2 = _get(m5, "second_phalanx_ratio")
+    scale = get_value(m5, "scale")
+    ratio2 = get_value(m5, "second_phalanx_ratio")
     if scale <= 0 or ratio2 <= 0:
         raise InputError("mk5: scale and second_phalanx_ratio must be positive")
-    tendon = _get(data, "tendon", dict)
-    w_motor = _get(tendon, "motor_speed_rad_s")
-    tau_peak = _get(tendon, "motor_peak_torque_nm")
-    eff = _get(tendon, "efficiency")
+    tendon = get_value(data, "tendon", dict)
+    w_motor = get_value(tendon, "motor_speed_rad_s")
+    tau_peak = get_value(tendon, "motor_peak_torque_nm")
+    eff = get_value(tendon, "efficiency")
     if not 0 < eff <= 1:
         raise InputError("tendon efficiency must be in (0, 1]")
     if w_motor <= 0 or tau_peak <= 0:
         raise InputError("tendon motor speed and peak torque must be positive")
-    fs = _get(data, "finger_speed", dict)
+    fs = get_value(data, "finger_speed", dict)
     return _Mk5Drive(table, scale, ratio2, w_motor, tau_peak, eff,
-                     _get(fs, "velocity_cap_rad_s"), _get(fs, "acceleration_rad_s2"),
+                     get_value(fs, "velocity_cap_rad_s"), get_value(fs, "acceleration_rad_s2"),
                      rotor_inertia(tendon, "motor_" + ROTOR_KEY))
 
 
 def build_mk5_hand(data: dict[str, Any]) -> HandSpec:
     """Build the Mk5 hand from its parsed TOML (see ``hands/mk5.toml``)."""
     hp = start_hand(data)
-    p_len = _length(_get(data, "palm", dict), "length")
+    p_len = get_length(get_value(data, "palm", dict), "length")
     d = _drive(data)
     by_name: dict[str, dict[str, Any]] = {f["name"]: f for f in long_fingers(data)}
-    by_name["thumb"] = _get(data, "thumb", dict)
+    by_name["thumb"] = get_value(data, "thumb", dict)
     for n in FINGERS:
         fl, fj, c, a = _finger(n, by_name[n], p_len, d)
         hp.links += fl
@@ -141,16 +145,16 @@ def _finger(n: str, fd: dict[str, Any], p_len: float, d: _Mk5Drive
     law = _finger_law(p)
     l1 = d.scale * p.d_geom
     l2 = d.ratio2 * l1
-    w = _get(fd, "width_m")
-    ms = _get(fd, "masses_kg", dict)
+    w = get_value(fd, "width_m")
+    ms = get_value(fd, "masses_kg", dict)
     if n == "thumb":
-        xyz = _vec(fd, "base_xyz_m")
-        rpy = tuple(math.radians(a) for a in _vec(fd, "base_rpy_deg"))
+        xyz = get_vec(fd, "base_xyz_m")
+        rpy = tuple(math.radians(a) for a in get_vec(fd, "base_rpy_deg"))
     else:
-        xyz = (_get(fd, "mcp_x_m"), p_len, 0.0)
+        xyz = (get_value(fd, "mcp_x_m"), p_len, 0.0)
         rpy = (0.0, 0.0, 0.0)
-    links = [_seg_link(f"{n}_proximal", l1, w, _get(ms, "proximal")),
-             _seg_link(f"{n}_distal", l2, 0.9 * w, _get(ms, "distal"))]
+    links = [seg_link(f"{n}_proximal", l1, w, get_value(ms, "proximal")),
+             seg_link(f"{n}_distal", l2, 0.9 * w, get_value(ms, "distal"))]
     # motor-limited speed of q1 (the motor ratio is largest where the motor
     # turns fastest per q1 radian), then the mechanical cap
     v1 = min(d.v_cap, d.w_motor / law["ratio_max"])
@@ -170,7 +174,7 @@ def _finger(n: str, fd: dict[str, Any], p_len: float, d: _Mk5Drive
               axis=(-1.0, 0.0, 0.0), lower=law["q2_lo"], upper=law["q2_hi"], velocity=v2,
               acceleration=a2, effort=e2),
     ]
-    tl, tj = _tip(n, f"{n}_distal", l2, 0.9 * w)
+    tl, tj = tip(n, f"{n}_distal", l2, 0.9 * w)
     links.append(tl)
     joints.append(tj)
     c = Mk5Coupling(joint=f"{n}_q2", source=f"{n}_q1", table=d.table, finger=n)
