@@ -32,9 +32,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from planner.catch.flight import get_ball
-from planner.catch.plan import get_planner, plan_throw, write_plan
-from planner.catch.results import CatchReason
+from planner.catch.flight.path import get_ball
+from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.results import CatchReason
 from planner.errors import InputError
 
 BUDGET_S = 0.420 - 0.300 - 0.025  # seed flight time - actuation time - signal handling

@@ -54,9 +54,9 @@ def throws_of(n: int, seed: int) -> np.ndarray:
 def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng):
     """One throw: (caught against the true ball, wall latencies (s), CPU times (s) or
     None, outcome, the check's problems)."""
-    from planner.catch.camera import observe_throw
-    from planner.catch.flight import predict_throw
-    from planner.catch.session import CatchSession
+    from planner.catch.flight.camera import observe_throw
+    from planner.catch.flight.path import predict_throw
+    from planner.catch.live.session import CatchSession
     from planner.check import check_trajectory
     from planner.trajfile import parse_trajectory
 
@@ -86,8 +86,8 @@ def run_config(pl, ball, throws, rate, noise, seed) -> dict:
 
 
 def setup():
-    from planner.catch.flight import get_ball
-    from planner.catch.plan import get_planner
+    from planner.catch.flight.path import get_ball
+    from planner.catch.plan.api import get_planner
 
     t0 = time.perf_counter()
     pl = get_planner("default")
@@ -135,7 +135,7 @@ def main(argv: list[str] | None = None) -> int:
         rate, noise = (float(x) for x in a.worker.split(","))
         worker(a.n, a.seed, rate, noise)
         return 0
-    from planner.catch.plan import plan_throw
+    from planner.catch.plan.api import plan_throw
 
     pl, ball, set_up = setup()
     throws = throws_of(a.n, a.seed)

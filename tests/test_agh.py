@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.catch.plan import plan_catch
+from planner.catch.plan.api import plan_catch
 from planner.hand.model import load_hand
 from planner.hand.strength import hand_strength
 

@@ -1,4 +1,4 @@
-"""Catch planner (planner.catch.plan) and grasp force QP (planner.catch.grasp), on the
+"""Catch planner (planner.catch.plan.api) and grasp force QP (planner.catch.grasp), on the
 default hand. (Its thumb CMC flexion range is 110 deg: with the earlier 90 deg the thumb
 tip stayed ~17 mm outside a tennis ball held on the palm, so no grasp could form;
 ``test_thumb_reaches_a_ball_on_the_palm`` checks the geometry independently.)
@@ -16,8 +16,8 @@ from scipy.optimize import minimize
 
 from cli import main as cli_main
 from planner.catch import grasp as gq
-from planner.catch.flight import predict_throw
-from planner.catch.plan import (
+from planner.catch.flight.path import predict_throw
+from planner.catch.plan.api import (
     GRASP_TOL_M,
     GRASP_WINDOW_S,
     INTERCEPT_TOL_M,
@@ -214,7 +214,7 @@ def test_grid(hand_kind, thumb110):
     3 m throws needed 2.07-2.80 N m of the 2 N m wrist flexion motor); the steep short throws
     whose ball would roll off the palm's wrist side (``planner.check.ballroll``: 20 deg from
     1.0 and 1.5 m) are infeasible for that alone."""
-    from planner.catch.results import CatchReason
+    from planner.catch.plan.results import CatchReason
 
     pl = get_planner(thumb110)
     n_ok = 0
@@ -442,7 +442,7 @@ def test_mount_defaults(thumb110):
 
 def test_out_of_reach_is_reported(tmp_path, thumb110):
     """A mount far from the path: the plan is still written, the reason says why."""
-    from planner.catch.plan import CatchMount
+    from planner.catch.plan.api import CatchMount
 
     hand = load_hand(thumb110)
     far = CatchMount((-0.2287, 0.0, -0.8), (126.0, 0.0, 90.0), "test: 0.5 m too low")
@@ -463,7 +463,7 @@ def test_independent_check_confirms_grid(tmp_path):
     (``planner.check.ballroll``, one rule) exactly the throws the planner calls infeasible for
     them (20 deg from 1.0 and 1.5 m: the roll)."""
     from planner import check
-    from planner.catch.results import CatchReason
+    from planner.catch.plan.results import CatchReason
 
     pl = get_planner("default")
     disagree, rejected, infeasible = [], 0, 0

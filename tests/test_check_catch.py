@@ -155,7 +155,7 @@ def test_catch_stopping_force_judged(tmp_path, hand):
 def test_catch_plan_edited_to_stop_over_2_mm_rejected(tmp_path):
     """Issue 15: the planner's feasible plan (30 deg from 1.5 m) passes; the same rows
     with its metadata edited to stop the ball over 2 mm instead of 2 cm do not."""
-    from planner.catch.plan import plan_catch
+    from planner.catch.plan.api import plan_catch
 
     res = plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "c.csv"))
     assert res.feasible

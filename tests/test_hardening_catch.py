@@ -1,6 +1,6 @@
 """Hardening (the harness and its contract: tests/hardening.py), (2) ``catch``
 arguments: angles, distances, NaN, infinities, words, huge and tiny values, any
-plausible throw; skipped while planner.catch.plan cannot be imported."""
+plausible throw; skipped while planner.catch.plan.api cannot be imported."""
 
 from __future__ import annotations
 
@@ -22,11 +22,11 @@ from tests.hardening import SETTINGS, assert_input_refused, one_line, part_files
 
 def _catch_importable() -> str | None:
     try:
-        if importlib.util.find_spec("planner.catch.plan") is None:
-            return "planner.catch.plan does not exist yet"
-        import planner.catch.plan  # noqa: F401
+        if importlib.util.find_spec("planner.catch.plan.api") is None:
+            return "planner.catch.plan.api does not exist yet"
+        import planner.catch.plan.api  # noqa: F401
     except Exception as e:  # noqa: BLE001 -- work in progress elsewhere
-        return f"planner.catch.plan is not importable yet ({type(e).__name__}: {e})"
+        return f"planner.catch.plan.api is not importable yet ({type(e).__name__}: {e})"
     return None
 
 

@@ -12,8 +12,8 @@ import pytest
 
 from cli import main as cli_main
 from planner.balls import BALLS, file_inertia_ratio, get_ball
-from planner.catch.plan import get_planner, plan_throw, write_plan
-from planner.catch.results import CatchReason
+from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.results import CatchReason
 from planner.check import check_trajectory
 from planner.check.ballroll import ROLL_ROOM_M, ROLL_TOL_M, roll_problem
 from planner.trajfile import read_trajectory
@@ -133,7 +133,7 @@ def test_the_rule_judges_only_the_hands_it_is_measured_on(tmp_path):
     """The room is the default hand's (the replay lost the ball beyond it); on mk5 the
     modelled roll of 30 deg / 1.5 m exceeds it and the plan is held in physics, so mk5's
     roll is reported, not judged: the plan is feasible and ``check`` confirms it."""
-    from planner.catch.plan import plan_catch
+    from planner.catch.plan.api import plan_catch
     from planner.check.ballroll import roll_judged
 
     assert roll_judged("default") and not roll_judged("mk5") and not roll_judged(None)

@@ -384,8 +384,8 @@ def _ball_in_closed_hand(catch30, tmp_path, wrist_m: float, tilt_to_wrist_deg=No
     ball at rest on the palm centre moved ``wrist_m`` along the palm towards the wrist (the
     palm's +y); ``tilt_to_wrist_deg``: the wrist flexion instead set so that the palm's
     downhill points that far towards the wrist (as the palm met the ball: 30-73 deg)."""
-    from planner.catch.plan import get_planner
-    from planner.catch.stopping import _best_flex
+    from planner.catch.plan.api import get_planner
+    from planner.catch.plan.stopping import best_flex
 
     tr = read_trajectory(str(catch30))
     hand = load_hand("default")
@@ -394,7 +394,7 @@ def _ball_in_closed_hand(catch30, tmp_path, wrist_m: float, tilt_to_wrist_deg=No
     if tilt_to_wrist_deg is not None:
         pl = get_planner("default")
         i = pl.joints.i_flex
-        f = _best_flex(pl.hand, q_hold, i, np.linspace(hand.lower[i], hand.upper[i], 400),
+        f = best_flex(pl.hand, q_hold, i, np.linspace(hand.lower[i], hand.upper[i], 400),
                        np.sin(np.radians(tilt_to_wrist_deg)))
         q_hold[i] = f
     scene = build_scene(hand, T)

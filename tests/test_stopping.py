@@ -1,4 +1,4 @@
-"""The soft catch (planner.catch.stopping) and the rule it is judged by
+"""The soft catch (planner.catch.plan.stopping) and the rule it is judged by
 (planner.check.ballstop, planner.check.ball.ball_loads). No wall-clock assertions."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from planner.catch.plan import get_planner, plan_catch, plan_throw
-from planner.catch.results import CatchReason
-from planner.catch.stopping import ramp_integral
+from planner.catch.plan.api import get_planner, plan_catch, plan_throw
+from planner.catch.plan.results import CatchReason
+from planner.catch.plan.stopping import ramp_integral
 from planner.check import check_trajectory
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.trajfile import read_trajectory
@@ -100,7 +100,7 @@ def test_check_judges_the_stopping_motion(tmp_path, far):
     planner's headroom; stopped over 2 mm of pad (metadata edited) it fails for torque; the
     same rows with the arm frozen from the intercept on (the palm stopping dead) fail."""
     path = tmp_path / "c.csv"
-    from planner.catch.plan import write_plan
+    from planner.catch.plan.api import write_plan
 
     write_plan(far, str(path))
     good = check_trajectory(str(path))
@@ -190,8 +190,8 @@ def test_the_ball_held_rolls_into_the_fingers_not_off_the_wrist(pl):
     that. The plan's last row (every joint at rest) has the palm facing up, its downhill
     HOLD_TILT_DEG towards the fingers (gravity's share along +y = -sin 5 deg), and the
     plan stays feasible with the turn inside its rows."""
-    from planner.catch.flight import get_ball, predict_throw
-    from planner.catch.stopping import HOLD_TILT_DEG, plan_stop
+    from planner.catch.flight.path import get_ball, predict_throw
+    from planner.catch.plan.stopping import HOLD_TILT_DEG, plan_stop
 
     fl = predict_throw(60.0, 1.5, 0.0, get_ball("tennis"), False)
     C = np.array([1.5, 0.0, 0.0])
@@ -218,7 +218,7 @@ def test_hold_turn_within_the_motors(pl):
     """``hold_turn``: only the wrist flexion turns, within its range; its duration keeps every
     motor within TURN_SHARE of its capacity with the hand's inertia (the peak acceleration
     PEAK_ACC |dq| / T^2 at either end), and the speed and acceleration limits."""
-    from planner.catch.stopping import STOP_SHARE, TURN_SHARE, hold_turn
+    from planner.catch.plan.stopping import STOP_SHARE, TURN_SHARE, hold_turn
     from planner.trajectory import PEAK_ACC
 
     plan = plan_throw(30.0, 1.5, 0.0, planner=pl)
@@ -239,16 +239,16 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     """15 deg from 1.5 m lands on a steep palm: with the turn from the grasp (TurnMode.EARLY)
     the ball would roll beyond ``ROLL_ROOM_M`` towards the wrist (``planner.check.ballroll``:
     that plan is infeasible for the roll), so the roll rule plans the turn under way when the
-    ball lands (``planner.catch.turnahead``): the rows pass the intercept pose at the
+    ball lands (``planner.catch.plan.turnahead``): the rows pass the intercept pose at the
     intercept, the flexion already turning towards level (the turn at 4.1 rad/s), the
     pre-catch pose short of it on the other side; the roll is within the room; ``check``
     confirms the catch. 30 deg from 1.5 m, whose turn from the grasp keeps the roll within
     ``ROLL_ROOM_M``, has the same rows as before the rule. (20 deg from 1.0 m, which this
     test planned before the roll was a feasibility rule, rolls 104 mm with the least rolling
     turn: infeasible, ``tests/test_roll_rule.py``.)"""
-    from planner.catch.plan import write_plan
-    from planner.catch.results import CatchReason
-    from planner.catch.turnahead import TurnMode
+    from planner.catch.plan.api import write_plan
+    from planner.catch.plan.results import CatchReason
+    from planner.catch.plan.turnahead import TurnMode
     from planner.check.ballroll import ROLL_ROOM_M, roll_towards_wrist_m
 
     def early(p):

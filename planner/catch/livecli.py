@@ -17,7 +17,7 @@ from typing import IO
 
 import numpy as np
 
-from planner.catch.session import CatchSession
+from planner.catch.live.session import CatchSession
 from planner.errors import InputError
 
 HEADER = ("t", "x", "y", "z")
@@ -62,7 +62,7 @@ def run_session(session: CatchSession, stream: IO[str]) -> int:
 
 def live_cli(args) -> int:
     """Plan the catch live; the summary (``planner.catch.summary``) once it has ended."""
-    from planner.catch.results import CatchResult
+    from planner.catch.plan.results import CatchResult
     from planner.catch.summary import catch_dict, format_summary
 
     for opt in ("angle", "observations"):

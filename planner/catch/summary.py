@@ -1,5 +1,5 @@
 """``cli.py catch``: the summary a user reads (or one JSON object, ``--json``), the
-reports, and the exit status of a planned catch (``planner.catch.plan``)."""
+reports, and the exit status of a planned catch (``planner.catch.plan.api``)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.catch.plan import (
+from planner.catch.plan.api import (
     ACTUATION_SEED_S,
     GRASP_WINDOW_S,
     PLAN_BUDGET_S,

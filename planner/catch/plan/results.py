@@ -11,13 +11,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from planner.catch import grasp as gq
-from planner.catch.flight import Flight
+from planner.catch.flight.path import Flight
 from planner.check.ballstop import PAD_GIVE_M
 from planner.check.criteria import GRASP_WINDOW_S
 from planner.hand.model import HandModel
 
 if TYPE_CHECKING:
-    from planner.catch.stopping import SoftStop
+    from planner.catch.plan.stopping import SoftStop
 
 
 class CatchReason(Enum):
@@ -79,7 +79,7 @@ class CatchPlan:
     """A planned catch (no file written yet). ``stop``: the stopping load on the rows (the
     check's ``BallLoad``: worst motor, every motor's headroom, the friction cone's margin);
     ``soft``: the arm's stopping motion (None when the palm does not give with the ball: at
-    rest, or turning with the wrist's turn under way, ``planner.catch.turnahead``)."""
+    rest, or turning with the wrist's turn under way, ``planner.catch.plan.turnahead``)."""
 
     feasible: bool
     reasons: tuple[Reason, ...]

@@ -56,14 +56,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from planner.catch import grasp as gq
-from planner.catch.arm import open_from
-from planner.catch.closing import close_start, earliest_close_start
-from planner.catch.flight import Ball, Flight, _finite, get_ball
-from planner.catch.livefit import LiveFit
-from planner.catch.livemotion import LiveMotion, rest_by_s
-from planner.catch.livesearch import LiveSearch
-from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
-from planner.catch.results import CatchPlan
+from planner.catch.flight.livefit import LiveFit
+from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
+from planner.catch.live.motion import LiveMotion, rest_by_s
+from planner.catch.live.search import LiveSearch
+from planner.catch.plan.arm import open_from
+from planner.catch.plan.closing import close_start, earliest_close_start
+from planner.catch.plan.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
+from planner.catch.plan.results import CatchPlan
 from planner.errors import InfeasibleError, InputError
 from planner.guard import guard_rows
 from planner.hand.model import HandModel
@@ -142,7 +142,7 @@ class CatchSession:
                  hand: HandModel | str = "default", ball: Ball | str = "tennis",
                  drag: bool = False, rate_hz: float = 100.0, out_path: str | None = None,
                  planner: CatchPlanner | None = None) -> None:
-        from planner.catch.plan import get_planner, validate_live
+        from planner.catch.plan.api import get_planner, validate_live
 
         d, hgt, rate = validate_live(dist_m, height_m, rate_hz)
         self.ball = get_ball(ball)
@@ -213,7 +213,7 @@ class CatchSession:
         return rows
 
     def _observe(self, t_s: Any, xyz: Any) -> np.ndarray:
-        t = _finite("t", t_s)
+        t = finite_float("t", t_s)
         p = _point(xyz)
         period = t - self.fit.times[-1] if self.fit.n else 0.0
         fit = self.fit.add(t, p)

@@ -1,6 +1,6 @@
 """The catch planner of one hand and mount: what is built once (the reference-mounted
 hand, its IK, joint groups, wrist geometry, rest pose, closing moves per ball size) and
-the plan of one throw (``CatchPlanner.plan``: the steps of ``planner.catch.plan``)."""
+the plan of one throw (``CatchPlanner.plan``: the steps of ``planner.catch.plan.api``)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,9 @@ from typing import Any
 import numpy as np
 
 from planner.catch import grasp as gq
-from planner.catch.arm import (
+from planner.catch.flight.observe import FitResult, predict_intercept
+from planner.catch.flight.path import Flight
+from planner.catch.plan.arm import (
     catch_joints,
     open_from,
     palm_target,
@@ -21,21 +23,19 @@ from planner.catch.arm import (
     rest_pose,
     zero_pose,
 )
-from planner.catch.closing import close_start, make_closing
-from planner.catch.flight import Flight
-from planner.catch.geometry import interp_row, rot1
-from planner.catch.intercept import Intercept, Wrist, closest_time, refine_time
-from planner.catch.mount import CatchMount
-from planner.catch.observe import FitResult, predict_intercept
-from planner.catch.results import CatchPlan, CatchReason, Closing, Reason
-from planner.catch.rowcheck import RowCheck
-from planner.catch.stopping import (
+from planner.catch.plan.closing import close_start, make_closing
+from planner.catch.plan.geometry import interp_row, rot1
+from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
+from planner.catch.plan.mount import CatchMount
+from planner.catch.plan.results import CatchPlan, CatchReason, Closing, Reason
+from planner.catch.plan.rowcheck import RowCheck
+from planner.catch.plan.stopping import (
     ROLL_WEIGHT,
     SoftStop,
     StopDynamics,
     plan_stop,
 )
-from planner.catch.turnahead import (
+from planner.catch.plan.turnahead import (
     HoldTurn,
     Turn,
     TurnMode,
@@ -128,10 +128,10 @@ class CatchPlanner:
         """Plan the catch of ``flight`` with the hand mounted at ``catch_point`` (catch
         frame). ``t_info``: when the flight is known (last observation); the hand moves
         from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written. ``soft``: the
-        soft catch (``planner.catch.stopping``), or the palm waiting at rest when that
+        soft catch (``planner.catch.plan.stopping``), or the palm waiting at rest when that
         alone passes the self-check (a palm that moves can bring the ball to a fingertip
         the closing would miss otherwise); False: the palm at rest. The hold (the roll term
-        of the contact speeds, the wrist's turn: ``planner.catch.stopping``): the turn from
+        of the contact speeds, the wrist's turn: ``planner.catch.plan.stopping``): the turn from
         the grasp on or earlier, so that the ball does not roll off the palm's wrist side before
         the turn has levelled it (``TurnMode.AHEAD``: ``HoldTurn.ahead_rows``), else from the grasp on
         (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
@@ -314,7 +314,7 @@ class CatchPlanner:
         stopping motion (``stop``), open -> closed fingers from ``s_c``, the wrist's ``turn``
         (``Turn``) that holds the ball, until ``HOLD_AFTER_S`` after
         the intercept (and the arm at rest). The turn is a min-jerk move, or (its profiles,
-        ``SoftStop``s of the flexion: ``planner.catch.turnahead``) under way at the intercept:
+        ``SoftStop``s of the flexion: ``planner.catch.plan.turnahead``) under way at the intercept:
         the move-in then ends short of ``q_pre`` by the turn's travel before the ball."""
         h = self.hand
         delta, T_turn, t_turn, prof = turn

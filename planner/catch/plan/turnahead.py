@@ -33,10 +33,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from planner.catch.flight import Flight
+from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix
-from planner.catch.results import Closing
-from planner.catch.stopping import TURN_SHARE, SoftStop, StopDynamics, hold_turn
+from planner.catch.plan.results import Closing
+from planner.catch.plan.stopping import TURN_SHARE, SoftStop, StopDynamics, hold_turn
 from planner.check.ballroll import ROLL_ROOM_M, roll_towards_wrist_m
 from planner.trajectory import LIMIT_MARGIN
 

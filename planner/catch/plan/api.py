@@ -63,7 +63,7 @@ Per throw (``CatchPlanner.plan``):
    -- to the pre-catch pose (min-jerk within speed and acceleration limits). From there
    the arm draws back along the ball's path so that the palm meets it moving (the arm's
    speeds by a QP, the recoil under the ball's push, the palm's tilt) and brings it to
-   rest within every motor's capacity (``planner.catch.stopping``). The closing move
+   rest within every motor's capacity (``planner.catch.plan.stopping``). The closing move
    (seed: 150-300 ms) is placed so that the grasp condition is met when the pad has
    stopped the ball on the palm, then delayed if a fingertip would come within
    ``TOUCH_CLEAR_M`` of the still-arriving ball; it must complete the grasp within
@@ -106,18 +106,19 @@ from typing import Any
 
 import numpy as np
 
-from planner.catch.arm import REST_CURL
-from planner.catch.closing import GRASP_MARGIN_M, TIP_ELEVATION_DEG, TIP_GAP_M, TOUCH_CLEAR_M
-from planner.catch.flight import (
-    MAX_HEIGHT,
+from planner.catch.flight.observe import fit_observations, load_observations_csv
+from planner.catch.flight.path import (
+    MAX_HEIGHT_M,
     Ball,
     check_throw,
     get_ball,
     predict_throw,
 )
-from planner.catch.flight import _finite as flight_finite
-from planner.catch.intercept import MAX_MISALIGN_DEG
-from planner.catch.mount import (
+from planner.catch.flight.path import finite_float as flight_finite
+from planner.catch.plan.arm import REST_CURL
+from planner.catch.plan.closing import GRASP_MARGIN_M, TIP_ELEVATION_DEG, TIP_GAP_M, TOUCH_CLEAR_M
+from planner.catch.plan.intercept import MAX_MISALIGN_DEG
+from planner.catch.plan.mount import (
     DESIGN_DESCENT_DEG,
     DESIGN_DEV_DEG,
     CatchMount,
@@ -125,9 +126,8 @@ from planner.catch.mount import (
     default_mount,
     mount_from_file,
 )
-from planner.catch.observe import fit_observations, load_observations_csv
-from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
-from planner.catch.results import CatchPlan, CatchResult, Closing
+from planner.catch.plan.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
+from planner.catch.plan.results import CatchPlan, CatchResult, Closing
 from planner.check.criteria import (
     GRASP_MIN_TIPS,
     GRASP_TOL_M,
@@ -169,7 +169,7 @@ def get_planner(hand: HandModel | str = "default", mount: CatchMount | None = No
     return pl
 
 
-def _finite(name: str, x: Any) -> float:
+def finite_float(name: str, x: Any) -> float:
     """A finite float, or InputError naming ``name`` (shared with the flight module)."""
     return flight_finite(name, x)
 
@@ -188,7 +188,7 @@ def validate_throw(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any
     a, d, hgt = check_throw(angle_deg, dist_m, height_m, prefix="--")
     if not MIN_DIST_M <= d <= MAX_DIST_M:
         raise InputError(f"--dist must be between {MIN_DIST_M:g} and {MAX_DIST_M:g} m, got {d:g}")
-    rate = _finite("--rate", rate_hz)
+    rate = finite_float("--rate", rate_hz)
     if not 1.0 <= rate <= 10000.0:
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate:g}")
     return a, d, hgt, rate
@@ -197,14 +197,14 @@ def validate_throw(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any
 def validate_live(dist_m: Any, height_m: Any, rate_hz: Any) -> tuple[float, float, float]:
     """``validate_throw``'s rules for a live catch, whose throw comes from the observations:
     where the hand is (dist, height) and the rate."""
-    d = _finite("--dist", dist_m)
+    d = finite_float("--dist", dist_m)
     if not MIN_DIST_M <= d <= MAX_DIST_M:
         raise InputError(f"--dist must be between {MIN_DIST_M:g} and {MAX_DIST_M:g} m, got {d:g}")
-    hgt = _finite("--height", height_m)
-    if not abs(hgt) < MAX_HEIGHT:
-        raise InputError(f"--height must be between -{MAX_HEIGHT:g} and {MAX_HEIGHT:g} m "
+    hgt = finite_float("--height", height_m)
+    if not abs(hgt) < MAX_HEIGHT_M:
+        raise InputError(f"--height must be between -{MAX_HEIGHT_M:g} and {MAX_HEIGHT_M:g} m "
                          f"(exclusive), got {hgt:g}")
-    rate = _finite("--rate", rate_hz)
+    rate = finite_float("--rate", rate_hz)
     if not 1.0 <= rate <= 10000.0:
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate:g}")
     return d, hgt, rate

@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from planner.catch.arm import palm_target
-from planner.catch.flight import Flight
-from planner.catch.geometry import interp_row
+from planner.catch.flight.path import Flight
+from planner.catch.plan.arm import palm_target
+from planner.catch.plan.geometry import interp_row
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
 from planner.hand.model import HandModel
 from planner.hand.spec import PALM_FRAME
