@@ -161,7 +161,7 @@ def test_catch_plan_edited_to_stop_over_2_mm_rejected(tmp_path):
     assert res.feasible
     good = check_trajectory(str(tmp_path / "c.csv"))
     assert good.ok, good.problems
-    assert good.catch.loads[0].headroom == pytest.approx(res.plan.stop.headroom, abs=0.03)
+    assert good.catch.loads[0].headroom == pytest.approx(res.plan.forces.stop.headroom, abs=0.03)
     text = (tmp_path / "c.csv").read_text()
     assert text.count('"stop_distance_m": 0.02') == 1
     (tmp_path / "e.csv").write_text(text.replace('"stop_distance_m": 0.02',

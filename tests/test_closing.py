@@ -1,4 +1,4 @@
-"""planner.catch.closing.close_start: the earliest clear start among its candidates,
+"""planner.catch.plan.closing.close_start: the earliest clear start among its candidates,
 judged a few at a time, is the one judging them all at once finds."""
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ PLAY = {"command": str, "song": str, "notes": int, "played": int, "left_out": li
         "setup_s": NUM, "realtime_factor": OPT_NUM, "hand_positions": int}
 LEFT_OUT = {"note": int, "onset_s": NUM, "pitch": int, "name": str, "reason": str,
             "detail": str}
-CATCH = {"command": str, "feasible": bool, "reasons": list, "throw": dict,
+CATCH = {"command": str, "feasible": bool, "reasons": list, "reason_kinds": list, "throw": dict,
          "launch_speed_m_s": NUM, "flight_time_s": OPT_NUM, "intercept_t_s": NUM,
          "intercept_point_m": list, "arrival_speed_m_s": NUM, "palm_misalignment_deg": NUM,
          "intercept_error_m": NUM, "move_start_s": NUM, "close_start_s": NUM, "close_s": NUM,

@@ -63,14 +63,20 @@ from planner.catch.live.search import LiveSearch
 from planner.catch.plan.arm import open_from
 from planner.catch.plan.closing import close_start, earliest_close_start
 from planner.catch.plan.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
-from planner.catch.plan.results import CatchPlan
+from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
+from planner.catch.plan.results import (
+    GIVEN_UP,
+    HELD,
+    CatchPlan,
+    Forces,
+    ThrowInfo,
+    catch_metadata,
+    make_catch_plan,
+)
 from planner.errors import InfeasibleError, InputError
 from planner.guard import guard_rows
 from planner.hand.model import HandModel
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
-
-HELD = "held"
-GIVEN_UP = "given_up"
 
 
 class _CloseAsk(NamedTuple):
@@ -296,23 +302,19 @@ class CatchSession:
         ball = self.flight.to_metadata()
         self.first = {"ball": dict(ball), "intercept_t": float(self.t_i),
                       "observations": self.fit.n}
-        meta = {"task": "catch", "hand": self.pl.base_hand.name,
-                "urdf_sha256": self.pl.base_hand.urdf_sha256, "T_world_root": self._T_root,
-                "rate_hz": self.rate_hz, "ball": ball,
-                "intercept_t": float(self.t_i),
-                "catch": {"live": True, "throw": self._throw(),
-                          "catch_point": [float(x) for x in self.C],
-                          "stop_distance_m": gq.STOP_DISTANCE_M,
-                          "observations": self.fit.n}}
+        meta = catch_metadata(self.pl.base_hand, self._T_root, self.rate_hz, self.flight,
+                              self.t_i, {"live": True, "throw": self._throw().to_dict(),
+                                         "catch_point": [float(x) for x in self.C],
+                                         "stop_distance_m": gq.STOP_DISTANCE_M,
+                                         "observations": self.fit.n})
         h = self.pl.base_hand
         self.writer = TrajectoryWriter(self.out_path, meta, h.joint_names, h.motor_names)
 
-    def _throw(self) -> dict[str, Any]:
+    def _throw(self) -> ThrowInfo:
         v = self.flight.v0
-        return {"angle_deg": math.degrees(math.atan2(float(v[2]), math.hypot(v[0], v[1]))),
-                "dist_m": float(self.C[0]), "height_m": float(self.C[2]),
-                "ball": self.ball.name, "drag": self.drag, "observations": self.fit.n,
-                "live": True}
+        return ThrowInfo(math.degrees(math.atan2(float(v[2]), math.hypot(v[0], v[1]))),
+                         float(self.C[0]), float(self.C[2]), self.ball.name, self.drag,
+                         self.fit.n, live=True)
 
     @property
     def closings_computed(self) -> int:
@@ -375,11 +377,12 @@ class CatchSession:
         if self.plan.feasible:
             self.outcome = HELD
             g = self.plan
-            self.reason = (f"grasp at t = {g.grasp_t:.3f} s ({', '.join(g.grasp_fingers)}) of "
+            self.reason = (f"grasp at t = {g.timing.grasp_t:.3f} s "
+                           f"({', '.join(g.timing.grasp_fingers)}) of "
                            f"the ball estimated from {self.fit.n} observations; {why}")
         else:
             self.outcome = GIVEN_UP
-            self.reason = "; ".join(self.plan.reasons) + f" ({why})"
+            self.reason = reasons_text(self.plan.reasons) + f" ({why})"
         self.writer.close({"catch": self.outcome, "reason": self.reason,
                            "observations": self.fit.n,
                            "last_observation_s": float(self.fit.times[-1]),
@@ -390,11 +393,12 @@ class CatchSession:
         """The final plan: every row through the planner's self-check, the grasp forces."""
         pl, pose, fl, r, m = self.pl, self.pose, self.flight, self.ball.radius_m, self.motion
         t, Q = np.concatenate(self._t), np.concatenate(self._q)
-        err, clear, g_t, g_f, reasons = pl.rows.check(
-            fl, self.C, r, t, Q, pose.t_i, t_static, self.rate_hz, self.closing.reason is not None)
-        reasons = ([self.closing.reason] if self.closing.reason else []) + reasons
+        verdict = pl.rows.check(fl, self.C, r, t, Q, pose.t_i, t_static, self.rate_hz,
+                                self.closing.reason is not None)
+        reasons = ([Reason(CatchReason.GRASP, self.closing.reason)] if self.closing.reason
+                   else []) + list(verdict.reasons)
         if pose.ic.reason:
-            reasons.append(pose.ic.reason)
+            reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
         stop, hold, force_reasons, _ = pl.forces(fl, pose, t, Q, r)
         reasons += force_reasons
         try:
@@ -408,18 +412,14 @@ class CatchSession:
             notes.append(f"{self.kept_targets} re-aims could not reach their target at rest "
                          "before the ball within the limits: part of the way, or the older "
                          "target kept")
-        return CatchPlan(
-            feasible=not reasons, reasons=reasons, flight=fl, catch_point=self.C,
-            T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand,
-            rate_hz=self.rate_hz, throw=self._throw(), launch_speed=fl.speed,
-            flight_time_s=t_f, intercept_t=float(pose.t_i),
-            intercept_point=fl.position(pose.t_i), arrival_velocity=pose.v_i,
-            intercept_error_m=err, misalignment_deg=pose.misalign_deg, q_rest=pl.q_rest,
-            q_open=pose.q_open, q_closed=pose.q_closed, move_start_s=m.t_move,
-            move_s=m.open_s, close_start_s=m.close_start_s, close_s=m.close_s, grasp_t=g_t,
-            grasp_fingers=g_f, min_clearance_before_m=clear, stop=stop, hold=hold, t=t, q=Q,
-            q_motor=pl.hand.motor_angles(Q), ik_iterations=pose.ik_iterations,
-            t_info_s=float(self.fit.times[-1]), uncertainty=self.uncertainty, notes=notes)
+        return make_catch_plan(
+            reasons=reasons, flight=fl, catch_point=self.C,
+            T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand, hand=pl.hand,
+            rate_hz=self.rate_hz, throw=self._throw(), pose=pose, verdict=verdict,
+            q_rest=pl.q_rest, q_open=pose.q_open, move_start_s=m.t_move, move_s=m.open_s,
+            close_start_s=m.close_start_s, close_s=m.close_s, forces=Forces(stop, hold),
+            t=t, Q=Q, t_info_s=float(self.fit.times[-1]), flight_time_s=t_f,
+            uncertainty=self.uncertainty, notes=notes)
 
 
 def _point(xyz: Any) -> np.ndarray:

@@ -127,7 +127,8 @@ from planner.catch.plan.mount import (
     mount_from_file,
 )
 from planner.catch.plan.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
-from planner.catch.plan.results import CatchPlan, CatchResult, Closing
+from planner.catch.plan.reasons import reasons_text
+from planner.catch.plan.results import CatchPlan, CatchResult, Closing, ThrowInfo
 from planner.check.criteria import (
     GRASP_MIN_TIPS,
     GRASP_TOL_M,
@@ -254,8 +255,7 @@ def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, d
         t_f = float(flight.time_at_x(d))
     except InfeasibleError:
         t_f = None
-    throw = {"angle_deg": a, "dist_m": d, "height_m": hgt, "ball": b.name, "drag": drag,
-             "observations": None if fit is None else fit.n_observations}
+    throw = ThrowInfo(a, d, hgt, b.name, drag, None if fit is None else fit.n_observations)
     plan = pl.plan(flight, C, rate, t_info=t_info, throw=throw, flight_time_s=t_f, fit=fit,
                    soft=soft)
     notes = plan.notes
@@ -270,7 +270,7 @@ def write_plan(plan: CatchPlan, out_path: str) -> int:
     hand = plan.base_hand
     writer = TrajectoryWriter(out_path, plan.metadata(), hand.joint_names, hand.motor_names)
     try:
-        writer.write_rows(plan.t, plan.q, plan.q_motor)
+        writer.write_rows(plan.rows.t, plan.rows.q, plan.rows.q_motor)
     except BaseException as e:
         writer.abort(discard=isinstance(e, InputError))
         raise
@@ -305,5 +305,5 @@ def plan_catch(angle_deg: float, dist_m: float, height_m: float, hand: HandModel
     rows = write_plan(plan, out_path)
     res = CatchResult(plan, out_path, rows, plan.planning_s, time.perf_counter() - t1, setup)
     if strict and not plan.feasible:
-        raise InfeasibleError("; ".join(plan.reasons), problem=res)
+        raise InfeasibleError(reasons_text(plan.reasons), problem=res)
     return res

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
@@ -12,44 +11,14 @@ import numpy as np
 
 from planner.catch import grasp as gq
 from planner.catch.flight.path import Flight
+from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
+from planner.catch.plan.rowcheck import RowVerdict
 from planner.check.ballstop import PAD_GIVE_M
 from planner.check.criteria import GRASP_WINDOW_S
 from planner.hand.model import HandModel
 
 if TYPE_CHECKING:
     from planner.catch.plan.stopping import SoftStop
-
-
-class CatchReason(Enum):
-    """Why a catch is infeasible. Only the first three are limits no motion of the hand
-    overcomes; the others are this plan's shortfalls."""
-
-    OUT_OF_REACH = "out of reach"  # no wrist/rail pose puts the palm on the ball's path
-    TOO_SOON = "too soon"  # the ball arrives before the hand can open
-    TOO_FAST_TO_STOP = "too fast to stop"  # no stopping motion within the joints' limits
-    # keeps every motor within its capacity
-    FRICTION = "friction"  # the ball would slide off the palm
-    TORQUE = "torque"  # holding the ball needs more than a motor gives
-    GRASP = "grasp"  # the fingers do not close around the ball (in time)
-    FINGERS = "fingers in the way"  # a fingertip would hit the arriving ball
-    MISS = "miss"  # the rows put the palm elsewhere
-    ROLL = "roll"  # the ball rolls off the palm's wrist side before the wrist's turn levels
-    # the palm (``planner.check.ballroll``)
-
-
-class Reason(str):
-    """A reason a catch is infeasible: the text (``str``: what the summary prints) and its
-    ``kind`` (a ``CatchReason``)."""
-
-    __slots__ = ("kind",)
-
-    def __new__(cls, kind: CatchReason, detail: str) -> Reason:  # noqa: PYI034
-        out = super().__new__(cls, detail)
-        out.kind = kind
-        return out
-
-    def __reduce__(self):
-        return (Reason, (self.kind, str(self)))
 
 
 @dataclass(frozen=True)
@@ -75,11 +44,90 @@ class Closing:
 
 
 @dataclass(frozen=True)
+class ThrowInfo:
+    """The throw as asked: its angle and where it passes (the live one's, the angle of its
+    last estimate), the ball, drag, the observations fitted (None: predicted)."""
+
+    angle_deg: float
+    dist_m: float
+    height_m: float
+    ball: str
+    drag: bool
+    observations: int | None
+    live: bool = False
+
+    def to_dict(self) -> dict[str, Any]:
+        out = {"angle_deg": self.angle_deg, "dist_m": self.dist_m, "height_m": self.height_m,
+               "ball": self.ball, "drag": self.drag, "observations": self.observations}
+        if self.live:
+            out["live"] = True
+        return out
+
+
+@dataclass(frozen=True)
+class InterceptInfo:
+    """Where and when the palm meets the ball (catch frame)."""
+
+    t_s: float
+    point_m: np.ndarray  # ball centre at t_s
+    arrival_velocity: np.ndarray
+    error_m: float  # the palm's distance from the ball then, on the rows (the check's rule)
+    misalignment_deg: float  # palm normal off the ball's path
+    launch_speed_m_s: float
+    flight_time_s: float | None  # time at x = dist (None: never)
+
+
+@dataclass(frozen=True)
+class Timing:
+    """The catch's timeline (s from the launch)."""
+
+    move_start_s: float
+    move_s: float
+    close_start_s: float
+    close_s: float
+    grasp_t: float | None  # first row time with the grasp
+    grasp_fingers: tuple[str, ...]
+    min_clearance_before_m: float  # min fingertip distance to the ball surface before it
+    t_info_s: float  # the last observation (0: predicted)
+
+    @property
+    def ready_s(self) -> float:
+        return self.move_start_s + self.move_s
+
+
+@dataclass(frozen=True)
+class Poses:
+    """The hand at rest, open (the pre-catch pose) and closed (holding the ball)."""
+
+    q_rest: np.ndarray
+    q_open: np.ndarray
+    q_closed: np.ndarray
+
+
+@dataclass(frozen=True)
+class Forces:
+    """``stop``: the stopping load on the rows (the check's ``BallLoad``: worst motor, every
+    motor's headroom, the friction cone's margin); ``hold``: the grasp QP's holding forces
+    (None: infeasible); ``soft``: the arm's stopping motion (None when the palm does not give
+    with the ball: at rest, or turning with the wrist's turn under way)."""
+
+    stop: Any
+    hold: gq.GraspResult | None
+    soft: SoftStop | None = None
+
+
+@dataclass(frozen=True)
+class Rows:
+    """The rows: times, joint positions, motor angles."""
+
+    t: np.ndarray
+    q: np.ndarray
+    q_motor: np.ndarray
+
+
+@dataclass(frozen=True)
 class CatchPlan:
-    """A planned catch (no file written yet). ``stop``: the stopping load on the rows (the
-    check's ``BallLoad``: worst motor, every motor's headroom, the friction cone's margin);
-    ``soft``: the arm's stopping motion (None when the palm does not give with the ball: at
-    rest, or turning with the wrist's turn under way, ``planner.catch.plan.turnahead``)."""
+    """A planned catch (no file written yet), made by ``make_catch_plan``."""
 
     feasible: bool
     reasons: tuple[Reason, ...]
@@ -88,86 +136,105 @@ class CatchPlan:
     T_world_root: np.ndarray
     base_hand: HandModel
     rate_hz: float
-    throw: dict[str, Any]
-    launch_speed: float
-    flight_time_s: float | None  # time at x = dist
-    intercept_t: float
-    intercept_point: np.ndarray  # ball centre at intercept_t (catch frame)
-    arrival_velocity: np.ndarray
-    intercept_error_m: float  # on the rows, as the independent check computes it
-    misalignment_deg: float
-    q_rest: np.ndarray
-    q_open: np.ndarray
-    q_closed: np.ndarray
-    move_start_s: float
-    move_s: float
-    close_start_s: float
-    close_s: float
-    grasp_t: float | None  # first row time with the grasp
-    grasp_fingers: tuple[str, ...]
-    min_clearance_before_m: float  # min fingertip distance to the ball surface before intercept
-    stop: Any
-    hold: gq.GraspResult | None
-    t: np.ndarray
-    q: np.ndarray
-    q_motor: np.ndarray
+    throw: ThrowInfo | None
+    intercept: InterceptInfo
+    timing: Timing
+    poses: Poses
+    forces: Forces
+    rows: Rows
     ik_iterations: int
-    t_info_s: float
     uncertainty: dict[str, float] | None = None
     planning_s: float = 0.0
     notes: tuple[str, ...] = ()
-    soft: SoftStop | None = None
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "reasons", tuple(self.reasons))
-        object.__setattr__(self, "notes", tuple(self.notes))
 
     @property
     def reason_kinds(self) -> tuple[CatchReason, ...]:
-        return tuple(getattr(r, "kind", CatchReason.MISS) for r in self.reasons)
+        return tuple(r.kind for r in self.reasons)
 
     @cached_property
     def hand(self) -> HandModel:
         """The hand mounted in the catch frame (``T_world_root``)."""
         return self.base_hand.mounted(self.T_world_root)
 
-    @property
-    def ready_s(self) -> float:
-        return self.move_start_s + self.move_s
-
     def margins(self) -> dict[str, float]:
+        tm, t_i = self.timing, self.intercept.t_s
         out = {
-            "reaction_s": self.move_start_s,
-            "move_s": self.move_s,
-            "ready_s": self.ready_s,
-            "wait_open_s": self.close_start_s - self.ready_s,
-            "close_s": self.close_s,
-            "close_lead_s": self.intercept_t - self.close_start_s,
+            "reaction_s": tm.move_start_s,
+            "move_s": tm.move_s,
+            "ready_s": tm.ready_s,
+            "wait_open_s": tm.close_start_s - tm.ready_s,
+            "close_s": tm.close_s,
+            "close_lead_s": t_i - tm.close_start_s,
         }
-        if self.grasp_t is not None:
-            out["grasp_after_s"] = self.grasp_t - self.intercept_t
-            out["grasp_slack_s"] = self.intercept_t + GRASP_WINDOW_S - self.grasp_t
+        if tm.grasp_t is not None:
+            out["grasp_after_s"] = tm.grasp_t - t_i
+            out["grasp_slack_s"] = t_i + GRASP_WINDOW_S - tm.grasp_t
         return out
 
     def metadata(self) -> dict[str, Any]:
-        hand = self.base_hand
-        return {
-            "task": "catch", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
-            "T_world_root": self.T_world_root.tolist(), "rate_hz": self.rate_hz,
-            "ball": self.flight.to_metadata(), "intercept_t": float(self.intercept_t),
-            "catch": {
-                "throw": self.throw,
-                "catch_point": [float(x) for x in self.catch_point],
-                "stop_distance_m": PAD_GIVE_M,
-                "close_start": float(self.close_start_s),
-                "grasp_t": None if self.grasp_t is None else float(self.grasp_t),
-                "feasible": bool(self.feasible),
-                "reasons": list(self.reasons),
-            },
-        }
+        """The file's first line (a planned catch's)."""
+        tm = self.timing
+        return catch_metadata(self.base_hand, self.T_world_root.tolist(), self.rate_hz,
+                              self.flight, self.intercept.t_s, {
+            "throw": {} if self.throw is None else self.throw.to_dict(),
+            "catch_point": [float(x) for x in self.catch_point],
+            "stop_distance_m": PAD_GIVE_M,
+            "close_start": float(tm.close_start_s),
+            "grasp_t": None if tm.grasp_t is None else float(tm.grasp_t),
+            "feasible": bool(self.feasible),
+            "reasons": [r.detail for r in self.reasons],
+        })
+
+    def end_claims(self) -> dict[str, Any]:
+        """The plan's claims for the end marker (spec section 4, version 2): ``"catch"``
+        ``held`` or ``infeasible`` with its reason."""
+        if self.feasible:
+            return {"catch": HELD, "reason": ""}
+        return {"catch": INFEASIBLE, "reason": reasons_text(self.reasons),
+                "reason_kinds": [k.value for k in self.reason_kinds]}
 
 
-@dataclass
+HELD = "held"
+GIVEN_UP = "given_up"
+INFEASIBLE = "infeasible"
+
+
+def catch_metadata(hand: HandModel, T_world_root: list, rate_hz: float, flight: Flight,
+                   intercept_t: float, catch: dict[str, Any]) -> dict[str, Any]:
+    """A catch file's metadata (spec section 4), planned or live: ``catch`` is the
+    ``"catch"`` entry (the plan's or the session's facts)."""
+    return {"task": "catch", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
+            "T_world_root": T_world_root, "rate_hz": rate_hz,
+            "ball": flight.to_metadata(), "intercept_t": float(intercept_t), "catch": catch}
+
+
+def make_catch_plan(*, reasons: list[Reason] | tuple[Reason, ...], flight: Flight,
+                    catch_point: np.ndarray, T_world_root: np.ndarray, base_hand: HandModel,
+                    hand: HandModel, rate_hz: float, throw: ThrowInfo | None, pose: Any,
+                    verdict: RowVerdict, q_rest: np.ndarray, q_open: np.ndarray,
+                    move_start_s: float, move_s: float, close_start_s: float, close_s: float,
+                    forces: Forces, t: np.ndarray, Q: np.ndarray, t_info_s: float,
+                    flight_time_s: float | None, uncertainty: dict[str, float] | None,
+                    notes: tuple[str, ...] | list[str] = (), planning_s: float = 0.0
+                    ) -> CatchPlan:
+    """The one way a ``CatchPlan`` is made (the planner's and the live session's): ``pose``
+    the hand meeting the ball (``CatchPlanner.meet``'s, its ``q_closed`` the pose that holds
+    it), ``verdict`` the rows' self-check, ``hand`` the reference-mounted hand (the motor
+    angles of ``Q``)."""
+    return CatchPlan(
+        feasible=not reasons, reasons=tuple(reasons), flight=flight, catch_point=catch_point,
+        T_world_root=T_world_root, base_hand=base_hand, rate_hz=float(rate_hz), throw=throw,
+        intercept=InterceptInfo(float(pose.t_i), flight.position(pose.t_i), pose.v_i,
+                                verdict.error_m, pose.misalign_deg, flight.speed,
+                                flight_time_s),
+        timing=Timing(move_start_s, move_s, float(close_start_s), close_s, verdict.grasp_t,
+                      verdict.grasp_fingers, verdict.clearance_m, float(t_info_s)),
+        poses=Poses(q_rest, q_open, pose.q_closed), forces=forces,
+        rows=Rows(t, Q, hand.motor_angles(Q)), ik_iterations=pose.ik_iterations,
+        uncertainty=uncertainty, planning_s=planning_s, notes=tuple(notes))
+
+
+@dataclass(frozen=True)
 class CatchResult:
     """What ``plan_catch`` returns: the plan and where it was written."""
 
@@ -183,13 +250,5 @@ class CatchResult:
         return self.plan.feasible
 
     @property
-    def reasons(self) -> tuple[str, ...]:
+    def reasons(self) -> tuple[Reason, ...]:
         return self.plan.reasons
-
-    def __getattr__(self, name: str) -> Any:  # convenience: result.intercept_t etc.
-        if name == "plan":
-            raise AttributeError(name)
-        return getattr(self.plan, name)
-
-
-# ====================================================================== geometry helpers
