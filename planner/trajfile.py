@@ -25,6 +25,7 @@ from planner.output import open_stream
 
 FORMAT = "hand-trajectory"
 VERSION = 1
+VERSIONS = (1, 2)  # read: version 2 is version 1 plus song_start_s and the end marker's claims
 _MAX_META_CHARS = 1 << 20  # a metadata line longer than this is not one (e.g. /dev/zero)
 
 
@@ -232,8 +233,9 @@ def _metadata(line: str, path: str) -> dict[str, Any]:
         raise InputError(f"{path}: metadata line is not valid JSON") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise InputError(f"{path}: not a hand-trajectory file (format is not {FORMAT!r})")
-    if meta.get("version") != VERSION:
-        raise InputError(f"{path}: unsupported version {meta.get('version')!r} (supported: {VERSION})")
+    if meta.get("version") not in VERSIONS or isinstance(meta.get("version"), bool):
+        raise InputError(f"{path}: unsupported version {meta.get('version')!r} (supported: "
+                         f"{', '.join(map(str, VERSIONS))})")
     for key in ("task", "hand", "urdf_sha256", "T_world_root", "rate_hz"):
         if key not in meta:
             raise InputError(f"{path}: metadata lacks required key {key!r}")

@@ -399,6 +399,7 @@ class CatchSession:
                    else []) + list(verdict.reasons)
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
+        reasons += pl.roll_reasons(fl, t, Q, pose.t_i)
         stop, hold, force_reasons, _ = pl.forces(fl, pose, t, Q, r)
         reasons += force_reasons
         try:

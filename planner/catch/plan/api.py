@@ -266,7 +266,8 @@ def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, d
 
 
 def write_plan(plan: CatchPlan, out_path: str) -> int:
-    """Write the plan's rows (hand-trajectory v1); returns the number of rows."""
+    """Write the plan's rows (hand-trajectory version 2: the end marker says ``"catch":
+    "held"`` or ``"infeasible"`` with its reason); returns the number of rows."""
     hand = plan.base_hand
     writer = TrajectoryWriter(out_path, plan.metadata(), hand.joint_names, hand.motor_names)
     try:
@@ -274,7 +275,7 @@ def write_plan(plan: CatchPlan, out_path: str) -> int:
     except BaseException as e:
         writer.abort(discard=isinstance(e, InputError))
         raise
-    writer.close()
+    writer.close(plan.end_claims())
     return writer.rows
 
 

@@ -233,7 +233,7 @@ class CatchPlanner:
             flight, C, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
                                                   s_c, rate_hz))
         reasons += verdict.reasons
-        reasons += _roll_reasons(self.turn, flight, t, Q, pose.t_i)
+        reasons += self.roll_reasons(flight, t, Q, pose.t_i)
         ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
         if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
             q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
@@ -375,6 +375,16 @@ class CatchPlanner:
             reasons.append(Reason(CatchReason.FRICTION, f"friction (holding the ball): {e}"))
         return stop, hold, reasons, centre_i
 
+    def roll_reasons(self, flight: Flight, t: np.ndarray, Q: np.ndarray,
+                     t_i: float) -> list[Reason]:
+        """The roll rule's reason (``planner.check.ballroll.roll_problem``: the ball, landing at
+        ``t_i``, rolls off the palm's wrist side on these rows, ``HoldTurn.rolled``, on a hand
+        the rule judges, ``roll_judged``; the check judges the same rule), if any."""
+        if not roll_judged(self.hand.name):
+            return []
+        rolled = roll_problem(self.turn.rolled(t, Q, t_i, flight))
+        return [] if rolled is None else [Reason(CatchReason.ROLL, rolled)]
+
     def _stop_load(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray,
                    grasp_t: float | None):
         """The check's stopping load on the rows from the one before the intercept (only the
@@ -396,17 +406,6 @@ def _turn_note(turn: Turn, t_i: float) -> tuple[str, ...]:
     return ((f"the wrist's turn under way at {np.abs(turn.profiles[0].qd).max():.1f} rad/s "
             f"when the ball lands (from {1000 * (t_i - turn.start_s):.0f} ms before it): from the grasp the "
             "ball would roll off the palm's wrist side"),)
-
-
-def _roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,
-                  t_i: float) -> list[Reason]:
-    """The roll rule's reason (``planner.check.ballroll.roll_problem``: the ball, landing at
-    ``t_i``, rolls off the palm's wrist side on these rows, ``HoldTurn.rolled``, on a hand
-    the rule judges, ``roll_judged``; the check judges the same rule), if any."""
-    if not roll_judged(turn.hand.name):
-        return []
-    rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
-    return [] if rolled is None else [Reason(CatchReason.ROLL, rolled)]
 
 
 def uncertainty(fit: FitResult, x_plane: float) -> dict[str, float] | None:

@@ -189,7 +189,9 @@ class CatchPlan:
         """The plan's claims for the end marker (spec section 4, version 2): ``"catch"``
         ``held`` or ``infeasible`` with its reason."""
         if self.feasible:
-            return {"catch": HELD, "reason": ""}
+            tm = self.timing
+            return {"catch": HELD, "reason": f"grasp at t = {tm.grasp_t:.3f} s "
+                                             f"({', '.join(tm.grasp_fingers)})"}
         return {"catch": INFEASIBLE, "reason": reasons_text(self.reasons),
                 "reason_kinds": [k.value for k in self.reason_kinds]}
 
@@ -197,13 +199,16 @@ class CatchPlan:
 HELD = "held"
 GIVEN_UP = "given_up"
 INFEASIBLE = "infeasible"
+CATCH_FILE_VERSION = 2  # spec section 4: the end marker carries the catch's claims
 
 
 def catch_metadata(hand: HandModel, T_world_root: list, rate_hz: float, flight: Flight,
                    intercept_t: float, catch: dict[str, Any]) -> dict[str, Any]:
-    """A catch file's metadata (spec section 4), planned or live: ``catch`` is the
+    """A catch file's metadata (spec section 4, version 2: its end marker says whether the
+    catch is held, given up or infeasible, and why), planned or live: ``catch`` is the
     ``"catch"`` entry (the plan's or the session's facts)."""
-    return {"task": "catch", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
+    return {"version": CATCH_FILE_VERSION, "task": "catch", "hand": hand.name,
+            "urdf_sha256": hand.urdf_sha256,
             "T_world_root": T_world_root, "rate_hz": rate_hz,
             "ball": flight.to_metadata(), "intercept_t": float(intercept_t), "catch": catch}
 
