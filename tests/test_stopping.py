@@ -306,6 +306,6 @@ def test_the_summary_does_not_call_a_turning_palm_at_rest(tmp_path, capsys):
 
     assert cli_main(["catch", "--angle", "20", "--dist", "1", "-o", str(tmp_path / "c.csv")]) == 0
     err = capsys.readouterr().err
-    (stopping,) = [x for x in err.splitlines() if x.lstrip().startswith("stopping:")]
+    (stopping,) = [x for x in err.splitlines() if x.lstrip().startswith("stopping (")]
     assert "(the palm not giving with the ball)" in stopping and "at rest" not in stopping
     assert "note: the wrist's turn under way at 6.7 rad/s" in err

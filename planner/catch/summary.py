@@ -64,8 +64,17 @@ def format_summary(res: CatchResult) -> str:
                f"{1000 * (soft.end_s - p.intercept.t_s):.0f} ms after")
         per = ", ".join(f"{m} {100 * x:.0f} %" for m, x in
                         sorted(zip(p.hand.motor_names, st.motor_headroom), key=lambda z: z[1])[:3])
-        lines.append(f"  stopping: {st.force_n:.1f} N ({how}); torque headroom "
+        lines.append(f"  stopping (the rule's worst instant, {_cause(st)} at {st.time_s:.3f} s): "
+                     f"{st.force_n:.1f} N ({how}); torque headroom "
                      f"{100 * st.headroom:.0f} % (least: {per})")
+        c = p.forces.contact
+        if c is not None:
+            for name, ld in (("impact at contact", c.impact), ("riding the palm", c.riding)):
+                if ld is not None:
+                    lines.append(f"  {name}: {ld.force_n:.1f} N at {ld.time_s:.3f} s"
+                                 + (f" ({ld.speed_m_s:.2f} m/s relative, over the pad's "
+                                    f"{1000 * ld.distance_m:.0f} mm)" if ld.speed_m_s else "")
+                                 + f"; headroom {_least(p, ld)}")
     for name, gr in (("holding", p.forces.hold),):
         if gr is not None:
             lines.append(f"  {name}: {np.linalg.norm(gr.total_force):.1f} N over "
@@ -89,6 +98,28 @@ def format_summary(res: CatchResult) -> str:
         for r in p.reasons:
             lines.append(f"  infeasible: {r}")
     return "\n".join(lines)
+
+
+def _cause(ld) -> str:
+    """What a stopping load is: the pad's impact or the ball riding the palm."""
+    return "impact" if ld.speed_m_s > 0 else "riding the palm"
+
+
+def _least(p, ld, n: int = 3) -> str:
+    """The ``n`` motors closest to their capacity at a load, with their headroom."""
+    per = sorted(zip(p.hand.motor_names, ld.motor_headroom), key=lambda z: z[1])[:n]
+    return ", ".join(f"{m} {100 * x:.0f} %" for m, x in per)
+
+
+def _load_dict(p, ld) -> dict[str, Any] | None:
+    """One ball load (``catch --json``): force, when, relative speed, every motor's
+    headroom."""
+    if ld is None:
+        return None
+    return {"force_n": float(ld.force_n), "time_s": float(ld.time_s),
+            "relative_speed_m_s": float(ld.speed_m_s), "limiting_motor": ld.motor,
+            "torque_headroom": float(ld.headroom),
+            "motor_headroom": dict(zip(p.hand.motor_names, map(float, ld.motor_headroom)))}
 
 
 def _part(gr) -> str:
@@ -119,7 +150,8 @@ def _stop_dict(p) -> dict[str, Any] | None:
             "relative_speed_m_s": None if soft is None else float(np.linalg.norm(soft.v_rel)),
             "tilt_deg": None if soft is None else float(np.degrees(soft.tilt_rad)),
             # the moment the force and headroom above are judged at (the check's worst row)
-            "worst_t_s": float(st.time_s), "worst_relative_speed_m_s": float(st.speed_m_s)}
+            "worst_t_s": float(st.time_s), "worst_relative_speed_m_s": float(st.speed_m_s),
+            "worst_is": _cause(st)}
 
 
 def catch_dict(res: CatchResult) -> dict[str, Any]:
@@ -146,6 +178,8 @@ def catch_dict(res: CatchResult) -> dict[str, Any]:
         "grasp_fingers": list(p.timing.grasp_fingers), "margins_s": {k: float(v) for k, v in m.items()},
         "min_clearance_before_m": float(p.timing.min_clearance_before_m),
         "stopping": _stop_dict(p), "holding": _grasp_dict(p.forces.hold),
+        "impact": None if p.forces.contact is None else _load_dict(p, p.forces.contact.impact),
+        "riding": None if p.forces.contact is None else _load_dict(p, p.forces.contact.riding),
         "uncertainty": None if not p.uncertainty else {k: float(v) for k, v in
                                                        p.uncertainty.items()},
         "notes": list(p.notes), "rows": int(res.rows), "rate_hz": float(p.rate_hz),
@@ -164,9 +198,9 @@ def catch_cli(args) -> int:
         from planner.catch.livecli import live_cli
 
         return live_cli(args)
-    if args.angle is None:
-        raise InputError("catch needs --angle (or --live, which takes the throw from the "
-                         "observations)")
+    if args.angle is None and args.observations is None:
+        raise InputError("catch needs --angle or --observations (or --live, which takes the "
+                         "throw from the observations on stdin)")
     report = getattr(args, "report", None)
     html = getattr(args, "html", None)
     if report or html:

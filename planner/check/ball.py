@@ -6,7 +6,7 @@ holding the ball, ``ball_loads``)."""
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -285,6 +285,46 @@ def _stop_distance(meta: dict[str, Any], path: str) -> float | None:
 def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
                ball: dict[str, Any], ti: float, pad_m: float, grasp_t: float | None = None
                ) -> tuple[BallLoad, BallLoad]:
+    """The stopping and the holding phase's worst instants (``ball_load_instants``)."""
+    return phase_loads(ball_load_instants(t, Q, kin, palm, ball, ti, pad_m, grasp_t), t[-1],
+                       kin, Q[-1], palm[-1], ball["mass"])
+
+
+@dataclass(frozen=True)
+class ContactLoads:
+    """The ball's load named by what causes it: ``impact``, the pad stopping the ball at
+    contact (its speed relative to the palm over the pad's give); ``riding``, the worst
+    instant of the ball riding the palm afterwards (its weight and the palm's acceleration;
+    None: the arm still from the pad's stop on). Each with every motor's headroom."""
+
+    impact: BallLoad
+    riding: BallLoad | None
+
+
+def contact_loads(instants: list[BallLoad]) -> ContactLoads:
+    """``ball_load_instants``' loads named apart: the impact (the first instant, at the
+    intercept) and the riding ball's worst (the instants after the pad's stop)."""
+    rides = [x for x in instants[1:] if x.speed_m_s == 0.0]
+    return ContactLoads(instants[0], _worst(rides) if rides else None)
+
+
+def phase_loads(inst: list[BallLoad], t_end: float, kin: Kinematics, q_end: np.ndarray,
+                palm_end: np.ndarray, mass: float) -> tuple[BallLoad, BallLoad]:
+    """The instants' worst while the palm target moves (``stop``) and after (``hold``; the
+    ball's weight on the last row when no instant is after)."""
+    stop = _worst([x for x in inst if x.phase == "stop"])
+    holds = [x for x in inst if x.phase == "hold"]
+    if holds:
+        return stop, _worst(holds)
+    n = len(q_end)
+    cap = actuator_capacity(kin.hand)
+    return stop, _load("hold", kin, q_end, float(t_end), ride_force_n(mass, np.zeros(3)), 0.0,
+                       0.0, np.zeros(n), np.zeros(n), palm_end[:3, 2], False, cap)
+
+
+def ball_load_instants(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
+                       ball: dict[str, Any], ti: float, pad_m: float,
+                       grasp_t: float | None = None) -> list[BallLoad]:
     """The ball's load on the hand (``planner.check.ballstop``, one definition with the
     planner), judged on the rows as they move: its velocity relative to the palm target at
     ``ti`` stopped by the pad over ``pad_m`` (at ``ti`` and at every row within the pad's
@@ -336,13 +376,7 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
         slows = sp > 0 or float(np.linalg.norm(centre_a[k])) > G  # the arm, not gravity, sets F
         inst.append(_load(phase, kin, Q[k], float(t[k]), F, sp, dist, V[k], A[k],
                           palm[k, :3, 2], phase == "stop" and slows and t[k] < held, cap))
-    stop = _worst([x for x in inst if x.phase == "stop"])
-    holds = [x for x in inst if x.phase == "hold"]
-    hold = _worst(holds) if holds else _load("hold", kin, Q[-1], float(t[-1]),
-                                             ride_force_n(m, np.zeros(3)), 0.0, 0.0,
-                                             np.zeros(Q.shape[1]), np.zeros(Q.shape[1]),
-                                             palm[-1, :3, 2], False, cap)
-    return stop, hold
+    return inst
 
 
 def _rows_at(t: np.ndarray, Q: np.ndarray, times: np.ndarray) -> np.ndarray:

@@ -56,6 +56,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from planner.catch import grasp as gq
+from planner.catch.flight.dragfit import DragEstimate, estimate_drag
 from planner.catch.flight.livefit import LiveFit
 from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
@@ -68,7 +69,6 @@ from planner.catch.plan.results import (
     GIVEN_UP,
     HELD,
     CatchPlan,
-    Forces,
     ThrowInfo,
     catch_metadata,
     make_catch_plan,
@@ -187,6 +187,7 @@ class CatchSession:
         self.outcome: str | None = None
         self.reason = ""
         self.plan: CatchPlan | None = None
+        self.drag_estimate: DragEstimate | None = None  # (drag: at the end)
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
         self.rows_cpu_s = math.nan  # thread_time then
 
@@ -373,6 +374,8 @@ class CatchSession:
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
         self.uncertainty = self._sigma(self.flight, pose.t_i)  # (of the last estimate only:
         # what the plan reports)
+        self.drag_estimate = (estimate_drag(self.fit.times, self.fit.positions, self.flight,
+                                            self.ball) if self.drag else None)
         self.plan = self._judge(t_static)
         if self.plan.feasible:
             self.outcome = HELD
@@ -386,7 +389,9 @@ class CatchSession:
         self.writer.close({"catch": self.outcome, "reason": self.reason,
                            "observations": self.fit.n,
                            "last_observation_s": float(self.fit.times[-1]),
-                           "ball": self.flight.to_metadata(), "intercept_t": float(pose.t_i)})
+                           "ball": self.flight.to_metadata(), "intercept_t": float(pose.t_i),
+                           **({} if self.drag_estimate is None else
+                              {"drag_estimate": self.drag_estimate.to_dict()})})
         return rows
 
     def _judge(self, t_static: float) -> CatchPlan:
@@ -400,8 +405,8 @@ class CatchSession:
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
         reasons += pl.roll_reasons(fl, t, Q, pose.t_i)
-        stop, hold, force_reasons, _ = pl.forces(fl, pose, t, Q, r)
-        reasons += force_reasons
+        fv = pl.forces(fl, pose, t, Q, r)
+        reasons += fv.reasons
         try:
             t_f = float(fl.time_at_x(float(self.C[0])))
         except InfeasibleError:
@@ -409,6 +414,8 @@ class CatchSession:
         notes = [(f"live: {self.fit.n} observations (rms residual "
                   f"{1000 * self.fit.result.residual_rms:.1f} mm), the first plan from "
                   f"{self.first['observations']}")]
+        if self.drag_estimate is not None:
+            notes.append(f"live: {self.drag_estimate.describe()}")
         if self.kept_targets:
             notes.append(f"{self.kept_targets} re-aims could not reach their target at rest "
                          "before the ball within the limits: part of the way, or the older "
@@ -418,7 +425,7 @@ class CatchSession:
             T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand, hand=pl.hand,
             rate_hz=self.rate_hz, throw=self._throw(), pose=pose, verdict=verdict,
             q_rest=pl.q_rest, q_open=pose.q_open, move_start_s=m.t_move, move_s=m.open_s,
-            close_start_s=m.close_start_s, close_s=m.close_s, forces=Forces(stop, hold),
+            close_start_s=m.close_start_s, close_s=m.close_s, forces=fv.forces,
             t=t, Q=Q, t_info_s=float(self.fit.times[-1]), flight_time_s=t_f,
             uncertainty=self.uncertainty, notes=notes)
 

@@ -99,6 +99,7 @@ the palm within the wrist flexion motor's 2 N m peak (``docs/soft-catch.md``).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -218,12 +219,24 @@ def plan_throw(angle_deg: float, dist_m: float, height_m: float = 0.0,
     """Validate, predict (or fit) the flight and plan; no file is written.
 
     ``observations``: None, a CSV path (``t,x,y,z``) or a pair (ts, ps); ``soft`` False:
-    the palm waits for the ball at rest (the catch before issue 15, for comparison)."""
-    a, d, hgt, rate = validate_throw(angle_deg, dist_m, height_m, rate_hz)
+    the palm waits for the ball at rest (the catch before issue 15, for comparison).
+    ``angle_deg`` None with observations: the throw is the observations' alone."""
+    a, d, hgt, rate = _validate(angle_deg, dist_m, height_m, rate_hz, observations)
     b = get_ball(ball)
     pl = planner or get_planner(hand)
     return _plan_validated(pl, a, d, hgt, b, bool(drag), _load_obs(observations, drag), rate,
                            soft)
+
+
+def _validate(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any, observations: Any
+              ) -> tuple[float | None, float, float, float]:
+    """``validate_throw``; without an angle (None) when the observations give the throw."""
+    if angle_deg is None:
+        if observations is None:
+            raise InputError("a catch needs --angle or --observations (the throw)")
+        d, hgt, rate = validate_live(dist_m, height_m, rate_hz)
+        return None, d, hgt, rate
+    return validate_throw(angle_deg, dist_m, height_m, rate_hz)
 
 
 def _load_obs(observations: Any, drag: bool):
@@ -238,30 +251,39 @@ def _load_obs(observations: Any, drag: bool):
     return np.asarray(ts, dtype=float), np.asarray(ps, dtype=float)
 
 
-def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, drag: bool,
-                    obs, rate: float, soft: bool = True) -> CatchPlan:
+def _plan_validated(pl: CatchPlanner, a: float | None, d: float, hgt: float, b: Ball,
+                    drag: bool, obs, rate: float, soft: bool = True) -> CatchPlan:
+    """The plan of a validated throw: predicted from ``a``, or fitted to ``obs`` (the
+    throw's angle then the fit's; ``a`` only said, not planned with)."""
     t_start = time.perf_counter()
     C = np.array([d, 0.0, hgt])
-    nominal = predict_throw(a, d, hgt, b, drag)  # also validates the throw itself
+    if a is not None:
+        flight = predict_throw(a, d, hgt, b, drag)  # also validates the throw itself
     fit = None
     t_info = 0.0
-    flight = nominal
+    asked = a
     if obs is not None:
         ts, ps = obs
         fit = fit_observations(ts, ps, b, b.drag_per_m if drag else 0.0)
         flight = fit.flight
         t_info = float(ts[-1])
+        v = flight.v0
+        a = math.degrees(math.atan2(float(v[2]), math.hypot(float(v[0]), float(v[1]))))
     try:
         t_f = float(flight.time_at_x(d))
     except InfeasibleError:
         t_f = None
-    throw = ThrowInfo(a, d, hgt, b.name, drag, None if fit is None else fit.n_observations)
+    throw = ThrowInfo(a if asked is None else asked, d, hgt, b.name, drag,
+                      None if fit is None else fit.n_observations)
     plan = pl.plan(flight, C, rate, t_info=t_info, throw=throw, flight_time_s=t_f, fit=fit,
                    soft=soft)
     notes = plan.notes
     if fit is not None:
         notes += ((f"fitted to {fit.n_observations} observations "
                    f"(rms residual {1000 * fit.residual_rms:.1f} mm)"),)
+        if asked is None or abs(a - asked) > 0.05:
+            notes += ((f"the throw from the observations: {a:.1f} deg"
+                       + ("" if asked is None else f" (--angle {asked:g} said, not used)")),)
     return replace(plan, notes=notes, planning_s=time.perf_counter() - t_start)
 
 
@@ -288,7 +310,7 @@ def plan_catch(angle_deg: float, dist_m: float, height_m: float, hand: HandModel
     Every argument is checked before any file is created (InputError). The plan is
     written even when the catch is infeasible (``result.reasons`` says why); with
     ``strict`` an infeasible plan then raises InfeasibleError (the file stays)."""
-    a, d, hgt, rate = validate_throw(angle_deg, dist_m, height_m, rate_hz)
+    a, d, hgt, rate = _validate(angle_deg, dist_m, height_m, rate_hz, observations)
     b = get_ball(ball)
     if not isinstance(out_path, str) or not out_path:
         raise InputError("an output path (or '-') is needed")

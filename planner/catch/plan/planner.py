@@ -31,12 +31,14 @@ from planner.catch.plan.results import (
     CatchPlan,
     Closing,
     Forces,
+    ForcesVerdict,
     ThrowInfo,
     make_catch_plan,
 )
 from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
     ROLL_WEIGHT,
+    SoftStop,
     StopDynamics,
     plan_stop,
 )
@@ -48,7 +50,7 @@ from planner.catch.plan.turnahead import (
     TurnMode,
     ahead_shift,
 )
-from planner.check.ball import ball_loads
+from planner.check.ball import ball_load_instants, contact_loads, phase_loads
 from planner.check.ballroll import roll_judged, roll_problem
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
@@ -241,16 +243,17 @@ class CatchPlanner:
         q_closed[arm] += soft_stop.last_offset
         q_closed += turn.delta  # the pose the ball is held in (the turn ends at rest)
         pose = replace(pose, q_closed=q_closed)
-        stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r, verdict.grasp_t)
-        reasons += force_reasons
-        unc = None if fit is None else uncertainty(fit, float(C[0] + centre_i[0]))
+        fv = self.forces(flight, pose, t, Q, r, verdict.grasp_t,
+                         soft_stop if np.any(soft_stop.qd) else None)
+        reasons += fv.reasons
+        unc = None if fit is None else uncertainty(fit, float(C[0] + fv.centre_i[0]))
         return make_catch_plan(
             reasons=reasons, flight=flight, catch_point=C,
             T_world_root=self.mount.T_world_root(C), base_hand=self.base_hand, hand=h,
             rate_hz=rate_hz, throw=throw, pose=pose, verdict=verdict, q_rest=self.q_rest,
             q_open=q_pre, move_start_s=t_react, move_s=T_m, close_start_s=s_c,
             close_s=closing.duration_s,
-            forces=Forces(stop, hold, soft_stop if np.any(soft_stop.qd) else None),
+            forces=fv.forces,
             t=t, Q=Q, t_info_s=float(t_info), flight_time_s=flight_time_s, uncertainty=unc,
             notes=_turn_note(turn, pose.t_i), planning_s=time.perf_counter() - t0), ahead
 
@@ -344,7 +347,7 @@ class CatchPlanner:
         return t, h.apply_couplings(Q)
 
     def forces(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray, r: float,
-               grasp_t: float | None = None):
+               grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:
         """Stopping the ball (the check's rule on the rows, ``planner.check.ball.ball_loads``:
         the pad, the hand's inertia, the friction cone) and holding it in the closed hand
         (the grasp QP): their results (None where infeasible), the reasons, and the ball's
@@ -354,7 +357,7 @@ class CatchPlanner:
         reasons = []
         q_i = interp_row(t, Q, pose.t_i)
         centre_i = palm_target(h, q_i, r)
-        stop = self._stop_load(flight, pose, t, Q, grasp_t)
+        stop, contact = self._stop_load(flight, pose, t, Q, grasp_t)
         if stop.headroom < -RATE_TOL:  # the check's tolerance (one rule)
             reasons.append(Reason(CatchReason.TOO_FAST_TO_STOP, (
                 f"too fast to stop (over the palm's {100 * PAD_GIVE_M:g} cm and the arm's "
@@ -373,7 +376,7 @@ class CatchPlanner:
             reasons.append(Reason(CatchReason.TORQUE, f"torque (holding the ball): {e}"))
         except gq.GraspFrictionError as e:
             reasons.append(Reason(CatchReason.FRICTION, f"friction (holding the ball): {e}"))
-        return stop, hold, reasons, centre_i
+        return ForcesVerdict(Forces(stop, hold, soft, contact), tuple(reasons), centre_i)
 
     def roll_reasons(self, flight: Flight, t: np.ndarray, Q: np.ndarray,
                      t_i: float) -> list[Reason]:
@@ -388,15 +391,18 @@ class CatchPlanner:
     def _stop_load(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray,
                    grasp_t: float | None):
         """The check's stopping load on the rows from the one before the intercept (only the
-        ball's velocity enters it: its launch point needs no shift to the reference frame)."""
+        ball's velocity enters it: its launch point needs no shift to the reference frame),
+        and the impact and riding loads named apart (``ContactLoads``)."""
         k0 = max(0, int(np.searchsorted(t, pose.t_i, side="right")) - 2)
         b = flight.to_metadata()
         ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
                 "radius": float(b["radius"]), "mass": float(b["mass"]),
                 "drag": float(b["drag"])}
         _, palm = self.kin.frames(Q[k0:])
-        return ball_loads(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i), PAD_GIVE_M,
-                          grasp_t)[0]
+        inst = ball_load_instants(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i),
+                                  PAD_GIVE_M, grasp_t)
+        stop = phase_loads(inst, t[-1], self.kin, Q[-1], palm[-1], ball["mass"])[0]
+        return stop, contact_loads(inst)
 
 
 def _turn_note(turn: Turn, t_i: float) -> tuple[str, ...]:

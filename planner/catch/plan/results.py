@@ -114,6 +114,18 @@ class Forces:
     stop: Any
     hold: gq.GraspResult | None
     soft: SoftStop | None = None
+    contact: Any = None  # the check's ContactLoads: the impact at contact and the riding
+    # ball's worst, named apart (``planner.check.ball.contact_loads``)
+
+
+@dataclass(frozen=True)
+class ForcesVerdict:
+    """``CatchPlanner.forces``: the forces, the reasons they fail, the ball's centre on the
+    palm at the intercept (reference frame)."""
+
+    forces: Forces
+    reasons: tuple[Reason, ...]
+    centre_i: np.ndarray
 
 
 @dataclass(frozen=True)
