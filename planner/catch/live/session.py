@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -61,6 +62,7 @@ from planner.catch.flight.livefit import LiveFit
 from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import LiveSearch
+from planner.catch.live.turn import LiveTurn, live_turn
 from planner.catch.plan.arm import open_from
 from planner.catch.plan.closing import close_start, earliest_close_start
 from planner.catch.plan.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
@@ -188,6 +190,7 @@ class CatchSession:
         self.reason = ""
         self.plan: CatchPlan | None = None
         self.drag_estimate: DragEstimate | None = None  # (drag: at the end)
+        self.turn: LiveTurn | None = None  # the wrist's turn that holds the ball (at the end)
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
         self.rows_cpu_s = math.nan  # thread_time then
 
@@ -337,6 +340,8 @@ class CatchSession:
             return None
         t = np.arange(first, n) * self.dt
         Q = self.motion.rows(t, old_seg, t_b)
+        if self.turn is not None:
+            Q = Q + self.turn.offset(t)
         guard_rows(self.pl.hand, Q, ahead[-1].Q[-1] if ahead else self._q[-1][-1] if self._q
                    else None, self.dt)
         return _Chunk(t, Q, format_rows(t, Q, self.pl.hand.motor_angles(Q)))
@@ -371,6 +376,13 @@ class CatchSession:
                                       t_b + T_m, gq.stop_time(pose.v_i), self.ball.radius_m),
                           cl.duration_s)
         t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s)
+        q_held = m.rows(np.array([t_static, t_static + self.dt]))[0]
+        grasp = m.close_start_s + (cl.u_grasp or 1.0) * m.close_s
+        self.turn = live_turn(self.pl.dyn, q_held,
+                              max(grasp, pose.t_i + gq.stop_time(pose.v_i), m.seg.end_s),
+                              (self.next_row + sum(len(c.t) for c in self._ahead)) * self.dt)
+        if self.turn is not None:
+            t_static = max(t_static, self.turn.end_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
         self.uncertainty = self._sigma(self.flight, pose.t_i)  # (of the last estimate only:
         # what the plan reports)
@@ -405,6 +417,8 @@ class CatchSession:
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
         reasons += pl.roll_reasons(fl, t, Q, pose.t_i)
+        if self.turn is not None:  # the ball is held in the turned hand
+            pose = replace(pose, q_closed=Q[-1].copy())
         fv = pl.forces(fl, pose, t, Q, r)
         reasons += fv.reasons
         try:
