@@ -65,7 +65,13 @@ from planner.catch.live.search import LiveSearch
 from planner.catch.live.turn import LiveTurn, live_turn
 from planner.catch.plan.arm import open_from
 from planner.catch.plan.closing import close_start, earliest_close_start
-from planner.catch.plan.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
+from planner.catch.plan.planner import (
+    HOLD_AFTER_S,
+    PLAN_BUDGET_S,
+    SIGNAL_S,
+    CatchPlanner,
+    roll_reasons,
+)
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.results import (
     GIVEN_UP,
@@ -416,7 +422,7 @@ class CatchSession:
                    else []) + list(verdict.reasons)
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
-        reasons += pl.roll_reasons(fl, t, Q, pose.t_i)
+        reasons += roll_reasons(pl.turn, fl, t, Q, pose.t_i)
         if self.turn is not None:  # the ball is held in the turned hand
             pose = replace(pose, q_closed=Q[-1].copy())
         fv = pl.forces(fl, pose, t, Q, r)

@@ -235,7 +235,7 @@ class CatchPlanner:
             flight, C, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
                                                   s_c, rate_hz))
         reasons += verdict.reasons
-        reasons += self.roll_reasons(flight, t, Q, pose.t_i)
+        reasons += roll_reasons(self.turn, flight, t, Q, pose.t_i)
         ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
         if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
             q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
@@ -378,16 +378,6 @@ class CatchPlanner:
             reasons.append(Reason(CatchReason.FRICTION, f"friction (holding the ball): {e}"))
         return ForcesVerdict(Forces(stop, hold, soft, contact), tuple(reasons), centre_i)
 
-    def roll_reasons(self, flight: Flight, t: np.ndarray, Q: np.ndarray,
-                     t_i: float) -> list[Reason]:
-        """The roll rule's reason (``planner.check.ballroll.roll_problem``: the ball, landing at
-        ``t_i``, rolls off the palm's wrist side on these rows, ``HoldTurn.rolled``, on a hand
-        the rule judges, ``roll_judged``; the check judges the same rule), if any."""
-        if not roll_judged(self.hand.name):
-            return []
-        rolled = roll_problem(self.turn.rolled(t, Q, t_i, flight))
-        return [] if rolled is None else [Reason(CatchReason.ROLL, rolled)]
-
     def _stop_load(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray,
                    grasp_t: float | None):
         """The check's stopping load on the rows from the one before the intercept (only the
@@ -403,6 +393,16 @@ class CatchPlanner:
                                   PAD_GIVE_M, grasp_t)
         stop = phase_loads(inst, t[-1], self.kin, Q[-1], palm[-1], ball["mass"])[0]
         return stop, contact_loads(inst)
+
+
+def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,
+                 t_i: float) -> list[Reason]:
+    """The roll rule's reason on these rows (``planner.check.ballroll``: the ball landing at
+    ``t_i``, ``HoldTurn.rolled``; on a hand the rule judges), if any."""
+    if not roll_judged(turn.hand.name):
+        return []
+    rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
+    return [] if rolled is None else [Reason(CatchReason.ROLL, rolled)]
 
 
 def _turn_note(turn: Turn, t_i: float) -> tuple[str, ...]:
