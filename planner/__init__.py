@@ -30,7 +30,7 @@ _API = {
     "Planner": "planner.play",
     "PlayPlan": "planner.play",
     "plan_song": "planner.play",
-    "plan_catch": "planner.catch.plan",
+    "plan_catch": "planner.catch",
     "check_trajectory": "planner.check",
     "read_trajectory": "planner.trajfile",
 }

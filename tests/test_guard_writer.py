@@ -72,12 +72,13 @@ def test_play_into_a_file_and_in_memory_refuses_the_row(hand, tmp_path, monkeypa
 
 
 def test_the_one_shot_catch_refuses_the_row(tmp_path):
-    from planner.catch.plan import plan_catch, write_plan
+    from planner.catch import plan_catch, write_plan
 
     res = plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "ok.csv"))
     plan = res.plan
     hand = plan.base_hand
-    bad = dataclasses.replace(plan, q=_over(hand, plan.q, len(plan.q) // 2))
+    q = _over(hand, plan.rows.q, len(plan.rows.q) // 2)
+    bad = dataclasses.replace(plan, rows=dataclasses.replace(plan.rows, q=q))
     out = tmp_path / "bad.csv"
     with pytest.raises(SolverError, match=f"{JOINT} = .* outside"):
         write_plan(bad, str(out))
@@ -86,10 +87,10 @@ def test_the_one_shot_catch_refuses_the_row(tmp_path):
 
 def test_the_live_catch_refuses_the_row(tmp_path, monkeypatch):
     from planner.balls import get_ball
-    from planner.catch.flight import predict_throw
-    from planner.catch.livemotion import LiveMotion
-    from planner.catch.plan import get_planner
-    from planner.catch.session import CatchSession
+    from planner.catch.flight.path import predict_throw
+    from planner.catch.live.motion import LiveMotion
+    from planner.catch import get_planner
+    from planner.catch.live.session import CatchSession
 
     pl = get_planner("default")
     ball = get_ball("tennis")

@@ -12,10 +12,7 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "planner"
 
-# The catch package is being rearranged (issue 31, "Catch that holds"); its private
-# imports (flight.py's from dragtable, the observers' from flight, ...) go with that
-# rearrangement, which removes this exemption.
-PRIVATE_EXEMPT = ("planner.catch",)
+PRIVATE_EXEMPT: tuple[str, ...] = ()  # (none: the catch package's went with its rearrangement)
 
 
 def _modules() -> dict[str, Path]:

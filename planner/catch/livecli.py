@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import IO
 
-from planner.catch.session import CatchSession
+from planner.catch.live.session import CatchSession
 from planner.errors import InputError
 
 HEADER = ("t", "x", "y", "z")

@@ -15,7 +15,8 @@ from planner.cli.options import add_pictures, draw_checked
 def add_parser(sub) -> None:
     c = sub.add_parser("catch", help="plan a catch of a thrown ball")
     c.add_argument("--angle", type=float, default=None,
-                   help="launch angle above horizontal, deg (required unless --live)")
+                   help="launch angle above horizontal, deg (required unless --live or "
+                        "--observations)")
     c.add_argument("--dist", type=float, required=True, help="horizontal distance to the hand, m")
     c.add_argument("--height", type=float, default=0.0, help="hand height above the launch point, m")
     c.add_argument("--ball", default="tennis", help="ball: tennis, baseball, golf, seed")
@@ -43,16 +44,16 @@ def run(a: argparse.Namespace) -> int:
 
     if a.live:
         return run_live(a)
-    if a.angle is None:
-        raise InputError("catch needs --angle (or --live, which takes the throw from the "
-                         "observations)")
+    if a.angle is None and a.observations is None:
+        raise InputError("catch needs --angle or --observations (or --live, which takes the "
+                         "throw from the observations on stdin)")
     if a.report or a.html:
         for mod in ("planner.report", "planner.check"):
             if importlib.util.find_spec(mod) is None:
                 raise InputError(f"--report/--html need {mod}, which is not installed")
         if a.output == "-":
             raise InputError("--report/--html need a trajectory file (-o FILE), not stdout")
-    from planner.catch.plan import plan_catch
+    from planner.catch import plan_catch
     from planner.catch.summary import catch_dict, format_summary
 
     res = plan_catch(a.angle, a.dist, a.height, a.hand, a.output, ball=a.ball, drag=a.drag,
@@ -75,8 +76,8 @@ def run_live(a: argparse.Namespace) -> int:
     import numpy as np
 
     from planner.catch.livecli import run_session
-    from planner.catch.results import CatchResult
-    from planner.catch.session import CatchSession
+    from planner.catch.plan.results import CatchResult
+    from planner.catch.live.session import CatchSession
     from planner.catch.summary import catch_dict, format_summary
     from planner.errors import InputError
 

@@ -18,8 +18,8 @@ import math
 
 import numpy as np
 
-from planner.catch.flight import Flight
-from planner.catch.intercept import (
+from planner.catch.flight.path import Flight
+from planner.catch.plan.intercept import (
     SEARCH_AFTER_S,
     Intercept,
     Wrist,

@@ -1,4 +1,4 @@
-"""The motion of a live catch (``planner.catch.session``): the hand at rest, the move to
+"""The motion of a live catch (``planner.catch.live.session``): the hand at rest, the move to
 the open pose, the arm re-aimed at every newer intercept, the fingers' closing move.
 
 * Fingers: a min-jerk phase from the rest pose to the open one (``trajectory.Phase``;
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.catch.stopping import StopDynamics
+from planner.catch.plan.stopping import StopDynamics
 from planner.hand.model import HandModel
 from planner.trajectory import min_jerk, phase_duration
 
@@ -126,11 +126,11 @@ class Quintic:
         """Positions in [lo, hi], |speed| <= v_max, |acceleration| <= a_max on a grid of
         ``step_s`` over the move (both ends included); ``motors`` (m, k), ``room`` (m,):
         also |motors @ acceleration| <= room there (``LiveMotion.reaim``'s motor rule)."""
-        return self.within_bounds(*_bounds(lo, hi, v_max, a_max, room), step_s, motors)
+        return self.within_bounds(*quintic_bounds(lo, hi, v_max, a_max, room), step_s, motors)
 
     def within_bounds(self, lb: np.ndarray, ub: np.ndarray, step_s: float,
                       motors: np.ndarray | None = None) -> bool:
-        """``within`` with its bounds as two rows (``_bounds``: positions, speeds,
+        """``within`` with its bounds as two rows (``quintic_bounds``: positions, speeds,
         accelerations, then the motors' torques): ``MoveCheck.holds`` of this move."""
         return MoveCheck(self.q0, self.v0, self.a0, self.q1, lb, ub, step_s, motors).holds(
             self.duration_s, self.c)
@@ -149,7 +149,7 @@ def _coefficients(D: float, X: np.ndarray) -> np.ndarray:
 class MoveCheck:
     """The grid check of the arm's moves from (q0, v0, a0) to rest at q1, whatever their
     duration (``LiveMotion.reaim`` tries several): positions, speeds, accelerations and
-    ``motors`` @ accelerations within [lb, ub] (``_bounds``) on a grid of ``step_s`` over
+    ``motors`` @ accelerations within [lb, ub] (``quintic_bounds``) on a grid of ``step_s`` over
     the move (both ends included). Every quantity on the grid is a polynomial in tau of
     degree <= 5, so the grid's powers of u = tau / D (one table per number of points,
     ``_unit_grid``) times one coefficient matrix (6, 3k + m) give all of them in one
@@ -214,7 +214,7 @@ def _min_jerk1(u: float) -> float:
     return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
 
 
-def _bounds(lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+def quintic_bounds(lo: np.ndarray, hi: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
             room: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``Quintic.within_bounds``' rows: positions in [lo, hi] (1e-12 rad of rounding),
     speeds and accelerations within +-their limits, motor torques within +-``room``."""
@@ -279,7 +279,7 @@ class LiveMotion:
         # every motor at either end of the move (rows: the start's, then the end's)
         MH, room = (np.concatenate(x) for x in zip(*self._ends(self.row1(t_s, q), q_target)))
         # (the acceleration it starts with is the move's it replaces: allowed as it is)
-        lb, ub = _bounds(self._lo, self._hi, self._v, self._a, np.maximum(room, np.abs(MH @ a)))
+        lb, ub = quintic_bounds(self._lo, self._hi, self._v, self._a, np.maximum(room, np.abs(MH @ a)))
 
         for share in PART_SHARES:
             goal = self.seg.q1 + share * (q1 - self.seg.q1)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.catch.flight import Flight
+from planner.catch.flight.path import Flight
 
 
 def observe_throw(session, flight: Flight, noise_m: float, rate_hz: float,

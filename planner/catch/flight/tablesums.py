@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner.catch.flight import DragNodes
+from planner.catch.flight.path import DragNodes
 
 
 class TableSums(NamedTuple):

@@ -5,15 +5,31 @@ held to the end."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pinocchio as pin
 
-from planner.catch.arm import palm_target
-from planner.catch.flight import Flight
-from planner.catch.geometry import interp_row
+from planner.catch.flight.path import Flight
+from planner.catch.plan.arm import palm_target
+from planner.catch.plan.geometry import interp_row
+from planner.catch.plan.reasons import CatchReason, Reason
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
 from planner.hand.model import HandModel
 from planner.hand.spec import PALM_FRAME
+
+
+@dataclass(frozen=True)
+class RowVerdict:
+    """The self-check of a catch's rows: the palm's distance from the ball at the intercept,
+    the least fingertip clearance before it, the grasp's time and fingers (None, () without
+    one), and the reasons the rows fail (each made where it is found)."""
+
+    error_m: float
+    clearance_m: float
+    grasp_t: float | None
+    grasp_fingers: tuple[str, ...]
+    reasons: tuple[Reason, ...]
 
 
 class RowCheck:
@@ -50,14 +66,15 @@ class RowCheck:
               t_i: float, t_static: float, rate_hz: float, grasp_known_bad: bool = False):
         """The independent check's catch criteria on the rows ``Q`` at times ``t``: the
         intercept error, the least fingertip clearance before it, the grasp's time and
-        fingers, and the reasons it fails (if any)."""
+        fingers, and the reasons it fails (if any): a ``RowVerdict``."""
         reasons = []
         h = self.hand
         qi = interp_row(t, Q, t_i)
         P = palm_target(h, qi, r)
         err = float(np.linalg.norm(flight.position(t_i) - C - P))
         if err > INTERCEPT_TOL_M:
-            reasons.append(f"the palm misses the ball by {1000 * err:.0f} mm at t = {t_i:.3f} s")
+            reasons.append(Reason(CatchReason.MISS, f"the palm misses the ball by "
+                                  f"{1000 * err:.0f} mm at t = {t_i:.3f} s"))
         # rows that matter: before the intercept those in which the ball is within
         # ``near_m`` of the palm target (no fingertip reaches farther); after it, rows until
         # the hand stops moving (``t_static``; later rows repeat the last), and the last row
@@ -76,8 +93,9 @@ class RowCheck:
             clear = float(d.min())
             if clear < 0:
                 k, f = np.unravel_index(int(np.argmin(d)), d.shape)
-                reasons.append(f"fingers in the way: {h.fingers[f]} tip inside the ball at "
-                               f"t = {tt[before][k]:.3f} s, before the intercept")
+                reasons.append(Reason(CatchReason.FINGERS, (
+                    f"fingers in the way: {h.fingers[f]} tip inside the ball at "
+                    f"t = {tt[before][k]:.3f} s, before the intercept")))
         after = ~before
         centre = palm[after, :3, 3] + r * palm[after, :3, 2]
         d = np.linalg.norm(tips[after] - centre[:, None, :], axis=-1)
@@ -93,12 +111,13 @@ class RowCheck:
             g_f = tuple(f for j, f in enumerate(h.fingers) if closed[k, j])
             if not ok[k:].all():
                 lost = k + int(np.argmin(ok[k:]))
-                reasons.append(f"grasp lost at t = {ta[lost]:.3f} s")
+                reasons.append(Reason(CatchReason.GRASP, f"grasp lost at t = {ta[lost]:.3f} s"))
         elif not grasp_known_bad:
             k = int(np.argmax(ok)) if ok.any() else None
             when = (f"only at t = {ta[k]:.3f} s ({1000 * (ta[k] - t_i):.0f} ms after the "
                     "intercept)" if k is not None else "never")
-            reasons.append(f"too slow to close: the grasp (thumb + {GRASP_MIN_TIPS - 1} "
-                           f"fingertips within radius + {1000 * GRASP_TOL_M:g} mm) holds {when}"
-                           f", limit {1000 * GRASP_WINDOW_S:g} ms")
-        return err, clear, g_t, g_f, reasons
+            reasons.append(Reason(CatchReason.GRASP, (
+                f"too slow to close: the grasp (thumb + {GRASP_MIN_TIPS - 1} "
+                f"fingertips within radius + {1000 * GRASP_TOL_M:g} mm) holds {when}"
+                f", limit {1000 * GRASP_WINDOW_S:g} ms")))
+        return RowVerdict(err, clear, g_t, tuple(g_f), tuple(reasons))

@@ -1,7 +1,7 @@
 """Camera observations of a thrown ball: reading them (``t,x,y,z`` CSV, catch frame),
 fitting a flight to them with its uncertainty (``fit_observations``), and what that
 uncertainty means where the ball meets the hand (``predict_intercept``). The flight
-itself, vacuum or drag, is ``planner.catch.flight``."""
+itself, vacuum or drag, is ``planner.catch.flight.path``."""
 
 from __future__ import annotations
 
@@ -14,17 +14,17 @@ from typing import Any
 
 import numpy as np
 
-from planner.catch.flight import (
-    _FD_STEP,
-    GRAVITY,
-    MAX_LAUNCH_SPEED,
+from planner.catch.flight.path import (
+    FD_STEP,
+    GRAVITY_M_S2,
+    MAX_LAUNCH_SPEED_M_S,
     MAX_OBS_RANGE_M,
-    MAX_TIME,
+    MAX_TIME_S,
     Ball,
     Flight,
-    _finite,
-    _step_for,
+    finite_float,
     get_ball,
+    step_for,
 )
 from planner.errors import InputError, PlannerError, SolverError
 
@@ -59,9 +59,9 @@ def _check_observations(ts: Any, ps: Any, min_rows: int) -> tuple[np.ndarray, np
         raise InputError("observations must be finite (no NaN or inf)")
     if np.any(np.diff(t) <= 0):
         raise InputError("observation times must be strictly increasing")
-    if np.any(np.abs(t) > MAX_TIME):
-        i = int(np.argmax(np.abs(t) > MAX_TIME))
-        raise InputError(f"observation {i + 1}: t = {t[i]:.6g} s is more than {MAX_TIME:g} s "
+    if np.any(np.abs(t) > MAX_TIME_S):
+        i = int(np.argmax(np.abs(t) > MAX_TIME_S))
+        raise InputError(f"observation {i + 1}: t = {t[i]:.6g} s is more than {MAX_TIME_S:g} s "
                          "from the launch")
     far = np.abs(p).max(axis=1) > MAX_OBS_RANGE_M  # (a norm of such values overflows)
     if np.any(far):
@@ -84,8 +84,8 @@ def _fd_jacobian(fun, theta: np.ndarray) -> np.ndarray:
     cols = []
     for i in range(theta.size):
         e = np.zeros_like(theta)
-        e[i] = _FD_STEP
-        cols.append((fun(theta + e) - fun(theta - e)) / (2.0 * _FD_STEP))
+        e[i] = FD_STEP
+        cols.append((fun(theta + e) - fun(theta - e)) / (2.0 * FD_STEP))
     return np.stack(cols, axis=-1)
 
 
@@ -98,19 +98,19 @@ def fit_observations(
     k > 0: least squares on the drag model from the vacuum fit (N >= 6).
     """
     b = get_ball(ball)
-    k = _finite("drag_per_m", drag_per_m)
+    k = finite_float("drag_per_m", drag_per_m)
     if k < 0:
         raise InputError(f"drag_per_m must be >= 0, got {k}")
     t, p = _check_observations(ts, ps, 6 if k > 0 else 3)
     n = t.size
     A = np.stack([np.ones(n), t], axis=1)
-    y = p - 0.5 * GRAVITY * (t * t)[:, None]
+    y = p - 0.5 * GRAVITY_M_S2 * (t * t)[:, None]
     coef, *_ = np.linalg.lstsq(A, y, rcond=None)  # (2, 3): rows p0, v0
     theta = np.concatenate([coef[0], coef[1]])
     speed = float(np.linalg.norm(theta[3:]))
-    if speed > MAX_LAUNCH_SPEED:
+    if speed > MAX_LAUNCH_SPEED_M_S:
         raise InputError(f"the observations move at {speed:.4g} m/s at t = 0, faster than any "
-                         f"throw (at most {MAX_LAUNCH_SPEED:g} m/s)")
+                         f"throw (at most {MAX_LAUNCH_SPEED_M_S:g} m/s)")
     if k == 0.0:
         res = y - A @ coef
         M = np.linalg.pinv(A.T @ A)
@@ -121,7 +121,7 @@ def fit_observations(
             cov[np.ix_(idx, idx)] = sigma[ax] ** 2 * M
         flight = Flight(theta[:3], theta[3:], b, 0.0)
     else:
-        step = _step_for(k, float(np.linalg.norm(theta[3:])))
+        step = step_for(k, float(np.linalg.norm(theta[3:])))
 
         def resid(th: np.ndarray) -> np.ndarray:
             return (Flight(th[:3], th[3:], b, k, step_s=step).position(t) - p).ravel()
@@ -163,7 +163,7 @@ def predict_intercept(
     uncertainty is the fit covariance propagated through a central-difference
     Jacobian of (t, p) with respect to [p0, v0].
     """
-    x = _finite("x_plane", x_plane)
+    x = finite_float("x_plane", x_plane)
     fl = fit.flight
 
     def crossing(th: np.ndarray) -> np.ndarray:

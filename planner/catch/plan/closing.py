@@ -8,11 +8,11 @@ import math
 
 import numpy as np
 
-from planner.catch.arm import CatchJoints, open_from, zero_pose
-from planner.catch.flight import Flight
-from planner.catch.geometry import unit
-from planner.catch.intercept import Wrist
-from planner.catch.results import Closing
+from planner.catch.flight.path import Flight
+from planner.catch.plan.arm import CatchJoints, open_from, zero_pose
+from planner.catch.plan.geometry import unit
+from planner.catch.plan.intercept import Wrist
+from planner.catch.plan.results import Closing
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M
 from planner.hand.model import HandModel
 from planner.ik import HandIK, PressTarget
@@ -31,15 +31,15 @@ TIP_ELEVATION_MAX_DEG = 70.0  # ... raised up to this for a finger whose body is
 ELEVATION_STEP_DEG = 10.0  # ... in these steps
 _ELEVATION_TRIES = 4  # 40, 50, 60, 70 deg
 _N_CLOSE = 201  # samples of the closing move (palm frame table)
-_N_CAND = 25  # candidate starts of the closing move
+N_CAND = 25  # candidate starts of the closing move
 _CAND_CHUNK = 4  # ... judged this many at a time, earliest first (the first clear one is
 # among the first four in 93 % of a live catch's re-plans: bench_live throws, 100 Hz)
-_CAND_STEPS = np.arange(_N_CAND, dtype=float)  # the candidates' steps from the earliest
+_CAND_STEPS = np.arange(N_CAND, dtype=float)  # the candidates' steps from the earliest
 
 
 def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
                  r: float, bodies: bool = True) -> Closing:
-    """The closing move for a ball of radius ``r`` on the palm (``planner.catch.plan``,
+    """The closing move for a ball of radius ``r`` on the palm (``planner.catch.plan.api``,
     step 2): fingertips ``TIP_GAP_M`` outside the ball, each ``TIP_ELEVATION_DEG`` above
     its equator on its finger's side (IK, the arm locked); the grasp condition along the
     min-jerk move in the palm frame. ``bodies``: the fingers' bodies, too, kept
@@ -258,10 +258,10 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
     # its pad sphere, so a start whose fingertips touch the ball has a body touching it:
     # the tips are judged first (cheap), the bodies only for the starts whose tips are
     # clear.
-    cands = _CAND_STEPS * ((t_i - want) / (_N_CAND - 1)) + want
+    cands = _CAND_STEPS * ((t_i - want) / (N_CAND - 1)) + want
     cands[-1] = t_i
     n_tab = len(closing.u)
-    for lo in range(0, _N_CAND, _CAND_CHUNK):  # the first clear one is nearly always early
+    for lo in range(0, N_CAND, _CAND_CHUNK):  # the first clear one is nearly always early
         c = cands[lo:lo + _CAND_CHUNK]
         U = np.clip((tt[None, :] - c[:, None]) / closing.duration_s, 0.0, 1.0)
         k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)

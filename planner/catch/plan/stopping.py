@@ -1,5 +1,5 @@
 """The soft catch: the palm meets the ball already moving along its path, then brings it
-to rest (``planner.catch.plan``, step 3).
+to rest (``planner.catch.plan.api``, step 3).
 
 The arm (rail, wrist flexion and deviation) follows one profile through the intercept
 pose q_i: q(t) = q_i + qd_c sigma(t), sigma a time-like scalar: at rest, a min-jerk rise
@@ -41,11 +41,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from planner.catch.arm import CatchJoints, open_from, palm_target
-from planner.catch.flight import Flight
+from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix, palm_jacobian
-from planner.catch.intercept import Intercept, Wrist, find_intercept
-from planner.catch.results import Closing
+from planner.catch.plan.arm import CatchJoints, open_from, palm_target
+from planner.catch.plan.intercept import Intercept, Wrist, find_intercept
+from planner.catch.plan.results import Closing
 from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.check.kinematics import Kinematics
@@ -221,7 +221,7 @@ class StopDynamics:
         its capacity while it moves the hand (its inertia at the peak acceleration PEAK_ACC
         |dq| / T^2, at either end, against gravity: ``accel_room``). ``arm_alone``: the
         arm's part of that acceleration alone within the room too (how a live session
-        bounds its re-aims, ``planner.catch.livemotion``)."""
+        bounds its re-aims, ``planner.catch.live.motion``)."""
         return self.room_time((q_from, q_to), q_to - q_from, STOP_SHARE, arm_alone)
 
     def room_time(self, ends: tuple[np.ndarray, np.ndarray], dq: np.ndarray, share: float,
@@ -480,11 +480,11 @@ def hold_turn(dyn: StopDynamics, q_end: np.ndarray, tilt_deg: float = HOLD_TILT_
     pad = 0.5 * (1.0 - LIMIT_MARGIN) * (hi - lo)
     want = -math.sin(math.radians(tilt_deg))
     coarse = np.linspace(lo + pad, hi - pad, 53)  # ~0.05 rad apart, then 0.005 about the best
-    best = _best_flex(h, q_end, i, coarse, want)
+    best = best_flex(h, q_end, i, coarse, want)
     if best is None:
         return z, 0.0
     d = float(coarse[1] - coarse[0])
-    best = _best_flex(h, q_end, i, np.clip(np.linspace(best - d, best + d, 21), lo + pad,
+    best = best_flex(h, q_end, i, np.clip(np.linspace(best - d, best + d, 21), lo + pad,
                                            hi - pad), want)
     z[i] = best - q_end[i]
     T = turn_time(dyn, q_end, z)
@@ -499,7 +499,7 @@ def turn_time(dyn: StopDynamics, q_from: np.ndarray, delta: np.ndarray) -> float
     return dyn.room_time((q_from, q_from + delta), delta, TURN_SHARE)
 
 
-def _best_flex(h: HandModel, q_end: np.ndarray, i: int, cand: np.ndarray, want: float
+def best_flex(h: HandModel, q_end: np.ndarray, i: int, cand: np.ndarray, want: float
                ) -> float | None:
     """Among flexion angles ``cand`` (joint ``i``; the rest as ``q_end``) the one whose palm
     faces up with gravity's share along its +y (towards the wrist) nearest ``want``, the

@@ -1,5 +1,5 @@
 """Ball flight for the catch planner: throws in a vacuum and with drag (fitting a flight to
-camera observations: ``planner.catch.observe``).
+camera observations: ``planner.catch.flight.observe``).
 
 Catch frame (spec section 5): origin at the ball's launch point, +x horizontal
 towards the hand, z up. The ball leaves at t = 0 in the x-z plane at ``angle``
@@ -39,50 +39,50 @@ from typing import Any
 
 import numpy as np
 
-from planner.balls import BALLS, RHO_AIR, Ball, _finite, get_ball  # (shared with the check)
-from planner.catch.dragtable import (  # (the RK4 table of a drag flight)
+from planner.balls import BALLS, RHO_AIR, Ball, finite_float, get_ball  # (shared with the check)
+from planner.catch.flight.dragtable import (  # (the RK4 table of a drag flight)
+    G_M_S2,
     DragNodes,
-    G,
-    _cross_fraction,
-    _hermite,
-    _hermite_np,
-    _rk4_run,
-    _step_for,
-    _Table,
+    RK4Table,
+    cross_fraction,
+    hermite,
+    hermite_np,
+    rk4_run,
+    step_for,
 )
 from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
 
 __all__ = [
     "BALLS",
-    "GRAVITY",
-    "MAX_HEIGHT",
-    "MAX_LAUNCH_SPEED",
-    "MAX_TIME",
+    "GRAVITY_M_S2",
+    "G_M_S2",
+    "MAX_HEIGHT_M",
+    "MAX_LAUNCH_SPEED_M_S",
+    "MAX_TIME_S",
     "RHO_AIR",
     "Ball",
     "Flight",
-    "G",
     "flight_time_to",
     "get_ball",
     "predict_throw",
 ]
 
-GRAVITY = np.array([0.0, 0.0, -G])
-GRAVITY.setflags(write=False)
-MAX_LAUNCH_SPEED = 100.0
+GRAVITY_M_S2 = np.array([0.0, 0.0, -G_M_S2])
+GRAVITY_M_S2.setflags(write=False)
+MAX_LAUNCH_SPEED_M_S = 100.0
 """Fastest launch speed predict_throw will propose, m/s."""
-MAX_HEIGHT = 10.0
+MAX_HEIGHT_M = 10.0
 """|height| of the target point must be below this, m."""
-MAX_TIME = 100.0
-"""Drag flights are only evaluated for |t| <= MAX_TIME seconds."""
-MAX_OBS_RANGE_M = MAX_LAUNCH_SPEED * MAX_TIME + 0.5 * G * MAX_TIME**2
-"""The farthest a ball launched at MAX_LAUNCH_SPEED gets from the launch point within
-MAX_TIME (vacuum): an observation farther off is no ball of a throw, m."""
+MAX_TIME_S = 100.0
+"""Drag flights are only evaluated for |t| <= MAX_TIME_S seconds."""
+MAX_OBS_RANGE_M = MAX_LAUNCH_SPEED_M_S * MAX_TIME_S + 0.5 * G_M_S2 * MAX_TIME_S**2
+"""The farthest a ball launched at MAX_LAUNCH_SPEED_M_S gets from the launch point within
+MAX_TIME_S (vacuum): an observation farther off is no ball of a throw, m."""
 
 _SHOOT_TOL = 1e-9  # m, height miss accepted by the shooting
-_HALF_GZ = 0.5 * -G  # z of 0.5 * GRAVITY
+_HALF_GZ_M_S2 = 0.5 * -G_M_S2  # z of 0.5 * GRAVITY_M_S2
 _S_S_Z = np.array([0, 0, 1])  # (s, z) -> (s, s, z)
-_FD_STEP = 1e-6  # m and m/s, central finite-difference step on [p0, v0]
+FD_STEP = 1e-6  # m and m/s, central finite-difference step on [p0, v0]
 
 
 # --------------------------------------------------------------------------- helpers
@@ -117,14 +117,14 @@ class Flight:
     ball: Ball
     drag_per_m: float
     step_s: float | None = None
-    _table: _Table | None = field(default=None, init=False, repr=False)
+    _table: RK4Table | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "p0", _vec3("p0", self.p0))
         object.__setattr__(self, "v0", _vec3("v0", self.v0))
         if not isinstance(self.ball, Ball):
             raise InputError(f"ball must be a Ball, got {type(self.ball).__name__}")
-        k = _finite("drag_per_m", self.drag_per_m)
+        k = finite_float("drag_per_m", self.drag_per_m)
         if k < 0:
             raise InputError(f"drag_per_m must be >= 0, got {k}")
         object.__setattr__(self, "drag_per_m", k)
@@ -140,13 +140,13 @@ class Flight:
         vx, vy, vz = (float(c) for c in self.v0)
         u0 = math.hypot(vx, vy)
         if self.step_s is None:
-            h = _step_for(k, math.hypot(u0, vz))
+            h = step_for(k, math.hypot(u0, vz))
         else:
-            h = _finite("step_s", self.step_s)
+            h = finite_float("step_s", self.step_s)
             if h <= 0:
                 raise InputError(f"step_s must be > 0, got {h}")
         object.__setattr__(self, "step_s", h)
-        object.__setattr__(self, "_table", _Table(u0, vz, k, h))
+        object.__setattr__(self, "_table", RK4Table(u0, vz, k, h))
 
     @property
     def speed(self) -> float:
@@ -160,8 +160,8 @@ class Flight:
             raise InputError(f"t must be a number or an array of numbers, got {t!r}") from None
         if not np.all(np.isfinite(ta)):
             raise InputError("t must be finite")
-        if self._table is not None and ta.size and np.max(np.abs(ta)) > MAX_TIME:
-            raise InputError(f"t must be within +-{MAX_TIME:g} s for a drag flight")
+        if self._table is not None and ta.size and np.max(np.abs(ta)) > MAX_TIME_S:
+            raise InputError(f"t must be within +-{MAX_TIME_S:g} s for a drag flight")
         return ta
 
     def _lookup(self, ta: np.ndarray) -> tuple:
@@ -179,7 +179,7 @@ class Flight:
         """A drag flight's table made to cover [0, ``t_s``] in one run (a look-up there then
         integrates nothing; growing on demand may integrate up to half again as far)."""
         if self._table is not None:
-            self._table.ensure(0.0, min(float(t_s), MAX_TIME))
+            self._table.ensure(0.0, min(float(t_s), MAX_TIME_S))
 
     def nodes(self, t_hi: float) -> DragNodes:
         """A drag flight's table, integrated to cover [0, ``t_hi``] (PlannerError for a
@@ -194,8 +194,8 @@ class Flight:
         """``_times`` for one time (a float): the same checks without numpy."""
         if not math.isfinite(t):
             raise InputError("t must be finite")
-        if self._table is not None and abs(t) > MAX_TIME:
-            raise InputError(f"t must be within +-{MAX_TIME:g} s for a drag flight")
+        if self._table is not None and abs(t) > MAX_TIME_S:
+            raise InputError(f"t must be within +-{MAX_TIME_S:g} s for a drag flight")
         return float(t)
 
     def position1(self, t: float) -> tuple[float, float, float]:
@@ -205,11 +205,11 @@ class Flight:
         px, py, pz = self._p0_t
         if self._table is None:
             vx, vy, vz = self._v0_t
-            return px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ * t * t
+            return px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ_M_S2 * t * t
         j, th, (_, S, Z, U, W, _, _) = self._table.node1(t)
         h = self._table.h
-        s = _hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
-        z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        s = hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
         ex, ey = self._dir
         return px + ex * s, py + ey * s, pz + z
 
@@ -219,13 +219,13 @@ class Flight:
         px, py, pz = self._p0_t
         if self._table is None:
             vx, vy, vz = self._v0_t
-            return (px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ * t * t, vx, vy, vz - G * t)
+            return (px + vx * t, py + vy * t, pz + vz * t + _HALF_GZ_M_S2 * t * t, vx, vy, vz - G_M_S2 * t)
         j, th, (_, S, Z, U, W, AS, AW) = self._table.node1(t)
         h = self._table.h
-        s = _hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
-        z = _hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
-        u = _hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
-        w = _hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        s = hermite(S[j], S[j + 1], U[j], U[j + 1], h, th)
+        z = hermite(Z[j], Z[j + 1], W[j], W[j + 1], h, th)
+        u = hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
         ex, ey = self._dir
         return px + ex * s, py + ey * s, pz + z, ex * u, ey * u, w
 
@@ -234,11 +234,11 @@ class Flight:
         t = self._time1(t)
         if self._table is None:
             vx, vy, vz = self._v0_t
-            return vx, vy, vz - G * t
+            return vx, vy, vz - G_M_S2 * t
         j, th, (_, _, _, U, W, AS, AW) = self._table.node1(t)
         h = self._table.h
-        u = _hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
-        w = _hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
+        u = hermite(U[j], U[j + 1], AS[j], AS[j + 1], h, th)
+        w = hermite(W[j], W[j + 1], AW[j], AW[j + 1], h, th)
         ex, ey = self._dir
         return ex * u, ey * u, w
 
@@ -249,9 +249,9 @@ class Flight:
         ta = self._times(t)
         if self._table is None:
             tt = ta[..., None]
-            return self.p0 + self.v0 * tt + 0.5 * GRAVITY * tt * tt
+            return self.p0 + self.v0 * tt + 0.5 * GRAVITY_M_S2 * tt * tt
         j, j1, th, h, (P, D, _) = self._lookup(ta)
-        sz = _hermite_np(P[j], P[j1], D[j], D[j1], h, th)  # (s, z)
+        sz = hermite_np(P[j], P[j1], D[j], D[j1], h, th)  # (s, z)
         return self.p0 + sz[..., _S_S_Z] * self._dir3  # (ex s, ey s, z)
 
     def velocity(self, t: Any) -> np.ndarray:
@@ -260,20 +260,20 @@ class Flight:
             return np.array(self.velocity1(t))
         ta = self._times(t)
         if self._table is None:
-            return self.v0 + GRAVITY * ta[..., None]
+            return self.v0 + GRAVITY_M_S2 * ta[..., None]
         j, j1, th, h, (_, D, A) = self._lookup(ta)
-        uw = _hermite_np(D[j], D[j1], A[j], A[j1], h, th)  # (u, w)
+        uw = hermite_np(D[j], D[j1], A[j], A[j1], h, th)  # (u, w)
         return uw[..., _S_S_Z] * self._dir3  # (ex u, ey u, w)
 
     def time_at_x(self, x: Any) -> Any:
         """Time t >= 0 at which the ball crosses the plane x = ``x`` (float, or array).
 
-        InfeasibleError if it does not cross it at any t in [0, MAX_TIME].
+        InfeasibleError if it does not cross it at any t in [0, MAX_TIME_S].
         """
         if np.ndim(x):
             xa = np.asarray(x, dtype=float)
             return np.array([self.time_at_x(float(xi)) for xi in xa.reshape(-1)]).reshape(xa.shape)
-        xf = _finite("x", x)
+        xf = finite_float("x", x)
         dx = xf - float(self.p0[0])
         vx = float(self.v0[0])
         if dx == 0.0:
@@ -289,14 +289,14 @@ class Flight:
         s_t = dx / self._dir[0]
         S, U = tab.fwd[0], tab.fwd[2]
         while S[-1] < s_t:
-            if (len(S) - 1) * tab.h >= MAX_TIME:
+            if (len(S) - 1) * tab.h >= MAX_TIME_S:
                 raise InfeasibleError(
-                    f"the ball does not reach the plane x = {xf:g} m within {MAX_TIME:g} s"
+                    f"the ball does not reach the plane x = {xf:g} m within {MAX_TIME_S:g} s"
                 )
-            tab.ensure(0.0, min(MAX_TIME, 2.0 * (len(S) - 1) * tab.h + 1.0))
+            tab.ensure(0.0, min(MAX_TIME_S, 2.0 * (len(S) - 1) * tab.h + 1.0))
         i = int(np.searchsorted(S, s_t, side="left"))
         i = max(i, 1)
-        th = _cross_fraction(S[i - 1], S[i], U[i - 1], U[i], tab.h, s_t)
+        th = cross_fraction(S[i - 1], S[i], U[i - 1], U[i], tab.h, s_t)
         return (i - 1 + th) * tab.h
 
     def to_metadata(self) -> dict[str, Any]:
@@ -316,18 +316,18 @@ class Flight:
 def check_throw(angle_deg: Any, dist_m: Any, height_m: Any, prefix: str = ""
                 ) -> tuple[float, float, float]:
     """(angle, dist, height) as floats, or InputError: 0 < angle < 90 deg, dist > 0,
-    |height| < MAX_HEIGHT, all finite. ``prefix`` goes before the names in messages
+    |height| < MAX_HEIGHT_M, all finite. ``prefix`` goes before the names in messages
     (``--`` for the command line)."""
-    a = _finite(f"{prefix}angle", angle_deg)
+    a = finite_float(f"{prefix}angle", angle_deg)
     if not 0.0 < a < 90.0:
         raise InputError(f"{prefix}angle must be strictly between 0 and 90 degrees, got {a:g}")
-    d = _finite(f"{prefix}dist", dist_m)
+    d = finite_float(f"{prefix}dist", dist_m)
     if d <= 0.0:
         raise InputError(f"{prefix}dist must be > 0 m, got {d:g}")
-    h = _finite(f"{prefix}height", height_m)
-    if not abs(h) < MAX_HEIGHT:
+    h = finite_float(f"{prefix}height", height_m)
+    if not abs(h) < MAX_HEIGHT_M:
         raise InputError(
-            f"{prefix}height must be between -{MAX_HEIGHT:g} and {MAX_HEIGHT:g} m (exclusive), "
+            f"{prefix}height must be between -{MAX_HEIGHT_M:g} and {MAX_HEIGHT_M:g} m (exclusive), "
             f"got {h:g}"
         )
     return a, d, h
@@ -341,11 +341,11 @@ def _vacuum_speed(a_rad: float, d: float, h: float, angle_deg: float) -> float:
             f"must be below dist*tan(angle) = {d * math.tan(a_rad):.4g} m"
         )
     c = math.cos(a_rad)
-    v = math.sqrt(G * d * d / (2.0 * c * c * rise))
-    if v > MAX_LAUNCH_SPEED:
+    v = math.sqrt(G_M_S2 * d * d / (2.0 * c * c * rise))
+    if v > MAX_LAUNCH_SPEED_M_S:
         raise InputError(
             f"a throw at {angle_deg:g} deg through ({d:g}, 0, {h:g}) m needs {v:.4g} m/s, "
-            f"more than {MAX_LAUNCH_SPEED:g} m/s"
+            f"more than {MAX_LAUNCH_SPEED_M_S:g} m/s"
         )
     return v
 
@@ -353,8 +353,8 @@ def _vacuum_speed(a_rad: float, d: float, h: float, angle_deg: float) -> float:
 def _shoot_drag(a_rad: float, d: float, h: float, k: float, v_vac: float, angle_deg: float):
     """Launch speed whose drag flight passes through (d, 0, h); returns (v, step, lists)."""
     ca, sa = math.cos(a_rad), math.sin(a_rad)
-    step = _step_for(k, v_vac)
-    n_max = int(MAX_TIME / step) + 1
+    step = step_for(k, v_vac)
+    n_max = int(MAX_TIME_S / step) + 1
 
     z_floor = h - 1.0
 
@@ -363,10 +363,10 @@ def _shoot_drag(a_rad: float, d: float, h: float, k: float, v_vac: float, angle_
         first, the miss extrapolated along its path from there (keeps the secant sane)."""
         lists = ([0.0], [0.0], [v * ca], [v * sa])
         S, Z, U, W = lists
-        _rk4_run(S, Z, U, W, k, step, n_max, d, z_floor)
+        rk4_run(S, Z, U, W, k, step, n_max, d, z_floor)
         if S[-1] >= d:
-            th = _cross_fraction(S[-2], S[-1], U[-2], U[-1], step, d)
-            return _hermite(Z[-2], Z[-1], W[-2], W[-1], step, th) - h, lists
+            th = cross_fraction(S[-2], S[-1], U[-2], U[-1], step, d)
+            return hermite(Z[-2], Z[-1], W[-2], W[-1], step, th) - h, lists
         slope = abs(W[-1]) / max(U[-1], 1e-9)
         return Z[-1] - h - slope * (d - S[-1]), lists
 
@@ -375,24 +375,24 @@ def _shoot_drag(a_rad: float, d: float, h: float, k: float, v_vac: float, angle_
     f1, lists = run(v1)
     if abs(f1) <= _SHOOT_TOL:
         return v1, step, lists
-    v2 = v1 - f1 / (G * d * d / (v1**3 * ca * ca))
+    v2 = v1 - f1 / (G_M_S2 * d * d / (v1**3 * ca * ca))
     for _ in range(12):
-        if not (0.0 < v2 <= 1.5 * MAX_LAUNCH_SPEED and math.isfinite(v2)):
+        if not (0.0 < v2 <= 1.5 * MAX_LAUNCH_SPEED_M_S and math.isfinite(v2)):
             break
         f2, lists = run(v2)
         if abs(f2) <= _SHOOT_TOL:
-            if v2 > MAX_LAUNCH_SPEED:
+            if v2 > MAX_LAUNCH_SPEED_M_S:
                 break
             return v2, step, lists
         if f2 == f1:
             break
         v1, f1, v2 = v2, f2, v2 - f2 * (v2 - v1) / (f2 - f1)
 
-    # Fallback: bracket [v_vac, MAX_LAUNCH_SPEED] (drag only ever needs more speed).
-    f_hi, _ = run(MAX_LAUNCH_SPEED)
+    # Fallback: bracket [v_vac, MAX_LAUNCH_SPEED_M_S] (drag only ever needs more speed).
+    f_hi, _ = run(MAX_LAUNCH_SPEED_M_S)
     if f_hi < 0.0:
         raise InputError(
-            f"no throw at {angle_deg:g} deg up to {MAX_LAUNCH_SPEED:g} m/s reaches "
+            f"no throw at {angle_deg:g} deg up to {MAX_LAUNCH_SPEED_M_S:g} m/s reaches "
             f"({d:g}, 0, {h:g}) m with drag k = {k:.4g} 1/m"
         )
     f_lo, _ = run(v_vac)
@@ -400,7 +400,7 @@ def _shoot_drag(a_rad: float, d: float, h: float, k: float, v_vac: float, angle_
         raise SolverError("drag shooting lost its bracket", problem=(angle_deg, d, h, k))
     from scipy.optimize import brentq  # (only here: scipy.optimize takes 0.25 s to import)
 
-    v = brentq(lambda v: run(v)[0], v_vac, MAX_LAUNCH_SPEED, xtol=1e-13, rtol=1e-15)
+    v = brentq(lambda v: run(v)[0], v_vac, MAX_LAUNCH_SPEED_M_S, xtol=1e-13, rtol=1e-15)
     return v, step, run(v)[1]
 
 
@@ -416,7 +416,7 @@ def predict_throw(
     ``ball``: a Ball, a name in BALLS, or None (the seed's ball). ``drag=False``
     flies it in a vacuum (k = 0, closed form); ``drag=True`` uses the ball's k and
     shoots for the launch speed. InputError on a bad argument, InfeasibleError
-    when no throw at that angle (at most MAX_LAUNCH_SPEED) reaches the point.
+    when no throw at that angle (at most MAX_LAUNCH_SPEED_M_S) reaches the point.
     """
     a, d, h = check_throw(angle_deg, dist_m, height_m)
     b = get_ball(ball)

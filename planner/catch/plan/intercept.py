@@ -1,5 +1,5 @@
 """Where the palm meets the ball: the wrist's geometry in the reference frame (the catch
-point at the origin) and the closed-form intercept it allows (``planner.catch.plan``,
+point at the origin) and the closed-form intercept it allows (``planner.catch.plan.api``,
 step 1): flexion from the ball's direction, the time from its height above the palm
 plane, deviation and rail in closed form; the palm's position alone (misaligned) where
 no pose faces the ball; out of reach where neither exists."""
@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.catch.arm import CatchJoints, zero_pose
-from planner.catch.flight import Flight
-from planner.catch.geometry import bracketed_secant, rot1, unit
+from planner.catch.flight.path import Flight
+from planner.catch.plan.arm import CatchJoints, zero_pose
+from planner.catch.plan.geometry import bracketed_secant, rot1, unit
 from planner.errors import PlannerError
 from planner.hand.model import HandModel
 
@@ -177,10 +177,10 @@ class Wrist:
 
 def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float,
                    tilt: float = 0.0) -> Intercept:
-    """Where and when the palm meets the ball near ``C`` (``planner.catch.plan``, step 1),
+    """Where and when the palm meets the ball near ``C`` (``planner.catch.plan.api``, step 1),
     searched around ``t_c`` (the throw's time at the catch point); ``tilt``: the palm
     normal turned this far (rad, about the flexion axis) from facing the ball (the soft
-    catch's choice, ``planner.catch.stopping``); 0 faces it."""
+    catch's choice, ``planner.catch.plan.stopping``); 0 faces it."""
     t = np.linspace(max(0.0, t_c - SEARCH_BEFORE_S), t_c + SEARCH_AFTER_S, _N_SEARCH)
     b = flight.position(t) - C
     v = flight.velocity(t)

@@ -1,6 +1,6 @@
 """The catch planner of one hand and mount: what is built once (the reference-mounted
 hand, its IK, joint groups, wrist geometry, rest pose, closing moves per ball size) and
-the plan of one throw (``CatchPlanner.plan``: the steps of ``planner.catch.plan``)."""
+the plan of one throw (``CatchPlanner.plan``: the steps of ``planner.catch.plan.api``)."""
 
 from __future__ import annotations
 
@@ -8,12 +8,13 @@ import math
 import time
 from dataclasses import dataclass, replace
 from itertools import pairwise
-from typing import Any
 
 import numpy as np
 
 from planner.catch import grasp as gq
-from planner.catch.arm import (
+from planner.catch.flight.observe import FitResult, predict_intercept
+from planner.catch.flight.path import Flight
+from planner.catch.plan.arm import (
     catch_joints,
     open_from,
     palm_target,
@@ -21,27 +22,35 @@ from planner.catch.arm import (
     rest_pose,
     zero_pose,
 )
-from planner.catch.closing import close_start, make_closing
-from planner.catch.flight import Flight
-from planner.catch.geometry import interp_row, rot1
-from planner.catch.intercept import Intercept, Wrist, closest_time, refine_time
-from planner.catch.mount import CatchMount
-from planner.catch.observe import FitResult, predict_intercept
-from planner.catch.results import CatchPlan, CatchReason, Closing, Reason
-from planner.catch.rowcheck import RowCheck
-from planner.catch.stopping import (
+from planner.catch.plan.closing import close_start, make_closing
+from planner.catch.plan.geometry import interp_row, rot1
+from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
+from planner.catch.plan.mount import CatchMount
+from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
+from planner.catch.plan.results import (
+    CatchPlan,
+    Closing,
+    Forces,
+    ForcesVerdict,
+    ThrowInfo,
+    make_catch_plan,
+)
+from planner.catch.plan.rowcheck import RowCheck
+from planner.catch.plan.stopping import (
     ROLL_WEIGHT,
     SoftStop,
     StopDynamics,
     plan_stop,
 )
-from planner.catch.turnahead import (
+from planner.catch.plan.turnahead import (
+    HoldStart,
     HoldTurn,
+    RowsArgs,
     Turn,
     TurnMode,
     ahead_shift,
 )
-from planner.check.ball import ball_loads
+from planner.check.ball import ball_load_instants, contact_loads, phase_loads
 from planner.check.ballroll import roll_judged, roll_problem
 from planner.check.ballstop import PAD_GIVE_M, pad_time_s
 from planner.check.criteria import GRASP_TOL_M
@@ -63,7 +72,7 @@ _NOT_THE_TURN = {CatchReason.OUT_OF_REACH, CatchReason.TOO_SOON}  # before the b
 
 
 @dataclass(frozen=True)
-class _Pose:
+class MeetPose:
     """The hand meeting the ball: the intercept, the open and closed poses there, the
     time the ball reaches the palm on them, its velocity then, the IK's iterations."""
 
@@ -122,16 +131,16 @@ class CatchPlanner:
 
     # ------------------------------------------------------------ plan
     def plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float = 100.0,
-             t_info: float = 0.0, throw: dict[str, Any] | None = None,
+             t_info: float = 0.0, throw: ThrowInfo | None = None,
              flight_time_s: float | None = None, fit: FitResult | None = None,
              soft: bool = True) -> CatchPlan:
         """Plan the catch of ``flight`` with the hand mounted at ``catch_point`` (catch
         frame). ``t_info``: when the flight is known (last observation); the hand moves
         from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written. ``soft``: the
-        soft catch (``planner.catch.stopping``), or the palm waiting at rest when that
+        soft catch (``planner.catch.plan.stopping``), or the palm waiting at rest when that
         alone passes the self-check (a palm that moves can bring the ball to a fingertip
         the closing would miss otherwise); False: the palm at rest. The hold (the roll term
-        of the contact speeds, the wrist's turn: ``planner.catch.stopping``): the turn from
+        of the contact speeds, the wrist's turn: ``planner.catch.plan.stopping``): the turn from
         the grasp on or earlier, so that the ball does not roll off the palm's wrist side before
         the turn has levelled it (``TurnMode.AHEAD``: ``HoldTurn.ahead_rows``), else from the grasp on
         (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
@@ -148,7 +157,7 @@ class CatchPlanner:
             if other.feasible:
                 plan = replace(other, notes=other.notes + (
                     "the fingertips' closing (bodies not kept clear of the ball): the "
-                    "closing failed (" + "; ".join(plan.reasons) + ")",))
+                    "closing failed (" + reasons_text(plan.reasons) + ")",))
         return replace(plan, planning_s=time.perf_counter() - t0)
 
     def _plans(self, args: tuple, soft: bool, bodies: bool) -> CatchPlan:
@@ -162,17 +171,17 @@ class CatchPlanner:
                 what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
                         "after the arm has stopped", None: "no turn to hold the ball"}[mode]
                 plan = replace(other, notes=other.notes + (
-                    f"{what}: the earlier turn failed (" + "; ".join(plan.reasons) + ")",))
+                    f"{what}: the earlier turn failed (" + reasons_text(plan.reasons) + ")",))
         if soft and not plan.feasible:
             still = self._plan(*args, soft=False, bodies=bodies)[0]
             if still.feasible:
                 plan = replace(still, notes=still.notes + (
                     "the palm waits at rest: the soft catch failed (" +
-                    "; ".join(plan.reasons) + ")",))
+                    reasons_text(plan.reasons) + ")",))
         return plan
 
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
-              throw: dict[str, Any] | None, flight_time_s: float | None,
+              throw: ThrowInfo | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
               bodies: bool = True) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
@@ -221,11 +230,12 @@ class CatchPlanner:
                                   f"(t = {pose.t_i:.3f} s)"))
         s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
                           pad_time_s(soft_stop.v_rel), r)
-        turn0 = self.turn.hold(pose, soft_stop) if turn_mode else (np.zeros(h.n), 0.0)
-        turn, t, Q, T_m, s_c, (err, clear, g_t, g_f, check_reasons) = self._closing_rows(
-            flight, C, turn0, turn_mode, (pose, q_pre, soft_stop, closing, t_react, T_m, s_c,
-                                          rate_hz))
-        reasons += _row_reasons(self.turn, check_reasons, flight, t, Q, pose.t_i)
+        turn0 = self.turn.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
+        turn, t, Q, T_m, s_c, verdict = self._closing_rows(
+            flight, C, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
+                                                  s_c, rate_hz))
+        reasons += verdict.reasons
+        reasons += roll_reasons(self.turn, flight, t, Q, pose.t_i)
         ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
         if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
             q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
@@ -233,50 +243,48 @@ class CatchPlanner:
         q_closed[arm] += soft_stop.last_offset
         q_closed += turn.delta  # the pose the ball is held in (the turn ends at rest)
         pose = replace(pose, q_closed=q_closed)
-        stop, hold, force_reasons, centre_i = self.forces(flight, pose, t, Q, r, g_t)
-        reasons += force_reasons
-        unc = None if fit is None else uncertainty(fit, float(C[0] + centre_i[0]))
-        return CatchPlan(
-            feasible=not reasons, reasons=tuple(reasons), flight=flight, catch_point=C,
-            T_world_root=self.mount.T_world_root(C), base_hand=self.base_hand,
-            rate_hz=float(rate_hz), throw=dict(throw or {}), launch_speed=flight.speed,
-            flight_time_s=flight_time_s, intercept_t=float(pose.t_i),
-            intercept_point=flight.position(pose.t_i), arrival_velocity=pose.v_i,
-            intercept_error_m=err, misalignment_deg=pose.misalign_deg, q_rest=self.q_rest,
-            q_open=q_pre, q_closed=pose.q_closed, move_start_s=t_react, move_s=T_m,
-            close_start_s=float(s_c), close_s=closing.duration_s, grasp_t=g_t,
-            grasp_fingers=g_f, min_clearance_before_m=clear, stop=stop, hold=hold, t=t, q=Q,
-            q_motor=h.motor_angles(Q), ik_iterations=pose.ik_iterations,
-            t_info_s=float(t_info), uncertainty=unc, planning_s=time.perf_counter() - t0,
-            notes=_turn_note(turn, pose.t_i), soft=soft_stop if np.any(soft_stop.qd) else None
-        ), ahead
+        fv = self.forces(flight, pose, t, Q, r, verdict.grasp_t,
+                         soft_stop if np.any(soft_stop.qd) else None)
+        reasons += fv.reasons
+        unc = None if fit is None else uncertainty(fit, float(C[0] + fv.centre_i[0]))
+        return make_catch_plan(
+            reasons=reasons, flight=flight, catch_point=C,
+            T_world_root=self.mount.T_world_root(C), base_hand=self.base_hand, hand=h,
+            rate_hz=rate_hz, throw=throw, pose=pose, verdict=verdict, q_rest=self.q_rest,
+            q_open=q_pre, move_start_s=t_react, move_s=T_m, close_start_s=s_c,
+            close_s=closing.duration_s,
+            forces=fv.forces,
+            t=t, Q=Q, t_info_s=float(t_info), flight_time_s=flight_time_s, uncertainty=unc,
+            notes=_turn_note(turn, pose.t_i), planning_s=time.perf_counter() - t0), ahead
 
-    def _closing_rows(self, flight: Flight, C: np.ndarray, turn0: tuple[np.ndarray, float],
-                      turn_mode: TurnMode | None, rows_args: tuple):
+    def _closing_rows(self, flight: Flight, C: np.ndarray, turn0: HoldStart,
+                      turn_mode: TurnMode | None, rows_args: RowsArgs):
         """The rows with the wrist's turn as ``turn_mode`` says and their self-check
         (``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
         keeps it near the fingers longer, so the closing waits a little more when a tip meets
         it. Returns the turn, the rows, the move-in's duration, the closing's start and the
         self-check's results."""
-        pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz = rows_args
+        pose, stop, closing = rows_args.pose, rows_args.stop, rows_args.closing
+        s_c = rows_args.s_c
         r = float(flight.ball.radius_m)
         for _ in range(_CLOSE_TRIES):
-            args = (pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz)
+            args = replace(rows_args, s_c=s_c)
             if turn_mode == TurnMode.AHEAD:
-                turn, t, Q, T_used = self.turn.ahead_rows(turn0, args, flight)
+                made = self.turn.ahead_rows(turn0, args, flight)
             else:
-                (turn, t, Q), T_used = self.turn.turned_rows(turn0, turn_mode, args), T_m
+                made = self.turn.turned_rows(turn0, turn_mode, args)
+            turn, t, Q, T_used = made.turn, made.t, made.Q, made.T_m
             t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
-            checked = self.rows.check(flight, C, r, t, Q, pose.t_i, t_static, rate_hz,
+            checked = self.rows.check(flight, C, r, t, Q, pose.t_i, t_static, rows_args.rate_hz,
                                       closing.reason is not None)
-            if not any(x.startswith("fingers in the way") for x in checked[4]) or \
+            if all(x.kind is not CatchReason.FINGERS for x in checked.reasons) or \
                     not np.any(stop.qd) or s_c >= pose.t_i:
                 break
             s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
         return turn, t, Q, T_used, s_c, checked
 
     def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
-             ic: Intercept) -> _Pose:
+             ic: Intercept) -> MeetPose:
         """The hand meeting the ball at the intercept ``ic`` (``find_intercept``): its pose
         confirmed with placo (warm-started: usually zero or one iteration) and the
         intercept time refined on the confirmed pose."""
@@ -305,19 +313,19 @@ class CatchPlanner:
         v_i = flight.velocity(t_i)
         n_i = P[:3, 2]
         misalign = math.degrees(math.acos(np.clip(-(v_i @ n_i) / np.linalg.norm(v_i), -1, 1)))
-        return _Pose(ic, q_open, q_closed, t_i, v_i, misalign, ik_iter)
+        return MeetPose(ic, q_open, q_closed, t_i, v_i, misalign, ik_iter)
 
-    def _rows(self, pose: _Pose, q_pre: np.ndarray, stop: SoftStop, closing: Closing,
-              t_react: float, T_m: float, s_c: float, rate_hz: float,
-              turn: Turn) -> tuple[np.ndarray, np.ndarray]:
-        """The rows: rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
+    def _rows(self, a: RowsArgs, turn: Turn) -> tuple[np.ndarray, np.ndarray]:
+        """The rows (``a``): rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
         stopping motion (``stop``), open -> closed fingers from ``s_c``, the wrist's ``turn``
         (``Turn``) that holds the ball, until ``HOLD_AFTER_S`` after
         the intercept (and the arm at rest). The turn is a min-jerk move, or (its profiles,
-        ``SoftStop``s of the flexion: ``planner.catch.turnahead``) under way at the intercept:
+        ``SoftStop``s of the flexion: ``planner.catch.plan.turnahead``) under way at the intercept:
         the move-in then ends short of ``q_pre`` by the turn's travel before the ball."""
+        pose, q_pre, stop, closing = a.pose, a.q_pre, a.stop, a.closing
+        t_react, T_m, s_c, rate_hz = a.t_react, a.T_m, a.s_c, a.rate_hz
         h = self.hand
-        delta, T_turn, t_turn, prof = turn
+        delta, T_turn, t_turn, prof = turn.delta, turn.duration_s, turn.start_s, turn.profiles
         arm = list(self.joints.arm)
         shift = ahead_shift(prof, pose.t_i, h.n) if prof is not None else np.zeros(h.n)
         phases = [Phase(delta=q_pre + shift - self.q_rest, duration_s=T_m),
@@ -338,8 +346,8 @@ class CatchPlanner:
             Q += p.offset(t, h.n) - p.offset(np.array([-math.inf]), h.n)[0]
         return t, h.apply_couplings(Q)
 
-    def forces(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray, r: float,
-               grasp_t: float | None = None):
+    def forces(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray, r: float,
+               grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:
         """Stopping the ball (the check's rule on the rows, ``planner.check.ball.ball_loads``:
         the pad, the hand's inertia, the friction cone) and holding it in the closed hand
         (the grasp QP): their results (None where infeasible), the reasons, and the ball's
@@ -349,7 +357,7 @@ class CatchPlanner:
         reasons = []
         q_i = interp_row(t, Q, pose.t_i)
         centre_i = palm_target(h, q_i, r)
-        stop = self._stop_load(flight, pose, t, Q, grasp_t)
+        stop, contact = self._stop_load(flight, pose, t, Q, grasp_t)
         if stop.headroom < -RATE_TOL:  # the check's tolerance (one rule)
             reasons.append(Reason(CatchReason.TOO_FAST_TO_STOP, (
                 f"too fast to stop (over the palm's {100 * PAD_GIVE_M:g} cm and the arm's "
@@ -364,23 +372,37 @@ class CatchPlanner:
             hold = gq.grasp_forces(h, pose.q_closed, palm_target(h, pose.q_closed, r), r,
                                    gq.hold_force(mass), case="hold", tip_tol_m=GRASP_TOL_M,
                                    moment_balance=True)
-        except InfeasibleError as e:
-            kind = CatchReason.TORQUE if _kind(e) == "torque" else CatchReason.FRICTION
-            reasons.append(Reason(kind, f"{_kind(e)} (holding the ball): {e}"))
-        return stop, hold, reasons, centre_i
+        except gq.GraspTorqueError as e:
+            reasons.append(Reason(CatchReason.TORQUE, f"torque (holding the ball): {e}"))
+        except gq.GraspFrictionError as e:
+            reasons.append(Reason(CatchReason.FRICTION, f"friction (holding the ball): {e}"))
+        return ForcesVerdict(Forces(stop, hold, soft, contact), tuple(reasons), centre_i)
 
-    def _stop_load(self, flight: Flight, pose: _Pose, t: np.ndarray, Q: np.ndarray,
+    def _stop_load(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray,
                    grasp_t: float | None):
         """The check's stopping load on the rows from the one before the intercept (only the
-        ball's velocity enters it: its launch point needs no shift to the reference frame)."""
+        ball's velocity enters it: its launch point needs no shift to the reference frame),
+        and the impact and riding loads named apart (``ContactLoads``)."""
         k0 = max(0, int(np.searchsorted(t, pose.t_i, side="right")) - 2)
         b = flight.to_metadata()
         ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
                 "radius": float(b["radius"]), "mass": float(b["mass"]),
                 "drag": float(b["drag"])}
         _, palm = self.kin.frames(Q[k0:])
-        return ball_loads(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i), PAD_GIVE_M,
-                          grasp_t)[0]
+        inst = ball_load_instants(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i),
+                                  PAD_GIVE_M, grasp_t)
+        stop = phase_loads(inst, t[-1], self.kin, Q[-1], palm[-1], ball["mass"])[0]
+        return stop, contact_loads(inst)
+
+
+def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,
+                 t_i: float) -> list[Reason]:
+    """The roll rule's reason on these rows (``planner.check.ballroll``: the ball landing at
+    ``t_i``, ``HoldTurn.rolled``; on a hand the rule judges), if any."""
+    if not roll_judged(turn.hand.name):
+        return []
+    rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
+    return [] if rolled is None else [Reason(CatchReason.ROLL, rolled)]
 
 
 def _turn_note(turn: Turn, t_i: float) -> tuple[str, ...]:
@@ -390,36 +412,6 @@ def _turn_note(turn: Turn, t_i: float) -> tuple[str, ...]:
     return ((f"the wrist's turn under way at {np.abs(turn.profiles[0].qd).max():.1f} rad/s "
             f"when the ball lands (from {1000 * (t_i - turn.start_s):.0f} ms before it): from the grasp the "
             "ball would roll off the palm's wrist side"),)
-
-
-def _row_kind(reason: str) -> CatchReason:
-    """The kind of a reason of the row self-check (``RowCheck.check``)."""
-    if reason.startswith("fingers in the way"):
-        return CatchReason.FINGERS
-    if reason.startswith(("too slow to close", "grasp")):
-        return CatchReason.GRASP
-    return CatchReason.MISS
-
-
-def _row_reasons(turn: HoldTurn, check_reasons, flight: Flight, t: np.ndarray, Q: np.ndarray,
-                 t_i: float) -> list[Reason]:
-    """The reasons of the rows: the self-check's (``RowCheck.check``) and the roll rule's
-    (``planner.check.ballroll.roll_problem``: the ball, landing at ``t_i``, rolls off the
-    palm's wrist side on these rows, ``HoldTurn.rolled``, on a hand the rule judges,
-    ``roll_judged``; the check judges the same rule)."""
-    out = [Reason(_row_kind(x), x) for x in check_reasons]
-    rolled = None
-    if roll_judged(turn.hand.name):
-        rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
-    if rolled is not None:
-        out.append(Reason(CatchReason.ROLL, rolled))
-    return out
-
-
-def _kind(e: InfeasibleError) -> str:
-    """'torque' when a motor's capacity is what fails, else 'friction' (no force split lies
-    inside the contacts' friction cones)."""
-    return "torque" if "needs motor." in str(e) else "friction"
 
 
 def uncertainty(fit: FitResult, x_plane: float) -> dict[str, float] | None:

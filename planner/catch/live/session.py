@@ -50,26 +50,40 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from planner.catch import grasp as gq
-from planner.catch.arm import open_from
-from planner.catch.closing import close_start, earliest_close_start
-from planner.catch.flight import Ball, Flight, _finite, get_ball
-from planner.catch.livefit import LiveFit
-from planner.catch.livemotion import LiveMotion, rest_by_s
-from planner.catch.livesearch import LiveSearch
-from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
-from planner.catch.results import CatchPlan
+from planner.catch.flight.dragfit import DragEstimate, estimate_drag
+from planner.catch.flight.livefit import LiveFit
+from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
+from planner.catch.live.motion import LiveMotion, rest_by_s
+from planner.catch.live.search import LiveSearch
+from planner.catch.live.turn import LiveTurn, live_turn
+from planner.catch.plan.arm import open_from
+from planner.catch.plan.closing import close_start, earliest_close_start
+from planner.catch.plan.planner import (
+    HOLD_AFTER_S,
+    PLAN_BUDGET_S,
+    SIGNAL_S,
+    CatchPlanner,
+    roll_reasons,
+)
+from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
+from planner.catch.plan.results import (
+    GIVEN_UP,
+    HELD,
+    CatchPlan,
+    ThrowInfo,
+    catch_metadata,
+    make_catch_plan,
+)
 from planner.errors import InfeasibleError, InputError
 from planner.hand.model import HandModel
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
-
-HELD = "held"
-GIVEN_UP = "given_up"
 
 
 class _CloseAsk(NamedTuple):
@@ -141,7 +155,7 @@ class CatchSession:
                  hand: HandModel | str = "default", ball: Ball | str = "tennis",
                  drag: bool = False, rate_hz: float = 100.0, out_path: str | None = None,
                  planner: CatchPlanner | None = None) -> None:
-        from planner.catch.plan import get_planner, validate_live
+        from planner.catch.plan.api import get_planner, validate_live
 
         d, hgt, rate = validate_live(dist_m, height_m, rate_hz)
         self.ball = get_ball(ball)
@@ -180,6 +194,8 @@ class CatchSession:
         self.outcome: str | None = None
         self.reason = ""
         self.plan: CatchPlan | None = None
+        self.drag_estimate: DragEstimate | None = None  # (drag: at the end)
+        self.turn: LiveTurn | None = None  # the wrist's turn that holds the ball (at the end)
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
         self.rows_cpu_s = math.nan  # thread_time then
 
@@ -212,7 +228,7 @@ class CatchSession:
         return rows
 
     def _observe(self, t_s: Any, xyz: Any) -> np.ndarray:
-        t = _finite("t", t_s)
+        t = finite_float("t", t_s)
         p = _point(xyz)
         period = t - self.fit.times[-1] if self.fit.n else 0.0
         fit = self.fit.add(t, p)
@@ -295,23 +311,19 @@ class CatchSession:
         ball = self.flight.to_metadata()
         self.first = {"ball": dict(ball), "intercept_t": float(self.t_i),
                       "observations": self.fit.n}
-        meta = {"task": "catch", "hand": self.pl.base_hand.name,
-                "urdf_sha256": self.pl.base_hand.urdf_sha256, "T_world_root": self._T_root,
-                "rate_hz": self.rate_hz, "ball": ball,
-                "intercept_t": float(self.t_i),
-                "catch": {"live": True, "throw": self._throw(),
-                          "catch_point": [float(x) for x in self.C],
-                          "stop_distance_m": gq.STOP_DISTANCE_M,
-                          "observations": self.fit.n}}
+        meta = catch_metadata(self.pl.base_hand, self._T_root, self.rate_hz, self.flight,
+                              self.t_i, {"live": True, "throw": self._throw().to_dict(),
+                                         "catch_point": [float(x) for x in self.C],
+                                         "stop_distance_m": gq.STOP_DISTANCE_M,
+                                         "observations": self.fit.n})
         h = self.pl.base_hand
         self.writer = TrajectoryWriter(self.out_path, meta, h)
 
-    def _throw(self) -> dict[str, Any]:
+    def _throw(self) -> ThrowInfo:
         v = self.flight.v0
-        return {"angle_deg": math.degrees(math.atan2(float(v[2]), math.hypot(v[0], v[1]))),
-                "dist_m": float(self.C[0]), "height_m": float(self.C[2]),
-                "ball": self.ball.name, "drag": self.drag, "observations": self.fit.n,
-                "live": True}
+        return ThrowInfo(math.degrees(math.atan2(float(v[2]), math.hypot(v[0], v[1]))),
+                         float(self.C[0]), float(self.C[2]), self.ball.name, self.drag,
+                         self.fit.n, live=True)
 
     @property
     def closings_computed(self) -> int:
@@ -333,6 +345,8 @@ class CatchSession:
             return None
         t = np.arange(first, n) * self.dt
         Q = self.motion.rows(t, old_seg, t_b)  # (the writer guards them as it writes them)
+        if self.turn is not None:
+            Q = Q + self.turn.offset(t)
         return _Chunk(t, Q, format_rows(t, Q, self.pl.hand.motor_angles(Q)))
 
     def _write_to(self, t_end_s: float, t_b: float = -math.inf, old_seg=None) -> np.ndarray:
@@ -365,35 +379,51 @@ class CatchSession:
                                       t_b + T_m, gq.stop_time(pose.v_i), self.ball.radius_m),
                           cl.duration_s)
         t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s)
+        q_held = m.rows(np.array([t_static, t_static + self.dt]))[0]
+        grasp = m.close_start_s + (cl.u_grasp or 1.0) * m.close_s
+        self.turn = live_turn(self.pl.dyn, q_held,
+                              max(grasp, pose.t_i + gq.stop_time(pose.v_i), m.seg.end_s),
+                              (self.next_row + sum(len(c.t) for c in self._ahead)) * self.dt)
+        if self.turn is not None:
+            t_static = max(t_static, self.turn.end_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
         self.uncertainty = self._sigma(self.flight, pose.t_i)  # (of the last estimate only:
         # what the plan reports)
+        self.drag_estimate = (estimate_drag(self.fit.times, self.fit.positions, self.flight,
+                                            self.ball) if self.drag else None)
         self.plan = self._judge(t_static)
         if self.plan.feasible:
             self.outcome = HELD
             g = self.plan
-            self.reason = (f"grasp at t = {g.grasp_t:.3f} s ({', '.join(g.grasp_fingers)}) of "
+            self.reason = (f"grasp at t = {g.timing.grasp_t:.3f} s "
+                           f"({', '.join(g.timing.grasp_fingers)}) of "
                            f"the ball estimated from {self.fit.n} observations; {why}")
         else:
             self.outcome = GIVEN_UP
-            self.reason = "; ".join(self.plan.reasons) + f" ({why})"
+            self.reason = reasons_text(self.plan.reasons) + f" ({why})"
         self.writer.close({"catch": self.outcome, "reason": self.reason,
                            "observations": self.fit.n,
                            "last_observation_s": float(self.fit.times[-1]),
-                           "ball": self.flight.to_metadata(), "intercept_t": float(pose.t_i)})
+                           "ball": self.flight.to_metadata(), "intercept_t": float(pose.t_i),
+                           **({} if self.drag_estimate is None else
+                              {"drag_estimate": self.drag_estimate.to_dict()})})
         return rows
 
     def _judge(self, t_static: float) -> CatchPlan:
         """The final plan: every row through the planner's self-check, the grasp forces."""
         pl, pose, fl, r, m = self.pl, self.pose, self.flight, self.ball.radius_m, self.motion
         t, Q = np.concatenate(self._t), np.concatenate(self._q)
-        err, clear, g_t, g_f, reasons = pl.rows.check(
-            fl, self.C, r, t, Q, pose.t_i, t_static, self.rate_hz, self.closing.reason is not None)
-        reasons = ([self.closing.reason] if self.closing.reason else []) + reasons
+        verdict = pl.rows.check(fl, self.C, r, t, Q, pose.t_i, t_static, self.rate_hz,
+                                self.closing.reason is not None)
+        reasons = ([Reason(CatchReason.GRASP, self.closing.reason)] if self.closing.reason
+                   else []) + list(verdict.reasons)
         if pose.ic.reason:
-            reasons.append(pose.ic.reason)
-        stop, hold, force_reasons, _ = pl.forces(fl, pose, t, Q, r)
-        reasons += force_reasons
+            reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
+        reasons += roll_reasons(pl.turn, fl, t, Q, pose.t_i)
+        if self.turn is not None:  # the ball is held in the turned hand
+            pose = replace(pose, q_closed=Q[-1].copy())
+        fv = pl.forces(fl, pose, t, Q, r)
+        reasons += fv.reasons
         try:
             t_f = float(fl.time_at_x(float(self.C[0])))
         except InfeasibleError:
@@ -401,22 +431,20 @@ class CatchSession:
         notes = [(f"live: {self.fit.n} observations (rms residual "
                   f"{1000 * self.fit.result.residual_rms:.1f} mm), the first plan from "
                   f"{self.first['observations']}")]
+        if self.drag_estimate is not None:
+            notes.append(f"live: {self.drag_estimate.describe()}")
         if self.kept_targets:
             notes.append(f"{self.kept_targets} re-aims could not reach their target at rest "
                          "before the ball within the limits: part of the way, or the older "
                          "target kept")
-        return CatchPlan(
-            feasible=not reasons, reasons=reasons, flight=fl, catch_point=self.C,
-            T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand,
-            rate_hz=self.rate_hz, throw=self._throw(), launch_speed=fl.speed,
-            flight_time_s=t_f, intercept_t=float(pose.t_i),
-            intercept_point=fl.position(pose.t_i), arrival_velocity=pose.v_i,
-            intercept_error_m=err, misalignment_deg=pose.misalign_deg, q_rest=pl.q_rest,
-            q_open=pose.q_open, q_closed=pose.q_closed, move_start_s=m.t_move,
-            move_s=m.open_s, close_start_s=m.close_start_s, close_s=m.close_s, grasp_t=g_t,
-            grasp_fingers=g_f, min_clearance_before_m=clear, stop=stop, hold=hold, t=t, q=Q,
-            q_motor=pl.hand.motor_angles(Q), ik_iterations=pose.ik_iterations,
-            t_info_s=float(self.fit.times[-1]), uncertainty=self.uncertainty, notes=notes)
+        return make_catch_plan(
+            reasons=reasons, flight=fl, catch_point=self.C,
+            T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand, hand=pl.hand,
+            rate_hz=self.rate_hz, throw=self._throw(), pose=pose, verdict=verdict,
+            q_rest=pl.q_rest, q_open=pose.q_open, move_start_s=m.t_move, move_s=m.open_s,
+            close_start_s=m.close_start_s, close_s=m.close_s, forces=fv.forces,
+            t=t, Q=Q, t_info_s=float(self.fit.times[-1]), flight_time_s=t_f,
+            uncertainty=self.uncertainty, notes=notes)
 
 
 def _point(xyz: Any) -> np.ndarray:

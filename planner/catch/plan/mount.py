@@ -1,6 +1,6 @@
 """Where the hand sits for a catch: the rail base (URDF root) relative to the nominal catch
 point, from the hand file's ``[catch]`` section or computed (``default_mount``; see
-``planner.catch.plan`` for the geometry)."""
+``planner.catch.plan.api`` for the geometry)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import tomllib
 
-from planner.catch.arm import zero_pose
+from planner.catch.plan.arm import zero_pose
 from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.hand.spec import hands_dir, rpy_matrix

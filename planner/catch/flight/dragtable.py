@@ -3,7 +3,7 @@ state (s, z, ds/dt, dz/dt) -- s the horizontal distance along the launch directi
 height, both from the launch point -- grown on demand, and the cubic Hermite
 interpolation between nodes (positions with the stored rates, rates with the
 accelerations). Its step, the accuracy it buys and how a flight uses it: the module
-docstring of ``planner.catch.flight``."""
+docstring of ``planner.catch.flight.path``."""
 
 from __future__ import annotations
 
@@ -14,26 +14,26 @@ import numpy as np
 
 from planner.errors import InputError
 
-G = 9.81
+G_M_S2 = 9.81
 """Gravity, m/s^2 (down, along -z)."""
 _MAX_STEP = 0.01  # s, coarsest RK4 step of a drag table
 _STEP_SCALE = 0.005  # step <= _STEP_SCALE / (k * speed scale)
 
 
-def _step_for(k: float, speed: float) -> float:
+def step_for(k: float, speed: float) -> float:
     """RK4 step for a drag flight: small against the drag time 1/(k v)."""
-    scale = max(speed, math.sqrt(G / k))
+    scale = max(speed, math.sqrt(G_M_S2 / k))
     return min(_MAX_STEP, _STEP_SCALE / (k * scale))
 
 
-def _rk4_run(S, Z, U, W, k, h, n_steps, s_stop=math.inf, z_floor=-math.inf):
+def rk4_run(S, Z, U, W, k, h, n_steps, s_stop=math.inf, z_floor=-math.inf):
     """Append up to ``n_steps`` RK4 steps of size ``h`` (may be < 0) to the lists.
 
     State (s, z, u, w) = horizontal distance, height and their rates;
     du/dt = -k|v|u, dw/dt = -g - k|v|w. Stops after the step where s >= s_stop,
     or where the ball descends below z_floor (it never climbs back: w < 0 stays < 0).
     """
-    g = G
+    g = G_M_S2
     s, z, u, w = S[-1], Z[-1], U[-1], W[-1]
     h2 = 0.5 * h
     h6 = h / 6.0
@@ -69,7 +69,7 @@ def _rk4_run(S, Z, U, W, k, h, n_steps, s_stop=math.inf, z_floor=-math.inf):
             break
 
 
-def _hermite(y0: float, y1: float, d0: float, d1: float, h: float, th: float) -> float:
+def hermite(y0: float, y1: float, d0: float, d1: float, h: float, th: float) -> float:
     """Cubic Hermite on one step: values y0, y1, derivatives d0, d1, fraction th."""
     m0 = h * d0
     m1 = h * d1
@@ -77,7 +77,7 @@ def _hermite(y0: float, y1: float, d0: float, d1: float, h: float, th: float) ->
     return y0 + th * (m0 + th * ((3.0 * dy - 2.0 * m0 - m1) + th * (m0 + m1 - 2.0 * dy)))
 
 
-def _cross_fraction(s0: float, s1: float, u0: float, u1: float, h: float, target: float) -> float:
+def cross_fraction(s0: float, s1: float, u0: float, u1: float, h: float, target: float) -> float:
     """Fraction th in [0, 1] of the step where the Hermite s(th) equals ``target``."""
     m0 = h * u0
     m1 = h * u1
@@ -99,7 +99,7 @@ def _cross_fraction(s0: float, s1: float, u0: float, u1: float, h: float, target
     return th
 
 
-class _Table:
+class RK4Table:
     """RK4 nodes of a drag flight at t = i h (i in [-len(bwd)+1, len(fwd)-1]), grown on demand."""
 
     def __init__(self, u0: float, w0: float, k: float, h: float) -> None:
@@ -113,7 +113,7 @@ class _Table:
 
     def _grow(self, lists: tuple, h: float, n: int) -> None:
         n0 = len(lists[0])
-        _rk4_run(*lists, self.k, h, n)
+        rk4_run(*lists, self.k, h, n)
         last = (lists[0][-1], lists[1][-1], lists[2][-1], lists[3][-1])
         if not all(map(math.isfinite, last)) or math.hypot(last[2], last[3]) > 1e6:
             t_end = h * (len(lists[0]) - 1)
@@ -144,7 +144,7 @@ class _Table:
             S, Z, U, W = cols
             sp = np.hypot(U, W)
             AS = -self.k * sp * U
-            AW = -G - self.k * sp * W
+            AW = -G_M_S2 - self.k * sp * W
             self._arrays = (-(len(self.bwd[0]) - 1), S, Z, U, W, AS, AW)
         return self._arrays
 
@@ -177,7 +177,7 @@ class _Table:
         return j, q - j, lists
 
 
-def _hermite_np(y0, y1, d0, d1, h, th):
+def hermite_np(y0, y1, d0, d1, h, th):
     m0 = h * d0
     m1 = h * d1
     dy = y1 - y0

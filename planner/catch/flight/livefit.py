@@ -42,18 +42,18 @@ import math
 
 import numpy as np
 
-from planner.catch.flight import (
-    GRAVITY,
-    MAX_LAUNCH_SPEED,
+from planner.catch.flight.observe import FitResult
+from planner.catch.flight.path import (
+    G_M_S2,
+    GRAVITY_M_S2,
+    MAX_LAUNCH_SPEED_M_S,
     MAX_OBS_RANGE_M,
-    MAX_TIME,
+    MAX_TIME_S,
     Ball,
     Flight,
-    G,
-    _step_for,
+    step_for,
 )
-from planner.catch.observe import FitResult
-from planner.catch.tablesums import IntervalSums
+from planner.catch.flight.tablesums import IntervalSums
 from planner.errors import InputError
 
 # ``fit_observations``' minimum number of observations: 3 positions fix the 6 numbers of
@@ -73,7 +73,7 @@ MAX_CHORD_STEPS = 2  # ... or at most this many steps at the first estimate (con
 # that point's distance from the true ball (120 throws, 20-60 deg, 1-2.5 m, 2-10 mm at
 # 100 and 500 Hz, measured)
 LIVE_STEP_FACTOR = 4.0  # the fit's drag tables take 4x the planner's RK4 step
-# (``flight._step_for``): the error goes as h^4, 256 x the planner's 1.5e-10 m, i.e.
+# (``flight.step_for``): the error goes as h^4, 256 x the planner's 1.5e-10 m, i.e.
 # 4e-8 m in position and 1.5e-7 m/s in velocity over 1.5 s against a 1 ms-step
 # reference for tennis-ball throws of 15-75 deg over 1-4 m (measured; tests/test_live.py
 # holds it below 1e-6 m), five orders below a 2 mm camera's noise; the table of a
@@ -120,13 +120,13 @@ class LiveFit:
 
     def check(self, t_s: float, p: np.ndarray) -> None:
         """InputError (one line) unless ``(t_s, p)`` can follow the observations so far:
-        finite, 0 <= t <= MAX_TIME, after the previous one, within any throw's range."""
+        finite, 0 <= t <= MAX_TIME_S, after the previous one, within any throw's range."""
         px, py, pz = p.tolist()
         if not (math.isfinite(t_s) and math.isfinite(px) and math.isfinite(py)
                 and math.isfinite(pz)):
             raise InputError("an observation must be finite (no NaN or inf)")
-        if not 0.0 <= t_s <= MAX_TIME:
-            raise InputError(f"t = {t_s:.6g} s is outside 0..{MAX_TIME:g} s (the ball leaves "
+        if not 0.0 <= t_s <= MAX_TIME_S:
+            raise InputError(f"t = {t_s:.6g} s is outside 0..{MAX_TIME_S:g} s (the ball leaves "
                              "at t = 0, catch frame)")
         if self.n and t_s <= self._t[self.n - 1]:
             raise InputError(f"t = {t_s:.6g} s is not after the previous observation's "
@@ -147,7 +147,7 @@ class LiveFit:
         self.n += 1
         px, py, pz = p.tolist()
         t2 = t_s * t_s
-        yz = pz + 0.5 * G * t2  # y = p - g t^2 / 2
+        yz = pz + 0.5 * G_M_S2 * t2  # y = p - g t^2 / 2
         self._acc += (1.0, t_s, t2, t2 * t_s, px, py, yz, t_s * px, t_s * py, t_s * yz,
                       px * px, py * py, yz * yz, px * px, py * py, pz * pz)
         if self._table_sums is not None:
@@ -169,7 +169,7 @@ class LiveFit:
         vac = self.vacuum_flight()
         if vac is None or self.k == 0.0 or self._theta is not None:
             return vac
-        if float(np.linalg.norm(vac.v0)) > MAX_LAUNCH_SPEED:
+        if float(np.linalg.norm(vac.v0)) > MAX_LAUNCH_SPEED_M_S:
             return None
         minv = self._minv()
         theta, _ = self._chord(minv, minv @ self._sy)
@@ -201,9 +201,9 @@ class LiveFit:
         else:
             rss = np.maximum(self._syy - np.sum(theta * self._sy, axis=0), 0.0)
         speed = float(np.linalg.norm(theta[1]))
-        if speed > MAX_LAUNCH_SPEED:
+        if speed > MAX_LAUNCH_SPEED_M_S:
             raise InputError(f"the observations move at {speed:.4g} m/s at t = 0, faster than "
-                             f"any throw (at most {MAX_LAUNCH_SPEED:g} m/s)")
+                             f"any throw (at most {MAX_LAUNCH_SPEED_M_S:g} m/s)")
         self._theta = theta
         sigma = np.sqrt(rss / max(n - 2, 1))
         cov = np.zeros((6, 6))  # per axis a: sigma_a^2 minv at (a, a), (a, 3 + a),
@@ -218,7 +218,7 @@ class LiveFit:
         if self.k == 0.0:
             return Flight(theta[0], theta[1], self.ball, 0.0)
         if self._step_s is None:  # the table's step from the first fit's speed, then kept
-            self._step_s = LIVE_STEP_FACTOR * _step_for(self.k, float(np.linalg.norm(theta[1])))
+            self._step_s = LIVE_STEP_FACTOR * step_for(self.k, float(np.linalg.norm(theta[1])))
         return Flight(theta[0], theta[1], self.ball, self.k, step_s=self._step_s)
 
     def _chord(self, minv: np.ndarray, theta_vac: np.ndarray):
@@ -244,8 +244,8 @@ class LiveFit:
             m, m_t, pm, mm = self._table_moments(flight, t_last)
             # sum of d and t d: d = m - v0 t - g t^2 / 2 (p0 cancels)
             n, s1, s2 = self._s
-            d_sum = m - v_old * s1 - 0.5 * GRAVITY * s2
-            td_sum = m_t - v_old * s2 - 0.5 * GRAVITY * self._acc[3]
+            d_sum = m - v_old * s1 - 0.5 * GRAVITY_M_S2 * s2
+            td_sum = m_t - v_old * s2 - 0.5 * GRAVITY_M_S2 * self._acc[3]
             new = minv @ (self._sy - np.stack([d_sum, td_sum]))
             moved = float(np.max(np.abs((new[0] - theta[0]) + (new[1] - theta[1]) * t_last)))
             theta = new
@@ -254,8 +254,8 @@ class LiveFit:
         # residual p - (p0 + v0 t + g t^2 / 2 + d) = p - p0 - (v0 - v_old) t - m, squared
         n, s1, s2 = self._s
         c, e = theta[0], theta[1] - v_old
-        sp = self._sy[0] + 0.5 * GRAVITY * s2
-        stp = self._sy[1] + 0.5 * GRAVITY * self._acc[3]
+        sp = self._sy[0] + 0.5 * GRAVITY_M_S2 * s2
+        stp = self._sy[1] + 0.5 * GRAVITY_M_S2 * self._acc[3]
         rss = (self._spp - 2 * c * sp - 2 * e * stp + c * c * n + 2 * c * e * s1 + e * e * s2
                - 2 * (pm - c * m - e * m_t) + mm)
         return theta, np.maximum(rss, 0.0)

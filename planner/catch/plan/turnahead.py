@@ -28,15 +28,16 @@ no pad), over the flexion alone: one speed profile of the arm, not two.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace
 from enum import Enum
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from planner.catch.flight import Flight
+from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix
-from planner.catch.results import Closing
-from planner.catch.stopping import TURN_SHARE, SoftStop, StopDynamics, hold_turn
+from planner.catch.plan.results import Closing
+from planner.catch.plan.stopping import TURN_SHARE, SoftStop, StopDynamics, hold_turn
 from planner.check.ballroll import ROLL_ROOM_M, roll_towards_wrist_m
 from planner.trajectory import LIMIT_MARGIN
 
@@ -59,6 +60,41 @@ class Turn(NamedTuple):
     duration_s: float
     start_s: float
     profiles: tuple[SoftStop, ...] | None = None
+
+
+class HoldStart(NamedTuple):
+    """The wrist's turn that holds the ball before it is placed in time: the joints'
+    travel and its duration (``HoldTurn.hold``)."""
+
+    delta: np.ndarray
+    duration_s: float
+
+
+@dataclass(frozen=True)
+class RowsArgs:
+    """What a plan's rows are made of, but the turn (``CatchPlanner._rows``): the hand
+    meeting the ball (``CatchPlanner.meet``'s ``MeetPose``), the pre-catch pose, the
+    stopping motion, the closing move, when the hand moves and for how long, when the
+    fingers start closing, the rows' rate."""
+
+    pose: Any
+    q_pre: np.ndarray
+    stop: SoftStop
+    closing: Closing
+    t_react: float
+    T_m: float
+    s_c: float
+    rate_hz: float
+
+
+class TurnRows(NamedTuple):
+    """The rows of a plan with its wrist's turn: the ``Turn``, times, joint rows and the
+    move-in's duration (a turn under way at the intercept may lengthen it)."""
+
+    turn: Turn
+    t: np.ndarray
+    Q: np.ndarray
+    T_m: float
 
 
 _FINE_S = 0.002  # the motors' room before the intercept judged every 2 ms (``_within``)
@@ -131,35 +167,35 @@ class HoldTurn:
         M = motor_torque_matrix(hand, q_rest)  # the motors that move the arm
         self._arm_motors = np.flatnonzero(np.any(M[:, list(joints.arm)] != 0, axis=1))
 
-    def hold(self, pose: Any, stop: SoftStop) -> tuple[np.ndarray, float]:
+    def hold(self, pose: Any, stop: SoftStop) -> HoldStart:
         """The wrist's turn that holds the ball (``stopping.hold_turn``) from the closed hand
         where the stopping motion leaves it (delta, duration); when it starts is the mode's
         (``turned_rows``: ``turn_start``; ``ahead_rows``: under way at the intercept)."""
         q_end = pose.q_closed.copy()
         q_end[list(self.joints.arm)] += stop.last_offset
-        return hold_turn(self.dyn, q_end)
+        return HoldStart(*hold_turn(self.dyn, q_end))
 
-    def turned_rows(self, turn0: tuple[np.ndarray, float], mode: TurnMode | None,
-                     rows_args: tuple):
-        """The rows (``rows(*rows_args, turn)``) with the wrist's turn (delta, duration)
+    def turned_rows(self, turn0: HoldStart, mode: TurnMode | None, rows_args: RowsArgs):
+        """The rows (``rows(rows_args, turn)``) with the wrist's turn (delta, duration)
         started as ``mode`` says (``turn_start``). An early turn (from the grasp, while the
         arm may still be stopping) adds its speeds and accelerations to the stop's: it is
         lengthened by ``_TURN_GROW`` until every joint is within its speed and acceleration
         limits on the rows (at most ``_TURN_TRIES`` times; then as it is, for the self-check
-        to refuse). Returns the ``Turn`` (no profiles) and the rows."""
-        _, _, stop, closing, _, _, s_c, _ = rows_args
-        turn = Turn(*turn0, turn_start(stop, closing, s_c, mode == TurnMode.EARLY))
-        t, Q = self.rows(*rows_args, turn)
-        if mode != TurnMode.EARLY or turn0[1] <= 0:
-            return turn, t, Q
+        to refuse). Returns the ``TurnRows`` (its ``Turn`` without profiles)."""
+        a = rows_args
+        turn = Turn(turn0.delta, turn0.duration_s,
+                    turn_start(a.stop, a.closing, a.s_c, mode == TurnMode.EARLY))
+        t, Q = self.rows(rows_args, turn)
+        if mode != TurnMode.EARLY or turn0.duration_s <= 0:
+            return TurnRows(turn, t, Q, a.T_m)
         for _ in range(_TURN_TRIES):
             if rows_within_limits(self.hand, t, Q):
                 break
             turn = turn._replace(duration_s=turn.duration_s * _TURN_GROW)
-            t, Q = self.rows(*rows_args, turn)
-        return turn, t, Q
+            t, Q = self.rows(rows_args, turn)
+        return TurnRows(turn, t, Q, a.T_m)
 
-    def ahead_rows(self, turn0: tuple[np.ndarray, float], rows_args: tuple, flight: Flight):
+    def ahead_rows(self, turn0: HoldStart, rows_args: RowsArgs, flight: Flight):
         """The roll rule (TurnMode.AHEAD): the slowest of the wrist's turns -- from the grasp
         (TurnMode.EARLY's), then under way at the intercept at ``AHEAD_SHARES`` of the speed the
         stop leaves the flexion (``ahead_turn``) -- on whose rows the ball, landing on the
@@ -172,23 +208,22 @@ class HoldTurn:
         intercept (the check judges the hand's inertia from there on), the arm's motors within
         ``STOP_SHARE`` of their capacity, the closing fingers' reaction included (``_within``);
         a candidate that is not is skipped. A plan whose least rolling turn lets the ball roll
-        beyond the room is infeasible (``CatchPlanner._row_reasons``: the rule). Returns the ``Turn``, the rows and the
-        move-in's duration."""
-        pose, q_pre, stop, closing, t_react, T_m, s_c, rate_hz = rows_args
-        turn, t, Q = self.turned_rows(turn0, TurnMode.EARLY, rows_args)
-        best = (self.rolled(t, Q, pose.t_i, flight), turn, t, Q, T_m)
-        if best[0] <= ROLL_ROOM_M or turn0[1] <= 0:
-            return best[1:]
+        beyond the room is infeasible (the roll rule's reason). Returns the ``TurnRows``."""
+        pose, q_pre, stop = rows_args.pose, rows_args.q_pre, rows_args.stop
+        early = self.turned_rows(turn0, TurnMode.EARLY, rows_args)
+        best_roll, best = self.rolled(early.t, early.Q, pose.t_i, flight), early
+        if best_roll <= ROLL_ROOM_M or turn0.duration_s <= 0:
+            return best
         h, i = self.hand, self.joints.i_flex
         arm = list(self.joints.arm)
         q_end = pose.q_closed.copy()
         q_end[arm] += stop.last_offset
-        J = self.dyn.target_jacobian(q_end + turn0[0], float(flight.ball.radius_m))
+        J = self.dyn.target_jacobian(q_end + turn0.delta, float(flight.ball.radius_m))
         load = np.zeros((h.n, len(arm)))
         load[arm] = float(flight.ball.mass_kg) * J.T @ J
         pad = 0.5 * (1.0 - LIMIT_MARGIN) * (h.upper[i] - h.lower[i])
         for share in AHEAD_SHARES:
-            prof = ahead_turn(self.dyn, stop, pose.q_open, q_end + turn0[0], turn0[0], share,
+            prof = ahead_turn(self.dyn, stop, pose.q_open, q_end + turn0.delta, turn0.delta, share,
                               load)
             if prof is None:
                 continue
@@ -197,19 +232,19 @@ class HoldTurn:
             if not h.lower[i] + pad <= pre[i] <= h.upper[i] - pad:
                 continue
             T_pre = self.dyn.move_time(self.q_rest, pre)
-            if t_react + T_pre > (stop.start_s if np.any(stop.qd) else pose.t_i):
+            if rows_args.t_react + T_pre > (stop.start_s if np.any(stop.qd) else pose.t_i):
                 continue
-            turn = Turn(turn0[0], max(p.end_s for p in prof) - start, start, prof)
-            args = (pose, q_pre, stop, closing, t_react, T_pre, s_c, rate_hz)
-            t, Q = self.rows(*args, turn)
+            turn = Turn(turn0.delta, max(p.end_s for p in prof) - start, start, prof)
+            args = replace(rows_args, T_m=T_pre)
+            t, Q = self.rows(args, turn)
             if not self._within(turn, args, t, Q):
                 continue
             rolled = self.rolled(t, Q, pose.t_i, flight)
-            if rolled < best[0]:
-                best = (rolled, turn, t, Q, T_pre)
+            if rolled < best_roll:
+                best_roll, best = rolled, TurnRows(turn, t, Q, T_pre)
             if rolled <= ROLL_ROOM_M:
                 break
-        return best[1:]
+        return best
 
     def rolled(self, t: np.ndarray, Q: np.ndarray, t_i: float, flight: Flight) -> float:
         """The ball's largest roll towards the wrist on the rows (``roll_towards_wrist_m``)."""
@@ -217,7 +252,7 @@ class HoldTurn:
         return roll_towards_wrist_m(t, palm, float(flight.ball.radius_m), t_i,
                                     flight.velocity(t_i), flight.ball.inertia_ratio)
 
-    def _within(self, turn: Turn, rows_args: tuple, t: np.ndarray, Q: np.ndarray) -> bool:
+    def _within(self, turn: Turn, rows_args: RowsArgs, t: np.ndarray, Q: np.ndarray) -> bool:
         """Every joint within its speed and acceleration limits on the rows ``t``, ``Q``, and
         from the turn's start to the intercept (where the check's rule takes over) the arm's
         motors within ``STOP_SHARE`` of their capacity with the hand's inertia at the rows'
@@ -227,9 +262,9 @@ class HoldTurn:
         ``_FINE_S`` (the rows' second differences smooth the short ramps' peaks)."""
         if not rows_within_limits(self.hand, t, Q, 1e-9):
             return False
-        t_f, Q_f = self.rows(*rows_args[:-1], 1.0 / _FINE_S, turn)
+        t_f, Q_f = self.rows(replace(rows_args, rate_hz=1.0 / _FINE_S), turn)
         a_f = np.diff(Q_f, 2, axis=0) / (_FINE_S * _FINE_S)
-        for k in np.flatnonzero((t_f[1:-1] >= turn.start_s) & (t_f[1:-1] <= rows_args[0].t_i)):
+        for k in np.flatnonzero((t_f[1:-1] >= turn.start_s) & (t_f[1:-1] <= rows_args.pose.t_i)):
             MH, room = self.dyn.accel_room(Q_f[k + 1])
             if np.any(np.abs(MH[self._arm_motors] @ a_f[k]) > room[self._arm_motors]):
                 return False

@@ -63,7 +63,7 @@ Per throw (``CatchPlanner.plan``):
    -- to the pre-catch pose (min-jerk within speed and acceleration limits). From there
    the arm draws back along the ball's path so that the palm meets it moving (the arm's
    speeds by a QP, the recoil under the ball's push, the palm's tilt) and brings it to
-   rest within every motor's capacity (``planner.catch.stopping``). The closing move
+   rest within every motor's capacity (``planner.catch.plan.stopping``). The closing move
    (seed: 150-300 ms) is placed so that the grasp condition is met when the pad has
    stopped the ball on the palm, then delayed if a fingertip would come within
    ``TOUCH_CLEAR_M`` of the still-arriving ball; it must complete the grasp within
@@ -99,6 +99,7 @@ the palm within the wrist flexion motor's 2 N m peak (``docs/soft-catch.md``).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -106,18 +107,19 @@ from typing import Any
 
 import numpy as np
 
-from planner.catch.arm import REST_CURL
-from planner.catch.closing import GRASP_MARGIN_M, TIP_ELEVATION_DEG, TIP_GAP_M, TOUCH_CLEAR_M
-from planner.catch.flight import (
-    MAX_HEIGHT,
+from planner.catch.flight.observe import fit_observations, load_observations_csv
+from planner.catch.flight.path import (
+    MAX_HEIGHT_M,
     Ball,
     check_throw,
     get_ball,
     predict_throw,
 )
-from planner.catch.flight import _finite as flight_finite
-from planner.catch.intercept import MAX_MISALIGN_DEG
-from planner.catch.mount import (
+from planner.catch.flight.path import finite_float as flight_finite
+from planner.catch.plan.arm import REST_CURL
+from planner.catch.plan.closing import GRASP_MARGIN_M, TIP_ELEVATION_DEG, TIP_GAP_M, TOUCH_CLEAR_M
+from planner.catch.plan.intercept import MAX_MISALIGN_DEG
+from planner.catch.plan.mount import (
     DESIGN_DESCENT_DEG,
     DESIGN_DEV_DEG,
     CatchMount,
@@ -125,9 +127,9 @@ from planner.catch.mount import (
     default_mount,
     mount_from_file,
 )
-from planner.catch.observe import fit_observations, load_observations_csv
-from planner.catch.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
-from planner.catch.results import CatchPlan, CatchResult, Closing
+from planner.catch.plan.planner import HOLD_AFTER_S, PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
+from planner.catch.plan.reasons import reasons_text
+from planner.catch.plan.results import CatchPlan, CatchResult, Closing, ThrowInfo
 from planner.check.criteria import (
     GRASP_MIN_TIPS,
     GRASP_TOL_M,
@@ -169,7 +171,7 @@ def get_planner(hand: HandModel | str = "default", mount: CatchMount | None = No
     return pl
 
 
-def _finite(name: str, x: Any) -> float:
+def finite_float(name: str, x: Any) -> float:
     """A finite float, or InputError naming ``name`` (shared with the flight module)."""
     return flight_finite(name, x)
 
@@ -188,7 +190,7 @@ def validate_throw(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any
     a, d, hgt = check_throw(angle_deg, dist_m, height_m, prefix="--")
     if not MIN_DIST_M <= d <= MAX_DIST_M:
         raise InputError(f"--dist must be between {MIN_DIST_M:g} and {MAX_DIST_M:g} m, got {d:g}")
-    rate = _finite("--rate", rate_hz)
+    rate = finite_float("--rate", rate_hz)
     if not 1.0 <= rate <= 10000.0:
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate:g}")
     return a, d, hgt, rate
@@ -197,14 +199,14 @@ def validate_throw(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any
 def validate_live(dist_m: Any, height_m: Any, rate_hz: Any) -> tuple[float, float, float]:
     """``validate_throw``'s rules for a live catch, whose throw comes from the observations:
     where the hand is (dist, height) and the rate."""
-    d = _finite("--dist", dist_m)
+    d = finite_float("--dist", dist_m)
     if not MIN_DIST_M <= d <= MAX_DIST_M:
         raise InputError(f"--dist must be between {MIN_DIST_M:g} and {MAX_DIST_M:g} m, got {d:g}")
-    hgt = _finite("--height", height_m)
-    if not abs(hgt) < MAX_HEIGHT:
-        raise InputError(f"--height must be between -{MAX_HEIGHT:g} and {MAX_HEIGHT:g} m "
+    hgt = finite_float("--height", height_m)
+    if not abs(hgt) < MAX_HEIGHT_M:
+        raise InputError(f"--height must be between -{MAX_HEIGHT_M:g} and {MAX_HEIGHT_M:g} m "
                          f"(exclusive), got {hgt:g}")
-    rate = _finite("--rate", rate_hz)
+    rate = finite_float("--rate", rate_hz)
     if not 1.0 <= rate <= 10000.0:
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate:g}")
     return d, hgt, rate
@@ -217,12 +219,24 @@ def plan_throw(angle_deg: float, dist_m: float, height_m: float = 0.0,
     """Validate, predict (or fit) the flight and plan; no file is written.
 
     ``observations``: None, a CSV path (``t,x,y,z``) or a pair (ts, ps); ``soft`` False:
-    the palm waits for the ball at rest (the catch before issue 15, for comparison)."""
-    a, d, hgt, rate = validate_throw(angle_deg, dist_m, height_m, rate_hz)
+    the palm waits for the ball at rest (the catch before issue 15, for comparison).
+    ``angle_deg`` None with observations: the throw is the observations' alone."""
+    a, d, hgt, rate = _validate(angle_deg, dist_m, height_m, rate_hz, observations)
     b = get_ball(ball)
     pl = planner or get_planner(hand)
     return _plan_validated(pl, a, d, hgt, b, bool(drag), _load_obs(observations, drag), rate,
                            soft)
+
+
+def _validate(angle_deg: Any, dist_m: Any, height_m: Any, rate_hz: Any, observations: Any
+              ) -> tuple[float | None, float, float, float]:
+    """``validate_throw``; without an angle (None) when the observations give the throw."""
+    if angle_deg is None:
+        if observations is None:
+            raise InputError("a catch needs --angle or --observations (the throw)")
+        d, hgt, rate = validate_live(dist_m, height_m, rate_hz)
+        return None, d, hgt, rate
+    return validate_throw(angle_deg, dist_m, height_m, rate_hz)
 
 
 def _load_obs(observations: Any, drag: bool):
@@ -237,44 +251,53 @@ def _load_obs(observations: Any, drag: bool):
     return np.asarray(ts, dtype=float), np.asarray(ps, dtype=float)
 
 
-def _plan_validated(pl: CatchPlanner, a: float, d: float, hgt: float, b: Ball, drag: bool,
-                    obs, rate: float, soft: bool = True) -> CatchPlan:
+def _plan_validated(pl: CatchPlanner, a: float | None, d: float, hgt: float, b: Ball,
+                    drag: bool, obs, rate: float, soft: bool = True) -> CatchPlan:
+    """The plan of a validated throw: predicted from ``a``, or fitted to ``obs`` (the
+    throw's angle then the fit's; ``a`` only said, not planned with)."""
     t_start = time.perf_counter()
     C = np.array([d, 0.0, hgt])
-    nominal = predict_throw(a, d, hgt, b, drag)  # also validates the throw itself
+    if a is not None:
+        flight = predict_throw(a, d, hgt, b, drag)  # also validates the throw itself
     fit = None
     t_info = 0.0
-    flight = nominal
+    asked = a
     if obs is not None:
         ts, ps = obs
         fit = fit_observations(ts, ps, b, b.drag_per_m if drag else 0.0)
         flight = fit.flight
         t_info = float(ts[-1])
+        v = flight.v0
+        a = math.degrees(math.atan2(float(v[2]), math.hypot(float(v[0]), float(v[1]))))
     try:
         t_f = float(flight.time_at_x(d))
     except InfeasibleError:
         t_f = None
-    throw = {"angle_deg": a, "dist_m": d, "height_m": hgt, "ball": b.name, "drag": drag,
-             "observations": None if fit is None else fit.n_observations}
+    throw = ThrowInfo(a if asked is None else asked, d, hgt, b.name, drag,
+                      None if fit is None else fit.n_observations)
     plan = pl.plan(flight, C, rate, t_info=t_info, throw=throw, flight_time_s=t_f, fit=fit,
                    soft=soft)
     notes = plan.notes
     if fit is not None:
         notes += ((f"fitted to {fit.n_observations} observations "
                    f"(rms residual {1000 * fit.residual_rms:.1f} mm)"),)
+        if asked is None or abs(a - asked) > 0.05:
+            notes += ((f"the throw from the observations: {a:.1f} deg"
+                       + ("" if asked is None else f" (--angle {asked:g} said, not used)")),)
     return replace(plan, notes=notes, planning_s=time.perf_counter() - t_start)
 
 
 def write_plan(plan: CatchPlan, out_path: str) -> int:
-    """Write the plan's rows (hand-trajectory v1); returns the number of rows."""
+    """Write the plan's rows (hand-trajectory version 2: the end marker says ``"catch":
+    "held"`` or ``"infeasible"`` with its reason); returns the number of rows."""
     hand = plan.base_hand
     writer = TrajectoryWriter(out_path, plan.metadata(), hand)
     try:
-        writer.write_rows(plan.t, plan.q, plan.q_motor)
+        writer.write_rows(plan.rows.t, plan.rows.q, plan.rows.q_motor)
     except BaseException as e:
         writer.abort(discard=isinstance(e, InputError))
         raise
-    writer.close()
+    writer.close(plan.end_claims())
     return writer.rows
 
 
@@ -287,7 +310,7 @@ def plan_catch(angle_deg: float, dist_m: float, height_m: float, hand: HandModel
     Every argument is checked before any file is created (InputError). The plan is
     written even when the catch is infeasible (``result.reasons`` says why); with
     ``strict`` an infeasible plan then raises InfeasibleError (the file stays)."""
-    a, d, hgt, rate = validate_throw(angle_deg, dist_m, height_m, rate_hz)
+    a, d, hgt, rate = _validate(angle_deg, dist_m, height_m, rate_hz, observations)
     b = get_ball(ball)
     if not isinstance(out_path, str) or not out_path:
         raise InputError("an output path (or '-') is needed")
@@ -305,5 +328,5 @@ def plan_catch(angle_deg: float, dist_m: float, height_m: float, hand: HandModel
     rows = write_plan(plan, out_path)
     res = CatchResult(plan, out_path, rows, plan.planning_s, time.perf_counter() - t1, setup)
     if strict and not plan.feasible:
-        raise InfeasibleError("; ".join(plan.reasons), problem=res)
+        raise InfeasibleError(reasons_text(plan.reasons), problem=res)
     return res
