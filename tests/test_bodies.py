@@ -15,7 +15,7 @@ from planner.check.bodykeys import body_keys
 from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M
 from planner.check.kinematics import Kinematics
 from planner.hand.bodies import BOX, CAPSULE, SPHERE, collision_bodies, place
-from planner.hand.spec import load_hand_spec
+from planner.hand.builders import load_hand_spec
 from planner.music import keyboard as kb
 from planner.music.keybodies import box_lowest_z, swept_lowest_z
 from planner.music.midi import Note, write_notes_midi
