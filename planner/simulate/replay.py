@@ -190,8 +190,10 @@ def _step_row(scene: Scene, data, mujoco, ctrl: np.ndarray, slope: np.ndarray, n
     mass = float(model.body_mass[scene.ball_body]) if scene.ball_body >= 0 else 0.0
     peak_f = 0.0
     ball_on = scene.ball_body >= 0
+    # (every substep's control at once: the same elementwise arithmetic, in one call)
+    ctrls = ctrl + slope * (np.arange(n_sub) / n_sub)[:, None]
     for j in range(n_sub):
-        data.ctrl[:] = ctrl + slope * (j / n_sub)
+        data.ctrl[:] = ctrls[j]
         if drag > 0.0:
             v = data.qvel[vadr:vadr + 3]
             data.xfrc_applied[scene.ball_body, :3] = -mass * drag * np.linalg.norm(v) * v
