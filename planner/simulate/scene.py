@@ -39,6 +39,15 @@ COUPLING_POLY_DEGREE = 4  # MuJoCo's joint equality: a quartic (a nonlinear law 
 HARD_SOLREF = (2 * TIMESTEP_S, 1.0)
 HARD_SOLIMP = (0.99, 0.999, 0.001)
 KEY_FRICTION = 0.5  # pad on a key top (the pad's 0.8 applies: MuJoCo takes the larger)
+# Keys at rest sleep (MuJoCo's sleeping islands, 3.4+: a tree slower than the tolerance
+# for 10 steps leaves the pipeline -- its limit row, its dynamics -- until a hand geom
+# touches it; docs: Computation, "Sleeping islands"). 88 keys resting on their stops were
+# 88 of the ~100 constraint rows of every step. The tolerance: a key slower than 10 um/s
+# (0.1 um per 10 ms row, 1/50000 of its 5 mm key-down travel) is at rest. MuJoCo's
+# default, 1 mm/s, froze keys still settling and moved the sample songs' physics F1 by up
+# to 0.03 (twinkle 0.354 -> 0.334, fast 0.354 -> 0.319); at 1e-5 (and 1e-7) every key's
+# travel stays within 0.1 um of the awake replay's (bench/bench_simulate.py --speed).
+KEY_SLEEP_TOLERANCE_M_S = 1e-5
 
 
 @dataclass(frozen=True)
@@ -94,7 +103,8 @@ def require_mujoco():
 
 def _keyboard(world: ET.Element) -> None:
     for k in key_bodies():
-        body = ET.SubElement(world, "body", name=k.name, pos="0 0 0")
+        # (a key may sleep at rest: KEY_SLEEP_TOLERANCE_M_S)
+        body = ET.SubElement(world, "body", name=k.name, pos="0 0 0", sleep="allowed")
         # straight down (qpos = the key's travel, m), from its rest stop to its bed
         ET.SubElement(body, "joint", name=f"{k.name}_slide", type="slide", axis="0 0 -1",
                       limited="true", range=mjcf_vec((0.0, k.dip_m)),
@@ -144,8 +154,12 @@ def scene_xml(hand: HandModel, T_world_root: np.ndarray, keyboard: bool,
     root = ET.Element("mujoco", model=f"replay_{hand.name}")
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", boundmass="1e-6",
                   boundinertia="1e-12")
-    ET.SubElement(root, "option", timestep=_f(TIMESTEP_S), integrator="implicitfast",
-                  cone="elliptic", gravity=" ".join(f"{float(g):g}" for g in GRAVITY_WORLD))
+    option = ET.SubElement(root, "option", timestep=_f(TIMESTEP_S), integrator="implicitfast",
+                           cone="elliptic",
+                           gravity=" ".join(f"{float(g):g}" for g in GRAVITY_WORLD))
+    if keyboard:  # (the catch's ball and hand never rest: nothing to gain)
+        option.set("sleep_tolerance", _f(KEY_SLEEP_TOLERANCE_M_S))
+        ET.SubElement(option, "flag", sleep="enable")
     ET.SubElement(root, "size", memory="64M")
     default = ET.SubElement(root, "default")
     ET.SubElement(default, "geom", solref=mjcf_vec(HARD_SOLREF), solimp=mjcf_vec(HARD_SOLIMP))
