@@ -80,16 +80,17 @@ def test_urdf_loads_in_placo(hand, tmp_path: Path) -> None:
 
 
 def test_dof_21_hand_joints_plus_rail_and_reach(hand, urdf_root) -> None:
-    """Seed Table 1: ~20 +/- 1 DOF. 3 thumb + 4 x 4 fingers + 2 wrist = 21, plus the rail."""
+    """Seed Table 1: ~20 +/- 1 DOF. 3 thumb + 4 x 4 fingers + 2 wrist = 21, plus the rig's
+    rail and reach."""
     movable = [j for j in urdf_root.iter("joint") if j.get("type") != "fixed"]
     assert len(movable) == 23
     kinds = {j.get("name"): j.get("type") for j in movable}
-    assert kinds.pop("rail") == "prismatic"
+    assert kinds.pop("rail") == kinds.pop("reach") == "prismatic"
     assert len(kinds) == 21 and 19 <= len(kinds) <= 21
     assert set(kinds.values()) == {"revolute"}
     assert hand.n == 23 and sum(1 for n in hand.joint_names if n not in ("rail", "reach")) == 21
-    # 4 DIPs follow their PIPs: 17 independent hand joints
-    assert len(hand.couplings) == 4 and len(hand.independent) == 18
+    # 4 DIPs follow their PIPs: 17 independent hand joints, and the rig's two
+    assert len(hand.couplings) == 4 and len(hand.independent) == 19
 
 
 def test_every_movable_joint_is_named(hand, urdf_root) -> None:
