@@ -28,9 +28,10 @@ many notes as the song has (with its ``track``, ``channel`` and ``transpose``,
 which the check reads from the metadata unless given).
 
 The verdict fails on key-bed hits, wrong presses, limit violations, a failed
-catch, F1 under ``min_f1``, and on any note whose outcome the plan's end marker
-states otherwise than the replay finds (``left_out``: the notes it says it left
-out, every other note it says it played). ``strict`` also fails it on any missed
+catch, F1 under ``min_f1``, and on any claim of the plan's end marker the replay
+contradicts (``planner.check.claims``): its ``notes`` and ``played`` counts, and
+every note's outcome (``left_out``: the notes it says it left out, every other
+note it says it played). A claim of the wrong type is bad input. ``strict`` also fails it on any missed
 or late note.
 
 Independence: this package shares only the hand model, the keyboard geometry,
@@ -111,6 +112,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from planner.check.ball import ball_params, ball_positions, catch_audit, is_num
+from planner.check.claims import (
+    ClaimKey,
+    CountMismatch,
+    PlayClaims,
+    count_mismatches,
+    left_out_notes,
+    read_claims,
+)
 from planner.check.criteria import (
     DOWN_DEPTH_M,
     GRASP_MIN_TIPS,
@@ -163,7 +172,10 @@ __all__ = [
     "NOTE_HIT_FRACTION",
     "CatchResult",
     "CheckReport",
+    "ClaimKey",
     "ClaimMismatch",
+    "CountMismatch",
+    "PlayClaims",
     "KeyBedHit",
     "KeyContacts",
     "KeyEpisode",
@@ -178,6 +190,7 @@ __all__ = [
     "ball_positions",
     "catch_audit",
     "check_cli",
+    "count_mismatches",
     "check_trajectory",
     "expected_keys",
     "fk_frames",
@@ -187,6 +200,8 @@ __all__ = [
     "key_contacts",
     "key_episodes",
     "keys_down",
+    "left_out_notes",
+    "read_claims",
     "pitch_name",
     "song_frames",
 ]
@@ -267,19 +282,6 @@ def _song_notes(song_path: str, meta: dict[str, Any], path: str, options: dict[s
     return notes
 
 
-def _left_out(end: dict[str, Any], n_notes: int, path: str) -> set[int] | None:
-    """The notes the end marker says the plan left out (None: it states no claims)."""
-    raw = end.get("left_out")
-    if raw is None:
-        return None
-    ok = isinstance(raw, list) and all(
-        isinstance(x, dict) and isinstance(x.get("note"), int) and 0 <= x["note"] < n_notes
-        for x in raw)
-    if not ok:
-        raise InputError(f"{path}: end marker's 'left_out' is not a list of notes of the song")
-    return {x["note"] for x in raw}
-
-
 def _claim_mismatches(notes, missed_notes: set[int], left_out: set[int]) -> list[ClaimMismatch]:
     out = []
     for i, n in enumerate(notes):
@@ -307,6 +309,9 @@ def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list
         problems.append(f"{len(play.claim_mismatches)} notes the plan claims otherwise than the "
                         f"replay finds (first: {c.name} at {c.onset_s:.3f} s, claimed {c.claimed},"
                         f" {c.found})")
+    for c in play.count_mismatches:
+        problems.append(f"the end marker claims {c.key.value} = {c.claimed}, the replay finds "
+                        f"{c.found} ({c.detail})")
     if min_f1 is not None and play.f1 < min_f1:
         problems.append(f"frame F1 {play.f1:.4f} < {min_f1:g}")
     if strict and play.missed:
@@ -366,11 +371,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     pressing = ball_load = None
     if task == "play":
         play, kc, exp = play_replay(tr, tips, notes)
-        if notes is not None:
-            left_out = _left_out(tr.end, len(notes), traj_path)
-            if left_out is not None:
-                missed = {m.note for m in play.missed}
-                play = _with_claims(play, _claim_mismatches(notes, missed, left_out))
+        play = _held_to_claims(play, notes, tr.end, traj_path)
         pressing = np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
         replay_kw = {"down": kc.down, "finger": kc.finger, "expected": exp}
         problems.extend(_play_problems(play, min_f1, strict))
@@ -394,10 +395,20 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw), tendons=tendons)
 
 
-def _with_claims(play: PlayResult, mismatches: list[ClaimMismatch]) -> PlayResult:
+def _held_to_claims(play: PlayResult, notes, end: dict[str, Any], path: str) -> PlayResult:
+    """``play`` with the end marker's claims held against it: every count and every
+    note's outcome (types are checked without a song too)."""
     import dataclasses
 
-    return dataclasses.replace(play, claims=True, claim_mismatches=tuple(mismatches))
+    claims = read_claims(end, None if notes is None else len(notes), path)
+    if notes is None or claims == PlayClaims(None, None, None):
+        return play
+    missed = {m.note for m in play.missed}
+    per_note = ([] if claims.left_out is None
+                else _claim_mismatches(notes, missed, claims.left_out))
+    return dataclasses.replace(play, claims=True, claim_mismatches=tuple(per_note),
+                               count_mismatches=tuple(count_mismatches(claims, len(notes),
+                                                                       len(missed))))
 
 
 def check_cli(args) -> int:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass, field, fields, is_dataclass
 from typing import Any
@@ -9,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from planner.check.ballroll import ROLL_ROOM_M
+from planner.check.claims import CountMismatch
 from planner.check.criteria import INTERCEPT_TOL_M, KEY_BED_DEPTH_M
 
 
@@ -132,6 +134,7 @@ class PlayResult:
     song_frames: int | None = None  # the frames F1 is computed over
     claims: bool = False  # the file's end marker states per-note outcomes
     claim_mismatches: tuple[ClaimMismatch, ...] = ()
+    count_mismatches: tuple[CountMismatch, ...] = ()  # the marker's counts the replay contradicts
 
     @property
     def hit_rate(self) -> float | None:
@@ -288,6 +291,8 @@ class CheckReport:
             _listing(L, "claims the replay contradicts", p.claim_mismatches, lambda c: (
                 f"{c.onset_s:8.3f} s  {c.name:4s} ({c.pitch})  note {c.note}: the plan says "
                 f"{c.claimed}, the replay finds it {c.found}"))
+            _listing(L, "counts the replay contradicts", p.count_mismatches, lambda c: (
+                f"{c.key.value}: the plan says {c.claimed}, the replay finds {c.found}"))
             _listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
                 f"{h.time_s:8.3f} s  {h.finger:6s} {h.name:4s} ({h.pitch})  "
                 f"{h.depth_m * 1000:.2f} mm below the top (max {KEY_BED_DEPTH_M * 1000:g})"))
@@ -335,6 +340,8 @@ def _listing(L: list[str], title: str, items, fmt, first: int = 10) -> None:
 
 
 def _plain(x: Any) -> Any:
+    if isinstance(x, enum.Enum):
+        return x.value
     if is_dataclass(x) and not isinstance(x, type):
         return {f.name: _plain(getattr(x, f.name)) for f in fields(x)}
     if isinstance(x, (list, tuple)):

@@ -129,9 +129,9 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     if task == "play":
         play = score_play(rec, notes, float(meta["rate_hz"]))
         if notes is not None:
-            from planner.check import _left_out
+            from planner.check import left_out_notes
 
-            left = _left_out(tr.end, len(notes), name) or set()
+            left = left_out_notes(tr.end, len(notes), name) or set()
             claims = [m for m in play.missed if m.note not in left]
     else:
         catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)
