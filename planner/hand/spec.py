@@ -22,6 +22,7 @@ import numpy as np
 import tomllib
 
 from planner.errors import InputError
+from planner.hand.units import check_hand_numbers
 
 INCH_M = 0.0254
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
@@ -178,6 +179,7 @@ def load_hand_spec(name_or_path: str) -> HandSpec:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise InputError(f"malformed hand file {path.name}: {e}") from None
     try:
+        check_hand_numbers(data)
         return build_spec(data)
     except InputError as e:
         raise InputError(f"malformed hand file {path.name}: {e}") from None
