@@ -328,7 +328,8 @@ def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list
 def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None = None, *,
                      allow_incomplete: bool = False, min_f1: float | None = None,
                      hand_override: str | HandModel | None = None, strict: bool = False,
-                     song_options: dict[str, Any] | None = None) -> CheckReport:
+                     song_options: dict[str, Any] | None = None,
+                     name: str | None = None) -> CheckReport:
     """Replay ``traj_path`` and audit it (see the package docstring).
 
     ``traj_path``: a file, or a ``Trajectory`` already read (a plan made in memory).
@@ -336,6 +337,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     and wrong presses, read with ``song_options`` (``track``, ``channel``, ``transpose``;
     each defaults to the file's metadata). ``min_f1``: the verdict also requires frame F1 >= this (needs a
     song). ``strict``: the verdict also fails on any missed or late note.
+    ``name``: what messages call a ``Trajectory`` given read already (its file).
     ``hand_override``: a hand name / hand file or a HandModel to use instead of
     metadata["hand"] (its URDF hash must still match the file's).
     Raises InputError when the file cannot be replayed: damaged or incomplete (unless
@@ -343,7 +345,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     catch metadata, a song other than the plan's.
     """
     if isinstance(traj_path, Trajectory):  # (a plan in memory: ``PlayPlan.trajectory``)
-        tr, traj_path = traj_path, "<memory>"
+        tr, traj_path = traj_path, name or "<memory>"
     else:
         tr = read_trajectory(traj_path, allow_incomplete=allow_incomplete)
     meta = tr.metadata

@@ -105,7 +105,7 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     # the kinematic check validates the file (hand, hash, columns, pose, song) and gives
     # the F1 to compare with
     kin = check_trajectory(tr, song_path, allow_incomplete=allow_incomplete,
-                           song_options=song_options, hand_override=hand_override)
+                           song_options=song_options, hand_override=hand_override, name=name)
     from planner.check import _load_hand, _song_notes, _T_world_root
 
     meta = tr.metadata
