@@ -207,3 +207,30 @@ def test_a_huge_observation_field_is_one_line(tmp_path):
                 tmp_path / "o.csv", cwd=tmp_path)
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     one_line(p.stderr)
+
+
+# ---------------------------------------------------------------- self-check = check
+
+
+def test_play_exits_1_with_a_plan_its_self_check_and_check_reject(capsys, tmp_path):
+    """A hand whose finger acceleration cap (1e6 rad/s^2, within its unit's range) is
+    beyond what its tendons carry: the planner's self-check runs the check's limit
+    audit, names the violation, writes it in the end marker, and play exits 1; check
+    finds the same."""
+    from tests.handfiles import default_text, edit
+
+    hand = tmp_path / "fast.toml"
+    hand.write_text(edit(default_text(), "acceleration_rad_s2 = 500.0",
+                         "acceleration_rad_s2 = 1e6"))
+    out = tmp_path / "o.csv"
+    rc, _, err = run_cli(capsys, "play", TWINKLE, "-o", out, "--hand", hand)
+    assert rc == 1, err
+    (line,) = [ln for ln in err.splitlines() if "LIMIT:" in ln]
+    (claim,) = read_trajectory(str(out)).end["limit_violations"]
+    crc, cout, _ = run_cli(capsys, "check", out, TWINKLE, "--hand", hand, "--json")
+    rep = json.loads(cout)
+    assert crc == 1
+    (found,) = [lc for lc in rep["limits"] if not lc["ok"]]
+    assert (found["category"], found["count"], found["name"]) == \
+        (claim["category"], claim["count"], claim["name"])
+    assert f"{found['count']} {found['category'].replace('_', ' ')} violations" in line

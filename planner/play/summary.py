@@ -72,8 +72,9 @@ def plan_dict(song_name: str, notes, plan: PlayPlan, out: str, setup_s: float) -
 
 
 def play_cli(a) -> int:
-    """Plan, write, summarise; 0, or 1 under ``--strict`` when a note is not played, late
-    or a key is pressed wrongly."""
+    """Plan, write, summarise; 0, or 1 when the plan's own replay finds what ``check``
+    fails (a wrong press, a limit violation), or under ``--strict`` a note not played
+    or late."""
     if (a.report or a.html) and a.output == "-":
         raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
     song = load_song(a.song, track=a.track, channel=a.channel, transpose=a.transpose)
@@ -98,6 +99,8 @@ def play_cli(a) -> int:
             sys.stderr.write("".join(f"{what} -> {path}\n" for what, path in
                                      (("report", a.report), ("html", a.html)) if path))
     score = plan.verdict.score
+    if plan.verdict.rejected:  # (a wrong press or a limit violation: check fails the plan)
+        return 1
     if a.strict and (plan.verdict.skipped or score.late or score.wrong_presses):
         return 1
     return 0
