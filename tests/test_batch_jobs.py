@@ -49,7 +49,13 @@ def _group_gone(pgid: int) -> bool:
 def _start(songs: Path, out: Path) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, str(ROOT / "cli.py"), "batch", str(songs), str(out),
                              "--workers", "2"], cwd=out.parent, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=_default_sigint)
+
+
+def _default_sigint() -> None:
+    # (a test run from a background job inherits SIGINT ignored, and Python keeps it so)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP],
