@@ -5,7 +5,15 @@
 outcome in ``out_dir/<name>.json`` (written whole, after the check: a song whose record
 is there, for the same song bytes and hand, with its trajectory complete, is done and
 skipped by the next run). The summary of every song goes to ``out_dir/summary.csv`` and
-``summary.json``.
+``summary.json`` (those names are reserved: a song named ``summary.mid`` is recorded as
+failed, its outputs never overwrite the summary's). Entries of ``songs_dir`` that are not
+MIDI files (another suffix, a folder named ``x.mid``, a file without a MIDI header) are
+skipped, each with a line (``on_skip``). A song whose planning fails, however, is
+recorded as failed with its one-line reason and the batch goes on.
+
+SIGINT, SIGTERM or SIGHUP (``KeyboardInterrupt``) stop the workers at once
+(``planner.batchpool``), the summary of the songs done is written, and the
+interrupt goes on to the command line (exit 128 + the signal's number).
 
 Workers are local processes (each builds its planner once and plans song after song);
 with ``address`` the songs go to a Ray cluster instead (the ``batch`` extra; one task a
@@ -20,13 +28,14 @@ import io
 import json
 import os
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from functools import cache
 from pathlib import Path
 
 from planner.errors import InputError, PlannerError
 
+RESERVED_STEMS = ("summary",)  # the summary's file names (summary.csv, summary.json)
+MIDI_MAGIC = (b"MThd", b"RIFF")  # a standard MIDI file, or one wrapped in RIFF (RMID)
 SUMMARY_FIELDS = ("song", "notes", "played", "infeasible", "frame_f1", "check_ok",
                   "planning_s", "realtime_factor", "trajectory", "error")
 
@@ -96,13 +105,15 @@ def format_song_line(r: SongResult) -> str:
 def batch_plan(songs_dir: str | os.PathLike, out_dir: str | os.PathLike, workers: int = 2,
                hand: str = "default", address: str | None = None,
                on_result: Callable[[SongResult], None] | None = None,
-               on_progress: Callable[[int, int], None] | None = None) -> BatchSummary:
+               on_progress: Callable[[int, int], None] | None = None,
+               on_skip: Callable[[str, str], None] | None = None) -> BatchSummary:
     """Plan and check every song of ``songs_dir`` into ``out_dir`` (see the module
     docstring); ``on_result`` is called as each song finishes (or is found done), then
-    ``on_progress(songs done, songs)``."""
+    ``on_progress(songs done, songs)``; ``on_skip(entry, why)`` for an entry that is
+    not a MIDI file."""
     if not Path(songs_dir).is_dir():
         raise InputError(f"{songs_dir}: no such folder")
-    songs = sorted(Path(songs_dir).glob("*.mid"))
+    songs = midi_files(Path(songs_dir), on_skip)
     if not songs:
         raise InputError(f"{songs_dir}: no MIDI files (*.mid) in it")
     if not isinstance(workers, int) or workers < 1:
@@ -123,16 +134,59 @@ def batch_plan(songs_dir: str | os.PathLike, out_dir: str | os.PathLike, workers
 
     todo = []
     for s in songs:
-        done = _done(s, out, hand)
+        done = _reserved(s, hand) or _done(s, out, hand)
         if done is None:
             todo.append(s)
         else:
             record(s, done)
-    for s, r in _run(todo, out, hand, workers, address):
-        record(s, r)
+    try:
+        for s, r in _run(todo, out, hand, workers, address):
+            record(s, r)
+    except KeyboardInterrupt:  # (the workers are stopped: the summary of what is done)
+        _write_summary(BatchSummary(tuple(results[s] for s in songs if s in results)), out)
+        raise
     summary = BatchSummary(tuple(results[s] for s in songs))
     _write_summary(summary, out)
     return summary
+
+
+def midi_files(folder: Path, on_skip: Callable[[str, str], None] | None) -> list[Path]:
+    """The MIDI files of ``folder`` (``*.mid`` regular files that start as one), by name;
+    every other entry is told to ``on_skip`` with why."""
+    out = []
+    for p in sorted(folder.iterdir()):
+        why = None
+        if p.suffix.lower() != ".mid":
+            why = "not a .mid file"
+        elif not p.is_file():
+            why = "not a regular file (a folder?)"
+        else:
+            try:
+                with open(p, "rb") as f:
+                    if f.read(4) not in MIDI_MAGIC:
+                        why = "not a MIDI file (no MThd header)"
+            except OSError as e:
+                why = f"cannot read it: {e.strerror or e}"
+        if why is None:
+            out.append(p)
+        elif on_skip:
+            on_skip(p.name, why)
+    return out
+
+
+def _failed(song: Path, hand: str, why: str) -> SongResult:
+    return SongResult(song=song.name, notes=0, played=0, infeasible=0, frame_f1=0.0,
+                      check_ok=False, planning_s=0.0, realtime_factor=0.0,
+                      trajectory=f"{song.stem}.csv", error=why, hand=hand)
+
+
+def _reserved(song: Path, hand: str) -> SongResult | None:
+    """A failed result for a song whose outputs would be the summary's files."""
+    if song.stem.lower() not in RESERVED_STEMS:
+        return None
+    r = _failed(song, hand, f"its outputs ({song.stem}.csv, {song.stem}.json) would be the "
+                            "batch summary's files: rename the song")
+    return SongResult(**{**asdict(r), "trajectory": ""})
 
 
 def _run(songs: list[Path], out: Path, hand: str, workers: int, address: str | None):
@@ -146,10 +200,16 @@ def _run(songs: list[Path], out: Path, hand: str, workers: int, address: str | N
         for s in songs:
             yield s, plan_one(str(s), str(out), hand)
         return
-    with ProcessPoolExecutor(max_workers=min(workers, len(songs))) as pool:
-        futures = {pool.submit(plan_one, str(s), str(out), hand): s for s in songs}
-        for f in as_completed(futures):
-            yield futures[f], f.result()
+    from planner.batchpool import Failed, WorkerPool
+
+    with WorkerPool(_plan_task, min(workers, len(songs))) as pool:
+        for (s, _, _), r in pool.run([(s, out, hand) for s in songs]):
+            yield s, (_failed(s, hand, r.reason) if isinstance(r, Failed) else r)
+
+
+def _plan_task(task: tuple[Path, Path, str]) -> SongResult:
+    song, out, hand = task
+    return plan_one(str(song), str(out), hand)
 
 
 def _run_ray(songs: list[Path], out: Path, hand: str, address: str):
@@ -167,10 +227,20 @@ def _run_ray(songs: list[Path], out: Path, hand: str, address: str):
                          "RAY_AUTH_MODE=token and its token (ray get-auth-token)") from None
     task = ray.remote(plan_one)
     pending = {task.remote(str(s), str(out), hand): s for s in songs}
-    while pending:
-        ready, _ = ray.wait(list(pending), num_returns=1)
-        for ref in ready:
-            yield pending.pop(ref), ray.get(ref)
+    try:
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            for ref in ready:
+                s = pending.pop(ref)
+                try:
+                    r = ray.get(ref)
+                except Exception as e:  # noqa: BLE001 -- (a task that died: this song failed)
+                    r = _failed(s, hand, f"{type(e).__name__}: "
+                                         f"{(str(e).strip().splitlines() or [''])[0]}"[:500])
+                yield s, r
+    finally:  # (done, or interrupted: no task of this batch keeps running)
+        for ref in pending:
+            ray.cancel(ref, force=True)
 
 
 def _song_sha256(path: Path) -> str:
@@ -223,6 +293,11 @@ def plan_one(song_path: str, out_dir: str, hand_name: str) -> SongResult:
     except (InputError, PlannerError) as e:
         r = SongResult(notes=0, played=0, infeasible=0, frame_f1=0.0, check_ok=False,
                        planning_s=0.0, realtime_factor=0.0, error=str(e), **base)
+    except Exception as e:  # noqa: BLE001 -- a planner bug fails this song, not the batch
+        first = (str(e).strip().splitlines() or [""])[0]
+        r = SongResult(notes=0, played=0, infeasible=0, frame_f1=0.0, check_ok=False,
+                       planning_s=0.0, realtime_factor=0.0,
+                       error=f"{type(e).__name__}: {first}"[:500], **base)
     record = {k: v for k, v in asdict(r).items() if k != "skipped"}
     write_file(Path(out_dir) / f"{song.stem}.json", json.dumps(record, indent=1) + "\n")
     return r

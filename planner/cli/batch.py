@@ -29,7 +29,9 @@ def run(a: argparse.Namespace) -> int:
                              address=a.address,
                              on_result=None if a.json else (
                                  lambda r: bar.write(format_song_line(r))),
-                             on_progress=bar.update)
+                             on_progress=bar.update,
+                             on_skip=None if a.json else (
+                                 lambda e, why: bar.write(f"{e}: skipped ({why})")))
     if a.json:
         sys.stdout.write(json.dumps(summary.to_dict()) + "\n")
     else:
