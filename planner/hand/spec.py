@@ -22,6 +22,7 @@ import numpy as np
 import tomllib
 
 from planner.errors import InputError
+from planner.hand.drive import apply_drive
 
 INCH_M = 0.0254
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
@@ -61,6 +62,8 @@ class Joint:
     velocity: float = 0.0
     acceleration: float = 0.0
     effort: float = 0.0
+    jerk: float = 0.0  # rad/s^3 or m/s^3 (``planner.hand.drive``)
+    stop_margin: float = 0.0  # rad or m kept from each hard stop (``planner.hand.drive``)
 
     @property
     def movable(self) -> bool:
@@ -385,7 +388,7 @@ def assemble_spec(data: dict[str, Any], parts: HandParts) -> HandSpec:
         name=_get(data, "name", str),
         description=str(data.get("description", "")),
         links=tuple(parts.links),
-        joints=tuple(parts.joints),
+        joints=tuple(apply_drive(data, parts.joints, actuators, parts.couplings)),
         couplings=tuple(parts.couplings),
         actuators=tuple(actuators),
         T_world_root=parts.T_world_root,
