@@ -12,7 +12,9 @@ name (a name wins over a kind); a joint that follows another by a coupling takes
 motor of the joint it follows.
 
 Stop margin: the planner keeps every joint ``stop_margin_deg`` (revolute) or
-``stop_margin_m`` (prismatic) inside its hard stops (``HandModel.plan_lower`` /
+``stop_margin_m`` (prismatic) inside its hard stops (a joint that follows another by a
+coupling, none of its own: it moves only as its source does, whose margin keeps it off
+the ends of its range) (``HandModel.plan_lower`` /
 ``plan_upper``); ``check`` counts the rows closer to a stop than that
 (``joint_stop_margin``) and refuses, as before, the rows beyond a stop.
 """
@@ -68,6 +70,7 @@ def apply_drive(data: dict[str, Any], joints, actuators, couplings) -> list:
     ramp = _number(drive, "ramp_time_constants")
     margin_rad = math.radians(_number(drive, "stop_margin_deg", positive=False))
     margin_m = _number(drive, "stop_margin_m", positive=False)
+    followers = {c.joint for c in couplings}
     out = []
     for j in joints:
         if not j.movable:
@@ -75,7 +78,9 @@ def apply_drive(data: dict[str, Any], joints, actuators, couplings) -> list:
             continue
         if j.name not in taus:
             raise InputError(f"joint {j.name!r}: no motor drives it ([{DRIVE_TABLE}])")
-        margin = margin_m if j.kind == "prismatic" else margin_rad
+        # (a joint that follows another by a coupling has its range from its law: its
+        # source's margin keeps it off the ends of it)
+        margin = 0.0 if j.name in followers else margin_m if j.kind == "prismatic" else margin_rad
         if math.isfinite(j.lower) and math.isfinite(j.upper) and 2 * margin >= j.upper - j.lower:
             raise InputError(f"joint {j.name!r}: stop margins leave no range")
         out.append(replace(j, jerk=j.acceleration / (ramp * taus[j.name]), stop_margin=margin))

@@ -141,7 +141,8 @@ class Atlas:
         for f in h.fingers:
             js = h.joint_slice(f)
             for j in js[1:]:
-                q0[j] = h.plan_lower[j] + CURL * (h.plan_upper[j] - h.plan_lower[j])
+                q0[j] = min(max(h.lower[j] + CURL * (h.upper[j] - h.lower[j]),
+                                h.plan_lower[j]), h.plan_upper[j])
             q0[js[0]] = min(max(0.0, h.plan_lower[js[0]]), h.plan_upper[js[0]])
         q0 = h.apply_couplings(q0)
         wrist = [h.index[n] for n in ("wrist_flex", "wrist_dev")]

@@ -101,7 +101,7 @@ def path_s(t_s: np.ndarray, duration_s, ta_s, tj_s) -> np.ndarray:
     element by element, one move's floats for every time or one move per time
     (``planner.play.motion`` samples a track's segments at once). A move of zero length
     is at its end (1)."""
-    T = duration_s
+    T, ta_s, tj_s = (np.asarray(x, dtype=float) for x in (duration_s, ta_s, tj_s))
     t = np.clip(t_s, 0.0, T)
     vp = 1.0 / (T - ta_s)  # the peak speed (the cruise covers the rest: vp (T - ta) = 1)
     ap = vp / (ta_s - tj_s)  # the peak acceleration
