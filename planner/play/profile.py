@@ -46,6 +46,21 @@ class Move:
     ta_s: float
     tj_s: float
 
+    @property
+    def peak_speed(self) -> float:
+        """The path parameter's largest speed (1/s; 0 for a zero move)."""
+        return 0.0 if self.duration_s == 0.0 else 1.0 / (self.duration_s - self.ta_s)
+
+    @property
+    def peak_acceleration(self) -> float:
+        """The path parameter's largest acceleration (1/s^2; 0 for a zero move)."""
+        return 0.0 if self.duration_s == 0.0 else self.peak_speed / (self.ta_s - self.tj_s)
+
+    @property
+    def jerk(self) -> float:
+        """The path parameter's jerk while it ramps (1/s^3; 0 for a zero move)."""
+        return 0.0 if self.duration_s == 0.0 else self.peak_acceleration / self.tj_s
+
     def s(self, t_s: np.ndarray) -> np.ndarray:
         """Path parameter in [0, 1] at times ``t_s`` after the move's start (clamped)."""
         return path_s(np.asarray(t_s, dtype=float), self.duration_s, self.ta_s, self.tj_s)
