@@ -158,8 +158,8 @@ class Costs:
         self.dt = 1.0 / rate_hz
         h = atlas.hand
         r = atlas.rail
-        self.rail_lo = 0 if r is None else math.ceil(h.lower[r] / RAIL_STEP_M)
-        self.rail_hi = 0 if r is None else math.floor(h.upper[r] / RAIL_STEP_M)
+        self.rail_lo = 0 if r is None else math.ceil(h.plan_lower[r] / RAIL_STEP_M)
+        self.rail_hi = 0 if r is None else math.floor(h.plan_upper[r] / RAIL_STEP_M)
         m = memo or CostMemo()
         self._rails: dict[tuple[str, int, float], frozenset[int]] = m.rails
         self._entry: dict = m.entry
