@@ -146,12 +146,7 @@ def _motor_consistency(hand: HandModel, t: np.ndarray, Q: np.ndarray, QM: np.nda
                        ) -> LimitCheck:
     """The motor columns against the joints: tolerance plus the rounding of the file."""
     QMc = hand.motor_angles(Q)
-    sens = np.zeros_like(QMc)
-    step = 1e-4
-    for j in range(hand.n):
-        Qp = Q.copy()
-        Qp[:, j] += step
-        sens += np.abs(hand.motor_angles(Qp) - QMc) / step
+    sens = hand.motor_sensitivity(Q)
     err = np.abs(QM - QMc)
     tol = MOTOR_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + sens)
     return _worst("motor_consistency", err / tol, err, tol, 0.0, _motor_columns(hand), t, "rad")

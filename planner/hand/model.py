@@ -257,6 +257,24 @@ class HandModel:
                                             q[..., self.index[a.mk5.source]])
         return qm
 
+    def motor_sensitivity(self, q: np.ndarray, step: float = 1e-4) -> np.ndarray:
+        """Per row of ``q`` (T, n) and motor: the sum over joints of |d q_motor / d q_j|
+        (how far a motor's angle moves when every joint moves by one unit): the rows of
+        the linear transmissions' matrix, and finite differences of ``step`` where a
+        motor's law is not linear (the Mk5's)."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        out = np.tile(np.abs(self._C).sum(axis=1), (len(q), 1))
+        nonlinear = [m for m, a in enumerate(self.actuators) if a.mk5 is not None]
+        if nonlinear:
+            qm = self.motor_angles(q)
+            fd = np.zeros_like(qm)
+            for j in range(self.n):
+                qp = q.copy()
+                qp[:, j] += step
+                fd += np.abs(self.motor_angles(qp) - qm) / step
+            out[:, nonlinear] = fd[:, nonlinear]
+        return out
+
     def motor_ratio(self, q: np.ndarray) -> np.ndarray:
         """dq_motor / dq_drive for each motor (rad per rad of its driven joint) at ``q``."""
         S = self.dq_dindependent(q)
