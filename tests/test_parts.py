@@ -45,10 +45,13 @@ def test_the_upper_track_is_played_and_the_reason_given(tmp_path):
     assert [n.pitch for n in song.notes] == [p for p, _ in MELODY]
     assert (song.track, song.channel) == (None, None)  # (the options: check reads it so)
     part = song.part
-    assert (part.track, part.channel, part.split_pitch) == (1, 0, None)
+    assert (part.played, part.track, part.channel, part.split_pitch) == (((1, 0),), 1, 0, None)
     assert [(p.track, p.notes, p.median_pitch) for p in part.parts] == [(1, 26, 63.0),
                                                                         (2, 7, 48.0)]
-    assert "lie highest" in part.reason and "--track" in part.reason
+    assert part.reason == ("the upper part, track 1 channel 0 (26 notes, median MIDI 63), its "
+                           "notes highest; left out, an octave or more lower: track 2 "
+                           "channel 1 (7 notes, median MIDI 48); --track/--channel choose "
+                           "another part")
 
 
 def test_track_and_channel_choose_otherwise(tmp_path):
@@ -62,7 +65,7 @@ def test_track_and_channel_choose_otherwise(tmp_path):
 def test_one_track_with_both_hands_is_split_by_pitch(tmp_path):
     song = load_song(_mary(tmp_path, one_track=True))
     assert [n.pitch for n in song.notes] == [p for p, _ in MELODY]
-    assert song.part.split_pitch == C4 and song.part.track is None
+    assert song.part.split_pitch == C4 and song.part.played == ((0, 0),)
     assert "7 below left out" in song.part.reason
 
 
@@ -72,6 +75,17 @@ def test_a_single_part_is_read_whole():
         assert load_song(f).part is None, f
     wide = smf(notes_track([(p, 0, Q, 80) for p in (36, 48, 60, 72, 84)]))
     assert len(parse_song_bytes(wide).notes) == 5  # (one wide chord: one hand's problem)
+
+
+def test_parts_within_an_octave_are_one_hands_line():
+    """A line spread over channels (a doubling, a file written channel by channel) is
+    read whole; a part an octave lower is left out."""
+    line = [(60 + i % 5, i * Q, (i + 1) * Q, 80, i % 3) for i in range(12)]  # 3 channels
+    assert len(parse_song_bytes(smf(notes_track(line))).notes) == 12
+    bass = [(45, i * 4 * Q, (i + 1) * 4 * Q, 80, 5) for i in range(3)]  # A2, 21 lower
+    song = parse_song_bytes(smf(notes_track(line + bass)))
+    assert len(song.notes) == 12 and song.part.played == ((0, 0), (0, 1), (0, 2))
+    assert (song.part.track, song.part.channel) == (0, None)
 
 
 @pytest.mark.parametrize("one_track", [False, True])

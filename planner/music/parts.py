@@ -5,19 +5,23 @@ channel and a left hand on another, or both hands in one track. One hand cannot 
 them all, and the notes it cannot play are better the lower ones: the right hand of a
 pianist plays the upper part. So, with neither ``track`` nor ``channel`` given:
 
-* Parts are the (track, channel) pairs that hold notes (drums excluded). With more than
-  one, the part whose notes lie highest (the largest median pitch; then more notes; then
-  the lower track and channel) is played, the others left out.
-* The chosen part (or the only one) is then tested for two hands in one part: its
-  pitches fall into two clusters (the best split of the sorted pitches into a lower and
-  an upper group, 1-D two-means), each struck at ``SPLIT_MIN_ONSETS`` times or more,
-  whose medians are at least ``SPLIT_MIN_SEMITONES`` apart, and at least ``SPLIT_MIN_TOGETHER`` of the lower group's notes sound while an
-  upper note sounds (two hands play at once; one hand's leaps do not). Then only the
-  notes at or above the split pitch are played.
+* Parts are the (track, channel) pairs that hold notes (drums excluded). The part whose
+  notes lie highest (the largest median pitch) is played, with every part whose median
+  is less than ``SPLIT_MIN_SEMITONES`` below it (one hand's line spread over channels or
+  tracks, a doubling); the parts an octave or more lower (a bass, a left hand) are left
+  out.
+* The notes kept are then tested for two hands in one part: their pitches fall into two
+  clusters (the best split of the sorted pitches into a lower and an upper group, 1-D
+  two-means), each struck at ``SPLIT_MIN_ONSETS`` times or more, whose medians are at
+  least ``SPLIT_MIN_SEMITONES`` apart, and at least ``SPLIT_MIN_TOGETHER`` of the lower
+  group's notes sound while an upper note sounds (two hands play at once; one hand's
+  leaps do not). Then only the notes at or above the split pitch are played.
 
 ``choose_part`` says what it chose and why (``PartChoice.reason``), which the play
-summary and ``play --json`` print. A caller that names ``track`` or ``channel`` gets
-exactly that part: this module is not asked.
+summary, ``play --json`` and the plan's metadata give. A caller that names ``track`` or
+``channel`` gets exactly that part: this module is not asked. The choice is a function
+of the file alone, so every reader of a plan (``check``, ``simulate``) reads the same
+notes.
 """
 
 from __future__ import annotations
@@ -52,24 +56,34 @@ class PartInfo:
 
 @dataclass(frozen=True)
 class PartChoice:
-    """The part played: ``track`` and ``channel`` (None: every one), ``split_pitch``
+    """The part played: the (track, channel) pairs kept (``played``), ``split_pitch``
     (only notes at or above it; None: no split), ``reason`` (a sentence), and every part
-    of the file (``parts``)."""
+    of the file (``parts``). ``track``/``channel``: the one track (channel) of every part
+    kept, or None when they are several."""
 
-    track: int | None
-    channel: int | None
+    played: tuple[tuple[int, int], ...]
     split_pitch: int | None
     reason: str
     parts: tuple[PartInfo, ...]
 
+    @property
+    def track(self) -> int | None:
+        tracks = {t for t, _ in self.played}
+        return next(iter(tracks)) if len(tracks) == 1 else None
+
+    @property
+    def channel(self) -> int | None:
+        channels = {c for _, c in self.played}
+        return next(iter(channels)) if len(channels) == 1 else None
+
     def keeps(self, pitch: int, channel: int, track: int) -> bool:
         """Whether a note of this pitch, channel and track is played."""
-        return ((self.track is None or track == self.track)
-                and (self.channel is None or channel == self.channel)
+        return ((track, channel) in self.played
                 and (self.split_pitch is None or pitch >= self.split_pitch))
 
     def to_dict(self) -> dict:
-        return {"track": self.track, "channel": self.channel, "split_pitch": self.split_pitch,
+        return {"track": self.track, "channel": self.channel,
+                "played": [list(p) for p in self.played], "split_pitch": self.split_pitch,
                 "reason": self.reason, "parts": [p.to_dict() for p in self.parts]}
 
 
@@ -84,28 +98,30 @@ def choose_part(raw, name: Callable[[int], str] = str) -> PartChoice | None:
                          key=lambda p: (p.track, p.channel)))
     if not parts:
         return None
-    best = max(parts, key=lambda p: (p.median_pitch, p.notes, -p.track, -p.channel))
-    chosen = groups[(best.track, best.channel)]
-    split = two_hands_split(chosen)
-    where = f"track {best.track}, channel {best.channel}"
-    if len(parts) > 1:
-        others = ", ".join(f"track {p.track} channel {p.channel} (median {p.median_pitch:g})"
-                           for p in parts if p is not best)
-        reason = (f"{where} of {len(parts)} parts: its notes lie highest (median MIDI "
-                  f"{best.median_pitch:g}, against {others}); the right hand plays the "
-                  "upper part")
-        track, channel = best.track, best.channel
-    elif split is None:
+    top = max(p.median_pitch for p in parts)
+    kept = [p for p in parts if p.median_pitch > top - SPLIT_MIN_SEMITONES]
+    notes = [n for p in kept for n in groups[(p.track, p.channel)]]
+    split = two_hands_split(notes)
+    if len(kept) == len(parts) and split is None:
         return None
-    else:
-        reason, track, channel = f"{where}, the only part", None, None
+    reasons = []
+    if len(kept) < len(parts):
+        reasons.append(
+            f"the upper part, {_listed(kept)}, its notes highest; left out, an octave or "
+            f"more lower: {_listed([p for p in parts if p not in kept])}")
     if split is not None:
-        upper = sum(1 for n in chosen if n[0] >= split)
-        reason += (f"; it holds two hands' notes (two pitch groups sounding together): "
-                   f"the {upper} notes from {name(split)} (MIDI {split}) up are played, the "
-                   f"{len(chosen) - upper} below left out")
-    reason += "; --track/--channel choose another part"
-    return PartChoice(track, channel, split, reason, parts)
+        upper = sum(1 for n in notes if n[0] >= split)
+        reasons.append(
+            f"{'it' if reasons else _listed(kept)} holds two hands' notes (two pitch groups "
+            f"sounding together): the {upper} notes from {name(split)} (MIDI {split}) up "
+            f"are played, the {len(notes) - upper} below left out")
+    reason = "; ".join(reasons) + "; --track/--channel choose another part"
+    return PartChoice(tuple((p.track, p.channel) for p in kept), split, reason, parts)
+
+
+def _listed(parts) -> str:
+    return ", ".join(f"track {p.track} channel {p.channel} ({p.notes} notes, median MIDI "
+                     f"{p.median_pitch:g})" for p in parts)
 
 
 def _info(track: int, channel: int, notes: list) -> PartInfo:

@@ -71,7 +71,7 @@ def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -
     defaults to the song's file name; ``part`` only when the file had several parts."""
     song_name = song_name or os.path.basename(song.source)
     part = {} if song.part is None else {"part": {
-        "track": song.part.track, "channel": song.part.channel,
+        "played": [list(tc) for tc in song.part.played],
         "split_pitch": song.part.split_pitch, "reason": song.part.reason}}
     return {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
             "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
