@@ -32,19 +32,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from planner.catch.flight import get_ball
-from planner.catch.plan import get_planner, plan_throw, write_plan
-from planner.catch.results import CatchReason
+from planner.catch.flight.path import get_ball
+from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.reasons import HARD_LIMITS, CatchReason
 from planner.errors import InputError
 
 BUDGET_S = 0.420 - 0.300 - 0.025  # seed flight time - actuation time - signal handling
 
 
-def _category(reason: str) -> str:
-    return reason.split(":")[0].split(" (")[0]
-
-
-HARD_LIMITS = {CatchReason.OUT_OF_REACH, CatchReason.TOO_SOON, CatchReason.TOO_FAST_TO_STOP}
 _SHORT = {CatchReason.OUT_OF_REACH: "reach", CatchReason.TOO_SOON: "soon",
           CatchReason.TOO_FAST_TO_STOP: "fast"}
 
@@ -53,7 +48,7 @@ def _cell(p) -> str:
     if p is None:
         return "-"
     if p.feasible:
-        return f"{100 * p.stop.headroom:.0f}"
+        return f"{100 * p.forces.stop.headroom:.0f}"
     hard = [k for k in p.reason_kinds if k in HARD_LIMITS]
     return _SHORT[hard[0]] if hard else p.reason_kinds[0].value
 
@@ -107,7 +102,7 @@ def grid(pl, ball, check: bool) -> int:
                   f"rejected {rejected[:3]}")
         for d in (1.5, 3.0):
             p = plan_throw(30.0, d, 0.0, planner=pl, ball=ball, soft=soft)
-            st = p.stop
+            st = p.forces.stop
             worst = sorted(zip(p.hand.motor_names, st.motor_headroom), key=lambda x: x[1])[:4]
             print(f"  30 deg from {d:g} m: feasible {p.feasible}, stopping {st.force_n:.1f} N, "
                   f"headroom {100 * st.headroom:.1f} % (motor.{st.motor}); least per motor: "
@@ -154,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
         lat[k] = time.perf_counter() - t
         cpu[k] = time.process_time() - c
         feasible += p.feasible
-        reasons.update({_category(r) for r in p.reasons})
+        reasons.update({r.kind.value for r in p.reasons})
     p50, p99 = np.percentile(lat, [50, 99])
     ms = 1000.0
     print(f"catch planning latency, hand {a.hand}, ball {a.ball}, {a.n} random throws "

@@ -24,7 +24,14 @@ own ``bench/bench_live.py --worker``: its planner with the loop it has) right be
 one's, on the same throws and the same noise: before and after side by side under the
 same load.
 
-    python bench/bench_live.py [--n 20] [--seed 0] [--against DIR]
+``--physics``: the physics judge beside the kinematic verdict -- every live catch replayed
+in MuJoCo (``simulate``; the TRUE ball in the file's metadata and end marker), held with
+every motor within its torque; per configuration: the session's own "held", the check's
+verdict against the true ball, held in physics, and the throws the check calls caught that
+the physics drops.
+
+    python bench/bench_live.py [--n 20] [--seed 0] [--against DIR] [--physics]
+                               [--rates 100,500] [--noises-mm 2,5,10]
 """
 
 from __future__ import annotations
@@ -51,12 +58,33 @@ def throws_of(n: int, seed: int) -> np.ndarray:
                             rng.uniform(-0.2, 0.2, n)])
 
 
-def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng):
+def true_ball_text(text: str, flight) -> str:
+    """A live file's text with the TRUE ball in its metadata and as its end marker's
+    estimate (the intercept time the session's last estimate): what the kinematic check
+    and the physics judge the rows against."""
+    lines = text.rstrip("\n").split("\n")
+    meta, end = json.loads(lines[0][2:]), json.loads(lines[-1][2:])
+    meta["ball"] = end["ball"] = flight.to_metadata()
+    meta["intercept_t"] = end["intercept_t"]
+    return "\n".join(["# " + json.dumps(meta), *lines[1:-1], "# " + json.dumps(end)]) + "\n"
+
+
+def physics_verdict(text: str) -> tuple[bool, str]:
+    """The physics judge: the file replayed in MuJoCo (``simulate``): held with every motor
+    within its torque, and the first problem otherwise."""
+    from planner.simulate import simulate_trajectory
+    from planner.trajfile import parse_trajectory
+
+    rep = simulate_trajectory(parse_trajectory(text))
+    return not rep.problems, (rep.problems[0][:60] if rep.problems else "")
+
+
+def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng, physics=False):
     """One throw: (caught against the true ball, wall latencies (s), CPU times (s) or
-    None, outcome, the check's problems)."""
-    from planner.catch.camera import observe_throw
-    from planner.catch.flight import predict_throw
-    from planner.catch.session import CatchSession
+    None, outcome, the check's problems, the physics' verdict (None without ``physics``))."""
+    from planner.catch.flight.camera import observe_throw
+    from planner.catch.flight.path import predict_throw
+    from planner.catch.live.session import CatchSession
     from planner.check import check_trajectory
     from planner.trajfile import parse_trajectory
 
@@ -67,27 +95,33 @@ def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng):
     end = parse_trajectory(s.text).end
     end = dict(end, ball=fl.to_metadata())  # judged against the true ball
     rep = check_trajectory(parse_trajectory(head + "\n# " + json.dumps(end) + "\n"))
-    return rep.ok, s.latencies_s, getattr(s, "cpu_s", None), s.outcome, rep.problems
+    phys = physics_verdict(true_ball_text(s.text, fl)) if physics else None
+    return rep.ok, s.latencies_s, getattr(s, "cpu_s", None), s.outcome, rep.problems, phys
 
 
-def run_config(pl, ball, throws, rate, noise, seed) -> dict:
+def run_config(pl, ball, throws, rate, noise, seed, physics=False) -> dict:
     """Every throw at one rate and noise level (its noise from its own seed)."""
     rng = np.random.default_rng([seed, int(rate), round(noise * 1e4)])
-    ok, lat, cpu, fails = [], [], [], {}
+    ok, lat, cpu, fails, phys, outcomes = [], [], [], {}, [], []
     for th in throws:
-        caught, ls, cs, outcome, problems = run_throw(pl, ball, *th, noise, rate, rng)
+        caught, ls, cs, outcome, problems, ph = run_throw(pl, ball, *th, noise, rate, rng,
+                                                          physics)
         ok.append(bool(caught))
+        outcomes.append(outcome)
+        if ph is not None:
+            phys.append(ph)
         lat.extend(ls)
         cpu.extend(cs or [])
         if not caught:
             key = problems[0].split(":")[0][:50] if problems else outcome
             fails[key] = fails.get(key, 0) + 1
-    return {"ok": ok, "lat": lat, "cpu": cpu, "fails": fails}
+    return {"ok": ok, "lat": lat, "cpu": cpu, "fails": fails, "phys": phys,
+            "outcomes": outcomes}
 
 
 def setup():
-    from planner.catch.flight import get_ball
-    from planner.catch.plan import get_planner
+    from planner.catch.flight.path import get_ball
+    from planner.catch.plan.api import get_planner
 
     t0 = time.perf_counter()
     pl = get_planner("default")
@@ -119,7 +153,26 @@ def line(label: str, r: dict, feasible: np.ndarray) -> str:
     rate_f = ok[feasible].mean() if feasible.any() else float("nan")
     return (f"{label}caught {ok.sum():3d}/{ok.size} ({ok.mean():.0%}; of the feasible "
             f"{rate_f:.0%}); latency p50 {p50:.2f} ms, p99 {p99:.2f} ms{c} over {lat.size} "
-            "observations" + (f"; misses: {r['fails']}" if r["fails"] else ""))
+            "observations" + (f"; misses: {r['fails']}" if r["fails"] else "")
+            + physics_line(r))
+
+
+def physics_line(r: dict) -> str:
+    """The physics judge beside the kinematic verdict: held in physics, the session's own
+    "held", and the throws the check calls caught that the physics drops."""
+    if not r.get("phys"):
+        return ""
+    held = np.array([h for h, _ in r["phys"]])
+    said = np.array([o == "held" for o in r["outcomes"]])
+    ok = np.array(r["ok"])
+    why: dict[str, int] = {}
+    for h, w in r["phys"]:
+        if not h:
+            key = w.split(":")[0][:40]
+            why[key] = why.get(key, 0) + 1
+    return (f"\n      session says held {said.sum()}/{said.size}, check (true ball) "
+            f"{ok.sum()}/{ok.size}, physics held {held.sum()}/{held.size}; check OK but "
+            f"physics drops: {int((ok & ~held).sum())}" + (f"; physics: {why}" if why else ""))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -128,6 +181,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--against", type=Path, default=None, metavar="DIR",
                     help="also run the planner of this checkout, configuration by configuration")
+    ap.add_argument("--physics", action="store_true",
+                    help="also replay every live catch in MuJoCo (simulate): the physics judge")
+    ap.add_argument("--rates", default=None, help="e.g. 100 (default: 100,500)")
+    ap.add_argument("--noises-mm", default=None, help="e.g. 5 (default: 2,5,10)")
     ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)  # RATE,NOISE: one config
     a = ap.parse_args(argv)
     sys.path.insert(0, os.environ.get(CODE_ENV, str(ROOT)))
@@ -135,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
         rate, noise = (float(x) for x in a.worker.split(","))
         worker(a.n, a.seed, rate, noise)
         return 0
-    from planner.catch.plan import plan_throw
+    from planner.catch.plan.api import plan_throw
 
     pl, ball, set_up = setup()
     throws = throws_of(a.n, a.seed)
@@ -145,8 +202,11 @@ def main(argv: list[str] | None = None) -> int:
           f"dist 1-2.5 m, height -0.2..0.2 m; {feasible.sum()} feasible from the true flight); "
           f"set-up {set_up:.2f} s" + (f"; before: {a.against}" if a.against else ""))
     all_lat, all_cpu, before, before_cpu = [], [], [], []
-    for rate in RATES_HZ:
-        for noise in NOISES_M:
+    rates = RATES_HZ if a.rates is None else tuple(float(x) for x in a.rates.split(","))
+    noises = NOISES_M if a.noises_mm is None else tuple(float(x) / 1000
+                                                        for x in a.noises_mm.split(","))
+    for rate in rates:
+        for noise in noises:
             head = f"  {rate:4.0f} Hz, noise {1000 * noise:4.1f} mm: "
             if a.against:
                 b = run_against(a.against.resolve(), a, rate, noise)
@@ -154,7 +214,7 @@ def main(argv: list[str] | None = None) -> int:
                 before_cpu.append(b["cpu"])
                 print(line(head + "before ", b, feasible))
                 head = " " * len(head) + "after  "
-            r = run_config(pl, ball, throws, rate, noise, a.seed)
+            r = run_config(pl, ball, throws, rate, noise, a.seed, a.physics)
             all_lat.append(r["lat"])
             all_cpu.append(r["cpu"])
             print(line(head, r, feasible))

@@ -1,6 +1,14 @@
 """The physics replay: how fast it runs, and how it agrees with the kinematic check.
 
     python bench/bench_simulate.py               # simulated seconds per wall second, 60 s song
+    python bench/bench_simulate.py --speed --against /work/main   # every sample song in
+                                                 # full contact, this tree and another one
+                                                 # (a worktree of the old code) in one run,
+                                                 # interleaved: real-time factors (median
+                                                 # of --reps), physics F1, wrong keys,
+                                                 # longest motor saturation, side by side
+    python bench/bench_simulate.py --bodies      # every sample song: check's body rule vs
+                                                 # physics F1 and wrong keys (full contact)
     python bench/bench_simulate.py --agreement   # every sample song: kinematic vs physics F1
                                                  # (both contact models), notes that differ
     python bench/bench_simulate.py --notes       # pads contact, note by note: each note's
@@ -67,6 +75,82 @@ def bench_speed() -> None:
                   f"s per wall s; physics F1 {rep.play.f1:.4f}, kinematic {rep.kinematic_f1:.4f}")
 
 
+# One replay in a fresh process whose ``planner`` is the tree in sys.argv[1] (the other
+# side of --speed): the modules run_replay imports are imported before the clock starts.
+_WORKER = r"""
+import json, sys, time
+sys.path.insert(0, sys.argv[1])
+import mujoco
+import planner.check, planner.planfile, planner.simulate.replay, planner.simulate.scores
+from planner.simulate import simulate_trajectory
+import planner
+assert planner.__file__.startswith(sys.argv[1]), planner.__file__
+t0, c0 = time.perf_counter(), time.process_time()
+r = simulate_trajectory(sys.argv[2], sys.argv[3], contact=sys.argv[4])
+wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+print(json.dumps(dict(sim_s=r.duration_s, wall_s=wall, cpu_s=cpu, loop_s=r.wall_s,
+                      f1=r.play.f1, wrong=len(r.play.wrong_keys), hit=r.play.notes_hit,
+                      notes=r.play.notes, sat_ms=1000 * max(m.saturated_s for m in r.motors))))
+"""
+
+
+def _replay_in(tree: Path, traj: Path, song: Path, contact: str) -> dict:
+    import json
+    import os
+    import subprocess
+
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    out = subprocess.run([sys.executable, "-c", _WORKER, str(tree), str(traj), str(song),
+                          contact],
+                         cwd=str(tree), env=env, capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def bench_speed_against(other: Path, reps: int, contact: str = "full") -> None:
+    """Every sample song planned once (this tree's planner), then replayed (``contact``,
+    full by default) by this tree and by ``other``, alternating, ``reps`` times each: the
+    real-time factor (simulated s per wall s of ``simulate_trajectory``, its imports
+    done; the CPU-time ratio beside it, less sensitive to a shared machine), median over
+    the reps; the physics verdict of each (deterministic: the first rep's)."""
+    trees = {"this": ROOT, "other": Path(other).resolve()}
+    hand = planner.load_hand("default")
+    songs = sorted((ROOT / "songs").glob("*.mid"))
+    rows = {}
+    with tempfile.TemporaryDirectory() as d:
+        for song in songs:
+            traj = Path(d) / f"{song.stem}.csv"
+            planner.plan_song(planner.load_song(str(song)), hand, str(traj))
+            runs = {k: [] for k in trees}
+            for _ in range(reps):
+                for k, tree in trees.items():
+                    runs[k].append(_replay_in(tree, traj, song, contact))
+            rows[song.stem] = runs
+            print(f"{song.stem}: " + "; ".join(
+                f"{k} {np.median([r['sim_s'] / r['wall_s'] for r in v]):.1f}x" for k, v in
+                runs.items()), flush=True)
+    print(f"\nthis = {trees['this']}, other = {trees['other']}; {reps} reps each, interleaved, "
+          f"contact {contact}\n")
+    print("| song | sim s | RTF other | RTF this | ratio | CPU-RTF other | CPU-RTF this | "
+          "F1 other | F1 this | wrong other | wrong this | hit other | hit this | "
+          "sat ms other | sat ms this |")
+    print("|---|" + "---|" * 14)
+    med = {"o": [], "t": [], "co": [], "ct": []}
+    for name, runs in rows.items():
+        o, t = runs["other"], runs["this"]
+        rtf = lambda v, key: float(np.median([r["sim_s"] / r[key] for r in v]))  # noqa: E731
+        ro, rt, co, ct = rtf(o, "wall_s"), rtf(t, "wall_s"), rtf(o, "cpu_s"), rtf(t, "cpu_s")
+        for k, v in zip(("o", "t", "co", "ct"), (ro, rt, co, ct)):
+            med[k].append(v)
+        a, b = o[0], t[0]
+        print(f"| {name} | {b['sim_s']:.2f} | {ro:.1f} | {rt:.1f} | {rt / ro:.2f} | {co:.1f} | "
+              f"{ct:.1f} | {a['f1']:.4f} | {b['f1']:.4f} | {a['wrong']} | {b['wrong']} | "
+              f"{a['hit']}/{a['notes']} | {b['hit']}/{b['notes']} | {a['sat_ms']:.0f} | "
+              f"{b['sat_ms']:.0f} |")
+    m = {k: float(np.median(v)) for k, v in med.items()}
+    print(f"| **median** | | {m['o']:.1f} | {m['t']:.1f} | {m['t'] / m['o']:.2f} | "
+          f"{m['co']:.1f} | {m['ct']:.1f} | | | | | | | | |")
+
+
 def _differences(rep) -> str:
     p = rep.play
     parts = [f"{m.name}@{m.onset_s:.2f}s missed ({m.reason})" for m in p.missed]
@@ -97,6 +181,32 @@ def bench_agreement() -> None:
     print()
     for line in notes_out:
         print(line)
+
+
+def bench_bodies(hand_name: str = "default") -> None:
+    """Every sample song: ``check``'s point rule and body rule (spec section 2) beside the
+    physics replay in full contact (frame F1, wrong keys), one plan each."""
+    from planner.check import check_trajectory
+
+    hand = planner.load_hand(hand_name)
+    print("| song | check F1 (points) | check F1 (bodies) | wrong keys (bodies) | body bed hits "
+          "| physics F1 (full) | wrong keys (physics) | wrong keys by body: links |")
+    print("|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as d:
+        for song in sorted((ROOT / "songs").glob("*.mid")):
+            traj = Path(d) / f"{song.stem}.csv"
+            planner.plan_song(planner.load_song(str(song)), hand, str(traj))
+            rep = check_trajectory(str(traj), str(song))
+            full = simulate_trajectory(str(traj), str(song), contact="full")
+            b = rep.bodies
+            links: dict[str, int] = {}
+            for w in b.wrong_presses:
+                for ln in w.fingers:
+                    links[ln] = links.get(ln, 0) + 1
+            top = ", ".join(f"{k} {v}" for k, v in sorted(links.items(), key=lambda x: -x[1])[:3])
+            print(f"| {song.stem} | {rep.play.f1:.4f} | {b.f1:.4f} | {len(b.wrong_presses)} | "
+                  f"{len(b.bed_hits)} | {full.play.f1:.4f} | {len(full.play.wrong_keys)} | "
+                  f"{top} |", flush=True)
 
 
 def bench_notes(contact: str = "pads") -> None:
@@ -233,15 +343,28 @@ def main() -> None:
                     help="kinematic vs physics F1 on every sample song")
     ap.add_argument("--notes", action="store_true",
                     help="pads contact: every note's share of the F1 difference")
+    ap.add_argument("--bodies", action="store_true",
+                    help="check's body rule vs physics (full contact) on every sample song")
+    ap.add_argument("--hand", default="default", help="--bodies: the hand")
     ap.add_argument("--catch-grid", action="store_true", help="the default catch grid")
     ap.add_argument("--catch-phases", type=int, metavar="N", default=0,
                     help="the default catch grid replayed at N phases of the physics' step")
+    ap.add_argument("--speed", action="store_true",
+                    help="every sample song, this tree beside --against's, in one run")
+    ap.add_argument("--against", type=Path, default=None, metavar="TREE",
+                    help="--speed: the other tree (a worktree of the old code)")
+    ap.add_argument("--reps", type=int, default=3, help="--speed: replays per song and tree")
     ap.add_argument("--contact", choices=("full", "pads"), default="pads",
-                    help="--notes: the contact model (default pads)")
+                    help="--notes: the contact model (default pads); --speed: (default full)")
     a = ap.parse_args()
     sys.path.insert(0, str(ROOT / "bench"))
-    if a.agreement:
+    if a.speed:
+        bench_speed_against(a.against if a.against is not None else ROOT, a.reps,
+                            a.contact if "--contact" in sys.argv else "full")
+    elif a.agreement:
         bench_agreement()
+    elif a.bodies:
+        bench_bodies(a.hand)
     elif a.notes:
         bench_notes(a.contact)
     elif a.catch_grid:

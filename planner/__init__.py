@@ -30,8 +30,7 @@ from planner.errors import InfeasibleError, InputError, PlannerError, SolverErro
 from planner.lazy import lazy_dir, lazy_names
 
 if TYPE_CHECKING:  # (what editors and type checkers see; at run time: on first use)
-    from planner.catch.plan import plan_catch
-    from planner.catch.session import CatchSession
+    from planner.catch import CatchSession, plan_catch
     from planner.check import CheckReport, check_trajectory
     from planner.hand.model import HandModel, load_hand
     from planner.music.midi import Note, Song, load_song
@@ -49,8 +48,8 @@ _API = {
     "Planner": "planner.play",
     "PlayPlan": "planner.play",
     "plan_song": "planner.play",
-    "plan_catch": "planner.catch.plan",
-    "CatchSession": "planner.catch.session",
+    "plan_catch": "planner.catch",
+    "CatchSession": "planner.catch",
     "check_trajectory": "planner.check",
     "CheckReport": "planner.check",
     "read_trajectory": "planner.trajfile",

@@ -18,7 +18,7 @@ RHO_AIR = 1.204
 _SAME_BALL_REL = 1e-9  # a file's radius and mass are its ball's (written as floats: repr)
 
 
-def _finite(name: str, value: Any) -> float:
+def finite_float(name: str, value: Any) -> float:
     if isinstance(value, (bool, np.bool_)):
         raise InputError(f"{name} must be a number, got {value!r}")
     try:
@@ -46,7 +46,7 @@ class Ball:
 
     def __post_init__(self) -> None:
         for attr in ("mass_kg", "radius_m", "drag_coefficient", "inertia_ratio"):
-            value = _finite(f"ball {self.name!r} {attr}", getattr(self, attr))
+            value = finite_float(f"ball {self.name!r} {attr}", getattr(self, attr))
             object.__setattr__(self, attr, value)
         if self.mass_kg <= 0 or self.radius_m <= 0 or self.drag_coefficient < 0 \
                 or not 0.0 < self.inertia_ratio <= 2.0 / 3.0:

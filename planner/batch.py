@@ -66,6 +66,32 @@ class BatchSummary:
     def failed(self) -> int:
         return sum(bool(r.error) for r in self.results)
 
+    @property
+    def ok(self) -> bool:
+        """Every song has a plan its check passes."""
+        return not any(r.error or not r.check_ok for r in self.results)
+
+    def to_dict(self) -> dict:
+        """``batch --json``: the counts and every song's result."""
+        return {"command": "batch", "planned": self.planned, "skipped": self.skipped,
+                "failed": self.failed, "songs": [asdict(r) for r in self.results]}
+
+    def format(self, out_dir: str | os.PathLike) -> str:
+        """The closing line: the counts and where the summary is."""
+        return (f"{len(self.results)} songs: {self.planned} planned, {self.skipped} done "
+                f"before, {self.failed} failed -> {Path(out_dir) / 'summary.csv'}")
+
+
+def format_song_line(r: SongResult) -> str:
+    """One song's line as it finishes: counts, F1, the check (or why it failed)."""
+    if r.error:
+        msg = f"failed: {r.error}"
+    else:
+        msg = (f"{r.played}/{r.notes} played, frame F1 {r.frame_f1:.4f}, check "
+               f"{'OK' if r.check_ok else 'FAILED'}"
+               + (" (done before)" if r.skipped else f", {r.realtime_factor:.0f}x"))
+    return f"{r.song}: {msg}"
+
 
 def batch_plan(songs_dir: str | os.PathLike, out_dir: str | os.PathLike, workers: int = 2,
                hand: str = "default", address: str | None = None,
@@ -221,36 +247,3 @@ def _write_summary(summary: BatchSummary, out: Path) -> None:
     w.writerows(rows)
     write_file(out / "summary.csv", buf.getvalue())
     write_file(out / "summary.json", json.dumps({"songs": rows}, indent=1) + "\n")
-
-
-def batch_cli(a) -> int:
-    """``batch``: a line per song on stderr as it finishes, under a progress bar on a
-    terminal (or one JSON object on stdout with ``--json``), the summary files; 0 when
-    every song has a plan its check passes."""
-    import sys
-
-    from planner.progress import progress_bar
-
-    def line(r: SongResult) -> None:
-        if r.error:
-            msg = f"failed: {r.error}"
-        else:
-            msg = (f"{r.played}/{r.notes} played, frame F1 {r.frame_f1:.4f}, check "
-                   f"{'OK' if r.check_ok else 'FAILED'}"
-                   + (" (done before)" if r.skipped else f", {r.realtime_factor:.0f}x"))
-        bar.write(f"{r.song}: {msg}")
-
-    with progress_bar("song", enabled=not a.json) as bar:
-        summary = batch_plan(a.songs, a.out, workers=a.workers, hand=a.hand,
-                             address=a.address, on_result=None if a.json else line,
-                             on_progress=bar.update)
-    if a.json:
-        sys.stdout.write(json.dumps({"command": "batch", "planned": summary.planned,
-                                     "skipped": summary.skipped, "failed": summary.failed,
-                                     "songs": [asdict(r) for r in summary.results]}) + "\n")
-    else:
-        sys.stderr.write(f"{len(summary.results)} songs: {summary.planned} planned, "
-                         f"{summary.skipped} done before, {summary.failed} failed -> "
-                         f"{Path(a.out) / 'summary.csv'}\n")
-    bad = [r for r in summary.results if r.error or not r.check_ok]
-    return 1 if bad else 0

@@ -1,18 +1,26 @@
 """The last guard before a row reaches the hand: setpoints outside the joint position or
 speed limits are refused, never clamped (they protect the hardware, so a planner bug
-must stop the plan). One definition, used by every planner that writes rows."""
+must stop the plan). One definition, run by the trajectory writer on every row it is
+given (``planner.trajfile.TrajectoryWriter``): no planner calls it apart."""
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from planner.errors import SolverError
-from planner.hand.model import HandModel
+
+if TYPE_CHECKING:
+    from planner.hand.model import HandModel
 
 
-def guard_rows(hand: HandModel, q: np.ndarray, prev: np.ndarray | None, dt: float) -> None:
+def guard_rows(hand: HandModel, q: np.ndarray, prev: np.ndarray | None,
+               dt: float | np.ndarray) -> None:
     """Refuse (never clamp) setpoints outside the joint position or speed limits: they
-    protect the hardware, so a planner bug must stop the plan, not reach the hand."""
+    protect the hardware, so a planner bug must stop the plan, not reach the hand.
+    ``prev``: the row before ``q``'s first (None: none); ``dt``: the time step, or each
+    step's, (steps, 1)."""
     if not np.isfinite(q).all():
         raise SolverError("planner produced a non-finite setpoint")
     out = (q < hand.lower - 1e-9) | (q > hand.upper + 1e-9)

@@ -2,7 +2,9 @@
 section 4; version 2 adds ``song_start_s``: the song's time 0 in the file's time).
 
 ``TrajectoryWriter`` streams rows into the named path itself as they are
-planned, flushed per chunk, so a reader can follow the file while it grows
+planned, flushed per chunk, each row first passed by the hardware guard
+(``planner.guard``: a row outside the hand's joint position or speed limits is refused,
+so none reaches a file, a pipe or a plan kept in memory), so a reader can follow the file while it grows
 (``planner.output``: a FIFO, a device or a symlink's target is written, never
 replaced). The end marker is what says the file is complete: a plan that stops
 early leaves a file without it, which every reader must call incomplete. The
@@ -17,12 +19,16 @@ import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from planner.errors import InputError, PlannerError
+from planner.guard import guard_rows
 from planner.output import open_stream
+
+if TYPE_CHECKING:
+    from planner.hand.model import HandModel
 
 FORMAT = "hand-trajectory"
 VERSION = 2  # written; read: READ_VERSIONS
@@ -64,11 +70,13 @@ def as_written(x: np.ndarray) -> np.ndarray:
 
 class FormattedRows(NamedTuple):
     """Rows as a file's text (``text``: one line each) and as the file holds them
-    (``written``: (n, columns), times and values rounded to its 6 decimals)."""
+    (``written``: (n, columns), times and values rounded to its 6 decimals), with the
+    joint positions they were made from (``q``, unrounded: what the guard judges)."""
 
     t_s: np.ndarray
     text: str
     written: np.ndarray
+    q: np.ndarray
 
 
 def format_rows(t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> FormattedRows:
@@ -76,13 +84,14 @@ def format_rows(t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> Formatte
     writes them: a pure function of the rows, so that a live plan can format rows no
     estimate changes ahead of the observation that writes them."""
     t_s = np.asarray(t_s, dtype=float)
+    q = np.asarray(q, dtype=float)
     if len(t_s) == 0:
-        return FormattedRows(t_s, "", np.empty((0, 0)))
+        return FormattedRows(t_s, "", np.empty((0, 0)), q)
     if len(t_s) == 1:  # (a live observation's usual row: no repeats to look for)
         line = f"{float(t_s[0]):.6f}," + ",".join(["%.6f"] * (q.shape[1] + q_motor.shape[1])
                                                   ) % (*q[0].tolist(), *q_motor[0].tolist())
         return FormattedRows(t_s, line + "\n",
-                             as_written(np.concatenate([t_s, q[0], q_motor[0]]))[None])
+                             as_written(np.concatenate([t_s, q[0], q_motor[0]]))[None], q)
     if not np.all(np.diff(t_s) > 0):
         raise PlannerError(f"trajectory time not increasing near t={t_s[0]}")
     body = np.column_stack([q, q_motor])
@@ -95,27 +104,49 @@ def format_rows(t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> Formatte
     text = "\n".join([f"{a},{distinct[j]}" for a, j in zip(times, of)]) + "\n"
     # (the values as written, without reading the text back: ``as_written``)
     return FormattedRows(t_s, text, np.column_stack([as_written(t_s),
-                                                     as_written(body[new])[of_row]]))
+                                                     as_written(body[new])[of_row]]), q)
+
+
+def metadata_line(metadata: dict[str, Any]) -> str:
+    """A file's first line: ``# `` and its metadata as JSON, format and version first."""
+    meta = {"format": FORMAT, "version": VERSION, **metadata}
+    return "# " + json.dumps(meta, sort_keys=False, separators=(", ", ": ")) + "\n"
+
+
+def header_line(joint_names, motor_names) -> str:
+    """The column header: ``t``, the joints, ``motor.<name>`` of each motor."""
+    return ",".join(["t", *joint_names, *(f"motor.{m}" for m in motor_names)]) + "\n"
+
+
+def end_line(rows: int, end_info: dict[str, Any] | None = None) -> str:
+    """The end marker: ``# {"end": true, "rows": n, ...end_info}``."""
+    end = {"end": True, "rows": rows, **(end_info or {})}
+    return "# " + json.dumps(end, separators=(", ", ": ")) + "\n"
 
 
 class TrajectoryWriter:
-    """Streams a trajectory: the constructor opens the path and writes metadata and
-    header, ``write_rows`` appends setpoints, ``close`` writes the end marker."""
+    """Streams a trajectory of ``hand``: the constructor opens the path and writes
+    metadata and header (the hand's joints and motors), ``write_rows`` appends setpoints,
+    each passed by the hand's guard first (``planner.guard``: a row out of the joint
+    position or speed limits raises SolverError and is not written), ``close`` writes the
+    end marker."""
 
-    def __init__(self, path: str | None, metadata: dict[str, Any], joint_names, motor_names,
+    def __init__(self, path: str | None, metadata: dict[str, Any], hand: HandModel,
                  on_rows: Callable[[np.ndarray], None] | None = None,
                  defer_header: bool = False) -> None:
         """``on_rows`` is given every chunk of rows as the file holds them (a self-check).
         ``path`` None: the text is kept in memory (``text`` once closed). ``defer_header``:
         metadata and header are written with the first rows (``add_metadata`` first)."""
         self.path = path
+        self.hand = hand
         self._on_rows = on_rows
         self.rows = 0
         self._last_t = -math.inf
-        self.columns = ["t", *joint_names, *(f"motor.{m}" for m in motor_names)]
+        self._last_q: np.ndarray | None = None  # the last row written, for its speed
+        self.columns = header_line(hand.joint_names, hand.motor_names)[:-1].split(",")
         self._out = io.StringIO() if path is None else open_stream(path)
         self.text: str | None = None
-        self._meta: dict[str, Any] | None = {"format": FORMAT, "version": VERSION, **metadata}
+        self._meta: dict[str, Any] | None = dict(metadata)
         if not defer_header:
             self._start()
 
@@ -131,13 +162,17 @@ class TrajectoryWriter:
         if self._meta is None:
             return
         meta, self._meta = self._meta, None
-        self._out.write("# " + json.dumps(meta, sort_keys=False, separators=(", ", ": ")) + "\n")
-        self._out.write(",".join(self.columns) + "\n")
+        self._out.write(metadata_line(meta))
+        self._out.write(header_line(self.hand.joint_names, self.hand.motor_names))
         self._out.flush()
 
-    def write_rows(self, t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> np.ndarray:
-        """Append rows (times in s, joint positions, motor angles) and flush. Returns
-        the rows as the file holds them (rounded to its 6 decimals), (n, columns)."""
+    def write_rows(self, t_s: np.ndarray, q: np.ndarray,
+                   q_motor: np.ndarray | None = None) -> np.ndarray:
+        """Append rows (times in s, joint positions, motor angles: the hand's of ``q``
+        unless given) and flush. Returns the rows as the file holds them (rounded to its
+        6 decimals), (n, columns)."""
+        if q_motor is None:
+            q_motor = self.hand.motor_angles(np.asarray(q, dtype=float))
         return self.append(format_rows(t_s, q, q_motor))
 
     def append(self, rows: FormattedRows) -> np.ndarray:
@@ -148,7 +183,8 @@ class TrajectoryWriter:
         self._start()
         if not rows.t_s[0] > self._last_t:
             raise PlannerError(f"trajectory time not increasing near t={rows.t_s[0]}")
-        self._last_t = float(rows.t_s[-1])
+        self._guard(rows)
+        self._last_t, self._last_q = float(rows.t_s[-1]), rows.q[-1].copy()
         self._out.write(rows.text)
         self.rows += len(rows.t_s)
         self._out.flush()
@@ -156,11 +192,15 @@ class TrajectoryWriter:
             self._on_rows(rows.written)
         return rows.written
 
+    def _guard(self, rows: FormattedRows) -> None:
+        """The hardware guard on ``rows`` (their speeds from the last row written on)."""
+        t = rows.t_s if self._last_q is None else np.r_[self._last_t, rows.t_s]
+        guard_rows(self.hand, rows.q, self._last_q, np.diff(t)[:, None] if len(t) > 1 else 1.0)
+
     def close(self, end_info: dict[str, Any] | None = None) -> None:
         """Write the end marker (with ``end_info``'s keys after ``end`` and ``rows``)."""
         self._start()
-        end = {"end": True, "rows": self.rows, **(end_info or {})}
-        self._out.write("# " + json.dumps(end, separators=(", ", ": ")) + "\n")
+        self._out.write(end_line(self.rows, end_info))
         if self.path is None:
             self.text = self._out.getvalue()
         self._out.close()

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.hand.builders import load_hand_spec
 from planner.hand.model import HandModel
-from planner.hand.spec import FINGERS, hands_dir, load_hand_spec
+from planner.hand.spec import FINGERS, hands_dir
 
 DEFAULT_TOML = hands_dir() / "default.toml"
 LONG_FINGERS = FINGERS[1:]  # index, middle, ring, pinky

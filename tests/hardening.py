@@ -29,7 +29,7 @@ runs 1000 examples per property (about 20 minutes) and also replays the
 bugs found here were fixed at their source and keep a test with their minimal
 example (a travel that swept a fingertip into a key, OSQP's polish message on
 stdout, a temporary URDF file, tiny catch distances); the catch tests skip while
-planner.catch.plan cannot be imported.
+planner.catch.plan.api cannot be imported.
 """
 
 from __future__ import annotations

@@ -86,9 +86,9 @@ def test_the_installed_command_runs_from_any_directory(tmp_path):
 def test_every_option_has_help_and_the_help_has_examples_and_exit_codes():
     import argparse
 
-    from planner.cli import _build_parser
+    from planner.cli import build_parser
 
-    p = _build_parser()
+    p = build_parser()
     text = p.format_help()
     assert "examples:" in text and "exit status:" in text and "141" in text
     subs = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))

@@ -1,4 +1,4 @@
-"""Catch planner (planner.catch.plan) and grasp force QP (planner.catch.grasp), on the
+"""Catch planner (planner.catch.plan.api) and grasp force QP (planner.catch.grasp), on the
 default hand. (Its thumb CMC flexion range is 110 deg: with the earlier 90 deg the thumb
 tip stayed ~17 mm outside a tennis ball held on the palm, so no grasp could form;
 ``test_thumb_reaches_a_ball_on_the_palm`` checks the geometry independently.)
@@ -16,8 +16,8 @@ from scipy.optimize import minimize
 
 from cli import main as cli_main
 from planner.catch import grasp as gq
-from planner.catch.flight import predict_throw
-from planner.catch.plan import (
+from planner.catch.flight.path import predict_throw
+from planner.catch.plan.api import (
     GRASP_TOL_M,
     GRASP_WINDOW_S,
     INTERCEPT_TOL_M,
@@ -29,6 +29,7 @@ from planner.catch.plan import (
     plan_throw,
     write_plan,
 )
+from planner.catch.plan.reasons import CatchReason
 from planner.errors import InfeasibleError, InputError
 from planner.hand.model import load_hand
 from planner.trajfile import read_trajectory
@@ -75,8 +76,8 @@ def _ball(meta, t):
 def test_seed_numbers(seed_plan):
     res, _ = seed_plan
     # seed: 30 deg over 1.5 m -> 4.122 m/s, 0.42 s
-    assert res.plan.launch_speed == pytest.approx(4.122, abs=5e-4)
-    assert res.plan.flight_time_s == pytest.approx(0.42, abs=5e-3)
+    assert res.plan.intercept.launch_speed_m_s == pytest.approx(4.122, abs=5e-4)
+    assert res.plan.intercept.flight_time_s == pytest.approx(0.42, abs=5e-3)
     assert res.feasible, res.reasons
 
 
@@ -152,18 +153,19 @@ def test_palm_meets_ball_and_grasp(seed_plan, thumb110):
 def test_palm_faces_ball(seed_plan):
     res, _ = seed_plan
     p = res.plan
-    n = p.hand.palm_pose(_rows_at(p.t, p.q, p.intercept_t))[:3, 2]
-    v = p.arrival_velocity
-    tilt = 0.0 if p.soft is None else abs(math.degrees(p.soft.tilt_rad))
+    n = p.hand.palm_pose(_rows_at(p.rows.t, p.rows.q, p.intercept.t_s))[:3, 2]
+    v = p.intercept.arrival_velocity
+    tilt = 0.0 if p.forces.soft is None else abs(math.degrees(p.forces.soft.tilt_rad))
     assert abs(math.degrees(math.acos(-(v @ n) / np.linalg.norm(v))) - tilt) < 1.0
-    assert p.close_s >= 0.150 - 1e-9  # closing time within the seed's 150-300 ms
-    assert p.close_s <= 0.300
+    assert p.timing.close_s >= 0.150 - 1e-9  # closing time within the seed's 150-300 ms
+    assert p.timing.close_s <= 0.300
 
 
 def test_independent_check_passes(seed_plan, thumb110):
-    check = pytest.importorskip("planner.check")
+    from planner.check import check_trajectory
+
     _, path = seed_plan
-    rep = check.check_trajectory(path, hand_override=thumb110)
+    rep = check_trajectory(path, hand_override=thumb110)
     assert rep.ok, rep.problems
 
 
@@ -198,8 +200,8 @@ def test_default_hand_catch_is_feasible_and_strict_passes(tmp_path):
     out = tmp_path / "c.csv"
     res = plan_catch(30.0, 1.5, 0.0, "default", str(out))
     assert out.exists() and res.feasible, res.reasons
-    assert res.plan.intercept_error_m < 0.001
-    assert res.plan.min_clearance_before_m > 0
+    assert res.plan.intercept.error_m < 0.001
+    assert res.plan.timing.min_clearance_before_m > 0
     plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "s.csv"), strict=True)
     assert (tmp_path / "s.csv").exists()
 
@@ -214,30 +216,30 @@ def test_grid(hand_kind, thumb110):
     3 m throws needed 2.07-2.80 N m of the 2 N m wrist flexion motor); the steep short throws
     whose ball would roll off the palm's wrist side (``planner.check.ballroll``: 20 deg from
     1.0 and 1.5 m) are infeasible for that alone."""
-    from planner.catch.results import CatchReason
+    from planner.catch.plan.reasons import CatchReason
 
     pl = get_planner(thumb110)
     n_ok = 0
     for a in range(20, 61, 10):
         for d in np.arange(1.0, 3.01, 0.5):
             p = plan_throw(a, d, 0.0, planner=pl)
-            assert p.intercept_error_m < 0.001
-            assert p.min_clearance_before_m > 0.0
-            assert p.grasp_t is not None and p.grasp_t <= p.intercept_t + GRASP_WINDOW_S
+            assert p.intercept.error_m < 0.001
+            assert p.timing.min_clearance_before_m > 0.0
+            assert p.timing.grasp_t is not None and p.timing.grasp_t <= p.intercept.t_s + GRASP_WINDOW_S
             if not p.feasible:  # only a ball faster than the joints can stop, or its roll
                 assert p.reason_kinds in ((CatchReason.TOO_FAST_TO_STOP,),
                                           (CatchReason.ROLL,)), (a, d, p.reasons)
                 assert p.reason_kinds == (CatchReason.TOO_FAST_TO_STOP,) or a == 20, (a, d)
                 continue
             n_ok += 1
-            assert p.stop.headroom >= 0 and len(p.stop.motor_headroom) == len(p.hand.motor_names)
-            if p.soft is not None:  # None: the palm waits at rest (no motion fits, none needed)
-                assert np.linalg.norm(p.soft.v_rel) < np.linalg.norm(p.arrival_velocity)
+            assert p.forces.stop.headroom >= 0 and len(p.forces.stop.motor_headroom) == len(p.hand.motor_names)
+            if p.forces.soft is not None:  # None: the palm waits at rest (no motion fits, none needed)
+                assert np.linalg.norm(p.forces.soft.v_rel) < np.linalg.norm(p.intercept.arrival_velocity)
     assert n_ok >= 23  # measured: 23 of 25 (25 before the roll rule)
     hard = plan_throw(30, 3.0, 0.0, planner=pl, soft=False)
     soft = plan_throw(30, 3.0, 0.0, planner=pl)
-    assert soft.stop.force_n < hard.stop.force_n
-    assert soft.stop.headroom >= 0.2  # issue 15's target
+    assert soft.forces.stop.force_n < hard.forces.stop.force_n
+    assert soft.forces.stop.headroom >= 0.2  # issue 15's target
     far = plan_throw(15, 4.0, 0.0, planner=pl)
     assert not far.feasible and CatchReason.TOO_FAST_TO_STOP in far.reason_kinds
 
@@ -298,25 +300,25 @@ def test_grasp_hold(closed):
     p = closed
     hand = p.hand
     r = p.flight.ball.radius_m
-    P = hand.palm_pose(p.q_closed)
+    P = hand.palm_pose(p.poses.q_closed)
     c = P[:3, 3] + r * P[:3, 2]
-    res = gq.grasp_forces(hand, p.q_closed, c, r, gq.hold_force(p.flight.ball.mass_kg))
+    res = gq.grasp_forces(hand, p.poses.q_closed, c, r, gq.hold_force(p.flight.ball.mass_kg))
     names = [ct.name for ct in res.problem.contacts]
     assert names[0] == "palm" and "thumb" in names and len(names) >= 4
     assert res.problem.facets == 8 and res.problem.mu == 0.8
     assert np.allclose(res.total_force, [0, 0, 1.5 * 0.057 * 9.81], atol=1e-4)
-    _check_grasp(res, hand, p.q_closed)
+    _check_grasp(res, hand, p.poses.q_closed)
 
 
 def test_grasp_stop(closed):
     p = closed
     hand = p.hand
     r = p.flight.ball.radius_m
-    q_i = _rows_at(p.t, p.q, p.intercept_t)
+    q_i = _rows_at(p.rows.t, p.rows.q, p.intercept.t_s)
     P = hand.palm_pose(q_i)
     c = P[:3, 3] + r * P[:3, 2]
-    F = gq.stop_force(p.flight.ball.mass_kg, 0.5 * p.arrival_velocity)
-    v = np.linalg.norm(0.5 * p.arrival_velocity)
+    F = gq.stop_force(p.flight.ball.mass_kg, 0.5 * p.intercept.arrival_velocity)
+    v = np.linalg.norm(0.5 * p.intercept.arrival_velocity)
     # m v^2 / (2 d) against the velocity, plus the weight
     assert np.linalg.norm(F + 0.057 * np.array([0, 0, -9.81])) == pytest.approx(
         0.057 * v * v / (2 * gq.STOP_DISTANCE_M))
@@ -331,10 +333,10 @@ def test_grasp_infeasible_huge_mass(closed):
     p = closed
     hand = p.hand
     r = p.flight.ball.radius_m
-    P = hand.palm_pose(p.q_closed)
+    P = hand.palm_pose(p.poses.q_closed)
     c = P[:3, 3] + r * P[:3, 2]
     with pytest.raises(InfeasibleError) as ei:
-        gq.grasp_forces(hand, p.q_closed, c, r, gq.hold_force(50.0))
+        gq.grasp_forces(hand, p.poses.q_closed, c, r, gq.hold_force(50.0))
     prob = ei.value.problem
     assert isinstance(prob, gq.GraspProblem)
     assert prob.required_force[2] == pytest.approx(1.5 * 50.0 * 9.81)
@@ -344,10 +346,10 @@ def test_grasp_infeasible_huge_mass(closed):
 def test_grasp_bad_input(closed):
     p = closed
     with pytest.raises(InputError):
-        gq.build_grasp_problem(p.hand, p.q_closed, [], np.zeros(3), np.zeros(3))
-    cts = gq.ball_contacts(p.hand, p.q_closed, np.zeros(3), 0.03, 0.01)
+        gq.build_grasp_problem(p.hand, p.poses.q_closed, [], np.zeros(3), np.zeros(3))
+    cts = gq.ball_contacts(p.hand, p.poses.q_closed, np.zeros(3), 0.03, 0.01)
     with pytest.raises(InputError):
-        gq.build_grasp_problem(p.hand, p.q_closed, cts, np.zeros(3), np.zeros(3), facets=3)
+        gq.build_grasp_problem(p.hand, p.poses.q_closed, cts, np.zeros(3), np.zeros(3), facets=3)
 
 
 # ------------------------------------------------------------------ bad arguments
@@ -409,13 +411,13 @@ def test_observations(tmp_path, thumb110):
     p = res.plan
     u = p.uncertainty
     assert u is not None and 0 < u["sigma_t_s"] < 0.05 and 0 < u["sigma_z_m"] < 0.05
-    assert p.t_info_s == pytest.approx(ts[-1])
-    assert p.move_start_s == pytest.approx(ts[-1] + 0.030)
+    assert p.timing.t_info_s == pytest.approx(ts[-1])
+    assert p.timing.move_start_s == pytest.approx(ts[-1] + 0.030)
     ref = plan_throw(35.0, 2.0, 0.1, hand=thumb110)
-    assert p.intercept_t == pytest.approx(ref.intercept_t, abs=0.02)
+    assert p.intercept.t_s == pytest.approx(ref.intercept.t_s, abs=0.02)
     tr = read_trajectory(str(out))
     assert tr.metadata["ball"]["v0"] == pytest.approx(list(p.flight.v0))
-    assert res.intercept_error_m < 0.002  # on the fitted flight
+    assert res.plan.intercept.error_m < 0.002  # on the fitted flight
 
 
 def test_drag_and_rate(tmp_path, thumb110):
@@ -424,7 +426,7 @@ def test_drag_and_rate(tmp_path, thumb110):
     tr = read_trajectory(str(out))
     assert tr.metadata["ball"]["drag"] > 0 and tr.metadata["rate_hz"] == 250.0
     assert np.allclose(np.diff(tr.t_s), 0.004)
-    assert res.plan.intercept_error_m < 0.001
+    assert res.plan.intercept.error_m < 0.001
     assert res.feasible, res.reasons
 
 
@@ -442,15 +444,16 @@ def test_mount_defaults(thumb110):
 
 def test_out_of_reach_is_reported(tmp_path, thumb110):
     """A mount far from the path: the plan is still written, the reason says why."""
-    from planner.catch.plan import CatchMount
+    from planner.catch.plan.api import CatchMount
 
     hand = load_hand(thumb110)
     far = CatchMount((-0.2287, 0.0, -0.8), (126.0, 0.0, 90.0), "test: 0.5 m too low")
     pl = CatchPlanner(hand, far)
     p = pl.plan(predict_throw(30.0, 1.5, 0.0, "tennis"), np.array([1.5, 0.0, 0.0]))
     assert not p.feasible
-    assert any(r.startswith("out of reach") for r in p.reasons)
-    assert len(p.t) > 0 and np.all(np.isfinite(p.q))
+    assert any(r.kind is CatchReason.OUT_OF_REACH and r.detail.startswith("out of reach")
+               for r in p.reasons)
+    assert len(p.rows.t) > 0 and np.all(np.isfinite(p.rows.q))
 
 
 # ------------------------------------------------------------------ independent check on a grid
@@ -463,7 +466,7 @@ def test_independent_check_confirms_grid(tmp_path):
     (``planner.check.ballroll``, one rule) exactly the throws the planner calls infeasible for
     them (20 deg from 1.0 and 1.5 m: the roll)."""
     from planner import check
-    from planner.catch.results import CatchReason
+    from planner.catch.plan.reasons import CatchReason
 
     pl = get_planner("default")
     disagree, rejected, infeasible = [], 0, 0
@@ -478,7 +481,8 @@ def test_independent_check_confirms_grid(tmp_path):
             rejected += not rep.ok
             infeasible += not p.feasible
             if rep.ok != p.feasible or (not rep.ok and not all(x.startswith((
-                    "stopping the ball needs", "the ball rolls off")) for x in rep.problems)):
+                    "stopping the ball needs", "the ball rolls off",
+                    "the plan says the catch is infeasible")) for x in rep.problems)):
                 disagree.append((a, d, p.reasons, rep.problems))
     assert disagree == []
     assert rejected == infeasible <= 3  # measured: 2 (the roll)

@@ -7,7 +7,6 @@ checks are in test_check_catch.py.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import sys
 
@@ -16,7 +15,6 @@ import pytest
 
 from planner import check
 from planner.check import (
-    check_cli,
     check_trajectory,
     frame_f1,
     frame_scores,
@@ -24,11 +22,11 @@ from planner.check import (
     key_episodes,
     keys_down,
 )
+from planner.cli.check import run as check_cli
 from planner.errors import InputError
 from planner.hand.model import load_hand
 from planner.music.keyboard import key
 from planner.music.midi import Note, load_song, write_notes_midi
-from planner.trajfile import TrajectoryWriter
 from tests.trajbuild import (
     RATE,
     SONG,
@@ -317,16 +315,12 @@ def test_refused_inputs(tmp_path, hand, good):
                                     metadata=meta(hand, hand="no_such_hand")))
     names = [n for n in hand.joint_names if n != "ring_pip"]
     cols = [hand.joint_names.index(n) for n in names]
-    p = tmp_path / "col.csv"
-    w = TrajectoryWriter(str(p), meta(hand), names, hand.motor_names)
-    w.write_rows(t, q[:, cols], hand.motor_angles(q))
-    w.close()
+    p = write_traj(tmp_path / "col.csv", hand, t, q[:, cols], hand.motor_angles(q),
+                   joint_names=names)
     with pytest.raises(InputError, match="missing ring_pip"):
         check_trajectory(str(p))
-    p = tmp_path / "mcol.csv"
-    w = TrajectoryWriter(str(p), meta(hand), hand.joint_names, [*hand.motor_names, "extra"])
-    w.write_rows(t, q, np.c_[hand.motor_angles(q), np.zeros(len(t))])
-    w.close()
+    p = write_traj(tmp_path / "mcol.csv", hand, t, q, np.c_[hand.motor_angles(q),
+                   np.zeros(len(t))], motor_names=[*hand.motor_names, "extra"])
     with pytest.raises(InputError, match="extra motor.extra"):
         check_trajectory(str(p))
     T = hand.T_world_root.copy()
@@ -375,8 +369,10 @@ def test_incomplete_refused_or_allowed(good):
 
 
 def _args(**kw):
-    base = {"trajectory": None, "song": None, "allow_incomplete": False, "min_f1": None,
-            "json": False, "played": None, "report": None, "html": None}
+    """``check``'s arguments as its parser gives them, with ``kw`` instead."""
+    from planner.cli import build_parser
+
+    base = vars(build_parser().parse_args(["check", "x.csv"]))
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -410,13 +406,6 @@ def test_cli_failure_exit_1_and_input_error_exit_2(tmp_path, hand, good, capsys)
 
     assert cli.main(["check", str(tmp_path / "missing.csv")]) == 2
     assert cli.main(["check", traj, song, "--json"]) == 1
-
-
-@pytest.mark.skipif(importlib.util.find_spec("planner.report") is not None,
-                    reason="planner.report exists")
-def test_cli_report_needs_report_module(good):
-    with pytest.raises(InputError, match="--report needs planner.report"):
-        check_cli(_args(trajectory=good[0], report="out"))
 
 
 # ---------------------------------------------------------------- a long file
@@ -456,11 +445,9 @@ def test_strict_fails_on_a_missed_note_and_a_late_one(tmp_path, hand):
 
 
 def _claiming(path, hand, t, q, left_out):
-    w = TrajectoryWriter(str(path), meta(hand, notes=4), hand.joint_names, hand.motor_names)
-    w.write_rows(t, q, hand.motor_angles(q))
-    w.close({"notes": 4, "played": 4 - len(left_out),
-             "left_out": [{"note": i, "reason": "left_out", "detail": "x"} for i in left_out]})
-    return str(path)
+    return write_traj(path, hand, t, q, metadata=meta(hand, notes=4), end_info={
+        "notes": 4, "played": 4 - len(left_out),
+        "left_out": [{"note": i, "reason": "left_out", "detail": "x"} for i in left_out]})
 
 
 def test_claims_the_replay_contradicts_fail_the_check(tmp_path, hand):
@@ -517,9 +504,6 @@ def test_the_song_is_read_as_the_plan_was(tmp_path, hand):
 def test_a_gap_in_the_rows_is_refused_naming_the_row(tmp_path, hand, good):
     _, song, t, q = good
     keep = np.r_[0:60, 110:len(t)]
-    w = TrajectoryWriter(str(tmp_path / "gap.csv"), meta(hand), hand.joint_names,
-                         hand.motor_names)
-    w.write_rows(t[keep], q[keep], hand.motor_angles(q[keep]))
-    w.close()
+    write_traj(tmp_path / "gap.csv", hand, t[keep], q[keep])
     with pytest.raises(InputError, match=r"row 61 is at t=1.100000 s, not 0.600000 s"):
         check_trajectory(str(tmp_path / "gap.csv"), song)

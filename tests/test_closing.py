@@ -1,4 +1,4 @@
-"""planner.catch.closing.close_start: the earliest clear start among its candidates,
+"""planner.catch.plan.closing.close_start: the earliest clear start among its candidates,
 judged a few at a time, is the one judging them all at once finds."""
 
 from __future__ import annotations
@@ -7,18 +7,18 @@ import numpy as np
 import pytest
 
 from planner.catch import grasp as gq
-from planner.catch.closing import (
-    _N_CAND,
+from planner.catch.flight.path import get_ball, predict_throw
+from planner.catch.live.session import CatchSession
+from planner.catch.plan.api import get_planner
+from planner.catch.plan.closing import (
     BODY_CLEAR_M,
+    N_CAND,
     TIP_GAP_M,
     TOUCH_CLEAR_M,
     body_gaps_m,
     close_start,
     make_closing,
 )
-from planner.catch.flight import get_ball, predict_throw
-from planner.catch.plan import get_planner
-from planner.catch.session import CatchSession
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M
 
 BALL = get_ball("tennis")
@@ -34,7 +34,7 @@ def _all_at_once(hand, flight, C, q_open, closing, t_i, ready, stop_t, r):
     tt = np.arange(max(want, t_i - (closing.reach_m + r) / speed), t_i, 0.001)
     Tinv = np.linalg.inv(hand.palm_pose(q_open))
     b_pc = (flight.position(tt) - C) @ Tinv[:3, :3].T + Tinv[:3, 3]
-    cands = np.linspace(want, t_i, _N_CAND)
+    cands = np.linspace(want, t_i, N_CAND)
     n_tab = len(closing.u)
     U = np.clip((tt[None, :] - cands[:, None]) / closing.duration_s, 0.0, 1.0)
     k = np.minimum(np.ceil(U * (n_tab - 1)).astype(int), n_tab - 1)
@@ -95,7 +95,7 @@ def test_body_table_is_the_per_configuration_one():
     """The closing's body table, every configuration at once (``FrameChain``), holds the
     points ``FingerBodies.points`` (Pinocchio, one configuration at a time) gives along
     the closing move, in the palm frame, to rounding (measured: within 1.9e-16 m)."""
-    from planner.catch.arm import open_from, zero_pose
+    from planner.catch.plan.arm import open_from, zero_pose
     from planner.play.fingerbody import FingerBodies
     from planner.trajectory import min_jerk
 

@@ -1,4 +1,4 @@
-"""Tests of planner.catch.flight: throws, drag integration, observation fits, errors."""
+"""Tests of planner.catch.flight.path: throws, drag integration, observation fits, errors."""
 
 from __future__ import annotations
 
@@ -10,21 +10,21 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from planner.catch.flight import (
+from planner.catch.flight.observe import (
+    FitResult,
+    fit_observations,
+    load_observations_csv,
+    predict_intercept,
+)
+from planner.catch.flight.path import (
     BALLS,
-    GRAVITY,
+    GRAVITY_M_S2,
     RHO_AIR,
     Ball,
     Flight,
     flight_time_to,
     get_ball,
     predict_throw,
-)
-from planner.catch.observe import (
-    FitResult,
-    fit_observations,
-    load_observations_csv,
-    predict_intercept,
 )
 from planner.errors import InfeasibleError, InputError, PlannerError
 
@@ -190,7 +190,7 @@ def _reference(flight: Flight, ts: np.ndarray) -> np.ndarray:
 
     def rhs(_t, y):
         v = y[3:]
-        return np.concatenate([v, GRAVITY - k * np.linalg.norm(v) * v])
+        return np.concatenate([v, GRAVITY_M_S2 - k * np.linalg.norm(v) * v])
 
     y0 = np.concatenate([flight.p0, flight.v0])
     out = np.empty((ts.size, 6))

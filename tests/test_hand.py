@@ -22,6 +22,7 @@ import pinocchio as pin
 import pytest
 import tomllib
 
+from planner.hand.builders import load_hand_spec
 from planner.hand.model import HandModel
 from planner.hand.spec import (
     FINGERS,
@@ -31,7 +32,6 @@ from planner.hand.spec import (
     HandSpec,
     Joint,
     Link,
-    load_hand_spec,
     rpy_matrix,
 )
 from planner.hand.urdf import urdf_sha256, urdf_text

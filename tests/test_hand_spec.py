@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from planner.errors import InputError
+from planner.hand.builders import load_hand_spec
 from planner.hand.model import HandModel, load_hand
-from planner.hand.spec import load_hand_spec
 from tests.handfiles import (
     DEFAULT_TOML,
     LONG_FINGERS,
@@ -185,7 +185,8 @@ def test_error_unreadable_hand_file(tmp_path: Path) -> None:
 def test_rail_can_be_turned_off(tmp_path):
     """A hand file with ``[rail] enabled = false``: no rail joint or motor, 21 hand joints,
     and play still plans (notes out of reach of the fixed hand are reported, not dropped)."""
-    from planner.hand.spec import hands_dir, load_hand_spec
+    from planner.hand.builders import load_hand_spec
+    from planner.hand.spec import hands_dir
     from planner.music.midi import load_song
     from planner.play import plan_song
 

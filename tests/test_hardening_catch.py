@@ -1,10 +1,9 @@
 """Hardening (the harness and its contract: tests/hardening.py), (2) ``catch``
 arguments: angles, distances, NaN, infinities, words, huge and tiny values, any
-plausible throw; skipped while planner.catch.plan cannot be imported."""
+plausible throw."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import tempfile
 from pathlib import Path
@@ -20,19 +19,6 @@ from tests.hardening import SETTINGS, assert_input_refused, one_line, part_files
 # ====================================================================== 2. catch arguments
 
 
-def _catch_importable() -> str | None:
-    try:
-        if importlib.util.find_spec("planner.catch.plan") is None:
-            return "planner.catch.plan does not exist yet"
-        import planner.catch.plan  # noqa: F401
-    except Exception as e:  # noqa: BLE001 -- work in progress elsewhere
-        return f"planner.catch.plan is not importable yet ({type(e).__name__}: {e})"
-    return None
-
-
-CATCH_SKIP = _catch_importable()
-needs_catch = pytest.mark.skipif(CATCH_SKIP is not None, reason=CATCH_SKIP or "")
-
 FLOAT_TEXT = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True).map(repr),
     st.sampled_from(["nan", "-nan", "inf", "-inf", "Infinity", "1e400", "-1e400"]),
@@ -45,7 +31,6 @@ def _catch(capsys, tmp_path, *args: str):
     return rc, o, err, out
 
 
-@needs_catch
 @SETTINGS
 @given(angle=st.one_of(st.floats(max_value=0.0), st.floats(min_value=90.0),
                        st.sampled_from([0.0, -0.0, 90.0, 180.0, -90.0, 1e300, -1e300])).map(repr))
@@ -55,7 +40,6 @@ def test_catch_angle_outside_0_90(capsys, angle):
         assert_input_refused(rc, err, out)
 
 
-@needs_catch
 @SETTINGS
 @given(dist=st.one_of(st.floats(max_value=0.0), st.sampled_from([0.0, -0.0, -1e300])).map(repr))
 def test_catch_dist_not_positive(capsys, dist):
@@ -64,7 +48,6 @@ def test_catch_dist_not_positive(capsys, dist):
         assert_input_refused(rc, err, out)
 
 
-@needs_catch
 @SETTINGS
 @given(which=st.sampled_from(["--angle", "--dist", "--height", "--rate"]),
        value=st.sampled_from(["nan", "-nan", "NaN", "inf", "-inf", "infinity", "1e400", "-1e999"]))
@@ -75,7 +58,6 @@ def test_catch_nan_and_inf(capsys, which, value):
         assert_input_refused(rc, err, out)
 
 
-@needs_catch
 @SETTINGS
 @given(which=st.sampled_from(["--angle", "--dist", "--height", "--rate"]),
        value=st.one_of(st.text(max_size=12).filter(lambda s: not _is_float(s)),
@@ -95,7 +77,6 @@ def _is_float(s: str) -> bool:
     return True
 
 
-@needs_catch
 @pytest.mark.parametrize("args", [
     ["--angle=1e300", "--dist=3"], ["--angle=45", "--dist=3", "--height=1e300"],
     ["--angle=45", "--dist=3", "--height=-1e300"], ["--angle=45", "--dist=3", "--rate=1e300"],
@@ -107,7 +88,6 @@ def test_catch_huge_and_unknown_values_are_refused(capsys, tmp_path, args):
     assert_input_refused(rc, err, out)
 
 
-@needs_catch
 @pytest.mark.parametrize("dist", ["1e300", "1e12", "1e6"])
 def test_catch_huge_distance_is_one_line_and_no_file(capsys, tmp_path, dist):
     """A finite but absurd distance: the throw is valid input the hand cannot meet; the
@@ -131,7 +111,6 @@ TINY_DIST_BUGS = {  # (angle, dist) -> what planner/catch/plan.py did before --d
 }
 
 
-@needs_catch
 @pytest.mark.parametrize("angle, dist", list(TINY_DIST_BUGS), ids=lambda v: v)
 def test_catch_tiny_distance_ends_cleanly(tmp_path, angle, dist):
     """A tiny positive distance (these once crashed planner/catch/plan.py: see
@@ -145,7 +124,6 @@ def test_catch_tiny_distance_ends_cleanly(tmp_path, angle, dist):
     assert not out.exists() and part_files(tmp_path) == []
 
 
-@needs_catch
 @SETTINGS
 @given(angle=st.floats(0.5, 89.5), dist=st.floats(0.05, 30.0), height=st.floats(-9.9, 9.9),
        ball=st.sampled_from(["tennis", "baseball", "seed"]), drag=st.booleans())
@@ -169,7 +147,6 @@ def test_catch_any_plausible_throw_ends_cleanly(capsys, angle, dist, height, bal
             assert not out.exists()
 
 
-@needs_catch
 def test_subprocess_catch_nan_prints_one_line(tmp_path):
     r = run_sub("catch", "--angle", "nan", "--dist", "3", "-o", tmp_path / "c.csv",
                 cwd=tmp_path, timeout=60)

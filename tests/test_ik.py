@@ -59,7 +59,7 @@ def test_solve_palm_returns_a_start_that_meets_the_task_unchanged():
     and comes back as it went in; one 5 cm off along the rail is solved by iterating."""
     import numpy as np
 
-    from planner.catch.plan import get_planner
+    from planner.catch.plan.api import get_planner
 
     pl = get_planner("default")
     h, q = pl.hand, pl.q_rest.copy()
@@ -80,8 +80,8 @@ def test_a_solve_that_cycles_ends_where_every_step_taken_ends():
     iterations returned are those of taking all ``max_iter`` steps one by one."""
     import numpy as np
 
-    from planner.catch.arm import zero_pose
-    from planner.catch.plan import get_planner
+    from planner.catch.plan.api import get_planner
+    from planner.catch.plan.arm import zero_pose
     from planner.ik import HandIK, PressTarget
 
     pl = get_planner("default")

@@ -21,13 +21,14 @@ PLAY = {"command": str, "song": str, "notes": int, "played": int, "left_out": li
         "part": (dict, type(None))}
 LEFT_OUT = {"note": int, "onset_s": NUM, "pitch": int, "name": str, "reason": str,
             "detail": str}
-CATCH = {"command": str, "feasible": bool, "reasons": list, "throw": dict,
+CATCH = {"command": str, "feasible": bool, "reasons": list, "reason_kinds": list, "throw": dict,
          "launch_speed_m_s": NUM, "flight_time_s": OPT_NUM, "intercept_t_s": NUM,
          "intercept_point_m": list, "arrival_speed_m_s": NUM, "palm_misalignment_deg": NUM,
          "intercept_error_m": NUM, "move_start_s": NUM, "close_start_s": NUM, "close_s": NUM,
          "grasp_t_s": OPT_NUM, "grasp_fingers": list, "margins_s": dict,
          "min_clearance_before_m": NUM, "stopping": (dict, type(None)),
-         "holding": (dict, type(None)), "uncertainty": (dict, type(None)), "notes": list,
+         "holding": (dict, type(None)), "impact": (dict, type(None)),
+         "riding": (dict, type(None)), "uncertainty": (dict, type(None)), "notes": list,
          "rows": int, "rate_hz": NUM, "duration_s": NUM, "trajectory": str,
          "planning_s": NUM, "setup_s": NUM}
 HAND = {"command": str, "name": str, "description": str, "urdf_sha256": str, "rail": bool,

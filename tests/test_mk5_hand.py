@@ -1,4 +1,4 @@
-"""Tests of the Mk5 hand (hands/mk5.toml, planner.hand.mk5_hand) and the q1 -> motor map."""
+"""Tests of the Mk5 hand (hands/mk5.toml, planner.hand.builders.mk5) and the q1 -> motor map."""
 
 from __future__ import annotations
 
@@ -13,10 +13,11 @@ import pinocchio as pin
 import pytest
 
 from planner.hand import mk5
-from planner.hand.mk5_hand import Q2_MARGIN_RAD
+from planner.hand.builders import load_hand_spec
+from planner.hand.builders.mk5 import Q2_MARGIN_RAD
 from planner.hand.mk5_tables import MK5_TABLES
 from planner.hand.model import load_hand
-from planner.hand.spec import FINGERS, PALM_FRAME, TIP_FRAMES, Mk5Coupling, load_hand_spec
+from planner.hand.spec import FINGERS, PALM_FRAME, TIP_FRAMES, Mk5Coupling
 
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = MK5_TABLES["mk5.1"]

@@ -124,11 +124,11 @@ def test_mk5_plays_twinkle_and_check_confirms(tmp_path):
 
 def test_mk5_catches_a_tennis_ball_and_check_confirms(tmp_path):
     from planner import check
-    from planner.catch.plan import plan_catch
+    from planner.catch.plan.api import plan_catch
 
     p = plan_catch(30.0, 1.5, 0.0, "mk5", str(tmp_path / "c.csv"))
     assert p.feasible, p.reasons
-    assert p.grasp_fingers == ("thumb", "middle", "ring")
+    assert p.plan.timing.grasp_fingers == ("thumb", "middle", "ring")
     assert check.check_trajectory(str(tmp_path / "c.csv")).ok
 
 

@@ -10,7 +10,8 @@ from planner.hand.model import load_hand
 from planner.ik import PREPARE_HEIGHT_M, PRESS_TOL_M, press_target
 from planner.music import keyboard as kb
 from planner.play.atlas import HIGH_Z_M, REPEAT_DEPTH_M, STEP_M, Atlas, max_key_force_n, path_clear
-from planner.play.moves import HIGH_SAFE_Z_M, Moves
+from planner.play.moves import Moves
+from planner.play.movetable import HIGH_SAFE_Z_M
 
 CASES = [("thumb", 53), ("index", 57), ("index", 58), ("middle", 60), ("middle", 61),
          ("ring", 64), ("pinky", 65), ("pinky", 66)]

@@ -113,17 +113,16 @@ def test_a_one_note_song_at_1_hz_is_a_file_the_check_reads(planner, tmp_path):
 
 
 def test_the_cli_layer_summarises_the_replay_and_exits_by_it(tmp_path, capsys):
-    """planner.play.summary.play_cli (the second planner behind ``cli.py play``): the
-    summary line the hardening tests parse, every note left out named, --strict exit 1."""
-    import argparse
+    """planner.cli.play (``cli.py play``): the summary line the hardening tests parse,
+    every note left out named, --strict exit 1."""
     import re
 
-    from planner.play.summary import play_cli
+    from planner.cli import build_parser
+    from planner.cli.play import run as play_cli
 
     def args(song, out, strict=False):
-        return argparse.Namespace(song=str(song), output=str(out), hand="default", rate=100.0,
-                                  track=None, channel=None, transpose=False, strict=strict,
-                                  report=None, html=None)
+        return build_parser().parse_args(
+            ["play", str(song), "-o", str(out)] + (["--strict"] if strict else []))
 
     assert play_cli(args(ROOT / "songs" / "twinkle.mid", tmp_path / "t.csv")) == 0
     err = capsys.readouterr().err
@@ -138,8 +137,9 @@ def test_the_cli_layer_summarises_the_replay_and_exits_by_it(tmp_path, capsys):
 def test_a_hand_on_a_fixed_mount_plays_what_it_reaches(tmp_path):
     """A hand file with ``[rail] enabled = false``: the atlas has one place for the hand;
     notes out of its reach are named, the rest played, nothing pressed wrongly."""
+    from planner.hand.builders import load_hand_spec
     from planner.hand.model import HandModel
-    from planner.hand.spec import hands_dir, load_hand_spec
+    from planner.hand.spec import hands_dir
 
     text = (hands_dir() / "default.toml").read_text(encoding="utf-8")
     p = tmp_path / "norail.toml"

@@ -76,7 +76,7 @@ def test_unknown_setting_is_refused():
 
 def test_catch_planner_imports_without_scipy():
     """SciPy (0.15-0.25 s of start) is imported by the first QP solve, not at start."""
-    code = "import sys, planner.catch.plan, planner.cli; print('scipy' in sys.modules)"
+    code = "import sys, planner.catch.plan.api, planner.cli; print('scipy' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "False"

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from planner.catch.flight import BALLS, Ball
+from planner.catch.flight.path import BALLS, Ball
 from planner.check.ballroll import roll_factor, roll_towards_wrist_m
 from planner.errors import InputError
 

@@ -12,8 +12,9 @@ import pytest
 
 from cli import main as cli_main
 from planner.balls import BALLS, file_inertia_ratio, get_ball
-from planner.catch.plan import get_planner, plan_throw, write_plan
-from planner.catch.results import CatchReason
+from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.reasons import CatchReason
+from planner.catch.plan.results import Rows
 from planner.check import check_trajectory
 from planner.check.ballroll import ROLL_ROOM_M, ROLL_TOL_M, roll_problem
 from planner.trajfile import read_trajectory
@@ -26,7 +27,7 @@ def pl():
 
 def _rolled(pl, p) -> float:
     """The planner's model of the roll on the plan's rows."""
-    return pl.turn.rolled(p.t, p.q, p.intercept_t, p.flight)
+    return pl.turn.rolled(p.rows.t, p.rows.q, p.intercept.t_s, p.flight)
 
 
 def test_the_rule_is_the_room():
@@ -86,10 +87,10 @@ def test_the_check_rejects_a_palm_that_does_not_turn(pl, tmp_path):
     model on the edited rows."""
     p = plan_throw(30.0, 1.5, 0.0, planner=pl)
     i = pl.joints.i_flex
-    Q = p.q.copy()
-    k = int(np.searchsorted(p.t, p.intercept_t))
+    Q = p.rows.q.copy()
+    k = int(np.searchsorted(p.rows.t, p.intercept.t_s))
     Q[k:, i] = Q[k, i]
-    edited = replace(p, q=Q, q_motor=p.hand.motor_angles(Q))
+    edited = replace(p, rows=Rows(p.rows.t, Q, p.hand.motor_angles(Q)))
     path = tmp_path / "still.csv"
     write_plan(edited, str(path))
     rep = check_trajectory(str(path))
@@ -133,7 +134,7 @@ def test_the_rule_judges_only_the_hands_it_is_measured_on(tmp_path):
     """The room is the default hand's (the replay lost the ball beyond it); on mk5 the
     modelled roll of 30 deg / 1.5 m exceeds it and the plan is held in physics, so mk5's
     roll is reported, not judged: the plan is feasible and ``check`` confirms it."""
-    from planner.catch.plan import plan_catch
+    from planner.catch.plan.api import plan_catch
     from planner.check.ballroll import roll_judged
 
     assert roll_judged("default") and not roll_judged("mk5") and not roll_judged(None)

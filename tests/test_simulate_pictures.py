@@ -96,7 +96,7 @@ def short_play(tmp_path_factory):
     path = d / "short.csv"
     w = TrajectoryWriter(str(path), {k: v for k, v in tr.metadata.items()
                                      if k not in ("format", "version")},
-                         hand.joint_names, hand.motor_names)
+                         hand)
     w.write_rows(tr.t_s[:ROWS], tr.q[:ROWS], hand.motor_angles(tr.q[:ROWS]))
     w.close({})
     return path

@@ -1,4 +1,4 @@
-"""The soft catch (planner.catch.stopping) and the rule it is judged by
+"""The soft catch (planner.catch.plan.stopping) and the rule it is judged by
 (planner.check.ballstop, planner.check.ball.ball_loads). No wall-clock assertions."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from planner.catch.plan import get_planner, plan_catch, plan_throw
-from planner.catch.results import CatchReason
-from planner.catch.stopping import ramp_integral
+from planner.catch.plan.api import get_planner, plan_catch, plan_throw
+from planner.catch.plan.reasons import CatchReason
+from planner.catch.plan.stopping import ramp_integral
 from planner.check import check_trajectory
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.trajfile import read_trajectory
@@ -48,7 +48,7 @@ def test_ramp_integral():
 
 
 def test_profile_is_continuous_and_meets_the_ball_moving(far):
-    s = far.soft
+    s = far.forces.soft
     assert s is not None and 0.5 <= s.contact_share <= 1.0
     t = np.arange(s.start_s - 0.01, s.end_s + 0.01, 1e-5)
     sig = s.sigma(t)
@@ -60,17 +60,17 @@ def test_profile_is_continuous_and_meets_the_ball_moving(far):
     assert v[0] == pytest.approx(0.0, abs=1e-9) and v[-1] == pytest.approx(0.0, abs=1e-9)
     assert np.all(v > -1e-9)  # the palm goes one way: along the ball's path
     # the palm target moves along the ball's path when they meet
-    u = far.arrival_velocity / np.linalg.norm(far.arrival_velocity)
+    u = far.intercept.arrival_velocity / np.linalg.norm(far.intercept.arrival_velocity)
     assert s.v_palm @ u > 0.5
-    assert np.linalg.norm(s.v_rel) < np.linalg.norm(far.arrival_velocity) - 0.5
+    assert np.linalg.norm(s.v_rel) < np.linalg.norm(far.intercept.arrival_velocity) - 0.5
 
 
 def test_rows_within_every_limit(far):
     h = far.hand
-    assert np.all(far.q >= h.lower - 1e-9) and np.all(far.q <= h.upper + 1e-9)
+    assert np.all(far.rows.q >= h.lower - 1e-9) and np.all(far.rows.q <= h.upper + 1e-9)
     dt = 1.0 / far.rate_hz
-    v = np.diff(far.q, axis=0) / dt
-    a = np.diff(far.q, 2, axis=0) / dt ** 2
+    v = np.diff(far.rows.q, axis=0) / dt
+    a = np.diff(far.rows.q, 2, axis=0) / dt ** 2
     assert np.all(np.abs(v) <= h.velocity * 1.0001)
     assert np.all(np.abs(a) <= h.acceleration * 1.0001)
 
@@ -80,10 +80,10 @@ def test_issue_targets(pl, far):
     near = plan_throw(30.0, 1.5, 0.0, planner=pl)
     for p in (near, far):
         assert p.feasible, p.reasons
-        assert min(p.stop.motor_headroom) == pytest.approx(p.stop.headroom)
-        assert p.stop.headroom >= 0.2
+        assert min(p.forces.stop.motor_headroom) == pytest.approx(p.forces.stop.headroom)
+        assert p.forces.stop.headroom >= 0.2
     hard = plan_throw(30.0, 3.0, 0.0, planner=pl, soft=False)
-    assert far.stop.headroom > hard.stop.headroom + 0.2  # measured: 23.8 % vs -12.0 %
+    assert far.forces.stop.headroom > hard.forces.stop.headroom + 0.2  # measured: 23.8 % vs -12.0 %
     # (the palm at rest also lets the ball roll off its wrist side: ``CatchReason.ROLL``)
     assert not hard.feasible and CatchReason.TOO_FAST_TO_STOP in hard.reason_kinds
 
@@ -92,7 +92,8 @@ def test_too_fast_is_named(pl):
     p = plan_throw(15.0, 4.0, 0.0, planner=pl)  # 8.8 m/s at the palm
     assert not p.feasible
     assert CatchReason.TOO_FAST_TO_STOP in p.reason_kinds
-    assert any(r.startswith("too fast to stop") and "motor.wrist_flex" in r for r in p.reasons)
+    assert any(r.kind is CatchReason.TOO_FAST_TO_STOP and "motor.wrist_flex" in r.detail
+               for r in p.reasons)
 
 
 def test_check_judges_the_stopping_motion(tmp_path, far):
@@ -100,12 +101,12 @@ def test_check_judges_the_stopping_motion(tmp_path, far):
     planner's headroom; stopped over 2 mm of pad (metadata edited) it fails for torque; the
     same rows with the arm frozen from the intercept on (the palm stopping dead) fail."""
     path = tmp_path / "c.csv"
-    from planner.catch.plan import write_plan
+    from planner.catch.plan.api import write_plan
 
     write_plan(far, str(path))
     good = check_trajectory(str(path))
     assert good.ok, good.problems
-    assert good.catch.loads[0].headroom == pytest.approx(far.stop.headroom, abs=1e-3)  # rounding
+    assert good.catch.loads[0].headroom == pytest.approx(far.forces.stop.headroom, abs=1e-3)  # rounding
     text = path.read_text()
     assert text.count('"stop_distance_m": 0.02') == 1
     (tmp_path / "e.csv").write_text(text.replace('"stop_distance_m": 0.02',
@@ -116,7 +117,7 @@ def test_check_judges_the_stopping_motion(tmp_path, far):
     # the arm frozen at its row before the intercept: the ball meets a palm at rest
     tr = read_trajectory(str(path))
     lines = text.splitlines()
-    k = int(np.searchsorted(tr.t_s, far.intercept_t)) - 1
+    k = int(np.searchsorted(tr.t_s, far.intercept.t_s)) - 1
     arm = [1 + far.hand.index[n] for n in ("rail", "wrist_flex", "wrist_dev")]
     frozen = lines[2 + k].split(",")
     out = lines[:2 + k + 1]
@@ -152,7 +153,7 @@ def test_same_bytes(tmp_path):
     a = plan_catch(30.0, 3.0, 0.0, "default", str(tmp_path / "a.csv"))
     plan_catch(30.0, 3.0, 0.0, "default", str(tmp_path / "b.csv"))
     assert a.feasible and (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
-    assert math.isfinite(a.plan.soft.ramp_out_s) and a.plan.soft.ramp_out_s > 0
+    assert math.isfinite(a.plan.forces.soft.ramp_out_s) and a.plan.forces.soft.ramp_out_s > 0
 
 
 def test_accel_room_is_the_hands_inertia_through_the_motors(pl):
@@ -190,8 +191,8 @@ def test_the_ball_held_rolls_into_the_fingers_not_off_the_wrist(pl):
     that. The plan's last row (every joint at rest) has the palm facing up, its downhill
     HOLD_TILT_DEG towards the fingers (gravity's share along +y = -sin 5 deg), and the
     plan stays feasible with the turn inside its rows."""
-    from planner.catch.flight import get_ball, predict_throw
-    from planner.catch.stopping import HOLD_TILT_DEG, plan_stop
+    from planner.catch.flight.path import get_ball, predict_throw
+    from planner.catch.plan.stopping import HOLD_TILT_DEG, plan_stop
 
     fl = predict_throw(60.0, 1.5, 0.0, get_ball("tennis"), False)
     C = np.array([1.5, 0.0, 0.0])
@@ -207,22 +208,22 @@ def test_the_ball_held_rolls_into_the_fingers_not_off_the_wrist(pl):
     assert rolls[1.0] > 0.3 and rolls[None] < 0.25 * rolls[1.0]
     plan = plan_throw(60.0, 1.5, 0.0, planner=pl)
     assert plan.feasible, plan.reasons
-    R = pl.hand.palm_pose(plan.q[-1])[:3, :3]
+    R = pl.hand.palm_pose(plan.rows.q[-1])[:3, :3]
     assert R[2, 2] > 0.9  # faces up
     assert -R[2, 1] == pytest.approx(-math.sin(math.radians(HOLD_TILT_DEG)), abs=0.01)
-    assert np.allclose(plan.q[-1], plan.q[-2])  # at rest at the end
-    assert np.allclose(plan.q_closed, plan.q[-1], atol=1e-9)  # the pose the grasp QP holds
+    assert np.allclose(plan.rows.q[-1], plan.rows.q[-2])  # at rest at the end
+    assert np.allclose(plan.poses.q_closed, plan.rows.q[-1], atol=1e-9)  # the pose the grasp QP holds
 
 
 def test_hold_turn_within_the_motors(pl):
     """``hold_turn``: only the wrist flexion turns, within its range; its duration keeps every
     motor within TURN_SHARE of its capacity with the hand's inertia (the peak acceleration
     PEAK_ACC |dq| / T^2 at either end), and the speed and acceleration limits."""
-    from planner.catch.stopping import STOP_SHARE, TURN_SHARE, hold_turn
+    from planner.catch.plan.stopping import STOP_SHARE, TURN_SHARE, hold_turn
     from planner.trajectory import PEAK_ACC
 
     plan = plan_throw(30.0, 1.5, 0.0, planner=pl)
-    q_end = plan.q[-1].copy()
+    q_end = plan.rows.q[-1].copy()
     i = pl.joints.i_flex
     q_end[i] -= 0.5  # a palm half a radian from the hold
     dq, T = hold_turn(pl.dyn, q_end)
@@ -239,25 +240,25 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     """15 deg from 1.5 m lands on a steep palm: with the turn from the grasp (TurnMode.EARLY)
     the ball would roll beyond ``ROLL_ROOM_M`` towards the wrist (``planner.check.ballroll``:
     that plan is infeasible for the roll), so the roll rule plans the turn under way when the
-    ball lands (``planner.catch.turnahead``): the rows pass the intercept pose at the
+    ball lands (``planner.catch.plan.turnahead``): the rows pass the intercept pose at the
     intercept, the flexion already turning towards level (the turn at 4.1 rad/s), the
     pre-catch pose short of it on the other side; the roll is within the room; ``check``
     confirms the catch. 30 deg from 1.5 m, whose turn from the grasp keeps the roll within
     ``ROLL_ROOM_M``, has the same rows as before the rule. (20 deg from 1.0 m, which this
     test planned before the roll was a feasibility rule, rolls 104 mm with the least rolling
     turn: infeasible, ``tests/test_roll_rule.py``.)"""
-    from planner.catch.plan import write_plan
-    from planner.catch.results import CatchReason
-    from planner.catch.turnahead import TurnMode
+    from planner.catch.plan.api import write_plan
+    from planner.catch.plan.reasons import CatchReason
+    from planner.catch.plan.turnahead import TurnMode
     from planner.check.ballroll import ROLL_ROOM_M, roll_towards_wrist_m
 
     def early(p):
-        return pl._plan(p.flight, p.catch_point, p.rate_hz, 0.0, None, p.flight_time_s, None,
+        return pl._plan(p.flight, p.catch_point, p.rate_hz, 0.0, None, p.intercept.flight_time_s, None,
                         True, TurnMode.EARLY)[0]
 
     def rolled(p):
-        return roll_towards_wrist_m(p.t, pl.kin.frames(p.q)[1], p.flight.ball.radius_m,
-                                    p.intercept_t, p.flight.velocity(p.intercept_t),
+        return roll_towards_wrist_m(p.rows.t, pl.kin.frames(p.rows.q)[1], p.flight.ball.radius_m,
+                                    p.intercept.t_s, p.flight.velocity(p.intercept.t_s),
                                     p.flight.ball.inertia_ratio)
 
     plan = plan_throw(15.0, 1.5, 0.0, planner=pl)
@@ -267,12 +268,12 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 4.1 rad/s")
     assert rolled(plan) <= ROLL_ROOM_M
     i = pl.joints.i_flex
-    k = int(np.searchsorted(plan.t, plan.intercept_t))
-    speed = (plan.q[k, i] - plan.q[k - 1, i]) / (plan.t[k] - plan.t[k - 1])
-    level = plan.q[-1, i]
-    assert abs(speed) > 4.0 and speed * (level - plan.q[k, i]) > 0  # turning towards level
-    assert (plan.q_open[i] - plan.q[k, i]) * (level - plan.q[k, i]) < 0  # pre-catch: behind
-    assert plan.intercept_error_m < 0.002
+    k = int(np.searchsorted(plan.rows.t, plan.intercept.t_s))
+    speed = (plan.rows.q[k, i] - plan.rows.q[k - 1, i]) / (plan.rows.t[k] - plan.rows.t[k - 1])
+    level = plan.rows.q[-1, i]
+    assert abs(speed) > 4.0 and speed * (level - plan.rows.q[k, i]) > 0  # turning towards level
+    assert (plan.poses.q_open[i] - plan.rows.q[k, i]) * (level - plan.rows.q[k, i]) < 0  # pre-catch: behind
+    assert plan.intercept.error_m < 0.002
     # before the ball the arm's motors stay within their capacity with the whole hand's
     # inverse dynamics on the rows (speeds and the closing fingers included; measured 0.771)
     import pinocchio as pin
@@ -280,21 +281,21 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     from planner.catch.grasp import motor_torque_matrix
 
     m, dyn = pl.hand.pin_model, pl.dyn
-    data, dt = m.createData(), plan.t[1] - plan.t[0]
+    data, dt = m.createData(), plan.rows.t[1] - plan.rows.t[0]
     for j in range(1, k):
         v, a = np.zeros(m.nv), np.zeros(m.nv)
-        v[dyn._idx] = (plan.q[j + 1] - plan.q[j - 1]) / (2 * dt)
-        a[dyn._idx] = (plan.q[j + 1] - 2 * plan.q[j] + plan.q[j - 1]) / dt ** 2
-        tau = pin.rnea(m, data, dyn._pq(plan.q[j]), v, a)[dyn._idx]
-        ratio = np.abs(motor_torque_matrix(pl.hand, plan.q[j]) @ tau) / dyn.cap
-        assert np.all(ratio[pl.turn._arm_motors] <= 0.85), (plan.t[j], ratio.max())
+        v[dyn._idx] = (plan.rows.q[j + 1] - plan.rows.q[j - 1]) / (2 * dt)
+        a[dyn._idx] = (plan.rows.q[j + 1] - 2 * plan.rows.q[j] + plan.rows.q[j - 1]) / dt ** 2
+        tau = pin.rnea(m, data, dyn._pq(plan.rows.q[j]), v, a)[dyn._idx]
+        ratio = np.abs(motor_torque_matrix(pl.hand, plan.rows.q[j]) @ tau) / dyn.cap
+        assert np.all(ratio[pl.turn._arm_motors] <= 0.85), (plan.rows.t[j], ratio.max())
     path = tmp_path / "c.csv"
     write_plan(plan, str(path))
     rep = check_trajectory(str(path))
     assert rep.ok, rep.problems
     assert rep.catch.loads[0].headroom >= 0.2
     near = plan_throw(30.0, 1.5, 0.0, planner=pl)
-    assert not near.notes and np.array_equal(near.q, early(near).q)
+    assert not near.notes and np.array_equal(near.rows.q, early(near).rows.q)
 
 
 def test_the_summary_does_not_call_a_turning_palm_at_rest(tmp_path, capsys):
@@ -305,6 +306,6 @@ def test_the_summary_does_not_call_a_turning_palm_at_rest(tmp_path, capsys):
 
     assert cli_main(["catch", "--angle", "20", "--dist", "1", "-o", str(tmp_path / "c.csv")]) == 0
     err = capsys.readouterr().err
-    (stopping,) = [x for x in err.splitlines() if x.lstrip().startswith("stopping:")]
+    (stopping,) = [x for x in err.splitlines() if x.lstrip().startswith("stopping (")]
     assert "(the palm not giving with the ball)" in stopping and "at rest" not in stopping
     assert "note: the wrist's turn under way at 6.7 rad/s" in err

@@ -14,9 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from planner.hand.builders import load_hand_spec
 from planner.hand.grip import CYLINDER_DIAMETER_M, flexion_joints, grip, grip_at
 from planner.hand.model import HandModel, load_hand
-from planner.hand.spec import INCH_M, hands_dir, load_hand_spec
+from planner.hand.spec import INCH_M, hands_dir
 from planner.hand.strength import (
     FLEXED_RAD,
     close_time,

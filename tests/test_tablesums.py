@@ -1,4 +1,4 @@
-"""planner.catch.tablesums: sums over observations of a drag table's values, kept per
+"""planner.catch.flight.tablesums: sums over observations of a drag table's values, kept per
 table interval, against the same sums taken observation by observation."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner.catch.flight import BALLS, Flight, predict_throw
-from planner.catch.tablesums import IntervalSums
+from planner.catch.flight.path import BALLS, Flight, predict_throw
+from planner.catch.flight.tablesums import IntervalSums
 
 BALL = BALLS["tennis"]
 

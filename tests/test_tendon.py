@@ -13,8 +13,9 @@ import pytest
 
 from planner.check import check_trajectory
 from planner.errors import InputError
+from planner.hand.builders import load_hand_spec
 from planner.hand.model import HandModel
-from planner.hand.spec import hands_dir, load_hand_spec
+from planner.hand.spec import hands_dir
 from planner.hand.tendon import (
     GEAR,
     MOTOR_TORQUE,

@@ -29,14 +29,15 @@ def test_values_as_written_are_the_files_bit_for_bit():
 def test_the_rows_a_writer_returns_are_the_files(tmp_path, hand):
     """``write_rows`` hands back (to the self-check) the rows as the file holds them."""
     rng = np.random.default_rng(10)
-    t = np.arange(300) / 100.0
+    t = np.arange(300) * 10.0  # (rows 10 s apart: random ones within the speeds the
+    # writer's guard holds)
     q = np.clip(hand.lower + (hand.upper - hand.lower) * rng.random((300, hand.n)),
                 hand.lower, hand.upper)
     q[100:150] = q[99]  # (rows equal to the one before: formatted once)
     w = TrajectoryWriter(str(tmp_path / "r.csv"), {"task": "play", "hand": hand.name,
                          "urdf_sha256": hand.urdf_sha256,
-                         "T_world_root": hand.T_world_root.tolist(), "rate_hz": 100.0},
-                         hand.joint_names, hand.motor_names)
+                         "T_world_root": hand.T_world_root.tolist(), "rate_hz": 0.1},
+                         hand)
     got = np.concatenate([w.write_rows(t[:120], q[:120], hand.motor_angles(q[:120])),
                           w.write_rows(t[120:], q[120:], hand.motor_angles(q[120:]))])
     w.close()

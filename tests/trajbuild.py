@@ -17,7 +17,7 @@ import numpy as np
 from planner.hand.model import load_hand
 from planner.music.keyboard import key
 from planner.music.midi import Note, write_notes_midi
-from planner.trajfile import TrajectoryWriter
+from planner.trajfile import end_line, format_rows, header_line, metadata_line
 
 RATE = 100.0
 RAMP_S = 0.08  # press / release ramp; the 5 mm threshold is crossed at its middle
@@ -28,12 +28,17 @@ def meta(h, task="play", **extra):
             "T_world_root": h.T_world_root.tolist(), "rate_hz": RATE, **extra}
 
 
-def write_traj(path, hand, t, q, qm=None, metadata=None, joint_names=None, motor_names=None):
-    q = np.asarray(q)
-    w = TrajectoryWriter(str(path), metadata or meta(hand),
-                         joint_names or hand.joint_names, motor_names or hand.motor_names)
-    w.write_rows(t, q, hand.motor_angles(q) if qm is None else qm)
-    w.close()
+def write_traj(path, hand, t, q, qm=None, metadata=None, joint_names=None, motor_names=None,
+               end_info=None):
+    """A file in the planner's format, written without its writer's guard: the check's
+    tests need files no planner may write (rows out of the limits, other columns)."""
+    q = np.asarray(q, dtype=float)
+    rows = format_rows(t, q, hand.motor_angles(q) if qm is None else np.asarray(qm))
+    text = (metadata_line(metadata or meta(hand))
+            + header_line(joint_names or hand.joint_names, motor_names or hand.motor_names)
+            + rows.text + end_line(len(rows.t_s), end_info))
+    with open(path, "w", encoding="utf-8", newline="") as f:
+        f.write(text)
     return str(path)
 
 

@@ -299,6 +299,15 @@ _SETTINGS = {"eps_abs": _EPS, "eps_rel": _EPS, "eps_prim_inf": 1e-6, "eps_dual_i
                  "adaptive_rho_interval": ADAPTIVE_RHO_INTERVAL}
 
 
+class GraspTorqueError(InfeasibleError):
+    """The grasp QP: a force split inside the friction cones exists, but it needs a motor
+    beyond its capacity (the message names the motor and its torque)."""
+
+
+class GraspFrictionError(InfeasibleError):
+    """The grasp QP: no force split over the contacts lies inside their friction cones."""
+
+
 def _osqp_solve(prob: GraspProblem):
     """OSQP on ``prob``: set up once per problem size (full dense patterns), then updated
     and warm-started from the previous solution of that size (consecutive throws give
@@ -314,7 +323,7 @@ def solve_grasp(prob: GraspProblem) -> GraspResult:
     res = _osqp_solve(prob)
     status = res.status
     if res.primal_infeasible or (not res.solved and over.any()):
-        raise InfeasibleError(_infeasible_reason(prob), problem=prob)
+        raise _infeasible(prob)
     if not res.solved:
         raise SolverError(f"grasp QP ({prob.case}) failed: {status}", problem=prob)
     x = res.x
@@ -322,14 +331,15 @@ def solve_grasp(prob: GraspProblem) -> GraspResult:
     ratio = np.abs(tau) / prob.capacity
     m = int(np.argmax(ratio))
     if ratio[m] > 1.0 + 1e-4:  # "solved inaccurate" that is not really inside the limits
-        raise InfeasibleError(_infeasible_reason(prob), problem=prob)
+        raise _infeasible(prob)
     return GraspResult(prob, x.reshape(-1, 3), tau, float(1.0 - ratio[m]), prob.motor_names[m],
                        status, prob.parts[m])
 
 
-def _infeasible_reason(prob: GraspProblem) -> str:
-    """Which motor is short: the motor whose capacity is exceeded in the least-torque
-    force split that satisfies the balance and cone constraints alone."""
+def _infeasible(prob: GraspProblem) -> InfeasibleError:
+    """Which motor is short (``GraspTorqueError``): the motor whose capacity is exceeded in
+    the least-torque force split that satisfies the balance and cone constraints alone; or
+    no split inside the cones at all (``GraspFrictionError``)."""
     F = np.linalg.norm(prob.required_force)
     where = ", ".join(c.name for c in prob.contacts)
     try:
@@ -343,15 +353,18 @@ def _infeasible_reason(prob: GraspProblem) -> str:
                          adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
         res = solver.solve(P, c, A, prob.lower[:-n_motor], prob.upper[:-n_motor])
         if not res.solved:
-            return (f"{prob.case}: no force split of {F:.1f} N over {where} lies inside the "
-                    f"friction cones (mu {prob.mu:g})")
+            return GraspFrictionError(f"{prob.case}: no force split of {F:.1f} N over {where} "
+                                      f"lies inside the friction cones (mu {prob.mu:g})",
+                                      problem=prob)
         tau = prob.tau_offset + prob.tau_map @ res.x
         ratio = np.abs(tau) / prob.capacity
         m = int(np.argmax(ratio))
-        return (f"{prob.case}: {F:.1f} N over {where} needs motor.{prob.motor_names[m]} at "
-                f"{abs(tau[m]):.2f} N m > its {prob.parts[m]} limit {prob.capacity[m]:.2f} N m")
+        return GraspTorqueError(f"{prob.case}: {F:.1f} N over {where} needs motor."
+                                f"{prob.motor_names[m]} at {abs(tau[m]):.2f} N m > its "
+                                f"{prob.parts[m]} limit {prob.capacity[m]:.2f} N m", problem=prob)
     except (ValueError, RuntimeError, SolverError):  # pragma: no cover - diagnostics only
-        return f"{prob.case}: {F:.1f} N over {where} exceeds a motor's capacity"
+        return GraspTorqueError(f"{prob.case}: {F:.1f} N over {where} exceeds a motor's "
+                                "capacity", problem=prob)
 
 
 def grasp_forces(hand: HandModel, q: np.ndarray, centre: np.ndarray, radius: float,

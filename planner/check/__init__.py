@@ -27,6 +27,11 @@ The file contract (``planner.trajfile``): rows at ``rate_hz`` from t = 0 (within
 many notes as the song has (with its ``track``, ``channel`` and ``transpose``,
 which the check reads from the metadata unless given).
 
+**bodies** (play): spec section 2's body rule (``bodykeys``): the keys the hand's
+collision bodies press, body key-bed hits, the body frame F1 and the wrong presses by
+body; reported on every play, the verdict only with ``bodies`` (``check --bodies``)
+while the planner is rebuilt to meet it (issue 30).
+
 The verdict fails on key-bed hits, wrong presses, limit violations, a failed
 catch, F1 under ``min_f1``, and on any note whose outcome the plan's end marker
 states otherwise than the replay finds (``left_out``: the notes it says it left
@@ -34,7 +39,8 @@ out, every other note it says it played). ``strict`` also fails it on any missed
 or late note.
 
 Independence: this package shares only the hand model, the keyboard geometry,
-the trajectory reader and the MIDI reader with the planner. It never imports
+the trajectory and plan-file readers (``planner.trajfile``, ``planner.planfile``), the
+MIDI reader and the results' plain form (``planner.resultform``) with the planner. It never imports
 ``planner.play``, ``planner.ik``, ``planner.trajectory``, ``planner.catch`` or
 ``planner.selfcheck`` (the planners' side), and it runs its own copy of the Pinocchio
 model (so it never touches the shared hand's data, and can put the root where
@@ -97,20 +103,20 @@ Choices (each one a named constant below):
   must keep that grasp (the catch holds to the end of the file).
 * ``T_world_root``: the FK uses the metadata's pose. For ``play`` it must equal
   the hand's mount (the keyboard frame is defined by that mount) within
-  ``T_TOL``; for ``catch`` the catch frame has its origin at the launch point,
+  ``planner.planfile.T_TOL``; for ``catch`` the catch frame has its origin at the launch point,
   so the hand may be mounted anywhere in it -- the pose is only required to be
   a rigid transform.
 """
 
 from __future__ import annotations
 
-import json
 import os
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planner.check.ball import ball_params, ball_positions, catch_audit, is_num
+from planner.check.bodykeys import body_keys, body_problems, judge_bodies
 from planner.check.criteria import (
     DOWN_DEPTH_M,
     GRASP_MIN_TIPS,
@@ -146,8 +152,10 @@ from planner.check.results import (
     TipTouch,
 )
 from planner.errors import InputError
-from planner.hand.model import HandModel, load_hand
-from planner.trajfile import Trajectory, read_trajectory, song_start_s
+from planner.hand.bodies import collision_bodies
+from planner.hand.model import HandModel
+from planner.planfile import read_plan
+from planner.trajfile import Trajectory, song_start_s
 
 if TYPE_CHECKING:
     from planner.music.midi import Song
@@ -177,7 +185,6 @@ __all__ = [
     "ball_params",
     "ball_positions",
     "catch_audit",
-    "check_cli",
     "check_trajectory",
     "expected_keys",
     "fk_frames",
@@ -190,96 +197,6 @@ __all__ = [
     "pitch_name",
     "song_frames",
 ]
-
-T_TOL = 1e-9  # metadata T_world_root vs the hand's mount (play)
-
-
-def _load_hand(meta: dict[str, Any], path: str, hand_override) -> HandModel:
-    if isinstance(hand_override, HandModel):
-        return hand_override
-    name = hand_override if hand_override is not None else meta["hand"]
-    if not isinstance(name, str) or not name:
-        raise InputError(f"{path}: metadata 'hand' must be a hand name, got {name!r}")
-    try:
-        return load_hand(name)
-    except InputError as e:
-        raise InputError(f"{path}: cannot rebuild hand {name!r}: {e}") from None
-
-
-def _check_columns(tr: Trajectory, hand: HandModel, path: str) -> None:
-    for what, have, want in (("joint", tr.joint_names, hand.joint_names),
-                             ("motor", tr.motor_names, hand.motor_names)):
-        if tuple(have) == tuple(want):
-            continue
-        pre = "motor." if what == "motor" else ""
-        missing = [pre + n for n in want if n not in have]
-        extra = [pre + n for n in have if n not in want]
-        parts = []
-        if missing:
-            parts.append("missing " + ", ".join(missing))
-        if extra:
-            parts.append("extra " + ", ".join(extra))
-        if not parts:
-            parts.append(f"order differs from the hand's ({', '.join(pre + n for n in want)})")
-        raise InputError(f"{path}: {what} columns do not match hand {hand.name!r}: "
-                         + "; ".join(parts))
-
-
-def _T_world_root(meta: dict[str, Any], hand: HandModel, path: str) -> np.ndarray:
-    raw = meta["T_world_root"]
-    try:
-        T = np.array(raw, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{path}: T_world_root must be a 4x4 list of numbers") from None
-    if T.shape != (4, 4) or not np.all(np.isfinite(T)):
-        raise InputError(f"{path}: T_world_root must be a 4x4 list of finite numbers")
-    R = T[:3, :3]
-    if (not np.allclose(T[3], [0, 0, 0, 1], atol=1e-9)
-            or not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0):
-        raise InputError(f"{path}: T_world_root is not a rigid transform")
-    if meta["task"] == "play":
-        diff = float(np.max(np.abs(T - hand.T_world_root)))
-        if diff > T_TOL:
-            raise InputError(f"{path}: T_world_root differs from hand {hand.name!r}'s mount by "
-                             f"{diff:.3g} (the keyboard frame is that mount)")
-    return T
-
-
-
-def _song_notes(song_path: str, meta: dict[str, Any], path: str, options: dict[str, Any]):
-    """The song's notes in the file's time (shifted by its ``song_start_s``), read with
-    the options the plan was made with (the file's metadata) unless given; InputError
-    when the file names another number of notes."""
-    from planner.music.midi import Song, load_song, shift_notes
-
-    opts = {k: (options.get(k) if options.get(k) is not None else meta.get(k))
-            for k in ("track", "channel", "transpose")}
-    if isinstance(song_path, Song):  # (read already, with the options its reader chose)
-        notes = song_path.notes
-    else:
-        notes = load_song(song_path, track=opts["track"], channel=opts["channel"],
-                          transpose=bool(opts["transpose"])).notes
-    want = meta.get("notes")
-    if is_num(want) and int(want) != len(notes):
-        given = ", ".join(f"{k}={v}" for k, v in opts.items() if v not in (None, False)) or "none"
-        raise InputError(f"{path}: planned for a song of {int(want)} notes, {song_path} has "
-                         f"{len(notes)} (another song, or other --track/--channel/--transpose; "
-                         f"options used: {given})")
-    return shift_notes(notes, song_start_s(meta))  # (version 2: the song in the file's time)
-
-
-def _left_out(end: dict[str, Any], n_notes: int, path: str) -> set[int] | None:
-    """The notes the end marker says the plan left out (None: it states no claims)."""
-    raw = end.get("left_out")
-    if raw is None:
-        return None
-    ok = isinstance(raw, list) and all(
-        isinstance(x, dict) and isinstance(x.get("note"), int) and 0 <= x["note"] < n_notes
-        for x in raw)
-    if not ok:
-        raise InputError(f"{path}: end marker's 'left_out' is not a list of notes of the song")
-    return {x["note"] for x in raw}
-
 
 def _claim_mismatches(notes, missed_notes: set[int], left_out: set[int]) -> list[ClaimMismatch]:
     out = []
@@ -324,7 +241,8 @@ def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list
 def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None = None, *,
                      allow_incomplete: bool = False, min_f1: float | None = None,
                      hand_override: str | HandModel | None = None, strict: bool = False,
-                     song_options: dict[str, Any] | None = None) -> CheckReport:
+                     song_options: dict[str, Any] | None = None,
+                     bodies: bool = False) -> CheckReport:
     """Replay ``traj_path`` and audit it (see the package docstring).
 
     ``traj_path``: a file, or a ``Trajectory`` already read (a plan made in memory).
@@ -338,17 +256,10 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     allowed), unknown hand, URDF hash or column mismatch, bad T_world_root, bad
     catch metadata, a song other than the plan's.
     """
-    if isinstance(traj_path, Trajectory):  # (a plan in memory: ``PlayPlan.trajectory``)
-        tr, traj_path = traj_path, "<memory>"
-    else:
-        tr = read_trajectory(traj_path, allow_incomplete=allow_incomplete)
+    plan = read_plan(traj_path, allow_incomplete=allow_incomplete,
+                     hand_override=hand_override)
+    tr, traj_path, hand, T_world_root = plan.trajectory, plan.path, plan.hand, plan.T_world_root
     meta = tr.metadata
-    hand = _load_hand(meta, traj_path, hand_override)
-    if meta["urdf_sha256"] != hand.urdf_sha256:
-        raise InputError(f"{traj_path}: urdf_sha256 mismatch: the file was planned for "
-                         f"{meta['urdf_sha256']!r}, hand {hand.name!r} is {hand.urdf_sha256!r}")
-    _check_columns(tr, hand, traj_path)
-    T_world_root = _T_world_root(meta, hand, traj_path)
     if min_f1 is not None and not (0.0 <= min_f1 <= 1.0):
         raise InputError(f"--min-f1 must be within 0..1, got {min_f1}")
     task = meta["task"]
@@ -356,25 +267,28 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         raise InputError(f"a song was given but {traj_path} is a {task} trajectory")
     if min_f1 is not None and song_path is None:
         raise InputError("--min-f1 needs a song")
-    notes = (None if song_path is None
-             else _song_notes(song_path, meta, traj_path, song_options or {}))
+    notes = None if song_path is None else plan.song_notes(song_path, song_options)
 
     kin = Kinematics(hand, T_world_root)
     tips, palm = kin.frames(tr.q)
     problems: list[str] = []
     play = catch = None
     replay_kw: dict[str, Any] = {}
-    pressing = ball_load = None
+    pressing = ball_load = body_result = None
     if task == "play":
         play, kc, exp = play_replay(tr, tips, notes)
         if notes is not None:
-            left_out = _left_out(tr.end, len(notes), traj_path)
+            left_out = plan.left_out(len(notes))
             if left_out is not None:
                 missed = {m.note for m in play.missed}
                 play = _with_claims(play, _claim_mismatches(notes, missed, left_out))
         pressing = np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
         replay_kw = {"down": kc.down, "finger": kc.finger, "expected": exp}
         problems.extend(_play_problems(play, min_f1, strict))
+        body_result = judge_bodies(tr.t_s, body_keys(kin, tr.q, collision_bodies(hand.spec)),
+                                   notes, float(meta["rate_hz"]), verdict=bodies)
+        if bodies:
+            problems.extend(body_problems(body_result))
     else:
         catch, ball_load = catch_audit(tr, kin, tips, palm, traj_path)
         problems.extend(catch.problems)
@@ -393,39 +307,10 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), rate_hz=float(meta["rate_hz"]),
         limits=tuple(limits), play=play, catch=catch, min_f1=min_f1, problems=tuple(problems),
         replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw), tendons=tendons,
-        song_start_s=song_start_s(meta))
+        song_start_s=song_start_s(meta), bodies=body_result)
 
 
 def _with_claims(play: PlayResult, mismatches: list[ClaimMismatch]) -> PlayResult:
     import dataclasses
 
     return dataclasses.replace(play, claims=True, claim_mismatches=tuple(mismatches))
-
-
-def check_cli(args) -> int:
-    """``cli.py check``: print the summary (or one JSON object with --json);
-    0 when the check passes, 1 otherwise. ``--played OUT.mid`` writes the
-    key-down episodes as notes (velocity 64). ``--report DIR`` / ``--html FILE``
-    are handed to ``planner.report``."""
-    options = {"track": getattr(args, "track", None), "channel": getattr(args, "channel", None),
-               "transpose": True if getattr(args, "transpose", False) else None}
-    report = check_trajectory(args.trajectory, args.song,
-                              allow_incomplete=bool(getattr(args, "allow_incomplete", False)),
-                              min_f1=getattr(args, "min_f1", None),
-                              strict=bool(getattr(args, "strict", False)), song_options=options,
-                              hand_override=getattr(args, "hand", None))
-    played = getattr(args, "played", None)
-    if played:
-        from planner.music.midi import Note, write_notes_midi
-
-        eps = report.play.played if report.play is not None else ()
-        write_notes_midi([Note(e.pitch, e.start_s, e.end_s, 64) for e in eps], played)
-    if getattr(args, "report", None) or getattr(args, "html", None):
-        from planner.report import draw_reports
-
-        draw_reports(report, args.report, args.html, enabled=not getattr(args, "json", False))
-    if getattr(args, "json", False):
-        print(json.dumps(report.to_dict()))
-    else:
-        print(report.summary())
-    return 0 if report.ok else 1

@@ -6,7 +6,7 @@ holding the ball, ``ball_loads``)."""
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -98,9 +98,12 @@ def ball_positions(p0, v0, drag: float, times) -> np.ndarray:
 def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndarray, path: str
            ) -> tuple[CatchResult, np.ndarray]:
     meta = tr.metadata
-    # a live plan's end marker carries the flight it was last re-planned for
-    live = "ball" in tr.end and "intercept_t" in tr.end
-    src = {**meta, "ball": tr.end["ball"], "intercept_t": tr.end["intercept_t"]} if live else meta
+    claims = end_claims(tr.end, path)
+    live = is_live(meta)
+    # the ball judged: the metadata's; a live plan's last estimate (its end marker), a claim
+    # judged by the same rules as any ball (spec section 4, version 2)
+    src = ({**meta, "ball": claims["ball"], "intercept_t": claims["intercept_t"]}
+           if live and "ball" in claims else meta)
     ball = ball_params(src, path)
     ti = src.get("intercept_t")
     if not is_num(ti) or not math.isfinite(ti):
@@ -140,11 +143,9 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
 
     g_time, g_fingers, held, d_after = _grasp_after(t, ti, tips, palm, r, problems)
     roll = None if err is None else _roll(t, palm, ball, ti, file_inertia_ratio(src))
-    # a live plan's rows hold the arm still from the intercept on (no wrist's turn, README
-    # "Live catch"): its roll is reported, not judged, until the live session turns the wrist
-    # (measured: beyond the room on 9-10 of 10 bench_live throws, docs/physics-replay.md)
-    # (nor on a hand whose room is not measured: ``roll_judged``)
-    judged = roll is not None and not live and roll_judged(meta.get("hand"))
+    # every file alike, planned or live (not on a hand whose room is not measured:
+    # ``roll_judged``)
+    judged = roll is not None and roll_judged(meta.get("hand"))
     rolled = roll_problem(roll, ROLL_TOL_M) if judged else None
     if rolled is not None:
         problems.append(rolled)
@@ -165,13 +166,67 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
                 problems.append(f"{what} the ball: the palm's force leaves its friction cone "
                                 f"(mu {PALM_MU:g}) by {-ld.cone_margin_n:.2f} N before the "
                                 "grasp: the ball slides off the palm")
+    problems += claim_problems(claims, src, live, bool(problems))
     load = np.where(t >= ti, ball["mass"], 0.0)
     res = CatchResult(ti, r, tuple(float(x) for x in b_i), tuple(float(x) for x in target), err,
                       err is not None and err <= INTERCEPT_TOL_M, tuple(touches), g_time,
                       g_fingers, held,
                       float(d_after.min()) if d_after.size else None, tuple(problems), loads,
-                      {k: tr.end.get(k) for k in ("catch", "reason")} if live else None, roll)
+                      {k: claims.get(k) for k in ("catch", "reason")} if live else None, roll)
     return res, load
+
+
+OUTCOMES = ("held", "given_up", "infeasible")  # a catch's claim (spec section 4, version 2)
+
+
+def is_live(meta: dict[str, Any]) -> bool:
+    """A live plan's file: its metadata says so (``catch.live``), not its end marker."""
+    c = meta.get("catch")
+    return isinstance(c, dict) and c.get("live") is True
+
+
+def end_claims(end: dict[str, Any], path: str) -> dict[str, Any]:
+    """A catch file's end-marker claims (``catch``, ``reason``, ``ball``, ``intercept_t``),
+    each of its type (InputError naming the key otherwise)."""
+    out: dict[str, Any] = {}
+    if "catch" in end:
+        if end["catch"] not in OUTCOMES:
+            raise InputError(f"{path}: end marker's 'catch' must be one of "
+                             f"{', '.join(OUTCOMES)}, got {end['catch']!r}")
+        out["catch"] = end["catch"]
+    if "reason" in end:
+        if not isinstance(end["reason"], str):
+            raise InputError(f"{path}: end marker's 'reason' must be text")
+        out["reason"] = end["reason"]
+    if ("ball" in end) != ("intercept_t" in end):
+        raise InputError(f"{path}: end marker's 'ball' and 'intercept_t' come together")
+    if "ball" in end:
+        ball_params({"ball": end["ball"]}, f"{path}: end marker")
+        ti = end["intercept_t"]
+        if not is_num(ti) or not math.isfinite(ti):
+            raise InputError(f"{path}: end marker's 'intercept_t' must be a finite number")
+        out["ball"], out["intercept_t"] = end["ball"], float(ti)
+    return out
+
+
+def claim_problems(claims: dict[str, Any], judged: dict[str, Any], live: bool,
+                   failed: bool) -> list[str]:
+    """The end marker's claims held against the replay: a planned file's ball is its
+    metadata's (an end marker that names another one is refused); a catch that says it is
+    not held (given up, infeasible) is not a catch; one that says it is held while the
+    rows fail is named."""
+    out = []
+    if not live and "ball" in claims and (claims["ball"] != judged["ball"]
+                                          or claims["intercept_t"] != judged["intercept_t"]):
+        out.append("the end marker names a ball other than the metadata's: a planned "
+                   "catch is judged against the ball it was planned for")
+    said = claims.get("catch")
+    if said in ("given_up", "infeasible"):
+        out.append(f"the plan says the catch is {said.replace('_', ' ')}: "
+                   f"{claims.get('reason') or 'no reason given'}")
+    elif said == "held" and (failed or out):
+        out.append("the end marker claims the catch held; the rows above say otherwise")
+    return out
 
 
 def _roll(t: np.ndarray, palm: np.ndarray, ball: dict[str, Any], ti: float,
@@ -230,6 +285,46 @@ def _stop_distance(meta: dict[str, Any], path: str) -> float | None:
 def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
                ball: dict[str, Any], ti: float, pad_m: float, grasp_t: float | None = None
                ) -> tuple[BallLoad, BallLoad]:
+    """The stopping and the holding phase's worst instants (``ball_load_instants``)."""
+    return phase_loads(ball_load_instants(t, Q, kin, palm, ball, ti, pad_m, grasp_t), t[-1],
+                       kin, Q[-1], palm[-1], ball["mass"])
+
+
+@dataclass(frozen=True)
+class ContactLoads:
+    """The ball's load named by what causes it: ``impact``, the pad stopping the ball at
+    contact (its speed relative to the palm over the pad's give); ``riding``, the worst
+    instant of the ball riding the palm afterwards (its weight and the palm's acceleration;
+    None: the arm still from the pad's stop on). Each with every motor's headroom."""
+
+    impact: BallLoad
+    riding: BallLoad | None
+
+
+def contact_loads(instants: list[BallLoad]) -> ContactLoads:
+    """``ball_load_instants``' loads named apart: the impact (the first instant, at the
+    intercept) and the riding ball's worst (the instants after the pad's stop)."""
+    rides = [x for x in instants[1:] if x.speed_m_s == 0.0]
+    return ContactLoads(instants[0], _worst(rides) if rides else None)
+
+
+def phase_loads(inst: list[BallLoad], t_end: float, kin: Kinematics, q_end: np.ndarray,
+                palm_end: np.ndarray, mass: float) -> tuple[BallLoad, BallLoad]:
+    """The instants' worst while the palm target moves (``stop``) and after (``hold``; the
+    ball's weight on the last row when no instant is after)."""
+    stop = _worst([x for x in inst if x.phase == "stop"])
+    holds = [x for x in inst if x.phase == "hold"]
+    if holds:
+        return stop, _worst(holds)
+    n = len(q_end)
+    cap = actuator_capacity(kin.hand)
+    return stop, _load("hold", kin, q_end, float(t_end), ride_force_n(mass, np.zeros(3)), 0.0,
+                       0.0, np.zeros(n), np.zeros(n), palm_end[:3, 2], False, cap)
+
+
+def ball_load_instants(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
+                       ball: dict[str, Any], ti: float, pad_m: float,
+                       grasp_t: float | None = None) -> list[BallLoad]:
     """The ball's load on the hand (``planner.check.ballstop``, one definition with the
     planner), judged on the rows as they move: its velocity relative to the palm target at
     ``ti`` stopped by the pad over ``pad_m`` (at ``ti`` and at every row within the pad's
@@ -281,13 +376,7 @@ def ball_loads(t: np.ndarray, Q: np.ndarray, kin: Kinematics, palm: np.ndarray,
         slows = sp > 0 or float(np.linalg.norm(centre_a[k])) > G  # the arm, not gravity, sets F
         inst.append(_load(phase, kin, Q[k], float(t[k]), F, sp, dist, V[k], A[k],
                           palm[k, :3, 2], phase == "stop" and slows and t[k] < held, cap))
-    stop = _worst([x for x in inst if x.phase == "stop"])
-    holds = [x for x in inst if x.phase == "hold"]
-    hold = _worst(holds) if holds else _load("hold", kin, Q[-1], float(t[-1]),
-                                             ride_force_n(m, np.zeros(3)), 0.0, 0.0,
-                                             np.zeros(Q.shape[1]), np.zeros(Q.shape[1]),
-                                             palm[-1, :3, 2], False, cap)
-    return stop, hold
+    return inst
 
 
 def _rows_at(t: np.ndarray, Q: np.ndarray, times: np.ndarray) -> np.ndarray:

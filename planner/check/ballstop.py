@@ -1,5 +1,5 @@
 """How a caught ball is stopped and carried on the palm: one definition, used by ``check``
-(``planner.check.ball``) and by the catch planner (``planner.catch.stopping`` and its
+(``planner.check.ball``) and by the catch planner (``planner.catch.plan.stopping`` and its
 self-check) alike.
 
 * The pad. The ball meets the palm with a velocity ``v_rel`` relative to the palm target

@@ -3,7 +3,9 @@ planners' self-checks alike.
 
 * Key down (spec section 2): a fingertip point inside a key's footprint (for a
   white key minus the black keys' rectangles) at least ``DOWN_DEPTH_M`` below the
-  key's resting top (``key_contacts``).
+  key's resting top (``key_contacts``); or any collision body of the hand reaching
+  that deep inside a footprint, and none more than ``BED_MARGIN_M`` past the key bed
+  (the body rule, ``planner.check.bodykeys``).
 * The song's frames: a note sounds in frame ``t`` when ``onset_s <= t < offset_s``
   (``expected_keys``). The frames a song is scored over are the rows' clock,
   k / rate_hz from t = 0, up to the end of the last note (``song_frames``): rows
@@ -30,30 +32,27 @@ from planner.music.keyboard import (
     DOWN_DEPTH_M,
     HIGHEST_PITCH,
     KEY_BED_DEPTH_M,
+    KEY_DIP_M,
     LOWEST_PITCH,
     key_table,
+    pitch_name,
 )
 
 __all__ = [
-    "DOWN_DEPTH_M", "KEY_BED_DEPTH_M", "LATE_S", "NOTE_HIT_FRACTION", "N_KEYS",
+    "BED_MARGIN_M", "BODY_BED_DEPTH_M", "DOWN_DEPTH_M", "KEY_BED_DEPTH_M", "LATE_S", "NOTE_HIT_FRACTION", "N_KEYS",
     "KeyContacts", "NoteOutcome", "expected_keys", "frame_f1", "frame_scores",
     "key_contacts", "note_outcomes", "pitch_name", "song_frames",
 ]
 
 N_KEYS = HIGHEST_PITCH - LOWEST_PITCH + 1  # 88
+BED_MARGIN_M = 0.001  # spec section 2 (bodies): no body more than 1 mm below the key bed
+BODY_BED_DEPTH_M = KEY_DIP_M + BED_MARGIN_M  # ... so 11 mm below a key's resting top
 NOTE_HIT_FRACTION = 0.5  # a note is hit when its key is down in >= 50 % of its frames
 LATE_S = 0.020  # a key first down later than this after its onset is late (see above)
 INTERCEPT_TOL_M = 0.015  # ball centre vs palm_center + radius * normal at intercept_t
 GRASP_WINDOW_S = 0.150  # the grasp must close within this after intercept_t
 GRASP_TOL_M = 0.010  # a fingertip "closed around" the ball: distance <= radius + this
 GRASP_MIN_TIPS = 3  # ... at least this many, the thumb among them
-_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
-
-
-def pitch_name(pitch: int) -> str:
-    """Scientific pitch name: 60 -> 'C4', 61 -> 'C#4', 21 -> 'A0'."""
-    return f"{_NAMES[pitch % 12]}{pitch // 12 - 1}"
-
 
 
 @dataclass(frozen=True)

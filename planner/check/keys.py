@@ -30,9 +30,10 @@ def _frame_period(t_s: np.ndarray) -> float:
     return float(np.median(np.diff(t_s))) if len(t_s) > 1 else 0.01
 
 
-def key_episodes(mask: np.ndarray, t_s: np.ndarray,
-                 finger: np.ndarray | None = None) -> list[KeyEpisode]:
-    """Contiguous runs of True in each key column of ``mask`` (T, 88), sorted by start.
+def key_episodes(mask: np.ndarray, t_s: np.ndarray, finger: np.ndarray | None = None,
+                 names: tuple[str, ...] = FINGERS) -> list[KeyEpisode]:
+    """Contiguous runs of True in each key column of ``mask`` (T, 88), sorted by start;
+    ``finger`` (T, 88): who holds each key down, an index into ``names`` (-1 none).
 
     An episode lasts from its first frame's time to the next frame's time
     (one median period past the last row at the end of the file).
@@ -51,7 +52,7 @@ def key_episodes(mask: np.ndarray, t_s: np.ndarray,
             fingers: tuple[str, ...] = ()
             if finger is not None:
                 fs = finger[a:b, k]
-                fingers = tuple(FINGERS[i] for i in sorted(set(fs[fs >= 0].tolist())))
+                fingers = tuple(names[i] for i in sorted(set(fs[fs >= 0].tolist())))
             p = int(k) + LOWEST_PITCH
             out.append(KeyEpisode(p, pitch_name(p), float(t_s[a]), float(t_end[b - 1]), fingers))
     out.sort(key=lambda e: (e.start_s, e.pitch))
@@ -96,16 +97,17 @@ class SongScore:
 
 
 def score_song(t: np.ndarray, down_rows: np.ndarray, finger_rows: np.ndarray | None, notes,
-               rate_hz: float) -> SongScore:
+               rate_hz: float, names: tuple[str, ...] = FINGERS) -> SongScore:
     """Score key states ``down_rows`` (T, 88) at row times ``t`` against ``notes``; the
-    planner's self-check calls this too, so its claims are the check's findings."""
+    planner's self-check calls this too, so its claims are the check's findings.
+    ``finger_rows`` index into ``names`` (the fingers; the links for the body rule)."""
     frames = song_frames(notes, rate_hz)
     n = min(len(frames), len(t))
     frames = np.concatenate([t[:n], frames[n:]])  # the rows' own clock where they exist
     down = np.zeros((len(frames), down_rows.shape[1]), dtype=bool)
     down[:n] = down_rows[:n]  # frames without a row: nothing pressed
     prec, rec, f1 = frame_scores(expected_keys(notes, frames), down)
-    wrong = key_episodes(down_rows & ~expected_keys(notes, t), t, finger_rows)
+    wrong = key_episodes(down_rows & ~expected_keys(notes, t), t, finger_rows, names)
     missed, late = [], []
     for i, (note, o) in enumerate(zip(notes, note_outcomes(notes, frames, down))):
         if o.hit:

@@ -64,6 +64,24 @@ class Kinematics:
         palm = np.einsum("ij,tjk->tik", self.T, palm)
         return tips, palm
 
+    def link_poses(self, Q: np.ndarray, links: tuple[str, ...]) -> dict[str, np.ndarray]:
+        """World poses (T, 4, 4) of the frames of ``links`` at every row of ``Q`` (a row
+        equal to the one before it computed once)."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        new, of = distinct_rows(Q)
+        U = Q[new]
+        m, d = self.model, self.data
+        ids = [m.getFrameId(n) for n in links]
+        out = np.empty((len(links), len(U), 4, 4))
+        QP = np.zeros((len(U), m.nq))
+        QP[:, self.idx] = U
+        for k in range(len(U)):
+            pin.forwardKinematics(m, d, QP[k])
+            for i, f in enumerate(ids):
+                out[i, k] = pin.updateFramePlacement(m, d, f).homogeneous
+        out = np.einsum("ij,ltjk->ltik", self.T, out)
+        return {n: out[i][of] for i, n in enumerate(links)}
+
     def gravity(self, q: np.ndarray) -> np.ndarray:
         return pin.computeGeneralizedGravity(self.model, self.data, self.pin_q(q))[self.idx]
 

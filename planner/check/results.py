@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field, fields, is_dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from planner.check.ballroll import ROLL_ROOM_M
-from planner.check.criteria import INTERCEPT_TOL_M, KEY_BED_DEPTH_M
+from planner.check.criteria import BODY_BED_DEPTH_M, INTERCEPT_TOL_M, KEY_BED_DEPTH_M
+from planner.resultform import listing, plain
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,41 @@ class KeyBedHit:
     pitch: int
     name: str
     depth_m: float
+
+
+@dataclass(frozen=True)
+class BodyBedHit:
+    """Rows ``row``.. (from ``time_s`` to ``end_s``) in which a collision body reaches
+    more than 1 mm past the key bed in a key's footprint (spec section 2): the deepest
+    reach (``depth_m`` below the key's top) and its body."""
+
+    time_s: float
+    row: int
+    end_s: float
+    pitch: int
+    name: str
+    link: str
+    body: str
+    depth_m: float
+
+
+@dataclass(frozen=True)
+class BodyResult:
+    """The body rule (spec section 2, ``planner.check.bodykeys``): the keys the hand's
+    collision bodies press. ``keys_pressed`` key-down episodes; ``bed_hits``; with a song
+    the frame scores over the song's frames, the notes hit and the wrong presses, each
+    episode's ``fingers`` the links whose bodies held the key down. ``verdict``: whether
+    it decides the check (``check --bodies``); otherwise reported only."""
+
+    verdict: bool
+    keys_pressed: int
+    bed_hits: tuple[BodyBedHit, ...]
+    f1: float | None = None
+    precision: float | None = None
+    recall: float | None = None
+    notes: int | None = None
+    notes_hit: int | None = None
+    wrong_presses: tuple[KeyEpisode, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -239,6 +274,7 @@ class CheckReport:
     replay: Replay | None = field(default=None, compare=False, repr=False)
     tendons: tuple[TendonLoad, ...] = ()  # the worst tension of every tendon
     song_start_s: float = 0.0  # the song's time 0 in the file's time (format version 2)
+    bodies: BodyResult | None = None  # play: the body rule (spec section 2)
 
     @property
     def ok(self) -> bool:
@@ -246,7 +282,7 @@ class CheckReport:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-serialisable dict (the replay arrays are left out)."""
-        d = _plain(self)
+        d = plain(self)
         d.pop("replay", None)
         d["ok"] = self.ok
         if self.play is not None:
@@ -277,21 +313,23 @@ class CheckReport:
                          f"(precision {p.precision:.4f}, recall {p.recall:.4f}); notes hit "
                          f"{p.notes_hit}/{p.notes}, {len(p.late)} late"
                          + (f"; required F1 >= {self.min_f1:g}" if self.min_f1 is not None else ""))
-            _listing(L, "wrong presses", p.wrong_presses, lambda w: (
+            listing(L, "wrong presses", p.wrong_presses, lambda w: (
                 f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
                 f"{'+'.join(w.fingers) or '?'}"))
-            _listing(L, "missed notes", p.missed, lambda m: (
+            listing(L, "missed notes", p.missed, lambda m: (
                 f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
                 f"down {m.fraction_down:.0%}  {m.reason}"))
-            _listing(L, "late notes", p.late, lambda n: (
+            listing(L, "late notes", p.late, lambda n: (
                 f"{n.onset_s:8.3f} s  {n.name:4s} ({n.pitch})  key down {n.late_s * 1000:.0f} ms "
                 "after the onset"))
-            _listing(L, "claims the replay contradicts", p.claim_mismatches, lambda c: (
+            listing(L, "claims the replay contradicts", p.claim_mismatches, lambda c: (
                 f"{c.onset_s:8.3f} s  {c.name:4s} ({c.pitch})  note {c.note}: the plan says "
                 f"{c.claimed}, the replay finds it {c.found}"))
-            _listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
+            listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
                 f"{h.time_s:8.3f} s  {h.finger:6s} {h.name:4s} ({h.pitch})  "
                 f"{h.depth_m * 1000:.2f} mm below the top (max {KEY_BED_DEPTH_M * 1000:g})"))
+        if self.bodies is not None:
+            _body_lines(L, self.bodies, self.song)
         if self.catch is not None:
             c = self.catch
             err = "n/a" if c.intercept_error_m is None else f"{c.intercept_error_m * 1000:.1f} mm"
@@ -312,7 +350,7 @@ class CheckReport:
                          f"wrist on the palm (room {1000 * ROLL_ROOM_M:g} mm)")
             if c.live:
                 L.append(f"  live plan: {c.live.get('catch')}: {c.live.get('reason')}")
-            _listing(L, "early touches", c.early_touches, lambda e: (
+            listing(L, "early touches", c.early_touches, lambda e: (
                 f"{e.time_s:8.3f} s  {e.finger:6s} {e.distance_m * 1000:.1f} mm from the centre"))
         L.append("limits (count, worst / limit, where):")
         for lc in self.limits:
@@ -326,29 +364,16 @@ class CheckReport:
         return "\n".join(L)
 
 
-def _listing(L: list[str], title: str, items, fmt, first: int = 10) -> None:
-    if not items:
-        return
-    L.append(f"{title} ({len(items)}):")
-    L.extend("  " + fmt(x) for x in items[:first])
-    if len(items) > first:
-        L.append(f"  ... and {len(items) - first} more")
-
-
-def _plain(x: Any) -> Any:
-    if is_dataclass(x) and not isinstance(x, type):
-        return {f.name: _plain(getattr(x, f.name)) for f in fields(x)}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, np.ndarray):
-        return _plain(x.tolist())
-    if isinstance(x, (np.bool_, bool)):
-        return bool(x)
-    if isinstance(x, (np.integer, int)):
-        return int(x)
-    if isinstance(x, (np.floating, float)):
-        v = float(x)
-        return v if math.isfinite(v) else None
-    return x
+def _body_lines(L: list[str], b: BodyResult, song: str | None) -> None:
+    """The body rule's section of the summary."""
+    L.append(f"bodies (spec section 2; {'the verdict' if b.verdict else 'reported, not the verdict: --bodies'}): "
+             f"{b.keys_pressed} key presses, {len(b.bed_hits)} key-bed hits")
+    if b.f1 is not None:
+        L.append(f"  song {song}: body frame F1 {b.f1:.4f} (precision {b.precision:.4f}, "
+                 f"recall {b.recall:.4f}); notes hit {b.notes_hit}/{b.notes}; "
+                 f"{len(b.wrong_presses)} wrong presses by bodies")
+    listing(L, "  wrong presses by bodies", b.wrong_presses, lambda w: (
+        f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  {'+'.join(w.fingers)}"))
+    listing(L, "  body key-bed hits", b.bed_hits, lambda h: (
+        f"{h.time_s:8.3f}-{h.end_s:.3f} s (row {h.row})  {h.name:4s} ({h.pitch})  {h.body} "
+        f"{h.depth_m * 1000:.2f} mm below the top (max {BODY_BED_DEPTH_M * 1000:g})"))

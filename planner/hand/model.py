@@ -17,14 +17,9 @@ import numpy as np
 import pinocchio as pin
 
 from planner.errors import InputError
+from planner.hand.builders import load_hand_spec
 from planner.hand.mk5_tables import MK5_TABLES
-from planner.hand.spec import (
-    PALM_FRAME,
-    HandSpec,
-    LinearCoupling,
-    Mk5Coupling,
-    load_hand_spec,
-)
+from planner.hand.spec import PALM_FRAME, HandSpec, LinearCoupling, Mk5Coupling
 from planner.hand.urdf import urdf_sha256, urdf_text
 
 GRAVITY_WORLD = np.array([0.0, 0.0, -9.81])

@@ -30,6 +30,12 @@ DOWN_DEPTH_M = 0.005  # a key is down when a fingertip is this far below its top
 KEY_BED_DEPTH_M = 0.012  # deeper than this below the top goes through the key bed
 
 _BLACK_IN_OCTAVE = frozenset({1, 3, 6, 8, 10})
+PITCH_CLASS_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
+
+
+def pitch_name(pitch: int) -> str:
+    """Scientific pitch name: 60 -> 'C4', 61 -> 'C#4', 21 -> 'A0'."""
+    return f"{PITCH_CLASS_NAMES[pitch % 12]}{pitch // 12 - 1}"
 
 
 def is_black(pitch: int) -> bool:
@@ -91,6 +97,22 @@ def key(pitch: int) -> Key:
 
 
 ALL_PITCHES = tuple(range(LOWEST_PITCH, HIGHEST_PITCH + 1))
+
+
+@cache
+def footprint(pitch: int) -> tuple[tuple[float, float, float, float], ...]:
+    """A key's footprint (spec section 2) as rectangles (x_min, x_max, y_min, y_max), m: a
+    black key's own; a white key's front (y up to the black keys' front, its full width)
+    and its back (its rectangle less its black neighbours', as far back as they reach)."""
+    k = key(pitch)
+    if k.black:
+        return ((k.x_min_m, k.x_max_m, k.y_min_m, k.y_max_m),)
+    lo, hi = k.x_min_m, k.x_max_m
+    if pitch - 1 >= LOWEST_PITCH and is_black(pitch - 1):
+        lo = max(lo, key(pitch - 1).x_max_m)
+    if pitch + 1 <= HIGHEST_PITCH and is_black(pitch + 1):
+        hi = min(hi, key(pitch + 1).x_min_m)
+    return ((k.x_min_m, k.x_max_m, k.y_min_m, BLACK_Y0_M), (lo, hi, BLACK_Y0_M, k.y_max_m))
 
 
 @lru_cache(maxsize=1)

@@ -65,18 +65,19 @@ from dataclasses import dataclass
 import mido
 
 from planner.errors import InputError
+from planner.music.keyboard import pitch_name
 from planner.music.parts import PartChoice, choose_part
 from planner.music.smf import (
     MAX_DURATION_S,
     MAX_EVENTS,
     MAX_FILE_BYTES,
     MAX_NOTES,
-    _check_high_bit_runs,
-    _limit_text,
-    _one_line,
-    _parse_tracks,
-    _split_chunks,
-    _unwrap_riff,
+    check_high_bit_runs,
+    limit_text,
+    one_line,
+    parse_tracks,
+    split_chunks,
+    unwrap_riff,
 )
 
 __all__ = [
@@ -101,7 +102,6 @@ DRUM_CHANNEL = 9  # "channel 10" in 1-based numbering
 
 
 _DEFAULT_TEMPO_US = 500_000
-_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
 
 
 @dataclass(frozen=True)
@@ -156,11 +156,6 @@ def shift_notes(notes, shift_s: float) -> list[Note]:
             for n in notes]
 
 
-def pitch_name(pitch: int) -> str:
-    """Scientific pitch name, e.g. 60 -> 'C4', 21 -> 'A0'."""
-    return f"{_NAMES[pitch % 12]}{pitch // 12 - 1}"
-
-
 # --------------------------------------------------------------------------
 # Reading
 
@@ -177,7 +172,7 @@ def load_song(
     try:
         size = os.path.getsize(name)
         if size > MAX_FILE_BYTES:
-            raise InputError(f"{name}: file is {size} bytes; the limit is {_limit_text()}")
+            raise InputError(f"{name}: file is {size} bytes; the limit is {limit_text()}")
         with open(name, "rb") as fh:
             data = fh.read(MAX_FILE_BYTES + 1)
     except InputError:
@@ -189,7 +184,7 @@ def load_song(
     except PermissionError:
         raise InputError(f"{name}: permission denied") from None
     except OSError as exc:
-        raise InputError(f"{name}: cannot read file ({_one_line(exc)})") from None
+        raise InputError(f"{name}: cannot read file ({one_line(exc)})") from None
     return parse_song_bytes(
         data, track=track, channel=channel, transpose=transpose, source=name
     )
@@ -208,12 +203,12 @@ def parse_song_bytes(
     if not data:
         raise InputError(f"{source}: empty file")
     if len(data) > MAX_FILE_BYTES:
-        raise InputError(f"{source}: file is {len(data)} bytes; the limit is {_limit_text()}")
-    data = _unwrap_riff(data, source)
-    _fmt, ntracks, tpb, chunks = _split_chunks(data, source)
+        raise InputError(f"{source}: file is {len(data)} bytes; the limit is {limit_text()}")
+    data = unwrap_riff(data, source)
+    _fmt, ntracks, tpb, chunks = split_chunks(data, source)
     _check_selection(track, channel, ntracks, source)
-    _check_high_bit_runs(data, source)
-    tracks = _parse_tracks(chunks, tpb, source)
+    check_high_bit_runs(data, source)
+    tracks = parse_tracks(chunks, tpb, source)
     tempo_map = _TempoMap(tracks, tpb, source)
 
     end_tick = max((sum(m.time for m in t) for t in tracks), default=0)
@@ -225,7 +220,7 @@ def parse_song_bytes(
     raw, sustain, found = _collect(tracks, end_tick, track, channel)
     if not raw:
         raise InputError(f"{source}: {_no_notes_text(track, channel, found)}")
-    part = choose_part(raw, pitch_name) if track is None and channel is None else None
+    part = choose_part(raw) if track is None and channel is None else None
     if part is not None:  # several parts, or two hands in one: the upper one
         if part.track is not None:
             raw, sustain, _ = _collect(tracks, end_tick, part.track, part.channel)

@@ -27,10 +27,11 @@ notes.
 from __future__ import annotations
 
 from bisect import bisect_left
-from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import accumulate
 from statistics import median
+
+from planner.music.keyboard import pitch_name
 
 SPLIT_MIN_SEMITONES = 12  # two clusters' medians at least an octave apart
 SPLIT_MIN_TOGETHER = 0.5  # and half of the lower notes sounding with an upper one
@@ -87,10 +88,9 @@ class PartChoice:
                 "reason": self.reason, "parts": [p.to_dict() for p in self.parts]}
 
 
-def choose_part(raw, name: Callable[[int], str] = str) -> PartChoice | None:
+def choose_part(raw) -> PartChoice | None:
     """The upper part of ``raw`` notes, tuples ``(pitch, on_tick, off_tick, velocity,
-    channel, track)`` (drums already out); None when the whole is one hand's part.
-    ``name(pitch)`` names a pitch in the reason (``planner.music.midi.pitch_name``)."""
+    channel, track)`` (drums already out); None when the whole is one hand's part."""
     groups: dict[tuple[int, int], list] = {}
     for note in raw:
         groups.setdefault((note[5], note[4]), []).append(note)
@@ -113,7 +113,7 @@ def choose_part(raw, name: Callable[[int], str] = str) -> PartChoice | None:
         upper = sum(1 for n in notes if n[0] >= split)
         reasons.append(
             f"{'it' if reasons else _listed(kept)} holds two hands' notes (two pitch groups "
-            f"sounding together): the {upper} notes from {name(split)} (MIDI {split}) up "
+            f"sounding together): the {upper} notes from {pitch_name(split)} (MIDI {split}) up "
             f"are played, the {len(notes) - upper} below left out")
     reason = "; ".join(reasons) + "; --track/--channel choose another part"
     return PartChoice(tuple((p.track, p.channel) for p in kept), split, reason, parts)

@@ -1,6 +1,9 @@
 """Reading a Standard MIDI File's bytes without trusting them: the RIFF wrapper, the
 chunks, the size and event budgets, runs of bytes no MIDI event holds, each track parsed
-by mido within the budget (``planner.music.midi`` turns the events into notes)."""
+by mido within the budget (``planner.music.midi`` turns the events into notes). Its
+steps, in the order the reader takes them: ``unwrap_riff``, ``split_chunks``,
+``check_high_bit_runs``, ``parse_tracks``; ``limit_text`` and ``one_line`` word the
+errors."""
 
 from __future__ import annotations
 
@@ -20,18 +23,20 @@ MAX_DURATION_S = 24 * 3600
 _MAX_HIGH_BIT_RUN = 16_384
 
 
-def _limit_text() -> str:
+def limit_text() -> str:
+    """The file size limit, as a message says it."""
     return f"{MAX_FILE_BYTES // (1024 * 1024)} MiB"
 
 
-def _one_line(exc: BaseException) -> str:
+def one_line(exc: BaseException) -> str:
+    """An exception's text on one line of at most 200 characters (its type without text)."""
     text = " ".join(str(exc).split())
     if not text:
         text = type(exc).__name__
     return text[:200]
 
 
-def _unwrap_riff(data: bytes, source: str) -> bytes:
+def unwrap_riff(data: bytes, source: str) -> bytes:
     """RIFF-wrapped MIDI (.rmi): return the SMF inside the 'data' chunk."""
     if data[:4] != b"RIFF":
         return data
@@ -47,7 +52,7 @@ def _unwrap_riff(data: bytes, source: str) -> bytes:
     raise InputError(f"{source}: RIFF MIDI file without a 'data' chunk")
 
 
-def _split_chunks(data: bytes, source: str) -> tuple[int, int, int, list[bytes]]:
+def split_chunks(data: bytes, source: str) -> tuple[int, int, int, list[bytes]]:
     """Check the header and cut the MTrk chunks out of ``data``."""
     if data[:4] != b"MThd":
         raise InputError(f"{source}: not a MIDI file (no 'MThd' header)")
@@ -96,7 +101,7 @@ def _split_chunks(data: bytes, source: str) -> tuple[int, int, int, list[bytes]]
     return fmt, ntracks, division, chunks
 
 
-def _check_high_bit_runs(data: bytes, source: str) -> None:
+def check_high_bit_runs(data: bytes, source: str) -> None:
     if len(data) <= _MAX_HIGH_BIT_RUN:
         return
     run = max(map(len, data.translate(_HIGH_BIT_TABLE).split(b"\x00")))
@@ -133,7 +138,7 @@ class _BudgetReader(io.BytesIO):
         return super().tell()
 
 
-def _parse_tracks(chunks: list[bytes], tpb: int, source: str) -> list[list]:
+def parse_tracks(chunks: list[bytes], tpb: int, source: str) -> list[list]:
     """Tokenise each MTrk chunk with mido; return lists of messages (delta ticks)."""
     tracks: list[list] = []
     events = 0
@@ -153,7 +158,7 @@ def _parse_tracks(chunks: list[bytes], tpb: int, source: str) -> list[list]:
             ) from None
         except Exception as exc:  # noqa: BLE001 -- mido raises many types on garbage
             raise InputError(
-                f"{source}: corrupt MIDI data in track {i} ({_one_line(exc)})"
+                f"{source}: corrupt MIDI data in track {i} ({one_line(exc)})"
             ) from None
         msgs = list(mf.tracks[0]) if mf.tracks else []
         events += len(msgs)

@@ -22,10 +22,9 @@ _API = {
     "PlayPlan": "planner.play.stream",
     "plan_song": "planner.play.stream",
     "format_summary": "planner.play.summary",
-    "play_cli": "planner.play.summary",
 }
 
-__all__ = ["Planner", "PlayPlan", "format_summary", "plan_song", "play_cli"]
+__all__ = ["Planner", "PlayPlan", "format_summary", "plan_song"]
 
 
 __getattr__ = lazy_names(__name__, _API)

@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass
 
 from planner.music import keyboard as kb
-from planner.music.midi import pitch_name
+from planner.music.keyboard import pitch_name
 from planner.play.atlas import Atlas
 from planner.play.force import press_force_n
 from planner.play.moves import Moves

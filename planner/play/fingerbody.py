@@ -1,16 +1,18 @@
-"""A finger's body against the keys: its segments and pad as the physics replay's shapes.
+"""A finger's body against the keys: its segments and pad, the hand's collision bodies.
 
-The spec's key-down rule (and so ``check``) and the atlas's tip clearance are about a
-fingertip point; the physics replay's fingers are bodies (``planner.simulate.hand_mjcf``:
-each finger segment a capsule of its URDF box's thickness, the distal one ending in the
-pad sphere whose bottom, in its link's frame, is the pad point). A 1.5x hand's finger
-end (17.1 mm thick on the default hand) does not fit between two black keys (13.5 mm of
-white key there), and a curled distal segment's sphere reaches below its pad point. The
-atlas keeps an entry only when its finger's body, at each pose and along its moves,
-stays out of every key but its own (``body_clear``), as the replay's physical keys are
-(``planner.simulate.keyboard``: a white key's front and back boxes, a black key's box,
-each standing on the key frame). The shapes are read from the same URDF by the same rule
-(``hand_mjcf.segment_capsule``): one definition of the finger's body.
+The spec's point rule and the atlas's tip clearance are about a fingertip point; a
+finger is a body (``planner.hand.bodies``, the one definition the URDF, the physics
+replay and ``check``'s body rule read: each segment a slab of two capsules as wide as
+the seed's finger, the distal one ending in the pad sphere whose bottom is the pad
+point). A 1.5x hand's finger end (21.4 mm wide, 17.1 mm thick on the default hand) does
+not fit between two black keys (13.5 mm of white key there), and a curled distal
+segment's sphere reaches below its pad point. ``FingerBodies`` places a finger's
+capsules and pad as sampled sphere-swept points and measures how deep they enter the
+replay's physical keys (``planner.simulate.keyboard``: a white key's front and back
+boxes, a black key's box; ``planner.music.keybodies.box_penetration``): the planner's
+clearance (``clear``), the plan's bodies in ``planner.simulate.planbody``, and the
+catch's bodies against the ball. ``check``'s body rule (``planner.check.bodykeys``)
+judges the same shapes against the keys' footprints, exactly.
 
 Tolerances (each a physical value with its source):
 
@@ -21,8 +23,8 @@ Tolerances (each a physical value with its source):
   spec allows a tip 12 mm below the key's top (``KEY_BED_DEPTH_M``): a body reaching
   more than 2 mm past the bed would be held up by it before its pad point is down.
 
-The knuckles' small boxes and the palm are not tested (the physics replay's palm is far
-above the keys in every play pose; the knuckles are inside the segments' capsules).
+The knuckles' small boxes and the palm are not tested here (they are far above the keys
+in every play pose); ``check``'s body rule judges them.
 """
 
 from __future__ import annotations
@@ -31,10 +33,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.hand.bodies import BOX, SPHERE, collision_bodies
 from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
-from planner.simulate.hand_mjcf import parse_urdf, segment_capsule
+from planner.music.keybodies import box_penetration
 from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
@@ -44,7 +47,8 @@ AXIS_SAMPLES = 9  # a capsule's axis is tested at this many points (its ends inc
 
 @dataclass(frozen=True)
 class FingerShapes:
-    """One finger's capsules (a sphere: both ends equal), each in its link's frame."""
+    """One finger's pad sphere and capsules (a sphere: both ends equal), pad first, each
+    in its link's frame."""
 
     frames: tuple[int, ...]  # Pinocchio frame ids
     p0: np.ndarray  # (k, 3) link frame, m
@@ -58,29 +62,15 @@ class FingerBodies:
 
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand
-        links, joints = parse_urdf(hand.urdf)
-        parent_of = {j.child: j for j in joints}
-        tip_link = {f: hand.tip_frames[i] for i, f in enumerate(hand.fingers)}
         self.shapes: dict[str, FingerShapes] = {}
+        shapes = [b for b in collision_bodies(hand.spec) if b.kind != BOX and b.finger]
         for f in hand.fingers:
-            tj = parent_of[tip_link[f]]  # the tip's fixed joint: the pad point in the distal link
-            r_pad = abs(tj.xyz_m[2])
-            centre = (tj.xyz_m[0], tj.xyz_m[1], tj.xyz_m[2] + r_pad)
-            frames = [hand.pin_model.getFrameId(tj.parent)]
-            p0, p1, rad = [centre], [centre], [r_pad]
-            name = tj.parent
-            while name in parent_of and name not in ("palm", "palm_center"):
-                link = links[name]
-                cap = segment_capsule(link, centre if name == tj.parent else None)
-                if cap is not None:
-                    frames.append(hand.pin_model.getFrameId(name))
-                    p0.append(cap[0])
-                    p1.append(cap[1])
-                    rad.append(cap[2])
-                name = parent_of[name].parent
-            n = tuple(1 if np.allclose(a, b) else AXIS_SAMPLES for a, b in zip(p0, p1))
-            self.shapes[f] = FingerShapes(tuple(frames), np.array(p0), np.array(p1),
-                                          np.array(rad), n)
+            mine = sorted((b for b in shapes if b.finger == f), key=lambda b: b.kind != SPHERE)
+            self.shapes[f] = FingerShapes(
+                tuple(hand.pin_model.getFrameId(b.link) for b in mine),
+                np.array([b.p0_m for b in mine]), np.array([b.p1_m for b in mine]),
+                np.array([b.radius_m for b in mine]),
+                tuple(1 if b.p0_m == b.p1_m else AXIS_SAMPLES for b in mine))
         boxes = [(k.pitch, b) for k in key_bodies() for b in k.boxes]
         self.box_pitch = np.array([p for p, _ in boxes])
         c = np.array([b.center_m for _, b in boxes])
@@ -135,9 +125,7 @@ class FingerBodies:
             lo, hi = lo.copy(), hi.copy()
             lo[own, 2] -= kb.KEY_DIP_M
             hi[own, 2] -= kb.KEY_DIP_M
-        d = np.maximum(np.maximum(lo[None] - p[:, None], p[:, None] - hi[None]), 0.0)
-        dist = np.sqrt((d * d).sum(axis=2))  # (points, boxes); 0 inside
-        return (r[:, None] - dist).max(axis=0)
+        return box_penetration(p, r, lo, hi)
 
     def clear(self, q: np.ndarray, finger: str, own_pitch: int | None) -> bool:
         """True when the finger's body at ``q`` reaches no key but ``own_pitch`` by more

@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from planner.music.midi import pitch_name
+from planner.music.keyboard import pitch_name
 from planner.play.atlas import Atlas
 from planner.play.costs import ONSET_TOL_S, RAIL_STEP_M, Skip, SkipReason, State
 from planner.play.layers import Layers

@@ -34,13 +34,19 @@ from planner.hand.tendon import actuator_capacity
 from planner.ik import surfaces_under
 from planner.music import keyboard as kb
 from planner.play.atlas import (
-    CLEARANCE_M,
     PATH_SAMPLES,
     TIP_RADIUS_M,
     Atlas,
     AtlasEntry,
 )
-from planner.play.movetable import ENDS, MoveTable, table_path
+from planner.play.movetable import (
+    ACROSS_SAMPLES,
+    ENDS,
+    HIGH_SAFE_Z_M,
+    HOLD_MARGIN_M,
+    MoveTable,
+    table_path,
+)
 from planner.play.profile import (
     LIMIT_FRACTION,
     Move,
@@ -51,11 +57,6 @@ from planner.play.profile import (
 )
 
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
-HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
-ACROSS_SAMPLES = (0.25, 0.5, 0.75)  # a move across at crossing height is checked here: both
-# ends are at HIGH_Z_M, 4.5 mm above HIGH_SAFE_Z_M, and the tip's height along a straight
-# joint-space move is smooth, lowest near its middle (the rows' replay checks every row)
-HOLD_MARGIN_M = 0.001  # a key held while the rail moves stays this far inside its down range
 
 
 @dataclass(frozen=True)

@@ -27,9 +27,22 @@ import numpy as np
 from planner.hand.chain import FrameChain
 from planner.ik import surfaces_under
 from planner.music import keyboard as kb
-from planner.play.atlas import PATH_SAMPLES, STEP_M, TABLE_DIR, TIP_RADIUS_M, AtlasEntry
+from planner.play.atlas import (
+    CLEARANCE_M,
+    PATH_SAMPLES,
+    STEP_M,
+    TABLE_DIR,
+    TIP_RADIUS_M,
+    AtlasEntry,
+)
 
 ENDS = ("high", "hover", "rise")  # the poses a descent starts from and a lift ends at
+# the move tests' parameters (``Moves`` and its table test the same):
+HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high clears every key
+ACROSS_SAMPLES = (0.25, 0.5, 0.75)  # a move across at crossing height is checked here: both
+# ends are at HIGH_Z_M, 4.5 mm above HIGH_SAFE_Z_M, and the tip's height along a straight
+# joint-space move is smooth, lowest near its middle (the rows' replay checks every row)
+HOLD_MARGIN_M = 0.001  # a key held while the rail moves stays this far inside its down range
 _BATCH = 60000  # configurations evaluated at once while the table is made
 
 
@@ -176,8 +189,6 @@ def _pair_tips(moves, finger: str, cols: np.ndarray, A: np.ndarray, S: np.ndarra
 def _across_matrix(moves, finger: str, E: list[AtlasEntry]) -> np.ndarray:
     """``Moves.across``' test for every pair (i, j) of ``E``: the tip at least
     ``HIGH_SAFE_Z_M`` high at each of ``ACROSS_SAMPLES`` along high_i -> high_j."""
-    from planner.play.moves import ACROSS_SAMPLES, HIGH_SAFE_Z_M
-
     S = np.array(ACROSS_SAMPLES)
     z = _pair_tips(moves, finger, moves.js[finger], np.array([e.high for e in E]), S)[:, 2]
     n = len(E)
@@ -189,8 +200,6 @@ def _follow_matrix(moves, finger: str, pc: int, E: list[AtlasEntry]) -> np.ndarr
     tip inside the key's footprint with the key down (within ``HOLD_MARGIN_M``) at each
     of ``PATH_SAMPLES`` along the joint rail + finger move, off the black keys beside a
     white one."""
-    from planner.play.moves import HOLD_MARGIN_M
-
     k = kb.key(60 + pc)
     cols = np.r_[moves.atlas.rail, moves.js[finger]]
     A = np.array([np.r_[k.center_x_m - e.dx_m, e.press] for e in E])  # rail, finger joints

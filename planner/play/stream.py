@@ -17,7 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InputError, PlannerError
-from planner.guard import guard_rows
 from planner.hand.model import HandModel
 from planner.music.midi import SHIFT_DIGITS, Song, shift_notes
 from planner.music.parts import PartChoice
@@ -80,7 +79,7 @@ def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -
 
 
 class Planner:
-    """The per-hand part of the second planner (atlas, timed moves), built once."""
+    """The per-hand part of the play planner (atlas, timed moves), built once."""
 
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand
@@ -103,9 +102,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
     t_start = time.perf_counter()
     notes = list(song.notes)
     selfcheck = SelfCheck(hand, rate_hz)
-    writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name),
-                              hand.joint_names, hand.motor_names, on_rows=selfcheck.add_rows,
-                              defer_header=True)
+    writer = TrajectoryWriter(out_path, play_metadata(song, hand, rate_hz, song_name), hand,
+                              on_rows=selfcheck.add_rows, defer_header=True)
     try:
         with _cyclic_gc_paused():
             motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
@@ -224,7 +222,6 @@ class _Rows:
         self.way = way
         self.out: Legs | None = None  # the way back to rest
         self.next_row = 0
-        self.last: np.ndarray | None = None
         self.first_row_s = math.nan
 
     @property
@@ -270,9 +267,7 @@ class _Rows:
             end = min(n, self.next_row + ROW_BLOCK)
             t = np.arange(self.next_row, end) * self.dt
             q = self._sample(t)
-            guard_rows(self.hand, q, self.last, self.dt)
-            self.writer.write_rows(t, q, self.hand.motor_angles(q))
+            self.writer.write_rows(t, q, self.hand.motor_angles(q))  # (guarded by the writer)
             if math.isnan(self.first_row_s):
                 self.first_row_s = time.perf_counter()
-            self.last = q[-1].copy()
             self.next_row = end

@@ -1,4 +1,5 @@
-"""``cli.py play`` on the second planner: the summary a user reads, and the exit status.
+"""A played song's plan as the summary a user reads (``format_summary``) and as one
+JSON object (``plan_dict``, ``play --json``).
 
 The summary is the plan's own replay (``PlayPlan.verdict``: the check's rules): every
 note it calls played the check finds hit, every other note is named with its reason.
@@ -6,17 +7,10 @@ note it calls played the check finds hit, every other note is named with its rea
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import sys
-import time
 
-from planner.errors import InputError
-from planner.hand.model import load_hand
-from planner.music.midi import load_song, pitch_name
-from planner.play.stream import Planner, PlayPlan, plan_song
-from planner.progress import progress_bar
+from planner.music.keyboard import pitch_name
+from planner.play.stream import PlayPlan
 
 
 def _timing(notes, plan: PlayPlan) -> tuple[float, float | None, int]:
@@ -76,45 +70,3 @@ def plan_dict(song_name: str, notes, plan: PlayPlan, out: str, setup_s: float) -
         "realtime_factor": rtf, "hand_positions": rails,
         "part": None if plan.part is None else plan.part.to_dict(),
     }
-
-
-def play_cli(a) -> int:
-    """Plan, write, summarise; 0, or 1 under ``--strict`` when a note is not played, late
-    or a key is pressed wrongly."""
-    if (a.report or a.html) and a.output == "-":
-        raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
-    song = load_song(a.song, track=a.track, channel=a.channel, transpose=a.transpose)
-    hand = load_hand(a.hand)
-    name = os.path.basename(a.song)
-    # (by default into the current directory, never beside the song: it may be read-only)
-    out = a.output if a.output is not None else os.path.splitext(name)[0] + ".csv"
-    as_json = getattr(a, "json", False)
-    t0 = time.perf_counter()  # (the hand's set-up, once per hand: timed apart from the song)
-    planner = Planner(hand)
-    setup_s = time.perf_counter() - t0
-    with progress_bar("note", enabled=not as_json) as bar:
-        plan = plan_song(song, hand, out, a.rate, song_name=name, planner=planner,
-                         on_progress=bar.update)
-    if as_json:
-        sys.stdout.write(json.dumps(plan_dict(name, song.notes, plan, out, setup_s)) + "\n")
-    else:
-        sys.stderr.write(format_summary(name, song.notes, plan, out, setup_s) + "\n")
-    if a.report or a.html:
-        write_reports(out, a.song, a.report, a.html, enabled=not as_json)
-        if not as_json:
-            sys.stderr.write("".join(f"{what} -> {path}\n" for what, path in
-                                     (("report", a.report), ("html", a.html)) if path))
-    score = plan.verdict.score
-    if a.strict and (plan.verdict.skipped or score.late or score.wrong_presses):
-        return 1
-    return 0
-
-
-def write_reports(traj_path: str, song_path: str, report_dir: str | None,
-                  html_path: str | None, enabled: bool = True) -> None:
-    """``--report DIR`` and ``--html FILE`` of a written plan: the independent check's
-    replay of it, plotted and animated (with a progress bar on a terminal)."""
-    from planner.check import check_trajectory
-    from planner.report import draw_reports
-
-    draw_reports(check_trajectory(traj_path, song_path), report_dir, html_path, enabled)

@@ -32,7 +32,9 @@ CATCH_CAMERA_OFFSET_M = (-0.15, -0.80, 0.20)  # side view of the flight plane (x
 
 
 @dataclass(frozen=True)
-class _Context:
+class PictureContext:
+    """What the pictures of one checked trajectory share (``picture_context``)."""
+
     hand: HandModel
     meta: dict[str, Any]
     T_world_root: np.ndarray
@@ -50,7 +52,9 @@ def _read_metadata(path: str) -> dict[str, Any]:
     return meta if isinstance(meta, dict) else {}
 
 
-def _context(report: CheckReport) -> _Context:
+def picture_context(report: CheckReport) -> PictureContext:
+    """The hand rebuilt from the file (or the report's), its metadata, the motor angles
+    of every row and the ball (a catch)."""
     if report.replay is None:
         raise ValueError("the report has no replay arrays (check_trajectory fills them)")
     meta = _read_metadata(report.trajectory)
@@ -79,10 +83,10 @@ def _context(report: CheckReport) -> _Context:
                     "drag": float(b.get("drag", 0.0)), "radius": report.catch.radius_m}
         except (KeyError, TypeError, ValueError):
             ball = None
-    return _Context(hand, meta, T, hand.motor_angles(rp.q), ball)
+    return PictureContext(hand, meta, T, hand.motor_angles(rp.q), ball)
 
 
-def _ball_centres(report: CheckReport, ctx: _Context) -> np.ndarray | None:
+def ball_centres(report: CheckReport, ctx: PictureContext) -> np.ndarray | None:
     """The ball's centre in every row as the check sees it: in flight before
     ``intercept_t``, on the palm (palm_center + radius * normal) from it on."""
     if ctx.ball is None:

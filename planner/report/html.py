@@ -32,8 +32,8 @@ from planner.report.context import (
     KEY_BODY_M,
     PLAY_CAMERA_OFFSET_M,
     TIP_SPHERE_M,
-    _ball_centres,
-    _context,
+    ball_centres,
+    picture_context,
 )
 
 # ====================================================================== HTML animation
@@ -117,7 +117,7 @@ def write_html(report: CheckReport, out_file: str) -> str:
     import meshcat.geometry as g
     from meshcat.animation import Animation
 
-    ctx = _context(report)
+    ctx = picture_context(report)
     rp = report.replay
     hand = ctx.hand.mounted(ctx.T_world_root)  # own Pinocchio data, the file's root pose
     rec = _SceneRecorder()
@@ -165,7 +165,7 @@ def write_html(report: CheckReport, out_file: str) -> str:
         vis["/Grid"].set_property("visible", False)
         vis["/Axes"].set_property("visible", False)
     else:
-        centres = _ball_centres(report, ctx)
+        centres = ball_centres(report, ctx)
         if centres is not None:
             _ball(vis, anim, report, ctx, centres, rows)
         i_row = int(np.argmin(np.abs(rp.t_s - report.catch.intercept_t)))

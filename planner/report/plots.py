@@ -38,9 +38,9 @@ from planner.report.context import (
     DPI,
     ERROR_COLOR,
     FINGER_COLORS,
-    _ball_centres,
-    _Context,
-    _context,
+    PictureContext,
+    ball_centres,
+    picture_context,
 )
 
 # ====================================================================== PNG plots
@@ -55,7 +55,7 @@ def write_check_report(report: CheckReport, out_dir: str,
     positions, joint speeds, motor angles, motor speeds. ``on_progress(done, total)``
     is called after each plot.
     """
-    ctx = _context(report)
+    ctx = picture_context(report)
     os.makedirs(out_dir, exist_ok=True)
     figs: list[tuple[str, Callable[[], Figure]]] = []
     if report.play is not None:
@@ -280,7 +280,7 @@ def _fig_tip_heights(report: CheckReport) -> Figure:
 # ---------------------------------------------------------------- catch
 
 
-def _fig_catch_paths(report: CheckReport, ctx: _Context) -> Figure:
+def _fig_catch_paths(report: CheckReport, ctx: PictureContext) -> Figure:
     rp, c = report.replay, report.catch
     t = rp.t_s
     palm = rp.palm[:, :3, 3]
@@ -290,7 +290,7 @@ def _fig_catch_paths(report: CheckReport, ctx: _Context) -> Figure:
     if ctx.ball is not None:
         tf = np.linspace(0.0, c.intercept_t, 300)
         flight = ball_positions(ctx.ball["p0"], ctx.ball["v0"], ctx.ball["drag"], tf)
-    held = _ball_centres(report, ctx)
+    held = ball_centres(report, ctx)
     after = t >= c.intercept_t
     b_i = np.array(c.ball_at_intercept)
     target = np.array(c.palm_target)
@@ -342,12 +342,12 @@ def _fig_catch_paths(report: CheckReport, ctx: _Context) -> Figure:
     return fig
 
 
-def _fig_catch_closing(report: CheckReport, ctx: _Context) -> Figure:
+def _fig_catch_closing(report: CheckReport, ctx: PictureContext) -> Figure:
     rp, c = report.replay, report.catch
     t = rp.t_s
     fig = Figure(figsize=(12.0, 6.0), layout="constrained")
     ax = fig.add_subplot()
-    centres = _ball_centres(report, ctx)
+    centres = ball_centres(report, ctx)
     t0 = max(float(t[0]), c.intercept_t - 0.3)
     r_mm = c.radius_m * 1000
     ymax = r_mm + 150.0
@@ -446,7 +446,7 @@ def _is_prismatic(hand: HandModel, name: str) -> bool:
         return False
 
 
-def _fig_joint_positions(report: CheckReport, ctx: _Context) -> Figure:
+def _fig_joint_positions(report: CheckReport, ctx: PictureContext) -> Figure:
     hand, rp = ctx.hand, report.replay
     pris = [_is_prismatic(hand, n) for n in hand.joint_names]
     scale = np.array([1.0 if p else 180.0 / math.pi for p in pris])
@@ -467,7 +467,7 @@ def _speeds(t: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return t[1:], np.diff(X, axis=0) / np.diff(t)[:, None]
 
 
-def _fig_joint_speeds(report: CheckReport, ctx: _Context) -> Figure:
+def _fig_joint_speeds(report: CheckReport, ctx: PictureContext) -> Figure:
     hand, rp = ctx.hand, report.replay
     ts, V = _speeds(rp.t_s, rp.q)
     pris = [_is_prismatic(hand, n) for n in hand.joint_names]
@@ -479,7 +479,7 @@ def _fig_joint_speeds(report: CheckReport, ctx: _Context) -> Figure:
         _xlim(rp.t_s), band=True)
 
 
-def _fig_motor_angles(report: CheckReport, ctx: _Context) -> Figure:
+def _fig_motor_angles(report: CheckReport, ctx: PictureContext) -> Figure:
     hand, rp = ctx.hand, report.replay
     names = [f"motor.{m}" for m in hand.motor_names]
     return _small_multiples(
@@ -489,7 +489,7 @@ def _fig_motor_angles(report: CheckReport, ctx: _Context) -> Figure:
         ["rad"] * len(names), _xlim(rp.t_s))
 
 
-def _fig_motor_speeds(report: CheckReport, ctx: _Context) -> Figure:
+def _fig_motor_speeds(report: CheckReport, ctx: PictureContext) -> Figure:
     hand, rp = ctx.hand, report.replay
     ts, V = _speeds(rp.t_s, ctx.q_motor)
     frac = V / hand.motor_speed

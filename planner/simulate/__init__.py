@@ -19,14 +19,11 @@ also on any missed or late note. MuJoCo is an optional dependency
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from typing import Any
 
-from planner.errors import InputError
-
-__all__ = ["Replay", "run_replay", "simulate_cli", "simulate_trajectory"]
+__all__ = ["Replay", "run_replay", "simulate_trajectory"]
 
 
 def _problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
@@ -91,26 +88,20 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
                song_options: dict[str, Any] | None = None, hand_override=None) -> Replay:
     """``simulate_trajectory`` keeping the record (for pictures and comparisons)."""
     from planner.check import check_trajectory
+    from planner.planfile import read_plan
     from planner.simulate.replay import simulate
     from planner.simulate.report import SimulateReport
-    from planner.simulate.scene import Ball, _mujoco, build_scene
+    from planner.simulate.scene import Ball, build_scene, require_mujoco
     from planner.simulate.scores import motor_efforts, score_catch, score_play, tracking
-    from planner.trajfile import Trajectory, read_trajectory
 
-    _mujoco()  # the clear message before any work
-    if isinstance(traj_path, Trajectory):
-        tr, name = traj_path, "<memory>"
-    else:
-        tr, name = read_trajectory(traj_path, allow_incomplete=allow_incomplete), traj_path
+    require_mujoco()  # the clear message before any work
+    plan = read_plan(traj_path, allow_incomplete=allow_incomplete, hand_override=hand_override)
+    tr, name, hand, T = plan.trajectory, plan.path, plan.hand, plan.T_world_root
     # the kinematic check validates the file (hand, hash, columns, pose, song) and gives
     # the F1 to compare with
     kin = check_trajectory(tr, song_path, allow_incomplete=allow_incomplete,
                            song_options=song_options, hand_override=hand_override)
-    from planner.check import _load_hand, _song_notes, _T_world_root
-
     meta = tr.metadata
-    hand = _load_hand(meta, name, hand_override)
-    T = _T_world_root(meta, hand, name)
     task = meta["task"]
     ball = None
     if task == "catch":
@@ -123,15 +114,13 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         hand = hand.mounted(T)
     scene = build_scene(hand, T, keyboard=task == "play", ball=ball, contact=contact)
     rec = simulate(scene, hand, tr.t_s, tr.q, ball=ball)
-    notes = None if song_path is None else _song_notes(song_path, meta, name, song_options or {})
+    notes = None if song_path is None else plan.song_notes(song_path, song_options)
     play = catch = None
     claims: list = []
     if task == "play":
         play = score_play(rec, notes, float(meta["rate_hz"]))
         if notes is not None:
-            from planner.check import _left_out
-
-            left = _left_out(tr.end, len(notes), name) or set()
+            left = plan.left_out(len(notes)) or set()
             claims = [m for m in play.missed if m.note not in left]
     else:
         catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)
@@ -148,29 +137,3 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         play=play, catch=catch, motors=motors, tracking=tracking(rec, hand),
         kinematic_f1=None if kin.play is None else kin.play.f1, problems=tuple(problems))
     return Replay(report, rec, hand, tr, None if notes is None else tuple(notes), scene)
-
-
-def simulate_cli(args) -> int:
-    """``cli.py simulate``: the summary (or one JSON object with --json), the pictures
-    (--video, --html); 0 when the physics passes the plan, 1 otherwise."""
-    from planner.simulate.pictures import prepare, write_pictures
-
-    if getattr(args, "min_f1", None) is not None and not 0.0 <= args.min_f1 <= 1.0:
-        raise InputError(f"--min-f1 must be within 0..1, got {args.min_f1}")
-    video, html = getattr(args, "video", None), getattr(args, "html", None)
-    prepare(video, html)
-    options = {"track": getattr(args, "track", None), "channel": getattr(args, "channel", None),
-               "transpose": True if getattr(args, "transpose", False) else None}
-    replay = run_replay(args.trajectory, args.song, contact=args.contact,
-                        min_f1=args.min_f1, strict=bool(args.strict),
-                        allow_incomplete=bool(args.allow_incomplete), song_options=options,
-                        hand_override=args.hand)
-    write_pictures(replay, video, html, progress=not args.json)
-    report = replay.report
-    if args.json:
-        d = report.to_dict()
-        d["video"], d["html"] = video, html
-        print(json.dumps(d))
-    else:
-        print(report.summary())
-    return 0 if report.ok else 1

@@ -68,7 +68,7 @@ class NoteDifference:
     key_width_mm: float = float("nan")  # the key's footprint width at that y
     touched: tuple[str, ...] = ()  # other keys the planned finger touches in physics then
     plan_finger: str = ""  # the finger the plan presses the note with
-    finger_width_mm: float = 0.0  # that finger's end in the scene (its pad sphere's diameter)
+    finger_width_mm: float = 0.0  # that finger's end in the scene (its width across)
     plan_frames: int = 0  # of its frames, those where the plan's own finger bodies reach
     # the key (``planner.simulate.planbody``; full contact only): a wrong key the plan puts
     # a finger's body on, before any dynamics
@@ -215,7 +215,17 @@ def _plan_presses(notes, frames: np.ndarray, kc, planned: np.ndarray) -> dict:
 
 
 def _finger_widths_mm(scene, fingers: tuple[str, ...]) -> list[float]:
-    """Each finger's end in the scene: its pad sphere's diameter (mm; 2 with pads only)."""
+    """Each finger's end in the scene: the width across it (its link's x) of the colliding
+    geoms of its pad's link, the pad sphere and the distal segment's capsules (mm; 2 with
+    pads only, the pad point's sphere)."""
     if scene is None:
         return [0.0] * len(fingers)
-    return [2000.0 * float(scene.model.geom(f"{f}_pad").size[0]) for f in fingers]
+    m = scene.model
+    out = []
+    for f in fingers:
+        body = m.geom_bodyid[m.geom(f"{f}_pad").id]
+        gs = [g for g in range(m.ngeom) if m.geom_bodyid[g] == body and m.geom_contype[g]]
+        lo = min(m.geom_pos[g][0] - m.geom_size[g][0] for g in gs)
+        hi = max(m.geom_pos[g][0] + m.geom_size[g][0] for g in gs)
+        out.append(1000.0 * float(hi - lo))
+    return out

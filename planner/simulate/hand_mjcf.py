@@ -2,13 +2,12 @@
 MJCF body tree: links -> bodies, revolute/prismatic joints -> hinge/slide joints with
 the URDF's limits, inertials as they are, ``<mimic>`` -> joint equality constraints.
 
-Collision geometry (the URDF has visual boxes only, as the kinematic check uses only
-the fingertip pad points): a finger segment (a link whose subtree holds some of the
-fingertips but not all, its box longest along its link's y) is a capsule of the box's thickness along it; the distal segment's capsule ends in the
-fingertip pad, a sphere whose bottom is the pad point (the tip link's origin, a pad
-radius below the segment's axis: ``planner.hand.spec``'s pad); the palm, wrist and
-forearm are their boxes. The hand's own parts do not collide with each other (the
-kinematic check does not test that either); they collide with the keys and the ball.
+Collision geometry: the hand's collision bodies (``planner.hand.bodies``, the shapes the
+URDF's ``<collision>`` elements and ``check``'s body rule are made of), a capsule as a
+MuJoCo capsule: each finger segment a slab of two capsules, the fingertip pad a sphere
+whose bottom is the pad point, the palm, knuckles, wrist and forearm their boxes. The
+hand's own parts do not collide with each other (the kinematic check does not test that
+either); they collide with the keys and the ball.
 """
 
 from __future__ import annotations
@@ -20,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InputError
+from planner.hand.bodies import CAPSULE, SPHERE, Body
 
 HAND_CONTYPE, HAND_CONAFFINITY = 1, 2  # hand geoms touch the world's (keys, ball), not their own
 PAD_FRICTION = 0.8
@@ -113,54 +113,41 @@ def matrix_quat(R: np.ndarray) -> tuple[float, float, float, float]:
     return tuple(float(v) for v in q)
 
 
-def _v(xs) -> str:
+def mjcf_vec(xs) -> str:
+    """Numbers as an MJCF attribute writes them (space-separated, 12 significant digits)."""
     return " ".join(f"{float(x):.12g}" for x in xs)
 
 
-def segment_capsule(link: UrdfLink, pad: tuple[float, float, float] | None
-                    ) -> tuple[tuple[float, ...], tuple[float, ...], float] | None:
-    """A finger segment's capsule in its link's frame (its two end points and radius), or
-    None when the link's box is not a segment's (not longest along its y): the box's
-    thickness, along y, ending at the pad sphere's centre ``pad`` on the distal segment.
-    (The one definition of the finger's body: the MJCF's geoms and the planner's body
-    clearance, ``planner.play.fingerbody``.)"""
-    if link.box_size_m is None:
-        return None
-    sx, sy, sz = link.box_size_m
-    cx, cy, cz = link.box_center_m
-    if not (sy > sx and sy > sz):
-        return None
-    r = 0.5 * min(sx, sz)
-    y0 = cy - 0.5 * sy + r
-    y1 = cy + 0.5 * sy - r if pad is None else pad[1]
-    return (cx, y0, cz), (cx, max(y1, y0 + 1e-4), cz), r
-
-
-def _geoms(body: ET.Element, link: UrdfLink, pad: tuple[float, float, float] | None,
-           segment: bool, collide: bool = True) -> None:
-    """Collision geoms of a link (see the module docstring); ``segment``: the link is a
-    finger segment (its subtree holds some of the fingertips, not all of them);
-    ``collide`` False: the same shapes drawn only (contact "pads": the pictures)."""
-    common = {"contype": str(HAND_CONTYPE if collide else 0),
-              "conaffinity": str(HAND_CONAFFINITY if collide else 0),
-              "friction": f"{PAD_FRICTION:g} 0.005 0.0001", "mass": "0",
-              "rgba": "0.75 0.6 0.5 1"}
-    if link.box_size_m is None:
-        return
-    cap = segment_capsule(link, pad) if segment else None
-    if cap is not None:
-        p0, p1, r = cap
-        ET.SubElement(body, "geom", name=f"{link.name}_capsule", type="capsule",
-                      fromto=_v((*p0, *p1)), size=f"{r:.12g}", **common)
-        return
-    sx, sy, sz = link.box_size_m
-    ET.SubElement(body, "geom", name=f"{link.name}_box", type="box", pos=_v(link.box_center_m),
-                  size=_v((0.5 * sx, 0.5 * sy, 0.5 * sz)), **common)
+def _geoms(body: ET.Element, shapes: tuple[Body, ...], pads_only: bool) -> None:
+    """A link's collision geoms: its bodies (``planner.hand.bodies``, the one definition),
+    a capsule as a capsule; ``pads_only``: the pad spheres become ``PAD_POINT_RADIUS_M``
+    spheres resting on the pad points and the other shapes are drawn only (the pictures)."""
+    for b in shapes:
+        pad = b.kind == SPHERE and b.name.endswith("_pad")
+        collide = pad or not pads_only
+        attrs = {"contype": str(HAND_CONTYPE if collide else 0),
+                 "conaffinity": str(HAND_CONAFFINITY if collide else 0),
+                 "friction": f"{PAD_FRICTION:g} 0.005 0.0001", "mass": "0",
+                 "rgba": "0.9 0.5 0.4 1" if pad else "0.75 0.6 0.5 1"}
+        if b.kind == CAPSULE:
+            ET.SubElement(body, "geom", name=b.name, type="capsule",
+                          fromto=mjcf_vec((*b.p0_m, *b.p1_m)), size=f"{b.radius_m:.12g}", **attrs)
+        elif b.kind == SPHERE:
+            r, (x, y, z) = b.radius_m, b.p0_m
+            if pad and pads_only:  # (the sphere's bottom stays on the pad point)
+                z, r = z - r + PAD_POINT_RADIUS_M, PAD_POINT_RADIUS_M
+            ET.SubElement(body, "geom", name=b.name, type="sphere", pos=mjcf_vec((x, y, z)),
+                          size=f"{r:.12g}", **attrs)
+        else:
+            ET.SubElement(body, "geom", name=b.name, type="box", pos=mjcf_vec(b.p0_m),
+                          size=mjcf_vec(b.half_m), **attrs)
 
 
 def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
-                armature: dict[str, float], pads_only: bool = False) -> list[UrdfJoint]:
+                armature: dict[str, float], shapes: tuple[Body, ...],
+                pads_only: bool = False) -> list[UrdfJoint]:
     """Add the URDF's tree under ``parent`` (the root link's body); returns its joints.
+    ``shapes``: the hand's collision bodies (``planner.hand.bodies.collision_bodies``).
 
     ``pads_only``: the only collision geometry is a ``PAD_POINT_RADIUS_M`` sphere on each
     pad point (the kinematic check's contact model, with the physics of the rest).
@@ -172,47 +159,24 @@ def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
     children: dict[str, list[UrdfJoint]] = {}
     for j in joints:
         children.setdefault(j.parent, []).append(j)
-    # the pad of each tip: (pad centre in the parent link's frame, radius)
-    pads = {}
-    for j in joints:
-        if j.child in tip_links:
-            r = PAD_POINT_RADIUS_M if pads_only else abs(j.xyz_m[2])
-            pads[j.parent] = (j.xyz_m[0], j.xyz_m[1], j.xyz_m[2], r, j.child)
-
-    tips_below: dict[str, set[str]] = {}
-
-    def below(link_name: str) -> set[str]:
-        if link_name not in tips_below:
-            out = {link_name} if link_name in tip_links else set()
-            for j in children.get(link_name, []):
-                out |= below(j.child)
-            tips_below[link_name] = out
-        return tips_below[link_name]
+    by_link: dict[str, list[Body]] = {}
+    for b in shapes:
+        by_link.setdefault(b.link, []).append(b)
 
     def add(body_el: ET.Element, link_name: str) -> None:
         link = links[link_name]
         if link.mass_kg > 0:
-            ET.SubElement(body_el, "inertial", pos=_v(link.com_m), mass=f"{link.mass_kg:.12g}",
-                          diaginertia=_v(link.inertia_diag))
-        pad = pads.get(link_name)
-        # (with pads only, the same shapes without contact: drawn in the pictures)
-        _geoms(body_el, link, None if pad is None else (pad[0], pad[1], pad[2] + pad[3]),
-               segment=0 < len(below(link_name)) < len(tip_links), collide=not pads_only)
-        if pad is not None:
-            x, y, z, r, tip = pad
-            ET.SubElement(body_el, "geom", name=f"{tip.removesuffix('_tip')}_pad", type="sphere",
-                          pos=_v((x, y, z + r)), size=f"{r:.12g}",
-                          contype=str(HAND_CONTYPE), conaffinity=str(HAND_CONAFFINITY),
-                          friction=f"{PAD_FRICTION:g} 0.005 0.0001", mass="0",
-                          rgba="0.9 0.5 0.4 1")
+            ET.SubElement(body_el, "inertial", pos=mjcf_vec(link.com_m), mass=f"{link.mass_kg:.12g}",
+                          diaginertia=mjcf_vec(link.inertia_diag))
+        _geoms(body_el, tuple(by_link.get(link_name, ())), pads_only)
         for j in children.get(link_name, []):
-            child = ET.SubElement(body_el, "body", name=j.child, pos=_v(j.xyz_m),
-                                  quat=_v(rpy_quat(j.rpy_rad)))
+            child = ET.SubElement(body_el, "body", name=j.child, pos=mjcf_vec(j.xyz_m),
+                                  quat=mjcf_vec(rpy_quat(j.rpy_rad)))
             if j.kind in ("revolute", "continuous", "prismatic"):
                 attrs = {"name": j.name, "type": "slide" if j.kind == "prismatic" else "hinge",
-                         "axis": _v(j.axis), "armature": f"{armature.get(j.name, 0.0):.6g}"}
+                         "axis": mjcf_vec(j.axis), "armature": f"{armature.get(j.name, 0.0):.6g}"}
                 if j.kind != "continuous" and math.isfinite(j.lower):
-                    attrs.update(limited="true", range=_v((j.lower, j.upper)))
+                    attrs.update(limited="true", range=mjcf_vec((j.lower, j.upper)))
                 ET.SubElement(child, "joint", **attrs)
             if j.child in tip_links:
                 ET.SubElement(child, "site", name=j.child, size="0.002")

@@ -85,17 +85,6 @@ class KeyBody:
         return f"key_{self.pitch}"
 
 
-def _white_back_x(pitch: int) -> tuple[float, float]:
-    """x range of a white key's back part: its footprint less its black neighbours'."""
-    k = kb.key(pitch)
-    lo, hi = k.x_min_m, k.x_max_m
-    if pitch - 1 >= kb.LOWEST_PITCH and kb.is_black(pitch - 1):
-        lo = max(lo, kb.key(pitch - 1).x_max_m)
-    if pitch + 1 <= kb.HIGHEST_PITCH and kb.is_black(pitch + 1):
-        hi = min(hi, kb.key(pitch + 1).x_min_m)
-    return lo, hi
-
-
 def _boxes(pitch: int) -> tuple[KeyBox, ...]:
     """Every key stands on the key frame, ``KEY_THICKNESS_M`` below the white tops: a
     black key is taller by its 12.5 mm rise, so its sides wall the slot between the
@@ -110,11 +99,7 @@ def _boxes(pitch: int) -> tuple[KeyBox, ...]:
         return KeyBox((0.5 * (x0 + x1), 0.5 * (y0 + y1), zc),
                       (0.5 * (x1 - x0), 0.5 * (y1 - y0), hz))
 
-    if k.black:
-        return (box(k.x_min_m, k.x_max_m, k.y_min_m, k.y_max_m),)
-    lo, hi = _white_back_x(pitch)
-    return (box(k.x_min_m, k.x_max_m, k.y_min_m, kb.BLACK_Y0_M),
-            box(lo, hi, kb.BLACK_Y0_M, k.y_max_m))
+    return tuple(box(*r) for r in kb.footprint(pitch))
 
 
 @cache

@@ -188,9 +188,9 @@ def _gl_name() -> str:
 def render_frames(replay, frames: Frames) -> Iterator[np.ndarray]:
     """The frames (H, 2 W, 3) uint8 of ``replay`` (a ``run_replay`` result with its
     scene) at ``frames``: plan on the left, physics on the right."""
-    from planner.simulate.scene import _mujoco
+    from planner.simulate.scene import require_mujoco
 
-    mujoco = _mujoco()
+    mujoco = require_mujoco()
     scene, rec = replay.scene, replay.record
     renderer = _renderer(mujoco, scene.model)
     plan, phys = mujoco.MjData(scene.model), mujoco.MjData(scene.model)

@@ -142,17 +142,30 @@ def _arrays(T: int, n: int, nm: int, n_tips: int) -> dict[str, np.ndarray]:
     return rec
 
 
+@dataclass(frozen=True)
+class _Addr:
+    """The scene's addresses and gains the replay reads at every row (looked up once)."""
+
+    drive_qpos: np.ndarray
+    drive_dof: np.ndarray
+    kp: np.ndarray
+    kv: np.ndarray
+
+
+def _addr(scene: Scene) -> _Addr:
+    d = scene.servos.drive
+    return _Addr(scene.hand_qpos[d], scene.hand_dof[d], scene.servos.kp, servo_kv(scene))
+
+
 def _sample(rec: dict, k: int, scene: Scene, data, mujoco, ctrl: np.ndarray,
-            lim: np.ndarray, peak_f: float) -> None:
+            lim: np.ndarray, peak_f: float, a: _Addr) -> None:
     """Row ``k``'s sample: the state the row's setpoint meets."""
-    servos = scene.servos
-    drive_qpos, drive_dof = scene.hand_qpos[servos.drive], scene.hand_dof[servos.drive]
+    drive_qpos, drive_dof = a.drive_qpos, a.drive_dof
     rec["q_sim"][k] = data.qpos[scene.hand_qpos]
     rec["key"][k] = data.qpos[scene.key_qpos] if len(scene.key_qpos) else 0.0
     # (from the state itself: data.actuator_length and _velocity are those of the last
     # step's start, 1 ms old -- at 250 rad/s^2 a 0.3 N m error of the demand)
-    demand = servos.kp * (ctrl - data.qpos[drive_qpos]) - \
-        servo_kv(scene) * data.qvel[drive_dof]
+    demand = a.kp * (ctrl - data.qpos[drive_qpos]) - a.kv * data.qvel[drive_dof]
     rec["demand"][k] = demand
     rec["force"][k] = np.clip(demand, -lim, lim)
     rec["limit"][k] = lim
@@ -176,13 +189,16 @@ def _step_row(scene: Scene, data, mujoco, ctrl: np.ndarray, slope: np.ndarray, n
     drag = ball.drag_per_m if ball is not None else 0.0
     mass = float(model.body_mass[scene.ball_body]) if scene.ball_body >= 0 else 0.0
     peak_f = 0.0
+    ball_on = scene.ball_body >= 0
+    # (every substep's control at once: the same elementwise arithmetic, in one call)
+    ctrls = ctrl + slope * (np.arange(n_sub) / n_sub)[:, None]
     for j in range(n_sub):
-        data.ctrl[:] = ctrl + slope * (j / n_sub)
+        data.ctrl[:] = ctrls[j]
         if drag > 0.0:
             v = data.qvel[vadr:vadr + 3]
             data.xfrc_applied[scene.ball_body, :3] = -mass * drag * np.linalg.norm(v) * v
         mujoco.mj_step(model, data)
-        if scene.ball_body >= 0:
+        if ball_on:
             peak_f = max(peak_f, _ball_contacts(scene, data, mujoco)[1])
     return peak_f
 
@@ -210,11 +226,14 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
     unstable = None
     peak_f = 0.0
+    addr = _addr(scene)
+    lims = scene.servos.force_limit(ref.ratio)  # (T, n_motor): elementwise, row by row alike
+    forcerange = model.actuator_forcerange
     for k in range(T):
-        lim = scene.servos.force_limit(ref.ratio[k])
-        model.actuator_forcerange[:, 0] = -lim
-        model.actuator_forcerange[:, 1] = lim
-        _sample(rec, k, scene, data, mujoco, base[k], lim, peak_f)
+        lim = lims[k]
+        forcerange[:, 0] = -lim
+        forcerange[:, 1] = lim
+        _sample(rec, k, scene, data, mujoco, base[k], lim, peak_f, addr)
         if k == T - 1:
             break
         peak_f = _step_row(scene, data, mujoco, base[k], slope[k], n_sub, ball, vadr)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from planner.check.results import _listing, _plain
+from planner.resultform import listing, plain
 from planner.simulate.scores import JointTracking, MotorEffort, PhysicsCatch, PhysicsPlay
 
 
@@ -36,7 +36,7 @@ class SimulateReport:
         return self.duration_s / self.wall_s if self.wall_s > 0 else float("inf")
 
     def to_dict(self) -> dict[str, Any]:
-        d = _plain(self)
+        d = plain(self)
         d["command"] = "simulate"
         d["ok"] = self.ok
         d["realtime_factor"] = self.realtime_factor
@@ -62,10 +62,10 @@ class SimulateReport:
                          f"frames (precision {p.precision:.4f}, recall {p.recall:.4f}){kin}; "
                          f"notes hit {p.notes_hit}/{p.notes}, {len(p.late)} late, "
                          f"{len(p.wrong_keys)} wrong keys, {len(p.overhangs)} overhangs")
-            _listing(L, "wrong keys", p.wrong_keys, lambda w: (
+            listing(L, "wrong keys", p.wrong_keys, lambda w: (
                 f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
                 f"{'+'.join(w.fingers) or 'no finger (the key returning)'}"))
-            _listing(L, "missed notes", p.missed, lambda m: (
+            listing(L, "missed notes", p.missed, lambda m: (
                 f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
                 f"down {m.fraction_down:.0%}  {m.reason}"))
         c = self.catch

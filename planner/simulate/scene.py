@@ -17,14 +17,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InputError
+from planner.hand.bodies import collision_bodies
 from planner.hand.model import GRAVITY_WORLD, HandModel
 from planner.simulate import actuators as act
 from planner.simulate.hand_mjcf import (
     HAND_CONAFFINITY,
     HAND_CONTYPE,
-    _v,
     hand_bodies,
     matrix_quat,
+    mjcf_vec,
 )
 from planner.simulate.keyboard import KEY_STIFFNESS_N_M, key_bodies
 
@@ -38,6 +39,15 @@ COUPLING_POLY_DEGREE = 4  # MuJoCo's joint equality: a quartic (a nonlinear law 
 HARD_SOLREF = (2 * TIMESTEP_S, 1.0)
 HARD_SOLIMP = (0.99, 0.999, 0.001)
 KEY_FRICTION = 0.5  # pad on a key top (the pad's 0.8 applies: MuJoCo takes the larger)
+# Keys at rest sleep (MuJoCo's sleeping islands, 3.4+: a tree slower than the tolerance
+# for 10 steps leaves the pipeline -- its limit row, its dynamics -- until a hand geom
+# touches it; docs: Computation, "Sleeping islands"). 88 keys resting on their stops were
+# 88 of the ~100 constraint rows of every step. The tolerance: a key slower than 10 um/s
+# (0.1 um per 10 ms row, 1/50000 of its 5 mm key-down travel) is at rest. MuJoCo's
+# default, 1 mm/s, froze keys still settling and moved the sample songs' physics F1 by up
+# to 0.03 (twinkle 0.354 -> 0.334, fast 0.354 -> 0.319); at 1e-5 (and 1e-7) every key's
+# travel stays within 0.1 um of the awake replay's (bench/bench_simulate.py --speed).
+KEY_SLEEP_TOLERANCE_M_S = 1e-5
 
 
 @dataclass(frozen=True)
@@ -76,7 +86,8 @@ def _f(x) -> str:
     return f"{float(x):.12g}"
 
 
-def _mujoco():
+def require_mujoco():
+    """The ``mujoco`` module, or the InputError saying how to get it (exit 2)."""
     try:
         import mujoco
     except ImportError:
@@ -92,29 +103,30 @@ def _mujoco():
 
 def _keyboard(world: ET.Element) -> None:
     for k in key_bodies():
-        body = ET.SubElement(world, "body", name=k.name, pos="0 0 0")
+        # (a key may sleep at rest: KEY_SLEEP_TOLERANCE_M_S)
+        body = ET.SubElement(world, "body", name=k.name, pos="0 0 0", sleep="allowed")
         # straight down (qpos = the key's travel, m), from its rest stop to its bed
         ET.SubElement(body, "joint", name=f"{k.name}_slide", type="slide", axis="0 0 -1",
-                      limited="true", range=_v((0.0, k.dip_m)),
+                      limited="true", range=mjcf_vec((0.0, k.dip_m)),
                       stiffness=_f(KEY_STIFFNESS_N_M), springref=_f(k.springref_m),
                       damping=_f(k.damping_ns_m))
         box = np.array([2 * h for h in k.boxes[0].half_m])  # (its inertia does not act)
-        ET.SubElement(body, "inertial", pos=_v(k.com_m), mass=_f(k.mass_kg),
-                      diaginertia=_v([k.mass_kg * float(box @ box) / 12.0] * 3))
+        ET.SubElement(body, "inertial", pos=mjcf_vec(k.com_m), mass=_f(k.mass_kg),
+                      diaginertia=mjcf_vec([k.mass_kg * float(box @ box) / 12.0] * 3))
         for i, b in enumerate(k.boxes):
-            ET.SubElement(body, "geom", name=f"{k.name}_{i}", type="box", pos=_v(b.center_m),
-                          size=_v(b.half_m), mass="0",
+            ET.SubElement(body, "geom", name=f"{k.name}_{i}", type="box", pos=mjcf_vec(b.center_m),
+                          size=mjcf_vec(b.half_m), mass="0",
                           contype=str(WORLD_CONTYPE), conaffinity=str(WORLD_CONAFFINITY),
                           friction=f"{KEY_FRICTION} 0.005 0.0001",
                           rgba="0.1 0.1 0.1 1" if k.black else "0.95 0.95 0.92 1")
 
 
 def _ball(world: ET.Element, ball: Ball) -> None:
-    body = ET.SubElement(world, "body", name="ball", pos=_v(ball.p0_m))
+    body = ET.SubElement(world, "body", name="ball", pos=mjcf_vec(ball.p0_m))
     ET.SubElement(body, "freejoint", name="ball_free")
     inertia = ball.inertia_ratio * ball.mass_kg * ball.radius_m ** 2  # about its centre
     ET.SubElement(body, "inertial", pos="0 0 0", mass=_f(ball.mass_kg),
-                  diaginertia=_v([inertia] * 3))  # (the geom's own would be a solid ball's)
+                  diaginertia=mjcf_vec([inertia] * 3))  # (the geom's own would be a solid ball's)
     ET.SubElement(body, "geom", name="ball", type="sphere", size=_f(ball.radius_m),
                   contype=str(WORLD_CONTYPE),
                   conaffinity=str(WORLD_CONAFFINITY), friction="0.8 0.005 0.0001",
@@ -142,20 +154,24 @@ def scene_xml(hand: HandModel, T_world_root: np.ndarray, keyboard: bool,
     root = ET.Element("mujoco", model=f"replay_{hand.name}")
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", boundmass="1e-6",
                   boundinertia="1e-12")
-    ET.SubElement(root, "option", timestep=_f(TIMESTEP_S), integrator="implicitfast",
-                  cone="elliptic", gravity=" ".join(f"{float(g):g}" for g in GRAVITY_WORLD))
+    option = ET.SubElement(root, "option", timestep=_f(TIMESTEP_S), integrator="implicitfast",
+                           cone="elliptic",
+                           gravity=" ".join(f"{float(g):g}" for g in GRAVITY_WORLD))
+    if keyboard:  # (the catch's ball and hand never rest: nothing to gain)
+        option.set("sleep_tolerance", _f(KEY_SLEEP_TOLERANCE_M_S))
+        ET.SubElement(option, "flag", sleep="enable")
     ET.SubElement(root, "size", memory="64M")
     default = ET.SubElement(root, "default")
-    ET.SubElement(default, "geom", solref=_v(HARD_SOLREF), solimp=_v(HARD_SOLIMP))
-    ET.SubElement(default, "joint", solreflimit=_v(HARD_SOLREF), solimplimit=_v(HARD_SOLIMP))
-    ET.SubElement(default, "equality", solref=_v(HARD_SOLREF), solimp=_v(HARD_SOLIMP))
+    ET.SubElement(default, "geom", solref=mjcf_vec(HARD_SOLREF), solimp=mjcf_vec(HARD_SOLIMP))
+    ET.SubElement(default, "joint", solreflimit=mjcf_vec(HARD_SOLREF), solimplimit=mjcf_vec(HARD_SOLIMP))
+    ET.SubElement(default, "equality", solref=mjcf_vec(HARD_SOLREF), solimp=mjcf_vec(HARD_SOLIMP))
     world = ET.SubElement(root, "worldbody")
     T = np.asarray(T_world_root, dtype=float)
     mount = ET.SubElement(world, "body", name="mount", pos=" ".join(f"{float(v):.12g}" for v in T[:3, 3]),
-                          quat=_v(matrix_quat(T[:3, :3])))
+                          quat=mjcf_vec(matrix_quat(T[:3, :3])))
     armature = {hand.joint_names[int(d)]: float(a) for d, a in zip(servos.drive, servos.armature)}
     joints = hand_bodies(hand.urdf, mount, tuple(hand.tip_frames), armature,
-                         pads_only=contact == "pads")
+                         collision_bodies(hand.spec), pads_only=contact == "pads")
     palm = _find_body(mount, "palm_center")  # (an empty Element is falsy: no `or`)
     ET.SubElement(mount if palm is None else palm, "site", name="palm_center_site",
                   size="0.002")
@@ -170,8 +186,8 @@ def scene_xml(hand: HandModel, T_world_root: np.ndarray, keyboard: bool,
         lim = servos.force_limit(servos.ratio)[m]
         ET.SubElement(acts, "general", name=f"motor.{name}",
                       joint=hand.joint_names[int(servos.drive[m])], gaintype="fixed",
-                      gainprm=_f(float(kp)), biastype="affine", biasprm=_v((0.0, -kp, 0.0)),
-                      forcelimited="true", forcerange=_v((-lim, lim)))
+                      gainprm=_f(float(kp)), biastype="affine", biasprm=mjcf_vec((0.0, -kp, 0.0)),
+                      forcelimited="true", forcerange=mjcf_vec((-lim, lim)))
     return ET.tostring(root, encoding="unicode"), joints
 
 
@@ -191,7 +207,7 @@ def build_scene(hand: HandModel, T_world_root: np.ndarray, *, keyboard: bool = F
     geometry of the fingers' bodies)."""
     if contact not in CONTACT_MODELS:
         raise InputError(f"contact model must be one of {', '.join(CONTACT_MODELS)}: {contact!r}")
-    mujoco = _mujoco()
+    mujoco = require_mujoco()
     servos = act.servo_set(hand)
     xml, _ = scene_xml(hand, T_world_root, keyboard, ball, servos, contact)
     model = mujoco.MjModel.from_xml_string(xml)
@@ -242,7 +258,7 @@ def inverse_dynamics(scene: Scene):
     (``M(q) qdd + c(q, qd)``: links, rotor inertia as armature, Coriolis, gravity). The
     couplings' constraint forces are left out: a servo's feedforward sums its coupled
     joints' forces (``actuators.reference``)."""
-    mujoco = _mujoco()
+    mujoco = require_mujoco()
     model = scene.model
     data = mujoco.MjData(model)
     acc = np.zeros(model.nv)

@@ -1,0 +1,424 @@
+"""The catch planner of one hand and mount: what is built once (the reference-mounted
+hand, its IK, joint groups, wrist geometry, rest pose, closing moves per ball size) and
+the plan of one throw (``CatchPlanner.plan``: the steps of ``planner.catch.plan.api``)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+from itertools import pairwise
+
+import numpy as np
+
+from planner.catch import grasp as gq
+from planner.catch.flight.observe import FitResult, predict_intercept
+from planner.catch.flight.path import Flight
+from planner.catch.plan.arm import (
+    catch_joints,
+    open_from,
+    palm_target,
+    palm_target_of,
+    rest_pose,
+    zero_pose,
+)
+from planner.catch.plan.closing import close_start, make_closing
+from planner.catch.plan.geometry import interp_row, rot1
+from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
+from planner.catch.plan.mount import CatchMount
+from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
+from planner.catch.plan.results import (
+    CatchPlan,
+    Closing,
+    Forces,
+    ForcesVerdict,
+    ThrowInfo,
+    make_catch_plan,
+)
+from planner.catch.plan.rowcheck import RowCheck
+from planner.catch.plan.stopping import (
+    ROLL_WEIGHT,
+    SoftStop,
+    StopDynamics,
+    plan_stop,
+)
+from planner.catch.plan.turnahead import (
+    HoldStart,
+    HoldTurn,
+    RowsArgs,
+    Turn,
+    TurnMode,
+    ahead_shift,
+)
+from planner.check.ball import ball_load_instants, contact_loads, phase_loads
+from planner.check.ballroll import roll_judged, roll_problem
+from planner.check.ballstop import PAD_GIVE_M, pad_time_s
+from planner.check.criteria import GRASP_TOL_M
+from planner.check.kinematics import Kinematics
+from planner.check.limits import RATE_TOL
+from planner.errors import InfeasibleError, PlannerError
+from planner.hand.model import HandModel
+from planner.ik import HandIK
+from planner.trajectory import Phase, sample
+
+SIGNAL_S = 0.025  # seed (Markus): 25 ms of signal processing
+PLAN_BUDGET_S = 0.005  # planning latency budget (bench target p99)
+INTERCEPT_PLAN_TOL_M = 0.001  # what the planner aims for
+HOLD_AFTER_S = 0.5  # rows until intercept_t + this
+_CLOSE_STEP_S = 0.005  # a closing that would touch the arriving ball starts this much later
+_CLOSE_TRIES = 8  # ... up to this many times
+_NOT_THE_TURN = {CatchReason.OUT_OF_REACH, CatchReason.TOO_SOON}  # before the ball: no turn
+# changes them (a plan failing only for these is not tried again without its turn)
+
+
+@dataclass(frozen=True)
+class MeetPose:
+    """The hand meeting the ball: the intercept, the open and closed poses there, the
+    time the ball reaches the palm on them, its velocity then, the IK's iterations."""
+
+    ic: Intercept
+    q_open: np.ndarray
+    q_closed: np.ndarray
+    t_i: float
+    v_i: np.ndarray
+    misalign_deg: float
+    ik_iterations: int
+
+
+def tip_reach_m(h: HandModel, q0: np.ndarray) -> float:
+    """Bound on any fingertip's distance from palm_center over the joint box (m): the sum
+    of each finger's segment lengths from the palm centre at ``q0`` (triangle inequality),
+    plus 1 cm."""
+    pc = h.palm_pose(q0)[:3, 3]
+    tips = h.tip_positions(q0)
+    best = 0.0
+    for k, f in enumerate(h.fingers):
+        pts = [pc] + [h.frame_pose(q0, j)[:3, 3] for j in h.spec.joints_of(f)] + [tips[k]]
+        best = max(best, sum(float(np.linalg.norm(b - a)) for a, b in pairwise(pts)))
+    return best + 0.01
+
+
+class CatchPlanner:
+    """Everything built once per hand and mount: reference-mounted hand, IK, poses,
+    wrist geometry, closing tables (per ball radius, on first use)."""
+
+    def __init__(self, hand: HandModel, mount: CatchMount) -> None:
+        self.base_hand = hand
+        self.mount = mount
+        self.T_ref = mount.T_ref()
+        self.hand = hand.mounted(self.T_ref)
+        self.joints = catch_joints(self.hand)
+        self.ik = HandIK(self.hand)
+        self.q_zero = zero_pose(self.hand)
+        self.wrist = Wrist(self.hand, self.joints)
+        self.q_rest = rest_pose(self.hand, self.joints)
+        self.near_m = tip_reach_m(self.hand, self.q_zero)
+        self.rows = RowCheck(self.hand, self.T_ref, self.near_m)
+        self.kin = Kinematics(self.base_hand, self.T_ref)
+        self.dyn = StopDynamics(self.hand, self.joints, self.kin)
+        self.turn = HoldTurn(self.hand, self.joints, self.dyn, self.kin, self.q_rest, self._rows)
+        self._closings: dict[tuple[float, bool], Closing] = {}
+
+    def closing(self, radius: float, bodies: bool = True) -> Closing:
+        """The closing move for a ball of ``radius`` (cached); ``bodies``: the fingers'
+        bodies kept clear of the ball, not only their tips (``make_closing``)."""
+        key = (round(float(radius), 9), bool(bodies))
+        c = self._closings.get(key)
+        if c is None:
+            c = self._closings[key] = make_closing(self.hand, self.ik, self.joints,
+                                                   self.wrist, float(radius), bool(bodies))
+        return c
+
+    # ------------------------------------------------------------ plan
+    def plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float = 100.0,
+             t_info: float = 0.0, throw: ThrowInfo | None = None,
+             flight_time_s: float | None = None, fit: FitResult | None = None,
+             soft: bool = True) -> CatchPlan:
+        """Plan the catch of ``flight`` with the hand mounted at ``catch_point`` (catch
+        frame). ``t_info``: when the flight is known (last observation); the hand moves
+        from ``t_info + SIGNAL_S + PLAN_BUDGET_S``. No file is written. ``soft``: the
+        soft catch (``planner.catch.plan.stopping``), or the palm waiting at rest when that
+        alone passes the self-check (a palm that moves can bring the ball to a fingertip
+        the closing would miss otherwise); False: the palm at rest. The hold (the roll term
+        of the contact speeds, the wrist's turn: ``planner.catch.plan.stopping``): the turn from
+        the grasp on or earlier, so that the ball does not roll off the palm's wrist side before
+        the turn has levelled it (``TurnMode.AHEAD``: ``HoldTurn.ahead_rows``), else from the grasp on
+        (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
+        (``TurnMode.LATE``), else none (the plan without the hold) -- the first of those that is
+        feasible."""
+        t0 = time.perf_counter()
+        args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
+        plan = self._plans(args, soft, True)
+        if not plan.feasible and CatchReason.GRASP in plan.reason_kinds:
+            # the closing with the fingers' bodies clear of the ball grasps a little later
+            # (its fingertips end a few mm further out): the fingertips' closing, if that is
+            # what was too late
+            other = self._plans(args, soft, False)
+            if other.feasible:
+                plan = replace(other, notes=other.notes + (
+                    "the fingertips' closing (bodies not kept clear of the ball): the "
+                    "closing failed (" + reasons_text(plan.reasons) + ")",))
+        return replace(plan, planning_s=time.perf_counter() - t0)
+
+    def _plans(self, args: tuple, soft: bool, bodies: bool) -> CatchPlan:
+        """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing."""
+        plan, ahead = self._plan(*args, soft=soft, bodies=bodies)
+        for mode in ((TurnMode.EARLY,) if ahead else ()) + (TurnMode.LATE, None):
+            if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
+                break
+            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies)[0]
+            if other.feasible:
+                what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
+                        "after the arm has stopped", None: "no turn to hold the ball"}[mode]
+                plan = replace(other, notes=other.notes + (
+                    f"{what}: the earlier turn failed (" + reasons_text(plan.reasons) + ")",))
+        if soft and not plan.feasible:
+            still = self._plan(*args, soft=False, bodies=bodies)[0]
+            if still.feasible:
+                plan = replace(still, notes=still.notes + (
+                    "the palm waits at rest: the soft catch failed (" +
+                    reasons_text(plan.reasons) + ")",))
+        return plan
+
+    def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
+              throw: ThrowInfo | None, flight_time_s: float | None,
+              fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
+              bodies: bool = True) -> tuple[CatchPlan, bool]:
+        """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
+        (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
+        (None: nor the contact speeds' roll term); and whether the turn starts before the
+        grasp (the roll rule moved it). Without the soft catch the palm waits for the ball at
+        rest: no turn under way then (the roll rule's turn is the grasp's)."""
+        t0 = time.perf_counter()
+        if not soft and turn_mode == TurnMode.AHEAD:
+            turn_mode = TurnMode.EARLY
+        h = self.hand
+        C = np.asarray(catch_point, dtype=float)
+        r = float(flight.ball.radius_m)
+        closing = self.closing(r, bodies)
+        reasons = [Reason(CatchReason.GRASP, closing.reason)] if closing.reason else []
+        reasons += [Reason(CatchReason.FINGERS, f"fingers in the way: the {f} tip passes "
+                           f"{1000 * -gap:.1f} mm inside the ball while the hand closes")
+                    for f, gap in zip(h.fingers, closing.min_gap_m) if gap < 0]
+        if flight_time_s is None:
+            try:
+                flight_time_s = float(flight.time_at_x(float(C[0])))
+            except InfeasibleError:
+                flight_time_s = None
+        t_c = flight_time_s if flight_time_s is not None else closest_time(flight, C)
+        t_react = max(0.0, t_info) + SIGNAL_S + PLAN_BUDGET_S
+
+        def ready_by(q_pre: np.ndarray) -> float:
+            return t_react + self.dyn.move_time(self.q_rest, q_pre)
+
+        ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
+                                     ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0)
+        pose = self.meet(flight, C, r, closing, ic)
+        soft_stop = replace(soft_stop, t_i=float(pose.t_i))
+        if pose.ic.reason:
+            reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
+        # timing: the move to the pre-catch pose, the stopping motion, the closing move
+        arm = list(self.joints.arm)
+        q_pre = pose.q_open.copy()
+        q_pre[arm] += soft_stop.first_offset
+        T_m = self.dyn.move_time(self.q_rest, q_pre)
+        ready = t_react + T_m
+        if ready > min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i):
+            reasons.append(Reason(CatchReason.TOO_SOON,
+                                  f"too fast: the open pre-catch pose is reached at {ready:.3f} s, "
+                                  f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
+                                  f"(t = {pose.t_i:.3f} s)"))
+        s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
+                          pad_time_s(soft_stop.v_rel), r)
+        turn0 = self.turn.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
+        turn, t, Q, T_m, s_c, verdict = self._closing_rows(
+            flight, C, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
+                                                  s_c, rate_hz))
+        reasons += verdict.reasons
+        reasons += roll_reasons(self.turn, flight, t, Q, pose.t_i)
+        ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
+        if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
+            q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
+        q_closed = pose.q_closed.copy()
+        q_closed[arm] += soft_stop.last_offset
+        q_closed += turn.delta  # the pose the ball is held in (the turn ends at rest)
+        pose = replace(pose, q_closed=q_closed)
+        fv = self.forces(flight, pose, t, Q, r, verdict.grasp_t,
+                         soft_stop if np.any(soft_stop.qd) else None)
+        reasons += fv.reasons
+        unc = None if fit is None else uncertainty(fit, float(C[0] + fv.centre_i[0]))
+        return make_catch_plan(
+            reasons=reasons, flight=flight, catch_point=C,
+            T_world_root=self.mount.T_world_root(C), base_hand=self.base_hand, hand=h,
+            rate_hz=rate_hz, throw=throw, pose=pose, verdict=verdict, q_rest=self.q_rest,
+            q_open=q_pre, move_start_s=t_react, move_s=T_m, close_start_s=s_c,
+            close_s=closing.duration_s,
+            forces=fv.forces,
+            t=t, Q=Q, t_info_s=float(t_info), flight_time_s=flight_time_s, uncertainty=unc,
+            notes=_turn_note(turn, pose.t_i), planning_s=time.perf_counter() - t0), ahead
+
+    def _closing_rows(self, flight: Flight, C: np.ndarray, turn0: HoldStart,
+                      turn_mode: TurnMode | None, rows_args: RowsArgs):
+        """The rows with the wrist's turn as ``turn_mode`` says and their self-check
+        (``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
+        keeps it near the fingers longer, so the closing waits a little more when a tip meets
+        it. Returns the turn, the rows, the move-in's duration, the closing's start and the
+        self-check's results."""
+        pose, stop, closing = rows_args.pose, rows_args.stop, rows_args.closing
+        s_c = rows_args.s_c
+        r = float(flight.ball.radius_m)
+        for _ in range(_CLOSE_TRIES):
+            args = replace(rows_args, s_c=s_c)
+            if turn_mode == TurnMode.AHEAD:
+                made = self.turn.ahead_rows(turn0, args, flight)
+            else:
+                made = self.turn.turned_rows(turn0, turn_mode, args)
+            turn, t, Q, T_used = made.turn, made.t, made.Q, made.T_m
+            t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
+            checked = self.rows.check(flight, C, r, t, Q, pose.t_i, t_static, rows_args.rate_hz,
+                                      closing.reason is not None)
+            if all(x.kind is not CatchReason.FINGERS for x in checked.reasons) or \
+                    not np.any(stop.qd) or s_c >= pose.t_i:
+                break
+            s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
+        return turn, t, Q, T_used, s_c, checked
+
+    def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
+             ic: Intercept) -> MeetPose:
+        """The hand meeting the ball at the intercept ``ic`` (``find_intercept``): its pose
+        confirmed with placo (warm-started: usually zero or one iteration) and the
+        intercept time refined on the confirmed pose."""
+        h, j = self.hand, self.joints
+        q_arm = self.q_zero.copy()
+        q_arm[j.i_flex], q_arm[j.i_dev] = ic.theta, ic.dev
+        if j.i_rail is not None:
+            q_arm[j.i_rail] = ic.rail
+        q_open = open_from(h, j, q_arm, closing.q_closed)
+        ik_iter = 0
+        if ic.reason is None:
+            b_i = flight.position(ic.t) - C
+            n_des = rot1(self.wrist.e_f, ic.theta, self.wrist.n0)
+            # the fingers are not masked (their hard coupling tasks would lose rank); the
+            # palm does not depend on them and the posture/stay tasks hold them
+            res = self.ik.solve_palm(b_i, n_des, q_open, q_open, offset_m=r, max_iter=5,
+                                     tol_m=INTERCEPT_PLAN_TOL_M, tol_rad=0.02)
+            ik_iter = res.iterations
+            if res.iterations:
+                q_open = open_from(h, j, res.q, closing.q_closed)
+        # intercept time on the confirmed pose: closest approach to palm_center + r n
+        P = h.palm_pose(q_open)
+        t_i = refine_time(flight, C, palm_target_of(P, r), ic.t)
+        q_closed = q_open.copy()
+        q_closed[j.finger_idx] = closing.q_closed[j.finger_idx]
+        v_i = flight.velocity(t_i)
+        n_i = P[:3, 2]
+        misalign = math.degrees(math.acos(np.clip(-(v_i @ n_i) / np.linalg.norm(v_i), -1, 1)))
+        return MeetPose(ic, q_open, q_closed, t_i, v_i, misalign, ik_iter)
+
+    def _rows(self, a: RowsArgs, turn: Turn) -> tuple[np.ndarray, np.ndarray]:
+        """The rows (``a``): rest -> the pre-catch pose ``q_pre`` from ``t_react`` (``T_m``), the arm's
+        stopping motion (``stop``), open -> closed fingers from ``s_c``, the wrist's ``turn``
+        (``Turn``) that holds the ball, until ``HOLD_AFTER_S`` after
+        the intercept (and the arm at rest). The turn is a min-jerk move, or (its profiles,
+        ``SoftStop``s of the flexion: ``planner.catch.plan.turnahead``) under way at the intercept:
+        the move-in then ends short of ``q_pre`` by the turn's travel before the ball."""
+        pose, q_pre, stop, closing = a.pose, a.q_pre, a.stop, a.closing
+        t_react, T_m, s_c, rate_hz = a.t_react, a.T_m, a.s_c, a.rate_hz
+        h = self.hand
+        delta, T_turn, t_turn, prof = turn.delta, turn.duration_s, turn.start_s, turn.profiles
+        arm = list(self.joints.arm)
+        shift = ahead_shift(prof, pose.t_i, h.n) if prof is not None else np.zeros(h.n)
+        phases = [Phase(delta=q_pre + shift - self.q_rest, duration_s=T_m),
+                  Phase(delta=pose.q_closed - pose.q_open, duration_s=closing.duration_s)]
+        starts = [t_react, s_c]
+        t_end = max(pose.t_i + HOLD_AFTER_S, stop.end_s + 2.0 / rate_hz)
+        if T_turn > 0 and prof is None:
+            phases.append(Phase(delta=delta, duration_s=T_turn))
+            starts.append(t_turn)
+        if T_turn > 0:
+            t_end = max(t_end, t_turn + T_turn + 2.0 / rate_hz)
+        n_rows = math.floor(t_end * rate_hz + 1e-9) + 1
+        t = np.arange(n_rows) * (1.0 / rate_hz)
+        Q = sample(phases, np.array(starts), t, self.q_rest)
+        Q += stop.offset(t, h.n)
+        Q[:, arm] -= stop.first_offset
+        for p in prof or ():
+            Q += p.offset(t, h.n) - p.offset(np.array([-math.inf]), h.n)[0]
+        return t, h.apply_couplings(Q)
+
+    def forces(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray, r: float,
+               grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:
+        """Stopping the ball (the check's rule on the rows, ``planner.check.ball.ball_loads``:
+        the pad, the hand's inertia, the friction cone) and holding it in the closed hand
+        (the grasp QP): their results (None where infeasible), the reasons, and the ball's
+        centre on the palm at the intercept."""
+        h, mass = self.hand, float(flight.ball.mass_kg)
+        hold = None
+        reasons = []
+        q_i = interp_row(t, Q, pose.t_i)
+        centre_i = palm_target(h, q_i, r)
+        stop, contact = self._stop_load(flight, pose, t, Q, grasp_t)
+        if stop.headroom < -RATE_TOL:  # the check's tolerance (one rule)
+            reasons.append(Reason(CatchReason.TOO_FAST_TO_STOP, (
+                f"too fast to stop (over the palm's {100 * PAD_GIVE_M:g} cm and the arm's "
+                f"stopping motion): {stop.force_n:.1f} N needs motor.{stop.motor} at "
+                f"{abs(stop.torque_nm):.2f} N m > its {stop.limiting_part} limit "
+                f"{stop.capacity_nm:.2f} N m")))
+        if stop.cone_margin_n is not None and stop.cone_margin_n < 0:
+            reasons.append(Reason(CatchReason.FRICTION, (
+                f"friction (stopping the ball): the palm's force leaves its friction cone by "
+                f"{-stop.cone_margin_n:.2f} N: the ball slides off")))
+        try:
+            hold = gq.grasp_forces(h, pose.q_closed, palm_target(h, pose.q_closed, r), r,
+                                   gq.hold_force(mass), case="hold", tip_tol_m=GRASP_TOL_M,
+                                   moment_balance=True)
+        except gq.GraspTorqueError as e:
+            reasons.append(Reason(CatchReason.TORQUE, f"torque (holding the ball): {e}"))
+        except gq.GraspFrictionError as e:
+            reasons.append(Reason(CatchReason.FRICTION, f"friction (holding the ball): {e}"))
+        return ForcesVerdict(Forces(stop, hold, soft, contact), tuple(reasons), centre_i)
+
+    def _stop_load(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray,
+                   grasp_t: float | None):
+        """The check's stopping load on the rows from the one before the intercept (only the
+        ball's velocity enters it: its launch point needs no shift to the reference frame),
+        and the impact and riding loads named apart (``ContactLoads``)."""
+        k0 = max(0, int(np.searchsorted(t, pose.t_i, side="right")) - 2)
+        b = flight.to_metadata()
+        ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
+                "radius": float(b["radius"]), "mass": float(b["mass"]),
+                "drag": float(b["drag"])}
+        _, palm = self.kin.frames(Q[k0:])
+        inst = ball_load_instants(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i),
+                                  PAD_GIVE_M, grasp_t)
+        stop = phase_loads(inst, t[-1], self.kin, Q[-1], palm[-1], ball["mass"])[0]
+        return stop, contact_loads(inst)
+
+
+def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,
+                 t_i: float) -> list[Reason]:
+    """The roll rule's reason on these rows (``planner.check.ballroll``: the ball landing at
+    ``t_i``, ``HoldTurn.rolled``; on a hand the rule judges), if any."""
+    if not roll_judged(turn.hand.name):
+        return []
+    rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
+    return [] if rolled is None else [Reason(CatchReason.ROLL, rolled)]
+
+
+def _turn_note(turn: Turn, t_i: float) -> tuple[str, ...]:
+    """The plan's note on a turn under way at the intercept (the roll rule's), else none."""
+    if turn.profiles is None:
+        return ()
+    return ((f"the wrist's turn under way at {np.abs(turn.profiles[0].qd).max():.1f} rad/s "
+            f"when the ball lands (from {1000 * (t_i - turn.start_s):.0f} ms before it): from the grasp the "
+            "ball would roll off the palm's wrist side"),)
+
+
+def uncertainty(fit: FitResult, x_plane: float) -> dict[str, float] | None:
+    try:
+        t, _, cov, sig_t = predict_intercept(fit, x_plane)
+    except PlannerError:
+        return None
+    return {"x_plane_m": x_plane, "t_s": t, "sigma_t_s": sig_t,
+            "sigma_y_m": float(math.sqrt(max(cov[1, 1], 0.0))),
+            "sigma_z_m": float(math.sqrt(max(cov[2, 2], 0.0)))}

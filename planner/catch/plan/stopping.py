@@ -1,0 +1,517 @@
+"""The soft catch: the palm meets the ball already moving along its path, then brings it
+to rest (``planner.catch.plan.api``, step 3).
+
+The arm (rail, wrist flexion and deviation) follows one profile through the intercept
+pose q_i: q(t) = q_i + qd_c sigma(t), sigma a time-like scalar: at rest, a min-jerk rise
+of its speed from 0 to 1 (``ramp_in_s``), speed 1 (the joints at ``qd_c``) from one row
+before the intercept until one row after the pad has stopped the ball
+(``planner.check.ballstop``: 2 d / |v_rel|), a min-jerk fall to rest (``ramp_out_s``).
+
+What is chosen, by optimisation:
+
+* ``qd_c``, the arm's speeds when the palm meets the ball: a QP (OSQP, ``planner.qp``)
+  minimising |v_ball - J qd|^2 (J the palm target's Jacobian over the arm joints), i.e.
+  the ball's speed relative to the palm and with it the pad's force (its square), within
+  every arm joint's speed limit and the speeds the ramps can reach in the time there is
+  and within the joints' range;
+* the ramps' durations: the shortest whose peak acceleration keeps every joint within its
+  acceleration limit and every motor within ``STOP_SHARE`` of its capacity while it moves
+  the hand's own inertia (and, ramping out, the ball riding on the palm) against gravity;
+* the palm's tilt (``find_intercept(..., tilt)``): among ``TILTS_DEG`` the pose whose
+  stopping needs the least of the motor closest to its capacity (its force's lever about
+  the wrist changes with the tilt) and whose pad force stays in the palm's friction cone.
+
+The rows' dynamics are then judged by the check's own rule (``planner.check.ball``); a
+ball that no such motion stops within every motor's capacity is "too fast to stop".
+
+Holding the ball (``docs/physics-replay.md``, "Catch"): nothing on the palm's wrist side
+stops a ball rolling there, so (1) the QP weighs the relative speed along the palm
+``ROLL_WEIGHT`` times its normal part (a tangential speed is not absorbed by the pad: the
+ball keeps 5/7 of it as a roll), and (2) once the grasp is made the wrist turns the closed
+hand (``hold_turn``: flexion alone, within its range, every motor within ``TURN_SHARE``)
+until the palm faces up with its downhill ``HOLD_TILT_DEG`` towards the fingers: the ball
+rolls into the closed fingers and the palm carries its weight.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from planner.catch.flight.path import Flight
+from planner.catch.grasp import motor_torque_matrix, palm_jacobian
+from planner.catch.plan.arm import CatchJoints, open_from, palm_target
+from planner.catch.plan.intercept import Intercept, Wrist, find_intercept
+from planner.catch.plan.results import Closing
+from planner.check.ball import ball_loads
+from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
+from planner.check.kinematics import Kinematics
+from planner.hand.model import HandModel
+from planner.hand.tendon import actuator_capacity
+from planner.qp import DenseQp
+from planner.trajectory import LIMIT_MARGIN, MIN_PHASE_S, PEAK_ACC, PEAK_VEL, phase_duration
+
+STOP_SHARE = 0.8  # the ramps load every motor to at most 80 % of its capacity: issue 15's
+# 20 % headroom, left for what the model does not see (friction, the fingers' moves)
+TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
+CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)  # the arm's speed when it meets the ball, tried as a
+# share of its speed after the recoil
+ROLL_WEIGHT = 30.0  # the contact-speed QP weighs the ball's speed along the palm this many
+# times its speed into it: the pad absorbs the normal part (its force grows with its square),
+# nothing absorbs the tangential part -- a sphere keeps 5/7 of it as a roll (rolling, no
+# friction stops it) that leaves the open wrist side before the fingers close. Measured
+# (bench_simulate.py --catch-grid, held of 25, the planner as committed): weight 1 -> 15,
+# 10 -> 18, 30 -> 23, 100 -> 18 (100 gives up the soft catch's normal speed as well)
+_SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
+# the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
+_MAX_SHRINK = 6
+_MIN_SPEED = 0.05  # arm speeds below this share of their limits are not worth a motion
+_FD_M = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
+_QP = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True, warm_starting=False)
+# (cold: a plan does not depend on the throws planned before it)
+
+
+def ramp_integral(u: np.ndarray) -> np.ndarray:
+    """The integral over [0, u] of the min-jerk rise (10 s^3 - 15 s^4 + 6 s^5), u clipped to
+    [0, 1]: 2.5 u^4 - 3 u^5 + u^6 (1/2 at u = 1)."""
+    u = np.clip(u, 0.0, 1.0)
+    return u ** 4 * (2.5 - 3.0 * u + u * u)
+
+
+_ROOMS_KEPT = 4  # accel_room results kept (the rest pose and the latest few; the least
+# recently used dropped)
+
+
+@dataclass(frozen=True)
+class SoftStop:
+    """The arm's stopping motion of one catch (see the module docstring): its speed factor
+    sigma' rises (min-jerk, ``ramp_in_s``) to ``contact_share`` one row before the
+    intercept, holds it to the intercept, rises linearly to 1 over ``recoil_s`` (the hand
+    recoiling under the ball's push), holds 1 for ``hold_s``, falls to rest (min-jerk,
+    ``ramp_out_s``). The arm's speeds at factor 1 are ``qd``."""
+
+    tilt_rad: float
+    arm: tuple[int, ...]  # the arm joints' indices (hand order)
+    qd: np.ndarray  # their speeds at factor 1 (after the recoil)
+    contact_share: float  # the speed factor when the palm meets the ball
+    t_i: float
+    row_s: float  # one row interval: the contact speed is held this long before the ball
+    ramp_in_s: float
+    recoil_s: float
+    hold_s: float
+    ramp_out_s: float
+    pad_s: float  # how long the pad takes to stop the ball relative to the palm
+    v_palm: np.ndarray  # palm target velocity at the intercept (m/s)
+    v_rel: np.ndarray  # the ball's velocity relative to it (m/s)
+    force_n: np.ndarray  # the pad's force on the ball (N)
+    motor_ratio: np.ndarray  # |torque| / capacity of every motor while the pad stops it
+    cone_margin_n: float
+
+    @property
+    def qd_c(self) -> np.ndarray:
+        """The arm's speeds when the palm meets the ball."""
+        return self.contact_share * self.qd
+
+    @property
+    def start_s(self) -> float:
+        """When the arm starts its ramp (it holds its pre-catch pose until then)."""
+        return self.t_i - self.row_s - self.ramp_in_s
+
+    @property
+    def end_s(self) -> float:
+        """When the arm is at rest with the ball."""
+        return self.t_i + self.recoil_s + self.hold_s + self.ramp_out_s
+
+    def _knots(self) -> tuple[float, float, float, float, float, float]:
+        """sigma at the ramp-in's start and end, the recoil's end, the hold's end, the end;
+        and the time the hold ends."""
+        c, t4 = self.contact_share, self.t_i + self.recoil_s + self.hold_s
+        s2 = -c * self.row_s
+        s1 = s2 - 0.5 * c * self.ramp_in_s
+        s3 = 0.5 * self.recoil_s * (1.0 + c)
+        s4 = s3 + self.hold_s
+        return s1, s2, s3, s4, s4 + 0.5 * self.ramp_out_s, t4
+
+    def sigma(self, t_s: np.ndarray) -> np.ndarray:
+        """The profile's time-like scalar at ``t_s`` (0 at the intercept)."""
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        c, ti = self.contact_share, self.t_i
+        s1, _, s3, s4, _, t4 = self._knots()
+        out = np.full(t.shape, s1)
+        if self.ramp_in_s > 0:
+            u = (t - self.start_s) / self.ramp_in_s
+            out = np.where(t > self.start_s, s1 + c * self.ramp_in_s * ramp_integral(u), out)
+        tau = t - ti
+        out = np.where(t > ti - self.row_s, np.minimum(tau, 0.0) * c, out)
+        if self.recoil_s > 0:
+            w = np.clip(tau, 0.0, self.recoil_s)
+            out = np.where(t > ti, c * w + (1.0 - c) * w * w / (2.0 * self.recoil_s), out)
+        out = np.where(t > ti + self.recoil_s, s3 + np.minimum(t - ti - self.recoil_s,
+                                                                self.hold_s), out)
+        if self.ramp_out_s > 0:
+            u = np.clip((t - t4) / self.ramp_out_s, 0.0, 1.0)
+            out = np.where(t > t4, s4 + self.ramp_out_s * (u - ramp_integral(u)), out)
+        return out
+
+    def offset(self, t_s: np.ndarray, n: int) -> np.ndarray:
+        """(T, n) joint offsets from the intercept pose (only the arm joints move)."""
+        t = np.atleast_1d(t_s)
+        out = np.zeros((len(t), n))
+        out[:, list(self.arm)] = np.outer(self.sigma(t), self.qd)
+        return out
+
+    @property
+    def first_offset(self) -> np.ndarray:
+        return self.qd * self._knots()[0]
+
+    @property
+    def last_offset(self) -> np.ndarray:
+        return self.qd * self._knots()[4]
+
+
+class StopDynamics:
+    """The hand's dynamics the stopping motion needs (one hand, reference-mounted)."""
+
+    def __init__(self, hand: HandModel, joints: CatchJoints, kin: Kinematics) -> None:
+        self.hand, self.joints, self.kin = hand, joints, kin
+        self.arm = tuple(joints.arm)
+        m = hand.pin_model
+        self._idx = np.array([m.idx_qs[m.getJointId(n)] for n in hand.joint_names])
+        self._data = m.createData()
+        i, j = self._idx[:, None], self._idx[None, :]  # the mass matrix of our joints in
+        # one take from crba's result, which fills the upper triangle only: (i, j) at
+        # (min, max)
+        self._h_flat = np.minimum(i, j) * m.nv + np.maximum(i, j)
+        self._rooms: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}  # accel_room's last
+        # results by q (a live session asks for the rest pose's at every observation
+        # until the hand moves)
+        self.cap = actuator_capacity(hand).torque_nm
+        self.v_max = LIMIT_MARGIN * hand.velocity[list(self.arm)]
+        self.a_max = LIMIT_MARGIN * hand.acceleration[list(self.arm)]
+
+    def _pq(self, q: np.ndarray) -> np.ndarray:
+        qp = np.zeros(self.hand.pin_model.nq)
+        qp[self._idx] = q
+        return qp
+
+    def target_jacobian(self, q: np.ndarray, r: float) -> np.ndarray:
+        """(3, k) palm target (palm_center + r n) per unit arm joint motion."""
+        h, p0 = self.hand, palm_target(self.hand, q, r)
+        J = np.empty((3, len(self.arm)))
+        for c, i in enumerate(self.arm):
+            dq = q.copy()
+            dq[i] += _FD_M
+            J[:, c] = (palm_target(h, dq, r) - p0) / _FD_M
+        return J
+
+    def joint_torques(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """RNEA (gravity included) at arm speeds/accelerations ``v``, ``a``."""
+        m = self.hand.pin_model
+        vp, ap = np.zeros(m.nv), np.zeros(m.nv)
+        vp[self._idx[list(self.arm)]], ap[self._idx[list(self.arm)]] = v, a
+        return pin.rnea(m, self._data, self._pq(q), vp, ap)[self._idx]
+
+    def move_time(self, q_from: np.ndarray, q_to: np.ndarray, arm_alone: bool = False
+                  ) -> float:
+        """Shortest min-jerk move ``q_from`` -> ``q_to`` within every joint's speed and
+        acceleration limits (``phase_duration``) and every motor within ``STOP_SHARE`` of
+        its capacity while it moves the hand (its inertia at the peak acceleration PEAK_ACC
+        |dq| / T^2, at either end, against gravity: ``accel_room``). ``arm_alone``: the
+        arm's part of that acceleration alone within the room too (how a live session
+        bounds its re-aims, ``planner.catch.live.motion``)."""
+        return self.room_time((q_from, q_to), q_to - q_from, STOP_SHARE, arm_alone)
+
+    def room_time(self, ends: tuple[np.ndarray, np.ndarray], dq: np.ndarray, share: float,
+                  arm_alone: bool = False) -> float:
+        """``move_time``'s rule with every motor within ``share`` (at most STOP_SHARE) of
+        its capacity: the shortest min-jerk move by ``dq`` between the poses ``ends``; inf
+        when gravity alone leaves a motor no room."""
+        T = phase_duration(dq, self.hand.velocity, self.hand.acceleration)
+        arm = list(self.arm)
+        for q in ends:
+            MH, room = self.accel_room(q)
+            room = room - (STOP_SHARE - share) * self.cap
+            per = np.abs(MH @ dq)
+            if arm_alone:
+                per = np.maximum(per, np.abs(MH[:, arm] @ dq[arm]))
+            need = per > 1e-12
+            if np.any(room[need] <= 0):
+                return math.inf
+            if need.any():
+                T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
+        return T
+
+    def accel_room(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The motors' room for the hand's accelerations at ``q`` (``move_time``'s rule; a
+        live re-aim's too): (MH, room), MH (n_motor, n) every motor's torque per unit joint
+        acceleration (the hand's inertia: the motor map of the mass matrix), room =
+        STOP_SHARE x its capacity - |its gravity torque|. Accelerations a with |MH @ a| <=
+        room keep every motor within STOP_SHARE of its capacity at low speed."""
+        key = q.tobytes()
+        hit = self._rooms.pop(key, None)
+        if hit is not None:  # kept as the newest: the least recently asked for goes first
+            self._rooms[key] = hit
+            return hit
+        m = self.hand.pin_model
+        qp = self._pq(q)
+        H = pin.crba(m, self._data, qp).take(self._h_flat)
+        M = motor_torque_matrix(self.hand, q)
+        z = np.zeros(m.nv)
+        g = pin.rnea(m, self._data, qp, z, z)[self._idx]
+        out = (M @ H, STOP_SHARE * self.cap - np.abs(M @ g))
+        for a in out:
+            a.setflags(write=False)
+        if len(self._rooms) >= _ROOMS_KEPT:
+            self._rooms.pop(next(iter(self._rooms)))
+        self._rooms[key] = out
+        return out
+
+    def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None,
+                  share: float = STOP_SHARE) -> float:
+        """Shortest min-jerk speed ramp between rest and ``qd`` (its peak acceleration is
+        PEAK_VEL |qd| / T) within the acceleration limits and every motor within ``share``
+        (``STOP_SHARE``) of its capacity; ``load``: (n, k) extra joint torque per unit arm
+        acceleration (the riding ball). inf when gravity and speed alone leave no room."""
+        if not np.any(qd):
+            return 0.0
+        M = motor_torque_matrix(self.hand, q)
+        z = np.zeros_like(qd)
+        base = M @ self.joint_torques(q, qd, z)
+        per = M @ (self.joint_torques(q, z, qd) - self.joint_torques(q, z, z)
+                   + (load @ qd if load is not None else 0.0))
+        room = share * self.cap - np.abs(base)
+        need = np.abs(per) > 1e-12
+        if np.any(room[need] <= 0):
+            return math.inf
+        s_max = min(float(np.min(room[need] / np.abs(per[need]))) if need.any() else math.inf,
+                    float(np.min(self.a_max / np.maximum(np.abs(qd), 1e-12))))
+        return max(MIN_PHASE_S, PEAK_VEL / s_max)
+
+    def judge(self, stop: SoftStop, q_open: np.ndarray, flight: Flight, r: float
+              ) -> tuple[bool, float]:
+        """The check's rule (``planner.check.ball.ball_loads``) on the rows around the
+        intercept that ``stop`` gives the arm (the fingers open): whether the ball stays in
+        the palm's friction cone while the pad stops it, and the least motor headroom."""
+        dt = stop.row_s
+        k0 = math.floor(stop.t_i / dt)
+        n = math.ceil((stop.pad_s + stop.recoil_s) / dt) + 3
+        t = np.arange(k0 - 2, k0 + n) * dt
+        Q = np.tile(q_open, (len(t), 1)) + stop.offset(t, self.hand.n)
+        _, palm = self.kin.frames(Q)
+        b = flight.to_metadata()
+        ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
+                "radius": float(r), "mass": float(b["mass"]), "drag": float(b["drag"])}
+        ld = ball_loads(t, Q, self.kin, palm, ball, stop.t_i, PAD_GIVE_M)[0]
+        return ld.cone_margin_n is None or ld.cone_margin_n >= 0, float(ld.headroom)
+
+    def pad_load(self, q: np.ndarray, qd: np.ndarray, v_rel: np.ndarray, mass: float,
+                 normal: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """The pad's force on the ball, every motor's |torque| / capacity while it acts (the
+        hand at speed ``qd``, not accelerating), and its friction-cone margin."""
+        F = pad_force_n(mass, v_rel)
+        tau = self.joint_torques(q, qd, np.zeros_like(qd)) + palm_jacobian(self.hand, q).T @ F
+        M = motor_torque_matrix(self.hand, q)
+        return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
+
+
+def _contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
+                    normal: np.ndarray, roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
+    """The QP: min |W^1/2 (v_ball - J x)|^2 + 1e-6 |x|^2, -bound <= x <= bound, W weighting
+    the relative velocity's part along the palm ``ROLL_WEIGHT`` times its part along the
+    palm's ``normal`` (``roll_weight``: that factor)."""
+    k = J.shape[1]
+    n = normal / np.linalg.norm(normal)
+    W = roll_weight * np.eye(3) + (1.0 - roll_weight) * np.outer(n, n)
+    P = 2.0 * (J.T @ W @ J + 1e-6 * np.eye(k))
+    c = -2.0 * J.T @ W @ v_ball
+    res = _QP.solve(P, c, np.eye(k), -bound, bound)
+    if not res.solved:
+        return np.zeros(k)
+    return np.clip(res.x, -bound, bound)
+
+
+def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
+              q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
+              soft: bool = True, roll_weight: float = ROLL_WEIGHT
+              ) -> tuple[Intercept, np.ndarray, SoftStop]:
+    """The intercept, its open pose and the stopping motion (module docstring). ``ready_by``:
+    a function of the pre-catch pose -> when the hand can be there. ``soft`` False: the palm
+    waits at rest (the stopping is the pad's alone). ``roll_weight``: the contact-speed QP's
+    weight on the ball's speed along the palm (1: none above its speed into it)."""
+    best = None
+    for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
+        # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
+        # the wrist changes smoothly with it)
+        for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):
+            ic = find_intercept(wrist, flight, C, r, t_c, math.radians(tilt))
+            if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
+                break
+            cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
+                              math.radians(tilt), 1.0, rw=roll_weight)
+            key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
+            if best is not None and key >= best[0]:
+                break
+            best = (key, cand)
+    if best is None:  # no tilt reaches: the untilted intercept says why
+        ic = find_intercept(wrist, flight, C, r, t_c)
+        return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
+                          rw=roll_weight)
+    ic, q_open, stop = best[1]
+    if not np.any(stop.qd):
+        return best[1]
+    # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
+    judged = (dyn.judge(stop, q_open, flight, r), stop)
+    for share in CONTACT_SHARES:  # slower while it helps
+        # from the speeds the last one found within the joints' range
+        warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
+        cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
+                          stop.tilt_rad, share, warm, rw=roll_weight)[2]
+        if cand.contact_share == 1.0:
+            break
+        j = (dyn.judge(cand, q_open, flight, r), cand)
+        if j[0] <= judged[0]:
+            break
+        judged, stop = j, cand
+    return ic, q_open, judged[1]
+
+
+def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
+               closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
+               tilt_rad: float, share: float, bound0: np.ndarray | None = None,
+               rw: float = ROLL_WEIGHT):
+    """The stopping motion at the intercept ``ic`` meeting the ball at ``share`` of the
+    arm's full speeds (those speeds by the QP), the ramps as short as the motors allow,
+    slowed where the joints' range or the time before the ball is short."""
+    h, j = dyn.hand, dyn.joints
+    q = q_zero.copy()
+    q[j.i_flex], q[j.i_dev] = ic.theta, ic.dev
+    if j.i_rail is not None:
+        q[j.i_rail] = ic.rail
+    q_open = open_from(h, j, q, closing.q_closed)
+    v_ball = flight.velocity(ic.t)
+    mass = float(flight.ball.mass_kg)
+    normal = h.palm_pose(q_open)[:3, 2]
+    J = dyn.target_jacobian(q_open, r)
+    arm = list(dyn.arm)
+    bound = (dyn.v_max.copy() if bound0 is None else bound0.copy()) if soft \
+        else np.zeros(len(arm))
+    load = np.zeros((h.n, len(arm)))
+    load[arm] = mass * J.T @ J  # joint torque per unit arm acceleration of the riding ball
+    lo, hi = h.lower[arm], h.upper[arm]
+    for _ in range(_MAX_SHRINK + 1):
+        qd_c = _contact_speeds(J, v_ball, share * bound, normal, rw) if np.any(bound) else 0.0 * bound
+        moving = bool(np.any(qd_c))
+        v_rel = v_ball - J @ qd_c
+        F, ratio, cone = dyn.pad_load(q_open, qd_c, v_rel, mass, normal)
+        t_pad = pad_time_s(v_rel)
+        qd = qd_c / share
+        recoil = max(t_pad, row_s) if moving and share < 1.0 else 0.0
+        if recoil and np.any((1.0 - share) * np.abs(qd) > dyn.a_max * recoil):
+            return ic, q_open, _at_rest(ic, tilt_rad, arm, v_rel, F, ratio, cone, t_pad)
+        stop = SoftStop(tilt_rad, tuple(arm), qd, share if moving else 1.0, float(ic.t),
+                        row_s if moving else 0.0, dyn.ramp_time(q_open, qd_c), recoil,
+                        max(0.0, t_pad - recoil) + row_s if moving else 0.0,
+                        dyn.ramp_time(q_open, qd, load) if moving else 0.0, t_pad, J @ qd_c,
+                        v_rel, F, ratio, cone)
+        if not moving:
+            return ic, q_open, stop
+        # how much slower each joint must go: its travel grows with its speed (the ramps'
+        # durations are set by the joint that needs the longest), the ramp-in's time too
+        scale = np.ones(len(arm))
+        for off in (stop.first_offset, stop.last_offset):
+            e = q_open[arm] + off
+            room = np.where(off < 0, q_open[arm] - lo, hi - q_open[arm])
+            over = (e < lo) | (e > hi)
+            scale[over] = np.minimum(scale[over], np.maximum(room[over], 0.0)
+                                     / np.abs(off[over]))
+        pre = q_open.copy()
+        pre[arm] += stop.first_offset
+        finite = math.isfinite(stop.ramp_in_s) and math.isfinite(stop.ramp_out_s)
+        late = ready_by(pre) - stop.start_s if finite else math.inf
+        if late <= 0 and np.all(scale >= 1.0):
+            return ic, q_open, stop
+        if late > 0:  # every joint slower, its ramp shorter by the time missing
+            scale = np.minimum(scale, max(0.0, 1.0 - late / max(stop.ramp_in_s, 1e-9))
+                               if finite else 0.0)
+        bound = np.where(scale < 1.0, _SHRINK * scale * np.abs(qd), bound)
+        if not np.any(bound > _MIN_SPEED * dyn.v_max):
+            break
+    return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, tilt_rad, 1.0,
+                      rw=rw)
+
+
+def _at_rest(ic: Intercept, tilt_rad: float, arm: list[int], v_rel, F, ratio, cone,
+             t_pad: float) -> SoftStop:
+    """A palm waiting at rest (no stopping motion)."""
+    z = np.zeros(len(arm))
+    return SoftStop(tilt_rad, tuple(arm), z, 1.0, float(ic.t), 0.0, 0.0, 0.0, 0.0, 0.0, t_pad,
+                    z.copy(), v_rel, F, ratio, cone)
+
+
+HOLD_TILT_DEG = 5.0  # the held palm's downhill: this far from level towards the fingers
+# (a ball on it rolls at 5/7 g sin 5 deg = 0.6 m/s^2 into the closed fingers). Measured
+# (bench_simulate.py --catch-grid, held of 25): 0 -> 21, 5 -> 23, 10 -> 23
+
+
+TURN_SHARE = 0.75  # the turn loads every motor to at most 75 % of its capacity with the
+# hand's inertia (5 % under the stop's STOP_SHARE): it runs with the ball in the hand, whose
+# weight the room of move_time does not carry. Measured (bench_catch.py --grid: 30 deg /
+# 1.5 m wrist flexion headroom), a turn after the arm's stop: 0.8 -> 19.1 % (under issue
+# 15's 20 %), 0.75 -> 23.5 %; the turn from the grasp (the plans' first choice, its length
+# also set by the joints' limits on top of the stop): 0.6 / 0.75 / 0.8 -> 52.0 / 54.7 /
+# 52.5 %, 23 of 25 held each
+
+
+def hold_turn(dyn: StopDynamics, q_end: np.ndarray, tilt_deg: float = HOLD_TILT_DEG
+              ) -> tuple[np.ndarray, float]:
+    """The wrist's turn after the stop that holds the ball in the fingers' cage: the arm
+    at rest in ``q_end``, its flexion turned (within its range, keeping LIMIT_MARGIN) so
+    that the palm faces up and its downhill points ``tilt_deg`` from level towards the
+    fingers (a ball on it rolls into the closed fingers, not off the open wrist side).
+    Returns the joint delta and the move's duration (the speed and acceleration limits,
+    every motor within ``TURN_SHARE`` of its capacity); no turn (zeros, 0) when gravity
+    alone leaves a motor no room."""
+    h, i = dyn.hand, dyn.joints.i_flex
+    z = np.zeros(h.n)
+    lo, hi = h.lower[i], h.upper[i]
+    pad = 0.5 * (1.0 - LIMIT_MARGIN) * (hi - lo)
+    want = -math.sin(math.radians(tilt_deg))
+    coarse = np.linspace(lo + pad, hi - pad, 53)  # ~0.05 rad apart, then 0.005 about the best
+    best = best_flex(h, q_end, i, coarse, want)
+    if best is None:
+        return z, 0.0
+    d = float(coarse[1] - coarse[0])
+    best = best_flex(h, q_end, i, np.clip(np.linspace(best - d, best + d, 21), lo + pad,
+                                           hi - pad), want)
+    z[i] = best - q_end[i]
+    T = turn_time(dyn, q_end, z)
+    return (z, T) if math.isfinite(T) else (np.zeros(h.n), 0.0)
+
+
+def turn_time(dyn: StopDynamics, q_from: np.ndarray, delta: np.ndarray) -> float:
+    """The shortest min-jerk turn ``delta`` from ``q_from`` within every joint's speed and
+    acceleration limit and every motor within ``TURN_SHARE`` of its capacity with the
+    hand's inertia at either end (``move_time``'s rule); inf when gravity alone leaves a
+    motor no room."""
+    return dyn.room_time((q_from, q_from + delta), delta, TURN_SHARE)
+
+
+def best_flex(h: HandModel, q_end: np.ndarray, i: int, cand: np.ndarray, want: float
+               ) -> float | None:
+    """Among flexion angles ``cand`` (joint ``i``; the rest as ``q_end``) the one whose palm
+    faces up with gravity's share along its +y (towards the wrist) nearest ``want``, the
+    nearest to ``q_end``'s between equals; None when the palm faces up at none."""
+    best, best_err = None, math.inf
+    for f in cand:
+        q = q_end.copy()
+        q[i] = f
+        R = h.palm_pose(q)[:3, :3]
+        if R[2, 2] <= 0.0:
+            continue
+        err = abs(-R[2, 1] - want) + 1e-3 * abs(f - q_end[i])  # gravity (0, 0, -1) . y
+        if err < best_err:
+            best, best_err = float(f), err
+    return best
