@@ -5,7 +5,15 @@
 outcome in ``out_dir/<name>.json`` (written whole, after the check: a song whose record
 is there, for the same song bytes and hand, with its trajectory complete, is done and
 skipped by the next run). The summary of every song goes to ``out_dir/summary.csv`` and
-``summary.json``.
+``summary.json`` (those names are reserved: a song named ``summary.mid`` is recorded as
+failed, its outputs never overwrite the summary's). Entries of ``songs_dir`` that are not
+MIDI files (another suffix, a folder named ``x.mid``, a file without a MIDI header) are
+skipped, each with a line (``on_skip``). A song whose planning fails, however, is
+recorded as failed with its one-line reason and the batch goes on.
+
+SIGINT, SIGTERM or SIGHUP (``KeyboardInterrupt``) stop the workers at once
+(``planner.batchpool``), the summary of the songs done is written, and the
+interrupt goes on to the command line (exit 128 + the signal's number).
 
 Workers are local processes (each builds its planner once and plans song after song);
 with ``address`` the songs go to a Ray cluster instead (the ``batch`` extra; one task a
@@ -20,15 +28,17 @@ import io
 import json
 import os
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from functools import cache
 from pathlib import Path
 
 from planner.errors import InputError, PlannerError
 
+RESERVED_STEMS = ("summary",)  # the summary's file names (summary.csv, summary.json)
+MIDI_MAGIC = (b"MThd", b"RIFF")  # a standard MIDI file, or one wrapped in RIFF (RMID)
 SUMMARY_FIELDS = ("song", "notes", "played", "infeasible", "frame_f1", "check_ok",
-                  "planning_s", "realtime_factor", "trajectory", "error")
+                  "planning_s", "realtime_factor", "trajectory", "error", "physics_f1",
+                  "physics_wrong_keys", "physics_saturated_ms", "physics_ok")
 
 
 @dataclass(frozen=True)
@@ -48,6 +58,11 @@ class SongResult:
     song_sha256: str = ""
     hand: str = ""
     skipped: bool = False  # done by an earlier run (this run only read its record)
+    # with ``physics``: the MuJoCo replay's verdict (``planner.simulate``, full contact)
+    physics_f1: float | None = None
+    physics_wrong_keys: int | None = None
+    physics_saturated_ms: float | None = None  # the longest run of a motor at its limit
+    physics_ok: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -68,8 +83,9 @@ class BatchSummary:
 
     @property
     def ok(self) -> bool:
-        """Every song has a plan its check passes."""
-        return not any(r.error or not r.check_ok for r in self.results)
+        """Every song has a plan its check passes (and its physics, when replayed)."""
+        return not any(r.error or not r.check_ok or r.physics_ok is False
+                       for r in self.results)
 
     def to_dict(self) -> dict:
         """``batch --json``: the counts and every song's result."""
@@ -90,19 +106,32 @@ def format_song_line(r: SongResult) -> str:
         msg = (f"{r.played}/{r.notes} played, frame F1 {r.frame_f1:.4f}, check "
                f"{'OK' if r.check_ok else 'FAILED'}"
                + (" (done before)" if r.skipped else f", {r.realtime_factor:.0f}x"))
+        if r.physics_f1 is not None:
+            msg += (f"; physics F1 {r.physics_f1:.4f}, {r.physics_wrong_keys} wrong keys, "
+                    f"longest motor saturation {r.physics_saturated_ms:.0f} ms, "
+                    f"{'OK' if r.physics_ok else 'FAILED'}")
     return f"{r.song}: {msg}"
 
 
 def batch_plan(songs_dir: str | os.PathLike, out_dir: str | os.PathLike, workers: int = 2,
                hand: str = "default", address: str | None = None,
                on_result: Callable[[SongResult], None] | None = None,
-               on_progress: Callable[[int, int], None] | None = None) -> BatchSummary:
+               on_progress: Callable[[int, int], None] | None = None,
+               on_skip: Callable[[str, str], None] | None = None,
+               physics: bool = False) -> BatchSummary:
     """Plan and check every song of ``songs_dir`` into ``out_dir`` (see the module
     docstring); ``on_result`` is called as each song finishes (or is found done), then
-    ``on_progress(songs done, songs)``."""
+    ``on_progress(songs done, songs)``; ``on_skip(entry, why)`` for an entry that is
+    not a MIDI file. ``physics``: every plan is also replayed in MuJoCo (full contact,
+    ``planner.simulate``: the ``physics`` extra), its F1, wrong keys and motor
+    saturation recorded; a record without them is not done for such a batch."""
+    if physics:
+        from planner.simulate.scene import require_mujoco
+
+        require_mujoco()  # (the clear message before any song)
     if not Path(songs_dir).is_dir():
         raise InputError(f"{songs_dir}: no such folder")
-    songs = sorted(Path(songs_dir).glob("*.mid"))
+    songs = midi_files(Path(songs_dir), on_skip)
     if not songs:
         raise InputError(f"{songs_dir}: no MIDI files (*.mid) in it")
     if not isinstance(workers, int) or workers < 1:
@@ -123,36 +152,86 @@ def batch_plan(songs_dir: str | os.PathLike, out_dir: str | os.PathLike, workers
 
     todo = []
     for s in songs:
-        done = _done(s, out, hand)
+        done = _reserved(s, hand) or _done(s, out, hand, physics)
         if done is None:
             todo.append(s)
         else:
             record(s, done)
-    for s, r in _run(todo, out, hand, workers, address):
-        record(s, r)
+    try:
+        for s, r in _run(todo, out, hand, workers, address, physics):
+            record(s, r)
+    except KeyboardInterrupt:  # (the workers are stopped: the summary of what is done)
+        _write_summary(BatchSummary(tuple(results[s] for s in songs if s in results)), out)
+        raise
     summary = BatchSummary(tuple(results[s] for s in songs))
     _write_summary(summary, out)
     return summary
 
 
-def _run(songs: list[Path], out: Path, hand: str, workers: int, address: str | None):
+def midi_files(folder: Path, on_skip: Callable[[str, str], None] | None) -> list[Path]:
+    """The MIDI files of ``folder`` (``*.mid`` regular files that start as one), by name;
+    every other entry is told to ``on_skip`` with why."""
+    out = []
+    for p in sorted(folder.iterdir()):
+        why = None
+        if p.suffix.lower() != ".mid":
+            why = "not a .mid file"
+        elif not p.is_file():
+            why = "not a regular file (a folder?)"
+        else:
+            try:
+                with open(p, "rb") as f:
+                    if f.read(4) not in MIDI_MAGIC:
+                        why = "not a MIDI file (no MThd header)"
+            except OSError as e:
+                why = f"cannot read it: {e.strerror or e}"
+        if why is None:
+            out.append(p)
+        elif on_skip:
+            on_skip(p.name, why)
+    return out
+
+
+def _failed(song: Path, hand: str, why: str) -> SongResult:
+    return SongResult(song=song.name, notes=0, played=0, infeasible=0, frame_f1=0.0,
+                      check_ok=False, planning_s=0.0, realtime_factor=0.0,
+                      trajectory=f"{song.stem}.csv", error=why, hand=hand)
+
+
+def _reserved(song: Path, hand: str) -> SongResult | None:
+    """A failed result for a song whose outputs would be the summary's files."""
+    if song.stem.lower() not in RESERVED_STEMS:
+        return None
+    r = _failed(song, hand, f"its outputs ({song.stem}.csv, {song.stem}.json) would be the "
+                            "batch summary's files: rename the song")
+    return SongResult(**{**asdict(r), "trajectory": ""})
+
+
+def _run(songs: list[Path], out: Path, hand: str, workers: int, address: str | None,
+         physics: bool):
     """(song, result) as they finish."""
     if not songs:
         return
     if address is not None:
-        yield from _run_ray(songs, out, hand, address)
+        yield from _run_ray(songs, out, hand, address, physics)
         return
     if workers == 1:
         for s in songs:
-            yield s, plan_one(str(s), str(out), hand)
+            yield s, plan_one(str(s), str(out), hand, physics)
         return
-    with ProcessPoolExecutor(max_workers=min(workers, len(songs))) as pool:
-        futures = {pool.submit(plan_one, str(s), str(out), hand): s for s in songs}
-        for f in as_completed(futures):
-            yield futures[f], f.result()
+    from planner.batchpool import Failed, WorkerPool
+
+    with WorkerPool(_plan_task, min(workers, len(songs))) as pool:
+        for (s, *_), r in pool.run([(s, out, hand, physics) for s in songs]):
+            yield s, (_failed(s, hand, r.reason) if isinstance(r, Failed) else r)
 
 
-def _run_ray(songs: list[Path], out: Path, hand: str, address: str):
+def _plan_task(task: tuple[Path, Path, str, bool]) -> SongResult:
+    song, out, hand, physics = task
+    return plan_one(str(song), str(out), hand, physics)
+
+
+def _run_ray(songs: list[Path], out: Path, hand: str, address: str, physics: bool):
     try:
         import ray
     except ImportError:
@@ -166,19 +245,30 @@ def _run_ray(songs: list[Path], out: Path, hand: str, address: str):
                          "cluster started with token authentication (Ray >= 2.52) needs "
                          "RAY_AUTH_MODE=token and its token (ray get-auth-token)") from None
     task = ray.remote(plan_one)
-    pending = {task.remote(str(s), str(out), hand): s for s in songs}
-    while pending:
-        ready, _ = ray.wait(list(pending), num_returns=1)
-        for ref in ready:
-            yield pending.pop(ref), ray.get(ref)
+    pending = {task.remote(str(s), str(out), hand, physics): s for s in songs}
+    try:
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            for ref in ready:
+                s = pending.pop(ref)
+                try:
+                    r = ray.get(ref)
+                except Exception as e:  # noqa: BLE001 -- (a task that died: this song failed)
+                    r = _failed(s, hand, f"{type(e).__name__}: "
+                                         f"{(str(e).strip().splitlines() or [''])[0]}"[:500])
+                yield s, r
+    finally:  # (done, or interrupted: no task of this batch keeps running)
+        for ref in pending:
+            ray.cancel(ref, force=True)
 
 
 def _song_sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _done(song: Path, out: Path, hand: str) -> SongResult | None:
-    """The recorded result of ``song`` when it is done for these bytes and this hand."""
+def _done(song: Path, out: Path, hand: str, physics: bool = False) -> SongResult | None:
+    """The recorded result of ``song`` when it is done for these bytes and this hand
+    (and replayed in physics, when ``physics``)."""
     rec = out / f"{song.stem}.json"
     try:
         d = json.loads(rec.read_text(encoding="utf-8"))
@@ -186,6 +276,8 @@ def _done(song: Path, out: Path, hand: str) -> SongResult | None:
     except (OSError, ValueError, KeyError, TypeError):
         return None
     if r.error or r.song_sha256 != _song_sha256(song) or r.hand != hand:
+        return None
+    if physics and r.physics_f1 is None:
         return None
     from planner.trajfile import read_trajectory
 
@@ -197,8 +289,9 @@ def _done(song: Path, out: Path, hand: str) -> SongResult | None:
     return SongResult(**{**asdict(r), "skipped": True})
 
 
-def plan_one(song_path: str, out_dir: str, hand_name: str) -> SongResult:
-    """Plan and check one song (in a worker: its planner is built once per process)."""
+def plan_one(song_path: str, out_dir: str, hand_name: str, physics: bool = False) -> SongResult:
+    """Plan and check one song (in a worker: its planner is built once per process);
+    ``physics``: replay it in MuJoCo too (``physics_verdict``)."""
     from planner.check import check_trajectory
     from planner.music.midi import load_song
     from planner.output import write_file
@@ -219,13 +312,32 @@ def plan_one(song_path: str, out_dir: str, hand_name: str) -> SongResult:
         r = SongResult(notes=plan.verdict.notes, played=plan.verdict.played,
                        infeasible=len(plan.verdict.skipped), frame_f1=float(rep.play.f1),
                        check_ok=bool(rep.ok), planning_s=float(plan.planning_s),
-                       realtime_factor=float(song_s / plan.planning_s), **base)
+                       realtime_factor=float(song_s / plan.planning_s), **base,
+                       **(physics_verdict(traj_path, song_path) if physics else {}))
     except (InputError, PlannerError) as e:
         r = SongResult(notes=0, played=0, infeasible=0, frame_f1=0.0, check_ok=False,
                        planning_s=0.0, realtime_factor=0.0, error=str(e), **base)
+    except Exception as e:  # noqa: BLE001 -- a planner bug fails this song, not the batch
+        first = (str(e).strip().splitlines() or [""])[0]
+        r = SongResult(notes=0, played=0, infeasible=0, frame_f1=0.0, check_ok=False,
+                       planning_s=0.0, realtime_factor=0.0,
+                       error=f"{type(e).__name__}: {first}"[:500], **base)
     record = {k: v for k, v in asdict(r).items() if k != "skipped"}
     write_file(Path(out_dir) / f"{song.stem}.json", json.dumps(record, indent=1) + "\n")
     return r
+
+
+def physics_verdict(traj_path: str, song_path: str) -> dict:
+    """A plan's physics replay (full contact) as a ``SongResult``'s physics fields."""
+    from planner.simulate import simulate_trajectory
+
+    rep = simulate_trajectory(traj_path, song_path)
+    play = rep.play
+    return {"physics_f1": None if play.f1 is None else float(play.f1),
+            "physics_wrong_keys": len(play.wrong_keys),
+            "physics_saturated_ms": 1000.0 * max((m.saturated_s for m in rep.motors),
+                                                 default=0.0),
+            "physics_ok": bool(rep.ok)}
 
 
 @cache

@@ -140,8 +140,12 @@ def surfaces_under(x: np.ndarray, y: np.ndarray, inflate_m: float) -> np.ndarray
 class HandIK:
     """A placo kinematics solver for one hand, built once and reused for every keyframe."""
 
-    def __init__(self, hand: HandModel) -> None:
+    def __init__(self, hand: HandModel, limits: tuple[np.ndarray, np.ndarray] | None = None
+                 ) -> None:
+        """``limits``: the joints' (lower, upper) bounds the solutions keep to (default
+        the hand's hard stops; ``play``'s atlas: ``HandModel.plan_lower``/``plan_upper``)."""
         self.hand = hand
+        self.lower, self.upper = (hand.lower, hand.upper) if limits is None else limits
         # the URDF text is passed directly: no temporary file
         self.robot = placo.RobotWrapper("", placo.Flags.ignore_collisions, hand.urdf)
         self.robot.set_T_world_fbase(hand.T_world_root)
@@ -151,6 +155,8 @@ class HandIK:
         self._nq = self.robot.model.nq
         self.solver = placo.KinematicsSolver(self.robot)
         self.solver.mask_fbase(True)
+        for n, lo, hi in zip(hand.joint_names, self.lower, self.upper):
+            self.robot.set_joint_limits(n, float(lo), float(hi))
         self.solver.enable_joint_limits(True)
         self._gears: dict[str, object] = {}
         for c in hand.couplings:
@@ -226,7 +232,7 @@ class HandIK:
             t.configure(f"press_{p.finger}", "soft", 1e5)
             self._tasks[p.finger] = t
         err, clearance, it = self._iterate(presses, hover, max_iter, tol_m)
-        q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
+        q = self.hand.apply_couplings(np.clip(self.get_q(), self.lower, self.upper))
         self._clear_half_spaces()
         return IKResult(q, bool(err <= tol_m and clearance >= MIN_CLEARANCE_M - 1e-9), it,
                         float(err), float(clearance))
@@ -396,7 +402,7 @@ class HandIK:
         # (the same URDF and mount) tell
         err, ang = errors(self.hand.frame_pose(q_start, "palm_center"))
         if err <= tol_m and ang <= tol_rad:
-            q = self.hand.apply_couplings(np.clip(q_start, self.hand.lower, self.hand.upper))
+            q = self.hand.apply_couplings(np.clip(q_start, self.lower, self.upper))
             return IKResult(q, True, 0, err, float(np.inf))
         self.set_q(q_start)
         err, ang = errors()
@@ -433,5 +439,5 @@ class HandIK:
             self.solver.remove_task(pos)
             self.solver.remove_task(ax)
             self._clear_half_spaces()
-        q = self.hand.apply_couplings(np.clip(self.get_q(), self.hand.lower, self.hand.upper))
+        q = self.hand.apply_couplings(np.clip(self.get_q(), self.lower, self.upper))
         return IKResult(q, bool(err <= tol_m and ang <= tol_rad), it, err, float(np.inf))

@@ -144,3 +144,74 @@ def _write_replacing(path: str, raw: bytes) -> None:
         except OSError:
             pass
         raise
+
+
+# ---------------------------------------------------------------- checked before planning
+
+# (the options naming an artefact: a file, or a folder the command fills)
+FILE_OPTIONS = ("output", "html", "urdf", "played", "video")
+DIR_OPTIONS = ("report",)
+
+
+def check_file_target(path: str, option: str) -> None:
+    """Refuse now (``InputError``) a file path the artefact could not be written to
+    later: empty, a folder, in a folder that does not exist (none is ever created) or
+    cannot be written. An existing FIFO, device or symlink's target is not opened."""
+    if path == STDOUT and option in ("output", "urdf"):
+        return
+    _refuse_unnameable(path)
+    if os.path.lexists(path):
+        target = os.path.realpath(path)
+        if is_regular_target(target):
+            _probe(lambda: open(target, "ab").close(), path)  # (appends nothing)
+        return
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise InputError(f"cannot write {path}: no folder {folder} (none is created)")
+    _probe(lambda: os.unlink(_temp_in(folder)), path)
+
+
+def check_dir_target(path: str, option: str) -> None:
+    """Refuse now a folder path for ``--report``: an existing file, a folder that
+    cannot be written, or a new folder whose parent does not exist or cannot be
+    written (the folder named is the only one ever created)."""
+    if not path:
+        raise InputError(f"--{option}: empty folder path")
+    if os.path.lexists(path) and not os.path.isdir(path):
+        raise InputError(f"cannot write into {path}: not a folder")
+    if os.path.isdir(path):
+        _probe(lambda: os.unlink(_temp_in(path)), f"into {path}")
+        return
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent):
+        raise InputError(f"cannot make folder {path}: no folder {parent} (none is created)")
+    _probe(lambda: os.rmdir(tempfile.mkdtemp(prefix=".probe.", dir=parent)),
+           f"{path} (cannot make a folder in {parent})")
+
+
+def _temp_in(folder: str) -> str:
+    fd, tmp = tempfile.mkstemp(prefix=".probe.", suffix=".part", dir=folder)
+    os.close(fd)
+    return tmp
+
+
+def _probe(fn, what: str) -> None:
+    try:
+        fn()
+    except OSError as e:
+        raise InputError(f"cannot write {what}: {_why(e)}") from None
+
+
+# ---------------------------------------------------------------- closed stdout / stderr
+
+
+def reopen_closed_stdio() -> frozenset[str]:
+    """A standard stream the shell closed (``>&-``, ``2>&-``: Python then has None
+    there) is put on /dev/null, so that nothing fails on it; returns the names of those
+    closed ("stdout", "stderr")."""
+    closed = set()
+    for name in ("stdout", "stderr"):
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(os.devnull, "w", encoding="utf-8"))  # noqa: SIM115
+            closed.add(name)
+    return frozenset(closed)

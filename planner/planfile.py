@@ -64,19 +64,6 @@ class PlanFile:
                              f"--transpose; options used: {given})")
         return shift_notes(notes, song_start_s(meta))
 
-    def left_out(self, n_notes: int) -> set[int] | None:
-        """The notes the end marker says the plan left out (None: it states no claims)."""
-        raw = self.trajectory.end.get("left_out")
-        if raw is None:
-            return None
-        ok = isinstance(raw, list) and all(
-            isinstance(x, dict) and isinstance(x.get("note"), int) and 0 <= x["note"] < n_notes
-            for x in raw)
-        if not ok:
-            raise InputError(f"{self.path}: end marker's 'left_out' is not a list of notes of "
-                             "the song")
-        return {x["note"] for x in raw}
-
 
 def read_plan(traj: str | os.PathLike | Trajectory, *, allow_incomplete: bool = False,
               hand_override: str | HandModel | None = None) -> PlanFile:

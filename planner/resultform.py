@@ -3,6 +3,8 @@ takes (``plain``) and as a titled list in a summary (``listing``)."""
 
 from __future__ import annotations
 
+import enum
+
 import math
 from dataclasses import fields, is_dataclass
 from typing import Any
@@ -23,7 +25,9 @@ def listing(L: list[str], title: str, items, fmt, first: int = 10) -> None:
 
 def plain(x: Any) -> Any:
     """``x`` as JSON takes it: dataclasses as dicts, sequences and arrays as lists, NumPy
-    scalars as Python's, a non-finite float as None (null)."""
+    scalars as Python's, an enum as its value, a non-finite float as None (null)."""
+    if isinstance(x, enum.Enum):
+        return x.value
     if is_dataclass(x) and not isinstance(x, type):
         return {f.name: plain(getattr(x, f.name)) for f in fields(x)}
     if isinstance(x, (list, tuple)):

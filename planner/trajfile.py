@@ -252,6 +252,9 @@ def parse_trajectory(text: str, path: str = "<memory>",
         lines.pop()
     if len(lines) < 2 or not lines[0].startswith("# "):
         raise InputError(f"{path}: not a hand-trajectory file (no metadata line)")
+    if lines[0].endswith("\r") or lines[1].endswith("\r"):
+        raise InputError(f"{path}: its lines end in CR LF (a Windows editor?); the format's "
+                         "line ends are LF alone (spec section 4)")
     meta = _metadata(lines[0], path)
     end = _end_marker(lines[-1])
     if end is not None:

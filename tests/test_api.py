@@ -26,8 +26,10 @@ def test_the_readme_api_example_runs(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     exec(compile(_readme_example(), "README.md", "exec"), {})  # noqa: S102 (the README's own code)
     out = capsys.readouterr().out.splitlines()
-    assert out[0] == "14 of 14 notes played; frame F1 1.0"
-    assert out[1].startswith("True 1.0 (")
+    # (jerk-limited moves, issue 30: twinkle 1.0 -> 0.9826, frames lost around a move of
+    # the hand)
+    assert out[0] == "14 of 14 notes played; frame F1 0.9826"
+    assert out[1].startswith("True 0.98258")
     assert sorted(os.listdir(tmp_path)) == ["songs", "twinkle.csv"]
 
 

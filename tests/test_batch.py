@@ -110,3 +110,26 @@ def test_a_cluster_that_cannot_be_joined_is_one_clear_error(songs, tmp_path, mon
                        r"cluster \(Failed to connect to Ray cluster at 10\.0\.0\.9:6379\)"):
         batch_plan(songs, tmp_path / "out", address="10.0.0.9:6379")
     assert not (tmp_path / "out" / "summary.json").exists()
+
+
+def test_physics_replays_every_plan_and_records_its_verdict(tmp_path):
+    """``batch --physics``: each plan replayed in MuJoCo (full contact); its physics F1,
+    wrong keys and longest motor saturation in the record and the summary; a record
+    made without physics is planned again for a physics batch."""
+    d = tmp_path / "songs"
+    d.mkdir()
+    (d / "twinkle.mid").write_bytes((ROOT / "songs" / "twinkle.mid").read_bytes())
+    plain = batch_plan(d, tmp_path / "out", workers=1)
+    assert plain.results[0].physics_f1 is None
+    phys = batch_plan(d, tmp_path / "out", workers=1, physics=True)
+    r = phys.results[0]
+    assert not r.skipped and r.physics_f1 is not None and 0.0 <= r.physics_f1 <= 1.0
+    assert r.physics_wrong_keys >= 0 and r.physics_saturated_ms >= 0.0
+    assert phys.ok == (r.check_ok and r.physics_ok)
+    header = (tmp_path / "out" / "summary.csv").read_text().splitlines()[0].split(",")
+    assert header[-4:] == ["physics_f1", "physics_wrong_keys", "physics_saturated_ms",
+                           "physics_ok"]
+    rec = json.loads((tmp_path / "out" / "twinkle.json").read_text())
+    assert rec["physics_f1"] == r.physics_f1
+    again = batch_plan(d, tmp_path / "out", workers=1, physics=True)
+    assert again.results[0].skipped and again.results[0].physics_f1 == r.physics_f1

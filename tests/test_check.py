@@ -176,8 +176,9 @@ def test_good_trajectory_passes(good, hand):
         ("C4", 0.3, 0.6, ("index",)), ("D4", 1.1, 1.4, ("middle",)),
         ("E4", 1.9, 2.2, ("ring",)), ("C#4", 2.7, 3.0, ("index",))]
     assert {lc.category for lc in r.limits} == {
-        "joint_position", "joint_velocity", "joint_acceleration", "motor_velocity",
-        "motor_consistency", "motor_torque", "coupling", "tendon_tension"}
+        "joint_position", "joint_stop_margin", "joint_velocity", "joint_acceleration",
+        "joint_jerk", "motor_velocity", "motor_consistency", "motor_torque", "coupling",
+        "tendon_tension"}
     assert all(lc.ok for lc in r.limits)
     d = json.loads(json.dumps(r.to_dict()))
     assert d["ok"] is True and d["play"]["f1"] == 1.0 and "replay" not in d
@@ -280,6 +281,54 @@ def test_too_fast_step(tmp_path, hand, good):
     a = _limit(r, "joint_acceleration")
     assert a.count == 2 and a.name == "thumb_ip"
     assert not r.ok
+
+
+def test_jerky_row_flagged(tmp_path, hand, good):
+    """One row half the jerk bound x dt^3 out of line: its third differences (1, -3, 3,
+    -1 times the offset over dt^3) put two rows' jerks at 1.5 x the bound (the other two
+    at 0.5 x), while the acceleration (2 x the offset / dt^2) stays within its limit."""
+    _, _, t, q = good
+    q = q.copy()
+    j = hand.index["index_mcp_abd"]
+    dt = 1.0 / RATE
+    off = 0.5 * hand.jerk[j] * dt ** 3  # 4.2e-3 rad (a jerk bound of 8333 rad/s^3)
+    q[150, j] += off
+    r = check_trajectory(write_traj(tmp_path / "j.csv", hand, t, q))
+    lc = _limit(r, "joint_jerk")
+    assert lc.name == "index_mcp_abd" and lc.limit == hand.jerk[j]
+    assert lc.count == 2
+    assert lc.worst == pytest.approx(3 * off / dt ** 3, rel=1e-3)
+    assert lc.time_s in (1.49, 1.5)
+    assert _limit(r, "joint_acceleration").ok and _limit(r, "joint_velocity").ok
+    assert not r.ok and any("joint jerk violations" in p for p in r.problems)
+    # a tenth of that offset: 0.15 of the bound, no violation
+    q[150, j] -= 0.9 * off
+    assert _limit(check_trajectory(write_traj(tmp_path / "j2.csv", hand, t, q)),
+                  "joint_jerk").ok
+
+
+def test_row_on_a_stop_flagged(tmp_path, hand, good):
+    """Rows with thumb_ip on its hard stop (0 rad): inside its 2 deg margin, counted by
+    joint_stop_margin, while joint_position (the hard stops) passes; a row 1 deg off the
+    stop is counted too, one at the margin's edge is not."""
+    _, _, t, q = good
+    j = hand.index["thumb_ip"]
+    assert hand.stop_margin[j] == pytest.approx(np.radians(2.0))
+    q = q.copy()
+    q[:, j] = np.radians(2.0)  # at the margin's edge: the plan's lowest
+    r = check_trajectory(write_traj(tmp_path / "edge.csv", hand, t, q))
+    assert _limit(r, "joint_stop_margin").ok and r.ok, r.summary()
+    q[:, j] = 0.0  # the hard stop, in every row
+    r = check_trajectory(write_traj(tmp_path / "stop.csv", hand, t, q))
+    lc = _limit(r, "joint_stop_margin")
+    assert lc.count == len(t) and lc.name == "thumb_ip"
+    assert lc.worst == 0.0 and lc.limit == pytest.approx(np.radians(2.0))
+    assert _limit(r, "joint_position").ok
+    assert not r.ok and any("joint stop margin violations" in p for p in r.problems)
+    q[:, j] = np.radians(2.0)
+    q[200:210, j] = np.radians(1.0)  # ten rows 1 deg off the stop (a slow dip: no jerk)
+    r = check_trajectory(write_traj(tmp_path / "near.csv", hand, t, q))
+    assert _limit(r, "joint_stop_margin").count == 10
 
 
 def test_motor_column_inconsistent(tmp_path, hand, good):

@@ -39,7 +39,7 @@ def test_hand_summary() -> None:
     r = run_cli("hand")
     assert r.returncode == 0 and r.stderr == ""
     assert r.stdout.startswith("hand default: ")
-    assert "21 hand joints (17 independent) + rail" in r.stdout
+    assert "21 hand joints (17 independent) + rig: rail, reach" in r.stdout
     assert f"urdf_sha256 {load_hand('default').urdf_sha256}" in r.stdout
     for f in ("index", "middle", "ring", "pinky"):
         assert f"{f}_dip = 0.667 x {f}_pip" in r.stdout

@@ -61,7 +61,7 @@ def urdf_root(hand) -> ET.Element:
 # =========================================================================== URDF
 def test_urdf_loads_in_pinocchio(hand) -> None:
     model = pin.buildModelFromXML(hand.urdf)
-    assert model.nq == model.nv == 22
+    assert model.nq == model.nv == 23  # 21 hand joints, the rail and the reach
     for frame in (*TIP_FRAMES, PALM_FRAME):
         assert model.existFrame(frame), frame
     assert set(model.names[1:]) == set(hand.joint_names)
@@ -76,20 +76,21 @@ def test_urdf_loads_in_placo(hand, tmp_path: Path) -> None:
     assert set(robot.joint_names()) == set(hand.joint_names)
     frames = set(robot.frame_names())
     assert {*TIP_FRAMES, PALM_FRAME} <= frames
-    assert robot.total_mass() == pytest.approx(2.675, abs=1e-12)
+    assert robot.total_mass() == pytest.approx(2.925, abs=1e-12)
 
 
-def test_dof_21_hand_joints_plus_rail(hand, urdf_root) -> None:
-    """Seed Table 1: ~20 +/- 1 DOF. 3 thumb + 4 x 4 fingers + 2 wrist = 21, plus the rail."""
+def test_dof_21_hand_joints_plus_rail_and_reach(hand, urdf_root) -> None:
+    """Seed Table 1: ~20 +/- 1 DOF. 3 thumb + 4 x 4 fingers + 2 wrist = 21, plus the rig's
+    rail and reach."""
     movable = [j for j in urdf_root.iter("joint") if j.get("type") != "fixed"]
-    assert len(movable) == 22
+    assert len(movable) == 23
     kinds = {j.get("name"): j.get("type") for j in movable}
-    assert kinds.pop("rail") == "prismatic"
+    assert kinds.pop("rail") == kinds.pop("reach") == "prismatic"
     assert len(kinds) == 21 and 19 <= len(kinds) <= 21
     assert set(kinds.values()) == {"revolute"}
-    assert hand.n == 22 and sum(1 for n in hand.joint_names if n != "rail") == 21
-    # 4 DIPs follow their PIPs: 17 independent hand joints
-    assert len(hand.couplings) == 4 and len(hand.independent) == 18
+    assert hand.n == 23 and sum(1 for n in hand.joint_names if n not in ("rail", "reach")) == 21
+    # 4 DIPs follow their PIPs: 17 independent hand joints, and the rig's two
+    assert len(hand.couplings) == 4 and len(hand.independent) == 19
 
 
 def test_every_movable_joint_is_named(hand, urdf_root) -> None:
@@ -191,11 +192,12 @@ def test_thumb_and_palm_lengths(urdf_root) -> None:
 
 # =========================================================================== mass
 def test_total_mass_and_inertias(hand) -> None:
-    """Seed Table 1: 2.5-3 kg. Model: 2.675 kg, of which 0.25 kg is the rail carriage."""
+    """Seed Table 1: 2.5-3 kg. Model: 2.925 kg, of which 0.25 kg is the rail carriage and
+    0.25 kg the reach axis's carriage (the rig's, not the hand's: the hand is 2.425 kg)."""
     model = pin.buildModelFromXML(hand.urdf)
     total = sum(inertia.mass for inertia in model.inertias)
     assert 2.5 <= total <= 3.0
-    assert total == pytest.approx(2.675, abs=1e-12)
+    assert total == pytest.approx(2.925, abs=1e-12)
     assert total == pytest.approx(sum(lk.mass_kg for lk in hand.spec.links), abs=1e-12)
     for name, inertia in zip(model.names, model.inertias):
         if name == "universe":

@@ -18,6 +18,7 @@ import pytest
 from planner.errors import InputError
 from planner.hand.builders import load_hand_spec
 from planner.hand.model import HandModel, load_hand
+from planner.hand.spec import list_hands
 from tests.handfiles import (
     DEFAULT_TOML,
     LONG_FINGERS,
@@ -173,7 +174,40 @@ def test_error_zero_or_negative_transmission(tmp_path: Path) -> None:
 
 def test_error_negative_rotor_inertia(tmp_path: Path) -> None:
     text = edit(default_text(), "motor_rotor_inertia_g_cm2 = 34.9", "motor_rotor_inertia_g_cm2 = -1")
-    _one_line_error(tmp_path, text, "'motor_rotor_inertia_g_cm2' must not be negative")
+    _one_line_error(tmp_path, text, "'tendon.motor_rotor_inertia_g_cm2' = -1 is outside "
+                    "[0, 1e+07] g cm^2")
+
+
+# (issue 32: every number of a hand file checked on load against its unit's range; the
+# one line names the key, its value and the range)
+OUT_OF_RANGE = [
+    ("velocity_cap_rad_s = 20.0", "velocity_cap_rad_s = 0.0",
+     "'finger_speed.velocity_cap_rad_s' = 0.0 is outside [0.1, 100000] rad/s"),
+    ("velocity_cap_rad_s = 20.0", "velocity_cap_rad_s = 1e-6",
+     "'finger_speed.velocity_cap_rad_s' = 1e-06 is outside [0.1, 100000] rad/s"),
+    ("velocity_cap_rad_s = 20.0", "velocity_cap_rad_s = 1e300",
+     "'finger_speed.velocity_cap_rad_s' = 1e+300 is outside [0.1, 100000] rad/s"),
+    ("acceleration_rad_s2 = 500.0", "acceleration_rad_s2 = 1e300",
+     "'finger_speed.acceleration_rad_s2' = 1e+300 is outside [1, 1e+06] rad/s^2"),
+    ("mass_kg = 0.40", "mass_kg = -1.0", "'palm.mass_kg' = -1.0 is outside (0, 100] kg"),
+    ("mass_kg = 0.40", "mass_kg = 0", "'palm.mass_kg' = 0 is outside (0, 100] kg"),
+    ("masses_kg = { base = 0.035", "masses_kg = { base = -0.035",
+     "'finger[0].masses_kg.base' = -0.035 is outside (0, 100] kg"),
+    ("velocity_m_s = 3.0", "velocity_m_s = 0.0", "'rail.velocity_m_s' = 0.0 is outside"),
+    ("acceleration_m_s2 = 40.0", "acceleration_m_s2 = 1e9", "'rail.acceleration_m_s2' = 1000000000.0"),
+    ("design_force_n = 40.0", "design_force_n = 0.0", "'tendon.design_force_n' = 0.0 is outside"),
+    ('name = "default"', 'name = "de\\u0007fault"', "'name' is not printable text"),
+]
+
+
+@pytest.mark.parametrize("old,new,needle", OUT_OF_RANGE, ids=[n for _, n, _ in OUT_OF_RANGE])
+def test_every_number_is_checked_against_its_unit(tmp_path: Path, old, new, needle) -> None:
+    _one_line_error(tmp_path, edit(default_text(), old, new), needle)
+
+
+def test_the_shipped_hands_are_within_every_range() -> None:
+    for name in list_hands():
+        load_hand_spec(name)
 
 
 def test_error_unreadable_hand_file(tmp_path: Path) -> None:

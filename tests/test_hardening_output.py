@@ -282,7 +282,8 @@ def test_same_song_same_bytes_in_different_directories(tmp_path):
     # no time of day or date anywhere in the metadata
     assert not re.search(r"\d{1,2}:\d{2}|\d{4}-\d{2}-\d{2}", meta_line), meta_line
     assert set(meta) == {"format", "version", "task", "hand", "urdf_sha256", "T_world_root",
-                         "rate_hz", "song", "notes", "track", "channel", "transpose"}
+                         "rate_hz", "song", "notes", "track", "channel", "transpose",
+                         "song_start_s"}
 
 
 def test_in_process_run_gives_the_same_bytes_as_a_subprocess(capsys, tmp_path):

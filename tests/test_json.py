@@ -34,7 +34,7 @@ CATCH = {"command": str, "feasible": bool, "reasons": list, "reason_kinds": list
 HAND = {"command": str, "name": str, "description": str, "urdf_sha256": str, "rail": bool,
         "fingers": list, "joints": list, "couplings": list, "actuators": list}
 JOINT = {"name": str, "lower": NUM, "upper": NUM, "velocity": NUM, "acceleration": NUM,
-         "unit": str}
+         "jerk": NUM, "stop_margin": NUM, "unit": str}
 
 
 def _shaped(obj: dict, schema: dict) -> None:

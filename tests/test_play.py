@@ -152,9 +152,10 @@ def _random_walk(seed: int, n: int, tempo_bpm: float, leap_p: float) -> list:
     return out
 
 
-# frame F1 measured with this version (0.984, 0.982, 0.990), less 0.01
-@pytest.mark.parametrize("seed,tempo,leaps,f1", [(3, 140, 0.1, 0.974), (5, 240, 0.05, 0.972),
-                                                 (11, 100, 0.4, 0.980)])
+# frame F1 measured with this version (0.958, 0.964, 0.973), less 0.01 (with moves
+# bang-bang at the acceleration limits, before issue 30's jerk bounds: 0.984, 0.982, 0.990)
+@pytest.mark.parametrize("seed,tempo,leaps,f1", [(3, 140, 0.1, 0.948), (5, 240, 0.05, 0.954),
+                                                 (11, 100, 0.4, 0.963)])
 def test_random_melodies_are_played_safely(planner, tmp_path, seed, tempo, leaps, f1):
     """Melodies over three octaves at three speeds, with leaps: safe, honest, and played
     as well as this version plays them."""
@@ -221,8 +222,10 @@ def test_a_held_key_the_hand_must_leave_is_let_go_and_named(planner, tmp_path):
 
 
 # frame F1 measured with this version (0.949, 1.0, 1.0), less 0.01
-@pytest.mark.parametrize("name,f1", [("melody_over_held_bass", 0.939), ("trill_sections", 0.99),
-                                     ("trill_cascade", 0.99)])
+# (jerk-limited moves, issue 30: 0.949, 1.0, 1.0 -> 0.935, 0.881, 0.889; a short move
+# bound by jerk takes 4 (d / 2 j)^(1/3), twice the bang-bang time of a repeated key)
+@pytest.mark.parametrize("name,f1", [("melody_over_held_bass", 0.925), ("trill_sections", 0.871),
+                                     ("trill_cascade", 0.878)])
 def test_regression_songs(planner, name, f1, tmp_path):
     """Random songs the first planner once did badly on (tests/data/README.md)."""
     song = ROOT / "tests" / "data" / f"{name}.mid"

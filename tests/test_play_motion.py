@@ -31,7 +31,8 @@ def test_a_track_sampled_at_once_is_its_segments_row_by_row():
         for _ in range(rng.integers(0, 8)):
             qb = q + 0.3 * rng.normal(size=3)
             t = track.add(t + rng.uniform(0.0, 0.3),
-                          straight_move(q, qb, np.full(3, 3.0), np.full(3, 50.0)))
+                          straight_move(q, qb, np.full(3, 3.0), np.full(3, 50.0),
+                                        np.full(3, 2000.0)))
             q = qb
         t_s = np.sort(rng.uniform(0.0, 3.0, size=rng.integers(1, 300)))
         assert np.array_equal(track.at(t_s, q0), _reference(track, t_s, q0))

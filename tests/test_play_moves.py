@@ -80,10 +80,17 @@ def test_shipped_follows_equal_the_forward_kinematics(moves, by_fk):
     rng = np.random.default_rng(5)
     E = _entries(moves)
     seen = {True: 0, False: 0}
-    for _ in range(300):
+    pairs = []
+    for _ in range(3000):  # (300 random pairs, and the first 20 the table finds not clear:
+        # 0.1 % of them, the stop margins keeping the fingers from their widest reach)
         a = E[rng.integers(len(E))]
         same_key = [e for e in E if e.finger == a.finger and e.pitch_class == a.pitch_class]
         b = same_key[rng.integers(len(same_key))]
+        if len(pairs) < 300 or (not moves.table.follow_clear(a, b) and seen[False] < 20):
+            seen[False] += len(pairs) >= 300
+            pairs.append((a, b))
+    seen[False] = 0
+    for a, b in pairs:
         fk = by_fk._follow(a, b) is not None
         assert moves.table.follow_clear(a, b) is fk
         seen[fk] += 1

@@ -54,7 +54,8 @@ def test_the_planner_moves_the_rail_within_the_cap(planner):
         rail_acceleration_cap(planner.hand, [planner.atlas.base, planner.atlas.park()]))
     assert planner.moves.acceleration[r] < planner.hand.acceleration[r]
     move = planner.moves.rail_move(0.0, 0.3)
-    assert move.a * abs(move.dq[0]) <= planner.moves.acceleration[r] + 1e-9
+    assert move.peak_acceleration * abs(move.dq[0]) <= planner.moves.acceleration[r] + 1e-9
+    assert move.jerk * abs(move.dq[0]) <= planner.moves.jerk[r] + 1e-9
 
 
 def test_check_judges_the_inertia_a_play_asks_of_the_motors(planner, tmp_path):

@@ -149,6 +149,7 @@ def test_play_html(play_report, tmp_path, monkeypatch):
         raise AssertionError("write_html must not start meshcat's server")
 
     monkeypatch.setattr(meshcat.visualizer, "start_zmq_server_as_subprocess", no_server)
+    (tmp_path / "a").mkdir()  # (no folder is created for it: issue 32)
     out = write_html(play_report, str(tmp_path / "a" / "play.html"))
     text = _read(out)
     assert text.startswith("<!DOCTYPE html>") and "MeshCat.Viewer" in text
@@ -172,6 +173,7 @@ def test_play_html(play_report, tmp_path, monkeypatch):
     assert z.max() == pytest.approx(0.0, abs=1e-7) and z.min() == pytest.approx(-0.010, abs=1e-6)
     assert "/meshcat/keyboard/71" not in clips  # B4 is never touched
     # deterministic
+    (tmp_path / "b").mkdir()
     out2 = write_html(play_report, str(tmp_path / "b" / "play.html"))
     assert _read(out2) == _read(out)
 

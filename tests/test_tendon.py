@@ -135,7 +135,7 @@ def test_higher_design_force_leaves_the_motor_limiting(tmp_path) -> None:
 
 @pytest.mark.parametrize("edit, needle", [
     (("design_force_n = 40.0\n", ""), "missing key 'design_force_n'"),
-    (("design_force_n = 40.0", "design_force_n = -1.0"), "'design_force_n' must be positive"),
+    (("design_force_n = 40.0", "design_force_n = -1.0"), "'tendon.design_force_n' = -1.0 is outside"),
     (("design_force_n = 40.0", 'design_force_n = "strong"'), "must be a finite number"),
 ])
 def test_bad_design_force(tmp_path, edit, needle) -> None:

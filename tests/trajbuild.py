@@ -50,11 +50,13 @@ def _idx(hand, *names):
 
 
 def base_posture(hand, wrist_deg=20.0):
+    """The neutral hand, the long fingers hyperextended: every joint its stop margin off
+    its stops (``HandModel.plan_lower``, ``plan_upper``), as a plan's rows keep them."""
     q = hand.q_neutral.copy()
     for f in ("index", "middle", "ring", "pinky"):
         q[hand.index[f"{f}_mcp_flex"]] = np.radians(-20.0)
     q[hand.index["wrist_flex"]] = np.radians(wrist_deg)
-    return hand.apply_couplings(q)
+    return hand.apply_couplings(np.clip(q, hand.plan_lower, hand.plan_upper))
 
 
 @cache
@@ -79,7 +81,7 @@ def _press_posture(pitch, finger, depth):
         dq = Ja.T @ np.linalg.solve(Ja @ Ja.T + 1e-6 * np.eye(3), e)
         dq *= min(1.0, 0.1 / np.max(np.abs(dq)))
         q[act] += dq
-        q = hand.apply_couplings(np.clip(q, hand.lower, hand.upper))
+        q = hand.apply_couplings(np.clip(q, hand.plan_lower, hand.plan_upper))
     assert np.linalg.norm(target - hand.tip_positions(q)[fi]) < 1e-7, "test IK failed"
     return q
 

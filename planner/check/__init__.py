@@ -33,9 +33,10 @@ body; reported on every play, the verdict only with ``bodies`` (``check --bodies
 while the planner is rebuilt to meet it (issue 30).
 
 The verdict fails on key-bed hits, wrong presses, limit violations, a failed
-catch, F1 under ``min_f1``, and on any note whose outcome the plan's end marker
-states otherwise than the replay finds (``left_out``: the notes it says it left
-out, every other note it says it played). ``strict`` also fails it on any missed
+catch, F1 under ``min_f1``, and on any claim of the plan's end marker the replay
+contradicts (``planner.check.claims``): its ``notes`` and ``played`` counts, and
+every note's outcome (``left_out``: the notes it says it left out, every other
+note it says it played). A claim of the wrong type is bad input. ``strict`` also fails it on any missed
 or late note.
 
 Independence: this package shares only the hand model, the keyboard geometry,
@@ -117,6 +118,14 @@ import numpy as np
 
 from planner.check.ball import ball_params, ball_positions, catch_audit, is_num
 from planner.check.bodykeys import body_keys, body_problems, judge_bodies
+from planner.check.claims import (
+    ClaimKey,
+    CountMismatch,
+    PlayClaims,
+    count_mismatches,
+    left_out_notes,
+    read_claims,
+)
 from planner.check.criteria import (
     DOWN_DEPTH_M,
     GRASP_MIN_TIPS,
@@ -171,7 +180,10 @@ __all__ = [
     "NOTE_HIT_FRACTION",
     "CatchResult",
     "CheckReport",
+    "ClaimKey",
     "ClaimMismatch",
+    "CountMismatch",
+    "PlayClaims",
     "KeyBedHit",
     "KeyContacts",
     "KeyEpisode",
@@ -185,6 +197,7 @@ __all__ = [
     "ball_params",
     "ball_positions",
     "catch_audit",
+    "count_mismatches",
     "check_trajectory",
     "expected_keys",
     "fk_frames",
@@ -194,6 +207,8 @@ __all__ = [
     "key_contacts",
     "key_episodes",
     "keys_down",
+    "left_out_notes",
+    "read_claims",
     "pitch_name",
     "song_frames",
 ]
@@ -225,6 +240,9 @@ def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list
         problems.append(f"{len(play.claim_mismatches)} notes the plan claims otherwise than the "
                         f"replay finds (first: {c.name} at {c.onset_s:.3f} s, claimed {c.claimed},"
                         f" {c.found})")
+    for c in play.count_mismatches:
+        problems.append(f"the end marker claims {c.key.value} = {c.claimed}, the replay finds "
+                        f"{c.found} ({c.detail})")
     if min_f1 is not None and play.f1 < min_f1:
         problems.append(f"frame F1 {play.f1:.4f} < {min_f1:g}")
     if strict and play.missed:
@@ -250,6 +268,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     and wrong presses, read with ``song_options`` (``track``, ``channel``, ``transpose``;
     each defaults to the file's metadata). ``min_f1``: the verdict also requires frame F1 >= this (needs a
     song). ``strict``: the verdict also fails on any missed or late note.
+    ``name``: what messages call a ``Trajectory`` given read already (its file).
     ``hand_override``: a hand name / hand file or a HandModel to use instead of
     metadata["hand"] (its URDF hash must still match the file's).
     Raises InputError when the file cannot be replayed: damaged or incomplete (unless
@@ -277,11 +296,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     pressing = ball_load = body_result = None
     if task == "play":
         play, kc, exp = play_replay(tr, tips, notes)
-        if notes is not None:
-            left_out = plan.left_out(len(notes))
-            if left_out is not None:
-                missed = {m.note for m in play.missed}
-                play = _with_claims(play, _claim_mismatches(notes, missed, left_out))
+        play = _held_to_claims(play, notes, tr.end, traj_path)
         pressing = np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
         replay_kw = {"down": kc.down, "finger": kc.finger, "expected": exp}
         problems.extend(_play_problems(play, min_f1, strict))
@@ -310,7 +325,17 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
         song_start_s=song_start_s(meta), bodies=body_result)
 
 
-def _with_claims(play: PlayResult, mismatches: list[ClaimMismatch]) -> PlayResult:
+def _held_to_claims(play: PlayResult, notes, end: dict[str, Any], path: str) -> PlayResult:
+    """``play`` with the end marker's claims held against it: every count and every
+    note's outcome (types are checked without a song too)."""
     import dataclasses
 
-    return dataclasses.replace(play, claims=True, claim_mismatches=tuple(mismatches))
+    claims = read_claims(end, None if notes is None else len(notes), path)
+    if notes is None or claims == PlayClaims(None, None, None):
+        return play
+    missed = {m.note for m in play.missed}
+    per_note = ([] if claims.left_out is None
+                else _claim_mismatches(notes, missed, claims.left_out))
+    return dataclasses.replace(play, claims=True, claim_mismatches=tuple(per_note),
+                               count_mismatches=tuple(count_mismatches(claims, len(notes),
+                                                                       len(missed))))

@@ -1,7 +1,9 @@
 """The limit audit of a replay: joint positions, speeds, accelerations, motor speeds,
 motor columns against the joints, couplings, static motor torque and the tendons'
 tensions (planner.hand.tendon: tension at the spool = motor torque / spool radius,
-bounded by the cable's design force)."""
+bounded by the cable's design force); of a play's rows also the joints' jerks (third
+differences) and the rows closer to a hard stop than the joint's stop margin
+(planner.hand.drive: rows a controller can run)."""
 
 from __future__ import annotations
 
@@ -44,6 +46,9 @@ def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips:
     t, Q, QM = tr.t_s, tr.q, tr.q_motor
     out = [_position_check(hand, t, Q), *_rate_checks(hand, t, Q, QM),
            _motor_consistency(hand, t, Q, QM), _coupling_check(hand, t, Q)]
+    if inertia:  # (a play: rows for the hand's controller)
+        out[1:1] = [stop_margin_check(hand, t, Q)]
+        out.append(jerk_check(hand, t, Q))
     tau = _joint_torques(kin, Q, pressing_tips, ball_load)
     if inertia:
         tau += _inertial_torques(kin, t, Q)
@@ -71,6 +76,39 @@ def _position_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck
     return LimitCheck("joint_position", int(np.count_nonzero(excess > POSITION_TOL)),
                       float(Q[r, c]), float(bound[r, c]), hand.joint_names[c], float(t[r]),
                       "rad|m")
+
+
+def stop_margin_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck:
+    """Rows closer to a hard stop than the joint's stop margin (outside the planner's
+    limits, ``HandModel.plan_lower``/``plan_upper``), the file's rounding allowed:
+    ``worst`` is the least room to a stop (rad or m), ``limit`` that joint's margin."""
+    lo = np.where(np.isfinite(hand.lower), hand.lower, -np.inf)
+    hi = np.where(np.isfinite(hand.upper), hand.upper, np.inf)
+    room = np.minimum(Q - lo, hi - Q)
+    short = hand.stop_margin - room  # > 0: inside the margin (or past the stop)
+    margin = np.broadcast_to(hand.stop_margin, Q.shape)
+    if short.size == 0:
+        return LimitCheck("joint_stop_margin", 0, 0.0, 0.0, "", 0.0, "rad|m")
+    r, c = np.unravel_index(int(np.argmax(short)), short.shape)
+    return LimitCheck("joint_stop_margin", int(np.count_nonzero(short > POSITION_TOL)),
+                      float(room[r, c]), float(margin[r, c]), hand.joint_names[c],
+                      float(t[r]), "rad|m")
+
+
+def jerk_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck:
+    """Joint jerks: differences of the rows' accelerations (second differences, as
+    ``joint_acceleration``) over their spacing, i.e. third differences, against each
+    joint's jerk bound with ``RATE_TOL`` of it and the file's rounding (8 half quanta
+    through the coefficients 1, 3, 3, 1)."""
+    if len(t) < 4:
+        return LimitCheck("joint_jerk", 0, 0.0, 0.0, "", 0.0, "rad/s^3|m/s^3")
+    dt = np.diff(t)
+    V = np.diff(Q, axis=0) / dt[:, None]
+    A = np.diff(V, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]  # at t[1:-1]
+    J = np.diff(A, axis=0) / np.diff(t[1:-1])[:, None]  # between t[1:-2] and t[2:-1]
+    tol = RATE_TOL * hand.jerk + 4 * FILE_QUANTUM / (dt[2:] * dt[1:-1] * dt[:-2])[:, None]
+    return _worst("joint_jerk", np.abs(J) / hand.jerk, np.abs(J), hand.jerk, tol,
+                  hand.joint_names, t[2:-1], "rad/s^3|m/s^3")
 
 
 def _rate_checks(hand: HandModel, t: np.ndarray, Q: np.ndarray, QM: np.ndarray

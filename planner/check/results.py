@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from planner.check.ballroll import ROLL_ROOM_M
+from planner.check.claims import CountMismatch
 from planner.check.criteria import BODY_BED_DEPTH_M, INTERCEPT_TOL_M, KEY_BED_DEPTH_M
 from planner.resultform import listing, plain
 
@@ -167,6 +168,7 @@ class PlayResult:
     song_frames: int | None = None  # the frames F1 is computed over
     claims: bool = False  # the file's end marker states per-note outcomes
     claim_mismatches: tuple[ClaimMismatch, ...] = ()
+    count_mismatches: tuple[CountMismatch, ...] = ()  # the marker's counts the replay contradicts
 
     @property
     def hit_rate(self) -> float | None:
@@ -325,6 +327,8 @@ class CheckReport:
             listing(L, "claims the replay contradicts", p.claim_mismatches, lambda c: (
                 f"{c.onset_s:8.3f} s  {c.name:4s} ({c.pitch})  note {c.note}: the plan says "
                 f"{c.claimed}, the replay finds it {c.found}"))
+            listing(L, "counts the replay contradicts", p.count_mismatches, lambda c: (
+                f"{c.key.value}: the plan says {c.claimed}, the replay finds {c.found}"))
             listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
                 f"{h.time_s:8.3f} s  {h.finger:6s} {h.name:4s} ({h.pitch})  "
                 f"{h.depth_m * 1000:.2f} mm below the top (max {KEY_BED_DEPTH_M * 1000:g})"))

@@ -19,6 +19,7 @@ import signal
 import sys
 
 from planner.cli import batch, catch, check, hand, play, simulate
+from planner.cli.options import check_artefacts, refuse_closed_stdout
 
 EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE  # 141
 EPILOG = """examples:
@@ -108,13 +109,50 @@ def _refuse_json_with_stdout(a: argparse.Namespace) -> None:
         raise InputError(f"--json writes its object on stdout: the {what} needs a path")
 
 
+# (below this address-space limit, ``ulimit -v``, the numerical libraries cannot start, and
+# OpenBLAS may spin forever retrying its buffer (seen at 230 MB; twinkle plans at 250 MB);
+# above it, a shortage ends in MemoryError or ImportError, one line)
+MIN_ADDRESS_SPACE = 256 << 20
+
+
+def _address_space_refused() -> str | None:
+    """The one line when ``ulimit -v`` is too small to start; under any limit, OpenBLAS
+    keeps to one thread (with a thread's buffers per core it spins forever retrying them
+    when the limit cannot hold them all)."""
+    import resource
+
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft == resource.RLIM_INFINITY:
+        return None
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    if soft >= MIN_ADDRESS_SPACE:
+        return None
+    return (f"the address-space limit (ulimit -v) is {soft >> 20} MiB; the planner needs at "
+            f"least {MIN_ADDRESS_SPACE >> 20} MiB to start")
+
+
+def _out_of_memory(e: BaseException) -> str:
+    what = one_line(e)[:200]
+    limit = _address_space_refused() or "is the address-space limit (ulimit -v) too small?"
+    return f"out of memory ({type(e).__name__}{': ' + what if what else ''}); {limit}"
+
+
 def main(argv: list[str] | None = None) -> int:
+    from planner.output import reopen_closed_stdio
+
+    closed = reopen_closed_stdio()  # (a stream the shell closed: /dev/null)
+    refused = _address_space_refused()
+    if refused:
+        sys.stderr.write(f"error: {refused}\n")
+        return 2
     args = build_parser().parse_args(argv)
     from planner.errors import InfeasibleError, InputError, PlannerError
 
     _follow_signals()
     try:
         _refuse_json_with_stdout(args)
+        refuse_closed_stdout(args, closed)
+        check_artefacts(args)  # (every output path, before any planning)
         rc = COMMANDS[args.command].run(args)
         sys.stdout.flush()
         return rc
@@ -130,6 +168,9 @@ def main(argv: list[str] | None = None) -> int:
     except PlannerError as e:
         sys.stderr.write(f"failed: {one_line(e)}\n")
         return 1
+    except (MemoryError, ImportError) as e:  # (``ulimit -v``: an allocation or a library
+        sys.stderr.write(f"error: {_out_of_memory(e)}\n")  # that cannot be mapped)
+        return 2
     except KeyboardInterrupt as e:
         signum = e.signum if isinstance(e, Interrupted) else signal.SIGINT
         sys.stderr.write(f"interrupted ({signal.Signals(signum).name})\n")

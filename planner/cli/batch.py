@@ -17,6 +17,9 @@ def add_parser(sub) -> None:
     b.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
     b.add_argument("--address", default=None,
                    help="run on a Ray cluster at this address ('local': a local Ray)")
+    b.add_argument("--physics", action="store_true",
+                   help="replay every plan in MuJoCo too (full contact; the physics extra): "
+                        "physics F1, wrong keys and motor saturation in the summary")
     b.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
 
@@ -26,10 +29,12 @@ def run(a: argparse.Namespace) -> int:
 
     with progress_bar("song", enabled=not a.json) as bar:
         summary = batch_plan(a.songs, a.out, workers=a.workers, hand=a.hand,
-                             address=a.address,
+                             address=a.address, physics=a.physics,
                              on_result=None if a.json else (
                                  lambda r: bar.write(format_song_line(r))),
-                             on_progress=bar.update)
+                             on_progress=bar.update,
+                             on_skip=None if a.json else (
+                                 lambda e, why: bar.write(f"{e}: skipped ({why})")))
     if a.json:
         sys.stdout.write(json.dumps(summary.to_dict()) + "\n")
     else:

@@ -5,6 +5,15 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from planner.errors import InputError
+from planner.output import (
+    DIR_OPTIONS,
+    FILE_OPTIONS,
+    STDOUT,
+    check_dir_target,
+    check_file_target,
+)
+
 
 def add_pictures(parser) -> None:
     """``--report DIR`` and ``--html FILE`` (play, catch, check: the checked plan drawn)."""
@@ -47,3 +56,30 @@ def draw_checked(report, report_dir: str | None, html_path: str | None,
     from planner.report import draw_reports
 
     draw_reports(report, report_dir, html_path, enabled)
+
+
+def check_artefacts(args) -> None:
+    """Every output path a command's options name (``FILE_OPTIONS``, ``DIR_OPTIONS``),
+    checked before any planning with the rules of ``check_file_target`` and
+    ``check_dir_target``."""
+    for option in FILE_OPTIONS:
+        path = getattr(args, option, None)
+        if isinstance(path, str):
+            check_file_target(path, option)
+    for option in DIR_OPTIONS:
+        path = getattr(args, option, None)
+        if isinstance(path, str):
+            check_dir_target(path, option)
+
+
+def refuse_closed_stdout(args, closed: frozenset[str]) -> None:
+    """InputError when stdout was closed and the command's output goes there (``-o -``,
+    ``--urdf -``, ``--json``, or ``hand``'s description)."""
+    if "stdout" not in closed:
+        return
+    to_stdout = (getattr(args, "output", None) == STDOUT or getattr(args, "urdf", None) == STDOUT
+                 or getattr(args, "json", False)
+                 or (args.command == "hand" and not getattr(args, "urdf", None)))
+    if to_stdout:
+        raise InputError("standard output is closed: the output has nowhere to go "
+                         "(name a file, or leave stdout open)")

@@ -31,8 +31,9 @@ def add_parser(sub) -> None:
 
 
 def run(a: argparse.Namespace) -> int:
-    """Plan, write, summarise; 0, or 1 under ``--strict`` when a note is not played, late
-    or a key is pressed wrongly."""
+    """Plan, write, summarise; 0, or 1 when the plan's own replay finds what ``check``
+    fails (a wrong press, a limit violation), or under ``--strict`` a note not played or
+    late."""
     from planner.errors import InputError
     from planner.hand.model import load_hand
     from planner.music.midi import load_song
@@ -65,6 +66,8 @@ def run(a: argparse.Namespace) -> int:
             sys.stderr.write("".join(f"{what} -> {path}\n" for what, path in
                                      (("report", a.report), ("html", a.html)) if path))
     score = plan.verdict.score
+    if plan.verdict.rejected:  # (a wrong press or a limit violation: check fails the plan)
+        return 1
     if a.strict and (plan.verdict.skipped or score.late or score.wrong_presses):
         return 1
     return 0

@@ -69,6 +69,12 @@ class HandModel:
         self.upper = np.array([j.upper for j in mov])
         self.velocity = np.array([j.velocity for j in mov])
         self.acceleration = np.array([j.acceleration for j in mov])
+        self.jerk = np.array([j.jerk for j in mov])  # (planner.hand.drive)
+        # the planner's limits: the hard stops less each joint's margin (``check`` counts
+        # the rows beyond them, ``joint_stop_margin``; the guard refuses only past a stop)
+        self.stop_margin = np.array([j.stop_margin for j in mov])
+        self.plan_lower = self.lower + self.stop_margin
+        self.plan_upper = self.upper - self.stop_margin
         self.T_world_root = np.array(spec.T_world_root, dtype=float)
 
         self.pin_model = pin.buildModelFromXML(self.urdf)
@@ -234,6 +240,10 @@ class HandModel:
     def within_limits(self, q: np.ndarray, tol: float = 1e-9) -> bool:
         return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
 
+    def within_plan_limits(self, q: np.ndarray, tol: float = 1e-9) -> bool:
+        """Within the hard stops less their margins (``plan_lower``, ``plan_upper``)."""
+        return bool(np.all(q >= self.plan_lower - tol) and np.all(q <= self.plan_upper + tol))
+
     # ------------------------------------------------------------ actuators
     def motor_angles(self, q: np.ndarray) -> np.ndarray:
         """Motor shaft angles (rad) for joint positions ``q``; works on (..., n) arrays."""
@@ -307,6 +317,7 @@ class HandModel:
             "joints": [{"name": n, "lower": float(self.lower[i]), "upper": float(self.upper[i]),
                         "velocity": float(self.velocity[i]),
                         "acceleration": float(self.acceleration[i]),
+                        "jerk": float(self.jerk[i]), "stop_margin": float(self.stop_margin[i]),
                         "unit": "m" if n in self.rig_joints else "rad"}
                        for i, n in enumerate(self.joint_names)],
             "couplings": [coupling(c) for c in self.spec.couplings],
@@ -323,14 +334,16 @@ class HandModel:
                  f"  {hand_dof} hand joints ({hand_dof - len(self.couplings)} independent)"
                  + (f" + rig: {', '.join(self.rig_joints)}" if self.rig_joints else " (rail off)"),
                  f"  urdf_sha256 {self.urdf_sha256}",
-                 "  joints (lower..upper, max speed, max acceleration):"]
+                 "  joints (lower..upper, max speed, max acceleration, max jerk):"]
         for i, n in enumerate(self.joint_names):
             if n in self.rig_joints:
                 lines.append(f"    {n:16s} {self.lower[i]:+.3f}..{self.upper[i]:+.3f} m"
-                             f"  {self.velocity[i]:.2f} m/s  {self.acceleration[i]:.1f} m/s^2")
+                             f"  {self.velocity[i]:.2f} m/s  {self.acceleration[i]:.1f} m/s^2"
+                             f"  {self.jerk[i]:.0f} m/s^3")
             else:
                 lines.append(f"    {n:16s} {np.degrees(self.lower[i]):+7.1f}..{np.degrees(self.upper[i]):+7.1f} deg"
-                             f"  {self.velocity[i]:6.2f} rad/s  {self.acceleration[i]:.0f} rad/s^2")
+                             f"  {self.velocity[i]:6.2f} rad/s  {self.acceleration[i]:.0f} rad/s^2"
+                             f"  {self.jerk[i]:.3g} rad/s^3")
         lines.append("  couplings:")
         for c in self.spec.couplings:
             if isinstance(c, LinearCoupling):

@@ -58,6 +58,8 @@ class Joint:
     velocity: float = 0.0
     acceleration: float = 0.0
     effort: float = 0.0
+    jerk: float = 0.0  # rad/s^3 or m/s^3 (``planner.hand.drive``)
+    stop_margin: float = 0.0  # rad or m kept from each hard stop (``planner.hand.drive``)
 
     @property
     def movable(self) -> bool:

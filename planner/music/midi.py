@@ -392,6 +392,12 @@ def _no_notes_text(track: int | None, channel: int | None, found: dict) -> str:
         where.append(f"on channel {channel}")
     else:
         where.append("on channel(s) 0..15 except drum channel 9")
+    chosen = sum(n for (t, c), n in found.items()
+                 if (track is None or t == track)
+                 and (c == channel if channel is not None else c != DRUM_CHANNEL))
+    if chosen:  # (notes there, every one of them ends on the tick it starts)
+        return (f"all {chosen} notes " + " ".join(where) + " are of zero length (note on and "
+                "off at the same tick): nothing to play")
     text = "no notes " + " ".join(where)
     if found:
         parts = sorted(found)

@@ -48,7 +48,7 @@ class Arc:
         rail = hand.index.get("rail")
         if rail is not None:
             self.q_base[rail] = 0.0
-        self.s = np.linspace(hand.lower[joint], hand.upper[joint], ARC_SAMPLES)
+        self.s = np.linspace(hand.plan_lower[joint], hand.plan_upper[joint], ARC_SAMPLES)
         Q = np.repeat(self.q_base[None, :], ARC_SAMPLES, axis=0)
         Q[:, joint] = self.s
         Q = hand.apply_couplings(Q)  # (every law at once, vectorised over the samples)

@@ -22,7 +22,8 @@ poses at the same heights, found on its tip's one arc instead (``planner.play.ar
 the press where flexing brings the tip to full dip, on the part of the key it presses,
 the others where opening brings it back up (not straight above: it cannot hold x, y).
 
-An entry is kept when the four converge (1 mm), every joint is within its limits, and
+An entry is kept when the four converge (1 mm), every joint is within its planning limits
+(its hard stops less its stop margin: ``HandModel.plan_lower``, ``plan_upper``), and
 the straight joint-space moves high -> hover -> press, high -> press and rise -> press
 keep the tip clear of every other key (forward kinematics, sampled). Its ``max_force_n`` is the largest key force the
 motors hold at the press pose (tau = J^T f plus gravity, through the actuator model),
@@ -93,7 +94,8 @@ class Atlas:
 
     def __init__(self, hand: HandModel, ik: HandIK | None = None) -> None:
         self.hand = hand
-        self.ik = ik or HandIK(hand)
+        # every pose keeps each joint its stop margin inside its hard stops
+        self.ik = ik or HandIK(hand, (hand.plan_lower, hand.plan_upper))
         self.rail = hand.index.get("rail")  # None: a hand on a fixed mount (rail at 0)
         # the fingers with one independent joint: their poses are found on their arc
         self.arc_joint = {f: j for f in hand.fingers if (j := arc_joint(hand, f)) is not None}
@@ -139,8 +141,9 @@ class Atlas:
         for f in h.fingers:
             js = h.joint_slice(f)
             for j in js[1:]:
-                q0[j] = h.lower[j] + CURL * (h.upper[j] - h.lower[j])
-            q0[js[0]] = min(max(0.0, h.lower[js[0]]), h.upper[js[0]])
+                q0[j] = min(max(h.lower[j] + CURL * (h.upper[j] - h.lower[j]),
+                                h.plan_lower[j]), h.plan_upper[j])
+            q0[js[0]] = min(max(0.0, h.plan_lower[js[0]]), h.plan_upper[js[0]])
         q0 = h.apply_couplings(q0)
         wrist = [h.index[n] for n in ("wrist_flex", "wrist_dev")]
         fit = [i for i, f in enumerate(h.fingers) if f not in self.arc_joint]
@@ -155,7 +158,7 @@ class Atlas:
             r = heights(w)
             J = np.stack([(heights(w + 1e-6 * e) - r) / 1e-6 for e in np.eye(2)], axis=1)
             step = np.linalg.lstsq(J, -r, rcond=None)[0]
-            w = np.clip(w + step, h.lower[wrist], h.upper[wrist])
+            w = np.clip(w + step, h.plan_lower[wrist], h.plan_upper[wrist])
             if np.max(np.abs(step)) < 1e-10:
                 break
         # the fit converges to 1e-10 rad; its last digits differ between machines (BLAS,
@@ -263,7 +266,9 @@ class Atlas:
                            "path_samples": PATH_SAMPLES, "canon_octave": CANON_OCTAVE,
                            "capacity_nm": [round(float(x), 12) for x in
                                            actuator_capacity(self.hand).torque_nm],
-                           "base": [round(float(x), 12) for x in self.base]}, sort_keys=True)
+                           "base": [round(float(x), 12) for x in self.base],
+                           "stop_margin": [round(float(x), 12) for x in self.hand.stop_margin]},
+                          sort_keys=True)
 
     def _load(self, path: Path) -> None:
         if not path.exists():
@@ -291,7 +296,7 @@ class Atlas:
         rail = self.rail_for(finger, pitch, k)
         base = self.base.copy()
         if self.rail is not None:
-            if not h.lower[self.rail] <= rail <= h.upper[self.rail]:
+            if not h.plan_lower[self.rail] <= rail <= h.plan_upper[self.rail]:
                 return None
             base[self.rail] = rail
         poses = (self._arc_poses(finger, pitch, rail) if finger in self.arc_joint
@@ -299,7 +304,7 @@ class Atlas:
         if poses is None:
             return None
         js = h.joint_slice(finger)
-        if not all(h.within_limits(q) for q in poses):
+        if not all(h.within_plan_limits(q) for q in poses):
             return None
         for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
                        (poses[1], poses[0])):

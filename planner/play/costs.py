@@ -158,8 +158,8 @@ class Costs:
         self.dt = 1.0 / rate_hz
         h = atlas.hand
         r = atlas.rail
-        self.rail_lo = 0 if r is None else math.ceil(h.lower[r] / RAIL_STEP_M)
-        self.rail_hi = 0 if r is None else math.floor(h.upper[r] / RAIL_STEP_M)
+        self.rail_lo = 0 if r is None else math.ceil(h.plan_lower[r] / RAIL_STEP_M)
+        self.rail_hi = 0 if r is None else math.floor(h.plan_upper[r] / RAIL_STEP_M)
         m = memo or CostMemo()
         self._rails: dict[tuple[str, int, float], frozenset[int]] = m.rails
         self._entry: dict = m.entry
@@ -406,17 +406,21 @@ class Costs:
             return ctx.lift_end + T, _NONE
         followers = _NONE
         for m, f, a, window_s, press_s in ctx.follows:
-            key = (a, rail_i)
+            # (an entry serves every key of its pitch class at its place: the key is the
+            # entry and the rail's step, never the rail's index, which names another
+            # entry for each of those keys)
+            b = self.entry(m, f, rail_i)
+            if b is None:  # (it cannot press the key from there: it does not ride along)
+                continue
+            key = (a, rail_i - ctx.state.rail_i)
             got = self._follows.get(key)  # (its time, and whether its path is clear:
             if got is None:  # found only when a note's time fits the move)
-                b = self.entry(m, f, rail_i)
-                got = self._follows[key] = [math.inf if b is None else
-                                            self.moves.follow_s(a, b), None]
+                got = self._follows[key] = [self.moves.follow_s(a, b), None]
             follow_s = got[0]
             # (the move fits inside the note, after its press and before its lift)
             if window_s >= follow_s + press_s:
                 if got[1] is None:
-                    got[1] = self.moves.follow_clear(a, self.entry(m, f, rail_i))
+                    got[1] = self.moves.follow_clear(a, b)
                 if got[1]:
                     followers = followers | {(m, f)}
                     T = max(T, follow_s)

@@ -48,7 +48,7 @@ def _part(move: Move, first: int, n: int) -> Move:
     """Joints ``first .. first + n`` of a straight move, on its own timing (the path
     parameter is shared: every part is where the whole move says at every instant)."""
     return Move(move.q_a[first:first + n].copy(), move.dq[first:first + n].copy(),
-                move.duration_s, move.v, move.a)
+                move.duration_s, move.ta_s, move.tj_s)
 
 
 def start_entries(atlas: Atlas, rail_m: float) -> dict[str, AtlasEntry]:
@@ -127,12 +127,12 @@ class _Track:
         lo = int(idx[first])
         segs = self.segments[lo:int(idx[-1]) + 1]
         of = idx[first:] - lo
-        t0, dur, v, a = np.array([(g.t0_s, g.move.duration_s, g.move.v, g.move.a)
+        t0, dur, ta, tj = np.array([(g.t0_s, g.move.duration_s, g.move.ta_s, g.move.tj_s)
                                   for g in segs]).T[:, of]
         q_a = np.array([g.move.q_a for g in segs])[of]
         dq = np.array([g.move.dq for g in segs])[of]
         tt = t_s[first:]
-        s = path_s(tt - t0, dur, v, a)
+        s = path_s(tt - t0, dur, ta, tj)
         moving = (tt < t0 + dur)[:, None]  # (before its end, ``Segment.t1_s``)
         out[first:] = np.where(moving, q_a + s[:, None] * dq, q_a + dq)
         return out
@@ -409,14 +409,16 @@ class Motion:
             qa, qb = [np.array([r0])], [np.array([rail_m])]
             vmax = [self.hand.velocity[[self.atlas.rail]]]
             amax = [self.moves.acceleration[[self.atlas.rail]]]
+            jmax = [self.moves.jerk[[self.atlas.rail]]]
             for st, e in holds:
                 js = self.hand.joint_slice(st.entry.finger)
                 qa.append(st.entry.press)
                 qb.append(e.press)
                 vmax.append(self.hand.velocity[js])
                 amax.append(self.moves.acceleration[js])
+                jmax.append(self.moves.jerk[js])
             move = straight_move(np.concatenate(qa), np.concatenate(qb), np.concatenate(vmax),
-                                 np.concatenate(amax))
+                                 np.concatenate(amax), np.concatenate(jmax))
         ready = max(self.rail.free_s, self.committed_s)
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():

@@ -104,24 +104,27 @@ class Moves:
         self.table.load(table_path(hand.urdf_sha256), self.params())
         # every joint's acceleration limit, the rail's also within what the wrist holds
         self.acceleration = np.array(hand.acceleration, dtype=float)
+        self.jerk = np.array(hand.jerk, dtype=float)
         if atlas.rail is not None:
             cap = rail_acceleration_cap(hand, [atlas.base, atlas.park()])
             self.acceleration[atlas.rail] = min(self.acceleration[atlas.rail], cap)
         # (each finger's limits as floats, alone and after the rail's: the durations the
         # programme asks for, ``across_s`` and ``follow_s``, are worked out without a Move)
-        self._limits = {f: (hand.velocity[js].tolist(), self.acceleration[js].tolist())
+        self._limits = {f: (hand.velocity[js].tolist(), self.acceleration[js].tolist(),
+                            self.jerk[js].tolist())
                         for f, js in self.js.items()}
         self._follow_limits = {}
         if atlas.rail is not None:
             for f, js in self.js.items():
                 cols = np.r_[atlas.rail, js]
                 self._follow_limits[f] = (hand.velocity[cols].tolist(),
-                                          self.acceleration[cols].tolist())
+                                          self.acceleration[cols].tolist(),
+                                          self.jerk[cols].tolist())
         self._across_s: dict[tuple[int, int], float | None] = {}
         self._follow_s: dict[tuple[int, int], float] = {}
         # (every entry's record by its id, ``_record``; the table as bytes)
         self._times: dict[int, EntryRecord] = _table_records(
-            atlas, self.table, self.js, hand.velocity, self.acceleration)
+            atlas, self.table, self.js, (hand.velocity, self.acceleration, self.jerk))
         self._across_bytes, self._follow_bytes = self.table.as_bytes()
 
     def params(self) -> str:
@@ -134,12 +137,13 @@ class Moves:
                            "across_samples": ACROSS_SAMPLES, "high_safe_z_m": HIGH_SAFE_Z_M,
                            "hold_margin_m": HOLD_MARGIN_M,
                            "velocity": [round(float(x), 12) for x in h.velocity],
-                           "acceleration": [round(float(x), 12) for x in h.acceleration]},
+                           "acceleration": [round(float(x), 12) for x in h.acceleration],
+                           "jerk": [round(float(x), 12) for x in h.jerk]},
                           sort_keys=True)
 
     def _move(self, finger: str, qa: np.ndarray, qb: np.ndarray) -> Move:
         js = self.js[finger]
-        return straight_move(qa, qb, self.hand.velocity[js], self.acceleration[js])
+        return straight_move(qa, qb, self.hand.velocity[js], self.acceleration[js], self.jerk[js])
 
     def _cross(self, e: AtlasEntry, qa: np.ndarray, qb: np.ndarray, move: Move,
                going_down: bool) -> float:
@@ -282,7 +286,8 @@ class Moves:
             qa, qb = self.atlas.base.copy(), self.atlas.base.copy()
             qa[r], qb[r] = k.center_x_m - a.dx_m, k.center_x_m - b.dx_m
             qa[js], qb[js] = a.press, b.press
-            move = straight_move(qa[cols], qb[cols], h.velocity[cols], self.acceleration[cols])
+            move = straight_move(qa[cols], qb[cols], h.velocity[cols], self.acceleration[cols],
+                                 self.jerk[cols])
             got = self._lat[key] = (qa, qb, move, cols)
         return got
 
@@ -367,13 +372,14 @@ class Moves:
     def rail_move(self, rail_a: float, rail_b: float) -> Move:
         r = self.atlas.rail
         if r is None:  # (a fixed mount: the rail stays at 0)
-            return Move(np.array([rail_a]), np.zeros(1), 0.0, 1.0, 1.0)
+            return Move(np.array([rail_a]), np.zeros(1), 0.0, 0.0, 0.0)
         return straight_move(np.array([rail_a]), np.array([rail_b]),
-                             self.hand.velocity[[r]], self.acceleration[[r]])
+                             self.hand.velocity[[r]], self.acceleration[[r]], self.jerk[[r]])
 
 
 def _table_records(atlas: Atlas, table: MoveTable, js: dict[str, list[int]],
-                   velocity: np.ndarray, acceleration: np.ndarray) -> dict[int, EntryRecord]:
+                   limits: tuple[np.ndarray, np.ndarray, np.ndarray]
+                   ) -> dict[int, EntryRecord]:
     """The record of every entry the move table has crossings for, by its id, at once:
     the same floats as ``Moves._record`` makes one by one (a lift and its descent are one
     move each way, of one duration; ``move_times_s`` is ``straight_move``'s, bit for bit),
@@ -390,9 +396,9 @@ def _table_records(atlas: Atlas, table: MoveTable, js: dict[str, list[int]],
         c = np.array([table.crossings[k] for _, k in es])
         es = [e for e, _ in es]
         press, high = np.array([e.press for e in es]), np.array([e.high for e in es])
-        vel, acc = velocity[jf], acceleration[jf]
-        t_high = move_times_s(high - press, vel, acc)
-        t_rise = move_times_s(np.array([e.rise for e in es]) - press, vel, acc)
+        lim = [x[jf] for x in limits]  # (speed, acceleration, jerk)
+        t_high = move_times_s(high - press, *lim)
+        t_rise = move_times_s(np.array([e.rise for e in es]) - press, *lim)
         d_high, u_high = c[:, cols["high"]], c[:, 3 + cols["high"]]
         d_rise, u_rise = c[:, cols["rise"]], c[:, 3 + cols["rise"]]
         for e, *rec in zip(es, (t_high - u_high).tolist(), d_high.tolist(),

@@ -1,18 +1,27 @@
-"""Time-optimal straight moves in joint space.
+"""Time-optimal jerk-limited straight moves in joint space.
 
 A move from ``q_a`` to ``q_b`` follows the straight joint-space line ``q_a + s (q_b -
 q_a)`` with the path parameter ``s`` on the fastest profile the joints allow: joint j
-caps ``s'`` at ``v_j / |dq_j|`` and ``s''`` at ``a_j / |dq_j|``, so the tightest joint
-sets one speed cap ``V`` and one acceleration cap ``A`` for ``s``, and the time-optimal
-profile under them is bang-coast-bang (a trapezoid in speed; a triangle when the move is
-too short to reach ``V``). That is the shortest time along that line under the joints'
-box limits, and it keeps the line, so a path checked by sampling the line stays checked.
-A min-jerk profile of the same peak acceleration takes sqrt(10 / sqrt(3)) / 2 = 1.20
-times as long (acceleration-limited moves), the 17 % issue 13 measured.
+caps ``s'`` at ``v_j / |dq_j|``, ``s''`` at ``a_j / |dq_j|`` and ``s'''`` at
+``jerk_j / |dq_j|`` (its jerk bound: ``planner.hand.drive``), so the tightest joint sets
+one speed cap ``V``, one acceleration cap ``A`` and one jerk cap ``J`` for ``s``, and
+the time-optimal rest-to-rest profile under them is the double S (seven segments: jerk
++J, 0, -J while accelerating, a cruise at ``V``, the mirror image while braking; the
+cruise, or the constant acceleration, is left out of a move too short to reach ``V``,
+or ``A``; Biagiotti & Melchiorri, Trajectory Planning for Automatic Machines and Robots,
+2008, section 3.4). That is the shortest time along that line under the joints' box
+limits, and it keeps the line, so a path checked by sampling the line stays checked.
+Speed and acceleration are zero at both ends, so moves one after another join with
+every speed, acceleration and jerk within bounds.
 
-``LIMIT_FRACTION`` of each limit is used: a sampled trajectory whose continuous speed and
-acceleration respect their limits has row differences that do too (they are averages),
-and the fraction keeps float rounding well inside the check's 1 % tolerance.
+A move's timing is its duration ``T``, the length of its acceleration phase ``ta`` and
+of each of its jerk ramps ``tj``: with them the peak speed is ``1 / (T - ta)``, the
+peak acceleration ``vp / (ta - tj)`` and the jerk ``ap / tj``.
+
+``LIMIT_FRACTION`` of each limit is used: a sampled trajectory whose continuous speed,
+acceleration and jerk respect their limits has row differences that do too (they are
+averages: the k-th difference over dt^k is the k-th derivative weighed by a B-spline
+kernel), and the fraction keeps float rounding well inside the check's 1 % tolerance.
 """
 
 from __future__ import annotations
@@ -28,18 +37,33 @@ LIMIT_FRACTION = 0.995
 @dataclass(frozen=True)
 class Move:
     """A straight joint-space move: from ``q_a`` by ``dq`` over ``duration_s``, its path
-    parameter on a trapezoid with speed cap ``v`` (1/s) and acceleration cap ``a``
-    (1/s^2). A move of zero length has duration 0."""
+    parameter on a double S with acceleration phases of ``ta_s`` and jerk ramps of
+    ``tj_s`` (``path_s``). A move of zero length has duration 0."""
 
     q_a: np.ndarray
     dq: np.ndarray
     duration_s: float
-    v: float
-    a: float
+    ta_s: float
+    tj_s: float
+
+    @property
+    def peak_speed(self) -> float:
+        """The path parameter's largest speed (1/s; 0 for a zero move)."""
+        return 0.0 if self.duration_s == 0.0 else 1.0 / (self.duration_s - self.ta_s)
+
+    @property
+    def peak_acceleration(self) -> float:
+        """The path parameter's largest acceleration (1/s^2; 0 for a zero move)."""
+        return 0.0 if self.duration_s == 0.0 else self.peak_speed / (self.ta_s - self.tj_s)
+
+    @property
+    def jerk(self) -> float:
+        """The path parameter's jerk while it ramps (1/s^3; 0 for a zero move)."""
+        return 0.0 if self.duration_s == 0.0 else self.peak_acceleration / self.tj_s
 
     def s(self, t_s: np.ndarray) -> np.ndarray:
         """Path parameter in [0, 1] at times ``t_s`` after the move's start (clamped)."""
-        return path_s(np.asarray(t_s, dtype=float), self.duration_s, self.v, self.a)
+        return path_s(np.asarray(t_s, dtype=float), self.duration_s, self.ta_s, self.tj_s)
 
     def at(self, t_s) -> np.ndarray:
         """Joint positions (len(t), n) at times after the start."""
@@ -47,59 +71,98 @@ class Move:
         return self.q_a[None, :] + s[:, None] * self.dq[None, :]
 
     def time_at_s(self, s_target: float) -> float:
-        """The time (s after the start) at which the path parameter reaches ``s_target``."""
+        """The first time (s after the start) at which the path parameter reaches
+        ``s_target`` (bisection of the increasing ``path_s`` to the last float)."""
         s_target = min(max(float(s_target), 0.0), 1.0)
-        if self.duration_s == 0.0:
+        if self.duration_s == 0.0 or s_target == 0.0:
             return 0.0
-        a, v, T = self.a, self.v, self.duration_s
-        ta = min(v / a, 0.5 * T)
-        vp = a * ta
-        s_ta = 0.5 * a * ta * ta
-        if s_target <= s_ta:
-            return math.sqrt(2.0 * s_target / a)
-        if s_target <= 1.0 - s_ta:
-            return ta + (s_target - s_ta) / vp
-        return T - math.sqrt(max(0.0, 2.0 * (1.0 - s_target) / a))
+        lo, hi = 0.0, self.duration_s
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            if mid in (lo, hi):
+                break
+            if _s_at(mid, self.duration_s, self.ta_s, self.tj_s) >= s_target:
+                hi = mid
+            else:
+                lo = mid
+        return hi
 
 
-def path_s(t_s: np.ndarray, duration_s, v, a) -> np.ndarray:
-    """Path parameter in [0, 1] at times ``t_s`` after the start of trapezoid moves of
-    ``duration_s`` with caps ``v`` and ``a`` (clamped): element by element, one move's
-    floats for every time or one move per time (``planner.play.motion`` samples a track's
-    segments at once). A move of zero length is at its end (1)."""
-    t = np.clip(t_s, 0.0, duration_s)
-    ta = np.minimum(v / a, 0.5 * duration_s)  # end of the acceleration phase
-    vp = a * ta  # the peak speed reached
-    s_acc = 0.5 * a * t * t
-    s_mid = 0.5 * a * ta * ta + vp * (t - ta)
-    tr = duration_s - t
-    s_dec = 1.0 - 0.5 * a * tr * tr
-    s = np.where(t < ta, s_acc, np.where(t <= duration_s - ta, s_mid, s_dec))
-    return np.where(np.equal(duration_s, 0.0), 1.0, s)
+def _s_at(t: float, T: float, ta: float, tj: float) -> float:
+    """``path_s`` of one time, in floats (``Move.time_at_s`` asks it many times)."""
+    t = min(max(t, 0.0), T)
+    vp = 1.0 / (T - ta)
+    if t > T - ta:
+        return 1.0 - _s_acc(T - t, ta, tj, vp)
+    if t >= ta:
+        return 0.5 * vp * ta + vp * (t - ta)
+    return _s_acc(t, ta, tj, vp)
 
 
-def straight_move(q_a: np.ndarray, q_b: np.ndarray, v_max: np.ndarray,
-                  a_max: np.ndarray) -> Move:
-    """The time-optimal straight move from ``q_a`` to ``q_b`` under per-joint speed and
-    acceleration limits (any joints: a finger's, the arm's, the whole hand's)."""
+def _s_acc(t: float, ta: float, tj: float, vp: float) -> float:
+    ap = vp / (ta - tj)
+    if t < tj:
+        return ap / tj * t * t * t / 6.0
+    if t <= ta - tj:
+        return ap / 6.0 * (3.0 * t * t - 3.0 * tj * t + tj * tj)
+    u = ta - t
+    return 0.5 * vp * ta - vp * u + ap / tj * u * u * u / 6.0
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # (a zero move's phases: it is at 1)
+def path_s(t_s: np.ndarray, duration_s, ta_s, tj_s) -> np.ndarray:
+    """Path parameter in [0, 1] at times ``t_s`` after the start of double-S moves of
+    ``duration_s`` with acceleration phases ``ta_s`` and jerk ramps ``tj_s`` (clamped):
+    element by element, one move's floats for every time or one move per time
+    (``planner.play.motion`` samples a track's segments at once). A move of zero length
+    is at its end (1)."""
+    T, ta_s, tj_s = (np.asarray(x, dtype=float) for x in (duration_s, ta_s, tj_s))
+    t = np.clip(t_s, 0.0, T)
+    vp = 1.0 / (T - ta_s)  # the peak speed (the cruise covers the rest: vp (T - ta) = 1)
+    ap = vp / (ta_s - tj_s)  # the peak acceleration
+    jm = ap / tj_s  # the jerk
+    late = t > T - ta_s
+    u = np.where(late, T - t, t)  # (the braking phase mirrors the accelerating one)
+    w = ta_s - u
+    acc = np.where(u < tj_s, jm * u * u * u / 6.0,
+                   np.where(u <= ta_s - tj_s, ap / 6.0 * (3.0 * u * u - 3.0 * tj_s * u + tj_s * tj_s),
+                            0.5 * vp * ta_s - vp * w + jm * w * w * w / 6.0))
+    cruise = 0.5 * vp * ta_s + vp * (t - ta_s)
+    s = np.where(late, 1.0 - acc, np.where(t >= ta_s, cruise, acc))
+    return np.where(np.equal(T, 0.0), 1.0, s)
+
+
+def straight_move(q_a: np.ndarray, q_b: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+                  j_max: np.ndarray) -> Move:
+    """The time-optimal straight move from ``q_a`` to ``q_b`` under per-joint speed,
+    acceleration and jerk limits (any joints: a finger's, the arm's, the whole hand's)."""
     q_a = np.asarray(q_a, dtype=float)
     dq = np.asarray(q_b, dtype=float) - q_a
     caps = path_caps(dq.tolist(), np.asarray(v_max, dtype=float).tolist(),
-                     np.asarray(a_max, dtype=float).tolist())
+                     np.asarray(a_max, dtype=float).tolist(),
+                     np.asarray(j_max, dtype=float).tolist())
+    return capped_move(q_a, dq, caps)
+
+
+def capped_move(q_a: np.ndarray, dq: np.ndarray, caps: tuple[float, float, float] | None
+                ) -> Move:
+    """The move by ``dq`` from ``q_a`` on the double S of the path caps ``caps`` (speed,
+    acceleration, jerk of ``s``; None: it does not move)."""
     if caps is None:
-        return Move(q_a, dq, 0.0, 1.0, 1.0)
-    return Move(q_a, dq, move_time_s(*caps), *caps)
+        return Move(q_a, dq, 0.0, 0.0, 0.0)
+    return Move(q_a, dq, *phases(*caps))
 
 
-def path_caps(dq: list[float], v_max: list[float], a_max: list[float]) -> tuple[float, float] | None:
-    """The path parameter's speed and acceleration caps of a straight move by ``dq``
-    (floats: a few joints), set by its tightest joint; None when it does not move.
+def path_caps(dq: list[float], v_max: list[float], a_max: list[float], j_max: list[float]
+              ) -> tuple[float, float, float] | None:
+    """The path parameter's speed, acceleration and jerk caps of a straight move by
+    ``dq`` (floats: a few joints), set by its tightest joint; None when it does not move.
     ``move_time_s(*caps)`` is its duration (the programme asks only that, for many
     moves: no ``Move`` made)."""
-    v = a = math.inf
+    v = a = j = math.inf
     moving = False
-    for d, vj, aj in zip(dq, v_max, a_max):  # (``min`` and ``abs`` spelt out: the same
-        if d:  # floats in less than half the time; a fresh process asks thousands)
+    for d, vj, aj, jj in zip(dq, v_max, a_max, j_max):  # (``min`` and ``abs`` spelt out:
+        if d:  # the same floats in less than half the time; a fresh process asks thousands)
             if d < 0.0:
                 d = -d
             moving = True
@@ -109,26 +172,48 @@ def path_caps(dq: list[float], v_max: list[float], a_max: list[float]) -> tuple[
             x = LIMIT_FRACTION * aj / d
             if x < a:  # noqa: PLR1730
                 a = x
-    return (v, a) if moving else None
+            x = LIMIT_FRACTION * jj / d
+            if x < j:  # noqa: PLR1730
+                j = x
+    return (v, a, j) if moving else None
 
 
-def move_times_s(dq: np.ndarray, v_max: np.ndarray, a_max: np.ndarray) -> np.ndarray:
+def move_times_s(dq: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+                 j_max: np.ndarray) -> np.ndarray:
     """``straight_move``'s durations of the moves by the rows of ``dq`` (n, joints), all
-    at once and bit for bit: ``path_caps`` per row and ``move_time_s`` in the same float
-    operations, element by element (``tests/test_play_profile.py`` holds them equal)."""
+    at once and bit for bit: the caps of ``path_caps`` per row in the same float
+    operations, element by element, and ``move_time_s`` of each (``tests/
+    test_play_profile.py`` holds them equal)."""
     d = np.abs(dq)
     moving = d != 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
-        v = np.where(moving, LIMIT_FRACTION * np.asarray(v_max, dtype=float) / d, math.inf)
-        a = np.where(moving, LIMIT_FRACTION * np.asarray(a_max, dtype=float) / d, math.inf)
-        v, a = v.min(axis=1), a.min(axis=1)
-        t = np.where(v * v >= a, 2.0 / np.sqrt(a), 1.0 / v + v / a)
-    return np.where(moving.any(axis=1), t, 0.0)
+        caps = [np.where(moving, LIMIT_FRACTION * np.asarray(x, dtype=float) / d,
+                         math.inf).min(axis=1) for x in (v_max, a_max, j_max)]
+    return np.array([move_time_s(v, a, j) if m else 0.0
+                     for v, a, j, m in zip(*(c.tolist() for c in caps),
+                                           moving.any(axis=1).tolist())], dtype=float)
 
 
-def move_time_s(v: float, a: float) -> float:
-    """Duration of a unit move on a trapezoid with caps ``v`` and ``a`` (triangle if
-    the unit distance is reached before ``v``)."""
-    if v * v >= a:  # 1 <= v^2 / a: the speed cap is never reached
-        return 2.0 / math.sqrt(a)
-    return 1.0 / v + v / a
+def move_time_s(v: float, a: float, j: float) -> float:
+    """Duration of a unit move on the double S of caps ``v``, ``a`` and ``j``."""
+    return phases(v, a, j)[0]
+
+
+def phases(v: float, a: float, j: float) -> tuple[float, float, float]:
+    """(duration, acceleration phase, jerk ramp) of the time-optimal rest-to-rest unit
+    move under caps ``v``, ``a``, ``j`` of speed, acceleration and jerk (Biagiotti &
+    Melchiorri 2008, eq. 3.30-3.32 with q1 - q0 = 1 and zero speeds at the ends)."""
+    if v * j >= a * a:  # the acceleration cap is reached before the speed cap
+        tj = a / j
+        ta = tj + v / a
+    else:
+        tj = math.sqrt(v / j)
+        ta = 2.0 * tj
+    if 1.0 / v >= ta:  # the speed cap is reached: a cruise of 1 / v - ta
+        return 1.0 / v + ta, ta, tj
+    tj = a / j  # not reached: the peak speed a (ta - tj) with ta (ta - tj) a = 1
+    ta = 0.5 * tj + math.sqrt(0.25 * tj * tj + 1.0 / a)
+    if ta >= 2.0 * tj:
+        return 2.0 * ta, ta, tj
+    tj = (0.5 / j) ** (1.0 / 3.0)  # nor the acceleration cap: 2 j tj^3 = 1
+    return 4.0 * tj, 2.0 * tj, tj

@@ -25,7 +25,7 @@ import numpy as np
 from planner.play.atlas import HIGH_Z_M, PATH_SAMPLES, Atlas
 from planner.play.motion import Motion
 from planner.play.moves import Moves, path_acceleration_cap
-from planner.play.profile import Move, move_time_s, straight_move
+from planner.play.profile import Move, capped_move, path_caps
 
 REST_RAIL_M = 0.0  # the rail rests with the hand over middle C (spec: x = 0), the
 # keyboard's middle: the longest way in to any key is half the keyboard's
@@ -74,7 +74,7 @@ def rest_pose(atlas: Atlas) -> np.ndarray:
     h = atlas.hand
     q = atlas.raised(HIGH_Z_M)
     if atlas.rail is not None:
-        q[atlas.rail] = min(max(REST_RAIL_M, h.lower[atlas.rail]), h.upper[atlas.rail])
+        q[atlas.rail] = min(max(REST_RAIL_M, h.plan_lower[atlas.rail]), h.plan_upper[atlas.rail])
     return h.apply_couplings(q)
 
 
@@ -99,17 +99,20 @@ def legs_between(moves: Moves, rest_q: np.ndarray, q: np.ndarray, leaving: bool,
 
 def whole_hand_move(moves: Moves, q_a: np.ndarray, q_b: np.ndarray) -> Move:
     """The time-optimal straight move of every joint from ``q_a`` to ``q_b``: each joint
-    within its speed and acceleration limits (the rail's within what the wrist holds:
-    ``Moves.acceleration``), and the path's acceleration within what every motor holds
-    with the hand's inertia and gravity at ``PATH_SAMPLES`` points of the line
-    (``path_acceleration_cap``: the wrist turns and the rail runs at once here)."""
+    within its speed, acceleration and jerk limits (the rail's acceleration within what
+    the wrist holds: ``Moves.acceleration``), and the path's acceleration within what
+    every motor holds with the hand's inertia and gravity at ``PATH_SAMPLES`` points of
+    the line (``path_acceleration_cap``: the wrist turns and the rail runs at once here)."""
     h = moves.hand
-    move = straight_move(q_a, q_b, h.velocity, moves.acceleration)
-    if move.duration_s == 0.0:
-        return move
-    line = [h.apply_couplings(q_a + s * move.dq) for s in np.linspace(0.0, 1.0, PATH_SAMPLES)]
-    a = min(move.a, path_acceleration_cap(h, line, move.dq))
-    return Move(move.q_a, move.dq, move_time_s(move.v, a), move.v, a)
+    q_a = np.asarray(q_a, dtype=float)
+    dq = np.asarray(q_b, dtype=float) - q_a
+    caps = path_caps(dq.tolist(), h.velocity.tolist(), moves.acceleration.tolist(),
+                     moves.jerk.tolist())
+    if caps is None:
+        return capped_move(q_a, dq, None)
+    v, a, j = caps
+    line = [h.apply_couplings(q_a + s * dq) for s in np.linspace(0.0, 1.0, PATH_SAMPLES)]
+    return capped_move(q_a, dq, (v, min(a, path_acceleration_cap(h, line, dq)), j))
 
 
 def way_in(moves: Moves, motion: Motion, rest_q: np.ndarray, assignments,

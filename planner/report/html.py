@@ -181,7 +181,6 @@ def write_html(report: CheckReport, out_file: str) -> str:
         "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
     vis.set_animation(anim, play=True, repetitions=1000)
 
-    Path(out_file).parent.mkdir(parents=True, exist_ok=True)
     text = _page(report, rec, fps, len(rows))
     write_file(out_file, text)
     return out_file

@@ -48,7 +48,7 @@ from planner.report.context import (
 
 def write_check_report(report: CheckReport, out_dir: str,
                        on_progress: Callable[[int, int], None] | None = None) -> list[str]:
-    """Write the PNG plots of ``report`` into ``out_dir`` (created if needed).
+    """Write the PNG plots of ``report`` into ``out_dir`` (created if needed, never its parents).
 
     Returns the paths written, in a fixed order: the task's plots (play: piano
     roll, fingertip heights; catch: paths, closing timeline) then joint
@@ -56,7 +56,8 @@ def write_check_report(report: CheckReport, out_dir: str,
     is called after each plot.
     """
     ctx = picture_context(report)
-    os.makedirs(out_dir, exist_ok=True)
+    if not os.path.isdir(out_dir):
+        os.mkdir(out_dir)  # (the folder named, never its parents)
     figs: list[tuple[str, Callable[[], Figure]]] = []
     if report.play is not None:
         figs.append(("play_piano_roll.png", lambda: _fig_piano_roll(report)))

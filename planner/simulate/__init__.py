@@ -88,6 +88,7 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
                song_options: dict[str, Any] | None = None, hand_override=None) -> Replay:
     """``simulate_trajectory`` keeping the record (for pictures and comparisons)."""
     from planner.check import check_trajectory
+    from planner.check.claims import left_out_notes
     from planner.planfile import read_plan
     from planner.simulate.replay import simulate
     from planner.simulate.report import SimulateReport
@@ -120,7 +121,7 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     if task == "play":
         play = score_play(rec, notes, float(meta["rate_hz"]))
         if notes is not None:
-            left = plan.left_out(len(notes)) or set()
+            left = left_out_notes(tr.end, len(notes), name) or set()
             claims = [m for m in play.missed if m.note not in left]
     else:
         catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)

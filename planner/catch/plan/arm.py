@@ -1,4 +1,6 @@
-"""The hand's joints as a catch uses them: the arm (rail, wrist flexion and deviation),
+"""The hand's joints as a catch uses them: the arm (rail, wrist flexion and deviation;
+the rig's other axes, the default hand's ``reach``, held at 0 where the rail alone held
+the hand: a catch that uses them is issue 31's item 4),
 which puts the palm on the ball's path, and the fingers (abduction, flexion), which
 close on it; and the poses every throw starts from (zero, rest, open)."""
 
@@ -26,7 +28,8 @@ class CatchJoints:
     finger_idx: np.ndarray  # every other joint
     abd_idx: np.ndarray  # the fingers' abduction joints
     flexion_idx: np.ndarray  # the fingers' flexion joints
-    locked: tuple[str, ...]  # names of the arm joints (masked while the fingers close)
+    locked: tuple[str, ...]  # the arm's and the held rig axes' names (masked while the
+    # fingers close)
 
 
 def catch_joints(hand: HandModel) -> CatchJoints:
@@ -38,11 +41,13 @@ def catch_joints(hand: HandModel) -> CatchJoints:
                                "needs the 2-DOF wrist")
     i_flex, i_dev, i_rail = idx["wrist_flex"], idx["wrist_dev"], idx.get("rail")
     arm = tuple(i for i in (i_rail, i_flex, i_dev) if i is not None)
-    finger_idx = np.array(sorted(set(range(hand.n)) - set(arm)))
+    held = {idx[n] for n in hand.rig_joints if n != "rail"}  # (at their zero pose's value)
+    finger_idx = np.array(sorted(set(range(hand.n)) - set(arm) - held))
     abd = [i for i in finger_idx if "abd" in hand.joint_names[i]]
     flexion = [i for i in finger_idx if i not in set(abd)]
     return CatchJoints(i_flex, i_dev, i_rail, arm, finger_idx, np.array(abd, dtype=int),
-                       np.array(flexion, dtype=int), tuple(hand.joint_names[i] for i in arm))
+                       np.array(flexion, dtype=int),
+                       tuple(hand.joint_names[i] for i in (*arm, *sorted(held))))
 
 
 def zero_pose(hand: HandModel) -> np.ndarray:

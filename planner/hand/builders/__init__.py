@@ -15,6 +15,7 @@ from typing import Any
 import tomllib
 
 from planner.errors import InputError
+from planner.hand.units import check_hand_numbers
 from planner.hand.spec import HandSpec, hands_dir, list_hands
 
 # kind -> (module, function) building a HandSpec from the parsed hand file
@@ -41,6 +42,7 @@ def load_hand_spec(name_or_path: str) -> HandSpec:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise InputError(f"malformed hand file {path.name}: {e}") from None
     try:
+        check_hand_numbers(data)  # (every number in its unit's physical range, strings printable)
         return build_spec(data)
     except InputError as e:
         raise InputError(f"malformed hand file {path.name}: {e}") from None

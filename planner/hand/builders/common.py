@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from planner.errors import InputError
+from planner.hand.drive import apply_drive
 from planner.hand.builders.values import (
     get_length,
     get_positive,
@@ -157,7 +158,7 @@ def assemble_spec(data: dict[str, Any], parts: HandParts) -> HandSpec:
         name=get_value(data, "name", str),
         description=str(data.get("description", "")),
         links=tuple(parts.links),
-        joints=tuple(parts.joints),
+        joints=tuple(apply_drive(data, parts.joints, actuators, parts.couplings)),
         couplings=tuple(parts.couplings),
         actuators=tuple(actuators),
         T_world_root=parts.T_world_root,
