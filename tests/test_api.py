@@ -28,8 +28,8 @@ def test_the_readme_api_example_runs(tmp_path, monkeypatch, capsys):
     out = capsys.readouterr().out.splitlines()
     # (jerk-limited moves, issue 30: twinkle 1.0 -> 0.9826, frames lost around a move of
     # the hand)
-    assert out[0] == "14 of 14 notes played; frame F1 0.9826"
-    assert out[1].startswith("True 0.98258")
+    assert out[0] == "14 of 14 notes played; frame F1 0.9969"
+    assert out[1].startswith("True 0.9969")
     assert sorted(os.listdir(tmp_path)) == ["songs", "twinkle.csv"]
 
 
