@@ -13,13 +13,31 @@ The public API (imported on first use, so that ``import planner`` stays light):
   ``.write(path)``), with a ``Planner(hand)`` to reuse across songs;
 * ``plan_catch(angle_deg, dist_m, height_m, hand, out_path, ...)`` -> ``CatchResult``;
 * ``check_trajectory(traj_path or Trajectory, song_path or Song=None)`` -> ``CheckReport``;
-* ``read_trajectory(path)`` -> ``Trajectory`` (times, joint and motor arrays, metadata).
+* ``read_trajectory(path)`` -> ``Trajectory`` (times, joint and motor arrays, metadata);
+* ``CatchSession(dist_m, height_m, ...)``: a catch planned live, ``observe(t_s, xyz)``
+  per observation, ``finish()``;
+* ``simulate_trajectory(traj_path, song_path=None, contact="full")`` ->
+  ``SimulateReport`` (the physics replay; needs the ``physics`` extra, MuJoCo).
+
+Every name, its fields and units: docs/user/api.md.
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from planner.errors import InfeasibleError, InputError, PlannerError, SolverError
-from planner.lazy import lazy_names
+from planner.lazy import lazy_dir, lazy_names
+
+if TYPE_CHECKING:  # (what editors and type checkers see; at run time: on first use)
+    from planner.catch import CatchSession, plan_catch
+    from planner.check import CheckReport, check_trajectory
+    from planner.hand.model import HandModel, load_hand
+    from planner.music.midi import Note, Song, load_song
+    from planner.play import Planner, PlayPlan, plan_song
+    from planner.simulate import simulate_trajectory
+    from planner.simulate.report import SimulateReport
+    from planner.trajfile import Trajectory, read_trajectory
 
 _API = {
     "load_hand": "planner.hand.model",
@@ -31,11 +49,18 @@ _API = {
     "PlayPlan": "planner.play",
     "plan_song": "planner.play",
     "plan_catch": "planner.catch",
+    "CatchSession": "planner.catch",
     "check_trajectory": "planner.check",
+    "CheckReport": "planner.check",
     "read_trajectory": "planner.trajfile",
+    "Trajectory": "planner.trajfile",
+    "simulate_trajectory": "planner.simulate",
+    "SimulateReport": "planner.simulate.report",
 }
 
 __all__ = [
+    "CatchSession",
+    "CheckReport",
     "HandModel",
     "InfeasibleError",
     "InputError",
@@ -43,15 +68,19 @@ __all__ = [
     "Planner",
     "PlannerError",
     "PlayPlan",
+    "SimulateReport",
     "SolverError",
     "Song",
+    "Trajectory",
     "check_trajectory",
     "load_hand",
     "load_song",
     "plan_catch",
     "plan_song",
     "read_trajectory",
+    "simulate_trajectory",
 ]
 
 
 __getattr__ = lazy_names(__name__, _API)
+__dir__ = lazy_dir(globals(), _API)

@@ -28,8 +28,8 @@ def test_the_readme_api_example_runs(tmp_path, monkeypatch, capsys):
     out = capsys.readouterr().out.splitlines()
     # (jerk-limited moves, issue 30: twinkle 1.0 -> 0.9826, frames lost around a move of
     # the hand)
-    assert out[0] == "14 of 14 notes played; frame F1 0.9826"
-    assert out[1].startswith("True 0.98258")
+    assert out[0] == "14 of 14 notes played; frame F1 0.9969"
+    assert out[1].startswith("True 0.9969")
     assert sorted(os.listdir(tmp_path)) == ["songs", "twinkle.csv"]
 
 
@@ -119,3 +119,34 @@ def test_a_plan_in_memory_is_the_file_and_checks_the_same(tmp_path):
     assert a.trajectory == "<memory>"
     with pytest.raises(planner.PlannerError):
         _ = planner.plan_song(song, hand, str(tmp_path / "g.csv"), planner=pl).trajectory
+
+
+def test_dir_lists_every_name_and_editors_see_them():
+    """``dir(planner)`` lists the lazy names; the type-checking imports name the same
+    ones (what an editor reads), and a name once used is a plain attribute."""
+    import ast
+
+    import planner
+
+    assert set(planner.__all__) <= set(dir(planner))
+    for name in ("CatchSession", "simulate_trajectory", "SimulateReport", "CheckReport",
+                 "Trajectory"):
+        assert name in planner.__all__ and name in dir(planner)
+    tree = ast.parse((ROOT / "planner" / "__init__.py").read_text(encoding="utf-8"))
+    guarded = next(n for n in tree.body if isinstance(n, ast.If)
+                   and getattr(n.test, "id", "") == "TYPE_CHECKING")
+    seen = {a.name for imp in guarded.body for a in imp.names}
+    assert seen == set(planner._API)
+    for name, module in planner._API.items():  # (each from the module _API says)
+        imp = next(i for i in guarded.body if name in {a.name for a in i.names})
+        assert imp.module == module, name
+    f = planner.read_trajectory
+    assert planner.__dict__["read_trajectory"] is f
+
+
+def test_the_song_name_is_in_the_metadata_whatever_the_entry_point(tmp_path):
+    import planner
+
+    song = planner.load_song(ROOT / "songs" / "scale.mid")
+    plan = planner.plan_song(song, planner.load_hand("default"))
+    assert plan.trajectory.metadata["song"] == "scale.mid"

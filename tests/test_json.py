@@ -17,7 +17,8 @@ OPT_NUM = (int, float, type(None))
 PLAY = {"command": str, "song": str, "notes": int, "played": int, "left_out": list,
         "late": list, "wrong_presses": list, "frame_f1": NUM, "rows": int, "duration_s": NUM,
         "trajectory": str, "song_s": NUM, "planning_s": NUM, "first_row_s": NUM,
-        "setup_s": NUM, "realtime_factor": OPT_NUM, "hand_positions": int}
+        "setup_s": NUM, "realtime_factor": OPT_NUM, "hand_positions": int,
+        "part": (dict, type(None))}
 LEFT_OUT = {"note": int, "onset_s": NUM, "pitch": int, "name": str, "reason": str,
             "detail": str}
 CATCH = {"command": str, "feasible": bool, "reasons": list, "reason_kinds": list, "throw": dict,

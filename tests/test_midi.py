@@ -196,15 +196,15 @@ def two_parts() -> bytes:
 
 def test_track_and_channel_selection():
     data = two_parts()
-    everything = parse_song_bytes(data)
-    assert [(n.pitch, n.track, n.channel) for n in everything.notes] == [
-        (48, 2, 2), (72, 1, 0), (74, 1, 1)]
+    upper = parse_song_bytes(data)  # (the default: the upper part, planner/music/parts.py)
+    assert [(n.pitch, n.track, n.channel) for n in upper.notes] == [(72, 1, 0), (74, 1, 1)]
+    assert upper.part.played == ((1, 0), (1, 1)) and "track 2 channel 2" in upper.part.reason
     assert [n.pitch for n in parse_song_bytes(data, track=1).notes] == [72, 74]
     assert [n.pitch for n in parse_song_bytes(data, track=2).notes] == [48]
     assert [n.pitch for n in parse_song_bytes(data, channel=1).notes] == [74]
     assert [n.pitch for n in parse_song_bytes(data, track=1, channel=0).notes] == [72]
     # selection never changes the timing or the file's duration
-    assert parse_song_bytes(data, track=2).duration_s == everything.duration_s == 1.0
+    assert parse_song_bytes(data, track=2).duration_s == upper.duration_s == 1.0
 
 
 def test_bad_track_index_names_the_range():

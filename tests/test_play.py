@@ -30,12 +30,13 @@ def planner():
     return Planner(load_hand("default"))
 
 
-def _plan(planner, notes, tmp_path, name="song"):
-    """Write ``notes`` as a MIDI file, plan it, check it: (plan, check report, csv path)."""
+def _plan(planner, notes, tmp_path, name="song", channel=None):
+    """Write ``notes`` as a MIDI file, plan it, check it: (plan, check report, csv path);
+    ``channel``: read only that channel (every note of it: no part chosen)."""
     song, path = tmp_path / f"{name}.mid", tmp_path / f"{name}.csv"
     write_notes_midi(notes, song)
-    res = plan_song(load_song(song), planner.hand, str(path), song_name=song.name,
-                    planner=planner)
+    res = plan_song(load_song(song, channel=channel), planner.hand, str(path),
+                    song_name=song.name, planner=planner)
     return res, check_trajectory(str(path), str(song), strict=False), path
 
 
@@ -182,8 +183,11 @@ def test_two_hands_of_notes_give_no_wrong_press(planner, tmp_path):
     no key the song does not have, and every note not played is named."""
     melody = [70, 68, 66, 67, 66, 67, 68, 68, 67, 67, 65, 65, 65, 67, 69, 69,
               70, 70, 72, 72, 73, 71, 69, 70, 72, 73, 75, 77, 77, 76, 76, 75]
-    res, rep, _ = _plan(planner, _melody_over_alberti_bass(melody), tmp_path)
+    notes = _melody_over_alberti_bass(melody)
+    res, rep, _ = _plan(planner, notes, tmp_path, channel=0)  # (channel 0: every note)
     _safe(rep)
+    by_default = load_song(tmp_path / "song.mid")  # (the right hand's part: the melody)
+    assert [n.pitch for n in by_default.notes] == melody and by_default.part.split_pitch
     assert res.verdict.skipped  # (one hand: some of it is named, not played)
     assert {s.note for s in res.verdict.skipped} == {m.note for m in rep.play.missed}
 

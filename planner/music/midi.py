@@ -33,7 +33,10 @@ How a file is read (the choices are deliberate; tests pin them down):
   reported as intervals in ``Song.sustain`` (the union over channels); it
   does not lengthen notes.
 * A part is chosen with ``track=`` (index of the MTrk chunk, 0-based) and/or
-  ``channel=``; the defaults take every track and every channel but 9.
+  ``channel=``. Without either, a file of several parts (tracks or channels), or of
+  two hands in one, gives its upper part, the right hand's (``planner.music.parts``:
+  ``Song.part`` says which and why); a file of one part gives every note.
+  Channel 9 (drums) is never read.
 * After selection (and transposition) the notes are merged: if two notes of
   the same pitch overlap (from different tracks or channels, or moved onto
   one pitch by ``transpose``), the earlier one ends at the later one's onset;
@@ -63,6 +66,7 @@ import mido
 
 from planner.errors import InputError
 from planner.music.keyboard import pitch_name
+from planner.music.parts import PartChoice, choose_part
 from planner.music.smf import (
     MAX_DURATION_S,
     MAX_EVENTS,
@@ -133,6 +137,7 @@ class Song:
     track: int | None = None  # the options it was read with (a plan's metadata names them)
     channel: int | None = None
     transpose: bool = False
+    part: PartChoice | None = None  # the part chosen when neither track nor channel was
 
 
 SHIFT_DIGITS = 12  # a shifted note's times are rounded to 1 ps (``shift_notes``)
@@ -215,6 +220,11 @@ def parse_song_bytes(
     raw, sustain, found = _collect(tracks, end_tick, track, channel)
     if not raw:
         raise InputError(f"{source}: {_no_notes_text(track, channel, found)}")
+    part = choose_part(raw) if track is None and channel is None else None
+    if part is not None:  # several parts, or two hands in one: the upper one
+        if part.track is not None:
+            raw, sustain, _ = _collect(tracks, end_tick, part.track, part.channel)
+        raw = [r for r in raw if part.keeps(r[0], r[4], r[5])]
 
     notes = sorted(
         (
@@ -239,6 +249,7 @@ def parse_song_bytes(
         track=track,
         channel=channel,
         transpose=bool(transpose),
+        part=part,
     )
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import gc
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ import numpy as np
 from planner.errors import InputError, PlannerError
 from planner.hand.model import HandModel
 from planner.music.midi import SHIFT_DIGITS, Song, shift_notes
+from planner.music.parts import PartChoice
 from planner.output import write_file
 from planner.play.atlas import Atlas
 from planner.play.costs import CostMemo
@@ -46,6 +48,7 @@ class PlayPlan:
     first_row_s: float
     text: str | None = None
     song_start_s: float = 0.0  # the song's time 0 in the file's time (the way in from rest)
+    part: PartChoice | None = None  # the part of the file played, when it had several
 
     @property
     def trajectory(self) -> Trajectory:
@@ -63,11 +66,16 @@ class PlayPlan:
 
 def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -> dict:
     """A play trajectory's metadata (spec section 4), with the song's note count and the
-    options it was read with, so that ``check`` reads it the same way."""
+    options it was read with, so that ``check`` reads it the same way; ``song_name``
+    defaults to the song's file name; ``part`` only when the file had several parts."""
+    song_name = song_name or os.path.basename(song.source)
+    part = {} if song.part is None else {"part": {
+        "played": [list(tc) for tc in song.part.played],
+        "split_pitch": song.part.split_pitch, "reason": song.part.reason}}
     return {"task": "play", "hand": hand.name, "urdf_sha256": hand.urdf_sha256,
             "T_world_root": hand.T_world_root.tolist(), "rate_hz": rate_hz,
             "song": song_name, "notes": len(song.notes), "track": song.track,
-            "channel": song.channel, "transpose": song.transpose}
+            "channel": song.channel, "transpose": song.transpose, **part}
 
 
 class Planner:
@@ -109,7 +117,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
         raise
     return PlayPlan(writer.rows, writer.rows / rate_hz, fingering, verdict,
                     time.perf_counter() - t_start, rows.first_row_s - t_start, writer.text,
-                    rows.shift_s)
+                    rows.shift_s, song.part)
 
 
 @contextlib.contextmanager

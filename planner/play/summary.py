@@ -21,6 +21,11 @@ def _timing(notes, plan: PlayPlan) -> tuple[float, float | None, int]:
     return song_s, rtf, len({a.rail_m for a in plan.fingering.assignments})
 
 
+def part_lines(plan: PlayPlan) -> list[str]:
+    """Which part of a file of several the hand played, and why (none for one part)."""
+    return [] if plan.part is None else [f"part: {plan.part.reason}"]
+
+
 def format_summary(song_name: str, notes, plan: PlayPlan, out: str,
                    setup_s: float | None = None) -> str:
     """The summary: counts and the file, timing (after the hand's set-up, ``setup_s``,
@@ -36,6 +41,7 @@ def format_summary(song_name: str, notes, plan: PlayPlan, out: str,
               + f"for {song_s:.2f} s of music "
              f"(real-time factor {rtf:.0f}x), first row after {plan.first_row_s * 1000:.0f} ms, "
              f"{rails} hand position{'' if rails == 1 else 's'}, frame F1 {v.score.f1:.4f}")]
+    lines.extend(part_lines(plan))
     for s in v.skipped:
         n = notes[s.note]
         lines.append(f"  infeasible: t={n.onset_s:.3f} s {pitch_name(n.pitch)} (MIDI {n.pitch}): "
@@ -62,4 +68,5 @@ def plan_dict(song_name: str, notes, plan: PlayPlan, out: str, setup_s: float) -
         "trajectory": out, "song_s": song_s, "planning_s": plan.planning_s,
         "first_row_s": plan.first_row_s, "setup_s": setup_s,
         "realtime_factor": rtf, "hand_positions": rails,
+        "part": None if plan.part is None else plan.part.to_dict(),
     }
