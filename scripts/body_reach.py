@@ -22,7 +22,7 @@ the counts on D / C / C#.
     python scripts/body_reach.py --y=-0.40,-0.48 --z=0.17,0.10 --flex=0.1 --dev=-0.5,-0.1
 
 (``--flex``/``--dev`` omitted: the atlas's fitted natural wrist). Measured and read in
-docs/play-second-design.md, "One arm posture cannot press the white keys' front with
+docs/history/play-second-design.md, "One arm posture cannot press the white keys' front with
 every finger".
 """
 

@@ -79,7 +79,7 @@ def test_penetration_agrees_with_mujoco(hand, bodies, twinkle_rows):
 
 
 def test_shipped_press_poses_reach_below_their_pad_point(hand, bodies):
-    """The finding (docs/play-second-design.md, "The fingers' bodies"): the shipped atlas's
+    """The finding (docs/history/play-second-design.md, "The fingers' bodies"): the shipped atlas's
     press poses curl the distal segment past vertical, so the pad sphere's bottom lies
     below the pad point and the key's bed holds the finger up before the point is down."""
     atlas = Atlas(hand)
@@ -128,7 +128,7 @@ def test_the_seed_hand_cannot_press_between_two_black_keys(hand, bodies):
     pinky's 13.7 mm one 5.6 mm, the index's to ring's 17.1 mm 3.3 mm, the thumb's 24 mm
     2.0 mm), where it has to reach the black keys' 12.5 mm above the white tops plus the
     spec's 5 mm key-down depth. So no posture of any finger presses D, G or A between the black keys: they are
-    pressed in front of them (docs/play-second-design.md, "The fingers' bodies")."""
+    pressed in front of them (docs/history/play-second-design.md, "The fingers' bodies")."""
     boxes = {k.pitch: k.boxes for k in key_bodies()}
     c_sharp, d_sharp = boxes[61][0], boxes[63][0]  # (a black key is one box)
     slot_m = (d_sharp.center_m[0] - d_sharp.half_m[0]) - (c_sharp.center_m[0] + c_sharp.half_m[0])

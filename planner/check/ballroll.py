@@ -1,4 +1,4 @@
-"""The ball rolling along the palm after the pad has stopped it (``docs/physics-replay.md``,
+"""The ball rolling along the palm after the pad has stopped it (``docs/history/physics-replay.md``,
 "Catch"): nothing on the palm's wrist side stops a ball that rolls there, so the plan must
 keep its roll towards the wrist within ``ROLL_ROOM_M`` until the wrist's turn has levelled
 the palm. One rule (``roll_problem``) of the catch planner (a plan whose rows let the ball

@@ -1,4 +1,4 @@
-"""Play: a MIDI song -> a hand trajectory, as one optimisation (docs/play-second-design.md).
+"""Play: a MIDI song -> a hand trajectory, as one optimisation (docs/history/play-second-design.md).
 
 The stages, in order: ``atlas`` (press, hover and crossing poses per finger and key,
 computed once per hand and shipped), ``profile`` and ``moves`` (time-optimal joint moves

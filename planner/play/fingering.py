@@ -33,7 +33,7 @@ from planner.play.moves import Moves
 WINDOW = 48  # events the programme looks over at once ...
 LOOKAHEAD = 16  # ... the last of which it decides only in the next window
 FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows start sooner
-# (shorter ones were tried: docs/play-second-design.md, "Speed ... session 21", item 3)
+# (shorter ones were tried: docs/history/play-second-design.md, "Speed ... session 21", item 3)
 
 
 @dataclass(frozen=True)

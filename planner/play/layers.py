@@ -31,7 +31,7 @@ from planner.play.costs import (
 from planner.play.moves import Moves
 
 THUMB = "thumb"
-BEAM = 20  # states kept per event (measured: docs/play-second-design.md, "Speed")
+BEAM = 20  # states kept per event (measured: docs/history/play-second-design.md, "Speed")
 PER_RAIL = 6  # ... at most this many at one rail position
 # (and one of each hand shape, rail and fingers on the notes sounding: a layer keeps the
 # cheapest state of each, so that states that differ only in the notes just let go,

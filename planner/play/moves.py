@@ -441,7 +441,7 @@ RAIL_TORQUE_SHARE = 0.7  # the rail accelerates at most so hard that the motors 
 # own moves, whose reactions on the wrist reach 0.5 N m in the rows (at 90 % the check's
 # inverse dynamics found 8 of 71 songs 3-16 % over the wrist deviation motor's 2 N m).
 # Without it the default hand's 40 m/s^2 rail asks that motor 1.19 x its capacity (the
-# MuJoCo replay of `leaps` saturates it for 350 ms: docs/physics-replay.md)
+# MuJoCo replay of `leaps` saturates it for 350 ms: docs/history/physics-replay.md)
 
 
 def rail_acceleration_cap(hand: HandModel, postures) -> float:

@@ -11,7 +11,7 @@ of entries, found once per hand and shipped beside the atlas
   other (``Moves.follow``).
 
 A planner that meets a hand without a table finds each of these when first needed
-(about 4 000 pairs a song, most of a cold plan's time: ``docs/play-second-design.md``).
+(about 4 000 pairs a song, most of a cold plan's time: ``docs/history/play-second-design.md``).
 The pair tests are the very tests of ``Moves`` on the very samples, evaluated for all
 pairs at once with ``planner.hand.chain.FrameChain`` (the same rigid transforms as
 Pinocchio's, to 2e-16 m); ``tests/test_play_moves.py`` checks them against

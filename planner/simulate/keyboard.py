@@ -14,7 +14,7 @@ balance rail 0.25 m behind its front, as a grand piano's key turns: a press betw
 black keys, 0.12 m in front of the rail, then met the bed 4.8 mm down, not the spec's
 10 mm, and a pad lifted 2.7 mm between two presses of a key kept its front 5.6 mm down:
 the key never rose, the repeated note never sounded -- 0.944 F1 on chords where the
-spec's key gives 0.990; docs/physics-replay.md.)
+spec's key gives 0.990; docs/history/physics-replay.md.)
 
 Constants (each a physical value with its source):
 

@@ -8,7 +8,7 @@ at about (step / time constant)^2 = 1/4 of that depth per step: its rebound off 
 0 to ~0.25 x its normal speed, is set by where in a step it arrives -- by the sub-step
 phase of the throw, not by the plan. Replaying one plan at several phases
 (``bench/bench_simulate.py --catch-phases``) separates what the plan decides from that
-phase (``docs/physics-replay.md``, "Catch").
+phase (``docs/history/physics-replay.md``, "Catch").
 """
 
 from __future__ import annotations

@@ -94,7 +94,7 @@ at their limits, the tip stays ~17 mm outside a tennis ball), so every catch
 with it fails the grasp criterion; a CMC flexion range of 110 deg (or the CMC
 1 cm closer to the palm) would reach. The mk5 hand's true-size fingers do not
 reach a ball on its 1.5x palm at all. The soft catch stops balls of up to ~6-7 m/s at
-the palm within the wrist flexion motor's 2 N m peak (``docs/soft-catch.md``).
+the palm within the wrist flexion motor's 2 N m peak (``docs/history/soft-catch.md``).
 """
 
 from __future__ import annotations

@@ -24,7 +24,7 @@ What is chosen, by optimisation:
 The rows' dynamics are then judged by the check's own rule (``planner.check.ball``); a
 ball that no such motion stops within every motor's capacity is "too fast to stop".
 
-Holding the ball (``docs/physics-replay.md``, "Catch"): nothing on the palm's wrist side
+Holding the ball (``docs/history/physics-replay.md``, "Catch"): nothing on the palm's wrist side
 stops a ball rolling there, so (1) the QP weighs the relative speed along the palm
 ``ROLL_WEIGHT`` times its normal part (a tangential speed is not absorbed by the pad: the
 ball keeps 5/7 of it as a roll), and (2) once the grasp is made the wrist turns the closed

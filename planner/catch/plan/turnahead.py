@@ -1,4 +1,4 @@
-"""The wrist's turn that holds the ball (``docs/physics-replay.md``, "Catch"): when it starts
+"""The wrist's turn that holds the ball (``docs/history/physics-replay.md``, "Catch"): when it starts
 and how it runs. Once the pad has stopped the ball the wrist turns the closed hand palm up,
 its downhill ``HOLD_TILT_DEG`` into the fingers (``stopping.hold_turn``); it starts from
 the grasp (``TurnMode.EARLY``), after the arm's stop (``TurnMode.LATE``) or, by the roll rule
