@@ -150,3 +150,19 @@ def test_the_song_name_is_in_the_metadata_whatever_the_entry_point(tmp_path):
     song = planner.load_song(ROOT / "songs" / "scale.mid")
     plan = planner.plan_song(song, planner.load_hand("default"))
     assert plan.trajectory.metadata["song"] == "scale.mid"
+
+
+def test_plan_catch_in_memory_as_plan_song(tmp_path):
+    """``plan_catch`` without a path keeps the file in memory (``text``, ``trajectory``,
+    ``write``), the same bytes as planning into a file; the check passes it."""
+    import planner
+
+    mem = planner.plan_catch(30.0, 1.5, 0.0, "default")
+    assert mem.out_path is None and mem.rows == len(mem.trajectory.t_s) > 0
+    path = tmp_path / "c.csv"
+    planner.plan_catch(30.0, 1.5, 0.0, "default", str(path))
+    mem.write(str(tmp_path / "m.csv"))
+    assert (tmp_path / "m.csv").read_bytes() == path.read_bytes()
+    assert planner.check_trajectory(mem.trajectory).ok
+    with pytest.raises(planner.PlannerError, match="written to a file"):
+        planner.plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "f.csv")).trajectory

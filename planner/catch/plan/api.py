@@ -290,6 +290,11 @@ def _plan_validated(pl: CatchPlanner, a: float | None, d: float, hgt: float, b: 
 def write_plan(plan: CatchPlan, out_path: str) -> int:
     """Write the plan's rows (hand-trajectory version 2: the end marker says ``"catch":
     "held"`` or ``"infeasible"`` with its reason); returns the number of rows."""
+    return _written(plan, out_path).rows
+
+
+def _written(plan: CatchPlan, out_path: str | None) -> TrajectoryWriter:
+    """The closed writer of the plan's file (``out_path`` None: its text in memory)."""
     hand = plan.base_hand
     writer = TrajectoryWriter(out_path, plan.metadata(), hand)
     try:
@@ -298,23 +303,25 @@ def write_plan(plan: CatchPlan, out_path: str) -> int:
         writer.abort(discard=isinstance(e, InputError))
         raise
     writer.close(plan.end_claims())
-    return writer.rows
+    return writer
 
 
 def plan_catch(angle_deg: float, dist_m: float, height_m: float, hand: HandModel | str,
-               out_path: str, ball: Ball | str = "tennis", drag: bool = False,
+               out_path: str | None = None, ball: Ball | str = "tennis", drag: bool = False,
                observations: Any = None, rate_hz: float = 100.0,
                strict: bool = False) -> CatchResult:
-    """Plan the catch of a throw at ``angle_deg`` through (dist, 0, height) and write it.
+    """Plan the catch of a throw at ``angle_deg`` through (dist, 0, height) and write it
+    to ``out_path`` ('-': stdout; None: kept in memory, ``CatchResult.text``, as
+    ``plan_song`` does).
 
     Every argument is checked before any file is created (InputError). The plan is
     written even when the catch is infeasible (``result.reasons`` says why); with
     ``strict`` an infeasible plan then raises InfeasibleError (the file stays)."""
     a, d, hgt, rate = _validate(angle_deg, dist_m, height_m, rate_hz, observations)
     b = get_ball(ball)
-    if not isinstance(out_path, str) or not out_path:
-        raise InputError("an output path (or '-') is needed")
-    if out_path != "-":
+    if out_path is not None and (not isinstance(out_path, str) or not out_path):
+        raise InputError("an output path (or '-', or None: in memory) is needed")
+    if out_path is not None and out_path != "-":
         parent = Path(out_path).parent
         if not parent.is_dir():
             raise InputError(f"cannot write {out_path}: no such directory {parent}")
@@ -325,8 +332,9 @@ def plan_catch(angle_deg: float, dist_m: float, height_m: float, hand: HandModel
     setup = time.perf_counter() - t0
     plan = _plan_validated(pl, a, d, hgt, b, bool(drag), obs, rate)
     t1 = time.perf_counter()
-    rows = write_plan(plan, out_path)
-    res = CatchResult(plan, out_path, rows, plan.planning_s, time.perf_counter() - t1, setup)
+    writer = _written(plan, out_path)
+    res = CatchResult(plan, out_path, writer.rows, plan.planning_s, time.perf_counter() - t1,
+                      setup, writer.text)
     if strict and not plan.feasible:
         raise InfeasibleError(reasons_text(plan.reasons), problem=res)
     return res
