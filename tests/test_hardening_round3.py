@@ -198,8 +198,6 @@ def test_simulate_names_the_file_of_a_wrong_hash(capsys, planned, tmp_path):
     assert str(bad) in err and "<memory>" not in err, err
 
 
-@pytest.mark.xfail(strict=True, reason="planner/catch/observe.py belongs to the 'catch' branch: "
-                   "csv.Error of a field over 131072 characters is not caught there yet")
 def test_a_huge_observation_field_is_one_line(tmp_path):
     obs = tmp_path / "obs.csv"
     obs.write_text("t,x,y,z\n" + "0," + "1" * 140_000 + ",0,0\n0.01,0,0,0\n0.02,0,0,0\n")

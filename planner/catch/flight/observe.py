@@ -200,12 +200,12 @@ def load_observations_csv(
     if not lines:
         raise InputError(f"{p}: empty file, expected a header t,x,y,z")
     lineno, head = lines[0]
-    header = [c.strip().lower() for c in next(csv.reader([head]))]
+    header = [c.strip().lower() for c in _cells(p, lineno, head)]
     if header != ["t", "x", "y", "z"]:
         raise InputError(f"{p}: line {lineno}: header must be t,x,y,z, got {head.strip()!r}")
     rows = []
     for lineno, ln in lines[1:]:
-        cells = next(csv.reader([ln]))
+        cells = _cells(p, lineno, ln)
         if len(cells) != 4:
             raise InputError(f"{p}: line {lineno}: expected 4 values t,x,y,z, got {len(cells)}")
         vals = []
@@ -228,3 +228,12 @@ def load_observations_csv(
         raise InputError(f"{p}: {len(rows)} observation rows, need at least {min_rows}")
     arr = np.array(rows, dtype=float)
     return arr[:, 0].copy(), arr[:, 1:].copy()
+
+
+def _cells(path: Path, lineno: int, line: str) -> list[str]:
+    """One CSV line's fields; InputError (one line) on what the csv module refuses (a
+    field over its 131,072-character limit, a stray quote)."""
+    try:
+        return next(csv.reader([line]))
+    except csv.Error as e:
+        raise InputError(f"{path}: line {lineno}: not a CSV line of t,x,y,z ({e})") from None
