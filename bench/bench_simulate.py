@@ -137,7 +137,7 @@ def bench_speed_against(other: Path, reps: int, contact: str = "full") -> None:
     med = {"o": [], "t": [], "co": [], "ct": []}
     for name, runs in rows.items():
         o, t = runs["other"], runs["this"]
-        rtf = lambda v, key: float(np.median([r["sim_s"] / r[key] for r in v]))  # noqa: E731
+        rtf = lambda v, key: float(np.median([r["sim_s"] / r[key] for r in v]))
         ro, rt, co, ct = rtf(o, "wall_s"), rtf(t, "wall_s"), rtf(o, "cpu_s"), rtf(t, "cpu_s")
         for k, v in zip(("o", "t", "co", "ct"), (ro, rt, co, ct)):
             med[k].append(v)

@@ -92,7 +92,7 @@ class WorkerPool:
             self._procs.append(p)
             self._conns.append(recv)
 
-    def __enter__(self) -> WorkerPool:
+    def __enter__(self) -> WorkerPool:  # noqa: PYI034 (Python 3.10 has no typing.Self)
         return self
 
     def __exit__(self, *exc) -> None:

@@ -4,7 +4,6 @@ takes (``plain``) and as a titled list in a summary (``listing``)."""
 from __future__ import annotations
 
 import enum
-
 import math
 from dataclasses import fields, is_dataclass
 from typing import Any

@@ -165,4 +165,4 @@ def test_plan_catch_in_memory_as_plan_song(tmp_path):
     assert (tmp_path / "m.csv").read_bytes() == path.read_bytes()
     assert planner.check_trajectory(mem.trajectory).ok
     with pytest.raises(planner.PlannerError, match="written to a file"):
-        planner.plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "f.csv")).trajectory
+        _ = planner.plan_catch(30.0, 1.5, 0.0, "default", str(tmp_path / "f.csv")).trajectory

@@ -50,7 +50,7 @@ def _start(songs: Path, out: Path) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, str(ROOT / "cli.py"), "batch", str(songs), str(out),
                              "--workers", "2"], cwd=out.parent, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True,
-                            preexec_fn=_default_sigint)
+                            preexec_fn=_default_sigint)  # noqa: PLW1509 (no threads here)
 
 
 def _default_sigint() -> None:
@@ -112,8 +112,8 @@ def test_a_song_that_crashes_the_planner_is_failed_and_the_batch_goes_on(tmp_pat
 
     monkeypatch.setattr(planner.play, "plan_song", boom)
     s = batch_plan(songs, tmp_path / "out", workers=1)
-    assert [r.error for r in s.results] == ["AttributeError: 'NoneType' object has no "
-                                            "attribute 'high'"] * 2
+    assert [r.error for r in s.results] == [("AttributeError: 'NoneType' object has no "
+                                             "attribute 'high'")] * 2
     assert (tmp_path / "out" / "summary.csv").exists()
 
 

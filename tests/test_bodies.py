@@ -44,7 +44,7 @@ def test_every_segment_is_enclosed_width_length_thickness(name):
         mine = [b for b in bodies if b.link == ln.name and b.kind == CAPSULE]
         assert mine, ln.name
         sx, sy, sz = ln.size_m
-        cx, cy, cz = ln.com_m
+        cx, cy, _ = ln.com_m
         x_lo = min(b.p0_m[0] - b.radius_m for b in mine)
         x_hi = max(b.p0_m[0] + b.radius_m for b in mine)
         assert x_lo == pytest.approx(cx - sx / 2, abs=1e-12)

@@ -87,9 +87,9 @@ def test_the_one_shot_catch_refuses_the_row(tmp_path):
 
 def test_the_live_catch_refuses_the_row(tmp_path, monkeypatch):
     from planner.balls import get_ball
+    from planner.catch import get_planner
     from planner.catch.flight.path import predict_throw
     from planner.catch.live.motion import LiveMotion
-    from planner.catch import get_planner
     from planner.catch.live.session import CatchSession
 
     pl = get_planner("default")

@@ -18,7 +18,7 @@ from planner.music import keyboard as kb
 from planner.simulate import simulate_trajectory
 from planner.simulate.keyboard import front_force_n, key_bodies, key_body
 from planner.simulate.scene import build_scene
-from planner.trajfile import TrajectoryWriter, read_trajectory, song_start_s
+from planner.trajfile import read_trajectory, song_start_s
 from tests.trajbuild import write_traj
 
 SONG = "songs/twinkle.mid"

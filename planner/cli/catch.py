@@ -75,9 +75,9 @@ def run_live(a: argparse.Namespace) -> int:
     ``CatchSession``; the summary once it has ended."""
     import numpy as np
 
+    from planner.catch.live.session import CatchSession
     from planner.catch.livecli import run_session
     from planner.catch.plan.results import CatchResult
-    from planner.catch.live.session import CatchSession
     from planner.catch.summary import catch_dict, format_summary
     from planner.errors import InputError
 

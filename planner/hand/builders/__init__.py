@@ -15,8 +15,8 @@ from typing import Any
 import tomllib
 
 from planner.errors import InputError
-from planner.hand.units import check_hand_numbers
 from planner.hand.spec import HandSpec, hands_dir, list_hands
+from planner.hand.units import check_hand_numbers
 
 # kind -> (module, function) building a HandSpec from the parsed hand file
 BUILDERS = {

@@ -11,7 +11,6 @@ from typing import Any
 import numpy as np
 
 from planner.errors import InputError
-from planner.hand.drive import apply_drive
 from planner.hand.builders.values import (
     get_length,
     get_positive,
@@ -19,6 +18,7 @@ from planner.hand.builders.values import (
     get_vec,
     rotor_inertia,
 )
+from planner.hand.drive import apply_drive
 from planner.hand.spec import (
     FINGERS,
     Actuator,
