@@ -13,7 +13,7 @@ from planner.check.kinematics import GRAVITY, Kinematics
 from planner.check.results import LimitCheck, TendonLoad
 from planner.hand.model import HandModel
 from planner.hand.tendon import spool_tensions_n, tendon_motors
-from planner.trajfile import Trajectory
+from planner.trajfile import Trajectory, distinct_rows
 
 FILE_QUANTUM = 1e-6  # the writer's 6 decimals
 POSITION_TOL = 1e-6  # rad or m beyond a joint limit
@@ -181,19 +181,26 @@ def _inertial_torques(kin: Kinematics, t: np.ndarray, Q: np.ndarray) -> np.ndarr
 def _joint_torques(kin: Kinematics, Q: np.ndarray, pressing_tips: np.ndarray | None,
                    ball_load: np.ndarray | None) -> np.ndarray:
     """Static joint torques of every row: gravity, the keys pushing back on the pressing
-    fingertips (``KEY_FORCE_N``), the ball's weight on the palm."""
-    tau = np.array([kin.gravity(q) for q in Q])
+    fingertips (``KEY_FORCE_N``), the ball's weight on the palm. They depend on the row
+    alone: a row equal to the one before it (a hand holding still, with the same keys
+    pressed) is computed once (``distinct_rows``)."""
+    key = [Q] + ([] if pressing_tips is None else [pressing_tips]) \
+        + ([] if ball_load is None else [np.asarray(ball_load, dtype=float)[:, None]])
+    new, of = distinct_rows(np.hstack(key))
+    Qn = Q[new]
+    tau = np.array([kin.gravity(q) for q in Qn])
     if pressing_tips is not None:
-        tip_ids = kin.tip_ids
-        for k in np.flatnonzero(pressing_tips.any(axis=1)):
-            Js = kin.point_jacobians(Q[k], [tip_ids[f] for f in np.flatnonzero(pressing_tips[k])])
+        tip_ids, pn = kin.tip_ids, pressing_tips[new]
+        for k in np.flatnonzero(pn.any(axis=1)):
+            Js = kin.point_jacobians(Qn[k], [tip_ids[f] for f in np.flatnonzero(pn[k])])
             for J in Js:
                 tau[k] -= J.T @ np.array([0.0, 0.0, KEY_FORCE_N])
     if ball_load is not None:
-        for k in np.flatnonzero(ball_load > 0):
-            (J,) = kin.point_jacobians(Q[k], [kin.palm_id])
-            tau[k] -= J.T @ (ball_load[k] * GRAVITY)
-    return tau
+        bn = np.asarray(ball_load)[new]
+        for k in np.flatnonzero(bn > 0):
+            (J,) = kin.point_jacobians(Qn[k], [kin.palm_id])
+            tau[k] -= J.T @ (bn[k] * GRAVITY)
+    return tau[of]
 
 
 def _tendon_audit(hand: HandModel, TM: np.ndarray, t: np.ndarray
