@@ -26,23 +26,10 @@ from planner.check.kinematics import Kinematics
 from planner.check.limits import limit_audit
 from planner.check.results import LimitCheck
 from planner.hand.model import HandModel
+from planner.play.costs import Skip, SkipReason
 from planner.trajfile import Trajectory, distinct_rows
 
 BATCH_ROWS = 2000  # rows judged at once (20 s at 100 Hz: 0.7 MB of rows waiting at most)
-
-
-class SkipReason(enum.Enum):
-    """Why a note is not played, beside the planner's own reasons (the enum of its
-    stages): meant to be played and found by the replay with its key down too little."""
-
-    MISSED = "missed"
-
-
-@dataclass(frozen=True)
-class Skip:
-    note: int  # index in the song
-    reason: enum.Enum  # SkipReason, or the reason enum of the planner stage that left it out
-    detail: str
 
 
 @dataclass(frozen=True)

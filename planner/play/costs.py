@@ -33,8 +33,9 @@ TIE_DX_PER_M = 0.5  # frames per metre a finger is off its natural place
 
 
 class SkipReason(enum.Enum):
-    """Why the planner does not play a note: the fingering's reasons (no state holds it)
-    and the motion's (the state chosen cannot strike it in time)."""
+    """Why a note is not played: the fingering's reasons (no state holds it), the
+    motion's (the state chosen cannot strike it in time), and the self-check's (meant
+    to be played, found by the replay with its key down too little: ``MISSED``)."""
 
     OUT_OF_REACH = "out_of_reach"  # no finger presses the key from any rail position
     TORQUE = "torque"  # the fingers that reach it cannot press with the note's force
@@ -45,6 +46,7 @@ class SkipReason(enum.Enum):
     # names the notes shorter than every press of every finger and rail that reach them)
     TOO_LATE = "too_late"  # its key cannot go down before half of it is over
     NO_PATH = "no_path"  # no move checked clear of the keys takes the finger there
+    MISSED = "missed"  # (``planner.selfcheck``) meant to be played, the replay finds it missed
 
 
 
