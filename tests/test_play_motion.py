@@ -40,3 +40,30 @@ def test_a_track_sampled_at_once_is_its_segments_row_by_row():
         cut = len(t_s) // 2
         both = np.vstack([track.at(t_s[:cut], q0), track.at(t_s[cut:], q0)])
         assert np.array_equal(both, _reference(track, t_s, q0))
+
+
+def test_a_repeated_key_comes_up_by_the_end_of_the_note_before():
+    """pretty-midi's example file (tests/data/round3), 195-197 s of its track 0: the
+    pinky presses G4 for 71 ms and again 130 ms later. Its press ends 31 ms before the
+    first note's end, and the short lift to the repeat height crosses the key-down depth
+    39 ms into it (the lift to crossing height: 30 ms): lifted so, the key came up one
+    row late, a wrong press. The repeat now lifts that way only when its key is up in
+    time; otherwise by crossing height. No wrong press, every claim confirmed."""
+    from pathlib import Path
+
+    from planner.check import check_trajectory
+    from planner.hand.model import load_hand
+    from planner.music.midi import Note, Song, load_song
+    from planner.play import Planner, plan_song
+
+    path = Path(__file__).parent / "data" / "round3" / "prettymidi_example.mid"
+    song = load_song(path, track=0)
+    notes = tuple(Note(n.pitch, round(n.onset_s - 194.5, 9), round(n.offset_s - 194.5, 9),
+                       n.velocity) for n in song.notes if 195.0 <= n.onset_s < 197.0)
+    window = Song(notes, max(n.offset_s for n in notes), source="window.mid")
+    pl = Planner(load_hand("default"))
+    plan = plan_song(window, pl.hand, None, planner=pl)
+    rep = check_trajectory(plan.trajectory, window)
+    assert len(notes) == 66
+    assert not rep.play.wrong_presses and not plan.verdict.score.wrong_presses, rep.summary()
+    assert rep.ok and not rep.play.claim_mismatches

@@ -169,8 +169,12 @@ def approach(moves: Moves, st: _Finger, e: AtlasEntry, want: float, after_s: flo
         lift, desc = moves.lift(e, "rise"), moves.descend(e, "rise")
         t_lift = min(want - desc.cross_s - lift.duration_s, st.up_s - lift.cross_s)
         t_lift = max(t_lift, st.track.free_s, committed_s)
-        t_desc = max(want - desc.cross_s, t_lift + lift.duration_s, floor)
-        return t_desc + desc.cross_s, [(t_lift, lift.move), (t_desc, desc.move)], "rise"
+        if t_lift + lift.cross_s <= st.up_s + 1e-9:  # (its key up by the note before's end)
+            t_desc = max(want - desc.cross_s, t_lift + lift.duration_s, floor)
+            return t_desc + desc.cross_s, [(t_lift, lift.move), (t_desc, desc.move)], "rise"
+        # (a press that ends late lifts too slowly to the rise: the short move crosses the
+        # key-down depth later than the lift to crossing height, which the note's own
+        # check (``Motion.place``, TOO_SHORT) holds within its end: that way, then down)
     if st.pose == "hover" and st.entry is e:  # waiting over this key already
         desc = moves.descend(e, "hover")
         t_desc = max(want - desc.cross_s, st.track.free_s, floor)
