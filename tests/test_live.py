@@ -93,7 +93,7 @@ def live_run():
     return fl, s, per_obs
 
 
-@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows have no wrist's turn; "
+@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows turn the wrist but have no soft stop; "
                    "the roll rule, now applied to live files, rejects them")
 def test_session_rows_never_change_and_lead_the_next_observation(live_run):
     _, s, per_obs = live_run
@@ -113,7 +113,7 @@ def test_session_rows_never_change_and_lead_the_next_observation(live_run):
     assert tr.end["ball"] != tr.metadata["ball"]
 
 
-@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows have no wrist's turn; "
+@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows turn the wrist but have no soft stop; "
                    "the roll rule, now applied to live files, rejects them")
 def test_session_catches_the_true_ball(live_run):
     """Judged by the independent check against the true ball, not the estimate."""
@@ -267,7 +267,7 @@ def test_session_needs_enough_observations():
         CatchSession(0.0)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows have no wrist's turn; "
+@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows turn the wrist but have no soft stop; "
                    "the roll rule, now applied to live files, rejects them")
 def test_session_end_of_input_follows_the_last_estimate(tmp_path):
     _, ts, ps = _observations(drag=False, noise_m=0.002)
@@ -292,7 +292,7 @@ def _lines(ts, ps, header=True):
     return "\n".join((["t,x,y,z"] if header else []) + rows) + "\n"
 
 
-@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows have no wrist's turn; "
+@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows turn the wrist but have no soft stop; "
                    "the roll rule, now applied to live files, rejects them")
 def test_cli_live_writes_a_checked_catch(tmp_path):
     _, ts, ps = _observations()
