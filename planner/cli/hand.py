@@ -51,6 +51,7 @@ def run(a: argparse.Namespace) -> int:
         raise InputError("--strength cannot be combined with --list or --urdf")
     if a.list:
         return _list(a.json)
+    from planner.hand.describe import format_hand, hand_dict
     from planner.hand.model import load_hand
 
     hand = load_hand(a.hand)
@@ -62,5 +63,5 @@ def run(a: argparse.Namespace) -> int:
         st = hand_strength(hand)
         print(json.dumps(st.to_dict()) if a.json else st.summary())
         return 0
-    print(json.dumps(hand.to_dict()) if a.json else hand.summary())
+    print(json.dumps(hand_dict(hand)) if a.json else format_hand(hand))
     return 0

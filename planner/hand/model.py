@@ -319,61 +319,6 @@ class HandModel:
             tau = tau - J[self.fingers.index(f)].T @ np.array([0.0, 0.0, F])
         return self.motor_torques(q, tau)
 
-    def to_dict(self) -> dict:
-        """``hand --json``: what ``summary`` says, one JSON object (SI units: m and rad)."""
-        def coupling(c) -> dict:
-            if isinstance(c, LinearCoupling):
-                return {"joint": c.joint, "source": c.source, "kind": "linear",
-                        "ratio": c.ratio, "offset": c.offset}
-            return {"joint": c.joint, "source": c.source, "kind": "mk5", "table": c.table,
-                    "finger": c.finger}
-
-        return {
-            "command": "hand", "name": self.name, "description": self.spec.description,
-            "urdf_sha256": self.urdf_sha256, "rail": bool(self.spec.rail_enabled),
-            "fingers": list(self.fingers),
-            "joints": [{"name": n, "lower": float(self.lower[i]), "upper": float(self.upper[i]),
-                        "velocity": float(self.velocity[i]),
-                        "acceleration": float(self.acceleration[i]),
-                        "jerk": float(self.jerk[i]), "stop_margin": float(self.stop_margin[i]),
-                        "unit": "m" if n in self.rig_joints else "rad"}
-                       for i, n in enumerate(self.joint_names)],
-            "couplings": [coupling(c) for c in self.spec.couplings],
-            "actuators": [{"name": a.name, "kind": a.kind, "drives": a.drives,
-                           "speed_rad_s": a.speed_rad_s, "peak_torque_nm": a.peak_torque_nm,
-                           "efficiency": a.efficiency,
-                           "rotor_inertia_kg_m2": a.rotor_inertia_kg_m2} for a in self.actuators],
-        }
-
-    def summary(self) -> str:
-        """A readable description: DOF, joints with limits, couplings, actuators."""
-        hand_dof = sum(1 for n in self.joint_names if n not in self.rig_joints)
-        lines = [f"hand {self.name}: {self.spec.description}",
-                 f"  {hand_dof} hand joints ({hand_dof - len(self.couplings)} independent)"
-                 + (f" + rig: {', '.join(self.rig_joints)}" if self.rig_joints else " (rail off)"),
-                 f"  urdf_sha256 {self.urdf_sha256}",
-                 "  joints (lower..upper, max speed, max acceleration, max jerk):"]
-        for i, n in enumerate(self.joint_names):
-            if n in self.rig_joints:
-                lines.append(f"    {n:16s} {self.lower[i]:+.3f}..{self.upper[i]:+.3f} m"
-                             f"  {self.velocity[i]:.2f} m/s  {self.acceleration[i]:.1f} m/s^2"
-                             f"  {self.jerk[i]:.0f} m/s^3")
-            else:
-                lines.append(f"    {n:16s} {np.degrees(self.lower[i]):+7.1f}..{np.degrees(self.upper[i]):+7.1f} deg"
-                             f"  {self.velocity[i]:6.2f} rad/s  {self.acceleration[i]:.0f} rad/s^2"
-                             f"  {self.jerk[i]:.3g} rad/s^3")
-        lines.append("  couplings:")
-        for c in self.spec.couplings:
-            if isinstance(c, LinearCoupling):
-                lines.append(f"    {c.joint} = {c.ratio:g} x {c.source}" + (f" + {c.offset:g}" if c.offset else ""))
-            else:
-                lines.append(f"    {c.joint} = q2({c.source}) - {c.source}  (Mk5 leverism, {c.table} {c.finger})")
-        lines.append("  actuators (kind, drives, max speed, peak torque, efficiency):")
-        for a in self.actuators:
-            lines.append(f"    motor.{a.name:14s} {a.kind:6s} {a.drives:16s} {a.speed_rad_s:6.1f} rad/s"
-                         f"  {a.peak_torque_nm:.2f} N m  {a.efficiency:.0%}")
-        return "\n".join(lines)
-
 
 @lru_cache(maxsize=8)
 def load_hand(name: str = "default") -> HandModel:
