@@ -2,17 +2,18 @@
 
 Every play plan starts at the hand's rest pose and ends there (spec section 4, version
 2): a controller starts the rows from a known, still pose and leaves the hand in it. The
-rest pose is the natural hand with every fingertip at crossing height (``Atlas.park``:
-above every key, so no key is down in the first or the last row) with the rail at its
-rest position (``REST_RAIL_M``, clamped to its travel).
+rest pose is the natural hand raised until its lowest fingertip is at crossing height
+(``Atlas.raised``: above every key, so no key is down in the first or the last row),
+with the rail at its rest position (``REST_RAIL_M``, within its planning travel).
 
-The way in is one time-optimal straight move of every joint from rest to the pose the
-motion starts from (``Motion.q0``: each finger at crossing height over its first key),
-the way out one from where the motion ends (every finger at crossing height) back to
-rest; each starts and ends with every speed zero. When the song's first notes come too
-soon to be reached from rest, the song starts later in the file: ``song_start_s``, a
-whole number of rows, written in the file's metadata, by which every reader shifts the
-song (``planner.trajfile.song_start_s``).
+The way in is two time-optimal straight moves (``legs_between``): the rail, with the
+hand in its rest posture, to where the motion starts; then the wrist and fingers, the
+rail still, to the motion's first pose (``Motion.q0``: each finger at crossing height
+over its first key). The way out is the same two backwards. Each starts and ends with
+every speed zero. When the song's first notes come too soon to be reached from rest,
+the song starts later in the file: ``song_start_s``, a whole number of rows, written in
+the file's metadata, by which every reader shifts the song
+(``planner.trajfile.song_start_s``, ``planner.music.midi.shift_notes``).
 """
 
 from __future__ import annotations

@@ -106,10 +106,10 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
                               on_rows=selfcheck.add_rows, defer_header=True)
     try:
         with _cyclic_gc_paused():
-            motion, rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
+            rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
         left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}
         left_out.update({o.note: (o.skip, o.detail)
-                         for o in motion.outcomes.values() if o.skip is not None})
+                         for o in rows.motion.outcomes.values() if o.skip is not None})
         verdict = selfcheck.verdict(rows.motion.notes, left_out)  # (in the file's time)
         writer.close(verdict.end_info())
     except BaseException as e:
@@ -144,7 +144,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     chunk's notes placed in time order (a cut before the notes that start with it) in
     the file's time (the song shifted by the way in from rest: ``planner.play.rest``),
     rows written up to where nothing can change any more, then the way back to rest.
-    Returns the motion, the rows, the fingering (song time) and the song's shift."""
+    Returns the rows (their motion and the song's shift) and the fingering (song time)."""
     problem = FingeringProblem(notes, pl.atlas, pl.moves, rate_hz, pl.memo)
     rest_q = rest_pose(pl.atlas)
     rows: _Rows | None = None
@@ -190,7 +190,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     rows.finish(rows.motion.finish(end), rest_q)
     fingering = Fingering(tuple(done[n] for n in sorted(done)),
                           tuple(sorted(skipped, key=lambda s: s.note)), loss)
-    return rows.motion, rows, fingering
+    return rows, fingering
 
 
 def _start(motion: Motion, pl: Planner, rest_q: np.ndarray, assignments,
@@ -249,15 +249,15 @@ class _Rows:
         self.write_to(max(self.out.end_s + SETTLE_S, (MIN_ROWS - 1) * self.dt))
 
     def _sample(self, t: np.ndarray) -> np.ndarray:
+        """The rows at times ``t``: the way in, the motion (couplings applied by it), the
+        way back; the legs' rows get their couplings here (a straight line keeps a
+        linear coupling, not the Mk5's)."""
         q = self.motion.rows(t)
-        into = t < self.way.arrive_s
-        if into.any():
-            q[into] = self.way.legs.at(t[into])
-        if self.out is not None:
-            back = t >= self.out.t0_s
-            if back.any():
-                q[back] = self.out.at(t[back])
-        return self.hand.apply_couplings(q)
+        for legs, on in ((self.way.legs, t < self.way.arrive_s),
+                         (self.out, None if self.out is None else t >= self.out.t0_s)):
+            if on is not None and on.any():
+                q[on] = self.hand.apply_couplings(legs.at(t[on]))
+        return q
 
     def write_to(self, t_s: float) -> None:
         """Rows up to ``t_s``, in blocks of at most ``ROW_BLOCK`` (memory stays bounded
