@@ -25,7 +25,7 @@ import numpy as np
 
 from planner.errors import InputError, PlannerError
 from planner.guard import guard_rows
-from planner.output import open_stream
+from planner.output import open_stream, write_file
 
 if TYPE_CHECKING:
     from planner.hand.model import HandModel
@@ -234,6 +234,28 @@ class Trajectory:
     q_motor: np.ndarray
     complete: bool
     end: dict[str, Any] = field(default_factory=dict)
+
+
+class KeptText:
+    """A plan made in memory (``text``, None when it went into a file): its file read
+    back (``trajectory``) or written whole (``write``). ``PlayPlan`` and ``CatchResult``
+    have it."""
+
+    text: str | None
+
+    @property
+    def trajectory(self) -> Trajectory:
+        """The plan as read back from its file (times, joint and motor arrays)."""
+        if self.text is None:
+            raise PlannerError("the plan was written to a file: read it with read_trajectory")
+        return parse_trajectory(self.text)
+
+    def write(self, path: str) -> None:
+        """Write a plan made in memory to ``path`` (whole: ``planner.output``), the same
+        bytes as planning into it."""
+        if self.text is None:
+            raise PlannerError("the plan was written to a file already")
+        write_file(path, self.text)
 
 
 def read_trajectory(path: str, allow_incomplete: bool = False) -> Trajectory:

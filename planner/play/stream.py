@@ -16,11 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.errors import InputError, PlannerError
+from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.music.midi import SHIFT_DIGITS, Song, shift_notes
 from planner.music.parts import PartChoice
-from planner.output import write_file
 from planner.play.atlas import Atlas
 from planner.play.costs import CostMemo
 from planner.play.fingering import Assignment, Fingering, FingeringProblem
@@ -28,7 +27,7 @@ from planner.play.motion import Motion
 from planner.play.moves import Moves
 from planner.play.rest import Legs, WayIn, legs_between, rest_pose, way_in
 from planner.selfcheck import SelfCheck, Verdict
-from planner.trajfile import MIN_ROWS, Trajectory, TrajectoryWriter, parse_trajectory
+from planner.trajfile import MIN_ROWS, KeptText, TrajectoryWriter
 
 COMMIT_LAG_S = 0.5  # rows are written up to this long before the last note placed
 SETTLE_S = 0.1  # rows go on this long after the hand is still
@@ -36,7 +35,7 @@ ROW_BLOCK = 6000  # rows sampled, guarded, written and replayed at once (60 s at
 
 
 @dataclass(frozen=True)
-class PlayPlan:
+class PlayPlan(KeptText):
     """What ``plan_song`` did: rows written, the fingering, the verdict of its replay;
     planned in memory (no path), the file's ``text``, its ``trajectory`` and ``write``."""
 
@@ -49,19 +48,6 @@ class PlayPlan:
     text: str | None = None
     song_start_s: float = 0.0  # the song's time 0 in the file's time (the way in from rest)
     part: PartChoice | None = None  # the part of the file played, when it had several
-
-    @property
-    def trajectory(self) -> Trajectory:
-        """The plan as read back from its file (times, joint and motor arrays)."""
-        if self.text is None:
-            raise PlannerError("the plan was streamed to a file: read it with read_trajectory")
-        return parse_trajectory(self.text)
-
-    def write(self, path: str) -> None:
-        """Write a plan made in memory to ``path`` (whole: see ``planner.output``)."""
-        if self.text is None:
-            raise PlannerError("the plan was streamed to a file already")
-        write_file(path, self.text)
 
 
 def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -> dict:

@@ -15,10 +15,8 @@ from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.rowcheck import RowVerdict
 from planner.check.ballstop import PAD_GIVE_M
 from planner.check.criteria import GRASP_WINDOW_S
-from planner.errors import PlannerError
 from planner.hand.model import HandModel
-from planner.output import write_file
-from planner.trajfile import Trajectory, parse_trajectory
+from planner.trajfile import KeptText
 
 if TYPE_CHECKING:
     from planner.catch.plan.stopping import SoftStop
@@ -255,7 +253,7 @@ def make_catch_plan(*, reasons: list[Reason] | tuple[Reason, ...], flight: Fligh
 
 
 @dataclass(frozen=True)
-class CatchResult:
+class CatchResult(KeptText):
     """What ``plan_catch`` returns: the plan and where it was written."""
 
     plan: CatchPlan
@@ -265,19 +263,6 @@ class CatchResult:
     writing_s: float
     setup_s: float = 0.0  # one-time: hand, IK, closing table (cached across calls)
     text: str | None = None  # the file's text, when planned in memory
-
-    @property
-    def trajectory(self) -> Trajectory:
-        """The plan as read back from its file (times, joint and motor arrays)."""
-        if self.text is None:
-            raise PlannerError("the catch was written to a file: read it with read_trajectory")
-        return parse_trajectory(self.text)
-
-    def write(self, path: str) -> None:
-        """Write a catch planned in memory to ``path`` (whole: ``planner.output``)."""
-        if self.text is None:
-            raise PlannerError("the catch was written to a file already")
-        write_file(path, self.text)
 
     @property
     def feasible(self) -> bool:
