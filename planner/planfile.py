@@ -15,7 +15,7 @@ import numpy as np
 
 from planner.errors import InputError
 from planner.hand.model import HandModel, load_hand
-from planner.trajfile import Trajectory, read_trajectory, song_start_s
+from planner.trajfile import Trajectory, is_num, read_trajectory, song_start_s
 
 if TYPE_CHECKING:
     from planner.music.midi import Song
@@ -56,7 +56,7 @@ class PlanFile:
             notes = load_song(song, track=opts["track"], channel=opts["channel"],
                               transpose=bool(opts["transpose"])).notes
         want = meta.get("notes")
-        if _is_num(want) and int(want) != len(notes):
+        if is_num(want) and int(want) != len(notes):
             given = (", ".join(f"{k}={v}" for k, v in opts.items() if v not in (None, False))
                      or "none")
             raise InputError(f"{self.path}: planned for a song of {int(want)} notes, {song} "
@@ -94,10 +94,6 @@ def plan_hand(meta: dict[str, Any], path: str, hand_override=None) -> HandModel:
         return load_hand(name)
     except InputError as e:
         raise InputError(f"{path}: cannot rebuild hand {name!r}: {e}") from None
-
-
-def _is_num(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def _check_columns(tr: Trajectory, hand: HandModel, path: str) -> None:

@@ -327,15 +327,18 @@ def _metadata(line: str, path: str) -> dict[str, Any]:
     if meta["task"] not in ("play", "catch"):
         raise InputError(f"{path}: task must be 'play' or 'catch', got {meta['task']!r}")
     rate = meta["rate_hz"]
-    if (not isinstance(rate, (int, float)) or isinstance(rate, bool) or not math.isfinite(rate)
-            or not rate > 0):
+    if not is_num(rate) or not math.isfinite(rate) or not rate > 0:
         raise InputError(f"{path}: rate_hz must be a positive number, got {rate!r}")
     start = meta.get("song_start_s", 0.0)
-    if (not isinstance(start, (int, float)) or isinstance(start, bool) or not math.isfinite(start)
-            or start < 0 or (start and version != 2)):
+    if not is_num(start) or not math.isfinite(start) or start < 0 or (start and version != 2):
         raise InputError(f"{path}: song_start_s must be a number >= 0 (format version 2), "
                          f"got {start!r}")
     return meta
+
+
+def is_num(v: Any) -> bool:
+    """A JSON number of the file (an int or a float, not a bool)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def song_start_s(metadata: dict[str, Any]) -> float:

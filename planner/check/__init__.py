@@ -116,7 +116,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from planner.check.ball import ball_params, ball_positions, catch_audit, is_num
+from planner.check.ball import ball_params, ball_positions, catch_audit
 from planner.check.bodykeys import body_keys, body_problems, judge_bodies
 from planner.check.claims import (
     ClaimKey,
@@ -164,7 +164,7 @@ from planner.errors import InputError
 from planner.hand.bodies import collision_bodies
 from planner.hand.model import HandModel
 from planner.planfile import read_plan
-from planner.trajfile import Trajectory, song_start_s
+from planner.trajfile import Trajectory, is_num, song_start_s
 
 if TYPE_CHECKING:
     from planner.music.midi import Song

@@ -22,7 +22,7 @@ from planner.check.results import BallLoad, CatchResult, TipTouch
 from planner.errors import InputError
 from planner.hand.spec import FINGERS
 from planner.hand.tendon import actuator_capacity
-from planner.trajfile import Trajectory
+from planner.trajfile import Trajectory, is_num
 
 BALL_STEP_S = 1e-3  # RK4 step of the ball flight with drag
 CONE_TOL_N = 1e-3  # the cone margin's tolerance (N): the file's rounding of the rows
@@ -49,10 +49,6 @@ def ball_params(meta: dict[str, Any], path: str) -> dict[str, Any]:
             raise InputError(f"{path}: ball {k!r} must be a {what} number, got {v!r}")
         out[k] = float(v)
     return out
-
-
-def is_num(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def ball_positions(p0, v0, drag: float, times) -> np.ndarray:
