@@ -1,4 +1,6 @@
-"""The limit audit of a replay: joint positions, speeds, accelerations, motor speeds,
+"""The limit audit of a replay, judged in blocks of rows (``LimitAudit``; a file or a plan
+being written is audited as it streams, ``limit_audit`` audits rows held whole as one
+block, with the same result to the bit): joint positions, speeds, accelerations, motor speeds,
 motor columns against the joints, couplings, static motor torque and the tendons'
 tensions (planner.hand.tendon: tension at the spool = motor torque / spool radius,
 bounded by the cable's design force); of a play's rows also the joints' jerks (third
@@ -11,6 +13,7 @@ import numpy as np
 
 from planner.check.kinematics import GRAVITY, Kinematics
 from planner.check.results import LimitCheck, TendonLoad
+from planner.check.worst import Worst, beats
 from planner.hand.model import HandModel
 from planner.hand.tendon import spool_tensions_n, tendon_motors
 from planner.trajfile import Trajectory, distinct_rows
@@ -23,62 +26,194 @@ COUPLING_TOL_RAD = 1e-5  # |coupling error|, plus file rounding
 KEY_FORCE_N = 0.5  # nominal key reaction on a pressing fingertip
 
 
-def _worst(category: str, excess: np.ndarray, value: np.ndarray, limit: np.ndarray,
-           tol: np.ndarray, names, times: np.ndarray, unit: str) -> LimitCheck:
-    """Build a LimitCheck from (R, C) arrays: ``excess`` ranks samples (bigger is
-    worse), a sample violates when its ``value`` is beyond ``limit + tol``."""
-    if excess.size == 0:
-        return LimitCheck(category, 0, 0.0, float(np.max(limit)) if np.size(limit) else 0.0,
-                          "", 0.0, unit)
-    count = int(np.count_nonzero(~(value <= limit + tol)))  # NaN (inf - inf) is no pass
-    r, c = np.unravel_index(int(np.argmax(excess)), excess.shape)
-    lim = np.broadcast_to(limit, value.shape)
-    return LimitCheck(category, count, float(value[r, c]), float(lim[r, c]), names[c],
-                      float(times[r]), unit)
+CARRY_ROWS = 3  # the rows before a block its differences reach (jerk: third differences)
 
 
-@np.errstate(over="ignore", invalid="ignore")  # absurd values give inf: counted, not printed
 def limit_audit(hand: HandModel, kin: Kinematics, tr: Trajectory, pressing_tips: np.ndarray | None,
                 ball_load: np.ndarray | None, inertia: bool = False
                 ) -> tuple[list[LimitCheck], tuple[TendonLoad, ...]]:
-    """The limit checks (one per category) and the worst tension of every tendon; with
-    ``inertia`` the motor torques also move the hand as its rows do (a play)."""
-    t, Q, QM = tr.t_s, tr.q, tr.q_motor
-    out = [_position_check(hand, t, Q), *_rate_checks(hand, t, Q, QM),
-           _motor_consistency(hand, t, Q, QM), _coupling_check(hand, t, Q)]
-    if inertia:  # (a play: rows for the hand's controller)
-        out[1:1] = [stop_margin_check(hand, t, Q)]
-        out.append(jerk_check(hand, t, Q))
-    tau = _joint_torques(kin, Q, pressing_tips, ball_load)
-    if inertia:
-        tau += _inertial_torques(kin, t, Q)
-    TM = _motor_torques(hand, Q, tau)
-    ratio = np.abs(TM) / hand.motor_peak_torque
-    out.append(_worst("motor_torque", ratio, np.abs(TM), hand.motor_peak_torque,
-                      RATE_TOL * hand.motor_peak_torque, _motor_columns(hand), t, "N m"))
-    tendon_check, tendons = _tendon_audit(hand, TM, t)
-    out.append(tendon_check)
-    return out, tendons
+    """The limit checks (one per category) and the worst tension of every tendon of rows
+    held whole (``LimitAudit`` with one block); with ``inertia`` the motor torques also
+    move the hand as its rows do (a play)."""
+    audit = LimitAudit(hand, kin, inertia)
+    audit.add(tr.t_s, tr.q, tr.q_motor, pressing_tips, ball_load)
+    return audit.finish()
+
+
+class LimitAudit:
+    """The limit audit of rows given block by block, in order (``add``), then ``finish``:
+    the limit checks (one per category) and the worst tension of every tendon, equal to
+    one pass over every row (each block's differences reach back into the ``CARRY_ROWS``
+    rows before it, kept from the blocks before; a row's motor torque, which with
+    ``inertia`` needs the row after it, waits for it). Memory: a few rows."""
+
+    def __init__(self, hand: HandModel, kin: Kinematics, inertia: bool = False) -> None:
+        self._hand, self._kin, self._inertia = hand, kin, inertia
+        peak = hand.motor_peak_torque
+        cats = [("joint_position", "rad|m", 0.0), ("joint_stop_margin", "rad|m", 0.0),
+                ("joint_velocity", "rad/s|m/s", 0.0), ("motor_velocity", "rad/s", 0.0),
+                ("joint_acceleration", "rad/s^2|m/s^2", 0.0), ("motor_consistency", "rad", 0.0),
+                ("coupling", "rad", 0.0 if hand.couplings else COUPLING_TOL_RAD),
+                ("joint_jerk", "rad/s^3|m/s^3", 0.0),
+                ("motor_torque", "N m", float(np.max(peak)) if np.size(peak) else 0.0),
+                ("tendon_tension", "N", 0.0)]
+        self._worst = {c: Worst(c, u, e) for c, u, e in cats}
+        self._tendons = _TendonLoads(hand)
+        self._tail: tuple | None = None  # (t, Q, QM, pressing, ball) of the last rows
+        self._rows = 0  # rows given
+        self._torqued = 0  # rows whose motor torques are judged
+
+    @np.errstate(over="ignore", invalid="ignore")  # absurd values give inf: counted, not printed
+    def add(self, t: np.ndarray, Q: np.ndarray, QM: np.ndarray,
+            pressing_tips: np.ndarray | None = None, ball_load: np.ndarray | None = None) -> None:
+        """Rows: times (s), joints, motor columns, the pressing fingertips (T, 5) of a play,
+        the ball's load (T,) of a catch."""
+        if len(t) == 0:
+            return
+        block = (t, Q, QM, pressing_tips,
+                 None if ball_load is None else np.asarray(ball_load, dtype=float))
+        self._row_rules(t, Q, QM)
+        c = 0 if self._tail is None else len(self._tail[0])
+        ext = block if self._tail is None else tuple(
+            None if b is None else np.concatenate([a, b]) for a, b in zip(self._tail, block))
+        self._differences(ext[0], ext[1], ext[2], c)
+        self._rows += len(t)
+        self._torques(ext, self._rows - len(ext[0]), len(ext[0]) - 1, self._inertia)
+        self._tail = tuple(None if a is None else a[-CARRY_ROWS:] for a in ext)
+
+    @np.errstate(over="ignore", invalid="ignore")
+    def finish(self) -> tuple[list[LimitCheck], tuple[TendonLoad, ...]]:
+        """The checks in the report's order, and the tendons' loads."""
+        if self._tail is not None:  # the last row: no row after it, no inertia
+            self._torques(self._tail, self._rows - len(self._tail[0]), len(self._tail[0]),
+                          False)
+        names = ["joint_position", "joint_velocity", "motor_velocity", "joint_acceleration",
+                 "motor_consistency", "coupling", "motor_torque", "tendon_tension"]
+        if self._inertia:
+            names[1:1] = ["joint_stop_margin"]
+            names[-2:-2] = ["joint_jerk"]
+        return [self._worst[n].result() for n in names], self._tendons.loads()
+
+    def _row_rules(self, t: np.ndarray, Q: np.ndarray, QM: np.ndarray) -> None:
+        """The rules of a row alone: position, stop margin, motor columns, couplings."""
+        hand, w = self._hand, self._worst
+        _position_rule(hand, t, Q, w["joint_position"])
+        if self._inertia:
+            _stop_margin_rule(hand, t, Q, w["joint_stop_margin"])
+        QMc = hand.motor_angles(Q)
+        sens = hand.motor_sensitivity(Q)
+        err = np.abs(QM - QMc)
+        tol = MOTOR_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + sens)
+        w["motor_consistency"].offer_values(err / tol, err, tol, 0.0, _motor_columns(hand), t)
+        if hand.couplings:
+            ce = np.abs(hand.coupling_errors(Q))
+            slope = np.stack([np.abs(c.slope(Q[:, c.src])) for c in hand.couplings], axis=-1)
+            tol = COUPLING_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + slope)
+            names = [hand.joint_names[c.dep] for c in hand.couplings]
+            w["coupling"].offer_values(ce / tol, ce, tol, 0.0, names, t)
+
+    def _differences(self, t: np.ndarray, Q: np.ndarray, QM: np.ndarray, c: int) -> None:
+        """Speeds (row differences), accelerations (second differences) and, of a play,
+        jerks (third) of rows ``t, Q, QM`` whose first ``c`` were judged before: each
+        sample whose last row is new, with the file's rounding in its tolerance."""
+        hand, w, m = self._hand, self._worst, len(t)
+        jn = hand.joint_names
+        if m < 2:
+            return
+        dt = np.diff(t)
+        V = np.diff(Q, axis=0) / dt[:, None]
+        s = slice(max(c - 1, 0), None)
+        tol = RATE_TOL * hand.velocity + FILE_QUANTUM / dt[:, None]
+        w["joint_velocity"].offer_values(np.abs(V[s]) / hand.velocity, np.abs(V[s]),
+                                         hand.velocity, tol[s], jn, t[1:][s])
+        VM = np.diff(QM, axis=0) / dt[:, None]
+        tol = RATE_TOL * hand.motor_speed + FILE_QUANTUM / dt[:, None]
+        w["motor_velocity"].offer_values(np.abs(VM[s]) / hand.motor_speed, np.abs(VM[s]),
+                                         hand.motor_speed, tol[s], _motor_columns(hand),
+                                         t[1:][s])
+        if m < 3:
+            return
+        A = np.diff(V, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]  # at t[1:-1]
+        s = slice(max(c - 2, 0), None)
+        tol = RATE_TOL * hand.acceleration + 2 * FILE_QUANTUM / (dt[1:] * dt[:-1])[:, None]
+        w["joint_acceleration"].offer_values(np.abs(A[s]) / hand.acceleration, np.abs(A[s]),
+                                             hand.acceleration, tol[s], jn, t[1:-1][s])
+        if m < 4 or not self._inertia:
+            return
+        J = np.diff(A, axis=0) / np.diff(t[1:-1])[:, None]  # between t[1:-2] and t[2:-1]
+        s = slice(max(c - 3, 0), None)
+        tol = RATE_TOL * hand.jerk + 4 * FILE_QUANTUM / (dt[2:] * dt[1:-1] * dt[:-2])[:, None]
+        w["joint_jerk"].offer_values(np.abs(J[s]) / hand.jerk, np.abs(J[s]), hand.jerk, tol[s],
+                                     jn, t[2:-1][s])
+
+    def _torques(self, rows: tuple, first: int, upto: int, inertia: bool) -> None:
+        """Motor torques and tendon tensions of ``rows`` (t, Q, QM, pressing, ball; row 0
+        is the song's row ``first``) not judged yet, up to row ``upto`` (exclusive)."""
+        t, Q, _, P, B = rows
+        lo = self._torqued - first
+        if upto <= lo:
+            return
+        tau = _joint_torques(self._kin, Q[lo:upto], None if P is None else P[lo:upto],
+                             None if B is None else B[lo:upto])
+        if inertia:
+            s = max(lo - 1, 0)  # (row 0 of the song has no row before it: no inertia)
+            tau += _inertial_torques(self._kin, t[s:upto + 1], Q[s:upto + 1])[lo - s:upto - s]
+        hand = self._hand
+        TM = _motor_torques(hand, Q[lo:upto], tau)
+        peak = hand.motor_peak_torque
+        self._worst["motor_torque"].offer_values(np.abs(TM) / peak, np.abs(TM), peak,
+                                                 RATE_TOL * peak, _motor_columns(hand),
+                                                 t[lo:upto])
+        self._tendons.add(TM, t[lo:upto], self._worst["tendon_tension"])
+        self._torqued = first + upto
+
+
+class _TendonLoads:
+    """Spool tensions (N) against each tendon's design force (1 %): the category's worst
+    and every tendon's own."""
+
+    def __init__(self, hand: HandModel) -> None:
+        self._hand = hand
+        self._idx = tendon_motors(hand)
+        self._names = tuple(f"motor.{hand.motor_names[m]}" for m in self._idx)
+        self._force = np.array([hand.actuators[m].tendon_force_n for m in self._idx],
+                               dtype=float)
+        self._tol = RATE_TOL * self._force
+        self._each: list[list] = [[0, None, 0.0, 0.0] for _ in self._idx]  # count, rank, T, t
+
+    def add(self, TM: np.ndarray, t: np.ndarray, worst: Worst) -> None:
+        if self._idx.size == 0:
+            return
+        T = np.abs(spool_tensions_n(self._hand, TM))
+        for k, each in enumerate(self._each):
+            r = int(np.argmax(T[:, k]))
+            each[0] += int(np.count_nonzero(~(T[:, k] <= self._force[k] + self._tol[k])))
+            if beats(float(T[r, k]), each[1]):
+                each[1:] = [float(T[r, k]), float(T[r, k]), float(t[r])]
+        worst.offer_values(T / self._force, T, self._force, self._tol, self._names, t)
+
+    def loads(self) -> tuple[TendonLoad, ...]:
+        return tuple(TendonLoad(name, each[0], each[2], float(f), each[3])
+                     for name, each, f in zip(self._names, self._each, self._force))
 
 
 def _motor_columns(hand: HandModel) -> tuple[str, ...]:
     return tuple(f"motor.{m}" for m in hand.motor_names)
 
 
-def _position_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck:
+def _position_rule(hand: HandModel, t: np.ndarray, Q: np.ndarray, worst: Worst) -> None:
     """Excess beyond the nearer bound (<= 0 inside); infinite bounds never bind."""
     lo = np.where(np.isfinite(hand.lower), hand.lower, -np.inf)
     hi = np.where(np.isfinite(hand.upper), hand.upper, np.inf)
     below, above = lo - Q, Q - hi
     excess = np.maximum(below, above)
     bound = np.where(below > above, lo, hi)
-    r, c = np.unravel_index(int(np.argmax(excess)), excess.shape)
-    return LimitCheck("joint_position", int(np.count_nonzero(excess > POSITION_TOL)),
-                      float(Q[r, c]), float(bound[r, c]), hand.joint_names[c], float(t[r]),
-                      "rad|m")
+    worst.offer(int(np.count_nonzero(excess > POSITION_TOL)), excess,
+                lambda r, c: (float(Q[r, c]), float(bound[r, c]), hand.joint_names[c],
+                              float(t[r])))
 
 
-def stop_margin_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck:
+def _stop_margin_rule(hand: HandModel, t: np.ndarray, Q: np.ndarray, worst: Worst) -> None:
     """Rows closer to a hard stop than the joint's stop margin (outside the planner's
     limits, ``HandModel.plan_lower``/``plan_upper``), the file's rounding allowed:
     ``worst`` is the least room to a stop (rad or m), ``limit`` that joint's margin."""
@@ -87,79 +222,9 @@ def stop_margin_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitChe
     room = np.minimum(Q - lo, hi - Q)
     short = hand.stop_margin - room  # > 0: inside the margin (or past the stop)
     margin = np.broadcast_to(hand.stop_margin, Q.shape)
-    if short.size == 0:
-        return LimitCheck("joint_stop_margin", 0, 0.0, 0.0, "", 0.0, "rad|m")
-    r, c = np.unravel_index(int(np.argmax(short)), short.shape)
-    return LimitCheck("joint_stop_margin", int(np.count_nonzero(short > POSITION_TOL)),
-                      float(room[r, c]), float(margin[r, c]), hand.joint_names[c],
-                      float(t[r]), "rad|m")
-
-
-def jerk_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck:
-    """Joint jerks: differences of the rows' accelerations (second differences, as
-    ``joint_acceleration``) over their spacing, i.e. third differences, against each
-    joint's jerk bound with ``RATE_TOL`` of it and the file's rounding (8 half quanta
-    through the coefficients 1, 3, 3, 1)."""
-    if len(t) < 4:
-        return LimitCheck("joint_jerk", 0, 0.0, 0.0, "", 0.0, "rad/s^3|m/s^3")
-    dt = np.diff(t)
-    V = np.diff(Q, axis=0) / dt[:, None]
-    A = np.diff(V, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]  # at t[1:-1]
-    J = np.diff(A, axis=0) / np.diff(t[1:-1])[:, None]  # between t[1:-2] and t[2:-1]
-    tol = RATE_TOL * hand.jerk + 4 * FILE_QUANTUM / (dt[2:] * dt[1:-1] * dt[:-2])[:, None]
-    return _worst("joint_jerk", np.abs(J) / hand.jerk, np.abs(J), hand.jerk, tol,
-                  hand.joint_names, t[2:-1], "rad/s^3|m/s^3")
-
-
-def _rate_checks(hand: HandModel, t: np.ndarray, Q: np.ndarray, QM: np.ndarray
-                 ) -> list[LimitCheck]:
-    """Joint and motor speeds (row differences), joint accelerations (second
-    differences), each with the file's rounding in its tolerance."""
-    jn, mn = hand.joint_names, _motor_columns(hand)
-    out = []
-    dt = np.diff(t)
-    if len(t) >= 2:
-        V = np.diff(Q, axis=0) / dt[:, None]
-        tol = RATE_TOL * hand.velocity + FILE_QUANTUM / dt[:, None]
-        out.append(_worst("joint_velocity", np.abs(V) / hand.velocity, np.abs(V), hand.velocity,
-                          tol, jn, t[1:], "rad/s|m/s"))
-        VM = np.diff(QM, axis=0) / dt[:, None]
-        tol = RATE_TOL * hand.motor_speed + FILE_QUANTUM / dt[:, None]
-        out.append(_worst("motor_velocity", np.abs(VM) / hand.motor_speed, np.abs(VM),
-                          hand.motor_speed, tol, mn, t[1:], "rad/s"))
-    else:
-        out.append(LimitCheck("joint_velocity", 0, 0.0, 0.0, "", 0.0, "rad/s|m/s"))
-        out.append(LimitCheck("motor_velocity", 0, 0.0, 0.0, "", 0.0, "rad/s"))
-    if len(t) >= 3:
-        V = np.diff(Q, axis=0) / dt[:, None]
-        h = 0.5 * (dt[1:] + dt[:-1])[:, None]
-        A = np.diff(V, axis=0) / h
-        tol = RATE_TOL * hand.acceleration + 2 * FILE_QUANTUM / (dt[1:] * dt[:-1])[:, None]
-        out.append(_worst("joint_acceleration", np.abs(A) / hand.acceleration, np.abs(A),
-                          hand.acceleration, tol, jn, t[1:-1], "rad/s^2|m/s^2"))
-    else:
-        out.append(LimitCheck("joint_acceleration", 0, 0.0, 0.0, "", 0.0, "rad/s^2|m/s^2"))
-    return out
-
-
-def _motor_consistency(hand: HandModel, t: np.ndarray, Q: np.ndarray, QM: np.ndarray
-                       ) -> LimitCheck:
-    """The motor columns against the joints: tolerance plus the rounding of the file."""
-    QMc = hand.motor_angles(Q)
-    sens = hand.motor_sensitivity(Q)
-    err = np.abs(QM - QMc)
-    tol = MOTOR_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + sens)
-    return _worst("motor_consistency", err / tol, err, tol, 0.0, _motor_columns(hand), t, "rad")
-
-
-def _coupling_check(hand: HandModel, t: np.ndarray, Q: np.ndarray) -> LimitCheck:
-    if not hand.couplings:
-        return LimitCheck("coupling", 0, 0.0, COUPLING_TOL_RAD, "", 0.0, "rad")
-    ce = np.abs(hand.coupling_errors(Q))
-    slope = np.stack([np.abs(c.slope(Q[:, c.src])) for c in hand.couplings], axis=-1)
-    tol = COUPLING_TOL_RAD + 0.5 * FILE_QUANTUM * (1.0 + slope)
-    names = [hand.joint_names[c.dep] for c in hand.couplings]
-    return _worst("coupling", ce / tol, ce, tol, 0.0, names, t, "rad")
+    worst.offer(int(np.count_nonzero(short > POSITION_TOL)), short,
+                lambda r, c: (float(room[r, c]), float(margin[r, c]), hand.joint_names[c],
+                              float(t[r])))
 
 
 def _inertial_torques(kin: Kinematics, t: np.ndarray, Q: np.ndarray) -> np.ndarray:
@@ -201,24 +266,6 @@ def _joint_torques(kin: Kinematics, Q: np.ndarray, pressing_tips: np.ndarray | N
             (J,) = kin.point_jacobians(Qn[k], [kin.palm_id])
             tau[k] -= J.T @ (bn[k] * GRAVITY)
     return tau[of]
-
-
-def _tendon_audit(hand: HandModel, TM: np.ndarray, t: np.ndarray
-                  ) -> tuple[LimitCheck, tuple[TendonLoad, ...]]:
-    """Spool tensions of every row (N) against each tendon's design force (1 %)."""
-    idx = tendon_motors(hand)
-    names = tuple(f"motor.{hand.motor_names[m]}" for m in idx)
-    if idx.size == 0:
-        return LimitCheck("tendon_tension", 0, 0.0, 0.0, "", 0.0, "N"), ()
-    T = np.abs(spool_tensions_n(hand, TM))
-    force = np.array([hand.actuators[m].tendon_force_n for m in idx], dtype=float)
-    tol = RATE_TOL * force
-    loads = []
-    for k, name in enumerate(names):
-        r = int(np.argmax(T[:, k]))
-        loads.append(TendonLoad(name, int(np.count_nonzero(~(T[:, k] <= force[k] + tol[k]))),
-                                float(T[r, k]), float(force[k]), float(t[r])))
-    return _worst("tendon_tension", T / force, T, force, tol, names, t, "N"), tuple(loads)
 
 
 def _motor_torques(hand: HandModel, Q: np.ndarray, tau: np.ndarray) -> np.ndarray:
