@@ -307,7 +307,7 @@ def plan_one(song_path: str, out_dir: str, hand_name: str, physics: bool = False
         planner = _planner(hand_name)
         plan = plan_song(parsed, planner.hand, traj_path, song_name=song.name,
                          planner=planner)
-        rep = check_trajectory(traj_path, song_path)
+        rep = check_trajectory(traj_path, song_path, replay=False)
         song_s = max((n.offset_s for n in parsed.notes), default=0.0)
         r = SongResult(notes=plan.verdict.notes, played=plan.verdict.played,
                        infeasible=len(plan.verdict.skipped), frame_f1=float(rep.play.f1),

@@ -66,12 +66,13 @@ class PlanFile:
 
 
 def read_plan(traj: str | os.PathLike | Trajectory, *, allow_incomplete: bool = False,
-              hand_override: str | HandModel | None = None) -> PlanFile:
-    """Read ``traj`` (a file, or a ``Trajectory`` read already) and rebuild its hand
-    (``hand_override``: a hand name, hand file or HandModel in place of the file's hand
-    name; its URDF hash must still match the file's)."""
+              hand_override: str | HandModel | None = None, name: str | None = None
+              ) -> PlanFile:
+    """Read ``traj`` (a file, or a ``Trajectory`` read already: ``name`` its file, or
+    MEMORY) and rebuild its hand (``hand_override``: a hand name, hand file or HandModel
+    in place of the file's hand name; its URDF hash must still match the file's)."""
     if isinstance(traj, Trajectory):
-        tr, path = traj, MEMORY
+        tr, path = traj, MEMORY if name is None else name
     else:
         tr, path = read_trajectory(traj, allow_incomplete=allow_incomplete), traj
     meta = tr.metadata

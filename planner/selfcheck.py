@@ -3,13 +3,15 @@
 ``SelfCheck`` takes every chunk of rows as the file holds them (rounded to its
 decimals), finds the keys down with the check's kinematics and key-down rule
 (``planner.check.criteria``), and at the end scores them against the song with
-the check's own ``score_song``, and audits the rows' limits with the check's own
-``limit_audit`` (motor torques with the hand's inertia, tendon tensions, speeds).
+the check's own ``SongScorer``, and audits the rows' limits with the check's own
+``LimitAudit`` (motor torques with the hand's inertia, tendon tensions, speeds), both
+block by block as the rows come.
 The summary and the end marker's claims are that verdict, so ``check`` never finds
 a note missed that the planner says it played, nor a wrong press or a limit
 violation the planner did not name; ``Verdict.rejected`` says what ``check`` would
-fail the plan for, and ``play`` exits 1 on it. (The audit keeps the rows until the
-end: 350 bytes a row, 125 MB an hour of music at 100 Hz.)
+fail the plan for, and ``play`` exits 1 on it. (Memory: a block of rows, and per row
+its time, its keys down as bits, the fingers holding them and its frame scores: about 50
+bytes a row, 18 MB an hour of music at 100 Hz.)
 """
 
 from __future__ import annotations
@@ -20,14 +22,14 @@ from typing import Any
 
 import numpy as np
 
-from planner.check.criteria import DOWN_DEPTH_M, key_contacts
-from planner.check.keys import SongScore, score_song
+from planner.check.criteria import DOWN_DEPTH_M, N_KEYS, key_contacts
+from planner.check.keys import SongScore, SongScorer, score_song
 from planner.check.kinematics import Kinematics
-from planner.check.limits import limit_audit
+from planner.check.limits import LimitAudit
 from planner.check.results import LimitCheck
 from planner.hand.model import HandModel
 from planner.play.costs import Skip, SkipReason
-from planner.trajfile import Trajectory, distinct_rows
+from planner.trajfile import distinct_rows
 
 BATCH_ROWS = 2000  # rows judged at once (20 s at 100 Hz: 0.7 MB of rows waiting at most)
 
@@ -83,20 +85,21 @@ class Verdict:
 
 
 class SelfCheck:
-    """Collects the key states of the rows written; ``verdict`` scores them."""
+    """Judges the rows written as they come: keys scored against the song and limits
+    audited block by block (``SongScorer``, ``LimitAudit``); ``verdict`` finishes both."""
 
     def __init__(self, hand: HandModel, rate_hz: float) -> None:
         self._hand = hand
         self._kin = Kinematics(hand, hand.T_world_root)
         self._nj = hand.n
-        self._rows: list[np.ndarray] = []  # (every row as written, for the limit audit)
-        self._pressing: list[np.ndarray] = []
         self._rate_hz = rate_hz
-        self._t: list[np.ndarray] = []
-        self._down: list[np.ndarray] = []
-        self._finger: list[np.ndarray] = []
-        self._pending: list[np.ndarray] = []  # (rows not judged yet, t and joints)
+        self._audit = LimitAudit(hand, self._kin, inertia=True)
+        self._t: list[np.ndarray] = []  # (every row's time: 8 bytes a row)
+        self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # (t, down, finger)
+        self._scorer: SongScorer | None = None
+        self._pending: list[np.ndarray] = []  # (rows not judged yet)
         self._pending_rows = 0
+        self._rows = 0
 
     def add_rows(self, rows: np.ndarray) -> None:
         """Rows as written: (n, 1 + joints + motors), t first. They are judged
@@ -105,8 +108,7 @@ class SelfCheck:
         ``verdict``."""
         if len(rows) == 0:
             return
-        self._pending.append(rows[:, :1 + self._nj])
-        self._rows.append(np.array(rows, dtype=float))
+        self._pending.append(np.array(rows, dtype=float))
         self._pending_rows += len(rows)
         if self._pending_rows >= BATCH_ROWS:
             self._judge()
@@ -116,43 +118,52 @@ class SelfCheck:
             return
         rows = np.concatenate(self._pending)
         self._pending, self._pending_rows = [], 0
-        q = rows[:, 1:1 + self._nj]
+        nj = self._nj
+        q = rows[:, 1:1 + nj]
         # (the rule is row by row: a row equal to the one before it, a hand holding still,
         # is judged once; about three rows in four on the corpus)
         new, of = distinct_rows(q)
         tips, _ = self._kin.frames_of(q[new])
         kc = key_contacts(tips)
-        self._t.append(rows[:, 0].copy())
-        self._down.append(kc.down[of])
-        self._finger.append(kc.finger[of])
-        self._pressing.append((np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)[of])
+        t = rows[:, 0].copy()
+        down, finger = kc.down[of], kc.finger[of]
+        self._t.append(t)
+        self._rows += len(t)
+        self._audit.add(t, q, rows[:, 1 + nj:],
+                        (np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)[of])
+        if self._scorer is not None:
+            self._scorer.add(t, down, finger)
+        else:  # (the song's notes come with the verdict: kept as bits till then)
+            self._blocks.append((t, np.packbits(down, axis=1), finger[down]))
+
+    def start_scoring(self, notes) -> None:
+        """Score the rows against ``notes`` as they come (else they wait for ``verdict``,
+        the keys down kept)."""
+        self._scorer = SongScorer(notes, self._rate_hz)
+        for t, bits, held in self._blocks:
+            down = np.unpackbits(bits, axis=1, count=N_KEYS).astype(bool)
+            finger = np.full(down.shape, -1, dtype=np.int8)
+            finger[down] = held
+            self._scorer.add(t, down, finger)
+        self._blocks = []
 
     def verdict(self, notes, left_out: dict[int, tuple[enum.Enum, str]]) -> Verdict:
         """Score the rows against ``notes``; ``left_out`` are the planner's own skips
         (note index -> (reason, detail)). Every note the replay finds missed is skipped:
         with the planner's reason when it left the note out, else as ``MISSED``."""
         self._judge()
-        t = np.concatenate(self._t) if self._t else np.zeros(1)
-        down = np.concatenate(self._down) if self._down else np.zeros((1, 88), dtype=bool)
-        finger = np.concatenate(self._finger) if self._finger else None
-        score = score_song(t, down, finger, notes, self._rate_hz)
+        if self._rows == 0:
+            score = score_song(np.zeros(1), np.zeros((1, N_KEYS), dtype=bool), None, notes,
+                               self._rate_hz)
+        else:
+            if self._scorer is None:
+                self.start_scoring(notes)
+            score = self._scorer.finish(np.concatenate(self._t))
         skipped = []
         for m in score.missed:
             if m.note in left_out:
                 skipped.append(Skip(m.note, *left_out[m.note]))
             else:
                 skipped.append(Skip(m.note, SkipReason.MISSED, f"replay: {m.reason}"))
-        return Verdict(len(notes), tuple(skipped), score, self._limits())
-
-    def _limits(self) -> tuple[LimitCheck, ...]:
-        """The check's limit audit of every row written (as ``check`` runs it on a play:
-        the keys pushing back on the pressing tips, the hand's inertia)."""
-        if sum(len(r) for r in self._rows) < 2:
-            return ()
-        rows = np.concatenate(self._rows)
-        h, nj = self._hand, self._nj
-        tr = Trajectory({}, h.joint_names, h.motor_names, rows[:, 0], rows[:, 1:1 + nj],
-                        rows[:, 1 + nj:], True)
-        limits, _ = limit_audit(h, self._kin, tr, np.concatenate(self._pressing), None,
-                                inertia=True)
-        return tuple(limits)
+        limits = tuple(self._audit.finish()[0]) if self._rows >= 2 else ()
+        return Verdict(len(notes), tuple(skipped), score, limits)

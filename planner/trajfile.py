@@ -408,3 +408,115 @@ def _row_ok(line: str, n: int) -> bool:
     except ValueError:
         return False
     return True
+
+
+SCAN_BYTES = 1 << 20  # the pre-pass reads the file in pieces this large
+STREAM_ROWS = 4096  # rows a streamed file yields at once
+
+
+class NotStreamable(Exception):
+    """A file ``stream_trajectory`` leaves to ``read_trajectory``: not a regular file,
+    not ASCII, or with any defect (whose message ``read_trajectory`` gives)."""
+
+
+@dataclass(frozen=True)
+class TrajectoryStream:
+    """A regular trajectory file read as a stream: ``head`` is its metadata, columns and
+    end marker (no rows: empty arrays), ``rows`` its count; ``blocks`` yields the rows,
+    (t_s, q, q_motor), ``STREAM_ROWS`` at a time, each checked as ``read_trajectory``
+    checks them (any defect: ``NotStreamable``)."""
+
+    head: Trajectory
+    path: str
+    rows: int
+    rate_hz: float
+
+    def blocks(self, block_rows: int | None = None):
+        block_rows = block_rows or STREAM_ROWS
+        nj, nm = len(self.head.joint_names), len(self.head.motor_names)
+        n, done, t_prev = 1 + nj + nm, 0, -math.inf
+        with open(self.path, encoding="ascii", newline="\n") as f:
+            f.readline()
+            f.readline()
+            while done < self.rows:
+                lines = [f.readline() for _ in range(min(block_rows, self.rows - done))]
+                try:
+                    arr = np.array([[float(x) for x in ln.rstrip("\n").split(",")]
+                                    for ln in lines], dtype=float)
+                except ValueError:
+                    raise NotStreamable("a row is not numbers") from None
+                if arr.ndim != 2 or arr.shape[1] != n or not np.all(np.isfinite(arr)):
+                    raise NotStreamable("a row is not numbers")
+                t = arr[:, 0]
+                k = np.arange(done, done + len(t))
+                if (not t[0] > t_prev or not np.all(np.diff(t) > 0)
+                        or np.any(np.abs(t - k / self.rate_hz) > ROW_TIME_TOL_S)):
+                    raise NotStreamable("rows off the clock")
+                t_prev, done = float(t[-1]), done + len(t)
+                yield t, arr[:, 1:1 + nj], arr[:, 1 + nj:]
+
+
+def _scan(path: str) -> tuple[int, bool, int]:
+    """Lines (as ``text.split("\\n")`` without a last empty one), whether the text ends in
+    a line end, and where its last line starts; NotStreamable unless a regular ASCII file."""
+    import os
+    import stat
+
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            raise NotStreamable("not a regular file")
+        ends, size, last_end, before = 0, 0, -1, -1  # (the last two line ends)
+        with open(path, "rb") as f:
+            while piece := f.read(SCAN_BYTES):
+                if not piece.isascii():
+                    raise NotStreamable("not ASCII")
+                ends += piece.count(b"\n")
+                j1 = piece.rfind(b"\n")
+                if j1 >= 0:
+                    j0 = piece.rfind(b"\n", 0, j1)
+                    before = size + j0 if j0 >= 0 else last_end
+                    last_end = size + j1
+                size += len(piece)
+    except OSError:
+        raise NotStreamable("cannot read") from None
+    terminated = size > 0 and last_end == size - 1
+    return (ends + (0 if terminated or size == 0 else 1), terminated,
+            (before if terminated else last_end) + 1)
+
+
+def stream_trajectory(path: str, allow_incomplete: bool = False) -> TrajectoryStream:
+    """``path`` read as a stream (``TrajectoryStream``): its first two lines and its last
+    now, its rows as they are read; NotStreamable for any file ``read_trajectory`` would
+    refuse or that is not a regular ASCII file (``read_trajectory`` then names why)."""
+    lines, terminated, last_start = _scan(path)
+    if lines < 3:
+        raise NotStreamable("too short")
+    with open(path, "rb") as f:
+        first, header = f.readline()[:-1].decode(), f.readline()[:-1].decode()
+        f.seek(last_start)
+        last = f.read().decode()
+    last = last[:-1] if terminated else last
+    if not first.startswith("# ") or first.endswith("\r") or header.endswith("\r"):
+        raise NotStreamable("not a trajectory's first lines")
+    try:
+        meta = _metadata(first, path)
+        joint_cols, motor_cols = _header(header, path)
+    except InputError:
+        raise NotStreamable("bad metadata or header") from None
+    end = _end_marker(last)
+    body = lines - 2
+    if end is not None:
+        body -= 1
+        if end.get("rows") != body:
+            raise NotStreamable("row count")
+    elif not allow_incomplete:
+        raise NotStreamable("incomplete")
+    elif body and (last.startswith("#") or not terminated):
+        body -= 1
+    if body < MIN_ROWS:
+        raise NotStreamable("too few rows")
+    nj = len(joint_cols)
+    head = Trajectory(meta, tuple(joint_cols), tuple(c[6:] for c in motor_cols), np.zeros(0),
+                      np.zeros((0, nj)), np.zeros((0, len(motor_cols))), end is not None,
+                      end or {})
+    return TrajectoryStream(head, path, body, float(meta["rate_hz"]))

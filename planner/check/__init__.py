@@ -117,7 +117,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from planner.check.ball import ball_params, ball_positions, catch_audit
-from planner.check.bodykeys import body_keys, body_problems, judge_bodies
+from planner.check.bodykeys import BodyJudge, body_keys, body_problems, judge_bodies
 from planner.check.claims import (
     ClaimKey,
     CountMismatch,
@@ -143,9 +143,9 @@ from planner.check.criteria import (
     pitch_name,
     song_frames,
 )
-from planner.check.keys import key_episodes, play_replay
+from planner.check.keys import PlayJudge, key_episodes, play_replay
 from planner.check.kinematics import Kinematics, fk_frames, keys_down
-from planner.check.limits import limit_audit
+from planner.check.limits import LimitAudit, limit_audit
 from planner.check.results import (
     CatchResult,
     CheckReport,
@@ -164,7 +164,13 @@ from planner.errors import InputError
 from planner.hand.bodies import collision_bodies
 from planner.hand.model import HandModel
 from planner.planfile import read_plan
-from planner.trajfile import Trajectory, is_num, song_start_s
+from planner.trajfile import (
+    NotStreamable,
+    Trajectory,
+    is_num,
+    song_start_s,
+    stream_trajectory,
+)
 
 if TYPE_CHECKING:
     from planner.music.midi import Song
@@ -260,7 +266,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
                      allow_incomplete: bool = False, min_f1: float | None = None,
                      hand_override: str | HandModel | None = None, strict: bool = False,
                      song_options: dict[str, Any] | None = None,
-                     bodies: bool = False) -> CheckReport:
+                     bodies: bool = False, replay: bool = True) -> CheckReport:
     """Replay ``traj_path`` and audit it (see the package docstring).
 
     ``traj_path``: a file, or a ``Trajectory`` already read (a plan made in memory).
@@ -268,27 +274,46 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     and wrong presses, read with ``song_options`` (``track``, ``channel``, ``transpose``;
     each defaults to the file's metadata). ``min_f1``: the verdict also requires frame F1 >= this (needs a
     song). ``strict``: the verdict also fails on any missed or late note.
-    ``name``: what messages call a ``Trajectory`` given read already (its file).
     ``hand_override``: a hand name / hand file or a HandModel to use instead of
     metadata["hand"] (its URDF hash must still match the file's).
+    ``replay``: keep the per-row arrays (``CheckReport.replay``, for pictures); without
+    them a play file is read and judged as a stream, block by block (memory bounded by
+    the block, not the song; the same report).
     Raises InputError when the file cannot be replayed: damaged or incomplete (unless
     allowed), unknown hand, URDF hash or column mismatch, bad T_world_root, bad
     catch metadata, a song other than the plan's.
     """
-    plan = read_plan(traj_path, allow_incomplete=allow_incomplete,
-                     hand_override=hand_override)
-    tr, traj_path, hand, T_world_root = plan.trajectory, plan.path, plan.hand, plan.T_world_root
-    meta = tr.metadata
+    kw = dict(allow_incomplete=allow_incomplete, min_f1=min_f1, hand_override=hand_override,
+              strict=strict, song_options=song_options, bodies=bodies)
+    if not replay and isinstance(traj_path, (str, os.PathLike)):
+        try:
+            return _check_streamed(os.fspath(traj_path), song_path, **kw)
+        except (NotStreamable, InputError):
+            pass  # (read whole: a catch, or bad input, named as read_trajectory names it)
+    return _check_whole(traj_path, song_path, **kw)
+
+
+def _song_notes(plan, song_path, min_f1: float | None, song_options):
+    """The checks of the options against the plan, and the song's notes (None)."""
     if min_f1 is not None and not (0.0 <= min_f1 <= 1.0):
         raise InputError(f"--min-f1 must be within 0..1, got {min_f1}")
-    task = meta["task"]
+    task = plan.task
     if song_path is not None and task != "play":
-        raise InputError(f"a song was given but {traj_path} is a {task} trajectory")
+        raise InputError(f"a song was given but {plan.path} is a {task} trajectory")
     if min_f1 is not None and song_path is None:
         raise InputError("--min-f1 needs a song")
-    notes = None if song_path is None else plan.song_notes(song_path, song_options)
+    return None if song_path is None else plan.song_notes(song_path, song_options)
 
-    kin = Kinematics(hand, T_world_root)
+
+def _check_whole(traj_path, song_path, *, allow_incomplete, min_f1, hand_override, strict,
+                 song_options, bodies) -> CheckReport:
+    """``check_trajectory`` of a file read whole (its replay arrays kept)."""
+    plan = read_plan(traj_path, allow_incomplete=allow_incomplete,
+                     hand_override=hand_override)
+    tr, traj_path, hand = plan.trajectory, plan.path, plan.hand
+    meta, task = tr.metadata, plan.task
+    notes = _song_notes(plan, song_path, min_f1, song_options)
+    kin = Kinematics(hand, plan.T_world_root)
     tips, palm = kin.frames(tr.q)
     problems: list[str] = []
     play = catch = None
@@ -307,21 +332,61 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     else:
         catch, ball_load = catch_audit(tr, kin, tips, palm, traj_path)
         problems.extend(catch.problems)
-
     limits, tendons = limit_audit(hand, kin, tr, pressing, ball_load, inertia=task == "play")
+    return _report(plan, song_path, tr.t_s, limits, tendons, play, catch, body_result,
+                   min_f1, problems, Replay(tr.t_s, tr.q, tips, palm, **replay_kw))
+
+
+def _check_streamed(path: str, song_path, *, allow_incomplete, min_f1, hand_override, strict,
+                    song_options, bodies) -> CheckReport:
+    """``check_trajectory`` of a play file read as a stream: every rule judges the rows
+    block by block (``PlayJudge``, ``BodyJudge``, ``LimitAudit``); kept per row only its
+    time and what the song's notes need (bits). NotStreamable: read it whole."""
+    stream = stream_trajectory(path, allow_incomplete)
+    if stream.head.metadata["task"] != "play":
+        raise NotStreamable("a catch")
+    plan = read_plan(stream.head, hand_override=hand_override, name=path)
+    hand, rate_hz = plan.hand, stream.rate_hz
+    notes = _song_notes(plan, song_path, min_f1, song_options)
+    kin = Kinematics(hand, plan.T_world_root)
+    judge, shapes = PlayJudge(notes, rate_hz), collision_bodies(hand.spec)
+    body_judge = BodyJudge(shapes, notes, rate_hz, verdict=bodies)
+    audit = LimitAudit(hand, kin, inertia=True)
+    times = []
+    for t, q, qm in stream.blocks():
+        tips, _ = kin.frames(q)
+        kc = judge.add(t, tips)
+        audit.add(t, q, qm, np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)
+        body_judge.add(t, body_keys(kin, q, shapes))
+        times.append(t)
+    t_s = np.concatenate(times)
+    play = _held_to_claims(judge.finish(t_s), notes, stream.head.end, path)
+    problems = _play_problems(play, min_f1, strict)
+    body_result = body_judge.finish(t_s)
+    if bodies:
+        problems.extend(body_problems(body_result))
+    limits, tendons = audit.finish()
+    return _report(plan, song_path, t_s, limits, tendons, play, None, body_result, min_f1,
+                   problems, None)
+
+
+def _report(plan, song_path, t_s: np.ndarray, limits, tendons, play, catch, body_result,
+            min_f1, problems: list[str], replay: Replay | None) -> CheckReport:
+    """The report: the limits' problems after the task's."""
     for lc in limits:
         if not lc.ok:
             problems.append(f"{lc.count} {lc.category.replace('_', ' ')} violations (worst "
                             f"{lc.worst:.6g} vs {lc.limit:.6g} {lc.unit}, {lc.name} at "
                             f"{lc.time_s:.3f} s)")
+    meta, hand = plan.metadata, plan.hand
     return CheckReport(
-        trajectory=os.fspath(traj_path),
+        trajectory=os.fspath(plan.path),
         song=None if song_path is None else (song_path.source if not isinstance(
             song_path, (str, os.PathLike)) else os.fspath(song_path)),
-        task=task, hand=hand.name, urdf_sha256=hand.urdf_sha256, complete=tr.complete,
-        rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), rate_hz=float(meta["rate_hz"]),
-        limits=tuple(limits), play=play, catch=catch, min_f1=min_f1, problems=tuple(problems),
-        replay=Replay(tr.t_s, tr.q, tips, palm, **replay_kw), tendons=tendons,
+        task=plan.task, hand=hand.name, urdf_sha256=hand.urdf_sha256,
+        complete=plan.trajectory.complete, rows=len(t_s), duration_s=float(t_s[-1] - t_s[0]),
+        rate_hz=float(meta["rate_hz"]), limits=tuple(limits), play=play, catch=catch,
+        min_f1=min_f1, problems=tuple(problems), replay=replay, tendons=tendons,
         song_start_s=song_start_s(meta), bodies=body_result)
 
 

@@ -19,8 +19,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M, LOWEST_PITCH, pitch_name
-from planner.check.keys import key_episodes, score_song
+from planner.check.criteria import (
+    BODY_BED_DEPTH_M,
+    DOWN_DEPTH_M,
+    LOWEST_PITCH,
+    N_KEYS,
+    pitch_name,
+)
+from planner.check.episodes import EpisodeStream
+from planner.check.keys import SongScorer, frame_period
 from planner.check.kinematics import Kinematics
 from planner.check.results import BodyBedHit, BodyResult
 from planner.hand.bodies import Body, body_links, place
@@ -61,34 +68,62 @@ def _link_rows(bk: BodyKeys, links: tuple[str, ...]) -> np.ndarray:
 def bed_hits(t_s: np.ndarray, bk: BodyKeys) -> tuple[BodyBedHit, ...]:
     """Contiguous rows in which some body reaches past ``BODY_BED_DEPTH_M`` in a key's
     footprint, per key: the first row, the deepest reach and its body's link."""
-    deep = bk.depth_m > BODY_BED_DEPTH_M
+    t_s = np.asarray(t_s, dtype=float)
+    stream = EpisodeStream(bk.down.shape[1])
+    stream.add(bk.depth_m > BODY_BED_DEPTH_M, t_s, bk.body, bk.depth_m)
+    return _bed_hits(stream.finish(frame_period(t_s)), bk.bodies)
+
+
+def _bed_hits(runs, bodies) -> tuple[BodyBedHit, ...]:
     out = []
-    for ep in key_episodes(deep, t_s):
-        k = ep.pitch - LOWEST_PITCH
-        rows = np.flatnonzero(deep[:, k] & (t_s >= ep.start_s) & (t_s < ep.end_s))
-        worst = rows[np.argmax(bk.depth_m[rows, k])]
-        b = bk.bodies[int(bk.body[worst, k])]
-        out.append(BodyBedHit(float(t_s[rows[0]]), int(rows[0]), ep.end_s, ep.pitch,
-                              pitch_name(ep.pitch), b.link, b.name,
-                              float(bk.depth_m[worst, k])))
+    for r in runs:
+        p = r.key + LOWEST_PITCH
+        b = bodies[r.best_tag]
+        out.append(BodyBedHit(r.start_s, r.start_row, r.end_s, p, pitch_name(p), b.link, b.name,
+                              r.best))
     return tuple(out)
+
+
+class BodyJudge:
+    """The body rule's findings over rows given block by block (``add``: their times and
+    ``BodyKeys``), then ``finish``: keys pressed, bed hits, and with ``notes`` the frame
+    scores, the notes hit and the wrong presses (each with the links whose bodies held the
+    key down). ``judge_bodies`` is one block."""
+
+    def __init__(self, bodies: tuple[Body, ...], notes, rate_hz: float,
+                 verdict: bool = False) -> None:
+        self._bodies, self._notes, self._verdict = bodies, notes, verdict
+        self._links = body_links(bodies)
+        self._played = EpisodeStream(N_KEYS)
+        self._bed = EpisodeStream(N_KEYS)
+        self._score = None if notes is None else SongScorer(notes, rate_hz, self._links)
+
+    def add(self, t_s: np.ndarray, bk: BodyKeys) -> None:
+        rows = _link_rows(bk, self._links)
+        self._played.add(bk.down, t_s)
+        self._bed.add(bk.depth_m > BODY_BED_DEPTH_M, t_s, bk.body, bk.depth_m)
+        if self._score is not None:
+            self._score.add(t_s, bk.down, rows)
+
+    def finish(self, t_s: np.ndarray) -> BodyResult:
+        """The findings; ``t_s``: every row's time."""
+        period = frame_period(t_s)
+        played = len(self._played.finish(period))
+        bed = _bed_hits(self._bed.finish(period), self._bodies)
+        if self._score is None:
+            return BodyResult(self._verdict, played, bed)
+        notes, score = self._notes, self._score.finish(t_s)
+        return BodyResult(self._verdict, played, bed, score.f1, score.precision, score.recall,
+                          len(notes), len(notes) - len(score.missed), score.wrong_presses)
 
 
 def judge_bodies(t_s: np.ndarray, bk: BodyKeys, notes, rate_hz: float,
                  verdict: bool = False) -> BodyResult:
-    """The body rule's findings over rows at times ``t_s``: keys pressed, bed hits, and
-    with ``notes`` the frame scores, the notes hit and the wrong presses (each with the
-    links whose bodies held the key down). ``verdict``: whether they decide the check."""
+    """The body rule's findings over rows at times ``t_s`` (``BodyJudge``, one block)."""
     t_s = np.asarray(t_s, dtype=float)
-    links = body_links(bk.bodies)
-    rows = _link_rows(bk, links)
-    played = key_episodes(bk.down, t_s, rows, links)
-    bed = bed_hits(t_s, bk)
-    if notes is None:
-        return BodyResult(verdict, len(played), bed)
-    score = score_song(t_s, bk.down, rows, notes, rate_hz, links)
-    return BodyResult(verdict, len(played), bed, score.f1, score.precision, score.recall,
-                      len(notes), len(notes) - len(score.missed), score.wrong_presses)
+    judge = BodyJudge(bk.bodies, notes, rate_hz, verdict)
+    judge.add(t_s, bk)
+    return judge.finish(t_s)
 
 
 def body_problems(res: BodyResult) -> list[str]:

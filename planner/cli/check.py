@@ -27,7 +27,8 @@ def run(a: argparse.Namespace) -> int:
 
     report = check_trajectory(a.trajectory, a.song, allow_incomplete=a.allow_incomplete,
                               min_f1=a.min_f1, strict=a.strict, song_options=song_options(a),
-                              hand_override=a.hand, bodies=a.bodies)
+                              hand_override=a.hand, bodies=a.bodies,
+                              replay=bool(a.report or a.html))
     if a.played:
         from planner.music.midi import Note, write_notes_midi
 
