@@ -411,7 +411,7 @@ def _row_ok(line: str, n: int) -> bool:
 
 
 SCAN_BYTES = 1 << 20  # the pre-pass reads the file in pieces this large
-STREAM_ROWS = 4096  # rows a streamed file yields at once
+STREAM_ROWS = 1024  # rows a streamed file yields at once (the rules' arrays of a block: ~15 MB)
 
 
 class NotStreamable(Exception):
@@ -447,7 +447,7 @@ class TrajectoryStream:
                     raise NotStreamable("a row is not numbers") from None
                 if arr.ndim != 2 or arr.shape[1] != n or not np.all(np.isfinite(arr)):
                     raise NotStreamable("a row is not numbers")
-                t = arr[:, 0]
+                t = arr[:, 0].copy()  # (kept by a reader: not a view of the block)
                 k = np.arange(done, done + len(t))
                 if (not t[0] > t_prev or not np.all(np.diff(t) > 0)
                         or np.any(np.abs(t - k / self.rate_hz) > ROW_TIME_TOL_S)):

@@ -94,7 +94,7 @@ class BodyJudge:
                  verdict: bool = False) -> None:
         self._bodies, self._notes, self._verdict = bodies, notes, verdict
         self._links = body_links(bodies)
-        self._played = EpisodeStream(N_KEYS)
+        self._played = EpisodeStream(N_KEYS, keep=False)
         self._bed = EpisodeStream(N_KEYS)
         self._score = None if notes is None else SongScorer(notes, rate_hz, self._links)
 
@@ -108,7 +108,8 @@ class BodyJudge:
     def finish(self, t_s: np.ndarray) -> BodyResult:
         """The findings; ``t_s``: every row's time."""
         period = frame_period(t_s)
-        played = len(self._played.finish(period))
+        self._played.finish(period)
+        played = self._played.count
         bed = _bed_hits(self._bed.finish(period), self._bodies)
         if self._score is None:
             return BodyResult(self._verdict, played, bed)

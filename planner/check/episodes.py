@@ -13,28 +13,31 @@ import numpy as np
 from planner.check.worst import beats
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Run:
     """One run of a key: its key index, first row (its index and time), the time its
     last row ends (the next row's time; one frame period past the last row at the end),
-    the tags seen in it (the fingers), and the largest ``value`` in it with its tag at
+    the tags seen in it (the fingers, ascending), and the largest ``value`` in it with its tag at
     that row (the first of equal ones; None without values)."""
 
     key: int
     start_s: float
     start_row: int
     end_s: float
-    tags: frozenset[int]
+    tags: tuple[int, ...]
     best: float | None
     best_tag: int | None
 
 
 class EpisodeStream:
-    """The runs of a mask given block by block, in order (``add``), then ``finish``."""
+    """The runs of a mask given block by block, in order (``add``), then ``finish``;
+    ``keep`` False: only their number (``count``)."""
 
-    def __init__(self, n_keys: int) -> None:
+    def __init__(self, n_keys: int, keep: bool = True) -> None:
         self._open: dict[int, list] = {}  # key -> [start_s, start_row, tags, best, best_tag]
         self._done: list[Run] = []
+        self._keep = keep
+        self.count = 0
         self._n_keys = n_keys
         self._rows = 0
         self._t_last = 0.0
@@ -79,7 +82,10 @@ class EpisodeStream:
                 run[4] = None if tag is None else int(tag[a + i, k])
 
     def _close(self, k: int, run: list, end_s: float) -> None:
-        self._done.append(Run(k, run[0], run[1], end_s, frozenset(run[2]), run[3], run[4]))
+        self.count += 1
+        if self._keep:
+            self._done.append(Run(k, run[0], run[1], end_s, tuple(sorted(run[2])), run[3],
+                                  run[4]))
 
     def finish(self, period_s: float) -> list[Run]:
         """Every run, the open ones ended ``period_s`` after the last row, by start time

@@ -56,7 +56,7 @@ def episodes_of(runs: list[Run], names: tuple[str, ...] = FINGERS) -> list[KeyEp
     for r in runs:
         p = r.key + LOWEST_PITCH
         out.append(KeyEpisode(p, pitch_name(p), r.start_s, r.end_s,
-                              tuple(names[i] for i in sorted(r.tags))))
+                              tuple(names[i] for i in r.tags)))
     return out
 
 
