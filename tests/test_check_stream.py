@@ -87,3 +87,16 @@ def test_what_cannot_stream(planned, tmp_path):
     s = stream_trajectory(str(planned))
     t = np.concatenate([b[0] for b in s.blocks(100)])
     assert len(t) == s.rows and t[0] == 0.0
+
+
+def test_the_self_check_judges_alike_in_any_batch(hand, monkeypatch):
+    """``play``'s self-check streams the same rules: its claims (the end marker) do not
+    depend on how many rows it judges at once."""
+    from planner.music.midi import load_song
+    from planner.play import plan_song
+
+    song = load_song(str(SCALE))
+    whole = plan_song(song, hand).text
+    monkeypatch.setattr("planner.selfcheck.BATCH_ROWS", 7)
+    assert plan_song(song, hand).text == whole
+    assert '"played": ' in whole.rsplit("\n", 2)[-2]
