@@ -25,7 +25,7 @@ def rows(planned, hand):
 
 
 def _streamed(hand, kin, tr, pressing, edges, inertia=True, ball=None):
-    audit = LimitAudit(hand, kin, inertia)
+    audit = LimitAudit(hand, kin, inertia, block_rows=1)  # (each block judged as given)
     cuts = [0, *sorted(set(e for e in edges if 0 < e < len(tr.t_s))), len(tr.t_s)]
     for a, b in zip(cuts[:-1], cuts[1:]):
         audit.add(tr.t_s[a:b], tr.q[a:b], tr.q_motor[a:b],
@@ -59,11 +59,16 @@ def _damaged(tr, hand, at):
     return _with(tr, q, qm)
 
 
-@pytest.mark.parametrize("block", [1, 2, 3, 5, 97, 4096])
+@pytest.mark.parametrize("block", [1, 2, 3, 5, 97, 4096])  # (and the default gathering)
 def test_blocks_of_a_real_plan_audit_as_the_whole(rows, hand, block):
     tr, kin, pressing = rows
     whole = limit_audit(hand, kin, tr, pressing, None, inertia=True)
     _same(whole, _streamed(hand, kin, tr, pressing, range(block, len(tr.t_s), block)))
+    gathered = LimitAudit(hand, kin, True, block_rows=4 * block)
+    for a in range(0, len(tr.t_s), block):
+        gathered.add(tr.t_s[a:a + block], tr.q[a:a + block], tr.q_motor[a:a + block],
+                     pressing[a:a + block])
+    _same(whole, gathered.finish())
 
 
 def test_a_catch_audit_streams_too(rows, hand):
