@@ -62,8 +62,16 @@ from planner.catch.flight.livefit import LiveFit
 from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import LiveSearch
+from planner.catch.live.stop import (
+    START_SLACK_S,
+    TiltTable,
+    arm_offset,
+    live_stop,
+    met_on_the_moving_palm,
+    moves,
+)
 from planner.catch.live.turn import LiveTurn, live_turn
-from planner.catch.plan.arm import open_from
+from planner.catch.plan.arm import open_from, palm_target
 from planner.catch.plan.closing import close_start, earliest_close_start
 from planner.catch.plan.planner import (
     HOLD_AFTER_S,
@@ -81,8 +89,11 @@ from planner.catch.plan.results import (
     catch_metadata,
     make_catch_plan,
 )
+from planner.catch.plan.stopping import SoftStop
+from planner.catch.plan.turnahead import TURN_GROW, TURN_TRIES, rows_within_limits
 from planner.errors import InfeasibleError, InputError
 from planner.hand.model import HandModel
+from planner.trajectory import phase_duration
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
 
 
@@ -186,6 +197,7 @@ class CatchSession:
         self.pose = self.flight = None
         self.t_i: float | None = None
         self._search = LiveSearch(self.pl.wrist, self.C, self.ball.radius_m)  # (step 2)
+        self._tilts = TiltTable.of(self.pl, self.C, self.ball, self.drag, self.dt)
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
         self._closings = _DeferredClosing(h, self.C, self.closing, self.ball.radius_m)
@@ -196,6 +208,11 @@ class CatchSession:
         self.plan: CatchPlan | None = None
         self.drag_estimate: DragEstimate | None = None  # (drag: at the end)
         self.turn: LiveTurn | None = None  # the wrist's turn that holds the ball (at the end)
+        self.stop: SoftStop | None = None  # the arm's stopping motion (``live.stop``) of the
+        # newest estimate, fixed (``stop_fixed``) once the rows reach its ramp
+        self.stop_fixed = False
+        self.q_pre: np.ndarray | None = None  # its pre-catch pose (the arm's move's target)
+        self._target_m: np.ndarray | None = None  # the fixed stop's palm target at its t_i
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
         self.rows_cpu_s = math.nan  # thread_time then
 
@@ -234,7 +251,10 @@ class CatchSession:
         fit = self.fit.add(t, p)
         if fit is None:
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
-                self._search.look(self.fit.first_look())
+                look = self.fit.first_look()
+                if look is not None:
+                    self._search.tilt = self._tilts.tilt_for(look)
+                self._search.look(look)
             # the hand rests at least until this observation could act: those rows
             # formatted here, written with the first fit's
             chunk = self._format(t + SIGNAL_S + PLAN_BUDGET_S)
@@ -273,29 +293,100 @@ class CatchSession:
         ``t_s``), acting from ``t_b`` (this observation's rows end at ``rows_to_s``)."""
         pl, r, cl = self.pl, self.ball.radius_m, self.closing
         prev = None if self.pose is None else self.pose.ic
-        pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
-        stop_t = gq.stop_time(pose.v_i)
         m = self.motion
-        rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives
+        if not m.moving:  # (the moving hand keeps its stopping motion's tilt)
+            self._search.tilt = self._tilts.tilt_for(flight)
+        pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
+        stop = (self.stop if self.stop_fixed else self._shifted(pose) if m.moving
+                else self._stop_for(pose, -math.inf))  # (waiting: the motion with time enough)
+        stop_t = stop.pad_s
+        rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
+        if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
+            rest_by = min(rest_by, stop.start_s)
+        q_pre = self.q_pre
         if not m.moving:
-            T_m = m.move_time(pl.q_rest, pose.q_open)
+            T_m = m.move_time(pl.q_rest, q_pre)
             go = t_b + period + T_m  # the open pose reached if the hand waits one more
             # observation; wait while that is early enough: before the arm must be at rest
-            # and before the closing's start, which is no earlier than its earliest (then
-            # no closing time is needed: the same decision as with it)
-            if go >= rest_by or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
+            # (with room for the re-aims) and before the closing's start, which is no
+            # earlier than its earliest (then no closing time is needed: the same decision)
+            late = go + (START_SLACK_S if moves(stop) else 0.0) >= rest_by
+            if late or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
                 s_c = self._closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t)
-                if go >= s_c or go >= rest_by:
-                    m.start(t_b, pose.q_open, T_m)
+                if go >= s_c or late:
+                    if t_b + T_m > stop.start_s:  # too late for it: one that starts later
+                        stop = self._stop_for(pose, t_b)
+                        q_pre = self.q_pre
+                        T_m = m.move_time(pl.q_rest, q_pre)
+                    m.start(t_b, q_pre, T_m)
                     m.set_closing(s_c, cl.duration_s)
         else:
             self._closings.due(m, t_b)
-            if m.reaim(t_b, pose.q_open, rest_by) < 1.0:
+            if not self.stop_fixed and m.reaim(t_b, q_pre, rest_by) < 1.0:
                 self.kept_targets += 1
             if m.close_start_s > t_b:
                 self._closings.retime(m, _CloseAsk(flight, pose.q_open, pose.t_i,
                                                    m.fingers_open_s, stop_t, t_b), rows_to_s)
+        if moves(stop) and m.moving and not self.stop_fixed and rows_to_s + period >= stop.start_s:
+            self._fix_stop()  # the next rows reach its ramp: the motion is the rows' now
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
+
+    def _stop_for(self, pose, t_b: float) -> SoftStop:
+        """The stopping motion through ``pose`` (``live.stop``), its pre-catch pose
+        (``q_pre``) reached in time from the hand's state at ``t_b`` (-inf: any time)."""
+        m, arm = self.motion, list(self.pl.joints.arm)
+
+        def ready_by(q: np.ndarray) -> float:
+            if t_b == -math.inf:
+                return t_b
+            if not m.moving:
+                return t_b + m.move_time(self.pl.q_rest, q)
+            q_now = m.seg.state1(t_b)[0]
+            return max(m.seg.end_s, t_b + phase_duration(q[arm] - q_now, m.hand.velocity[arm],
+                                                          m.hand.acceleration[arm]))
+
+        self.stop = stop = live_stop(self.pl.dyn, pose.v_i, float(self.ball.mass_kg),
+                                     self.ball.radius_m, pose.q_open, float(pose.t_i), ready_by,
+                                     self.dt)
+        self.q_pre = pose.q_open.copy()
+        self.q_pre[arm] += stop.first_offset
+        return stop
+
+    def _shifted(self, pose) -> SoftStop:
+        """The moving hand's stopping motion (chosen when it started to move: its speeds
+        and ramps kept, so that the re-aims follow the estimate, not a new motion) through
+        ``pose``, the newest intercept."""
+        stop, h, arm = self.stop, self.pl.hand, list(self.pl.joints.arm)
+        q = pose.q_open[arm]
+        lo, hi = h.lower[arm], h.upper[arm]
+        scale = np.ones(len(arm))  # a joint whose travel would leave its range from the
+        for off in (stop.first_offset, stop.last_offset):  # newer pose slower (as
+            room = np.where(off < 0, q - lo, hi - q)  # ``stop_profile`` slows it)
+            over = np.abs(off) > room
+            scale[over] = np.minimum(scale[over], np.maximum(room[over], 0.0) / np.abs(off[over]))
+        stop = self.stop = replace(stop, t_i=float(pose.t_i), qd=stop.qd * scale)
+        self.q_pre = pose.q_open.copy()
+        self.q_pre[arm] += stop.first_offset
+        return stop
+
+    def _fix_stop(self) -> None:
+        """The stopping motion fixed: the palm target where the rows have it at its
+        intercept kept (a newer estimate's intercept is where its ball meets the moving
+        palm, ``_met``)."""
+        self.stop_fixed = True
+        t = np.array([self.stop.t_i])
+        off = arm_offset(self.stop, t, self.pl.hand.n)
+        q = self.motion.rows(t)[0] + (0.0 if off is None else off[0])
+        self._target_m = palm_target(self.pl.hand, q, self.ball.radius_m)
+
+    def _met(self, pose):
+        """``pose`` with the intercept time of its flight on the fixed moving palm."""
+        if not (self.stop_fixed and moves(self.stop)):
+            return pose
+        fl, stop = self.flight, self.stop
+        t_i = met_on_the_moving_palm(stop, self._target_m, fl.position(stop.t_i) - self.C,
+                                     fl.velocity(stop.t_i))
+        return replace(pose, t_i=t_i, v_i=fl.velocity(t_i))
 
     def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
         """The intercept's 1-sigma from the fit (``LiveFit.sigma_at``): across the path at
@@ -345,6 +436,9 @@ class CatchSession:
             return None
         t = np.arange(first, n) * self.dt
         Q = self.motion.rows(t, old_seg, t_b)  # (the writer guards them as it writes them)
+        off = arm_offset(self.stop if self.stop_fixed else None, t, self.pl.hand.n)
+        if off is not None:
+            Q = Q + off
         if self.turn is not None:
             Q = Q + self.turn.offset(t)
         return _Chunk(t, Q, format_rows(t, Q, self.pl.hand.motor_angles(Q)))
@@ -373,17 +467,26 @@ class CatchSession:
         self._closings.due(m, math.inf)
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
-            T_m = m.move_time(self.pl.q_rest, pose.q_open)
-            m.start(t_b, pose.q_open, T_m)
+            stop = self.stop if self.stop_fixed else self._stop_for(pose, t_b)
+            T_m = m.move_time(self.pl.q_rest, self.q_pre)
+            m.start(t_b, self.q_pre, T_m)
             m.set_closing(close_start(h, self.flight, self.C, pose.q_open, cl, pose.t_i,
-                                      t_b + T_m, gq.stop_time(pose.v_i), self.ball.radius_m),
+                                      t_b + T_m, stop.pad_s, self.ball.radius_m),
                           cl.duration_s)
-        t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s)
-        q_held = m.rows(np.array([t_static, t_static + self.dt]))[0]
+        if not self.stop_fixed:
+            self._fix_stop()
+        self.pose = pose = self._met(pose)
+        stop = self.stop
+        t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s,
+                       stop.end_s if moves(stop) else -math.inf)
+        t2 = np.array([t_static, t_static + self.dt])
+        off = arm_offset(stop, t2, h.n)
+        q_held = m.rows(t2)[0] + (0.0 if off is None else off[0])
         grasp = m.close_start_s + (cl.u_grasp or 1.0) * m.close_s
         self.turn = live_turn(self.pl.dyn, q_held,
-                              max(grasp, pose.t_i + gq.stop_time(pose.v_i), m.seg.end_s),
+                              max(grasp, pose.t_i + stop.pad_s, m.seg.end_s),
                               (self.next_row + sum(len(c.t) for c in self._ahead)) * self.dt)
+        self.turn = self._within_limits(self.turn)
         if self.turn is not None:
             t_static = max(t_static, self.turn.end_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
@@ -409,6 +512,23 @@ class CatchSession:
                               {"drag_estimate": self.drag_estimate.to_dict()})})
         return rows
 
+    def _within_limits(self, turn: LiveTurn | None) -> LiveTurn | None:
+        """The turn lengthened (``TURN_GROW``, at most ``TURN_TRIES`` times, as the planned
+        catch's turn from the grasp) until every joint is within its speed and acceleration
+        limits on its rows, where it runs on top of the stopping motion's end."""
+        if turn is None or not moves(self.stop):
+            return turn
+        n = self.pl.hand.n
+        for _ in range(TURN_TRIES):
+            t = np.arange(math.floor(turn.start_s / self.dt) - 1,
+                          math.ceil(turn.end_s / self.dt) + 2) * self.dt
+            Q = self.motion.rows(t) + turn.offset(t)
+            off = arm_offset(self.stop, t, n)
+            if rows_within_limits(self.pl.hand, t, Q + (0.0 if off is None else off)):
+                break
+            turn = turn._replace(duration_s=turn.duration_s * TURN_GROW)
+        return turn
+
     def _judge(self, t_static: float) -> CatchPlan:
         """The final plan: every row through the planner's self-check, the grasp forces."""
         pl, pose, fl, r, m = self.pl, self.pose, self.flight, self.ball.radius_m, self.motion
@@ -420,9 +540,9 @@ class CatchSession:
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
         reasons += roll_reasons(pl.turn, fl, t, Q, pose.t_i)
-        if self.turn is not None:  # the ball is held in the turned hand
+        if self.turn is not None or moves(self.stop):  # the ball is held where the rows end
             pose = replace(pose, q_closed=Q[-1].copy())
-        fv = pl.forces(fl, pose, t, Q, r)
+        fv = pl.forces(fl, pose, t, Q, r, soft=self.stop if moves(self.stop) else None)
         reasons += fv.reasons
         try:
             t_f = float(fl.time_at_x(float(self.C[0])))
@@ -441,7 +561,7 @@ class CatchSession:
             reasons=reasons, flight=fl, catch_point=self.C,
             T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand, hand=pl.hand,
             rate_hz=self.rate_hz, throw=self._throw(), pose=pose, verdict=verdict,
-            q_rest=pl.q_rest, q_open=pose.q_open, move_start_s=m.t_move, move_s=m.open_s,
+            q_rest=pl.q_rest, q_open=self.q_pre, move_start_s=m.t_move, move_s=m.open_s,
             close_start_s=m.close_start_s, close_s=m.close_s, forces=fv.forces,
             t=t, Q=Q, t_info_s=float(self.fit.times[-1]), flight_time_s=t_f,
             uncertainty=self.uncertainty, notes=notes)

@@ -348,20 +348,8 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     a function of the pre-catch pose -> when the hand can be there. ``soft`` False: the palm
     waits at rest (the stopping is the pad's alone). ``roll_weight``: the contact-speed QP's
     weight on the ball's speed along the palm (1: none above its speed into it)."""
-    best = None
-    for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
-        # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
-        # the wrist changes smoothly with it)
-        for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):
-            ic = find_intercept(wrist, flight, C, r, t_c, math.radians(tilt))
-            if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
-                break
-            cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
-                              math.radians(tilt), 1.0, rw=roll_weight)
-            key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
-            if best is not None and key >= best[0]:
-                break
-            best = (key, cand)
+    best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, soft,
+                      roll_weight)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
@@ -383,6 +371,38 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
             break
         judged, stop = j, cand
     return ic, q_open, judged[1]
+
+
+def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
+              q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float
+              ) -> float:
+    """The palm's tilt (rad) ``plan_stop`` chooses for this throw (its contact share 1:
+    the tilt is chosen before the share), 0 when no tilt reaches."""
+    best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, True,
+                      ROLL_WEIGHT)
+    return 0.0 if best is None else float(best[1][2].tilt_rad)
+
+
+def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
+               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
+               soft: bool, roll_weight: float):
+    """``plan_stop``'s tilt search: (key, (intercept, open pose, stop)) of the tilt whose
+    pad phase needs the least of the motor closest to its capacity; None: no tilt reaches."""
+    best = None
+    for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
+        # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
+        # the wrist changes smoothly with it)
+        for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):
+            ic = find_intercept(wrist, flight, C, r, t_c, math.radians(tilt))
+            if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
+                break
+            cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
+                              math.radians(tilt), 1.0, rw=roll_weight)
+            key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
+            if best is not None and key >= best[0]:
+                break
+            best = (key, cand)
+    return best
 
 
 def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
