@@ -57,6 +57,10 @@ class LiveSearch:
              t_i: float | None) -> Intercept:
         """The intercept of ``flight`` (observed up to ``t_s``) warm-started from ``prev``,
         the last re-plan's (its time ``t_i``; None: the first fit's)."""
+        if self.tilt and prev is not None and prev.reason is None and not prev.aligned:
+            prev = None  # a tilted palm's crossing may lie beyond the near window of the
+            # position-only intercept: searched along the whole path (as a first fit's)
+            self.prior = None
         ic = self._next(flight, t_s, prev, t_i)
         if self.tilt and (ic.reason is not None or not ic.aligned):  # the tilted palm
             tilt, self.tilt = self.tilt, 0.0  # faces no pose: the untilted one (as the
