@@ -165,7 +165,7 @@ class CatchSession:
     def __init__(self, dist_m: float, height_m: float = 0.0,
                  hand: HandModel | str = "default", ball: Ball | str = "tennis",
                  drag: bool = False, rate_hz: float = 100.0, out_path: str | None = None,
-                 planner: CatchPlanner | None = None) -> None:
+                 planner: CatchPlanner | None = None, soft_stop: bool = False) -> None:
         from planner.catch.plan.api import get_planner, validate_live
 
         d, hgt, rate = validate_live(dist_m, height_m, rate_hz)
@@ -197,7 +197,10 @@ class CatchSession:
         self.pose = self.flight = None
         self.t_i: float | None = None
         self._search = LiveSearch(self.pl.wrist, self.C, self.ball.radius_m)  # (step 2)
-        self._tilts = TiltTable.of(self.pl, self.C, self.ball, self.drag, self.dt)
+        self.soft_stop = bool(soft_stop)  # the live soft stop (``live.stop``; not yet the
+        # default: docs/history/live-catch.md, issue 31)
+        self._tilts = (TiltTable.of(self.pl, self.C, self.ball, self.drag, self.dt)
+                       if self.soft_stop else None)
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
         self._closings = _DeferredClosing(h, self.C, self.closing, self.ball.radius_m)
@@ -252,7 +255,7 @@ class CatchSession:
         if fit is None:
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
                 look = self.fit.first_look()
-                if look is not None:
+                if look is not None and self._tilts is not None:
                     self._search.tilt = self._tilts.tilt_for(look)
                 self._search.look(look)
             # the hand rests at least until this observation could act: those rows
@@ -294,12 +297,12 @@ class CatchSession:
         pl, r, cl = self.pl, self.ball.radius_m, self.closing
         prev = None if self.pose is None else self.pose.ic
         m = self.motion
-        if not m.moving:  # (the moving hand keeps its stopping motion's tilt)
+        if not m.moving and self._tilts is not None:  # (the moving hand keeps its stopping
             self._search.tilt = self._tilts.tilt_for(flight)
         pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
         stop = (self.stop if self.stop_fixed else self._shifted(pose) if m.moving
                 else self._stop_for(pose, -math.inf))  # (waiting: the motion with time enough)
-        stop_t = stop.pad_s
+        stop_t = self._pad_s(pose)
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
         if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
             rest_by = min(rest_by, stop.start_s)
@@ -314,7 +317,7 @@ class CatchSession:
             if late or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
                 s_c = self._closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t)
                 if go >= s_c or late:
-                    if t_b + T_m > stop.start_s:  # too late for it: one that starts later
+                    if moves(stop) and t_b + T_m > stop.start_s:  # too late for it: one that starts later
                         stop = self._stop_for(pose, t_b)
                         q_pre = self.q_pre
                         T_m = m.move_time(pl.q_rest, q_pre)
@@ -331,10 +334,13 @@ class CatchSession:
             self._fix_stop()  # the next rows reach its ramp: the motion is the rows' now
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
 
-    def _stop_for(self, pose, t_b: float) -> SoftStop:
+    def _stop_for(self, pose, t_b: float) -> SoftStop | None:
         """The stopping motion through ``pose`` (``live.stop``), its pre-catch pose
         (``q_pre``) reached in time from the hand's state at ``t_b`` (-inf: any time)."""
         m, arm = self.motion, list(self.pl.joints.arm)
+        if not self.soft_stop:
+            self.stop, self.q_pre = None, pose.q_open
+            return None
 
         def ready_by(q: np.ndarray) -> float:
             if t_b == -math.inf:
@@ -352,11 +358,19 @@ class CatchSession:
         self.q_pre[arm] += stop.first_offset
         return stop
 
-    def _shifted(self, pose) -> SoftStop:
+    def _pad_s(self, pose) -> float:
+        """How long the pad takes to stop the ball: at the stopping motion's contact
+        speed, or on a palm at rest (no soft stop)."""
+        return gq.stop_time(pose.v_i) if self.stop is None else self.stop.pad_s
+
+    def _shifted(self, pose) -> SoftStop | None:
         """The moving hand's stopping motion (chosen when it started to move: its speeds
         and ramps kept, so that the re-aims follow the estimate, not a new motion) through
         ``pose``, the newest intercept."""
         stop, h, arm = self.stop, self.pl.hand, list(self.pl.joints.arm)
+        if stop is None:
+            self.q_pre = pose.q_open
+            return None
         q = pose.q_open[arm]
         lo, hi = h.lower[arm], h.upper[arm]
         scale = np.ones(len(arm))  # a joint whose travel would leave its range from the
@@ -374,6 +388,8 @@ class CatchSession:
         intercept kept (a newer estimate's intercept is where its ball meets the moving
         palm, ``_met``)."""
         self.stop_fixed = True
+        if self.stop is None:
+            return
         t = np.array([self.stop.t_i])
         off = arm_offset(self.stop, t, self.pl.hand.n)
         q = self.motion.rows(t)[0] + (0.0 if off is None else off[0])
@@ -471,7 +487,7 @@ class CatchSession:
             T_m = m.move_time(self.pl.q_rest, self.q_pre)
             m.start(t_b, self.q_pre, T_m)
             m.set_closing(close_start(h, self.flight, self.C, pose.q_open, cl, pose.t_i,
-                                      t_b + T_m, stop.pad_s, self.ball.radius_m),
+                                      t_b + T_m, self._pad_s(pose), self.ball.radius_m),
                           cl.duration_s)
         if not self.stop_fixed:
             self._fix_stop()
@@ -484,7 +500,7 @@ class CatchSession:
         q_held = m.rows(t2)[0] + (0.0 if off is None else off[0])
         grasp = m.close_start_s + (cl.u_grasp or 1.0) * m.close_s
         self.turn = live_turn(self.pl.dyn, q_held,
-                              max(grasp, pose.t_i + stop.pad_s, m.seg.end_s),
+                              max(grasp, pose.t_i + self._pad_s(pose), m.seg.end_s),
                               (self.next_row + sum(len(c.t) for c in self._ahead)) * self.dt)
         self.turn = self._within_limits(self.turn)
         if self.turn is not None:
