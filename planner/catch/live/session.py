@@ -63,12 +63,14 @@ from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import LiveSearch
 from planner.catch.live.stop import (
+    LATE_STEPS,
     START_SLACK_S,
-    TiltTable,
+    StopTable,
     arm_offset,
     live_stop,
     met_on_the_moving_palm,
     moves,
+    scaled,
 )
 from planner.catch.live.turn import LiveTurn, live_turn
 from planner.catch.plan.arm import open_from, palm_target
@@ -93,7 +95,6 @@ from planner.catch.plan.stopping import SoftStop
 from planner.catch.plan.turnahead import TURN_GROW, TURN_TRIES, rows_within_limits
 from planner.errors import InfeasibleError, InputError
 from planner.hand.model import HandModel
-from planner.trajectory import phase_duration
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
 
 
@@ -199,8 +200,9 @@ class CatchSession:
         self._search = LiveSearch(self.pl.wrist, self.C, self.ball.radius_m)  # (step 2)
         self.soft_stop = bool(soft_stop)  # the live soft stop (``live.stop``; not yet the
         # default: docs/history/live-catch.md, issue 31)
-        self._tilts = (TiltTable.of(self.pl, self.C, self.ball, self.drag, self.dt)
+        self._table = (StopTable.of(self.pl, self.C, self.ball, self.drag, self.dt)
                        if self.soft_stop else None)
+        self._nominal: SoftStop | None = None  # the table's motion for the estimate
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
         self._closings = _DeferredClosing(h, self.C, self.closing, self.ball.radius_m)
@@ -255,8 +257,8 @@ class CatchSession:
         if fit is None:
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
                 look = self.fit.first_look()
-                if look is not None and self._tilts is not None:
-                    self._search.tilt = self._tilts.tilt_for(look)
+                if look is not None and self._table is not None:
+                    self._search.tilt = self._table.entry_for(look)[0]
                 self._search.look(look)
             # the hand rests at least until this observation could act: those rows
             # formatted here, written with the first fit's
@@ -297,11 +299,11 @@ class CatchSession:
         pl, r, cl = self.pl, self.ball.radius_m, self.closing
         prev = None if self.pose is None else self.pose.ic
         m = self.motion
-        if not m.moving and self._tilts is not None:  # (the moving hand keeps its stopping
-            self._search.tilt = self._tilts.tilt_for(flight)
+        if not m.moving and self._table is not None:  # (the moving hand keeps its stopping
+            self._search.tilt, self._nominal = self._table.entry_for(flight)
         pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
         stop = (self.stop if self.stop_fixed else self._shifted(pose) if m.moving
-                else self._stop_for(pose, -math.inf))  # (waiting: the motion with time enough)
+                else self._waiting_stop(pose))
         stop_t = self._pad_s(pose)
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
         if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
@@ -317,10 +319,8 @@ class CatchSession:
             if late or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
                 s_c = self._closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t)
                 if go >= s_c or late:
-                    if moves(stop) and t_b + T_m > stop.start_s:  # too late for it: one that starts later
-                        stop = self._stop_for(pose, t_b)
-                        q_pre = self.q_pre
-                        T_m = m.move_time(pl.q_rest, q_pre)
+                    if moves(stop) and t_b + T_m > stop.start_s:  # too late for it: its
+                        stop, q_pre, T_m = self._slower(pose, t_b)  # ramp shorter
                     m.start(t_b, q_pre, T_m)
                     m.set_closing(s_c, cl.duration_s)
         else:
@@ -347,9 +347,8 @@ class CatchSession:
                 return t_b
             if not m.moving:
                 return t_b + m.move_time(self.pl.q_rest, q)
-            q_now = m.seg.state1(t_b)[0]
-            return max(m.seg.end_s, t_b + phase_duration(q[arm] - q_now, m.hand.velocity[arm],
-                                                          m.hand.acceleration[arm]))
+            q_now = m.row1(t_b, m.seg.state1(t_b)[0])  # (its move from there: from rest)
+            return t_b + m.move_time(q_now, q)
 
         self.stop = stop = live_stop(self.pl.dyn, pose.v_i, float(self.ball.mass_kg),
                                      self.ball.radius_m, pose.q_open, float(pose.t_i), ready_by,
@@ -362,6 +361,37 @@ class CatchSession:
         """How long the pad takes to stop the ball: at the stopping motion's contact
         speed, or on a palm at rest (no soft stop)."""
         return gq.stop_time(pose.v_i) if self.stop is None else self.stop.pad_s
+
+    def _waiting_stop(self, pose) -> SoftStop | None:
+        """The waiting hand's stopping motion: the table's for the estimate (``StopTable``)
+        through ``pose``, else (no table throw) one chosen for it with time enough."""
+        if self._nominal is None:
+            return self._stop_for(pose, -math.inf)
+        self.stop = self._nominal
+        return self._shifted(pose)
+
+    def _slower(self, pose, t_b: float) -> tuple[SoftStop | None, np.ndarray, float]:
+        """The stopping motion for a hand that starts at ``t_b``, too late for its ramp: its
+        speeds and ramps scaled down together (``scaled``: the ramps' peak accelerations,
+        hence every motor's load, no higher) until the ramp starts once the pre-catch pose
+        is reached (a few fixed-point steps: a slower ramp starts nearer the intercept
+        pose); the palm at rest when no share of it fits. Returns the stop, its pre-catch
+        pose and the move's duration."""
+        m, base = self.motion, self.stop
+        T_m = m.move_time(self.pl.q_rest, self.q_pre)
+        k = 1.0
+        for _ in range(LATE_STEPS):
+            if t_b + T_m <= self.stop.start_s + 1e-9:
+                break
+            k *= max(0.0, 1.0 - (t_b + T_m - self.stop.start_s) / max(self.stop.ramp_in_s, 1e-9))
+            self.stop = scaled(base, k)
+            self._shifted(pose)
+            T_m = m.move_time(self.pl.q_rest, self.q_pre)
+        stop = self.stop
+        if t_b + T_m > stop.start_s + 1e-9:
+            stop = self._stop_for(pose, t_b)  # (the palm at rest, or what fits)
+            T_m = m.move_time(self.pl.q_rest, self.q_pre)
+        return stop, self.q_pre, T_m
 
     def _shifted(self, pose) -> SoftStop | None:
         """The moving hand's stopping motion (chosen when it started to move: its speeds
@@ -390,6 +420,16 @@ class CatchSession:
         self.stop_fixed = True
         if self.stop is None:
             return
+        # the arm's travel from where its move ends (a re-aim may have kept an older
+        # target) within the joints' range: a joint that would leave it slower
+        stop, h, arm = self.stop, self.pl.hand, list(self.pl.joints.arm)
+        q, travel = self.motion.seg.q1, stop.last_offset - stop.first_offset
+        room = np.where(travel < 0, q - h.lower[arm], h.upper[arm] - q)
+        over = np.abs(travel) > room
+        if over.any():
+            scale = np.ones(len(arm))
+            scale[over] = np.maximum(room[over], 0.0) / np.abs(travel[over])
+            self.stop = replace(stop, qd=stop.qd * scale)
         t = np.array([self.stop.t_i])
         off = arm_offset(self.stop, t, self.pl.hand.n)
         q = self.motion.rows(t)[0] + (0.0 if off is None else off[0])

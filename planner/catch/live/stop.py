@@ -10,9 +10,11 @@ before the ball is short. The arm's move (``live.motion``) goes to the pre-catch
 once the rows reach the ramp (``fixes``) the motion is fixed: the rows never change
 once written, and the ramp, the contact, the recoil and the ramp out follow it.
 
-The palm's tilt (``TiltTable``): the planned catch's choice (``stopping.stop_tilt``) for
-throws through the catch point at ``TABLE_ANGLES_DEG``, made at set-up, looked up by the
-estimate's launch angle until the hand moves. Not searched live (the planned catch does,
+The motion (``StopTable``): for throws through the catch point at ``TABLE_ANGLES_DEG``,
+made at set-up, the planned catch's tilt (``stopping.stop_tilt``) and the stopping motion
+at its intercept; the session takes the one of the throw nearest the estimate's launch
+angle, through the estimate's own intercept pose, until the hand moves (then it keeps its
+speeds and ramps, and follows the estimate's intercept). Not searched live (the planned catch does,
 ``plan_stop``): the contact share (``LIVE_CONTACT_SHARE``); the check's rule judges the
 rows at the end as it judges the planned ones.
 """
@@ -20,6 +22,7 @@ rows at the end as it judges the planned ones.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -42,6 +45,8 @@ LIVE_CONTACT_SHARE = 0.9  # the arm's speed when the palm meets the ball, as a s
 START_SLACK_S = 0.02  # the live hand starts its move to the pre-catch pose this much before
 # it must (two observations at 100 Hz): room for the re-aims that follow newer estimates,
 # each of which must end at rest before the ramp begins
+LATE_STEPS = 4  # a late hand's slower stop found in this many fixed-point steps (each
+# brings its ramp's start within the move's change: a few ms after the first)
 _KKT_TOL = 1e-12  # the active set's multipliers and steps: rounding, not a choice
 
 
@@ -86,11 +91,25 @@ def box_qp(P: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.n
     return np.clip(x, lo, hi)
 
 
-def exact_contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
-                         normal: np.ndarray, roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
-    """``stopping.contact_speeds``' QP (``contact_qp``) solved exactly (``box_qp``)."""
-    P, c = contact_qp(J, v_ball, normal, roll_weight)
-    return box_qp(P, c, -bound, bound)
+def giving_contact_speeds(k_flex: int):
+    """``stopping.contact_speeds``' QP (``contact_qp``) solved exactly (``box_qp``), the
+    wrist flexion (column ``k_flex``) bounded to the side on which it moves the palm
+    against its normal (away from the arriving ball): the palm gives with the ball. (Unbounded, a noisy early estimate's
+    optimum can turn the palm into the ball, trading the pad's normal speed for the roll
+    term's tangential one: bench_live's 100 Hz / 5 mm throws 5, 11 and 13 rolled 338-500 mm
+    so; the planned catch's flexion gives with the ball on every one of them.)"""
+
+    def speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray, normal: np.ndarray,
+               roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
+        P, c = contact_qp(J, v_ball, normal, roll_weight)
+        lo, hi = -bound.copy(), bound.copy()
+        if float(J[:, k_flex] @ normal) > 0.0:  # (the palm's normal faces the ball: giving
+            hi[k_flex] = 0.0  # is moving against it)
+        else:
+            lo[k_flex] = 0.0
+        return box_qp(P, c, lo, hi)
+
+    return speeds
 
 
 def live_stop(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
@@ -98,12 +117,21 @@ def live_stop(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
     """The stopping motion through ``q_open`` for the ball arriving at ``t_i`` with
     ``v_ball`` (``stop_profile`` at ``LIVE_CONTACT_SHARE``, tilt 0), or the palm at rest
     when no motion of that family is left."""
-    ask = StopAsk(0.0, LIVE_CONTACT_SHARE, dyn.v_max.copy(), ROLL_WEIGHT, exact_contact_speeds)
+    speeds = giving_contact_speeds(dyn.arm.index(dyn.joints.i_flex))
+    ask = StopAsk(0.0, LIVE_CONTACT_SHARE, dyn.v_max.copy(), ROLL_WEIGHT, speeds)
     stop = stop_profile(dyn, v_ball, mass, r, q_open, t_i, ready_by, row_s, ask)
     if stop is None:
-        rest = StopAsk(0.0, 1.0, np.zeros(len(dyn.arm)), ROLL_WEIGHT, exact_contact_speeds)
+        rest = StopAsk(0.0, 1.0, np.zeros(len(dyn.arm)), ROLL_WEIGHT, speeds)
         stop = stop_profile(dyn, v_ball, mass, r, q_open, t_i, ready_by, row_s, rest)
     return stop
+
+
+def scaled(stop: SoftStop, k: float) -> SoftStop:
+    """``stop`` at ``k`` (0..1) of its speeds, its ramps ``k`` times as long: the same peak
+    accelerations (the ramps' motor loads no higher), the palm slower at the contact (the
+    pad's recoil and hold as they were: the rows' check judges the contact)."""
+    return replace(stop, qd=k * stop.qd, ramp_in_s=k * stop.ramp_in_s,
+                   ramp_out_s=k * stop.ramp_out_s)
 
 
 def moves(stop: SoftStop | None) -> bool:
@@ -131,21 +159,25 @@ def met_on_the_moving_palm(stop: SoftStop, target_m: np.ndarray, ball_m: np.ndar
     return stop.t_i - (float(d0 @ vr) / vv if vv > 0 else 0.0)
 
 
-TABLE_ANGLES_DEG = tuple(range(10, 81, 5))  # launch angles of the tilt table's throws: the
+TABLE_ANGLES_DEG = tuple(range(10, 81, 5))  # launch angles of the table's throws: the
 # issue's envelope (15-75 deg) and 5 deg beyond, 5 deg apart (the planned catch's tilts
 # are 5 deg apart; its choice changes a few times over the envelope)
-_TABLES: dict[tuple, TiltTable] = {}
+_TABLES: dict[tuple, StopTable] = {}
 
 
-class TiltTable:
-    """The palm's tilt the planned catch chooses (``stop_tilt``) for the throws through
-    one catch point at ``TABLE_ANGLES_DEG``, looked up by a flight's launch angle."""
+class StopTable:
+    """The stopping motions of the throws through one catch point at ``TABLE_ANGLES_DEG``
+    (made at set-up): per throw the palm's tilt the planned catch chooses (``stop_tilt``)
+    and the stopping motion at that tilt's intercept (``stop_profile`` at
+    ``LIVE_CONTACT_SHARE``, from the planned catch's start), looked up by a flight's launch
+    angle: the live hand's motion is the nearest throw's, through its own intercept."""
 
-    def __init__(self, angles_deg: np.ndarray, tilts_rad: np.ndarray) -> None:
-        self.angles_deg, self.tilts_rad = angles_deg, tilts_rad
+    def __init__(self, angles_deg: np.ndarray, tilts_rad: np.ndarray,
+                 stops: tuple[SoftStop, ...]) -> None:
+        self.angles_deg, self.tilts_rad, self.stops = angles_deg, tilts_rad, stops
 
     @classmethod
-    def of(cls, pl, C: np.ndarray, ball: Ball, drag: bool, row_s: float) -> TiltTable:
+    def of(cls, pl, C: np.ndarray, ball: Ball, drag: bool, row_s: float) -> StopTable:
         """The table of planner ``pl`` at the catch point ``C`` (made once, kept)."""
         key = (id(pl), tuple(float(x) for x in C), ball.name, ball.radius_m, bool(drag),
                float(row_s))
@@ -155,15 +187,17 @@ class TiltTable:
         return table
 
     @classmethod
-    def make(cls, pl, C: np.ndarray, ball: Ball, drag: bool, row_s: float) -> TiltTable:
+    def make(cls, pl, C: np.ndarray, ball: Ball, drag: bool, row_s: float) -> StopTable:
+        from planner.catch.plan.arm import open_from
+        from planner.catch.plan.intercept import find_intercept
         from planner.catch.plan.planner import PLAN_BUDGET_S, SIGNAL_S
 
         closing = pl.closing(ball.radius_m)
-        r = float(ball.radius_m)
-        angles, tilts = [], []
+        r, dyn = float(ball.radius_m), pl.dyn
+        angles, tilts, stops = [], [], []
 
         def ready_by(q: np.ndarray) -> float:  # (the planned catch's, from t = 0)
-            return SIGNAL_S + PLAN_BUDGET_S + pl.dyn.move_time(pl.q_rest, q)
+            return SIGNAL_S + PLAN_BUDGET_S + dyn.move_time(pl.q_rest, q)
 
         for a in TABLE_ANGLES_DEG:
             try:
@@ -171,15 +205,28 @@ class TiltTable:
                 t_c = float(fl.time_at_x(float(C[0])))
             except (InputError, InfeasibleError):
                 continue
+            tilt = stop_tilt(dyn, pl.wrist, fl, C, r, pl.q_zero, closing, t_c, ready_by, row_s)
+            ic = find_intercept(pl.wrist, fl, C, r, t_c, tilt)
+            if ic.reason is not None:
+                continue
+            q = pl.q_zero.copy()
+            j = pl.joints
+            q[j.i_flex], q[j.i_dev] = ic.theta, ic.dev
+            if j.i_rail is not None:
+                q[j.i_rail] = ic.rail
+            q_open = open_from(pl.hand, j, q, closing.q_closed)
             angles.append(float(a))
-            tilts.append(stop_tilt(pl.dyn, pl.wrist, fl, C, r, pl.q_zero, closing, t_c,
-                                   ready_by, row_s))
-        return cls(np.array(angles), np.array(tilts))
+            tilts.append(float(tilt))
+            stops.append(live_stop(dyn, fl.velocity(ic.t), float(ball.mass_kg), r, q_open,
+                                   float(ic.t), ready_by, row_s))
+        return cls(np.array(angles), np.array(tilts), tuple(stops))
 
-    def tilt_for(self, flight: Flight) -> float:
-        """The tilt of the table's throw nearest ``flight``'s launch angle (0: none)."""
+    def entry_for(self, flight: Flight) -> tuple[float, SoftStop | None]:
+        """The tilt and stopping motion of the table's throw nearest ``flight``'s launch
+        angle ((0, None): no throw in the table)."""
         if not len(self.angles_deg):
-            return 0.0
+            return 0.0, None
         v = flight.v0
         a = math.degrees(math.atan2(float(v[2]), math.hypot(float(v[0]), float(v[1]))))
-        return float(self.tilts_rad[int(np.argmin(np.abs(self.angles_deg - a)))])
+        k = int(np.argmin(np.abs(self.angles_deg - a)))
+        return float(self.tilts_rad[k]), self.stops[k]
