@@ -95,6 +95,7 @@ from planner.catch.plan.stopping import SoftStop
 from planner.catch.plan.turnahead import TURN_GROW, TURN_TRIES, rows_within_limits
 from planner.errors import InfeasibleError, InputError
 from planner.hand.model import HandModel
+from planner.trajectory import phase_duration
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
 
 
@@ -255,6 +256,8 @@ class CatchSession:
         period = t - self.fit.times[-1] if self.fit.n else 0.0
         fit = self.fit.add(t, p)
         if fit is None:
+            if self.fit.n == 1 and self._table is not None and not self.motion.moving:
+                self._start_early(t + SIGNAL_S + PLAN_BUDGET_S)
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
                 look = self.fit.first_look()
                 if look is not None and self._table is not None:
@@ -299,11 +302,11 @@ class CatchSession:
         pl, r, cl = self.pl, self.ball.radius_m, self.closing
         prev = None if self.pose is None else self.pose.ic
         m = self.motion
-        if not m.moving and self._table is not None:  # (the moving hand keeps its stopping
+        if not self.stop_fixed and self._table is not None:  # (a fixed stop keeps its tilt)
             self._search.tilt, self._nominal = self._table.entry_for(flight)
         pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
-        stop = (self.stop if self.stop_fixed else self._shifted(pose) if m.moving
-                else self._waiting_stop(pose))
+        stop = (self.stop if self.stop_fixed else self._nominal_through(pose, t_b, rows_to_s + period)
+                if self.soft_stop else self._shifted(pose))
         stop_t = self._pad_s(pose)
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
         if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
@@ -362,36 +365,59 @@ class CatchSession:
         speed, or on a palm at rest (no soft stop)."""
         return gq.stop_time(pose.v_i) if self.stop is None else self.stop.pad_s
 
-    def _waiting_stop(self, pose) -> SoftStop | None:
-        """The waiting hand's stopping motion: the table's for the estimate (``StopTable``)
-        through ``pose``, else (no table throw) one chosen for it with time enough."""
-        if self._nominal is None:
-            return self._stop_for(pose, -math.inf)
-        self.stop = self._nominal
-        return self._shifted(pose)
+    def _start_early(self, t_s: float) -> None:
+        """The soft stop's hand moves from the first observation's ``t_s`` on, to the table's
+        typical pre-catch pose (``StopTable.prior``): the ramp of a short throw's stopping
+        motion starts ~0.2-0.3 s after the launch (bench_live's 1-1.5 m throws), too soon
+        for a move begun at the first fit (~0.1 s); the re-aims then take it to the
+        estimate's."""
+        q = self.pl.q_rest.copy()
+        q[list(self.pl.joints.arm)] = self._table.prior
+        m = self.motion
+        m.start(t_s, q, m.move_time(self.pl.q_rest, q))
 
     def _slower(self, pose, t_b: float) -> tuple[SoftStop | None, np.ndarray, float]:
-        """The stopping motion for a hand that starts at ``t_b``, too late for its ramp: its
-        speeds and ramps scaled down together (``scaled``: the ramps' peak accelerations,
-        hence every motor's load, no higher) until the ramp starts once the pre-catch pose
-        is reached (a few fixed-point steps: a slower ramp starts nearer the intercept
-        pose); the palm at rest when no share of it fits. Returns the stop, its pre-catch
-        pose and the move's duration."""
-        m, base = self.motion, self.stop
-        T_m = m.move_time(self.pl.q_rest, self.q_pre)
-        k = 1.0
+        """The stopping motion (the newest, through ``pose``) for a hand that is at its
+        pre-catch pose too late for the ramp (``_ready``) from ``t_b``: its speeds and
+        ramps scaled down together (``scaled``: the ramps' peak accelerations, hence every
+        motor's load, no higher; a slower ramp starts later and nearer the intercept pose),
+        the largest share that is in time found by bisection (``LATE_STEPS``); the palm at
+        rest when none is. Returns the stop, its pre-catch pose and the move's duration
+        from ``t_b``."""
+        base, lo, hi = self.stop, 0.0, 1.0
         for _ in range(LATE_STEPS):
-            if t_b + T_m <= self.stop.start_s + 1e-9:
-                break
-            k *= max(0.0, 1.0 - (t_b + T_m - self.stop.start_s) / max(self.stop.ramp_in_s, 1e-9))
+            k = 0.5 * (lo + hi)
             self.stop = scaled(base, k)
             self._shifted(pose)
-            T_m = m.move_time(self.pl.q_rest, self.q_pre)
-        stop = self.stop
-        if t_b + T_m > stop.start_s + 1e-9:
-            stop = self._stop_for(pose, t_b)  # (the palm at rest, or what fits)
-            T_m = m.move_time(self.pl.q_rest, self.q_pre)
-        return stop, self.q_pre, T_m
+            lo, hi = (k, hi) if self._ready(t_b) <= self.stop.start_s else (lo, k)
+        self.stop = scaled(base, lo) if lo > 0 else replace(scaled(base, 0.0))
+        self._shifted(pose)
+        return self.stop, self.q_pre, self._ready(t_b) - t_b
+
+    def _ready(self, t_b: float) -> float:
+        """When the arm can be at rest at the pre-catch pose ``q_pre`` if it goes there
+        from ``t_b`` (from rest: ``LiveMotion.move_time``)."""
+        m = self.motion
+        if not m.moving:
+            return t_b + m.move_time(self.pl.q_rest, self.q_pre)
+        arm = list(self.pl.joints.arm)  # (a re-aim from the moving arm's state: its shortest,
+        # the joints' limits alone; ``LiveMotion.reaim`` then keeps the motors within theirs)
+        return t_b + phase_duration(self.q_pre[arm] - m.seg.state1(t_b)[0],
+                                    m.hand.velocity[arm], m.hand.acceleration[arm])
+
+    def _nominal_through(self, pose, t_b: float, fix_s: float) -> SoftStop | None:
+        """The table's stopping motion for the estimate (``StopTable``) through ``pose``;
+        slower (``_slower``) when the arm cannot be at its pre-catch pose before its ramp,
+        unless the rows reach the ramp by ``fix_s`` (then it is fixed as it is, the re-aim's
+        share made); one chosen for the estimate when the table has no throw."""
+        if self._nominal is None:
+            return self._stop_for(pose, t_b if self.motion.moving else -math.inf)
+        self.stop = self._nominal
+        stop = self._shifted(pose)
+        if (self.motion.moving and moves(stop) and fix_s < stop.start_s
+                and self._ready(t_b) > stop.start_s):
+            stop = self._slower(pose, t_b)[0]
+        return stop
 
     def _shifted(self, pose) -> SoftStop | None:
         """The moving hand's stopping motion (chosen when it started to move: its speeds

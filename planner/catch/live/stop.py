@@ -45,8 +45,8 @@ LIVE_CONTACT_SHARE = 0.9  # the arm's speed when the palm meets the ball, as a s
 START_SLACK_S = 0.02  # the live hand starts its move to the pre-catch pose this much before
 # it must (two observations at 100 Hz): room for the re-aims that follow newer estimates,
 # each of which must end at rest before the ramp begins
-LATE_STEPS = 4  # a late hand's slower stop found in this many fixed-point steps (each
-# brings its ramp's start within the move's change: a few ms after the first)
+LATE_STEPS = 6  # a late hand's slower stop: its share of the speeds found to 1/64 by
+# bisection (a ramp of ~0.12 s to within ~2 ms)
 _KKT_TOL = 1e-12  # the active set's multipliers and steps: rounding, not a choice
 
 
@@ -173,8 +173,10 @@ class StopTable:
     angle: the live hand's motion is the nearest throw's, through its own intercept."""
 
     def __init__(self, angles_deg: np.ndarray, tilts_rad: np.ndarray,
-                 stops: tuple[SoftStop, ...]) -> None:
+                 stops: tuple[SoftStop, ...], prior: np.ndarray) -> None:
         self.angles_deg, self.tilts_rad, self.stops = angles_deg, tilts_rad, stops
+        self.prior = prior  # the arm joints' median pre-catch pose over the table's throws
+        # (where a live hand goes before its first estimate)
 
     @classmethod
     def of(cls, pl, C: np.ndarray, ball: Ball, drag: bool, row_s: float) -> StopTable:
@@ -194,7 +196,7 @@ class StopTable:
 
         closing = pl.closing(ball.radius_m)
         r, dyn = float(ball.radius_m), pl.dyn
-        angles, tilts, stops = [], [], []
+        angles, tilts, stops, pres = [], [], [], []
 
         def ready_by(q: np.ndarray) -> float:  # (the planned catch's, from t = 0)
             return SIGNAL_S + PLAN_BUDGET_S + dyn.move_time(pl.q_rest, q)
@@ -219,7 +221,10 @@ class StopTable:
             tilts.append(float(tilt))
             stops.append(live_stop(dyn, fl.velocity(ic.t), float(ball.mass_kg), r, q_open,
                                    float(ic.t), ready_by, row_s))
-        return cls(np.array(angles), np.array(tilts), tuple(stops))
+            pres.append(q_open[list(dyn.arm)] + stops[-1].first_offset)
+        prior = (np.median(np.array(pres), axis=0) if pres
+                 else pl.q_rest[list(dyn.arm)].copy())
+        return cls(np.array(angles), np.array(tilts), tuple(stops), prior)
 
     def entry_for(self, flight: Flight) -> tuple[float, SoftStop | None]:
         """The tilt and stopping motion of the table's throw nearest ``flight``'s launch
