@@ -63,6 +63,7 @@ from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import LiveSearch
 from planner.catch.live.stop import (
+    FIX_LEAD_S,
     LATE_STEPS,
     START_SLACK_S,
     StopTable,
@@ -305,12 +306,15 @@ class CatchSession:
         if not self.stop_fixed and self._table is not None:  # (a fixed stop keeps its tilt)
             self._search.tilt, self._nominal = self._table.entry_for(flight)
         pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
+        old = (self.stop, self.q_pre) if moves(self.stop) and self.stop.start_s > t_b else None
         stop = (self.stop if self.stop_fixed else self._nominal_through(pose, t_b, rows_to_s + period)
                 if self.soft_stop else self._shifted(pose))
         stop_t = self._pad_s(pose)
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
-        if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
-            rest_by = min(rest_by, stop.start_s)
+        if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts (and
+            rest_by = min(rest_by, stop.start_s)  # the one before's, which it may keep)
+        if old is not None and not self.stop_fixed:
+            rest_by = min(rest_by, old[0].start_s)
         q_pre = self.q_pre
         if not m.moving:
             T_m = m.move_time(pl.q_rest, q_pre)
@@ -330,10 +334,14 @@ class CatchSession:
             self._closings.due(m, t_b)
             if not self.stop_fixed and m.reaim(t_b, q_pre, rest_by) < 1.0:
                 self.kept_targets += 1
+                if old is not None:  # (the arm at rest before either ramp starts: the rows
+                    self.stop, self.q_pre = old  # never add a re-aim to a ramp)
+                    stop = self.stop
             if m.close_start_s > t_b:
                 self._closings.retime(m, _CloseAsk(flight, pose.q_open, pose.t_i,
                                                    m.fingers_open_s, stop_t, t_b), rows_to_s)
-        if moves(stop) and m.moving and not self.stop_fixed and rows_to_s + period >= stop.start_s:
+        if (moves(stop) and m.moving and not self.stop_fixed
+                and rows_to_s + period + FIX_LEAD_S >= stop.start_s):
             self._fix_stop()  # the next rows reach its ramp: the motion is the rows' now
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
 
@@ -412,9 +420,13 @@ class CatchSession:
         share made); one chosen for the estimate when the table has no throw."""
         if self._nominal is None:
             return self._stop_for(pose, t_b if self.motion.moving else -math.inf)
+        before = (self.stop, self.q_pre)
         self.stop = self._nominal
         stop = self._shifted(pose)
-        if (self.motion.moving and moves(stop) and fix_s < stop.start_s
+        if moves(before[0]) and before[0].start_s > t_b >= stop.start_s - self.dt:
+            self.stop, self.q_pre = before  # (a newer estimate's intercept moved the ramp's
+            return before[0]  # start into the rows written: the one before is kept)
+        if (self.motion.moving and moves(stop) and (fix_s < stop.start_s or stop.start_s <= t_b)
                 and self._ready(t_b) > stop.start_s):
             stop = self._slower(pose, t_b)[0]
         return stop
