@@ -63,8 +63,9 @@ from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import LiveSearch
 from planner.catch.live.stop import (
-    FIX_LEAD_S,
     LATE_STEPS,
+    LATE_TOL_S,
+    OVERLAP_STEP_S,
     START_SLACK_S,
     StopTable,
     arm_offset,
@@ -218,6 +219,7 @@ class CatchSession:
         self.stop: SoftStop | None = None  # the arm's stopping motion (``live.stop``) of the
         # newest estimate, fixed (``stop_fixed``) once the rows reach its ramp
         self.stop_fixed = False
+        self.fallbacks = 0  # soft stops given up for the palm at rest (``_fix_stop``)
         self.q_pre: np.ndarray | None = None  # its pre-catch pose (the arm's move's target)
         self._target_m: np.ndarray | None = None  # the fixed stop's palm target at its t_i
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
@@ -306,15 +308,13 @@ class CatchSession:
         if not self.stop_fixed and self._table is not None:  # (a fixed stop keeps its tilt)
             self._search.tilt, self._nominal = self._table.entry_for(flight)
         pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
-        old = (self.stop, self.q_pre) if moves(self.stop) and self.stop.start_s > t_b else None
-        stop = (self.stop if self.stop_fixed else self._nominal_through(pose, t_b, rows_to_s + period)
+        fix_s = max(rows_to_s, t_b) + period  # the next observation's rows or re-aim reach this
+        stop = (self._fixed(pose) if self.stop_fixed else self._nominal_through(pose, t_b, fix_s)
                 if self.soft_stop else self._shifted(pose))
         stop_t = self._pad_s(pose)
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
-        if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts (and
-            rest_by = min(rest_by, stop.start_s)  # the one before's, which it may keep)
-        if old is not None and not self.stop_fixed:
-            rest_by = min(rest_by, old[0].start_s)
+        if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
+            rest_by = min(rest_by, stop.start_s)
         q_pre = self.q_pre
         if not m.moving:
             T_m = m.move_time(pl.q_rest, q_pre)
@@ -332,17 +332,13 @@ class CatchSession:
                     m.set_closing(s_c, cl.duration_s)
         else:
             self._closings.due(m, t_b)
-            if not self.stop_fixed and m.reaim(t_b, q_pre, rest_by) < 1.0:
+            if not (self.stop_fixed and moves(stop)) and m.reaim(t_b, q_pre, rest_by) < 1.0:
                 self.kept_targets += 1
-                if old is not None:  # (the arm at rest before either ramp starts: the rows
-                    self.stop, self.q_pre = old  # never add a re-aim to a ramp)
-                    stop = self.stop
             if m.close_start_s > t_b:
                 self._closings.retime(m, _CloseAsk(flight, pose.q_open, pose.t_i,
                                                    m.fingers_open_s, stop_t, t_b), rows_to_s)
-        if (moves(stop) and m.moving and not self.stop_fixed
-                and rows_to_s + period + FIX_LEAD_S >= stop.start_s):
-            self._fix_stop()  # the next rows reach its ramp: the motion is the rows' now
+        if moves(stop) and m.moving and not self.stop_fixed and fix_s >= stop.start_s:
+            self._fix_stop(pose, t_b)  # the next rows reach its ramp: the motion is the rows' now
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
 
     def _stop_for(self, pose, t_b: float) -> SoftStop | None:
@@ -371,7 +367,7 @@ class CatchSession:
     def _pad_s(self, pose) -> float:
         """How long the pad takes to stop the ball: at the stopping motion's contact
         speed, or on a palm at rest (no soft stop)."""
-        return gq.stop_time(pose.v_i) if self.stop is None else self.stop.pad_s
+        return self.stop.pad_s if moves(self.stop) else gq.stop_time(pose.v_i)
 
     def _start_early(self, t_s: float) -> None:
         """The soft stop's hand moves from the first observation's ``t_s`` on, to the table's
@@ -392,13 +388,14 @@ class CatchSession:
         the largest share that is in time found by bisection (``LATE_STEPS``); the palm at
         rest when none is. Returns the stop, its pre-catch pose and the move's duration
         from ``t_b``."""
-        base, lo, hi = self.stop, 0.0, 1.0
+        base = self._nominal if self._nominal is not None else self.stop
+        lo, hi = 0.0, 1.0
         for _ in range(LATE_STEPS):
             k = 0.5 * (lo + hi)
             self.stop = scaled(base, k)
             self._shifted(pose)
             lo, hi = (k, hi) if self._ready(t_b) <= self.stop.start_s else (lo, k)
-        self.stop = scaled(base, lo) if lo > 0 else replace(scaled(base, 0.0))
+        self.stop = scaled(base, lo)
         self._shifted(pose)
         return self.stop, self.q_pre, self._ready(t_b) - t_b
 
@@ -411,7 +408,7 @@ class CatchSession:
         arm = list(self.pl.joints.arm)  # (a re-aim from the moving arm's state: its shortest,
         # the joints' limits alone; ``LiveMotion.reaim`` then keeps the motors within theirs)
         return t_b + phase_duration(self.q_pre[arm] - m.seg.state1(t_b)[0],
-                                    m.hand.velocity[arm], m.hand.acceleration[arm])
+                                    m.hand.velocity[arm], m.hand.acceleration[arm], 0.0)
 
     def _nominal_through(self, pose, t_b: float, fix_s: float) -> SoftStop | None:
         """The table's stopping motion for the estimate (``StopTable``) through ``pose``;
@@ -420,14 +417,10 @@ class CatchSession:
         share made); one chosen for the estimate when the table has no throw."""
         if self._nominal is None:
             return self._stop_for(pose, t_b if self.motion.moving else -math.inf)
-        before = (self.stop, self.q_pre)
         self.stop = self._nominal
         stop = self._shifted(pose)
-        if moves(before[0]) and before[0].start_s > t_b >= stop.start_s - self.dt:
-            self.stop, self.q_pre = before  # (a newer estimate's intercept moved the ramp's
-            return before[0]  # start into the rows written: the one before is kept)
-        if (self.motion.moving and moves(stop) and (fix_s < stop.start_s or stop.start_s <= t_b)
-                and self._ready(t_b) > stop.start_s):
+        if (self.motion.moving and moves(stop) and fix_s < stop.start_s
+                and self._ready(t_b) > stop.start_s + LATE_TOL_S):
             stop = self._slower(pose, t_b)[0]
         return stop
 
@@ -451,12 +444,41 @@ class CatchSession:
         self.q_pre[arm] += stop.first_offset
         return stop
 
-    def _fix_stop(self) -> None:
+    def _adds_within_limits(self) -> bool:
+        """Whether the arm's move, where it still runs after the ramp starts, and the
+        stopping motion added keep every arm joint within its speed and acceleration limits
+        (``turnahead.rows_within_limits`` on a ``OVERLAP_STEP_S`` grid)."""
+        m, stop = self.motion, self.stop
+        if m.seg.end_s <= stop.start_s:
+            return True
+        t = np.arange(stop.start_s - 2 * OVERLAP_STEP_S, m.seg.end_s + 2 * OVERLAP_STEP_S,
+                      OVERLAP_STEP_S)
+        Q = m.rows(t) + arm_offset(stop, t, self.pl.hand.n)
+        return rows_within_limits(self.pl.hand, t, Q)
+
+    def _fixed(self, pose) -> SoftStop | None:
+        """The fixed stop (its rows follow it); a palm at rest (the fallback of
+        ``_fix_stop``) waits at the newest intercept pose."""
+        if not moves(self.stop):
+            self.q_pre = pose.q_open
+        return self.stop
+
+    def _fix_stop(self, pose, t_b: float) -> None:
         """The stopping motion fixed: the palm target where the rows have it at its
         intercept kept (a newer estimate's intercept is where its ball meets the moving
         palm, ``_met``)."""
         self.stop_fixed = True
         if self.stop is None:
+            return
+        m = self.motion
+        if moves(self.stop) and not self._adds_within_limits():
+            # the arm's move (a re-aim that could not reach the pre-catch pose in time) would
+            # still run when the ramp starts: the rows would add the two beyond the joints'
+            # limits; the palm waits at rest at the intercept pose instead (the live catch
+            # before the soft stop), its re-aims going on
+            self.stop, self.q_pre = scaled(self.stop, 0.0), pose.q_open
+            m.reaim(t_b, pose.q_open, rest_by_s(pose.t_i, self.dt))
+            self.fallbacks += 1
             return
         # the arm's travel from where its move ends (a re-aim may have kept an older
         # target) within the joints' range: a joint that would leave it slower
@@ -568,7 +590,7 @@ class CatchSession:
                                       t_b + T_m, self._pad_s(pose), self.ball.radius_m),
                           cl.duration_s)
         if not self.stop_fixed:
-            self._fix_stop()
+            self._fix_stop(pose, t_b)
         self.pose = pose = self._met(pose)
         stop = self.stop
         t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s,

@@ -45,9 +45,13 @@ LIVE_CONTACT_SHARE = 0.9  # the arm's speed when the palm meets the ball, as a s
 START_SLACK_S = 0.02  # the live hand starts its move to the pre-catch pose this much before
 # it must (two observations at 100 Hz): room for the re-aims that follow newer estimates,
 # each of which must end at rest before the ramp begins
-FIX_LEAD_S = 0.005  # the stop is fixed when the next observation's rows come this close to
-# its ramp's start: its intercept time moves by ~1 ms from one estimate to the next late
-# in the flight (1 sigma of a 5 mm camera's, ``live.search.NEAR_S``), which moves the start
+OVERLAP_STEP_S = 0.0005  # the arm's move and the ramp, where they overlap, checked this
+# finely (the rows are 1-10 ms apart; the guard and the check read their differences)
+LATE_TOL_S = 0.010  # an arm this little late for the ramp (one 100 Hz row) keeps the
+# table's motion: a newer estimate's target moves by a few mrad (the noise of its
+# deviation), which the shortest re-aim cannot make in less (``phase_duration``'s 10 ms
+# floor); what it leaves of the move where the ramp starts is checked within the joints'
+# limits when the stop is fixed (``session._adds_within_limits``)
 LATE_STEPS = 6  # a late hand's slower stop: its share of the speeds found to 1/64 by
 # bisection (a ramp of ~0.12 s to within ~2 ms)
 _KKT_TOL = 1e-12  # the active set's multipliers and steps: rounding, not a choice
