@@ -169,7 +169,7 @@ class CatchSession:
     def __init__(self, dist_m: float, height_m: float = 0.0,
                  hand: HandModel | str = "default", ball: Ball | str = "tennis",
                  drag: bool = False, rate_hz: float = 100.0, out_path: str | None = None,
-                 planner: CatchPlanner | None = None, soft_stop: bool = False) -> None:
+                 planner: CatchPlanner | None = None, soft_stop: bool = True) -> None:
         from planner.catch.plan.api import get_planner, validate_live
 
         d, hgt, rate = validate_live(dist_m, height_m, rate_hz)
@@ -308,7 +308,8 @@ class CatchSession:
         if not self.stop_fixed and self._table is not None:  # (a fixed stop keeps its tilt)
             self._search.tilt, self._nominal = self._table.entry_for(flight)
         pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
-        fix_s = max(rows_to_s, t_b) + period  # the next observation's rows or re-aim reach this
+        # the next observation's rows (to its t_react + period) or re-aim reach this far
+        fix_s = max(t_s + SIGNAL_S + PLAN_BUDGET_S + period, t_b) + period
         stop = (self._fixed(pose) if self.stop_fixed else self._nominal_through(pose, t_b, fix_s)
                 if self.soft_stop else self._shifted(pose))
         stop_t = self._pad_s(pose)

@@ -374,18 +374,20 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
 
 
 def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
-              q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float
-              ) -> float:
+              q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
+              speeds: Callable[..., np.ndarray] | None = None) -> float:
     """The palm's tilt (rad) ``plan_stop`` chooses for this throw (its contact share 1:
-    the tilt is chosen before the share), 0 when no tilt reaches."""
+    the tilt is chosen before the share), 0 when no tilt reaches; ``speeds``: the contact
+    speeds' QP solver (``StopAsk``)."""
     best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, True,
-                      ROLL_WEIGHT)
+                      ROLL_WEIGHT, speeds)
     return 0.0 if best is None else float(best[1][2].tilt_rad)
 
 
 def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
                q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
-               soft: bool, roll_weight: float):
+               soft: bool, roll_weight: float,
+               speeds: Callable[..., np.ndarray] | None = None):
     """``plan_stop``'s tilt search: (key, (intercept, open pose, stop)) of the tilt whose
     pad phase needs the least of the motor closest to its capacity; None: no tilt reaches."""
     best = None
@@ -397,7 +399,7 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
             if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
                 break
             cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
-                              math.radians(tilt), 1.0, rw=roll_weight)
+                              math.radians(tilt), 1.0, rw=roll_weight, speeds=speeds)
             key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
             if best is not None and key >= best[0]:
                 break
@@ -408,7 +410,7 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
 def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
                closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
                tilt_rad: float, share: float, bound0: np.ndarray | None = None,
-               rw: float = ROLL_WEIGHT):
+               rw: float = ROLL_WEIGHT, speeds: Callable[..., np.ndarray] | None = None):
     """The stopping motion at the intercept ``ic`` (``stop_profile``), from its open pose."""
     h, j = dyn.hand, dyn.joints
     q = q_zero.copy()
@@ -419,10 +421,10 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
     bound = (dyn.v_max.copy() if bound0 is None else bound0.copy()) if soft \
         else np.zeros(len(dyn.arm))
     stop = stop_profile(dyn, flight.velocity(ic.t), float(flight.ball.mass_kg), r, q_open,
-                        float(ic.t), ready_by, row_s, StopAsk(tilt_rad, share, bound, rw))
+                        float(ic.t), ready_by, row_s, StopAsk(tilt_rad, share, bound, rw, speeds))
     if stop is None:
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False,
-                          tilt_rad, 1.0, rw=rw)
+                          tilt_rad, 1.0, rw=rw, speeds=speeds)
     return ic, q_open, stop
 
 
