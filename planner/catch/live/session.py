@@ -63,19 +63,13 @@ from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import LiveSearch
 from planner.catch.live.stop import (
-    LATE_STEPS,
-    LATE_TOL_S,
-    OVERLAP_STEP_S,
     START_SLACK_S,
-    StopTable,
     arm_offset,
-    live_stop,
-    met_on_the_moving_palm,
     moves,
-    scaled,
 )
+from planner.catch.live.stopper import LiveStopper
 from planner.catch.live.turn import LiveTurn, live_turn
-from planner.catch.plan.arm import open_from, palm_target
+from planner.catch.plan.arm import open_from
 from planner.catch.plan.closing import close_start, earliest_close_start
 from planner.catch.plan.planner import (
     HOLD_AFTER_S,
@@ -94,10 +88,8 @@ from planner.catch.plan.results import (
     make_catch_plan,
 )
 from planner.catch.plan.stopping import SoftStop
-from planner.catch.plan.turnahead import TURN_GROW, TURN_TRIES, rows_within_limits
 from planner.errors import InfeasibleError, InputError
 from planner.hand.model import HandModel
-from planner.trajectory import phase_duration
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
 
 
@@ -201,11 +193,7 @@ class CatchSession:
         self.pose = self.flight = None
         self.t_i: float | None = None
         self._search = LiveSearch(self.pl.wrist, self.C, self.ball.radius_m)  # (step 2)
-        self.soft_stop = bool(soft_stop)  # the live soft stop (``live.stop``; not yet the
         # default: docs/history/live-catch.md, issue 31)
-        self._table = (StopTable.of(self.pl, self.C, self.ball, self.drag, self.dt)
-                       if self.soft_stop else None)
-        self._nominal: SoftStop | None = None  # the table's motion for the estimate
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
         self._closings = _DeferredClosing(h, self.C, self.closing, self.ball.radius_m)
@@ -216,16 +204,27 @@ class CatchSession:
         self.plan: CatchPlan | None = None
         self.drag_estimate: DragEstimate | None = None  # (drag: at the end)
         self.turn: LiveTurn | None = None  # the wrist's turn that holds the ball (at the end)
-        self.stop: SoftStop | None = None  # the arm's stopping motion (``live.stop``) of the
-        # newest estimate, fixed (``stop_fixed``) once the rows reach its ramp
-        self.stop_fixed = False
-        self.fallbacks = 0  # soft stops given up for the palm at rest (``_fix_stop``)
-        self.q_pre: np.ndarray | None = None  # its pre-catch pose (the arm's move's target)
-        self._target_m: np.ndarray | None = None  # the fixed stop's palm target at its t_i
+        self.stopper = LiveStopper(self.pl, self.motion, self.ball, self.C, self.dt, self.drag,
+                                   soft_stop)  # the soft stop (``live.stopper``)
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
         self.rows_cpu_s = math.nan  # thread_time then
 
     # ------------------------------------------------------------ observations
+    @property
+    def stop(self) -> SoftStop | None:
+        """The arm's stopping motion (``live.stopper``): of the newest estimate, fixed
+        (``stop_fixed``) once the rows reach its ramp."""
+        return self.stopper.stop
+
+    @property
+    def stop_fixed(self) -> bool:
+        return self.stopper.fixed
+
+    @property
+    def fallbacks(self) -> int:
+        """Soft stops given up for the palm at rest (``LiveStopper.fix``)."""
+        return self.stopper.fallbacks
+
     @property
     def done(self) -> bool:
         return self.outcome is not None
@@ -259,12 +258,13 @@ class CatchSession:
         period = t - self.fit.times[-1] if self.fit.n else 0.0
         fit = self.fit.add(t, p)
         if fit is None:
-            if self.fit.n == 1 and self._table is not None and not self.motion.moving:
-                self._start_early(t + SIGNAL_S + PLAN_BUDGET_S)
+            if self.fit.n == 1 and self.stopper.soft and not self.motion.moving:
+                self.stopper.start_early(t + SIGNAL_S + PLAN_BUDGET_S)
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
                 look = self.fit.first_look()
-                if look is not None and self._table is not None:
-                    self._search.tilt = self._table.entry_for(look)[0]
+                tilt = None if look is None else self.stopper.look(look)
+                if tilt is not None:
+                    self._search.tilt = tilt
                 self._search.look(look)
             # the hand rests at least until this observation could act: those rows
             # formatted here, written with the first fit's
@@ -305,18 +305,20 @@ class CatchSession:
         pl, r, cl = self.pl, self.ball.radius_m, self.closing
         prev = None if self.pose is None else self.pose.ic
         m = self.motion
-        if not self.stop_fixed and self._table is not None:  # (a fixed stop keeps its tilt)
-            self._search.tilt, self._nominal = self._table.entry_for(flight)
+        tilt = self.stopper.look(flight)  # (a fixed stop keeps its tilt)
+        if tilt is not None:
+            self._search.tilt = tilt
         pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
         # the next observation's rows (to its t_react + period) or re-aim reach this far
         fix_s = max(t_s + SIGNAL_S + PLAN_BUDGET_S + period, t_b) + period
-        stop = (self._fixed(pose) if self.stop_fixed else self._nominal_through(pose, t_b, fix_s)
-                if self.soft_stop else self._shifted(pose))
-        stop_t = self._pad_s(pose)
+        sp = self.stopper
+        stop = (sp.fixed_stop(pose) if sp.fixed else sp.for_estimate(pose, t_b, fix_s)
+                if sp.soft else sp.shifted(pose))
+        stop_t = sp.pad_s(pose)
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
         if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
             rest_by = min(rest_by, stop.start_s)
-        q_pre = self.q_pre
+        q_pre = sp.q_pre
         if not m.moving:
             T_m = m.move_time(pl.q_rest, q_pre)
             go = t_b + period + T_m  # the open pose reached if the hand waits one more
@@ -328,182 +330,19 @@ class CatchSession:
                 s_c = self._closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t)
                 if go >= s_c or late:
                     if moves(stop) and t_b + T_m > stop.start_s:  # too late for it: its
-                        stop, q_pre, T_m = self._slower(pose, t_b)  # ramp shorter
+                        stop, q_pre, T_m = sp.slower(pose, t_b)  # ramp shorter
                     m.start(t_b, q_pre, T_m)
                     m.set_closing(s_c, cl.duration_s)
         else:
             self._closings.due(m, t_b)
-            if not (self.stop_fixed and moves(stop)) and m.reaim(t_b, q_pre, rest_by) < 1.0:
+            if not (sp.fixed and moves(stop)) and m.reaim(t_b, q_pre, rest_by) < 1.0:
                 self.kept_targets += 1
             if m.close_start_s > t_b:
                 self._closings.retime(m, _CloseAsk(flight, pose.q_open, pose.t_i,
                                                    m.fingers_open_s, stop_t, t_b), rows_to_s)
-        if moves(stop) and m.moving and not self.stop_fixed and fix_s >= stop.start_s:
-            self._fix_stop(pose, t_b)  # the next rows reach its ramp: the motion is the rows' now
+        if moves(stop) and m.moving and not sp.fixed and fix_s >= stop.start_s:
+            sp.fix(pose, t_b)  # the next rows reach its ramp: the motion is the rows' now
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
-
-    def _stop_for(self, pose, t_b: float) -> SoftStop | None:
-        """The stopping motion through ``pose`` (``live.stop``), its pre-catch pose
-        (``q_pre``) reached in time from the hand's state at ``t_b`` (-inf: any time)."""
-        m, arm = self.motion, list(self.pl.joints.arm)
-        if not self.soft_stop:
-            self.stop, self.q_pre = None, pose.q_open
-            return None
-
-        def ready_by(q: np.ndarray) -> float:
-            if t_b == -math.inf:
-                return t_b
-            if not m.moving:
-                return t_b + m.move_time(self.pl.q_rest, q)
-            q_now = m.row1(t_b, m.seg.state1(t_b)[0])  # (its move from there: from rest)
-            return t_b + m.move_time(q_now, q)
-
-        self.stop = stop = live_stop(self.pl.dyn, pose.v_i, float(self.ball.mass_kg),
-                                     self.ball.radius_m, pose.q_open, float(pose.t_i), ready_by,
-                                     self.dt)
-        self.q_pre = pose.q_open.copy()
-        self.q_pre[arm] += stop.first_offset
-        return stop
-
-    def _pad_s(self, pose) -> float:
-        """How long the pad takes to stop the ball: at the stopping motion's contact
-        speed, or on a palm at rest (no soft stop)."""
-        return self.stop.pad_s if moves(self.stop) else gq.stop_time(pose.v_i)
-
-    def _start_early(self, t_s: float) -> None:
-        """The soft stop's hand moves from the first observation's ``t_s`` on, to the table's
-        typical pre-catch pose (``StopTable.prior``): the ramp of a short throw's stopping
-        motion starts ~0.2-0.3 s after the launch (bench_live's 1-1.5 m throws), too soon
-        for a move begun at the first fit (~0.1 s); the re-aims then take it to the
-        estimate's."""
-        q = self.pl.q_rest.copy()
-        q[list(self.pl.joints.arm)] = self._table.prior
-        m = self.motion
-        m.start(t_s, q, m.move_time(self.pl.q_rest, q))
-
-    def _slower(self, pose, t_b: float) -> tuple[SoftStop | None, np.ndarray, float]:
-        """The stopping motion (the newest, through ``pose``) for a hand that is at its
-        pre-catch pose too late for the ramp (``_ready``) from ``t_b``: its speeds and
-        ramps scaled down together (``scaled``: the ramps' peak accelerations, hence every
-        motor's load, no higher; a slower ramp starts later and nearer the intercept pose),
-        the largest share that is in time found by bisection (``LATE_STEPS``); the palm at
-        rest when none is. Returns the stop, its pre-catch pose and the move's duration
-        from ``t_b``."""
-        base = self._nominal if self._nominal is not None else self.stop
-        lo, hi = 0.0, 1.0
-        for _ in range(LATE_STEPS):
-            k = 0.5 * (lo + hi)
-            self.stop = scaled(base, k)
-            self._shifted(pose)
-            lo, hi = (k, hi) if self._ready(t_b) <= self.stop.start_s else (lo, k)
-        self.stop = scaled(base, lo)
-        self._shifted(pose)
-        return self.stop, self.q_pre, self._ready(t_b) - t_b
-
-    def _ready(self, t_b: float) -> float:
-        """When the arm can be at rest at the pre-catch pose ``q_pre`` if it goes there
-        from ``t_b`` (from rest: ``LiveMotion.move_time``)."""
-        m = self.motion
-        if not m.moving:
-            return t_b + m.move_time(self.pl.q_rest, self.q_pre)
-        arm = list(self.pl.joints.arm)  # (a re-aim from the moving arm's state: its shortest,
-        # the joints' limits alone; ``LiveMotion.reaim`` then keeps the motors within theirs)
-        return t_b + phase_duration(self.q_pre[arm] - m.seg.state1(t_b)[0],
-                                    m.hand.velocity[arm], m.hand.acceleration[arm], 0.0)
-
-    def _nominal_through(self, pose, t_b: float, fix_s: float) -> SoftStop | None:
-        """The table's stopping motion for the estimate (``StopTable``) through ``pose``;
-        slower (``_slower``) when the arm cannot be at its pre-catch pose before its ramp,
-        unless the rows reach the ramp by ``fix_s`` (then it is fixed as it is, the re-aim's
-        share made); one chosen for the estimate when the table has no throw."""
-        if self._nominal is None:
-            return self._stop_for(pose, t_b if self.motion.moving else -math.inf)
-        self.stop = self._nominal
-        stop = self._shifted(pose)
-        if (self.motion.moving and moves(stop) and fix_s < stop.start_s
-                and self._ready(t_b) > stop.start_s + LATE_TOL_S):
-            stop = self._slower(pose, t_b)[0]
-        return stop
-
-    def _shifted(self, pose) -> SoftStop | None:
-        """The moving hand's stopping motion (chosen when it started to move: its speeds
-        and ramps kept, so that the re-aims follow the estimate, not a new motion) through
-        ``pose``, the newest intercept."""
-        stop, h, arm = self.stop, self.pl.hand, list(self.pl.joints.arm)
-        if stop is None:
-            self.q_pre = pose.q_open
-            return None
-        q = pose.q_open[arm]
-        lo, hi = h.lower[arm], h.upper[arm]
-        scale = np.ones(len(arm))  # a joint whose travel would leave its range from the
-        for off in (stop.first_offset, stop.last_offset):  # newer pose slower (as
-            room = np.where(off < 0, q - lo, hi - q)  # ``stop_profile`` slows it)
-            over = np.abs(off) > room
-            scale[over] = np.minimum(scale[over], np.maximum(room[over], 0.0) / np.abs(off[over]))
-        stop = self.stop = replace(stop, t_i=float(pose.t_i), qd=stop.qd * scale)
-        self.q_pre = pose.q_open.copy()
-        self.q_pre[arm] += stop.first_offset
-        return stop
-
-    def _adds_within_limits(self) -> bool:
-        """Whether the arm's move, where it still runs after the ramp starts, and the
-        stopping motion added keep every arm joint within its speed and acceleration limits
-        (``turnahead.rows_within_limits`` on a ``OVERLAP_STEP_S`` grid)."""
-        m, stop = self.motion, self.stop
-        if m.seg.end_s <= stop.start_s:
-            return True
-        t = np.arange(stop.start_s - 2 * OVERLAP_STEP_S, m.seg.end_s + 2 * OVERLAP_STEP_S,
-                      OVERLAP_STEP_S)
-        Q = m.rows(t) + arm_offset(stop, t, self.pl.hand.n)
-        return rows_within_limits(self.pl.hand, t, Q)
-
-    def _fixed(self, pose) -> SoftStop | None:
-        """The fixed stop (its rows follow it); a palm at rest (the fallback of
-        ``_fix_stop``) waits at the newest intercept pose."""
-        if not moves(self.stop):
-            self.q_pre = pose.q_open
-        return self.stop
-
-    def _fix_stop(self, pose, t_b: float) -> None:
-        """The stopping motion fixed: the palm target where the rows have it at its
-        intercept kept (a newer estimate's intercept is where its ball meets the moving
-        palm, ``_met``)."""
-        self.stop_fixed = True
-        if self.stop is None:
-            return
-        m = self.motion
-        if moves(self.stop) and not self._adds_within_limits():
-            # the arm's move (a re-aim that could not reach the pre-catch pose in time) would
-            # still run when the ramp starts: the rows would add the two beyond the joints'
-            # limits; the palm waits at rest at the intercept pose instead (the live catch
-            # before the soft stop), its re-aims going on
-            self.stop, self.q_pre = scaled(self.stop, 0.0), pose.q_open
-            m.reaim(t_b, pose.q_open, rest_by_s(pose.t_i, self.dt))
-            self.fallbacks += 1
-            return
-        # the arm's travel from where its move ends (a re-aim may have kept an older
-        # target) within the joints' range: a joint that would leave it slower
-        stop, h, arm = self.stop, self.pl.hand, list(self.pl.joints.arm)
-        q, travel = self.motion.seg.q1, stop.last_offset - stop.first_offset
-        room = np.where(travel < 0, q - h.lower[arm], h.upper[arm] - q)
-        over = np.abs(travel) > room
-        if over.any():
-            scale = np.ones(len(arm))
-            scale[over] = np.maximum(room[over], 0.0) / np.abs(travel[over])
-            self.stop = replace(stop, qd=stop.qd * scale)
-        t = np.array([self.stop.t_i])
-        off = arm_offset(self.stop, t, self.pl.hand.n)
-        q = self.motion.rows(t)[0] + (0.0 if off is None else off[0])
-        self._target_m = palm_target(self.pl.hand, q, self.ball.radius_m)
-
-    def _met(self, pose):
-        """``pose`` with the intercept time of its flight on the fixed moving palm."""
-        if not (self.stop_fixed and moves(self.stop)):
-            return pose
-        fl, stop = self.flight, self.stop
-        t_i = met_on_the_moving_palm(stop, self._target_m, fl.position(stop.t_i) - self.C,
-                                     fl.velocity(stop.t_i))
-        return replace(pose, t_i=t_i, v_i=fl.velocity(t_i))
 
     def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
         """The intercept's 1-sigma from the fit (``LiveFit.sigma_at``): across the path at
@@ -553,7 +392,8 @@ class CatchSession:
             return None
         t = np.arange(first, n) * self.dt
         Q = self.motion.rows(t, old_seg, t_b)  # (the writer guards them as it writes them)
-        off = arm_offset(self.stop if self.stop_fixed else None, t, self.pl.hand.n)
+        sp = self.stopper
+        off = arm_offset(sp.stop if sp.fixed else None, t, self.pl.hand.n)
         if off is not None:
             Q = Q + off
         if self.turn is not None:
@@ -579,21 +419,22 @@ class CatchSession:
     def _finish(self, why: str) -> np.ndarray:
         """The rest of the plan (started now if the hand is still waiting), written; then
         judged, and the end marker."""
-        m, cl = self.motion, self.closing
+        m, cl, sp = self.motion, self.closing, self.stopper
         pose, h = self.pose, self.pl.hand
         self._closings.due(m, math.inf)
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
-            stop = self.stop if self.stop_fixed else self._stop_for(pose, t_b)
-            T_m = m.move_time(self.pl.q_rest, self.q_pre)
-            m.start(t_b, self.q_pre, T_m)
+            if not sp.fixed:
+                sp.stop_for(pose, t_b)
+            T_m = m.move_time(self.pl.q_rest, sp.q_pre)
+            m.start(t_b, sp.q_pre, T_m)
             m.set_closing(close_start(h, self.flight, self.C, pose.q_open, cl, pose.t_i,
-                                      t_b + T_m, self._pad_s(pose), self.ball.radius_m),
+                                      t_b + T_m, sp.pad_s(pose), self.ball.radius_m),
                           cl.duration_s)
-        if not self.stop_fixed:
-            self._fix_stop(pose, t_b)
-        self.pose = pose = self._met(pose)
-        stop = self.stop
+        if not sp.fixed:
+            sp.fix(pose, t_b)
+        self.pose = pose = sp.met(pose, self.flight)
+        stop = sp.stop
         t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s,
                        stop.end_s if moves(stop) else -math.inf)
         t2 = np.array([t_static, t_static + self.dt])
@@ -601,9 +442,9 @@ class CatchSession:
         q_held = m.rows(t2)[0] + (0.0 if off is None else off[0])
         grasp = m.close_start_s + (cl.u_grasp or 1.0) * m.close_s
         self.turn = live_turn(self.pl.dyn, q_held,
-                              max(grasp, pose.t_i + self._pad_s(pose), m.seg.end_s),
+                              max(grasp, pose.t_i + sp.pad_s(pose), m.seg.end_s),
                               (self.next_row + sum(len(c.t) for c in self._ahead)) * self.dt)
-        self.turn = self._within_limits(self.turn)
+        self.turn = sp.within_limits(self.turn)
         if self.turn is not None:
             t_static = max(t_static, self.turn.end_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
@@ -629,23 +470,6 @@ class CatchSession:
                               {"drag_estimate": self.drag_estimate.to_dict()})})
         return rows
 
-    def _within_limits(self, turn: LiveTurn | None) -> LiveTurn | None:
-        """The turn lengthened (``TURN_GROW``, at most ``TURN_TRIES`` times, as the planned
-        catch's turn from the grasp) until every joint is within its speed and acceleration
-        limits on its rows, where it runs on top of the stopping motion's end."""
-        if turn is None or not moves(self.stop):
-            return turn
-        n = self.pl.hand.n
-        for _ in range(TURN_TRIES):
-            t = np.arange(math.floor(turn.start_s / self.dt) - 1,
-                          math.ceil(turn.end_s / self.dt) + 2) * self.dt
-            Q = self.motion.rows(t) + turn.offset(t)
-            off = arm_offset(self.stop, t, n)
-            if rows_within_limits(self.pl.hand, t, Q + (0.0 if off is None else off)):
-                break
-            turn = turn._replace(duration_s=turn.duration_s * TURN_GROW)
-        return turn
-
     def _judge(self, t_static: float) -> CatchPlan:
         """The final plan: every row through the planner's self-check, the grasp forces."""
         pl, pose, fl, r, m = self.pl, self.pose, self.flight, self.ball.radius_m, self.motion
@@ -657,9 +481,10 @@ class CatchSession:
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
         reasons += roll_reasons(pl.turn, fl, t, Q, pose.t_i)
-        if self.turn is not None or moves(self.stop):  # the ball is held where the rows end
+        stop = self.stopper.stop
+        if self.turn is not None or moves(stop):  # the ball is held where the rows end
             pose = replace(pose, q_closed=Q[-1].copy())
-        fv = pl.forces(fl, pose, t, Q, r, soft=self.stop if moves(self.stop) else None)
+        fv = pl.forces(fl, pose, t, Q, r, soft=stop if moves(stop) else None)
         reasons += fv.reasons
         try:
             t_f = float(fl.time_at_x(float(self.C[0])))
@@ -678,7 +503,8 @@ class CatchSession:
             reasons=reasons, flight=fl, catch_point=self.C,
             T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand, hand=pl.hand,
             rate_hz=self.rate_hz, throw=self._throw(), pose=pose, verdict=verdict,
-            q_rest=pl.q_rest, q_open=self.q_pre, move_start_s=m.t_move, move_s=m.open_s,
+            q_rest=pl.q_rest, q_open=self.stopper.q_pre, move_start_s=m.t_move,
+            move_s=m.open_s,
             close_start_s=m.close_start_s, close_s=m.close_s, forces=fv.forces,
             t=t, Q=Q, t_info_s=float(self.fit.times[-1]), flight_time_s=t_f,
             uncertainty=self.uncertainty, notes=notes)
