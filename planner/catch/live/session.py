@@ -63,6 +63,7 @@ from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import LiveSearch
 from planner.catch.live.stop import (
+    RAMP_MARGIN_S,
     START_SLACK_S,
     arm_offset,
     moves,
@@ -314,10 +315,12 @@ class CatchSession:
         sp = self.stopper
         stop = (sp.fixed_stop(pose) if sp.fixed else sp.for_estimate(pose, t_b, fix_s)
                 if sp.soft else sp.shifted(pose))
+        if sp.fixed and moves(stop):  # the ball meets the fixed motion's palm then (the
+            pose = sp.met(pose, flight)  # closing is timed for it)
         stop_t = sp.pad_s(pose)
         rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
         if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
-            rest_by = min(rest_by, stop.start_s)
+            rest_by = min(rest_by, stop.start_s - RAMP_MARGIN_S)
         q_pre = sp.q_pre
         if not m.moving:
             T_m = m.move_time(pl.q_rest, q_pre)

@@ -47,6 +47,10 @@ START_SLACK_S = 0.02  # the live hand starts its move to the pre-catch pose this
 # each of which must end at rest before the ramp begins
 OVERLAP_STEP_S = 0.0005  # the arm's move and the ramp, where they overlap, checked this
 # finely (the rows are 1-10 ms apart; the guard and the check read their differences)
+RAMP_MARGIN_S = 0.005  # the arm's re-aims end at rest this long before the ramp starts: a
+# newer estimate moves the intercept, and with it the ramp's start, by ~1 ms (1 sigma of a
+# 5 mm camera's late in the flight, ``live.search.NEAR_S``); a re-aim that ended at the
+# older start would then run into the ramp and no later one could end in time
 LATE_TOL_S = 0.010  # an arm this little late for the ramp (one 100 Hz row) keeps the
 # table's motion: a newer estimate's target moves by a few mrad (the noise of its
 # deviation), which the shortest re-aim cannot make in less (``phase_duration``'s 10 ms
