@@ -27,6 +27,7 @@ from dataclasses import replace
 import numpy as np
 
 from planner.catch.flight.path import Ball, Flight, predict_throw
+from planner.catch.live.search import NEAR_S
 from planner.catch.plan.stopping import (
     ROLL_WEIGHT,
     SoftStop,
@@ -163,11 +164,14 @@ def met_on_the_moving_palm(stop: SoftStop, target_m: np.ndarray, ball_m: np.ndar
     """When a ball at ``ball_m`` (velocity ``v_ball``) at the fixed stop's intercept time
     is nearest the palm target, which passes ``target_m`` then at the contact velocity
     ``stop.v_palm`` (both straight over the few ms a newer estimate moves it): the
-    intercept time of a newer estimate on the fixed motion."""
+    intercept time of a newer estimate on the fixed motion, within ``NEAR_S`` of the fixed
+    one (the palm moves nearly with the ball, so an estimate centimetres off the palm's path
+    would move it by far more: such a ball misses the palm whenever it is judged)."""
     d0 = ball_m - target_m
     vr = v_ball - stop.v_palm
     vv = float(vr @ vr)
-    return stop.t_i - (float(d0 @ vr) / vv if vv > 0 else 0.0)
+    shift = float(d0 @ vr) / vv if vv > 0 else 0.0
+    return stop.t_i - min(max(shift, -NEAR_S), NEAR_S)
 
 
 TABLE_ANGLES_DEG = tuple(range(10, 81, 5))  # launch angles of the table's throws: the
