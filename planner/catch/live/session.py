@@ -274,7 +274,9 @@ class CatchSession:
             return np.empty((0, 0))
         t_react = t + SIGNAL_S + PLAN_BUDGET_S
         t_b = max(self.written_to_s, t_react)
-        if self.t_i is not None and t_b >= self.t_i:  # too late to act before the ball
+        if self.t_i is not None and t_b >= self.t_i and self.pose.ic.reason is None:  # too
+            # late to act before the ball (an estimate out of reach has no such time: a
+            # first fit of a few noisy observations may put its nearest point in the past)
             return self._finish(f"the observation at t = {t:.3f} s acts after the intercept")
         old_seg = self.motion.seg
         self._replan(fit.flight, t, t_b, period, self._last_row_s(t_react + period))
