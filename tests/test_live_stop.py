@@ -51,3 +51,24 @@ def test_a_slower_stop_keeps_its_peak_accelerations():
 
     assert slow.start_s > stop.start_s and slow.t_i == stop.t_i
     assert peak_acc(slow) <= peak_acc(stop) * (1 + 1e-6)
+
+
+def test_simulate_replays_the_ball_the_check_judges():
+    """A live file's ball is its end marker's last estimate for the check and for the
+    physics replay alike (``check.ball.judged_source``); a planned file's, its metadata's."""
+    from planner.catch import CatchSession, get_planner, plan_catch
+    from planner.catch.flight.camera import observe_throw
+    from planner.catch.flight.path import get_ball, predict_throw
+    from planner.check.ball import judged_source
+    from planner.trajfile import parse_trajectory
+
+    ball = get_ball("tennis")
+    fl = predict_throw(30.0, 1.5, 0.0, ball, drag=True)
+    s = observe_throw(CatchSession(1.5, 0.0, ball=ball, drag=True, planner=get_planner("default")),
+                      fl, 0.005, 100.0, np.random.default_rng(0))
+    tr = parse_trajectory(s.text)
+    src = judged_source(tr, "live.csv")
+    assert src["ball"] == tr.end["ball"] and src["intercept_t"] == tr.end["intercept_t"]
+    assert src["ball"] != tr.metadata["ball"]
+    planned = parse_trajectory(plan_catch(30.0, 1.5, 0.0, "default").text)
+    assert judged_source(planned, "planned.csv") is planned.metadata
