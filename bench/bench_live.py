@@ -79,6 +79,9 @@ def physics_verdict(text: str) -> tuple[bool, str]:
     return not rep.problems, (rep.problems[0][:60] if rep.problems else "")
 
 
+SOFT = {"soft_stop": True}  # --still-palm: the palm waiting at rest (``soft_stop=False``)
+
+
 def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng, physics=False):
     """One throw: (caught against the true ball, wall latencies (s), CPU times (s) or
     None, outcome, the check's problems, the physics' verdict (None without ``physics``))."""
@@ -90,7 +93,9 @@ def run_throw(pl, ball, angle, dist, height, noise_m, rate_hz, rng, physics=Fals
 
     fl = predict_throw(angle, dist, height, ball, drag=True)
     s = observe_throw(CatchSession(dist, height, ball=ball, drag=True, rate_hz=100.0,
-                                   planner=pl), fl, noise_m, rate_hz, rng, until_s=3.0)
+                                   planner=pl, **({} if SOFT["soft_stop"]
+                                                  else {"soft_stop": False})),
+                      fl, noise_m, rate_hz, rng, until_s=3.0)
     head, _ = s.text.rstrip("\n").rsplit("\n", 1)
     end = parse_trajectory(s.text).end
     end = dict(end, ball=fl.to_metadata())  # judged against the true ball
@@ -183,11 +188,15 @@ def main(argv: list[str] | None = None) -> int:
                     help="also run the planner of this checkout, configuration by configuration")
     ap.add_argument("--physics", action="store_true",
                     help="also replay every live catch in MuJoCo (simulate): the physics judge")
+    ap.add_argument("--still-palm", action="store_true",
+                    help="the palm waiting at rest (CatchSession(soft_stop=False)), the live "
+                         "catch before the soft stop")
     ap.add_argument("--rates", default=None, help="e.g. 100 (default: 100,500)")
     ap.add_argument("--noises-mm", default=None, help="e.g. 5 (default: 2,5,10)")
     ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)  # RATE,NOISE: one config
     a = ap.parse_args(argv)
     sys.path.insert(0, os.environ.get(CODE_ENV, str(ROOT)))
+    SOFT["soft_stop"] = not a.still_palm
     if a.worker:
         rate, noise = (float(x) for x in a.worker.split(","))
         worker(a.n, a.seed, rate, noise)

@@ -20,6 +20,7 @@ from planner.catch.plan.api import get_planner
 from planner.catch.plan.arm import open_from
 from planner.catch.plan.intercept import find_intercept
 from planner.catch.plan.planner import PLAN_BUDGET_S, SIGNAL_S
+from planner.catch.plan.turnahead import rows_within_limits
 from planner.check import check_trajectory
 from planner.errors import InputError
 from planner.trajectory import Phase, sample
@@ -93,8 +94,6 @@ def live_run():
     return fl, s, per_obs
 
 
-@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows turn the wrist but have no soft stop; "
-                   "the roll rule, now applied to live files, rejects them")
 def test_session_rows_never_change_and_lead_the_next_observation(live_run):
     _, s, per_obs = live_run
     assert s.outcome == HELD, s.reason
@@ -113,8 +112,6 @@ def test_session_rows_never_change_and_lead_the_next_observation(live_run):
     assert tr.end["ball"] != tr.metadata["ball"]
 
 
-@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows turn the wrist but have no soft stop; "
-                   "the roll rule, now applied to live files, rejects them")
 def test_session_catches_the_true_ball(live_run):
     """Judged by the independent check against the true ball, not the estimate."""
     fl, s, _ = live_run
@@ -149,8 +146,12 @@ def test_session_first_plan_starts_from_the_first_look(live_run):
         if first.t_i is not None:
             break
     np.testing.assert_array_equal(first.flight.v0, lf.flight.v0)
-    full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m,
-                          float(lf.flight.time_at_x(1.5)))
+    t_c = float(lf.flight.time_at_x(1.5))
+    # (at the soft stop's palm tilt, ``live.stop.StopTable``; untilted where the tilted palm
+    # faces no pose, as ``LiveSearch.next``)
+    full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m, t_c, first._search.tilt)
+    if not full.aligned:
+        full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m, t_c)
     ic = first.pose.ic
     assert abs(ic.t - full.t) < 1e-6 and abs(ic.theta - full.theta) < 1e-6
     assert abs(ic.dev - full.dev) < 1e-6 and abs(ic.rail - full.rail) < 1e-6
@@ -247,15 +248,48 @@ def test_reaim_ends_at_rest_in_time_within_the_motors():
     assert m.seg.t0 == 0.2 and worst(m.seg, m.rows(np.array([0.2]))[0], target) <= 1.0 + 1e-9
 
 
-def test_session_arm_at_rest_when_the_ball_arrives(live_run):
+@pytest.fixture(scope="module")
+def still_run():
+    """``live_run``'s throw and noise, the palm waiting at rest (no soft stop)."""
+    fl, ts, ps = _observations()
+    s = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=get_planner("default"),
+                     soft_stop=False)
+    for t, p in zip(ts, ps):
+        s.observe(t, p)
+        if s.done:
+            break
+    return fl, s, None
+
+
+def test_session_arm_at_rest_when_the_ball_arrives(still_run):
     """The rows the check's stopping load reads around the intercept: the arm still."""
-    _, s, _ = live_run
+    _, s, _ = still_run
     tr = parse_trajectory(s.text)
     arm = list(s.pl.joints.arm)
     t_i = tr.end["intercept_t"]
     near = (tr.t_s >= rest_by_s(t_i, s.dt)) & (tr.t_s <= t_i + 0.05)
     assert near.sum() >= 6 and rest_by_s(t_i, s.dt) <= (math.floor(t_i / s.dt) - 1) * s.dt + 1e-12
     np.testing.assert_array_equal(tr.q[near][:, arm], np.tile(tr.q[near][0, arm], (near.sum(), 1)))
+
+
+def test_session_arm_moves_with_the_ball(live_run):
+    """The live soft stop (issue 31, item 3): the arm's move to the pre-catch pose ends
+    before the ball (what is left of it when the stopping motion's ramp starts, added to
+    it, within every joint's limits on the rows), and when the ball arrives the arm moves
+    with the stopping motion's contact speeds, the palm giving with the ball (away from it
+    along its normal), as the planned catch's does."""
+    _, s, _ = live_run
+    tr = parse_trajectory(s.text)
+    arm = list(s.pl.joints.arm)
+    stop = s.stop
+    assert s.stop_fixed and np.any(stop.qd) and s.fallbacks == 0
+    assert s.motion.seg.end_s < stop.t_i - stop.row_s
+    assert rows_within_limits(s.pl.hand, tr.t_s, tr.q, 1e-9)
+    k = int(np.searchsorted(tr.t_s, tr.end["intercept_t"], side="right")) - 1
+    v = (tr.q[k, arm] - tr.q[k - 1, arm]) / s.dt
+    assert v @ stop.qd_c > 0.5 * stop.qd_c @ stop.qd_c
+    normal = s.pl.hand.palm_pose(tr.q[k])[:3, 2]
+    assert stop.v_palm @ normal < 0.0
 
 
 def test_session_needs_enough_observations():
@@ -267,8 +301,6 @@ def test_session_needs_enough_observations():
         CatchSession(0.0)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows turn the wrist but have no soft stop; "
-                   "the roll rule, now applied to live files, rejects them")
 def test_session_end_of_input_follows_the_last_estimate(tmp_path):
     _, ts, ps = _observations(drag=False, noise_m=0.002)
     out = tmp_path / "eof.csv"
@@ -292,8 +324,6 @@ def _lines(ts, ps, header=True):
     return "\n".join((["t,x,y,z"] if header else []) + rows) + "\n"
 
 
-@pytest.mark.xfail(strict=True, reason="issue 31 item 3: the live rows turn the wrist but have no soft stop; "
-                   "the roll rule, now applied to live files, rejects them")
 def test_cli_live_writes_a_checked_catch(tmp_path):
     _, ts, ps = _observations()
     r = _cli(["--dist", "1.5", "--drag", "-o", "c.csv"], _lines(ts, ps), tmp_path)

@@ -1,8 +1,8 @@
 """The live catch's hold (issue 31, item 3, its wrist turn): once the grasp is made the wrist
 turns the closed hand palm up, as the planned catch's does; the rows written before the
-session's end are not changed by it. Without the planned catch's soft stop (the palm
-moving with the ball at contact) the ball still rolls beyond the palm on these throws: the
-session says so (given up), as the check and the physics do."""
+session's end are not changed by it. Without the soft stop (``soft_stop=False``: the palm
+waiting at rest) the ball still rolls beyond the palm on these throws: the session says so
+(given up), as the check and the physics do; with it (the default) the ball stays."""
 
 from __future__ import annotations
 
@@ -23,8 +23,20 @@ BALL = get_ball("tennis")
 def session():
     pl = get_planner("default")
     fl = predict_throw(30.0, 1.5, 0.0, BALL, drag=True)
-    s = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=pl)
+    s = CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=pl, soft_stop=False)
     return pl, observe_throw(s, fl, 0.002, 100.0, np.random.default_rng(0))
+
+
+def test_with_the_soft_stop_the_ball_stays_on_the_palm():
+    """The same throw and camera with the live soft stop (the default): the palm gives with
+    the ball, the turn follows, and the ball rolls within the palm's room: held."""
+    pl = get_planner("default")
+    fl = predict_throw(30.0, 1.5, 0.0, BALL, drag=True)
+    s = observe_throw(CatchSession(1.5, 0.0, ball=BALL, drag=True, planner=pl), fl, 0.002,
+                      100.0, np.random.default_rng(0))
+    p = s.plan
+    assert s.outcome == "held" and s.turn is not None
+    assert pl.turn.rolled(p.rows.t, p.rows.q, p.intercept.t_s, p.flight) <= ROLL_ROOM_M
 
 
 def test_the_live_wrist_turns_after_the_grasp(session):

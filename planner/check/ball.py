@@ -96,10 +96,7 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
     meta = tr.metadata
     claims = end_claims(tr.end, path)
     live = is_live(meta)
-    # the ball judged: the metadata's; a live plan's last estimate (its end marker), a claim
-    # judged by the same rules as any ball (spec section 4, version 2)
-    src = ({**meta, "ball": claims["ball"], "intercept_t": claims["intercept_t"]}
-           if live and "ball" in claims else meta)
+    src = judged_source(tr, path, claims)
     ball = ball_params(src, path)
     ti = src.get("intercept_t")
     if not is_num(ti) or not math.isfinite(ti):
@@ -173,6 +170,18 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
 
 
 OUTCOMES = ("held", "given_up", "infeasible")  # a catch's claim (spec section 4, version 2)
+
+
+def judged_source(tr: Trajectory, path: str, claims: dict[str, Any] | None = None
+                  ) -> dict[str, Any]:
+    """The metadata whose ball and intercept time a catch file is judged against (by the
+    check, and replayed by ``simulate``): the metadata's; a live plan's last estimate (its
+    end marker), a claim judged by the same rules as any ball (spec section 4, version 2)."""
+    meta = tr.metadata
+    claims = end_claims(tr.end, path) if claims is None else claims
+    if is_live(meta) and "ball" in claims:
+        return {**meta, "ball": claims["ball"], "intercept_t": claims["intercept_t"]}
+    return meta
 
 
 def is_live(meta: dict[str, Any]) -> bool:

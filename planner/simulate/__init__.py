@@ -107,8 +107,9 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     ball = None
     if task == "catch":
         from planner.balls import file_inertia_ratio
-        from planner.check.ball import ball_params
+        from planner.check.ball import ball_params, judged_source
 
+        meta = judged_source(tr, name)  # (a live file: its last estimate, as the check's)
         b = ball_params(meta, name)
         ball = Ball(tuple(b["p0"]), tuple(b["v0"]), float(b["radius"]), float(b["mass"]),
                     float(b["drag"]), file_inertia_ratio(meta))

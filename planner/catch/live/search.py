@@ -46,6 +46,7 @@ class LiveSearch:
         self.wrist, self.C, self.radius_m = wrist, C, radius_m
         self.prior: Intercept | None = None  # the first look's intercept, when in reach
         self.searched_s = -math.inf  # the last whole-path search from out of reach
+        self.tilt = 0.0  # the palm's tilt from facing the ball (rad; ``live.stop.TiltTable``)
 
     def look(self, flight: Flight | None) -> None:
         """The first look's intercept (the observation before the first fit)."""
@@ -56,10 +57,24 @@ class LiveSearch:
              t_i: float | None) -> Intercept:
         """The intercept of ``flight`` (observed up to ``t_s``) warm-started from ``prev``,
         the last re-plan's (its time ``t_i``; None: the first fit's)."""
+        if self.tilt and prev is not None and prev.reason is None and not prev.aligned:
+            prev = None  # a tilted palm's crossing may lie beyond the near window of the
+            # position-only intercept: searched along the whole path (as a first fit's)
+            self.prior = None
+        ic = self._next(flight, t_s, prev, t_i)
+        if self.tilt and (ic.reason is not None or not ic.aligned):  # the tilted palm
+            tilt, self.tilt = self.tilt, 0.0  # faces no pose: the untilted one (as the
+            ic = self._next(flight, t_s, prev, t_i)  # planned catch's tilt search)
+            self.tilt = tilt
+        return ic
+
+    def _next(self, flight: Flight, t_s: float, prev: Intercept | None,
+              t_i: float | None) -> Intercept:
+        """``next`` at the tilt ``self.tilt``."""
         if prev is None:
             if self.prior is not None:
                 return find_intercept_near(self.wrist, flight, self.C, self.radius_m,
-                                           self.prior, self.prior.t, NEAR_S)
+                                           self.prior, self.prior.t, NEAR_S, self.tilt)
             return self.search(flight)
         if prev.reason is not None and t_s < self.searched_s + REACH_RETRY_S - 1e-9:
             flight.integrate_to(t_i + NEAR_S)
@@ -67,7 +82,8 @@ class LiveSearch:
         # the drag table integrated once, as far as it is needed (from an intercept out of
         # reach, the whole-path search's span)
         flight.integrate_to(t_i + (SEARCH_AFTER_S if prev.reason else NEAR_S))
-        ic = find_intercept_near(self.wrist, flight, self.C, self.radius_m, prev, t_i, NEAR_S)
+        ic = find_intercept_near(self.wrist, flight, self.C, self.radius_m, prev, t_i, NEAR_S,
+                                 self.tilt)
         if ic.reason is not None:  # (out of reach: the whole path was searched)
             self.searched_s = t_s
         return ic
@@ -81,4 +97,4 @@ class LiveSearch:
             t_c = float(flight.time_at_x(float(self.C[0])))
         except InfeasibleError:
             t_c = closest_time(flight, self.C)
-        return find_intercept(self.wrist, flight, self.C, self.radius_m, t_c)
+        return find_intercept(self.wrist, flight, self.C, self.radius_m, t_c, self.tilt)

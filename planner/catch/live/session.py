@@ -62,6 +62,13 @@ from planner.catch.flight.livefit import LiveFit
 from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import LiveSearch
+from planner.catch.live.stop import (
+    RAMP_MARGIN_S,
+    START_SLACK_S,
+    arm_offset,
+    moves,
+)
+from planner.catch.live.stopper import LiveStopper
 from planner.catch.live.turn import LiveTurn, live_turn
 from planner.catch.plan.arm import open_from
 from planner.catch.plan.closing import close_start, earliest_close_start
@@ -81,6 +88,7 @@ from planner.catch.plan.results import (
     catch_metadata,
     make_catch_plan,
 )
+from planner.catch.plan.stopping import SoftStop
 from planner.errors import InfeasibleError, InputError
 from planner.hand.model import HandModel
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
@@ -154,7 +162,7 @@ class CatchSession:
     def __init__(self, dist_m: float, height_m: float = 0.0,
                  hand: HandModel | str = "default", ball: Ball | str = "tennis",
                  drag: bool = False, rate_hz: float = 100.0, out_path: str | None = None,
-                 planner: CatchPlanner | None = None) -> None:
+                 planner: CatchPlanner | None = None, soft_stop: bool = True) -> None:
         from planner.catch.plan.api import get_planner, validate_live
 
         d, hgt, rate = validate_live(dist_m, height_m, rate_hz)
@@ -186,6 +194,7 @@ class CatchSession:
         self.pose = self.flight = None
         self.t_i: float | None = None
         self._search = LiveSearch(self.pl.wrist, self.C, self.ball.radius_m)  # (step 2)
+        # default: docs/history/live-catch.md, issue 31)
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
         self._closings = _DeferredClosing(h, self.C, self.closing, self.ball.radius_m)
@@ -196,10 +205,27 @@ class CatchSession:
         self.plan: CatchPlan | None = None
         self.drag_estimate: DragEstimate | None = None  # (drag: at the end)
         self.turn: LiveTurn | None = None  # the wrist's turn that holds the ball (at the end)
+        self.stopper = LiveStopper(self.pl, self.motion, self.ball, self.C, self.dt, self.drag,
+                                   soft_stop)  # the soft stop (``live.stopper``)
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
         self.rows_cpu_s = math.nan  # thread_time then
 
     # ------------------------------------------------------------ observations
+    @property
+    def stop(self) -> SoftStop | None:
+        """The arm's stopping motion (``live.stopper``): of the newest estimate, fixed
+        (``stop_fixed``) once the rows reach its ramp."""
+        return self.stopper.stop
+
+    @property
+    def stop_fixed(self) -> bool:
+        return self.stopper.fixed
+
+    @property
+    def fallbacks(self) -> int:
+        """Soft stops given up for the palm at rest (``LiveStopper.fix``)."""
+        return self.stopper.fallbacks
+
     @property
     def done(self) -> bool:
         return self.outcome is not None
@@ -233,8 +259,14 @@ class CatchSession:
         period = t - self.fit.times[-1] if self.fit.n else 0.0
         fit = self.fit.add(t, p)
         if fit is None:
+            if self.fit.n == 1 and self.stopper.soft and not self.motion.moving:
+                self.stopper.start_early(t + SIGNAL_S + PLAN_BUDGET_S)
             if self.fit.n == self.fit.min_obs - 1:  # the observation before the first fit
-                self._search.look(self.fit.first_look())
+                look = self.fit.first_look()
+                tilt = None if look is None else self.stopper.look(look)
+                if tilt is not None:
+                    self._search.tilt = tilt
+                self._search.look(look)
             # the hand rests at least until this observation could act: those rows
             # formatted here, written with the first fit's
             chunk = self._format(t + SIGNAL_S + PLAN_BUDGET_S)
@@ -242,7 +274,9 @@ class CatchSession:
             return np.empty((0, 0))
         t_react = t + SIGNAL_S + PLAN_BUDGET_S
         t_b = max(self.written_to_s, t_react)
-        if self.t_i is not None and t_b >= self.t_i:  # too late to act before the ball
+        if self.t_i is not None and t_b >= self.t_i and self.pose.ic.reason is None:  # too
+            # late to act before the ball (an estimate out of reach has no such time: a
+            # first fit of a few noisy observations may put its nearest point in the past)
             return self._finish(f"the observation at t = {t:.3f} s acts after the intercept")
         old_seg = self.motion.seg
         self._replan(fit.flight, t, t_b, period, self._last_row_s(t_react + period))
@@ -273,28 +307,46 @@ class CatchSession:
         ``t_s``), acting from ``t_b`` (this observation's rows end at ``rows_to_s``)."""
         pl, r, cl = self.pl, self.ball.radius_m, self.closing
         prev = None if self.pose is None else self.pose.ic
-        pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
-        stop_t = gq.stop_time(pose.v_i)
         m = self.motion
-        rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives
+        tilt = self.stopper.look(flight)  # (a fixed stop keeps its tilt)
+        if tilt is not None:
+            self._search.tilt = tilt
+        pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
+        # the next observation's rows (to its t_react + period) or re-aim reach this far
+        fix_s = max(t_s + SIGNAL_S + PLAN_BUDGET_S + period, t_b) + period
+        sp = self.stopper
+        stop = (sp.fixed_stop(pose) if sp.fixed else sp.for_estimate(pose, t_b, fix_s)
+                if sp.soft else sp.shifted(pose))
+        if sp.fixed and moves(stop):  # the ball meets the fixed motion's palm then (the
+            pose = sp.met(pose, flight)  # closing is timed for it)
+        stop_t = sp.pad_s(pose)
+        rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
+        if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
+            rest_by = min(rest_by, stop.start_s - RAMP_MARGIN_S)
+        q_pre = sp.q_pre
         if not m.moving:
-            T_m = m.move_time(pl.q_rest, pose.q_open)
+            T_m = m.move_time(pl.q_rest, q_pre)
             go = t_b + period + T_m  # the open pose reached if the hand waits one more
             # observation; wait while that is early enough: before the arm must be at rest
-            # and before the closing's start, which is no earlier than its earliest (then
-            # no closing time is needed: the same decision as with it)
-            if go >= rest_by or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
+            # (with room for the re-aims) and before the closing's start, which is no
+            # earlier than its earliest (then no closing time is needed: the same decision)
+            late = go + (START_SLACK_S if moves(stop) else 0.0) >= rest_by
+            if late or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
                 s_c = self._closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t)
-                if go >= s_c or go >= rest_by:
-                    m.start(t_b, pose.q_open, T_m)
+                if go >= s_c or late:
+                    if moves(stop) and t_b + T_m > stop.start_s:  # too late for it: its
+                        stop, q_pre, T_m = sp.slower(pose, t_b)  # ramp shorter
+                    m.start(t_b, q_pre, T_m)
                     m.set_closing(s_c, cl.duration_s)
         else:
             self._closings.due(m, t_b)
-            if m.reaim(t_b, pose.q_open, rest_by) < 1.0:
+            if not (sp.fixed and moves(stop)) and m.reaim(t_b, q_pre, rest_by) < 1.0:
                 self.kept_targets += 1
             if m.close_start_s > t_b:
                 self._closings.retime(m, _CloseAsk(flight, pose.q_open, pose.t_i,
                                                    m.fingers_open_s, stop_t, t_b), rows_to_s)
+        if moves(stop) and m.moving and not sp.fixed and fix_s >= stop.start_s:
+            sp.fix(pose, t_b)  # the next rows reach its ramp: the motion is the rows' now
         self.pose, self.flight, self.t_i = pose, flight, pose.t_i
 
     def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
@@ -345,6 +397,10 @@ class CatchSession:
             return None
         t = np.arange(first, n) * self.dt
         Q = self.motion.rows(t, old_seg, t_b)  # (the writer guards them as it writes them)
+        sp = self.stopper
+        off = arm_offset(sp.stop if sp.fixed else None, t, self.pl.hand.n)
+        if off is not None:
+            Q = Q + off
         if self.turn is not None:
             Q = Q + self.turn.offset(t)
         return _Chunk(t, Q, format_rows(t, Q, self.pl.hand.motor_angles(Q)))
@@ -368,22 +424,32 @@ class CatchSession:
     def _finish(self, why: str) -> np.ndarray:
         """The rest of the plan (started now if the hand is still waiting), written; then
         judged, and the end marker."""
-        m, cl = self.motion, self.closing
+        m, cl, sp = self.motion, self.closing, self.stopper
         pose, h = self.pose, self.pl.hand
         self._closings.due(m, math.inf)
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
-            T_m = m.move_time(self.pl.q_rest, pose.q_open)
-            m.start(t_b, pose.q_open, T_m)
+            if not sp.fixed:
+                sp.stop_for(pose, t_b)
+            T_m = m.move_time(self.pl.q_rest, sp.q_pre)
+            m.start(t_b, sp.q_pre, T_m)
             m.set_closing(close_start(h, self.flight, self.C, pose.q_open, cl, pose.t_i,
-                                      t_b + T_m, gq.stop_time(pose.v_i), self.ball.radius_m),
+                                      t_b + T_m, sp.pad_s(pose), self.ball.radius_m),
                           cl.duration_s)
-        t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s)
-        q_held = m.rows(np.array([t_static, t_static + self.dt]))[0]
+        if not sp.fixed:
+            sp.fix(pose, t_b)
+        self.pose = pose = sp.met(pose, self.flight)
+        stop = sp.stop
+        t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s,
+                       stop.end_s if moves(stop) else -math.inf)
+        t2 = np.array([t_static, t_static + self.dt])
+        off = arm_offset(stop, t2, h.n)
+        q_held = m.rows(t2)[0] + (0.0 if off is None else off[0])
         grasp = m.close_start_s + (cl.u_grasp or 1.0) * m.close_s
         self.turn = live_turn(self.pl.dyn, q_held,
-                              max(grasp, pose.t_i + gq.stop_time(pose.v_i), m.seg.end_s),
+                              max(grasp, pose.t_i + sp.pad_s(pose), m.seg.end_s),
                               (self.next_row + sum(len(c.t) for c in self._ahead)) * self.dt)
+        self.turn = sp.within_limits(self.turn)
         if self.turn is not None:
             t_static = max(t_static, self.turn.end_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
@@ -420,9 +486,10 @@ class CatchSession:
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
         reasons += roll_reasons(pl.turn, fl, t, Q, pose.t_i)
-        if self.turn is not None:  # the ball is held in the turned hand
+        stop = self.stopper.stop
+        if self.turn is not None or moves(stop):  # the ball is held where the rows end
             pose = replace(pose, q_closed=Q[-1].copy())
-        fv = pl.forces(fl, pose, t, Q, r)
+        fv = pl.forces(fl, pose, t, Q, r, soft=stop if moves(stop) else None)
         reasons += fv.reasons
         try:
             t_f = float(fl.time_at_x(float(self.C[0])))
@@ -441,7 +508,8 @@ class CatchSession:
             reasons=reasons, flight=fl, catch_point=self.C,
             T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand, hand=pl.hand,
             rate_hz=self.rate_hz, throw=self._throw(), pose=pose, verdict=verdict,
-            q_rest=pl.q_rest, q_open=pose.q_open, move_start_s=m.t_move, move_s=m.open_s,
+            q_rest=pl.q_rest, q_open=self.stopper.q_pre, move_start_s=m.t_move,
+            move_s=m.open_s,
             close_start_s=m.close_start_s, close_s=m.close_s, forces=fv.forces,
             t=t, Q=Q, t_info_s=float(self.fit.times[-1]), flight_time_s=t_f,
             uncertainty=self.uncertainty, notes=notes)

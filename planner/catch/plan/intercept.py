@@ -201,29 +201,31 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
 
 
 def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev: Intercept,
-                        t_prev: float, half_width_s: float) -> Intercept:
+                        t_prev: float, half_width_s: float, tilt: float = 0.0) -> Intercept:
     """``find_intercept`` warm-started from a previous intercept time ``t_prev`` (a live
     re-plan: the flight moved a little): the palm-plane crossing bracketed within
     ``half_width_s`` of it and found by the same secant, or (no aligned pose) the palm's
     position alone searched on ``_N_NEAR`` samples of that window (at the previous
     deviation only when ``prev`` was such an intercept); the full search when neither
     finds it there. A previous intercept out of reach is no pose to start from (as the
-    first plan's ``session._prior``): the full search at once (around ``t_prev``)."""
+    first plan's ``session._prior``): the full search at once (around ``t_prev``).
+    ``tilt``: ``find_intercept``'s (the palm turned from facing the ball; its position-only
+    fallback faces none)."""
     if prev.reason is not None:
-        return find_intercept(wr, flight, C, r, t_prev)
+        return find_intercept(wr, flight, C, r, t_prev, tilt)
     ta, tb = max(0.0, t_prev - half_width_s), t_prev + half_width_s
-    fa, fb = wr.aligned1(flight, C, ta, r)[2], wr.aligned1(flight, C, tb, r)[2]
+    fa, fb = wr.aligned1(flight, C, ta, r, tilt)[2], wr.aligned1(flight, C, tb, r, tilt)[2]
     if fa > 0 >= fb:
         ti, (th, s_vec, _) = bracketed_secant(
-            lambda tm: wr.aligned1(flight, C, tm, r), ta, tb, fa, fb)
+            lambda tm: wr.aligned1(flight, C, tm, r, tilt), ta, tb, fa, fb)
         sol = wr.dev_rail(s_vec, r)
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
-            return Intercept(ti, th, sol[0], sol[1], 0.0, True, None)
+            return Intercept(ti, th, sol[0], sol[1], abs(tilt), True, None)
     devs = (prev.dev,) if not prev.aligned else None
     ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR), devs)
     if ic.reason is not None and devs is not None:
         ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR))
-    return ic if ic.reason is None else find_intercept(wr, flight, C, r, t_prev)
+    return ic if ic.reason is None else find_intercept(wr, flight, C, r, t_prev, tilt)
 
 
 def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, tb: float,

@@ -36,6 +36,7 @@ rolls into the closed fingers and the palm carries its weight.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -317,16 +318,22 @@ class StopDynamics:
         return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
 
 
-def _contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
-                    normal: np.ndarray, roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
-    """The QP: min |W^1/2 (v_ball - J x)|^2 + 1e-6 |x|^2, -bound <= x <= bound, W weighting
-    the relative velocity's part along the palm ``ROLL_WEIGHT`` times its part along the
-    palm's ``normal`` (``roll_weight``: that factor)."""
+def contact_qp(J: np.ndarray, v_ball: np.ndarray, normal: np.ndarray,
+               roll_weight: float = ROLL_WEIGHT) -> tuple[np.ndarray, np.ndarray]:
+    """The contact speeds' QP objective (P, c) of x^T P x / 2 + c^T x: |W^1/2 (v_ball -
+    J x)|^2 + 1e-6 |x|^2, W weighting the relative velocity's part along the palm
+    ``roll_weight`` times its part along the palm's ``normal``."""
     k = J.shape[1]
     n = normal / np.linalg.norm(normal)
     W = roll_weight * np.eye(3) + (1.0 - roll_weight) * np.outer(n, n)
-    P = 2.0 * (J.T @ W @ J + 1e-6 * np.eye(k))
-    c = -2.0 * J.T @ W @ v_ball
+    return 2.0 * (J.T @ W @ J + 1e-6 * np.eye(k)), -2.0 * J.T @ W @ v_ball
+
+
+def contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
+                   normal: np.ndarray, roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
+    """The QP (``contact_qp``) within -bound <= x <= bound, by OSQP (zeros when unsolved)."""
+    k = J.shape[1]
+    P, c = contact_qp(J, v_ball, normal, roll_weight)
     res = _QP.solve(P, c, np.eye(k), -bound, bound)
     if not res.solved:
         return np.zeros(k)
@@ -341,20 +348,8 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     a function of the pre-catch pose -> when the hand can be there. ``soft`` False: the palm
     waits at rest (the stopping is the pad's alone). ``roll_weight``: the contact-speed QP's
     weight on the ball's speed along the palm (1: none above its speed into it)."""
-    best = None
-    for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
-        # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
-        # the wrist changes smoothly with it)
-        for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):
-            ic = find_intercept(wrist, flight, C, r, t_c, math.radians(tilt))
-            if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
-                break
-            cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
-                              math.radians(tilt), 1.0, rw=roll_weight)
-            key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
-            if best is not None and key >= best[0]:
-                break
-            best = (key, cand)
+    best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, soft,
+                      roll_weight)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
@@ -378,31 +373,95 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     return ic, q_open, judged[1]
 
 
+def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
+              q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
+              speeds: Callable[..., np.ndarray] | None = None) -> float:
+    """The palm's tilt (rad) ``plan_stop`` chooses for this throw (its contact share 1:
+    the tilt is chosen before the share), 0 when no tilt reaches; ``speeds``: the contact
+    speeds' QP solver (``StopAsk``)."""
+    best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, True,
+                      ROLL_WEIGHT, speeds)
+    return 0.0 if best is None else float(best[1][2].tilt_rad)
+
+
+def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
+               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
+               soft: bool, roll_weight: float,
+               speeds: Callable[..., np.ndarray] | None = None):
+    """``plan_stop``'s tilt search: (key, (intercept, open pose, stop)) of the tilt whose
+    pad phase needs the least of the motor closest to its capacity; None: no tilt reaches."""
+    best = None
+    for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
+        # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
+        # the wrist changes smoothly with it)
+        for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):
+            ic = find_intercept(wrist, flight, C, r, t_c, math.radians(tilt))
+            if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
+                break
+            cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
+                              math.radians(tilt), 1.0, rw=roll_weight, speeds=speeds)
+            key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
+            if best is not None and key >= best[0]:
+                break
+            best = (key, cand)
+    return best
+
+
 def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
                closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
                tilt_rad: float, share: float, bound0: np.ndarray | None = None,
-               rw: float = ROLL_WEIGHT):
-    """The stopping motion at the intercept ``ic`` meeting the ball at ``share`` of the
-    arm's full speeds (those speeds by the QP), the ramps as short as the motors allow,
-    slowed where the joints' range or the time before the ball is short."""
+               rw: float = ROLL_WEIGHT, speeds: Callable[..., np.ndarray] | None = None):
+    """The stopping motion at the intercept ``ic`` (``stop_profile``), from its open pose."""
     h, j = dyn.hand, dyn.joints
     q = q_zero.copy()
     q[j.i_flex], q[j.i_dev] = ic.theta, ic.dev
     if j.i_rail is not None:
         q[j.i_rail] = ic.rail
     q_open = open_from(h, j, q, closing.q_closed)
-    v_ball = flight.velocity(ic.t)
-    mass = float(flight.ball.mass_kg)
+    bound = (dyn.v_max.copy() if bound0 is None else bound0.copy()) if soft \
+        else np.zeros(len(dyn.arm))
+    stop = stop_profile(dyn, flight.velocity(ic.t), float(flight.ball.mass_kg), r, q_open,
+                        float(ic.t), ready_by, row_s, StopAsk(tilt_rad, share, bound, rw, speeds))
+    if stop is None:
+        return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False,
+                          tilt_rad, 1.0, rw=rw, speeds=speeds)
+    return ic, q_open, stop
+
+
+@dataclass(frozen=True)
+class StopAsk:
+    """What ``stop_profile`` is asked for: the palm's tilt (rad, recorded), the contact
+    share, the arm's speed bounds to start from (zeros: the palm at rest), the roll weight
+    of the contact speeds' QP and its solver (``contact_speeds``'s arguments)."""
+
+    tilt_rad: float
+    share: float
+    bound: np.ndarray
+    roll_weight: float = ROLL_WEIGHT
+    speeds: Callable[..., np.ndarray] | None = None  # None: ``contact_speeds`` (OSQP)
+
+
+def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
+                 q_open: np.ndarray, t_i: float, ready_by, row_s: float, ask: StopAsk
+                 ) -> SoftStop | None:
+    """The stopping motion through the open pose ``q_open`` for a ball arriving at ``t_i``
+    with velocity ``v_ball``, meeting it at ``ask.share`` of the arm's full speeds (those
+    speeds by the QP), the ramps as short as the motors allow, slowed where the joints'
+    range or the time before the ball (``ready_by``: a function of the pre-catch pose ->
+    when the hand can be there) is short. The palm at rest when the recoil would need more
+    than the joints' acceleration; None when no speed is left worth a motion (then the
+    palm at rest, the caller's ``StopAsk`` with zero bounds)."""
+    h, arm, share = dyn.hand, list(dyn.arm), ask.share
+    speeds = ask.speeds or contact_speeds
     normal = h.palm_pose(q_open)[:3, 2]
     J = dyn.target_jacobian(q_open, r)
-    arm = list(dyn.arm)
-    bound = (dyn.v_max.copy() if bound0 is None else bound0.copy()) if soft \
-        else np.zeros(len(arm))
+    bound = ask.bound.copy()
     load = np.zeros((h.n, len(arm)))
     load[arm] = mass * J.T @ J  # joint torque per unit arm acceleration of the riding ball
     lo, hi = h.lower[arm], h.upper[arm]
     for _ in range(_MAX_SHRINK + 1):
-        qd_c = _contact_speeds(J, v_ball, share * bound, normal, rw) if np.any(bound) else 0.0 * bound
+        qd_c = speeds(J, v_ball, share * bound, normal, ask.roll_weight) if np.any(bound) \
+            else 0.0 * bound
         moving = bool(np.any(qd_c))
         v_rel = v_ball - J @ qd_c
         F, ratio, cone = dyn.pad_load(q_open, qd_c, v_rel, mass, normal)
@@ -410,14 +469,14 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
         qd = qd_c / share
         recoil = max(t_pad, row_s) if moving and share < 1.0 else 0.0
         if recoil and np.any((1.0 - share) * np.abs(qd) > dyn.a_max * recoil):
-            return ic, q_open, _at_rest(ic, tilt_rad, arm, v_rel, F, ratio, cone, t_pad)
-        stop = SoftStop(tilt_rad, tuple(arm), qd, share if moving else 1.0, float(ic.t),
+            return _at_rest(t_i, ask.tilt_rad, arm, v_rel, F, ratio, cone, t_pad)
+        stop = SoftStop(ask.tilt_rad, tuple(arm), qd, share if moving else 1.0, t_i,
                         row_s if moving else 0.0, dyn.ramp_time(q_open, qd_c), recoil,
                         max(0.0, t_pad - recoil) + row_s if moving else 0.0,
                         dyn.ramp_time(q_open, qd, load) if moving else 0.0, t_pad, J @ qd_c,
                         v_rel, F, ratio, cone)
         if not moving:
-            return ic, q_open, stop
+            return stop
         # how much slower each joint must go: its travel grows with its speed (the ramps'
         # durations are set by the joint that needs the longest), the ramp-in's time too
         scale = np.ones(len(arm))
@@ -432,22 +491,21 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
         finite = math.isfinite(stop.ramp_in_s) and math.isfinite(stop.ramp_out_s)
         late = ready_by(pre) - stop.start_s if finite else math.inf
         if late <= 0 and np.all(scale >= 1.0):
-            return ic, q_open, stop
+            return stop
         if late > 0:  # every joint slower, its ramp shorter by the time missing
             scale = np.minimum(scale, max(0.0, 1.0 - late / max(stop.ramp_in_s, 1e-9))
                                if finite else 0.0)
         bound = np.where(scale < 1.0, _SHRINK * scale * np.abs(qd), bound)
         if not np.any(bound > _MIN_SPEED * dyn.v_max):
             break
-    return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, tilt_rad, 1.0,
-                      rw=rw)
+    return None
 
 
-def _at_rest(ic: Intercept, tilt_rad: float, arm: list[int], v_rel, F, ratio, cone,
+def _at_rest(t_i: float, tilt_rad: float, arm: list[int], v_rel, F, ratio, cone,
              t_pad: float) -> SoftStop:
     """A palm waiting at rest (no stopping motion)."""
     z = np.zeros(len(arm))
-    return SoftStop(tilt_rad, tuple(arm), z, 1.0, float(ic.t), 0.0, 0.0, 0.0, 0.0, 0.0, t_pad,
+    return SoftStop(tilt_rad, tuple(arm), z, 1.0, float(t_i), 0.0, 0.0, 0.0, 0.0, 0.0, t_pad,
                     z.copy(), v_rel, F, ratio, cone)
 
 

@@ -103,8 +103,8 @@ AHEAD_SHARES = tuple(k / 20 for k in range(1, 21))  # the roll rule's turns unde
 # (its speed limit less the stop's own flexion speed: ``ahead_turn``), in steps of 5 % (with
 # steps of 25 %, 20 deg / 1.5 m had 43 mm of roll at 0.25 and its 0.5 beyond the motors: the
 # 5 % steps find 40 mm within them)
-_TURN_GROW = 1.25  # an early turn too fast on top of the stop is made this much longer
-_TURN_TRIES = 6  # ... up to this many times (1.25^6 = 3.8 x)
+TURN_GROW = 1.25  # an early turn too fast on top of the stop is made this much longer
+TURN_TRIES = 6  # ... up to this many times (1.25^6 = 3.8 x)
 
 
 def ahead_turn(dyn: StopDynamics, stop: SoftStop, q_land: np.ndarray, q_held: np.ndarray,
@@ -179,8 +179,8 @@ class HoldTurn:
         """The rows (``rows(rows_args, turn)``) with the wrist's turn (delta, duration)
         started as ``mode`` says (``turn_start``). An early turn (from the grasp, while the
         arm may still be stopping) adds its speeds and accelerations to the stop's: it is
-        lengthened by ``_TURN_GROW`` until every joint is within its speed and acceleration
-        limits on the rows (at most ``_TURN_TRIES`` times; then as it is, for the self-check
+        lengthened by ``TURN_GROW`` until every joint is within its speed and acceleration
+        limits on the rows (at most ``TURN_TRIES`` times; then as it is, for the self-check
         to refuse). Returns the ``TurnRows`` (its ``Turn`` without profiles)."""
         a = rows_args
         turn = Turn(turn0.delta, turn0.duration_s,
@@ -188,10 +188,10 @@ class HoldTurn:
         t, Q = self.rows(rows_args, turn)
         if mode != TurnMode.EARLY or turn0.duration_s <= 0:
             return TurnRows(turn, t, Q, a.T_m)
-        for _ in range(_TURN_TRIES):
+        for _ in range(TURN_TRIES):
             if rows_within_limits(self.hand, t, Q):
                 break
-            turn = turn._replace(duration_s=turn.duration_s * _TURN_GROW)
+            turn = turn._replace(duration_s=turn.duration_s * TURN_GROW)
             t, Q = self.rows(rows_args, turn)
         return TurnRows(turn, t, Q, a.T_m)
 

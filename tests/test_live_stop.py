@@ -1,0 +1,74 @@
+"""The live soft stop's pieces (planner.catch.live.stop): the contact QP solved exactly, the
+slower motion of a late hand. No wall-clock assertions."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.catch.live.stop import box_qp, giving_contact_speeds, scaled
+from planner.catch.plan.stopping import SoftStop, contact_qp, contact_speeds
+
+
+def test_box_qp_is_the_osqp_minimum():
+    """The active-set solution is the QP's minimum: OSQP's objective to rounding, never
+    below it by more, and within the bounds."""
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        J = rng.normal(size=(3, 3)) * rng.uniform(0.01, 0.5)
+        v, n = rng.normal(size=3) * 5, rng.normal(size=3)
+        b = rng.uniform(0.1, 8.0, 3)
+        P, c = contact_qp(J, v, n, 30.0)
+        x = box_qp(P, c, -b, b)
+        y = contact_speeds(J, v, b, n, 30.0)
+        fx, fy = (0.5 * z @ P @ z + c @ z for z in (x, y))
+        assert np.all(np.abs(x) <= b + 1e-12)
+        assert fx <= fy + 1e-9 * (1.0 + abs(fy))
+
+
+def test_the_flexion_gives_with_the_ball():
+    """The flexion's speed moves the palm target against the palm's normal (or not at all)."""
+    rng = np.random.default_rng(1)
+    speeds = giving_contact_speeds(1)
+    for _ in range(200):
+        J = rng.normal(size=(3, 3))
+        v, n = rng.normal(size=3) * 5, rng.normal(size=3)
+        x = speeds(J, v, np.full(3, 8.0), n, 30.0)
+        assert x[1] * float(J[:, 1] @ n) <= 1e-12
+
+
+def test_a_slower_stop_keeps_its_peak_accelerations():
+    """``scaled``: speeds and ramps by the same share, so the ramps' accelerations (hence the
+    motors' inertial loads) are no higher; the ramp starts later, nearer the intercept."""
+    z = np.zeros(3)
+    stop = SoftStop(0.0, (0, 1, 2), np.array([0.1, -7.8, 0.9]), 0.9, 0.5, 0.01, 0.12, 0.01,
+                    0.02, 0.14, 0.01, z, z, z, z, 1.0)
+    slow = scaled(stop, 0.5)
+    t = np.linspace(0.3, 0.8, 5001)
+    dt = t[1] - t[0]
+
+    def peak_acc(s):
+        return np.abs(np.diff(s.offset(t, 3), 2, axis=0) / dt ** 2).max()
+
+    assert slow.start_s > stop.start_s and slow.t_i == stop.t_i
+    assert peak_acc(slow) <= peak_acc(stop) * (1 + 1e-6)
+
+
+def test_simulate_replays_the_ball_the_check_judges():
+    """A live file's ball is its end marker's last estimate for the check and for the
+    physics replay alike (``check.ball.judged_source``); a planned file's, its metadata's."""
+    from planner.catch import CatchSession, get_planner, plan_catch
+    from planner.catch.flight.camera import observe_throw
+    from planner.catch.flight.path import get_ball, predict_throw
+    from planner.check.ball import judged_source
+    from planner.trajfile import parse_trajectory
+
+    ball = get_ball("tennis")
+    fl = predict_throw(30.0, 1.5, 0.0, ball, drag=True)
+    s = observe_throw(CatchSession(1.5, 0.0, ball=ball, drag=True, planner=get_planner("default")),
+                      fl, 0.005, 100.0, np.random.default_rng(0))
+    tr = parse_trajectory(s.text)
+    src = judged_source(tr, "live.csv")
+    assert src["ball"] == tr.end["ball"] and src["intercept_t"] == tr.end["intercept_t"]
+    assert src["ball"] != tr.metadata["ball"]
+    planned = parse_trajectory(plan_catch(30.0, 1.5, 0.0, "default").text)
+    assert judged_source(planned, "planned.csv") is planned.metadata
