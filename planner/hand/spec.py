@@ -121,6 +121,19 @@ class Actuator:
 
 
 @dataclass(frozen=True)
+class PlayPosture:
+    """The arm's posture while the hand plays (the hand file's ``[play]``): where the
+    rig's reach axis holds the forearm (m), the wrist's flexion and deviation (rad), and
+    how deep below a key's top the pad point presses (m). Without it the planner fits the
+    wrist (``planner.play.atlas``), holds reach at 0 and presses to the key's full dip."""
+
+    reach_m: float
+    wrist_flex_rad: float
+    wrist_dev_rad: float
+    press_depth_m: float
+
+
+@dataclass(frozen=True)
 class HandSpec:
     name: str
     description: str
@@ -133,6 +146,7 @@ class HandSpec:
     rail_enabled: bool
     sources: tuple[tuple[str, str], ...] = field(default_factory=tuple)
     finger_joints: tuple[tuple[str, tuple[str, ...]], ...] = field(default_factory=tuple)
+    play_posture: PlayPosture | None = None
 
     @property
     def movable_joints(self) -> tuple[Joint, ...]:

@@ -56,6 +56,7 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.play.arc import Arc, arc_joint
+from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, FingerBodies
 
 STEP_M = 0.001  # the atlas samples dx this often
 SPAN_M = 0.045  # ... this far either side of a finger's natural place
@@ -69,6 +70,8 @@ CLEARANCE_M = 0.001  # a tip passing over a key it does not press stays this far
 TIP_RADIUS_M = 0.002  # ... counting the pad's size (a key's footprint grows by this)
 WRIST_DIGITS = 9  # the natural wrist's fit is kept to 1e-9 rad (``_natural_hand``)
 PATH_SAMPLES = 12  # a straight move is checked at this many points
+BODY_SAMPLES = 5  # ... and its finger's body at this many (each a forward kinematics of
+# every segment: the ends and every quarter, so that a curl between two clear ends shows)
 CANON_OCTAVE = 4  # entries are solved on the keys of this octave (C4..B4)
 TABLE_DIR = Path(__file__).parents[1] / "tables"
 _POSES = ("press", "rise", "hover", "high")
@@ -99,11 +102,18 @@ class Atlas:
         self.rail = hand.index.get("rail")  # None: a hand on a fixed mount (rail at 0)
         # the fingers with one independent joint: their poses are found on their arc
         self.arc_joint = {f: j for f in hand.fingers if (j := arc_joint(hand, f)) is not None}
+        self.posture = hand.spec.play_posture  # (None: the fitted wrist, reach 0, full dip)
+        self.press_depth_m = kb.KEY_DIP_M if self.posture is None else self.posture.press_depth_m
         self.base = self._natural_hand()
         self._arcs = {f: Arc(hand, f, j, self.base) for f, j in self.arc_joint.items()}
         tips = hand.tip_positions(self.base)
         self.natural_dx = {f: float(tips[i, 0] - self.rail_of(self.base))
                            for i, f in enumerate(hand.fingers)}
+        # the fingers whose natural tips rest in front of the black keys press white keys
+        # there (``press_target``'s ``front``; with a ``[play]`` posture only)
+        self.front = frozenset(f for i, f in enumerate(hand.fingers)
+                               if self.posture is not None and tips[i, 1] < kb.BLACK_Y0_M)
+        self._bodies: FingerBodies | None = None  # (made on the first entry solved)
         self._entries: dict[tuple[str, int, int], AtlasEntry | None] = {}
         self.solves = 0
         self._load(table_path(hand.urdf_sha256))
@@ -130,6 +140,7 @@ class Atlas:
     def _natural_hand(self, z_m: float = BASE_HOVER_Z_M) -> np.ndarray:
         """The natural hand at rail 0: every finger ``CURL`` flexed with no abduction, and
         the wrist (flexion, deviation) that puts the tips, in the least-squares sense,
+        (a hand file's ``[play]`` posture gives reach and wrist instead, at that height)
         ``BASE_HOVER_Z_M`` above the white tops, midway between full dip and crossing
         height, so that each finger has room both ways. A finger of one degree of
         freedom (``planner.play.arc``) takes no part in the fit: its one joint is what
@@ -146,6 +157,12 @@ class Atlas:
             q0[js[0]] = min(max(0.0, h.plan_lower[js[0]]), h.plan_upper[js[0]])
         q0 = h.apply_couplings(q0)
         wrist = [h.index[n] for n in ("wrist_flex", "wrist_dev")]
+        if self.posture is not None and z_m == BASE_HOVER_Z_M:  # (the hand file's posture)
+            p = self.posture
+            if "reach" in h.index:
+                q0[h.index["reach"]] = p.reach_m
+            q0[wrist] = (p.wrist_flex_rad, p.wrist_dev_rad)
+            return h.apply_couplings(q0)
         fit = [i for i, f in enumerate(h.fingers) if f not in self.arc_joint]
 
         def heights(w: np.ndarray) -> np.ndarray:
@@ -267,8 +284,19 @@ class Atlas:
                            "capacity_nm": [round(float(x), 12) for x in
                                            actuator_capacity(self.hand).torque_nm],
                            "base": [round(float(x), 12) for x in self.base],
-                           "stop_margin": [round(float(x), 12) for x in self.hand.stop_margin]},
+                           "stop_margin": [round(float(x), 12) for x in self.hand.stop_margin],
+                           **self._posture_params()},
                           sort_keys=True)
+
+    def _posture_params(self) -> dict:
+        """A ``[play]`` posture and the body rule it brings (none without one: the tables
+        of the hands without it stay as they were)."""
+        p = self.posture
+        if p is None:
+            return {}
+        return {"posture": [round(float(x), 12) for x in (p.reach_m, p.wrist_flex_rad,
+                                                          p.wrist_dev_rad, p.press_depth_m)],
+                "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES]}
 
     def _load(self, path: Path) -> None:
         if not path.exists():
@@ -306,9 +334,13 @@ class Atlas:
         js = h.joint_slice(finger)
         if not all(h.within_plan_limits(q) for q in poses):
             return None
+        if self._bodies is None and self.posture is not None:
+            self._bodies = FingerBodies(h)
         for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
                        (poses[1], poses[0])):
-            if not path_clear(h, qa, qb, finger, pitch):
+            if not (path_clear(h, qa, qb, finger, pitch)
+                    and (self.posture is None
+                         or bodies_clear(self._bodies, qa, qb, finger, pitch))):
                 return None
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
                           *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger))
@@ -316,7 +348,7 @@ class Atlas:
     def _ik_poses(self, finger: str, pitch: int, base: np.ndarray) -> list[np.ndarray] | None:
         """Press, rise, hover and high by single-finger IK: the tip on the key's press
         point, then straight above it at each height."""
-        target = press_target(finger, pitch)
+        target = press_target(finger, pitch, self.press_depth_m, finger in self.front)
         self.solves += 1
         r = self.ik.solve_finger(target, base)
         if not r.converged:
@@ -342,12 +374,13 @@ class Atlas:
         from there brings it back up to each height."""
         arc = self._arcs[finger]
         top = kb.key(pitch).top_z_m
-        s = [arc.descend(top - kb.KEY_DIP_M)]
+        s = [arc.descend(top - self.press_depth_m)]
         if s[0] is None:
             return None
         x, y, _ = arc.tip(s[0], rail)
-        x_lo, x_hi = press_x_range(finger, pitch, TIP_RADIUS_M)
-        y_lo, y_hi = press_target(finger, pitch).y_range_m
+        front = finger in self.front
+        x_lo, x_hi = press_x_range(finger, pitch, TIP_RADIUS_M, front)
+        y_lo, y_hi = press_target(finger, pitch, self.press_depth_m, front).y_range_m
         if not (x_lo <= x <= x_hi and y_lo <= y <= y_hi):
             return None
         for z in (top - REPEAT_DEPTH_M, top + PREPARE_HEIGHT_M, HIGH_Z_M):
@@ -385,6 +418,16 @@ def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,
             inside &= surfaces_under(x, y, TIP_RADIUS_M) <= k.top_z_m
         ok |= inside
     return bool(ok.all())
+
+
+def bodies_clear(bodies: FingerBodies, qa: np.ndarray, qb: np.ndarray, finger: str,
+                 own_pitch: int) -> bool:
+    """True when ``finger``'s body (``planner.play.fingerbody``: the collision bodies of
+    spec section 3) is clear of the keys all along the straight joint-space move qa -> qb
+    (``BODY_SAMPLES`` points, both ends included): no other key reached by more than
+    ``OTHER_KEY_TOLERANCE_M``, its own key (pressed) by at most ``OWN_BED_MARGIN_M``."""
+    return all(bodies.clear(bodies.hand.apply_couplings(qa + si * (qb - qa)), finger, own_pitch)
+               for si in np.linspace(0.0, 1.0, BODY_SAMPLES))
 
 
 def max_key_force_n(hand: HandModel, q: np.ndarray, finger: str) -> float:

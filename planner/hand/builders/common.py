@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from planner.errors import InputError
+from planner.music.keyboard import DOWN_DEPTH_M, KEY_DIP_M
 from planner.hand.builders.values import (
     get_length,
     get_positive,
@@ -27,6 +28,7 @@ from planner.hand.spec import (
     LinearCoupling,
     Link,
     Mk5Coupling,
+    PlayPosture,
     rpy_matrix,
 )
 
@@ -168,7 +170,35 @@ def assemble_spec(data: dict[str, Any], parts: HandParts) -> HandSpec:
         rail_enabled=parts.rail_enabled,
         sources=sources,
         finger_joints=tuple(finger_joints),
+        play_posture=play_posture(data, parts),
     )
+
+
+def play_posture(data: dict[str, Any], parts: HandParts) -> PlayPosture | None:
+    """The hand file's ``[play]`` posture (``PlayPosture``), each number within its joint's
+    travel and the press depth between the spec's key-down depth and the key's dip."""
+    play = data.get("play")
+    if play is None:
+        return None
+    if not isinstance(play, dict):
+        raise InputError("play: expected a table")
+    joints = {j.name: j for j in parts.joints}
+    out = []
+    for key, joint, scale in (("reach_m", "reach", 1.0), ("wrist_flex_deg", "wrist_flex", math.pi / 180),
+                              ("wrist_dev_deg", "wrist_dev", math.pi / 180)):
+        v = get_value(play, key) * scale
+        j = joints.get(joint)
+        if j is None:
+            if v != 0.0:
+                raise InputError(f"play.{key}: the hand has no {joint} joint")
+        elif not j.lower <= v <= j.upper:
+            raise InputError(f"play.{key} = {get_value(play, key)} is outside the {joint} joint's travel")
+        out.append(v)
+    depth = get_value(play, "press_depth_m")
+    if not DOWN_DEPTH_M < depth <= KEY_DIP_M:
+        raise InputError(f"play.press_depth_m = {depth} must be deeper than the key-down depth "
+                         f"({DOWN_DEPTH_M} m) and at most the key's dip ({KEY_DIP_M} m)")
+    return PlayPosture(*out, depth)
 
 
 def seg_link(name: str, length: float, width: float, mass: float) -> Link:
