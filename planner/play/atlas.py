@@ -113,7 +113,9 @@ class Atlas:
         # there (``press_target``'s ``front``; with a ``[play]`` posture only)
         self.front = frozenset(f for i, f in enumerate(hand.fingers)
                                if self.posture is not None and tips[i, 1] < kb.BLACK_Y0_M)
-        self._bodies: FingerBodies | None = None  # (made on the first entry solved)
+        # the fingers' bodies, with a ``[play]`` posture: its poses, its moves and its key
+        # crossings (``planner.play.moves``) follow the body rule (spec section 2)
+        self.bodies = FingerBodies(hand) if self.posture is not None else None
         self._entries: dict[tuple[str, int, int], AtlasEntry | None] = {}
         self.solves = 0
         self._load(table_path(hand.urdf_sha256))
@@ -157,12 +159,14 @@ class Atlas:
             q0[js[0]] = min(max(0.0, h.plan_lower[js[0]]), h.plan_upper[js[0]])
         q0 = h.apply_couplings(q0)
         wrist = [h.index[n] for n in ("wrist_flex", "wrist_dev")]
-        if self.posture is not None and z_m == BASE_HOVER_Z_M:  # (the hand file's posture)
+        if self.posture is not None:  # (the hand file's posture: its reach always, its
+            # wrist at the playing height; a hand raised higher fits its wrist)
             p = self.posture
             if "reach" in h.index:
                 q0[h.index["reach"]] = p.reach_m
-            q0[wrist] = (p.wrist_flex_rad, p.wrist_dev_rad)
-            return h.apply_couplings(q0)
+            if z_m == BASE_HOVER_Z_M:
+                q0[wrist] = (p.wrist_flex_rad, p.wrist_dev_rad)
+                return h.apply_couplings(q0)
         fit = [i for i, f in enumerate(h.fingers) if f not in self.arc_joint]
 
         def heights(w: np.ndarray) -> np.ndarray:
@@ -334,13 +338,11 @@ class Atlas:
         js = h.joint_slice(finger)
         if not all(h.within_plan_limits(q) for q in poses):
             return None
-        if self._bodies is None and self.posture is not None:
-            self._bodies = FingerBodies(h)
         for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
                        (poses[1], poses[0])):
             if not (path_clear(h, qa, qb, finger, pitch)
-                    and (self.posture is None
-                         or bodies_clear(self._bodies, qa, qb, finger, pitch))):
+                    and (self.bodies is None
+                         or bodies_clear(self.bodies, qa, qb, finger, pitch))):
                 return None
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
                           *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger))
@@ -355,8 +357,11 @@ class Atlas:
             return None
         tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
         top = kb.key(pitch).top_z_m
+        # (with the body rule the key rises as far as the finger's body lets it: its
+        # rise lifts the body, not only the pad point, to the repeat depth)
+        below_tip = 0.0 if self.bodies is None else self._body_below_tip_m(r.q, finger, tip)
         poses = [r.q]
-        for z in (top - REPEAT_DEPTH_M, top + PREPARE_HEIGHT_M, HIGH_Z_M):
+        for z in (top - REPEAT_DEPTH_M + below_tip, top + PREPARE_HEIGHT_M, HIGH_Z_M):
             self.solves += 1
             up = self.ik.solve_finger(
                 PressTarget(finger, pitch, (float(tip[0]), float(tip[1]), z), target.y_range_m),
@@ -365,6 +370,11 @@ class Atlas:
                 return None
             poses.append(up.q)
         return poses
+
+    def _body_below_tip_m(self, q: np.ndarray, finger: str, tip: np.ndarray) -> float:
+        """How far the finger's lowest body point lies below its pad point at ``q`` (m, >= 0)."""
+        p, r = self.bodies.points(q, finger)
+        return max(0.0, float(tip[2] - np.min(p[:, 2] - r)))
 
     def _arc_poses(self, finger: str, pitch: int, rail: float) -> list[np.ndarray] | None:
         """Press, rise, hover and high of a one-DOF finger on its arc

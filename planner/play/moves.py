@@ -147,7 +147,8 @@ class Moves:
 
     def _cross(self, e: AtlasEntry, qa: np.ndarray, qb: np.ndarray, move: Move,
                going_down: bool) -> float:
-        """Time within ``move`` at which the tip's depth below the key top passes
+        """Time within ``move`` at which the tip's depth below the key top (the finger's body's,
+        with the atlas's body rule: ``Atlas.bodies``) passes
         ``DOWN_DEPTH_M`` (``_crossing`` on the path parameter, forward kinematics), on the
         key-down side of the crossing, to within ``CROSS_TOL``."""
         depth = self._depth_fn(e)
@@ -166,6 +167,15 @@ class Moves:
         q = self.atlas.base.copy()
         js = self.js[e.finger]
         top = kb.key(60 + e.pitch_class).top_z_m
+
+        bodies = self.atlas.bodies
+        if bodies is not None:  # (the body rule: the finger's lowest body point, spec section 2)
+            def depth(qf: np.ndarray) -> float:
+                q[js] = qf
+                p, r = bodies.points(self.hand.apply_couplings(q), e.finger)
+                return top - float(np.min(p[:, 2] - r))
+
+            return depth
 
         def depth(qf: np.ndarray) -> float:
             q[js] = qf
