@@ -55,7 +55,7 @@ def test_hand_file_without_reach_and_with_a_bad_one(tmp_path):
         load_text(tmp_path, no_reach)
     off = load_text(tmp_path, edit(no_reach, "reach_m = -0.175", "reach_m = 0.0"))
     assert "reach" not in off.index and off.rig_joints == ("rail",)
-    assert off.spec.play_posture.reach_m == 0.0
+    assert off.spec.play_posture.reach_m == (0.0,)
     with pytest.raises(InputError, match="reach: lower_m must be below upper_m"):
         load_text(tmp_path, edit(text, "lower_m = -0.20", "lower_m = 0.10"))
 

@@ -90,12 +90,13 @@ class AtlasEntry:
     hover: np.ndarray
     high: np.ndarray
     max_force_n: float
+    posture: int = 0  # which of the hand's play postures (``Atlas.posture_index``)
 
 
 class Atlas:
     """The atlas of one hand (see the module docstring)."""
 
-    def __init__(self, hand: HandModel, ik: HandIK | None = None) -> None:
+    def __init__(self, hand: HandModel, ik: HandIK | None = None, posture: int = 0) -> None:
         self.hand = hand
         # every pose keeps each joint its stop margin inside its hard stops
         self.ik = ik or HandIK(hand, (hand.plan_lower, hand.plan_upper))
@@ -103,6 +104,9 @@ class Atlas:
         # the fingers with one independent joint: their poses are found on their arc
         self.arc_joint = {f: j for f in hand.fingers if (j := arc_joint(hand, f)) is not None}
         self.posture = hand.spec.play_posture  # (None: the fitted wrist, reach 0, full dip)
+        self.posture_index = posture  # (which of its reach positions: ``AtlasEntry.posture``)
+        if posture and (self.posture is None or posture >= len(self.posture.reach_m)):
+            raise ValueError(f"hand {hand.name!r} has no play posture {posture}")
         self.press_depth_m = kb.KEY_DIP_M if self.posture is None else self.posture.press_depth_m
         self.base = self._natural_hand()
         self._arcs = {f: Arc(hand, f, j, self.base) for f, j in self.arc_joint.items()}
@@ -118,7 +122,7 @@ class Atlas:
         self.bodies = FingerBodies(hand) if self.posture is not None else None
         self._entries: dict[tuple[str, int, int], AtlasEntry | None] = {}
         self.solves = 0
-        self._load(table_path(hand.urdf_sha256))
+        self._load(table_path(hand.urdf_sha256, posture))
 
     # ------------------------------------------------------------------ set-up
     def park(self) -> np.ndarray:
@@ -163,7 +167,7 @@ class Atlas:
             # wrist at the playing height; a hand raised higher fits its wrist)
             p = self.posture
             if "reach" in h.index:
-                q0[h.index["reach"]] = p.reach_m
+                q0[h.index["reach"]] = p.reach_m[self.posture_index]
             if z_m == BASE_HOVER_Z_M:
                 q0[wrist] = (p.wrist_flex_rad, p.wrist_dev_rad)
                 return h.apply_couplings(q0)
@@ -298,8 +302,9 @@ class Atlas:
         p = self.posture
         if p is None:
             return {}
-        return {"posture": [round(float(x), 12) for x in (p.reach_m, p.wrist_flex_rad,
-                                                          p.wrist_dev_rad, p.press_depth_m)],
+        return {"posture": [round(float(x), 12) for x in (p.reach_m[self.posture_index],
+                                                          p.wrist_flex_rad, p.wrist_dev_rad,
+                                                          p.press_depth_m)],
                 "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES]}
 
     def _load(self, path: Path) -> None:
@@ -317,7 +322,7 @@ class Atlas:
                 n = len(self.hand.joint_slice(f))
                 self._entries[(f, int(pc), int(k))] = AtlasEntry(
                     f, int(pc), self.natural_dx[f] + int(k) * STEP_M,
-                    *(q[:n].copy() for q in qs), float(force))
+                    *(q[:n].copy() for q in qs), float(force), self.posture_index)
 
     # ------------------------------------------------------------------ solving
     def _solve(self, finger: str, pitch_class: int, k: int) -> AtlasEntry | None:
@@ -345,7 +350,8 @@ class Atlas:
                          or bodies_clear(self.bodies, qa, qb, finger, pitch))):
                 return None
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
-                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger))
+                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger),
+                          self.posture_index)
 
     def _ik_poses(self, finger: str, pitch: int, base: np.ndarray) -> list[np.ndarray] | None:
         """Press, rise, hover and high by single-finger IK: the tip on the key's press
@@ -400,10 +406,11 @@ class Atlas:
         return [arc.q(si, rail) for si in s]
 
 
-def table_path(urdf_sha256: str) -> Path:
-    """Where the atlas of a hand's URDF is shipped (a cache: without it, entries are
-    solved when first asked for; ``scripts/make_atlas.py`` writes it)."""
-    return TABLE_DIR / f"atlas-{urdf_sha256[:16]}.npz"
+def table_path(urdf_sha256: str, posture: int = 0) -> Path:
+    """Where the atlas of a hand's URDF (in its play posture ``posture``, after the first)
+    is shipped (a cache: without it, entries are solved when first asked for;
+    ``scripts/make_atlas.py`` writes it)."""
+    return TABLE_DIR / f"atlas-{urdf_sha256[:16]}{f'-p{posture}' if posture else ''}.npz"
 
 
 def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,

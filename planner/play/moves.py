@@ -100,8 +100,8 @@ class Moves:
         self._lat: dict = {}
         self.descend = lru_cache(maxsize=None)(self._descend)
         self.lift = lru_cache(maxsize=None)(self._lift)
-        self.table = MoveTable(hand.fingers, atlas.natural_dx)
-        self.table.load(table_path(hand.urdf_sha256), self.params())
+        self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
+        self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
         # every joint's acceleration limit, the rail's also within what the wrist holds
         self.acceleration = np.array(hand.acceleration, dtype=float)
         self.jerk = np.array(hand.jerk, dtype=float)

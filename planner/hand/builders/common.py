@@ -33,6 +33,9 @@ from planner.hand.spec import (
 )
 
 
+MAX_POSTURES = 4  # reach positions a hand file's [play] may give (each an atlas, a move table)
+
+
 @dataclass
 class HandParts:
     """What a hand's builder fills, from the part every hand has (``start_hand``) on;
@@ -183,22 +186,32 @@ def play_posture(data: dict[str, Any], parts: HandParts) -> PlayPosture | None:
     if not isinstance(play, dict):
         raise InputError("play: expected a table")
     joints = {j.name: j for j in parts.joints}
-    out = []
-    for key, joint, scale in (("reach_m", "reach", 1.0), ("wrist_flex_deg", "wrist_flex", math.pi / 180),
-                              ("wrist_dev_deg", "wrist_dev", math.pi / 180)):
-        v = get_value(play, key) * scale
-        j = joints.get(joint)
-        if j is None:
-            if v != 0.0:
-                raise InputError(f"play.{key}: the hand has no {joint} joint")
-        elif not j.lower <= v <= j.upper:
-            raise InputError(f"play.{key} = {get_value(play, key)} is outside the {joint} joint's travel")
-        out.append(v)
+    reach = play.get("reach_m")
+    reach = reach if isinstance(reach, list) else [reach]
+    if not reach or len(reach) > MAX_POSTURES:
+        raise InputError(f"play.reach_m: expected 1 to {MAX_POSTURES} positions, got {len(reach)}")
+    values = [_play_value({"reach_m": r}, "reach_m", joints.get("reach"), 1.0) for r in reach]
+    if len(set(values)) != len(values):
+        raise InputError("play.reach_m: a position is given twice")
+    flex, dev = (_play_value(play, key, joints.get(name), math.pi / 180) for key, name in
+                 (("wrist_flex_deg", "wrist_flex"), ("wrist_dev_deg", "wrist_dev")))
     depth = get_value(play, "press_depth_m")
     if not DOWN_DEPTH_M < depth <= KEY_DIP_M:
         raise InputError(f"play.press_depth_m = {depth} must be deeper than the key-down depth "
                          f"({DOWN_DEPTH_M} m) and at most the key's dip ({KEY_DIP_M} m)")
-    return PlayPosture(*out, depth)
+    return PlayPosture(tuple(values), flex, dev, depth)
+
+
+def _play_value(play: dict[str, Any], key: str, joint: Joint | None, scale: float) -> float:
+    """One number of ``[play]`` (scaled to the joint's unit), within its joint's travel."""
+    v = get_value(play, key) * scale
+    if joint is None:
+        if v != 0.0:
+            raise InputError(f"play.{key}: the hand has no {key.rsplit('_', 1)[0]} joint")
+    elif not joint.lower <= v <= joint.upper:
+        raise InputError(f"play.{key} = {get_value(play, key)} is outside the {joint.name} "
+                         "joint's travel")
+    return v
 
 
 def seg_link(name: str, length: float, width: float, mass: float) -> Link:
