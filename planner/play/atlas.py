@@ -121,6 +121,9 @@ class Atlas:
         # crossings (``planner.play.moves``) follow the body rule (spec section 2)
         self.bodies = FingerBodies(hand) if self.posture is not None else None
         self._entries: dict[tuple[str, int, int], AtlasEntry | None] = {}
+        # (the samples whose poses the IK found within the limits and the body rule
+        # refused: a note only they could play is left out for its bodies, ``body``)
+        self._body_refused: set[tuple[str, int, int]] = set()
         self.solves = 0
         self._load(table_path(hand.urdf_sha256, posture))
 
@@ -236,6 +239,15 @@ class Atlas:
             self._entries[key] = self._solve(finger, pitch_class, k)
         return self._entries[key]
 
+    def body_refused(self, finger: str, pitch: int, rail_m: float) -> bool:
+        """Whether the finger would press key ``pitch`` from ``rail_m`` (snapped to the grid)
+        but for its body (the poses found within the limits, a body not clear of the keys)."""
+        k = self.grid_index(finger, pitch, rail_m)
+        if abs(k) * STEP_M > SPAN_M:
+            return False
+        self.entry_at(finger, pitch % 12, k)
+        return (finger, pitch % 12, k) in self._body_refused
+
     def samples(self, finger: str, pitch: int) -> list[int]:
         """Every grid sample at which ``finger`` can press key ``pitch`` (solving them)."""
         n = round(SPAN_M / STEP_M)
@@ -274,7 +286,9 @@ class Atlas:
                 force[i] = e.max_force_n
         idx = np.array([(self.hand.fingers.index(f), pc, k) for f, pc, k in keys], dtype=np.int16)
         with open(path, "wb") as fh:
-            np.savez_compressed(fh, key=idx, max_force_n=force, params=np.array(self._params()),
+            body = np.array([key in self._body_refused for key in keys], dtype=bool)
+            np.savez_compressed(fh, key=idx, max_force_n=force, body_refused=body,
+                                params=np.array(self._params()),
                                 **poses)
 
     def _params(self) -> str:
@@ -313,6 +327,10 @@ class Atlas:
         with np.load(path, allow_pickle=False) as z:
             if str(z["params"]) != self._params():
                 return
+            refused = z["body_refused"] if "body_refused" in z else np.zeros(len(z["key"]), bool)
+            for (fi, pc, k), r in zip(z["key"], refused):
+                if r:
+                    self._body_refused.add((self.hand.fingers[int(fi)], int(pc), int(k)))
             for (fi, pc, k), force, *qs in zip(z["key"], z["max_force_n"],
                                                *(z[p] for p in _POSES)):
                 f = self.hand.fingers[int(fi)]
@@ -345,9 +363,12 @@ class Atlas:
             return None
         for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
                        (poses[1], poses[0])):
-            if not (path_clear(h, qa, qb, finger, pitch)
-                    and (self.bodies is None
-                         or bodies_clear(self.bodies, qa, qb, finger, pitch))):
+            if not path_clear(h, qa, qb, finger, pitch):
+                return None
+        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
+                       (poses[1], poses[0])):
+            if self.bodies is not None and not bodies_clear(self.bodies, qa, qb, finger, pitch):
+                self._body_refused.add((finger, pitch_class, k))
                 return None
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
                           *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger),

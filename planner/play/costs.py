@@ -37,6 +37,8 @@ class SkipReason(enum.Enum):
     to be played, found by the replay with its key down too little: ``MISSED``)."""
 
     OUT_OF_REACH = "out_of_reach"  # no finger presses the key from any rail position
+    BODY = "body"  # a finger would press it but for its body, which touches another key or
+    # the key bed (spec section 2): never pressed wrongly
     TORQUE = "torque"  # the fingers that reach it cannot press with the note's force
     CHORD = "chord"  # more notes at once than the hand can hold from one position
     HELD = "held"  # the fingers that could strike it hold longer notes through it (each
@@ -223,6 +225,11 @@ class Costs:
         if reach:
             return Skip(note, SkipReason.TORQUE, f"no finger presses {pitch_name(n.pitch)} with "
                         f"{press_force_n(n.velocity):.1f} N within the motors' torque")
+        if any(self.places.body_refused(f, n.pitch, self.places.place(p, i))
+               for f in fingers for p in range(self.places.postures)
+               for i in range(self.rail_lo, self.rail_hi + 1, 2)):
+            return Skip(note, SkipReason.BODY, f"no finger presses {pitch_name(n.pitch)} with "
+                        "its body clear of the other keys and the key bed")
         return Skip(note, SkipReason.OUT_OF_REACH, f"no finger reaches {pitch_name(n.pitch)} "
                     "from any rail position")
 

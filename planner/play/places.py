@@ -77,6 +77,11 @@ class Places:
         p = self.posture_of(place)
         return self.atlases[p].entry(finger, pitch, (place - p * PLACE_STRIDE) * RAIL_STEP_M)
 
+    def body_refused(self, finger: str, pitch: int, place: int) -> bool:
+        """Whether ``finger`` would press key ``pitch`` from ``place`` but for its body."""
+        p = self.posture_of(place)
+        return self.atlases[p].body_refused(finger, pitch, (place - p * PLACE_STRIDE) * RAIL_STEP_M)
+
     def distance_m(self, a: int, b: int) -> float:
         """How far the arm moves between two places (rail and reach, m)."""
         pa, pb = self.posture_of(a), self.posture_of(b)
