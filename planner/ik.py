@@ -58,21 +58,29 @@ class IKResult:
     hover_clearance_m: float  # smallest height of a hovering tip above the keys near it
 
 
+FRONT_Y_MAX_M = kb.BLACK_Y0_M - 0.010  # a pad point pressing a white key's front stays this
+# far in front of the black keys (the pad reaches about its radius' half beyond its point:
+# docs/history/play-second-design.md, "y 4-50 mm for the pads' points"); the atlas's body
+# rule decides the rest
 THUMB_BLACK_EDGE_M = 0.008  # the thumb presses a black key at least this far behind its front
 
 
-def press_target(finger: str, pitch: int) -> PressTarget:
-    """Where ``finger`` presses key ``pitch``: at full dip, centred on the part of the key it can touch.
+def press_target(finger: str, pitch: int, depth_m: float = kb.KEY_DIP_M,
+                 front: bool = False) -> PressTarget:
+    """Where ``finger`` presses key ``pitch``: ``depth_m`` below its top (default: full dip),
+    centred on the part of the key it can touch.
 
     The thumb presses white keys in front of the black keys; the long fingers
     press white keys behind the black keys' front (between them), where the
     exposed part of the key is centred at ``exposed_center_x``. Black keys
     are pressed 30 mm behind their front end, sliding between 15 mm behind it
     (the thumb: ``THUMB_BLACK_EDGE_M``, as far as it reaches back) and 25 mm
-    before their back end.
+    before their back end. ``front``: a long finger presses white keys in front of the
+    black keys too, as the thumb does (a finger wider than a white key between two black
+    keys: the atlas of a hand with a ``[play]`` posture whose tips rest there).
     """
     k = kb.key(pitch)
-    z = k.top_z_m - kb.KEY_DIP_M
+    z = k.top_z_m - depth_m
     if k.black:
         y0 = kb.BLACK_Y0_M + 0.030
         # the thumb (short, reaching back from the front) may press nearer the front edge
@@ -80,17 +88,21 @@ def press_target(finger: str, pitch: int) -> PressTarget:
         return PressTarget(finger, pitch, (k.center_x_m, y0, z), (lo, kb.BLACK_Y1_M - 0.025))
     if finger == "thumb":
         return PressTarget(finger, pitch, (k.center_x_m, 0.012, z), (0.004, 0.025))
+    if front:
+        return PressTarget(finger, pitch, (k.center_x_m, 0.030, z), (0.004, FRONT_Y_MAX_M))
     x = exposed_center_x(pitch)
     return PressTarget(finger, pitch, (x, 0.095, z), (kb.BLACK_Y0_M + 0.012, kb.WHITE_LENGTH_M - 0.020))
 
 
-def press_x_range(finger: str, pitch: int, inset_m: float) -> tuple[float, float]:
+def press_x_range(finger: str, pitch: int, inset_m: float, front: bool = False
+                  ) -> tuple[float, float]:
     """x range (m) of the part of key ``pitch`` that ``press_target`` has ``finger`` press,
     ``inset_m`` in from each side: a black key, or a white key in front of the black keys
     (the thumb's), across its whole width; a white key between the black keys (the long
     fingers'), between its black neighbours (``exposed_range_x``)."""
     k = kb.key(pitch)
-    lo, hi = (k.x_min_m, k.x_max_m) if k.black or finger == "thumb" else exposed_range_x(pitch)
+    whole = k.black or finger == "thumb" or front  # (``front``: as ``press_target``'s)
+    lo, hi = (k.x_min_m, k.x_max_m) if whole else exposed_range_x(pitch)
     return lo + inset_m, hi - inset_m
 
 

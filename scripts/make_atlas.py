@@ -29,6 +29,28 @@ from planner.play.movetable import MoveTable, make_table
 from planner.play.movetable import table_path as moves_path
 
 
+def make(hand, posture: int, moves_only: bool) -> None:
+    """The atlas and the move table of one play posture of ``hand``."""
+    path = table_path(hand.urdf_sha256, posture)
+    atlas = Atlas(hand, posture=posture)
+    t0 = time.perf_counter()
+    if not moves_only:
+        atlas._entries.clear()  # (solved afresh, not read back from an older table)
+    n = atlas.solve_all()
+    if not moves_only:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atlas.save(path)
+        print(f"{path}: {n} entries of {len(atlas._entries)} samples, {atlas.solves} IK "
+              f"solves, {time.perf_counter() - t0:.1f} s")
+    t1 = time.perf_counter()
+    moves = Moves(hand, atlas)
+    # (found afresh, not read back)
+    moves.table = MoveTable(hand.fingers, atlas.natural_dx, posture)
+    out = moves_path(hand.urdf_sha256, posture)
+    make_table(moves, out, moves.params())
+    print(f"{out}: the moves of {n} entries, {time.perf_counter() - t1:.1f} s")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hand", default="default")
@@ -36,23 +58,9 @@ def main() -> int:
                     help="keep the shipped atlas; write the move table of its entries")
     a = ap.parse_args()
     hand = load_hand(a.hand)
-    path = table_path(hand.urdf_sha256)
-    atlas = Atlas(hand)
-    t0 = time.perf_counter()
-    if not a.moves_only:
-        atlas._entries.clear()  # (solved afresh, not read back from an older table)
-    n = atlas.solve_all()
-    if not a.moves_only:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        atlas.save(path)
-        print(f"{path}: {n} entries of {len(atlas._entries)} samples, {atlas.solves} IK "
-              f"solves, {time.perf_counter() - t0:.1f} s")
-    t1 = time.perf_counter()
-    moves = Moves(hand, atlas)
-    moves.table = MoveTable(hand.fingers, atlas.natural_dx)  # (found afresh, not read back)
-    out = moves_path(hand.urdf_sha256)
-    make_table(moves, out, moves.params())
-    print(f"{out}: the moves of {n} entries, {time.perf_counter() - t1:.1f} s")
+    posture = hand.spec.play_posture
+    for i in range(1 if posture is None else len(posture.reach_m)):
+        make(hand, i, a.moves_only)
     return 0
 
 

@@ -51,15 +51,28 @@ def load_text(tmp_path: Path, text: str) -> HandModel:
     return HandModel(load_hand_spec(str(write_hand(tmp_path, text))))
 
 
-def remounted_play(tmp_path: Path, xyz_m: str, pitches: tuple[int, int]):
-    """A hand file: the default hand with its play mount at ``xyz_m`` (TOML text, e.g.
-    "[0.0, -0.40, 0.18]"); a two-note song of ``pitches``; ``play`` of it with that hand
-    file. Returns (hand file, song, trajectory, play's exit code)."""
+DEFAULT_MOUNT = "xyz_m = [0.0, -0.40, 0.05]"  # the default hand's play mount, as its file has it
+
+
+def fitted_text() -> str:
+    """The default hand as it was until session 37: no ``[play]`` posture (the wrist fitted
+    to the natural hand, reach 0, presses to full dip, the tip rule alone: the atlas's
+    path of the ``mk5`` and the ``agh``) and the rail 0.17 m over the keys."""
+    text = edit(default_text(), DEFAULT_MOUNT, "xyz_m = [0.0, -0.40, 0.17]")
+    return text[:text.index("[play]")] + text[text.index("[forearm]"):]
+
+
+def remounted_play(tmp_path: Path, xyz_m: str, pitches: tuple[int, int], fitted: bool = False):
+    """A hand file: the default hand (``fitted``: ``fitted_text``'s) with its play mount at
+    ``xyz_m`` (TOML text, e.g. "[0.0, -0.40, 0.06]"); a two-note song of ``pitches``;
+    ``play`` of it with that hand file. Returns (hand file, song, trajectory, play's exit
+    code)."""
     from planner.cli import main
     from planner.music.midi import Note, write_notes_midi
 
-    hand = write_hand(tmp_path, edit(default_text(), "xyz_m = [0.0, -0.40, 0.17]",
-                                     f"xyz_m = {xyz_m}"), "mounted.toml")
+    text = fitted_text() if fitted else default_text()
+    hand = write_hand(tmp_path, re.sub(r"xyz_m = \[0\.0, -0\.40, 0\.\d+\]", f"xyz_m = {xyz_m}",
+                                       text, count=1), "mounted.toml")
     song = tmp_path / "s.mid"
     write_notes_midi([Note(pitches[0], 0.0, 0.4, 80), Note(pitches[1], 0.5, 0.9, 80)], str(song))
     out = tmp_path / "s.csv"

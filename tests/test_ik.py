@@ -22,16 +22,17 @@ def test_press_targets_are_on_their_keys_at_full_dip():
             assert k.y_min_m <= t.y_range_m[0] <= y <= t.y_range_m[1] <= k.y_max_m
 
 
-def test_the_thumb_presses_every_black_key_within_its_reach():
+def test_the_thumb_presses_every_black_key_within_its_reach(tmp_path):
     """The thumb is short: the IK (through the atlas, which solves with it) puts it on
     every black key from some hand position within 1 mm, pressing no nearer the key's
     front than 8 mm, wherever the rail lets it. (It once stopped 5 mm short on every
-    one: its press range began 15 mm behind the front, out of its reach.)"""
-    from planner.hand.model import load_hand
+    one: its press range began 15 mm behind the front, out of its reach.) On the default
+    hand without its play posture (the tip rule: its thumb has no body-clear press)."""
     from planner.ik import PRESS_TOL_M, THUMB_BLACK_EDGE_M
     from planner.play.atlas import SPAN_M, STEP_M, Atlas
+    from tests.handfiles import fitted_text, load_text
 
-    hand = load_hand("default")
+    hand = load_text(tmp_path, fitted_text())
     atlas = Atlas(hand)
     rail = hand.joint_names.index("rail")
     f = hand.fingers.index("thumb")
@@ -128,6 +129,6 @@ def test_an_infeasible_step_is_an_unconverged_solve_not_a_crash(tmp_path, capsys
     not a traceback: every note is reported out of reach."""
     from tests.handfiles import remounted_play
 
-    assert remounted_play(tmp_path, "[0.0, -0.52, 0.10]", (60, 62))[3] == 0
+    assert remounted_play(tmp_path, "[0.0, -0.52, 0.10]", (60, 62), fitted=True)[3] == 0
     err = capsys.readouterr().err
     assert "2 notes, 0 played, 2 infeasible" in err and err.count("out_of_reach") == 2

@@ -1,5 +1,7 @@
 """planner.play.atlas and planner.play.moves: the poses are where they say, their paths
-are clear, the timed crossings are at the key-down depth, the force bound is exact."""
+are clear (as points and as bodies), the timed crossings are at the key-down depth, the
+force bound is exact. The default hand's atlas is one per play posture
+(``planner.play.places``); a case is taken from the first posture that has it."""
 
 from __future__ import annotations
 
@@ -10,21 +12,33 @@ from planner.hand.model import load_hand
 from planner.ik import PREPARE_HEIGHT_M, PRESS_TOL_M, press_target
 from planner.music import keyboard as kb
 from planner.play.atlas import HIGH_Z_M, REPEAT_DEPTH_M, STEP_M, Atlas, max_key_force_n, path_clear
-from planner.play.moves import Moves
+from planner.play.places import Places
 from planner.play.movetable import HIGH_SAFE_Z_M
 
-CASES = [("thumb", 53), ("index", 57), ("index", 58), ("middle", 60), ("middle", 61),
+# (the thumb has no press pose on the default hand: below)
+CASES = [("index", 57), ("index", 58), ("middle", 60), ("middle", 61), ("ring", 63),
          ("ring", 64), ("pinky", 65), ("pinky", 66)]
 
 
 @pytest.fixture(scope="module")
-def atlas():
-    return Atlas(load_hand("default"))
+def places():
+    return Places(load_hand("default"))
 
 
 @pytest.fixture(scope="module")
-def moves(atlas):
-    return Moves(atlas.hand, atlas)
+def atlas(places):
+    return places.atlas
+
+
+@pytest.fixture(scope="module")
+def moves(places):
+    return places
+
+
+def _lowest(atlas, q, finger):
+    """The finger's lowest body point (z, m)."""
+    p, r = atlas.bodies.points(q, finger)
+    return float(np.min(p[:, 2] - r))
 
 
 def _tip(atlas, e, pose, rail):
@@ -32,31 +46,37 @@ def _tip(atlas, e, pose, rail):
     return h.tip_positions(atlas.full_q(e, pose, rail))[h.fingers.index(e.finger)]
 
 
-def _some(atlas, finger, pitch, rail0=0.0):
-    """An entry of ``finger`` on ``pitch`` and the rail it is at (the middle sample)."""
-    ks = atlas.samples(finger, pitch)
-    assert ks, f"the {finger} reaches {pitch} from no rail"
-    k = ks[len(ks) // 2]
-    rail = atlas.rail_for(finger, pitch, k)
-    return atlas.entry(finger, pitch, rail), rail
+def _some(places, finger, pitch):
+    """The first posture's atlas with an entry of ``finger`` on ``pitch``, that entry and
+    the rail it is at (its middle sample)."""
+    for atlas in places.atlases:
+        ks = atlas.samples(finger, pitch)
+        if ks:
+            k = ks[len(ks) // 2]
+            rail = atlas.rail_for(finger, pitch, k)
+            return atlas, atlas.entry(finger, pitch, rail), rail
+    pytest.fail(f"the {finger} reaches {pitch} from no rail in any posture")
 
 
 @pytest.mark.parametrize("finger, pitch", CASES)
-def test_poses_are_where_the_atlas_says(atlas, finger, pitch):
-    e, rail = _some(atlas, finger, pitch)
+def test_poses_are_where_the_atlas_says(places, finger, pitch):
+    atlas, e, rail = _some(places, finger, pitch)
     key = kb.key(pitch)
-    t = press_target(finger, pitch)
+    t = press_target(finger, pitch, atlas.press_depth_m, finger in atlas.front)
     p = _tip(atlas, e, "press", rail)
     # at the press point (y may slide in its range), within the seed's 1 mm and the grid's
-    # half step, inside the footprint, at full dip: down, not through the key bed
+    # half step, inside the footprint, at the press depth (7 mm: the default hand's play
+    # posture): down, not through the key bed
     assert abs(p[0] - t.point_m[0]) <= PRESS_TOL_M + STEP_M / 2
     assert t.y_range_m[0] - PRESS_TOL_M <= p[1] <= t.y_range_m[1] + PRESS_TOL_M
     assert key.x_min_m < p[0] < key.x_max_m
     depth = key.top_z_m - p[2]
     assert kb.DOWN_DEPTH_M < depth < kb.KEY_BED_DEPTH_M
-    assert abs(depth - kb.KEY_DIP_M) <= PRESS_TOL_M
-    for pose, z in (("rise", key.top_z_m - REPEAT_DEPTH_M), ("hover", key.top_z_m + PREPARE_HEIGHT_M),
-                    ("high", HIGH_Z_M)):
+    assert atlas.press_depth_m == 0.007 and abs(depth - atlas.press_depth_m) <= PRESS_TOL_M
+    # the rise lifts the finger's body (its lowest point) to the repeat depth
+    q_rise = atlas.full_q(e, "rise", rail)
+    assert abs(_lowest(atlas, q_rise, finger) - (key.top_z_m - REPEAT_DEPTH_M)) <= PRESS_TOL_M
+    for pose, z in (("hover", key.top_z_m + PREPARE_HEIGHT_M), ("high", HIGH_Z_M)):
         q = _tip(atlas, e, pose, rail)
         assert abs(q[2] - z) <= PRESS_TOL_M, pose
         # above the press point (x), anywhere along the key's press range (y)
@@ -65,10 +85,10 @@ def test_poses_are_where_the_atlas_says(atlas, finger, pitch):
     assert atlas.hand.within_limits(atlas.full_q(e, "press", rail))
 
 
-def test_an_entry_is_the_same_an_octave_away(atlas):
+def test_an_entry_is_the_same_an_octave_away(places):
     """The rail carries the hand along x: the finger's joints over a key depend only on
     the key's place relative to the rail (and its pitch class)."""
-    e, rail = _some(atlas, "middle", 62)
+    atlas, e, rail = _some(places, "middle", 62)
     octave = kb.key(74).center_x_m - kb.key(62).center_x_m
     e2 = atlas.entry("middle", 74, rail + octave)
     assert e2 is e
@@ -81,10 +101,10 @@ def test_out_of_the_sampled_span_there_is_no_entry(atlas):
 
 
 @pytest.mark.parametrize("finger, pitch", CASES[:4])
-def test_the_force_bound_is_where_a_motor_reaches_its_capacity(atlas, finger, pitch):
+def test_the_force_bound_is_where_a_motor_reaches_its_capacity(places, finger, pitch):
     """A motor's capacity: its peak torque, or for a tendon motor the torque at which its
     cable pulls its 40 N design force at the 5 mm spool (0.2 N m), whichever is less."""
-    e, rail = _some(atlas, finger, pitch)
+    atlas, e, rail = _some(places, finger, pitch)
     h = atlas.hand
     q = atlas.full_q(e, "press", rail)
     f = max_key_force_n(h, q, finger)
@@ -121,11 +141,12 @@ def test_path_clear_sees_a_finger_sweeping_through_a_key(atlas):
 
 
 @pytest.mark.parametrize("finger, pitch", CASES)
-def test_timed_crossings_are_at_the_key_down_depth(atlas, moves, finger, pitch):
-    e, rail = _some(atlas, finger, pitch)
+def test_timed_crossings_are_at_the_key_down_depth(places, finger, pitch):
+    """The body rule's key-down depth: the finger's lowest body point (spec section 2)."""
+    atlas, e, rail = _some(places, finger, pitch)
+    moves = places
     h = atlas.hand
     top = kb.key(pitch).top_z_m
-    f = h.fingers.index(finger)
     js = h.joint_slice(finger)
     for timed, going_down in ((moves.descend(e, "high"), True), (moves.descend(e, "hover"), True),
                               (moves.descend(e, "rise"), True), (moves.lift(e, "high"), False),
@@ -133,7 +154,7 @@ def test_timed_crossings_are_at_the_key_down_depth(atlas, moves, finger, pitch):
         q = atlas.full_q(e, "press", rail)
         for dt, below in ((-1e-4, not going_down), (1e-4, going_down)):
             q[js] = timed.move.at(timed.cross_s + dt)[0]
-            depth = top - h.tip_positions(h.apply_couplings(q))[f, 2]
+            depth = top - _lowest(atlas, h.apply_couplings(q), finger)
             assert (depth >= kb.DOWN_DEPTH_M) == below
     assert moves.repeat_gap_s(e) < moves.move_gap_s(e, e) if moves.move_gap_s(e, e) else True
 
@@ -153,19 +174,21 @@ def test_move_gap_is_lift_across_descent(atlas, moves):
         assert h.tip_positions(h.apply_couplings(q))[f, 2] >= HIGH_SAFE_Z_M - 1e-9
 
 
-def test_the_shipped_table_is_the_solvers_own(atlas):
-    """planner/tables/atlas-<hash>.npz (scripts/make_atlas.py) holds exactly what the IK
-    gives: a sample of entries solved afresh match it to the bit."""
+@pytest.mark.parametrize("posture", [0, 1, 2])
+def test_the_shipped_table_is_the_solvers_own(atlas, posture):
+    """planner/tables/atlas-<hash>[-p<i>].npz (scripts/make_atlas.py) holds exactly what
+    the IK gives: a sample of entries solved afresh match it to the bit."""
     from planner.play.atlas import table_path
 
     h = atlas.hand
-    assert table_path(h.urdf_sha256).exists(), "run python scripts/make_atlas.py"
-    shipped = Atlas(h)
-    fresh = Atlas(h)
+    assert table_path(h.urdf_sha256, posture).exists(), "run python scripts/make_atlas.py"
+    shipped = Atlas(h, posture=posture)
+    fresh = Atlas(h, posture=posture)
     fresh._entries.clear()
     n = 0
     for f, pc, k in [("thumb", 7, 10), ("index", 0, -5), ("middle", 1, 0), ("ring", 4, 12),
-                     ("pinky", 10, -20), ("index", 6, 44), ("pinky", 3, -45)]:
+                     ("pinky", 10, -20), ("index", 6, 20), ("pinky", 3, -25), ("middle", 4, 5),
+                     ("ring", 6, -3), ("index", 1, 2), ("pinky", 8, 0)]:
         a, b = shipped.entry_at(f, pc, k), fresh.entry_at(f, pc, k)
         assert (a is None) == (b is None), (f, pc, k)
         if a is not None:
@@ -173,7 +196,7 @@ def test_the_shipped_table_is_the_solvers_own(atlas):
             for pose in ("press", "rise", "hover", "high"):
                 assert np.array_equal(getattr(a, pose), getattr(b, pose)), (f, pc, k, pose)
             assert a.max_force_n == b.max_force_n and a.dx_m == b.dx_m
-    assert n >= 4
+    assert n >= 3
 
 
 def test_a_crossing_is_found_within_its_tolerance_on_the_key_down_side():
@@ -191,3 +214,31 @@ def test_a_crossing_is_found_within_its_tolerance_on_the_key_down_side():
 
         s = _crossing(g, g(0.0), g(1.0), 1e-4)
         assert g(s) >= 0.0 and abs(s - root) <= 1e-4
+
+
+@pytest.mark.parametrize("posture", [0, 1, 2])
+def test_every_press_is_clear_of_the_other_keys_as_a_body(places, posture):
+    """The atlas's body rule: at every kept entry's press pose (a sample of the shipped
+    table) the finger's bodies reach no other key by more than 0.5 mm and their own no
+    more than 2 mm past its bed (``FingerBodies.clear``)."""
+    atlas = places.atlases[posture]
+    n = 0
+    for (f, pc, k), e in sorted(atlas._entries.items())[::7]:
+        if e is None:
+            continue
+        pitch = 60 + pc
+        rail = atlas.rail_for(f, pitch, k)
+        assert atlas.bodies.clear(atlas.full_q(e, "press", rail), f, pitch), (f, pc, k)
+        assert atlas.bodies.clear(atlas.full_q(e, "high", rail), f, None), (f, pc, k)
+        n += 1
+    assert n > 50
+
+
+def test_the_seed_thumb_presses_no_key_with_its_body_clear(places):
+    """A seed inconsistency the body rule makes plain: the default hand's thumb (seed
+    Table 2's upper-limit column, 1.5x: its end 33 mm long over a white key 23.5 mm wide)
+    has no press pose clear of the neighbouring keys in any play posture; the fingering
+    plays without it (docs/history/2026-12-06-play-posture.md)."""
+    for atlas in places.atlases:
+        assert not any(atlas.samples("thumb", p) for p in range(60, 72))
+    assert any(places.atlases[0].samples(f, 62) for f in ("index", "middle", "ring", "pinky"))

@@ -8,23 +8,19 @@ import pytest
 
 from planner.hand.model import load_hand
 from planner.music.midi import Note
-from planner.play.atlas import Atlas
 from planner.play.fingering import SkipReason, events, plan_fingering
-from planner.play.moves import Moves
+from planner.play.places import Places
 
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
 
 
 @pytest.fixture(scope="module")
 def hand_parts():
-    h = load_hand("default")
-    at = Atlas(h)
-    return at, Moves(h, at)
+    return Places(load_hand("default"))
 
 
 def plan(hand_parts, notes):
-    at, mv = hand_parts
-    return plan_fingering(notes, at, mv, 100.0)
+    return plan_fingering(notes, hand_parts, 100.0)
 
 
 def test_events_group_notes_by_onset():
@@ -86,8 +82,9 @@ def test_a_chord_wider_than_the_hand_keeps_what_fits(hand_parts):
 def test_a_held_note_keeps_its_finger(hand_parts):
     """A bass held for 2 s under four melody notes: one finger holds it to its end (the
     hand may move under it only where that finger can follow its key), no melody note
-    takes that finger, nothing is lost."""
-    notes = [Note(55, 0.0, 2.0, 80)] + [Note(p, 0.5 * k, 0.5 * k + 0.45, 80)
+    takes that finger, nothing is lost. (C4 under E4-G4: within the four long fingers'
+    reach; the default hand's thumb presses nothing, ``test_play_atlas``.)"""
+    notes = [Note(60, 0.0, 2.0, 80)] + [Note(p, 0.5 * k, 0.5 * k + 0.45, 80)
                                         for k, p in enumerate((64, 65, 67, 65))]
     fg = plan(hand_parts, notes)
     by = {a.note: a for a in fg.assignments}
@@ -109,9 +106,8 @@ def test_the_programme_runs_over_a_receding_window(hand_parts):
     before."""
     from planner.play.fingering import FIRST_LOOKAHEAD, FIRST_WINDOW, FingeringProblem
 
-    at, mv = hand_parts
     notes = [Note(60 + (k * 5) % 12, 0.3 * k, 0.3 * k + 0.28, 80) for k in range(150)]
-    chunks = list(FingeringProblem(notes, at, mv, 100.0).chunks())
+    chunks = list(FingeringProblem(notes, hand_parts, 100.0).chunks())
     assert len(chunks) >= 3
     struck = [a.note for c in chunks for a in c.assignments]
     left = [s.note for c in chunks for s in c.skipped]
@@ -147,7 +143,7 @@ def test_a_state_is_immutable_and_equal_by_value():
     assert a != State(3, ((0, "index"),)) and a != State(4, ((0, "index"),), a.recent)
     assert a.notes == (0,) and a.last_notes == ((1, "thumb", 2), (0, "index", 3))
     with pytest.raises(AttributeError):
-        a.rail_i = 4
+        a.place = 4
 
 
 def test_a_layer_holds_one_state_per_hand_shape_cheapest_first(hand_parts):
@@ -157,17 +153,16 @@ def test_a_layer_holds_one_state_per_hand_shape_cheapest_first(hand_parts):
     from planner.play.fingering import FingeringProblem, events
     from planner.play.layers import BEAM, PER_RAIL
 
-    at, mv = hand_parts
     notes = [Note(60 + (k * 7) % 15, 0.2 * k, 0.2 * k + 0.3, 80) for k in range(30)]
-    fp = FingeringProblem(notes, at, mv, 100.0)
+    fp = FingeringProblem(notes, hand_parts, 100.0)
     prev = {}
     for t, new in events(notes)[:12]:
         layer = fp._layer(prev, t, new)
         costs = [v[0] for v in layer.values()]
-        shapes = [(s.rail_i, s.fingers) for s in layer]
+        shapes = [(s.place, s.fingers) for s in layer]
         assert 0 < len(layer) <= BEAM and costs == sorted(costs)
         assert len(set(shapes)) == len(shapes)
-        assert max(sum(s.rail_i == r for s in layer) for r, _ in shapes) <= PER_RAIL
+        assert max(sum(s.place == r for s in layer) for r, _ in shapes) <= PER_RAIL
         assert all((p is None) == (not prev) and (p is None or p in prev)
                    for _, p in layer.values())
         prev = layer
@@ -181,7 +176,6 @@ def test_the_first_window_stops_once_its_decision_is_made(hand_parts):
     from planner.music.midi import load_song
     from planner.play.fingering import FIRST_LOOKAHEAD, FIRST_WINDOW, FingeringProblem
 
-    at, mv = hand_parts
     songs = Path(__file__).resolve().parents[1] / "songs"
     early = 0
     for name in ("fast.mid", "fur_elise.mid", "ode_to_joy.mid"):
@@ -194,10 +188,10 @@ def test_the_first_window_stops_once_its_decision_is_made(hand_parts):
                 Counted.layers += 1
                 return super()._layer(prev, t, new)
 
-        p = Counted(notes, at, mv, 100.0)
+        p = Counted(notes, hand_parts, 100.0)
         first = next(p.chunks())
         early += Counted.layers < FIRST_WINDOW
-        whole = FingeringProblem(notes, at, mv, 100.0)
+        whole = FingeringProblem(notes, hand_parts, 100.0)
         evs = [(t, new) for t, new, _ in whole._events() if new][:FIRST_WINDOW]
         layers, prev = [], {}
         for t, new in evs:
@@ -209,3 +203,18 @@ def test_the_first_window_stops_once_its_decision_is_made(hand_parts):
             (ch.assignments, ch.cuts, ch.loss_frames)
         assert first.skipped == ch.skipped
     assert early >= 1
+
+
+def test_a_note_only_a_body_refused_pose_could_press_is_left_out_for_its_body(hand_parts,
+                                                                            monkeypatch):
+    """The default hand's thumb would press D4 but for its body (the atlas's body rule
+    refuses every pose of it); with the long fingers taken away, D4 is left out, named
+    ``body``, never pressed wrongly."""
+    from planner.play.costs import Costs
+
+    place = next(hand_parts.place(p, i) for p in range(hand_parts.postures)
+                 for i in range(-60, 60) if hand_parts.body_refused("thumb", 62, hand_parts.place(p, i)))
+    assert hand_parts.entry("thumb", 62, place) is None
+    monkeypatch.setattr(hand_parts, "entry", lambda f, pitch, pl: None)
+    skip = Costs([Note(62, 0.0, 0.5, 80)], hand_parts, 100.0).reason(0)
+    assert skip.reason is SkipReason.BODY and "body clear" in skip.detail

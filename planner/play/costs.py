@@ -1,6 +1,7 @@
 """What a transition of the fingering's dynamic programme costs, in frames of music lost.
 
-A state is a rail position (on a ``RAIL_STEP_M`` grid) and a finger for every note
+A state is a hand position (``planner.play.places``: an arm posture and a rail position
+on the ``RAIL_STEP_M`` grid, one int) and a finger for every note
 sounding then (``State``). A transition costs the frames of music it loses (the currency
 of frame F1), from the timed moves of ``planner.play.moves``: a finger striking again
 needs ``repeat_gap_s`` (same key) or ``move_gap_s`` (another key) between its key up and
@@ -20,11 +21,9 @@ from dataclasses import dataclass
 
 from planner.music import keyboard as kb
 from planner.music.keyboard import pitch_name
-from planner.play.atlas import Atlas
 from planner.play.force import press_force_n
-from planner.play.moves import Moves
+from planner.play.places import RAIL_STEP_M, Places
 
-RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart
 RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing
 # (the slowest move between two keys in the default hand's atlas, the thumb's, takes 0.2 s)
 ONSET_TOL_S = 1e-4  # notes starting this close together are one event
@@ -38,6 +37,8 @@ class SkipReason(enum.Enum):
     to be played, found by the replay with its key down too little: ``MISSED``)."""
 
     OUT_OF_REACH = "out_of_reach"  # no finger presses the key from any rail position
+    BODY = "body"  # a finger would press it but for its body, which touches another key or
+    # the key bed (spec section 2): never pressed wrongly
     TORQUE = "torque"  # the fingers that reach it cannot press with the note's force
     CHORD = "chord"  # more notes at once than the hand can hold from one position
     HELD = "held"  # the fingers that could strike it hold longer notes through it (each
@@ -61,7 +62,7 @@ class Skip:
 
 
 class State:
-    """A state of the programme: the rail (index on the ``RAIL_STEP_M`` grid), the notes
+    """A state of the programme: the hand's place (``planner.play.places``), the notes
     sounding with their fingers (``fingers``: (note, finger), by note) and ``recent``:
     (note, finger, rail index it was at), the last notes of fingers not sounding, ended
     within RECENT_S. Immutable (its slots are set once; it is hashed many times, its
@@ -69,14 +70,14 @@ class State:
     still matters to its next move, sounding or recent, with the rail index it is (or
     was last) pressed from."""
 
-    __slots__ = ("_hash", "fingers", "last_notes", "notes", "rail_i", "recent")
+    __slots__ = ("_hash", "fingers", "last_notes", "notes", "place", "recent")
 
-    def __init__(self, rail_i: int, fingers: tuple[tuple[int, str], ...],
+    def __init__(self, place: int, fingers: tuple[tuple[int, str], ...],
                  recent: tuple[tuple[int, str, int], ...] = ()) -> None:
-        object.__setattr__(self, "rail_i", rail_i)
+        object.__setattr__(self, "place", place)
         object.__setattr__(self, "fingers", fingers)
         object.__setattr__(self, "recent", recent)
-        object.__setattr__(self, "_hash", hash((rail_i, fingers, recent)))
+        object.__setattr__(self, "_hash", hash((place, fingers, recent)))
 
     def __setattr__(self, name, value):
         raise AttributeError("State is immutable")
@@ -85,7 +86,7 @@ class State:
         if name == "notes":
             value = tuple(n for n, _ in self.fingers)
         elif name == "last_notes":
-            value = self.recent + tuple((m, f, self.rail_i) for m, f in self.fingers)
+            value = self.recent + tuple((m, f, self.place) for m, f in self.fingers)
         else:
             raise AttributeError(name)
         object.__setattr__(self, name, value)
@@ -93,14 +94,14 @@ class State:
 
     def __eq__(self, other) -> bool:
         return (self is other or isinstance(other, State) and self._hash == other._hash
-                and self.rail_i == other.rail_i and self.fingers == other.fingers
+                and self.place == other.place and self.fingers == other.fingers
                 and self.recent == other.recent)
 
     def __hash__(self) -> int:
         return self._hash
 
     def __repr__(self) -> str:
-        return f"State(rail_i={self.rail_i}, fingers={self.fingers}, recent={self.recent})"
+        return f"State(place={self.place}, fingers={self.fingers}, recent={self.recent})"
 
 
 class Prev:
@@ -117,7 +118,7 @@ class Prev:
         pitch, t_up, t_down = costs.pitch, costs._t_up, costs._t_down
         self.held = [(m, f) for m, f in state.fingers if costs.offset[m] > t + ONSET_TOL_S]
         self.last = {f: (m, r) for m, f, r in state.last_notes}
-        self.on_key = {pitch[m]: (m, f) for m, f, r in state.last_notes if r == state.rail_i}
+        self.on_key = {pitch[m]: (m, f) for m, f, r in state.last_notes if r == state.place}
         self.fresh = [(m, f, r) for m, f, r in state.last_notes if t_up[m] > t - RECENT_S]
         # (before a move of the rail: when each finger's lift ends, latest first)
         timing = costs._timing  # (``Costs._times``' memo, read here: most find it)
@@ -128,7 +129,7 @@ class Prev:
         # (the notes sounding that might ride along: their entry, frames and press)
         self.follows = [] if costs.atlas.rail is None else [
             (m, f, a, t_up[m] - t_down[m], costs.moves.press_min_s(a))
-            for m, f in state.fingers if (a := costs.entry(m, f, state.rail_i)) is not None]
+            for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None]
         self.release: dict[int, tuple[float, frozenset]] = {}  # by rail index
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
         self.steps: dict[tuple, float] = {}  # a transition's loss, by (notes, rail, kept)
@@ -140,7 +141,7 @@ class CostMemo:
     by keys, forces, fingers and rail positions (bounded), kept across the songs of one
     hand (``planner.play.Planner`` holds one)."""
 
-    __slots__ = ("cand_rails", "cands", "entry", "follows", "gaps", "rail_time", "rails",
+    __slots__ = ("cand_rails", "cands", "entry", "follows", "gaps", "rails",
                  "rails_to", "shortest", "timing")
 
     def __init__(self) -> None:
@@ -152,14 +153,15 @@ class Costs:
     """The cost model of one song on one hand (memoised: what depends on the hand alone
     in ``memo``, kept across songs when one is given)."""
 
-    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float,
+    def __init__(self, notes, places: Places, rate_hz: float,
                  memo: CostMemo | None = None) -> None:
         self.notes = notes
-        self.atlas = atlas
-        self.moves = moves
+        self.places = places
+        self.atlas = places  # (what the programme asks of an atlas: entries by place)
+        self.moves = places  # (... and of the moves: each entry's posture's)
         self.dt = 1.0 / rate_hz
-        h = atlas.hand
-        r = atlas.rail
+        h = places.hand
+        r = places.rail
         self.rail_lo = 0 if r is None else math.ceil(h.plan_lower[r] / RAIL_STEP_M)
         self.rail_hi = 0 if r is None else math.floor(h.plan_upper[r] / RAIL_STEP_M)
         m = memo or CostMemo()
@@ -168,7 +170,6 @@ class Costs:
         self._timing: dict = m.timing
         self._gaps: dict = m.gaps
         self._follows: dict = m.follows
-        self._rail_time: dict[int, float] = m.rail_time
         self._cands: dict = m.cands
         self._cand_rails: dict = m.cand_rails  # (``_cands``' rails, and its best, by key)
         self._rails_to: dict = m.rails_to
@@ -182,7 +183,8 @@ class Costs:
 
     # ------------------------------------------------------------------ reach
     def rails(self, finger: str, note: int) -> frozenset[int]:
-        """Rail grid indices from which ``finger`` presses ``note`` with its force."""
+        """Places (every posture's rail grid indices) from which ``finger`` presses
+        ``note`` with its force."""
         n = self.notes[note]
         force = press_force_n(n.velocity)
         key = (finger, n.pitch, force)  # (bounded: keys and forces, not notes)
@@ -193,10 +195,12 @@ class Costs:
             lo = max(self.rail_lo, math.ceil((x - nat - span) / RAIL_STEP_M))
             hi = min(self.rail_hi, math.floor((x - nat + span) / RAIL_STEP_M))
             ok = set()
-            for i in range(lo, hi + 1):
-                e = self.atlas.entry(finger, n.pitch, i * RAIL_STEP_M)
-                if e is not None and e.max_force_n >= force:
-                    ok.add(i)
+            for p in range(self.places.postures):
+                for i in range(lo, hi + 1):
+                    place = self.places.place(p, i)
+                    e = self.places.entry(finger, n.pitch, place)
+                    if e is not None and e.max_force_n >= force:
+                        ok.add(place)
             self._rails[key] = frozenset(ok)
         return self._rails[key]
 
@@ -215,11 +219,17 @@ class Costs:
             return Skip(note, SkipReason.TOO_SHORT, f"{1000 * n.duration_s:.0f} ms long; the "
                         f"shortest press down and up of any finger on {pitch_name(n.pitch)} "
                         f"takes {1000 * shortest_s:.0f} ms")
-        reach = any(self.atlas.entry(f, n.pitch, i * RAIL_STEP_M) is not None
-                    for f in fingers for i in range(self.rail_lo, self.rail_hi + 1, 2))
+        reach = any(self.places.entry(f, n.pitch, self.places.place(p, i)) is not None
+                    for f in fingers for p in range(self.places.postures)
+                    for i in range(self.rail_lo, self.rail_hi + 1, 2))
         if reach:
             return Skip(note, SkipReason.TORQUE, f"no finger presses {pitch_name(n.pitch)} with "
                         f"{press_force_n(n.velocity):.1f} N within the motors' torque")
+        if any(self.places.body_refused(f, n.pitch, self.places.place(p, i))
+               for f in fingers for p in range(self.places.postures)
+               for i in range(self.rail_lo, self.rail_hi + 1, 2)):
+            return Skip(note, SkipReason.BODY, f"no finger presses {pitch_name(n.pitch)} with "
+                        "its body clear of the other keys and the key bed")
         return Skip(note, SkipReason.OUT_OF_REACH, f"no finger reaches {pitch_name(n.pitch)} "
                     "from any rail position")
 
@@ -255,28 +265,28 @@ class Costs:
         """When it should come up: half a frame before the first row at or after its end."""
         return self._t_up[note]
 
-    def entry(self, note: int, finger: str, rail_i: int):
-        key = (self.pitch[note], finger, rail_i)  # (bounded: keys, not notes)
+    def entry(self, note: int, finger: str, place: int):
+        key = (self.pitch[note], finger, place)  # (bounded: keys, not notes)
         e = self._entry.get(key, False)
         if e is False:
-            e = self._entry[key] = self.atlas.entry(finger, key[0], rail_i * RAIL_STEP_M)
+            e = self._entry[key] = self.places.entry(finger, key[0], place)
         return e
 
-    def _times(self, note: int, finger: str, rail_i: int) -> tuple[float, float]:
+    def _times(self, note: int, finger: str, place: int) -> tuple[float, float]:
         """(``Moves.before_rail_s``, ``Moves.after_rail_s``) of the entry (memoised: the
         programme reads them for every transition)."""
-        key = (self.pitch[note], finger, rail_i)
+        key = (self.pitch[note], finger, place)
         got = self._timing.get(key)
         if got is None:
-            e = self.entry(note, finger, rail_i)
+            e = self.entry(note, finger, place)
             got = self._timing[key] = (self.moves.before_rail_s(e), self.moves.after_rail_s(e))
         return got
 
-    def before_rail_s(self, note: int, finger: str, rail_i: int) -> float:
-        return self._times(note, finger, rail_i)[0]
+    def before_rail_s(self, note: int, finger: str, place: int) -> float:
+        return self._times(note, finger, place)[0]
 
-    def after_rail_s(self, note: int, finger: str, rail_i: int) -> float:
-        return self._times(note, finger, rail_i)[1]
+    def after_rail_s(self, note: int, finger: str, place: int) -> float:
+        return self._times(note, finger, place)[1]
 
     def forget(self, until_s: float = math.inf) -> None:
         """Drop what only the events before ``until_s``, decided, can use (memory stays
@@ -298,16 +308,16 @@ class Costs:
         """Frames lost by the new notes struck with the rail where it is: each key down
         as late as the latest of what it waits for (another finger leaving the key, its
         own finger's move from its last key), a repeated key let up early."""
-        rail_i, last, on_key = prev.state.rail_i, prev.last, prev.on_key
+        place, last, on_key = prev.state.place, prev.last, prev.on_key
         loss = 0.0
         for n, f in new_notes.items():
             late = 0.0
             other = on_key.get(self.pitch[n])
             if other is not None and other[1] != f:  # another finger leaves the key first
-                late = self._leave_key_s(other, n, f, rail_i)
+                late = self._leave_key_s(other, n, f, place)
             if f in last:
                 m, r = last[f]
-                early, again = self._strike_again(m, r, n, f, rail_i)
+                early, again = self._strike_again(m, r, n, f, place)
                 if math.isinf(again):
                     return math.inf
                 loss += early / self.dt
@@ -315,39 +325,39 @@ class Costs:
             loss += max(0.0, late) / self.dt
         return loss
 
-    def _strike_again(self, m: int, r: int, n: int, f: str, rail_i: int) -> tuple[float, float]:
+    def _strike_again(self, m: int, r: int, n: int, f: str, place: int) -> tuple[float, float]:
         """(seconds ``m``'s key comes up early, seconds ``n``'s goes down late) when finger
-        ``f``, last on note ``m`` from rail ``r``, strikes ``n`` from ``rail_i``: the same
+        ``f``, last on note ``m`` from rail ``r``, strikes ``n`` from ``place``: the same
         key again from the same place is a repeat (the motion lets the key up in time for
         it), another key a lift, a move across and a descent (the key down late); late
         inf when no checked move gets there."""
         room = self._t_down[n] - self._t_up[m]
-        if self.pitch[m] == self.pitch[n] and r == rail_i:
+        if self.pitch[m] == self.pitch[n] and r == place:
             return max(0.0, self.moves.repeat_gap_s(self.entry(m, f, r)) - room), 0.0
-        gap = self._move_gap_s(m, f, r, n, rail_i)
+        gap = self._move_gap_s(m, f, r, n, place)
         if gap is None:
             return 0.0, math.inf
         return 0.0, max(0.0, gap - room)
 
-    def _move_gap_s(self, m: int, f: str, r: int, n: int, rail_i: int) -> float | None:
+    def _move_gap_s(self, m: int, f: str, r: int, n: int, place: int) -> float | None:
         """``Moves.move_gap_s`` from finger ``f``'s entry on ``m`` at rail ``r`` to its
-        entry on ``n`` at ``rail_i`` (memoised by keys and rails)."""
-        key = (self.pitch[m], f, r, self.pitch[n], rail_i)
+        entry on ``n`` at ``place`` (memoised by keys and rails)."""
+        key = (self.pitch[m], f, r, self.pitch[n], place)
         got = self._gaps.get(key, False)
         if got is False:
             got = self._gaps[key] = self.moves.move_gap_s(self.entry(m, f, r),
-                                                          self.entry(n, f, rail_i))
+                                                          self.entry(n, f, place))
         return got
 
-    def _leave_key_s(self, other: tuple[int, str], n: int, f: str, rail_i: int) -> float:
+    def _leave_key_s(self, other: tuple[int, str], n: int, f: str, place: int) -> float:
         """Seconds late when finger ``f`` strikes ``n`` on the key another finger has
         (``other``: its note and finger): that one lifts first, then this one descends."""
         m2, g = other
-        gap = self.before_rail_s(m2, g, rail_i) + self.after_rail_s(n, f, rail_i)
+        gap = self.before_rail_s(m2, g, place) + self.after_rail_s(n, f, place)
         return max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
 
-    def _rail_loss(self, prev: Prev, new: dict[int, str], rail_i: int, kept=()) -> float:
-        """Frames lost to a move of the rail to ``rail_i`` after ``prev``: a finger of
+    def _rail_loss(self, prev: Prev, new: dict[int, str], place: int, kept=()) -> float:
+        """Frames lost to a move of the rail to ``place`` after ``prev``: a finger of
         ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
         other lifts after its key comes up; then the rail moves (as slow as its slowest
         follower), and the new fingers descend. Each new key goes down as late as the
@@ -355,9 +365,9 @@ class Costs:
         (while the rail moves) or striking again after following it, another finger
         leaving its key. A ``kept`` note (sounding past the event) must follow, or the
         move is not made (inf)."""
-        got = prev.release.get(rail_i)
+        got = prev.release.get(place)
         if got is None:
-            got = prev.release[rail_i] = self._release_of(prev, rail_i)
+            got = prev.release[place] = self._release_of(prev, place)
         release_t, followers = got
         if kept and not followers.issuperset(kept):
             return math.inf
@@ -369,22 +379,22 @@ class Costs:
         by_finger, by_key, lifted = around
         t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
         timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
-        loss = TIE_RAIL_PER_M * abs(rail_i - prev.state.rail_i) * RAIL_STEP_M
+        loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
         for n, f in new.items():
-            times = timing.get((pitch[n], f, rail_i))
-            after_s = (times or self._times(n, f, rail_i))[1]
+            times = timing.get((pitch[n], f, place))
+            after_s = (times or self._times(n, f, place))[1]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
                 m, r = lifted[f]
-                gap = gaps.get((pitch[m], f, r, pitch[n], rail_i), False)
+                gap = gaps.get((pitch[m], f, r, pitch[n], place), False)
                 if gap is False:
-                    gap = self._move_gap_s(m, f, r, n, rail_i)
+                    gap = self._move_gap_s(m, f, r, n, place)
                 if gap is None:
                     return math.inf
                 late = max(late, gap - (t_down[n] - t_up[m]))
-            elif m is not None:  # (it followed its key: it is at rail_i now)
-                early, again = self._strike_again(m, rail_i, n, f, rail_i)
+            elif m is not None:  # (it followed its key: it is at place now)
+                early, again = self._strike_again(m, place, n, f, place)
                 if math.isinf(again):
                     return math.inf
                 loss += early / dt
@@ -392,18 +402,15 @@ class Costs:
             if by_key:
                 other = by_key.get(self.pitch[n])
                 if other is not None and other[1] != f:
-                    late = max(late, self._leave_key_s(other, n, f, rail_i))
+                    late = max(late, self._leave_key_s(other, n, f, place))
             loss += max(0.0, late) / dt
         return loss
 
-    def _release_of(self, ctx: Prev, rail_i: int) -> tuple[float, frozenset]:
-        """When the rail arrives at ``rail_i`` after ``ctx``'s state (the lifters' key up,
+    def _release_of(self, ctx: Prev, place: int) -> tuple[float, frozenset]:
+        """When the rail arrives at ``place`` after ``ctx``'s state (the lifters' key up,
         a held note's at this event, their lift, and the move), and which notes ride
         along."""
-        di = abs(rail_i - ctx.state.rail_i)
-        T = self._rail_time.get(di)
-        if T is None:
-            T = self._rail_time[di] = self.moves.rail_move(0.0, di * RAIL_STEP_M).duration_s
+        T = self.places.arm_time_s(ctx.state.place, place)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift)
             return ctx.lift_end + T, _NONE
         followers = _NONE
@@ -411,10 +418,10 @@ class Costs:
             # (an entry serves every key of its pitch class at its place: the key is the
             # entry and the rail's step, never the rail's index, which names another
             # entry for each of those keys)
-            b = self.entry(m, f, rail_i)
+            b = self.entry(m, f, place)
             if b is None:  # (it cannot press the key from there: it does not ride along)
                 continue
-            key = (a, rail_i - ctx.state.rail_i)
+            key = (a, place - ctx.state.place)
             got = self._follows.get(key)  # (its time, and whether its path is clear:
             if got is None:  # found only when a note's time fits the move)
                 got = self._follows[key] = [self.moves.follow_s(a, b), None]

@@ -19,9 +19,10 @@ Tolerances (each a physical value with its source):
 * ``OTHER_KEY_TOLERANCE_M`` 0.5 mm: a key the body touches by that much is pushed down
   0.5 mm at most, a tenth of the spec's 5 mm key-down depth (it does not sound); it is
   also the atlas's grid (``STEP_M / 2``: where a tip lands at most off its sample).
-* ``OWN_BED_MARGIN_M`` 2 mm: the pressed key's bed is 10 mm down (spec: key dip); the
-  spec allows a tip 12 mm below the key's top (``KEY_BED_DEPTH_M``): a body reaching
-  more than 2 mm past the bed would be held up by it before its pad point is down.
+* ``OWN_BED_MARGIN_M`` 1 mm: the pressed key's bed is 10 mm down (spec: key dip); spec
+  section 2 (bodies) allows no body more than 1 mm past it (``check``'s
+  ``criteria.BED_MARGIN_M``, the one definition): a body reaching further would be held
+  up by the bed before its pad point is down.
 
 The knuckles' small boxes and the palm are not tested here (they are far above the keys
 in every play pose); ``check``'s body rule judges them.
@@ -33,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.check.criteria import BED_MARGIN_M
 from planner.hand.bodies import BOX, SPHERE, collision_bodies
 from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
@@ -41,7 +43,7 @@ from planner.music.keybodies import box_penetration
 from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
-OWN_BED_MARGIN_M = kb.KEY_BED_DEPTH_M - kb.KEY_DIP_M  # 2 mm: spec section 2
+OWN_BED_MARGIN_M = BED_MARGIN_M  # 1 mm: spec section 2 (bodies), check's own rule
 AXIS_SAMPLES = 9  # a capsule's axis is tested at this many points (its ends included)
 
 

@@ -22,13 +22,12 @@ over a receding window (``chunks``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from planner.music.keyboard import pitch_name
-from planner.play.atlas import Atlas
-from planner.play.costs import ONSET_TOL_S, RAIL_STEP_M, Skip, SkipReason, State
+from planner.play.costs import ONSET_TOL_S, Skip, SkipReason, State
 from planner.play.layers import Layers
-from planner.play.moves import Moves
+from planner.play.places import Places
 
 WINDOW = 48  # events the programme looks over at once ...
 LOOKAHEAD = 16  # ... the last of which it decides only in the next window
@@ -38,13 +37,15 @@ FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows sta
 
 @dataclass(frozen=True)
 class Assignment:
-    """A note played by ``finger`` with the rail at ``rail_m``; ``release_s`` is when a
-    held note is cut (a later event needs its finger or the hand), else None."""
+    """A note played by ``finger`` with the rail at ``rail_m`` and the arm in play posture
+    ``posture`` (``planner.play.places``); ``release_s`` is when a held note is cut (a
+    later event needs its finger or the hand), else None."""
 
     note: int
     finger: str
     rail_m: float
     release_s: float | None = None
+    posture: int = 0
 
 
 
@@ -97,8 +98,7 @@ class FingeringProblem(Layers):
         for ch in self.chunks():
             out.update({x.note: x for x in ch.assignments})
             for n, t in ch.cuts:
-                a = out[n]
-                out[n] = Assignment(a.note, a.finger, a.rail_m, t)
+                out[n] = replace(out[n], release_s=t)
             skipped.extend(ch.skipped)
             loss = ch.loss_frames
         return Fingering(tuple(out[n] for n in sorted(out)),
@@ -204,7 +204,8 @@ class FingeringProblem(Layers):
             for n, f in state.fingers:
                 if n not in seen:
                     seen.add(n)
-                    assignments.append(Assignment(n, f, state.rail_i * RAIL_STEP_M))
+                    assignments.append(Assignment(n, f, self.places.rail_m(state.place),
+                                                  posture=self.places.posture_of(state.place)))
             prev = state
         loss = layers[-1][1][path[-1]][0]
         return FingeringChunk(tuple(assignments), tuple(skipped), tuple(cuts), float(loss))
@@ -250,7 +251,7 @@ def _descendants(layers, before: State):
     return out
 
 
-def plan_fingering(notes, atlas: Atlas, moves: Moves, rate_hz: float) -> Fingering:
+def plan_fingering(notes, places: Places, rate_hz: float) -> Fingering:
     """The fingering and hand positions of ``notes`` (see the module docstring)."""
-    return FingeringProblem(notes, atlas, moves, rate_hz).solve()
+    return FingeringProblem(notes, places, rate_hz).solve()
 

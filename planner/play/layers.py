@@ -18,9 +18,7 @@ import itertools
 import math
 
 from planner.music import keyboard as kb
-from planner.play.atlas import Atlas
 from planner.play.costs import (
-    RAIL_STEP_M,
     TIE_DX_PER_M,
     TIE_RAIL_PER_M,
     CostMemo,
@@ -28,7 +26,7 @@ from planner.play.costs import (
     Prev,
     State,
 )
-from planner.play.moves import Moves
+from planner.play.places import Places
 
 THUMB = "thumb"
 BEAM = 20  # states kept per event (measured: docs/history/play-second-design.md, "Speed")
@@ -39,7 +37,6 @@ PER_RAIL = 6  # ... at most this many at one rail position
 PER_NOTES = 10  # ... and at most this many holding the same notes (so that a state that
 # lets a note go, or leaves one out, is not crowded out by the ways of holding it)
 BOUND_EVERY = 8  # the beam's cost bound is renewed after this many states before
-_PER_STEP = TIE_RAIL_PER_M * RAIL_STEP_M  # a move's tie-break, per step of the rail grid
 
 
 class _Strike:
@@ -62,10 +59,10 @@ class Layers(Costs):
     """The layers of one song's programme (``_layer``: one event's states from the
     layer before); the windows over them are ``planner.play.fingering``'s."""
 
-    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float,
+    def __init__(self, notes, places: Places, rate_hz: float,
                  memo: CostMemo | None = None) -> None:
-        super().__init__(notes, atlas, moves, rate_hz, memo)
-        self._order = {f: i for i, f in enumerate(atlas.hand.fingers)}
+        super().__init__(notes, places, rate_hz, memo)
+        self._order = {f: i for i, f in enumerate(places.hand.fingers)}
         self._bound_at: tuple = (None, 0, math.inf)  # (layer, its size, its bound)
 
     def _layer(self, prev, t: float, new: list[int]):
@@ -150,48 +147,48 @@ class Layers(Costs):
         if not new:  # (every new note left out: the hand stays)
             if p is None:
                 return
-            rails = [(p.rail_i, 0.0)]
+            rails = [(p.place, 0.0)]
         else:  # (``_moves_to``'s memo read here: most calls find it)
-            rails = self._rails_to.get((strike.press_key, None if p is None else p.rail_i))
+            rails = self._rails_to.get((strike.press_key, None if p is None else p.place))
             if rails is None:
                 rails = self._moves_to(new, strike.press_key, p)
         if p is None:  # (the song's first notes: from anywhere, no move lost)
-            for rail_i, tie in rails:
-                total, shape = cost + tie, (rail_i, sounding_t)
+            for place, tie in rails:
+                total, shape = cost + tie, (place, sounding_t)
                 old = layer.get(shape)
                 if total <= bound and (old is None or total < old[0]):
-                    layer[shape] = (total, None, State(rail_i, sounding_t))
+                    layer[shape] = (total, None, State(place, sounding_t))
             return
-        here, steps = p.rail_i, ctx.steps
+        here, steps = p.place, ctx.steps
         crossing = recent = None
-        for rail_i, tie in rails:
+        for place, tie in rails:
             # (the pruning keeps one state per shape, the cheapest: a transition that
             # cannot cost less than the cheapest state of its shape so far is not weighed,
             # nor one that cannot cost less than the beam's last state)
-            low = cost + tie + _PER_STEP * abs(rail_i - here)
-            shape = (rail_i, sounding_t)
+            low = cost + tie + TIE_RAIL_PER_M * self.places.distance_m(place, here)
+            shape = (place, sounding_t)
             old = layer.get(shape)
             if low > bound or old is not None and low > old[0]:
                 continue
             if busy is None:
                 busy = frozenset(f for _, f in sounding)
-            if rail_i == here:
+            if place == here:
                 if crossing is None:
                     crossing = self._crosses(ctx, sounding, busy)
                 if crossing:
                     continue
-            key = (sounding_t, rail_i, kept)
+            key = (sounding_t, place, kept)
             step = steps.get(key)
             if step is None:
-                step = steps[key] = self._same_rail_loss(ctx, new) if rail_i == here \
-                    else self._rail_loss(ctx, new, rail_i, kept)
+                step = steps[key] = self._same_rail_loss(ctx, new) if place == here \
+                    else self._rail_loss(ctx, new, place, kept)
             total = cost + step + tie
             if step == math.inf or total > bound:  # (inf: no move gets there)
                 continue
             if old is None or total < old[0]:
                 if recent is None:
                     recent = self._recent(ctx, busy)
-                s = State(rail_i, sounding_t, recent)
+                s = State(place, sounding_t, recent)
                 if old is not None and old[2] != s:
                     del layer[shape]  # (another state of the shape: it comes after)
                 layer[shape] = (total, p, s)
@@ -200,8 +197,8 @@ class Layers(Costs):
         """Whether the fingers sounding, with those that left their keys within
         RECENT_S (still over them), are out of the hand's order: a finger would cross
         another without moving the rail."""
-        order_of, pitch, rail_i = self._order, self.pitch, ctx.state.rail_i
-        left = [(m, f) for m, f, r in ctx.fresh if f not in busy and r == rail_i]
+        order_of, pitch, place = self._order, self.pitch, ctx.state.place
+        left = [(m, f) for m, f, r in ctx.fresh if f not in busy and r == place]
         near = sorted([*sounding, *left], key=lambda mf: pitch[mf[0]])
         # (the thumb on a white key presses in front of the black keys, 30 mm and more
         # before the long fingers' tips: they pass behind it, it passes under them)
@@ -211,30 +208,35 @@ class Layers(Costs):
 
     def _moves_to(self, new: dict[int, str], press_key: tuple,
                   p: State | None) -> list[tuple[int, float]]:
-        """The rails worth a transition from ``p`` (memoised per rail before): staying,
-        when the new notes can be played from there; else, of the moves, the shortest one
-        each way and the one with the fingers nearest their natural places (a longer move
+        """The places worth a transition from ``p`` (memoised per place before): staying,
+        when the new notes can be played from there; else, of the moves in each posture,
+        the shortest one each way and the one with the fingers nearest their natural places (a longer move
         to a place no better for the fingers is never cheaper: the arm's time grows with
         the distance, the fingers' lifts and descents do not change)."""
-        key = (press_key, None if p is None else p.rail_i)
+        key = (press_key, None if p is None else p.place)
         keep = self._rails_to.get(key)
         if keep is None:
             cands = self._candidates(new, press_key)
             if p is None or len(cands) <= 3:
                 keep = cands
-            else:  # (the candidates by rail, found by bisection: here, the nearest
-                # below and above, and the best for the fingers)
-                rails, best = self._cand_rails[press_key]
-                i = bisect.bisect_left(rails, p.rail_i)
-                j = i + 1 if i < len(rails) and rails[i] == p.rail_i else i
-                keep = cands[i:j] + cands[max(0, i - 1):i] + cands[j:j + 1]
-                if best not in keep:
-                    keep.append(best)
+            else:  # (the candidates by place, found by bisection: here, the nearest
+                # below and above in each posture, and each posture's best for the fingers)
+                rails, bests = self._cand_rails[press_key]
+                places, here = self.places, p.place
+                keep = []
+                for q in sorted(bests, key=lambda q: q != places.posture_of(here)):
+                    at = places.place(q, places.rail_i(here))
+                    i = bisect.bisect_left(rails, at)
+                    j = i + 1 if i < len(rails) and rails[i] == at else i
+                    keep += [c for c in cands[i:j] + cands[max(0, i - 1):i] + cands[j:j + 1]
+                             if places.posture_of(c[0]) == q and c not in keep]
+                    if bests[q] not in keep:
+                        keep.append(bests[q])
             self._rails_to[key] = keep
         return keep
 
     def _candidates(self, new: dict[int, str], key: tuple) -> list[tuple[int, float]]:
-        """(rail index, tie-break) of every rail from which the fingers of
+        """(place, tie-break) of every place from which the fingers of
         ``new`` press their notes (memoised by ``key``, their keys, forces and fingers:
         it does not depend on the state before)."""
         out = self._cands.get(key)
@@ -244,13 +246,17 @@ class Layers(Costs):
                 r = self.rails(f, n)
                 rails = r if rails is None else rails & r
             out = []
-            for rail_i in sorted(rails):
-                tie = sum(abs(self.entry(n, f, rail_i).dx_m - self.atlas.natural_dx[f])
+            for place in sorted(rails):
+                tie = sum(abs(self.entry(n, f, place).dx_m - self.atlas.natural_dx[f])
                           for n, f in new.items()) * TIE_DX_PER_M
-                out.append((rail_i, tie))
+                out.append((place, tie))
             self._cands[key] = out
-            self._cand_rails[key] = ([r for r, _ in out],
-                                     min(out, key=lambda c: c[1]) if out else None)
+            bests: dict[int, tuple[int, float]] = {}  # (each posture's best, by posture)
+            for c in out:
+                q = self.places.posture_of(c[0])
+                if q not in bests or c[1] < bests[q][1]:
+                    bests[q] = c
+            self._cand_rails[key] = ([r for r, _ in out], bests)
         return out
 
     def _press_key(self, new: dict[int, str]) -> tuple:
@@ -286,23 +292,23 @@ def _prune(layer):
     capped = []  # (skipped for their notes only: the second pass's candidates, in order)
     for v in ranked:  # (one state per shape: every state is new to ``out``)
         s = v[2]
-        rail_i = s.rail_i
-        if per.get(rail_i, 0) >= PER_RAIL:  # (a rail's count only grows: out for good)
+        place = s.place
+        if per.get(place, 0) >= PER_RAIL:  # (a rail's count only grows: out for good)
             continue
         notes = s.notes
         if sets.get(notes, 0) >= PER_NOTES:
             capped.append(v)
             continue
         out[s] = (v[0], v[1])
-        per[rail_i] = per.get(rail_i, 0) + 1
+        per[place] = per.get(place, 0) + 1
         sets[notes] = sets.get(notes, 0) + 1
         if len(out) == BEAM:  # (added in cost order: sorted)
             return out
     for v in capped:
         s = v[2]
-        if per.get(s.rail_i, 0) < PER_RAIL:
+        if per.get(s.place, 0) < PER_RAIL:
             out[s] = (v[0], v[1])
-            per[s.rail_i] = per.get(s.rail_i, 0) + 1
+            per[s.place] = per.get(s.place, 0) + 1
             if len(out) == BEAM:
                 break
     return dict(sorted(out.items(), key=lambda kv: kv[1][0]))

@@ -31,7 +31,7 @@ from planner.music import keyboard as kb
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
-from planner.play.moves import Moves
+from planner.play.places import Places
 from planner.play.profile import Move, path_s, straight_move
 
 DROP_FRACTION = 0.5  # a note whose key cannot go down before this much of it is over is left out
@@ -157,7 +157,7 @@ class Outcome:
     detail: str = ""
 
 
-def approach(moves: Moves, st: _Finger, e: AtlasEntry, want: float, after_s: float,
+def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: float,
              rail_free_s: float, committed_s: float):
     """The moves that bring finger ``st`` from where it is to key-down on ``e`` (no
     earlier than ``want``, no move starting before ``after_s`` nor ``committed_s`` (the
@@ -212,7 +212,7 @@ def approach(moves: Moves, st: _Finger, e: AtlasEntry, want: float, after_s: flo
     return t_desc + d_high.cross_s, steps, "high"
 
 
-def _up_move(moves: Moves, st: _Finger):
+def _up_move(moves: Places, st: _Finger):
     """The finger's way up to crossing height from its pose (a timed lift when it presses:
     its key comes up ``cross_s`` into it)."""
     if st.pose == "press":
@@ -223,31 +223,39 @@ def _up_move(moves: Moves, st: _Finger):
 class Motion:
     """Builds the segments note by note (``place``); ``rows`` samples them."""
 
-    def __init__(self, notes, atlas: Atlas, moves: Moves, rate_hz: float,
-                 rail0_m: float, park: bool = False) -> None:
+    def __init__(self, notes, places: Places, rate_hz: float, rail0_m: float,
+                 posture: int = 0, park: bool = False) -> None:
         """``park``: the hand has nothing to play (asked, or none of its fingers presses
         any key); it waits with every tip at crossing height (``Atlas.park``) and never
-        moves."""
-        self.notes, self.atlas, self.moves = notes, atlas, moves
-        self.hand = atlas.hand
+        moves. The arm starts at ``rail0_m`` in play posture ``posture``."""
+        atlas = places.atlases[posture]
+        self.notes, self.places, self.moves = notes, places, places
+        self.hand = places.hand
         self.dt = 1.0 / rate_hz
         self.q0 = atlas.base.copy()
-        if atlas.rail is not None:
-            self.q0[atlas.rail] = rail0_m
-        self.rail = _Track(np.array([rail0_m]))
+        self.arm = places.arm  # (the rail, and the reach axis if the rig has one)
+        if places.rail is not None:
+            self.q0[places.rail] = rail0_m
+        self.posture = posture
+        # (the arm's joints as one track: the rail alone on a hand without a reach axis)
+        self.rail = _Track(np.array([rail0_m, places.reach_m(posture)][:max(1, len(self.arm))]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
                         for f in self.hand.fingers}
         entries = {} if park else start_entries(atlas, rail0_m)
         if not entries:
-            self.q0 = atlas.park()
-            if atlas.rail is not None:
-                self.q0[atlas.rail] = rail0_m
+            self.q0 = places.atlas.park()
+            if places.rail is not None:
+                self.q0[places.rail] = rail0_m
             for f, st in self.fingers.items():
                 st.track.q = self.q0[self.hand.joint_slice(f)].copy()
         else:
             self._start_high(entries)
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
         self.outcomes: dict[int, Outcome] = {}
+
+    def entry(self, a: Assignment) -> AtlasEntry | None:
+        """The entry of an assignment: its finger over its key from its place."""
+        return self.places.atlases[a.posture].entry(a.finger, self.notes[a.note].pitch, a.rail_m)
 
     def _start_high(self, entries: dict[str, AtlasEntry]) -> None:
         """The hand starts with every finger at crossing height over the key nearest its
@@ -267,7 +275,7 @@ class Motion:
             if a.finger in seen:
                 continue
             seen.add(a.finger)
-            if abs(a.rail_m - self.rail.q[0]) <= 1e-9:
+            if abs(a.rail_m - self.rail.q[0]) <= 1e-9 and a.posture == self.posture:
                 out.append(a)
         return out
 
@@ -277,7 +285,7 @@ class Motion:
         (``planner.play.rest``), so no key is down when the motion starts."""
         for a in self.prepared(assignments):
             st = self.fingers[a.finger]
-            e = self.atlas.entry(a.finger, self.notes[a.note].pitch, a.rail_m)
+            e = self.entry(a)
             st.entry = e
             st.track.q = e.high.copy()
             self.q0[self.hand.joint_slice(a.finger)] = st.track.q
@@ -307,9 +315,9 @@ class Motion:
     def place(self, a: Assignment) -> Outcome:
         """Schedule note ``a.note`` (after every note of earlier onset)."""
         n = self.notes[a.note]
-        e = self.atlas.entry(a.finger, n.pitch, a.rail_m)
-        if abs(self.rail.q[0] - a.rail_m) > 1e-9:
-            self._move_rail(a.rail_m, self.t_down(a.note) - self.moves.after_rail_s(e))
+        e = self.entry(a)
+        if abs(self.rail.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
+            self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.after_rail_s(e))
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
         after = self._release_others_on(n.pitch, a.finger)
@@ -374,18 +382,19 @@ class Motion:
                 clear = max(clear, self._to_high(st))
         return clear
 
-    def _move_rail(self, rail_m: float, arrive_by_s: float) -> None:
-        """The rail to ``rail_m``, as late as lets the next key go down on time, once every
-        finger is at crossing height, except those holding a key that sounds past the
-        move which can follow it (``Moves.follow``: the rail and their joints on one
-        straight time-optimal move, the tip kept on the key)."""
+    def _move_rail(self, rail_m: float, posture: int, arrive_by_s: float) -> None:
+        """The arm to ``rail_m`` in play posture ``posture``, as late as lets the next key
+        go down on time, once every finger is at crossing height, except those holding a
+        key that sounds past the move which can follow it (``Moves.follow``: the rail and
+        their joints on one straight time-optimal move, the tip kept on the key; in the
+        same posture only)."""
         r0 = self.rail.q[0]
-        holds = self._holds(rail_m, arrive_by_s)
+        holds = self._holds(rail_m, arrive_by_s) if posture == self.posture else []
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
             end_by = min([arrive_by_s] + [st.up_s - self.moves.lift(e, "high").cross_s
                                           - HOLD_PAST_S for st, e in holds])
-            move, t0 = self._rail_timing(r0, rail_m, end_by, holds)
+            move, t0 = self._rail_timing(r0, rail_m, posture, end_by, holds)
             late = {id(st) for st, e in holds if t0 + move.duration_s
                     > st.up_s - self.moves.lift(e, "high").cross_s - HOLD_PAST_S / 2}
             if not late:
@@ -397,30 +406,34 @@ class Motion:
                 up = _up_move(self.moves, st)
                 self._to_high(st, t0 - up.duration_s + up.cross_s)
         t0 = max([t0] + [st.high_s for st in self.fingers.values() if id(st) not in held])
-        k = 1
-        self.rail.add(t0, _part(move, 0, 1))
+        k = len(self.rail.q)
+        self.rail.add(t0, _part(move, 0, k))
+        self.posture = posture
         for st, e in holds:
             n = len(st.entry.press)
             st.track.add(t0, _part(move, k, n))
             st.entry = e
             k += n
 
-    def _rail_timing(self, r0: float, rail_m: float, arrive_by_s: float, holds):
-        """The rail's move (with its followers' joints after it) and its start: as late
+    def _rail_timing(self, r0: float, rail_m: float, posture: int, arrive_by_s: float, holds):
+        """The arm's move (with its followers' joints after it) and its start: as late
         as lets the next key go down on time, not before the hand is ready."""
-        move = self.moves.rail_move(r0, rail_m)
-        if holds:
-            qa, qb = [np.array([r0])], [np.array([rail_m])]
-            vmax = [self.hand.velocity[[self.atlas.rail]]]
-            amax = [self.moves.acceleration[[self.atlas.rail]]]
-            jmax = [self.moves.jerk[[self.atlas.rail]]]
+        a = (r0, self.places.reach_m(self.posture))
+        b = (rail_m, self.places.reach_m(posture))
+        move = self.places.arm_move(a, b)
+        if holds:  # (the same posture: the reach axis, if any, stays)
+            n = len(self.rail.q)
+            qa, qb = [np.array(a[:n])], [np.array(b[:n])]
+            vmax = [self.hand.velocity[self.arm[:n]]]
+            amax = [self.places.home.acceleration[self.arm[:n]]]
+            jmax = [self.places.home.jerk[self.arm[:n]]]
             for st, e in holds:
                 js = self.hand.joint_slice(st.entry.finger)
                 qa.append(st.entry.press)
                 qb.append(e.press)
                 vmax.append(self.hand.velocity[js])
-                amax.append(self.moves.acceleration[js])
-                jmax.append(self.moves.jerk[js])
+                amax.append(self.places.moves_of(e).acceleration[js])
+                jmax.append(self.places.moves_of(e).jerk[js])
             move = straight_move(np.concatenate(qa), np.concatenate(qb), np.concatenate(vmax),
                                  np.concatenate(amax), np.concatenate(jmax))
         ready = max(self.rail.free_s, self.committed_s)
@@ -442,7 +455,8 @@ class Motion:
         for st in self.fingers.values():
             if st.pose != "press":
                 continue
-            e = self.atlas.entry(st.entry.finger, self.notes[st.note].pitch, rail_m)
+            e = self.places.atlases[self.posture].entry(st.entry.finger,
+                                                        self.notes[st.note].pitch, rail_m)
             if e is not None and self.moves.follow(st.entry, e) is not None:
                 out.append((st, e))
         return out
@@ -479,8 +493,9 @@ class Motion:
     def rows(self, t_s: np.ndarray) -> np.ndarray:
         """Whole-hand configurations at times ``t_s`` (sorted)."""
         q = np.tile(self.q0, (len(t_s), 1))
-        if self.atlas.rail is not None:
-            q[:, self.atlas.rail] = self.rail.at(t_s, np.array([self.q0[self.atlas.rail]]))[:, 0]
+        if self.arm:
+            n = len(self.rail.q)
+            q[:, self.arm[:n]] = self.rail.at(t_s, self.q0[self.arm[:n]])
         for f, st in self.fingers.items():
             js = self.hand.joint_slice(f)
             q[:, js] = st.track.at(t_s, self.q0[js])

@@ -100,8 +100,8 @@ class Moves:
         self._lat: dict = {}
         self.descend = lru_cache(maxsize=None)(self._descend)
         self.lift = lru_cache(maxsize=None)(self._lift)
-        self.table = MoveTable(hand.fingers, atlas.natural_dx)
-        self.table.load(table_path(hand.urdf_sha256), self.params())
+        self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
+        self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
         # every joint's acceleration limit, the rail's also within what the wrist holds
         self.acceleration = np.array(hand.acceleration, dtype=float)
         self.jerk = np.array(hand.jerk, dtype=float)
@@ -147,7 +147,8 @@ class Moves:
 
     def _cross(self, e: AtlasEntry, qa: np.ndarray, qb: np.ndarray, move: Move,
                going_down: bool) -> float:
-        """Time within ``move`` at which the tip's depth below the key top passes
+        """Time within ``move`` at which the tip's depth below the key top (the finger's body's,
+        with the atlas's body rule: ``Atlas.bodies``) passes
         ``DOWN_DEPTH_M`` (``_crossing`` on the path parameter, forward kinematics), on the
         key-down side of the crossing, to within ``CROSS_TOL``."""
         depth = self._depth_fn(e)
@@ -166,6 +167,15 @@ class Moves:
         q = self.atlas.base.copy()
         js = self.js[e.finger]
         top = kb.key(60 + e.pitch_class).top_z_m
+
+        bodies = self.atlas.bodies
+        if bodies is not None:  # (the body rule: the finger's lowest body point, spec section 2)
+            def depth(qf: np.ndarray) -> float:
+                q[js] = qf
+                p, r = bodies.points(self.hand.apply_couplings(q), e.finger)
+                return top - float(np.min(p[:, 2] - r))
+
+            return depth
 
         def depth(qf: np.ndarray) -> float:
             q[js] = qf

@@ -46,18 +46,21 @@ HOLD_MARGIN_M = 0.001  # a key held while the rail moves stays this far inside i
 _BATCH = 60000  # configurations evaluated at once while the table is made
 
 
-def table_path(urdf_sha256: str) -> Path:
-    """Where the move table of a hand's atlas is shipped (beside the atlas)."""
-    return TABLE_DIR / f"moves-{urdf_sha256[:16]}.npz"
+def table_path(urdf_sha256: str, posture: int = 0) -> Path:
+    """Where the move table of a hand's atlas (of play posture ``posture``) is shipped
+    (beside the atlas)."""
+    return TABLE_DIR / f"moves-{urdf_sha256[:16]}{f'-p{posture}' if posture else ''}.npz"
 
 
 class MoveTable:
     """The shipped answers (empty when there is no table for the hand, or it was made
     with other parameters); ``None`` from a lookup: not in the table."""
 
-    def __init__(self, fingers: tuple[str, ...], natural_dx: dict[str, float]) -> None:
+    def __init__(self, fingers: tuple[str, ...], natural_dx: dict[str, float],
+                 posture: int = 0) -> None:
         self.fingers = fingers
         self.natural_dx = natural_dx
+        self.posture = posture  # (the atlas's play posture: another's entries are not here)
         self.crossings: dict[tuple[str, int, int], np.ndarray] = {}
         self._index: dict[tuple[str, int, int], tuple[int, int]] = {}  # in finger, in key
         self._across: dict[str, np.ndarray] = {}
@@ -67,8 +70,9 @@ class MoveTable:
     def key(self, e: AtlasEntry) -> tuple[str, int, int]:
         got = self._keys.get(id(e))  # (by the entry, held: its id is not reused)
         if got is None or got[0] is not e:
-            got = self._keys[id(e)] = (e, (e.finger, e.pitch_class,
-                                           round((e.dx_m - self.natural_dx[e.finger]) / STEP_M)))
+            k = (e.finger, e.pitch_class, round((e.dx_m - self.natural_dx[e.finger]) / STEP_M))
+            # (an entry of another posture: a key the table never holds)
+            got = self._keys[id(e)] = (e, k if e.posture == self.posture else (*k, e.posture))
         return got[1]
 
     def crossing(self, e: AtlasEntry, column: int) -> float | None:

@@ -126,8 +126,8 @@ def way_in(moves: Moves, motion: Motion, rest_q: np.ndarray, assignments,
     dt = 1.0 / rate_hz
     need_s = 0.0
     for a in motion.prepared(assignments):
-        e = motion.atlas.entry(a.finger, motion.notes[a.note].pitch, a.rail_m)
+        e = motion.entry(a)
         t_down = motion.t_down(a.note)  # (song time: the motion's notes are not shifted yet)
-        need_s = max(need_s, legs.end_s + moves.descend(e, "high").cross_s - t_down)
+        need_s = max(need_s, legs.end_s + motion.moves.descend(e, "high").cross_s - t_down)
     rows = math.ceil(need_s / dt - 1e-9) if need_s > 0.0 else 0
     return WayIn(legs, rows / rate_hz)  # (35 / 100 = 0.35; 35 * 0.01 = 0.35000000000000003)

@@ -12,7 +12,7 @@ import math
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,11 +20,10 @@ from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.music.midi import SHIFT_DIGITS, Song, shift_notes
 from planner.music.parts import PartChoice
-from planner.play.atlas import Atlas
 from planner.play.costs import CostMemo
 from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
-from planner.play.moves import Moves
+from planner.play.places import Places
 from planner.play.rest import Legs, WayIn, legs_between, rest_pose, way_in
 from planner.selfcheck import SelfCheck, Verdict
 from planner.trajfile import MIN_ROWS, KeptText, TrajectoryWriter
@@ -65,12 +64,12 @@ def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -
 
 
 class Planner:
-    """The per-hand part of the play planner (atlas, timed moves), built once."""
+    """The per-hand part of the play planner (atlases, timed moves), built once."""
 
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand
-        self.atlas = Atlas(hand)
-        self.moves = Moves(hand, self.atlas)
+        self.places = Places(hand)  # (every play posture's atlas and moves)
+        self.atlas, self.moves = self.places.atlas, self.places.home  # (the rest pose's)
         self.memo = CostMemo()  # (the fingering's costs that depend on the hand alone)
 
 
@@ -131,7 +130,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     the file's time (the song shifted by the way in from rest: ``planner.play.rest``),
     rows written up to where nothing can change any more, then the way back to rest.
     Returns the rows (their motion and the song's shift) and the fingering (song time)."""
-    problem = FingeringProblem(notes, pl.atlas, pl.moves, rate_hz, pl.memo)
+    problem = FingeringProblem(notes, pl.places, rate_hz, pl.memo)
     rest_q = rest_pose(pl.atlas)
     rows: _Rows | None = None
     done: dict[int, Assignment] = {}
@@ -147,14 +146,13 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
         steps.sort(key=lambda s: s[0])
         if rows is None and ch.assignments:
             first = min(ch.assignments, key=lambda a: (notes[a.note].onset_s, notes[a.note].pitch))
-            rows = _start(Motion(notes, pl.atlas, pl.moves, rate_hz, first.rail_m), pl, rest_q,
-                          ch.assignments, writer, rate_hz)
+            rows = _start(Motion(notes, pl.places, rate_hz, first.rail_m, first.posture), pl,
+                          rest_q, ch.assignments, writer, rate_hz)
         elif rows is None and math.isfinite(ch.until_s):  # (nothing playable yet, more
             # to come: the hand waits at its natural place, the rows go on; parked if no
             # finger reaches any key: then nothing ever will be)
-            rows = _start(Motion(notes, pl.atlas, pl.moves, rate_hz,
-                                 pl.atlas.rail_of(pl.atlas.base)), pl, rest_q, (), writer,
-                          rate_hz)
+            rows = _start(Motion(notes, pl.places, rate_hz, pl.atlas.rail_of(pl.atlas.base)),
+                          pl, rest_q, (), writer, rate_hz)
         shift = 0.0 if rows is None else rows.shift_s
         for _, item in steps:
             if isinstance(item, Assignment):
@@ -164,13 +162,12 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
             else:
                 n, t = item
                 rows.motion.cut(n, t + shift)
-                a = done[n]
-                done[n] = Assignment(a.note, a.finger, a.rail_m, t)
+                done[n] = replace(done[n], release_s=t)
         # (every note before ``until_s`` is placed: the rows can go on to a lag before it)
         if rows is not None and math.isfinite(ch.until_s):
             rows.commit_to(ch.until_s + shift - COMMIT_LAG_S)
     if rows is None:  # nothing to play: the hand waits, still
-        rows = _start(Motion(notes, pl.atlas, pl.moves, rate_hz, pl.atlas.rail_of(pl.atlas.base),
+        rows = _start(Motion(notes, pl.places, rate_hz, pl.atlas.rail_of(pl.atlas.base),
                              park=True), pl, rest_q, (), writer, rate_hz)
     end = max((n.offset_s for n in notes), default=0.0) + rows.shift_s
     rows.finish(rows.motion.finish(end), rest_q)
@@ -194,7 +191,7 @@ def _shifted(a: Assignment, shift_s: float) -> Assignment:
     """An assignment in the file's time (its cut, if any, ``shift_s`` later)."""
     if a.release_s is None or shift_s == 0.0:
         return a
-    return Assignment(a.note, a.finger, a.rail_m, round(a.release_s + shift_s, SHIFT_DIGITS))
+    return replace(a, release_s=round(a.release_s + shift_s, SHIFT_DIGITS))
 
 
 class _Rows:

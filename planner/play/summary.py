@@ -18,7 +18,7 @@ def _timing(notes, plan: PlayPlan) -> tuple[float, float | None, int]:
     positions used): the facts both the summary and ``--json`` give."""
     song_s = max((n.offset_s for n in notes), default=0.0)
     rtf = song_s / plan.planning_s if plan.planning_s > 0 else None
-    return song_s, rtf, len({a.rail_m for a in plan.fingering.assignments})
+    return song_s, rtf, len({(a.rail_m, a.posture) for a in plan.fingering.assignments})
 
 
 def part_lines(plan: PlayPlan) -> list[str]:

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from planner.errors import InputError
+from planner.music.keyboard import DOWN_DEPTH_M, KEY_DIP_M
 from planner.hand.builders.values import (
     get_length,
     get_positive,
@@ -27,8 +28,12 @@ from planner.hand.spec import (
     LinearCoupling,
     Link,
     Mk5Coupling,
+    PlayPosture,
     rpy_matrix,
 )
+
+
+MAX_POSTURES = 4  # reach positions a hand file's [play] may give (each an atlas, a move table)
 
 
 @dataclass
@@ -168,7 +173,45 @@ def assemble_spec(data: dict[str, Any], parts: HandParts) -> HandSpec:
         rail_enabled=parts.rail_enabled,
         sources=sources,
         finger_joints=tuple(finger_joints),
+        play_posture=play_posture(data, parts),
     )
+
+
+def play_posture(data: dict[str, Any], parts: HandParts) -> PlayPosture | None:
+    """The hand file's ``[play]`` posture (``PlayPosture``), each number within its joint's
+    travel and the press depth between the spec's key-down depth and the key's dip."""
+    play = data.get("play")
+    if play is None:
+        return None
+    if not isinstance(play, dict):
+        raise InputError("play: expected a table")
+    joints = {j.name: j for j in parts.joints}
+    reach = play.get("reach_m")
+    reach = reach if isinstance(reach, list) else [reach]
+    if not reach or len(reach) > MAX_POSTURES:
+        raise InputError(f"play.reach_m: expected 1 to {MAX_POSTURES} positions, got {len(reach)}")
+    values = [_play_value({"reach_m": r}, "reach_m", joints.get("reach"), 1.0) for r in reach]
+    if len(set(values)) != len(values):
+        raise InputError("play.reach_m: a position is given twice")
+    flex, dev = (_play_value(play, key, joints.get(name), math.pi / 180) for key, name in
+                 (("wrist_flex_deg", "wrist_flex"), ("wrist_dev_deg", "wrist_dev")))
+    depth = get_value(play, "press_depth_m")
+    if not DOWN_DEPTH_M < depth <= KEY_DIP_M:
+        raise InputError(f"play.press_depth_m = {depth} must be deeper than the key-down depth "
+                         f"({DOWN_DEPTH_M} m) and at most the key's dip ({KEY_DIP_M} m)")
+    return PlayPosture(tuple(values), flex, dev, depth)
+
+
+def _play_value(play: dict[str, Any], key: str, joint: Joint | None, scale: float) -> float:
+    """One number of ``[play]`` (scaled to the joint's unit), within its joint's travel."""
+    v = get_value(play, key) * scale
+    if joint is None:
+        if v != 0.0:
+            raise InputError(f"play.{key}: the hand has no {key.rsplit('_', 1)[0]} joint")
+    elif not joint.lower <= v <= joint.upper:
+        raise InputError(f"play.{key} = {get_value(play, key)} is outside the {joint.name} "
+                         "joint's travel")
+    return v
 
 
 def seg_link(name: str, length: float, width: float, mass: float) -> Link:
