@@ -18,9 +18,20 @@ from planner.play.costs import SkipReason
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 SONGS = sorted((ROOT / "songs").glob("*.mid")) + sorted((ROOT / "songs" / "stress").glob("*.mid"))
-# frame F1 measured with this version (two-core machine, 100 Hz), less 0.005
-FLOOR = {"twinkle": 0.986, "ode_to_joy": 0.99, "chords": 0.972, "scale": 0.964, "fur_elise": 0.99,
-         "fast": 0.862, "leaps": 0.966, "fast_six_keys": 0.88, "leaps_legato": 0.62}
+# frame F1 by the pad points (the check's verdict) and by the bodies (spec section 2, the
+# rule the plan is timed to), and the wrong presses by bodies, measured with this version
+# less 0.01 (issue 30, the arm's play postures and the body rule in the atlas, session 37:
+# the plan is timed to the bodies, whose lowest point reaches the key-down depth 20-40 ms
+# before the pad point: the point F1 fell, twinkle 0.9969 -> 0.9693, chords 0.9823 ->
+# 0.9333, fast 0.8721 -> 0.7821, fur_elise 1.0 -> 0.8970, leaps 0.9766 -> 0.9599,
+# ode_to_joy 1.0 -> 0.9456, scale 0.9740 -> 0.9338; by the bodies, 0.31-0.52 before)
+FLOOR = {"twinkle": 0.959, "ode_to_joy": 0.935, "chords": 0.923, "scale": 0.923,
+         "fur_elise": 0.887, "fast": 0.772, "leaps": 0.949, "fast_six_keys": 0.761,
+         "leaps_legato": 0.619}
+BODY_FLOOR = {"twinkle": 0.99, "ode_to_joy": 0.948, "chords": 0.939, "scale": 0.956,
+              "fur_elise": 0.948, "fast": 0.903, "leaps": 0.983, "fast_six_keys": 0.899,
+              "leaps_legato": 0.618}
+BODY_WRONG = {"ode_to_joy": 6, "fast_six_keys": 1, "leaps_legato": 5}  # (at most; else 0)
 # (issue 30's rows a controller can run, measured less 0.01 on the tree that brought them:
 # jerk-limited moves (a ramp of one motor time constant) and 2 deg from every hard stop:
 # twinkle 1.0 -> 0.9969, chords 0.9931 -> 0.9823, scale 1.0 -> 0.9740, leaps 0.9928 ->
@@ -58,6 +69,8 @@ def test_safe_honest_and_above_its_floor(planned, name):
     assert {s.note for s in res.verdict.skipped} == {m.note for m in rep.play.missed}
     assert res.verdict.score.f1 == pytest.approx(rep.play.f1, abs=1e-12)
     assert rep.play.f1 >= FLOOR[name], rep.summary()
+    assert rep.bodies.f1 >= BODY_FLOOR[name], rep.summary()
+    assert len(rep.bodies.wrong_presses) <= BODY_WRONG.get(name, 0), rep.summary()
 
 
 def test_same_song_same_bytes(planner, tmp_path):
@@ -147,7 +160,10 @@ def test_a_hand_on_a_fixed_mount_plays_what_it_reaches(tmp_path):
     from planner.hand.model import HandModel
     from planner.hand.spec import hands_dir
 
-    text = (hands_dir() / "default.toml").read_text(encoding="utf-8")
+    from tests.handfiles import fitted_text
+
+    text = fitted_text()  # (no [play] posture: its reach axis goes with the rail's off)
+    assert hands_dir().exists()
     p = tmp_path / "norail.toml"
     p.write_text(text.replace("enabled = true", "enabled = false").replace(
         'name = "default"', 'name = "norail"'), encoding="utf-8")
@@ -211,6 +227,6 @@ def test_planning_leaves_no_reference_cycles_and_the_collector_as_it_was():
         assert gc.collect() == 0
     finally:
         gc.enable()
-    assert plan.verdict.played >= 20 and plan.verdict.skipped  # (notes left out, too)
+    assert plan.verdict.played >= 15 and plan.verdict.skipped  # (notes left out, too)
     plan_song(song, hand, planner=pl)
     assert gc.isenabled()

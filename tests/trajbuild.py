@@ -71,7 +71,7 @@ def base_posture(hand, wrist_deg=None):
 
 
 @cache
-def _press_posture(pitch, finger, depth):
+def _press_posture(pitch, finger, depth, y_m=None):
     """Joints putting ``finger``'s tip ``depth`` below the top of key ``pitch``
     (negative: above), rail (and reach) + that finger's MCP/PIP, the rest at base_posture."""
     hand = load_hand("default")
@@ -80,7 +80,8 @@ def _press_posture(pitch, finger, depth):
     act = _idx(hand, "rail", *(["reach"] if "reach" in hand.index else []),
                f"{finger}_mcp_flex", f"{finger}_pip")
     k = key(pitch)
-    y = 0.09 if k.black else 0.045  # inside the footprint, in front of the black keys
+    y = y_m if y_m is not None else 0.09 if k.black else 0.045  # (inside the footprint; a
+    # white key in front of the black keys, as the default hand presses it)
     target = np.array([k.center_x_m, y, k.top_z_m - depth])
     indep = list(hand.independent)
     cols = [indep.index(a) for a in act]
@@ -98,8 +99,8 @@ def _press_posture(pitch, finger, depth):
     return q
 
 
-def press_posture(pitch, finger, depth):
-    return _press_posture(pitch, finger, round(depth, 6)).copy()
+def press_posture(pitch, finger, depth, y_m=None):
+    return _press_posture(pitch, finger, round(depth, 6), y_m).copy()
 
 
 def min_jerk(times, keyframes, t):

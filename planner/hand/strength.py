@@ -195,21 +195,23 @@ def _speed_source(hand: HandModel, j: int) -> str:
 
 
 def press_strength(hand: HandModel) -> dict[str, tuple[float | None, str, float | None]]:
-    """Per finger: the smallest ``max_force_n`` over its atlas press poses, the limiting
-    part there and the motor torque a PRESS_KEY_FORCE_N press needs there."""
+    """Per finger: the smallest ``max_force_n`` over its atlas press poses (every play
+    posture's), the limiting part there and the motor torque a PRESS_KEY_FORCE_N press
+    needs there."""
     from planner.play.atlas import SPAN_M, STEP_M, Atlas
 
-    atlas = Atlas(hand)
+    posture = hand.spec.play_posture
+    atlases = [Atlas(hand, posture=i) for i in range(1 if posture is None else len(posture.reach_m))]
     cap = actuator_capacity(hand)
     n = round(SPAN_M / STEP_M)
     out: dict[str, tuple[float | None, str, float | None]] = {}
     for f in hand.fingers:
-        entries = [e for pc in range(12) for k in range(-n, n + 1)
-                   if (e := atlas.entry_at(f, pc, k)) is not None]
+        entries = [(a, e) for a in atlases for pc in range(12) for k in range(-n, n + 1)
+                   if (e := a.entry_at(f, pc, k)) is not None]
         if not entries:
             out[f] = (None, "no press pose: the finger reaches no key from the mount", None)
             continue
-        weakest = min(entries, key=lambda e: e.max_force_n)
+        atlas, weakest = min(entries, key=lambda ae: ae[1].max_force_n)
         q = atlas.full_q(weakest, "press", 0.0)
         F = weakest.max_force_n
         load = np.abs(hand.press_torques(q, {f: F})) / cap.torque_nm
