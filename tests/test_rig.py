@@ -53,7 +53,8 @@ def test_hand_file_without_reach_and_with_a_bad_one(tmp_path):
     # (the play posture holds the forearm on the reach axis: without the axis, at 0)
     with pytest.raises(InputError, match="play.reach_m: the hand has no reach joint"):
         load_text(tmp_path, no_reach)
-    off = load_text(tmp_path, edit(no_reach, "reach_m = -0.175", "reach_m = 0.0"))
+    off = load_text(tmp_path, edit(no_reach, "reach_m = [-0.175, -0.15, -0.10]",
+                                   "reach_m = 0.0"))
     assert "reach" not in off.index and off.rig_joints == ("rail",)
     assert off.spec.play_posture.reach_m == (0.0,)
     with pytest.raises(InputError, match="reach: lower_m must be below upper_m"):
