@@ -45,6 +45,16 @@ def test_hand_summary() -> None:
         assert f"{f}_dip = 0.667 x {f}_pip" in r.stdout
     # same output with the hand named explicitly
     assert run_cli("hand", "--hand", "default").stdout == r.stdout
+    assert ("play postures: reach -0.175, -0.150, -0.100 m, wrist -11.5 / +0.0 deg, presses "
+            "6.0 mm deep") in r.stdout
+
+
+def test_hand_json_names_its_play_postures() -> None:
+    import json
+
+    play = json.loads(run_cli("hand", "--json").stdout)["play"]
+    assert play["reach_m"] == [-0.175, -0.15, -0.1] and play["press_depth_m"] == 0.006
+    assert json.loads(run_cli("hand", "--hand", "mk5", "--json").stdout)["play"] is None
 
 
 def test_hand_urdf_to_file(tmp_path: Path, default_urdf: str) -> None:

@@ -32,7 +32,8 @@ CATCH = {"command": str, "feasible": bool, "reasons": list, "reason_kinds": list
          "rows": int, "rate_hz": NUM, "duration_s": NUM, "trajectory": str,
          "planning_s": NUM, "setup_s": NUM}
 HAND = {"command": str, "name": str, "description": str, "urdf_sha256": str, "rail": bool,
-        "fingers": list, "joints": list, "couplings": list, "actuators": list}
+        "fingers": list, "joints": list, "couplings": list, "actuators": list,
+        "play": (dict, type(None))}
 JOINT = {"name": str, "lower": NUM, "upper": NUM, "velocity": NUM, "acceleration": NUM,
          "jerk": NUM, "stop_margin": NUM, "unit": str}
 

@@ -29,6 +29,9 @@ def hand_dict(hand: HandModel) -> dict:
                     "unit": "m" if n in hand.rig_joints else "rad"}
                    for i, n in enumerate(hand.joint_names)],
         "couplings": [coupling(c) for c in hand.spec.couplings],
+        "play": None if (p := hand.spec.play_posture) is None else {
+            "reach_m": list(p.reach_m), "wrist_flex_rad": p.wrist_flex_rad,
+            "wrist_dev_rad": p.wrist_dev_rad, "press_depth_m": p.press_depth_m},
         "actuators": [{"name": a.name, "kind": a.kind, "drives": a.drives,
                        "speed_rad_s": a.speed_rad_s, "peak_torque_nm": a.peak_torque_nm,
                        "efficiency": a.efficiency,
@@ -52,6 +55,11 @@ def format_hand(hand: HandModel) -> str:
             lines.append(f"    {n:16s} {np.degrees(hand.lower[i]):+7.1f}..{np.degrees(hand.upper[i]):+7.1f} deg"
                          f"  {hand.velocity[i]:6.2f} rad/s  {hand.acceleration[i]:.0f} rad/s^2"
                          f"  {hand.jerk[i]:.3g} rad/s^3")
+    p = hand.spec.play_posture
+    if p is not None:
+        lines.append(f"  play postures: reach {', '.join(f'{r:+.3f}' for r in p.reach_m)} m, wrist "
+                     f"{np.degrees(p.wrist_flex_rad):+.1f} / {np.degrees(p.wrist_dev_rad):+.1f} deg, "
+                     f"presses {1000 * p.press_depth_m:.1f} mm deep (bodies clear of the keys)")
     lines.append("  couplings:")
     for c in hand.spec.couplings:
         if isinstance(c, LinearCoupling):
