@@ -23,7 +23,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner.hand.model import load_hand
-from planner.play.atlas import Atlas, table_path
+from planner.play.atlas import Atlas, posture_count, table_path
 from planner.play.moves import Moves
 from planner.play.movetable import MoveTable, make_table
 from planner.play.movetable import table_path as moves_path
@@ -58,8 +58,7 @@ def main() -> int:
                     help="keep the shipped atlas; write the move table of its entries")
     a = ap.parse_args()
     hand = load_hand(a.hand)
-    posture = hand.spec.play_posture
-    for i in range(1 if posture is None else len(posture.reach_m)):
+    for i in range(posture_count(hand)):
         make(hand, i, a.moves_only)
     return 0
 

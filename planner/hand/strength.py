@@ -198,10 +198,9 @@ def press_strength(hand: HandModel) -> dict[str, tuple[float | None, str, float 
     """Per finger: the smallest ``max_force_n`` over its atlas press poses (every play
     posture's), the limiting part there and the motor torque a PRESS_KEY_FORCE_N press
     needs there."""
-    from planner.play.atlas import SPAN_M, STEP_M, Atlas
+    from planner.play.atlas import SPAN_M, STEP_M, Atlas, posture_count
 
-    posture = hand.spec.play_posture
-    atlases = [Atlas(hand, posture=i) for i in range(1 if posture is None else len(posture.reach_m))]
+    atlases = [Atlas(hand, posture=i) for i in range(posture_count(hand))]
     cap = actuator_capacity(hand)
     n = round(SPAN_M / STEP_M)
     out: dict[str, tuple[float | None, str, float | None]] = {}

@@ -427,6 +427,12 @@ class Atlas:
         return [arc.q(si, rail) for si in s]
 
 
+def posture_count(hand: HandModel) -> int:
+    """How many play postures ``hand`` has (its ``[play]`` reach positions; one without)."""
+    p = hand.spec.play_posture
+    return 1 if p is None else len(p.reach_m)
+
+
 def table_path(urdf_sha256: str, posture: int = 0) -> Path:
     """Where the atlas of a hand's URDF (in its play posture ``posture``, after the first)
     is shipped (a cache: without it, entries are solved when first asked for;

@@ -127,8 +127,8 @@ class Prev:
                              for m, f, r in state.last_notes), key=lambda x: -x[0])
         self.lift_end = self.lifts[0][0] if self.lifts else -math.inf  # (the latest)
         # (the notes sounding that might ride along: their entry, frames and press)
-        self.follows = [] if costs.atlas.rail is None else [
-            (m, f, a, t_up[m] - t_down[m], costs.moves.press_min_s(a))
+        self.follows = [] if costs.places.rail is None else [
+            (m, f, a, t_up[m] - t_down[m], costs.places.press_min_s(a))
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None]
         self.release: dict[int, tuple[float, frozenset]] = {}  # by rail index
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
@@ -157,8 +157,6 @@ class Costs:
                  memo: CostMemo | None = None) -> None:
         self.notes = notes
         self.places = places
-        self.atlas = places  # (what the programme asks of an atlas: entries by place)
-        self.moves = places  # (... and of the moves: each entry's posture's)
         self.dt = 1.0 / rate_hz
         h = places.hand
         r = places.rail
@@ -190,7 +188,7 @@ class Costs:
         key = (finger, n.pitch, force)  # (bounded: keys and forces, not notes)
         if key not in self._rails:
             x = kb.key(n.pitch).center_x_m
-            nat = self.atlas.natural_dx[finger]
+            nat = self.places.natural_dx[finger]
             span = 0.05
             lo = max(self.rail_lo, math.ceil((x - nat - span) / RAIL_STEP_M))
             hi = min(self.rail_hi, math.floor((x - nat + span) / RAIL_STEP_M))
@@ -209,7 +207,7 @@ class Costs:
         its force, or every press that could is longer than the note (so that the
         programme never weighs a note the motion cannot strike: a dense run of one-tick
         notes costs nothing to plan)."""
-        fingers = self.atlas.hand.fingers
+        fingers = self.places.hand.fingers
         n = self.notes[note]
         if any(self.rails(f, note) for f in fingers):
             window_s = self._t_up[note] - self._t_down[note]
@@ -243,9 +241,9 @@ class Costs:
         if shortest is not None:
             return window_s >= shortest, shortest
         shortest = math.inf
-        for f in self.atlas.hand.fingers:
+        for f in self.places.hand.fingers:
             for i in sorted(self.rails(f, note)):
-                s = self.moves.press_min_s(self.entry(note, f, i))
+                s = self.places.press_min_s(self.entry(note, f, i))
                 if s <= window_s:
                     return True, s
                 shortest = min(shortest, s)
@@ -279,7 +277,7 @@ class Costs:
         got = self._timing.get(key)
         if got is None:
             e = self.entry(note, finger, place)
-            got = self._timing[key] = (self.moves.before_rail_s(e), self.moves.after_rail_s(e))
+            got = self._timing[key] = (self.places.before_rail_s(e), self.places.after_rail_s(e))
         return got
 
     def before_rail_s(self, note: int, finger: str, place: int) -> float:
@@ -333,7 +331,7 @@ class Costs:
         inf when no checked move gets there."""
         room = self._t_down[n] - self._t_up[m]
         if self.pitch[m] == self.pitch[n] and r == place:
-            return max(0.0, self.moves.repeat_gap_s(self.entry(m, f, r)) - room), 0.0
+            return max(0.0, self.places.repeat_gap_s(self.entry(m, f, r)) - room), 0.0
         gap = self._move_gap_s(m, f, r, n, place)
         if gap is None:
             return 0.0, math.inf
@@ -345,7 +343,7 @@ class Costs:
         key = (self.pitch[m], f, r, self.pitch[n], place)
         got = self._gaps.get(key, False)
         if got is False:
-            got = self._gaps[key] = self.moves.move_gap_s(self.entry(m, f, r),
+            got = self._gaps[key] = self.places.move_gap_s(self.entry(m, f, r),
                                                           self.entry(n, f, place))
         return got
 
@@ -424,12 +422,12 @@ class Costs:
             key = (a, place - ctx.state.place)
             got = self._follows.get(key)  # (its time, and whether its path is clear:
             if got is None:  # found only when a note's time fits the move)
-                got = self._follows[key] = [self.moves.follow_s(a, b), None]
+                got = self._follows[key] = [self.places.follow_s(a, b), None]
             follow_s = got[0]
             # (the move fits inside the note, after its press and before its lift)
             if window_s >= follow_s + press_s:
                 if got[1] is None:
-                    got[1] = self.moves.follow_clear(a, b)
+                    got[1] = self.places.follow_clear(a, b)
                 if got[1]:
                     followers = followers | {(m, f)}
                     T = max(T, follow_s)

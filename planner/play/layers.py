@@ -74,7 +74,7 @@ class Layers(Costs):
         # (by hand shape, the rail and the fingers on the notes sounding: the cheapest
         # state of each, the only one the pruning can keep; (cost, state before, state))
         layer: dict[tuple, tuple[float, State | None, State]] = {}
-        for size in range(min(len(new), len(self.atlas.hand.fingers)), -1, -1):
+        for size in range(min(len(new), len(self.places.hand.fingers)), -1, -1):
             for i in range(len(new) - size + 1):
                 sub = new[i:i + size]
                 left_out = sum(self.frames(n) for n in new if n not in sub)
@@ -82,7 +82,7 @@ class Layers(Costs):
         return _prune(layer)
 
     def _extend(self, layer, prev, t: float, new: list[int], left_out: float = 0.0) -> None:
-        fingers = self.atlas.hand.fingers
+        fingers = self.places.hand.fingers
         new = sorted(new, key=lambda n: self.pitch[n])
         offset = self.offset
         starts = prev.items() if prev else [(None, (0.0, None))]
@@ -247,7 +247,7 @@ class Layers(Costs):
                 rails = r if rails is None else rails & r
             out = []
             for place in sorted(rails):
-                tie = sum(abs(self.entry(n, f, place).dx_m - self.atlas.natural_dx[f])
+                tie = sum(abs(self.entry(n, f, place).dx_m - self.places.natural_dx[f])
                           for n, f in new.items()) * TIE_DX_PER_M
                 out.append((place, tie))
             self._cands[key] = out

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner.hand.model import HandModel
-from planner.play.atlas import PATH_SAMPLES, Atlas, AtlasEntry
+from planner.play.atlas import PATH_SAMPLES, Atlas, AtlasEntry, posture_count
 from planner.play.moves import Moves, path_acceleration_cap
 from planner.play.profile import Move, capped_move, path_caps
 
@@ -36,10 +36,8 @@ class Places:
     """Every play posture's atlas and moves of one hand (built once, ``Planner``)."""
 
     def __init__(self, hand: HandModel) -> None:
-        p = hand.spec.play_posture
-        n = 1 if p is None else len(p.reach_m)
         self.hand = hand
-        self.atlases = tuple(Atlas(hand, posture=i) for i in range(n))
+        self.atlases = tuple(Atlas(hand, posture=i) for i in range(posture_count(hand)))
         self.moves = tuple(Moves(hand, a) for a in self.atlases)
         self.atlas, self.home = self.atlases[0], self.moves[0]  # (the rest pose's posture)
         self.rail = self.atlas.rail
