@@ -237,8 +237,8 @@ class Motion:
         if places.rail is not None:
             self.q0[places.rail] = rail0_m
         self.posture = posture
-        # (the arm's joints as one track: the rail alone on a hand without a reach axis)
-        self.rail = _Track(np.array([rail0_m, places.reach_m(posture)][:max(1, len(self.arm))]))
+        # (the arm's joints, ``arm``, as one track: the rail alone on a hand without a reach axis)
+        self.arm_track = _Track(np.array([rail0_m, places.reach_m(posture)][:max(1, len(self.arm))]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
                         for f in self.hand.fingers}
         entries = {} if park else start_entries(atlas, rail0_m)
@@ -275,7 +275,7 @@ class Motion:
             if a.finger in seen:
                 continue
             seen.add(a.finger)
-            if abs(a.rail_m - self.rail.q[0]) <= 1e-9 and a.posture == self.posture:
+            if abs(a.rail_m - self.arm_track.q[0]) <= 1e-9 and a.posture == self.posture:
                 out.append(a)
         return out
 
@@ -296,7 +296,7 @@ class Motion:
         before then; ``notes`` are the song's notes in the file's time, which the
         motion times from now on."""
         self.notes = notes
-        for track in [self.rail] + [st.track for st in self.fingers.values()]:
+        for track in [self.arm_track] + [st.track for st in self.fingers.values()]:
             track.free_s = max(track.free_s, t_s)
         for st in self.fingers.values():
             st.high_s = max(st.high_s, t_s)
@@ -316,12 +316,12 @@ class Motion:
         """Schedule note ``a.note`` (after every note of earlier onset)."""
         n = self.notes[a.note]
         e = self.entry(a)
-        if abs(self.rail.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
+        if abs(self.arm_track.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
             self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.after_rail_s(e))
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
         after = self._release_others_on(n.pitch, a.finger)
-        found = approach(self.moves, st, e, want, after, self.rail.free_s,
+        found = approach(self.moves, st, e, want, after, self.arm_track.free_s,
                          self.committed_s)
         if found is None:
             out = Outcome(a.note, None, None, SkipReason.NO_PATH,
@@ -378,7 +378,7 @@ class Motion:
         for g, st in self.fingers.items():
             if g != finger and st.pose != "high" and st.entry is not None \
                     and (st.entry.pitch_class == pitch % 12) \
-                    and abs(st.entry.dx_m + self.rail.q[0] - _key_x(pitch)) < 0.005:
+                    and abs(st.entry.dx_m + self.arm_track.q[0] - _key_x(pitch)) < 0.005:
                 clear = max(clear, self._to_high(st))
         return clear
 
@@ -388,7 +388,7 @@ class Motion:
         key that sounds past the move which can follow it (``Moves.follow``: the rail and
         their joints on one straight time-optimal move, the tip kept on the key; in the
         same posture only)."""
-        r0 = self.rail.q[0]
+        r0 = self.arm_track.q[0]
         holds = self._holds(rail_m, arrive_by_s) if posture == self.posture else []
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
@@ -406,8 +406,8 @@ class Motion:
                 up = _up_move(self.moves, st)
                 self._to_high(st, t0 - up.duration_s + up.cross_s)
         t0 = max([t0] + [st.high_s for st in self.fingers.values() if id(st) not in held])
-        k = len(self.rail.q)
-        self.rail.add(t0, _part(move, 0, k))
+        k = len(self.arm_track.q)
+        self.arm_track.add(t0, _part(move, 0, k))
         self.posture = posture
         for st, e in holds:
             n = len(st.entry.press)
@@ -422,7 +422,7 @@ class Motion:
         b = (rail_m, self.places.reach_m(posture))
         move = self.places.arm_move(a, b)
         if holds:  # (the same posture: the reach axis, if any, stays)
-            n = len(self.rail.q)
+            n = len(self.arm_track.q)
             qa, qb = [np.array(a[:n])], [np.array(b[:n])]
             vmax = [self.hand.velocity[self.arm[:n]]]
             amax = [self.places.home.acceleration[self.arm[:n]]]
@@ -436,7 +436,7 @@ class Motion:
                 jmax.append(self.places.moves_of(e).jerk[js])
             move = straight_move(np.concatenate(qa), np.concatenate(qb), np.concatenate(vmax),
                                  np.concatenate(amax), np.concatenate(jmax))
-        ready = max(self.rail.free_s, self.committed_s)
+        ready = max(self.arm_track.free_s, self.committed_s)
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():
             if id(st) in held:
@@ -487,15 +487,15 @@ class Motion:
         hand is still."""
         for st in self.fingers.values():
             self._to_high(st)
-        return max([end_s, self.rail.free_s] + [s.track.free_s for s in self.fingers.values()])
+        return max([end_s, self.arm_track.free_s] + [s.track.free_s for s in self.fingers.values()])
 
     # ------------------------------------------------------------------ rows
     def rows(self, t_s: np.ndarray) -> np.ndarray:
         """Whole-hand configurations at times ``t_s`` (sorted)."""
         q = np.tile(self.q0, (len(t_s), 1))
         if self.arm:
-            n = len(self.rail.q)
-            q[:, self.arm[:n]] = self.rail.at(t_s, self.q0[self.arm[:n]])
+            n = len(self.arm_track.q)
+            q[:, self.arm[:n]] = self.arm_track.at(t_s, self.q0[self.arm[:n]])
         for f, st in self.fingers.items():
             js = self.hand.joint_slice(f)
             q[:, js] = st.track.at(t_s, self.q0[js])
