@@ -57,7 +57,7 @@ def peak(cmd: list[str], code: Path) -> tuple[float, float, int]:
     """Peak RSS (MB), wall time (s) and exit status of ``cmd`` under /usr/bin/time -v."""
     env = dict(os.environ, PYTHONPATH=str(code))
     p = subprocess.run(["/usr/bin/time", "-v", *cmd], cwd=code, env=env,
-                       capture_output=True, text=True)
+                       capture_output=True, text=True, check=False)
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr)
     wall = re.search(r"Elapsed \(wall clock\) time.*: (?:(\d+):)?(\d+):([\d.]+)", p.stderr)
     secs = 0.0

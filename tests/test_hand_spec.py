@@ -223,7 +223,6 @@ def test_rail_can_be_turned_off(tmp_path):
     from planner.hand.spec import hands_dir
     from planner.music.midi import load_song
     from planner.play import plan_song
-
     from tests.handfiles import fitted_text
 
     text = fitted_text()  # (no [play] posture: its reach axis goes with the rail's off)

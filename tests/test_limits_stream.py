@@ -5,6 +5,8 @@ violation), on a real plan and on one with violations put in."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -26,8 +28,8 @@ def rows(planned, hand):
 
 def _streamed(hand, kin, tr, pressing, edges, inertia=True, ball=None):
     audit = LimitAudit(hand, kin, inertia, block_rows=1)  # (each block judged as given)
-    cuts = [0, *sorted(set(e for e in edges if 0 < e < len(tr.t_s))), len(tr.t_s)]
-    for a, b in zip(cuts[:-1], cuts[1:]):
+    cuts = [0, *sorted({e for e in edges if 0 < e < len(tr.t_s)}), len(tr.t_s)]
+    for a, b in itertools.pairwise(cuts):
         audit.add(tr.t_s[a:b], tr.q[a:b], tr.q_motor[a:b],
                   None if pressing is None else pressing[a:b],
                   None if ball is None else ball[a:b])

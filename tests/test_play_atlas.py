@@ -12,8 +12,8 @@ from planner.hand.model import load_hand
 from planner.ik import PREPARE_HEIGHT_M, PRESS_TOL_M, press_target
 from planner.music import keyboard as kb
 from planner.play.atlas import HIGH_Z_M, REPEAT_DEPTH_M, STEP_M, Atlas, max_key_force_n, path_clear
-from planner.play.places import Places
 from planner.play.movetable import HIGH_SAFE_Z_M
+from planner.play.places import Places
 
 # (the thumb has no press pose on the default hand: below)
 CASES = [("index", 57), ("index", 58), ("middle", 60), ("middle", 61), ("ring", 63),

@@ -159,7 +159,6 @@ def test_a_hand_on_a_fixed_mount_plays_what_it_reaches(tmp_path):
     from planner.hand.builders import load_hand_spec
     from planner.hand.model import HandModel
     from planner.hand.spec import hands_dir
-
     from tests.handfiles import fitted_text
 
     text = fitted_text()  # (no [play] posture: its reach axis goes with the rail's off)

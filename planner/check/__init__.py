@@ -285,8 +285,9 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     allowed), unknown hand, URDF hash or column mismatch, bad T_world_root, bad
     catch metadata, a song other than the plan's.
     """
-    kw = dict(allow_incomplete=allow_incomplete, min_f1=min_f1, hand_override=hand_override,
-              strict=strict, song_options=song_options, bodies=bodies)
+    kw = {"allow_incomplete": allow_incomplete, "min_f1": min_f1,
+          "hand_override": hand_override, "strict": strict, "song_options": song_options,
+          "bodies": bodies}
     if not replay and isinstance(traj_path, (str, os.PathLike)):
         try:
             return _check_streamed(os.fspath(traj_path), song_path, **kw)

@@ -8,6 +8,7 @@ does in one pass."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -28,9 +29,9 @@ def beats(rank: float, kept: float | None) -> bool:
     """Whether a later block's worst ``rank`` replaces the ``kept`` one (argmax's order)."""
     if kept is None:
         return True
-    if kept != kept:  # NaN kept: argmax would have stopped there
+    if math.isnan(kept):  # NaN kept: argmax would have stopped there
         return False
-    return rank != rank or rank > kept
+    return math.isnan(rank) or rank > kept
 
 
 class Worst:

@@ -11,7 +11,6 @@ from typing import Any
 import numpy as np
 
 from planner.errors import InputError
-from planner.music.keyboard import DOWN_DEPTH_M, KEY_DIP_M
 from planner.hand.builders.values import (
     get_length,
     get_positive,
@@ -31,7 +30,7 @@ from planner.hand.spec import (
     PlayPosture,
     rpy_matrix,
 )
-
+from planner.music.keyboard import DOWN_DEPTH_M, KEY_DIP_M
 
 MAX_POSTURES = 4  # reach positions a hand file's [play] may give (each an atlas, a move table)
 
