@@ -1,8 +1,9 @@
-"""The hand's joints as a catch uses them: the arm (rail, wrist flexion and deviation;
-the rig's other axes, the default hand's ``reach``, held at 0 where the rail alone held
-the hand: a catch that uses them is issue 31's item 4),
-which puts the palm on the ball's path, and the fingers (abduction, flexion), which
-close on it; and the poses every throw starts from (zero, rest, open)."""
+"""The hand's joints as a catch uses them: the arm (rail, the rig's reach axis where the hand
+has one, wrist flexion and deviation), which puts the palm on the ball's path, and the
+fingers (abduction, flexion), which close on it; and the poses every throw starts from
+(zero, rest, open). The planned catch moves the reach axis (``catch_joints(..., reach=True)``:
+where along the forearm's line the palm meets the ball, and the palm giving with it); the
+live session holds it at 0, where the rail alone held the hand."""
 
 from __future__ import annotations
 
@@ -24,30 +25,34 @@ class CatchJoints:
     i_flex: int
     i_dev: int
     i_rail: int | None
-    arm: tuple[int, ...]  # rail (if any), wrist flexion, wrist deviation
+    arm: tuple[int, ...]  # rail (if any), reach (if moved), wrist flexion, wrist deviation
     finger_idx: np.ndarray  # every other joint
     abd_idx: np.ndarray  # the fingers' abduction joints
     flexion_idx: np.ndarray  # the fingers' flexion joints
     locked: tuple[str, ...]  # the arm's and the held rig axes' names (masked while the
     # fingers close)
+    i_reach: int | None = None  # the rig's reach axis when the arm moves it
 
 
-def catch_joints(hand: HandModel) -> CatchJoints:
-    """The joint groups of ``hand``; PlannerError without the 2-DOF wrist."""
+def catch_joints(hand: HandModel, reach: bool = False) -> CatchJoints:
+    """The joint groups of ``hand``; PlannerError without the 2-DOF wrist. ``reach``: the
+    rig's reach axis (if the hand has one) is one of the arm's joints, else held at 0."""
     idx = hand.index
     for n in WRIST:
         if n not in idx:
             raise PlannerError(f"hand {hand.name!r} has no joint {n!r}: the catch planner "
                                "needs the 2-DOF wrist")
     i_flex, i_dev, i_rail = idx["wrist_flex"], idx["wrist_dev"], idx.get("rail")
-    arm = tuple(i for i in (i_rail, i_flex, i_dev) if i is not None)
-    held = {idx[n] for n in hand.rig_joints if n != "rail"}  # (at their zero pose's value)
+    i_reach = idx.get("reach") if reach and "reach" in hand.rig_joints else None
+    arm = tuple(i for i in (i_rail, i_reach, i_flex, i_dev) if i is not None)
+    held = {idx[n] for n in hand.rig_joints if n != "rail" and idx[n] != i_reach}  # (at
+    # their zero pose's value)
     finger_idx = np.array(sorted(set(range(hand.n)) - set(arm) - held))
     abd = [i for i in finger_idx if "abd" in hand.joint_names[i]]
     flexion = [i for i in finger_idx if i not in set(abd)]
     return CatchJoints(i_flex, i_dev, i_rail, arm, finger_idx, np.array(abd, dtype=int),
                        np.array(flexion, dtype=int),
-                       tuple(hand.joint_names[i] for i in (*arm, *sorted(held))))
+                       tuple(hand.joint_names[i] for i in (*arm, *sorted(held))), i_reach)
 
 
 def zero_pose(hand: HandModel) -> np.ndarray:

@@ -16,6 +16,7 @@ from planner.catch.plan.arm import CatchJoints, zero_pose
 from planner.catch.plan.geometry import bracketed_secant, rot1, unit
 from planner.errors import PlannerError
 from planner.hand.model import HandModel
+from planner.trajectory import LIMIT_MARGIN
 
 MAX_MISALIGN_DEG = 80.0  # beyond this the ball grazes the palm: out of reach
 _N_SEARCH = 46  # samples of the ball's path in the intercept search
@@ -36,6 +37,7 @@ class Intercept:
     misalign: float  # rad
     aligned: bool
     reason: str | None
+    reach: float = 0.0  # the rig's reach axis (m): where along the forearm's line the hand is
 
 
 class Wrist:
@@ -55,6 +57,8 @@ class Wrist:
         self.e_f = axis("wrist_flex")
         self.u_d = axis("wrist_dev")
         self.e_r = axis("rail") if joints.i_rail is not None else self.e_f.copy()
+        self.e_reach = axis("reach") if "reach" in h.index else np.zeros(3)  # (held or
+        # moved: the reference frame's direction of a reach move, the hand's whole)
         self.W = h.frame_pose(q0, "wrist_flex")[:3, 3].copy()
         D = h.frame_pose(q0, "wrist_dev")[:3, 3]
         P = h.palm_pose(q0)
@@ -78,7 +82,13 @@ class Wrist:
         e_n = np.cross(self.e_f, self.n0)  # (aligned's projections: e, n0, e x n0)
         self._frame = np.column_stack([self.e_f, self.n0, e_n])
         self._e_n0, self._e_en = float(self.e_f @ self.n0), float(self.e_f @ e_n)
+        self.f0 = np.cross(self.n0, self.e_f)  # in the palm's plane, across the flexion axis
+        if float(self.g0 @ self.f0) < 0.0:  # (towards the palm centre from the wrist)
+            self.f0 = -self.f0
         lo, hi = hand.lower, hand.upper
+        i_reach = hand.index.get("reach")
+        self.reach_lim = ((float(lo[i_reach]), float(hi[i_reach])) if i_reach is not None
+                          else (0.0, 0.0))
         self.flex_lim = (float(lo[joints.i_flex]), float(hi[joints.i_flex]))
         self.dev_lim = (float(lo[joints.i_dev]), float(hi[joints.i_dev]))
         self.rail_lim = ((float(lo[joints.i_rail]), float(hi[joints.i_rail]))
@@ -180,7 +190,7 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
     """Where and when the palm meets the ball near ``C`` (``planner.catch.plan.api``, step 1),
     searched around ``t_c`` (the throw's time at the catch point); ``tilt``: the palm
     normal turned this far (rad, about the flexion axis) from facing the ball (the soft
-    catch's choice, ``planner.catch.plan.stopping``); 0 faces it."""
+    catch's choice, ``planner.catch.plan.stopping``); 0 faces it. The reach axis at 0."""
     t = np.linspace(max(0.0, t_c - SEARCH_BEFORE_S), t_c + SEARCH_AFTER_S, _N_SEARCH)
     b = flight.position(t) - C
     v = flight.velocity(t)
@@ -198,6 +208,58 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             return Intercept(ti, th, sol[0], sol[1], abs(tilt), True, None)
     return _position_only(wr, flight, C, r, t, b=b)
+
+
+def find_intercept_square(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float,
+                          tilt: float = 0.0, dev: float = 0.0) -> Intercept | None:
+    """The intercept with the wrist's deviation at ``dev`` (0: the palm square to the
+    throw, the fingers' cage symmetric about the ball's path) and the rig's reach axis
+    putting the palm on the path: at each time the flexion faces the ball (``tilt`` further),
+    the reach s moves the hand along its axis (direction ``e_reach``, across the flexion axis)
+    until the palm point is the ball's distance from the wrist along the palm (f), and the
+    intercept is where the ball's height above the moved palm plane crosses zero (a root in
+    t); the rail takes up the part along the flexion axis. None where no such pose lies
+    within the reach axis', the flexion's and the rail's ranges (the caller then holds the
+    reach at 0 and lets the deviation place the ball)."""
+    if not np.any(wr.e_reach) or not wr.reach_lim[0] < wr.reach_lim[1]:
+        return None
+    g = rot1(wr.u_d, dev, wr.g0) + r * wr.n0  # the palm point from the wrist, zero flexion
+    g_f, g_n, g_e = float(g @ wr.f0), float(g @ wr.n0), float(g @ wr.e_f)
+    t = np.linspace(max(0.0, t_c - SEARCH_BEFORE_S), t_c + SEARCH_AFTER_S, _N_SEARCH)
+
+    def at(tt: np.ndarray):
+        w = flight.position(tt) - C - wr.W
+        th, _ = wr.aligned(flight.position(tt) - C, flight.velocity(tt), r, tilt)
+        c, sn = np.cos(th)[:, None], np.sin(th)[:, None]
+        e = wr.e_f
+        n = wr.n0 * c + np.cross(e, wr.n0) * sn + np.outer(np.ones(len(th)), e) * (
+            e @ wr.n0) * (1.0 - c)
+        f = wr.f0 * c + np.cross(e, wr.f0) * sn + np.outer(np.ones(len(th)), e) * (
+            e @ wr.f0) * (1.0 - c)
+        rf, rn = f @ wr.e_reach, n @ wr.e_reach
+        s = (np.einsum("ij,ij->i", w, f) - g_f) / np.where(np.abs(rf) > 1e-9, rf, 1e-9)
+        h = np.einsum("ij,ij->i", w, n) - s * rn - g_n
+        return th, s, h, w @ e - g_e
+
+    h = at(t)[2]
+    down = np.flatnonzero((h[:-1] > 0) & (h[1:] <= 0))
+    if not down.size:
+        return None
+    k = int(down[0])
+
+    def one(tm: float):
+        th1, s1, h1, rail1 = at(np.array([tm]))
+        return th1[0], s1[0], rail1[0], h1[0]
+
+    ti, (th_i, s_i, rail_i, _) = bracketed_secant(one, float(t[k]), float(t[k + 1]),
+                                                   float(h[k]), float(h[k + 1]))
+    pad = 0.5 * (1.0 - LIMIT_MARGIN) * (wr.reach_lim[1] - wr.reach_lim[0])
+    lo, hi = wr.reach_lim[0] + pad, wr.reach_lim[1] - pad
+    if not (lo <= s_i <= hi and wr.flex_lim[0] <= th_i <= wr.flex_lim[1]
+            and wr.rail_lim[0] <= rail_i <= wr.rail_lim[1]):
+        return None
+    return Intercept(float(ti), float(th_i), float(dev), float(rail_i), abs(tilt), True, None,
+                     float(s_i))
 
 
 def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev: Intercept,

@@ -117,6 +117,11 @@ class CatchPlanner:
         self.kin = Kinematics(self.base_hand, self.T_ref)
         self.dyn = StopDynamics(self.hand, self.joints, self.kin)
         self.turn = HoldTurn(self.hand, self.joints, self.dyn, self.kin, self.q_rest, self._rows)
+        # the rig's reach axis moving too (``plan``: where the arm alone fails)
+        self.rig = catch_joints(self.hand, reach=True)
+        self.rig_dyn = StopDynamics(self.hand, self.rig, self.kin)
+        self.rig_turn = HoldTurn(self.hand, self.rig, self.rig_dyn, self.kin, self.q_rest,
+                                 self._rows)
         self._closings: dict[tuple[float, bool], Closing] = {}
 
     def closing(self, radius: float, bodies: bool = True) -> Closing:
@@ -149,6 +154,12 @@ class CatchPlanner:
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._plans(args, soft, True)
+        if not plan.feasible and soft and self.rig.i_reach is not None:
+            other = self._plans(args, soft, True, rig=True)
+            if other.feasible:
+                plan = replace(other, notes=other.notes + (
+                    "the rig's reach axis moves (the palm square to the throw on it where it "
+                    "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
         if not plan.feasible and CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
@@ -160,19 +171,20 @@ class CatchPlanner:
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
         return replace(plan, planning_s=time.perf_counter() - t0)
 
-    def _plans(self, args: tuple, soft: bool, bodies: bool) -> CatchPlan:
-        """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing."""
-        plan, ahead = self._plan(*args, soft=soft, bodies=bodies)
+    def _plans(self, args: tuple, soft: bool, bodies: bool, rig: bool = False) -> CatchPlan:
+        """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing;
+        ``rig``: the reach axis moves too."""
+        plan, ahead = self._plan(*args, soft=soft, bodies=bodies, rig=rig)
         for mode in ((TurnMode.EARLY,) if ahead else ()) + (TurnMode.LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
-            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies)[0]
+            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies, rig=rig)[0]
             if other.feasible:
                 what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
                         "after the arm has stopped", None: "no turn to hold the ball"}[mode]
                 plan = replace(other, notes=other.notes + (
                     f"{what}: the earlier turn failed (" + reasons_text(plan.reasons) + ")",))
-        if soft and not plan.feasible:
+        if soft and not plan.feasible and not rig:
             still = self._plan(*args, soft=False, bodies=bodies)[0]
             if still.feasible:
                 plan = replace(still, notes=still.notes + (
@@ -183,15 +195,18 @@ class CatchPlanner:
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: ThrowInfo | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
-              bodies: bool = True) -> tuple[CatchPlan, bool]:
+              bodies: bool = True, rig: bool = False) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
         (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
         grasp (the roll rule moved it). Without the soft catch the palm waits for the ball at
-        rest: no turn under way then (the roll rule's turn is the grasp's)."""
+        rest: no turn under way then (the roll rule's turn is the grasp's). ``rig``: the
+        rig's reach axis moves too (``catch_joints(..., reach=True)``): the intercept may put
+        the palm square to the throw on it, and the stopping motion uses it."""
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
+        dyn, hold = (self.rig_dyn, self.rig_turn) if rig else (self.dyn, self.turn)
         h = self.hand
         C = np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
@@ -209,19 +224,19 @@ class CatchPlanner:
         t_react = max(0.0, t_info) + SIGNAL_S + PLAN_BUDGET_S
 
         def ready_by(q_pre: np.ndarray) -> float:
-            return t_react + self.dyn.move_time(self.q_rest, q_pre)
+            return t_react + dyn.move_time(self.q_rest, q_pre)
 
-        ic, _, soft_stop = plan_stop(self.dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
+        ic, _, soft_stop = plan_stop(dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
                                      ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0)
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
         # timing: the move to the pre-catch pose, the stopping motion, the closing move
-        arm = list(self.joints.arm)
+        arm = list(soft_stop.arm)
         q_pre = pose.q_open.copy()
         q_pre[arm] += soft_stop.first_offset
-        T_m = self.dyn.move_time(self.q_rest, q_pre)
+        T_m = dyn.move_time(self.q_rest, q_pre)
         ready = t_react + T_m
         if ready > min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i):
             reasons.append(Reason(CatchReason.TOO_SOON,
@@ -230,12 +245,12 @@ class CatchPlanner:
                                   f"(t = {pose.t_i:.3f} s)"))
         s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
                           pad_time_s(soft_stop.v_rel), r)
-        turn0 = self.turn.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
+        turn0 = hold.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
         turn, t, Q, T_m, s_c, verdict = self._closing_rows(
-            flight, C, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
+            flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
                                                   s_c, rate_hz))
         reasons += verdict.reasons
-        reasons += roll_reasons(self.turn, flight, t, Q, pose.t_i)
+        reasons += roll_reasons(hold, flight, t, Q, pose.t_i)
         ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
         if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
             q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
@@ -257,22 +272,22 @@ class CatchPlanner:
             t=t, Q=Q, t_info_s=float(t_info), flight_time_s=flight_time_s, uncertainty=unc,
             notes=_turn_note(turn, pose.t_i), planning_s=time.perf_counter() - t0), ahead
 
-    def _closing_rows(self, flight: Flight, C: np.ndarray, turn0: HoldStart,
+    def _closing_rows(self, flight: Flight, C: np.ndarray, hold: HoldTurn, turn0: HoldStart,
                       turn_mode: TurnMode | None, rows_args: RowsArgs):
         """The rows with the wrist's turn as ``turn_mode`` says and their self-check
         (``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
         keeps it near the fingers longer, so the closing waits a little more when a tip meets
         it. Returns the turn, the rows, the move-in's duration, the closing's start and the
-        self-check's results."""
+        self-check's results; ``hold``: the turn's choices (the arm's joints it moves with)."""
         pose, stop, closing = rows_args.pose, rows_args.stop, rows_args.closing
         s_c = rows_args.s_c
         r = float(flight.ball.radius_m)
         for _ in range(_CLOSE_TRIES):
             args = replace(rows_args, s_c=s_c)
             if turn_mode == TurnMode.AHEAD:
-                made = self.turn.ahead_rows(turn0, args, flight)
+                made = hold.ahead_rows(turn0, args, flight)
             else:
-                made = self.turn.turned_rows(turn0, turn_mode, args)
+                made = hold.turned_rows(turn0, turn_mode, args)
             turn, t, Q, T_used = made.turn, made.t, made.Q, made.T_m
             t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
             checked = self.rows.check(flight, C, r, t, Q, pose.t_i, t_static, rows_args.rate_hz,
@@ -288,11 +303,13 @@ class CatchPlanner:
         """The hand meeting the ball at the intercept ``ic`` (``find_intercept``): its pose
         confirmed with placo (warm-started: usually zero or one iteration) and the
         intercept time refined on the confirmed pose."""
-        h, j = self.hand, self.joints
+        h, j = self.hand, self.rig
         q_arm = self.q_zero.copy()
         q_arm[j.i_flex], q_arm[j.i_dev] = ic.theta, ic.dev
         if j.i_rail is not None:
             q_arm[j.i_rail] = ic.rail
+        if j.i_reach is not None:
+            q_arm[j.i_reach] = ic.reach
         q_open = open_from(h, j, q_arm, closing.q_closed)
         ik_iter = 0
         if ic.reason is None:
@@ -326,7 +343,7 @@ class CatchPlanner:
         t_react, T_m, s_c, rate_hz = a.t_react, a.T_m, a.s_c, a.rate_hz
         h = self.hand
         delta, T_turn, t_turn, prof = turn.delta, turn.duration_s, turn.start_s, turn.profiles
-        arm = list(self.joints.arm)
+        arm = list(stop.arm)
         shift = ahead_shift(prof, pose.t_i, h.n) if prof is not None else np.zeros(h.n)
         phases = [Phase(delta=q_pre + shift - self.q_rest, duration_s=T_m),
                   Phase(delta=pose.q_closed - pose.q_open, duration_s=closing.duration_s)]

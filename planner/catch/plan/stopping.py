@@ -45,7 +45,7 @@ import pinocchio as pin
 from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix, palm_jacobian
 from planner.catch.plan.arm import CatchJoints, open_from, palm_target
-from planner.catch.plan.intercept import Intercept, Wrist, find_intercept
+from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_intercept_square
 from planner.catch.plan.results import Closing
 from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
@@ -391,20 +391,41 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
     """``plan_stop``'s tilt search: (key, (intercept, open pose, stop)) of the tilt whose
     pad phase needs the least of the motor closest to its capacity; None: no tilt reaches."""
     best = None
+    square = dyn.joints.i_reach is not None
+    for placed in ((True, False) if square else (False,)):
+        # the palm square to the throw on the reach axis (``find_intercept_square``), then
+        # the reach held at 0 and the deviation placing the ball (``find_intercept``)
+        def place(tilt_rad: float, placed: bool = placed) -> Intercept | None:
+            if placed:
+                return find_intercept_square(wrist, flight, C, r, t_c, tilt_rad)
+            return find_intercept(wrist, flight, C, r, t_c, tilt_rad)
+
+        found = _tilt_search(dyn, place, flight, r, q_zero, closing, ready_by, row_s, soft,
+                             roll_weight, speeds)
+        if found is not None and (best is None or found[0] < best[0]):
+            best = found
+    return best
+
+
+def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.ndarray,
+                 closing: Closing, ready_by, row_s: float, soft: bool, roll_weight: float,
+                 speeds: Callable[..., np.ndarray] | None):
+    """``_best_tilt`` at one placement of the palm (``place``: tilt -> intercept or None)."""
+    found = None
     for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
         # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
         # the wrist changes smoothly with it)
         for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):
-            ic = find_intercept(wrist, flight, C, r, t_c, math.radians(tilt))
-            if ic.reason is not None or (tilt != 0.0 and not ic.aligned):
+            ic = place(math.radians(tilt))
+            if ic is None or ic.reason is not None or (tilt != 0.0 and not ic.aligned):
                 break
             cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
                               math.radians(tilt), 1.0, rw=roll_weight, speeds=speeds)
             key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
-            if best is not None and key >= best[0]:
+            if found is not None and key >= found[0]:
                 break
-            best = (key, cand)
-    return best
+            found = (key, cand)
+    return found
 
 
 def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
@@ -417,6 +438,8 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
     q[j.i_flex], q[j.i_dev] = ic.theta, ic.dev
     if j.i_rail is not None:
         q[j.i_rail] = ic.rail
+    if j.i_reach is not None:
+        q[j.i_reach] = ic.reach
     q_open = open_from(h, j, q, closing.q_closed)
     bound = (dyn.v_max.copy() if bound0 is None else bound0.copy()) if soft \
         else np.zeros(len(dyn.arm))
