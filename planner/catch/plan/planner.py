@@ -160,6 +160,9 @@ class CatchPlanner:
                 plan = replace(other, notes=other.notes + (
                     "the rig's reach axis moves (the palm square to the throw on it where it "
                     "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
+            else:
+                plan = replace(plan, notes=plan.notes + (
+                    "with the rig's reach axis moving too: " + reasons_text(other.reasons),))
         if not plan.feasible and CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is

@@ -1,0 +1,92 @@
+"""The catch with the rig's reach axis (``planner.catch.plan.intercept.find_intercept_square``,
+``CatchPlanner.plan``'s rig fallback): where the arm alone fails, the palm meets the ball
+square to the throw (wrist deviation 0) with the reach axis putting it on the ball's path,
+and the stopping motion moves the reach too. No wall-clock assertions."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from planner.catch.flight.path import get_ball, predict_throw
+from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.arm import palm_target
+from planner.catch.plan.intercept import find_intercept_square
+from planner.catch.plan.reasons import HARD_LIMITS, CatchReason
+from planner.check import check_trajectory
+from planner.trajfile import read_trajectory
+
+
+@pytest.fixture(scope="module")
+def pl():
+    return get_planner("default")
+
+
+def test_the_square_intercept_puts_the_palm_on_the_path(pl):
+    """65 deg through (1.5, 0, -0.3): the square intercept has the deviation at 0, the reach
+    within its travel, the palm target on the ball (the IK's 1 mm) and the palm facing it."""
+    ball = get_ball("tennis")
+    fl = predict_throw(65.0, 1.5, -0.3, ball, False)
+    C = np.array([1.5, 0.0, -0.3])
+    ic = find_intercept_square(pl.wrist, fl, C, ball.radius_m, float(fl.time_at_x(1.5)))
+    assert ic is not None and ic.reason is None and ic.aligned and ic.dev == 0.0
+    h, j = pl.hand, pl.rig
+    assert h.lower[j.i_reach] < ic.reach < h.upper[j.i_reach] and ic.reach != 0.0
+    q = pl.q_zero.copy()
+    q[[j.i_flex, j.i_dev, j.i_rail, j.i_reach]] = ic.theta, ic.dev, ic.rail, ic.reach
+    gap = np.linalg.norm(palm_target(h, q, ball.radius_m) - (fl.position(ic.t) - C))
+    assert gap < 1e-3
+    n, v = h.palm_pose(q)[:3, 2], fl.velocity(ic.t)
+    assert math.degrees(math.acos(min(1.0, -(n @ v) / np.linalg.norm(v)))) < 0.5
+
+
+@pytest.mark.parametrize("throw", [(65.0, 1.5, -0.3), (65.0, 2.0, -0.3), (25.0, 2.5, 0.3)])
+def test_throws_the_arm_alone_loses_to_the_roll_are_caught_with_the_reach(pl, tmp_path, throw):
+    """Measured (bench/bench_catch_wide.py): with the arm alone these roll 51, 53 and 330 mm
+    towards the wrist; with the reach axis they are feasible, ``check`` confirms them and
+    the rows move the reach."""
+    p = plan_throw(*throw, planner=pl)
+    assert p.feasible, p.reasons
+    assert any(n.startswith("the rig's reach axis moves") for n in p.notes)
+    out = tmp_path / "c.csv"
+    write_plan(p, str(out))
+    rep = check_trajectory(str(out))
+    assert rep.ok, rep.problems
+    i = pl.hand.index["reach"]
+    assert np.ptp(read_trajectory(str(out)).q[:, i]) > 0.01
+
+
+def test_a_plan_of_the_arm_alone_holds_the_reach(pl):
+    """A throw the arm alone catches is planned as before: the reach axis stays at 0."""
+    p = plan_throw(30.0, 1.5, 0.0, planner=pl)
+    assert p.feasible
+    assert np.all(p.rows.q[:, pl.hand.index["reach"]] == 0.0)
+    assert not any("reach axis" in n for n in p.notes)
+
+
+def test_a_steep_fast_throw_names_its_limit_with_its_number(pl):
+    """75 deg from 2 m arrives at 6.3 m/s: with the arm alone and with the reach axis too,
+    stopping it needs more of the wrist flexion's motor than its 2 N m: too fast to stop (a
+    hard limit), with the force and the torque in the reason; the reach's try is noted."""
+    p = plan_throw(75.0, 2.0, 0.0, planner=pl)
+    assert not p.feasible and CatchReason.TOO_FAST_TO_STOP in p.reason_kinds
+    fast = next(r for r in p.reasons if r.kind in HARD_LIMITS)
+    m = re.search(r"([\d.]+) N needs motor\.wrist_flex at ([\d.]+) N m > its gear limit "
+                  r"([\d.]+) N m", str(fast))
+    assert m and float(m.group(2)) > float(m.group(3)) == 2.0
+    assert any(n.startswith("with the rig's reach axis moving too: ") for n in p.notes)
+
+
+def test_caught_with_the_reach_in_physics(pl, tmp_path):
+    """The reach's catch of 65 deg through (1.5, 0, -0.3) is held in MuJoCo (measured: 34 mm
+    from the palm centre at the end)."""
+    pytest.importorskip("mujoco")
+    from planner.simulate import simulate_trajectory
+
+    out = tmp_path / "c.csv"
+    write_plan(plan_throw(65.0, 1.5, -0.3, planner=pl), str(out))
+    c = simulate_trajectory(str(out)).catch
+    assert c is not None and c.held and c.end_distance_m < 0.0335 + 0.010
