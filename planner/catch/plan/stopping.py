@@ -71,8 +71,8 @@ _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried
 _MAX_SHRINK = 6
 _MIN_SPEED = 0.05  # arm speeds below this share of their limits are not worth a motion
 _FD_M = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
-_QP = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True, warm_starting=False)
-# (cold: a plan does not depend on the throws planned before it)
+_QPS: dict[int, DenseQp] = {}  # one cold OSQP solver per number of arm joints (3; 4 with the
+# reach): one size's problems never re-set up the other's (the arm alone's bytes kept)
 
 
 def ramp_integral(u: np.ndarray) -> np.ndarray:
@@ -334,7 +334,9 @@ def contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
     """The QP (``contact_qp``) within -bound <= x <= bound, by OSQP (zeros when unsolved)."""
     k = J.shape[1]
     P, c = contact_qp(J, v_ball, normal, roll_weight)
-    res = _QP.solve(P, c, np.eye(k), -bound, bound)
+    qp = _QPS.setdefault(k, DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000,
+                                    polishing=True, warm_starting=False))
+    res = qp.solve(P, c, np.eye(k), -bound, bound)
     if not res.solved:
         return np.zeros(k)
     return np.clip(res.x, -bound, bound)
