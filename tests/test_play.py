@@ -240,9 +240,11 @@ def test_a_held_key_the_hand_must_leave_is_let_go_and_named(planner, tmp_path):
 # frame F1 measured with this version (0.949, 1.0, 1.0), less 0.01
 # (jerk-limited moves, issue 30: 0.949, 1.0, 1.0 -> 0.935, 0.881, 0.889; a short move
 # bound by jerk takes 4 (d / 2 j)^(1/3), twice the bang-bang time of a repeated key)
-# (the plan timed to the bodies, session 37, by the pad points: 0.820, 0.820, 0.774)
+# (the plan timed to the bodies, session 37, by the pad points: 0.820, 0.820, 0.774;
+# each finger move timed within the tendons' capacity, planner.play.tendonload: the
+# middle finger's moves up to 8 % slower, trill_cascade 0.7632)
 @pytest.mark.parametrize("name,f1", [("melody_over_held_bass", 0.81), ("trill_sections", 0.81),
-                                     ("trill_cascade", 0.764)])
+                                     ("trill_cascade", 0.753)])
 def test_regression_songs(planner, name, f1, tmp_path):
     """Random songs the first planner once did badly on (tests/data/README.md)."""
     song = ROOT / "tests" / "data" / f"{name}.mid"
