@@ -436,6 +436,10 @@ class Motion:
                 jmax.append(self.places.moves_of(e).jerk[js])
             move = straight_move(np.concatenate(qa), np.concatenate(qb), np.concatenate(vmax),
                                  np.concatenate(amax), np.concatenate(jmax))
+            cols = np.concatenate([self.arm[:n]] + [self.hand.joint_slice(st.entry.finger)
+                                                    for st, _ in holds])
+            move = self.places.tendon_slowed(move, self.posture, cols, tuple(
+                self.hand.fingers.index(st.entry.finger) for st, _ in holds))
         ready = max(self.arm_track.free_s, self.committed_s)
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():

@@ -55,8 +55,13 @@ from planner.play.profile import (
     path_caps,
     straight_move,
 )
+from planner.play.tendonload import slowed, tendon_load
 
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
+# an entry's moves timed within the tendons' capacity (``planner.play.tendonload``), each
+# pair of poses one way or the other (the bound is the same both ways: computed from the
+# first pose), the press's key pushing back on the finger in the first three
+SCALE_PAIRS = (("press", "high"), ("press", "hover"), ("press", "rise"), ("hover", "high"))
 
 
 @dataclass(frozen=True)
@@ -100,6 +105,10 @@ class Moves:
         self._lat: dict = {}
         self.descend = lru_cache(maxsize=None)(self._descend)
         self.lift = lru_cache(maxsize=None)(self._lift)
+        self.tendons = tendon_load(hand)
+        self.entry_scale = lru_cache(maxsize=None)(self._entry_scale)
+        self.rise = lru_cache(maxsize=None)(self._rise)
+        self.to_hover = lru_cache(maxsize=None)(self._to_hover)
         self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
         self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
         # every joint's acceleration limit, the rail's also within what the wrist holds
@@ -136,6 +145,7 @@ class Moves:
                            "limit_fraction": LIMIT_FRACTION, "path_samples": PATH_SAMPLES,
                            "across_samples": ACROSS_SAMPLES, "high_safe_z_m": HIGH_SAFE_Z_M,
                            "hold_margin_m": HOLD_MARGIN_M,
+                           **self.tendons.params(),
                            "velocity": [round(float(x), 12) for x in h.velocity],
                            "acceleration": [round(float(x), 12) for x in h.acceleration],
                            "jerk": [round(float(x), 12) for x in h.jerk]},
@@ -144,6 +154,36 @@ class Moves:
     def _move(self, finger: str, qa: np.ndarray, qb: np.ndarray) -> Move:
         js = self.js[finger]
         return straight_move(qa, qb, self.hand.velocity[js], self.acceleration[js], self.jerk[js])
+
+    def _entry_move(self, e: AtlasEntry, a: str, b: str) -> Move:
+        """The entry's finger from its pose ``a`` to its pose ``b``, timed within the
+        tendons' capacity (``entry_scale``)."""
+        pair = (a, b) if (a, b) in SCALE_PAIRS else (b, a)
+        move = self._move(e.finger, getattr(e, a), getattr(e, b))
+        return slowed(move, self.entry_scale(e, SCALE_PAIRS.index(pair)))
+
+    def _entry_scale(self, e: AtlasEntry, column: int) -> float:
+        """How much slower than its joints allow the move between the entry's poses
+        ``SCALE_PAIRS[column]`` runs to keep its tendons within their share of capacity
+        (``TendonLoad.time_scale``; the move table's, when it has the entry)."""
+        got = self.table.tendon_scale(e, column)
+        if got is not None:
+            return got
+        a, b = (getattr(e, p) for p in SCALE_PAIRS[column])
+        top = kb.key(60 + e.pitch_class).top_z_m if column < 3 else None
+        return self.finger_scale(e.finger, a, b, self._move(e.finger, a, b), top)
+
+    def finger_scale(self, finger: str, qa: np.ndarray, qb: np.ndarray, move: Move,
+                     key_top_z_m: float | None = None) -> float:
+        """``TendonLoad.time_scale`` of a finger's ``move`` from ``qa`` to ``qb`` (its
+        joints; the rest of the hand at the atlas's natural posture), its key (top at
+        ``key_top_z_m``; None: no key under it) pushing back where it is down."""
+        js = self.js[finger]
+        q_a, dq = self.atlas.base.copy(), np.zeros(self.hand.n)
+        q_a[js], dq[js] = qa, qb - qa
+        f = self.hand.fingers.index(finger)
+        return self.tendons.time_scale(move, q_a, dq, () if key_top_z_m is None else (f,),
+                                       key_top_z_m)
 
     def _cross(self, e: AtlasEntry, qa: np.ndarray, qb: np.ndarray, move: Move,
                going_down: bool) -> float:
@@ -186,14 +226,14 @@ class Moves:
     def _descend(self, e: AtlasEntry, start: str) -> Timed:
         """From ``start`` ("high", "hover" or "rise") down to the press pose."""
         qa = getattr(e, start)
-        m = self._move(e.finger, qa, e.press)
+        m = self._entry_move(e, start, "press")
         c = self.table.crossing(e, ENDS.index(start))
         return Timed(m, self._cross(e, qa, e.press, m, True) if c is None else c)
 
     def _lift(self, e: AtlasEntry, end: str) -> Timed:
         """From the press pose up to ``end`` ("high", "hover" or "rise")."""
         qb = getattr(e, end)
-        m = self._move(e.finger, e.press, qb)
+        m = self._entry_move(e, "press", end)
         c = self.table.crossing(e, 3 + ENDS.index(end))
         return Timed(m, self._cross(e, e.press, qb, m, False) if c is None else c)
 
@@ -203,8 +243,13 @@ class Moves:
         top, wherever the rail is: the arm may have moved since the finger rose)."""
         key = (a.finger, id(a), id(b))
         if key not in self._lat:
-            self._lat[key] = None if self.across_s(a, b) is None else \
-                self._move(a.finger, a.high, b.high)
+            move = None
+            if self.across_s(a, b) is not None:
+                move = self._move(a.finger, a.high, b.high)
+                move = slowed(move, self.finger_scale(a.finger, a.high, b.high, move))
+                # (the programme's duration is this move's from now on)
+                self._across_s[(id(a), id(b))] = move.duration_s
+            self._lat[key] = move
         return self._lat[key]
 
     def across_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
@@ -212,8 +257,17 @@ class Moves:
         programme asks this of thousands of pairs; ``path_caps``, as ``straight_move``)."""
         got = self._across_s.get((id(a), id(b)), False)
         if got is False:
-            got = self._across_new(a, b, self._record(a), self._record(b))
+            got = self._across_new(a, b, self._poses(a), self._poses(b))
         return got
+
+    def _poses(self, e: AtlasEntry) -> EntryRecord:
+        """The entry's record, or of an entry of another posture (a finger crossing to
+        this one's at crossing height: ``Places.move_gap_s``) its poses alone (its moves
+        are its own posture's)."""
+        if e.posture == self.atlas.posture_index:
+            return self._record(e)
+        nan = float("nan")
+        return EntryRecord(e, nan, nan, nan, nan, e.high.tolist(), e.press.tolist(), None)
 
     def _across_new(self, a: AtlasEntry, b: AtlasEntry, ra: EntryRecord,
                     rb: EntryRecord) -> float | None:
@@ -268,7 +322,7 @@ class Moves:
         got = self._follow_s.get(key)
         if got is None:
             x = kb.key(60 + a.pitch_class).center_x_m
-            pa, pb = self._record(a).press, self._record(b).press
+            pa, pb = self._poses(a).press, self._poses(b).press
             caps = path_caps([(x - b.dx_m) - (x - a.dx_m), *[y - z for z, y in zip(pa, pb)]],
                              *self._follow_limits[a.finger])
             got = self._follow_s[key] = 0.0 if caps is None else move_time_s(*caps)
@@ -328,14 +382,14 @@ class Moves:
             return None
         return move
 
-    def rise(self, e: AtlasEntry) -> Timed:
+    def _rise(self, e: AtlasEntry) -> Timed:
         """Up from the waiting pose to crossing height (no key crossing)."""
-        return Timed(self._move(e.finger, e.hover, e.high), 0.0)
+        return Timed(self._entry_move(e, "hover", "high"), 0.0)
 
-    def to_hover(self, e: AtlasEntry) -> Move:
+    def _to_hover(self, e: AtlasEntry) -> Move:
         """Down from crossing height to the waiting pose over the same key (checked by
         the atlas)."""
-        return self._move(e.finger, e.high, e.hover)
+        return self._entry_move(e, "high", "hover")
 
     # ------------------------------------------------------------------ gaps
     def entry_times(self, e: AtlasEntry) -> tuple[float, float, float, float]:
@@ -407,8 +461,11 @@ def _table_records(atlas: Atlas, table: MoveTable, js: dict[str, list[int]],
         es = [e for e, _ in es]
         press, high = np.array([e.press for e in es]), np.array([e.high for e in es])
         lim = [x[jf] for x in limits]  # (speed, acceleration, jerk)
-        t_high = move_times_s(high - press, *lim)
-        t_rise = move_times_s(np.array([e.rise for e in es]) - press, *lim)
+        # (each timed within the tendons' capacity: ``Moves._entry_move``)
+        sc = np.array([table.scales[table.key(e)] for e in es]).reshape(-1, 4)
+        t_high = move_times_s(high - press, *lim) * sc[:, SCALE_PAIRS.index(("press", "high"))]
+        t_rise = move_times_s(np.array([e.rise for e in es]) - press, *lim) \
+            * sc[:, SCALE_PAIRS.index(("press", "rise"))]
         d_high, u_high = c[:, cols["high"]], c[:, 3 + cols["high"]]
         d_rise, u_rise = c[:, cols["rise"]], c[:, 3 + cols["rise"]]
         for e, *rec in zip(es, (t_high - u_high).tolist(), d_high.tolist(),

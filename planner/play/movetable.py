@@ -4,6 +4,8 @@ of entries, found once per hand and shipped beside the atlas
 
 * the key crossings of every entry's descents (from high, hover, rise) and lifts (to
   the same), ``Moves._cross``;
+* how much slower than its joints allow each of an entry's moves runs within the
+  tendons' capacity (``Moves.entry_scale``, ``planner.play.tendonload``);
 * for every pair of one finger's entries, whether its move across at crossing height
   is clear of the keys (``Moves.across``);
 * for every pair of one finger's entries on one key (two places relative to the rail),
@@ -62,6 +64,7 @@ class MoveTable:
         self.natural_dx = natural_dx
         self.posture = posture  # (the atlas's play posture: another's entries are not here)
         self.crossings: dict[tuple[str, int, int], np.ndarray] = {}
+        self.scales: dict[tuple[str, int, int], np.ndarray] = {}  # (``SCALE_PAIRS``' order)
         self._index: dict[tuple[str, int, int], tuple[int, int]] = {}  # in finger, in key
         self._across: dict[str, np.ndarray] = {}
         self._follow: dict[tuple[str, int], np.ndarray] = {}
@@ -77,6 +80,10 @@ class MoveTable:
 
     def crossing(self, e: AtlasEntry, column: int) -> float | None:
         row = self.crossings.get(self.key(e))
+        return None if row is None else float(row[column])
+
+    def tendon_scale(self, e: AtlasEntry, column: int) -> float | None:
+        row = self.scales.get(self.key(e))
         return None if row is None else float(row[column])
 
     def across_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool | None:
@@ -113,8 +120,8 @@ class MoveTable:
             if str(z["params"]) != params:
                 return
             keys = [(self.fingers[int(f)], int(pc), int(k)) for f, pc, k in z["key"]]
-            for key, row in zip(keys, z["cross_s"]):
-                self.crossings[key] = row
+            for key, row, sc in zip(keys, z["cross_s"], z["tendon_scale"]):
+                self.crossings[key], self.scales[key] = row, sc
             self._index = _indices(keys)
             for f in self.fingers:
                 n = sum(k[0] == f for k in keys)
@@ -155,6 +162,8 @@ def make_table(moves, path: Path, params: str) -> int:
         "cross_s": np.array([[moves.descend(e, p).cross_s for p in ENDS]
                              + [moves.lift(e, p).cross_s for p in ENDS] for e in entries]
                             ).reshape(-1, 6),
+        "tendon_scale": np.array([[moves.entry_scale(e, c) for c in range(4)]
+                                  for e in entries]).reshape(-1, 4),
         "params": np.array(params)}
     for f in hand.fingers:
         mine = [e for e in entries if e.finger == f]
