@@ -17,7 +17,7 @@ from planner.check.kinematics import Kinematics
 from planner.hand.bodies import BOX, CAPSULE, SPHERE, collision_bodies, place
 from planner.hand.builders import load_hand_spec
 from planner.music import keyboard as kb
-from planner.music.keybodies import box_lowest_z, swept_lowest_z
+from planner.music.keybodies import box_lowest_z, footprints, sphere_depths, swept_lowest_z
 from planner.music.midi import Note, write_notes_midi
 from tests.trajbuild import min_jerk, press_posture, write_traj
 
@@ -134,6 +134,26 @@ def test_swept_lowest_point_is_exact():
             assert z[i] <= low.min() + 1e-12 and low.min() - z[i] < 1e-6
         else:
             assert not np.isfinite(z[i]) or low.min() - z[i] >= 0.0
+
+
+def test_sphere_depths_are_the_exact_column_depths():
+    """The atlas's sampled bodies (spheres) judged as check judges a body: the depth below
+    each key's top of the lowest sphere point inside its footprint, against the exact
+    column search (``swept_lowest_z`` with a = b) over every footprint rectangle."""
+    rng = np.random.default_rng(1)
+    p = np.c_[rng.uniform(0.15, 0.25, 40), rng.uniform(0.0, 0.16, 40),
+              rng.uniform(-0.012, 0.03, 40)]
+    r = rng.uniform(0.004, 0.012, 40)
+    fp = footprints()
+    want = np.full(88, -np.inf)
+    for pi, ri in zip(p, r):
+        n = len(fp.key)
+        z = swept_lowest_z(np.tile(pi, (n, 1)), np.tile(pi, (n, 1)), np.full(n, ri), fp.lo, fp.hi)
+        np.maximum.at(want, fp.key, fp.top_m - z)
+    got = sphere_depths(p, r)
+    assert np.isfinite(got).sum() > 5
+    assert np.array_equal(np.isfinite(got), np.isfinite(want))
+    np.testing.assert_allclose(got[np.isfinite(got)], want[np.isfinite(want)], atol=1e-9)
 
 
 def test_box_lowest_point_is_the_linear_programmes():

@@ -56,7 +56,12 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.play.arc import Arc, arc_joint
-from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, FingerBodies
+from planner.play.fingerbody import (
+    OTHER_KEY_DEPTH_M,
+    OTHER_KEY_TOLERANCE_M,
+    OWN_BED_MARGIN_M,
+    FingerBodies,
+)
 
 STEP_M = 0.001  # the atlas samples dx this often
 SPAN_M = 0.045  # ... this far either side of a finger's natural place
@@ -319,7 +324,8 @@ class Atlas:
         return {"posture": [round(float(x), 12) for x in (p.reach_m[self.posture_index],
                                                           p.wrist_flex_rad, p.wrist_dev_rad,
                                                           p.press_depth_m)],
-                "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES]}
+                "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES,
+                              OTHER_KEY_DEPTH_M]}
 
     def _load(self, path: Path) -> None:
         if not path.exists():
