@@ -217,46 +217,49 @@ def _body_check(tmp_path, hand, pitch, finger, depth_m, note_pitch, y_m=None):
 def test_a_clean_press_by_the_bodies(tmp_path, hand):
     """C#4 pressed by the index's body 7 mm (its pad point above the key: the test's
     posture curls the distal segment past vertical, so the pad sphere is the finger's
-    lowest point): the note sounds by the body rule, no wrong key, no bed hit."""
+    lowest point): the note sounds by the body rule, check's verdict, no wrong key, no
+    bed hit."""
     d = _depth_for(hand, 61, "index", 61, 0.007)
     rep = _body_check(tmp_path, hand, 61, "index", d, 61)
-    b = rep.bodies
-    assert b is not None and not b.verdict
-    assert b.notes_hit == 1 and b.wrong_presses == () and b.bed_hits == ()
-    assert b.f1 > 0.5 and b.keys_pressed == 1
+    p = rep.play
+    assert rep.ok, rep.summary()
+    assert p.notes_hit == 1 and p.wrong_presses == () and p.body_bed_hits == ()
+    assert p.f1 > 0.5 and len(p.played) == 1 and p.played[0].fingers == ("index",)
 
 
-BEHIND_M = 0.12  # a white key pressed behind the black keys' front (as the planner did before
-# session 37: the finger's width reaches the black neighbour)
+BEHIND_M = 0.12  # a white key pressed behind the black keys' front (as the planner once
+# did: the finger's width reaches the black neighbour)
 
 
 def test_a_neighbour_pressed_6_mm_is_a_wrong_key_by_body(tmp_path, hand):
-    """The index on E4 behind the black keys, its body reaching D#4 6 mm below D#4's top:
-    a wrong key by body (the index's distal link named), while E4's note is expected."""
+    """The index on E4 behind the black keys, its body reaching D#4 6 mm below D#4's top
+    (its pad point nowhere near D#4): a wrong key, the index named, and check fails."""
     d = _depth_for(hand, 64, "index", 63, 0.006, BEHIND_M)
     rep = _body_check(tmp_path, hand, 64, "index", d, 64, BEHIND_M)
-    wrong = [w for w in rep.bodies.wrong_presses if w.pitch == 63]
-    assert len(wrong) == 1 and wrong[0].fingers[0].startswith("index_")
-    assert rep.bodies.bed_hits == ()
-    assert rep.ok  # reported only: not the verdict without --bodies
-    strict = check_trajectory(rep.trajectory, str(tmp_path / "song.mid"), bodies=True)
-    assert not strict.ok and any("wrong presses by bodies" in p for p in strict.problems)
+    wrong = [w for w in rep.play.wrong_presses if w.pitch == 63]
+    assert len(wrong) == 1 and wrong[0].fingers == ("index",)
+    assert rep.play.body_bed_hits == ()
+    assert not rep.ok and any("wrong presses (first: D#4" in p and "by index" in p
+                              for p in rep.problems), rep.problems
 
 
 def test_a_body_2_mm_past_the_bed_is_a_bed_hit(tmp_path, hand):
     """C#4 pressed until the pad sphere is 12 mm below its top (2 mm past the 10 mm bed,
-    the limit 11 mm): a body bed hit with its row, time and link; the JSON has it."""
+    the limit 11 mm): a body bed hit with its row, time and link; check fails; the JSON
+    has it."""
     d = _depth_for(hand, 61, "index", 61, 0.012)
     rep = _body_check(tmp_path, hand, 61, "index", d, 61)
-    hits = rep.bodies.bed_hits
+    hits = rep.play.body_bed_hits
     assert len(hits) == 1 and hits[0].pitch == 61 and hits[0].link == "index_top"
     assert hits[0].depth_m == pytest.approx(0.012, abs=2e-4)
     assert hits[0].depth_m > BODY_BED_DEPTH_M
     assert hits[0].time_s == pytest.approx(hits[0].row / 100.0)
-    assert rep.bodies.wrong_presses == ()
-    js = rep.to_dict()["bodies"]
-    assert js["bed_hits"][0]["body"] == "index_pad" and js["verdict"] is False
-    assert "bodies (spec section 2" in rep.summary()
+    assert rep.play.wrong_presses == ()
+    js = rep.to_dict()["play"]
+    assert js["body_bed_hits"][0]["body"] == "index_pad"
+    assert not rep.ok and any("body key-bed hits (first: index_top on C#4" in p
+                              for p in rep.problems), rep.problems
+    assert "body key-bed hits" in rep.summary()
 
 
 def test_body_rule_contains_the_point_rule(tmp_path, hand):

@@ -167,7 +167,8 @@ def test_a_body_beside_a_black_keys_wall_is_refused(bodies):
     finger end (the ring's 8.6 mm sphere) 2 mm below the white tops, 0.2 mm into D#5's
     footprint from its side, touches the black key's box by 0.2 mm (under the 0.5 mm a
     physical touch is allowed) yet lies 18 mm below its top inside its footprint, a
-    wrong note by check's rule: the atlas refuses it. Moved 0.5 mm clear of the wall, it
+    wrong note by check's rule: the atlas refuses it (and within 0.5 mm of the wall: the rail
+    lands up to half the atlas's step off a sample). Moved 1 mm clear of the wall, it
     presses its own E5 (10.6 mm deep, within its bed's 1 mm)."""
     r = 0.0086
     x_wall = kb.footprint(75)[0][1]  # D#5's right side
@@ -175,7 +176,8 @@ def test_a_body_beside_a_black_keys_wall_is_refused(bodies):
     rad = np.array([r])
     assert 0 < bodies.box_depths(p, rad, 76)[bodies.box_pitch == 75].max() <= 0.0005
     assert not bodies.clear_points(p, rad, 76)
-    assert bodies.clear_points(p + [0.0007, 0.0, 0.0], rad, 76)
+    assert not bodies.clear_points(p + [0.0005, 0.0, 0.0], rad, 76)  # (0.3 mm clear)
+    assert bodies.clear_points(p + [0.0012, 0.0, 0.0], rad, 76)
 
 
 def test_points_many_are_points_at_each_configuration(hand, bodies):

@@ -19,11 +19,13 @@ Tolerances (each a physical value with its source):
 * ``OTHER_KEY_TOLERANCE_M`` 0.5 mm: a key the body touches by that much is pushed down
   0.5 mm at most, a tenth of the spec's 5 mm key-down depth (it does not sound); it is
   also the atlas's grid (``STEP_M / 2``: where a tip lands at most off its sample).
-* ``OTHER_KEY_DEPTH_M`` 4.5 mm: spec section 2's own rule, judged as ``check`` judges it
-  (how far below a key's top a body reaches inside the key's footprint column,
-  ``planner.music.keybodies.sphere_depths``): a body beside a black key's wall, below its
-  top, touches the box by a fraction of a millimetre from the side but lies inside the
-  footprint deeper than the key-down depth (5 mm, short by the atlas's half step).
+* Spec section 2's own rule, judged as ``check`` judges it: no body reaches the key-down
+  depth (5 mm) inside another key's footprint column
+  (``planner.music.keybodies.sphere_depths``), the column grown by
+  ``OTHER_KEY_TOLERANCE_M`` on every side (the rail lands up to half the atlas's grid
+  step off the pose's sample). A body beside a black key's wall, below its top, touches
+  the key's box by a fraction of a millimetre from the side but lies inside its
+  footprint column deeper than the key-down depth: a wrong key by the rule.
 * ``OWN_BED_MARGIN_M`` 1 mm: the pressed key's bed is 10 mm down (spec: key dip); spec
   section 2 (bodies) allows no body more than 1 mm past it (``check``'s
   ``criteria.BED_MARGIN_M``, the one definition): a body reaching further would be held
@@ -49,9 +51,6 @@ from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
 OWN_BED_MARGIN_M = BED_MARGIN_M  # 1 mm: spec section 2 (bodies), check's own rule
-# spec section 2's rule itself, inside every other key's footprint column: short of the
-# key-down depth by the atlas's grid (a tip lands at most half a step off its sample)
-OTHER_KEY_DEPTH_M = DOWN_DEPTH_M - OTHER_KEY_TOLERANCE_M
 AXIS_SAMPLES = 9  # a capsule's axis is tested at this many points (its ends included)
 
 
@@ -146,17 +145,19 @@ class FingerBodies:
 
     def clear_points(self, p: np.ndarray, r: np.ndarray, own_pitch: int | None) -> bool:
         """True when sphere-swept points ``p`` (m, 3), radii ``r`` (m,) reach no key but
-        ``own_pitch`` by more than ``OTHER_KEY_TOLERANCE_M`` nor ``OTHER_KEY_DEPTH_M`` deep
-        in its footprint, and their own key (pressed) by at most ``OWN_BED_MARGIN_M`` (the
-        box pressed to its bed; in the footprint, ``check``'s ``BODY_BED_DEPTH_M``)."""
+        ``own_pitch`` by more than ``OTHER_KEY_TOLERANCE_M`` nor ``DOWN_DEPTH_M`` deep in
+        its footprint grown by ``OTHER_KEY_TOLERANCE_M``, and their own key (pressed) by
+        at most ``OWN_BED_MARGIN_M`` (the box pressed to its bed; in the footprint,
+        ``check``'s ``BODY_BED_DEPTH_M``)."""
         pen = self.box_depths(p, r, own_pitch)
         own = self.box_pitch == own_pitch
         if not (np.all(pen[~own] <= OTHER_KEY_TOLERANCE_M)
                 and np.all(pen[own] <= OWN_BED_MARGIN_M)):
             return False
-        depth = sphere_depths(p, r)
-        mine = np.zeros(len(depth), dtype=bool)
-        if own_pitch is not None:
-            mine[own_pitch - kb.LOWEST_PITCH] = True
-        return bool(np.all(depth[~mine] < OTHER_KEY_DEPTH_M)
-                    and np.all(depth[mine] <= BODY_BED_DEPTH_M))
+        near = sphere_depths(p, r, OTHER_KEY_TOLERANCE_M)
+        mine = np.zeros(len(near), dtype=bool)
+        if own_pitch is None:
+            return bool(np.all(near < DOWN_DEPTH_M))
+        mine[own_pitch - kb.LOWEST_PITCH] = True
+        own = sphere_depths(p, r)[mine]
+        return bool(np.all(near[~mine] < DOWN_DEPTH_M) and np.all(own <= BODY_BED_DEPTH_M))
