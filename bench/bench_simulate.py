@@ -7,7 +7,7 @@
                                                  # interleaved: real-time factors (median
                                                  # of --reps), physics F1, wrong keys,
                                                  # longest motor saturation, side by side
-    python bench/bench_simulate.py --bodies      # every sample song: check's body rule vs
+    python bench/bench_simulate.py --bodies      # every sample song: check's verdict (bodies) vs
                                                  # physics F1 and wrong keys (full contact)
     python bench/bench_simulate.py --agreement   # every sample song: kinematic vs physics F1
                                                  # (both contact models), notes that differ
@@ -184,28 +184,27 @@ def bench_agreement() -> None:
 
 
 def bench_bodies(hand_name: str = "default") -> None:
-    """Every sample song: ``check``'s point rule and body rule (spec section 2) beside the
+    """Every sample song: ``check``'s verdict (the body rule, spec section 2) beside the
     physics replay in full contact (frame F1, wrong keys), one plan each."""
     from planner.check import check_trajectory
 
     hand = planner.load_hand(hand_name)
-    print("| song | check F1 (points) | check F1 (bodies) | wrong keys (bodies) | body bed hits "
-          "| physics F1 (full) | wrong keys (physics) | wrong keys by body: links |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| song | check F1 (bodies) | wrong keys (check) | body bed hits "
+          "| physics F1 (full) | wrong keys (physics) | wrong keys in check by: |")
+    print("|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as d:
         for song in sorted((ROOT / "songs").glob("*.mid")):
             traj = Path(d) / f"{song.stem}.csv"
             planner.plan_song(planner.load_song(str(song)), hand, str(traj))
-            rep = check_trajectory(str(traj), str(song))
+            p = check_trajectory(str(traj), str(song)).play
             full = simulate_trajectory(str(traj), str(song), contact="full")
-            b = rep.bodies
-            links: dict[str, int] = {}
-            for w in b.wrong_presses:
+            who: dict[str, int] = {}
+            for w in p.wrong_presses:
                 for ln in w.fingers:
-                    links[ln] = links.get(ln, 0) + 1
-            top = ", ".join(f"{k} {v}" for k, v in sorted(links.items(), key=lambda x: -x[1])[:3])
-            print(f"| {song.stem} | {rep.play.f1:.4f} | {b.f1:.4f} | {len(b.wrong_presses)} | "
-                  f"{len(b.bed_hits)} | {full.play.f1:.4f} | {len(full.play.wrong_keys)} | "
+                    who[ln] = who.get(ln, 0) + 1
+            top = ", ".join(f"{k} {v}" for k, v in sorted(who.items(), key=lambda x: -x[1])[:3])
+            print(f"| {song.stem} | {p.f1:.4f} | {len(p.wrong_presses)} | "
+                  f"{len(p.body_bed_hits)} | {full.play.f1:.4f} | {len(full.play.wrong_keys)} | "
                   f"{top} |", flush=True)
 
 

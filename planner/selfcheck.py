@@ -1,8 +1,8 @@
 """The planner's own verdict: the rows it wrote, replayed by the check's rules.
 
 ``SelfCheck`` takes every chunk of rows as the file holds them (rounded to its
-decimals), finds the keys down with the check's kinematics and key-down rule
-(``planner.check.criteria``), and at the end scores them against the song with
+decimals), finds the keys down with the check's kinematics and key-down rule (spec
+section 2's bodies: ``planner.check.bodykeys``), and at the end scores them against the song with
 the check's own ``SongScorer``, and audits the rows' limits with the check's own
 ``LimitAudit`` (motor torques with the hand's inertia, tendon tensions, speeds), both
 block by block as the rows come.
@@ -22,11 +22,14 @@ from typing import Any
 
 import numpy as np
 
-from planner.check.criteria import DOWN_DEPTH_M, N_KEYS, key_contacts
-from planner.check.keys import SongScore, SongScorer, score_song
+from planner.check.bodykeys import bed_hits, bed_problem, body_keys, body_names
+from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M, N_KEYS, key_contacts
+from planner.check.episodes import EpisodeStream
+from planner.check.keys import SongScore, SongScorer, frame_period, score_song
 from planner.check.kinematics import Kinematics
 from planner.check.limits import LimitAudit
-from planner.check.results import LimitCheck
+from planner.check.results import BodyBedHit, LimitCheck
+from planner.hand.bodies import collision_bodies
 from planner.hand.model import HandModel
 from planner.play.costs import Skip, SkipReason
 from planner.trajfile import distinct_rows
@@ -43,6 +46,7 @@ class Verdict:
     skipped: tuple[Skip, ...]
     score: SongScore
     limits: tuple[LimitCheck, ...] = ()  # the check's limit audit of the rows
+    bed_hits: tuple[BodyBedHit, ...] = ()  # bodies past a key's bed (check's rule)
 
     @property
     def played(self) -> int:
@@ -54,8 +58,9 @@ class Verdict:
 
     @property
     def rejected(self) -> bool:
-        """What ``check``'s default verdict fails: a wrong press or a limit violation."""
-        return bool(self.score.wrong_presses or self.violations)
+        """What ``check``'s default verdict fails: a wrong press, a body past a key's bed
+        or a limit violation."""
+        return bool(self.score.wrong_presses or self.bed_hits or self.violations)
 
     def problem_lines(self) -> list[str]:
         """The summary's lines for every key the replay finds down late and every wrong
@@ -65,6 +70,7 @@ class Verdict:
         out += [f"  WRONG PRESS: {w.start_s:.3f}-{w.end_s:.3f} s {w.name} by "
                 f"{'+'.join(w.fingers) or '?'} (no note of that key sounds then)"
                 for w in self.score.wrong_presses]
+        out += [f"  BED: {line}" for line in bed_problem(self.bed_hits)]
         out += [f"  LIMIT: {lc.count} {lc.category.replace('_', ' ')} violations (worst "
                 f"{lc.worst:.6g} vs {lc.limit:.6g} {lc.unit}, {lc.name} at {lc.time_s:.3f} s)"
                 for lc in self.violations]
@@ -93,6 +99,9 @@ class SelfCheck:
         self._kin = Kinematics(hand, hand.T_world_root)
         self._nj = hand.n
         self._rate_hz = rate_hz
+        self._bodies = collision_bodies(hand.spec)
+        self._names, self._of_body = body_names(self._bodies)
+        self._bed = EpisodeStream(N_KEYS)
         self._audit = LimitAudit(hand, self._kin, inertia=True)
         self._t: list[np.ndarray] = []  # (every row's time: 8 bytes a row)
         self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # (t, down, finger)
@@ -125,10 +134,13 @@ class SelfCheck:
         new, of = distinct_rows(q)
         tips, _ = self._kin.frames_of(q[new])
         kc = key_contacts(tips)
+        bk = body_keys(self._kin, q, self._bodies)
         t = rows[:, 0].copy()
-        down, finger = kc.down[of], kc.finger[of]
+        down = bk.down
+        finger = np.where(down, self._of_body[bk.body], -1).astype(np.int8)
         self._t.append(t)
         self._rows += len(t)
+        self._bed.add(bk.depth_m > BODY_BED_DEPTH_M, t, bk.body, bk.depth_m)
         self._audit.add(t, q, rows[:, 1 + nj:],
                         (np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)[of])
         if self._scorer is not None:
@@ -139,7 +151,7 @@ class SelfCheck:
     def start_scoring(self, notes) -> None:
         """Score the rows against ``notes`` as they come (else they wait for ``verdict``,
         the keys down kept)."""
-        self._scorer = SongScorer(notes, self._rate_hz)
+        self._scorer = SongScorer(notes, self._rate_hz, self._names)
         for t, bits, held in self._blocks:
             down = np.unpackbits(bits, axis=1, count=N_KEYS).astype(bool)
             finger = np.full(down.shape, -1, dtype=np.int8)
@@ -154,7 +166,7 @@ class SelfCheck:
         self._judge()
         if self._rows == 0:
             score = score_song(np.zeros(1), np.zeros((1, N_KEYS), dtype=bool), None, notes,
-                               self._rate_hz)
+                               self._rate_hz, self._names)
         else:
             if self._scorer is None:
                 self.start_scoring(notes)
@@ -166,4 +178,6 @@ class SelfCheck:
             else:
                 skipped.append(Skip(m.note, SkipReason.MISSED, f"replay: {m.reason}"))
         limits = tuple(self._audit.finish()[0]) if self._rows >= 2 else ()
-        return Verdict(len(notes), tuple(skipped), score, limits)
+        t_all = np.concatenate(self._t) if self._t else np.zeros(1)
+        beds = bed_hits(self._bed.finish(frame_period(t_all)), self._bodies)
+        return Verdict(len(notes), tuple(skipped), score, limits, beds)

@@ -17,7 +17,7 @@ from planner.check.kinematics import Kinematics
 from planner.hand.bodies import BOX, CAPSULE, SPHERE, collision_bodies, place
 from planner.hand.builders import load_hand_spec
 from planner.music import keyboard as kb
-from planner.music.keybodies import box_lowest_z, swept_lowest_z
+from planner.music.keybodies import box_lowest_z, footprints, sphere_depths, swept_lowest_z
 from planner.music.midi import Note, write_notes_midi
 from tests.trajbuild import min_jerk, press_posture, write_traj
 
@@ -136,6 +136,26 @@ def test_swept_lowest_point_is_exact():
             assert not np.isfinite(z[i]) or low.min() - z[i] >= 0.0
 
 
+def test_sphere_depths_are_the_exact_column_depths():
+    """The atlas's sampled bodies (spheres) judged as check judges a body: the depth below
+    each key's top of the lowest sphere point inside its footprint, against the exact
+    column search (``swept_lowest_z`` with a = b) over every footprint rectangle."""
+    rng = np.random.default_rng(1)
+    p = np.c_[rng.uniform(0.15, 0.25, 40), rng.uniform(0.0, 0.16, 40),
+              rng.uniform(-0.012, 0.03, 40)]
+    r = rng.uniform(0.004, 0.012, 40)
+    fp = footprints()
+    want = np.full(88, -np.inf)
+    for pi, ri in zip(p, r):
+        n = len(fp.key)
+        z = swept_lowest_z(np.tile(pi, (n, 1)), np.tile(pi, (n, 1)), np.full(n, ri), fp.lo, fp.hi)
+        np.maximum.at(want, fp.key, fp.top_m - z)
+    got = sphere_depths(p, r)
+    assert np.isfinite(got).sum() > 5
+    assert np.array_equal(np.isfinite(got), np.isfinite(want))
+    np.testing.assert_allclose(got[np.isfinite(got)], want[np.isfinite(want)], atol=1e-9)
+
+
 def test_box_lowest_point_is_the_linear_programmes():
     """A tilted box in a column: its lowest point against the LP's optimum (scipy)."""
     from scipy.optimize import linprog
@@ -197,46 +217,49 @@ def _body_check(tmp_path, hand, pitch, finger, depth_m, note_pitch, y_m=None):
 def test_a_clean_press_by_the_bodies(tmp_path, hand):
     """C#4 pressed by the index's body 7 mm (its pad point above the key: the test's
     posture curls the distal segment past vertical, so the pad sphere is the finger's
-    lowest point): the note sounds by the body rule, no wrong key, no bed hit."""
+    lowest point): the note sounds by the body rule, check's verdict, no wrong key, no
+    bed hit."""
     d = _depth_for(hand, 61, "index", 61, 0.007)
     rep = _body_check(tmp_path, hand, 61, "index", d, 61)
-    b = rep.bodies
-    assert b is not None and not b.verdict
-    assert b.notes_hit == 1 and b.wrong_presses == () and b.bed_hits == ()
-    assert b.f1 > 0.5 and b.keys_pressed == 1
+    p = rep.play
+    assert rep.ok, rep.summary()
+    assert p.notes_hit == 1 and p.wrong_presses == () and p.body_bed_hits == ()
+    assert p.f1 > 0.5 and len(p.played) == 1 and p.played[0].fingers == ("index",)
 
 
-BEHIND_M = 0.12  # a white key pressed behind the black keys' front (as the planner did before
-# session 37: the finger's width reaches the black neighbour)
+BEHIND_M = 0.12  # a white key pressed behind the black keys' front (as the planner once
+# did: the finger's width reaches the black neighbour)
 
 
 def test_a_neighbour_pressed_6_mm_is_a_wrong_key_by_body(tmp_path, hand):
-    """The index on E4 behind the black keys, its body reaching D#4 6 mm below D#4's top:
-    a wrong key by body (the index's distal link named), while E4's note is expected."""
+    """The index on E4 behind the black keys, its body reaching D#4 6 mm below D#4's top
+    (its pad point nowhere near D#4): a wrong key, the index named, and check fails."""
     d = _depth_for(hand, 64, "index", 63, 0.006, BEHIND_M)
     rep = _body_check(tmp_path, hand, 64, "index", d, 64, BEHIND_M)
-    wrong = [w for w in rep.bodies.wrong_presses if w.pitch == 63]
-    assert len(wrong) == 1 and wrong[0].fingers[0].startswith("index_")
-    assert rep.bodies.bed_hits == ()
-    assert rep.ok  # reported only: not the verdict without --bodies
-    strict = check_trajectory(rep.trajectory, str(tmp_path / "song.mid"), bodies=True)
-    assert not strict.ok and any("wrong presses by bodies" in p for p in strict.problems)
+    wrong = [w for w in rep.play.wrong_presses if w.pitch == 63]
+    assert len(wrong) == 1 and wrong[0].fingers == ("index",)
+    assert rep.play.body_bed_hits == ()
+    assert not rep.ok and any("wrong presses (first: D#4" in p and "by index" in p
+                              for p in rep.problems), rep.problems
 
 
 def test_a_body_2_mm_past_the_bed_is_a_bed_hit(tmp_path, hand):
     """C#4 pressed until the pad sphere is 12 mm below its top (2 mm past the 10 mm bed,
-    the limit 11 mm): a body bed hit with its row, time and link; the JSON has it."""
+    the limit 11 mm): a body bed hit with its row, time and link; check fails; the JSON
+    has it."""
     d = _depth_for(hand, 61, "index", 61, 0.012)
     rep = _body_check(tmp_path, hand, 61, "index", d, 61)
-    hits = rep.bodies.bed_hits
+    hits = rep.play.body_bed_hits
     assert len(hits) == 1 and hits[0].pitch == 61 and hits[0].link == "index_top"
     assert hits[0].depth_m == pytest.approx(0.012, abs=2e-4)
     assert hits[0].depth_m > BODY_BED_DEPTH_M
     assert hits[0].time_s == pytest.approx(hits[0].row / 100.0)
-    assert rep.bodies.wrong_presses == ()
-    js = rep.to_dict()["bodies"]
-    assert js["bed_hits"][0]["body"] == "index_pad" and js["verdict"] is False
-    assert "bodies (spec section 2" in rep.summary()
+    assert rep.play.wrong_presses == ()
+    js = rep.to_dict()["play"]
+    assert js["body_bed_hits"][0]["body"] == "index_pad"
+    assert not rep.ok and any("body key-bed hits (first: index_top on C#4" in p
+                              for p in rep.problems), rep.problems
+    assert "body key-bed hits" in rep.summary()
 
 
 def test_body_rule_contains_the_point_rule(tmp_path, hand):

@@ -234,11 +234,11 @@ def test_key_bed_hit(tmp_path, hand):
     t, q = play_trajectory(deep, 3.4)
     r = check_trajectory(write_traj(tmp_path / "k.csv", hand, t, q), song_file(tmp_path))
     assert not r.ok
-    hits = r.play.key_bed_hits
-    assert hits and {(h.finger, h.name) for h in hits} == {("middle", "D4")}
-    assert max(h.depth_m for h in hits) == pytest.approx(0.015, abs=1e-5)
-    assert all(1.0 < h.time_s < 1.5 for h in hits)
-    assert any("key-bed" in p for p in r.problems)
+    (hit,) = r.play.body_bed_hits  # (the middle's body 15 mm down: 4 mm past the 11 allowed)
+    assert (hit.link.split("_")[0], hit.name) == ("middle", "D4")
+    assert hit.depth_m == pytest.approx(0.015, abs=1e-5)
+    assert 1.0 < hit.time_s < hit.end_s < 1.5
+    assert any("body key-bed hits" in p for p in r.problems)
 
 
 def _limit(r, category):

@@ -162,6 +162,24 @@ def test_the_seed_hand_cannot_press_between_two_black_keys(hand, bodies):
         assert cap_m < needed_m, (f, cap_m)
 
 
+def test_a_body_beside_a_black_keys_wall_is_refused(bodies):
+    """Spec section 2 judges a body by how deep it reaches inside a key's footprint: a
+    finger end (the ring's 8.6 mm sphere) 2 mm below the white tops, 0.2 mm into D#5's
+    footprint from its side, touches the black key's box by 0.2 mm (under the 0.5 mm a
+    physical touch is allowed) yet lies 18 mm below its top inside its footprint, a
+    wrong note by check's rule: the atlas refuses it (and within 0.5 mm of the wall: the rail
+    lands up to half the atlas's step off a sample). Moved 1 mm clear of the wall, it
+    presses its own E5 (10.6 mm deep, within its bed's 1 mm)."""
+    r = 0.0086
+    x_wall = kb.footprint(75)[0][1]  # D#5's right side
+    p = np.array([[x_wall + r - 0.0002, 0.10, -0.002]])
+    rad = np.array([r])
+    assert 0 < bodies.box_depths(p, rad, 76)[bodies.box_pitch == 75].max() <= 0.0005
+    assert not bodies.clear_points(p, rad, 76)
+    assert not bodies.clear_points(p + [0.0005, 0.0, 0.0], rad, 76)  # (0.3 mm clear)
+    assert bodies.clear_points(p + [0.0012, 0.0, 0.0], rad, 76)
+
+
 def test_points_many_are_points_at_each_configuration(hand, bodies):
     """``FingerBodies.points_many`` (``FrameChain``, many configurations at once) gives
     ``points`` (Pinocchio, one at a time) at each, to rounding."""

@@ -14,13 +14,17 @@ from functools import cache, lru_cache
 
 import numpy as np
 
+from planner.check.bodykeys import body_keys
+from planner.check.kinematics import Kinematics
+from planner.hand.bodies import collision_bodies
 from planner.hand.model import load_hand
-from planner.music.keyboard import key
+from planner.music.keyboard import LOWEST_PITCH, key
 from planner.music.midi import Note, write_notes_midi
 from planner.trajfile import end_line, format_rows, header_line, metadata_line
 
 RATE = 100.0
 RAMP_S = 0.08  # press / release ramp; the 5 mm threshold is crossed at its middle
+HOVER_M = -0.008  # a finger waiting to press: its deepest body this far above the key's top
 
 
 def meta(h, task="play", **extra):
@@ -103,6 +107,56 @@ def press_posture(pitch, finger, depth, y_m=None):
     return _press_posture(pitch, finger, round(depth, 6), y_m).copy()
 
 
+FRONT_Y_M = 0.03  # a white key pressed this far behind its front edge: the finger's
+# segments, rising behind the pad, stay clear of the black keys (y >= 0.06)
+
+
+@cache
+def _below_pad(pitch, finger):
+    """How far ``finger``'s deepest body lies below its pad point pressing ``pitch`` (a
+    white key in front of the black keys): found where the body is 8 mm down."""
+    hand = load_hand("default")
+    kin = Kinematics(hand, hand.T_world_root)
+    bodies = collision_bodies(hand.spec)
+    y = None if key(pitch).black else FRONT_Y_M
+    lo, hi, want = 0.0, 0.008, 0.008
+    for _ in range(24):
+        mid = 0.5 * (lo + hi)
+        q = _press_posture(pitch, finger, round(mid, 7), y)
+        if body_keys(kin, q[None], bodies).depth_m[0, pitch - LOWEST_PITCH] < want:
+            lo = mid
+        else:
+            hi = mid
+    return want - 0.5 * (lo + hi)
+
+
+def body_press_posture(pitch, finger, depth):
+    """``finger`` on key ``pitch`` with its deepest collision body ``depth`` below the
+    key's top (spec section 2's body rule; negative: above), a white key in front of the
+    black keys: the other keys clear (the pad point ``_below_pad`` above it)."""
+    return _body_press(pitch, finger, round(depth, 6)).copy()
+
+
+@cache
+def _body_press(pitch, finger, depth):
+    y = None if key(pitch).black else FRONT_Y_M
+    pad = depth - _below_pad(pitch, finger)
+    if depth <= 0.005:  # (above the key-down depth the rule reports no depth: the offset)
+        return _press_posture(pitch, finger, round(pad, 7), y)
+    hand = load_hand("default")
+    kin = Kinematics(hand, hand.T_world_root)
+    bodies = collision_bodies(hand.spec)
+    lo, hi = pad - 0.002, pad + 0.002
+    for _ in range(24):
+        mid = 0.5 * (lo + hi)
+        q = _press_posture(pitch, finger, round(mid, 7), y)
+        if body_keys(kin, q[None], bodies).depth_m[0, pitch - LOWEST_PITCH] < depth:
+            lo = mid
+        else:
+            hi = mid
+    return _press_posture(pitch, finger, round(0.5 * (lo + hi), 7), y)
+
+
 def min_jerk(times, keyframes, t):
     """Minimum-jerk blend between consecutive (time, q) keyframes, at rest at each."""
     times = np.asarray(times)
@@ -115,15 +169,16 @@ def min_jerk(times, keyframes, t):
 
 
 def play_trajectory(presses, t_end, depth=0.010):
-    """Rows at RATE for presses = [(pitch, finger, onset, offset[, depth])]: the key
-    goes down at the frame of ``onset`` and up at the frame of ``offset``."""
+    """Rows at RATE for presses = [(pitch, finger, onset, offset[, depth])] (``depth``:
+    the finger's deepest body below the key's top): the key goes down at the frame of
+    ``onset`` and up at the frame of ``offset``."""
     hand = load_hand("default")
-    times, frames = [0.0], [press_posture(presses[0][0], presses[0][1], -0.015)]
+    times, frames = [0.0], [body_press_posture(presses[0][0], presses[0][1], HOVER_M)]
     half = 0.5 / RATE  # the threshold crossing sits between two frames
     for p in presses:
         pitch, finger, on, off = p[:4]
         d = p[4] if len(p) > 4 else depth
-        hover, up, down = (press_posture(pitch, finger, x) for x in (-0.015, 0.0, d))
+        hover, up, down = (body_press_posture(pitch, finger, x) for x in (HOVER_M, 0.0, d))
         ramp_on = on - half - RAMP_S / 2
         if times[-1] < ramp_on - 0.1 - 1e-9:
             times.append(ramp_on - 0.1)
@@ -131,7 +186,7 @@ def play_trajectory(presses, t_end, depth=0.010):
         times += [ramp_on, on - half + RAMP_S / 2, off - half - RAMP_S / 2, off - half + RAMP_S / 2]
         frames += [up, down, down, up]
     times.append(times[-1] + 0.1)
-    frames.append(press_posture(presses[-1][0], presses[-1][1], -0.015))
+    frames.append(body_press_posture(presses[-1][0], presses[-1][1], HOVER_M))
     assert np.all(np.diff(times) >= RAMP_S - 1e-9), times
     t = np.arange(round(t_end * RATE) + 1) / RATE
     q = hand.apply_couplings(min_jerk(times, frames, t))

@@ -4,11 +4,13 @@
 section 4), rebuilds the hand it names, replays every row through forward
 kinematics and reports
 
-* **play**: which keys go down in every frame (spec section 2: a fingertip
-  point inside a key's footprint -- for a white key minus the black keys'
-  rectangles -- at least ``DOWN_DEPTH_M`` below the key's resting top), key-bed
-  hits (a fingertip in a footprint more than ``KEY_BED_DEPTH_M`` below that
-  top), and with a song: frame-level precision / recall / F1 (RoboPianist's
+* **play**: which keys go down in every frame (spec section 2's body rule,
+  ``bodykeys``: any collision body of the hand inside a key's footprint -- for a
+  white key minus the black keys' rectangles -- at least ``DOWN_DEPTH_M`` below the
+  key's resting top; a fingertip point is the bottom of its pad sphere, so the point
+  rule is the special case), key-bed hits (a fingertip in a footprint more than
+  ``KEY_BED_DEPTH_M`` below that top, a body more than ``BODY_BED_DEPTH_M``), and
+  with a song: frame-level precision / recall / F1 (RoboPianist's
   metric), note-level hits, missed notes and wrong presses;
 * **catch**: the ball's flight (integrated here), where it meets the palm,
   fingertips touching it early and the grasp after the intercept;
@@ -28,11 +30,6 @@ The file contract (``planner.trajfile``): rows at ``rate_hz`` from t = 0 (within
 2) with the first bad row named. With a song, the file's metadata must name as
 many notes as the song has (with its ``track``, ``channel`` and ``transpose``,
 which the check reads from the metadata unless given).
-
-**bodies** (play): spec section 2's body rule (``bodykeys``): the keys the hand's
-collision bodies press, body key-bed hits, the body frame F1 and the wrong presses by
-body; reported on every play, the verdict only with ``bodies`` (``check --bodies``)
-while the planner is rebuilt to meet it (issue 30).
 
 The verdict fails on key-bed hits, wrong presses, limit violations, a failed
 catch, F1 under ``min_f1``, and on any claim of the plan's end marker the replay
@@ -119,7 +116,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from planner.check.ball import ball_params, ball_positions, catch_audit
-from planner.check.bodykeys import BodyJudge, body_keys, body_problems, judge_bodies
+from planner.check.bodykeys import bed_problem, body_keys, body_names
 from planner.check.claims import (
     ClaimKey,
     CountMismatch,
@@ -239,10 +236,11 @@ def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list
         h = play.key_bed_hits[0]
         problems.append(f"{len(play.key_bed_hits)} key-bed hits (first: {h.finger} on {h.name}"
                         f" at {h.time_s:.3f} s, {h.depth_m * 1000:.2f} mm deep)")
+    problems.extend(bed_problem(play.body_bed_hits))
     if play.wrong_presses:
         w = play.wrong_presses[0]
         problems.append(f"{len(play.wrong_presses)} wrong presses (first: {w.name} at "
-                        f"{w.start_s:.3f} s)")
+                        f"{w.start_s:.3f} s by {'+'.join(w.fingers) or '?'})")
     if play.claim_mismatches:
         c = play.claim_mismatches[0]
         problems.append(f"{len(play.claim_mismatches)} notes the plan claims otherwise than the "
@@ -268,7 +266,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
                      allow_incomplete: bool = False, min_f1: float | None = None,
                      hand_override: str | HandModel | None = None, strict: bool = False,
                      song_options: dict[str, Any] | None = None,
-                     bodies: bool = False, replay: bool = True) -> CheckReport:
+                     replay: bool = True) -> CheckReport:
     """Replay ``traj_path`` and audit it (see the package docstring).
 
     ``traj_path``: a file, or a ``Trajectory`` already read (a plan made in memory).
@@ -286,8 +284,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     catch metadata, a song other than the plan's.
     """
     kw = {"allow_incomplete": allow_incomplete, "min_f1": min_f1,
-          "hand_override": hand_override, "strict": strict, "song_options": song_options,
-          "bodies": bodies}
+          "hand_override": hand_override, "strict": strict, "song_options": song_options}
     if not replay and isinstance(traj_path, (str, os.PathLike)):
         try:
             return _check_streamed(os.fspath(traj_path), song_path, **kw)
@@ -309,42 +306,41 @@ def _song_notes(plan, song_path, min_f1: float | None, song_options):
 
 
 def _check_whole(traj_path, song_path, *, allow_incomplete, min_f1, hand_override, strict,
-                 song_options, bodies) -> CheckReport:
+                 song_options) -> CheckReport:
     """``check_trajectory`` of a file read whole (its replay arrays kept)."""
     plan = read_plan(traj_path, allow_incomplete=allow_incomplete,
                      hand_override=hand_override)
     tr, traj_path, hand = plan.trajectory, plan.path, plan.hand
-    meta, task = tr.metadata, plan.task
+    task = plan.task
     notes = _song_notes(plan, song_path, min_f1, song_options)
     kin = Kinematics(hand, plan.T_world_root)
     tips, palm = kin.frames(tr.q)
     problems: list[str] = []
     play = catch = None
     replay_kw: dict[str, Any] = {}
-    pressing = ball_load = body_result = None
+    pressing = ball_load = None
     if task == "play":
-        play, kc, exp = play_replay(tr, tips, notes)
+        shapes = collision_bodies(hand.spec)
+        bk = body_keys(kin, tr.q, shapes)
+        play, keys, exp = play_replay(tr, tips, bk, shapes, notes)
         play = _held_to_claims(play, notes, tr.end, traj_path)
-        pressing = np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
-        replay_kw = {"down": kc.down, "finger": kc.finger, "expected": exp}
+        pressing = np.nan_to_num(keys.kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
+        replay_kw = {"down": keys.down, "finger": keys.holder, "expected": exp,
+                     "holders": body_names(shapes)[0], "key_depth_m": bk.depth_m}
         problems.extend(_play_problems(play, min_f1, strict))
-        body_result = judge_bodies(tr.t_s, body_keys(kin, tr.q, collision_bodies(hand.spec)),
-                                   notes, float(meta["rate_hz"]), verdict=bodies)
-        if bodies:
-            problems.extend(body_problems(body_result))
     else:
         catch, ball_load = catch_audit(tr, kin, tips, palm, traj_path)
         problems.extend(catch.problems)
     limits, tendons = limit_audit(hand, kin, tr, pressing, ball_load, inertia=task == "play")
-    return _report(plan, song_path, tr.t_s, limits, tendons, play, catch, body_result,
-                   min_f1, problems, Replay(tr.t_s, tr.q, tips, palm, **replay_kw))
+    return _report(plan, song_path, tr.t_s, limits, tendons, play, catch, min_f1, problems,
+                   Replay(tr.t_s, tr.q, tips, palm, **replay_kw))
 
 
 def _check_streamed(path: str, song_path, *, allow_incomplete, min_f1, hand_override, strict,
-                    song_options, bodies) -> CheckReport:
+                    song_options) -> CheckReport:
     """``check_trajectory`` of a play file read as a stream: every rule judges the rows
-    block by block (``PlayJudge``, ``BodyJudge``, ``LimitAudit``); kept per row only its
-    time and what the song's notes need (bits). NotStreamable: read it whole."""
+    block by block (``PlayJudge``, ``LimitAudit``); kept per row only its time and what
+    the song's notes need (bits). NotStreamable: read it whole."""
     stream = stream_trajectory(path, allow_incomplete)
     if stream.head.metadata["task"] != "play":
         raise NotStreamable("a catch")
@@ -352,29 +348,24 @@ def _check_streamed(path: str, song_path, *, allow_incomplete, min_f1, hand_over
     hand, rate_hz = plan.hand, stream.rate_hz
     notes = _song_notes(plan, song_path, min_f1, song_options)
     kin = Kinematics(hand, plan.T_world_root)
-    judge, shapes = PlayJudge(notes, rate_hz), collision_bodies(hand.spec)
-    body_judge = BodyJudge(shapes, notes, rate_hz, verdict=bodies)
+    shapes = collision_bodies(hand.spec)
+    judge = PlayJudge(notes, rate_hz, shapes)
     audit = LimitAudit(hand, kin, inertia=True)
     times = []
     for t, q, qm in stream.blocks():
         tips, _ = kin.frames(q)
-        kc = judge.add(t, tips)
-        audit.add(t, q, qm, np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)
-        body_judge.add(t, body_keys(kin, q, shapes))
+        keys = judge.add(t, tips, body_keys(kin, q, shapes))
+        audit.add(t, q, qm, np.nan_to_num(keys.kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)
         times.append(t)
     t_s = np.concatenate(times)
     play = _held_to_claims(judge.finish(t_s), notes, stream.head.end, path)
     problems = _play_problems(play, min_f1, strict)
-    body_result = body_judge.finish(t_s)
-    if bodies:
-        problems.extend(body_problems(body_result))
     limits, tendons = audit.finish()
-    return _report(plan, song_path, t_s, limits, tendons, play, None, body_result, min_f1,
-                   problems, None)
+    return _report(plan, song_path, t_s, limits, tendons, play, None, min_f1, problems, None)
 
 
-def _report(plan, song_path, t_s: np.ndarray, limits, tendons, play, catch, body_result,
-            min_f1, problems: list[str], replay: Replay | None) -> CheckReport:
+def _report(plan, song_path, t_s: np.ndarray, limits, tendons, play, catch, min_f1,
+            problems: list[str], replay: Replay | None) -> CheckReport:
     """The report: the limits' problems after the task's."""
     for lc in limits:
         if not lc.ok:
@@ -390,7 +381,7 @@ def _report(plan, song_path, t_s: np.ndarray, limits, tendons, play, catch, body
         complete=plan.trajectory.complete, rows=len(t_s), duration_s=float(t_s[-1] - t_s[0]),
         rate_hz=float(meta["rate_hz"]), limits=tuple(limits), play=play, catch=catch,
         min_f1=min_f1, problems=tuple(problems), replay=replay, tendons=tendons,
-        song_start_s=song_start_s(meta), bodies=body_result)
+        song_start_s=song_start_s(meta))
 
 
 def _held_to_claims(play: PlayResult, notes, end: dict[str, Any], path: str) -> PlayResult:

@@ -8,8 +8,8 @@ footprint: ``criteria.BODY_BED_DEPTH_M``, 11 mm below its top. The fingertip poi
 a body of zero size; every pad point is its pad sphere's bottom, so a key down by the
 point rule is down by the bodies too.
 
-One definition: ``check`` reports it (``check_trajectory``) and the planners'
-self-checks call the same ``body_keys`` and ``judge_bodies``. The geometry (each body's
+One definition: ``check``'s key-down rule (``planner.check.keys.PlayJudge``) and the
+planner's self-check (``planner.selfcheck``) call the same ``body_keys``. The geometry (each body's
 lowest point in each footprint, exact) is ``planner.music.keybodies``.
 """
 
@@ -19,18 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.check.criteria import (
-    BODY_BED_DEPTH_M,
-    DOWN_DEPTH_M,
-    LOWEST_PITCH,
-    N_KEYS,
-    pitch_name,
-)
-from planner.check.episodes import EpisodeStream
-from planner.check.keys import SongScorer, frame_period
+from planner.check.criteria import DOWN_DEPTH_M, LOWEST_PITCH, pitch_name
 from planner.check.kinematics import Kinematics
-from planner.check.results import BodyBedHit, BodyResult
+from planner.check.results import BodyBedHit
 from planner.hand.bodies import Body, body_links, place
+from planner.hand.spec import FINGERS
 from planner.music.keybodies import column_depths
 from planner.trajfile import distinct_rows
 
@@ -59,22 +52,22 @@ def body_keys(kin: Kinematics, Q: np.ndarray, bodies: tuple[Body, ...]) -> BodyK
     return BodyKeys(bodies, depth >= DOWN_DEPTH_M, depth, which)
 
 
-def _link_rows(bk: BodyKeys, links: tuple[str, ...]) -> np.ndarray:
-    """(T, 88) index into ``links`` of the link whose body holds each key down, -1 none."""
-    of_body = np.array([links.index(b.link) for b in bk.bodies] + [-1])
-    return np.where(bk.down, of_body[bk.body], -1)
+def body_names(bodies: tuple[Body, ...]) -> tuple[tuple[str, ...], np.ndarray]:
+    """Who holds a key down by the body rule, by name: the fingers (``FINGERS``, a
+    finger's every segment and its pad) and then each other link (palm, wrist, forearm,
+    carriage) by its own name; and each body's index into those names (-1 appended: a
+    row where no body holds the key)."""
+    others = tuple(dict.fromkeys(b.link for b in bodies if b.finger is None))
+    names = FINGERS + others
+    of_body = np.array([FINGERS.index(b.finger) if b.finger is not None
+                        else names.index(b.link) for b in bodies] + [-1], dtype=np.int16)
+    return names, of_body
 
 
-def bed_hits(t_s: np.ndarray, bk: BodyKeys) -> tuple[BodyBedHit, ...]:
-    """Contiguous rows in which some body reaches past ``BODY_BED_DEPTH_M`` in a key's
-    footprint, per key: the first row, the deepest reach and its body's link."""
-    t_s = np.asarray(t_s, dtype=float)
-    stream = EpisodeStream(bk.down.shape[1])
-    stream.add(bk.depth_m > BODY_BED_DEPTH_M, t_s, bk.body, bk.depth_m)
-    return _bed_hits(stream.finish(frame_period(t_s)), bk.bodies)
-
-
-def _bed_hits(runs, bodies) -> tuple[BodyBedHit, ...]:
+def bed_hits(runs, bodies: tuple[Body, ...]) -> tuple[BodyBedHit, ...]:
+    """The runs of rows in which a body reaches past ``BODY_BED_DEPTH_M`` in a key's
+    footprint (an ``EpisodeStream`` of ``BodyKeys.depth_m > BODY_BED_DEPTH_M`` tagged by
+    body, valued by depth): the first row, the deepest reach and its body's link."""
     out = []
     for r in runs:
         p = r.key + LOWEST_PITCH
@@ -84,58 +77,11 @@ def _bed_hits(runs, bodies) -> tuple[BodyBedHit, ...]:
     return tuple(out)
 
 
-class BodyJudge:
-    """The body rule's findings over rows given block by block (``add``: their times and
-    ``BodyKeys``), then ``finish``: keys pressed, bed hits, and with ``notes`` the frame
-    scores, the notes hit and the wrong presses (each with the links whose bodies held the
-    key down). ``judge_bodies`` is one block."""
-
-    def __init__(self, bodies: tuple[Body, ...], notes, rate_hz: float,
-                 verdict: bool = False) -> None:
-        self._bodies, self._notes, self._verdict = bodies, notes, verdict
-        self._links = body_links(bodies)
-        self._played = EpisodeStream(N_KEYS, keep=False)
-        self._bed = EpisodeStream(N_KEYS)
-        self._score = None if notes is None else SongScorer(notes, rate_hz, self._links)
-
-    def add(self, t_s: np.ndarray, bk: BodyKeys) -> None:
-        rows = _link_rows(bk, self._links)
-        self._played.add(bk.down, t_s)
-        self._bed.add(bk.depth_m > BODY_BED_DEPTH_M, t_s, bk.body, bk.depth_m)
-        if self._score is not None:
-            self._score.add(t_s, bk.down, rows)
-
-    def finish(self, t_s: np.ndarray) -> BodyResult:
-        """The findings; ``t_s``: every row's time."""
-        period = frame_period(t_s)
-        self._played.finish(period)
-        played = self._played.count
-        bed = _bed_hits(self._bed.finish(period), self._bodies)
-        if self._score is None:
-            return BodyResult(self._verdict, played, bed)
-        notes, score = self._notes, self._score.finish(t_s)
-        return BodyResult(self._verdict, played, bed, score.f1, score.precision, score.recall,
-                          len(notes), len(notes) - len(score.missed), score.wrong_presses)
-
-
-def judge_bodies(t_s: np.ndarray, bk: BodyKeys, notes, rate_hz: float,
-                 verdict: bool = False) -> BodyResult:
-    """The body rule's findings over rows at times ``t_s`` (``BodyJudge``, one block)."""
-    t_s = np.asarray(t_s, dtype=float)
-    judge = BodyJudge(bk.bodies, notes, rate_hz, verdict)
-    judge.add(t_s, bk)
-    return judge.finish(t_s)
-
-
-def body_problems(res: BodyResult) -> list[str]:
-    """The verdict's lines for the body rule (``check --bodies``)."""
-    out = []
-    if res.bed_hits:
-        h = res.bed_hits[0]
-        out.append(f"{len(res.bed_hits)} body key-bed hits (first: {h.link} on {h.name} at "
-                   f"{h.time_s:.3f} s, {h.depth_m * 1000:.2f} mm below the top)")
-    if res.wrong_presses:
-        w = res.wrong_presses[0]
-        out.append(f"{len(res.wrong_presses)} wrong presses by bodies (first: {w.name} at "
-                   f"{w.start_s:.3f} s by {'+'.join(w.fingers)})")
-    return out
+def bed_problem(hits: tuple[BodyBedHit, ...]) -> list[str]:
+    """The verdict's line for the bodies' key-bed hits (none: no line)."""
+    if not hits:
+        return []
+    h = hits[0]
+    line = (f"{len(hits)} body key-bed hits (first: {h.link} on {h.name} at {h.time_s:.3f} s, "
+            f"{h.depth_m * 1000:.2f} mm below the top)")
+    return [line]

@@ -9,7 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.check.bodykeys import BodyKeys, bed_hits, body_names
 from planner.check.criteria import (
+    BODY_BED_DEPTH_M,
     KEY_BED_DEPTH_M,
     LOWEST_PITCH,
     N_KEYS,
@@ -24,6 +26,7 @@ from planner.check.criteria import (
 )
 from planner.check.episodes import EpisodeStream, PackedRows, Run
 from planner.check.results import KeyBedHit, KeyEpisode, LateNote, MissedNote, PlayResult
+from planner.hand.bodies import Body
 from planner.hand.spec import FINGERS
 from planner.trajfile import Trajectory
 
@@ -61,50 +64,77 @@ def episodes_of(runs: list[Run], names: tuple[str, ...] = FINGERS) -> list[KeyEp
 
 
 class PlayJudge:
-    """The point rule's keys of a play's rows given block by block (``add``: the rows'
-    times and fingertip points), then ``finish``: key-down episodes, key-bed hits and,
-    with ``notes``, the song's scores (``SongScorer``). ``play_replay`` is one block."""
+    """The keys of a play's rows given block by block (``add``: the rows' times,
+    fingertip points and ``BodyKeys``), then ``finish``: key-down episodes by the body
+    rule (spec section 2: any body 5 mm below a key's top in its footprint; the point
+    rule is its special case), the points' and the bodies' key-bed hits and, with
+    ``notes``, the song's scores (``SongScorer``). ``play_replay`` is one block."""
 
-    def __init__(self, notes, rate_hz: float) -> None:
+    def __init__(self, notes, rate_hz: float, bodies: tuple[Body, ...]) -> None:
+        self._bodies = bodies
+        self._names, self._of_body = body_names(bodies)
         self._played = EpisodeStream(N_KEYS)
+        self._bed = EpisodeStream(N_KEYS)
         self._hits: list[KeyBedHit] = []
-        self._score = None if notes is None else SongScorer(notes, rate_hz)
+        self._score = None if notes is None else SongScorer(notes, rate_hz, self._names)
         self._notes = notes
         self._rows = 0
 
-    def add(self, t: np.ndarray, tips: np.ndarray) -> KeyContacts:
-        """A block of rows; returns their key contacts."""
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Who holds a key (``finger`` of ``add``'s result indexes it): ``body_names``."""
+        return self._names
+
+    def add(self, t: np.ndarray, tips: np.ndarray, bk: BodyKeys) -> KeyRows:
+        """A block of rows; returns their keys down and fingertip contacts."""
         kc = key_contacts(tips)
-        self._played.add(kc.down, t, kc.finger)
+        holder = np.where(bk.down, self._of_body[bk.body], -1).astype(np.int16)
+        self._played.add(bk.down, t, holder)
+        self._bed.add(bk.depth_m > BODY_BED_DEPTH_M, t, bk.body, bk.depth_m)
         deep = np.nan_to_num(kc.tip_depth, nan=-1.0) > KEY_BED_DEPTH_M + KEY_BED_TOL_M
         for r, f in zip(*np.nonzero(deep)):
             p = int(kc.tip_key[r, f]) + LOWEST_PITCH
             self._hits.append(KeyBedHit(float(t[r]), FINGERS[f], p, pitch_name(p),
                                         float(kc.tip_depth[r, f])))
         if self._score is not None:
-            self._score.add(t, kc.down, kc.finger)
+            self._score.add(t, bk.down, holder)
         self._rows += len(t)
-        return kc
+        return KeyRows(bk.down, holder, kc)
 
     def finish(self, t_s: np.ndarray) -> PlayResult:
         """The result; ``t_s``: every row's time."""
-        played = episodes_of(self._played.finish(frame_period(t_s)))
+        period = frame_period(t_s)
+        played = episodes_of(self._played.finish(period), self._names)
+        body_bed = bed_hits(self._bed.finish(period), self._bodies)
         if self._score is None:
-            return PlayResult(self._rows, tuple(played), tuple(self._hits))
+            return PlayResult(self._rows, tuple(played), tuple(self._hits),
+                              body_bed_hits=body_bed)
         score, notes = self._score.finish(t_s), self._notes
         return PlayResult(self._rows, tuple(played), tuple(self._hits), f1=score.f1,
                           precision=score.precision, recall=score.recall, notes=len(notes),
                           notes_hit=len(notes) - len(score.missed), missed=score.missed,
                           wrong_presses=score.wrong_presses, late=score.late,
-                          song_frames=score.song_frames)
+                          song_frames=score.song_frames, body_bed_hits=body_bed)
 
 
-def play_replay(tr: Trajectory, tips: np.ndarray, notes
-                ) -> tuple[PlayResult, KeyContacts, np.ndarray | None]:
+@dataclass(frozen=True)
+class KeyRows:
+    """A block's keys: ``down`` (T, 88) by the body rule, ``holder`` (T, 88) who holds
+    each (an index into ``PlayJudge.names``, -1 none), and the fingertip points' contacts
+    (``kc``: their depths load the fingers in the limit audit)."""
+
+    down: np.ndarray
+    holder: np.ndarray
+    kc: KeyContacts
+
+
+def play_replay(tr: Trajectory, tips: np.ndarray, bk: BodyKeys, bodies: tuple[Body, ...],
+                notes) -> tuple[PlayResult, KeyRows, np.ndarray | None]:
     """Keys of every row; with ``notes``, the scores over the song's frames (criteria)."""
-    judge = PlayJudge(notes, float(tr.metadata["rate_hz"]))
-    kc = judge.add(tr.t_s, tips)
-    return judge.finish(tr.t_s), kc, None if notes is None else expected_keys(notes, tr.t_s)
+    judge = PlayJudge(notes, float(tr.metadata["rate_hz"]), bodies)
+    rows = judge.add(tr.t_s, tips, bk)
+    return (judge.finish(tr.t_s), rows,
+            None if notes is None else expected_keys(notes, tr.t_s))
 
 
 @dataclass(frozen=True)

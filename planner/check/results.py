@@ -91,25 +91,6 @@ class BodyBedHit:
 
 
 @dataclass(frozen=True)
-class BodyResult:
-    """The body rule (spec section 2, ``planner.check.bodykeys``): the keys the hand's
-    collision bodies press. ``keys_pressed`` key-down episodes; ``bed_hits``; with a song
-    the frame scores over the song's frames, the notes hit and the wrong presses, each
-    episode's ``fingers`` the links whose bodies held the key down. ``verdict``: whether
-    it decides the check (``check --bodies``); otherwise reported only."""
-
-    verdict: bool
-    keys_pressed: int
-    bed_hits: tuple[BodyBedHit, ...]
-    f1: float | None = None
-    precision: float | None = None
-    recall: float | None = None
-    notes: int | None = None
-    notes_hit: int | None = None
-    wrong_presses: tuple[KeyEpisode, ...] = ()
-
-
-@dataclass(frozen=True)
 class MissedNote:
     onset_s: float
     offset_s: float
@@ -169,6 +150,7 @@ class PlayResult:
     claims: bool = False  # the file's end marker states per-note outcomes
     claim_mismatches: tuple[ClaimMismatch, ...] = ()
     count_mismatches: tuple[CountMismatch, ...] = ()  # the marker's counts the replay contradicts
+    body_bed_hits: tuple[BodyBedHit, ...] = ()  # a body more than 1 mm past a key's bed
 
     @property
     def hit_rate(self) -> float | None:
@@ -242,8 +224,11 @@ class Replay:
     """Per-row arrays of the replay (not serialised), for plots and animations.
 
     ``tips`` (T, 5, 3) world fingertip points in ``FINGERS`` order; ``palm``
-    (T, 4, 4) world palm_center poses; ``down``/``finger``/``depth`` as in
-    ``key_contacts``; ``expected`` (T, 88) bool or None without a song.
+    (T, 4, 4) world palm_center poses; ``down`` (T, 88) the keys down by the body rule,
+    ``finger`` (T, 88) who holds each (an index into ``holders``: the fingers, then the
+    other links, ``planner.check.bodykeys.body_names``; -1 none); ``key_depth_m`` (T, 88)
+    how deep the bodies push each key where they hold it down (``BodyKeys.depth_m``);
+    ``expected`` (T, 88) bool or None without a song.
     """
 
     t_s: np.ndarray
@@ -253,6 +238,8 @@ class Replay:
     down: np.ndarray | None = None
     finger: np.ndarray | None = None
     expected: np.ndarray | None = None
+    holders: tuple[str, ...] = ()
+    key_depth_m: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -276,7 +263,6 @@ class CheckReport:
     replay: Replay | None = field(default=None, compare=False, repr=False)
     tendons: tuple[TendonLoad, ...] = ()  # the worst tension of every tendon
     song_start_s: float = 0.0  # the song's time 0 in the file's time (format version 2)
-    bodies: BodyResult | None = None  # play: the body rule (spec section 2)
 
     @property
     def ok(self) -> bool:
@@ -309,7 +295,8 @@ class CheckReport:
                  + ("" if self.complete else " (INCOMPLETE file: no end marker)"))
         if self.play is not None:
             p = self.play
-            L.append(f"keys: {len(p.played)} key presses, {len(p.key_bed_hits)} key-bed hits")
+            L.append(f"keys (by the hand's bodies, spec section 2): {len(p.played)} key presses, "
+                     f"{len(p.key_bed_hits) + len(p.body_bed_hits)} key-bed hits")
             if p.f1 is not None:
                 L.append(f"song {self.song}: frame F1 {p.f1:.4f} over its {p.song_frames} frames "
                          f"(precision {p.precision:.4f}, recall {p.recall:.4f}); notes hit "
@@ -332,8 +319,10 @@ class CheckReport:
             listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
                 f"{h.time_s:8.3f} s  {h.finger:6s} {h.name:4s} ({h.pitch})  "
                 f"{h.depth_m * 1000:.2f} mm below the top (max {KEY_BED_DEPTH_M * 1000:g})"))
-        if self.bodies is not None:
-            _body_lines(L, self.bodies, self.song)
+            listing(L, "body key-bed hits", p.body_bed_hits, lambda h: (
+                f"{h.time_s:8.3f}-{h.end_s:.3f} s (row {h.row})  {h.name:4s} ({h.pitch})  "
+                f"{h.body} {h.depth_m * 1000:.2f} mm below the top (max "
+                f"{BODY_BED_DEPTH_M * 1000:g})"))
         if self.catch is not None:
             c = self.catch
             err = "n/a" if c.intercept_error_m is None else f"{c.intercept_error_m * 1000:.1f} mm"
@@ -366,18 +355,3 @@ class CheckReport:
                 L.append(f"  {tl.name:20s} {'ok  ' if tl.ok else 'FAIL'} {tl.count:6d}  "
                          f"{tl.worst_n:.4g} / {tl.limit_n:.4g} N at {tl.time_s:.3f} s")
         return "\n".join(L)
-
-
-def _body_lines(L: list[str], b: BodyResult, song: str | None) -> None:
-    """The body rule's section of the summary."""
-    L.append(f"bodies (spec section 2; {'the verdict' if b.verdict else 'reported, not the verdict: --bodies'}): "
-             f"{b.keys_pressed} key presses, {len(b.bed_hits)} key-bed hits")
-    if b.f1 is not None:
-        L.append(f"  song {song}: body frame F1 {b.f1:.4f} (precision {b.precision:.4f}, "
-                 f"recall {b.recall:.4f}); notes hit {b.notes_hit}/{b.notes}; "
-                 f"{len(b.wrong_presses)} wrong presses by bodies")
-    listing(L, "  wrong presses by bodies", b.wrong_presses, lambda w: (
-        f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  {'+'.join(w.fingers)}"))
-    listing(L, "  body key-bed hits", b.bed_hits, lambda h: (
-        f"{h.time_s:8.3f}-{h.end_s:.3f} s (row {h.row})  {h.name:4s} ({h.pitch})  {h.body} "
-        f"{h.depth_m * 1000:.2f} mm below the top (max {BODY_BED_DEPTH_M * 1000:g})"))

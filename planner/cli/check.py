@@ -12,9 +12,6 @@ from planner.cli.options import add_pictures, add_replay_options, draw_checked, 
 def add_parser(sub) -> None:
     k = sub.add_parser("check", help="replay a trajectory and verify it")
     add_replay_options(k, "frame")
-    k.add_argument("--bodies", action="store_true",
-                   help="the hand's bodies decide the verdict too (spec section 2: wrong "
-                        "presses and key-bed hits by any body; reported either way)")
     k.add_argument("--played", metavar="OUT.mid", help="write the keys pressed as a MIDI file")
     add_pictures(k)
 
@@ -27,7 +24,7 @@ def run(a: argparse.Namespace) -> int:
 
     report = check_trajectory(a.trajectory, a.song, allow_incomplete=a.allow_incomplete,
                               min_f1=a.min_f1, strict=a.strict, song_options=song_options(a),
-                              hand_override=a.hand, bodies=a.bodies,
+                              hand_override=a.hand,
                               replay=bool(a.report or a.html))
     if a.played:
         from planner.music.midi import Note, write_notes_midi

@@ -78,23 +78,15 @@ class Body:
 
 
 def _tips_below(spec: HandSpec) -> dict[str, set[str]]:
-    """Each link's fingertip links in its subtree."""
-    children: dict[str, list[str]] = {}
-    for j in spec.joints:
-        children.setdefault(j.parent, []).append(j.child)
-    tips = set(spec.tip_frames)
-    out: dict[str, set[str]] = {}
-
-    def below(name: str) -> set[str]:
-        if name not in out:
-            s = {name} if name in tips else set()
-            for c in children.get(name, []):
-                s |= below(c)
-            out[name] = s
-        return out[name]
-
-    for link in spec.links:
-        below(link.name)
+    """Each link's fingertip links in its subtree (each tip up its chain of parents: no
+    recursion, so no reference cycle for the planner's paused collector)."""
+    parent = {j.child: j.parent for j in spec.joints}
+    out: dict[str, set[str]] = {link.name: set() for link in spec.links}
+    for tip in spec.tip_frames:
+        name: str | None = tip
+        while name is not None:
+            out.setdefault(name, set()).add(tip)
+            name = parent.get(name)
     return out
 
 

@@ -219,6 +219,21 @@ def _collect(depth, which, fp: Footprints, z_cut, bounds, index, lowest) -> None
     which[t[better], key[better]] = np.asarray(index)[s[better]]
 
 
+def sphere_depths(p: np.ndarray, r: np.ndarray, grow_m: float = 0.0) -> np.ndarray:
+    """How far below each key's resting top spheres at ``p`` (m, 3), radii ``r`` (m,),
+    reach inside its footprint column (spec section 2's body rule for a sampled body,
+    ``column_depths``' question), each footprint grown by ``grow_m`` on every side:
+    (88,), -inf for a key no sphere enters."""
+    fp = footprints()
+    d = _rect_dist(p[:, None, :2], fp.lo[None] - grow_m, fp.hi[None] + grow_m)  # (m, R)
+    r2 = (r * r)[:, None] - d * d
+    low = np.where(r2 >= 0.0, p[:, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
+    per_rect = fp.top_m - low.min(axis=0)  # (R,) -inf where no sphere enters
+    out = np.full(kb.HIGHEST_PITCH - kb.LOWEST_PITCH + 1, -np.inf)
+    np.maximum.at(out, fp.key, per_rect)
+    return out
+
+
 def box_penetration(p: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndarray
                     ) -> np.ndarray:
     """How deep (m) sphere-swept points ``p`` (m, 3), radii ``r`` (m,), reach into each

@@ -19,6 +19,13 @@ Tolerances (each a physical value with its source):
 * ``OTHER_KEY_TOLERANCE_M`` 0.5 mm: a key the body touches by that much is pushed down
   0.5 mm at most, a tenth of the spec's 5 mm key-down depth (it does not sound); it is
   also the atlas's grid (``STEP_M / 2``: where a tip lands at most off its sample).
+* Spec section 2's own rule, judged as ``check`` judges it: no body reaches the key-down
+  depth (5 mm) inside another key's footprint column
+  (``planner.music.keybodies.sphere_depths``), the column grown by
+  ``OTHER_KEY_TOLERANCE_M`` on every side (the rail lands up to half the atlas's grid
+  step off the pose's sample). A body beside a black key's wall, below its top, touches
+  the key's box by a fraction of a millimetre from the side but lies inside its
+  footprint column deeper than the key-down depth: a wrong key by the rule.
 * ``OWN_BED_MARGIN_M`` 1 mm: the pressed key's bed is 10 mm down (spec: key dip); spec
   section 2 (bodies) allows no body more than 1 mm past it (``check``'s
   ``criteria.BED_MARGIN_M``, the one definition): a body reaching further would be held
@@ -34,12 +41,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.check.criteria import BED_MARGIN_M
+from planner.check.criteria import BED_MARGIN_M, BODY_BED_DEPTH_M, DOWN_DEPTH_M
 from planner.hand.bodies import BOX, SPHERE, collision_bodies
 from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
-from planner.music.keybodies import box_penetration
+from planner.music.keybodies import box_penetration, sphere_depths
 from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
@@ -120,7 +127,10 @@ class FingerBodies:
                     update: bool = True) -> np.ndarray:
         """How deep (m) the finger's body reaches into each key box (keys at rest; key
         ``own_pitch`` pressed to its bed), (boxes,); <= 0 where it is clear."""
-        p, r = self.points(q, finger, update)
+        return self.box_depths(*self.points(q, finger, update), own_pitch)
+
+    def box_depths(self, p: np.ndarray, r: np.ndarray, own_pitch: int | None) -> np.ndarray:
+        """``penetration`` of sphere-swept points ``p`` (m, 3), radii ``r`` (m,)."""
         lo, hi = self.box_lo, self.box_hi
         if own_pitch is not None:
             own = self.box_pitch == own_pitch
@@ -130,10 +140,24 @@ class FingerBodies:
         return box_penetration(p, r, lo, hi)
 
     def clear(self, q: np.ndarray, finger: str, own_pitch: int | None) -> bool:
-        """True when the finger's body at ``q`` reaches no key but ``own_pitch`` by more
-        than ``OTHER_KEY_TOLERANCE_M``, and its own key (pressed) by at most
-        ``OWN_BED_MARGIN_M``."""
-        pen = self.penetration(q, finger, own_pitch)
+        """True when the finger's body at ``q`` is clear of the keys (``clear_points``)."""
+        return self.clear_points(*self.points(q, finger), own_pitch)
+
+    def clear_points(self, p: np.ndarray, r: np.ndarray, own_pitch: int | None) -> bool:
+        """True when sphere-swept points ``p`` (m, 3), radii ``r`` (m,) reach no key but
+        ``own_pitch`` by more than ``OTHER_KEY_TOLERANCE_M`` nor ``DOWN_DEPTH_M`` deep in
+        its footprint grown by ``OTHER_KEY_TOLERANCE_M``, and their own key (pressed) by
+        at most ``OWN_BED_MARGIN_M`` (the box pressed to its bed; in the footprint,
+        ``check``'s ``BODY_BED_DEPTH_M``)."""
+        pen = self.box_depths(p, r, own_pitch)
         own = self.box_pitch == own_pitch
-        return bool(np.all(pen[~own] <= OTHER_KEY_TOLERANCE_M)
-                    and np.all(pen[own] <= OWN_BED_MARGIN_M))
+        if not (np.all(pen[~own] <= OTHER_KEY_TOLERANCE_M)
+                and np.all(pen[own] <= OWN_BED_MARGIN_M)):
+            return False
+        near = sphere_depths(p, r, OTHER_KEY_TOLERANCE_M)
+        mine = np.zeros(len(near), dtype=bool)
+        if own_pitch is None:
+            return bool(np.all(near < DOWN_DEPTH_M))
+        mine[own_pitch - kb.LOWEST_PITCH] = True
+        own = sphere_depths(p, r)[mine]
+        return bool(np.all(near[~mine] < DOWN_DEPTH_M) and np.all(own <= BODY_BED_DEPTH_M))

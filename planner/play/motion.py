@@ -241,7 +241,8 @@ class Motion:
         self.arm_track = _Track(np.array([rail0_m, places.reach_m(posture)][:max(1, len(self.arm))]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
                         for f in self.hand.fingers}
-        entries = {} if park else start_entries(atlas, rail0_m)
+        reach = start_entries(atlas, rail0_m)
+        entries = {} if park else reach
         if not entries:
             self.q0 = places.atlas.park()
             if places.rail is not None:
@@ -250,12 +251,21 @@ class Motion:
                 st.track.q = self.q0[self.hand.joint_slice(f)].copy()
         else:
             self._start_high(entries)
+        self._tuck([f for f in self.hand.fingers if f not in reach])
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
         self.outcomes: dict[int, Outcome] = {}
 
     def entry(self, a: Assignment) -> AtlasEntry | None:
         """The entry of an assignment: its finger over its key from its place."""
         return self.places.atlases[a.posture].entry(a.finger, self.notes[a.note].pitch, a.rail_m)
+
+    def _tuck(self, fingers: list[str]) -> None:
+        """The fingers that press no key wait tucked clear of the keys (``Atlas.tucked``)."""
+        for f in fingers:
+            q = self.places.atlas.tucked(f)
+            self.fingers[f].track.q = q.copy()
+            self.q0[self.hand.joint_slice(f)] = q
+        self.q0 = self.hand.apply_couplings(self.q0)
 
     def _start_high(self, entries: dict[str, AtlasEntry]) -> None:
         """The hand starts with every finger at crossing height over the key nearest its

@@ -14,7 +14,6 @@ import numpy as np
 from planner.check import (
     CheckReport,
     ball_positions,
-    key_contacts,
 )
 from planner.hand.spec import FINGERS
 from planner.music.keyboard import (
@@ -187,11 +186,11 @@ def write_html(report: CheckReport, out_file: str) -> str:
 
 
 def _keyboard(vis, anim, rp, rows: np.ndarray) -> None:
-    """88 key boxes; a key moves down by the depth of the fingertip pressing it (<= dip)."""
+    """88 key boxes; a key held down moves down by the depth of the body pressing it
+    (<= dip; the body rule's ``Replay.key_depth_m``)."""
     import meshcat.geometry as g
 
-    kc = key_contacts(rp.tips)
-    depth = np.clip(np.nan_to_num(kc.tip_depth, nan=0.0), 0.0, KEY_DIP_M)  # (T, 5)
+    depth = np.where(rp.down, np.clip(rp.key_depth_m, 0.0, KEY_DIP_M), 0.0)  # (T, 88)
     vis["keyboard/bed"].set_object(_mesh(
         g.Box([key(HIGHEST_PITCH).x_max_m - key(LOWEST_PITCH).x_min_m + 0.02, 0.17, 0.01]),
         g.MeshPhongMaterial(color=0x2b2b2b), "keyboard/bed"))
@@ -208,7 +207,7 @@ def _keyboard(vis, anim, rp, rows: np.ndarray) -> None:
         centre = [k.center_x_m, 0.5 * (k.y_min_m + k.y_max_m), k.top_z_m]
         vis[path].set_transform(_translation(centre))
         col = p - LOWEST_PITCH
-        dip = np.where(kc.tip_key == col, depth, 0.0).max(axis=1)  # (T,)
+        dip = depth[:, col]  # (T,)
         if not np.any(dip[rows] > 0):
             continue
         for i, r in enumerate(rows):

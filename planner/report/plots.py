@@ -175,10 +175,12 @@ def _fig_piano_roll(report: CheckReport) -> Figure:
         col = np.where(rp.down[:, k], rp.finger[:, k], -1)
         for a, b, f in _runs(col):
             x0, x1 = t[a], t_end[b - 1]
-            ax.add_patch(Rectangle((x0, q - 0.25), x1 - x0, 0.5, facecolor=FINGER_COLORS[f],
-                                   edgecolor="none", zorder=2))
+            finger = f < len(FINGER_COLORS)  # (else the palm, wrist, ...: ``rp.holders``)
+            ax.add_patch(Rectangle((x0, q - 0.25), x1 - x0, 0.5, edgecolor="none", zorder=2,
+                                   facecolor=FINGER_COLORS[f] if finger else ERROR_COLOR))
             if x1 - x0 >= small_bar:
-                ax.text(0.5 * (x0 + x1), q, str(f + 1), ha="center", va="center",
+                label = str(f + 1) if finger else rp.holders[f][:1].upper()
+                ax.text(0.5 * (x0 + x1), q, label, ha="center", va="center",
                         fontsize=8, color="white", fontweight="bold", zorder=4)
     for w in p.wrong_presses:
         ax.add_patch(Rectangle((w.start_s, w.pitch - 0.34), w.end_s - w.start_s, 0.68,
