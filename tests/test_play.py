@@ -121,8 +121,9 @@ def test_one_hand_position_serves_a_four_finger_tune(planner, tmp_path):
     song = (tr.t_s >= start) & (tr.t_s <= start + 0.3 * (len(pitches) - 1) + 0.25)
     assert np.ptp(tr.q[song, planner.hand.joint_names.index("rail")]) < 1e-9
     _safe(rep)
-    # (by the pad points: the plan is timed to the bodies, the points cross 20 ms later)
-    assert rep.play.f1 >= 0.93 and rep.bodies.f1 >= 0.98, rep.summary()
+    # (check by the bodies, the rule the plan is timed to; 0.93 by the pad points, whose
+    # crossings come 20 ms after the bodies')
+    assert rep.play.f1 >= 0.98, rep.summary()
 
 
 def test_a_chord_wider_than_the_hand_is_played_in_part(planner, tmp_path):
@@ -228,9 +229,10 @@ def test_a_held_key_the_hand_must_leave_is_let_go_and_named(planner, tmp_path):
     bass = next(a for a in res.fingering.assignments if a.note == 0)
     assert bass.release_s == pytest.approx(0.5)
     pressed = [p for p in rep.play.played if p.pitch == 48]
-    # (within one row of the cut: the lift is timed to the finger's body, and the pad
-    # point's rule finds C3 down in the row at 0.50 s; not yet explained: issue 30's notes)
-    assert len(pressed) == 1 and pressed[0].end_s <= 0.51 + 1e-9
+    # (within two rows of the cut: the lift is timed to the finger's lowest body point,
+    # yet check's body rule finds C3 down in the rows at 0.50 and 0.51 s; not explained
+    # yet: docs/design/play.md, limits; the note sounds on, so no wrong press)
+    assert len(pressed) == 1 and pressed[0].end_s <= 0.52 + 1e-9
     assert rep.play.notes_hit >= len(notes) - 2
     skipped = [s.note for s in res.verdict.skipped]
     assert skipped[0] == 0 and len(skipped) <= 2  # (C3 down 1/6 of its frames: missed)

@@ -18,20 +18,13 @@ from planner.play.costs import SkipReason
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 SONGS = sorted((ROOT / "songs").glob("*.mid")) + sorted((ROOT / "songs" / "stress").glob("*.mid"))
-# frame F1 by the pad points (the check's verdict) and by the bodies (spec section 2, the
-# rule the plan is timed to), and the wrong presses by bodies, measured with this version
-# less 0.01 (issue 30, the arm's play postures and the body rule in the atlas, session 37:
-# the plan is timed to the bodies, whose lowest point reaches the key-down depth 20-40 ms
-# before the pad point: the point F1 fell, twinkle 0.9969 -> 0.9693, chords 0.9823 ->
-# 0.9333, fast 0.8721 -> 0.7821, fur_elise 1.0 -> 0.8970, leaps 0.9766 -> 0.9599,
-# ode_to_joy 1.0 -> 0.9456, scale 0.9740 -> 0.9338; by the bodies, 0.31-0.52 before)
-FLOOR = {"twinkle": 0.959, "ode_to_joy": 0.935, "chords": 0.923, "scale": 0.923,
-         "fur_elise": 0.887, "fast": 0.772, "leaps": 0.949, "fast_six_keys": 0.761,
-         "leaps_legato": 0.619}
-BODY_FLOOR = {"twinkle": 0.99, "ode_to_joy": 0.948, "chords": 0.939, "scale": 0.956,
-              "fur_elise": 0.948, "fast": 0.903, "leaps": 0.983, "fast_six_keys": 0.899,
-              "leaps_legato": 0.618}
-BODY_WRONG = {"ode_to_joy": 6, "fast_six_keys": 1, "leaps_legato": 5}  # (at most; else 0)
+# frame F1 by check's verdict, the hand's bodies (spec section 2, the rule the plan is
+# timed to), measured with this version less 0.01 (by the pad points before check judged
+# the bodies: twinkle 0.9693, chords 0.9333, fast 0.7821, fur_elise 0.8970, leaps 0.9599,
+# ode_to_joy 0.9456, scale 0.9338, fast_six_keys 0.7714, leaps_legato 0.6297)
+FLOOR = {"twinkle": 0.99, "ode_to_joy": 0.976, "chords": 0.943, "scale": 0.956,
+         "fur_elise": 0.946, "fast": 0.902, "leaps": 0.983, "fast_six_keys": 0.872,
+         "leaps_legato": 0.651}
 # (issue 30's rows a controller can run, measured less 0.01 on the tree that brought them:
 # jerk-limited moves (a ramp of one motor time constant) and 2 deg from every hard stop:
 # twinkle 1.0 -> 0.9969, chords 0.9931 -> 0.9823, scale 1.0 -> 0.9740, leaps 0.9928 ->
@@ -69,8 +62,7 @@ def test_safe_honest_and_above_its_floor(planned, name):
     assert {s.note for s in res.verdict.skipped} == {m.note for m in rep.play.missed}
     assert res.verdict.score.f1 == pytest.approx(rep.play.f1, abs=1e-12)
     assert rep.play.f1 >= FLOOR[name], rep.summary()
-    assert rep.bodies.f1 >= BODY_FLOOR[name], rep.summary()
-    assert len(rep.bodies.wrong_presses) <= BODY_WRONG.get(name, 0), rep.summary()
+    assert not rep.play.body_bed_hits, rep.summary()
 
 
 def test_same_song_same_bytes(planner, tmp_path):
@@ -159,21 +151,26 @@ def test_a_hand_on_a_fixed_mount_plays_what_it_reaches(tmp_path):
     from planner.hand.builders import load_hand_spec
     from planner.hand.model import HandModel
     from planner.hand.spec import hands_dir
-    from tests.handfiles import fitted_text
+    from tests.handfiles import DEFAULT_MOUNT, default_text
 
-    text = fitted_text()  # (no [play] posture: its reach axis goes with the rail's off)
+    # (the reach axis goes with the rail: the mount takes the first play posture's reach)
+    text = default_text().replace("enabled = true", "enabled = false").replace(
+        'name = "default"', 'name = "norail"').replace(
+        DEFAULT_MOUNT, "xyz_m = [0.0, -0.575, 0.05]").replace(
+        "reach_m = [-0.175, -0.15, -0.10]", "reach_m = 0.0")
     assert hands_dir().exists()
     p = tmp_path / "norail.toml"
-    p.write_text(text.replace("enabled = true", "enabled = false").replace(
-        'name = "default"', 'name = "norail"'), encoding="utf-8")
+    p.write_text(text, encoding="utf-8")
     hand = HandModel(load_hand_spec(str(p)))
     assert "rail" not in hand.joint_names
     song = ROOT / "songs" / "twinkle.mid"
     res = plan_song(load_song(song), hand, str(tmp_path / "t.csv"))
     rep = check_trajectory(str(tmp_path / "t.csv"), str(song), hand_override=hand)
     assert rep.ok and not rep.play.wrong_presses and all(lc.count == 0 for lc in rep.limits)
-    assert res.verdict.played == rep.play.notes_hit >= 10
-    assert {s.reason.value for s in res.verdict.skipped} <= {"out_of_reach"}
+    # (one hand position, one posture: 4 of twinkle's 14 notes have a press whose bodies
+    # are clear of the other keys from there; 10 by the pad points alone)
+    assert res.verdict.played == rep.play.notes_hit >= 4
+    assert {s.reason.value for s in res.verdict.skipped} <= {"out_of_reach", "body"}
 
 
 def test_a_chord_of_twelve_keeps_five_next_to_each_other(planner, tmp_path):

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.check.bodykeys import body_keys
 from planner.check.criteria import (
     expected_keys,
     frame_scores,
@@ -29,6 +30,8 @@ from planner.check.criteria import (
     pitch_name,
     song_frames,
 )
+from planner.check.kinematics import Kinematics
+from planner.hand.bodies import collision_bodies
 from planner.music.keyboard import LOWEST_PITCH, WHITE_WIDTH_M
 from planner.simulate.planbody import plan_body_keys
 from planner.simulate.scores import key_down
@@ -132,7 +135,10 @@ def note_differences(replay, rate_hz: float | None = None) -> tuple[NoteDifferen
     kin = np.zeros((len(frames), 88), dtype=bool)
     phys = np.zeros_like(kin)
     kc = key_contacts(planned)
-    kin[:n] = kc.down
+    # (the plan's keys by check's rule, the hand's bodies: what ``kinematic_f1`` scores)
+    kin[:n] = body_keys(Kinematics(replay.hand, np.asarray(
+        replay.trajectory.metadata["T_world_root"], dtype=float)), rec.q_ref[:n],
+        collision_bodies(replay.hand.spec)).down
     phys[:n] = key_down(rec)[:n]
     expected = expected_keys(notes, frames)
     f1k = frame_scores(expected, kin)[2]
