@@ -54,7 +54,8 @@ def test_hand_json_names_its_play_postures() -> None:
 
     play = json.loads(run_cli("hand", "--json").stdout)["play"]
     assert play["reach_m"] == [-0.175, -0.15, -0.1] and play["press_depth_m"] == 0.006
-    assert json.loads(run_cli("hand", "--hand", "mk5", "--json").stdout)["play"] is None
+    assert json.loads(run_cli("hand", "--hand", "mk5", "--json").stdout)["play"] == {
+        "reach_m": [0.0], "wrist_flex_rad": 0.0, "wrist_dev_rad": 0.0, "press_depth_m": 0.006}
 
 
 def test_hand_urdf_to_file(tmp_path: Path, default_urdf: str) -> None:

@@ -191,10 +191,10 @@ class Atlas:
             p = self.posture
             if "reach" in h.index:
                 q0[h.index["reach"]] = p.reach_m[self.posture_index]
-            if z_m == BASE_HOVER_Z_M:
-                q0[wrist] = (p.wrist_flex_rad, p.wrist_dev_rad)
-                return h.apply_couplings(q0)
         fit = [i for i, f in enumerate(h.fingers) if f not in self.arc_joint]
+        if self.posture is not None and z_m == BASE_HOVER_Z_M:
+            fit = []  # (the posture's wrist; a one-DOF finger still comes down to the height)
+            q0[wrist] = (self.posture.wrist_flex_rad, self.posture.wrist_dev_rad)
 
         def heights(w: np.ndarray) -> np.ndarray:
             q = q0.copy()
@@ -212,7 +212,8 @@ class Atlas:
         # the fit converges to 1e-10 rad; its last digits differ between machines (BLAS,
         # numpy): kept to 1e-9 rad, the natural hand (and so the shipped tables, which are
         # used only for the same natural hand) is the same everywhere
-        q0[wrist] = np.round(w, WRIST_DIGITS)
+        if fit:
+            q0[wrist] = np.round(w, WRIST_DIGITS)
         for f, j in self.arc_joint.items():
             s = Arc(h, f, j, q0).descend(z_m)
             if s is not None:
