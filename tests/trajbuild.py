@@ -111,23 +111,28 @@ FRONT_Y_M = 0.03  # a white key pressed this far behind its front edge: the fing
 # segments, rising behind the pad, stay clear of the black keys (y >= 0.06)
 
 
-@cache
-def _below_pad(pitch, finger):
-    """How far ``finger``'s deepest body lies below its pad point pressing ``pitch`` (a
-    white key in front of the black keys): found where the body is 8 mm down."""
+def _pad_for(pitch, finger, depth, lo, hi):
+    """The pad point's depth in [lo, hi] (bisection) that puts ``finger``'s deepest body
+    ``depth`` (> the key-down depth) below key ``pitch``'s top (a white key in front)."""
     hand = load_hand("default")
     kin = Kinematics(hand, hand.T_world_root)
     bodies = collision_bodies(hand.spec)
     y = None if key(pitch).black else FRONT_Y_M
-    lo, hi, want = 0.0, 0.008, 0.008
     for _ in range(24):
         mid = 0.5 * (lo + hi)
         q = _press_posture(pitch, finger, round(mid, 7), y)
-        if body_keys(kin, q[None], bodies).depth_m[0, pitch - LOWEST_PITCH] < want:
+        if body_keys(kin, q[None], bodies).depth_m[0, pitch - LOWEST_PITCH] < depth:
             lo = mid
         else:
             hi = mid
-    return want - 0.5 * (lo + hi)
+    return round(0.5 * (lo + hi), 7)
+
+
+@cache
+def _below_pad(pitch, finger):
+    """How far ``finger``'s deepest body lies below its pad point pressing ``pitch``:
+    found where the body is 8 mm down."""
+    return 0.008 - _pad_for(pitch, finger, 0.008, 0.0, 0.008)
 
 
 def body_press_posture(pitch, finger, depth):
@@ -141,20 +146,9 @@ def body_press_posture(pitch, finger, depth):
 def _body_press(pitch, finger, depth):
     y = None if key(pitch).black else FRONT_Y_M
     pad = depth - _below_pad(pitch, finger)
-    if depth <= 0.005:  # (above the key-down depth the rule reports no depth: the offset)
-        return _press_posture(pitch, finger, round(pad, 7), y)
-    hand = load_hand("default")
-    kin = Kinematics(hand, hand.T_world_root)
-    bodies = collision_bodies(hand.spec)
-    lo, hi = pad - 0.002, pad + 0.002
-    for _ in range(24):
-        mid = 0.5 * (lo + hi)
-        q = _press_posture(pitch, finger, round(mid, 7), y)
-        if body_keys(kin, q[None], bodies).depth_m[0, pitch - LOWEST_PITCH] < depth:
-            lo = mid
-        else:
-            hi = mid
-    return _press_posture(pitch, finger, round(0.5 * (lo + hi), 7), y)
+    if depth > 0.005:  # (above the key-down depth the rule reports no depth: the offset)
+        pad = _pad_for(pitch, finger, depth, pad - 0.002, pad + 0.002)
+    return _press_posture(pitch, finger, round(pad, 7), y)
 
 
 def min_jerk(times, keyframes, t):
