@@ -41,6 +41,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -49,6 +50,7 @@ from planner.hand.tendon import actuator_capacity
 from planner.ik import (
     PREPARE_HEIGHT_M,
     HandIK,
+    IKResult,
     PressTarget,
     press_target,
     press_x_range,
@@ -61,6 +63,7 @@ from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, Fin
 STEP_M = 0.001  # the atlas samples dx this often
 SPAN_M = 0.045  # ... this far either side of a finger's natural place
 HIGH_Z_M = kb.BLACK_TOP_Z_M + 0.0075  # a finger moving sideways keeps its tip this high
+PRESS_DEPTH_ITERATIONS = 3  # ``Atlas._press``: the pad's depth found again from the body's
 TUCK_STEPS = 7  # ``Atlas.tucked``'s grid per joint (the travel's ends and 5 between)
 REPEAT_DEPTH_M = kb.DOWN_DEPTH_M - 0.002  # a repeated key rises to this depth (see above)
 BASE_HOVER_Z_M = 0.005  # the natural hand's tips, above the white tops
@@ -92,6 +95,13 @@ class AtlasEntry:
     high: np.ndarray
     max_force_n: float
     posture: int = 0  # which of the hand's play postures (``Atlas.posture_index``)
+
+
+class Press(NamedTuple):
+    """A press pose's IK target and result (``Atlas._press``)."""
+
+    target: PressTarget
+    result: IKResult
 
 
 class Atlas:
@@ -341,7 +351,7 @@ class Atlas:
                                                           p.wrist_flex_rad, p.wrist_dev_rad,
                                                           p.press_depth_m)],
                 "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES,
-                              "footprint-grown"]}
+                              "footprint-grown", "press-body-to-bed", PRESS_DEPTH_ITERATIONS]}
 
     def _load(self, path: Path) -> None:
         if not path.exists():
@@ -399,11 +409,11 @@ class Atlas:
     def _ik_poses(self, finger: str, pitch: int, base: np.ndarray) -> list[np.ndarray] | None:
         """Press, rise, hover and high by single-finger IK: the tip on the key's press
         point, then straight above it at each height."""
-        target = press_target(finger, pitch, self.press_depth_m, finger in self.front)
-        self.solves += 1
-        r = self.ik.solve_finger(target, base)
-        if not r.converged:
+        r = self._press(finger, pitch, base)
+        if r is None:
             return None
+        target = r.target
+        r = r.result
         tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
         top = kb.key(pitch).top_z_m
         # (with the body rule the key rises as far as the finger's body lets it: its
@@ -419,6 +429,30 @@ class Atlas:
                 return None
             poses.append(up.q)
         return poses
+
+    def _press(self, finger: str, pitch: int, base: np.ndarray) -> Press | None:
+        """The press pose by single-finger IK: the pad point ``press_depth_m`` below the
+        key's top; with the body rule, deeper where the finger's lowest body point would
+        stop short of the key bed (a pad that is its finger's lowest point, on a black
+        key: 6 mm down leaves the key 1 mm past the key-down depth, which a servo's
+        tracking under the key's spring loses, 2-2.5 mm measured in physics), until its
+        body reaches the bed (``KEY_DIP_M``; the pad no deeper than the dip)."""
+        front = finger in self.front
+        depth = self.press_depth_m
+        for _ in range(PRESS_DEPTH_ITERATIONS):
+            target = press_target(finger, pitch, depth, front)
+            self.solves += 1
+            r = self.ik.solve_finger(target, base)
+            if not r.converged:
+                return None
+            if self.bodies is None:
+                break
+            tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
+            want = min(kb.KEY_DIP_M, kb.KEY_DIP_M - self._body_below_tip_m(r.q, finger, tip))
+            if want <= depth + 1e-4:
+                break
+            depth, base = want, r.q
+        return Press(target, r)
 
     def _body_below_tip_m(self, q: np.ndarray, finger: str, tip: np.ndarray) -> float:
         """How far the finger's lowest body point lies below its pad point at ``q`` (m, >= 0)."""
