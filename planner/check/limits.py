@@ -183,7 +183,9 @@ class LimitAudit:
             s = max(lo - 1, 0)  # (row 0 of the song has no row before it: no inertia)
             tau += _inertial_torques(self._kin, t[s:upto + 1], Q[s:upto + 1])[lo - s:upto - s]
         hand = self._hand
-        TM = (tau @ self._motor_map.T if self._motor_map is not None
+        # (einsum, not a matrix product: each row summed in one order whatever the block's
+        # size, so a stream's rows equal the whole file's to the bit)
+        TM = (np.einsum("tj,mj->tm", tau, self._motor_map) if self._motor_map is not None
               else _motor_torques(hand, Q[lo:upto], tau))
         peak = hand.motor_peak_torque
         self._worst["motor_torque"].offer_values(np.abs(TM) / peak, np.abs(TM), peak,

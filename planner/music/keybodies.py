@@ -234,6 +234,23 @@ def sphere_depths(p: np.ndarray, r: np.ndarray, grow_m: float = 0.0) -> np.ndarr
     return out
 
 
+def key_depths(p: np.ndarray, r: np.ndarray, pitches, grow_m: float = 0.0) -> np.ndarray:
+    """``sphere_depths`` of many configurations at once, for the keys ``pitches`` only:
+    spheres at ``p`` (K, m, 3), radii ``r`` (m,) -> (K, len(pitches)), -inf where none
+    enters a key's footprint column (grown by ``grow_m``)."""
+    fp = footprints()
+    keys = np.asarray(pitches) - kb.LOWEST_PITCH
+    out = np.full((len(p), len(keys)), -np.inf)
+    for i, k in enumerate(keys):
+        sel = fp.key == k
+        lo, hi = fp.lo[sel] - grow_m, fp.hi[sel] + grow_m
+        d = _rect_dist(p[:, :, None, :2], lo[None, None], hi[None, None])  # (K, m, R)
+        r2 = (r * r)[None, :, None] - d * d
+        low = np.where(r2 >= 0.0, p[:, :, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
+        out[:, i] = (fp.top_m[sel][None] - low.min(axis=1)).max(axis=1)
+    return out
+
+
 def box_penetration(p: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndarray
                     ) -> np.ndarray:
     """How deep (m) sphere-swept points ``p`` (m, 3), radii ``r`` (m,), reach into each

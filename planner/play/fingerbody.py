@@ -46,11 +46,13 @@ from planner.hand.bodies import BOX, SPHERE, collision_bodies
 from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
-from planner.music.keybodies import box_penetration, sphere_depths
+from planner.music.keybodies import box_penetration, key_depths, sphere_depths
 from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
 OWN_BED_MARGIN_M = BED_MARGIN_M  # 1 mm: spec section 2 (bodies), check's own rule
+HOLD_NEIGHBOURS = 3  # a held key's neighbours judged along a follow: a finger end (at most
+# 24 mm) reaches no further than the next key but one either side
 AXIS_SAMPLES = 9  # a capsule's axis is tested at this many points (its ends included)
 
 
@@ -142,6 +144,20 @@ class FingerBodies:
     def clear(self, q: np.ndarray, finger: str, own_pitch: int | None) -> bool:
         """True when the finger's body at ``q`` is clear of the keys (``clear_points``)."""
         return self.clear_points(*self.points(q, finger), own_pitch)
+
+    def holding_clear(self, Q: np.ndarray, finger: str, own_pitch: int) -> np.ndarray:
+        """(K,) bool: at each configuration of ``Q`` (K, n) the finger holding key
+        ``own_pitch`` down keeps its body within the spec's 1 mm past that key's bed and
+        out of its neighbours' footprint columns (``HOLD_NEIGHBOURS`` either side, grown
+        by ``OTHER_KEY_TOLERANCE_M``) short of the key-down depth: the body rule of
+        ``clear_points`` along a move that holds a key (``planner.play.moves``' followers)."""
+        P = self.points_many(Q, finger)
+        r = self.points(Q[0], finger)[1]
+        own = key_depths(P, r, [own_pitch])[:, 0] <= BODY_BED_DEPTH_M
+        near = [p for p in range(own_pitch - HOLD_NEIGHBOURS, own_pitch + HOLD_NEIGHBOURS + 1)
+                if p != own_pitch and kb.LOWEST_PITCH <= p <= kb.HIGHEST_PITCH]
+        other = key_depths(P, r, near, OTHER_KEY_TOLERANCE_M) < DOWN_DEPTH_M
+        return own & other.all(axis=1)
 
     def clear_points(self, p: np.ndarray, r: np.ndarray, own_pitch: int | None) -> bool:
         """True when sphere-swept points ``p`` (m, 3), radii ``r`` (m,) reach no key but

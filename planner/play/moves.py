@@ -39,6 +39,7 @@ from planner.play.atlas import (
     Atlas,
     AtlasEntry,
 )
+from planner.play.fingerbody import HOLD_NEIGHBOURS
 from planner.play.movetable import (
     ACROSS_SAMPLES,
     ENDS,
@@ -145,6 +146,8 @@ class Moves:
                            "limit_fraction": LIMIT_FRACTION, "path_samples": PATH_SAMPLES,
                            "across_samples": ACROSS_SAMPLES, "high_safe_z_m": HIGH_SAFE_Z_M,
                            "hold_margin_m": HOLD_MARGIN_M,
+                           "follow_bodies": (None if self.atlas.bodies is None
+                                             else HOLD_NEIGHBOURS),
                            **self.tendons.params(),
                            "velocity": [round(float(x), 12) for x in h.velocity],
                            "acceleration": [round(float(x), 12) for x in h.acceleration],
@@ -380,6 +383,13 @@ class Moves:
         if k.black is False and np.any(surfaces_under(tips[:, 0], tips[:, 1], TIP_RADIUS_M)
                                        > k.top_z_m):
             return None
+        bodies = self.atlas.bodies
+        if bodies is not None:  # (the body rule along the move: the key's bed, its neighbours)
+            S = np.linspace(0.0, 1.0, PATH_SAMPLES)
+            Q = np.repeat(qa[None, :], len(S), axis=0)
+            Q[:, cols] = qa[cols] + S[:, None] * (qb[cols] - qa[cols])
+            if not bodies.holding_clear(h.apply_couplings(Q), a.finger, 60 + a.pitch_class).all():
+                return None
         return move
 
     def _rise(self, e: AtlasEntry) -> Timed:

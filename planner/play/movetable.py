@@ -212,7 +212,8 @@ def _follow_matrix(moves, finger: str, pc: int, E: list[AtlasEntry]) -> np.ndarr
     """``Moves._follow``'s test for every pair (i, j) of ``E`` (one finger, one key): the
     tip inside the key's footprint with the key down (within ``HOLD_MARGIN_M``) at each
     of ``PATH_SAMPLES`` along the joint rail + finger move, off the black keys beside a
-    white one."""
+    white one; with the atlas's body rule, the finger's body too
+    (``FingerBodies.holding_clear``)."""
     k = kb.key(60 + pc)
     cols = np.r_[moves.atlas.rail, moves.js[finger]]
     A = np.array([np.r_[k.center_x_m - e.dx_m, e.press] for e in E])  # rail, finger joints
@@ -226,4 +227,15 @@ def _follow_matrix(moves, finger: str, pc: int, E: list[AtlasEntry]) -> np.ndarr
           & (depth <= kb.KEY_BED_DEPTH_M - HOLD_MARGIN_M))
     if k.black is False:
         ok &= ~(surfaces_under(x, y, TIP_RADIUS_M) > k.top_z_m)
-    return ok.reshape(n * n, len(S)).all(axis=1).reshape(n, n)
+    ok = ok.reshape(n * n, len(S)).all(axis=1)
+    bodies = moves.atlas.bodies
+    if bodies is not None:  # (the body rule along the pairs the tip allows)
+        for lo in range(0, int(ok.sum()), _BATCH // len(S)):
+            pair = np.flatnonzero(ok)[lo:lo + _BATCH // len(S)]
+            I, J = np.divmod(pair, n)
+            Q = np.repeat(moves.atlas.base[None, :], len(pair) * len(S), axis=0)
+            a, b = np.repeat(A[I], len(S), axis=0), np.repeat(A[J], len(S), axis=0)
+            Q[:, cols] = a + np.tile(S, len(pair))[:, None] * (b - a)
+            clear = bodies.holding_clear(moves.hand.apply_couplings(Q), finger, 60 + pc)
+            ok[pair] = clear.reshape(len(pair), len(S)).all(axis=1)
+    return ok.reshape(n, n)
