@@ -219,16 +219,25 @@ def _collect(depth, which, fp: Footprints, z_cut, bounds, index, lowest) -> None
     which[t[better], key[better]] = np.asarray(index)[s[better]]
 
 
+def _column_depths_of_spheres(p: np.ndarray, r: np.ndarray, lo: np.ndarray,
+                              hi: np.ndarray) -> np.ndarray:
+    """How far below z = 0 spheres at ``p`` (K, m, 3), radii ``r`` (m,), reach inside each
+    column [lo, hi] (R, 2): (K, R), -inf where none enters it (the lowest sphere point
+    inside a column: ``z - sqrt(r^2 - d^2)``, d its centre's distance to the rectangle)."""
+    d = _rect_dist(p[:, :, None, :2], lo[None, None], hi[None, None])  # (K, m, R)
+    r2 = (r * r)[None, :, None] - d * d
+    low = np.where(r2 >= 0.0, p[:, :, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
+    return -low.min(axis=1)
+
+
 def sphere_depths(p: np.ndarray, r: np.ndarray, grow_m: float = 0.0) -> np.ndarray:
     """How far below each key's resting top spheres at ``p`` (m, 3), radii ``r`` (m,),
     reach inside its footprint column (spec section 2's body rule for a sampled body,
     ``column_depths``' question), each footprint grown by ``grow_m`` on every side:
     (88,), -inf for a key no sphere enters."""
     fp = footprints()
-    d = _rect_dist(p[:, None, :2], fp.lo[None] - grow_m, fp.hi[None] + grow_m)  # (m, R)
-    r2 = (r * r)[:, None] - d * d
-    low = np.where(r2 >= 0.0, p[:, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
-    per_rect = fp.top_m - low.min(axis=0)  # (R,) -inf where no sphere enters
+    per_rect = fp.top_m + _column_depths_of_spheres(p[None], r, fp.lo - grow_m,
+                                                    fp.hi + grow_m)[0]  # (R,)
     out = np.full(kb.HIGHEST_PITCH - kb.LOWEST_PITCH + 1, -np.inf)
     np.maximum.at(out, fp.key, per_rect)
     return out
@@ -243,11 +252,9 @@ def key_depths(p: np.ndarray, r: np.ndarray, pitches, grow_m: float = 0.0) -> np
     out = np.full((len(p), len(keys)), -np.inf)
     for i, k in enumerate(keys):
         sel = fp.key == k
-        lo, hi = fp.lo[sel] - grow_m, fp.hi[sel] + grow_m
-        d = _rect_dist(p[:, :, None, :2], lo[None, None], hi[None, None])  # (K, m, R)
-        r2 = (r * r)[None, :, None] - d * d
-        low = np.where(r2 >= 0.0, p[:, :, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
-        out[:, i] = (fp.top_m[sel][None] - low.min(axis=1)).max(axis=1)
+        depth = fp.top_m[sel][None] + _column_depths_of_spheres(p, r, fp.lo[sel] - grow_m,
+                                                                 fp.hi[sel] + grow_m)
+        out[:, i] = depth.max(axis=1)
     return out
 
 

@@ -135,6 +135,7 @@ class Atlas:
         # (the samples whose poses the IK found within the limits and the body rule
         # refused: a note only they could play is left out for its bodies, ``body``)
         self._body_refused: set[tuple[str, int, int]] = set()
+        self._tucked: dict[str, np.ndarray] = {}  # (``tucked``, found once per finger)
         self.solves = 0
         self._load(table_path(hand.urdf_sha256, posture))
 
@@ -151,6 +152,11 @@ class Atlas:
         every posture and wherever the rail takes it (the default hand's thumb: its
         natural pose hangs 53 mm below the white tops, inside the keys' columns once the
         reach moves the hand over them). Without the body rule, its natural pose."""
+        if finger not in self._tucked:
+            self._tucked[finger] = self._tuck(finger)
+        return self._tucked[finger].copy()
+
+    def _tuck(self, finger: str) -> np.ndarray:
         js = self.hand.joint_slice(finger)
         if self.bodies is None:
             return self.base[js].copy()
@@ -448,7 +454,7 @@ class Atlas:
             if self.bodies is None:
                 break
             tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
-            want = min(kb.KEY_DIP_M, kb.KEY_DIP_M - self._body_below_tip_m(r.q, finger, tip))
+            want = kb.KEY_DIP_M - self._body_below_tip_m(r.q, finger, tip)  # (<= the dip)
             if want <= depth + 1e-4:
                 break
             depth, base = want, r.q
