@@ -23,6 +23,7 @@ from planner.catch.plan.arm import (
     zero_pose,
 )
 from planner.catch.plan.closing import close_start, make_closing
+from planner.catch.plan.drop import add_drop
 from planner.catch.plan.geometry import interp_row, rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.plan.mount import CatchMount
@@ -121,7 +122,7 @@ class CatchPlanner:
         self.rig = catch_joints(self.hand, reach=True)
         self.rig_dyn = StopDynamics(self.hand, self.rig, self.kin)
         self.rig_turn = HoldTurn(self.hand, self.rig, self.rig_dyn, self.kin, self.q_rest,
-                                 self._rows)
+                                 self._falling_rows)
         self._closings: dict[tuple[float, bool], Closing] = {}
 
     def closing(self, radius: float, bodies: bool = True) -> Closing:
@@ -156,6 +157,13 @@ class CatchPlanner:
         plan = self._plans(args, soft, True)
         if not plan.feasible and soft and self.rig.i_reach is not None:
             other = self._plans(args, soft, True, rig=True)
+            if not other.feasible and CatchReason.ROLL in other.reason_kinds:
+                # the hand falling with the ball on the reach axis while the wrist turns
+                fell = self._plans(args, soft, True, rig=True, fall=True)
+                if fell.feasible:
+                    other = replace(fell, notes=fell.notes + (
+                        "the hand falls with the ball on the reach axis while the wrist turns: "
+                        "on the reach without the fall " + reasons_text(other.reasons),))
             if other.feasible:
                 plan = replace(other, notes=other.notes + (
                     "the rig's reach axis moves (the palm square to the throw on it where it "
@@ -174,14 +182,16 @@ class CatchPlanner:
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
         return replace(plan, planning_s=time.perf_counter() - t0)
 
-    def _plans(self, args: tuple, soft: bool, bodies: bool, rig: bool = False) -> CatchPlan:
+    def _plans(self, args: tuple, soft: bool, bodies: bool, rig: bool = False,
+               fall: bool = False) -> CatchPlan:
         """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing;
         ``rig``: the reach axis moves too."""
-        plan, ahead = self._plan(*args, soft=soft, bodies=bodies, rig=rig)
+        plan, ahead = self._plan(*args, soft=soft, bodies=bodies, rig=rig, fall=fall)
         for mode in ((TurnMode.EARLY,) if ahead else ()) + (TurnMode.LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
-            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies, rig=rig)[0]
+            other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies, rig=rig,
+                               fall=fall)[0]
             if other.feasible:
                 what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
                         "after the arm has stopped", None: "no turn to hold the ball"}[mode]
@@ -198,14 +208,17 @@ class CatchPlanner:
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: ThrowInfo | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
-              bodies: bool = True, rig: bool = False) -> tuple[CatchPlan, bool]:
+              bodies: bool = True, rig: bool = False, fall: bool = False
+              ) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
         (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
         grasp (the roll rule moved it). Without the soft catch the palm waits for the ball at
         rest: no turn under way then (the roll rule's turn is the grasp's). ``rig``: the
         rig's reach axis moves too (``catch_joints(..., reach=True)``): the intercept may put
-        the palm square to the throw on it, and the stopping motion uses it."""
+        the palm square to the throw on it, and the stopping motion uses it. ``fall``: the
+        rows then fall with the ball on the reach axis once it lands
+        (``planner.catch.plan.drop``)."""
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
@@ -251,7 +264,7 @@ class CatchPlanner:
         turn0 = hold.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
         turn, t, Q, T_m, s_c, verdict = self._closing_rows(
             flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
-                                                  s_c, rate_hz))
+                                                  s_c, rate_hz, float(flight.ball.inertia_ratio) if fall else None))
         reasons += verdict.reasons
         reasons += roll_reasons(hold, flight, t, Q, pose.t_i)
         ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
@@ -365,6 +378,15 @@ class CatchPlanner:
         for p in prof or ():
             Q += p.offset(t, h.n) - p.offset(np.array([-math.inf]), h.n)[0]
         return t, h.apply_couplings(Q)
+
+    def _falling_rows(self, a: RowsArgs, turn: Turn) -> tuple[np.ndarray, np.ndarray]:
+        """``_rows`` with the hand falling with the ball on the reach axis after it lands
+        (``planner.catch.plan.drop``)."""
+        t, Q = self._rows(a, turn)
+        if a.inertia_ratio is None or self.rig.i_reach is None:
+            return t, Q
+        return t, add_drop(self.hand, self.kin, t, Q, self.rig.i_reach, float(a.pose.t_i),
+                           a.pose.v_i, float(a.closing.radius), a.inertia_ratio)
 
     def forces(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray, r: float,
                grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:

@@ -85,6 +85,8 @@ class RowsArgs:
     T_m: float
     s_c: float
     rate_hz: float
+    inertia_ratio: float | None = None  # the ball's I / (m R^2) where the rows fall with it on
+    # the reach axis (``planner.catch.plan.drop``; None: they do not)
 
 
 class TurnRows(NamedTuple):

@@ -1,0 +1,122 @@
+"""The hand falling with the ball on the rig's reach axis (a person's palm-up catch of a
+short or a steep throw: the hand gives way downwards with the ball while the wrist turns
+the palm up under it).
+
+After the pad has stopped the ball on the palm it rolls along the palm's +y (towards the
+wrist, where nothing stops it) at k ((g - a) . y) (``planner.check.ballroll``: k the rolling
+ball's share of the tangential force, a the palm target's acceleration). The reach axis is
+a translation upstream of the wrist: it moves the palm target along one fixed direction
+e_r without turning the palm, so it changes a by a_r e_r and nothing else. Where e_r . y is
+far from 0 (a steep palm: e_r . y = -0.95 on 15 deg / 1 m's intercept pose) the reach
+accelerating at a_r = ((g - a_0) . y - w) / (e_r . y) makes the along-palm acceleration w,
+chosen to bring the ball's roll towards the wrist to rest (``DROP_SETTLE_S``): the hand
+falls with the ball, as in free fall when w = 0, while the wrist's turn (already in the
+rows) levels the palm. The fall is bounded by the reach's travel, speed and acceleration
+(its limits at ``LIMIT_MARGIN``): the axis brakes in time to stop within its range and by
+the rows' end, and brakes when the palm is level enough that braking does not roll the
+ball towards the wrist.
+
+``add_drop`` adds that motion to a plan's rows (the law row by row, as the check integrates
+the roll: ``roll_towards_wrist_m``); the check then judges the rows as any other (the roll
+rule, every motor at the rows' accelerations).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.check.ballroll import roll_factor, roll_towards_wrist_m
+from planner.hand.model import GRAVITY_WORLD
+from planner.trajectory import LIMIT_MARGIN
+
+DROP_SETTLE_S = 0.03  # the law brings the ball's roll towards the wrist to rest in about
+# this long: three rows at 100 Hz (the rows' own rate is the finest the check sees)
+MIN_LEVER = 0.2  # below this |e_r . y| the reach barely moves the ball along the palm (a
+# palm near perpendicular to the forearm's line): the axis then only brakes
+
+
+def reach_direction(kin, q: np.ndarray, i_reach: int, radius_m: float) -> np.ndarray:
+    """The palm target's motion per metre of the reach axis (reference frame): constant
+    (the axis is a translation upstream of the wrist)."""
+    d = 1e-4
+    q1 = q.copy()
+    q1[i_reach] += d
+    _, P = kin.frames(np.vstack([q, q1]))
+    c = P[:, :3, 3] + radius_m * P[:, :3, 2]
+    return (c[1] - c[0]) / d
+
+
+def add_drop(hand, kin, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
+             v_ball: np.ndarray, radius_m: float, inertia_ratio: float) -> np.ndarray:
+    """The rows ``Q`` (at times ``t``) with the reach axis falling with the ball from its
+    landing at ``t_land_s`` (velocity ``v_ball``) and braking to rest within its range by
+    the last rows (module docstring); ``Q`` unchanged where that rolls the ball no less
+    towards the wrist (``roll_towards_wrist_m``) than the rows alone."""
+    after = np.flatnonzero(t > t_land_s)
+    if len(after) < 4 or after[0] < 1:
+        return Q
+    dt = float(t[1] - t[0])
+    k0 = int(after[0])
+    _, palm = kin.frames(Q)
+    y = palm[:, :3, 1]
+    centre = palm[:, :3, 3] + radius_m * palm[:, :3, 2]
+    acc = np.zeros_like(centre)
+    acc[1:-1] = (centre[2:] - 2.0 * centre[1:-1] + centre[:-2]) / (dt * dt)
+    e_r = reach_direction(kin, Q[k0], i_reach, radius_m)
+    lever = y @ e_r
+    k_roll = roll_factor(inertia_ratio)
+    along0 = k_roll * np.einsum("ij,ij->i", GRAVITY_WORLD - acc, y)
+    a_max = LIMIT_MARGIN * float(hand.acceleration[i_reach])
+    v_max = LIMIT_MARGIN * float(hand.velocity[i_reach])
+    lo = float(hand.lower[i_reach])
+    hi = float(hand.upper[i_reach])
+    base = Q[:, i_reach]
+    v_rel = np.asarray(v_ball, dtype=float) - (centre[k0] - centre[k0 - 1]) / dt
+    x, vx = 0.0, k_roll * float(v_rel @ y[k0 - 1])
+    tau = float(t[k0] - t_land_s)
+    n = len(t)
+    p = np.zeros(n)  # the reach's offset from the rows' own
+    u = 0.0  # its speed
+    for k in range(k0, n - 2):
+        # the roll as the rule integrates it up to this row (with the offsets so far)
+        room_t = (n - 3 - k) * dt  # time left to brake to rest by the rows' end
+        a_o = 0.0
+        if x > 0.0 or vx > 0.0:
+            w = -vx / DROP_SETTLE_S  # bring the roll towards the wrist to rest
+        else:
+            w = min(float(along0[k]), 0.0)  # resting on the fingers' side: as it is
+        if abs(lever[k]) >= MIN_LEVER:
+            a_o = (float(along0[k]) - w) / (k_roll * float(lever[k]))
+        # brake when the palm no longer needs the fall (the ball would not roll towards
+        # the wrist with the axis braking)
+        a_brake = float(np.clip(-u / dt, -a_max, a_max))
+        if x <= 0.0 and vx <= 0.0 and along0[k] - k_roll * a_brake * lever[k] <= 0.0:
+            a_o = a_brake
+        a_o = float(np.clip(a_o, -a_max, a_max))
+        # the range and the rows' end: able to stop in time (at a_max) after this step
+        u1 = float(np.clip(u + a_o * dt, -v_max, v_max))
+        pos1 = base[k + 1] + p[k] + u1 * dt
+        stop_d = u1 * u1 / (2.0 * a_max)
+        if (u1 < 0 and pos1 - stop_d < lo) or (u1 > 0 and pos1 + stop_d > hi) \
+                or abs(u1) > a_max * room_t:
+            a_o = a_brake
+            u1 = u + a_o * dt
+        u = u1
+        p[k + 1] = p[k] + u * dt
+        # the roll over the next step with this row's acceleration
+        a_along = float(along0[k]) - k_roll * a_o * float(lever[k])
+        x += vx * tau + 0.5 * a_along * tau * tau
+        vx += a_along * tau
+        if x < 0.0:
+            x, vx = 0.0, max(vx, 0.0)
+        tau = dt
+    p[n - 1] = p[n - 2]
+    if not np.any(p):
+        return Q
+    out = Q.copy()
+    out[:, i_reach] = base + p
+    _, palm_out = kin.frames(out)
+    rolled = [roll_towards_wrist_m(t, P, radius_m, t_land_s, v_ball, inertia_ratio)
+              for P in (palm, palm_out)]
+    return out if rolled[1] < rolled[0] else Q  # the law's fall only where it rolls less
+    # (its braking can roll the ball more than the rows alone where the travel is short)
