@@ -90,3 +90,37 @@ def test_caught_with_the_reach_in_physics(pl, tmp_path):
     write_plan(plan_throw(65.0, 1.5, -0.3, planner=pl), str(out))
     c = simulate_trajectory(str(out)).catch
     assert c is not None and c.held and c.end_distance_m < 0.0335 + 0.010
+
+
+def test_the_hand_falls_with_the_ball_where_the_reach_alone_lets_it_roll(pl, tmp_path):
+    """-0.3 m / 75 deg / 0.5 m: on the reach without the fall the ball rolls off the palm's
+    wrist side (the note says so); with the hand falling on the reach axis after the ball
+    lands (``planner.catch.plan.drop``) the plan is feasible, ``check`` confirms it, and the
+    reach moves down after the intercept within its travel."""
+    p = plan_throw(75.0, 0.5, -0.3, planner=pl)
+    assert p.feasible, p.reasons
+    note = [n for n in p.notes if n.startswith("the hand falls with the ball")]
+    assert note and "rolls off the palm's wrist side" in note[0]
+    out = tmp_path / "c.csv"
+    write_plan(p, str(out))
+    rep = check_trajectory(str(out))
+    assert rep.ok, rep.problems
+    i = pl.hand.index["reach"]
+    tr = read_trajectory(str(out))
+    after = tr.t_s > p.intercept.t_s
+    assert np.all(tr.q[:, i] >= pl.hand.lower[i]) and np.all(tr.q[:, i] <= pl.hand.upper[i])
+    assert tr.q[after, i].min() < tr.q[~after, i][-1] - 0.01  # the hand gives way downwards
+
+
+def test_the_fall_keeps_rows_that_roll_less_without_it(pl):
+    """``add_drop`` returns the rows unchanged where its fall would not roll the ball less
+    (a palm held level: nothing rolls towards the wrist)."""
+    from planner.catch.plan.drop import add_drop
+
+    h, j = pl.hand, pl.rig
+    q = pl.q_zero.copy()
+    q[j.i_flex] = -1.1  # the palm up, its downhill towards the fingers
+    t = np.arange(60) * 0.01
+    Q = np.tile(q, (60, 1))
+    out = add_drop(h, pl.kin, t, Q, j.i_reach, 0.105, np.array([0.0, 0.0, -1.0]), 0.033, 0.6)
+    assert out is Q

@@ -7,31 +7,30 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
+from functools import partial
 from itertools import pairwise
 
 import numpy as np
 
-from planner.catch import grasp as gq
 from planner.catch.flight.observe import FitResult, predict_intercept
 from planner.catch.flight.path import Flight
 from planner.catch.plan.arm import (
     catch_joints,
     open_from,
-    palm_target,
     palm_target_of,
     rest_pose,
     zero_pose,
 )
+from planner.catch.plan.ballforces import BallForces
 from planner.catch.plan.closing import close_start, make_closing
 from planner.catch.plan.drop import add_drop
-from planner.catch.plan.geometry import interp_row, rot1
+from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.plan.mount import CatchMount
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.results import (
     CatchPlan,
     Closing,
-    Forces,
     ForcesVerdict,
     ThrowInfo,
     make_catch_plan,
@@ -41,6 +40,7 @@ from planner.catch.plan.stopping import (
     ROLL_WEIGHT,
     SoftStop,
     StopDynamics,
+    contact_speeds,
     plan_stop,
 )
 from planner.catch.plan.turnahead import (
@@ -51,12 +51,9 @@ from planner.catch.plan.turnahead import (
     TurnMode,
     ahead_shift,
 )
-from planner.check.ball import ball_load_instants, contact_loads, phase_loads
 from planner.check.ballroll import roll_judged, roll_problem
-from planner.check.ballstop import PAD_GIVE_M, pad_time_s
-from planner.check.criteria import GRASP_TOL_M
+from planner.check.ballstop import pad_time_s
 from planner.check.kinematics import Kinematics
-from planner.check.limits import RATE_TOL
 from planner.errors import InfeasibleError, PlannerError
 from planner.hand.model import HandModel
 from planner.ik import HandIK
@@ -123,6 +120,11 @@ class CatchPlanner:
         self.rig_dyn = StopDynamics(self.hand, self.rig, self.kin)
         self.rig_turn = HoldTurn(self.hand, self.rig, self.rig_dyn, self.kin, self.q_rest,
                                  self._falling_rows)
+        self.ball_forces = BallForces(self.hand, self.kin)
+        # the fall's plans solve the contact QPs with solvers of their own: OSQP's state
+        # after a solve (its step size) moves the last digit of the next, and the plans
+        # without the fall keep their bytes
+        self._fall_speeds = partial(contact_speeds, qps={})
         self._closings: dict[tuple[float, bool], Closing] = {}
 
     def closing(self, radius: float, bodies: bool = True) -> Closing:
@@ -208,8 +210,7 @@ class CatchPlanner:
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: ThrowInfo | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
-              bodies: bool = True, rig: bool = False, fall: bool = False
-              ) -> tuple[CatchPlan, bool]:
+              bodies: bool = True, rig: bool = False, fall: bool = False) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
         (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
@@ -217,14 +218,12 @@ class CatchPlanner:
         rest: no turn under way then (the roll rule's turn is the grasp's). ``rig``: the
         rig's reach axis moves too (``catch_joints(..., reach=True)``): the intercept may put
         the palm square to the throw on it, and the stopping motion uses it. ``fall``: the
-        rows then fall with the ball on the reach axis once it lands
-        (``planner.catch.plan.drop``)."""
+        rows fall with the ball on the reach axis once it lands (``planner.catch.plan.drop``)."""
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
         dyn, hold = (self.rig_dyn, self.rig_turn) if rig else (self.dyn, self.turn)
-        h = self.hand
-        C = np.asarray(catch_point, dtype=float)
+        h, C = self.hand, np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
         closing = self.closing(r, bodies)
         reasons = [Reason(CatchReason.GRASP, closing.reason)] if closing.reason else []
@@ -243,7 +242,8 @@ class CatchPlanner:
             return t_react + dyn.move_time(self.q_rest, q_pre)
 
         ic, _, soft_stop = plan_stop(dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
-                                     ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0)
+                                     ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0,
+                                     self._fall_speeds if fall else None)
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:
@@ -390,51 +390,8 @@ class CatchPlanner:
 
     def forces(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray, r: float,
                grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:
-        """Stopping the ball (the check's rule on the rows, ``planner.check.ball.ball_loads``:
-        the pad, the hand's inertia, the friction cone) and holding it in the closed hand
-        (the grasp QP): their results (None where infeasible), the reasons, and the ball's
-        centre on the palm at the intercept."""
-        h, mass = self.hand, float(flight.ball.mass_kg)
-        hold = None
-        reasons = []
-        q_i = interp_row(t, Q, pose.t_i)
-        centre_i = palm_target(h, q_i, r)
-        stop, contact = self._stop_load(flight, pose, t, Q, grasp_t)
-        if stop.headroom < -RATE_TOL:  # the check's tolerance (one rule)
-            reasons.append(Reason(CatchReason.TOO_FAST_TO_STOP, (
-                f"too fast to stop (over the palm's {100 * PAD_GIVE_M:g} cm and the arm's "
-                f"stopping motion): {stop.force_n:.1f} N needs motor.{stop.motor} at "
-                f"{abs(stop.torque_nm):.2f} N m > its {stop.limiting_part} limit "
-                f"{stop.capacity_nm:.2f} N m")))
-        if stop.cone_margin_n is not None and stop.cone_margin_n < 0:
-            reasons.append(Reason(CatchReason.FRICTION, (
-                f"friction (stopping the ball): the palm's force leaves its friction cone by "
-                f"{-stop.cone_margin_n:.2f} N: the ball slides off")))
-        try:
-            hold = gq.grasp_forces(h, pose.q_closed, palm_target(h, pose.q_closed, r), r,
-                                   gq.hold_force(mass), case="hold", tip_tol_m=GRASP_TOL_M,
-                                   moment_balance=True)
-        except gq.GraspTorqueError as e:
-            reasons.append(Reason(CatchReason.TORQUE, f"torque (holding the ball): {e}"))
-        except gq.GraspFrictionError as e:
-            reasons.append(Reason(CatchReason.FRICTION, f"friction (holding the ball): {e}"))
-        return ForcesVerdict(Forces(stop, hold, soft, contact), tuple(reasons), centre_i)
-
-    def _stop_load(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray,
-                   grasp_t: float | None):
-        """The check's stopping load on the rows from the one before the intercept (only the
-        ball's velocity enters it: its launch point needs no shift to the reference frame),
-        and the impact and riding loads named apart (``ContactLoads``)."""
-        k0 = max(0, int(np.searchsorted(t, pose.t_i, side="right")) - 2)
-        b = flight.to_metadata()
-        ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
-                "radius": float(b["radius"]), "mass": float(b["mass"]),
-                "drag": float(b["drag"])}
-        _, palm = self.kin.frames(Q[k0:])
-        inst = ball_load_instants(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i),
-                                  PAD_GIVE_M, grasp_t)
-        stop = phase_loads(inst, t[-1], self.kin, Q[-1], palm[-1], ball["mass"])[0]
-        return stop, contact_loads(inst)
+        """``BallForces.forces`` of this hand (stopping and holding the ball judged)."""
+        return self.ball_forces.forces(flight, pose, t, Q, r, grasp_t, soft)
 
 
 def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,

@@ -330,11 +330,13 @@ def contact_qp(J: np.ndarray, v_ball: np.ndarray, normal: np.ndarray,
 
 
 def contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
-                   normal: np.ndarray, roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
-    """The QP (``contact_qp``) within -bound <= x <= bound, by OSQP (zeros when unsolved)."""
+                   normal: np.ndarray, roll_weight: float = ROLL_WEIGHT,
+                   qps: dict[int, DenseQp] | None = None) -> np.ndarray:
+    """The QP (``contact_qp``) within -bound <= x <= bound, by OSQP (zeros when unsolved);
+    ``qps``: the solvers to use, one per number of arm joints (default: the module's)."""
     k = J.shape[1]
     P, c = contact_qp(J, v_ball, normal, roll_weight)
-    qp = _QPS.setdefault(k, DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000,
+    qp = (_QPS if qps is None else qps).setdefault(k, DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000,
                                     polishing=True, warm_starting=False))
     res = qp.solve(P, c, np.eye(k), -bound, bound)
     if not res.solved:
@@ -344,18 +346,20 @@ def contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
 
 def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
-              soft: bool = True, roll_weight: float = ROLL_WEIGHT
+              soft: bool = True, roll_weight: float = ROLL_WEIGHT,
+              speeds: Callable[..., np.ndarray] | None = None
               ) -> tuple[Intercept, np.ndarray, SoftStop]:
     """The intercept, its open pose and the stopping motion (module docstring). ``ready_by``:
     a function of the pre-catch pose -> when the hand can be there. ``soft`` False: the palm
     waits at rest (the stopping is the pad's alone). ``roll_weight``: the contact-speed QP's
-    weight on the ball's speed along the palm (1: none above its speed into it)."""
+    weight on the ball's speed along the palm (1: none above its speed into it). ``speeds``:
+    the contact speeds' QP solver (``StopAsk``; None: ``contact_speeds``)."""
     best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, soft,
-                      roll_weight)
+                      roll_weight, speeds)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
-                          rw=roll_weight)
+                          rw=roll_weight, speeds=speeds)
     ic, q_open, stop = best[1]
     if not np.any(stop.qd):
         return best[1]
@@ -365,7 +369,7 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
         # from the speeds the last one found within the joints' range
         warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
         cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
-                          stop.tilt_rad, share, warm, rw=roll_weight)[2]
+                          stop.tilt_rad, share, warm, rw=roll_weight, speeds=speeds)[2]
         if cand.contact_share == 1.0:
             break
         j = (dyn.judge(cand, q_open, flight, r), cand)
