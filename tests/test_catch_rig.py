@@ -117,10 +117,10 @@ def test_the_fall_keeps_rows_that_roll_less_without_it(pl):
     (a palm held level: nothing rolls towards the wrist)."""
     from planner.catch.plan.drop import add_drop
 
-    h, j = pl.hand, pl.rig
+    j = pl.rig
     q = pl.q_zero.copy()
     q[j.i_flex] = -1.1  # the palm up, its downhill towards the fingers
     t = np.arange(60) * 0.01
     Q = np.tile(q, (60, 1))
-    out = add_drop(h, pl.kin, t, Q, j.i_reach, 0.105, np.array([0.0, 0.0, -1.0]), 0.033, 0.6)
+    out = add_drop(pl.rig_dyn, t, Q, j.i_reach, 0.105, np.array([0.0, 0.0, -1.0]), 0.033, 0.6)
     assert out is Q

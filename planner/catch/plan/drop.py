@@ -26,11 +26,15 @@ from __future__ import annotations
 import numpy as np
 
 from planner.check.ballroll import roll_factor, roll_towards_wrist_m
+from planner.check.ballstop import PALM_MU
 from planner.hand.model import GRAVITY_WORLD
 from planner.trajectory import LIMIT_MARGIN
 
 DROP_SETTLE_S = 0.03  # the law brings the ball's roll towards the wrist to rest in about
 # this long: three rows at 100 Hz (the rows' own rate is the finest the check sees)
+CONE_SHARE = 0.95  # the fall keeps the ball's force within this share of the palm's friction
+# (tan of the cone's half angle): on the cone's edge itself the check's rule on the written
+# rows (rounded, their accelerations second differences) found it 0.00 N outside
 MIN_LEVER = 0.2  # below this |e_r . y| the reach barely moves the ball along the palm (a
 # palm near perpendicular to the forearm's line): the axis then only brakes
 
@@ -46,16 +50,55 @@ def reach_direction(kin, q: np.ndarray, i_reach: int, radius_m: float) -> np.nda
     return (c[1] - c[0]) / d
 
 
-def add_drop(hand, kin, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
+def allowed_accel(dyn, q: np.ndarray, qdd: np.ndarray, i_reach: int, b: np.ndarray,
+                  e_r: np.ndarray, normal: np.ndarray) -> tuple[float, float]:
+    """The reach's accelerations a (m/s^2) that row ``q`` (joint accelerations ``qdd``
+    without the fall) may add: every motor within ``STOP_SHARE`` of its capacity with the
+    hand's inertia (``StopDynamics.accel_room``, as the stop's ramps), and the ball riding
+    the palm, whose force m (b + a e_r) (b: the palm target's acceleration less g) stays in
+    the palm's friction cone (``CONE_SHARE`` of ``PALM_MU``): the palm neither leaves the ball nor drags it.
+    (lo, hi); lo > hi: none."""
+    MH, room = dyn.accel_room(q)
+    base, per = MH @ qdd, MH[:, i_reach]
+    lo, hi = -np.inf, np.inf
+    for m in np.flatnonzero(np.abs(per) > 1e-12):
+        ends = sorted(((-room[m] - base[m]) / per[m], (room[m] - base[m]) / per[m]))
+        lo, hi = max(lo, ends[0]), min(hi, ends[1])
+    # the cone: |F_t|^2 <= mu^2 F_n^2 with F_n >= 0, F = b + a e_r (per unit mass)
+    bn, en = float(b @ normal), float(e_r @ normal)
+    bt, et = b - bn * normal, e_r - en * normal
+    mu2 = (CONE_SHARE * PALM_MU) ** 2
+    qa, qb, qc = float(et @ et) - mu2 * en * en, float(bt @ et) - mu2 * bn * en, \
+        float(bt @ bt) - mu2 * bn * bn
+    disc = qb * qb - qa * qc
+    if qa > 1e-12:  # between the roots
+        if disc < 0.0:
+            return 0.0, -1.0
+        lo = max(lo, (-qb - disc ** 0.5) / qa)
+        hi = min(hi, (-qb + disc ** 0.5) / qa)
+    elif qa < -1e-12 and disc >= 0.0 and abs(en) > 1e-12:  # outside the roots, on the side
+        r1, r2 = sorted(((-qb - disc ** 0.5) / qa, (-qb + disc ** 0.5) / qa))  # F_n >= 0
+        lo, hi = (max(lo, r2), hi) if en > 0 else (lo, min(hi, r1))
+    if abs(en) > 1e-12:  # F_n >= 0
+        edge = -bn / en
+        lo, hi = (max(lo, edge), hi) if en > 0 else (lo, min(hi, edge))
+    return float(lo), float(hi)
+
+
+def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
              v_ball: np.ndarray, radius_m: float, inertia_ratio: float) -> np.ndarray:
-    """The rows ``Q`` (at times ``t``) with the reach axis falling with the ball from its
-    landing at ``t_land_s`` (velocity ``v_ball``) and braking to rest within its range by
-    the last rows (module docstring); ``Q`` unchanged where that rolls the ball no less
-    towards the wrist (``roll_towards_wrist_m``) than the rows alone."""
+    """The rows ``Q`` (at times ``t``) of ``dyn``'s hand with the reach axis falling with
+    the ball from its landing at ``t_land_s`` (velocity ``v_ball``) and braking to rest
+    within its range by the last rows (module docstring), every row's fall within
+    ``allowed_accel``; ``Q`` unchanged where that rolls the ball no less towards the wrist
+    (``roll_towards_wrist_m``) than the rows alone."""
+    hand, kin = dyn.hand, dyn.kin
     after = np.flatnonzero(t > t_land_s)
     if len(after) < 4 or after[0] < 1:
         return Q
     dt = float(t[1] - t[0])
+    qdd = np.zeros_like(Q)
+    qdd[1:-1] = (Q[2:] - 2.0 * Q[1:-1] + Q[:-2]) / (dt * dt)
     k0 = int(after[0])
     _, palm = kin.frames(Q)
     y = palm[:, :3, 1]
@@ -92,7 +135,14 @@ def add_drop(hand, kin, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: fl
         a_brake = float(np.clip(-u / dt, -a_max, a_max))
         if x <= 0.0 and vx <= 0.0 and along0[k] - k_roll * a_brake * lever[k] <= 0.0:
             a_o = a_brake
-        a_o = float(np.clip(a_o, -a_max, a_max))
+        lo_a, hi_a = allowed_accel(dyn, Q[k], qdd[k], i_reach, acc[k] - GRAVITY_WORLD, e_r,
+                                   palm[k, :3, 2])
+        if lo_a > hi_a:
+            lo_a = hi_a = 0.0
+        # (rows already outside the cone or the motors' room without the fall: the fall is
+        # bounded to make it no worse)
+        lo_a, hi_a = min(lo_a, 0.0), max(hi_a, 0.0)
+        a_o = float(np.clip(a_o, max(-a_max, lo_a), min(a_max, hi_a)))
         # the range and the rows' end: able to stop in time (at a_max) after this step
         u1 = float(np.clip(u + a_o * dt, -v_max, v_max))
         pos1 = base[k + 1] + p[k] + u1 * dt

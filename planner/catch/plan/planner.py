@@ -159,9 +159,11 @@ class CatchPlanner:
         plan = self._plans(args, soft, True)
         if not plan.feasible and soft and self.rig.i_reach is not None:
             other = self._plans(args, soft, True, rig=True)
+            fell_why = ""
             if not other.feasible and CatchReason.ROLL in other.reason_kinds:
                 # the hand falling with the ball on the reach axis while the wrist turns
                 fell = self._plans(args, soft, True, rig=True, fall=True)
+                fell_why = "; the hand falling with the ball on it: " + reasons_text(fell.reasons)
                 if fell.feasible:
                     other = replace(fell, notes=fell.notes + (
                         "the hand falls with the ball on the reach axis while the wrist turns: "
@@ -172,7 +174,8 @@ class CatchPlanner:
                     "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
             else:
                 plan = replace(plan, notes=plan.notes + (
-                    "with the rig's reach axis moving too: " + reasons_text(other.reasons),))
+                    "with the rig's reach axis moving too: " + reasons_text(other.reasons)
+                    + fell_why,))
         if not plan.feasible and CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
@@ -385,7 +388,7 @@ class CatchPlanner:
         t, Q = self._rows(a, turn)
         if a.inertia_ratio is None or self.rig.i_reach is None:
             return t, Q
-        return t, add_drop(self.hand, self.kin, t, Q, self.rig.i_reach, float(a.pose.t_i),
+        return t, add_drop(self.rig_dyn, t, Q, self.rig.i_reach, float(a.pose.t_i),
                            a.pose.v_i, float(a.closing.radius), a.inertia_ratio)
 
     def forces(self, flight: Flight, pose: MeetPose, t: np.ndarray, Q: np.ndarray, r: float,
