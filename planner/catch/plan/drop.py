@@ -14,7 +14,9 @@ falls with the ball, as in free fall when w = 0, while the wrist's turn (already
 rows) levels the palm. The fall is bounded by the reach's travel, speed and acceleration
 (its limits at ``LIMIT_MARGIN``): the axis brakes in time to stop within its range and by
 the rows' end, and brakes when the palm is level enough that braking does not roll the
-ball towards the wrist.
+ball towards the wrist. Each row's fall also keeps every motor within its room with the
+hand's inertia and the riding ball's force inside the palm's friction cone
+(``allowed_accel``).
 
 ``add_drop`` adds that motion to a plan's rows (the law row by row, as the check integrates
 the roll: ``roll_towards_wrist_m``); the check then judges the rows as any other (the roll
@@ -48,6 +50,22 @@ def reach_direction(kin, q: np.ndarray, i_reach: int, radius_m: float) -> np.nda
     _, P = kin.frames(np.vstack([q, q1]))
     c = P[:, :3, 3] + radius_m * P[:, :3, 2]
     return (c[1] - c[0]) / d
+
+
+def fall_accel(x: float, vx: float, along: float, lever: float, k_roll: float, u: float,
+               dt: float, a_max: float) -> float:
+    """The law (module docstring) at one row: the reach's acceleration (m/s^2) for a ball
+    ``x`` (m) from the palm target towards the wrist rolling at ``vx`` (m/s), where the rows
+    alone roll it at ``along`` (m/s^2) and a unit of the reach's acceleration at -``k_roll``
+    ``lever`` (e_r . y); the reach moving at ``u`` (m/s). It brakes (to rest within a row,
+    at most ``a_max``) once the ball rests on the fingers' side and braking keeps it there."""
+    a_brake = float(np.clip(-u / dt, -a_max, a_max))
+    if x <= 0.0 and vx <= 0.0 and along - k_roll * a_brake * lever <= 0.0:
+        return a_brake
+    if abs(lever) < MIN_LEVER:
+        return 0.0
+    w = -vx / DROP_SETTLE_S if x > 0.0 or vx > 0.0 else min(along, 0.0)
+    return (along - w) / (k_roll * lever)
 
 
 def allowed_accel(dyn, q: np.ndarray, qdd: np.ndarray, i_reach: int, b: np.ndarray,
@@ -111,8 +129,8 @@ def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
     along0 = k_roll * np.einsum("ij,ij->i", GRAVITY_WORLD - acc, y)
     a_max = LIMIT_MARGIN * float(hand.acceleration[i_reach])
     v_max = LIMIT_MARGIN * float(hand.velocity[i_reach])
-    lo = float(hand.lower[i_reach])
-    hi = float(hand.upper[i_reach])
+    pad = 0.5 * (1.0 - LIMIT_MARGIN) * float(hand.upper[i_reach] - hand.lower[i_reach])
+    lo, hi = float(hand.lower[i_reach]) + pad, float(hand.upper[i_reach]) - pad
     base = Q[:, i_reach]
     v_rel = np.asarray(v_ball, dtype=float) - (centre[k0] - centre[k0 - 1]) / dt
     x, vx = 0.0, k_roll * float(v_rel @ y[k0 - 1])
@@ -121,35 +139,20 @@ def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
     p = np.zeros(n)  # the reach's offset from the rows' own
     u = 0.0  # its speed
     for k in range(k0, n - 2):
-        # the roll as the rule integrates it up to this row (with the offsets so far)
-        room_t = (n - 3 - k) * dt  # time left to brake to rest by the rows' end
-        a_o = 0.0
-        if x > 0.0 or vx > 0.0:
-            w = -vx / DROP_SETTLE_S  # bring the roll towards the wrist to rest
-        else:
-            w = min(float(along0[k]), 0.0)  # resting on the fingers' side: as it is
-        if abs(lever[k]) >= MIN_LEVER:
-            a_o = (float(along0[k]) - w) / (k_roll * float(lever[k]))
-        # brake when the palm no longer needs the fall (the ball would not roll towards
-        # the wrist with the axis braking)
-        a_brake = float(np.clip(-u / dt, -a_max, a_max))
-        if x <= 0.0 and vx <= 0.0 and along0[k] - k_roll * a_brake * lever[k] <= 0.0:
-            a_o = a_brake
+        a_o = fall_accel(x, vx, float(along0[k]), float(lever[k]), k_roll, u, dt, a_max)
         lo_a, hi_a = allowed_accel(dyn, Q[k], qdd[k], i_reach, acc[k] - GRAVITY_WORLD, e_r,
                                    palm[k, :3, 2])
-        if lo_a > hi_a:
-            lo_a = hi_a = 0.0
         # (rows already outside the cone or the motors' room without the fall: the fall is
         # bounded to make it no worse)
-        lo_a, hi_a = min(lo_a, 0.0), max(hi_a, 0.0)
+        lo_a, hi_a = (min(lo_a, 0.0), max(hi_a, 0.0)) if lo_a <= hi_a else (0.0, 0.0)
         a_o = float(np.clip(a_o, max(-a_max, lo_a), min(a_max, hi_a)))
         # the range and the rows' end: able to stop in time (at a_max) after this step
         u1 = float(np.clip(u + a_o * dt, -v_max, v_max))
         pos1 = base[k + 1] + p[k] + u1 * dt
         stop_d = u1 * u1 / (2.0 * a_max)
         if (u1 < 0 and pos1 - stop_d < lo) or (u1 > 0 and pos1 + stop_d > hi) \
-                or abs(u1) > a_max * room_t:
-            a_o = a_brake
+                or abs(u1) > a_max * (n - 3 - k) * dt:
+            a_o = float(np.clip(-u / dt, -a_max, a_max))
             u1 = u + a_o * dt
         u = u1
         p[k + 1] = p[k] + u * dt
