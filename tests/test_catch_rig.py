@@ -124,3 +124,23 @@ def test_the_fall_keeps_rows_that_roll_less_without_it(pl):
     Q = np.tile(q, (60, 1))
     out = add_drop(pl.rig_dyn, t, Q, j.i_reach, 0.105, np.array([0.0, 0.0, -1.0]), 0.033, 0.6)
     assert out is Q
+
+
+def test_the_fall_keeps_the_ball_on_the_palm(pl):
+    """``allowed_accel``: a level palm at rest under the ball (its force m (a - g) = m g up)
+    may fall on a vertical axis at most at g (faster it would leave the ball: the force
+    would have to pull), and on a horizontal one (the force's tangential part) at most at
+    95 % of mu g either way (the motors' room is wider at the zero pose)."""
+    from planner.catch.plan.drop import CONE_SHARE, allowed_accel
+    from planner.check.ballstop import PALM_MU
+
+    q = pl.q_zero.copy()
+    z = np.zeros(pl.hand.n)
+    up = np.array([0.0, 0.0, 1.0])
+    b = np.array([0.0, 0.0, 9.81])  # the palm target at rest, less gravity
+    lo, hi = allowed_accel(pl.rig_dyn, q, z, pl.rig.i_reach, b, up, up)
+    assert lo == pytest.approx(-9.81, abs=1e-9)
+    assert hi > 20.0  # up: the motors' room (the carriage's 2 N m at 10 mm moves the hand)
+    lo, hi = allowed_accel(pl.rig_dyn, q, z, pl.rig.i_reach, b, np.array([1.0, 0.0, 0.0]), up)
+    mu_g = CONE_SHARE * PALM_MU * 9.81
+    assert lo == pytest.approx(-mu_g, rel=1e-9) and hi == pytest.approx(mu_g, rel=1e-9)
