@@ -128,6 +128,12 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)
     motors = motor_efforts(rec, hand)
     problems = _problems(play, motors, catch, min_f1, strict, claims)
+    if rec.reach_overruns:
+        from planner.simulate.nearkeys import REACH_MARGIN_M
+
+        problems.insert(0, f"the hand moved more than {500 * REACH_MARGIN_M:.0f} mm within a "
+                           f"row {rec.reach_overruns} times: the replay's collision selection "
+                           "may have missed a contact")
     if rec.unstable_at_s is not None:
         problems.insert(0, f"the simulation diverged near {rec.unstable_at_s:.3f} s (MuJoCo "
                            "reset its state: forces beyond what the solver can resolve)")
