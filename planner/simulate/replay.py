@@ -138,13 +138,11 @@ def _near(scene: Scene, data):
         return None
     from planner.simulate import nearkeys
     from planner.simulate.hand_mjcf import HAND_CONAFFINITY, HAND_CONTYPE
-    from planner.simulate.keyboard import key_bodies
 
     m = scene.model
     hand = np.flatnonzero((m.geom_contype == HAND_CONTYPE)
                           & (m.geom_conaffinity == HAND_CONAFFINITY))
-    travel_m = max(k.dip_m for k in key_bodies())
-    return nearkeys.near_keys(m, data, scene.key_geom_key, hand, travel_m)
+    return nearkeys.near_keys(m, data, scene.key_geom_key, hand)
 
 
 def _run(scene: Scene, data, mujoco, base, slope, lims, n_sub: int, ball, vadr, t_s,
@@ -158,7 +156,7 @@ def _run(scene: Scene, data, mujoco, base, slope, lims, n_sub: int, ball, vadr, 
     a = sm.addr(scene)
     rows = sm.Rows(T, len(scene.hand_qpos), len(a.sites))
     bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
-    unstable, peak_f, overruns, sel = None, 0.0, 0, None
+    unstable, peak_f, overruns, span, sel = None, 0.0, 0, None, None
     forcerange, ctrl_view = model.actuator_forcerange, data.ctrl
     frac = (np.arange(n_sub) / n_sub)[:, None]
     nk = _near(scene, data)
@@ -172,11 +170,12 @@ def _run(scene: Scene, data, mujoco, base, slope, lims, n_sub: int, ball, vadr, 
                 # the force: the largest since the previous row (an impact lasts a few steps)
                 rows.take_ball(k, data, a, nb, max(fb, peak_f))
             if nk is not None:
-                now = nearkeys.select(nk, data)
-                if sel is not None and nearkeys.moved_m(sel, now) > 0.5 * nk.margin_m:
+                now = nearkeys.hand_span_m(nk, data)
+                if span is not None and nearkeys.moved_m(span, now) > 0.5 * nk.margin_m:
                     overruns += 1
-                nearkeys.apply(nk, model, now, sel)
-                sel = now
+                span, was = now, sel
+                sel = nearkeys.reachable(nk, span)
+                nearkeys.apply(nk, model, sel, was)
             if k == T - 1:
                 break
             # (every substep's control at once: the same elementwise arithmetic)
