@@ -87,7 +87,7 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
                allow_incomplete: bool = False,
                song_options: dict[str, Any] | None = None, hand_override=None) -> Replay:
     """``simulate_trajectory`` keeping the record (for pictures and comparisons)."""
-    from planner.check import check_trajectory
+    from planner.check import check_play, check_trajectory
     from planner.check.claims import left_out_notes
     from planner.planfile import read_plan
     from planner.simulate.replay import simulate
@@ -99,11 +99,13 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     plan = read_plan(traj_path, allow_incomplete=allow_incomplete, hand_override=hand_override)
     tr, name, hand, T = plan.trajectory, plan.path, plan.hand, plan.T_world_root
     # the kinematic check validates the file (hand, hash, columns, pose, song) and gives
-    # the F1 to compare with
-    kin = check_trajectory(tr, song_path, allow_incomplete=allow_incomplete,
-                           song_options=song_options, hand_override=hand_override)
+    # the F1 to compare with (a play file's key replay: its limit audit is not needed)
     meta = tr.metadata
     task = meta["task"]
+    kw = {"allow_incomplete": allow_incomplete, "song_options": song_options,
+          "hand_override": hand_override}
+    kin_play = (check_play(tr, song_path, **kw) if task == "play"
+                else check_trajectory(tr, song_path, **kw).play)
     ball = None
     if task == "catch":
         from planner.balls import file_inertia_ratio
@@ -143,5 +145,5 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         trajectory=os.fspath(name), song=song_name, task=task, hand=hand.name, contact=contact,
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), wall_s=rec.wall_s,
         play=play, catch=catch, motors=motors, tracking=tracking(rec, hand),
-        kinematic_f1=None if kin.play is None else kin.play.f1, problems=tuple(problems))
+        kinematic_f1=None if kin_play is None else kin_play.f1, problems=tuple(problems))
     return Replay(report, rec, hand, tr, None if notes is None else tuple(notes), scene)
