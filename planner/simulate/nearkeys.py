@@ -47,11 +47,12 @@ class NearKeys:
 
 
 def near_keys(model, data, key_geom_key: np.ndarray, hand_geoms: np.ndarray,
-              margin_m: float = REACH_MARGIN_M) -> NearKeys:
+              margin_m: float | None = None) -> NearKeys:
     """The selection for a scene whose keys are the geoms with ``key_geom_key >= 0``
     (their key's index, keys in pitch order) and whose hand collides through
     ``hand_geoms``; ``data``: any state of it (a key slides straight down: its x-extent
-    is where its boxes are)."""
+    is where its boxes are). ``margin_m``: ``REACH_MARGIN_M`` unless given."""
+    margin_m = REACH_MARGIN_M if margin_m is None else margin_m
     keys = np.flatnonzero(key_geom_key >= 0)
     n = int(key_geom_key.max()) + 1
     R = data.geom_xmat[keys].reshape(-1, 3, 3)
@@ -66,7 +67,8 @@ def near_keys(model, data, key_geom_key: np.ndarray, hand_geoms: np.ndarray,
     per_key = tuple(keys[key_geom_key[keys] == k] for k in range(n))
     g0 = int(keys[0])
     hand_geoms = np.asarray(hand_geoms, dtype=int)
-    return NearKeys(hand_geoms, hand_half_x_m(model, data, hand_geoms), [float(v) for v in lo], [float(v) for v in hi], per_key,
+    return NearKeys(hand_geoms, hand_half_x_m(model, data, hand_geoms),
+                    [float(v) for v in lo], [float(v) for v in hi], per_key,
                     np.array([int(model.geom_bodyid[g[0]]) for g in per_key]),
                     int(model.geom_contype[g0]), int(model.geom_conaffinity[g0]), margin_m)
 
