@@ -6,13 +6,15 @@ scene (``scene``: the hand from its URDF, ``keyboard``: 88 keys, or the catch's
 ball; ``actuators``: a torque-limited position servo per motor, couplings as equality
 constraints), runs it (``replay``) and scores it (``scores``), with the kinematic
 check's F1 of the same file beside the physics F1. The modules: ``hand_mjcf`` (URDF ->
-MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay``, ``scores``, ``report``,
-``compare``; the pictures (``--video``, ``--html``): ``render``, ``video``, ``page``,
+MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay`` (with ``nearkeys``: only the
+keys the hand can reach collide, and ``sampling``: what a row reads), ``scores``,
+``report``, ``compare``; the pictures (``--video``, ``--html``): ``render``, ``video``, ``page``,
 ``pictures``.
 
 Verdict (``SimulateReport.ok``): fails on wrong keys, on notes the plan's end marker
 claims played that the physics misses, on a motor saturated longer than
-``scores.SATURATION_MAX_S``, on a catch not held, on F1 under ``min_f1``, on a diverged simulation; ``strict``
+``scores.SATURATION_MAX_S``, on a catch not held, on F1 under ``min_f1``, on a diverged
+simulation, on a hand faster than ``nearkeys``' margin allows; ``strict``
 also on any missed or late note. MuJoCo is an optional dependency
 (``pip install -e ".[physics]"``); without it the command says so (exit 2).
 """

@@ -6,8 +6,10 @@ reference moves linearly (what a controller interpolating 100 Hz setpoints does)
 speed and inverse-dynamics feedforward move likewise (``actuators.Reference``).
 At every row's time the state is sampled: the hand's joints, every key's travel and
 the finger touching it, the servos' forces and what they asked for (before the clamp
-to their motor's torque), the pad points, the ball and its contacts. A ball with drag
-gets ``-m k |v| v`` as an applied force at every step (spec section 4).
+to their motor's torque), the pad points, the ball and its contacts (``sampling``: a
+row copies MuJoCo's state, the rest is computed after the run). A ball with drag gets
+``-m k |v| v`` as an applied force at every step (spec section 4). On a keyboard only
+the keys the hand can reach within a row collide in it (``nearkeys``).
 """
 
 from __future__ import annotations
@@ -21,8 +23,6 @@ from planner.hand.model import HandModel
 from planner.simulate import actuators as act
 from planner.simulate import sampling as sm
 from planner.simulate.scene import TIMESTEP_S, Ball, Scene, inverse_dynamics, servo_kv
-
-N_KEYS = sm.N_KEYS
 
 
 @dataclass(frozen=True)
@@ -59,10 +59,9 @@ def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray
     return base, slope
 
 
-def _ball_contacts(scene: Scene, data, mujoco, geoms: np.ndarray | None = None):
+def _ball_contacts(scene: Scene, data, mujoco):
     """The ball's contacts with the hand and their summed normal force (N)."""
-    if geoms is None:
-        geoms = np.asarray(data.contact.geom[:data.ncon])
+    geoms = np.asarray(data.contact.geom[:data.ncon])
     if len(geoms) == 0:
         return 0, 0.0
     on_ball = np.flatnonzero((geoms[:, 0] == scene.ball_geom) | (geoms[:, 1] == scene.ball_geom))
