@@ -202,6 +202,7 @@ __all__ = [
     "ball_params",
     "ball_positions",
     "catch_audit",
+    "check_play",
     "check_trajectory",
     "count_mismatches",
     "expected_keys",
@@ -320,10 +321,7 @@ def _check_whole(traj_path, song_path, *, allow_incomplete, min_f1, hand_overrid
     replay_kw: dict[str, Any] = {}
     pressing = ball_load = None
     if task == "play":
-        shapes = collision_bodies(hand.spec)
-        bk = body_keys(kin, tr.q, shapes)
-        play, keys, exp = play_replay(tr, tips, bk, shapes, notes)
-        play = _held_to_claims(play, notes, tr.end, traj_path)
+        play, keys, exp, bk, shapes = _play_whole(plan, kin, tips, notes)
         pressing = np.nan_to_num(keys.kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
         replay_kw = {"down": keys.down, "finger": keys.holder, "expected": exp,
                      "holders": body_names(shapes)[0], "key_depth_m": bk.depth_m}
@@ -334,6 +332,32 @@ def _check_whole(traj_path, song_path, *, allow_incomplete, min_f1, hand_overrid
     limits, tendons = limit_audit(hand, kin, tr, pressing, ball_load, inertia=task == "play")
     return _report(plan, song_path, tr.t_s, limits, tendons, play, catch, min_f1, problems,
                    Replay(tr.t_s, tr.q, tips, palm, **replay_kw))
+
+
+def _play_whole(plan, kin: Kinematics, tips: np.ndarray, notes):
+    """A play file's key replay by the body rule, its claims held against it: (play,
+    keys, expected, body keys, shapes)."""
+    tr = plan.trajectory
+    shapes = collision_bodies(plan.hand.spec)
+    bk = body_keys(kin, tr.q, shapes)
+    play, keys, exp = play_replay(tr, tips, bk, shapes, notes)
+    return _held_to_claims(play, notes, tr.end, plan.path), keys, exp, bk, shapes
+
+
+def check_play(traj_path: str | Trajectory, song_path: str | Song | None = None, *,
+               allow_incomplete: bool = False, hand_override: str | HandModel | None = None,
+               song_options: dict[str, Any] | None = None) -> PlayResult | None:
+    """``check_trajectory(...).play`` without the limit audit (the same reading, the
+    same errors on bad input, the same key replay and claims): the kinematic verdict
+    ``simulate`` reports beside its physics. None for a catch file."""
+    plan = read_plan(traj_path, allow_incomplete=allow_incomplete,
+                     hand_override=hand_override)
+    notes = _song_notes(plan, song_path, None, song_options)
+    if plan.task != "play":
+        return None
+    kin = Kinematics(plan.hand, plan.T_world_root)
+    tips, _ = kin.frames(plan.trajectory.q)
+    return _play_whole(plan, kin, tips, notes)[0]
 
 
 def _check_streamed(path: str, song_path, *, allow_incomplete, min_f1, hand_override, strict,

@@ -6,13 +6,15 @@ scene (``scene``: the hand from its URDF, ``keyboard``: 88 keys, or the catch's
 ball; ``actuators``: a torque-limited position servo per motor, couplings as equality
 constraints), runs it (``replay``) and scores it (``scores``), with the kinematic
 check's F1 of the same file beside the physics F1. The modules: ``hand_mjcf`` (URDF ->
-MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay``, ``scores``, ``report``,
-``compare``; the pictures (``--video``, ``--html``): ``render``, ``video``, ``page``,
+MJCF), ``keyboard``, ``actuators``, ``scene``, ``replay`` (with ``nearkeys``: only the
+keys the hand can reach collide, and ``sampling``: what a row reads), ``scores``,
+``report``, ``compare``; the pictures (``--video``, ``--html``): ``render``, ``video``, ``page``,
 ``pictures``.
 
 Verdict (``SimulateReport.ok``): fails on wrong keys, on notes the plan's end marker
 claims played that the physics misses, on a motor saturated longer than
-``scores.SATURATION_MAX_S``, on a catch not held, on F1 under ``min_f1``, on a diverged simulation; ``strict``
+``scores.SATURATION_MAX_S``, on a catch not held, on F1 under ``min_f1``, on a diverged
+simulation, on a hand faster than ``nearkeys``' margin allows; ``strict``
 also on any missed or late note. MuJoCo is an optional dependency
 (``pip install -e ".[physics]"``); without it the command says so (exit 2).
 """
@@ -87,7 +89,7 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
                allow_incomplete: bool = False,
                song_options: dict[str, Any] | None = None, hand_override=None) -> Replay:
     """``simulate_trajectory`` keeping the record (for pictures and comparisons)."""
-    from planner.check import check_trajectory
+    from planner.check import check_play, check_trajectory
     from planner.check.claims import left_out_notes
     from planner.planfile import read_plan
     from planner.simulate.replay import simulate
@@ -99,11 +101,13 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     plan = read_plan(traj_path, allow_incomplete=allow_incomplete, hand_override=hand_override)
     tr, name, hand, T = plan.trajectory, plan.path, plan.hand, plan.T_world_root
     # the kinematic check validates the file (hand, hash, columns, pose, song) and gives
-    # the F1 to compare with
-    kin = check_trajectory(tr, song_path, allow_incomplete=allow_incomplete,
-                           song_options=song_options, hand_override=hand_override)
+    # the F1 to compare with (a play file's key replay: its limit audit is not needed)
     meta = tr.metadata
     task = meta["task"]
+    kw = {"allow_incomplete": allow_incomplete, "song_options": song_options,
+          "hand_override": hand_override}
+    kin_play = (check_play(tr, song_path, **kw) if task == "play"
+                else check_trajectory(tr, song_path, **kw).play)
     ball = None
     if task == "catch":
         from planner.balls import file_inertia_ratio
@@ -128,6 +132,12 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)
     motors = motor_efforts(rec, hand)
     problems = _problems(play, motors, catch, min_f1, strict, claims)
+    if rec.reach_overruns:
+        from planner.simulate.nearkeys import REACH_MARGIN_M
+
+        problems.insert(0, f"the hand moved more than {500 * REACH_MARGIN_M:.0f} mm within a "
+                           f"row {rec.reach_overruns} times: the replay's collision selection "
+                           "may have missed a contact")
     if rec.unstable_at_s is not None:
         problems.insert(0, f"the simulation diverged near {rec.unstable_at_s:.3f} s (MuJoCo "
                            "reset its state: forces beyond what the solver can resolve)")
@@ -137,5 +147,5 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
         trajectory=os.fspath(name), song=song_name, task=task, hand=hand.name, contact=contact,
         rows=len(tr.t_s), duration_s=float(tr.t_s[-1] - tr.t_s[0]), wall_s=rec.wall_s,
         play=play, catch=catch, motors=motors, tracking=tracking(rec, hand),
-        kinematic_f1=None if kin.play is None else kin.play.f1, problems=tuple(problems))
+        kinematic_f1=None if kin_play is None else kin_play.f1, problems=tuple(problems))
     return Replay(report, rec, hand, tr, None if notes is None else tuple(notes), scene)

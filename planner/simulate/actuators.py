@@ -107,6 +107,30 @@ class Transmission:
             self._cache[key] = hit
         return hit
 
+    def servo_motor_torques(self, q: np.ndarray, force: np.ndarray,
+                            drive: np.ndarray) -> np.ndarray:
+        """(T, n_motor) ``motor_torques`` of rows ``q`` (T, n) whose joint torques are
+        the servos' ``force`` (T, n_motor) on their driven joints ``drive``. Where the
+        transmission reads no joint and each motor's column meets one driven joint
+        only, ``c @ tau`` is one product ``c[d] tau[d]`` (the other terms exact zeros):
+        all the rows at once, the same numbers (``+ 0.0``: a zero's sign as the sum's);
+        else row by row."""
+        T = len(q)
+        out = np.empty((T, len(self._cols)))
+        if T and not len(self._reads):
+            cols, ratio = self.at(q[0])
+            hits = [np.flatnonzero(c[drive] != 0.0) for c in cols]
+            if all(len(h) == 1 for h in hits):
+                for m, (c, h) in enumerate(zip(cols, hits)):
+                    j = int(h[0])
+                    out[:, m] = (c[drive[j]] * force[:, j] + 0.0) / ratio[m] / self._eff[m]
+                return out
+        tau = np.zeros(self.hand.n)
+        for k in range(T):
+            tau[drive] = force[k]
+            out[k] = self.motor_torques(q[k], tau)
+        return out
+
     def motor_torques(self, q: np.ndarray, tau_joint: np.ndarray) -> np.ndarray:
         """``HandModel.motor_torques(q, tau_joint)``, its arithmetic in its order."""
         cols, ratio = self.at(q)
@@ -143,12 +167,16 @@ def reference(hand: HandModel, q: np.ndarray, t_s: np.ndarray,
     qdd = np.gradient(qd, t_s, axis=0) if many else np.zeros_like(q)
     ff = np.empty((len(q), hand.n_motor))
     ratio = np.empty((len(q), hand.n_motor))
+    done: dict[bytes, tuple] = {}  # (a held pose repeats its row: 1/3-1/2 of a song's)
     for i, row in enumerate(q):
-        tau = (hand.gravity_torques(row) if inverse_dynamics is None
-               else inverse_dynamics(row, qd[i], qdd[i]))
-        cols, r = tr.at(row)
-        ff[i] = [float(c @ tau) for c in cols]
-        ratio[i] = np.abs(r)
+        key = row.tobytes() + qd[i].tobytes() + qdd[i].tobytes()
+        hit = done.get(key)
+        if hit is None:
+            tau = (hand.gravity_torques(row) if inverse_dynamics is None
+                   else inverse_dynamics(row, qd[i], qdd[i]))
+            cols, r = tr.at(row)
+            hit = done[key] = ([float(c @ tau) for c in cols], np.abs(r))
+        ff[i], ratio[i] = hit
     drive = np.array(hand._drive)
     return Reference(q[:, drive], qd[:, drive], ff, ratio)
 

@@ -6,8 +6,10 @@ reference moves linearly (what a controller interpolating 100 Hz setpoints does)
 speed and inverse-dynamics feedforward move likewise (``actuators.Reference``).
 At every row's time the state is sampled: the hand's joints, every key's travel and
 the finger touching it, the servos' forces and what they asked for (before the clamp
-to their motor's torque), the pad points, the ball and its contacts. A ball with drag
-gets ``-m k |v| v`` as an applied force at every step (spec section 4).
+to their motor's torque), the pad points, the ball and its contacts (``sampling``: a
+row copies MuJoCo's state, the rest is computed after the run). A ball with drag gets
+``-m k |v| v`` as an applied force at every step (spec section 4). On a keyboard only
+the keys the hand can reach within a row collide in it (``nearkeys``).
 """
 
 from __future__ import annotations
@@ -19,9 +21,8 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.simulate import actuators as act
+from planner.simulate import sampling as sm
 from planner.simulate.scene import TIMESTEP_S, Ball, Scene, inverse_dynamics, servo_kv
-
-N_KEYS = 88
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,7 @@ class SimRecord:
     substeps: int
     wall_s: float
     unstable_at_s: float | None = None  # MuJoCo reset a diverging state here (first time)
+    reach_overruns: int = 0  # rows over which the hand moved past half nearkeys' margin
 
 
 def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray]:
@@ -57,36 +59,9 @@ def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray
     return base, slope
 
 
-def _contacts(scene: Scene, data, mujoco, out_finger: np.ndarray, ball_geom: int,
-              out_ball: np.ndarray):
-    """Fill ``out_finger`` (88,) with the finger touching each key and ``out_ball``
-    (fingers,) with the fingers touching the ball; return the ball's hand contacts and
-    their summed normal force (N)."""
-    out_finger.fill(-1)
-    out_ball[:] = False
-    n = data.ncon
-    if n == 0:
-        return 0, 0.0
-    geoms = np.asarray(data.contact.geom[:n])
-    g1, g2 = geoms[:, 0], geoms[:, 1]
-    k1, k2 = scene.key_geom_key[g1], scene.key_geom_key[g2]
-    f1, f2 = scene.geom_finger[g1], scene.geom_finger[g2]
-    key = np.where(k1 >= 0, k1, k2)
-    fin = np.where(k1 >= 0, f2, f1)
-    sel = (key >= 0) & (fin >= 0)
-    out_finger[key[sel]] = fin[sel]
-    if ball_geom < 0:
-        return 0, 0.0
-    on = (g1 == ball_geom) | (g2 == ball_geom)
-    fb = np.where(g1 == ball_geom, f2, f1)[on]
-    out_ball[fb[fb >= 0]] = True
-    return _ball_contacts(scene, data, mujoco, geoms)
-
-
-def _ball_contacts(scene: Scene, data, mujoco, geoms: np.ndarray | None = None):
+def _ball_contacts(scene: Scene, data, mujoco):
     """The ball's contacts with the hand and their summed normal force (N)."""
-    if geoms is None:
-        geoms = np.asarray(data.contact.geom[:data.ncon])
+    geoms = np.asarray(data.contact.geom[:data.ncon])
     if len(geoms) == 0:
         return 0, 0.0
     on_ball = np.flatnonzero((geoms[:, 0] == scene.ball_geom) | (geoms[:, 1] == scene.ball_geom))
@@ -131,76 +106,88 @@ def _start(scene: Scene, q: np.ndarray, ball: Ball | None, mujoco):
     return data, vadr
 
 
-def _arrays(T: int, n: int, nm: int, n_tips: int) -> dict[str, np.ndarray]:
-    """The record's arrays, one entry per row (``n_tips``: the hand's fingers)."""
-    rec = {k: np.empty(s) for k, s in (
-        ("q_sim", (T, n)), ("key", (T, N_KEYS)), ("force", (T, nm)), ("demand", (T, nm)),
-        ("limit", (T, nm)), ("tips", (T, n_tips, 3)), ("palm", (T, 3)), ("ball", (T, 3)),
-        ("ball_v", (T,)), ("ball_n", (T,)), ("ball_f", (T,)))}
-    rec["key_finger"] = np.full((T, N_KEYS), -1, dtype=np.int8)
-    rec["ball_fingers"] = np.zeros((T, n_tips), dtype=bool)
-    return rec
-
-
-@dataclass(frozen=True)
-class _Addr:
-    """The scene's addresses and gains the replay reads at every row (looked up once)."""
-
-    drive_qpos: np.ndarray
-    drive_dof: np.ndarray
-    kp: np.ndarray
-    kv: np.ndarray
-
-
-def _addr(scene: Scene) -> _Addr:
-    d = scene.servos.drive
-    return _Addr(scene.hand_qpos[d], scene.hand_dof[d], scene.servos.kp, servo_kv(scene))
-
-
-def _sample(rec: dict, k: int, scene: Scene, data, mujoco, ctrl: np.ndarray,
-            lim: np.ndarray, peak_f: float, a: _Addr) -> None:
-    """Row ``k``'s sample: the state the row's setpoint meets."""
-    drive_qpos, drive_dof = a.drive_qpos, a.drive_dof
-    rec["q_sim"][k] = data.qpos[scene.hand_qpos]
-    rec["key"][k] = data.qpos[scene.key_qpos] if len(scene.key_qpos) else 0.0
-    # (from the state itself: data.actuator_length and _velocity are those of the last
-    # step's start, 1 ms old -- at 250 rad/s^2 a 0.3 N m error of the demand)
-    demand = a.kp * (ctrl - data.qpos[drive_qpos]) - a.kv * data.qvel[drive_dof]
-    rec["demand"][k] = demand
-    rec["force"][k] = np.clip(demand, -lim, lim)
-    rec["limit"][k] = lim
-    rec["tips"][k] = data.site_xpos[scene.tip_sites]
-    rec["palm"][k] = data.site_xpos[scene.palm_site]
-    finger_now = np.full(N_KEYS, -1, dtype=np.int64)
-    nb, fb = _contacts(scene, data, mujoco, finger_now, scene.ball_geom, rec["ball_fingers"][k])
-    rec["key_finger"][k] = finger_now
-    if scene.ball_body >= 0:
-        rec["ball"][k] = data.xpos[scene.ball_body]
-        rec["ball_v"][k] = float(np.linalg.norm(data.cvel[scene.ball_body][3:]))
-    # the force: the largest since the previous row (an impact lasts a few steps)
-    rec["ball_n"][k], rec["ball_f"][k] = nb, max(fb, peak_f)
-
-
-def _step_row(scene: Scene, data, mujoco, ctrl: np.ndarray, slope: np.ndarray, n_sub: int,
+def _step_row(scene: Scene, data, mujoco, ctrls: np.ndarray, ctrl_view: np.ndarray,
               ball: Ball | None, vadr: int | None) -> float:
-    """Step from one row to the next (the control moving linearly, the ball's drag
-    applied every step); returns the ball's peak contact force over the steps (N)."""
+    """Step from one row to the next, step ``j`` at control ``ctrls[j]`` (the control
+    moving linearly), the ball's drag applied every step; returns the ball's peak contact
+    force over the steps (N)."""
     model = scene.model
+    step = mujoco.mj_step
+    if scene.ball_body < 0:  # (the keyboard: nothing but the control per step)
+        for c in ctrls:
+            ctrl_view[:] = c
+            step(model, data)
+        return 0.0
     drag = ball.drag_per_m if ball is not None else 0.0
-    mass = float(model.body_mass[scene.ball_body]) if scene.ball_body >= 0 else 0.0
+    mass = float(model.body_mass[scene.ball_body])
     peak_f = 0.0
-    ball_on = scene.ball_body >= 0
-    # (every substep's control at once: the same elementwise arithmetic, in one call)
-    ctrls = ctrl + slope * (np.arange(n_sub) / n_sub)[:, None]
-    for j in range(n_sub):
-        data.ctrl[:] = ctrls[j]
+    for c in ctrls:
+        ctrl_view[:] = c
         if drag > 0.0:
             v = data.qvel[vadr:vadr + 3]
             data.xfrc_applied[scene.ball_body, :3] = -mass * drag * np.linalg.norm(v) * v
-        mujoco.mj_step(model, data)
-        if ball_on:
-            peak_f = max(peak_f, _ball_contacts(scene, data, mujoco)[1])
+        step(model, data)
+        peak_f = max(peak_f, _ball_contacts(scene, data, mujoco)[1])
     return peak_f
+
+
+def _near(scene: Scene, data):
+    """The row-by-row collision selection of a keyboard scene (None: no keyboard)."""
+    if not len(scene.key_qpos):
+        return None
+    from planner.simulate import nearkeys
+    from planner.simulate.hand_mjcf import HAND_CONAFFINITY, HAND_CONTYPE
+
+    m = scene.model
+    hand = np.flatnonzero((m.geom_contype == HAND_CONTYPE)
+                          & (m.geom_conaffinity == HAND_CONAFFINITY))
+    return nearkeys.near_keys(m, data, scene.key_geom_key, hand)
+
+
+def _run(scene: Scene, data, mujoco, base, slope, lims, n_sub: int, ball, vadr, t_s,
+         on_progress) -> tuple[sm.Rows, float | None, int]:
+    """The rows' loop: (the samples, the time MuJoCo first reset a diverging state,
+    the rows whose hand moved past half the collision selection's margin)."""
+    from planner.simulate import nearkeys
+
+    model = scene.model
+    T = len(t_s)
+    a = sm.addr(scene)
+    rows = sm.Rows(T, len(scene.hand_qpos), len(a.sites))
+    bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
+    unstable, peak_f, overruns, span, sel = None, 0.0, 0, None, None
+    forcerange, ctrl_view = model.actuator_forcerange, data.ctrl
+    frac = (np.arange(n_sub) / n_sub)[:, None]
+    nk = _near(scene, data)
+    try:
+        for k in range(T):
+            forcerange[:, 0] = -lims[k]
+            forcerange[:, 1] = lims[k]
+            rows.take(k, data, a)
+            if a.ball_body >= 0:
+                nb, fb = _ball_contacts(scene, data, mujoco)
+                # the force: the largest since the previous row (an impact lasts a few steps)
+                rows.take_ball(k, data, a, nb, max(fb, peak_f))
+            if nk is not None:
+                now = nearkeys.hand_span_m(nk, data)
+                if span is not None and nearkeys.moved_m(span, now) > 0.5 * nk.margin_m:
+                    overruns += 1
+                span, was = now, sel
+                sel = nearkeys.reachable(nk, span)
+                nearkeys.apply(nk, model, sel, was)
+            if k == T - 1:
+                break
+            # (every substep's control at once: the same elementwise arithmetic)
+            peak_f = _step_row(scene, data, mujoco, base[k] + slope[k] * frac, ctrl_view,
+                               ball, vadr)
+            if unstable is None and data.warning[bad_qacc].number > 0:
+                unstable = float(t_s[k])
+            if on_progress is not None and k % 100 == 0:
+                on_progress(k, T)
+    finally:
+        if nk is not None:  # (the scene's model as it was built)
+            nearkeys.apply(nk, model, None, sel)
+    return rows, unstable, overruns
 
 
 def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
@@ -215,41 +202,27 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     wall0 = time.perf_counter()
     # MuJoCo's warnings would print on stdout (--json owns it): counted in data.warning
     mujoco.set_mju_user_warning(lambda _msg: None)
-    model = scene.model
     data, vadr = _start(scene, q, ball, mujoco)
     T = len(t_s)
     dt_row = float(np.median(np.diff(t_s))) if T > 1 else 0.01
     n_sub = max(1, round(dt_row / TIMESTEP_S))
     ref = act.reference(hand, q, t_s, inverse_dynamics(scene))
     base, slope = _ctrl_rows(scene, ref)
-    rec = _arrays(T, q.shape[1], len(scene.servos.kp), len(scene.tip_sites))
-    bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
-    unstable = None
-    peak_f = 0.0
-    addr = _addr(scene)
     lims = scene.servos.force_limit(ref.ratio)  # (T, n_motor): elementwise, row by row alike
-    forcerange = model.actuator_forcerange
-    for k in range(T):
-        lim = lims[k]
-        forcerange[:, 0] = -lim
-        forcerange[:, 1] = lim
-        _sample(rec, k, scene, data, mujoco, base[k], lim, peak_f, addr)
-        if k == T - 1:
-            break
-        peak_f = _step_row(scene, data, mujoco, base[k], slope[k], n_sub, ball, vadr)
-        if unstable is None and data.warning[bad_qacc].number > 0:
-            unstable = float(t_s[k])
-        if on_progress is not None and k % 100 == 0:
-            on_progress(k, T)
-    if scene.ball_body < 0:
-        rec["ball"][:] = np.nan
-        rec["ball_v"][:] = np.nan
-    return SimRecord(t_s=np.asarray(t_s, dtype=float), q_ref=q, q_sim=rec["q_sim"],
-                     key_dip_m=rec["key"], key_finger=rec["key_finger"],
-                     servo_force=rec["force"], servo_demand=rec["demand"],
-                     force_limit=rec["limit"], tips_m=rec["tips"], palm_m=rec["palm"],
-                     ball_m=rec["ball"], ball_speed_m_s=rec["ball_v"],
-                     ball_contacts=rec["ball_n"].astype(int), ball_force_n=rec["ball_f"],
-                     ball_fingers=rec["ball_fingers"],
+    rows, unstable, overruns = _run(scene, data, mujoco, base, slope, lims, n_sub, ball, vadr,
+                                    t_s, on_progress)
+    demand, force = sm.servo_rows(rows, scene.servos.drive, base, scene.servos.kp,
+                                  servo_kv(scene), lims)
+    n_tips = len(scene.tip_sites)
+    key_finger, ball_fingers = sm.touches(rows, scene.key_geom_key, scene.geom_finger,
+                                          scene.ball_geom, n_tips)
+    return SimRecord(t_s=np.asarray(t_s, dtype=float), q_ref=q, q_sim=rows.q,
+                     key_dip_m=rows.key, key_finger=key_finger,
+                     servo_force=force, servo_demand=demand,
+                     force_limit=np.array(lims), tips_m=rows.sites[:, :n_tips],
+                     palm_m=rows.sites[:, n_tips],
+                     ball_m=rows.ball, ball_speed_m_s=rows.ball_v,
+                     ball_contacts=rows.ball_n.astype(int), ball_force_n=rows.ball_f,
+                     ball_fingers=ball_fingers,
                      substeps=n_sub, wall_s=time.perf_counter() - wall0,
-                     unstable_at_s=unstable)
+                     unstable_at_s=unstable, reach_overruns=overruns)

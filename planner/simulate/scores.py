@@ -136,13 +136,9 @@ def motor_efforts(rec: SimRecord, hand: HandModel) -> tuple[MotorEffort, ...]:
     T = len(rec.t_s)
     from planner.simulate.actuators import Transmission
 
-    demand = np.empty((T, hand.n_motor))
     drive = np.array(hand._drive)
     tr = Transmission(hand)  # (hand.motor_torques, once per distinct transmission)
-    tau = np.zeros(hand.n)
-    for k in range(T):
-        tau[drive] = rec.servo_demand[k]
-        demand[k] = tr.motor_torques(rec.q_sim[k], tau)
+    demand = tr.servo_motor_torques(rec.q_sim, rec.servo_demand, drive)
     finger_of = {}
     for f, name in enumerate(hand.fingers):
         for j in hand.joint_slice(name):
