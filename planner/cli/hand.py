@@ -26,8 +26,9 @@ def _list(as_json: bool) -> int:
         print(json.dumps({"command": "hand", "hands": [
             {"name": n, "description": d} for n, d in hands.items()]}))
     else:
+        width = max(map(len, hands))
         for n, d in hands.items():
-            print(f"{n:10s} {d}")
+            print(f"{n:{width}s} {d}")
     return 0
 
 

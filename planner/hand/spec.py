@@ -149,6 +149,8 @@ class HandSpec:
     sources: tuple[tuple[str, str], ...] = field(default_factory=tuple)
     finger_joints: tuple[tuple[str, tuple[str, ...]], ...] = field(default_factory=tuple)
     play_posture: PlayPosture | None = None
+    # which hand: "right" (as built) or "left" (its mirror image, ``planner.hand.mirror``)
+    side: str = "right"
 
     @property
     def movable_joints(self) -> tuple[Joint, ...]:
