@@ -31,7 +31,7 @@ def test_hand_list() -> None:
     r = run_cli("hand", "--list")
     assert r.returncode == 0 and r.stderr == ""
     names = [line.split()[0] for line in r.stdout.splitlines() if line.strip()]
-    assert names == ["default", "agh", "default-left", "mk5"]
+    assert names == ["default", "default-left", "agh", "mk5"]
     assert "Seed hand (000_776cdc32671efdf6)" in r.stdout
 
 
@@ -89,7 +89,7 @@ def test_unknown_hand() -> None:
     assert r.returncode == 2 and r.stdout == ""
     lines = r.stderr.splitlines()
     assert len(lines) == 1 and r.stderr.endswith("\n")
-    assert "unknown hand" in lines[0] and "default, agh, mk5" in lines[0]
+    assert "unknown hand" in lines[0] and "default, default-left, agh, mk5" in lines[0]
 
 
 @pytest.mark.parametrize("content, needle", [

@@ -91,8 +91,7 @@ def pair_urdf_text(hands: tuple[HandModel, ...]) -> str:
         spec = prefixed_spec(h.spec, pre)
         body = urdf_text(spec).splitlines()
         start = next(i for i, line in enumerate(body) if line.startswith("<robot "))
-        lines = [line.replace('<collision name="', f'<collision name="{pre}')
-                 for line in body[start + 1:-1]]
+        lines = body[start + 1:-1]  # (its collisions are named by its links and tips)
         T = np.asarray(h.T_world_root, dtype=float)
         xyz = " ".join(fmt(float(x)) for x in T[:3, 3])
         rpy = " ".join(fmt(a) for a in rpy_of(T[:3, :3]))
