@@ -10,6 +10,7 @@ import pytest
 
 import planner
 from planner.check import check_trajectory
+from planner.hand.bodies import collision_bodies
 from planner.hand.model import load_hand
 from planner.hand.spec import FINGERS
 from planner.play.atlas import posture_count
@@ -139,3 +140,36 @@ def test_the_left_hand_alone_reaches_the_bass_and_the_treble(pair, tmp_path) -> 
     plan, rep = _plan(str(song), pair[1], tmp_path / "bass.csv")
     assert plan.verdict.played == plan.verdict.notes == len(pitches)
     assert rep.ok and rep.play.notes_hit == len(pitches) and not rep.play.wrong_presses
+
+
+def test_the_left_hands_physics_scene_is_the_right_ones_mirrored(pair) -> None:
+    """The MuJoCo scene of each hand with the keyboard: every geom of the left hand where
+    the right hand's is, reflected through the carriage's plane, with the same shape and
+    size; the same servos (gains, the damping set from the compiled inertia)."""
+    mujoco = pytest.importorskip("mujoco")
+    from planner.simulate.scene import build_scene
+
+    right, left = pair
+    scenes = [build_scene(h, h.T_world_root, keyboard=True) for h in pair]
+    names = {b.name for b in collision_bodies(right.spec)}
+    assert all(scenes[0].model.geom(n) is not None for n in names)
+    for s in (1, 2):
+        q = right.apply_couplings(np.random.default_rng(s).uniform(right.lower, right.upper))
+        plane_x = right.frame_pose(q, "carriage")[0, 3]
+        geoms = []
+        for hand, sc in zip(pair, scenes):
+            data = mujoco.MjData(sc.model)
+            data.qpos[sc.hand_qpos] = q
+            mujoco.mj_kinematics(sc.model, data)
+            out = set()
+            for g in range(sc.model.ngeom):
+                p = data.geom_xpos[g].copy()
+                if hand is right and sc.model.geom(g).name in names:  # (the hand's, not a key's)
+                    p[0] = 2 * plane_x - p[0]
+                out.add((int(sc.model.geom_type[g]), tuple(np.round(sc.model.geom_size[g], 9)),
+                         tuple(np.round(p, 9))))
+            geoms.append(out)
+        assert len(geoms[0]) > 88 and geoms[0] == geoms[1]
+    m_r, m_l = (sc.model for sc in scenes)
+    assert np.array_equal(m_r.actuator_gainprm, m_l.actuator_gainprm)
+    assert np.allclose(m_r.actuator_biasprm, m_l.actuator_biasprm, rtol=1e-9, atol=0)
