@@ -13,7 +13,7 @@ from planner.check import check_trajectory
 from planner.hand.bodies import collision_bodies
 from planner.hand.model import load_hand
 from planner.hand.spec import FINGERS
-from planner.play.atlas import posture_count
+from planner.play.atlas import Atlas, posture_count
 from planner.play.atlas import table_path as atlas_path
 from planner.play.movetable import table_path as moves_path
 
@@ -53,10 +53,14 @@ def test_the_left_atlas_is_the_right_atlas_mirrored(pair, posture) -> None:
             if np.isnan(zl["max_force_n"][i]):
                 continue
             n_entries += 1
+            some = (left.fingers[f], pc, k)
             assert abs(zl["max_force_n"][i] - zr["max_force_n"][j]) < 1e-9
             for pose in ("press", "rise", "hover", "high"):
                 assert np.nanmax(np.abs(zl[pose][i] - zr[pose][j])) < 1e-12
         assert n_entries > 500
+    # (and the planner loads it: an entry read is not solved again)
+    atlas = Atlas(left, posture=posture)
+    assert atlas.entry_at(*some) is not None and atlas.solves == 0
 
 
 @pytest.mark.parametrize("posture", range(3))

@@ -75,7 +75,8 @@ def run(a: argparse.Namespace) -> int:
     if a.strength and (a.list or a.urdf or a.hands):
         from planner.errors import InputError
 
-        raise InputError("--strength cannot be combined with --list, --urdf or --hands")
+        raise InputError("--strength cannot be combined with --list or --urdf"
+                         + (" (nor with --hands)" if a.hands else ""))
     if a.list:
         return _list(a.json)
     if a.hands is not None:
