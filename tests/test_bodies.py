@@ -21,7 +21,7 @@ from planner.music.keybodies import box_lowest_z, footprints, sphere_depths, swe
 from planner.music.midi import Note, write_notes_midi
 from tests.trajbuild import min_jerk, press_posture, write_traj
 
-HANDS = ("default", "agh", "mk5")
+HANDS = ("default", "default-left", "agh", "mk5")
 
 
 def _segments(spec):

@@ -31,7 +31,7 @@ def test_hand_list() -> None:
     r = run_cli("hand", "--list")
     assert r.returncode == 0 and r.stderr == ""
     names = [line.split()[0] for line in r.stdout.splitlines() if line.strip()]
-    assert names == ["default", "agh", "mk5"]
+    assert names == ["default", "default-left", "agh", "mk5"]
     assert "Seed hand (000_776cdc32671efdf6)" in r.stdout
 
 
@@ -39,7 +39,7 @@ def test_hand_summary() -> None:
     r = run_cli("hand")
     assert r.returncode == 0 and r.stderr == ""
     assert r.stdout.startswith("hand default: ")
-    assert "21 hand joints (17 independent) + rig: rail, reach" in r.stdout
+    assert "a right hand, 21 hand joints (17 independent) + rig: rail, reach" in r.stdout
     assert f"urdf_sha256 {load_hand('default').urdf_sha256}" in r.stdout
     for f in ("index", "middle", "ring", "pinky"):
         assert f"{f}_dip = 0.667 x {f}_pip" in r.stdout
@@ -89,7 +89,7 @@ def test_unknown_hand() -> None:
     assert r.returncode == 2 and r.stdout == ""
     lines = r.stderr.splitlines()
     assert len(lines) == 1 and r.stderr.endswith("\n")
-    assert "unknown hand" in lines[0] and "default, agh, mk5" in lines[0]
+    assert "unknown hand" in lines[0] and "default, default-left, agh, mk5" in lines[0]
 
 
 @pytest.mark.parametrize("content, needle", [

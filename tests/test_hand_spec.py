@@ -98,7 +98,7 @@ def test_unknown_hand_names_the_valid_hands() -> None:
     with pytest.raises(InputError) as e:
         load_hand("nope")
     msg = str(e.value)
-    assert msg == "unknown hand 'nope'; valid hands: default, agh, mk5"
+    assert msg == "unknown hand 'nope'; valid hands: default, default-left, agh, mk5"
 
 
 def _one_line_error(tmp_path: Path, text: str, *needles: str) -> str:

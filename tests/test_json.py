@@ -31,7 +31,7 @@ CATCH = {"command": str, "feasible": bool, "reasons": list, "reason_kinds": list
          "riding": (dict, type(None)), "uncertainty": (dict, type(None)), "notes": list,
          "rows": int, "rate_hz": NUM, "duration_s": NUM, "trajectory": str,
          "planning_s": NUM, "setup_s": NUM}
-HAND = {"command": str, "name": str, "description": str, "urdf_sha256": str, "rail": bool,
+HAND = {"command": str, "name": str, "description": str, "side": str, "urdf_sha256": str, "rail": bool,
         "fingers": list, "joints": list, "couplings": list, "actuators": list,
         "play": (dict, type(None))}
 JOINT = {"name": str, "lower": NUM, "upper": NUM, "velocity": NUM, "acceleration": NUM,
@@ -108,7 +108,7 @@ def test_hand_json(tmp_path):
         _shaped(j, JOINT)
         assert j["lower"] <= j["upper"]
     rc, out, _ = _run("hand", "--list", "--json", cwd=tmp_path)
-    assert rc == 0 and [h["name"] for h in json.loads(out)["hands"]] == ["default", "agh", "mk5"]
+    assert rc == 0 and [h["name"] for h in json.loads(out)["hands"]] == ["default", "default-left", "agh", "mk5"]
     rc, out, _ = _run("hand", "--urdf", tmp_path / "h.urdf", "--json", cwd=tmp_path)
     assert rc == 0 and json.loads(out)["urdf"] == str(tmp_path / "h.urdf")
 

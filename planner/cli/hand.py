@@ -11,6 +11,9 @@ def add_parser(sub) -> None:
     h = sub.add_parser("hand", help="describe a hand, list hands, write its URDF")
     h.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
     h.add_argument("--list", action="store_true", help="list the shipped hands")
+    h.add_argument("--hands", metavar="LEFT,RIGHT",
+                   help="two hands, the left one first: with --urdf, the pair's URDF (every "
+                        "name prefixed left. or right.: docs/user/two-hands.md)")
     h.add_argument("--urdf", metavar="PATH", help="write the hand's URDF here ('-' for stdout)")
     h.add_argument("--strength", action="store_true",
                    help="the hand's strength from its model beside the seed's requirements")
@@ -26,8 +29,9 @@ def _list(as_json: bool) -> int:
         print(json.dumps({"command": "hand", "hands": [
             {"name": n, "description": d} for n, d in hands.items()]}))
     else:
+        width = max(map(len, hands))
         for n, d in hands.items():
-            print(f"{n:10s} {d}")
+            print(f"{n:{width}s} {d}")
     return 0
 
 
@@ -44,13 +48,39 @@ def _urdf(hand, path: str, as_json: bool) -> int:
     return 0
 
 
+def _pair_urdf(names: str, path: str | None, as_json: bool) -> int:
+    """``--hands LEFT,RIGHT --urdf PATH``: the two hands' URDF as one robot."""
+    from planner.errors import InputError
+    from planner.hand.model import load_hand
+    from planner.hand.pair import pair_name, pair_urdf_text
+    from planner.hand.urdf import urdf_sha256
+
+    if path is None:
+        raise InputError("--hands writes the pair's URDF: give --urdf PATH")
+    hands = tuple(load_hand(n.strip()) for n in names.split(","))
+    text = pair_urdf_text(hands)
+    if path == "-":
+        sys.stdout.write(text)
+    else:
+        from planner.output import write_file
+
+        write_file(path, text)
+    if as_json:
+        print(json.dumps({"command": "hand", "name": pair_name(hands), "urdf": path,
+                          "urdf_sha256": urdf_sha256(text)}))
+    return 0
+
+
 def run(a: argparse.Namespace) -> int:
-    if a.strength and (a.list or a.urdf):
+    if a.strength and (a.list or a.urdf or a.hands):
         from planner.errors import InputError
 
-        raise InputError("--strength cannot be combined with --list or --urdf")
+        raise InputError("--strength cannot be combined with --list or --urdf"
+                         + (" (nor with --hands)" if a.hands else ""))
     if a.list:
         return _list(a.json)
+    if a.hands is not None:
+        return _pair_urdf(a.hands, a.urdf, a.json)
     from planner.hand.describe import format_hand, hand_dict
     from planner.hand.model import load_hand
 

@@ -20,7 +20,8 @@ def hand_dict(hand: HandModel) -> dict:
 
     return {
         "command": "hand", "name": hand.name, "description": hand.spec.description,
-        "urdf_sha256": hand.urdf_sha256, "rail": bool(hand.spec.rail_enabled),
+        "side": hand.side, "urdf_sha256": hand.urdf_sha256,
+        "rail": bool(hand.spec.rail_enabled),
         "fingers": list(hand.fingers),
         "joints": [{"name": n, "lower": float(hand.lower[i]), "upper": float(hand.upper[i]),
                     "velocity": float(hand.velocity[i]),
@@ -42,7 +43,8 @@ def format_hand(hand: HandModel) -> str:
     """A readable description: DOF, joints with limits, couplings, actuators."""
     hand_dof = sum(1 for n in hand.joint_names if n not in hand.rig_joints)
     lines = [f"hand {hand.name}: {hand.spec.description}",
-             f"  {hand_dof} hand joints ({hand_dof - len(hand.couplings)} independent)"
+             f"  a {hand.side} hand, {hand_dof} hand joints "
+             f"({hand_dof - len(hand.couplings)} independent)"
              + (f" + rig: {', '.join(hand.rig_joints)}" if hand.rig_joints else " (rail off)"),
              f"  urdf_sha256 {hand.urdf_sha256}",
              "  joints (lower..upper, max speed, max acceleration, max jerk):"]

@@ -87,6 +87,12 @@ class HandModel:
         self.tip_frames = spec.tip_frames
         # the hand's fingers (a prefix of FINGERS, in that order: five, or the AGH's four)
         self.fingers: tuple[str, ...] = tuple(f for f, _ in spec.finger_joints)
+        # which hand (``planner.hand.mirror``), and its fingers in the order of the keys
+        # they play, the lowest first: a right hand's thumb is on its bass side, a left
+        # hand's (its mirror image) on its treble side
+        self.side = spec.side
+        self.fingers_low_to_high: tuple[str, ...] = (
+            self.fingers if self.side == "right" else self.fingers[::-1])
         self._tip_ids = [self.pin_model.getFrameId(f) for f in self.tip_frames]
         self._palm_id = self.pin_model.getFrameId(PALM_FRAME)
 

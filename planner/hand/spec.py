@@ -149,6 +149,8 @@ class HandSpec:
     sources: tuple[tuple[str, str], ...] = field(default_factory=tuple)
     finger_joints: tuple[tuple[str, tuple[str, ...]], ...] = field(default_factory=tuple)
     play_posture: PlayPosture | None = None
+    # which hand: "right" (as built) or "left" (its mirror image, ``planner.hand.mirror``)
+    side: str = "right"
 
     @property
     def movable_joints(self) -> tuple[Joint, ...]:
@@ -173,8 +175,10 @@ def hands_dir() -> Path:
 
 def list_hands() -> list[str]:
     """Names of the hands shipped with the planner (one TOML file each): ``default``
-    first (the hand every command uses unless told otherwise), then the others by name."""
-    return sorted((p.stem for p in hands_dir().glob("*.toml")), key=lambda n: (n != "default", n))
+    first (the hand every command uses unless told otherwise) and its variants
+    (``default-left``), then the others by name."""
+    return sorted((p.stem for p in hands_dir().glob("*.toml")),
+                  key=lambda n: (n.split("-")[0] != "default", n))
 
 
 ROTOR_KEY = "rotor_inertia_g_cm2"  # a motor table's rotor inertia, as data sheets give it

@@ -9,10 +9,13 @@ from planner.hand.bodies import BOX, SPHERE, Body, collision_bodies
 from planner.hand.spec import HandSpec, LinearCoupling
 
 
-def _f(x: float) -> str:
+def number_text(x: float) -> str:
     """Format a float compactly and reproducibly (round-trips to 12 significant digits)."""
     s = f"{x:.12g}"
     return "0" if s == "-0" else s
+
+
+_f = number_text
 
 
 def _v(xs) -> str:

@@ -62,7 +62,8 @@ class Layers(Costs):
     def __init__(self, notes, places: Places, rate_hz: float,
                  memo: CostMemo | None = None) -> None:
         super().__init__(notes, places, rate_hz, memo)
-        self._order = {f: i for i, f in enumerate(places.hand.fingers)}
+        # (the fingers in the order of their keys: a left hand's thumb is its highest)
+        self._order = {f: i for i, f in enumerate(places.hand.fingers_low_to_high)}
         self._bound_at: tuple = (None, 0, math.inf)  # (layer, its size, its bound)
 
     def _layer(self, prev, t: float, new: list[int]):
@@ -82,7 +83,7 @@ class Layers(Costs):
         return _prune(layer)
 
     def _extend(self, layer, prev, t: float, new: list[int], left_out: float = 0.0) -> None:
-        fingers = self.places.hand.fingers
+        fingers = self.places.hand.fingers_low_to_high
         new = sorted(new, key=lambda n: self.pitch[n])
         offset = self.offset
         starts = prev.items() if prev else [(None, (0.0, None))]

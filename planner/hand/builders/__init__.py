@@ -15,6 +15,7 @@ from typing import Any
 import tomllib
 
 from planner.errors import InputError
+from planner.hand.mirror import SIDES, mirror_spec
 from planner.hand.spec import HandSpec, hands_dir, list_hands
 from planner.hand.units import check_hand_numbers
 
@@ -26,22 +27,14 @@ BUILDERS = {
 }
 
 
+EXTENDS_DEPTH = 4  # hand files a chain of ``extends`` may pass through (a guard, no more)
+
+
 def load_hand_spec(name_or_path: str) -> HandSpec:
     """Load a shipped hand by name, or a hand file by path (.toml)."""
-    path = Path(name_or_path)
-    if path.suffix != ".toml":
-        path = hands_dir() / f"{name_or_path}.toml"
-        if not path.is_file():
-            raise InputError(
-                f"unknown hand {name_or_path!r}; valid hands: {', '.join(list_hands())}"
-            )
+    path = hand_path(name_or_path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as e:
-        raise InputError(f"cannot read hand file {path}: {e.strerror or e}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise InputError(f"malformed hand file {path.name}: {e}") from None
-    try:
+        data = read_hand_file(path)
         check_hand_numbers(data)  # (every number in its unit's physical range, strings printable)
         return build_spec(data)
     except InputError as e:
@@ -50,10 +43,60 @@ def load_hand_spec(name_or_path: str) -> HandSpec:
         raise InputError(f"malformed hand file {path.name}: bad or missing entry {e}") from None
 
 
+def hand_path(name_or_path: str, folder: Path | None = None) -> Path:
+    """The file of a shipped hand's name, or a hand file's path (.toml; relative to
+    ``folder`` when given: the folder of the file that names it)."""
+    path = Path(name_or_path)
+    if path.suffix == ".toml":
+        return path if folder is None or path.is_absolute() else folder / path
+    path = hands_dir() / f"{name_or_path}.toml"
+    if not path.is_file():
+        raise InputError(f"unknown hand {name_or_path!r}; valid hands: {', '.join(list_hands())}")
+    return path
+
+
+def read_hand_file(path: Path, depth: int = 0) -> dict[str, Any]:
+    """A hand file's tables. ``extends = "NAME"`` (a shipped hand, or a hand file's path
+    relative to this one's folder): that hand's tables with this file's merged over them
+    (a table key by key, at every depth; any other value, a list of tables such as
+    ``[[finger]]`` included, replaced whole), so that a variant of a hand (the shipped
+    ``default-left``: ``side = "left"``) names only what differs and its numbers stay
+    the other file's."""
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as e:
+        raise InputError(f"cannot read hand file {path}: {e.strerror or e}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise InputError(f"malformed hand file {path.name}: {e}") from None
+    base = data.pop("extends", None)
+    if base is None:
+        return data
+    if not isinstance(base, str) or not base:
+        raise InputError(f"malformed hand file {path.name}: 'extends' must be a hand name "
+                         "or a hand file's path")
+    if depth >= EXTENDS_DEPTH:
+        raise InputError(f"malformed hand file {path.name}: 'extends' chains more than "
+                         f"{EXTENDS_DEPTH} files (a cycle?)")
+    return merged(read_hand_file(hand_path(base, path.parent), depth + 1), data)
+
+
+def merged(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """``over``'s keys over ``base``'s: tables merged key by key, any other value replaced."""
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = merged(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
 def build_spec(data: dict[str, Any]) -> HandSpec:
-    """Build the kinematic tree of a hand from its parsed TOML (its ``kind``'s builder)."""
+    """Build the kinematic tree of a hand from its parsed TOML (its ``kind``'s builder), a
+    right hand; ``side = "left"``: its mirror image (``planner.hand.mirror``)."""
     kind = data.get("kind", "tendon")
     if kind not in BUILDERS:
         raise InputError(f"unknown hand kind {kind!r}; valid kinds: {', '.join(BUILDERS)}")
+    side = data.get("side", "right")
+    if side not in SIDES:
+        raise InputError(f"side must be one of {', '.join(map(repr, SIDES))}, got {side!r}")
     module, function = BUILDERS[kind]
-    return getattr(importlib.import_module(module), function)(data)
+    spec = getattr(importlib.import_module(module), function)(data)
+    return mirror_spec(spec, side)
