@@ -299,6 +299,15 @@ class HandModel:
             return self._fixed
         return self._transmission_at(q)
 
+    def transmission_key(self, q: np.ndarray) -> bytes:
+        """What ``motor_torques`` and ``motor_ratio`` read of ``q``: at two poses of equal
+        keys they are the same functions, bit for bit (an all-linear hand's: one key at
+        every pose whose coupling sources are finite; else the whole pose)."""
+        q = np.asarray(q, dtype=float)
+        if self._fixed is not None and np.isfinite(q[self._lin_src]).all():
+            return b"fixed"
+        return q.tobytes()
+
     def motor_ratio(self, q: np.ndarray) -> np.ndarray:
         """dq_motor / dq_drive for each motor (rad per rad of its driven joint) at ``q``."""
         return self._transmission(np.asarray(q, dtype=float))[1].copy()
