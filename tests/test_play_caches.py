@@ -122,3 +122,23 @@ def test_across_clear_of_another_postures_entry_is_the_sampled_one(places) -> No
             assert moves._across_clear(a, b) == want
             seen[want] += 1
     assert seen[True] > 0
+
+
+def test_arm_move_line_is_the_samples_one_by_one(places, monkeypatch) -> None:
+    """``Places.arm_move`` builds its line's samples as one array: the rows it hands
+    ``path_acceleration_cap`` are the samples built one by one."""
+    import planner.play.places as pp
+
+    h, cols = places.hand, places.arm
+    got = []
+    monkeypatch.setattr(pp, "path_acceleration_cap",
+                        lambda hand, line, dq: got.append(np.array(line)) or 1.0)
+    a, b = (0.0, places.reach_m(0)), (0.138, places.reach_m(places.postures - 1))
+    places.arm_move(a, b)
+    qa, dq = np.array(a), np.array(b) - np.array(a)
+    want = []
+    for s in np.linspace(0.0, 1.0, PATH_SAMPLES):
+        q = places.atlas.base.copy()
+        q[cols] = qa + s * dq
+        want.append(h.apply_couplings(q))
+    assert len(got) == 1 and np.array_equal(got[0], np.array(want))

@@ -130,11 +130,9 @@ class Places:
             return capped_move(qa, dq, None)
         full = np.zeros(h.n)
         full[cols] = dq
-        line = []
-        for s in np.linspace(0.0, 1.0, PATH_SAMPLES):
-            q = self.atlas.base.copy()
-            q[cols] = qa + s * dq
-            line.append(h.apply_couplings(q))
+        line = np.tile(self.atlas.base, (PATH_SAMPLES, 1))  # (the samples' rows at once)
+        line[:, cols] = qa + np.linspace(0.0, 1.0, PATH_SAMPLES)[:, None] * dq
+        line = h.apply_couplings(line)
         v, acc, j = caps
         return capped_move(qa, dq, (v, min(acc, path_acceleration_cap(h, line, full)), j))
 
