@@ -5,7 +5,7 @@ a change that is meant to change no plan (a speed-up, a refactoring) leaves ever
 it was (``sha256sum -c OLD/SHA256SUMS`` in the new DIR, or ``--against OLD``).
 
     python bench/play_bytes.py DIR [--tree PATH] [--corpus DIR] [--only SUBSTRING]
-                                   [--against OLD_DIR]
+                                   [--extra DIR ...] [--against OLD_DIR]
 
 ``--tree PATH`` runs another checkout's ``cli.py`` (its planner on ``PYTHONPATH``): the
 same songs planned by main and by a branch, each into its own DIR. Exit 1 when
@@ -24,11 +24,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def songs_of(corpus: Path, only: str | None) -> list[Path]:
+def songs_of(corpus: Path, only: str | None, extra: list[str]) -> list[Path]:
     if not any(corpus.glob("*.mid")):
         raise SystemExit(f"no corpus songs in {corpus} (--corpus DIR)")
     songs = sorted((ROOT / "songs").glob("*.mid")) + sorted((ROOT / "songs" / "stress").glob("*.mid")) \
-        + sorted(corpus.glob("*.mid"))
+        + sorted(corpus.glob("*.mid")) + [s for d in extra for s in sorted(Path(d).glob("*.mid"))]
     return [s for s in songs if only is None or only in s.name]
 
 
@@ -38,13 +38,15 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--tree", default=str(ROOT), help="the checkout whose cli.py plans")
     ap.add_argument("--corpus", default=str(ROOT.parent / "shared" / "corpus"))
     ap.add_argument("--only", default=None, help="only songs whose name holds this")
+    ap.add_argument("--extra", action="append", default=[],
+                    help="another folder of songs (tests/data, bench/random_songs.py's)")
     ap.add_argument("--against", default=None, help="a DIR of this script's to compare with")
     a = ap.parse_args(argv)
     out, tree = Path(a.out), Path(a.tree).resolve()
     out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "PYTHONPATH": str(tree)}
     sums = []
-    for song in songs_of(Path(a.corpus), a.only):
+    for song in songs_of(Path(a.corpus), a.only, a.extra):
         csv = out / f"{song.stem}.csv"
         r = subprocess.run([sys.executable, str(tree / "cli.py"), "play", str(song), "-o", str(csv)],
                            capture_output=True, text=True, env=env, check=False)
