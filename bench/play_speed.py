@@ -7,10 +7,13 @@ seconds / planning), the first row (``first_row_s``) and the set-up (``setup_s``
 the medians over the songs and the ratio of each tree's to the other's.
 
     python bench/play_speed.py --vs /work/main [--repeat 3] [--corpus DIR] [--only SUB]
-                               [--no-samples] [--tsv FILE]
+                               [--no-samples] [--tsv FILE] [--warm]
 
 The clock is the planner's own (``plan_song``: from after ``Planner(hand)``, the atlas
 and the timed moves loaded, to the file closed, the self-check's verdict included).
+``--warm``: as ``bench_corpus.py`` and ``batch`` plan, one process per tree plans every
+song with one ``Planner`` (its memos of the hand's moves filled by the songs before), the
+trees' processes in turn (A B, B A, ...), ``--repeat`` passes; no first row or set-up.
 """
 
 from __future__ import annotations
@@ -38,7 +41,55 @@ def run(tree: Path, song: Path, out: str) -> dict:
     return json.loads(r.stdout)
 
 
+def worker(songs: list[str]) -> int:
+    """``--warm``'s process: every song planned with one ``Planner``, one JSON line each
+    (the planner of ``PYTHONPATH``: this file imports it)."""
+    from planner.hand.model import load_hand
+    from planner.music.midi import load_song
+    from planner.play.stream import Planner, plan_song
+
+    hand = load_hand("default")
+    planner = Planner(hand)
+    with tempfile.TemporaryDirectory() as d:
+        for p in songs:
+            song = load_song(p)
+            res = plan_song(song, hand, os.path.join(d, "o.csv"), planner=planner)
+            print(json.dumps({"song": p, "song_s": max(n.offset_s for n in song.notes),
+                              "planning_s": res.planning_s}), flush=True)
+    return 0
+
+
+def warm(trees: dict[str, Path], songs: list[Path], repeat: int) -> int:
+    got: dict[str, dict[str, list[float]]] = {k: {s.stem: [] for s in songs} for k in trees}
+    song_s = {}
+    for r in range(repeat):
+        for k in (["this", "vs"] if r % 2 == 0 else ["vs", "this"]):
+            env = {**os.environ, "PYTHONPATH": str(trees[k])}
+            out = subprocess.run([sys.executable, __file__, "--worker", *map(str, songs)],
+                                 capture_output=True, text=True, env=env, check=True).stdout
+            for line in out.splitlines():
+                j = json.loads(line)
+                got[k][Path(j["song"]).stem].append(j["planning_s"])
+                song_s[Path(j["song"]).stem] = j["song_s"]
+    rtf = {k: {s: song_s[s] / statistics.median(v) for s, v in got[k].items()} for k in trees}
+    print(f"{'song':40s} {'this RTF':>9s} {'vs RTF':>8s} {'ratio':>6s}")
+    for s in got["this"]:
+        print(f"{s[:40]:40s} {rtf['this'][s]:8.0f}x {rtf['vs'][s]:7.0f}x "
+              f"{rtf['this'][s] / rtf['vs'][s]:6.2f}")
+    print(f"\n{len(songs)} songs, one Planner per pass, {repeat} passes per tree:")
+    for k, tree in trees.items():
+        v = list(rtf[k].values())
+        print(f"  {k:5s} ({tree}): real-time factor {statistics.median(v):.0f}x median "
+              f"(lowest {min(v):.0f}x)")
+    ratios = [rtf["this"][s] / rtf["vs"][s] for s in rtf["this"]]
+    print(f"  this / vs, per song: x{statistics.median(ratios):.2f} median "
+          f"(x{min(ratios):.2f}-x{max(ratios):.2f})")
+    return 0
+
+
 def main(argv: list[str]) -> int:
+    if argv[:1] == ["--worker"]:
+        return worker(argv[1:])
     ap = argparse.ArgumentParser()
     ap.add_argument("--vs", required=True, help="the other checkout (its cli.py, its planner)")
     ap.add_argument("--repeat", type=int, default=3)
@@ -46,6 +97,7 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--only", default=None, help="only songs whose name holds this")
     ap.add_argument("--no-samples", action="store_true", help="the corpus alone")
     ap.add_argument("--tsv", default=None, help="also write every run here")
+    ap.add_argument("--warm", action="store_true", help="one Planner per pass (bench_corpus's)")
     a = ap.parse_args(argv)
     trees = {"this": ROOT, "vs": Path(a.vs).resolve()}
     songs = [] if a.no_samples else sorted((ROOT / "songs").glob("*.mid"))
@@ -53,6 +105,8 @@ def main(argv: list[str]) -> int:
     songs = [s for s in songs if a.only is None or a.only in s.name]
     if not songs:
         raise SystemExit("no songs")
+    if a.warm:
+        return warm(trees, songs, a.repeat)
     runs: list[tuple[str, str, int, dict]] = []
     med: dict[str, dict[str, list[float]]] = {k: {f: [] for f in (*FIELDS, "rtf")} for k in trees}
     print(f"{'song':40s} {'this RTF':>9s} {'vs RTF':>8s} {'ratio':>6s} {'this 1st ms':>11s} "
