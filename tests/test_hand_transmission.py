@@ -69,21 +69,6 @@ def test_fixed_transmission_only_for_linear_hands(hand) -> None:
     assert np.all(hand.motor_ratio(hand.q_neutral) != 0.0)
 
 
-@pytest.mark.parametrize("name", ["default", "mk5", "agh"])
-def test_tip_points_and_couplings_of_many_rows_are_each_rows(name: str) -> None:
-    """``tip_points`` of rows (and ``apply_couplings`` of a 2-D array) give each row's
-    ``tip_position`` (``apply_couplings``) to the bit."""
-    hand = load_hand(name)
-    rng = np.random.default_rng(11)
-    lo, hi = np.clip(hand.plan_lower, -2, 2), np.clip(hand.plan_upper, -2, 2)
-    raw = rng.uniform(lo, hi, (40, hand.n))
-    Q = hand.apply_couplings(raw)
-    assert np.array_equal(Q, np.array([hand.apply_couplings(q) for q in raw]))
-    for f in range(len(hand.fingers)):
-        got = hand.tip_points(Q, f)
-        assert np.array_equal(got, np.array([hand.tip_position(q, f) for q in Q]))
-
-
 def test_inertials_at_one_pose_are_each_inertial(hand) -> None:
     """``Kinematics.inertials`` (RNEA at rest found once) against ``inertial`` of each."""
     from planner.check.kinematics import Kinematics

@@ -94,36 +94,6 @@ def test_distance_and_arm_time_are_the_straight_ones(places) -> None:
             assert places.arm_time_s(a, b) == want.duration_s
 
 
-def test_across_clear_of_another_postures_entry_is_the_sampled_one(places) -> None:
-    """A finger crossing from an entry of one posture to one of another (no table: forward
-    kinematics at ``ACROSS_SAMPLES``, all at once) against the samples one by one."""
-    from planner.play.movetable import ACROSS_SAMPLES, HIGH_SAFE_Z_M
-
-    h = places.hand
-    rng = np.random.default_rng(2)
-    seen = {True: 0, False: 0}
-    for finger in h.fingers:
-        fi = h.fingers.index(finger)
-        ea = [e for p in range(60, 72) for k in range(-6, 7)
-              if (e := places.atlases[0].entry(finger, p, k * 0.006)) is not None]
-        eb = [e for p in range(60, 72) for k in range(-6, 7)
-              if (e := places.atlases[1].entry(finger, p, k * 0.006)) is not None]
-        if not ea or not eb:
-            continue
-        moves = places.moves[1]
-        js = moves.js[finger]
-        for _ in range(30):
-            a, b = ea[rng.integers(len(ea))], eb[rng.integers(len(eb))]
-            want = True
-            q = moves.atlas.base.copy()
-            for s in ACROSS_SAMPLES:
-                q[js] = a.high + s * (b.high - a.high)
-                want &= bool(h.tip_position(h.apply_couplings(q), fi)[2] >= HIGH_SAFE_Z_M)
-            assert moves._across_clear(a, b) == want
-            seen[want] += 1
-    assert seen[True] > 0
-
-
 def test_arm_move_line_is_the_samples_one_by_one(places, monkeypatch) -> None:
     """``Places.arm_move`` builds its line's samples as one array: the rows it hands
     ``path_acceleration_cap`` are the samples built one by one."""

@@ -211,20 +211,6 @@ class HandModel:
         p = pin.updateFramePlacement(self.pin_model, self.pin_data, self._tip_ids[finger]).translation
         return self.T_world_root[:3, :3] @ p + self.T_world_root[:3, 3]
 
-    def tip_points(self, Q: np.ndarray, finger: int) -> np.ndarray:
-        """``tip_position`` of every row of ``Q`` (T, n): (T, 3), the same products row
-        by row (one array of Pinocchio's joint vectors for all)."""
-        Q = np.atleast_2d(np.asarray(Q, dtype=float))
-        QP = np.zeros((len(Q), self.pin_model.nq))
-        QP[:, self._pin_idx] = Q
-        m, d, fid = self.pin_model, self.pin_data, self._tip_ids[finger]
-        R, t = self.T_world_root[:3, :3], self.T_world_root[:3, 3]
-        out = np.empty((len(Q), 3))
-        for k in range(len(Q)):
-            pin.forwardKinematics(m, d, QP[k])
-            out[k] = R @ pin.updateFramePlacement(m, d, fid).translation + t
-        return out
-
     def tip_positions(self, q: np.ndarray) -> np.ndarray:
         """World positions of the five fingertip pad points, (5, 3) in m, order ``FINGERS``."""
         # joint placements, then only the five tip frames (twice as fast as every frame)

@@ -63,7 +63,6 @@ CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision
 # pair of poses one way or the other (the bound is the same both ways: computed from the
 # first pose), the press's key pushing back on the finger in the first three
 SCALE_PAIRS = (("press", "high"), ("press", "hover"), ("press", "rise"), ("hover", "high"))
-_ACROSS_S = np.array(ACROSS_SAMPLES)[:, None]  # (``_across_clear``'s samples, a column)
 
 
 @dataclass(frozen=True)
@@ -296,10 +295,13 @@ class Moves:
         ok = self.table.across_clear(a, b)
         if ok is None:
             f = self.hand.fingers.index(a.finger)
-            Q = np.tile(self.atlas.base, (len(ACROSS_SAMPLES), 1))
-            Q[:, self.js[a.finger]] = a.high + _ACROSS_S * (b.high - a.high)
-            ok = bool(np.all(self.hand.tip_points(self.hand.apply_couplings(Q), f)[:, 2]
-                             >= HIGH_SAFE_Z_M))
+            q = self.atlas.base.copy()
+            js = self.js[a.finger]
+            ok = True
+            for s in ACROSS_SAMPLES:
+                q[js] = a.high + s * (b.high - a.high)
+                z = self.hand.tip_position(self.hand.apply_couplings(q), f)[2]
+                ok &= bool(z >= HIGH_SAFE_Z_M)
         return ok
 
     def follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
