@@ -94,6 +94,18 @@ class Kinematics:
         return (pin.rnea(self.model, self.data, qp, vp, ap)
                 - pin.rnea(self.model, self.data, qp, z, z))[self.idx]
 
+    def inertials(self, q: np.ndarray, moves) -> list[np.ndarray]:
+        """``inertial(q, v, a)`` of each ``(v, a)`` of ``moves`` at one pose, RNEA(q, 0, 0)
+        found once (the same numbers)."""
+        qp, z = self.pin_q(q), np.zeros(self.model.nv)
+        still = pin.rnea(self.model, self.data, qp, z, z)
+        out = []
+        for v, a in moves:
+            vp, ap = z.copy(), z.copy()
+            vp[self.idx], ap[self.idx] = v, a
+            out.append((pin.rnea(self.model, self.data, qp, vp, ap) - still)[self.idx])
+        return out
+
     def point_jacobians(self, q: np.ndarray, frame_ids: list[int]) -> list[np.ndarray]:
         """World position Jacobians (3, n) of frames, our joint order."""
         pin.computeJointJacobians(self.model, self.data, self.pin_q(q))

@@ -130,6 +130,17 @@ class HandModel:
             for jn, c in a.coefficients:
                 C[m, self.index[jn]] = c
         self._C = C
+        col = {int(j): k for k, j in enumerate(self.independent)}
+        self._drive_col = [col[int(d)] for d in self._drive]
+        self._efficiency = [a.efficiency for a in self.actuators]
+        # (every law linear, no Mk5 motor: ``dq_dindependent`` and ``motor_ratio`` are the
+        # same at every q whose coupling sources are finite; found once, ``_transmission``)
+        self._fixed = None
+        if all(c.kind == "linear" for c in laws) and all(a.mk5 is None for a in self.actuators):
+            self._lin_src = np.array([c.src for c in laws], dtype=int)
+            self._fixed = self._transmission_at(np.zeros(self.n))
+            for a in (*self._fixed[0], self._fixed[1]):
+                a.setflags(write=False)
 
         lo = np.where(np.isfinite(self.lower), self.lower, -1.0)
         hi = np.where(np.isfinite(self.upper), self.upper, 1.0)
@@ -281,9 +292,34 @@ class HandModel:
             out[:, nonlinear] = fd[:, nonlinear]
         return out
 
+    def _transmission_at(self, q: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+        """(each motor's column of ``dq_dindependent(q)``, ``motor_ratio(q)``), computed."""
+        S = self.dq_dindependent(q)
+        return [S[:, c] for c in self._drive_col], self._motor_ratio(q, S)
+
+    def _transmission(self, q: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+        """``_transmission_at(q)``; for a hand whose laws are all linear the one found at
+        set-up (a linear law's slope is its ratio at every finite source: the same
+        numbers, so the same arithmetic on them gives the same bits)."""
+        if self._fixed is not None and np.isfinite(q[self._lin_src]).all():
+            return self._fixed
+        return self._transmission_at(q)
+
+    def transmission_key(self, q: np.ndarray) -> bytes:
+        """What ``motor_torques`` and ``motor_ratio`` read of ``q``: at two poses of equal
+        keys they are the same functions, bit for bit (an all-linear hand's: one key at
+        every pose whose coupling sources are finite; else the whole pose)."""
+        q = np.asarray(q, dtype=float)
+        if self._fixed is not None and np.isfinite(q[self._lin_src]).all():
+            return b"fixed"
+        return q.tobytes()
+
     def motor_ratio(self, q: np.ndarray) -> np.ndarray:
         """dq_motor / dq_drive for each motor (rad per rad of its driven joint) at ``q``."""
-        S = self.dq_dindependent(q)
+        return self._transmission(np.asarray(q, dtype=float))[1].copy()
+
+    def _motor_ratio(self, q: np.ndarray, S: np.ndarray) -> np.ndarray:
+        """``motor_ratio`` with ``S = dq_dindependent(q)``."""
         col = {int(j): k for k, j in enumerate(self.independent)}
         r = np.empty(self.n_motor)
         for m, a in enumerate(self.actuators):
@@ -306,13 +342,10 @@ class HandModel:
         ``tau_m = (dq/dq_m)^T tau_joint / efficiency`` where ``dq/dq_m`` moves
         the motor's driven joint and every joint coupled to it.
         """
-        S = self.dq_dindependent(q)
-        col = {int(j): k for k, j in enumerate(self.independent)}
-        ratio = self.motor_ratio(q)
+        cols, ratio = self._transmission(np.asarray(q, dtype=float))
         out = np.empty(self.n_motor)
-        for m, a in enumerate(self.actuators):
-            dq_ddrive = S[:, col[int(self._drive[m])]]
-            out[m] = float(dq_ddrive @ tau_joint) / ratio[m] / a.efficiency
+        for m, (dq_ddrive, eff) in enumerate(zip(cols, self._efficiency)):
+            out[m] = float(dq_ddrive @ tau_joint) / ratio[m] / eff
         return out
 
     def press_torques(self, q: np.ndarray, forces_n: dict[str, float]) -> np.ndarray:

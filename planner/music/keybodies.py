@@ -57,18 +57,25 @@ def _rect_dist(p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.sqrt((d * d).sum(axis=-1))
 
 
+def _rect_dist_xy(x: np.ndarray, y: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``_rect_dist`` of points (``x``, ``y``) (N,) to rectangles [lo, hi] (N, 2), the same
+    numbers (a sum of two squares in either order) without a reduction's overhead."""
+    dx = np.maximum(np.maximum(lo[:, 0] - x, x - hi[:, 0]), 0.0)
+    dy = np.maximum(np.maximum(lo[:, 1] - y, y - hi[:, 1]), 0.0)
+    return np.sqrt(dx * dx + dy * dy)
+
+
 def swept_lowest_z(a: np.ndarray, b: np.ndarray, r: np.ndarray, lo: np.ndarray,
                    hi: np.ndarray) -> np.ndarray:
     """The lowest z of each capsule (axis ``a``-``b`` (N, 3), radius ``r`` (N,); a sphere:
     a = b) inside the column of the rectangle [lo, hi] (N, 2); +inf where it does not
     enter the column."""
     ab = b - a
+    ax, ay, az = (np.ascontiguousarray(a[:, i]) for i in range(3))
+    bx, by, bz = (np.ascontiguousarray(ab[:, i]) for i in range(3))
 
-    def at(t):
-        return a + t[:, None] * ab
-
-    def dist(t):
-        return _rect_dist(at(t)[:, :2], lo, hi)
+    def dist(t):  # (the axis point at t: a + t (b - a), coordinate by coordinate)
+        return _rect_dist_xy(ax + t * bx, ay + t * by, lo, hi)
 
     # the axis point nearest the rectangle (d is convex in t): golden section
     t_near = _golden(lambda t: dist(t), len(a))
@@ -81,7 +88,7 @@ def swept_lowest_z(a: np.ndarray, b: np.ndarray, r: np.ndarray, lo: np.ndarray,
     def f(u):  # u in [0, 1] over [t_lo, t_hi]
         t = t_lo + u * (t_hi - t_lo)
         d = np.minimum(dist(t), r)
-        return at(t)[:, 2] - np.sqrt(np.maximum(r * r - d * d, 0.0))
+        return (az + t * bz) - np.sqrt(np.maximum(r * r - d * d, 0.0))
 
     u = _golden(f, len(a))
     z = np.minimum(np.minimum(f(u), f(np.zeros(len(a)))), f(np.ones(len(a))))
@@ -202,9 +209,17 @@ def _collect(depth, which, fp: Footprints, z_cut, bounds, index, lowest) -> None
     """Candidates (row, shape, rectangle) whose bounding box overlaps the rectangle's column
     below ``z_cut``; their exact lowest points, the deepest per key kept in place."""
     xlo, xhi, ylo, yhi, zlo = bounds  # (T, S)
-    t, s, k = np.nonzero((xlo[..., None] <= fp.hi[:, 0]) & (xhi[..., None] >= fp.lo[:, 0])
-                         & (ylo[..., None] <= fp.hi[:, 1]) & (yhi[..., None] >= fp.lo[:, 1])
-                         & (zlo[..., None] <= z_cut))
+    # (first the (row, shape) pairs whose box reaches below the highest cut and overlaps
+    # the keyboard's extent: a few in a hundred; then their rectangles. The candidates
+    # come in the order of the whole (T, S, R) test: by row, shape, rectangle)
+    t, s = np.nonzero((zlo <= z_cut.max()) & (xlo <= fp.hi[:, 0].max())
+                      & (xhi >= fp.lo[:, 0].min()) & (ylo <= fp.hi[:, 1].max())
+                      & (yhi >= fp.lo[:, 1].min()))
+    xlo, xhi, ylo, yhi, zlo = (v[t, s] for v in bounds)
+    p, k = np.nonzero((xlo[:, None] <= fp.hi[:, 0]) & (xhi[:, None] >= fp.lo[:, 0])
+                      & (ylo[:, None] <= fp.hi[:, 1]) & (yhi[:, None] >= fp.lo[:, 1])
+                      & (zlo[:, None] <= z_cut))
+    t, s = t[p], s[p]
     if len(t) == 0:
         return
     d = fp.top_m[k] - lowest(t, s, k)

@@ -541,12 +541,21 @@ def path_acceleration_cap(hand: HandModel, postures, dq: np.ndarray) -> float:
     cap = RAIL_TORQUE_SHARE * actuator_capacity(hand).torque_nm
     vi = hand._pin_v_idx
     best = np.inf
+    seen = set()
+    v = np.zeros(m.nv)  # (no speed, no acceleration; and the unit acceleration along dq)
+    unit = np.zeros(m.nv)
+    unit[vi] = dq
     for q in postures:
-        qp, v = hand._pin_q(q), np.zeros(m.nv)
-        unit = np.zeros(m.nv)
-        unit[vi] = dq
-        tau_g = pin.rnea(m, data, qp, v, np.zeros(m.nv))[vi]
+        qp = hand._pin_q(q)
+        tau_g = pin.rnea(m, data, qp, v, v)[vi]
         tau_1 = pin.rnea(m, data, qp, v, unit)[vi] - tau_g
+        # (a posture whose torques and transmission equal one's before gives its motor
+        # torques: skipped. The arm's line: the rail and the reach, prismatic at the
+        # root, move no joint's torque, to the bit)
+        key = (hand.transmission_key(q), tau_g.tobytes(), tau_1.tobytes())
+        if key in seen:
+            continue
+        seen.add(key)
         g, k = hand.motor_torques(q, tau_g), hand.motor_torques(q, tau_1)
         room = cap - np.abs(g)
         if np.any(room <= 0.0):

@@ -31,6 +31,7 @@ from planner.play.tendonload import slowed
 RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart on the rail
 PLACE_STRIDE = 1000  # place = posture * PLACE_STRIDE + rail index (a rail index lies within
 # +-PLACE_STRIDE / 2: 3 m of rail either way)
+_HALF = PLACE_STRIDE // 2  # (``posture_of``'s offset)
 
 
 class Places:
@@ -48,6 +49,10 @@ class Places:
         # (the whole hand's bounds, for the moves of the whole hand: the rest pose's)
         self.acceleration, self.jerk = self.home.acceleration, self.home.jerk
         self._arm_s: dict[tuple[int, int, int], float] = {}
+        # (the programme asks these of ~10^5 pairs of places a song: the same numbers,
+        # read from a list and a memo by the places themselves)
+        self._reach_of = [self.reach_m(p) for p in range(len(self.atlases))]
+        self._arm_ab: dict[tuple[int, int], float] = {}
 
     @property
     def postures(self) -> int:
@@ -83,12 +88,18 @@ class Places:
 
     def distance_m(self, a: int, b: int) -> float:
         """How far the arm moves between two places (rail and reach, m)."""
-        pa, pb = self.posture_of(a), self.posture_of(b)
-        return (abs(self.rail_i(a) - self.rail_i(b)) * RAIL_STEP_M
-                + abs(self.reach_m(pa) - self.reach_m(pb)))
+        pa, pb = (a + _HALF) // PLACE_STRIDE, (b + _HALF) // PLACE_STRIDE
+        return (abs((a - pa * PLACE_STRIDE) - (b - pb * PLACE_STRIDE)) * RAIL_STEP_M
+                + abs(self._reach_of[pa] - self._reach_of[pb]))
 
     def arm_time_s(self, a: int, b: int) -> float:
         """The arm's move from place ``a`` to place ``b`` (memoised)."""
+        got = self._arm_ab.get((a, b))
+        if got is None:
+            got = self._arm_ab[(a, b)] = self._arm_time_s(a, b)
+        return got
+
+    def _arm_time_s(self, a: int, b: int) -> float:
         pa, pb = self.posture_of(a), self.posture_of(b)
         key = (min(pa, pb), max(pa, pb), abs(self.rail_i(a) - self.rail_i(b)))
         got = self._arm_s.get(key)
@@ -119,11 +130,9 @@ class Places:
             return capped_move(qa, dq, None)
         full = np.zeros(h.n)
         full[cols] = dq
-        line = []
-        for s in np.linspace(0.0, 1.0, PATH_SAMPLES):
-            q = self.atlas.base.copy()
-            q[cols] = qa + s * dq
-            line.append(h.apply_couplings(q))
+        line = np.tile(self.atlas.base, (PATH_SAMPLES, 1))  # (the samples' rows at once)
+        line[:, cols] = qa + np.linspace(0.0, 1.0, PATH_SAMPLES)[:, None] * dq
+        line = h.apply_couplings(line)
         v, acc, j = caps
         return capped_move(qa, dq, (v, min(acc, path_acceleration_cap(h, line, full)), j))
 

@@ -71,6 +71,7 @@ class Planner:
         self.places = Places(hand)  # (every play posture's atlas and moves)
         self.atlas, self.moves = self.places.atlas, self.places.home  # (the rest pose's)
         self.memo = CostMemo()  # (the fingering's costs that depend on the hand alone)
+        self.rest_q = rest_pose(self.atlas)  # (the hand's rest pose: every plan's first row)
 
 
 def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz: float = 100.0,
@@ -131,7 +132,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     rows written up to where nothing can change any more, then the way back to rest.
     Returns the rows (their motion and the song's shift) and the fingering (song time)."""
     problem = FingeringProblem(notes, pl.places, rate_hz, pl.memo)
-    rest_q = rest_pose(pl.atlas)
+    rest_q = pl.rest_q.copy()
     rows: _Rows | None = None
     done: dict[int, Assignment] = {}
     skipped: list = []

@@ -109,8 +109,8 @@ class TendonLoad:
                 for J in kin.point_jacobians(q, [kin.tip_ids[f] for f in pressing]):
                     pushed -= J.T @ np.array([0.0, 0.0, KEY_FORCE_N])
             static[i, 0], static[i, 1] = M @ g, M @ pushed
-            K[i] = M @ kin.inertial(q, zero, q_s)
-            C[i] = M @ kin.inertial(q, q_s, q_ss)
+            tau_k, tau_c = kin.inertials(q, ((zero, q_s), (q_s, q_ss)))
+            K[i], C[i] = M @ tau_k, M @ tau_c
         return static, K, C
 
     def _pushes(self, Q: np.ndarray, pressing: tuple[int, ...], key_top_z_m: float | None

@@ -1,0 +1,68 @@
+"""The play's bytes (not a test): ``python cli.py play SONG -o DIR/NAME.csv`` for every
+sample song, every stress song and every corpus piece (``../shared/corpus/``, or
+``--corpus DIR``), each in a fresh process as a user runs it, with ``DIR/SHA256SUMS``:
+a change that is meant to change no plan (a speed-up, a refactoring) leaves every sum as
+it was (``sha256sum -c OLD/SHA256SUMS`` in the new DIR, or ``--against OLD``).
+
+    python bench/play_bytes.py DIR [--tree PATH] [--corpus DIR] [--only SUBSTRING]
+                                   [--extra DIR ...] [--against OLD_DIR]
+
+``--tree PATH`` runs another checkout's ``cli.py`` (its planner on ``PYTHONPATH``): the
+same songs planned by main and by a branch, each into its own DIR. Exit 1 when
+``--against`` finds a file that differs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def songs_of(corpus: Path, only: str | None, extra: list[str]) -> list[Path]:
+    if not any(corpus.glob("*.mid")):
+        raise SystemExit(f"no corpus songs in {corpus} (--corpus DIR)")
+    songs = sorted((ROOT / "songs").glob("*.mid")) + sorted((ROOT / "songs" / "stress").glob("*.mid")) \
+        + sorted(corpus.glob("*.mid")) + [s for d in extra for s in sorted(Path(d).glob("*.mid"))]
+    return [s for s in songs if only is None or only in s.name]
+
+
+def main(argv: list[str]) -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("--tree", default=str(ROOT), help="the checkout whose cli.py plans")
+    ap.add_argument("--corpus", default=str(ROOT.parent / "shared" / "corpus"))
+    ap.add_argument("--only", default=None, help="only songs whose name holds this")
+    ap.add_argument("--extra", action="append", default=[],
+                    help="another folder of songs (tests/data, bench/random_songs.py's)")
+    ap.add_argument("--against", default=None, help="a DIR of this script's to compare with")
+    a = ap.parse_args(argv)
+    out, tree = Path(a.out), Path(a.tree).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    sums = []
+    for song in songs_of(Path(a.corpus), a.only, a.extra):
+        csv = out / f"{song.stem}.csv"
+        r = subprocess.run([sys.executable, str(tree / "cli.py"), "play", str(song), "-o", str(csv)],
+                           capture_output=True, text=True, env=env, check=False)
+        if r.returncode not in (0, 1):  # (1: the plan's own replay rejects it; still a plan)
+            print(f"{song.name}: exit {r.returncode}: {r.stderr.strip()[-300:]}")
+        sums.append(f"{hashlib.sha256(csv.read_bytes()).hexdigest()}  {csv.name}\n")
+    (out / "SHA256SUMS").write_text("".join(sums))
+    print(f"{len(sums)} files -> {out}")
+    if a.against is None:
+        return 0
+    old = dict(line.split()[::-1] for line in (Path(a.against) / "SHA256SUMS").read_text().splitlines())
+    differ = [name for name, h in (line.split()[::-1] for line in sums) if old.get(name) != h]
+    print(f"{len(sums) - len(differ)} of {len(sums)} identical to {a.against}"
+          + "".join(f"\n  DIFFERS: {n}" for n in differ))
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
