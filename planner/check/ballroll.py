@@ -89,13 +89,6 @@ def roll_towards_wrist_m(t_s: np.ndarray, palm: np.ndarray, radius_m: float, t_l
                                     inertia_ratio), initial=0.0))
 
 
-def ball_on_palm_m(palm: np.ndarray, radius_m: float, roll_m: np.ndarray) -> np.ndarray:
-    """Where the landed ball's centre is at each row (T, 3): the palm target moved
-    ``roll_m`` (``roll_path_m``) along the palm's +y. The grasp closes around the ball
-    there, not around the palm target it has rolled from."""
-    return palm[:, :3, 3] + radius_m * palm[:, :3, 2] + roll_m[:, None] * palm[:, :3, 1]
-
-
 def roll_problem(roll_m: float, tol_m: float = 0.0) -> str | None:
     """The rule: the ball's roll towards the wrist ``roll_m`` (``roll_towards_wrist_m``)
     beyond ``ROLL_ROOM_M`` (+ ``tol_m``) loses the ball -- the reason, else None."""
