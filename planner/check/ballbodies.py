@@ -5,7 +5,7 @@ the check (``planner.check.ball``) and of the catch planner's self-check
 A ball that touches a finger before the palm is deflected: the palm then meets it
 elsewhere or not at all. Measured in the replay (wide grid, -0.3 m / 25 deg / 3.0 m at
 2d5a21d): the ball, at 6 m/s, struck the thumb's distal segment (its capsule and its pad)
-14 ms before the intercept, lost 0.5 m/s there and rolled off the palm, while every
+14 ms before the intercept, lost 0.5 m/s there and slid off the palm, while every
 fingertip point stayed outside the ball at every row (10 ms apart: 60 mm of the ball's
 flight) -- the point rule at the rows alone missed it.
 
