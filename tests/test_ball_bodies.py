@@ -24,20 +24,21 @@ def _still(Q, links):
 
 def test_a_ball_through_a_finger_between_two_rows_is_found():
     # a capsule along x at the origin (radius 6 mm) and a ball crossing it along z at
-    # 6 m/s: at the rows (10 ms apart) the ball is 30 mm above and below its axis (inside
-    # neither the capsule nor any point), between them it passes through it
+    # 6.95 m/s: at the rows (20 ms apart) the ball's surface is 30 mm above and below the
+    # capsule (no touch at any row), between them it passes through it
     cap = Body("f_capsule", "f_link", CAPSULE, (-0.01, 0.0, 0.0), (0.01, 0.0, 0.0), 0.006,
                finger="thumb")
-    t = np.array([0.0, 0.01, 0.02])
+    t = np.array([0.0, 0.02, 0.04])
     Q = np.zeros((3, 1))
+    z0 = 0.03 + R_BALL + 0.006
 
     def ball_at(ts):
-        z = 0.03 + R_BALL + 0.006 - 6.0 * (ts - 0.0)
+        z = z0 - 2.0 * z0 / 0.02 * ts
         return np.stack([np.zeros_like(ts), np.zeros_like(ts), z], axis=1)
 
     at_rows = np.linalg.norm(ball_at(t[:2]), axis=1) - R_BALL - 0.006
-    assert np.all(np.abs(at_rows) > 0.0) and at_rows[0] > 0  # the rows alone see no touch
-    hit = finger_hit((cap,), _still, t, Q, 0.02, ball_at, R_BALL)
+    np.testing.assert_allclose(at_rows, [0.03, 0.03], atol=1e-12)  # the rows see no touch
+    hit = finger_hit((cap,), _still, t, Q, 0.04, ball_at, R_BALL)
     assert hit is not None and hit.body == "f_capsule" and hit.finger == "thumb"
     assert hit.gap_m < -0.03  # through its middle
     assert abs(hit.time_s - round(hit.time_s / FINE_S) * FINE_S) < 1e-12
@@ -47,11 +48,11 @@ def test_a_ball_through_a_finger_between_two_rows_is_found():
     def beside(ts):
         return ball_at(ts) + np.array([0.0, R_BALL + 0.006 + 0.005, 0.0])
 
-    clear = finger_hit((cap,), _still, t, Q, 0.02, beside, R_BALL)
+    clear = finger_hit((cap,), _still, t, Q, 0.04, beside, R_BALL)
     assert clear.gap_m > 0.004 and finger_hit_problem(clear) is None
     # the palm's and the arm's bodies are not the fingers'
     assert finger_hit((Body("palm_box", "palm", "box", (0, 0, 0), (0, 0, 0),
-                            half_m=(0.1, 0.1, 0.1)),), _still, t, Q, 0.02, ball_at,
+                            half_m=(0.1, 0.1, 0.1)),), _still, t, Q, 0.04, ball_at,
                       R_BALL) is None
 
 
