@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from planner.balls import file_inertia_ratio
+from planner.check.ballbodies import finger_hit, finger_hit_problem
 from planner.check.ballroll import ROLL_TOL_M, roll_judged, roll_problem, roll_towards_wrist_m
 from planner.check.ballstop import PALM_MU, cone_margin_n, pad_force_n, pad_time_s, ride_force_n
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
@@ -20,11 +21,14 @@ from planner.check.limits import RATE_TOL
 from planner.check.motormap import motor_torque_matrix
 from planner.check.results import BallLoad, CatchResult, TipTouch
 from planner.errors import InputError
+from planner.hand.bodies import collision_bodies
 from planner.hand.spec import FINGERS
 from planner.hand.tendon import actuator_capacity
 from planner.trajfile import Trajectory, is_num
 
 BALL_STEP_S = 1e-3  # RK4 step of the ball flight with drag
+BODY_TOL_M = 1e-5  # the fingers' bodies' tolerance on a file's rows (their 1e-6 rad
+# rounding moves a body ~0.3 um at the arm's 0.3 m)
 CONE_TOL_N = 1e-3  # the cone margin's tolerance (N): the file's rounding of the rows
 STILL_M_S = 1e-3  # the palm target slower than this (1 mm/s) has brought the ball to rest
 STOP_DIFF_S = 1e-4  # central differences of the ball and the palm at the intercept (s): the
@@ -133,6 +137,12 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
     if touches:
         problems.append(f"{len(touches)} fingertip contacts with the ball before the intercept "
                         f"(first: {touches[0].finger} at {touches[0].time_s:.3f} s)")
+    # ... nor any finger's body in the ball's flight (``planner.check.ballbodies``)
+    hit = finger_hit(collision_bodies(kin.hand.spec), kin.link_poses, t, tr.q, ti,
+                     lambda ts: ball_positions(ball["p0"], ball["v0"], ball["drag"], ts), r)
+    hit_problem = finger_hit_problem(hit, BODY_TOL_M)
+    if hit_problem is not None:
+        problems.append(hit_problem)
 
     g_time, g_fingers, held, d_after = _grasp_after(t, ti, tips, palm, r, problems)
     roll = None if err is None else _roll(t, palm, ball, ti, file_inertia_ratio(src))

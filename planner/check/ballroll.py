@@ -46,19 +46,22 @@ def roll_factor(inertia_ratio: float) -> float:
     return 1.0 / (1.0 + float(inertia_ratio))
 
 
-def roll_towards_wrist_m(t_s: np.ndarray, palm: np.ndarray, radius_m: float, t_land_s: float,
-                         v_ball_m_s: np.ndarray, inertia_ratio: float) -> float:
-    """The ball's largest roll towards the wrist (m, along the palm's +y from the palm
-    target) on rows at times ``t_s`` with palm poses ``palm`` (T, 4, 4) from its landing at
-    ``t_land_s`` (at velocity ``v_ball_m_s``; the palm target's is its row segment's there)
-    to the last row; the closing fingers on its far side stop it at the palm target (the
-    roll is not negative). Integrated row to row with the rows' accelerations (second
-    differences of the palm target)."""
+def roll_path_m(t_s: np.ndarray, palm: np.ndarray, radius_m: float, t_land_s: float,
+                v_ball_m_s: np.ndarray, inertia_ratio: float) -> np.ndarray:
+    """The ball's roll towards the wrist (m, along the palm's +y from the palm target) at
+    every row at times ``t_s`` with palm poses ``palm`` (T, 4, 4), from its landing at
+    ``t_land_s`` (at velocity ``v_ball_m_s``; the palm target's is its row segment's there):
+    0 on the rows before the landing. Nothing on the palm holds the ball towards the
+    fingers but the palm target's place (the roll is not negative: the palm's cup and the
+    fingers on that side); towards the wrist nothing holds it but the palm's tilt and
+    acceleration. Integrated row to row with the rows' accelerations (second differences
+    of the palm target)."""
+    out = np.zeros(len(t_s))
     k_roll = roll_factor(inertia_ratio)
     centre = palm[:, :3, 3] + radius_m * palm[:, :3, 2]
     after = np.flatnonzero(t_s > t_land_s)
     if len(after) < 2 or after[0] < 1:
-        return 0.0
+        return out
     dt = np.diff(t_s)
     k0 = int(after[0])
     v_rel = np.asarray(v_ball_m_s, dtype=float) - (centre[k0] - centre[k0 - 1]) / dt[k0 - 1]
@@ -67,16 +70,23 @@ def roll_towards_wrist_m(t_s: np.ndarray, palm: np.ndarray, radius_m: float, t_l
                        - (centre[1:-1] - centre[:-2]) / dt[:-1, None]) / (dt[1:] + dt[:-1])[:, None]
     along = k_roll * np.einsum("ij,ij->i", GRAVITY_WORLD - acc, palm[:, :3, 1])
     x, v = 0.0, k_roll * float(v_rel @ palm[k0 - 1, :3, 1])
-    worst, tau = 0.0, float(t_s[k0] - t_land_s)  # the first step: from the landing to row k0
+    tau = float(t_s[k0] - t_land_s)  # the first step: from the landing to row k0
     for k in range(k0, len(t_s)):
         a = float(along[k])
         x += v * tau + 0.5 * a * tau * tau
         v += a * tau
         if x < 0.0:
             x, v = 0.0, max(v, 0.0)
-        worst = max(worst, x)
+        out[k] = x
         tau = float(dt[k]) if k < len(dt) else 0.0
-    return worst
+    return out
+
+
+def roll_towards_wrist_m(t_s: np.ndarray, palm: np.ndarray, radius_m: float, t_land_s: float,
+                         v_ball_m_s: np.ndarray, inertia_ratio: float) -> float:
+    """The ball's largest roll towards the wrist (m) on the rows (``roll_path_m``)."""
+    return float(np.max(roll_path_m(t_s, palm, radius_m, t_land_s, v_ball_m_s,
+                                    inertia_ratio), initial=0.0))
 
 
 def roll_problem(roll_m: float, tol_m: float = 0.0) -> str | None:

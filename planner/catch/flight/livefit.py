@@ -277,3 +277,12 @@ class LiveFit:
         var = np.array([cov[a, a] + 2 * t_s * cov[a, 3 + a] + t_s * t_s * cov[3 + a, 3 + a]
                         for a in range(3)])
         return np.sqrt(np.maximum(var, 0.0))
+
+    def intercept_sigma(self, flight, t_i: float) -> dict[str, float]:
+        """The intercept's 1-sigma from the fit (``sigma_at``) on ``flight`` at ``t_i``:
+        across the path at the palm, and in time along it (sigma_x / |v_x|)."""
+        sig = self.sigma_at(t_i)
+        vx = abs(float(flight.velocity(t_i)[0]))
+        return {"x_plane_m": float(flight.position(t_i)[0]), "t_s": float(t_i),
+                "sigma_t_s": float(sig[0] / vx) if vx > 0 else math.inf,
+                "sigma_y_m": float(sig[1]), "sigma_z_m": float(sig[2])}

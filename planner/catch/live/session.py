@@ -42,6 +42,9 @@ plan catches the ball it last estimated, ``"given_up"`` with the reasons otherwi
 carries that estimate (``ball``, ``intercept_t``), which ``check`` judges. The file's
 metadata holds the first fit's (spec section 4 asks for one on the first line).
 
+Steps 2-3 are ``live.replan.LiveReplan``'s (the re-plan of each estimate); the session
+keeps the observations, their fit, the rows written and the end.
+
 The force QPs change no row, so they run on the final plan only; the latency of an
 observation (to its rows) is the fit, the intercept, the motion and the new rows.
 """
@@ -60,18 +63,14 @@ from planner.catch import grasp as gq
 from planner.catch.flight.dragfit import DragEstimate, estimate_drag
 from planner.catch.flight.livefit import LiveFit
 from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
-from planner.catch.live.motion import LiveMotion, rest_by_s
+from planner.catch.live.motion import LiveMotion
+from planner.catch.live.replan import LiveReplan
 from planner.catch.live.search import LiveSearch
-from planner.catch.live.stop import (
-    RAMP_MARGIN_S,
-    START_SLACK_S,
-    arm_offset,
-    moves,
-)
+from planner.catch.live.stop import arm_offset, moves
 from planner.catch.live.stopper import LiveStopper
 from planner.catch.live.turn import LiveTurn, live_turn
 from planner.catch.plan.arm import open_from
-from planner.catch.plan.closing import close_start, earliest_close_start
+from planner.catch.plan.closing import close_start
 from planner.catch.plan.planner import (
     HOLD_AFTER_S,
     PLAN_BUDGET_S,
@@ -94,65 +93,12 @@ from planner.hand.model import HandModel
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
 
 
-class _CloseAsk(NamedTuple):
-    """``close_start``'s inputs of one re-plan (the flight, the open pose, the intercept,
-    the fingers open, the ball's stop) and the time that re-plan acted from."""
-
-    flight: Flight
-    q_open: np.ndarray
-    t_i: float
-    ready: float
-    stop_t: float
-    t_b: float
-
-
 class _Chunk(NamedTuple):
     """Rows sampled, guarded and formatted (``trajfile.format_rows``), to be written."""
 
     t: np.ndarray
     Q: np.ndarray
     rows: FormattedRows
-
-
-class _DeferredClosing:
-    """A moving hand's closing start, re-timed for each estimate (``retime``) but computed
-    (``close_start``) only once a row or a decision needs it (``due``). Its time changes no
-    row before it (the fingers' closing phase is zero there), so while even its earliest
-    (``earliest_close_start``) lies beyond the rows written, that earliest stands in its
-    place: the same rows and decisions."""
-
-    def __init__(self, hand: HandModel, C: np.ndarray, closing, radius_m: float) -> None:
-        self.hand, self.C, self.closing, self.radius_m = hand, C, closing, radius_m
-        self.ask: _CloseAsk | None = None  # the inputs of the estimate deferred
-        self.computed = 0  # closing starts computed (``close_start``)
-
-    def compute(self, flight: Flight, q_open: np.ndarray, t_i: float, ready: float,
-                stop_t: float) -> float:
-        """``close_start`` for these inputs, counted."""
-        self.computed += 1
-        return close_start(self.hand, flight, self.C, q_open, self.closing, t_i, ready,
-                           stop_t, self.radius_m)
-
-    def retime(self, m: LiveMotion, ask: _CloseAsk, rows_to_s: float) -> None:
-        """The closing re-timed for the newest estimate; this observation's rows end at
-        ``rows_to_s``."""
-        low = earliest_close_start(self.closing, ask.t_i, ask.ready, ask.stop_t)
-        self.ask = ask
-        if low > rows_to_s:
-            m.set_closing(low, self.closing.duration_s)
-        else:
-            self.due(m, math.inf)
-
-    def due(self, m: LiveMotion, t_b: float) -> None:
-        """The deferred estimate's closing start, computed when its earliest is no longer
-        after ``t_b`` (it may have begun by then: the re-plan's test ``close_start_s >
-        t_b`` needs the time itself)."""
-        ask = self.ask
-        if ask is None or m.close_start_s > t_b:
-            return
-        s_c = self.compute(ask.flight, ask.q_open, ask.t_i, ask.ready, ask.stop_t)
-        m.set_closing(max(s_c, ask.t_b), self.closing.duration_s)
-        self.ask = None
 
 
 class CatchSession:
@@ -197,9 +143,6 @@ class CatchSession:
         # default: docs/history/live-catch.md, issue 31)
         self.first: dict[str, Any] | None = None  # the first plan's flight and intercept
         self.uncertainty: dict[str, float] | None = None
-        self._closings = _DeferredClosing(h, self.C, self.closing, self.ball.radius_m)
-        self.kept_targets = 0  # re-aims that could not reach their target at rest before
-        # the ball within the limits (part of the way made, or the older target kept)
         self.outcome: str | None = None
         self.reason = ""
         self.plan: CatchPlan | None = None
@@ -207,6 +150,8 @@ class CatchSession:
         self.turn: LiveTurn | None = None  # the wrist's turn that holds the ball (at the end)
         self.stopper = LiveStopper(self.pl, self.motion, self.ball, self.C, self.dt, self.drag,
                                    soft_stop)  # the soft stop (``live.stopper``)
+        self.replanner = LiveReplan(self.pl, self.closing, self.C, self.dt, self.ball.radius_m,
+                                    self.motion, self.stopper, self._search)  # (steps 2-3)
         self.rows_out_s = math.nan  # perf_counter when the last rows were flushed
         self.rows_cpu_s = math.nan  # thread_time then
 
@@ -279,7 +224,9 @@ class CatchSession:
             # first fit of a few noisy observations may put its nearest point in the past)
             return self._finish(f"the observation at t = {t:.3f} s acts after the intercept")
         old_seg = self.motion.seg
-        self._replan(fit.flight, t, t_b, period, self._last_row_s(t_react + period))
+        self.pose = self.replanner.replan(fit.flight, t, t_b, period,
+                                          self._last_row_s(t_react + period), self.pose, self.t_i)
+        self.flight, self.t_i = fit.flight, self.pose.t_i
         if self.writer is None:
             self._open()
         return self._write_to(t_react + period, t_b, old_seg)
@@ -301,86 +248,26 @@ class CatchSession:
             self.writer.abort(discard=discard)
 
     # ------------------------------------------------------------ re-plan
-    def _replan(self, flight: Flight, t_s: float, t_b: float, period: float,
-                rows_to_s: float) -> None:
-        """Steps 2-3 of the module docstring for the newest ``flight`` (observed up to
-        ``t_s``), acting from ``t_b`` (this observation's rows end at ``rows_to_s``)."""
-        pl, r, cl = self.pl, self.ball.radius_m, self.closing
-        prev = None if self.pose is None else self.pose.ic
-        m = self.motion
-        tilt = self.stopper.look(flight)  # (a fixed stop keeps its tilt)
-        if tilt is not None:
-            self._search.tilt = tilt
-        pose = pl.meet(flight, self.C, r, cl, self._search.next(flight, t_s, prev, self.t_i))
-        # the next observation's rows (to its t_react + period) or re-aim reach this far
-        fix_s = max(t_s + SIGNAL_S + PLAN_BUDGET_S + period, t_b) + period
-        sp = self.stopper
-        stop = (sp.fixed_stop(pose) if sp.fixed else sp.for_estimate(pose, t_b, fix_s)
-                if sp.soft else sp.shifted(pose))
-        if sp.fixed and moves(stop):  # the ball meets the fixed motion's palm then (the
-            pose = sp.met(pose, flight)  # closing is timed for it)
-        stop_t = sp.pad_s(pose)
-        rest_by = rest_by_s(pose.t_i, self.dt)  # the arm still when the ball arrives, or
-        if moves(stop):  # at the pre-catch pose when the stopping motion's ramp starts
-            rest_by = min(rest_by, stop.start_s - RAMP_MARGIN_S)
-        q_pre = sp.q_pre
-        if not m.moving:
-            T_m = m.move_time(pl.q_rest, q_pre)
-            go = t_b + period + T_m  # the open pose reached if the hand waits one more
-            # observation; wait while that is early enough: before the arm must be at rest
-            # (with room for the re-aims) and before the closing's start, which is no
-            # earlier than its earliest (then no closing time is needed: the same decision)
-            late = go + (START_SLACK_S if moves(stop) else 0.0) >= rest_by
-            if late or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
-                s_c = self._closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t)
-                if go >= s_c or late:
-                    if moves(stop) and t_b + T_m > stop.start_s:  # too late for it: its
-                        stop, q_pre, T_m = sp.slower(pose, t_b)  # ramp shorter
-                    m.start(t_b, q_pre, T_m)
-                    m.set_closing(s_c, cl.duration_s)
-        else:
-            self._closings.due(m, t_b)
-            if not (sp.fixed and moves(stop)) and m.reaim(t_b, q_pre, rest_by) < 1.0:
-                self.kept_targets += 1
-            if m.close_start_s > t_b:
-                self._closings.retime(m, _CloseAsk(flight, pose.q_open, pose.t_i,
-                                                   m.fingers_open_s, stop_t, t_b), rows_to_s)
-        if moves(stop) and m.moving and not sp.fixed and fix_s >= stop.start_s:
-            sp.fix(pose, t_b)  # the next rows reach its ramp: the motion is the rows' now
-        self.pose, self.flight, self.t_i = pose, flight, pose.t_i
-
-    def _sigma(self, flight: Flight, t_i: float) -> dict[str, float]:
-        """The intercept's 1-sigma from the fit (``LiveFit.sigma_at``): across the path at
-        the palm, and in time along it (sigma_x / |v_x|)."""
-        sig = self.fit.sigma_at(t_i)
-        vx = abs(float(flight.velocity(t_i)[0]))
-        return {"x_plane_m": float(flight.position(t_i)[0]), "t_s": float(t_i),
-                "sigma_t_s": float(sig[0] / vx) if vx > 0 else math.inf,
-                "sigma_y_m": float(sig[1]), "sigma_z_m": float(sig[2])}
-
     # ------------------------------------------------------------ rows
     def _open(self) -> None:
         ball = self.flight.to_metadata()
         self.first = {"ball": dict(ball), "intercept_t": float(self.t_i),
                       "observations": self.fit.n}
         meta = catch_metadata(self.pl.base_hand, self._T_root, self.rate_hz, self.flight,
-                              self.t_i, {"live": True, "throw": self._throw().to_dict(),
+                              self.t_i, {"live": True, "throw": self._throw_info().to_dict(),
                                          "catch_point": [float(x) for x in self.C],
                                          "stop_distance_m": gq.STOP_DISTANCE_M,
                                          "observations": self.fit.n})
         h = self.pl.base_hand
         self.writer = TrajectoryWriter(self.out_path, meta, h)
 
-    def _throw(self) -> ThrowInfo:
-        v = self.flight.v0
-        return ThrowInfo(math.degrees(math.atan2(float(v[2]), math.hypot(v[0], v[1]))),
-                         float(self.C[0]), float(self.C[2]), self.ball.name, self.drag,
-                         self.fit.n, live=True)
+    def _throw_info(self) -> ThrowInfo:
+        return live_throw(self.flight, self.C, self.ball, self.drag, self.fit.n)
 
     @property
     def closings_computed(self) -> int:
         """Re-plans' closing starts computed (``close_start``; the rest deferred)."""
-        return self._closings.computed
+        return self.replanner.closings.computed
 
     def _last_row_s(self, t_end_s: float) -> float:
         """The time of the last row ``_write_to(t_end_s)`` writes."""
@@ -426,7 +313,7 @@ class CatchSession:
         judged, and the end marker."""
         m, cl, sp = self.motion, self.closing, self.stopper
         pose, h = self.pose, self.pl.hand
-        self._closings.due(m, math.inf)
+        self.replanner.closings.due(m, math.inf)
         t_b = max(self.written_to_s, 0.0)
         if not m.moving:
             if not sp.fixed:
@@ -453,8 +340,8 @@ class CatchSession:
         if self.turn is not None:
             t_static = max(t_static, self.turn.end_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
-        self.uncertainty = self._sigma(self.flight, pose.t_i)  # (of the last estimate only:
-        # what the plan reports)
+        self.uncertainty = self.fit.intercept_sigma(self.flight, pose.t_i)  # (of the last
+        # estimate only: what the plan reports)
         self.drag_estimate = (estimate_drag(self.fit.times, self.fit.positions, self.flight,
                                             self.ball) if self.drag else None)
         self.plan = self._judge(t_static)
@@ -500,14 +387,14 @@ class CatchSession:
                   f"{self.first['observations']}")]
         if self.drag_estimate is not None:
             notes.append(f"live: {self.drag_estimate.describe()}")
-        if self.kept_targets:
-            notes.append(f"{self.kept_targets} re-aims could not reach their target at rest "
+        if self.replanner.kept_targets:
+            notes.append(f"{self.replanner.kept_targets} re-aims could not reach their target at rest "
                          "before the ball within the limits: part of the way, or the older "
                          "target kept")
         return make_catch_plan(
             reasons=reasons, flight=fl, catch_point=self.C,
             T_world_root=pl.mount.T_world_root(self.C), base_hand=pl.base_hand, hand=pl.hand,
-            rate_hz=self.rate_hz, throw=self._throw(), pose=pose, verdict=verdict,
+            rate_hz=self.rate_hz, throw=self._throw_info(), pose=pose, verdict=verdict,
             q_rest=pl.q_rest, q_open=self.stopper.q_pre, move_start_s=m.t_move,
             move_s=m.open_s,
             close_start_s=m.close_start_s, close_s=m.close_s, forces=fv.forces,
@@ -523,3 +410,11 @@ def _point(xyz: Any) -> np.ndarray:
     if p.shape != (3,):
         raise InputError(f"an observation's position must be 3 numbers, got {p.size}")
     return p
+
+
+def live_throw(flight: Flight, C: np.ndarray, ball: Ball, drag: bool, n_obs: int) -> ThrowInfo:
+    """The throw a live estimate ``flight`` describes (its launch angle, the catch point
+    ``C``, the ball, drag, ``n_obs`` observations)."""
+    v = flight.v0
+    return ThrowInfo(math.degrees(math.atan2(float(v[2]), math.hypot(v[0], v[1]))),
+                     float(C[0]), float(C[2]), ball.name, drag, n_obs, live=True)

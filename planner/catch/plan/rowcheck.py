@@ -1,7 +1,8 @@
 """The catch's self-check: the independent check's criteria (``planner.check.criteria``)
 on the planned rows, with its own forward kinematics: the palm on the ball at the
-intercept, no fingertip inside the ball before it, the grasp within its window and
-held to the end."""
+intercept, no fingertip inside the ball before it and no finger's body in its flight
+(``planner.check.ballbodies``, the check's rule), the grasp within its window and held
+to the end."""
 
 from __future__ import annotations
 
@@ -14,7 +15,10 @@ from planner.catch.flight.path import Flight
 from planner.catch.plan.arm import palm_target
 from planner.catch.plan.geometry import interp_row
 from planner.catch.plan.reasons import CatchReason, Reason
+from planner.check.ballbodies import finger_hit, finger_hit_problem
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
+from planner.check.kinematics import Kinematics
+from planner.hand.bodies import collision_bodies
 from planner.hand.model import HandModel
 from planner.hand.spec import PALM_FRAME
 
@@ -43,6 +47,8 @@ class RowCheck:
         self._tip_ids = [m.getFrameId(f"{f}_tip") for f in hand.fingers]
         self._palm_id = m.getFrameId(PALM_FRAME)
         self._pin_data = m.createData()
+        self._kin = Kinematics(hand, T_ref)  # the check's, for the fingers' bodies
+        self._bodies = collision_bodies(hand.spec)
 
     def frames(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Fingertips (T, 5, 3) and palm poses (T, 4, 4), reference frame, one FK per row."""
@@ -96,6 +102,11 @@ class RowCheck:
                 reasons.append(Reason(CatchReason.FINGERS, (
                     f"fingers in the way: {h.fingers[f]} tip inside the ball at "
                     f"t = {tt[before][k]:.3f} s, before the intercept")))
+        hit = finger_hit(self._bodies, self._kin.link_poses, t, Q, t_i,
+                         lambda ts: flight.position(ts) - C, r)
+        hit_reason = finger_hit_problem(hit)
+        if hit_reason is not None:
+            reasons.append(Reason(CatchReason.FINGERS, hit_reason))
         after = ~before
         centre = palm[after, :3, 3] + r * palm[after, :3, 2]
         d = np.linalg.norm(tips[after] - centre[:, None, :], axis=-1)
