@@ -44,7 +44,7 @@ from planner.hand.bodies import BOX, SPHERE, collision_bodies
 from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
-from planner.music.keybodies import box_penetration, sphere_depths
+from planner.music.keybodies import box_penetration, footprints, sphere_depths
 from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
@@ -53,6 +53,7 @@ OWN_BED_MARGIN_M = BED_MARGIN_M  # 1 mm: spec section 2 (bodies), check's own ru
 # key-down depth by the atlas's grid (a tip lands at most half a step off its sample)
 OTHER_KEY_DEPTH_M = DOWN_DEPTH_M - OTHER_KEY_TOLERANCE_M
 AXIS_SAMPLES = 9  # a capsule's axis is tested at this many points (its ends included)
+MANY_CHUNK = 2048  # configurations tested at once by ``clear_many`` (bounded memory)
 
 
 @dataclass(frozen=True)
@@ -107,6 +108,11 @@ class FingerBodies:
             rad.append(np.full(n, r))
         return np.concatenate(pts), np.concatenate(rad)
 
+    def radii(self, finger: str) -> np.ndarray:
+        """The radius of each of ``points``' points (m,)."""
+        s = self.shapes[finger]
+        return np.repeat(s.radius_m, s.n_points)
+
     def points_many(self, Q: np.ndarray, finger: str) -> np.ndarray:
         """``points`` at each of the configurations ``Q`` (K, n) at once (world, (K, m, 3);
         the radii are ``points``'): the shapes' ends carried by ``FrameChain``, the same
@@ -160,3 +166,44 @@ class FingerBodies:
             mine[own_pitch - kb.LOWEST_PITCH] = True
         return bool(np.all(depth[~mine] < OTHER_KEY_DEPTH_M)
                     and np.all(depth[mine] <= BODY_BED_DEPTH_M))
+
+    def clear_many(self, P: np.ndarray, r: np.ndarray, own_pitch: int
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """``clear_points`` of many configurations' points ``P`` (K, m, 3) (radii ``r``
+        (m,)) at once, and how deep each reaches inside key ``own_pitch``'s footprint
+        column (``sphere_depths``' value for that key, -inf where it does not enter it):
+        ((K,) bool, (K,) m). The same tests on the same numbers, against the boxes and
+        footprints that the points' bounding box reaches (the others are clear of them)."""
+        ok, own_depth = np.empty(len(P), dtype=bool), np.empty(len(P))
+        for lo_i in range(0, len(P), MANY_CHUNK):
+            sl = slice(lo_i, lo_i + MANY_CHUNK)
+            ok[sl], own_depth[sl] = self._clear_chunk(P[sl], r, own_pitch)
+        return ok, own_depth
+
+    def _clear_chunk(self, P: np.ndarray, r: np.ndarray, own_pitch: int):
+        rmax = float(r.max())
+        p_lo, p_hi = P.reshape(-1, 3).min(axis=0) - rmax, P.reshape(-1, 3).max(axis=0) + rmax
+        own = self.box_pitch == own_pitch
+        lo, hi = self.box_lo.copy(), self.box_hi.copy()
+        lo[own, 2] -= kb.KEY_DIP_M
+        hi[own, 2] -= kb.KEY_DIP_M
+        near = np.all((lo <= p_hi) & (hi >= p_lo), axis=1)
+        lo, hi, own = lo[near], hi[near], own[near]
+        d = np.maximum(np.maximum(lo[None, None] - P[:, :, None], P[:, :, None] - hi[None, None]),
+                       0.0)
+        pen = (r[None, :, None] - np.sqrt((d * d).sum(axis=3))).max(axis=1)  # (K, boxes)
+        ok = np.all(pen[:, ~own] <= OTHER_KEY_TOLERANCE_M, axis=1) \
+            & np.all(pen[:, own] <= OWN_BED_MARGIN_M, axis=1)
+        fp = footprints()
+        near = np.all((fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2]), axis=1)
+        key, flo, fhi, top = fp.key[near], fp.lo[near], fp.hi[near], fp.top_m[near]
+        e = np.maximum(np.maximum(flo[None, None] - P[:, :, None, :2],
+                                  P[:, :, None, :2] - fhi[None, None]), 0.0)
+        r2 = (r * r)[None, :, None] - (e * e).sum(axis=3)  # (K, m, rects)
+        low = np.where(r2 >= 0.0, P[:, :, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
+        depth = top[None] - low.min(axis=1)  # (K, rects), -inf where no sphere enters
+        mine = key == own_pitch - kb.LOWEST_PITCH
+        ok &= np.all(depth[:, ~mine] < OTHER_KEY_DEPTH_M, axis=1) \
+            & np.all(depth[:, mine] <= BODY_BED_DEPTH_M, axis=1)
+        own_depth = depth[:, mine].max(axis=1, initial=-np.inf)
+        return ok, own_depth

@@ -39,11 +39,11 @@ from planner.play.atlas import (
     Atlas,
     AtlasEntry,
 )
+from planner.play.follow import FOLLOW_STEP_M, HOLD_MARGIN_M, canonical_pitch, paths_clear
 from planner.play.movetable import (
     ACROSS_SAMPLES,
     ENDS,
     HIGH_SAFE_Z_M,
-    HOLD_MARGIN_M,
     MoveTable,
     table_path,
 )
@@ -132,7 +132,9 @@ class Moves:
         used): the atlas's own parameters, the tests' samples and margins, the search's
         tolerance, the joints' limits."""
         h = self.hand
-        return json.dumps({"atlas": self.atlas._params(), "cross_tol": CROSS_TOL,
+        # (with the body rule, its follow test: ``planner.play.follow``)
+        rule = {} if self.atlas.bodies is None else {"follow_step_m": FOLLOW_STEP_M}
+        return json.dumps({**rule, "atlas": self.atlas._params(), "cross_tol": CROSS_TOL,
                            "limit_fraction": LIMIT_FRACTION, "path_samples": PATH_SAMPLES,
                            "across_samples": ACROSS_SAMPLES, "high_safe_z_m": HIGH_SAFE_Z_M,
                            "hold_margin_m": HOLD_MARGIN_M,
@@ -253,7 +255,8 @@ class Moves:
         straight move of the rail and the finger's joints (rail first in ``dq``), kept
         only when forward kinematics finds the tip inside the key's footprint and the key
         down (``HOLD_MARGIN_M`` past the key-down depth, as far from the key bed) all the
-        way; None otherwise."""
+        way, and with the atlas's body rule the finger's body holding the key down and
+        clear of every other key (``planner.play.follow``); None otherwise."""
         key = ("follow", id(a), id(b))
         if key not in self._lat:
             self._lat[key] = self._follow(a, b)
@@ -308,6 +311,10 @@ class Moves:
         qa, qb, move, cols = self._follow_ends(a, b)
         ok = self.table.follow_clear(a, b)
         if ok is not None:
+            return move if ok else None
+        if self.atlas.bodies is not None:  # (the body rule: ``planner.play.follow``)
+            ok = paths_clear(self.atlas, a.finger, canonical_pitch(a), qa[None], qb[None],
+                             [r])[0]
             return move if ok else None
         k = kb.key(60 + a.pitch_class)
         f = h.fingers.index(a.finger)

@@ -154,6 +154,8 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
             rows = _start(Motion(notes, pl.places, rate_hz, pl.atlas.rail_of(pl.atlas.base)),
                           pl, rest_q, (), writer, rate_hz)
         shift = 0.0 if rows is None else rows.shift_s
+        if rows is not None:
+            rows.motion.expect([_shifted(a, shift) for a in ch.assignments])
         for _, item in steps:
             if isinstance(item, Assignment):
                 rows.motion.place(_shifted(item, shift))
