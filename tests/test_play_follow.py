@@ -135,3 +135,21 @@ def test_a_held_key_follows_a_posture_change(places):
     others = np.ones(88, dtype=bool)
     others[[k0, k1]] = False
     assert not bk.down[:, others].any()
+
+
+def test_a_press_the_rail_grid_puts_into_a_neighbour_is_not_offered(places):
+    """The index's entry over E4 from rail 78 mm (its ``dx`` half a step off the atlas's
+    sample) would put its body into a neighbouring key's column deeper than the body
+    rule allows: that place is not among the programme's for the note; those 6 mm after
+    and 12 mm before it are."""
+    here = [places.place(0, i) for i in (11, 13, 14)]
+    assert all(places.entry("index", 64, q) is not None for q in here)
+    assert places.presses_clear("index", 64, here) == [True, False, True]
+    e = places.entry("index", 64, here[1])
+    q = places.atlas.base.copy()
+    q[places.rail] = places.rail_m(here[1])
+    q[places.hand.joint_slice("index")] = e.press
+    p, r = places.atlas.bodies.points(places.hand.apply_couplings(q), "index")
+    depth = sphere_depths(p, r)
+    depth[64 - kb.LOWEST_PITCH] = -np.inf
+    assert depth.max() >= kb.DOWN_DEPTH_M - 0.0005
