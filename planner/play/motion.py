@@ -252,6 +252,7 @@ class Motion:
                 st.track.q = self.q0[self.hand.joint_slice(f)].copy()
         else:
             self._start_high(entries)
+            self._tuck(set(self.hand.fingers) - set(entries))
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
         self._strikers: dict[float, set[str]] = {}  # (``expect``: by key-down time)
         self.outcomes: dict[int, Outcome] = {}
@@ -268,6 +269,18 @@ class Motion:
             st.entry = e
             st.track.q = e.high.copy()
             self.q0[self.hand.joint_slice(f)] = e.high
+        self.q0 = self.hand.apply_couplings(self.q0)
+
+    def _tuck(self, idle: set[str]) -> None:
+        """The fingers that press no key (``idle``) hold, all song long, the pose nearest
+        their natural one whose body enters no key's column in any posture
+        (``Places.idle_pose``: the default hand's thumb hangs 52 mm below the keys' tops
+        in its third posture's natural hand, inside a white key's column)."""
+        for f in sorted(idle):
+            q = self.places.idle_pose(f)
+            if q is not None:
+                self.fingers[f].track.q = q.copy()
+                self.q0[self.hand.joint_slice(f)] = q
         self.q0 = self.hand.apply_couplings(self.q0)
 
     def prepared(self, assignments) -> list:
