@@ -252,7 +252,7 @@ class Motion:
                 st.track.q = self.q0[self.hand.joint_slice(f)].copy()
         else:
             self._start_high(entries)
-            self._tuck(set(self.hand.fingers) - set(entries))
+            self._tuck()
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
         self._strikers: dict[float, set[str]] = {}  # (``expect``: by key-down time)
         self.outcomes: dict[int, Outcome] = {}
@@ -271,17 +271,17 @@ class Motion:
             self.q0[self.hand.joint_slice(f)] = e.high
         self.q0 = self.hand.apply_couplings(self.q0)
 
-    def _tuck(self, idle: set[str]) -> None:
-        """The fingers that press no key (``idle``) hold, all song long, the pose nearest
-        their natural one whose body enters no key's column in any posture
-        (``Places.idle_pose``: the default hand's thumb hangs 52 mm below the keys' tops
-        in its third posture's natural hand, inside a white key's column)."""
-        for f in sorted(idle):
-            q = self.places.idle_pose(f)
-            if q is not None:
-                self.fingers[f].track.q = q.copy()
-                self.q0[self.hand.joint_slice(f)] = q
-        self.q0 = self.hand.apply_couplings(self.q0)
+    def _tuck(self) -> None:
+        """The fingers that press no key (``Places.idle_fingers``) hold, all song long,
+        the pose nearest their natural one whose body enters no key's column in any
+        posture (``Places.idle_pose``, ``Places.tuck``; the rest pose has them there too:
+        the default hand's thumb hangs 52 mm below the keys' tops in its third posture's
+        natural hand, inside a white key's column)."""
+        q0 = self.places.tuck(self.q0)
+        if q0 is not self.q0:
+            self.q0 = q0
+            for f in self.places.idle_fingers:
+                self.fingers[f].track.q = q0[self.hand.joint_slice(f)].copy()
 
     def prepared(self, assignments) -> list:
         """The first assignment of each finger, of those at the start rail (in onset

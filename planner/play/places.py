@@ -26,7 +26,14 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.music.keybodies import sphere_depths
-from planner.play.atlas import PATH_SAMPLES, Atlas, AtlasEntry, posture_count
+from planner.play.atlas import (
+    PATH_SAMPLES,
+    SPAN_M,
+    STEP_M,
+    Atlas,
+    AtlasEntry,
+    posture_count,
+)
 from planner.play.follow import canonical_pitch, follow_ends, paths_clear
 from planner.play.moves import Moves, path_acceleration_cap
 from planner.play.profile import Move, capped_move, path_caps
@@ -56,6 +63,7 @@ class Places:
         self._cross_s: dict[tuple[int, int], float] = {}
         self._cross_clear: dict[tuple[int, int], bool] = {}
         self._idle: dict[str, np.ndarray | None] = {}  # (``idle_pose``)
+        self._idle_fingers: tuple[str, ...] | None = None
 
     @property
     def postures(self) -> int:
@@ -84,20 +92,43 @@ class Places:
         p = self.posture_of(place)
         return self.atlases[p].entry(finger, pitch, (place - p * PLACE_STRIDE) * RAIL_STEP_M)
 
+    @property
+    def idle_fingers(self) -> tuple[str, ...]:
+        """The fingers that press no key from any place in any posture (no atlas entry:
+        the default hand's thumb)."""
+        if self._idle_fingers is None:
+            n = round(SPAN_M / STEP_M)
+            self._idle_fingers = tuple(
+                f for f in self.hand.fingers
+                if not any(a.entry_at(f, pc, k) is not None for a in self.atlases
+                           for pc in range(12) for k in range(-n, n + 1)))
+        return self._idle_fingers
+
+    def tuck(self, q: np.ndarray) -> np.ndarray:
+        """``q`` with every idle finger (``idle_fingers``) at its ``idle_pose`` (``q``
+        itself without the body rule: there is none)."""
+        poses = [(f, p) for f in self.idle_fingers if (p := self.idle_pose(f)) is not None]
+        if not poses:
+            return q
+        q = q.copy()
+        for f, pose in poses:
+            q[self.hand.joint_slice(f)] = pose
+        return self.hand.apply_couplings(q)
+
     def idle_pose(self, finger: str) -> np.ndarray | None:
         """The joints (``hand.joint_slice(finger)``) of a finger that presses no key in
         any posture (the default hand's thumb): of the poses on a grid of each joint's
         planning range (``IDLE_STEPS`` steps), the nearest its natural one (the sum of the
         joints' moves) whose body enters no key's footprint column in any play posture,
         at any rail (spec section 2's body rule: then it presses nothing, wherever the
-        arm goes); its natural joints when they are such, or without the body rule; None
-        when no pose of the grid is (memoised)."""
+        arm goes); its natural joints when they are such; None without the body rule
+        (the finger keeps its pose) or when no pose of the grid is (memoised)."""
         got = self._idle.get(finger, False)
         if got is not False:
             return got
         h, js = self.hand, self.hand.joint_slice(finger)
         natural = self.atlas.base[js]
-        got = natural.copy()
+        got = None
         if self.atlas.bodies is not None and self.rail is not None:
             grid = itertools.product(*(np.linspace(h.plan_lower[j], h.plan_upper[j], IDLE_STEPS)
                                        for j in js))
@@ -107,8 +138,6 @@ class Places:
                 if self._enters_no_key(finger, c):
                     got = c
                     break
-            else:
-                got = None
         self._idle[finger] = got
         return got
 

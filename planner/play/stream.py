@@ -131,7 +131,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     rows written up to where nothing can change any more, then the way back to rest.
     Returns the rows (their motion and the song's shift) and the fingering (song time)."""
     problem = FingeringProblem(notes, pl.places, rate_hz, pl.memo)
-    rest_q = rest_pose(pl.atlas)
+    rest_q = pl.places.tuck(rest_pose(pl.atlas))  # (an idle finger rests tucked as it plays)
     rows: _Rows | None = None
     done: dict[int, Assignment] = {}
     skipped: list = []
