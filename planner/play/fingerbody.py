@@ -89,6 +89,7 @@ class FingerBodies:
         self.box_lo, self.box_hi = c - h, c + h
         self._t = np.linspace(0.0, 1.0, AXIS_SAMPLES)[:, None]
         self._chains: dict[str, list[FrameChain]] = {}  # per finger, per shape (``points_many``)
+        self._tips: dict[str, FrameChain] = {}  # (``tip_chain``)
 
     def points(self, q: np.ndarray, finger: str, update: bool = True
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -107,6 +108,13 @@ class FingerBodies:
             pts.append(wa + self._t[:n] * (wb - wa))
             rad.append(np.full(n, r))
         return np.concatenate(pts), np.concatenate(rad)
+
+    def tip_chain(self, finger: str) -> FrameChain:
+        """The finger's tip frame as a ``FrameChain`` (made once)."""
+        got = self._tips.get(finger)
+        if got is None:
+            got = self._tips[finger] = FrameChain(self.hand, f"{finger}_tip")
+        return got
 
     def radii(self, finger: str) -> np.ndarray:
         """The radius of each of ``points``' points (m,)."""

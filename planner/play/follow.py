@@ -66,8 +66,8 @@ def paths_clear(atlas: Atlas, finger: str, pitch: int, QA: np.ndarray, QB: np.nd
     """Whether each straight move ``QA[i]`` -> ``QB[i]`` (whole hands, independent joints)
     passes the body rule's follow test on key ``pitch`` (the module docstring); ``arm``:
     the arm's joints (their travel sets the samples). (N,) bool."""
-    hand, bodies = atlas.hand, atlas.bodies
-    chain = FrameChain(hand, f"{finger}_tip")
+    bodies = atlas.bodies
+    chain = bodies.tip_chain(finger)
     radii = bodies.radii(finger)
     travel = np.linalg.norm((QB - QA)[:, arm], axis=1)
     counts = np.array([samples(float(t)) for t in travel])

@@ -209,13 +209,20 @@ class Moves:
                 self._move(a.finger, a.high, b.high)
         return self._lat[key]
 
-    def across_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
+    def across_s(self, a: AtlasEntry, b: AtlasEntry, ra: EntryRecord | None = None
+                 ) -> float | None:
         """``across(a, b)``'s duration (None: not clear), without making the move (the
-        programme asks this of thousands of pairs; ``path_caps``, as ``straight_move``)."""
+        programme asks this of thousands of pairs; ``path_caps``, as ``straight_move``);
+        ``ra``: ``a``'s record when ``a`` is another posture's entry (``Places``: its own
+        posture's, with no place in this table)."""
         got = self._across_s.get((id(a), id(b)), False)
         if got is False:
-            got = self._across_new(a, b, self._record(a), self._record(b))
+            got = self._across_new(a, b, ra or self._record(a), self._record(b))
         return got
+
+    def record(self, e: AtlasEntry) -> EntryRecord:
+        """The entry's record (``_record``)."""
+        return self._record(e)
 
     def _across_new(self, a: AtlasEntry, b: AtlasEntry, ra: EntryRecord,
                     rb: EntryRecord) -> float | None:

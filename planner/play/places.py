@@ -62,6 +62,7 @@ class Places:
         # (follows across postures: their times and answers, by the entries' ids)
         self._cross_s: dict[tuple[int, int], float] = {}
         self._cross_clear: dict[tuple[int, int], bool] = {}
+        self._cross_arm: dict[tuple[int, int, float], tuple | None] = {}  # (``follow_s``)
         self._idle: dict[str, np.ndarray | None] = {}  # (``idle_pose``)
         self._idle_fingers: tuple[str, ...] | None = None
 
@@ -258,7 +259,10 @@ class Places:
         its heights the same)."""
         if a.posture == b.posture:
             return self.moves[b.posture].move_gap_s(a, b)
-        lat = self.moves[b.posture].across_s(a, b)
+        # (``a``'s record from its own posture's moves, its place in no table here: its
+        # key crossings are not found again by forward kinematics)
+        ra = self.moves[a.posture].record(a)._replace(places=None)
+        lat = self.moves[b.posture].across_s(a, b, ra)
         if lat is None:
             return None
         return self.before_rail_s(a) + lat + self.after_rail_s(b)
@@ -278,8 +282,15 @@ class Places:
         if got is None:
             qa, qb = follow_ends(self.atlases[a.posture], self.atlases[b.posture], a, b)
             cols = self._carry_cols(a.finger)
-            got = self._cross_s[key] = self._carry(qa[cols], qb[cols] - qa[cols],
-                                                   [a.finger]).duration_s
+            dq = qb[cols] - qa[cols]
+            # (the arm's caps from rail 0: the same for every move of the same steps, the
+            # rail and reach prismatic, and so memoised by them alone)
+            arm = (a.posture, b.posture, float(dq[0]))
+            caps = self._cross_arm.get(arm)
+            if caps is None:
+                caps = self._cross_arm[arm] = self.arm_caps(
+                    np.array([0.0, self.reach_m(a.posture)]), dq[:len(self.arm)])
+            got = self._cross_s[key] = self._carry(qa[cols], dq, [a.finger], caps).duration_s
         return got
 
     def follow_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool:
@@ -324,12 +335,14 @@ class Places:
         qb = np.concatenate([arm_b] + [b.press for _, b in held])
         return self._carry(qa, qb - qa, [a.finger for a, _ in held])
 
-    def _carry(self, qa: np.ndarray, dq: np.ndarray, fingers: list[str]) -> Move:
+    def _carry(self, qa: np.ndarray, dq: np.ndarray, fingers: list[str],
+               caps: tuple | None = None) -> Move:
         """The move by ``dq`` from ``qa`` (the arm's joints, then ``fingers``' joints):
-        the arm's caps (``arm_caps``) and every finger joint's speed, acceleration and
-        jerk bounds, the tightest of each."""
+        the arm's caps (``arm_caps``, or ``caps`` when given) and every finger joint's
+        speed, acceleration and jerk bounds, the tightest of each."""
         n = len(self.arm)
-        caps = self.arm_caps(qa[:n], dq[:n])
+        if caps is None:
+            caps = self.arm_caps(qa[:n], dq[:n])
         cols = np.concatenate([self.hand.joint_slice(f) for f in fingers])
         fc = path_caps(dq[n:].tolist(), self.hand.velocity[cols].tolist(),
                        self.home.acceleration[cols].tolist(), self.home.jerk[cols].tolist())
