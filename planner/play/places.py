@@ -98,16 +98,19 @@ class Places:
         """The fingers that press no key from any place in any posture (no atlas entry:
         the default hand's thumb)."""
         if self._idle_fingers is None:
-            n = round(SPAN_M / STEP_M)
+            n = round(SPAN_M / STEP_M)  # (nearest the natural place first: a finger
+            # that plays finds an entry at once)
             self._idle_fingers = tuple(
                 f for f in self.hand.fingers
                 if not any(a.entry_at(f, pc, k) is not None for a in self.atlases
-                           for pc in range(12) for k in range(-n, n + 1)))
+                           for k in sorted(range(-n, n + 1), key=abs) for pc in range(12)))
         return self._idle_fingers
 
     def tuck(self, q: np.ndarray) -> np.ndarray:
         """``q`` with every idle finger (``idle_fingers``) at its ``idle_pose`` (``q``
         itself without the body rule: there is none)."""
+        if self.atlas.bodies is None or self.rail is None:
+            return q
         poses = [(f, p) for f in self.idle_fingers if (p := self.idle_pose(f)) is not None]
         if not poses:
             return q

@@ -131,7 +131,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
     rows written up to where nothing can change any more, then the way back to rest.
     Returns the rows (their motion and the song's shift) and the fingering (song time)."""
     problem = FingeringProblem(notes, pl.places, rate_hz, pl.memo)
-    rest_q = pl.places.tuck(rest_pose(pl.atlas))  # (an idle finger rests tucked as it plays)
+    rest_q = rest_pose(pl.atlas)
     rows: _Rows | None = None
     done: dict[int, Assignment] = {}
     skipped: list = []
@@ -183,10 +183,17 @@ def _start(motion: Motion, pl: Planner, rest_q: np.ndarray, assignments,
     """The motion's start: its first fingers over their keys, the way in from rest, the
     song's shift (into the file's metadata, before its first row)."""
     motion.prepare(assignments)
-    way = way_in(pl.moves, motion, rest_q, assignments, rate_hz)
+    way = way_in(pl.moves, motion, rest_q, assignments, rate_hz, _tucked(pl, rest_q))
     motion.start_after(way.arrive_s, shift_notes(motion.notes, way.song_start_s))
     writer.add_metadata(song_start_s=way.song_start_s)
     return _Rows(pl.hand, writer, motion, rate_hz, way)
+
+
+def _tucked(pl: Planner, rest_q: np.ndarray) -> np.ndarray | None:
+    """The rest pose with the idle fingers tucked (``Places.tuck``), None when it is the
+    rest pose itself (no leg to tuck them)."""
+    q = pl.places.tuck(rest_q)
+    return None if q is rest_q else q
 
 
 def _shifted(a: Assignment, shift_s: float) -> Assignment:
@@ -230,7 +237,8 @@ class _Rows:
         rows to its end and ``SETTLE_S`` after (at least a file's ``MIN_ROWS``)."""
         still_s = max(still_s, self.way.arrive_s)
         q_end = self.motion.rows(np.array([still_s]))[0]
-        self.out = legs_between(self.motion.moves, rest_q, q_end, leaving=True, t0_s=still_s)
+        self.out = legs_between(self.motion.moves, rest_q, q_end, leaving=True, t0_s=still_s,
+                                tucked_q=self.motion.places.tuck(rest_q))
         self.write_to(max(self.out.end_s + SETTLE_S, (MIN_ROWS - 1) * self.dt))
 
     def _sample(self, t: np.ndarray) -> np.ndarray:
