@@ -9,7 +9,9 @@ with the rail at its rest position (``REST_RAIL_M``, within its planning travel)
 The way in is two time-optimal straight moves (``legs_between``): the rail, with the
 hand in its rest posture, to where the motion starts; then the wrist and fingers, the
 rail still, to the motion's first pose (``Motion.q0``: each finger at crossing height
-over its first key). The way out is the same two backwards. Each starts and ends with
+over its first key); a hand with an idle finger (``Places.tuck``: the default hand's
+thumb) first tucks it, at rest, in a third leg before them. The way out is the same
+backwards. Each starts and ends with
 every speed zero. When the song's first notes come too soon to be reached from rest,
 the song starts later in the file: ``song_start_s``, a whole number of rows, written in
 the file's metadata, by which every reader shifts the song
