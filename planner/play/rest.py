@@ -10,8 +10,8 @@ The way in is two time-optimal straight moves (``legs_between``): the rail, with
 hand in its rest posture, to where the motion starts; then the wrist and fingers, the
 rail still, to the motion's first pose (``Motion.q0``: each finger at crossing height
 over its first key); a hand with an idle finger (``Places.tuck``: the default hand's
-thumb) first tucks it, at rest, in a third leg before them. The way out is the same
-backwards. Each starts and ends with
+thumb) tucks it while the rail runs. The way out is the same backwards. Each starts and
+ends with
 every speed zero. When the song's first notes come too soon to be reached from rest,
 the song starts later in the file: ``song_start_s``, a whole number of rows, written in
 the file's metadata, by which every reader shifts the song
@@ -95,12 +95,12 @@ def legs_between(moves: Moves, rest_q: np.ndarray, q: np.ndarray, leaving: bool,
     only while the hand is in its rest posture (every tip above crossing height), and
     the wrist and fingers move only while the rail is still. ``tucked_q``: the rest pose
     with the fingers that press no key tucked (``Places.tuck``), when it differs: they
-    tuck first, at rest (a third leg), and the other legs go from there, so that the arm
-    never carries them untucked into a posture whose keys they would enter."""
+    tuck while the rail runs (in the rest posture, where their body is clear of the keys
+    tucked or not) and untuck in the last leg out, so that the arm never carries them
+    untucked into a posture whose keys they would enter."""
     atlas = moves.atlas
     start = rest_q if tucked_q is None else tucked_q
-    poses = [rest_q] + ([start] if start is not rest_q else [])
-    poses += [_at_rail(atlas, start, atlas.rail_of(q)), q]
+    poses = [rest_q, _at_rail(atlas, start, atlas.rail_of(q)), q]
     if leaving:
         poses.reverse()
     return Legs(t0_s, tuple(whole_hand_move(moves, a, b) for a, b in itertools.pairwise(poses)))
