@@ -196,13 +196,18 @@ class Places:
                 + abs(self.reach_m(pa) - self.reach_m(pb)))
 
     def arm_time_s(self, a: int, b: int) -> float:
-        """The arm's move from place ``a`` to place ``b`` (memoised)."""
+        """The arm's move from place ``a`` to place ``b`` (memoised by the postures and the
+        rail's steps: a move that changes the posture by its direction too, its path's
+        acceleration cap being the motors' against gravity along it, and so not the same
+        both ways; one memo for both ways made the answer depend on which was asked
+        first, and a plan on the songs planned before it by the same planner)."""
         pa, pb = self.posture_of(a), self.posture_of(b)
-        key = (min(pa, pb), max(pa, pb), abs(self.rail_i(a) - self.rail_i(b)))
+        steps = self.rail_i(b) - self.rail_i(a)
+        key = (pa, pb, steps) if pa != pb else (0, 0, abs(steps))
         got = self._arm_s.get(key)
         if got is None:
             got = self._arm_s[key] = self.arm_move(
-                (0.0, self.reach_m(pa)), (key[2] * RAIL_STEP_M, self.reach_m(pb))).duration_s
+                (0.0, self.reach_m(pa)), (steps * RAIL_STEP_M, self.reach_m(pb))).duration_s
         return got
 
     def arm_move(self, a: tuple[float, float], b: tuple[float, float]) -> Move:
