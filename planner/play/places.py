@@ -197,17 +197,23 @@ class Places:
 
     def arm_time_s(self, a: int, b: int) -> float:
         """The arm's move from place ``a`` to place ``b`` (memoised by the postures and the
-        rail's steps: a move that changes the posture by its direction too, its path's
-        acceleration cap being the motors' against gravity along it, and so not the same
-        both ways; one memo for both ways made the answer depend on which was asked
-        first, and a plan on the songs planned before it by the same planner)."""
+        rail's steps of the move or of its reverse, which takes the same time: the move
+        of the rail and the reach together is the same line of configurations backwards,
+        the rail prismatic along x; it is found from the lower posture, so that the answer
+        is the same whichever way was asked first. The rail's sign matters when the
+        posture changes: a right hand is not its mirror image, and the path's acceleration
+        cap is the motors' against gravity and the hand's inertia along the line)."""
         pa, pb = self.posture_of(a), self.posture_of(b)
         steps = self.rail_i(b) - self.rail_i(a)
-        key = (pa, pb, steps) if pa != pb else (0, 0, abs(steps))
+        if pa == pb:
+            key = (0, 0, abs(steps))
+        else:
+            key = (pa, pb, steps) if pa < pb else (pb, pa, -steps)
         got = self._arm_s.get(key)
         if got is None:
             got = self._arm_s[key] = self.arm_move(
-                (0.0, self.reach_m(pa)), (steps * RAIL_STEP_M, self.reach_m(pb))).duration_s
+                (0.0, self.reach_m(key[0])), (key[2] * RAIL_STEP_M, self.reach_m(key[1]))
+            ).duration_s
         return got
 
     def arm_move(self, a: tuple[float, float], b: tuple[float, float]) -> Move:
