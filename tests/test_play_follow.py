@@ -166,3 +166,24 @@ def test_a_press_the_rail_grid_puts_into_a_neighbour_is_not_offered(places):
     depth = sphere_depths(p, r)
     depth[64 - kb.LOWEST_PITCH] = -np.inf
     assert depth.max() >= kb.DOWN_DEPTH_M - 0.0005
+
+
+def test_the_arm_time_is_the_same_whichever_way_is_asked_first(places):
+    """The programme's arm time of a posture change (memoised) is the move's own time,
+    the same for the move and its reverse, whichever was asked first: one memo for both
+    ways once gave the first asker's answer to both, and a plan depended on the songs
+    planned before it by the same planner. Its rail mirrored is another move (a right
+    hand is not its mirror image)."""
+    a, b = places.place(0, 3), places.place(2, -4)
+    places._arm_s.clear()
+    first = (places.arm_time_s(a, b), places.arm_time_s(b, a))
+    places._arm_s.clear()
+    second = (places.arm_time_s(b, a), places.arm_time_s(a, b))
+    assert first[0] == first[1] == second[0] == second[1]
+    reach = places.reach_m
+    fwd = places.arm_move((places.rail_m(a), reach(0)), (places.rail_m(b), reach(2)))
+    back = places.arm_move((places.rail_m(b), reach(2)), (places.rail_m(a), reach(0)))
+    assert fwd.duration_s == pytest.approx(first[0], rel=1e-9)
+    assert back.duration_s == pytest.approx(first[0], rel=1e-9)
+    mirror = places.arm_time_s(places.place(0, 3), places.place(2, 10))
+    assert mirror != first[0]
