@@ -151,21 +151,21 @@ def test_a_held_key_follows_a_posture_change(places):
 
 
 def test_a_press_the_rail_grid_puts_into_a_neighbour_is_not_offered(places):
-    """The index's entry over E4 from rail 78 mm (its ``dx`` half a step off the atlas's
-    sample) would put its body into a neighbouring key's column deeper than the body
-    rule allows: that place is not among the programme's for the note; those 6 mm after
-    and 12 mm before it are."""
-    here = [places.place(0, i) for i in (11, 13, 14)]
-    assert all(places.entry("index", 64, q) is not None for q in here)
-    assert places.presses_clear("index", 64, here) == [True, False, True]
-    e = places.entry("index", 64, here[1])
-    q = places.atlas.base.copy()
-    q[places.rail] = places.rail_m(here[1])
-    q[places.hand.joint_slice("index")] = e.press
-    p, r = places.atlas.bodies.points(places.hand.apply_couplings(q), "index")
-    depth = sphere_depths(p, r)
-    depth[64 - kb.LOWEST_PITCH] = -np.inf
-    assert depth.max() >= kb.DOWN_DEPTH_M - 0.0005
+    """The index's entries over E4 from the rail's places (each entry's ``dx`` up to half
+    the atlas's step off its sample): a press whose body, with the rail where the place
+    puts it, the atlas's body rule refuses (found at rail 114 mm when measured) is not
+    offered; the others are, and the rule passes them."""
+    here = [q for q in (places.place(0, i) for i in range(40))
+            if places.entry("index", 64, q) is not None]
+    ok = places.presses_clear("index", 64, here)
+    assert ok.count(False) >= 1 and ok.count(True) >= 5
+    fb = places.atlas.bodies
+    for q, clear in zip(here, ok):
+        e = places.entry("index", 64, q)
+        full = places.atlas.base.copy()
+        full[places.rail] = places.rail_m(q)
+        full[places.hand.joint_slice("index")] = e.press
+        assert fb.clear(places.hand.apply_couplings(full), "index", 64) is clear
 
 
 def test_the_arm_time_is_the_same_whichever_way_is_asked_first(places):
