@@ -91,7 +91,7 @@ def test_the_idle_thumb_enters_no_key_in_any_posture():
         p, r = fb.points(hand.apply_couplings(q), "thumb")
         return float(sphere_depths(p, r).max())
 
-    natural, idle = places.atlas.base[js], places.idle_pose("thumb")
+    natural, idle = places.atlas.base[js], places.idle.pose("thumb")
     assert deepest(natural, 2, 0.0) > kb.DOWN_DEPTH_M
     assert not np.array_equal(idle, natural)
     for posture in range(places.postures):

@@ -272,15 +272,15 @@ class Motion:
         self.q0 = self.hand.apply_couplings(self.q0)
 
     def _tuck(self) -> None:
-        """The fingers that press no key (``Places.idle_fingers``) hold, all song long,
+        """The fingers that press no key (``planner.play.idle``) hold, all song long,
         the pose nearest their natural one whose body enters no key's column in any
-        posture (``Places.idle_pose``, ``Places.tuck``; the rest pose has them there too:
+        posture (``IdleFingers.pose``, ``IdleFingers.tuck``; the rest pose has them there too:
         the default hand's thumb hangs 52 mm below the keys' tops in its third posture's
         natural hand, inside a white key's column)."""
-        q0 = self.places.tuck(self.q0)
+        q0 = self.places.idle.tuck(self.q0)
         if q0 is not self.q0:
             self.q0 = q0
-            for f in self.places.idle_fingers:
+            for f in self.places.idle.fingers:
                 self.fingers[f].track.q = q0[self.hand.joint_slice(f)].copy()
 
     def prepared(self, assignments) -> list:

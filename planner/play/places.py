@@ -20,27 +20,17 @@ alone, the same in every posture.
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 
 from planner.hand.model import HandModel
-from planner.music.keybodies import sphere_depths
-from planner.play.atlas import (
-    PATH_SAMPLES,
-    SPAN_M,
-    STEP_M,
-    Atlas,
-    AtlasEntry,
-    posture_count,
-)
+from planner.play.atlas import PATH_SAMPLES, Atlas, AtlasEntry, posture_count
 from planner.play.follow import canonical_pitch, follow_ends, paths_clear
+from planner.play.idle import IdleFingers
 from planner.play.moves import Moves, path_acceleration_cap
 from planner.play.profile import Move, capped_move, path_caps
 from planner.play.tendonload import slowed
 
 RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart on the rail
-IDLE_STEPS = 7  # an idle finger's pose is searched on this many values of each joint
 PLACE_STRIDE = 1000  # place = posture * PLACE_STRIDE + rail index (a rail index lies within
 # +-PLACE_STRIDE / 2: 3 m of rail either way)
 
@@ -64,8 +54,7 @@ class Places:
         self._cross_s: dict[tuple[int, int], float] = {}
         self._cross_clear: dict[tuple[int, int], bool] = {}
         self._cross_arm: dict[tuple[int, int, float], tuple | None] = {}  # (``follow_s``)
-        self._idle: dict[str, np.ndarray | None] = {}  # (``idle_pose``)
-        self._idle_fingers: tuple[str, ...] | None = None
+        self.idle = IdleFingers(hand, self.atlases, self.rail)  # (fingers that press no key)
 
     @property
     def postures(self) -> int:
@@ -93,75 +82,6 @@ class Places:
         """``finger``'s entry over key ``pitch`` from ``place`` (None: it cannot press it)."""
         p = self.posture_of(place)
         return self.atlases[p].entry(finger, pitch, (place - p * PLACE_STRIDE) * RAIL_STEP_M)
-
-    @property
-    def idle_fingers(self) -> tuple[str, ...]:
-        """The fingers that press no key from any place in any posture (no atlas entry:
-        the default hand's thumb)."""
-        if self._idle_fingers is None:
-            n = round(SPAN_M / STEP_M)  # (nearest the natural place first: a finger
-            # that plays finds an entry at once)
-            self._idle_fingers = tuple(
-                f for f in self.hand.fingers
-                if not any(a.entry_at(f, pc, k) is not None for a in self.atlases
-                           for k in sorted(range(-n, n + 1), key=abs) for pc in range(12)))
-        return self._idle_fingers
-
-    def tuck(self, q: np.ndarray) -> np.ndarray:
-        """``q`` with every idle finger (``idle_fingers``) at its ``idle_pose`` (``q``
-        itself without the body rule: there is none)."""
-        if self.atlas.bodies is None or self.rail is None:
-            return q
-        poses = [(f, p) for f in self.idle_fingers if (p := self.idle_pose(f)) is not None]
-        if not poses:
-            return q
-        q = q.copy()
-        for f, pose in poses:
-            q[self.hand.joint_slice(f)] = pose
-        return self.hand.apply_couplings(q)
-
-    def idle_pose(self, finger: str) -> np.ndarray | None:
-        """The joints (``hand.joint_slice(finger)``) of a finger that presses no key in
-        any posture (the default hand's thumb): of the poses on a grid of each joint's
-        planning range (``IDLE_STEPS`` steps), the nearest its natural one (the sum of the
-        joints' moves) whose body enters no key's footprint column in any play posture,
-        at any rail (spec section 2's body rule: then it presses nothing, wherever the
-        arm goes); its natural joints when they are such; None without the body rule
-        (the finger keeps its pose) or when no pose of the grid is (memoised)."""
-        got = self._idle.get(finger, False)
-        if got is not False:
-            return got
-        h, js = self.hand, self.hand.joint_slice(finger)
-        natural = self.atlas.base[js]
-        got = None
-        if self.atlas.bodies is not None and self.rail is not None:
-            grid = itertools.product(*(np.linspace(h.plan_lower[j], h.plan_upper[j], IDLE_STEPS)
-                                       for j in js))
-            for c in [natural, *sorted((np.array(c) for c in grid),
-                                       key=lambda c: (float(np.abs(c - natural).sum()),
-                                                      tuple(c)))]:
-                if self._enters_no_key(finger, c):
-                    got = c
-                    break
-        self._idle[finger] = got
-        return got
-
-    def _enters_no_key(self, finger: str, joints: np.ndarray) -> bool:
-        """Whether ``finger``'s body with its joints at ``joints``, the rest of the hand
-        natural, lies outside every key's footprint column in every posture (the rail
-        at either end of its travel and at 0: the keyboard's columns repeat by octave,
-        and a body out of them is so by its height or by lying in front of the keys)."""
-        h, fb, js = self.hand, self.atlas.bodies, self.hand.joint_slice(finger)
-        r = h.index["rail"]
-        Q = []
-        for a in self.atlases:
-            for rail in (h.plan_lower[r], 0.0, h.plan_upper[r]):
-                q = a.base.copy()
-                q[self.rail], q[js] = rail, joints
-                Q.append(q)
-        P = fb.points_many(h.apply_couplings(np.array(Q)), finger)
-        radii = fb.radii(finger)
-        return all(np.all(sphere_depths(p, radii) < 0.0) for p in P)
 
     def presses_clear(self, finger: str, pitch: int, places: list[int]) -> list[bool]:
         """Whether ``finger``'s press pose on key ``pitch`` from each of ``places`` (an

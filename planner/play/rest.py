@@ -9,7 +9,7 @@ with the rail at its rest position (``REST_RAIL_M``, within its planning travel)
 The way in is two time-optimal straight moves (``legs_between``): the rail, with the
 hand in its rest posture, to where the motion starts; then the wrist and fingers, the
 rail still, to the motion's first pose (``Motion.q0``: each finger at crossing height
-over its first key); a hand with an idle finger (``Places.tuck``: the default hand's
+over its first key); a hand with an idle finger (``planner.play.idle``: the default hand's
 thumb) tucks it while the rail runs. The way out is the same backwards. Each starts and
 ends with
 every speed zero. When the song's first notes come too soon to be reached from rest,
@@ -94,7 +94,7 @@ def legs_between(moves: Moves, rest_q: np.ndarray, q: np.ndarray, leaving: bool,
     """From rest to ``q`` (or from ``q`` to rest, ``leaving``) in two legs: the rail runs
     only while the hand is in its rest posture (every tip above crossing height), and
     the wrist and fingers move only while the rail is still. ``tucked_q``: the rest pose
-    with the fingers that press no key tucked (``Places.tuck``), when it differs: they
+    with the fingers that press no key tucked (``IdleFingers.tuck``), when it differs: they
     tuck while the rail runs (in the rest posture, where their body is clear of the keys
     tucked or not) and untuck in the last leg out, so that the arm never carries them
     untucked into a posture whose keys they would enter."""

@@ -190,9 +190,9 @@ def _start(motion: Motion, pl: Planner, rest_q: np.ndarray, assignments,
 
 
 def _tucked(pl: Planner, rest_q: np.ndarray) -> np.ndarray | None:
-    """The rest pose with the idle fingers tucked (``Places.tuck``), None when it is the
+    """The rest pose with the idle fingers tucked (``IdleFingers.tuck``), None when it is the
     rest pose itself (no leg to tuck them)."""
-    q = pl.places.tuck(rest_q)
+    q = pl.places.idle.tuck(rest_q)
     return None if q is rest_q else q
 
 
@@ -238,7 +238,7 @@ class _Rows:
         still_s = max(still_s, self.way.arrive_s)
         q_end = self.motion.rows(np.array([still_s]))[0]
         self.out = legs_between(self.motion.moves, rest_q, q_end, leaving=True, t0_s=still_s,
-                                tucked_q=self.motion.places.tuck(rest_q))
+                                tucked_q=self.motion.places.idle.tuck(rest_q))
         self.write_to(max(self.out.end_s + SETTLE_S, (MIN_ROWS - 1) * self.dt))
 
     def _sample(self, t: np.ndarray) -> np.ndarray:
