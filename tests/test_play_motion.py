@@ -67,3 +67,35 @@ def test_a_repeated_key_comes_up_by_the_end_of_the_note_before():
     assert len(notes) == 66
     assert not rep.play.wrong_presses and not plan.verdict.score.wrong_presses, rep.summary()
     assert rep.ok and not rep.play.claim_mismatches
+
+
+def test_the_idle_thumb_enters_no_key_in_any_posture():
+    """The default hand's thumb presses no key; natural, it hangs inside a white key's
+    footprint column 52 mm below its top when the arm is in its third posture (reach
+    -0.10 m: a wrong press by check's body rule). The motion holds it at the nearest pose
+    that enters no key's column in any posture, at any rail; a motion started in the
+    third posture has it there."""
+    from planner.hand.model import load_hand
+    from planner.music import keyboard as kb
+    from planner.music.keybodies import sphere_depths
+    from planner.play.motion import Motion
+    from planner.play.places import Places
+
+    places = Places(load_hand("default"))
+    hand, fb = places.hand, places.atlas.bodies
+    js = hand.joint_slice("thumb")
+
+    def deepest(joints, posture, rail_m):
+        q = places.atlases[posture].base.copy()
+        q[places.rail], q[js] = rail_m, joints
+        p, r = fb.points(hand.apply_couplings(q), "thumb")
+        return float(sphere_depths(p, r).max())
+
+    natural, idle = places.atlas.base[js], places.idle.pose("thumb")
+    assert deepest(natural, 2, 0.0) > kb.DOWN_DEPTH_M
+    assert not np.array_equal(idle, natural)
+    for posture in range(places.postures):
+        for rail in (-0.2, -0.05, 0.0, 0.13, 0.25):
+            assert deepest(idle, posture, rail) < 0.0
+    motion = Motion((), places, 100.0, 0.1, posture=2)
+    assert np.array_equal(motion.rows(np.array([0.0, 1.0]))[:, js], np.tile(idle, (2, 1)))

@@ -276,7 +276,8 @@ def key_depths(p: np.ndarray, r: np.ndarray, pitches, grow_m: float = 0.0) -> np
 def box_penetration(p: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndarray
                     ) -> np.ndarray:
     """How deep (m) sphere-swept points ``p`` (m, 3), radii ``r`` (m,), reach into each
-    box [lo, hi] (boxes, 3): (boxes,), <= 0 where clear."""
-    d = np.maximum(np.maximum(lo[None] - p[:, None], p[:, None] - hi[None]), 0.0)
-    dist = np.sqrt((d * d).sum(axis=2))  # (points, boxes); 0 inside
-    return (r[:, None] - dist).max(axis=0)
+    box [lo, hi] (boxes, 3): (boxes,), <= 0 where clear; of many configurations' points
+    ``p`` (K, m, 3) at once: (K, boxes)."""
+    d = np.maximum(np.maximum(lo - p[..., None, :], p[..., None, :] - hi), 0.0)
+    dist = np.sqrt((d * d).sum(axis=-1))  # (..., points, boxes); 0 inside
+    return (r[:, None] - dist).max(axis=-2)

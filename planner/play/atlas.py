@@ -64,7 +64,6 @@ STEP_M = 0.001  # the atlas samples dx this often
 SPAN_M = 0.045  # ... this far either side of a finger's natural place
 HIGH_Z_M = kb.BLACK_TOP_Z_M + 0.0075  # a finger moving sideways keeps its tip this high
 PRESS_DEPTH_ITERATIONS = 3  # ``Atlas._press``: the pad's depth found again from the body's
-TUCK_STEPS = 7  # ``Atlas.tucked``'s grid per joint (the travel's ends and 5 between)
 REPEAT_DEPTH_M = kb.DOWN_DEPTH_M - 0.002  # a repeated key rises to this depth (see above)
 BASE_HOVER_Z_M = 0.005  # the natural hand's tips, above the white tops
 CURL = 0.35  # the natural hand's finger flexion, a fraction of each joint's range
@@ -135,7 +134,6 @@ class Atlas:
         # (the samples whose poses the IK found within the limits and the body rule
         # refused: a note only they could play is left out for its bodies, ``body``)
         self._body_refused: set[tuple[str, int, int]] = set()
-        self._tucked: dict[str, np.ndarray] = {}  # (``tucked``, found once per finger)
         self.solves = 0
         self._load(table_path(hand.urdf_sha256, posture))
 
@@ -144,30 +142,6 @@ class Atlas:
         """The natural hand with the wrist fitted to hold the tips at crossing height (for
         a hand that plays nothing: it waits clear of the keys)."""
         return self._natural_hand(HIGH_Z_M)
-
-    def tucked(self, finger: str) -> np.ndarray:
-        """``finger``'s joints holding its collision bodies as high as its travel lets them
-        (a grid of ``TUCK_STEPS`` over each joint's planning range, the wrist as the
-        posture holds it): where a finger that presses no key waits, clear of the keys in
-        every posture and wherever the rail takes it (the default hand's thumb: its
-        natural pose hangs 53 mm below the white tops, inside the keys' columns once the
-        reach moves the hand over them). Without the body rule, its natural pose."""
-        if finger not in self._tucked:
-            self._tucked[finger] = self._tuck(finger)
-        return self._tucked[finger].copy()
-
-    def _tuck(self, finger: str) -> np.ndarray:
-        js = self.hand.joint_slice(finger)
-        if self.bodies is None:
-            return self.base[js].copy()
-        h = self.hand
-        grids = [np.linspace(h.plan_lower[j], h.plan_upper[j], TUCK_STEPS) for j in js]
-        Q = np.tile(self.base, (TUCK_STEPS ** len(js), 1))
-        Q[:, js] = np.array(np.meshgrid(*grids, indexing="ij")).reshape(len(js), -1).T
-        Q = np.array([h.apply_couplings(q) for q in Q])
-        r = self.bodies.points(self.base, finger)[1]
-        low = (self.bodies.points_many(Q, finger)[..., 2] - r).min(axis=1)
-        return Q[int(np.argmax(low))][js].copy()
 
     def raised(self, z_min_m: float) -> np.ndarray:
         """The natural hand at rail 0 with its wrist fitted so that its lowest fingertip

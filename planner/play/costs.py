@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 from planner.music import keyboard as kb
 from planner.music.keyboard import pitch_name
+from planner.play.follow import HOLD_PAST_S
 from planner.play.force import press_force_n
 from planner.play.places import RAIL_STEP_M, Places
 
@@ -130,7 +131,7 @@ class Prev:
         self.follows = [] if costs.places.rail is None else [
             (m, f, a, t_up[m] - t_down[m], costs.places.press_min_s(a))
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None]
-        self.release: dict[int, tuple[float, frozenset]] = {}  # by rail index
+        self.release: dict[tuple, tuple[float, frozenset]] = {}  # by place and new notes
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
         self.steps: dict[tuple, float] = {}  # a transition's loss, by (notes, rail, kept)
         self.recent: dict[frozenset, tuple] = {}  # ``State.recent`` after, by fingers sounding
@@ -141,7 +142,7 @@ class CostMemo:
     by keys, forces, fingers and rail positions (bounded), kept across the songs of one
     hand (``planner.play.Planner`` holds one)."""
 
-    __slots__ = ("cand_rails", "cands", "entry", "follows", "gaps", "rails",
+    __slots__ = ("cand_rails", "cands", "entry", "follows", "gaps", "paths", "rails",
                  "rails_to", "shortest", "timing")
 
     def __init__(self) -> None:
@@ -168,6 +169,7 @@ class Costs:
         self._timing: dict = m.timing
         self._gaps: dict = m.gaps
         self._follows: dict = m.follows
+        self._paths: dict = m.paths  # (``_follow_path``'s answers)
         self._cands: dict = m.cands
         self._cand_rails: dict = m.cand_rails  # (``_cands``' rails, and its best, by key)
         self._rails_to: dict = m.rails_to
@@ -192,14 +194,17 @@ class Costs:
             span = 0.05
             lo = max(self.rail_lo, math.ceil((x - nat - span) / RAIL_STEP_M))
             hi = min(self.rail_hi, math.floor((x - nat + span) / RAIL_STEP_M))
-            ok = set()
+            ok = []
             for p in range(self.places.postures):
                 for i in range(lo, hi + 1):
                     place = self.places.place(p, i)
                     e = self.places.entry(finger, n.pitch, place)
                     if e is not None and e.max_force_n >= force:
-                        ok.add(place)
-            self._rails[key] = frozenset(ok)
+                        ok.append(place)
+            # (the press clear of the other keys with the rail where the place puts it)
+            clear = self.places.presses_clear(finger, n.pitch, ok)
+            self._rails[key] = frozenset(q for q, c in zip(ok, clear) if c)
+            self._rails[("refused", *key)] = frozenset(q for q, c in zip(ok, clear) if not c)
         return self._rails[key]
 
     def reason(self, note: int) -> Skip | None:
@@ -217,6 +222,10 @@ class Costs:
             return Skip(note, SkipReason.TOO_SHORT, f"{1000 * n.duration_s:.0f} ms long; the "
                         f"shortest press down and up of any finger on {pitch_name(n.pitch)} "
                         f"takes {1000 * shortest_s:.0f} ms")
+        if any(self._rails[("refused", f, n.pitch, press_force_n(n.velocity))]
+               for f in fingers):
+            return Skip(note, SkipReason.BODY, f"no finger presses {pitch_name(n.pitch)} with "
+                        "its body clear of the other keys from the rail's places")
         reach = any(self.places.entry(f, n.pitch, self.places.place(p, i)) is not None
                     for f in fingers for p in range(self.places.postures)
                     for i in range(self.rail_lo, self.rail_hi + 1, 2))
@@ -363,9 +372,10 @@ class Costs:
         (while the rail moves) or striking again after following it, another finger
         leaving its key. A ``kept`` note (sounding past the event) must follow, or the
         move is not made (inf)."""
-        got = prev.release.get(place)
+        key = (place, tuple(new.items()))
+        got = prev.release.get(key)
         if got is None:
-            got = prev.release[place] = self._release_of(prev, place)
+            got = prev.release[key] = self._release_of(prev, place, new)
         release_t, followers = got
         if kept and not followers.issuperset(kept):
             return math.inf
@@ -404,38 +414,75 @@ class Costs:
             loss += max(0.0, late) / dt
         return loss
 
-    def _release_of(self, ctx: Prev, place: int) -> tuple[float, frozenset]:
-        """When the rail arrives at ``place`` after ``ctx``'s state (the lifters' key up,
+    def _release_of(self, ctx: Prev, place: int, new: dict[int, str]
+                    ) -> tuple[float, frozenset]:
+        """When the arm arrives at ``place`` after ``ctx``'s state (the lifters' key up,
         a held note's at this event, their lift, and the move), and which notes ride
-        along."""
+        along: those whose finger strikes none of the ``new`` notes, whose path is clear
+        (``Places.follow_clear``) and whose key stays down ``HOLD_PAST_S`` past the move's
+        end (``_riders``), as the motion holds them."""
         T = self.places.arm_time_s(ctx.state.place, place)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift)
             return ctx.lift_end + T, _NONE
-        followers = _NONE
+        strikers = set(new.values())
+        cands = []  # (note, finger, the move's latest end, its time)
         for m, f, a, window_s, press_s in ctx.follows:
             # (an entry serves every key of its pitch class at its place: the key is the
             # entry and the rail's step, never the rail's index, which names another
             # entry for each of those keys)
             b = self.entry(m, f, place)
-            if b is None:  # (it cannot press the key from there: it does not ride along)
-                continue
+            if b is None or f in strikers:  # (it cannot press the key from there, or
+                continue  # strikes next: it does not ride along)
             key = (a, place - ctx.state.place)
-            got = self._follows.get(key)  # (its time, and whether its path is clear:
-            if got is None:  # found only when a note's time fits the move)
-                got = self._follows[key] = [self.places.follow_s(a, b), None]
-            follow_s = got[0]
+            got = self._follows.get(key)  # (its time, whether its path is clear, its
+            if got is None:  # lift's key crossing: found only when a note's time fits)
+                got = self._follows[key] = [self.places.follow_s(a, b), None, None]
             # (the move fits inside the note, after its press and before its lift)
-            if window_s >= follow_s + press_s:
+            if window_s >= got[0] + press_s:
                 if got[1] is None:
                     got[1] = self.places.follow_clear(a, b)
-                if got[1]:
-                    followers = followers | {(m, f)}
-                    T = max(T, follow_s)
-        if not followers:
-            release = ctx.lift_end
-        else:
-            release = next((v for v, m, f in ctx.lifts if (m, f) not in followers), -math.inf)
-        return release + T, followers
+                    got[2] = self.places.lift(b, "high").cross_s
+                if got[1] and self._follow_path(m, f, ctx.state.place, place):  # (its press done: the descent's end, ``press_min_s`` less the
+                    # lift to its key crossing)
+                    done = self._t_down[m] + press_s - self.places.lift(a, "high").cross_s
+                    cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
+        arrive = min((self._t_down[n] - self._times(n, f, place)[1] for n, f in new.items()),
+                     default=math.inf)
+        return self._riders(ctx, cands, T, arrive)
+
+    def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
+        """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
+        to ``place``, the rails the motion moves (memoised by key and places)."""
+        key = (self.pitch[m], f, here, place)
+        got = self._paths.get(key)
+        if got is None:
+            got = self._paths[key] = self.places.follow_path_clear(
+                self.entry(m, f, here), self.entry(m, f, place), self.pitch[m],
+                self.places.rail_m(here), self.places.rail_m(place))
+        return got
+
+    @staticmethod
+    def _riders(ctx: Prev, cands: list, T: float, arrive: float) -> tuple[float, frozenset]:
+        """The arm's arrival and the notes riding along, of ``cands`` (note and finger, the
+        latest end of the move that keeps its key down, the move's time carrying it, when
+        its press is done): the move starts once every other finger has lifted on time
+        and every rider's press is done, and takes the arm's ``T`` or its riders' moves;
+        a rider whose key would come up before the move ends, or before it could end
+        without hurrying the others' lifts where the new notes (``arrive``, their wish)
+        do not ask that anyway, lifts instead: of those, the one whose key comes up first,
+        and the others are weighed again without it (the motion's rule,
+        ``Motion._move_rail``)."""
+        while True:
+            riders = frozenset(c[0] for c in cands)
+            release = next((v for v, m, f in ctx.lifts if (m, f) not in riders), -math.inf)
+            start = max([release] + [c[3] for c in cands])
+            move_s = max([T] + [c[2] for c in cands])
+            late = [c for c in cands if c[1] < min(arrive, start + move_s)
+                    or c[1] < c[3] + move_s]
+            if not late:
+                return start + move_s, riders
+            first = min(late, key=lambda c: (c[1], c[0]))
+            cands = [c for c in cands if c is not first]
 
 
 _NONE: frozenset = frozenset()  # (no note rides along)

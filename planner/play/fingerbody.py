@@ -46,14 +46,13 @@ from planner.hand.bodies import BOX, SPHERE, collision_bodies
 from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
-from planner.music.keybodies import box_penetration, key_depths, sphere_depths
+from planner.music.keybodies import box_penetration, footprints, key_depths
 from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
 OWN_BED_MARGIN_M = BED_MARGIN_M  # 1 mm: spec section 2 (bodies), check's own rule
-HOLD_NEIGHBOURS = 3  # a held key's neighbours judged along a follow: a finger end (at most
-# 24 mm) reaches no further than the next key but one either side
 AXIS_SAMPLES = 9  # a capsule's axis is tested at this many points (its ends included)
+MANY_CHUNK = 2048  # configurations tested at once by ``clear_many`` (bounded memory)
 
 
 @dataclass(frozen=True)
@@ -89,6 +88,7 @@ class FingerBodies:
         self.box_lo, self.box_hi = c - h, c + h
         self._t = np.linspace(0.0, 1.0, AXIS_SAMPLES)[:, None]
         self._chains: dict[str, list[FrameChain]] = {}  # per finger, per shape (``points_many``)
+        self._tips: dict[str, FrameChain] = {}  # (``tip_chain``)
 
     def points(self, q: np.ndarray, finger: str, update: bool = True
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -107,6 +107,18 @@ class FingerBodies:
             pts.append(wa + self._t[:n] * (wb - wa))
             rad.append(np.full(n, r))
         return np.concatenate(pts), np.concatenate(rad)
+
+    def tip_chain(self, finger: str) -> FrameChain:
+        """The finger's tip frame as a ``FrameChain`` (made once)."""
+        got = self._tips.get(finger)
+        if got is None:
+            got = self._tips[finger] = FrameChain(self.hand, f"{finger}_tip")
+        return got
+
+    def radii(self, finger: str) -> np.ndarray:
+        """The radius of each of ``points``' points (m,)."""
+        s = self.shapes[finger]
+        return np.repeat(s.radius_m, s.n_points)
 
     def points_many(self, Q: np.ndarray, finger: str) -> np.ndarray:
         """``points`` at each of the configurations ``Q`` (K, n) at once (world, (K, m, 3);
@@ -145,35 +157,47 @@ class FingerBodies:
         """True when the finger's body at ``q`` is clear of the keys (``clear_points``)."""
         return self.clear_points(*self.points(q, finger), own_pitch)
 
-    def holding_clear(self, Q: np.ndarray, finger: str, own_pitch: int) -> np.ndarray:
-        """(K,) bool: at each configuration of ``Q`` (K, n) the finger holding key
-        ``own_pitch`` down keeps its body within the spec's 1 mm past that key's bed and
-        out of its neighbours' footprint columns (``HOLD_NEIGHBOURS`` either side, grown
-        by ``OTHER_KEY_TOLERANCE_M``) short of the key-down depth: the body rule of
-        ``clear_points`` along a move that holds a key (``planner.play.moves``' followers)."""
-        P = self.points_many(Q, finger)
-        r = self.points(Q[0], finger)[1]
-        own = key_depths(P, r, [own_pitch])[:, 0] <= BODY_BED_DEPTH_M
-        near = [p for p in range(own_pitch - HOLD_NEIGHBOURS, own_pitch + HOLD_NEIGHBOURS + 1)
-                if p != own_pitch and kb.LOWEST_PITCH <= p <= kb.HIGHEST_PITCH]
-        other = key_depths(P, r, near, OTHER_KEY_TOLERANCE_M) < DOWN_DEPTH_M
-        return own & other.all(axis=1)
-
     def clear_points(self, p: np.ndarray, r: np.ndarray, own_pitch: int | None) -> bool:
-        """True when sphere-swept points ``p`` (m, 3), radii ``r`` (m,) reach no key but
-        ``own_pitch`` by more than ``OTHER_KEY_TOLERANCE_M`` nor ``DOWN_DEPTH_M`` deep in
-        its footprint grown by ``OTHER_KEY_TOLERANCE_M``, and their own key (pressed) by
-        at most ``OWN_BED_MARGIN_M`` (the box pressed to its bed; in the footprint,
-        ``check``'s ``BODY_BED_DEPTH_M``)."""
-        pen = self.box_depths(p, r, own_pitch)
+        """True when sphere-swept points ``p`` (m, 3), radii ``r`` (m,) are clear of the
+        keys (``clear_many`` of one configuration)."""
+        return bool(self.clear_many(p[None], r, own_pitch)[0][0])
+
+    def clear_many(self, P: np.ndarray, r: np.ndarray, own_pitch: int | None
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Whether each configuration's sphere-swept points ``P`` (K, m, 3), radii ``r``
+        (m,), reach no key but ``own_pitch`` by more than ``OTHER_KEY_TOLERANCE_M`` nor
+        ``DOWN_DEPTH_M`` deep in its footprint grown by ``OTHER_KEY_TOLERANCE_M``, and
+        their own key (pressed) by at most ``OWN_BED_MARGIN_M`` (the box pressed to its
+        bed; in the footprint, ``check``'s ``BODY_BED_DEPTH_M``); and how deep each
+        reaches inside ``own_pitch``'s footprint column (-inf where it does not enter it,
+        or without ``own_pitch``): ((K,) bool, (K,) m). Only the boxes and footprints
+        that the points' bounding box reaches are measured (the others are clear)."""
+        ok, own_depth = np.empty(len(P), dtype=bool), np.empty(len(P))
+        for lo_i in range(0, len(P), MANY_CHUNK):
+            sl = slice(lo_i, lo_i + MANY_CHUNK)
+            ok[sl], own_depth[sl] = self._clear_chunk(P[sl], r, own_pitch)
+        return ok, own_depth
+
+    def _clear_chunk(self, P: np.ndarray, r: np.ndarray, own_pitch: int | None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
+        p_lo, p_hi = P.reshape(-1, 3).min(axis=0) - reach, P.reshape(-1, 3).max(axis=0) + reach
         own = self.box_pitch == own_pitch
-        if not (np.all(pen[~own] <= OTHER_KEY_TOLERANCE_M)
-                and np.all(pen[own] <= OWN_BED_MARGIN_M)):
-            return False
-        near = sphere_depths(p, r, OTHER_KEY_TOLERANCE_M)
-        mine = np.zeros(len(near), dtype=bool)
-        if own_pitch is None:
-            return bool(np.all(near < DOWN_DEPTH_M))
-        mine[own_pitch - kb.LOWEST_PITCH] = True
-        own = sphere_depths(p, r)[mine]
-        return bool(np.all(near[~mine] < DOWN_DEPTH_M) and np.all(own <= BODY_BED_DEPTH_M))
+        lo, hi = self.box_lo.copy(), self.box_hi.copy()
+        lo[own, 2] -= kb.KEY_DIP_M
+        hi[own, 2] -= kb.KEY_DIP_M
+        near = np.all((lo <= p_hi) & (hi >= p_lo), axis=1)
+        pen = box_penetration(P, r, lo[near], hi[near])  # (K, boxes near)
+        own = own[near]
+        ok = np.all(pen[:, ~own] <= OTHER_KEY_TOLERANCE_M, axis=1) \
+            & np.all(pen[:, own] <= OWN_BED_MARGIN_M, axis=1)
+        fp = footprints()
+        near = np.all((fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2]), axis=1)
+        others = sorted({int(k) + kb.LOWEST_PITCH for k in fp.key[near]} - {own_pitch})
+        if others:
+            ok &= np.all(key_depths(P, r, others, OTHER_KEY_TOLERANCE_M) < DOWN_DEPTH_M, axis=1)
+        own_depth = np.full(len(P), -np.inf)
+        if own_pitch is not None:
+            own_depth = key_depths(P, r, [own_pitch])[:, 0]
+            ok &= own_depth <= BODY_BED_DEPTH_M
+        return ok, own_depth

@@ -7,8 +7,10 @@ the plan safe are few and hold by construction:
 * a finger not pressing is at its crossing height (``high``), or waits at ``hover`` over
   the key it presses next, or moves straight between atlas poses whose paths the atlas
   and ``Moves.across`` checked clear of the keys;
-* the rail moves only while every finger is at crossing height (so nothing under a tip
-  is higher than a black key's top, at any rail);
+* the arm moves only while every finger is at crossing height (so nothing under a tip
+  is higher than a black key's top, at any rail), or holds its key down following it
+  (``planner.play.follow``: tip on the key, body holding it down and clear of every
+  other key, checked along the very move; into another posture too);
 * a key goes down half a frame before the note's first row and comes up half a frame
   before the first row at or after its end, or as close to that as the moves allow: down
   later, up earlier, never the other way (a key down outside its note is a wrong note).
@@ -31,12 +33,12 @@ from planner.music import keyboard as kb
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
+from planner.play.follow import HOLD_PAST_S
 from planner.play.places import Places
 from planner.play.profile import Move, path_s, straight_move
 
 DROP_FRACTION = 0.5  # a note whose key cannot go down before this much of it is over is left out
 WAIT_MARGIN_S = 0.005  # a finger reaches its waiting pose at least this long before it descends
-HOLD_PAST_S = 0.01  # a key held through a move of the rail comes up at least this long after it
 COMMIT_MARGIN_S = 0.3  # a key due up this soon after the rows written is let up when they are
 
 
@@ -241,8 +243,7 @@ class Motion:
         self.arm_track = _Track(np.array([rail0_m, places.reach_m(posture)][:max(1, len(self.arm))]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
                         for f in self.hand.fingers}
-        reach = start_entries(atlas, rail0_m)
-        entries = {} if park else reach
+        entries = {} if park else start_entries(atlas, rail0_m)
         if not entries:
             self.q0 = places.atlas.park()
             if places.rail is not None:
@@ -251,21 +252,14 @@ class Motion:
                 st.track.q = self.q0[self.hand.joint_slice(f)].copy()
         else:
             self._start_high(entries)
-        self._tuck([f for f in self.hand.fingers if f not in reach])
+        self._tuck()
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
+        self._strikers: dict[float, set[str]] = {}  # (``expect``: by key-down time)
         self.outcomes: dict[int, Outcome] = {}
 
     def entry(self, a: Assignment) -> AtlasEntry | None:
         """The entry of an assignment: its finger over its key from its place."""
         return self.places.atlases[a.posture].entry(a.finger, self.notes[a.note].pitch, a.rail_m)
-
-    def _tuck(self, fingers: list[str]) -> None:
-        """The fingers that press no key wait tucked clear of the keys (``Atlas.tucked``)."""
-        for f in fingers:
-            q = self.places.atlas.tucked(f)
-            self.fingers[f].track.q = q.copy()
-            self.q0[self.hand.joint_slice(f)] = q
-        self.q0 = self.hand.apply_couplings(self.q0)
 
     def _start_high(self, entries: dict[str, AtlasEntry]) -> None:
         """The hand starts with every finger at crossing height over the key nearest its
@@ -276,6 +270,18 @@ class Motion:
             st.track.q = e.high.copy()
             self.q0[self.hand.joint_slice(f)] = e.high
         self.q0 = self.hand.apply_couplings(self.q0)
+
+    def _tuck(self) -> None:
+        """The fingers that press no key (``planner.play.idle``) hold, all song long,
+        the pose nearest their natural one whose body enters no key's column in any
+        posture (``IdleFingers.pose``, ``IdleFingers.tuck``; the rest pose has them there too:
+        the default hand's thumb hangs 52 mm below the keys' tops in its third posture's
+        natural hand, inside a white key's column)."""
+        q0 = self.places.idle.tuck(self.q0)
+        if q0 is not self.q0:
+            self.q0 = q0
+            for f in self.places.idle.fingers:
+                self.fingers[f].track.q = q0[self.hand.joint_slice(f)].copy()
 
     def prepared(self, assignments) -> list:
         """The first assignment of each finger, of those at the start rail (in onset
@@ -327,7 +333,9 @@ class Motion:
         n = self.notes[a.note]
         e = self.entry(a)
         if abs(self.arm_track.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
-            self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.after_rail_s(e))
+            strikers = self._strikers.get(self.t_down(a.note), set()) | {a.finger}
+            self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.after_rail_s(e),
+                            strikers)
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
         after = self._release_others_on(n.pitch, a.finger)
@@ -392,24 +400,41 @@ class Motion:
                 clear = max(clear, self._to_high(st))
         return clear
 
-    def _move_rail(self, rail_m: float, posture: int, arrive_by_s: float) -> None:
+    def expect(self, assignments) -> None:
+        """The fingers that strike at each onset (``assignments``, a chunk of the
+        fingering's, before they are placed): a finger about to strike does not ride
+        along on a move of the arm (``_holds``)."""
+        for a in assignments:
+            self._strikers.setdefault(self.t_down(a.note), set()).add(a.finger)
+
+    def _move_rail(self, rail_m: float, posture: int, arrive_by_s: float,
+                   strikers: set[str]) -> None:
         """The arm to ``rail_m`` in play posture ``posture``, as late as lets the next key
         go down on time, once every finger is at crossing height, except those holding a
-        key that sounds past the move which can follow it (``Moves.follow``: the rail and
-        their joints on one straight time-optimal move, the tip kept on the key; in the
-        same posture only)."""
+        key which can follow it (``Moves.follow``: the rail and their joints on one
+        straight time-optimal move, the tip kept on the key; into another posture, the
+        reach axis too: ``Places.carry_move``) and strike none of the notes the move is
+        for (``strikers``): their keys come up ``HOLD_PAST_S`` after the move at the
+        earliest, which ends early for them only where it need not wait for the other
+        fingers' lifts (the programme's rule, ``Costs._riders``)."""
         r0 = self.arm_track.q[0]
-        holds = self._holds(rail_m, arrive_by_s) if posture == self.posture else []
+        holds = [h for h in self._holds(rail_m, posture) if h[1].finger not in strikers]
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
             end_by = min([arrive_by_s] + [st.up_s - self.moves.lift(e, "high").cross_s
                                           - HOLD_PAST_S for st, e in holds])
             move, t0 = self._rail_timing(r0, rail_m, posture, end_by, holds)
-            late = {id(st) for st, e in holds if t0 + move.duration_s
-                    > st.up_s - self.moves.lift(e, "high").cross_s - HOLD_PAST_S / 2}
+            natural = self._natural_ready(holds) + move.duration_s
+            late = [(st.up_s - self.moves.lift(e, "high").cross_s - HOLD_PAST_S, i)
+                    for i, (st, e) in enumerate(holds)]
+            late = [(end, i) for end, i in late if t0 + move.duration_s > end + HOLD_PAST_S / 2
+                    or end + 1e-9 < min(arrive_by_s, natural)]
             if not late:
                 break
-            holds = [h for h in holds if id(h[0]) not in late]
+            # (the late follower whose key comes up first lifts; the others are weighed
+            # again without it: a note already over may have made the move late for all)
+            drop = min(late)[1]
+            holds = [h for i, h in enumerate(holds) if i != drop]
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():
             if id(st) not in held and st.pose != "high":
@@ -431,8 +456,11 @@ class Motion:
         a = (r0, self.places.reach_m(self.posture))
         b = (rail_m, self.places.reach_m(posture))
         move = self.places.arm_move(a, b)
-        if holds:  # (the same posture: the reach axis, if any, stays)
-            n = len(self.arm_track.q)
+        n = len(self.arm_track.q)
+        if holds and posture != self.posture:  # (the reach axis too: ``Places.carry_move``)
+            move = self.places.carry_move(np.array(a[:n]), np.array(b[:n]),
+                                          [(st.entry, e) for st, e in holds])
+        elif holds:  # (the same posture: the reach axis, if any, stays)
             qa, qb = [np.array(a[:n])], [np.array(b[:n])]
             vmax = [self.hand.velocity[self.arm[:n]]]
             amax = [self.places.home.acceleration[self.arm[:n]]]
@@ -446,6 +474,7 @@ class Motion:
                 jmax.append(self.places.moves_of(e).jerk[js])
             move = straight_move(np.concatenate(qa), np.concatenate(qb), np.concatenate(vmax),
                                  np.concatenate(amax), np.concatenate(jmax))
+        if holds:  # (timed within the tendons' capacity, the followers' keys pushing back)
             cols = np.concatenate([self.arm[:n]] + [self.hand.joint_slice(st.entry.finger)
                                                     for st, _ in holds])
             move = self.places.tendon_slowed(move, self.posture, cols, tuple(
@@ -462,16 +491,41 @@ class Motion:
                 ready = max(ready, st.track.free_s + up.duration_s)
         return move, max(ready, arrive_by_s - move.duration_s)
 
-    def _holds(self, rail_m: float, arrive_by_s: float):
-        """The pressing fingers that may keep their keys through a move of the rail to
-        ``rail_m``: their notes sound past the move, and their tips can follow."""
+    def _natural_ready(self, holds) -> float:
+        """When the arm could start with ``holds`` riding along and every other finger
+        lifted at its key's own time (none let up early)."""
+        held = {id(st) for st, _ in holds}
+        ready = max(self.arm_track.free_s, self.committed_s)
+        for st in self.fingers.values():
+            if id(st) in held:
+                ready = max(ready, st.track.free_s)
+            elif st.pose == "high":
+                ready = max(ready, st.high_s)
+            else:
+                up = _up_move(self.moves, st)
+                t0 = max(st.track.free_s, self.committed_s)
+                if st.pose == "press":
+                    t0 = max(t0, st.up_s - up.cross_s)
+                ready = max(ready, t0 + up.duration_s)
+        return ready
+
+    def _holds(self, rail_m: float, posture: int):
+        """The pressing fingers that may keep their keys through a move of the arm to
+        ``rail_m`` in play posture ``posture``: their tips can follow
+        (``Places.follow_clear``: in another posture too, with the atlas's body rule; and
+        on the very move, from the rail where it is: ``Places.follow_path_clear``)."""
         out = []
         for st in self.fingers.values():
             if st.pose != "press":
                 continue
-            e = self.places.atlases[self.posture].entry(st.entry.finger,
-                                                        self.notes[st.note].pitch, rail_m)
-            if e is not None and self.moves.follow(st.entry, e) is not None:
+            e = self.places.atlases[posture].entry(st.entry.finger,
+                                                   self.notes[st.note].pitch, rail_m)
+            if e is None:
+                continue
+            if (posture == self.posture and self.moves.follow(st.entry, e) is not None
+                    or posture != self.posture and self.places.follow_clear(st.entry, e)) \
+                    and self.places.follow_path_clear(st.entry, e, self.notes[st.note].pitch,
+                                                      self.arm_track.q[0], rail_m):
                 out.append((st, e))
         return out
 

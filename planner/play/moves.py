@@ -39,12 +39,11 @@ from planner.play.atlas import (
     Atlas,
     AtlasEntry,
 )
-from planner.play.fingerbody import HOLD_NEIGHBOURS
+from planner.play.follow import FOLLOW_STEP_M, HOLD_MARGIN_M, canonical_pitch, paths_clear
 from planner.play.movetable import (
     ACROSS_SAMPLES,
     ENDS,
     HIGH_SAFE_Z_M,
-    HOLD_MARGIN_M,
     MoveTable,
     table_path,
 )
@@ -142,12 +141,12 @@ class Moves:
         used): the atlas's own parameters, the tests' samples and margins, the search's
         tolerance, the joints' limits."""
         h = self.hand
-        return json.dumps({"atlas": self.atlas._params(), "cross_tol": CROSS_TOL,
+        # (with the body rule, its follow test: ``planner.play.follow``)
+        rule = {} if self.atlas.bodies is None else {"follow_step_m": FOLLOW_STEP_M}
+        return json.dumps({**rule, "atlas": self.atlas._params(), "cross_tol": CROSS_TOL,
                            "limit_fraction": LIMIT_FRACTION, "path_samples": PATH_SAMPLES,
                            "across_samples": ACROSS_SAMPLES, "high_safe_z_m": HIGH_SAFE_Z_M,
                            "hold_margin_m": HOLD_MARGIN_M,
-                           "follow_bodies": (None if self.atlas.bodies is None
-                                             else HOLD_NEIGHBOURS),
                            **self.tendons.params(),
                            "velocity": [round(float(x), 12) for x in h.velocity],
                            "acceleration": [round(float(x), 12) for x in h.acceleration],
@@ -310,7 +309,8 @@ class Moves:
         straight move of the rail and the finger's joints (rail first in ``dq``), kept
         only when forward kinematics finds the tip inside the key's footprint and the key
         down (``HOLD_MARGIN_M`` past the key-down depth, as far from the key bed) all the
-        way; None otherwise."""
+        way, and with the atlas's body rule the finger's body holding the key down and
+        clear of every other key (``planner.play.follow``); None otherwise."""
         key = ("follow", id(a), id(b))
         if key not in self._lat:
             self._lat[key] = self._follow(a, b)
@@ -366,6 +366,10 @@ class Moves:
         ok = self.table.follow_clear(a, b)
         if ok is not None:
             return move if ok else None
+        if self.atlas.bodies is not None:  # (the body rule: ``planner.play.follow``)
+            ok = paths_clear(self.atlas, a.finger, canonical_pitch(a), qa[None], qb[None],
+                             [r])[0]
+            return move if ok else None
         k = kb.key(60 + a.pitch_class)
         f = h.fingers.index(a.finger)
         q = qa.copy()
@@ -383,13 +387,6 @@ class Moves:
         if k.black is False and np.any(surfaces_under(tips[:, 0], tips[:, 1], TIP_RADIUS_M)
                                        > k.top_z_m):
             return None
-        bodies = self.atlas.bodies
-        if bodies is not None:  # (the body rule along the move: the key's bed, its neighbours)
-            S = np.linspace(0.0, 1.0, PATH_SAMPLES)
-            Q = np.repeat(qa[None, :], len(S), axis=0)
-            Q[:, cols] = qa[cols] + S[:, None] * (qb[cols] - qa[cols])
-            if not bodies.holding_clear(h.apply_couplings(Q), a.finger, 60 + a.pitch_class).all():
-                return None
         return move
 
     def _rise(self, e: AtlasEntry) -> Timed:

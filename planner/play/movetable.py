@@ -37,6 +37,7 @@ from planner.play.atlas import (
     TIP_RADIUS_M,
     AtlasEntry,
 )
+from planner.play.follow import HOLD_MARGIN_M, paths_clear
 
 ENDS = ("high", "hover", "rise")  # the poses a descent starts from and a lift ends at
 # the move tests' parameters (``Moves`` and its table test the same):
@@ -44,7 +45,6 @@ HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high
 ACROSS_SAMPLES = (0.25, 0.5, 0.75)  # a move across at crossing height is checked here: both
 # ends are at HIGH_Z_M, 4.5 mm above HIGH_SAFE_Z_M, and the tip's height along a straight
 # joint-space move is smooth, lowest near its middle (the rows' replay checks every row)
-HOLD_MARGIN_M = 0.001  # a key held while the rail moves stays this far inside its down range
 _BATCH = 60000  # configurations evaluated at once while the table is made
 
 
@@ -209,15 +209,21 @@ def _across_matrix(moves, finger: str, E: list[AtlasEntry]) -> np.ndarray:
 
 
 def _follow_matrix(moves, finger: str, pc: int, E: list[AtlasEntry]) -> np.ndarray:
-    """``Moves._follow``'s test for every pair (i, j) of ``E`` (one finger, one key): the
-    tip inside the key's footprint with the key down (within ``HOLD_MARGIN_M``) at each
-    of ``PATH_SAMPLES`` along the joint rail + finger move, off the black keys beside a
-    white one; with the atlas's body rule, the finger's body too
-    (``FingerBodies.holding_clear``)."""
+    """``Moves._follow``'s test for every pair (i, j) of ``E`` (one finger, one key): with
+    the atlas's body rule, ``planner.play.follow.paths_clear``; else the tip inside the
+    key's footprint with the key down (within ``HOLD_MARGIN_M``) at each of
+    ``PATH_SAMPLES`` along the joint rail + finger move, off the black keys beside a
+    white one."""
     k = kb.key(60 + pc)
     cols = np.r_[moves.atlas.rail, moves.js[finger]]
     A = np.array([np.r_[k.center_x_m - e.dx_m, e.press] for e in E])  # rail, finger joints
     n, S = len(E), np.linspace(0.0, 1.0, PATH_SAMPLES)
+    if moves.atlas.bodies is not None:  # (the body rule: ``planner.play.follow``)
+        Q = np.repeat(moves.atlas.base[None, :], n, axis=0)
+        Q[:, cols] = A
+        I, J = np.divmod(np.arange(n * n), n)
+        return paths_clear(moves.atlas, finger, k.pitch, Q[I], Q[J],
+                           [moves.atlas.rail]).reshape(n, n)
     tips = _pair_tips(moves, finger, cols, A, S)
     x, y, z = tips[:, 0], tips[:, 1], tips[:, 2]
     depth = k.top_z_m - z
@@ -227,15 +233,4 @@ def _follow_matrix(moves, finger: str, pc: int, E: list[AtlasEntry]) -> np.ndarr
           & (depth <= kb.KEY_BED_DEPTH_M - HOLD_MARGIN_M))
     if k.black is False:
         ok &= ~(surfaces_under(x, y, TIP_RADIUS_M) > k.top_z_m)
-    ok = ok.reshape(n * n, len(S)).all(axis=1)
-    bodies = moves.atlas.bodies
-    if bodies is not None:  # (the body rule along the pairs the tip allows)
-        for lo in range(0, int(ok.sum()), _BATCH // len(S)):
-            pair = np.flatnonzero(ok)[lo:lo + _BATCH // len(S)]
-            I, J = np.divmod(pair, n)
-            Q = np.repeat(moves.atlas.base[None, :], len(pair) * len(S), axis=0)
-            a, b = np.repeat(A[I], len(S), axis=0), np.repeat(A[J], len(S), axis=0)
-            Q[:, cols] = a + np.tile(S, len(pair))[:, None] * (b - a)
-            clear = bodies.holding_clear(moves.hand.apply_couplings(Q), finger, 60 + pc)
-            ok[pair] = clear.reshape(len(pair), len(S)).all(axis=1)
-    return ok.reshape(n, n)
+    return ok.reshape(n * n, len(S)).all(axis=1).reshape(n, n)

@@ -24,6 +24,8 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.play.atlas import PATH_SAMPLES, Atlas, AtlasEntry, posture_count
+from planner.play.follow import canonical_pitch, follow_ends, paths_clear
+from planner.play.idle import IdleFingers
 from planner.play.moves import Moves, path_acceleration_cap
 from planner.play.profile import Move, capped_move, path_caps
 from planner.play.tendonload import slowed
@@ -53,6 +55,11 @@ class Places:
         # read from a list and a memo by the places themselves)
         self._reach_of = [self.reach_m(p) for p in range(len(self.atlases))]
         self._arm_ab: dict[tuple[int, int], float] = {}
+        # (follows across postures: their times and answers, by the entries' ids)
+        self._cross_s: dict[tuple[int, int], float] = {}
+        self._cross_clear: dict[tuple[int, int], bool] = {}
+        self._cross_arm: dict[tuple[int, int, float], tuple | None] = {}  # (``follow_s``)
+        self.idle = IdleFingers(hand, self.atlases, self.rail)  # (fingers that press no key)
 
     @property
     def postures(self) -> int:
@@ -81,6 +88,27 @@ class Places:
         p = self.posture_of(place)
         return self.atlases[p].entry(finger, pitch, (place - p * PLACE_STRIDE) * RAIL_STEP_M)
 
+    def presses_clear(self, finger: str, pitch: int, places: list[int]) -> list[bool]:
+        """Whether ``finger``'s press pose on key ``pitch`` from each of ``places`` (an
+        entry there) keeps its body clear of every other key with the rail where the place
+        puts it (the atlas's body rule, ``FingerBodies.clear``: the atlas tested the pose
+        at its entry's own ``dx``, which the rail's grid misses by up to half its step,
+        and a body's side beside a key's wall can reach a millimetre deeper for that).
+        All True without the body rule."""
+        if self.atlas.bodies is None or self.rail is None or not places:
+            return [True] * len(places)
+        Q = []
+        for place in places:
+            e = self.entry(finger, pitch, place)
+            q = self.atlases[e.posture].base.copy()
+            q[self.rail] = self.rail_m(place)
+            q[self.hand.joint_slice(finger)] = e.press
+            Q.append(q)
+        fb = self.atlas.bodies
+        ok, _ = fb.clear_many(fb.points_many(self.hand.apply_couplings(np.array(Q)), finger),
+                              fb.radii(finger), pitch)
+        return ok.tolist()
+
     def body_refused(self, finger: str, pitch: int, place: int) -> bool:
         """Whether ``finger`` would press key ``pitch`` from ``place`` but for its body."""
         p = self.posture_of(place)
@@ -93,19 +121,31 @@ class Places:
                 + abs(self._reach_of[pa] - self._reach_of[pb]))
 
     def arm_time_s(self, a: int, b: int) -> float:
-        """The arm's move from place ``a`` to place ``b`` (memoised)."""
+        """The arm's move from place ``a`` to place ``b`` (memoised by the pair)."""
         got = self._arm_ab.get((a, b))
         if got is None:
             got = self._arm_ab[(a, b)] = self._arm_time_s(a, b)
         return got
 
     def _arm_time_s(self, a: int, b: int) -> float:
+        """The arm's move from place ``a`` to place ``b`` (memoised by the postures and the
+        rail's steps of the move or of its reverse, which takes the same time: the move
+        of the rail and the reach together is the same line of configurations backwards,
+        the rail prismatic along x; it is found from the lower posture, so that the answer
+        is the same whichever way was asked first. The rail's sign matters when the
+        posture changes: a right hand is not its mirror image, and the path's acceleration
+        cap is the motors' against gravity and the hand's inertia along the line)."""
         pa, pb = self.posture_of(a), self.posture_of(b)
-        key = (min(pa, pb), max(pa, pb), abs(self.rail_i(a) - self.rail_i(b)))
+        steps = self.rail_i(b) - self.rail_i(a)
+        if pa == pb:
+            key = (0, 0, abs(steps))
+        else:
+            key = (pa, pb, steps) if pa < pb else (pb, pa, -steps)
         got = self._arm_s.get(key)
         if got is None:
             got = self._arm_s[key] = self.arm_move(
-                (0.0, self.reach_m(pa)), (key[2] * RAIL_STEP_M, self.reach_m(pb))).duration_s
+                (0.0, self.reach_m(key[0])), (key[2] * RAIL_STEP_M, self.reach_m(key[1]))
+            ).duration_s
         return got
 
     def arm_move(self, a: tuple[float, float], b: tuple[float, float]) -> Move:
@@ -121,20 +161,26 @@ class Places:
                 return rail
             return Move(np.array([a[0], a[1]]), np.array([rail.dq[0], 0.0]), rail.duration_s,
                         rail.ta_s, rail.tj_s)
+        qa = np.array(a[:len(self.arm)])
+        dq = np.array(b[:len(self.arm)]) - qa
+        return capped_move(qa, dq, self.arm_caps(qa, dq))
+
+    def arm_caps(self, qa: np.ndarray, dq: np.ndarray) -> tuple[float, float, float] | None:
+        """The path caps (``path_caps``) of the arm's straight move by ``dq`` (its joints
+        ``arm``) from ``qa``, its acceleration within what every motor holds with the
+        natural hand's inertia along the line (``path_acceleration_cap``)."""
         h, m, cols = self.hand, self.home, self.arm
-        qa, qb = np.array(a[:len(cols)]), np.array(b[:len(cols)])
-        dq = qb - qa
         caps = path_caps(dq.tolist(), h.velocity[cols].tolist(), m.acceleration[cols].tolist(),
                          m.jerk[cols].tolist())
         if caps is None:
-            return capped_move(qa, dq, None)
+            return None
         full = np.zeros(h.n)
         full[cols] = dq
         line = np.tile(self.atlas.base, (PATH_SAMPLES, 1))  # (the samples' rows at once)
         line[:, cols] = qa + np.linspace(0.0, 1.0, PATH_SAMPLES)[:, None] * dq
         line = h.apply_couplings(line)
         v, acc, j = caps
-        return capped_move(qa, dq, (v, min(acc, path_acceleration_cap(h, line, full)), j))
+        return v, min(acc, path_acceleration_cap(h, line, full)), j
 
     def tendon_slowed(self, move: Move, posture: int, cols: np.ndarray,
                       pressing: tuple[int, ...]) -> Move:
@@ -163,8 +209,8 @@ class Places:
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         """A finger's lift from ``a``, its move across and its descent onto ``b`` (the
-        moves of ``b``'s posture: another posture's entry is found by forward kinematics,
-        its heights the same)."""
+        moves of ``b``'s posture, another posture's entry by its poses alone: its key
+        crossings are its own posture's, not found again by forward kinematics)."""
         if a.posture == b.posture:
             return self.moves[b.posture].move_gap_s(a, b)
         lat = self.moves[b.posture].across_s(a, b)
@@ -175,14 +221,90 @@ class Places:
     def across(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
         return self.moves[b.posture].across(a, b)
 
+    # ------------------------------------------------------------------ follows
     def follow_s(self, a: AtlasEntry, b: AtlasEntry) -> float:
-        return self.moves[a.posture].follow_s(a, b)
+        """How long the arm takes carrying a finger holding its key from entry ``a`` to
+        entry ``b`` of the same key (``Moves.follow_s``; across postures, the rail, the
+        reach axis and the finger's joints on one straight move: ``carry_move``)."""
+        if a.posture == b.posture:
+            return self.moves[a.posture].follow_s(a, b)
+        key = (id(a), id(b))
+        got = self._cross_s.get(key)
+        if got is None:
+            qa, qb = follow_ends(self.atlases[a.posture], self.atlases[b.posture], a, b)
+            cols = self._carry_cols(a.finger)
+            dq = qb[cols] - qa[cols]
+            # (the arm's caps from rail 0: the same for every move of the same steps, the
+            # rail and reach prismatic, and so memoised by them alone)
+            arm = (a.posture, b.posture, float(dq[0]))
+            caps = self._cross_arm.get(arm)
+            if caps is None:
+                caps = self._cross_arm[arm] = self.arm_caps(
+                    np.array([0.0, self.reach_m(a.posture)]), dq[:len(self.arm)])
+            got = self._cross_s[key] = self._carry(qa[cols], dq, [a.finger], caps).duration_s
+        return got
 
     def follow_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool:
-        return a.posture == b.posture and self.moves[a.posture].follow_clear(a, b)
+        """Whether a finger holding its key can follow it from entry ``a`` to entry ``b``
+        (``Moves.follow_clear``; across postures, with the atlas's body rule only:
+        ``planner.play.follow``, found by forward kinematics when first asked)."""
+        if a.posture == b.posture:
+            return self.moves[a.posture].follow_clear(a, b)
+        if self.reach is None or self.atlas.bodies is None or a.pitch_class != b.pitch_class:
+            return False
+        key = (id(a), id(b))
+        got = self._cross_clear.get(key)
+        if got is None:
+            qa, qb = follow_ends(self.atlases[a.posture], self.atlases[b.posture], a, b)
+            got = self._cross_clear[key] = bool(paths_clear(
+                self.atlas, a.finger, canonical_pitch(a), qa[None], qb[None], self.arm)[0])
+        return got
 
     def follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
         return self.moves[a.posture].follow(a, b) if a.posture == b.posture else None
+
+    def follow_path_clear(self, a: AtlasEntry, b: AtlasEntry, pitch: int, rail_a_m: float,
+                          rail_b_m: float) -> bool:
+        """Whether a finger holding key ``pitch`` follows it from entry ``a`` with the rail
+        at ``rail_a_m`` to entry ``b`` at ``rail_b_m``: the body rule's test on the very
+        move the motion makes (``planner.play.follow``; the move table tested each pair
+        at its entries' own ``dx``, which the rail's grid misses by up to half the atlas's
+        step). True without the body rule (the table's answer stands)."""
+        if self.atlas.bodies is None or self.rail is None:
+            return True
+        js = self.hand.joint_slice(a.finger)
+        qa, qb = self.atlases[a.posture].base.copy(), self.atlases[b.posture].base.copy()
+        qa[self.rail], qb[self.rail] = rail_a_m, rail_b_m
+        qa[js], qb[js] = a.press, b.press
+        return bool(paths_clear(self.atlas, a.finger, pitch, qa[None], qb[None], self.arm)[0])
+
+    def carry_move(self, arm_a: np.ndarray, arm_b: np.ndarray, held) -> Move:
+        """The arm from ``arm_a`` to ``arm_b`` (its joints ``arm``) carrying the fingers
+        of ``held``, (entry before, entry after) pairs of one key each, on one straight
+        time-optimal move: the arm's joints first in ``q_a``, then each finger's."""
+        qa = np.concatenate([arm_a] + [a.press for a, _ in held])
+        qb = np.concatenate([arm_b] + [b.press for _, b in held])
+        return self._carry(qa, qb - qa, [a.finger for a, _ in held])
+
+    def _carry(self, qa: np.ndarray, dq: np.ndarray, fingers: list[str],
+               caps: tuple | None = None) -> Move:
+        """The move by ``dq`` from ``qa`` (the arm's joints, then ``fingers``' joints):
+        the arm's caps (``arm_caps``, or ``caps`` when given) and every finger joint's
+        speed, acceleration and jerk bounds, the tightest of each."""
+        n = len(self.arm)
+        if caps is None:
+            caps = self.arm_caps(qa[:n], dq[:n])
+        cols = np.concatenate([self.hand.joint_slice(f) for f in fingers])
+        fc = path_caps(dq[n:].tolist(), self.hand.velocity[cols].tolist(),
+                       self.home.acceleration[cols].tolist(), self.home.jerk[cols].tolist())
+        if caps is None or fc is None:
+            caps = caps or fc
+        else:
+            caps = tuple(min(x, y) for x, y in zip(caps, fc))
+        return capped_move(qa, dq, caps)
+
+    def _carry_cols(self, finger: str) -> np.ndarray:
+        return np.r_[self.arm, self.hand.joint_slice(finger)]
 
     def descend(self, e: AtlasEntry, start: str):
         return self.moves[e.posture].descend(e, start)

@@ -9,7 +9,9 @@ with the rail at its rest position (``REST_RAIL_M``, within its planning travel)
 The way in is two time-optimal straight moves (``legs_between``): the rail, with the
 hand in its rest posture, to where the motion starts; then the wrist and fingers, the
 rail still, to the motion's first pose (``Motion.q0``: each finger at crossing height
-over its first key). The way out is the same two backwards. Each starts and ends with
+over its first key); a hand with an idle finger (``planner.play.idle``: the default hand's
+thumb) tucks it while the rail runs. The way out is the same backwards. Each starts and
+ends with
 every speed zero. When the song's first notes come too soon to be reached from rest,
 the song starts later in the file: ``song_start_s``, a whole number of rows, written in
 the file's metadata, by which every reader shifts the song
@@ -18,6 +20,7 @@ the file's metadata, by which every reader shifts the song
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -87,15 +90,20 @@ def _at_rail(atlas: Atlas, q: np.ndarray, rail_m: float) -> np.ndarray:
 
 
 def legs_between(moves: Moves, rest_q: np.ndarray, q: np.ndarray, leaving: bool,
-                 t0_s: float = 0.0) -> Legs:
+                 t0_s: float = 0.0, tucked_q: np.ndarray | None = None) -> Legs:
     """From rest to ``q`` (or from ``q`` to rest, ``leaving``) in two legs: the rail runs
     only while the hand is in its rest posture (every tip above crossing height), and
-    the wrist and fingers move only while the rail is still."""
+    the wrist and fingers move only while the rail is still. ``tucked_q``: the rest pose
+    with the fingers that press no key tucked (``IdleFingers.tuck``), when it differs: they
+    tuck while the rail runs (in the rest posture, where their body is clear of the keys
+    tucked or not) and untuck in the last leg out, so that the arm never carries them
+    untucked into a posture whose keys they would enter."""
     atlas = moves.atlas
-    mid = _at_rail(atlas, rest_q, atlas.rail_of(q))
+    start = rest_q if tucked_q is None else tucked_q
+    poses = [rest_q, _at_rail(atlas, start, atlas.rail_of(q)), q]
     if leaving:
-        return Legs(t0_s, (whole_hand_move(moves, q, mid), whole_hand_move(moves, mid, rest_q)))
-    return Legs(t0_s, (whole_hand_move(moves, rest_q, mid), whole_hand_move(moves, mid, q)))
+        poses.reverse()
+    return Legs(t0_s, tuple(whole_hand_move(moves, a, b) for a, b in itertools.pairwise(poses)))
 
 
 def whole_hand_move(moves: Moves, q_a: np.ndarray, q_b: np.ndarray) -> Move:
@@ -117,12 +125,12 @@ def whole_hand_move(moves: Moves, q_a: np.ndarray, q_b: np.ndarray) -> Move:
 
 
 def way_in(moves: Moves, motion: Motion, rest_q: np.ndarray, assignments,
-           rate_hz: float) -> WayIn:
+           rate_hz: float, tucked_q: np.ndarray | None = None) -> WayIn:
     """From rest to ``motion.q0``, and the song's shift: the first note of each finger
     prepared over its key (``Motion.prepare``) can go down on time only if its descent
     from crossing height starts after the hand has arrived; the song is shifted by the
     whole rows that make this hold for every such note (0 when it holds already)."""
-    legs = legs_between(moves, rest_q, motion.q0, leaving=False)
+    legs = legs_between(moves, rest_q, motion.q0, leaving=False, tucked_q=tucked_q)
     dt = 1.0 / rate_hz
     need_s = 0.0
     for a in motion.prepared(assignments):

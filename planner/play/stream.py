@@ -155,6 +155,8 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
             rows = _start(Motion(notes, pl.places, rate_hz, pl.atlas.rail_of(pl.atlas.base)),
                           pl, rest_q, (), writer, rate_hz)
         shift = 0.0 if rows is None else rows.shift_s
+        if rows is not None:
+            rows.motion.expect([_shifted(a, shift) for a in ch.assignments])
         for _, item in steps:
             if isinstance(item, Assignment):
                 rows.motion.place(_shifted(item, shift))
@@ -182,10 +184,17 @@ def _start(motion: Motion, pl: Planner, rest_q: np.ndarray, assignments,
     """The motion's start: its first fingers over their keys, the way in from rest, the
     song's shift (into the file's metadata, before its first row)."""
     motion.prepare(assignments)
-    way = way_in(pl.moves, motion, rest_q, assignments, rate_hz)
+    way = way_in(pl.moves, motion, rest_q, assignments, rate_hz, _tucked(pl, rest_q))
     motion.start_after(way.arrive_s, shift_notes(motion.notes, way.song_start_s))
     writer.add_metadata(song_start_s=way.song_start_s)
     return _Rows(pl.hand, writer, motion, rate_hz, way)
+
+
+def _tucked(pl: Planner, rest_q: np.ndarray) -> np.ndarray | None:
+    """The rest pose with the idle fingers tucked (``IdleFingers.tuck``), None when it is the
+    rest pose itself (no leg to tuck them)."""
+    q = pl.places.idle.tuck(rest_q)
+    return None if q is rest_q else q
 
 
 def _shifted(a: Assignment, shift_s: float) -> Assignment:
@@ -229,7 +238,8 @@ class _Rows:
         rows to its end and ``SETTLE_S`` after (at least a file's ``MIN_ROWS``)."""
         still_s = max(still_s, self.way.arrive_s)
         q_end = self.motion.rows(np.array([still_s]))[0]
-        self.out = legs_between(self.motion.moves, rest_q, q_end, leaving=True, t0_s=still_s)
+        self.out = legs_between(self.motion.moves, rest_q, q_end, leaving=True, t0_s=still_s,
+                                tucked_q=self.motion.places.idle.tuck(rest_q))
         self.write_to(max(self.out.end_s + SETTLE_S, (MIN_ROWS - 1) * self.dt))
 
     def _sample(self, t: np.ndarray) -> np.ndarray:
