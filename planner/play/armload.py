@@ -18,9 +18,9 @@ timing lowers), the note's moves are played ``sigma`` times slower (``slowed``: 
 inertial load goes as ``1 / sigma^2``) and placed again: the least ``sigma`` up to
 ``MAX_SCALE`` that keeps every motor within (bisection, to one row's time over the note's
 moves; at ``MAX_SCALE`` when none does). A note whose rows stay within is placed as
-before: the same moves, the same floats. Moves placed later (a key let up by the rows'
-commit, the arm's moves) are within when the notes placed after them are judged with
-them.
+before: the same moves, the same floats. Moves placed outside a note's placing (a key let
+up at the rows' commit, the arm's moves) are judged only with the notes placed after
+them: rows between 95 % and 100 % of a motor's capacity remain possible there.
 """
 
 from __future__ import annotations
