@@ -57,7 +57,7 @@ class LimitAudit:
         self._block_rows = block_rows
         self._waiting: list[tuple] = []  # blocks given, not judged yet
         self._waiting_rows = 0
-        self._motor_map = _linear_motor_map(hand)
+        self._motor_map = linear_motor_map(hand)
         peak = hand.motor_peak_torque
         cats = [("joint_position", "rad|m", 0.0), ("joint_stop_margin", "rad|m", 0.0),
                 ("joint_velocity", "rad/s|m/s", 0.0), ("motor_velocity", "rad/s", 0.0),
@@ -195,6 +195,24 @@ class LimitAudit:
         self._torqued = first + upto
 
 
+def row_motor_torques(hand: HandModel, kin: Kinematics, t: np.ndarray, Q: np.ndarray,
+                      pressing_tips: np.ndarray, motor_map: np.ndarray | None,
+                      inertia: bool = True) -> np.ndarray:
+    """The motor torques (rows, motors) that a play's audit judges (``LimitAudit`` with
+    ``inertia``) at rows ``1 .. len(t) - 2`` of rows ``t, Q`` held whole, with the
+    fingertips ``pressing_tips`` (T, 5) pressing: gravity, the keys' push, and moving the
+    hand as its rows do (central differences: each needs the rows beside it; without
+    ``inertia`` the static torques alone; ``motor_map``: the hand's
+    ``linear_motor_map``). The audit's own definition, for a planner bounding its rows
+    before it writes them."""
+    tau = _joint_torques(kin, Q, pressing_tips, None)
+    if inertia:
+        tau += _inertial_torques(kin, t, Q)
+    tau = tau[1:-1]
+    return (np.einsum("tj,mj->tm", tau, motor_map) if motor_map is not None
+            else _motor_torques(hand, Q[1:-1], tau))
+
+
 class _TendonLoads:
     """Spool tensions (N) against each tendon's design force (1 %): the category's worst
     and every tendon's own."""
@@ -295,7 +313,7 @@ def _joint_torques(kin: Kinematics, Q: np.ndarray, pressing_tips: np.ndarray | N
     return tau[of]
 
 
-def _linear_motor_map(hand: HandModel) -> np.ndarray | None:
+def linear_motor_map(hand: HandModel) -> np.ndarray | None:
     """The matrix of ``hand.motor_torques`` when every law is linear (else None)."""
     if not (all(c.kind == "linear" for c in hand.couplings)
             and all(a.mk5 is None for a in hand.actuators)):

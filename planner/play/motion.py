@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from planner.music import keyboard as kb
+from planner.play.armload import within_motors
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
@@ -346,8 +347,10 @@ class Motion:
                           f"no checked path of the {a.finger} to it")
             self.outcomes[a.note] = out
             return out
+        found, timed_by = within_motors(self, a.finger, found, lambda places: approach(
+            places, st, e, want, after, self.arm_track.free_s, self.committed_s))
         down_at, steps, start = found
-        desc = self.moves.descend(e, start)
+        desc = timed_by.descend(e, start)
         press_end = down_at + desc.duration_s - desc.cross_s
         up = self.t_up(a.note, a.release_s)
         lift = self.moves.lift(e, "high")

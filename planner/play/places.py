@@ -28,7 +28,7 @@ from planner.play.follow import canonical_pitch, follow_ends, paths_clear
 from planner.play.idle import IdleFingers
 from planner.play.moves import Moves, path_acceleration_cap
 from planner.play.profile import Move, capped_move, path_caps
-from planner.play.tendonload import slowed
+from planner.play.tendonload import hand_load, slowed
 
 RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart on the rail
 PLACE_STRIDE = 1000  # place = posture * PLACE_STRIDE + rail index (a rail index lies within
@@ -185,11 +185,12 @@ class Places:
     def tendon_slowed(self, move: Move, posture: int, cols: np.ndarray,
                       pressing: tuple[int, ...]) -> Move:
         """``move`` of the joints ``cols`` (the rest of the hand at posture ``posture``'s
-        natural pose), the fingers ``pressing`` holding their keys, timed within the
-        tendons' capacity (``planner.play.tendonload``: slowed if need be)."""
+        natural pose), the fingers ``pressing`` holding their keys, timed within every
+        motor's capacity (``planner.play.tendonload.hand_load``: the groups' reactions add
+        up on the wrist's and arm's motors; slowed if need be)."""
         q_a, dq = self.atlases[posture].base.copy(), np.zeros(self.hand.n)
         q_a[cols], dq[cols] = move.q_a, move.dq
-        return slowed(move, self.moves[posture].tendons.time_scale(move, q_a, dq, pressing))
+        return slowed(move, hand_load(self.hand).time_scale(move, q_a, dq, pressing))
 
     # ------------------------------------------------------------------ moves
     def moves_of(self, e: AtlasEntry) -> Moves:

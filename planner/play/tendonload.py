@@ -69,13 +69,23 @@ def tendon_load(hand: HandModel) -> TendonLoad:
     return TendonLoad(hand)
 
 
-class TendonLoad:
-    """The tendon bound of one hand's moves (``time_scale``)."""
+@cache
+def hand_load(hand: HandModel) -> TendonLoad:
+    """The bound on every motor of the hand (``TendonLoad`` with ``every_motor``): for a
+    move of several joint groups at once (the arm with the fingers that follow it), whose
+    reactions add up on the motors they share, the wrist's and the arm's."""
+    return TendonLoad(hand, every_motor=True)
 
-    def __init__(self, hand: HandModel) -> None:
+
+class TendonLoad:
+    """The tendon bound of one hand's moves (``time_scale``); with ``every_motor`` the
+    bound of every motor (tendon, wrist, arm), each within ``TENDON_SHARE`` of its
+    capacity (``actuator_capacity``: the smaller of its peak torque and its tendon's)."""
+
+    def __init__(self, hand: HandModel, every_motor: bool = False) -> None:
         self.hand = hand
         self.kin = Kinematics(hand, hand.T_world_root)
-        self.motors = tendon_motors(hand)
+        self.motors = np.arange(hand.n_motor) if every_motor else tendon_motors(hand)
         self.capacity_nm = TENDON_SHARE * actuator_capacity(hand).torque_nm[self.motors]
         self.samples = np.linspace(0.0, 1.0, PATH_SAMPLES)
 
