@@ -79,9 +79,9 @@ def test_whole_hand_lines_cap_is_the_straight_one(name: str) -> None:
 
 def test_distance_and_arm_time_are_the_straight_ones(places) -> None:
     """``Places.distance_m`` (read from a list of reaches) and ``arm_time_s`` (memoised
-    by the pair of places) against their definitions, both orders of every pair (the
-    arm's move between two postures is the same time either way: the memo keeps the
-    first order asked, here the lower posture's first)."""
+    by the pair of places) against their definitions, both orders of every pair (a
+    move and its reverse take the same time: found within one posture by the rail's
+    steps, across postures from the lower posture, the rail's steps signed)."""
     ps = [places.place(p, r) for p in range(places.postures) for r in (-40, -3, 0, 1, 7, 60)]
     for a in ps:
         for b in ps:
@@ -89,8 +89,10 @@ def test_distance_and_arm_time_are_the_straight_ones(places) -> None:
             ra, rb = places.rail_i(a), places.rail_i(b)
             reach_a, reach_b = places.reach_m(pa), places.reach_m(pb)
             assert places.distance_m(a, b) == abs(ra - rb) * 0.006 + abs(reach_a - reach_b)
-            want = places.arm_move((0.0, places.reach_m(min(pa, pb))),
-                                   (abs(ra - rb) * 0.006, places.reach_m(max(pa, pb))))
+            lo, hi, steps = ((pa, pb, rb - ra) if pa < pb else (pb, pa, ra - rb)
+                             if pa > pb else (pa, pa, abs(rb - ra)))
+            want = places.arm_move((0.0, places.reach_m(lo)),
+                                   (steps * 0.006, places.reach_m(hi)))
             assert places.arm_time_s(a, b) == want.duration_s
 
 
