@@ -320,7 +320,6 @@ class HandModel:
 
     def _motor_ratio(self, q: np.ndarray, S: np.ndarray) -> np.ndarray:
         """``motor_ratio`` with ``S = dq_dindependent(q)``."""
-        col = {int(j): k for k, j in enumerate(self.independent)}
         r = np.empty(self.n_motor)
         for m, a in enumerate(self.actuators):
             if a.mk5 is not None:
@@ -329,7 +328,7 @@ class HandModel:
                 p = MK5_TABLES[a.mk5.table][a.mk5.finger]
                 r[m] = mk5.dqmot_dq1(p, q[self._drive[m]])
             else:
-                r[m] = float(self._C[m] @ S[:, col[int(self._drive[m])]])
+                r[m] = float(self._C[m] @ S[:, self._drive_col[m]])
         return r
 
     def motor_velocities(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
