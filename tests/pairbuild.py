@@ -1,0 +1,94 @@
+"""Two-hand (version 3) files for the tests, made before a two-hand planner: each hand's
+part planned alone by the one-hand planner, and the two plans written together by the one
+two-hand writer (``planner.pairfile.PairWriter``) on a common clock (no test here).
+
+A song of two parts (the left hand's notes, the right hand's) is written as one MIDI file
+(every note in track 1: ``track`` 1 reads them all, with no part chosen), and each part as
+a file of its own that its hand plans. The plan that starts later (its ``song_start_s``:
+the way in from rest) sets the common clock; the other hand waits at its first row (its
+rest pose) before it, and the shorter plan holds its last row (rest) to the end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from planner.hand.model import load_hand
+from planner.music.midi import Note, load_song, write_notes_midi
+from planner.pairfile import PairWriter
+from planner.trajfile import song_start_s
+
+RATE = 100.0
+SONG_TRACK = 1  # write_notes_midi's track of notes
+
+
+def notes_of(pitches, start_s=0.5, step_s=0.4, length_s=0.3, channel=0) -> list[Note]:
+    """One note per pitch, ``step_s`` apart from ``start_s``."""
+    return [Note(int(p), start_s + i * step_s, start_s + i * step_s + length_s, 80, channel)
+            for i, p in enumerate(pitches)]
+
+
+@dataclass(frozen=True)
+class PairFile:
+    """A two-hand file written: its path, the song of both parts, and per prefix the
+    song's indices of that hand's notes (the plan's ``by_hand`` claim)."""
+
+    path: Path
+    song: Path
+    by_hand: dict[str, list[int]]
+    t_s: np.ndarray
+    q: tuple[np.ndarray, np.ndarray]
+
+
+def _aligned(tr, start_s: float, n_rows: int) -> np.ndarray:
+    """A plan's rows on the common clock: its first row held until its own start."""
+    lead = round((start_s - song_start_s(tr.metadata)) * RATE)
+    q = np.concatenate([np.repeat(tr.q[:1], lead, axis=0), tr.q])
+    return np.concatenate([q, np.repeat(q[-1:], n_rows - len(q), axis=0)])
+
+
+def plan_pair(tmp: Path, left: list[Note], right: list[Note], name: str = "pair",
+              hands=("default-left", "default")) -> PairFile:
+    """Plan ``left`` on the left hand and ``right`` on the right one, and write both as
+    one two-hand file ``tmp/NAME.csv`` (the song: ``tmp/NAME.mid``)."""
+    from planner.play.stream import plan_song
+
+    models = tuple(load_hand(h) for h in hands)
+    song_path = tmp / f"{name}.mid"
+    write_notes_midi([*left, *[replace(n, channel=0) for n in right]], song_path)
+    song = load_song(song_path, track=SONG_TRACK)
+    trs, index = [], {}
+    for part, hand, side in ((left, models[0], "l"), (right, models[1], "r")):
+        part_path = tmp / f"{name}-{side}.mid"
+        write_notes_midi(part, part_path)
+        part_song = load_song(part_path, track=SONG_TRACK)
+        trs.append(plan_song(part_song, hand).trajectory)
+        index[side] = [_song_index(song, n) for n in part_song.notes]
+    start = max(song_start_s(tr.metadata) for tr in trs)
+    n_rows = max(len(tr.t_s) + round((start - song_start_s(tr.metadata)) * RATE)
+                 for tr in trs)
+    q = tuple(_aligned(tr, start, n_rows) for tr in trs)
+    t_s = np.arange(n_rows) / RATE
+    left_out = sorted((index[s][x["note"]], x) for s, tr in zip("lr", trs)
+                      for x in tr.end.get("left_out", []))
+    by_hand = {p: sorted(set(index[s]) - {i for i, _ in left_out})
+               for p, s in (("left.", "l"), ("right.", "r"))}
+    path = tmp / f"{name}.csv"
+    w = PairWriter(str(path), models, {
+        "task": "play", "rate_hz": RATE, "song": song_path.name, "notes": len(song.notes),
+        "track": SONG_TRACK, "channel": None, "transpose": False, "song_start_s": start})
+    w.write_rows(t_s, q[0], q[1])
+    w.close({"notes": len(song.notes), "played": len(song.notes) - len(left_out),
+             "left_out": [{**x, "note": i} for i, x in left_out]}, by_hand)
+    return PairFile(path, song_path, by_hand, t_s, q)
+
+
+def _song_index(song, note: Note) -> int:
+    """The index in ``song`` of a note of one part (its pitch and onset)."""
+    for i, n in enumerate(song.notes):
+        if n.pitch == note.pitch and abs(n.onset_s - note.onset_s) < 1e-9:
+            return i
+    raise AssertionError(f"note {note} not in the song")
