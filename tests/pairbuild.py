@@ -4,7 +4,9 @@ two-hand writer (``planner.pairfile.PairWriter``) on a common clock (no test her
 
 A song of two parts (the left hand's notes, the right hand's) is written as one MIDI file
 (every note in track 1: ``track`` 1 reads them all, with no part chosen), and each part as
-a file of its own that its hand plans. The plan that starts later (its ``song_start_s``:
+a file of its own that its hand plans, from a rest pose of its own on the rail
+(``REST_RAIL_M``: the one-hand planner's rest is at middle C, where two hands would
+overlap; a test helper's choice, not the planner's). The plan that starts later (its ``song_start_s``:
 the way in from rest) sets the common clock; the other hand waits at its first row (its
 rest pose) before it, and the shorter plan holds its last row (rest) to the end.
 """
@@ -22,6 +24,7 @@ from planner.pairfile import PairWriter
 from planner.trajfile import song_start_s
 
 RATE = 100.0
+REST_RAIL_M = {"left": -0.35, "right": 0.35}  # each hand's rest on the rail (m), apart
 SONG_TRACK = 1  # write_notes_midi's track of notes
 
 
@@ -54,7 +57,7 @@ def plan_pair(tmp: Path, left: list[Note], right: list[Note], name: str = "pair"
               hands=("default-left", "default")) -> PairFile:
     """Plan ``left`` on the left hand and ``right`` on the right one, and write both as
     one two-hand file ``tmp/NAME.csv`` (the song: ``tmp/NAME.mid``)."""
-    from planner.play.stream import plan_song
+    from planner.play.stream import Planner, plan_song
 
     models = tuple(load_hand(h) for h in hands)
     song_path = tmp / f"{name}.mid"
@@ -65,7 +68,10 @@ def plan_pair(tmp: Path, left: list[Note], right: list[Note], name: str = "pair"
         part_path = tmp / f"{name}-{side}.mid"
         write_notes_midi(part, part_path)
         part_song = load_song(part_path, track=SONG_TRACK)
-        trs.append(plan_song(part_song, hand).trajectory)
+        planner = Planner(hand)
+        planner.rest_q = planner.rest_q.copy()
+        planner.rest_q[hand.joint_names.index("rail")] = REST_RAIL_M[hand.side]
+        trs.append(plan_song(part_song, hand, planner=planner).trajectory)
         index[side] = [_song_index(song, n) for n in part_song.notes]
     start = max(song_start_s(tr.metadata) for tr in trs)
     n_rows = max(len(tr.t_s) + round((start - song_start_s(tr.metadata)) * RATE)
