@@ -13,7 +13,7 @@ rest pose) before it, and the shorter plan holds its last row (rest) to the end.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -54,14 +54,16 @@ def _aligned(tr, start_s: float, n_rows: int) -> np.ndarray:
 
 
 def plan_pair(tmp: Path, left: list[Note], right: list[Note], name: str = "pair",
-              hands=("default-left", "default")) -> PairFile:
+              hands=("default-left", "default"), heard_left: list[Note] | None = None
+              ) -> PairFile:
     """Plan ``left`` on the left hand and ``right`` on the right one, and write both as
-    one two-hand file ``tmp/NAME.csv`` (the song: ``tmp/NAME.mid``)."""
+    one two-hand file ``tmp/NAME.csv`` (the song: ``tmp/NAME.mid``, with ``heard_left``
+    in place of the left part when given: a song other than the one planned)."""
     from planner.play.stream import Planner, plan_song
 
     models = tuple(load_hand(h) for h in hands)
     song_path = tmp / f"{name}.mid"
-    write_notes_midi([*left, *[replace(n, channel=0) for n in right]], song_path)
+    write_notes_midi([*(heard_left or left), *right], song_path)
     song = load_song(song_path, track=SONG_TRACK)
     trs, index = [], {}
     for part, hand, side in ((left, models[0], "l"), (right, models[1], "r")):
@@ -72,7 +74,10 @@ def plan_pair(tmp: Path, left: list[Note], right: list[Note], name: str = "pair"
         planner.rest_q = planner.rest_q.copy()
         planner.rest_q[hand.joint_names.index("rail")] = REST_RAIL_M[hand.side]
         trs.append(plan_song(part_song, hand, planner=planner).trajectory)
-        index[side] = [_song_index(song, n) for n in part_song.notes]
+        heard = part_song.notes  # (in the song: the notes heard, in the part's order)
+        if side == "l" and heard_left:
+            heard = sorted(heard_left, key=lambda n: (n.onset_s, n.pitch))
+        index[side] = [_song_index(song, n) for n in heard]
     start = max(song_start_s(tr.metadata) for tr in trs)
     n_rows = max(len(tr.t_s) + round((start - song_start_s(tr.metadata)) * RATE)
                  for tr in trs)
@@ -95,6 +100,26 @@ def plan_pair(tmp: Path, left: list[Note], right: list[Note], name: str = "pair"
 def _song_index(song, note: Note) -> int:
     """The index in ``song`` of a note of one part (its pitch and onset)."""
     for i, n in enumerate(song.notes):
-        if n.pitch == note.pitch and abs(n.onset_s - note.onset_s) < 1e-9:
+        if n.pitch == note.pitch and abs(n.onset_s - note.onset_s) < 1e-3:  # (MIDI ticks)
             return i
     raise AssertionError(f"note {note} not in the song")
+
+
+def write_unguarded(path: Path, pair_file: PairFile, q_left: np.ndarray, q_right: np.ndarray,
+                    end: dict | None = None) -> Path:
+    """``pair_file`` with other rows, written without the writer's guard (a file no
+    planner may write: rows beyond a limit, hands that collide), its metadata and end
+    marker as they were (``end``: keys changed in the end marker)."""
+    from planner.trajfile import end_line, format_rows, header_line, parse_trajectory
+
+    text = pair_file.path.read_text()
+    tr = parse_trajectory(text)
+    hands = tuple(load_hand(e["hand"]) for e in tr.metadata["hands"])
+    q = np.concatenate([q_left, q_right], axis=1)
+    qm = np.concatenate([h.motor_angles(x) for h, x in zip(hands, (q_left, q_right))], axis=1)
+    rows = format_rows(pair_file.t_s, q, qm)
+    info = {k: v for k, v in tr.end.items() if k not in ("end", "rows")} | (end or {})
+    path.write_text(text.split("\n")[0] + "\n"
+                    + header_line(tr.joint_names, tr.motor_names)
+                    + rows.text + end_line(len(pair_file.t_s), info))
+    return path
