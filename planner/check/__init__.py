@@ -38,9 +38,13 @@ every note's outcome (``left_out``: the notes it says it left out, every other
 note it says it played). A claim of the wrong type is bad input. ``strict`` also fails it on any missed
 or late note.
 
+A two-hand file (version 3, ``planner.pairfile``) is judged by ``planner.check.pair``:
+each hand by the code that judges one, the keys of both together, and the distance
+between the hands (``planner.check.handgap``); its report is a ``PairReport``.
+
 Independence: this package shares only the hand model, the keyboard geometry,
-the trajectory and plan-file readers (``planner.trajfile``, ``planner.planfile``), the
-MIDI reader and the results' plain form (``planner.resultform``) with the planner. It never imports
+the trajectory and plan-file readers (``planner.trajfile``, ``planner.planfile``,
+``planner.pairfile``), the MIDI reader and the results' plain form (``planner.resultform``) with the planner. It never imports
 ``planner.play``, ``planner.ik``, ``planner.trajectory``, ``planner.catch`` or
 ``planner.selfcheck`` (the planners' side), and it runs its own copy of the Pinocchio
 model (so it never touches the shared hand's data, and can put the root where
