@@ -52,7 +52,8 @@ def plan_song_notes(meta: dict[str, Any], path: str, song: str | os.PathLike | S
                     options: dict[str, Any] | None = None):
     """The song's notes in the file's time (shifted by its ``song_start_s``, format
     version 2 on), read with the options the plan was made with (the file's metadata
-    ``meta``) unless given; InputError when the file names another number of notes."""
+    ``meta``) unless given, every part of it for a two-hand plan (version 3: both hands'
+    parts, none chosen); InputError when the file names another number of notes."""
     from planner.music.midi import Song, load_song, shift_notes
 
     options = options or {}
@@ -62,7 +63,8 @@ def plan_song_notes(meta: dict[str, Any], path: str, song: str | os.PathLike | S
         notes = song.notes
     else:
         notes = load_song(song, track=opts["track"], channel=opts["channel"],
-                          transpose=bool(opts["transpose"])).notes
+                          transpose=bool(opts["transpose"]),
+                          every_part=meta.get("version") == PAIR_VERSION).notes
     want = meta.get("notes")
     if is_num(want) and int(want) != len(notes):
         given = (", ".join(f"{k}={v}" for k, v in opts.items() if v not in (None, False))

@@ -18,6 +18,7 @@ import os
 import numpy as np
 
 from planner.check import check_report, held_to_claims, play_problems
+from planner.check.bodykeys import body_keys
 from planner.check.criteria import DOWN_DEPTH_M, N_KEYS
 from planner.check.episodes import EpisodeStream
 from planner.check.handgap import GapJudge
@@ -44,8 +45,6 @@ class _Hand:
         self.audit = LimitAudit(plan.hand, self.kin, inertia=True)
 
     def add(self, t: np.ndarray, q: np.ndarray, qm: np.ndarray):
-        from planner.check.bodykeys import body_keys
-
         tips, _ = self.kin.frames(q)
         keys = self.judge.add(t, tips, body_keys(self.kin, q, self.bodies))
         self.audit.add(t, q, qm, np.nan_to_num(keys.kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)
