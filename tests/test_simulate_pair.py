@@ -38,7 +38,7 @@ def test_two_hands_apart_in_physics(pair, capsys) -> None:
     rc, out, _ = run_cli(capsys, "simulate", pair.path, pair.song, "--json")
     d = json.loads(out)
     assert rc == 0 and d["ok"] and [h["prefix"] for h in d["hands"]] == ["left.", "right."]
-    assert d["play"]["f1"] == rep.play.f1 and len(d["hands"][1]["motors"]) == 19
+    assert d["play"]["f1"] == rep.play.f1 and len(d["hands"][1]["motors"]) == len(rep.hands[1].motors) > 0
     # a batch's physics verdict reads it as it reads one hand's
     from planner.batch import physics_verdict
 

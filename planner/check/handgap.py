@@ -141,23 +141,34 @@ class GapJudge:
         return np.maximum(np.maximum(lo_r - hi_l, lo_l - hi_r).max(axis=1), 0.0)
 
     def _row_least(self, poses, k: int) -> tuple[float, int, int]:
-        """The exact least distance of distinct row ``k`` and its two bodies."""
+        """The exact least distance of distinct row ``k`` and its two bodies: the pair of
+        the least sphere gap measured first, then only the pairs whose gap is under the
+        least found, in the order of their gaps."""
         (cl, Rl), (cr, Rr) = poses
         sl, sr = self._shapes
-        gap = (np.linalg.norm(cl[k][:, None] - cr[k][None], axis=-1)
-               - sl.radius_m[:, None] - sr.radius_m[None])
-        best = (np.inf, -1, -1)
-        for flat in np.argsort(gap, axis=None, kind="stable"):
-            i, j = divmod(int(flat), gap.shape[1])
-            if gap[i, j] >= best[0]:
+        d = cl[k][:, None] - cr[k][None]
+        gap = (np.sqrt(np.einsum("ijk,ijk->ij", d, d))
+               - sl.radius_m[:, None] - sr.radius_m[None]).ravel()
+        n = len(sr.radius_m)
+
+        def measure(flat: int) -> float:
+            i, j = divmod(flat, n)
+            return float(coal.distance(sl.shapes[i], coal.Transform3s(Rl[k, i], cl[k, i]),
+                                       sr.shapes[j], coal.Transform3s(Rr[k, j], cr[k, j]),
+                                       self._req, coal.DistanceResult()))
+
+        first = int(np.argmin(gap))
+        best, at = measure(first), first
+        near = np.flatnonzero(gap < best)
+        for flat in near[np.argsort(gap[near], kind="stable")].tolist():
+            if gap[flat] >= best:
                 break
-            res = coal.DistanceResult()
-            d = coal.distance(sl.shapes[i], coal.Transform3s(Rl[k, i], cl[k, i]),
-                              sr.shapes[j], coal.Transform3s(Rr[k, j], cr[k, j]),
-                              self._req, res)
-            if d < best[0]:
-                best = (float(d), i, j)
-        return best
+            if flat != first:
+                dist = measure(flat)
+                if dist < best:
+                    best, at = dist, flat
+        i, j = divmod(at, n)
+        return best, i, j
 
     def _collisions(self, t: np.ndarray, of: np.ndarray,
                     measured: dict[int, tuple[float, int, int]]) -> None:
