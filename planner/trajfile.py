@@ -127,8 +127,9 @@ def end_line(rows: int, end_info: dict[str, Any] | None = None) -> str:
 
 
 class TrajectoryWriter:
-    """Streams a trajectory of ``hand``: the constructor opens the path and writes
-    metadata and header (the hand's joints and motors), ``write_rows`` appends setpoints,
+    """Streams a trajectory of ``hand`` (a ``HandModel``, or a ``HandPair``: two hands'
+    prefixed columns and limits, ``planner.pairfile``): the constructor opens the path and
+    writes metadata and header (the hand's joints and motors), ``write_rows`` appends setpoints,
     each passed by the hand's guard first (``planner.guard``: a row out of the joint
     position or speed limits raises SolverError and is not written), ``close`` writes the
     end marker."""
@@ -328,6 +329,9 @@ def _metadata(line: str, path: str) -> dict[str, Any]:
             raise InputError(f"{path}: metadata lacks required key {key!r}")
     if meta["task"] not in ("play", "catch"):
         raise InputError(f"{path}: task must be 'play' or 'catch', got {meta['task']!r}")
+    if version == PAIR_VERSION and (meta["task"] != "play" or "hands" not in meta):
+        raise InputError(f"{path}: a version-3 file is a play of two hands: its metadata "
+                         "must have 'hands' and task 'play'")
     rate = meta["rate_hz"]
     if not is_num(rate) or not math.isfinite(rate) or not rate > 0:
         raise InputError(f"{path}: rate_hz must be a positive number, got {rate!r}")

@@ -357,7 +357,8 @@ def check_play(traj_path: str | Trajectory, song_path: str | Song | None = None,
                song_options: dict[str, Any] | None = None) -> PlayResult | None:
     """``check_trajectory(...).play`` without the limit audit (the same reading, the
     same errors on bad input, the same key replay and claims): the kinematic verdict
-    ``simulate`` reports beside its physics. None for a catch file."""
+    ``simulate`` reports beside its physics. None for a catch file; for a two-hand file,
+    the keys of both hands (``PairReport.play``, its whole check made)."""
     plan = read_plan(traj_path, allow_incomplete=allow_incomplete,
                      hand_override=hand_override)
     notes = plan_notes(plan, song_path, None, song_options)
