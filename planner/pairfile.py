@@ -28,7 +28,7 @@ import numpy as np
 
 from planner.errors import InputError, PlannerError
 from planner.hand.pair import HandPair, check_pair, prefix
-from planner.planfile import PlanFile, check_columns, plan_hand, plan_song_notes, start_pose
+from planner.planhand import PlanFile, check_columns, plan_hand, plan_song_notes, start_pose
 from planner.trajfile import PAIR_VERSION, Trajectory, TrajectoryWriter
 
 if TYPE_CHECKING:

@@ -17,7 +17,6 @@ import os
 
 import numpy as np
 
-from planner.check import check_report, held_to_claims, play_problems
 from planner.check.bodykeys import body_keys
 from planner.check.criteria import DOWN_DEPTH_M, N_KEYS
 from planner.check.episodes import EpisodeStream
@@ -27,6 +26,7 @@ from planner.check.kinematics import Kinematics
 from planner.check.limits import LimitAudit
 from planner.check.pairreport import PairReport
 from planner.check.results import CheckReport, PlayResult
+from planner.check.verdict import check_report, held_to_claims, play_problems
 from planner.errors import InputError
 from planner.hand.bodies import collision_bodies
 from planner.pairfile import PairPlan

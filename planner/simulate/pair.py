@@ -19,6 +19,7 @@ import numpy as np
 
 from planner.pairfile import PairPlan
 from planner.simulate.pairreport import HandPhysics, HandsTouch, PairSimulateReport
+from planner.simulate.verdict import Replay, physics_problems, record_problems
 
 
 def _hand_record(rec, i: int, plan: PairPlan, finger_cut: list[int]):
@@ -81,7 +82,6 @@ def run_pair_replay(plan: PairPlan, song_path=None, *, contact: str = "full",
     """``run_replay`` of a two-hand plan (see the module docstring)."""
     from planner.check import check_play
     from planner.check.claims import left_out_notes
-    from planner.simulate import Replay, physics_problems, record_problems
     from planner.simulate.replay import simulate
     from planner.simulate.scene import build_parts, pair_parts
     from planner.simulate.scores import score_play
