@@ -192,7 +192,8 @@ def test_the_ball_held_rolls_into_the_fingers_not_off_the_wrist(pl):
     HOLD_TILT_DEG towards the fingers (gravity's share along +y = -sin 5 deg), and the
     plan stays feasible with the turn inside its rows."""
     from planner.catch.flight.path import get_ball, predict_throw
-    from planner.catch.plan.stopping import HOLD_TILT_DEG, plan_stop
+    from planner.catch.plan.holdturn import HOLD_TILT_DEG
+    from planner.catch.plan.stopping import plan_stop
 
     fl = predict_throw(60.0, 1.5, 0.0, get_ball("tennis"), False)
     C = np.array([1.5, 0.0, 0.0])
@@ -219,7 +220,8 @@ def test_hold_turn_within_the_motors(pl):
     """``hold_turn``: only the wrist flexion turns, within its range; its duration keeps every
     motor within TURN_SHARE of its capacity with the hand's inertia (the peak acceleration
     PEAK_ACC |dq| / T^2 at either end), and the speed and acceleration limits."""
-    from planner.catch.plan.stopping import STOP_SHARE, TURN_SHARE, hold_turn
+    from planner.catch.plan.holdturn import TURN_SHARE, hold_turn
+    from planner.catch.plan.stopping import STOP_SHARE
     from planner.trajectory import PEAK_ACC
 
     plan = plan_throw(30.0, 1.5, 0.0, planner=pl)
