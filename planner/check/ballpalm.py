@@ -119,6 +119,14 @@ class BallOnPalm:
         c = P[:3, 3] + r * P[:3, 2]
         return float((np.array(self.p) - c) @ P[:3, 1])
 
+    def along_speed(self, palm: np.ndarray) -> float:
+        """The ball's speed along the palm's +y relative to the palm target (m/s), at the
+        end of the segment last stepped (row ``k`` of ``step_to``), ``palm`` its rows."""
+        P = palm[self._seg + 1]
+        od, om, r = np.array(self._od), np.array(self._om), self.r
+        target_v = od + np.cross(om, r * P[:3, 2])
+        return float((np.array(self.v) - target_v) @ P[:3, 1])
+
     def _step(self, h: float) -> None:
         r, beta, mu = self.r, self.beta, self.mu
         o, n, y = self._plane(self.t)
