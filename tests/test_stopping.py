@@ -243,7 +243,7 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     the ball would roll beyond ``ROLL_ROOM_M`` towards the wrist (``planner.check.ballroll``:
     that plan is infeasible for the roll), so the roll rule plans the turn under way when the
     ball lands (``planner.catch.plan.turnahead``): the rows pass the intercept pose at the
-    intercept, the flexion already turning towards level (the turn at 4.1 rad/s), the
+    intercept, the flexion already turning towards level (the turn at 5.3 rad/s), the
     pre-catch pose short of it on the other side; the roll is within the room; ``check``
     confirms the catch. 30 deg from 1.5 m, whose turn from the grasp keeps the roll within
     ``ROLL_ROOM_M``, has the same rows as before the rule. (20 deg from 1.0 m, which this
@@ -267,7 +267,7 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     before = early(plan)
     assert rolled(before) > ROLL_ROOM_M and before.reason_kinds == (CatchReason.ROLL,)
     assert plan.feasible, plan.reasons
-    assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 4.1 rad/s")
+    assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 5.3 rad/s")
     assert rolled(plan) <= ROLL_ROOM_M
     i = pl.joints.i_flex
     k = int(np.searchsorted(plan.rows.t, plan.intercept.t_s))
