@@ -104,7 +104,7 @@ def test_mk5_catch_holds_the_baseball_on_the_turned_palm(tmp_path) -> None:
     """The mk5 at its own scale grasps a baseball (thumb, middle, ring). Held as the stop
     leaves the palm (tilted towards the wrist) it asked the ring's motor more than its
     tendon's 40 N (0.2 N m); since the wrist turns the closed hand palm up
-    (``planner.catch.plan.stopping.hold_turn``) the palm carries the ball's weight and the grasp
+    (``planner.catch.plan.holdturn.hold_turn``) the palm carries the ball's weight and the grasp
     QP holds it within every motor: the plan is feasible and ``check`` accepts it."""
     out = tmp_path / "c.csv"
     p = plan_catch(30.0, 1.5, 0.0, "mk5", str(out), ball="baseball")

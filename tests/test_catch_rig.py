@@ -43,11 +43,11 @@ def test_the_square_intercept_puts_the_palm_on_the_path(pl):
     assert math.degrees(math.acos(min(1.0, -(n @ v) / np.linalg.norm(v)))) < 0.5
 
 
-@pytest.mark.parametrize("throw", [(65.0, 1.5, -0.3), (65.0, 2.0, -0.3), (25.0, 2.5, 0.3)])
+@pytest.mark.parametrize("throw", [(65.0, 1.5, -0.3), (75.0, 1.5, 0.0), (25.0, 2.5, 0.3)])
 def test_throws_the_arm_alone_loses_to_the_roll_are_caught_with_the_reach(pl, tmp_path, throw):
-    """Measured (bench/bench_catch_wide.py): with the arm alone these roll 51, 53 and 330 mm
-    towards the wrist; with the reach axis they are feasible, ``check`` confirms them and
-    the rows move the reach."""
+    """Measured (bench/bench_catch_wide.py, the ball-on-palm roll model): with the arm alone
+    these roll 45, 3275 and 439 mm towards the wrist; with the reach axis they are feasible,
+    ``check`` confirms them and the rows move the reach."""
     p = plan_throw(*throw, planner=pl)
     assert p.feasible, p.reasons
     assert any(n.startswith("the rig's reach axis moves") for n in p.notes)
@@ -93,11 +93,11 @@ def test_caught_with_the_reach_in_physics(pl, tmp_path):
 
 
 def test_the_hand_falls_with_the_ball_where_the_reach_alone_lets_it_roll(pl, tmp_path):
-    """-0.3 m / 75 deg / 0.5 m: on the reach without the fall the ball rolls off the palm's
+    """-0.3 m / 75 deg / 1.0 m: on the reach without the fall the ball rolls off the palm's
     wrist side (the note says so); with the hand falling on the reach axis after the ball
     lands (``planner.catch.plan.drop``) the plan is feasible, ``check`` confirms it, and the
     reach moves down after the intercept within its travel."""
-    p = plan_throw(75.0, 0.5, -0.3, planner=pl)
+    p = plan_throw(75.0, 1.0, -0.3, planner=pl)
     assert p.feasible, p.reasons
     note = [n for n in p.notes if n.startswith("the hand falls with the ball")]
     assert note and "rolls off the palm's wrist side" in note[0]

@@ -48,10 +48,11 @@ def test_the_live_wrist_turns_after_the_grasp(session):
     t, Q = p.rows.t, p.rows.q
     assert Q[-1, i] == pytest.approx((Q - turn.offset(t))[-1, i] + turn.delta[i])
     assert np.all(turn.offset(t[t <= turn.start_s]) == 0.0)
-    # the turn lessens the roll (measured 604 -> 260 mm) but not within the palm's room
+    # the turn lessens the roll (measured 653 -> 434 mm by the ball-on-palm model; 604 ->
+    # 260 mm by the rolling law before it) but not within the palm's room
     still = Q - turn.offset(t)
     rolled = pl.turn.rolled(t, Q, p.intercept.t_s, p.flight)
-    assert rolled < 0.5 * pl.turn.rolled(t, still, p.intercept.t_s, p.flight)
+    assert rolled < 0.75 * pl.turn.rolled(t, still, p.intercept.t_s, p.flight)
     assert rolled > ROLL_ROOM_M and CatchReason.ROLL in p.reason_kinds
     assert s.outcome == "given_up"
     assert parse_trajectory(s.text).end["catch"] == "given_up"

@@ -317,7 +317,7 @@ def test_the_physics_ball_has_the_file_balls_inertia(catch30, hand):
 def test_catch_in_physics_held_motors_within_peak(catch30, capsys):
     """The 30 deg / 1.5 m catch is held in physics: the contact speeds leave the ball no
     roll along the palm, the wrist turns the closed hand so that the palm's downhill points
-    5 deg into the fingers (``planner.catch.plan.stopping.hold_turn``); the servos stay within
+    5 deg into the fingers (``planner.catch.plan.holdturn.hold_turn``); the servos stay within
     their motors, never saturated; the impact is resolved within the row (the ball stops in
     a few 1 ms steps: a force far above the one the plan spreads over 2 cm of pad). (Before
     the hold: not held, 76 mm from the palm centre at the end.)"""
@@ -394,7 +394,7 @@ def _ball_in_closed_hand(catch30, tmp_path, wrist_m: float, tilt_to_wrist_deg=No
     palm's +y); ``tilt_to_wrist_deg``: the wrist flexion instead set so that the palm's
     downhill points that far towards the wrist (as the palm met the ball: 30-73 deg)."""
     from planner.catch.plan.api import get_planner
-    from planner.catch.plan.stopping import best_flex
+    from planner.catch.plan.holdturn import best_flex
 
     tr = read_trajectory(str(catch30))
     hand = load_hand("default")

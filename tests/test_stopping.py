@@ -192,7 +192,8 @@ def test_the_ball_held_rolls_into_the_fingers_not_off_the_wrist(pl):
     HOLD_TILT_DEG towards the fingers (gravity's share along +y = -sin 5 deg), and the
     plan stays feasible with the turn inside its rows."""
     from planner.catch.flight.path import get_ball, predict_throw
-    from planner.catch.plan.stopping import HOLD_TILT_DEG, plan_stop
+    from planner.catch.plan.holdturn import HOLD_TILT_DEG
+    from planner.catch.plan.stopping import plan_stop
 
     fl = predict_throw(60.0, 1.5, 0.0, get_ball("tennis"), False)
     C = np.array([1.5, 0.0, 0.0])
@@ -219,7 +220,8 @@ def test_hold_turn_within_the_motors(pl):
     """``hold_turn``: only the wrist flexion turns, within its range; its duration keeps every
     motor within TURN_SHARE of its capacity with the hand's inertia (the peak acceleration
     PEAK_ACC |dq| / T^2 at either end), and the speed and acceleration limits."""
-    from planner.catch.plan.stopping import STOP_SHARE, TURN_SHARE, hold_turn
+    from planner.catch.plan.holdturn import TURN_SHARE, hold_turn
+    from planner.catch.plan.stopping import STOP_SHARE
     from planner.trajectory import PEAK_ACC
 
     plan = plan_throw(30.0, 1.5, 0.0, planner=pl)
@@ -241,7 +243,7 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     the ball would roll beyond ``ROLL_ROOM_M`` towards the wrist (``planner.check.ballroll``:
     that plan is infeasible for the roll), so the roll rule plans the turn under way when the
     ball lands (``planner.catch.plan.turnahead``): the rows pass the intercept pose at the
-    intercept, the flexion already turning towards level (the turn at 4.1 rad/s), the
+    intercept, the flexion already turning towards level (the turn at 5.3 rad/s), the
     pre-catch pose short of it on the other side; the roll is within the room; ``check``
     confirms the catch. 30 deg from 1.5 m, whose turn from the grasp keeps the roll within
     ``ROLL_ROOM_M``, has the same rows as before the rule. (20 deg from 1.0 m, which this
@@ -265,7 +267,7 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     before = early(plan)
     assert rolled(before) > ROLL_ROOM_M and before.reason_kinds == (CatchReason.ROLL,)
     assert plan.feasible, plan.reasons
-    assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 4.1 rad/s")
+    assert plan.notes and plan.notes[0].startswith("the wrist's turn under way at 5.3 rad/s")
     assert rolled(plan) <= ROLL_ROOM_M
     i = pl.joints.i_flex
     k = int(np.searchsorted(plan.rows.t, plan.intercept.t_s))

@@ -126,24 +126,7 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
         problems.append(f"intercept_t {ti:.3f} s is outside the trajectory "
                         f"({t[0]:.3f}..{t[-1]:.3f} s)")
 
-    # before the intercept: no fingertip inside the ball
-    before = t < ti
-    touches = []
-    if before.any():
-        bp = ball_positions(ball["p0"], ball["v0"], ball["drag"], t[before])
-        d = np.linalg.norm(tips[before] - bp[:, None, :], axis=-1)
-        for k, f in zip(*np.nonzero(d < r)):
-            touches.append(TipTouch(float(t[before][k]), FINGERS[f], float(d[k, f])))
-    if touches:
-        problems.append(f"{len(touches)} fingertip contacts with the ball before the intercept "
-                        f"(first: {touches[0].finger} at {touches[0].time_s:.3f} s)")
-    # ... nor any finger's body in the ball's flight (``planner.check.ballbodies``)
-    hit = finger_hit(collision_bodies(kin.hand.spec), kin.link_poses, t, tr.q, ti,
-                     lambda ts: ball_positions(ball["p0"], ball["v0"], ball["drag"], ts), r)
-    hit_problem = finger_hit_problem(hit, BODY_TOL_M)
-    if hit_problem is not None:
-        problems.append(hit_problem)
-
+    touches = early_touches(tr, kin, tips, ball, ti, problems)
     g_time, g_fingers, held, d_after = _grasp_after(t, ti, tips, palm, r, problems)
     roll = None if err is None else _roll(t, palm, ball, ti, file_inertia_ratio(src))
     # every file alike, planned or live (not on a hand whose room is not measured:
@@ -172,11 +155,35 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
     problems += claim_problems(claims, src, live, bool(problems))
     load = np.where(t >= ti, ball["mass"], 0.0)
     res = CatchResult(ti, r, tuple(float(x) for x in b_i), tuple(float(x) for x in target), err,
-                      err is not None and err <= INTERCEPT_TOL_M, tuple(touches), g_time,
+                      err is not None and err <= INTERCEPT_TOL_M, touches, g_time,
                       g_fingers, held,
                       float(d_after.min()) if d_after.size else None, tuple(problems), loads,
                       {k: claims.get(k) for k in ("catch", "reason")} if live else None, roll)
     return res, load
+
+
+def early_touches(tr: Trajectory, kin: Kinematics, tips: np.ndarray, ball: dict[str, Any],
+                  ti: float, problems: list[str]) -> tuple[TipTouch, ...]:
+    """Before the intercept the hand must not meet the ball's flight: no fingertip inside
+    the ball on the rows, nor any finger's body between them (``planner.check.ballbodies``).
+    The fingertips' touches; the failures are appended to ``problems``."""
+    t, r = tr.t_s, ball["radius"]
+    before = t < ti
+    touches = []
+    if before.any():
+        bp = ball_positions(ball["p0"], ball["v0"], ball["drag"], t[before])
+        d = np.linalg.norm(tips[before] - bp[:, None, :], axis=-1)
+        for k, f in zip(*np.nonzero(d < r)):
+            touches.append(TipTouch(float(t[before][k]), FINGERS[f], float(d[k, f])))
+    if touches:
+        problems.append(f"{len(touches)} fingertip contacts with the ball before the intercept "
+                        f"(first: {touches[0].finger} at {touches[0].time_s:.3f} s)")
+    hit = finger_hit(collision_bodies(kin.hand.spec), kin.link_poses, t, tr.q, ti,
+                     lambda ts: ball_positions(ball["p0"], ball["v0"], ball["drag"], ts), r)
+    hit_problem = finger_hit_problem(hit, BODY_TOL_M)
+    if hit_problem is not None:
+        problems.append(hit_problem)
+    return tuple(touches)
 
 
 OUTCOMES = ("held", "given_up", "infeasible")  # a catch's claim (spec section 4, version 2)

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.hand.model import GRAVITY_WORLD
+from planner.check.ballpalm import BallOnPalm
+from planner.check.ballstop import PALM_MU
 
 ROLL_ROOM_M = 0.042  # how far the ball may roll from the palm target towards the wrist: there
 # it meets the forearm (measured in the replay, 20 deg / 1.0 m at 92f563c: the ball touches
@@ -47,38 +48,36 @@ def roll_factor(inertia_ratio: float) -> float:
 
 
 def roll_path_m(t_s: np.ndarray, palm: np.ndarray, radius_m: float, t_land_s: float,
-                v_ball_m_s: np.ndarray, inertia_ratio: float) -> np.ndarray:
+                v_ball_m_s: np.ndarray, inertia_ratio: float, mu: float = PALM_MU
+                ) -> np.ndarray:
     """The ball's roll towards the wrist (m, along the palm's +y from the palm target) at
     every row at times ``t_s`` with palm poses ``palm`` (T, 4, 4), from its landing at
-    ``t_land_s`` (at velocity ``v_ball_m_s``; the palm target's is its row segment's there):
-    0 on the rows before the landing. Nothing on the palm holds the ball towards the
-    fingers but the palm target's place (the roll is not negative: the palm's cup and the
-    fingers on that side); towards the wrist nothing holds it but the palm's tilt and
-    acceleration. Integrated row to row with the rows' accelerations (second differences
-    of the palm target)."""
+    ``t_land_s`` on the palm target at velocity ``v_ball_m_s`` without spin (the file's
+    ball has none): 0 on the rows before the landing.
+
+    The ball (mass m, radius R, I = ``inertia_ratio`` m R^2) on the palm's plane as the rows
+    move it, in time steps of ``ROLL_STEP_S`` (``ball_on_palm``): the palm between two rows
+    turns at the rows' angular velocity and its centre moves at their speed (as the
+    replay's servos follow the joints moving linearly from row to row); the contact
+    stops the ball's approach (a non-penetrating impulse, the ball may leave a palm that
+    falls away faster than gravity), and friction (Coulomb, ``mu``: the palm pad's rubber)
+    brings the contact point to the palm's velocity when it can (the ball rolls; at most
+    ``mu`` times the normal impulse: it slides, on a palm steeper than
+    atan(mu (1 + I / (m R^2)) / (I / (m R^2))), 65 deg for a tennis ball, or where the palm
+    turns fast). So it carries what the rolling ball's law (``roll_factor``) leaves out:
+    the palm's turn (the ball's spin must follow it, the centrifugal and the Coriolis
+    terms), the slide of a steep palm, and the lift-off of a palm falling away. Nothing
+    on the palm holds the ball towards the fingers but the palm target's place (the roll is
+    not negative: the palm's cup and the fingers on that side)."""
     out = np.zeros(len(t_s))
-    k_roll = roll_factor(inertia_ratio)
-    centre = palm[:, :3, 3] + radius_m * palm[:, :3, 2]
     after = np.flatnonzero(t_s > t_land_s)
     if len(after) < 2 or after[0] < 1:
         return out
-    dt = np.diff(t_s)
     k0 = int(after[0])
-    v_rel = np.asarray(v_ball_m_s, dtype=float) - (centre[k0] - centre[k0 - 1]) / dt[k0 - 1]
-    acc = np.zeros_like(centre)
-    acc[1:-1] = 2.0 * ((centre[2:] - centre[1:-1]) / dt[1:, None]
-                       - (centre[1:-1] - centre[:-2]) / dt[:-1, None]) / (dt[1:] + dt[:-1])[:, None]
-    along = k_roll * np.einsum("ij,ij->i", GRAVITY_WORLD - acc, palm[:, :3, 1])
-    x, v = 0.0, k_roll * float(v_rel @ palm[k0 - 1, :3, 1])
-    tau = float(t_s[k0] - t_land_s)  # the first step: from the landing to row k0
+    ball = BallOnPalm(float(radius_m), float(inertia_ratio), float(mu))
+    ball.land(palm, t_s, k0 - 1, float(t_land_s), np.asarray(v_ball_m_s, dtype=float))
     for k in range(k0, len(t_s)):
-        a = float(along[k])
-        x += v * tau + 0.5 * a * tau * tau
-        v += a * tau
-        if x < 0.0:
-            x, v = 0.0, max(v, 0.0)
-        out[k] = x
-        tau = float(dt[k]) if k < len(dt) else 0.0
+        out[k] = ball.step_to(palm, t_s, k)
     return out
 
 

@@ -1,4 +1,4 @@
-"""The live catch's hold: the planned catch's wrist turn (``stopping.hold_turn``) on the
+"""The live catch's hold: the planned catch's wrist turn (``holdturn.hold_turn``) on the
 live rows. Once the grasp is made and the pad has stopped the ball, the wrist turns the
 closed hand palm up, its downhill ``HOLD_TILT_DEG`` into the fingers, so that the ball
 rolls into the fingers' cage, not off the open wrist side (the roll rule, which the check
@@ -12,7 +12,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner.catch.plan.stopping import StopDynamics, hold_turn
+from planner.catch.plan.holdturn import hold_turn
+from planner.catch.plan.stopping import StopDynamics
 from planner.trajectory import min_jerk
 
 

@@ -68,7 +68,7 @@ Per throw (``CatchPlanner.plan``):
    stopped the ball on the palm, then delayed if a fingertip would come within
    ``TOUCH_CLEAR_M`` of the still-arriving ball; it must complete the grasp within
    ``GRASP_WINDOW_S`` (150 ms) of the intercept. Once the grasp is made the wrist turns the
-   closed hand palm up, its downhill 5 deg into the fingers (``stopping.hold_turn``: a ball
+   closed hand palm up, its downhill 5 deg into the fingers (``holdturn.hold_turn``: a ball
    rolling on the palm rolls into the fingers, not off the open wrist side) -- or, where
    the ball would roll off the wrist side before that turn has levelled the palm
    (``roll``), the turn is already under way when the ball lands (``turnahead``). Rows at

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from planner.check.ballpalm import BallOnPalm
 from planner.check.ballroll import roll_factor, roll_towards_wrist_m
 from planner.check.ballstop import PALM_MU
 from planner.hand.model import GRAVITY_WORLD
@@ -103,6 +104,15 @@ def allowed_accel(dyn, q: np.ndarray, qdd: np.ndarray, i_reach: int, b: np.ndarr
     return float(lo), float(hi)
 
 
+def can_stop(u: float, pos: float, lo: float, hi: float, a_max: float, left_s: float
+             ) -> bool:
+    """Whether the reach at ``pos`` moving at ``u`` can still stop (at ``a_max``) within
+    [``lo``, ``hi``] and within ``left_s``."""
+    stop_d = u * u / (2.0 * a_max)
+    return not ((u < 0 and pos - stop_d < lo) or (u > 0 and pos + stop_d > hi)
+                or abs(u) > a_max * left_s)
+
+
 def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
              v_ball: np.ndarray, radius_m: float, inertia_ratio: float) -> np.ndarray:
     """The rows ``Q`` (at times ``t``) of ``dyn``'s hand with the reach axis falling with
@@ -132,13 +142,18 @@ def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
     pad = 0.5 * (1.0 - LIMIT_MARGIN) * float(hand.upper[i_reach] - hand.lower[i_reach])
     lo, hi = float(hand.lower[i_reach]) + pad, float(hand.upper[i_reach]) - pad
     base = Q[:, i_reach]
-    v_rel = np.asarray(v_ball, dtype=float) - (centre[k0] - centre[k0 - 1]) / dt
-    x, vx = 0.0, k_roll * float(v_rel @ y[k0 - 1])
-    tau = float(t[k0] - t_land_s)
     n = len(t)
     p = np.zeros(n)  # the reach's offset from the rows' own
     u = 0.0  # its speed
+    # the ball on the palm as the fall so far moves it (the check's model, ``BallOnPalm``):
+    # the law's feedback, its state row by row
+    ball = BallOnPalm(radius_m, inertia_ratio, PALM_MU)
+    fallen = palm.copy()
+    ball.land(fallen, t, k0 - 1, t_land_s, np.asarray(v_ball, dtype=float))
     for k in range(k0, n - 2):
+        fallen[k, :3, 3] = palm[k, :3, 3] + p[k] * e_r
+        x = max(ball.step_to(fallen, t, k), 0.0)
+        vx = ball.along_speed(fallen)
         a_o = fall_accel(x, vx, float(along0[k]), float(lever[k]), k_roll, u, dt, a_max)
         lo_a, hi_a = allowed_accel(dyn, Q[k], qdd[k], i_reach, acc[k] - GRAVITY_WORLD, e_r,
                                    palm[k, :3, 2])
@@ -148,21 +163,15 @@ def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
         a_o = float(np.clip(a_o, max(-a_max, lo_a), min(a_max, hi_a)))
         # the range and the rows' end: able to stop in time (at a_max) after this step
         u1 = float(np.clip(u + a_o * dt, -v_max, v_max))
-        pos1 = base[k + 1] + p[k] + u1 * dt
-        stop_d = u1 * u1 / (2.0 * a_max)
-        if (u1 < 0 and pos1 - stop_d < lo) or (u1 > 0 and pos1 + stop_d > hi) \
-                or abs(u1) > a_max * (n - 3 - k) * dt:
-            a_o = float(np.clip(-u / dt, -a_max, a_max))
+        if not can_stop(u1, base[k + 1] + p[k] + u1 * dt, lo, hi, a_max, (n - 3 - k) * dt):
+            # brake: within the motors' room where that still stops within the travel
+            a_o = float(np.clip(-u / dt, max(-a_max, lo_a), min(a_max, hi_a)))
+            if not can_stop(u + a_o * dt, base[k + 1] + p[k] + (u + a_o * dt) * dt, lo, hi,
+                            a_max, (n - 3 - k) * dt):
+                a_o = float(np.clip(-u / dt, -a_max, a_max))
             u1 = u + a_o * dt
         u = u1
         p[k + 1] = p[k] + u * dt
-        # the roll over the next step with this row's acceleration
-        a_along = float(along0[k]) - k_roll * a_o * float(lever[k])
-        x += vx * tau + 0.5 * a_along * tau * tau
-        vx += a_along * tau
-        if x < 0.0:
-            x, vx = 0.0, max(vx, 0.0)
-        tau = dt
     p[n - 1] = p[n - 2]
     if not np.any(p):
         return Q

@@ -1,13 +1,13 @@
 """The wrist's turn that holds the ball (``docs/history/physics-replay.md``, "Catch"): when it starts
 and how it runs. Once the pad has stopped the ball the wrist turns the closed hand palm up,
-its downhill ``HOLD_TILT_DEG`` into the fingers (``stopping.hold_turn``); it starts from
+its downhill ``HOLD_TILT_DEG`` into the fingers (``holdturn.hold_turn``); it starts from
 the grasp (``TurnMode.EARLY``), after the arm's stop (``TurnMode.LATE``) or, by the roll rule
 (``TurnMode.AHEAD``, ``HoldTurn.ahead_rows``), under way before the ball lands.
 
 A palm steep at the intercept (66-73 deg from level on the 20 deg throws: the geometry of
 the wrist and the path fixes the palm's angle where the ball meets the palm centre) lets
 the landed ball roll towards the wrist at up to k g sin(tilt) (``planner.check.ballroll``: k
-= 5/7 a solid ball, 0.62 a tennis ball) while a turn from rest (``stopping.hold_turn``) is
+= 5/7 a solid ball, 0.62 a tennis ball) while a turn from rest (``holdturn.hold_turn``) is
 still slow. Started before the ball, the turn passes the intercept pose at speed: the
 flexion's speed rises (min-jerk) to w exactly at the intercept, holds it and falls to rest
 (min-jerk) where the hold's pose is (palm up, ``HOLD_TILT_DEG`` downhill into the fingers;
@@ -36,8 +36,9 @@ import numpy as np
 
 from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix
+from planner.catch.plan.holdturn import TURN_SHARE, hold_turn
 from planner.catch.plan.results import Closing
-from planner.catch.plan.stopping import TURN_SHARE, SoftStop, StopDynamics, hold_turn
+from planner.catch.plan.stopping import SoftStop, StopDynamics
 from planner.check.ballroll import ROLL_ROOM_M, roll_towards_wrist_m
 from planner.trajectory import LIMIT_MARGIN
 
@@ -170,7 +171,7 @@ class HoldTurn:
         self._arm_motors = np.flatnonzero(np.any(M[:, list(joints.arm)] != 0, axis=1))
 
     def hold(self, pose: Any, stop: SoftStop) -> HoldStart:
-        """The wrist's turn that holds the ball (``stopping.hold_turn``) from the closed hand
+        """The wrist's turn that holds the ball (``holdturn.hold_turn``) from the closed hand
         where the stopping motion leaves it (delta, duration); when it starts is the mode's
         (``turned_rows``: ``turn_start``; ``ahead_rows``: under way at the intercept)."""
         q_end = pose.q_closed.copy()
