@@ -36,6 +36,7 @@ How a file is read (the choices are deliberate; tests pin them down):
   ``channel=``. Without either, a file of several parts (tracks or channels), or of
   two hands in one, gives its upper part, the right hand's (``planner.music.parts``:
   ``Song.part`` says which and why); a file of one part gives every note.
+  ``every_part=True`` (two hands: ``play --hands 2``) reads every part, none chosen.
   Channel 9 (drums) is never read.
 * After selection (and transposition) the notes are merged: if two notes of
   the same pitch overlap (from different tracks or channels, or moved onto
@@ -138,6 +139,7 @@ class Song:
     channel: int | None = None
     transpose: bool = False
     part: PartChoice | None = None  # the part chosen when neither track nor channel was
+    every_part: bool = False  # read with ``every_part`` (both hands' parts, none chosen)
 
 
 SHIFT_DIGITS = 12  # a shifted note's times are rounded to 1 ps (``shift_notes``)
@@ -166,8 +168,10 @@ def load_song(
     track: int | None = None,
     channel: int | None = None,
     transpose: bool = False,
+    every_part: bool = False,
 ) -> Song:
-    """Read a MIDI file into a :class:`Song` (see the module docstring)."""
+    """Read a MIDI file into a :class:`Song` (see the module docstring; ``every_part``:
+    every part of the file, none chosen, as two hands play it)."""
     name = os.fspath(path)
     try:
         size = os.path.getsize(name)
@@ -186,7 +190,8 @@ def load_song(
     except OSError as exc:
         raise InputError(f"{name}: cannot read file ({one_line(exc)})") from None
     return parse_song_bytes(
-        data, track=track, channel=channel, transpose=transpose, source=name
+        data, track=track, channel=channel, transpose=transpose, source=name,
+        every_part=every_part,
     )
 
 
@@ -197,6 +202,7 @@ def parse_song_bytes(
     channel: int | None = None,
     transpose: bool = False,
     source: str = "<bytes>",
+    every_part: bool = False,
 ) -> Song:
     """Parse the bytes of a MIDI file into a :class:`Song` (see the module docstring)."""
     data = bytes(data)
@@ -220,7 +226,7 @@ def parse_song_bytes(
     raw, sustain, found = _collect(tracks, end_tick, track, channel)
     if not raw:
         raise InputError(f"{source}: {_no_notes_text(track, channel, found)}")
-    part = choose_part(raw) if track is None and channel is None else None
+    part = choose_part(raw) if track is None and channel is None and not every_part else None
     if part is not None:  # several parts, or two hands in one: the upper one
         if part.track is not None:
             raw, sustain, _ = _collect(tracks, end_tick, part.track, part.channel)
@@ -250,6 +256,7 @@ def parse_song_bytes(
         channel=channel,
         transpose=bool(transpose),
         part=part,
+        every_part=bool(every_part),
     )
 
 
