@@ -31,12 +31,14 @@ from __future__ import annotations
 
 import bisect
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.music.midi import Song
@@ -45,7 +47,7 @@ from planner.play.handgap import HandGap, hand_gap
 from planner.play.costs import CostMemo, Costs
 from planner.play.motion import DROP_FRACTION
 from planner.play.places import Places
-from planner.play.stream import Planner, PlayPlan, plan_song
+from planner.play.stream import ROW_BLOCK, Planner, PlayPlan, plan_song
 
 UNBOUNDED_M = 10.0  # a bound no rail reaches (the travel is a few metres at most)
 
@@ -56,15 +58,11 @@ class PairPlanner:
 
     def __init__(self, left: HandModel, right: HandModel) -> None:
         if left.side != LEFT or right.side != RIGHT:
-            from planner.errors import InputError
-
             raise InputError(f"two hands are a left hand then a right one; got {left.name} "
                              f"({left.side}), {right.name} ({right.side})")
         self.hands = {LEFT: left, RIGHT: right}
         rl, rr = left.index.get("rail"), right.index.get("rail")
         if rl is None or rr is None:
-            from planner.errors import InputError
-
             raise InputError("two hands share one rail: each hand needs a rail axis "
                              f"({left.name}, {right.name})")
         self.planners = {LEFT: Planner(left, rest_rail_m=float(left.plan_lower[rl])),
@@ -96,6 +94,8 @@ class TwoHandPlan:
     notes_of: tuple[tuple[int, ...], tuple[int, ...]]
     rows: PairRows
     planning_s: float
+    least_rail_gap_m: float  # the rails' least distance apart over the rows
+    text: str | None = None  # the file, planned in memory (no path)
 
     def left_out(self) -> list[tuple[int, object]]:
         """Every note not played, as (song index, ``Skip`` of its hand's plan), by note."""
@@ -185,10 +185,13 @@ def _sub_song(song: Song, idx: tuple[int, ...]) -> Song:
     return replace(song, notes=tuple(song.notes[i] for i in idx), part=None)
 
 
-def plan_two_hands(song: Song, pp: PairPlanner, rate_hz: float = 100.0,
-                   song_name: str = "") -> TwoHandPlan:
+def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
+                   rate_hz: float = 100.0, song_name: str = "") -> TwoHandPlan:
     """Plan ``song`` (every part: ``load_song(..., every_part=True)``) on both hands (the
-    module docstring), in memory. The clock starts after the pair's set-up."""
+    module docstring) and write the two-hand file to ``out_path`` ('-': stdout; None:
+    in memory, ``TwoHandPlan.text``). The clock starts after the pair's set-up."""
+    if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
+        raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
     places = {s: pp.planners[s].places for s in SIDES}
     a = assign_hands(song.notes, pp.gap, places, rate_hz)
@@ -213,8 +216,59 @@ def plan_two_hands(song: Song, pp: PairPlanner, rate_hz: float = 100.0,
     plans[LEFT] = plan_song(subs[LEFT], pp.hands[LEFT], None, rate_hz, song_name=song_name,
                             planner=pp.planners[LEFT], rail_bounds=bounds)
     rows = _one_clock((plans[LEFT], plans[RIGHT]), rate_hz, tr)
-    return TwoHandPlan(a, pp.gap, (plans[LEFT], plans[RIGHT]), (idx[LEFT], idx[RIGHT]), rows,
-                       time.perf_counter() - t_start)
+    least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
+                   - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
+    plan = TwoHandPlan(a, pp.gap, (plans[LEFT], plans[RIGHT]), (idx[LEFT], idx[RIGHT]), rows,
+                       0.0, least)
+    text = write_two_hands(plan, song, pp, out_path, rate_hz, song_name)
+    return replace(plan, planning_s=time.perf_counter() - t_start, text=text)
+
+
+def two_hand_metadata(song: Song, plan: TwoHandPlan, rate_hz: float, song_name: str) -> dict:
+    """The two-hand file's own metadata (the pair's keys are the writer's,
+    ``planner.pairfile``): the song read with every part, the common ``song_start_s``,
+    the pair's rail gap and how the hint was read."""
+    return {"task": "play", "rate_hz": rate_hz,
+            "song": song_name or os.path.basename(song.source), "notes": len(song.notes),
+            "track": None, "channel": None, "transpose": song.transpose, "every_part": True,
+            "song_start_s": plan.rows.song_start_s, "rail_gap_m": plan.gap.rail_gap_m,
+            "hint": plan.assignment.source.value}
+
+
+def end_claims(plan: TwoHandPlan, notes) -> tuple[dict, dict[str, list[int]]]:
+    """The end marker's claims for the whole song (``notes``, ``played``, ``left_out``,
+    each hand's limit violations should one reach the end) and ``by_hand`` (per prefix,
+    the notes that hand plays)."""
+    left_out = plan.left_out()
+    info: dict = {"notes": len(notes), "played": len(notes) - len(left_out),
+                  "left_out": [{"note": i, "reason": s.reason.value, "detail": s.detail}
+                               for i, s in left_out]}
+    for side, p in zip(SIDES, plan.plans):
+        bad = p.verdict.end_info().get("limit_violations")
+        if bad:
+            info.setdefault("limit_violations", []).extend(
+                {**v, "name": f"{side}.{v['name']}"} for v in bad)
+    return info, {f"{side}.": plan.played_of(side) for side in SIDES}
+
+
+def write_two_hands(plan: TwoHandPlan, song: Song, pp: PairPlanner, out_path: str | None,
+                    rate_hz: float, song_name: str = "") -> str | None:
+    """The two-hand file (version 3, ``planner.pairfile.PairWriter``: the one writer and
+    its guard) of ``plan``'s rows, into ``out_path`` ('-': stdout; None: returned)."""
+    from planner.pairfile import PairWriter
+
+    w = PairWriter(out_path, (pp.hands[LEFT], pp.hands[RIGHT]),
+                   two_hand_metadata(song, plan, rate_hz, song_name))
+    try:
+        t, (ql, qr) = plan.rows.t_s, plan.rows.q
+        for a in range(0, len(t), ROW_BLOCK):
+            w.write_rows(t[a:a + ROW_BLOCK], ql[a:a + ROW_BLOCK], qr[a:a + ROW_BLOCK])
+        info, by_hand = end_claims(plan, song.notes)
+        w.close(info, by_hand)
+    except BaseException as e:
+        w.abort(discard=isinstance(e, InputError))
+        raise
+    return w.text
 
 
 def _one_clock(plans: tuple[PlayPlan, PlayPlan], rate_hz: float, right_tr) -> PairRows:
