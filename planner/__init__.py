@@ -12,7 +12,10 @@ The public API (imported on first use, so that ``import planner`` stays light):
   to ``out_path``, ``'-'`` for stdout; without one, in memory: ``.trajectory``,
   ``.write(path)``), with a ``Planner(hand)`` to reuse across songs;
 * ``plan_catch(angle_deg, dist_m, height_m, hand, out_path, ...)`` -> ``CatchResult``;
-* ``check_trajectory(traj_path or Trajectory, song_path or Song=None)`` -> ``CheckReport``;
+* ``check_trajectory(traj_path or Trajectory, song_path or Song=None)`` -> ``CheckReport``
+  (a two-hand file: ``PairReport``, each hand's ``CheckReport`` and both together);
+* ``PairWriter(path, (left, right), metadata)``: a two-hand plan written (version 3);
+  ``read_plan(path)`` -> ``PlanFile``, or ``PairPlan`` for a two-hand file;
 * ``read_trajectory(path)`` -> ``Trajectory`` (times, joint and motor arrays, metadata);
 * ``CatchSession(dist_m, height_m, ...)``: a catch planned live, ``observe(t_s, xyz)``
   per observation, ``finish()``;
@@ -32,8 +35,11 @@ from planner.lazy import lazy_dir, lazy_names
 if TYPE_CHECKING:  # (what editors and type checkers see; at run time: on first use)
     from planner.catch import CatchSession, plan_catch
     from planner.check import CheckReport, check_trajectory
+    from planner.check.pairreport import PairReport
     from planner.hand.model import HandModel, load_hand
     from planner.music.midi import Note, Song, load_song
+    from planner.pairfile import PairPlan, PairWriter
+    from planner.planfile import read_plan
     from planner.play import Planner, PlayPlan, plan_song
     from planner.simulate import simulate_trajectory
     from planner.simulate.report import SimulateReport
@@ -52,6 +58,10 @@ _API = {
     "CatchSession": "planner.catch",
     "check_trajectory": "planner.check",
     "CheckReport": "planner.check",
+    "PairReport": "planner.check.pairreport",
+    "PairWriter": "planner.pairfile",
+    "PairPlan": "planner.pairfile",
+    "read_plan": "planner.planfile",
     "read_trajectory": "planner.trajfile",
     "Trajectory": "planner.trajfile",
     "simulate_trajectory": "planner.simulate",
@@ -65,6 +75,9 @@ __all__ = [
     "InfeasibleError",
     "InputError",
     "Note",
+    "PairPlan",
+    "PairReport",
+    "PairWriter",
     "Planner",
     "PlannerError",
     "PlayPlan",
@@ -77,6 +90,7 @@ __all__ = [
     "load_song",
     "plan_catch",
     "plan_song",
+    "read_plan",
     "read_trajectory",
     "simulate_trajectory",
 ]

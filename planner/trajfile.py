@@ -1,5 +1,6 @@
-"""The ``hand-trajectory`` file, version 2 written, 1 and 2 read (interface spec,
-section 4; version 2 adds ``song_start_s``: the song's time 0 in the file's time).
+"""The ``hand-trajectory`` file, version 2 written, 1, 2 and 3 read (interface spec,
+section 4; version 2 adds ``song_start_s``: the song's time 0 in the file's time; version 3
+is two hands in one file, written by ``planner.pairfile`` through this writer).
 
 ``TrajectoryWriter`` streams rows into the named path itself as they are
 planned, flushed per chunk, each row first passed by the hardware guard
@@ -32,7 +33,8 @@ if TYPE_CHECKING:
 
 FORMAT = "hand-trajectory"
 VERSION = 2  # written; read: READ_VERSIONS
-READ_VERSIONS = (1, 2)  # version 2 adds song_start_s and the end marker's claims
+PAIR_VERSION = 3  # two hands in one file (``planner.pairfile``)
+READ_VERSIONS = (1, 2, PAIR_VERSION)  # 2 adds song_start_s and the end marker's claims; 3 two hands
 _MAX_META_CHARS = 1 << 20  # a metadata line longer than this is not one (e.g. /dev/zero)
 
 
@@ -320,7 +322,7 @@ def _metadata(line: str, path: str) -> dict[str, Any]:
         raise InputError(f"{path}: not a hand-trajectory file (format is not {FORMAT!r})")
     version = meta.get("version")
     if isinstance(version, bool) or version not in READ_VERSIONS:
-        raise InputError(f"{path}: unsupported version {version!r} (supported: 1, 2)")
+        raise InputError(f"{path}: unsupported version {version!r} (supported: 1, 2, 3)")
     for key in ("task", "hand", "urdf_sha256", "T_world_root", "rate_hz"):
         if key not in meta:
             raise InputError(f"{path}: metadata lacks required key {key!r}")
@@ -330,7 +332,7 @@ def _metadata(line: str, path: str) -> dict[str, Any]:
     if not is_num(rate) or not math.isfinite(rate) or not rate > 0:
         raise InputError(f"{path}: rate_hz must be a positive number, got {rate!r}")
     start = meta.get("song_start_s", 0.0)
-    if not is_num(start) or not math.isfinite(start) or start < 0 or (start and version != 2):
+    if not is_num(start) or not math.isfinite(start) or start < 0 or (start and version < 2):
         raise InputError(f"{path}: song_start_s must be a number >= 0 (format version 2), "
                          f"got {start!r}")
     return meta

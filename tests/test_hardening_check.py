@@ -86,7 +86,8 @@ DAMAGE = {  # name -> (lines -> text or bytes, expected exit status)
     "rate_nan": (lambda L: _with(_meta(L, rate_hz=float("nan"))), 2),
     "rate_string": (lambda L: _with(_meta(L, rate_hz="100")), 2),
     "task_unknown": (lambda L: _with(_meta(L, task="dance")), 2),
-    "version_3": (lambda L: _with(_meta(L, version=3)), 2),  # (1 and 2 are read: spec 4)
+    "version_3": (lambda L: _with(_meta(L, version=3)), 2),  # (3 is two hands: no 'hands')
+    "version_4": (lambda L: _with(_meta(L, version=4)), 2),  # (1, 2 and 3 are read: spec 4)
     "format_other": (lambda L: _with(_meta(L, format="csv")), 2),
     "metadata_not_json": (lambda L: _with(["# {not json", *L[1:]]), 2),
     "metadata_deeply_nested": (lambda L: _with(["# " + "[" * 100_000, *L[1:]]), 2),

@@ -38,9 +38,13 @@ every note's outcome (``left_out``: the notes it says it left out, every other
 note it says it played). A claim of the wrong type is bad input. ``strict`` also fails it on any missed
 or late note.
 
+A two-hand file (version 3, ``planner.pairfile``) is judged by ``planner.check.pair``:
+each hand by the code that judges one, the keys of both together, and the distance
+between the hands (``planner.check.handgap``); its report is a ``PairReport``.
+
 Independence: this package shares only the hand model, the keyboard geometry,
-the trajectory and plan-file readers (``planner.trajfile``, ``planner.planfile``), the
-MIDI reader and the results' plain form (``planner.resultform``) with the planner. It never imports
+the trajectory and plan-file readers (``planner.trajfile``, ``planner.planfile``,
+``planner.pairfile``), the MIDI reader and the results' plain form (``planner.resultform``) with the planner. It never imports
 ``planner.play``, ``planner.ik``, ``planner.trajectory``, ``planner.catch`` or
 ``planner.selfcheck`` (the planners' side), and it runs its own copy of the Pinocchio
 model (so it never touches the shared hand's data, and can put the root where
@@ -162,6 +166,7 @@ from planner.check.results import (
 from planner.errors import InputError
 from planner.hand.bodies import collision_bodies
 from planner.hand.model import HandModel
+from planner.pairfile import PairPlan
 from planner.planfile import read_plan
 from planner.trajfile import (
     NotStreamable,
@@ -172,6 +177,7 @@ from planner.trajfile import (
 )
 
 if TYPE_CHECKING:
+    from planner.check.pairreport import PairReport
     from planner.music.midi import Song
 
 __all__ = [
@@ -231,7 +237,7 @@ def _claim_mismatches(notes, missed_notes: set[int], left_out: set[int]) -> list
     return out
 
 
-def _play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list[str]:
+def play_problems(play: PlayResult, min_f1: float | None, strict: bool) -> list[str]:
     problems = []
     if play.key_bed_hits:
         h = play.key_bed_hits[0]
@@ -267,7 +273,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
                      allow_incomplete: bool = False, min_f1: float | None = None,
                      hand_override: str | HandModel | None = None, strict: bool = False,
                      song_options: dict[str, Any] | None = None,
-                     replay: bool = True) -> CheckReport:
+                     replay: bool = True) -> CheckReport | PairReport:
     """Replay ``traj_path`` and audit it (see the package docstring).
 
     ``traj_path``: a file, or a ``Trajectory`` already read (a plan made in memory).
@@ -294,7 +300,7 @@ def check_trajectory(traj_path: str | Trajectory, song_path: str | Song | None =
     return _check_whole(traj_path, song_path, **kw)
 
 
-def _song_notes(plan, song_path, min_f1: float | None, song_options):
+def plan_notes(plan, song_path, min_f1: float | None, song_options):
     """The checks of the options against the plan, and the song's notes (None)."""
     if min_f1 is not None and not (0.0 <= min_f1 <= 1.0):
         raise InputError(f"--min-f1 must be within 0..1, got {min_f1}")
@@ -307,13 +313,15 @@ def _song_notes(plan, song_path, min_f1: float | None, song_options):
 
 
 def _check_whole(traj_path, song_path, *, allow_incomplete, min_f1, hand_override, strict,
-                 song_options) -> CheckReport:
+                 song_options) -> CheckReport | PairReport:
     """``check_trajectory`` of a file read whole (its replay arrays kept)."""
     plan = read_plan(traj_path, allow_incomplete=allow_incomplete,
                      hand_override=hand_override)
+    notes = plan_notes(plan, song_path, min_f1, song_options)
+    if isinstance(plan, PairPlan):
+        return _check_pair(plan, None, notes, song_path, min_f1, strict)
     tr, traj_path, hand = plan.trajectory, plan.path, plan.hand
     task = plan.task
-    notes = _song_notes(plan, song_path, min_f1, song_options)
     kin = Kinematics(hand, plan.T_world_root)
     tips, palm = kin.frames(tr.q)
     problems: list[str] = []
@@ -325,12 +333,12 @@ def _check_whole(traj_path, song_path, *, allow_incomplete, min_f1, hand_overrid
         pressing = np.nan_to_num(keys.kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M
         replay_kw = {"down": keys.down, "finger": keys.holder, "expected": exp,
                      "holders": body_names(shapes)[0], "key_depth_m": bk.depth_m}
-        problems.extend(_play_problems(play, min_f1, strict))
+        problems.extend(play_problems(play, min_f1, strict))
     else:
         catch, ball_load = catch_audit(tr, kin, tips, palm, traj_path)
         problems.extend(catch.problems)
     limits, tendons = limit_audit(hand, kin, tr, pressing, ball_load, inertia=task == "play")
-    return _report(plan, song_path, tr.t_s, limits, tendons, play, catch, min_f1, problems,
+    return check_report(plan, song_path, tr.t_s, limits, tendons, play, catch, min_f1, problems,
                    Replay(tr.t_s, tr.q, tips, palm, **replay_kw))
 
 
@@ -341,7 +349,7 @@ def _play_whole(plan, kin: Kinematics, tips: np.ndarray, notes):
     shapes = collision_bodies(plan.hand.spec)
     bk = body_keys(kin, tr.q, shapes)
     play, keys, exp = play_replay(tr, tips, bk, shapes, notes)
-    return _held_to_claims(play, notes, tr.end, plan.path), keys, exp, bk, shapes
+    return held_to_claims(play, notes, tr.end, plan.path), keys, exp, bk, shapes
 
 
 def check_play(traj_path: str | Trajectory, song_path: str | Song | None = None, *,
@@ -352,7 +360,9 @@ def check_play(traj_path: str | Trajectory, song_path: str | Song | None = None,
     ``simulate`` reports beside its physics. None for a catch file."""
     plan = read_plan(traj_path, allow_incomplete=allow_incomplete,
                      hand_override=hand_override)
-    notes = _song_notes(plan, song_path, None, song_options)
+    notes = plan_notes(plan, song_path, None, song_options)
+    if isinstance(plan, PairPlan):
+        return _check_pair(plan, None, notes, song_path, None, False).play
     if plan.task != "play":
         return None
     kin = Kinematics(plan.hand, plan.T_world_root)
@@ -361,7 +371,7 @@ def check_play(traj_path: str | Trajectory, song_path: str | Song | None = None,
 
 
 def _check_streamed(path: str, song_path, *, allow_incomplete, min_f1, hand_override, strict,
-                    song_options) -> CheckReport:
+                    song_options) -> CheckReport | PairReport:
     """``check_trajectory`` of a play file read as a stream: every rule judges the rows
     block by block (``PlayJudge``, ``LimitAudit``); kept per row only its time and what
     the song's notes need (bits). NotStreamable: read it whole."""
@@ -369,8 +379,10 @@ def _check_streamed(path: str, song_path, *, allow_incomplete, min_f1, hand_over
     if stream.head.metadata["task"] != "play":
         raise NotStreamable("a catch")
     plan = read_plan(stream.head, hand_override=hand_override, name=path)
+    notes = plan_notes(plan, song_path, min_f1, song_options)
+    if isinstance(plan, PairPlan):
+        return _check_pair(plan, stream, notes, song_path, min_f1, strict)
     hand, rate_hz = plan.hand, stream.rate_hz
-    notes = _song_notes(plan, song_path, min_f1, song_options)
     kin = Kinematics(hand, plan.T_world_root)
     shapes = collision_bodies(hand.spec)
     judge = PlayJudge(notes, rate_hz, shapes)
@@ -382,13 +394,23 @@ def _check_streamed(path: str, song_path, *, allow_incomplete, min_f1, hand_over
         audit.add(t, q, qm, np.nan_to_num(keys.kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)
         times.append(t)
     t_s = np.concatenate(times)
-    play = _held_to_claims(judge.finish(t_s), notes, stream.head.end, path)
-    problems = _play_problems(play, min_f1, strict)
+    play = held_to_claims(judge.finish(t_s), notes, stream.head.end, path)
+    problems = play_problems(play, min_f1, strict)
     limits, tendons = audit.finish()
-    return _report(plan, song_path, t_s, limits, tendons, play, None, min_f1, problems, None)
+    return check_report(plan, song_path, t_s, limits, tendons, play, None, min_f1, problems, None)
 
 
-def _report(plan, song_path, t_s: np.ndarray, limits, tendons, play, catch, min_f1,
+def _check_pair(plan: PairPlan, stream, notes, song_path, min_f1, strict) -> PairReport:
+    """A two-hand plan's check (``planner.check.pair``): its rows from ``stream`` (a
+    ``TrajectoryStream``) or, None, the file read whole."""
+    from planner.check.pair import check_pair_plan
+
+    tr = plan.trajectory
+    blocks = [(tr.t_s, tr.q, tr.q_motor)] if stream is None else stream.blocks()
+    return check_pair_plan(plan, blocks, notes, song_path, min_f1=min_f1, strict=strict)
+
+
+def check_report(plan, song_path, t_s: np.ndarray, limits, tendons, play, catch, min_f1,
             problems: list[str], replay: Replay | None) -> CheckReport:
     """The report: the limits' problems after the task's."""
     for lc in limits:
@@ -408,7 +430,7 @@ def _report(plan, song_path, t_s: np.ndarray, limits, tendons, play, catch, min_
         song_start_s=song_start_s(meta))
 
 
-def _held_to_claims(play: PlayResult, notes, end: dict[str, Any], path: str) -> PlayResult:
+def held_to_claims(play: PlayResult, notes, end: dict[str, Any], path: str) -> PlayResult:
     """``play`` with the end marker's claims held against it: every count and every
     note's outcome (types are checked without a song too)."""
     import dataclasses

@@ -39,7 +39,7 @@ from planner.music.keyboard import (
 )
 
 __all__ = [
-    "BED_MARGIN_M", "BODY_BED_DEPTH_M", "DOWN_DEPTH_M", "KEY_BED_DEPTH_M", "LATE_S", "NOTE_HIT_FRACTION", "N_KEYS",
+    "BED_MARGIN_M", "BODY_BED_DEPTH_M", "DOWN_DEPTH_M", "HANDS_GAP_M", "KEY_BED_DEPTH_M", "LATE_S", "NOTE_HIT_FRACTION", "N_KEYS",
     "KeyContacts", "NoteOutcome", "expected_keys", "frame_f1", "frame_scores",
     "key_contacts", "note_outcomes", "pitch_name", "song_frames",
 ]
@@ -53,6 +53,11 @@ INTERCEPT_TOL_M = 0.015  # ball centre vs palm_center + radius * normal at inter
 GRASP_WINDOW_S = 0.150  # the grasp must close within this after intercept_t
 GRASP_TOL_M = 0.010  # a fingertip "closed around" the ball: distance <= radius + this
 GRASP_MIN_TIPS = 3  # ... at least this many, the thumb among them
+# Two hands on one keyboard (``planner.check.handgap``): the least distance between any body
+# of one and any of the other. Twice the rail's stop margin (default.toml [drive]
+# stop_margin_m, 5 mm: a belt axis' end-stop bumpers and its homing repeatability): each
+# carriage may stand that far from where its rows put it, towards the other.
+HANDS_GAP_M = 0.010
 
 
 @dataclass(frozen=True)

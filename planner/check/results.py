@@ -294,35 +294,7 @@ class CheckReport:
                  f"{self.duration_s:.3f} s at {self.rate_hz:g} Hz"
                  + ("" if self.complete else " (INCOMPLETE file: no end marker)"))
         if self.play is not None:
-            p = self.play
-            L.append(f"keys (by the hand's bodies, spec section 2): {len(p.played)} key presses, "
-                     f"{len(p.key_bed_hits) + len(p.body_bed_hits)} key-bed hits")
-            if p.f1 is not None:
-                L.append(f"song {self.song}: frame F1 {p.f1:.4f} over its {p.song_frames} frames "
-                         f"(precision {p.precision:.4f}, recall {p.recall:.4f}); notes hit "
-                         f"{p.notes_hit}/{p.notes}, {len(p.late)} late"
-                         + (f"; required F1 >= {self.min_f1:g}" if self.min_f1 is not None else ""))
-            listing(L, "wrong presses", p.wrong_presses, lambda w: (
-                f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
-                f"{'+'.join(w.fingers) or '?'}"))
-            listing(L, "missed notes", p.missed, lambda m: (
-                f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
-                f"down {m.fraction_down:.0%}  {m.reason}"))
-            listing(L, "late notes", p.late, lambda n: (
-                f"{n.onset_s:8.3f} s  {n.name:4s} ({n.pitch})  key down {n.late_s * 1000:.0f} ms "
-                "after the onset"))
-            listing(L, "claims the replay contradicts", p.claim_mismatches, lambda c: (
-                f"{c.onset_s:8.3f} s  {c.name:4s} ({c.pitch})  note {c.note}: the plan says "
-                f"{c.claimed}, the replay finds it {c.found}"))
-            listing(L, "counts the replay contradicts", p.count_mismatches, lambda c: (
-                f"{c.key.value}: the plan says {c.claimed}, the replay finds {c.found}"))
-            listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
-                f"{h.time_s:8.3f} s  {h.finger:6s} {h.name:4s} ({h.pitch})  "
-                f"{h.depth_m * 1000:.2f} mm below the top (max {KEY_BED_DEPTH_M * 1000:g})"))
-            listing(L, "body key-bed hits", p.body_bed_hits, lambda h: (
-                f"{h.time_s:8.3f}-{h.end_s:.3f} s (row {h.row})  {h.name:4s} ({h.pitch})  "
-                f"{h.body} {h.depth_m * 1000:.2f} mm below the top (max "
-                f"{BODY_BED_DEPTH_M * 1000:g})"))
+            play_lines(L, self.play, self.song, self.min_f1)
         if self.catch is not None:
             c = self.catch
             err = "n/a" if c.intercept_error_m is None else f"{c.intercept_error_m * 1000:.1f} mm"
@@ -345,13 +317,52 @@ class CheckReport:
                 L.append(f"  live plan: {c.live.get('catch')}: {c.live.get('reason')}")
             listing(L, "early touches", c.early_touches, lambda e: (
                 f"{e.time_s:8.3f} s  {e.finger:6s} {e.distance_m * 1000:.1f} mm from the centre"))
-        L.append("limits (count, worst / limit, where):")
-        for lc in self.limits:
-            L.append(f"  {lc.category:18s} {'ok  ' if lc.ok else 'FAIL'} {lc.count:6d}  "
-                     f"{lc.worst:.6g} / {lc.limit:.6g} {lc.unit}  {lc.name} at {lc.time_s:.3f} s")
-        if self.tendons:
-            L.append("tendons (count, worst tension at the spool / design force, when):")
-            for tl in self.tendons:
-                L.append(f"  {tl.name:20s} {'ok  ' if tl.ok else 'FAIL'} {tl.count:6d}  "
-                         f"{tl.worst_n:.4g} / {tl.limit_n:.4g} N at {tl.time_s:.3f} s")
+        limit_lines(L, self.limits, self.tendons)
         return "\n".join(L)
+
+
+def play_lines(L: list[str], p: PlayResult, song: str | None, min_f1: float | None,
+               by: str = "the hand's bodies") -> None:
+    """A summary's lines of a play's keys (held down ``by``): presses, the song's scores,
+    the listings."""
+    L.append(f"keys (by {by}, spec section 2): {len(p.played)} key presses, "
+             f"{len(p.key_bed_hits) + len(p.body_bed_hits)} key-bed hits")
+    if p.f1 is not None:
+        L.append(f"song {song}: frame F1 {p.f1:.4f} over its {p.song_frames} frames "
+                 f"(precision {p.precision:.4f}, recall {p.recall:.4f}); notes hit "
+                 f"{p.notes_hit}/{p.notes}, {len(p.late)} late"
+                 + (f"; required F1 >= {min_f1:g}" if min_f1 is not None else ""))
+    listing(L, "wrong presses", p.wrong_presses, lambda w: (
+        f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
+        f"{'+'.join(w.fingers) or '?'}"))
+    listing(L, "missed notes", p.missed, lambda m: (
+        f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
+        f"down {m.fraction_down:.0%}  {m.reason}"))
+    listing(L, "late notes", p.late, lambda n: (
+        f"{n.onset_s:8.3f} s  {n.name:4s} ({n.pitch})  key down {n.late_s * 1000:.0f} ms "
+        "after the onset"))
+    listing(L, "claims the replay contradicts", p.claim_mismatches, lambda c: (
+        f"{c.onset_s:8.3f} s  {c.name:4s} ({c.pitch})  note {c.note}: the plan says "
+        f"{c.claimed}, the replay finds it {c.found}"))
+    listing(L, "counts the replay contradicts", p.count_mismatches, lambda c: (
+        f"{c.key.value}: the plan says {c.claimed}, the replay finds {c.found}"))
+    listing(L, "key-bed hits", p.key_bed_hits, lambda h: (
+        f"{h.time_s:8.3f} s  {h.finger:6s} {h.name:4s} ({h.pitch})  "
+        f"{h.depth_m * 1000:.2f} mm below the top (max {KEY_BED_DEPTH_M * 1000:g})"))
+    listing(L, "body key-bed hits", p.body_bed_hits, lambda h: (
+        f"{h.time_s:8.3f}-{h.end_s:.3f} s (row {h.row})  {h.name:4s} ({h.pitch})  "
+        f"{h.body} {h.depth_m * 1000:.2f} mm below the top (max "
+        f"{BODY_BED_DEPTH_M * 1000:g})"))
+
+
+def limit_lines(L: list[str], limits, tendons) -> None:
+    """A summary's lines of the limit audit and the tendons."""
+    L.append("limits (count, worst / limit, where):")
+    for lc in limits:
+        L.append(f"  {lc.category:18s} {'ok  ' if lc.ok else 'FAIL'} {lc.count:6d}  "
+                 f"{lc.worst:.6g} / {lc.limit:.6g} {lc.unit}  {lc.name} at {lc.time_s:.3f} s")
+    if tendons:
+        L.append("tendons (count, worst tension at the spool / design force, when):")
+        for tl in tendons:
+            L.append(f"  {tl.name:20s} {'ok  ' if tl.ok else 'FAIL'} {tl.count:6d}  "
+                     f"{tl.worst_n:.4g} / {tl.limit_n:.4g} N at {tl.time_s:.3f} s")

@@ -26,6 +26,13 @@ def run(a: argparse.Namespace) -> int:
                               min_f1=a.min_f1, strict=a.strict, song_options=song_options(a),
                               hand_override=a.hand,
                               replay=bool(a.report or a.html))
+    from planner.check.pairreport import PairReport
+
+    if (a.report or a.html) and isinstance(report, PairReport):
+        from planner.errors import InputError
+
+        raise InputError(f"{a.trajectory}: --report and --html draw a one-hand plan; this "
+                         "file has two hands (no pictures of two yet)")
     if a.played:
         from planner.music.midi import Note, write_notes_midi
 

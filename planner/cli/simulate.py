@@ -33,6 +33,9 @@ def run(a: argparse.Namespace) -> int:
     replay = run_replay(a.trajectory, a.song, contact=a.contact, min_f1=a.min_f1,
                         strict=a.strict, allow_incomplete=a.allow_incomplete,
                         song_options=song_options(a), hand_override=a.hand)
+    if (a.video or a.html) and not hasattr(replay.hand, "urdf"):
+        raise InputError(f"{a.trajectory}: --video and --html draw a one-hand plan; this "
+                         "file has two hands (no pictures of two yet)")
     write_pictures(replay, a.video, a.html, progress=not a.json)
     report = replay.report
     if a.json:

@@ -101,3 +101,64 @@ def pair_urdf_text(hands: tuple[HandModel, ...]) -> str:
                         f'    <origin xyz="{xyz}" rpy="{rpy}"/>', "  </joint>"]
     out.append("</robot>")
     return "\n".join(out) + "\n"
+
+
+class HandPair:
+    """Two hands as the one robot of a two-hand file (a left hand, then a right one): the
+    columns of its rows (``joint_names``, ``motor_names``: each hand's, prefixed), its
+    limits (``lower``, ``upper``, ``velocity``: each hand's, in column order) and its
+    motors' angles, so that the one trajectory writer (``planner.trajfile``) and its guard
+    take it as they take a hand; ``split`` gives each hand its own columns back."""
+
+    def __init__(self, hands: tuple[HandModel, ...]) -> None:
+        check_pair(hands)
+        self.hands: tuple[HandModel, HandModel] = (hands[0], hands[1])
+        self.prefixes = tuple(prefix(h) for h in hands)
+        self.name = pair_name(hands)
+        self.joint_names, self.motor_names = column_names(hands)
+        self.n = len(self.joint_names)
+        self.n_motor = len(self.motor_names)
+        self.lower = np.concatenate([h.lower for h in hands])
+        self.upper = np.concatenate([h.upper for h in hands])
+        self.velocity = np.concatenate([h.velocity for h in hands])
+        self.T_world_root = np.eye(4)  # (the pair's root is the keyboard frame itself)
+        self._cut = hands[0].n
+        self._cut_motor = hands[0].n_motor
+        self._urdf: str | None = None
+
+    @property
+    def urdf(self) -> str:
+        """The pair's URDF text (``pair_urdf_text``), made once."""
+        if self._urdf is None:
+            self._urdf = pair_urdf_text(self.hands)
+        return self._urdf
+
+    @property
+    def urdf_sha256(self) -> str:
+        from planner.hand.urdf import urdf_sha256
+
+        return urdf_sha256(self.urdf)
+
+    def split(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The left hand's joint columns of ``q`` (..., n) and the right hand's."""
+        q = np.asarray(q)
+        return q[..., :self._cut], q[..., self._cut:]
+
+    def split_motor(self, q_motor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The left hand's motor columns of ``q_motor`` and the right hand's."""
+        q_motor = np.asarray(q_motor)
+        return q_motor[..., :self._cut_motor], q_motor[..., self._cut_motor:]
+
+    def motor_angles(self, q: np.ndarray) -> np.ndarray:
+        """Each hand's motor angles of its own joints (``HandModel.motor_angles``)."""
+        return np.concatenate([h.motor_angles(p) for h, p in zip(self.hands, self.split(q))],
+                              axis=-1)
+
+
+def load_pair(names: tuple[str, ...] | str) -> HandPair:
+    """The pair of two hand names (``"default-left,default"`` or a tuple), rebuilt."""
+    from planner.hand.model import load_hand
+
+    if isinstance(names, str):
+        names = tuple(n.strip() for n in names.split(","))
+    return HandPair(tuple(load_hand(n) for n in names))

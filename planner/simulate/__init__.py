@@ -28,7 +28,8 @@ from typing import Any
 __all__ = ["Replay", "run_replay", "simulate_trajectory"]
 
 
-def _problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
+def physics_problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
+    """The verdict's lines of a replay's keys, motors and catch (see the docstring)."""
     out = []
     if play is not None:
         if play.wrong_keys:
@@ -55,6 +56,22 @@ def _problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
     if catch is not None and not catch.held:
         out.append(f"ball not held in physics: {catch.end_distance_m * 1000:.1f} mm from the "
                    f"palm centre at the end")
+    return out
+
+
+def record_problems(rec) -> list[str]:
+    """The verdict's lines of the replay itself: a diverged simulation, a hand faster than
+    the collision selection's margin."""
+    out = []
+    if rec.unstable_at_s is not None:
+        out.append(f"the simulation diverged near {rec.unstable_at_s:.3f} s (MuJoCo "
+                   "reset its state: forces beyond what the solver can resolve)")
+    if rec.reach_overruns:
+        from planner.simulate.nearkeys import REACH_MARGIN_M
+
+        out.append(f"the hand moved more than {500 * REACH_MARGIN_M:.0f} mm within a "
+                   f"row {rec.reach_overruns} times: the replay's collision selection "
+                   "may have missed a contact")
     return out
 
 
@@ -99,6 +116,13 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
 
     require_mujoco()  # the clear message before any work
     plan = read_plan(traj_path, allow_incomplete=allow_incomplete, hand_override=hand_override)
+    from planner.pairfile import PairPlan
+
+    if isinstance(plan, PairPlan):  # (a two-hand file: planner.simulate.pair)
+        from planner.simulate.pair import run_pair_replay
+
+        return run_pair_replay(plan, song_path, contact=contact, min_f1=min_f1, strict=strict,
+                               song_options=song_options)
     tr, name, hand, T = plan.trajectory, plan.path, plan.hand, plan.T_world_root
     # the kinematic check validates the file (hand, hash, columns, pose, song) and gives
     # the F1 to compare with (a play file's key replay: its limit audit is not needed)
@@ -131,16 +155,8 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     else:
         catch = score_catch(rec, float(meta["intercept_t"]), ball.radius_m)
     motors = motor_efforts(rec, hand)
-    problems = _problems(play, motors, catch, min_f1, strict, claims)
-    if rec.reach_overruns:
-        from planner.simulate.nearkeys import REACH_MARGIN_M
-
-        problems.insert(0, f"the hand moved more than {500 * REACH_MARGIN_M:.0f} mm within a "
-                           f"row {rec.reach_overruns} times: the replay's collision selection "
-                           "may have missed a contact")
-    if rec.unstable_at_s is not None:
-        problems.insert(0, f"the simulation diverged near {rec.unstable_at_s:.3f} s (MuJoCo "
-                           "reset its state: forces beyond what the solver can resolve)")
+    problems = record_problems(rec) + physics_problems(play, motors, catch, min_f1, strict,
+                                                       claims)
     song_name = None if song_path is None else (
         os.fspath(song_path) if isinstance(song_path, (str, os.PathLike)) else song_path.source)
     report = SimulateReport(

@@ -72,6 +72,18 @@ def servo_set(hand: HandModel) -> ServoSet:
     return ServoSet(hand.motor_names, np.array(hand._drive), ratio, eff, peak, arm, kp)
 
 
+def joined_servos(sets: list[ServoSet], prefixes: list[str], n_joints: list[int]) -> ServoSet:
+    """The servos of a scene's hands as one set (one hand: its own): names prefixed,
+    each driven joint's index into the hands' joints in order."""
+    if len(sets) == 1:
+        return sets[0]
+    offset = np.cumsum([0, *n_joints[:-1]])
+    return ServoSet(tuple(p + n for s, p in zip(sets, prefixes) for n in s.names),
+                    np.concatenate([s.drive + o for s, o in zip(sets, offset)]),
+                    *(np.concatenate([getattr(s, f) for s in sets])
+                      for f in ("ratio", "efficiency", "peak_torque_nm", "armature", "kp")))
+
+
 def critical_damping(kp: np.ndarray, inertia: np.ndarray) -> np.ndarray:
     """``kv = 2 zeta sqrt(kp I)`` for each servo."""
     return 2.0 * DAMPING_RATIO * np.sqrt(kp * inertia)

@@ -118,15 +118,16 @@ def mjcf_vec(xs) -> str:
     return " ".join(f"{float(x):.12g}" for x in xs)
 
 
-def _geoms(body: ET.Element, shapes: tuple[Body, ...], pads_only: bool) -> None:
+def _geoms(body: ET.Element, shapes: tuple[Body, ...], pads_only: bool,
+           collide_bits: tuple[int, int] = (HAND_CONTYPE, HAND_CONAFFINITY)) -> None:
     """A link's collision geoms: its bodies (``planner.hand.bodies``, the one definition),
     a capsule as a capsule; ``pads_only``: the pad spheres become ``PAD_POINT_RADIUS_M``
     spheres resting on the pad points and the other shapes are drawn only (the pictures)."""
     for b in shapes:
         pad = b.kind == SPHERE and b.name.endswith("_pad")
         collide = pad or not pads_only
-        attrs = {"contype": str(HAND_CONTYPE if collide else 0),
-                 "conaffinity": str(HAND_CONAFFINITY if collide else 0),
+        attrs = {"contype": str(collide_bits[0] if collide else 0),
+                 "conaffinity": str(collide_bits[1] if collide else 0),
                  "friction": f"{PAD_FRICTION:g} 0.005 0.0001", "mass": "0",
                  "rgba": "0.9 0.5 0.4 1" if pad else "0.75 0.6 0.5 1"}
         if b.kind == CAPSULE:
@@ -145,12 +146,16 @@ def _geoms(body: ET.Element, shapes: tuple[Body, ...], pads_only: bool) -> None:
 
 def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
                 armature: dict[str, float], shapes: tuple[Body, ...],
-                pads_only: bool = False) -> list[UrdfJoint]:
+                pads_only: bool = False,
+                collide_bits: tuple[int, int] = (HAND_CONTYPE, HAND_CONAFFINITY)
+                ) -> list[UrdfJoint]:
     """Add the URDF's tree under ``parent`` (the root link's body); returns its joints.
     ``shapes``: the hand's collision bodies (``planner.hand.bodies.collision_bodies``).
 
     ``pads_only``: the only collision geometry is a ``PAD_POINT_RADIUS_M`` sphere on each
     pad point (the kinematic check's contact model, with the physics of the rest).
+    ``collide_bits``: the geoms' (contype, conaffinity) (two hands: each its own bit, so
+    that each touches the other's, ``scene.pair_bits``).
 
     ``armature``: a joint's reflected rotor inertia (kg m^2), by joint name. Each tip
     link gets a pad sphere geom ``<finger>_pad`` and a site ``<link>`` at the pad point.
@@ -168,7 +173,7 @@ def hand_bodies(urdf: str, parent: ET.Element, tip_links: tuple[str, ...],
         if link.mass_kg > 0:
             ET.SubElement(body_el, "inertial", pos=mjcf_vec(link.com_m), mass=f"{link.mass_kg:.12g}",
                           diaginertia=mjcf_vec(link.inertia_diag))
-        _geoms(body_el, tuple(by_link.get(link_name, ())), pads_only)
+        _geoms(body_el, tuple(by_link.get(link_name, ())), pads_only, collide_bits)
         for j in children.get(link_name, []):
             child = ET.SubElement(body_el, "body", name=j.child, pos=mjcf_vec(j.xyz_m),
                                   quat=mjcf_vec(rpy_quat(j.rpy_rad)))

@@ -48,6 +48,8 @@ class SimRecord:
     wall_s: float
     unstable_at_s: float | None = None  # MuJoCo reset a diverging state here (first time)
     reach_overruns: int = 0  # rows over which the hand moved past half nearkeys' margin
+    hand_contacts: tuple[tuple[int, int, int], ...] = ()  # two hands: (row, geom of the
+    # left, geom of the right) of every contact between them at a row
 
 
 def _ctrl_rows(scene: Scene, ref: act.Reference) -> tuple[np.ndarray, np.ndarray]:
@@ -139,8 +141,8 @@ def _near(scene: Scene, data):
     from planner.simulate.hand_mjcf import HAND_CONAFFINITY, HAND_CONTYPE
 
     m = scene.model
-    hand = np.flatnonzero((m.geom_contype == HAND_CONTYPE)
-                          & (m.geom_conaffinity == HAND_CONAFFINITY))
+    hand = np.flatnonzero((m.geom_contype & HAND_CONTYPE).astype(bool)
+                          & (m.geom_conaffinity & HAND_CONAFFINITY).astype(bool))
     return nearkeys.near_keys(m, data, scene.key_geom_key, hand)
 
 
@@ -190,11 +192,37 @@ def _run(scene: Scene, data, mujoco, base, slope, lims, n_sub: int, ball, vadr, 
     return rows, unstable, overruns
 
 
-def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
-             ball: Ball | None = None,
+def _reference(scene: Scene, hand: HandModel | tuple[HandModel, ...], q: np.ndarray,
+               t_s: np.ndarray) -> act.Reference:
+    """The servos' reference: one hand's, or each hand's of its own columns, joined."""
+    if isinstance(hand, HandModel):
+        return act.reference(hand, q, t_s, inverse_dynamics(scene))
+    cut = np.cumsum([0, *(h.n for h in hand)])
+    refs = [act.reference(h, q[:, a:b], t_s, inverse_dynamics(scene, i))
+            for i, (h, a, b) in enumerate(zip(hand, cut[:-1], cut[1:]))]
+    return act.Reference(*(np.concatenate([getattr(r, f) for r in refs], axis=1)
+                           for f in ("q_rad", "qd_rad_s", "feedforward_nm", "ratio")))
+
+
+def hand_contacts(rows: sm.Rows, geom_hand: np.ndarray | None) -> tuple[tuple[int, int, int], ...]:
+    """Every contact between two hands' geoms at a row: (row, the first hand's geom, the
+    second's); none for one hand."""
+    if geom_hand is None or geom_hand.max(initial=-1) < 1 or not rows.contact_rows:
+        return ()
+    out = []
+    for k, geoms in zip(rows.contact_rows, rows.contact_geoms):
+        h1, h2 = geom_hand[geoms[:, 0]], geom_hand[geoms[:, 1]]
+        for (g1, g2), a, b in zip(geoms.tolist(), h1.tolist(), h2.tolist()):
+            if a >= 0 and b >= 0 and a != b:
+                out.append((int(k), g1, g2) if a < b else (int(k), g2, g1))
+    return tuple(out)
+
+
+def simulate(scene: Scene, hand: HandModel | tuple[HandModel, ...], t_s: np.ndarray,
+             q: np.ndarray, *, ball: Ball | None = None,
              on_progress: Callable[[int, int], None] | None = None) -> SimRecord:
     """Replay rows ``q`` (T, n) at times ``t_s`` in ``scene`` (built for ``hand``
-    mounted where the rows were planned)."""
+    mounted where the rows were planned; two hands: a tuple, ``q`` their columns)."""
     import time
 
     import mujoco
@@ -206,7 +234,7 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
     T = len(t_s)
     dt_row = float(np.median(np.diff(t_s))) if T > 1 else 0.01
     n_sub = max(1, round(dt_row / TIMESTEP_S))
-    ref = act.reference(hand, q, t_s, inverse_dynamics(scene))
+    ref = _reference(scene, hand, q, t_s)
     base, slope = _ctrl_rows(scene, ref)
     lims = scene.servos.force_limit(ref.ratio)  # (T, n_motor): elementwise, row by row alike
     rows, unstable, overruns = _run(scene, data, mujoco, base, slope, lims, n_sub, ball, vadr,
@@ -225,4 +253,5 @@ def simulate(scene: Scene, hand: HandModel, t_s: np.ndarray, q: np.ndarray, *,
                      ball_contacts=rows.ball_n.astype(int), ball_force_n=rows.ball_f,
                      ball_fingers=ball_fingers,
                      substeps=n_sub, wall_s=time.perf_counter() - wall0,
-                     unstable_at_s=unstable, reach_overruns=overruns)
+                     unstable_at_s=unstable, reach_overruns=overruns,
+                     hand_contacts=hand_contacts(rows, scene.geom_hand))

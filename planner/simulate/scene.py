@@ -19,6 +19,8 @@ import numpy as np
 from planner.errors import InputError
 from planner.hand.bodies import collision_bodies
 from planner.hand.model import GRAVITY_WORLD, HandModel
+from planner.hand.pair import prefixed_spec
+from planner.hand.urdf import urdf_text
 from planner.simulate import actuators as act
 from planner.simulate.hand_mjcf import (
     HAND_CONAFFINITY,
@@ -74,12 +76,16 @@ class Scene:
     hand_dof: np.ndarray  # (n,) dof address of each hand joint
     key_qpos: np.ndarray  # (88,) qpos address of each key hinge (empty without keys)
     key_geom_key: np.ndarray  # (ngeom,) key index of a geom, -1 for none
-    geom_finger: np.ndarray  # (ngeom,) finger index (the hand's fingers) of a hand geom, -1 none
-    tip_sites: np.ndarray  # site ids of the pad points, the hand's fingers' order
-    palm_site: int
+    geom_finger: np.ndarray  # (ngeom,) finger index (the hand's fingers; two hands: the
+    # left's, then the right's) of a hand geom, -1 none
+    tip_sites: np.ndarray  # site ids of the pad points, the hand's fingers' order (each hand's)
+    palm_site: int  # (two hands: the left's; a play reads none)
     ball_body: int  # -1 without a ball
     ball_geom: int
     servos: act.ServoSet
+    geom_hand: np.ndarray | None = None  # (ngeom,) the part (hand) of a hand geom, -1 none
+    hand_dofs: tuple[np.ndarray, ...] = ()  # each hand's dof addresses (its part of hand_dof)
+    hand_qposes: tuple[np.ndarray, ...] = ()  # each hand's qpos addresses
 
 
 def _f(x) -> str:
@@ -133,12 +139,13 @@ def _ball(world: ET.Element, ball: Ball) -> None:
                   rgba="0.8 0.9 0.2 1")
 
 
-def _couplings(eq: ET.Element, hand: HandModel, joints) -> None:
+def _couplings(eq: ET.Element, hand: HandModel, joints, pre: str = "") -> None:
     """Each coupling as ``dep = poly(src)``: the URDF's mimic (linear) as it is; a
-    nonlinear law (Mk5) fitted by a quartic over the source joint's range."""
+    nonlinear law (Mk5) fitted by a quartic over the source joint's range. ``pre``: the
+    hand's prefix in a two-hand scene."""
     mimic = {j.name: j.mimic for j in joints if j.mimic is not None}
     for c in hand.couplings:
-        dep, src = hand.joint_names[c.dep], hand.joint_names[c.src]
+        dep, src = pre + hand.joint_names[c.dep], pre + hand.joint_names[c.src]
         if dep in mimic and mimic[dep][0] == src:
             coef = [mimic[dep][2], mimic[dep][1], 0.0, 0.0, 0.0]
         else:
@@ -148,10 +155,72 @@ def _couplings(eq: ET.Element, hand: HandModel, joints) -> None:
                       polycoef=" ".join(f"{v:.12g}" for v in coef))
 
 
+@dataclass(frozen=True)
+class ScenePart:
+    """One hand of a scene: its model, where its root is (``T_world_root``), its servos,
+    the prefix of its names ("" alone; ``left.``/``right.`` in a two-hand scene) and its
+    geoms' (contype, conaffinity)."""
+
+    hand: HandModel
+    T_world_root: np.ndarray
+    servos: act.ServoSet
+    prefix: str = ""
+    collide_bits: tuple[int, int] = (HAND_CONTYPE, HAND_CONAFFINITY)
+
+
+PAIR_BIT = 4  # two hands: the left's geoms carry it in contype, the right's in conaffinity
+
+
+def pair_bits(i: int) -> tuple[int, int]:
+    """Hand ``i`` of two: its geoms' (contype, conaffinity), so that each hand's geoms
+    touch the keys, the ball and the other hand's geoms, never its own (MuJoCo collides
+    two geoms when contype of one and conaffinity of the other share a bit)."""
+    return ((HAND_CONTYPE | PAIR_BIT, HAND_CONAFFINITY) if i == 0
+            else (HAND_CONTYPE, HAND_CONAFFINITY | PAIR_BIT))
+
+
+def _hand_part(world: ET.Element, part: ScenePart, contact: str) -> list:
+    """A hand's bodies under a mount body at its root's pose, its palm site; its joints."""
+    hand, pre, T = part.hand, part.prefix, np.asarray(part.T_world_root, dtype=float)
+    mount = ET.SubElement(world, "body", name=f"{pre}mount", pos=" ".join(f"{float(v):.12g}" for v in T[:3, 3]),
+                          quat=mjcf_vec(matrix_quat(T[:3, :3])))
+    armature = {pre + hand.joint_names[int(d)]: float(a)
+                for d, a in zip(part.servos.drive, part.servos.armature)}
+    spec = hand.spec if not pre else prefixed_spec(hand.spec, pre)
+    joints = hand_bodies(hand.urdf if not pre else urdf_text(spec), mount,
+                         tuple(pre + t for t in hand.tip_frames), armature,
+                         collision_bodies(spec), pads_only=contact == "pads",
+                         collide_bits=part.collide_bits)
+    palm = _find_body(mount, pre + "palm_center")  # (an empty Element is falsy: no `or`)
+    ET.SubElement(mount if palm is None else palm, "site", name=f"{pre}palm_center_site",
+                  size="0.002")
+    return joints
+
+
+def _actuators(acts: ET.Element, part: ScenePart) -> None:
+    servos, pre = part.servos, part.prefix
+    for m, name in enumerate(servos.names):
+        kp = servos.kp[m]
+        lim = servos.force_limit(servos.ratio)[m]
+        ET.SubElement(acts, "general", name=f"motor.{pre}{name}",
+                      joint=pre + part.hand.joint_names[int(servos.drive[m])], gaintype="fixed",
+                      gainprm=_f(float(kp)), biastype="affine", biasprm=mjcf_vec((0.0, -kp, 0.0)),
+                      forcelimited="true", forcerange=mjcf_vec((-lim, lim)))
+
+
 def scene_xml(hand: HandModel, T_world_root: np.ndarray, keyboard: bool,
               ball: Ball | None, servos: act.ServoSet,
               contact: str = "full") -> tuple[str, list]:
-    root = ET.Element("mujoco", model=f"replay_{hand.name}")
+    """The scene of one hand (``parts_xml`` of one part)."""
+    return parts_xml(hand.name, (ScenePart(hand, T_world_root, servos),), keyboard, ball,
+                     contact)
+
+
+def parts_xml(name: str, parts: tuple[ScenePart, ...], keyboard: bool, ball: Ball | None,
+              contact: str = "full") -> tuple[str, list]:
+    """The MJCF text of a scene of one hand or two (``parts``), and the first hand's
+    joints."""
+    root = ET.Element("mujoco", model=f"replay_{name}")
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", boundmass="1e-6",
                   boundinertia="1e-12")
     option = ET.SubElement(root, "option", timestep=_f(TIMESTEP_S), integrator="implicitfast",
@@ -166,29 +235,18 @@ def scene_xml(hand: HandModel, T_world_root: np.ndarray, keyboard: bool,
     ET.SubElement(default, "joint", solreflimit=mjcf_vec(HARD_SOLREF), solimplimit=mjcf_vec(HARD_SOLIMP))
     ET.SubElement(default, "equality", solref=mjcf_vec(HARD_SOLREF), solimp=mjcf_vec(HARD_SOLIMP))
     world = ET.SubElement(root, "worldbody")
-    T = np.asarray(T_world_root, dtype=float)
-    mount = ET.SubElement(world, "body", name="mount", pos=" ".join(f"{float(v):.12g}" for v in T[:3, 3]),
-                          quat=mjcf_vec(matrix_quat(T[:3, :3])))
-    armature = {hand.joint_names[int(d)]: float(a) for d, a in zip(servos.drive, servos.armature)}
-    joints = hand_bodies(hand.urdf, mount, tuple(hand.tip_frames), armature,
-                         collision_bodies(hand.spec), pads_only=contact == "pads")
-    palm = _find_body(mount, "palm_center")  # (an empty Element is falsy: no `or`)
-    ET.SubElement(mount if palm is None else palm, "site", name="palm_center_site",
-                  size="0.002")
+    joints = [_hand_part(world, part, contact) for part in parts]
     if keyboard:
         _keyboard(world)
     if ball is not None:
         _ball(world, ball)
-    _couplings(ET.SubElement(root, "equality"), hand, joints)
+    eq = ET.SubElement(root, "equality")
+    for part, js in zip(parts, joints):
+        _couplings(eq, part.hand, js, part.prefix)
     acts = ET.SubElement(root, "actuator")
-    for m, name in enumerate(servos.names):
-        kp = servos.kp[m]
-        lim = servos.force_limit(servos.ratio)[m]
-        ET.SubElement(acts, "general", name=f"motor.{name}",
-                      joint=hand.joint_names[int(servos.drive[m])], gaintype="fixed",
-                      gainprm=_f(float(kp)), biastype="affine", biasprm=mjcf_vec((0.0, -kp, 0.0)),
-                      forcelimited="true", forcerange=mjcf_vec((-lim, lim)))
-    return ET.tostring(root, encoding="unicode"), joints
+    for part in parts:
+        _actuators(acts, part)
+    return ET.tostring(root, encoding="unicode"), joints[0]
 
 
 def _find_body(el: ET.Element, name: str) -> ET.Element | None:
@@ -205,18 +263,74 @@ def build_scene(hand: HandModel, T_world_root: np.ndarray, *, keyboard: bool = F
     ``contact``: "full" (every finger segment, the palm, the pads: the URDF's shapes) or
     "pads" (only the pad points, as the kinematic check: the dynamics without the
     geometry of the fingers' bodies)."""
+    return build_parts(hand.name, (ScenePart(hand, T_world_root, act.servo_set(hand)),),
+                       keyboard=keyboard, ball=ball, contact=contact)
+
+
+def pair_parts(hands: tuple[HandModel, ...], poses: tuple[np.ndarray, ...],
+               prefixes: tuple[str, ...]) -> tuple[ScenePart, ...]:
+    """The parts of a two-hand scene: each hand at its pose, its names prefixed, its
+    geoms touching the other hand's (``pair_bits``)."""
+    return tuple(ScenePart(h, T, act.servo_set(h), p, pair_bits(i))
+                 for i, (h, T, p) in enumerate(zip(hands, poses, prefixes)))
+
+
+def build_parts(name: str, parts: tuple[ScenePart, ...], *, keyboard: bool = False,
+                ball: Ball | None = None, contact: str = "full") -> Scene:
+    """``build_scene`` of one hand or two (``parts``): the hands' joints, dofs, servos
+    and fingers in the parts' order, each servo's damping from its own hand."""
     if contact not in CONTACT_MODELS:
         raise InputError(f"contact model must be one of {', '.join(CONTACT_MODELS)}: {contact!r}")
     mujoco = require_mujoco()
-    servos = act.servo_set(hand)
-    xml, _ = scene_xml(hand, T_world_root, keyboard, ball, servos, contact)
+    xml, _ = parts_xml(name, parts, keyboard, ball, contact)
     model = mujoco.MjModel.from_xml_string(xml)
-    hand_qpos = np.array([model.jnt_qposadr[model.joint(n).id] for n in hand.joint_names])
-    hand_dof = np.array([model.jnt_dofadr[model.joint(n).id] for n in hand.joint_names])
     data = mujoco.MjData(model)
-    data.qpos[hand_qpos] = hand.q_neutral
+    qpos, dofs = [], []
+    for part in parts:
+        names = [part.prefix + n for n in part.hand.joint_names]
+        qpos.append(np.array([model.jnt_qposadr[model.joint(n).id] for n in names]))
+        dofs.append(np.array([model.jnt_dofadr[model.joint(n).id] for n in names]))
+        data.qpos[qpos[-1]] = part.hand.q_neutral
     mujoco.mj_forward(model, data)
-    # a driven joint's inertia with its coupled joints moving along: v^T M v, v = S's column
+    kvs = [_servo_damping(model, data, part, dof, mujoco) for part, dof in zip(parts, dofs)]
+    model.actuator_biasprm[:, 2] = -np.concatenate(kvs)
+    key_qpos = np.array([model.jnt_qposadr[model.joint(f"{k.name}_slide").id]
+                         for k in key_bodies()] if keyboard else [], dtype=int)
+    key_geom = np.full(model.ngeom, -1, dtype=int)
+    geom_finger = np.full(model.ngeom, -1, dtype=int)
+    geom_hand = np.full(model.ngeom, -1, dtype=int)
+    fingers = [(i, part.prefix + f) for i, part in enumerate(parts) for f in part.hand.fingers]
+    for g in range(model.ngeom):
+        name = model.geom(g).name
+        body = model.body(model.geom_bodyid[g]).name
+        if name.startswith("key_"):
+            key_geom[g] = int(name.split("_")[1]) - 21
+        elif (model.geom_contype[g] & HAND_CONTYPE) and \
+                (model.geom_conaffinity[g] & HAND_CONAFFINITY):
+            geom_finger[g] = next((k for k, (_, f) in enumerate(fingers)
+                                   if body.startswith(f)), -1)
+            geom_hand[g] = next(i for i, part in enumerate(parts)
+                                if body.startswith(part.prefix))
+    ball_body = model.body("ball").id if ball is not None else -1
+    first = parts[0]
+    return Scene(model=model, xml=xml, hand_qpos=np.concatenate(qpos),
+                 hand_dof=np.concatenate(dofs), key_qpos=key_qpos, key_geom_key=key_geom,
+                 geom_finger=geom_finger,
+                 tip_sites=np.array([model.site(p.prefix + f).id for p in parts
+                                     for f in p.hand.tip_frames]),
+                 palm_site=model.site(f"{first.prefix}palm_center_site").id,
+                 ball_body=ball_body,
+                 ball_geom=model.geom("ball").id if ball is not None else -1,
+                 servos=act.joined_servos([p.servos for p in parts],
+                                          [p.prefix for p in parts],
+                                          [p.hand.n for p in parts]),
+                 geom_hand=geom_hand, hand_dofs=tuple(dofs), hand_qposes=tuple(qpos))
+
+
+def _servo_damping(model, data, part: ScenePart, hand_dof: np.ndarray, mujoco) -> np.ndarray:
+    """A hand's servos' damping: critical for a driven joint's inertia with its coupled
+    joints moving along (v^T M v, v = S's column)."""
+    hand, servos = part.hand, part.servos
     S = hand.dq_dindependent(hand.q_neutral)
     col = {int(j): k for k, j in enumerate(hand.independent)}
     inertia = np.empty(len(servos.drive))
@@ -226,57 +340,41 @@ def build_scene(hand: HandModel, T_world_root: np.ndarray, *, keyboard: bool = F
         v[hand_dof] = S[:, col[int(d)]]
         mujoco.mj_mulM(model, data, Mv, v)
         inertia[m] = float(v @ Mv)
-    kv = act.critical_damping(servos.kp, inertia)
-    model.actuator_biasprm[:, 2] = -kv
-    key_qpos = np.array([model.jnt_qposadr[model.joint(f"{k.name}_slide").id]
-                         for k in key_bodies()] if keyboard else [], dtype=int)
-    key_geom = np.full(model.ngeom, -1, dtype=int)
-    geom_finger = np.full(model.ngeom, -1, dtype=int)
-    for g in range(model.ngeom):
-        name = model.geom(g).name
-        body = model.body(model.geom_bodyid[g]).name
-        if name.startswith("key_"):
-            key_geom[g] = int(name.split("_")[1]) - 21
-        elif model.geom_contype[g] == HAND_CONTYPE and model.geom_conaffinity[g] == \
-                HAND_CONAFFINITY:
-            geom_finger[g] = next((i for i, f in enumerate(hand.fingers) if body.startswith(f)), -1)
-    ball_body = model.body("ball").id if ball is not None else -1
-    return Scene(model=model, xml=xml, hand_qpos=hand_qpos, hand_dof=hand_dof,
-                 key_qpos=key_qpos, key_geom_key=key_geom, geom_finger=geom_finger,
-                 tip_sites=np.array([model.site(f).id for f in hand.tip_frames]),
-                 palm_site=model.site("palm_center_site").id, ball_body=ball_body,
-                 ball_geom=model.geom("ball").id if ball is not None else -1, servos=servos)
+    return act.critical_damping(servos.kp, inertia)
 
 
 def servo_kv(scene: Scene) -> np.ndarray:
     return -np.asarray(scene.model.actuator_biasprm[:, 2])
 
 
-def inverse_dynamics(scene: Scene):
+def inverse_dynamics(scene: Scene, part: int | None = None):
     """``f(q, qd, qdd) -> tau`` (n,): the generalised forces on the hand's joints that
     give it acceleration ``qdd`` at ``q, qd`` in this scene's model without contacts
     (``M(q) qdd + c(q, qd)``: links, rotor inertia as armature, Coriolis, gravity). The
     couplings' constraint forces are left out: a servo's feedforward sums its coupled
-    joints' forces (``actuators.reference``)."""
+    joints' forces (``actuators.reference``). ``part``: hand ``part`` of a two-hand scene
+    alone (its joints; the hands are separate trees, so neither moves the other's)."""
     mujoco = require_mujoco()
     model = scene.model
     data = mujoco.MjData(model)
     acc = np.zeros(model.nv)
     out = np.zeros(model.nv)
+    qpos = scene.hand_qpos if part is None else scene.hand_qposes[part]
+    dof = scene.hand_dof if part is None else scene.hand_dofs[part]
 
     def f(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-        data.qpos[scene.hand_qpos] = q
+        data.qpos[qpos] = q
         data.qvel[:] = 0.0
-        data.qvel[scene.hand_dof] = qd
+        data.qvel[dof] = qd
         mujoco.mj_kinematics(model, data)
         mujoco.mj_comPos(model, data)
         mujoco.mj_makeM(model, data)  # (the armature included)
         mujoco.mj_comVel(model, data)
         mujoco.mj_rne(model, data, 0, out)  # c(q, qd): Coriolis, centrifugal, gravity
-        bias = out[scene.hand_dof].copy()
+        bias = out[dof].copy()
         acc[:] = 0.0
-        acc[scene.hand_dof] = qdd
+        acc[dof] = qdd
         mujoco.mj_mulM(model, data, out, acc)
-        return out[scene.hand_dof] + bias
+        return out[dof] + bias
 
     return f

@@ -30,6 +30,7 @@ from planner.check.criteria import GRASP_TOL_M, GRASP_WINDOW_S, LATE_S
 from planner.check.keys import key_episodes, score_song
 from planner.check.results import KeyEpisode, LateNote, MissedNote
 from planner.hand.model import HandModel
+from planner.hand.spec import FINGERS
 from planner.simulate.keyboard import key_bodies
 from planner.simulate.replay import SimRecord
 
@@ -103,14 +104,17 @@ def _split_overhangs(episodes, down: np.ndarray, expected: np.ndarray, t_s: np.n
     return tuple(wrong), tuple(over)
 
 
-def score_play(rec: SimRecord, notes, rate_hz: float) -> PhysicsPlay:
+def score_play(rec: SimRecord, notes, rate_hz: float,
+               names: tuple[str, ...] = FINGERS) -> PhysicsPlay:
+    """The keys of a replay against ``notes``; ``names``: the fingers ``key_finger``
+    indexes (two hands: each hand's, prefixed)."""
     from planner.check.criteria import expected_keys
 
     down = key_down(rec)
-    played = tuple(key_episodes(down, rec.t_s, rec.key_finger))
+    played = tuple(key_episodes(down, rec.t_s, rec.key_finger, names))
     if notes is None:
         return PhysicsPlay(None, None, None, None, None, (), (), (), (), played, None)
-    s = score_song(rec.t_s, down, rec.key_finger, notes, rate_hz)
+    s = score_song(rec.t_s, down, rec.key_finger, notes, rate_hz, names)
     wrong, over = _split_overhangs(s.wrong_presses, down, expected_keys(notes, rec.t_s),
                                    rec.t_s)
     return PhysicsPlay(s.f1, s.precision, s.recall, len(notes), len(notes) - len(s.missed),

@@ -1,0 +1,121 @@
+"""The physics replay's report of a two-hand plan (``planner.simulate.pair``): the keys
+of both hands together, each hand's notes, motors and tracking, the contacts between the
+hands; its verdict, summary and JSON form (``SimulateReport``'s conventions)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from planner.resultform import listing, plain
+from planner.simulate.scores import JointTracking, MotorEffort, PhysicsPlay
+
+
+@dataclass(frozen=True)
+class HandPhysics:
+    """One hand of the pair in the physics: the notes its ``by_hand`` claim gives it
+    (None without a song or the claim) and how many of them sound, the wrong keys its own
+    fingers pressed, its motors and its joints' tracking (names prefixed)."""
+
+    prefix: str
+    hand: str
+    notes: int | None
+    notes_hit: int | None
+    wrong_keys: int
+    motors: tuple[MotorEffort, ...]
+    tracking: tuple[JointTracking, ...]
+
+
+@dataclass(frozen=True)
+class HandsTouch:
+    """Rows ``row``.. (``start_s`` to ``end_s``) in which a geom of one hand touches one of
+    the other in the physics: a collision between the hands (the first pair named)."""
+
+    start_s: float
+    row: int
+    end_s: float
+    rows: int
+    left_geom: str
+    right_geom: str
+
+
+@dataclass(frozen=True)
+class PairSimulateReport:
+    trajectory: str
+    song: str | None
+    task: str
+    hand: str
+    contact: str
+    rows: int
+    duration_s: float
+    wall_s: float
+    play: PhysicsPlay
+    hands: tuple[HandPhysics, HandPhysics]
+    touches: tuple[HandsTouch, ...]
+    kinematic_f1: float | None  # the kinematic check's F1 (both hands) of the same file
+    problems: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+    @property
+    def realtime_factor(self) -> float:
+        return self.duration_s / self.wall_s if self.wall_s > 0 else float("inf")
+
+    @property
+    def motors(self) -> tuple[MotorEffort, ...]:
+        """Every motor of both hands (named ``motor.<prefix><name>``)."""
+        return tuple(m for h in self.hands for m in h.motors)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = plain(self)
+        d["command"] = "simulate"
+        d["ok"] = self.ok
+        d["realtime_factor"] = self.realtime_factor
+        for h, dh in zip(self.hands, d["hands"]):
+            for m, dd in zip(h.motors, dh["motors"]):
+                dd["ratio"] = m.ratio
+        return d
+
+    def summary(self, timing: bool = True) -> str:
+        L = [f"simulate {self.trajectory}: {'OK' if self.ok else 'FAILED'}"]
+        L.extend(f"  - {p}" for p in self.problems)
+        took = (f" in {self.wall_s:.2f} s ({self.realtime_factor:.1f}x real time)" if timing
+                else "")
+        L.append(f"task {self.task}, two hands {self.hand}, contact {self.contact}, "
+                 f"{self.rows} rows, {self.duration_s:.3f} s simulated{took}")
+        p = self.play
+        L.append(f"keys: {len(p.played)} key presses in physics (either hand)")
+        if p.f1 is not None:
+            kin = "" if self.kinematic_f1 is None else f"; kinematic F1 {self.kinematic_f1:.4f}"
+            L.append(f"song {self.song}: physics frame F1 {p.f1:.4f} over {p.song_frames} "
+                     f"frames (precision {p.precision:.4f}, recall {p.recall:.4f}){kin}; "
+                     f"notes hit {p.notes_hit}/{p.notes}, {len(p.late)} late, "
+                     f"{len(p.wrong_keys)} wrong keys, {len(p.overhangs)} overhangs")
+        listing(L, "wrong keys", p.wrong_keys, lambda w: (
+            f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
+            f"{'+'.join(w.fingers) or 'no finger (the key returning)'}"))
+        listing(L, "missed notes", p.missed, lambda m: (
+            f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
+            f"down {m.fraction_down:.0%}  {m.reason}"))
+        L.append(f"between the hands: {len(self.touches)} contacts in physics")
+        listing(L, "contacts between the hands", self.touches, lambda c: (
+            f"{c.start_s:8.3f}-{c.end_s:.3f} s (row {c.row}, {c.rows} rows)  {c.left_geom} "
+            f"and {c.right_geom}"))
+        for h in self.hands:
+            notes = ("" if h.notes is None else
+                     f": its notes (by_hand) {h.notes_hit}/{h.notes} sound")
+            L.append(f"hand {h.prefix} {h.hand}{notes}, {h.wrong_keys} wrong keys by its "
+                     "fingers")
+            L.append("  motors (peak demand / limit, longest saturation):")
+            for m in h.motors:
+                L.append(f"    {m.name:26s} {m.peak_demand_nm:8.3f} / {m.limit_nm:.3f} N m "
+                         f"({m.ratio:5.2f})  {m.saturated_s * 1000:5.0f} ms at {m.at_s:.3f} s")
+            L.append("  tracking error per joint (max, rms):")
+            for j in h.tracking:
+                unit = "mm" if j.name.endswith("rail") else "deg"
+                f = 1000.0 if unit == "mm" else 57.29577951308232
+                L.append(f"    {j.name:24s} {j.max_error * f:8.2f} {unit}  rms "
+                         f"{j.rms_error * f:6.2f}  worst at {j.at_s:.3f} s")
+        return "\n".join(L)
