@@ -28,13 +28,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.check.criteria import HANDS_GAP_M
 from planner.check.kinematics import Kinematics
 from planner.hand.bodies import body_links, collision_bodies, place
 from planner.play.atlas import SPAN_M, STEP_M
 from planner.play.places import Places
 
-CLEARANCE_M = 0.010  # every body of one hand this far from every body of the other: twice
-# the rig's 5 mm stop margin, each carriage's homing repeatability (docs/user/two-hands.md)
+CLEARANCE_M = HANDS_GAP_M  # every body of one hand this far from every body of the other
+# (10 mm: the check's rule, twice the rig's stop margin; docs/user/two-hands.md)
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,8 @@ widest gap between neighbours, the lower ones the left hand's; one part that hol
 hands' notes (``planner.music.parts.two_hands_split``) is cut at its split pitch; one
 part that does not (a melody) is the right hand's, as one hand plays it.
 
-**Not a law.** The notes are weighed one by one in onset order (a chord from its lowest
-note up), each hand's cost in frames of music (the currency of frame F1 and of the one-hand
+**Not a law.** The notes are weighed one by one in onset order (of one onset, the left
+part's from the lowest up, then the right part's from the highest down), each hand's cost in frames of music (the currency of frame F1 and of the one-hand
 planner's programme, ``planner.play.costs``), and the note goes to the cheaper hand:
 
 * a hand whose notes sounding with it would not fit its span (the lowest and highest key
@@ -158,9 +158,10 @@ def assign_hands(notes, gap: HandGap, places: dict[str, Places],
     hint, source, split = hint_hands(notes)
     w = _Weigher(gap, places, rate_hz)
     states = {s: _HandState([]) for s in SIDES}
-    out: list[str] = []
+    out: list[str] = [RIGHT] * len(notes)
     moved: list[Moved] = []
-    for i, n in enumerate(notes):
+    for i in _weighing_order(notes, hint):
+        n = notes[i]
         for st in states.values():  # (the notes over by this onset, and RECENT_S
             # before it, leave: the hand is still where they were)
             st.sounding = [s for s in st.sounding if s[2] + RECENT_S > n.onset_s + 1e-9]
@@ -178,5 +179,14 @@ def assign_hands(notes, gap: HandGap, places: dict[str, Places],
         xs = [sx for _, sx, end in st.sounding if end > n.onset_s + 1e-9]
         st.centre_m = (max(xs) + min(xs)) / 2
         st.last_onset_s = n.onset_s
-        out.append(side)
-    return HandAssignment(tuple(out), hint, tuple(moved), source, split)
+        out[i] = side
+    return HandAssignment(tuple(out), hint, tuple(sorted(moved, key=lambda m: m.note)),
+                          source, split)
+
+
+def _weighing_order(notes, hint: tuple[str, ...]) -> list[int]:
+    """The notes in onset order; of one onset, the left part's from the lowest up, then
+    the right part's from the highest down (each hand's chord from its outer side in)."""
+    return sorted(range(len(notes)), key=lambda i: (
+        notes[i].onset_s, hint[i] == RIGHT, -notes[i].pitch if hint[i] == RIGHT
+        else notes[i].pitch))
