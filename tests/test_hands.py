@@ -51,7 +51,7 @@ def test_hint_parts_cut_at_widest_gap() -> None:
                      for i in range(4)])
     hint, _, _ = hint_hands(notes)
     assert [h for h, n in zip(hint, notes) if n.channel == 2] == [LEFT] * 4
-    assert set(h for h, n in zip(hint, notes) if n.channel != 2) == {RIGHT}
+    assert {h for h, n in zip(hint, notes) if n.channel != 2} == {RIGHT}
 
 
 def test_hint_one_part_of_two_hands_is_split() -> None:

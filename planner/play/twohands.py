@@ -42,9 +42,9 @@ from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.music.midi import Song
-from planner.play.hands import LEFT, RIGHT, SIDES, HandAssignment, assign_hands
-from planner.play.handgap import HandGap, hand_gap
 from planner.play.costs import CostMemo, Costs
+from planner.play.handgap import HandGap, hand_gap
+from planner.play.hands import LEFT, RIGHT, SIDES, HandAssignment, assign_hands
 from planner.play.motion import DROP_FRACTION
 from planner.play.places import Places
 from planner.play.stream import ROW_BLOCK, Planner, PlayPlan, plan_song
