@@ -14,6 +14,9 @@ The public API (imported on first use, so that ``import planner`` stays light):
 * ``plan_catch(angle_deg, dist_m, height_m, hand, out_path, ...)`` -> ``CatchResult``;
 * ``check_trajectory(traj_path or Trajectory, song_path or Song=None)`` -> ``CheckReport``
   (a two-hand file: ``PairReport``, each hand's ``CheckReport`` and both together);
+* ``plan_two_hands(song, PairPlanner(left, right), out_path=None)`` -> ``TwoHandPlan``:
+  a song (``load_song(path, every_part=True)``) planned on two hands into one two-hand
+  file (``play --hands 2``);
 * ``PairWriter(path, (left, right), metadata)``: a two-hand plan written (version 3);
   ``read_plan(path)`` -> ``PlanFile``, or ``PairPlan`` for a two-hand file;
 * ``read_trajectory(path)`` -> ``Trajectory`` (times, joint and motor arrays, metadata);
@@ -41,6 +44,7 @@ if TYPE_CHECKING:  # (what editors and type checkers see; at run time: on first 
     from planner.pairfile import PairPlan, PairWriter
     from planner.planfile import read_plan
     from planner.play import Planner, PlayPlan, plan_song
+    from planner.play.twohands import PairPlanner, TwoHandPlan, plan_two_hands
     from planner.simulate import simulate_trajectory
     from planner.simulate.report import SimulateReport
     from planner.trajfile import Trajectory, read_trajectory
@@ -54,6 +58,9 @@ _API = {
     "Planner": "planner.play",
     "PlayPlan": "planner.play",
     "plan_song": "planner.play",
+    "PairPlanner": "planner.play.twohands",
+    "TwoHandPlan": "planner.play.twohands",
+    "plan_two_hands": "planner.play.twohands",
     "plan_catch": "planner.catch",
     "CatchSession": "planner.catch",
     "check_trajectory": "planner.check",
@@ -76,6 +83,7 @@ __all__ = [
     "InputError",
     "Note",
     "PairPlan",
+    "PairPlanner",
     "PairReport",
     "PairWriter",
     "Planner",
@@ -85,11 +93,13 @@ __all__ = [
     "SolverError",
     "Song",
     "Trajectory",
+    "TwoHandPlan",
     "check_trajectory",
     "load_hand",
     "load_song",
     "plan_catch",
     "plan_song",
+    "plan_two_hands",
     "read_plan",
     "read_trajectory",
     "simulate_trajectory",

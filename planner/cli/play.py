@@ -18,7 +18,12 @@ def add_parser(sub) -> None:
     pl.add_argument("-o", "--output", default=None,
                     help="trajectory CSV ('-' for stdout; default: SONG.csv in the current "
                          "directory)")
-    pl.add_argument("--hand", default="default", help="hand name or hand file (.toml)")
+    pl.add_argument("--hand", default=None, help="hand name or hand file (.toml; default: "
+                                                  "the default hand)")
+    pl.add_argument("--hands", default="1", metavar="1|2|LEFT,RIGHT",
+                    help="1 (default): one hand; 2: both hands (default-left,default), or the "
+                         "pair named, the left hand first: one two-hand file "
+                         "(docs/user/two-hands.md)")
     pl.add_argument("--rate", type=float, default=100.0, help="setpoint rate, Hz (default 100)")
     pl.add_argument("--track", type=int, default=None, help="only this track (0-based)")
     pl.add_argument("--channel", type=int, default=None, help="only this channel (0-15)")
@@ -43,8 +48,13 @@ def run(a: argparse.Namespace) -> int:
 
     if (a.report or a.html) and a.output == "-":
         raise InputError("--report and --html need a trajectory file (-o PATH), not stdout")
+    pair = pair_names(a.hands, a.hand)
+    if pair is not None:
+        from planner.cli.playtwo import run_two
+
+        return run_two(a, pair)
     song = load_song(a.song, track=a.track, channel=a.channel, transpose=a.transpose)
-    hand = load_hand(a.hand)
+    hand = load_hand(a.hand or "default")
     name = os.path.basename(a.song)
     # (by default into the current directory, never beside the song: it may be read-only)
     out = a.output if a.output is not None else os.path.splitext(name)[0] + ".csv"
@@ -71,3 +81,28 @@ def run(a: argparse.Namespace) -> int:
     if a.strict and (plan.verdict.skipped or score.late or score.wrong_presses):
         return 1
     return 0
+
+
+DEFAULT_PAIR = ("default-left", "default")
+
+
+def pair_names(hands: str, hand: str | None) -> tuple[str, str] | None:
+    """``--hands``: None for one hand (``1``), the two hands' names for two (``2``: the
+    default pair; ``LEFT,RIGHT``: named); InputError on anything else, or ``--hand``
+    with two hands."""
+    from planner.errors import InputError
+
+    text = hands.strip()
+    if text == "1":
+        return None
+    if text == "2":
+        names = DEFAULT_PAIR
+    elif text.count(",") == 1 and all(n.strip() for n in text.split(",")):
+        left, right = (n.strip() for n in text.split(","))
+        names = (left, right)
+    else:
+        raise InputError(f"--hands takes 1, 2 or two hands LEFT,RIGHT (the left one first), "
+                         f"got {hands!r}")
+    if hand is not None:
+        raise InputError("--hand names one hand; with two, name the pair: --hands LEFT,RIGHT")
+    return names

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from planner.music import keyboard as kb
@@ -49,6 +50,8 @@ class SkipReason(enum.Enum):
     TOO_LATE = "too_late"  # its key cannot go down before half of it is over
     NO_PATH = "no_path"  # no move checked clear of the keys takes the finger there
     MISSED = "missed"  # (``planner.selfcheck``) meant to be played, the replay finds it missed
+    OTHER_HAND = "other_hand"  # (two hands) every place that presses it leaves the other
+    # hand less than its clearance (``rail_bounds``: ``planner.play.twohands``)
 
 
 
@@ -155,7 +158,8 @@ class Costs:
     in ``memo``, kept across songs when one is given)."""
 
     def __init__(self, notes, places: Places, rate_hz: float,
-                 memo: CostMemo | None = None) -> None:
+                 memo: CostMemo | None = None,
+                 rail_bounds: Sequence[tuple[float, float]] | None = None) -> None:
         self.notes = notes
         self.places = places
         self.dt = 1.0 / rate_hz
@@ -180,6 +184,12 @@ class Costs:
         self.offset = [n.offset_s for n in notes]
         self._t_down = [(math.ceil(n.onset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
         self._t_up = [(math.ceil(n.offset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
+        # (two hands: per note, the rail's grid indices it may be pressed from, the other
+        # hand's clearance kept; None: the whole travel, as one hand plays)
+        self.bound: list[tuple[int, int]] | None = None if rail_bounds is None else [
+            (math.ceil(lo / RAIL_STEP_M - 1e-9), math.floor(hi / RAIL_STEP_M + 1e-9))
+            for lo, hi in rail_bounds]
+        self._note_bound: list = [False] * len(notes)  # (``note_bound``'s, made when asked)
 
     # ------------------------------------------------------------------ reach
     def rails(self, finger: str, note: int) -> frozenset[int]:
@@ -205,6 +215,45 @@ class Costs:
             clear = self.places.presses_clear(finger, n.pitch, ok)
             self._rails[key] = frozenset(q for q, c in zip(ok, clear) if c)
             self._rails[("refused", *key)] = frozenset(q for q, c in zip(ok, clear) if not c)
+        b = None if self.bound is None else self.note_bound(note)
+        if b is None:
+            return self._rails[key]
+        lo, hi = b
+        bounded = (*key, lo, hi)
+        got = self._rails.get(bounded)
+        if got is None:
+            rail_i = self.places.rail_i
+            got = self._rails[bounded] = frozenset(
+                q for q in self._rails[key] if lo <= rail_i(q) <= hi)
+        return got
+
+    def note_bound(self, note: int) -> tuple[int, int] | None:
+        """Two hands: ``note``'s rail bound (grid indices) cut to the rails any finger
+        presses it from, None when it cuts none of them (then the note is weighed as one
+        hand weighs it, and the memos keyed by keys and forces serve it)."""
+        got = self._note_bound[note]
+        if got is False:
+            n = self.notes[note]
+            force = press_force_n(n.velocity)
+            rail_i = self.places.rail_i
+            idx = [rail_i(q) for f in self.places.hand.fingers
+                   for q in self._unbounded(f, n.pitch, force, note)]
+            lo, hi = self.bound[note]
+            if not idx or (lo <= min(idx) and hi >= max(idx)):
+                got = None
+            else:
+                got = (max(lo, min(idx) - 1), min(hi, max(idx) + 1))
+            self._note_bound[note] = got
+        return got
+
+    def _unbounded(self, finger: str, pitch: int, force: float, note: int) -> frozenset[int]:
+        key = (finger, pitch, force)
+        if key not in self._rails:
+            bound, self.bound = self.bound, None
+            try:
+                self.rails(finger, note)
+            finally:
+                self.bound = bound
         return self._rails[key]
 
     def reason(self, note: int) -> Skip | None:
@@ -222,6 +271,12 @@ class Costs:
             return Skip(note, SkipReason.TOO_SHORT, f"{1000 * n.duration_s:.0f} ms long; the "
                         f"shortest press down and up of any finger on {pitch_name(n.pitch)} "
                         f"takes {1000 * shortest_s:.0f} ms")
+        if self.bound is not None and self.note_bound(note) is not None:
+            lo, hi = self.note_bound(note)
+            return Skip(note, SkipReason.OTHER_HAND, f"every place that presses "
+                        f"{pitch_name(n.pitch)} puts the rail outside "
+                        f"{lo * RAIL_STEP_M:+.3f}..{hi * RAIL_STEP_M:+.3f} m, where the other "
+                        "hand leaves it its clearance")
         if any(self._rails[("refused", f, n.pitch, press_force_n(n.velocity))]
                for f in fingers):
             return Skip(note, SkipReason.BODY, f"no finger presses {pitch_name(n.pitch)} with "
@@ -246,6 +301,8 @@ class Costs:
         or the shortest of all when none fits (memoised per key and force)."""
         n = self.notes[note]
         key = (n.pitch, press_force_n(n.velocity))
+        if self.bound is not None and self.note_bound(note) is not None:  # (the fingers
+            key = (*key, *self.note_bound(note))  # that reach it depend on its bound)
         shortest = self._shortest.get(key)
         if shortest is not None:
             return window_s >= shortest, shortest

@@ -89,6 +89,40 @@ class IdleFingers:
         self._poses[finger] = got
         return got
 
+    def narrow(self) -> None:
+        """Two hands on one rail (``planner.play.twohands``): every idle finger holds, of
+        the grid poses whose body enters no key's column (``pose``'s rule), the one whose
+        body reaches least far from the rail on the hand's inner side (the thumb's: below
+        it on a right hand, above it on a left one), ties to the nearest its natural
+        pose, so that the other hand's carriage may come nearer (``planner.play.handgap``:
+        the default hand's thumb tucked under the palm reaches 64 mm inside the rail, at
+        its natural-nearest pose 122 mm). Without the body rule nothing changes."""
+        if self.atlas.bodies is None or self.rail is None:
+            return
+        h, fb = self.hand, self.atlas.bodies
+        sign = -1.0 if h.side == "right" else 1.0  # (the inner side: the thumb's)
+        for f in self.fingers:
+            js = h.joint_slice(f)
+            natural = self.atlas.base[js]
+            best = None
+            for c in itertools.product(*(np.linspace(h.plan_lower[j], h.plan_upper[j],
+                                                     IDLE_STEPS) for j in js)):
+                c = np.array(c)
+                if not self._enters_no_key(f, c):
+                    continue
+                Q = []
+                for a in self.atlases:
+                    q = a.base.copy()
+                    q[self.rail], q[js] = 0.0, c
+                    Q.append(q)
+                P = fb.points_many(h.apply_couplings(np.array(Q)), f)
+                reach = float((sign * P[..., 0] + fb.radii(f)).max())
+                key = (round(reach, 9), float(np.abs(c - natural).sum()), tuple(c))
+                if best is None or key < best[0]:
+                    best = (key, c)
+            if best is not None:
+                self._poses[f] = best[1]
+
     def _enters_no_key(self, finger: str, joints: np.ndarray) -> bool:
         """Whether ``finger``'s body with its joints at ``joints``, the rest of the hand
         natural, lies outside every key's footprint column in every posture (the rail

@@ -16,6 +16,7 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
+from collections.abc import Sequence
 
 from planner.music import keyboard as kb
 from planner.play.costs import (
@@ -26,7 +27,7 @@ from planner.play.costs import (
     Prev,
     State,
 )
-from planner.play.places import Places
+from planner.play.places import PLACE_STRIDE, Places
 
 THUMB = "thumb"
 BEAM = 20  # states kept per event (measured: docs/history/play-second-design.md, "Speed")
@@ -60,11 +61,13 @@ class Layers(Costs):
     layer before); the windows over them are ``planner.play.fingering``'s."""
 
     def __init__(self, notes, places: Places, rate_hz: float,
-                 memo: CostMemo | None = None) -> None:
-        super().__init__(notes, places, rate_hz, memo)
+                 memo: CostMemo | None = None,
+                 rail_bounds: Sequence[tuple[float, float]] | None = None) -> None:
+        super().__init__(notes, places, rate_hz, memo, rail_bounds)
         # (the fingers in the order of their keys: a left hand's thumb is its highest)
         self._order = {f: i for i, f in enumerate(places.hand.fingers_low_to_high)}
         self._bound_at: tuple = (None, 0, math.inf)  # (layer, its size, its bound)
+        self._stay_bound: tuple[int, int] = (0, 0)  # (two hands: ``_layer``'s event's)
 
     def _layer(self, prev, t: float, new: list[int]):
         """The ``BEAM`` cheapest states of one event: striking every note of ``new`` the
@@ -72,6 +75,9 @@ class Layers(Costs):
         or none, each note left out costing its frames (a short note given up for a long
         one held through it is the better music, in the frame currency)."""
         new = sorted(new, key=lambda n: self.notes[n].pitch)
+        if self.bound is not None:  # (two hands: the event's rail bound, its notes' one,
+            # which a hand that strikes none of them must keep too)
+            self._stay_bound = self.bound[new[0]]  # (uncut: the hand's rail, any key)
         # (by hand shape, the rail and the fingers on the notes sounding: the cheapest
         # state of each, the only one the pruning can keep; (cost, state before, state))
         layer: dict[tuple, tuple[float, State | None, State]] = {}
@@ -80,6 +86,10 @@ class Layers(Costs):
                 sub = new[i:i + size]
                 left_out = sum(self.frames(n) for n in new if n not in sub)
                 self._extend(layer, prev, t, sub, left_out)
+        if not layer and self.bound is not None and prev:  # (no state keeps the bound:
+            # the hand stays where it is rather than the programme lose its path)
+            self._stay_bound = (-PLACE_STRIDE, PLACE_STRIDE)
+            self._extend(layer, prev, t, [], sum(self.frames(n) for n in new))
         return _prune(layer)
 
     def _extend(self, layer, prev, t: float, new: list[int], left_out: float = 0.0) -> None:
@@ -146,7 +156,8 @@ class Layers(Costs):
             sounding, sounding_t, busy = strike.items, strike.by_note, strike.busy
         p = None if ctx is None else ctx.state
         if not new:  # (every new note left out: the hand stays)
-            if p is None:
+            if p is None or self.bound is not None and not (
+                    self._stay_bound[0] <= self.places.rail_i(p.place) <= self._stay_bound[1]):
                 return
             rails = [(p.place, 0.0)]
         else:  # (``_moves_to``'s memo read here: most calls find it)
@@ -264,6 +275,10 @@ class Layers(Costs):
         """What the rails that press ``new`` depend on: each note's key and force, and its
         finger."""
         pitch, force = self.pitch, self.force
+        if self.bound is not None:  # (two hands: and each note's rail bound, if it cuts)
+            nb = self.note_bound
+            return tuple((pitch[n], force[n], f) if nb(n) is None else
+                         (pitch[n], force[n], f, nb(n)) for n, f in new.items())
         return tuple((pitch[n], force[n], f) for n, f in new.items())
 
     @staticmethod

@@ -72,13 +72,14 @@ class WayIn:
         return self.legs.end_s
 
 
-def rest_pose(atlas: Atlas) -> np.ndarray:
+def rest_pose(atlas: Atlas, rail_m: float = REST_RAIL_M) -> np.ndarray:
     """The hand's rest pose: the natural hand with its lowest fingertip at crossing
-    height (``Atlas.raised``) and the rail at ``REST_RAIL_M`` within its travel."""
+    height (``Atlas.raised``) and the rail at ``rail_m`` (``REST_RAIL_M``; two hands park
+    at the ends of their travel: ``planner.play.twohands``) within its travel."""
     h = atlas.hand
     q = atlas.raised(HIGH_Z_M)
     if atlas.rail is not None:
-        q[atlas.rail] = min(max(REST_RAIL_M, h.plan_lower[atlas.rail]), h.plan_upper[atlas.rail])
+        q[atlas.rail] = min(max(rail_m, h.plan_lower[atlas.rail]), h.plan_upper[atlas.rail])
     return h.apply_couplings(q)
 
 

@@ -11,7 +11,7 @@ import gc
 import math
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -24,7 +24,7 @@ from planner.play.costs import CostMemo
 from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.places import Places
-from planner.play.rest import Legs, WayIn, legs_between, rest_pose, way_in
+from planner.play.rest import REST_RAIL_M, Legs, WayIn, legs_between, rest_pose, way_in
 from planner.selfcheck import SelfCheck, Verdict
 from planner.trajfile import MIN_ROWS, KeptText, TrajectoryWriter
 
@@ -66,22 +66,26 @@ def play_metadata(song: Song, hand: HandModel, rate_hz: float, song_name: str) -
 class Planner:
     """The per-hand part of the play planner (atlases, timed moves), built once."""
 
-    def __init__(self, hand: HandModel) -> None:
+    def __init__(self, hand: HandModel, rest_rail_m: float = REST_RAIL_M) -> None:
         self.hand = hand
         self.places = Places(hand)  # (every play posture's atlas and moves)
         self.atlas, self.moves = self.places.atlas, self.places.home  # (the rest pose's)
         self.memo = CostMemo()  # (the fingering's costs that depend on the hand alone)
-        self.rest_q = rest_pose(self.atlas)  # (the hand's rest pose: every plan's first row)
+        # (the hand's rest pose: every plan's first row; two hands rest apart)
+        self.rest_q = rest_pose(self.atlas, rest_rail_m)
 
 
 def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz: float = 100.0,
               song_name: str = "", planner: Planner | None = None,
-              on_progress: Callable[[int, int], None] | None = None) -> PlayPlan:
+              on_progress: Callable[[int, int], None] | None = None,
+              rail_bounds: Sequence[tuple[float, float]] | None = None) -> PlayPlan:
     """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout;
     None: keep it in memory, ``PlayPlan.text``).
     ``on_progress(notes_decided, notes)`` is called as the notes are decided (played or
     left out), chunk by chunk. The clock (``planning_s``, ``first_row_s``) starts after
-    the hand's set-up (``Planner``, built here when none is given)."""
+    the hand's set-up (``Planner``, built here when none is given). ``rail_bounds``: per
+    note, the rail's (lowest, highest) position it may be pressed from (two hands:
+    ``planner.play.twohands``; None: the whole travel)."""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     pl = planner or Planner(hand)
@@ -92,7 +96,8 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
                               on_rows=selfcheck.add_rows, defer_header=True)
     try:
         with _cyclic_gc_paused():
-            rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress)
+            rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress,
+                                    rail_bounds)
         left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}
         left_out.update({o.note: (o.skip, o.detail)
                          for o in rows.motion.outcomes.values() if o.skip is not None})
@@ -125,13 +130,13 @@ def _cyclic_gc_paused():
 
 
 def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: TrajectoryWriter,
-          on_progress=None):
+          on_progress=None, rail_bounds=None):
     """Fingering chunk by chunk (``FingeringProblem.chunks``, in the song's time), each
     chunk's notes placed in time order (a cut before the notes that start with it) in
     the file's time (the song shifted by the way in from rest: ``planner.play.rest``),
     rows written up to where nothing can change any more, then the way back to rest.
     Returns the rows (their motion and the song's shift) and the fingering (song time)."""
-    problem = FingeringProblem(notes, pl.places, rate_hz, pl.memo)
+    problem = FingeringProblem(notes, pl.places, rate_hz, pl.memo, rail_bounds)
     rest_q = pl.rest_q.copy()
     rows: _Rows | None = None
     done: dict[int, Assignment] = {}
@@ -152,7 +157,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
         elif rows is None and math.isfinite(ch.until_s):  # (nothing playable yet, more
             # to come: the hand waits at its natural place, the rows go on; parked if no
             # finger reaches any key: then nothing ever will be)
-            rows = _start(Motion(notes, pl.places, rate_hz, pl.atlas.rail_of(pl.atlas.base)),
+            rows = _start(Motion(notes, pl.places, rate_hz, pl.atlas.rail_of(pl.rest_q)),
                           pl, rest_q, (), writer, rate_hz)
         shift = 0.0 if rows is None else rows.shift_s
         if rows is not None:
@@ -170,7 +175,7 @@ def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: Trajector
         if rows is not None and math.isfinite(ch.until_s):
             rows.commit_to(ch.until_s + shift - COMMIT_LAG_S)
     if rows is None:  # nothing to play: the hand waits, still
-        rows = _start(Motion(notes, pl.places, rate_hz, pl.atlas.rail_of(pl.atlas.base),
+        rows = _start(Motion(notes, pl.places, rate_hz, pl.atlas.rail_of(pl.rest_q),
                              park=True), pl, rest_q, (), writer, rate_hz)
     end = max((n.offset_s for n in notes), default=0.0) + rows.shift_s
     rows.finish(rows.motion.finish(end), rest_q)

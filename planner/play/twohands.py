@@ -1,0 +1,284 @@
+"""Two hands on one rail (``play --hands 2``): a song's notes given to the left and the
+right hand, both planned so that they never come within their clearance, one file.
+
+**The stages.** ``planner.play.hands`` gives each note a hand (the file's parts a
+strong hint, weighed in frames of music). The right hand is planned first by the
+one-hand planner (``plan_song``), each of its notes pressed only from rail positions that
+leave the left hand room for its own notes sounding then (a lower bound); then the left
+hand, each of its notes pressed only from rail positions at least the rail gap
+(``planner.play.handgap``) left of where the right hand's rail *is* at every row over the
+note's window (an upper bound read from the right hand's rows). A note whose every place
+breaks its bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand.
+
+**Why the rails stay apart between the notes too.** A note's window runs from its hand's
+previous onset to its hand's next onset (and half of the next notes' length, the latest a
+note is still struck: ``planner.play.motion.DROP_FRACTION``): the arm moves to a note's
+place after the notes before it are struck and leaves it for the next ones, one straight,
+monotone move, so its rail lies between two places each within the bound over the move's
+time. The first note's window starts before the way in, the last note's lasts to the end
+of the file. Each hand rests at its end of the rail (the left hand at the lowest rail
+position of its travel, the right at the highest: ``REST_RAIL_M`` is where one hand
+rests), so the way in and the way out move each carriage away from the other or towards
+a place within its bound.
+
+**One clock.** The two hands' plans are made apart; each starts its song when its way
+in allows (``song_start_s``). The one that starts the song sooner waits at rest for the
+difference (rows of its rest pose, every speed zero), and the shorter plan holds its last
+row (rest) to the end, so both hands' rows are on one clock with one ``song_start_s``.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from planner.errors import InputError
+from planner.hand.model import HandModel
+from planner.music import keyboard as kb
+from planner.music.midi import Song
+from planner.play.costs import CostMemo, Costs
+from planner.play.handgap import HandGap, hand_gap
+from planner.play.hands import LEFT, RIGHT, SIDES, HandAssignment, assign_hands
+from planner.play.motion import DROP_FRACTION
+from planner.play.places import Places
+from planner.play.stream import ROW_BLOCK, Planner, PlayPlan, plan_song
+
+UNBOUNDED_M = 10.0  # a bound no rail reaches (the travel is a few metres at most)
+
+
+class PairPlanner:
+    """The per-pair part of the two-hand planner, built once: each hand's ``Planner``
+    (resting at its end of the rail) and the pair's ``HandGap``."""
+
+    def __init__(self, left: HandModel, right: HandModel) -> None:
+        if left.side != LEFT or right.side != RIGHT:
+            raise InputError(f"two hands are a left hand then a right one; got {left.name} "
+                             f"({left.side}), {right.name} ({right.side})")
+        self.hands = {LEFT: left, RIGHT: right}
+        rl, rr = left.index.get("rail"), right.index.get("rail")
+        if rl is None or rr is None:
+            raise InputError("two hands share one rail: each hand needs a rail axis "
+                             f"({left.name}, {right.name})")
+        self.planners = {LEFT: Planner(left, rest_rail_m=float(left.plan_lower[rl])),
+                         RIGHT: Planner(right, rest_rail_m=float(right.plan_upper[rr]))}
+        for pl in self.planners.values():  # (the idle fingers tucked in: the hands nearer)
+            pl.places.idle.narrow()
+        self.gap: HandGap = hand_gap(self.planners[LEFT].places, self.planners[RIGHT].places)
+
+
+@dataclass(frozen=True)
+class PairRows:
+    """Both hands' rows on one clock: times ``t_s`` (from 0 at the rate), each hand's
+    joints (``q``: left, right) and the common ``song_start_s``."""
+
+    t_s: np.ndarray
+    q: tuple[np.ndarray, np.ndarray]
+    song_start_s: float
+
+
+@dataclass(frozen=True)
+class TwoHandPlan:
+    """What ``plan_two_hands`` did: the assignment, each hand's one-hand plan (in memory,
+    its song the hand's notes: ``plans``, left then right), each hand's notes as indices
+    of the song (``notes_of``), the rows on one clock, and the clock after set-up."""
+
+    assignment: HandAssignment
+    gap: HandGap
+    plans: tuple[PlayPlan, PlayPlan]
+    notes_of: tuple[tuple[int, ...], tuple[int, ...]]
+    rows: PairRows
+    planning_s: float
+    least_rail_gap_m: float  # the rails' least distance apart over the rows
+    text: str | None = None  # the file, planned in memory (no path)
+
+    def left_out(self) -> list[tuple[int, object]]:
+        """Every note not played, as (song index, ``Skip`` of its hand's plan), by note."""
+        out = [(idx[s.note], s) for idx, p in zip(self.notes_of, self.plans)
+               for s in p.verdict.skipped]
+        return sorted(out, key=lambda x: x[0])
+
+    def played_of(self, side: str) -> list[int]:
+        """The song indices of the notes ``side`` plays (its notes but those left out)."""
+        i = SIDES.index(side)
+        out = {s.note for s in self.plans[i].verdict.skipped}
+        return [n for k, n in enumerate(self.notes_of[i]) if k not in out]
+
+
+def windows(notes, idx: tuple[int, ...], out_of: frozenset[int] = frozenset()
+            ) -> list[tuple[float, float]]:
+    """Per note of ``idx`` (indices into ``notes``, in onset order), its window (module
+    docstring): from its hand's previous onset (-inf for the first) to its hand's next
+    onset plus half of that event's longest note (+inf for the last); the onsets of the
+    notes ``out_of`` (positions in ``idx`` no place within their bound plays) are none:
+    the hand does not move for them."""
+    struck = sorted({notes[i].onset_s for k, i in enumerate(idx) if k not in out_of})
+    longest: dict[float, float] = {}
+    for k, i in enumerate(idx):
+        if k not in out_of:
+            t = notes[i].onset_s
+            longest[t] = max(longest.get(t, 0.0), notes[i].duration_s)
+    out = []
+    for i in idx:
+        t = notes[i].onset_s
+        a, b = bisect.bisect_left(struck, t), bisect.bisect_right(struck, t)
+        t0 = struck[a - 1] if a > 0 else -math.inf
+        t1 = struck[b] + DROP_FRACTION * longest[struck[b]] if b < len(struck) else math.inf
+        out.append((t0, t1))
+    return out
+
+
+def right_bounds(notes, left: tuple[int, ...], right: tuple[int, ...], gap: HandGap,
+                 out_of: frozenset[int] = frozenset()) -> list[tuple[float, float]]:
+    """The right hand's rail bounds: above the rail the left hand needs for its notes
+    sounding in each right note's window (their keys at its farthest reach), plus the
+    rail gap."""
+    lx = [(notes[i].onset_s, notes[i].offset_s, kb.key(notes[i].pitch).center_x_m)
+          for i in left]
+    out = []
+    for t0, t1 in windows(notes, right, out_of):
+        need = [x for a, b, x in lx if a < t1 and b > t0]
+        lo = (max(need) - gap.left.key_hi_m + gap.rail_gap_m) if need else -UNBOUNDED_M
+        out.append((lo, UNBOUNDED_M))
+    return out
+
+
+def left_bounds(notes, left: tuple[int, ...], rail_t_s: np.ndarray, rail_m: np.ndarray,
+                gap: HandGap, dt_s: float, out_of: frozenset[int] = frozenset()
+                ) -> list[tuple[float, float]]:
+    """The left hand's rail bounds: below the right hand's rail (``rail_m`` at song times
+    ``rail_t_s``, its rows) less the rail gap, at every row of each left note's window
+    (one row more each side: the rows' clock samples the right hand's moves)."""
+    out = []
+    for t0, t1 in windows(notes, left, out_of):
+        a = 0 if t0 == -math.inf else int(np.searchsorted(rail_t_s, t0 - dt_s, side="left"))
+        b = (len(rail_t_s) if t1 == math.inf
+             else int(np.searchsorted(rail_t_s, t1 + dt_s, side="right")))
+        seg = rail_m[max(0, a - 1):b + 1]
+        out.append((-UNBOUNDED_M, float(seg.min()) - gap.rail_gap_m))
+    return out
+
+
+def settled_bounds(notes, places: Places, memo: CostMemo, rate_hz: float,
+                   bounds_of: Callable[[frozenset[int]], list[tuple[float, float]]]
+                   ) -> list[tuple[float, float]]:
+    """A hand's bounds (``bounds_of(out_of)``) with the windows of its notes that no place
+    plays within their bound (``Costs.reason``: out of reach, too short, the other hand's)
+    taken out, again until no more notes fall out (windows only grow, so bounds only
+    tighten: it ends)."""
+    out_of: frozenset[int] = frozenset()
+    while True:
+        bounds = bounds_of(out_of)
+        costs = Costs(notes, places, rate_hz, memo, bounds)
+        now = frozenset(k for k in range(len(notes)) if costs.reason(k) is not None)
+        if now <= out_of:
+            return bounds
+        out_of |= now
+
+
+def _sub_song(song: Song, idx: tuple[int, ...]) -> Song:
+    return replace(song, notes=tuple(song.notes[i] for i in idx), part=None)
+
+
+def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
+                   rate_hz: float = 100.0, song_name: str = "") -> TwoHandPlan:
+    """Plan ``song`` (every part: ``load_song(..., every_part=True)``) on both hands (the
+    module docstring) and write the two-hand file to ``out_path`` ('-': stdout; None:
+    in memory, ``TwoHandPlan.text``). The clock starts after the pair's set-up."""
+    if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
+        raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
+    t_start = time.perf_counter()
+    places = {s: pp.planners[s].places for s in SIDES}
+    a = assign_hands(song.notes, pp.gap, places, rate_hz)
+    idx = {s: a.notes_of(s) for s in SIDES}
+    notes = song.notes
+    plans: dict[str, PlayPlan] = {}
+    subs = {s: _sub_song(song, idx[s]) for s in SIDES}
+
+    def settled(side: str, bounds_of) -> list[tuple[float, float]]:
+        pl = pp.planners[side]
+        return settled_bounds(subs[side].notes, pl.places, pl.memo, rate_hz, bounds_of)
+
+    # (the right hand's bound leaves the left room; it keeps no clearance itself, the left
+    # hand's bound does: its windows are its notes' own, none taken out)
+    bounds = right_bounds(notes, idx[LEFT], idx[RIGHT], pp.gap)
+    plans[RIGHT] = plan_song(subs[RIGHT], pp.hands[RIGHT], None, rate_hz, song_name=song_name,
+                             planner=pp.planners[RIGHT], rail_bounds=bounds)
+    tr = plans[RIGHT].trajectory
+    rail_t_s, rail_m = tr.t_s - plans[RIGHT].song_start_s, tr.q[:, pp.hands[RIGHT].index["rail"]]
+    bounds = settled(LEFT, lambda out: left_bounds(notes, idx[LEFT], rail_t_s, rail_m, pp.gap,
+                                                   1.0 / rate_hz, out))
+    plans[LEFT] = plan_song(subs[LEFT], pp.hands[LEFT], None, rate_hz, song_name=song_name,
+                            planner=pp.planners[LEFT], rail_bounds=bounds)
+    rows = _one_clock((plans[LEFT], plans[RIGHT]), rate_hz, tr)
+    least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
+                   - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
+    plan = TwoHandPlan(a, pp.gap, (plans[LEFT], plans[RIGHT]), (idx[LEFT], idx[RIGHT]), rows,
+                       0.0, least)
+    text = write_two_hands(plan, song, pp, out_path, rate_hz, song_name)
+    return replace(plan, planning_s=time.perf_counter() - t_start, text=text)
+
+
+def two_hand_metadata(song: Song, plan: TwoHandPlan, rate_hz: float, song_name: str) -> dict:
+    """The two-hand file's own metadata (the pair's keys are the writer's,
+    ``planner.pairfile``): the song read with every part, the common ``song_start_s``,
+    the pair's rail gap and how the hint was read."""
+    return {"task": "play", "rate_hz": rate_hz,
+            "song": song_name or os.path.basename(song.source), "notes": len(song.notes),
+            "track": None, "channel": None, "transpose": song.transpose, "every_part": True,
+            "song_start_s": plan.rows.song_start_s, "rail_gap_m": plan.gap.rail_gap_m,
+            "hint": plan.assignment.source.value}
+
+
+def end_claims(plan: TwoHandPlan, notes) -> tuple[dict, dict[str, list[int]]]:
+    """The end marker's claims for the whole song (``notes``, ``played``, ``left_out``,
+    each hand's limit violations should one reach the end) and ``by_hand`` (per prefix,
+    the notes that hand plays)."""
+    left_out = plan.left_out()
+    info: dict = {"notes": len(notes), "played": len(notes) - len(left_out),
+                  "left_out": [{"note": i, "reason": s.reason.value, "detail": s.detail}
+                               for i, s in left_out]}
+    for side, p in zip(SIDES, plan.plans):
+        bad = p.verdict.end_info().get("limit_violations")
+        if bad:
+            info.setdefault("limit_violations", []).extend(
+                {**v, "name": f"{side}.{v['name']}"} for v in bad)
+    return info, {f"{side}.": plan.played_of(side) for side in SIDES}
+
+
+def write_two_hands(plan: TwoHandPlan, song: Song, pp: PairPlanner, out_path: str | None,
+                    rate_hz: float, song_name: str = "") -> str | None:
+    """The two-hand file (version 3, ``planner.pairfile.PairWriter``: the one writer and
+    its guard) of ``plan``'s rows, into ``out_path`` ('-': stdout; None: returned)."""
+    from planner.pairfile import PairWriter
+
+    w = PairWriter(out_path, (pp.hands[LEFT], pp.hands[RIGHT]),
+                   two_hand_metadata(song, plan, rate_hz, song_name))
+    try:
+        t, (ql, qr) = plan.rows.t_s, plan.rows.q
+        for a in range(0, len(t), ROW_BLOCK):
+            w.write_rows(t[a:a + ROW_BLOCK], ql[a:a + ROW_BLOCK], qr[a:a + ROW_BLOCK])
+        info, by_hand = end_claims(plan, song.notes)
+        w.close(info, by_hand)
+    except BaseException as e:
+        w.abort(discard=isinstance(e, InputError))
+        raise
+    return w.text
+
+
+def _one_clock(plans: tuple[PlayPlan, PlayPlan], rate_hz: float, right_tr) -> PairRows:
+    """Both plans' rows on one clock (module docstring)."""
+    trs = (plans[0].trajectory, right_tr)
+    start = max(p.song_start_s for p in plans)
+    lead = [round((start - p.song_start_s) * rate_hz) for p in plans]
+    n = max(len(tr.t_s) + k for tr, k in zip(trs, lead))
+    qs = []
+    for tr, k in zip(trs, lead):
+        q = np.concatenate([np.repeat(tr.q[:1], k, axis=0), tr.q])
+        qs.append(np.concatenate([q, np.repeat(q[-1:], n - len(q), axis=0)]))
+    return PairRows(np.arange(n) / rate_hz, (qs[0], qs[1]), start)

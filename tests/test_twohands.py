@@ -1,0 +1,123 @@
+"""Two hands planned together (``planner.play.twohands``, ``play --hands 2``): the rails
+never closer than the pair's rail gap on a song that makes the hands meet, the independent
+check finding no collision and every claim true; the windows and bounds; the command
+line's errors and its one-part file."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planner.check import check_trajectory
+from planner.hand.model import load_hand
+from planner.music.midi import Note, load_song, write_notes_midi
+from planner.play.hands import LEFT, RIGHT
+from planner.play.twohands import PairPlanner, left_bounds, plan_two_hands, windows
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def pair() -> PairPlanner:
+    return PairPlanner(load_hand("default-left"), load_hand("default"))
+
+
+def meeting_song(path: Path) -> Path:
+    """The left part climbs from C3 and the right one falls from C6, a note each every
+    0.25 s, so that they meet at middle C and pass: a left part on channel 1, a right one
+    on channel 0 (two parts: ``hint_hands``)."""
+    white = [0, 2, 4, 5, 7, 9, 11]
+    up = [48 + 12 * (i // 7) + white[i % 7] for i in range(15)]  # C3 .. C5
+    down = [84 - (12 * (i // 7) + [0, 1, 3, 5, 7, 8, 10][i % 7]) for i in range(15)]  # C6 ..
+    notes = [Note(p, 0.5 + 0.25 * i, 0.5 + 0.25 * i + 0.2, 80, 1) for i, p in enumerate(up)]
+    notes += [Note(p, 0.5 + 0.25 * i, 0.5 + 0.25 * i + 0.2, 80, 0) for i, p in enumerate(down)]
+    write_notes_midi(notes, path)
+    return path
+
+
+def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    out = tmp_path / "meet.csv"
+    plan = plan_two_hands(song, pair, str(out))
+    qL, qR = plan.rows.q
+    gap = qR[:, pair.hands[RIGHT].index["rail"]] - qL[:, pair.hands[LEFT].index["rail"]]
+    assert gap.min() == pytest.approx(plan.least_rail_gap_m)
+    assert plan.least_rail_gap_m >= pair.gap.rail_gap_m - 1e-9
+    assert gap.min() < pair.gap.rail_gap_m + 0.05  # (the hands did meet)
+    rep = check_trajectory(str(out), song)
+    assert rep.gap.collision_rows == 0 and rep.gap.least_m >= 0.010
+    assert rep.ok, rep.problems
+    # (every note is one hand's, claimed or named; the claims are the check's findings)
+    assert sorted(plan.notes_of[0] + plan.notes_of[1]) == list(range(len(song.notes)))
+    left_out = {i for i, _ in plan.left_out()}
+    assert rep.play.f1 > 0.5 and len(left_out) < len(song.notes) // 2
+    assert set(plan.played_of(LEFT)) | set(plan.played_of(RIGHT)) == (
+        set(range(len(song.notes))) - left_out)
+
+
+def test_same_song_same_bytes(pair, tmp_path) -> None:
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    a, b = (plan_two_hands(song, pair).text for _ in range(2))
+    assert a == b and a.startswith("#")
+
+
+def test_windows_skip_the_notes_out_of_reach() -> None:
+    notes = [Note(60, t, t + 0.2, 80) for t in (0.0, 1.0, 2.0, 3.0)]
+    w = windows(notes, (0, 1, 2, 3))
+    assert w[0] == (-math.inf, 1.1) and w[1] == (0.0, 2.1) and w[3] == (2.0, math.inf)
+    # (the note at 2 s played by no place: the hand stays from the one at 1 s to 3 s)
+    w = windows(notes, (0, 1, 2, 3), frozenset({2}))
+    assert w[1] == (0.0, 3.1) and w[3] == (1.0, math.inf)
+
+
+def test_left_bound_is_the_right_rail_less_the_gap_over_the_window(pair) -> None:
+    notes = [Note(48, 1.0, 1.2, 80), Note(50, 2.0, 2.2, 80)]
+    t = np.arange(0, 400) / 100.0
+    rail = np.where(t < 1.5, 0.30, 0.10)  # (the right hand comes down at 1.5 s)
+    b = left_bounds(notes, (0, 1), t, rail, pair.gap, 0.01)
+    # (the first note's window lasts to the second's onset and half of it: it holds the
+    # rail from before the right hand came down to after)
+    assert b[0][1] == pytest.approx(0.10 - pair.gap.rail_gap_m)
+    assert b[1][1] == pytest.approx(0.10 - pair.gap.rail_gap_m)
+
+
+def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    r = subprocess.run([sys.executable, str(ROOT / "cli.py"), *args], cwd=cwd,
+                       capture_output=True, text=True, timeout=900, check=False)
+    assert "Traceback" not in r.stderr, r.stderr
+    return r
+
+
+@pytest.mark.parametrize("args,says", [
+    (("--hands", "3"), "--hands takes 1, 2 or two hands"),
+    (("--hands", "default"), "--hands takes 1, 2 or two hands"),
+    (("--hands", "2", "--hand", "default"), "name the pair"),
+    (("--hands", "2", "--track", "1"), "every part"),
+    (("--hands", "default,default-left"), "a left hand then a right"),
+])
+def test_cli_bad_hands(tmp_path, args, says) -> None:
+    r = run_cli("play", str(ROOT / "songs" / "twinkle.mid"), "-o", "x.csv", *args, cwd=tmp_path)
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.count("\n") == 1 and says in r.stderr, r.stderr
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_cli_one_part_file_split_by_pitch(tmp_path) -> None:
+    # (both hands' notes in one track and channel: cut at the pitch between them)
+    notes = [Note(p, 0.5 + 0.5 * i, 0.9 + 0.5 * i, 80) for i in range(8)
+             for p in (43 + (i % 3) * 2, 76 + (i % 4))]
+    write_notes_midi(notes, tmp_path / "one.mid")
+    r = run_cli("play", "one.mid", "--hands", "2", "-o", "one.csv", "--json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["hint"] == "split" and [h["notes"] for h in d["hands"]] == [8, 8]
+    assert d["least_rail_gap_m"] >= d["rail_gap_m"] - 1e-9
+    rep = check_trajectory(str(tmp_path / "one.csv"), load_song(tmp_path / "one.mid",
+                                                                every_part=True))
+    assert rep.ok and rep.play.f1 > 0.9, rep.problems
