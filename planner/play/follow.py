@@ -24,11 +24,16 @@ import math
 
 import numpy as np
 
-from planner.music import keyboard as kb
-from planner.play.atlas import PATH_SAMPLES, TIP_RADIUS_M, Atlas, AtlasEntry
 from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M
+from planner.music import keyboard as kb
 from planner.music.keybodies import box_penetration, footprints
-from planner.play.fingerbody import MANY_CHUNK, OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, FingerBodies
+from planner.play.atlas import PATH_SAMPLES, TIP_RADIUS_M, Atlas, AtlasEntry
+from planner.play.fingerbody import (
+    MANY_CHUNK,
+    OTHER_KEY_TOLERANCE_M,
+    OWN_BED_MARGIN_M,
+    FingerBodies,
+)
 from planner.play.fingerchain import FingerChain
 
 HOLD_MARGIN_M = 0.001  # a key held while the arm moves stays this far inside its down range
