@@ -16,20 +16,24 @@ BLAS calls on other shapes of array: ``tests/test_fingerchain.py``).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
-from planner.play.fingerbody import AXIS_SAMPLES, FingerBodies
+
+if TYPE_CHECKING:
+    from planner.play.fingerbody import FingerShapes
 
 
 class FingerChain:
-    """One finger's tip (``tip``) and body shapes' ends (``FingerBodies.shapes``), carried
-    together (see the module docstring)."""
+    """One finger's tip (``tip``) and body shapes' ends (``FingerBodies.shapes``: ``s``,
+    each capsule's axis sampled at ``axis_samples`` points), carried together (see the
+    module docstring). ValueError when the finger's links are not one chain."""
 
-    def __init__(self, hand: HandModel, bodies: FingerBodies, finger: str) -> None:
+    def __init__(self, hand: HandModel, s: FingerShapes, finger: str, axis_samples: int) -> None:
         names = hand.pin_model.frames
-        s = bodies.shapes[finger]
         tip = FrameChain(hand, f"{finger}_tip")
         chains = [FrameChain(hand, names[fid].name) for fid in s.frames]
         self.joints = max([tip, *chains], key=lambda c: len(c.joints)).joints
@@ -62,7 +66,7 @@ class FingerChain:
         self._row = np.array([first[d] + i for d, i in order])  # (each point's place)
         self.n_points = start
         self.n_shape = tuple(s.n_points)
-        self._t = np.linspace(0.0, 1.0, AXIS_SAMPLES)[:, None]  # (``points_many``'s)
+        self._t = np.linspace(0.0, 1.0, axis_samples)[:, None]  # (``points_many``'s)
 
     def carry(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """At configurations ``Q`` (N, n; the hand's joint order, couplings applied): the

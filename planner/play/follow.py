@@ -29,6 +29,7 @@ from planner.music import keyboard as kb
 from planner.music.keybodies import box_penetration, footprints
 from planner.play.atlas import PATH_SAMPLES, TIP_RADIUS_M, Atlas, AtlasEntry
 from planner.play.fingerbody import (
+    AXIS_SAMPLES,
     MANY_CHUNK,
     OTHER_KEY_TOLERANCE_M,
     OWN_BED_MARGIN_M,
@@ -96,7 +97,8 @@ def finger_chain(bodies: FingerBodies, finger: str) -> FingerChain:
     """The finger's ``FingerChain`` over ``bodies``' shapes (made once per hand)."""
     got = _CHAINS.get((id(bodies), finger))
     if got is None or got[0] is not bodies:
-        got = _CHAINS[(id(bodies), finger)] = (bodies, FingerChain(bodies.hand, bodies, finger))
+        got = _CHAINS[(id(bodies), finger)] = (bodies, FingerChain(
+            bodies.hand, bodies.shapes[finger], finger, AXIS_SAMPLES))
     return got[1]
 
 
