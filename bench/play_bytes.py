@@ -5,10 +5,11 @@ a change that is meant to change no plan (a speed-up, a refactoring) leaves ever
 it was (``sha256sum -c OLD/SHA256SUMS`` in the new DIR, or ``--against OLD``).
 
     python bench/play_bytes.py DIR [--tree PATH] [--corpus DIR] [--only SUBSTRING]
-                                   [--extra DIR ...] [--against OLD_DIR]
+                                   [--extra DIR ...] [--against OLD_DIR] [--hand NAME]
 
 ``--tree PATH`` runs another checkout's ``cli.py`` (its planner on ``PYTHONPATH``): the
-same songs planned by main and by a branch, each into its own DIR. Exit 1 when
+same songs planned by main and by a branch, each into its own DIR. ``--hand NAME`` plans
+with another hand (``cli.py play --hand NAME``; default: the default hand). Exit 1 when
 ``--against`` finds a file that differs.
 """
 
@@ -41,6 +42,7 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--extra", action="append", default=[],
                     help="another folder of songs (tests/data, bench/random_songs.py's)")
     ap.add_argument("--against", default=None, help="a DIR of this script's to compare with")
+    ap.add_argument("--hand", default=None, help="hand name or file (cli.py play --hand)")
     a = ap.parse_args(argv)
     out, tree = Path(a.out), Path(a.tree).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -48,7 +50,8 @@ def main(argv: list[str]) -> int:
     sums = []
     for song in songs_of(Path(a.corpus), a.only, a.extra):
         csv = out / f"{song.stem}.csv"
-        r = subprocess.run([sys.executable, str(tree / "cli.py"), "play", str(song), "-o", str(csv)],
+        hand = [] if a.hand is None else ["--hand", a.hand]
+        r = subprocess.run([sys.executable, str(tree / "cli.py"), "play", str(song), "-o", str(csv), *hand],
                            capture_output=True, text=True, env=env, check=False)
         if r.returncode not in (0, 1):  # (1: the plan's own replay rejects it; still a plan)
             print(f"{song.name}: exit {r.returncode}: {r.stderr.strip()[-300:]}")

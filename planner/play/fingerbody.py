@@ -47,6 +47,7 @@ from planner.hand.chain import FrameChain
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.music.keybodies import box_penetration, footprints, key_depths
+from planner.play.fingerchain import FingerChain
 from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
@@ -89,6 +90,8 @@ class FingerBodies:
         self._t = np.linspace(0.0, 1.0, AXIS_SAMPLES)[:, None]
         self._chains: dict[str, list[FrameChain]] = {}  # per finger, per shape (``points_many``)
         self._tips: dict[str, FrameChain] = {}  # (``tip_chain``)
+        self._fingers: dict[str, FingerChain | None] = {}  # (``points_many``; None: its
+        # links are not one chain)
 
     def points(self, q: np.ndarray, finger: str, update: bool = True
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -123,8 +126,19 @@ class FingerBodies:
     def points_many(self, Q: np.ndarray, finger: str) -> np.ndarray:
         """``points`` at each of the configurations ``Q`` (K, n) at once (world, (K, m, 3);
         the radii are ``points``'): the shapes' ends carried by ``FrameChain``, the same
-        rigid transforms as Pinocchio's to rounding (``tests/test_fingerbody.py``)."""
+        rigid transforms as Pinocchio's to rounding (``tests/test_fingerbody.py``); a
+        finger whose links are one chain, all of them in one pass (``FingerChain``, the
+        same numbers to the bit: ``tests/test_fingerchain.py``)."""
         s = self.shapes[finger]
+        one = self._fingers.get(finger, False)
+        if one is False:
+            try:
+                one = FingerChain(self.hand, s, finger, AXIS_SAMPLES)
+            except ValueError:
+                one = None
+            self._fingers[finger] = one
+        if one is not None:
+            return one.carry(Q)[1]
         chains = self._chains.get(finger)
         if chains is None:
             names = self.hand.pin_model.frames

@@ -24,9 +24,18 @@ import math
 
 import numpy as np
 
-from planner.hand.chain import FrameChain
+from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M
 from planner.music import keyboard as kb
+from planner.music.keybodies import box_penetration, footprints
 from planner.play.atlas import PATH_SAMPLES, TIP_RADIUS_M, Atlas, AtlasEntry
+from planner.play.fingerbody import (
+    AXIS_SAMPLES,
+    MANY_CHUNK,
+    OTHER_KEY_TOLERANCE_M,
+    OWN_BED_MARGIN_M,
+    FingerBodies,
+)
+from planner.play.fingerchain import FingerChain
 
 HOLD_MARGIN_M = 0.001  # a key held while the arm moves stays this far inside its down range
 FOLLOW_STEP_M = 0.002  # a follow is tested every 2 mm of the arm's travel: a body sphere
@@ -67,7 +76,7 @@ def paths_clear(atlas: Atlas, finger: str, pitch: int, QA: np.ndarray, QB: np.nd
     passes the body rule's follow test on key ``pitch`` (the module docstring); ``arm``:
     the arm's joints (their travel sets the samples). (N,) bool."""
     bodies = atlas.bodies
-    chain = bodies.tip_chain(finger)
+    chain = finger_chain(bodies, finger)
     radii = bodies.radii(finger)
     travel = np.linalg.norm((QB - QA)[:, arm], axis=1)
     counts = np.array([samples(float(t)) for t in travel])
@@ -77,25 +86,91 @@ def paths_clear(atlas: Atlas, finger: str, pitch: int, QA: np.ndarray, QB: np.nd
         S = np.linspace(0.0, 1.0, n_s)
         for lo in range(0, len(idx), PAIR_CHUNK):
             sel = idx[lo:lo + PAIR_CHUNK]
-            out[sel] = _clear(atlas, chain, radii, finger, pitch, QA[sel], QB[sel], S)
+            out[sel] = _clear(atlas, chain, radii, pitch, QA[sel], QB[sel], S)
     return out
 
 
-def _clear(atlas: Atlas, chain: FrameChain, radii: np.ndarray, finger: str, pitch: int,
+_CHAINS: dict[tuple[int, str], tuple[FingerBodies, FingerChain]] = {}  # (``finger_chain``)
+
+
+def finger_chain(bodies: FingerBodies, finger: str) -> FingerChain:
+    """The finger's ``FingerChain`` over ``bodies``' shapes (made once per hand)."""
+    got = _CHAINS.get((id(bodies), finger))
+    if got is None or got[0] is not bodies:
+        got = _CHAINS[(id(bodies), finger)] = (bodies, FingerChain(
+            bodies.hand, bodies.shapes[finger], finger, AXIS_SAMPLES))
+    return got[1]
+
+
+def _clear(atlas: Atlas, chain: FingerChain, radii: np.ndarray, pitch: int,
            qa: np.ndarray, qb: np.ndarray, S: np.ndarray) -> np.ndarray:
     hand, k = atlas.hand, kb.key(pitch)
     n, m = len(qa), len(S)
     Q = (qa[:, None, :] + S[None, :, None] * (qb - qa)[:, None, :]).reshape(n * m, -1)
-    Q = hand.apply_couplings(Q)
-    x, y, _ = chain.positions(Q).T
+    tips, points = chain.carry(hand.apply_couplings(Q))
+    x, y, _ = tips.T
     inside = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
               & (k.y_min_m + TIP_RADIUS_M <= y) & (y <= k.y_max_m - TIP_RADIUS_M))
     ok = inside.reshape(n, m).all(axis=1)
     if not ok.any():
         return ok
     rows = np.repeat(ok, m)
-    clear, depth = atlas.bodies.clear_many(atlas.bodies.points_many(Q[rows], finger), radii,
-                                           pitch)
-    held = clear & (depth >= kb.DOWN_DEPTH_M + HOLD_MARGIN_M)
+    held = np.concatenate([held_clear(atlas.bodies, points[rows][lo:lo + MANY_CHUNK], radii, pitch)
+                           for lo in range(0, int(rows.sum()), MANY_CHUNK)])
     ok[ok] = held.reshape(-1, m).all(axis=1)
     return ok
+
+
+def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -> np.ndarray:
+    """Whether each configuration's sphere-swept points ``P`` (K, m, 3), radii ``r``
+    (m,), are clear of every key but ``pitch`` and of its bed and hold ``pitch`` down
+    (``HOLD_MARGIN_M`` past the key-down depth in its footprint column): the booleans of
+    ``FingerBodies.clear_many`` and its own-key depth, from the same numbers (the same
+    boxes' penetrations; every footprint column's depth in one array, not key by key:
+    ``keybodies.key_depths``' elementwise arithmetic, its reductions exact), (K,) bool."""
+    reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
+    flat = P.reshape(-1, 3)
+    p_lo, p_hi = flat.min(axis=0) - reach, flat.max(axis=0) + reach
+    own, lo, hi = _boxes(bodies, pitch)
+    near = np.all((lo <= p_hi) & (hi >= p_lo), axis=1)
+    pen = box_penetration(P, r, lo[near], hi[near])  # (K, boxes near)
+    own = own[near]
+    ok = np.all(pen[:, ~own] <= OTHER_KEY_TOLERANCE_M, axis=1) \
+        & np.all(pen[:, own] <= OWN_BED_MARGIN_M, axis=1)
+    fp = footprints()
+    near = np.all((fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2]), axis=1)
+    mine = fp.key == pitch - kb.LOWEST_PITCH
+    other = near & ~mine  # (the other keys' footprints near, grown by the tolerance; the
+    # key's own as they are)
+    cols_lo = np.concatenate([fp.lo[other] - OTHER_KEY_TOLERANCE_M, fp.lo[mine] - 0.0])
+    cols_hi = np.concatenate([fp.hi[other] + OTHER_KEY_TOLERANCE_M, fp.hi[mine] + 0.0])
+    top = np.concatenate([fp.top_m[other], fp.top_m[mine]])
+    dx = np.maximum(np.maximum(cols_lo[:, 0] - P[:, :, None, 0], P[:, :, None, 0] - cols_hi[:, 0]),
+                    0.0)
+    dy = np.maximum(np.maximum(cols_lo[:, 1] - P[:, :, None, 1], P[:, :, None, 1] - cols_hi[:, 1]),
+                    0.0)
+    d = np.sqrt(dx * dx + dy * dy)  # (K, m, columns)
+    r2 = (r * r)[None, :, None] - d * d
+    low = np.where(r2 >= 0.0, P[:, :, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
+    depth = top[None] + -low.min(axis=1)  # (K, columns)
+    n_other = int(other.sum())
+    if n_other:
+        ok &= np.all(depth[:, :n_other] < DOWN_DEPTH_M, axis=1)
+    own_depth = depth[:, n_other:].max(axis=1)
+    return ok & (own_depth <= BODY_BED_DEPTH_M) & (own_depth >= kb.DOWN_DEPTH_M + HOLD_MARGIN_M)
+
+
+_BOXES: dict[tuple[int, int], tuple] = {}  # (``_boxes``)
+
+
+def _boxes(bodies: FingerBodies, pitch: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The key boxes with key ``pitch``'s pressed to its bed (``FingerBodies.clear_many``'s),
+    and which are its: (own (B,) bool, lo (B, 3), hi (B, 3)), made once per hand and key."""
+    got = _BOXES.get((id(bodies), pitch))
+    if got is None or got[0] is not bodies:
+        own = bodies.box_pitch == pitch
+        lo, hi = bodies.box_lo.copy(), bodies.box_hi.copy()
+        lo[own, 2] -= kb.KEY_DIP_M
+        hi[own, 2] -= kb.KEY_DIP_M
+        got = _BOXES[(id(bodies), pitch)] = (bodies, own, lo, hi)
+    return got[1:]

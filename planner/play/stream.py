@@ -73,6 +73,9 @@ class Planner:
         self.memo = CostMemo()  # (the fingering's costs that depend on the hand alone)
         # (the hand's rest pose: every plan's first row; two hands rest apart)
         self.rest_q = rest_pose(self.atlas, rest_rail_m)
+        # (the idle fingers' pose, ``IdleFingers.pose``, found and kept with the set-up: it
+        # depends on the hand alone; every plan's first rows tuck them there)
+        self.places.idle.tuck(self.rest_q)
 
 
 def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz: float = 100.0,

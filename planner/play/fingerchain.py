@@ -1,0 +1,107 @@
+"""A finger's tip and body points for many configurations at once, in one pass down its
+chain: what ``FrameChain.positions`` (the tip) and ``FingerBodies.points_many`` (the
+shapes' sampled axes) give, for the follow test (``planner.play.follow``), which asks
+them of one move's samples at a time, thousands of times a song.
+
+``FingerBodies.points_many`` carries each shape's two ends down the chain from its own
+link, one ``FrameChain`` per shape (seven for a long finger, four frames deep or more
+each); the tip is carried once more. The links of one finger are one chain (the arm's
+joints, the wrist, the finger's joints: each shape's link a prefix of the tip's), so here
+every point starts at its own link's joint and all of them go on together from there to
+the root: the same rigid transforms (Rodrigues for a revolute joint, a translation for a
+prismatic one, then the joint's placement), applied once per joint to every point.
+The numbers are those of ``FrameChain``'s to rounding (the matrix products are the same
+BLAS calls on other shapes of array: ``tests/test_fingerchain.py``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from planner.hand.chain import FrameChain
+from planner.hand.model import HandModel
+
+if TYPE_CHECKING:
+    from planner.play.fingerbody import FingerShapes
+
+
+class FingerChain:
+    """One finger's tip (``tip``) and body shapes' ends (``FingerBodies.shapes``: ``s``,
+    each capsule's axis sampled at ``axis_samples`` points), carried together (see the
+    module docstring). ValueError when the finger's links are not one chain."""
+
+    def __init__(self, hand: HandModel, s: FingerShapes, finger: str, axis_samples: int) -> None:
+        names = hand.pin_model.frames
+        tip = FrameChain(hand, f"{finger}_tip")
+        chains = [FrameChain(hand, names[fid].name) for fid in s.frames]
+        self.joints = max([tip, *chains], key=lambda c: len(c.joints)).joints
+        for c in (tip, *chains):  # (one chain: every link's a prefix of the deepest)
+            if any(a[0] != b[0] or a[1] != b[1] for a, b in zip(c.joints, self.joints)):
+                raise ValueError(f"finger {finger!r}: its links are not one chain")
+        self.T_world_root = tip.T_world_root
+        # (each joint's column of the configurations; a joint not ours stays at 0: a
+        # column of zeros, its cosine 1 and sine 0, as ``FrameChain``'s)
+        self._cols = [hand.n if j[0] is None else j[0] for j in self.joints]
+        self._pad = any(j[0] is None for j in self.joints)
+        # the points each joint's frame holds (its links' shape ends, the tip: in the
+        # frame's parent joint, as ``FrameChain.points``), by joint depth, and where each
+        # lands in the carried array (point-major rows: point i's at i N .. i N + N - 1)
+        local: dict[int, list[np.ndarray]] = {}
+        order: list[tuple[int, int]] = []  # (depth, index in the depth's list) per point
+        for c, pts in [(tip, np.zeros((1, 3))), *[(c, np.stack([a, b])) for c, a, b
+                                                    in zip(chains, s.p0, s.p1)]]:
+            depth = len(c.joints)
+            block = local.setdefault(depth, [])
+            for p in pts @ c.R_frame.T + c.tip:
+                order.append((depth, len(block)))
+                block.append(p)
+        self._local = {d: np.array(v) for d, v in local.items()}
+        depths = sorted(self._local, reverse=True)
+        start, first = 0, {}
+        for d in depths:
+            first[d] = start
+            start += len(self._local[d])
+        self._row = np.array([first[d] + i for d, i in order])  # (each point's place)
+        self.n_points = start
+        self.n_shape = tuple(s.n_points)
+        self._t = np.linspace(0.0, 1.0, axis_samples)[:, None]  # (``points_many``'s)
+
+    def carry(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """At configurations ``Q`` (N, n; the hand's joint order, couplings applied): the
+        tip's world position (N, 3) and the shapes' sampled axis points (N, m, 3), as
+        ``FrameChain.positions`` and ``FingerBodies.points_many``."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        n = len(Q)
+        # (every joint's value, cosine and sine for every point's row at once: rows
+        # point-major, the points of the deepest links first, ``_local``)
+        if self._pad:
+            Q = np.concatenate([Q, np.zeros((n, 1))], axis=1)
+        q_all = np.tile(Q[:, self._cols], (self.n_points, 1))
+        cos_all, sin_all = np.cos(q_all), np.sin(q_all)
+        p = np.empty((0, 3))
+        for depth in range(len(self.joints), 0, -1):
+            loc = self._local.get(depth)
+            if loc is not None:  # (this joint's links' points join the others here)
+                p = np.concatenate([p, np.repeat(loc, n, axis=0)])
+            _, prismatic, k, R, t = self.joints[depth - 1]
+            rows = len(p)
+            if prismatic:
+                p = p + q_all[:rows, depth - 1, None] * k
+            else:  # Rodrigues, as ``FrameChain``: p cos + (k x p) sin + k (k . p)(1 - cos)
+                c, s = cos_all[:rows, depth - 1, None], sin_all[:rows, depth - 1, None]
+                kxp = np.empty_like(p)
+                kxp[:, 0] = k[1] * p[:, 2] - k[2] * p[:, 1]
+                kxp[:, 1] = k[2] * p[:, 0] - k[0] * p[:, 2]
+                kxp[:, 2] = k[0] * p[:, 1] - k[1] * p[:, 0]
+                p = p * c + kxp * s + (p @ k)[:, None] * k * (1.0 - c)
+            p = p @ R.T + t
+        T = self.T_world_root
+        w = (p @ T[:3, :3].T + T[:3, 3]).reshape(self.n_points, n, 3)[self._row]
+        tip, ends = w[0], w[1:]
+        pts = []
+        for j, m in enumerate(self.n_shape):  # (each shape's axis, as ``points_many``)
+            wa, wb = ends[2 * j][:, None], ends[2 * j + 1][:, None]
+            pts.append(wa + self._t[None, :m] * (wb - wa))
+        return tip, np.concatenate(pts, axis=1)
