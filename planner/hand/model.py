@@ -7,7 +7,7 @@ in file order), SI units (rad, m). The IK (placo) and the independent check
 both read limits, couplings and actuators from here, never from a copy.
 
 The model holds the joints, their limits and the Pinocchio kinematics; its couplings
-(``planner.hand.couplings``) and its motors and drives (``planner.hand.transmission``)
+(``planner.hand.couplings``) and its motors and drives (``planner.hand.motormap``)
 are objects of their own that it builds at set-up and answers through.
 """
 
@@ -22,8 +22,8 @@ import pinocchio as pin
 from planner.errors import InputError
 from planner.hand.builders import load_hand_spec
 from planner.hand.couplings import CouplingLaw, CouplingMap
+from planner.hand.motormap import MotorMap
 from planner.hand.spec import PALM_FRAME, HandSpec
-from planner.hand.transmission import Transmission
 from planner.hand.urdf import urdf_sha256, urdf_text
 
 GRAVITY_WORLD = np.array([0.0, 0.0, -9.81])
@@ -74,18 +74,18 @@ class HandModel:
         self._tip_ids = [self.pin_model.getFrameId(f) for f in self.tip_frames]
         self._palm_id = self.pin_model.getFrameId(PALM_FRAME)
 
-        # couplings (``planner.hand.couplings``), motors and drives (``planner.hand.transmission``)
+        # couplings (``planner.hand.couplings``), motors and drives (``planner.hand.motormap``)
         self.coupling_map = CouplingMap(spec.couplings, self.index, self.n)
         self.couplings: tuple[CouplingLaw, ...] = self.coupling_map.laws
         self.independent = self.coupling_map.independent
         self.dependent = self.coupling_map.dependent
-        self.transmission = Transmission(spec.actuators, self.index, self.coupling_map)
+        self.motor_map = MotorMap(spec.actuators, self.index, self.coupling_map)
         self.actuators = spec.actuators
-        self.motor_names = self.transmission.motor_names
-        self.n_motor = self.transmission.n_motor
-        self.motor_speed = self.transmission.motor_speed
-        self.motor_peak_torque = self.transmission.motor_peak_torque
-        self._drive = self.transmission.drive  # (read by planner.simulate)
+        self.motor_names = self.motor_map.motor_names
+        self.n_motor = self.motor_map.n_motor
+        self.motor_speed = self.motor_map.motor_speed
+        self.motor_peak_torque = self.motor_map.motor_peak_torque
+        self._drive = self.motor_map.drive  # (read by planner.simulate)
 
         lo = np.where(np.isfinite(self.lower), self.lower, -1.0)
         hi = np.where(np.isfinite(self.upper), self.upper, 1.0)
@@ -191,30 +191,30 @@ class HandModel:
     # ------------------------------------------------------------ actuators
     def motor_angles(self, q: np.ndarray) -> np.ndarray:
         """Motor shaft angles (rad) for joint positions ``q``; works on (..., n) arrays."""
-        return self.transmission.motor_angles(q)
+        return self.motor_map.motor_angles(q)
 
     def motor_sensitivity(self, q: np.ndarray, step: float = 1e-4) -> np.ndarray:
         """Per row of ``q`` (T, n) and motor: the sum over joints of |d q_motor / d q_j|
-        (``Transmission.motor_sensitivity``)."""
-        return self.transmission.motor_sensitivity(q, step)
+        (``MotorMap.motor_sensitivity``)."""
+        return self.motor_map.motor_sensitivity(q, step)
 
     def transmission_key(self, q: np.ndarray) -> bytes:
         """What ``motor_torques`` and ``motor_ratio`` read of ``q``: at two poses of equal
-        keys they are the same functions, bit for bit (``Transmission.key``)."""
-        return self.transmission.key(q)
+        keys they are the same functions, bit for bit (``MotorMap.key``)."""
+        return self.motor_map.key(q)
 
     def motor_ratio(self, q: np.ndarray) -> np.ndarray:
         """dq_motor / dq_drive for each motor (rad per rad of its driven joint) at ``q``."""
-        return self.transmission.motor_ratio(q)
+        return self.motor_map.motor_ratio(q)
 
     def motor_velocities(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """Motor shaft speeds (rad/s) for joint speeds ``qd`` at ``q`` (couplings respected)."""
-        return self.transmission.motor_velocities(q, qd)
+        return self.motor_map.motor_velocities(q, qd)
 
     def motor_torques(self, q: np.ndarray, tau_joint: np.ndarray) -> np.ndarray:
         """Motor torques (N m) that supply joint torques ``tau_joint`` by virtual work
-        (``Transmission.motor_torques``)."""
-        return self.transmission.motor_torques(q, tau_joint)
+        (``MotorMap.motor_torques``)."""
+        return self.motor_map.motor_torques(q, tau_joint)
 
     def press_torques(self, q: np.ndarray, forces_n: dict[str, float]) -> np.ndarray:
         """Motor torques (N m) holding ``q`` against gravity while the named

@@ -3,7 +3,7 @@
 Each motor drives one independent joint (``Actuator.drives``); the joints coupled to it
 follow. A linear drive's motor angle is ``q_motor = C q`` (``Actuator.coefficients``:
 rad per rad, rad per m for a rig axis); an Mk5 motor's follows the seed's tables. Built
-once per hand (``HandModel.transmission``); ``HandModel`` answers ``motor_angles``,
+once per hand (``HandModel.motor_map``); ``HandModel`` answers ``motor_angles``,
 ``motor_ratio``, ``motor_velocities`` and ``motor_torques`` through it.
 """
 
@@ -15,7 +15,7 @@ from planner.hand.couplings import CouplingMap
 from planner.hand.mk5_tables import MK5_TABLES
 
 
-class Transmission:
+class MotorMap:
     """The motor map of a hand: ``actuators`` (the hand file's), the joint each drives
     (``drive``) and the linear map ``C`` (n_motor, n) from joint to motor angles."""
 
