@@ -1,6 +1,7 @@
 """Whole-hand inverse kinematics: placo (on Pinocchio) QP, iterated to convergence.
 
-The only module of the planner that imports placo. One ``solve(True)`` of a
+With ``planner.placo_hand`` (the solver: robot, limits, couplings, joint tasks), the
+only modules of the planner that import placo. One ``solve(True)`` of a
 placo ``KinematicsSolver`` is one Newton step of a QP; ``HandIK.solve``
 iterates it until every pressing fingertip is within tolerance (1 mm, the
 seed's precision requirement) of its target.
@@ -25,11 +26,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import placo
 
 from planner.errors import InputError
-from planner.hand.model import HandModel
 from planner.music import keyboard as kb
+from planner.placo_hand import PlacoHand
 
 PRESS_TOL_M = 1e-3  # seed: precision 1 mm
 PREPARE_HEIGHT_M = 0.0055  # a finger about to press waits this far above its key (>= 5 mm)
@@ -149,66 +149,10 @@ def surfaces_under(x: np.ndarray, y: np.ndarray, inflate_m: float) -> np.ndarray
     return np.where(inside, t["top_z"][None, :], -np.inf).max(axis=1)
 
 
-class HandIK:
-    """A placo kinematics solver for one hand, built once and reused for every keyframe."""
-
-    def __init__(self, hand: HandModel, limits: tuple[np.ndarray, np.ndarray] | None = None
-                 ) -> None:
-        """``limits``: the joints' (lower, upper) bounds the solutions keep to (default
-        the hand's hard stops; ``play``'s atlas: ``HandModel.plan_lower``/``plan_upper``)."""
-        self.hand = hand
-        self.lower, self.upper = (hand.lower, hand.upper) if limits is None else limits
-        # the URDF text is passed directly: no temporary file
-        self.robot = placo.RobotWrapper("", placo.Flags.ignore_collisions, hand.urdf)
-        self.robot.set_T_world_fbase(hand.T_world_root)
-        self._names = hand.joint_names
-        self._v_off = np.array([self.robot.get_joint_v_offset(n) for n in self._names])
-        self._q_off = np.array([self.robot.get_joint_offset(n) for n in self._names])
-        self._nq = self.robot.model.nq
-        self.solver = placo.KinematicsSolver(self.robot)
-        self.solver.mask_fbase(True)
-        for n, lo, hi in zip(hand.joint_names, self.lower, self.upper):
-            self.robot.set_joint_limits(n, float(lo), float(hi))
-        self.solver.enable_joint_limits(True)
-        self._gears: dict[str, object] = {}
-        for c in hand.couplings:
-            if c.kind == "linear":
-                self._add_gear(c)
-        self._nonlinear = [c for c in hand.couplings if c.kind != "linear"]
-        self.posture = self.solver.add_joints_task()
-        self.posture.configure("posture", "soft", 1e-4)
-        # minimal motion: stay near the configuration the hand comes from
-        self.stay = self.solver.add_joints_task()
-        self.stay.configure("stay", "soft", 1e-2)
-        # the arm (rail at its planned position, wrist where it is) moves only
-        # when reaching needs it: the fingers do the local work
-        self._arm = [n for n in ("rail", "wrist_flex", "wrist_dev") if n in hand.index]
-        self.arm_task = self.solver.add_joints_task()
-        self.arm_task.configure("arm", "soft", 1e1)
-        self._tasks: dict[str, object] = {}
-        self._half = None
-
-    def _add_gear(self, c) -> None:
-        g = self.solver.add_gear_task()
-        g.set_gear(self._names[c.dep], self._names[c.src], float(c.ratio))
-        g.configure(f"coupling_{self._names[c.dep]}", "hard", 1.0)
-        self._gears[self._names[c.dep]] = (g, c)
-
-    # -------------------------------------------------------------- state
-    def set_q(self, q: np.ndarray) -> None:
-        for n, v in zip(self._names, q):
-            self.robot.set_joint(n, float(v))
-        self.robot.update_kinematics()
-
-    def get_q(self) -> np.ndarray:
-        return np.array([self.robot.get_joint(n) for n in self._names])
-
-    def _tip(self, finger: str) -> np.ndarray:
-        return self.robot.get_T_world_frame(f"{finger}_tip")[:3, 3]
-
-    def _tip_jacobian_z(self, finger: str) -> np.ndarray:
-        J = self.robot.frame_jacobian(f"{finger}_tip", "local_world_aligned")
-        return J[2]
+class HandIK(PlacoHand):
+    """The IK's tasks on a hand's placo solver (``PlacoHand``), built once and reused for
+    every keyframe: fingertips pressing keys with the others hovering above them
+    (``solve``), one finger alone (``solve_finger``), and the palm at a pose (``solve_palm``)."""
 
     # -------------------------------------------------------------- solve
     def solve(self, presses: list[PressTarget], q_start: np.ndarray, posture: np.ndarray,
@@ -232,13 +176,12 @@ class HandIK:
             raise InputError("one finger cannot press two keys")
         if hover is None:
             hover = tuple(f for f in fingers if f not in pressing)
-        self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
-        self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
-        self.arm_task.set_joints({n: float((posture if n == "rail" else q_start)[self.hand.index[n]])
-                                  for n in self._arm})
+        arm_q = np.array(q_start, dtype=float)
+        if "rail" in self.hand.index:
+            arm_q[self.hand.index["rail"]] = posture[self.hand.index["rail"]]
+        self._set_joint_tasks(posture, q_start, arm_q)
         self.set_q(q_start)
-        for f in list(self._tasks):
-            self.solver.remove_task(self._tasks.pop(f))
+        self._drop_tasks()
         for p in presses:
             t = self.solver.add_position_task(f"{p.finger}_tip", np.array(p.point_m))
             t.configure(f"press_{p.finger}", "soft", 1e5)
@@ -270,7 +213,7 @@ class HandIK:
             for p in presses:
                 y = min(max(float(tips[p.finger][1]), p.y_range_m[0]), p.y_range_m[1])
                 self._tasks[p.finger].target_world = np.array([p.point_m[0], y, p.point_m[2]])
-            self._set_half_spaces(hover)
+            self._set_hover(hover)
             stuck = False
             try:
                 self.solver.solve(True)
@@ -319,16 +262,10 @@ class HandIK:
                 c = min(c, float(tip[2] - s))
         return c
 
-    def _clear_half_spaces(self) -> None:
-        if self._half is not None:
-            self.solver.remove_constraint(self._half)
-            self._half = None
-
-    def _set_half_spaces(self, hover) -> None:
-        """Linearised ``z_tip(q) >= surface + clearance`` for hovering tips, and nonlinear couplings."""
-        self._clear_half_spaces()
+    def _set_hover(self, hover) -> None:
+        """Linearised ``z_tip(q) >= surface + clearance`` for hovering tips (with the
+        nonlinear couplings: ``PlacoHand._set_half_spaces``)."""
         # placo wants A with one column per configuration entry (floating base ignored)
-        nq = self._nq
         rows, rhs = [], []
         q_now = self.get_q()
         for f in hover:
@@ -337,23 +274,12 @@ class HandIK:
             if not np.isfinite(s):
                 continue
             Jv = self._tip_jacobian_z(f)
-            Jz = np.zeros(nq)
+            Jz = np.zeros(self._nq)
             Jz[self._q_off] = Jv[self._v_off]
             # z + Jz (q - q0) >= s + c   <=>   -Jz q <= z - s - c - Jz q0
             rows.append(-Jz)
             rhs.append(tip[2] - s - HOVER_CLEARANCE_M - Jv[self._v_off] @ q_now)
-        for c in self._nonlinear:
-            a = np.zeros(nq)
-            qs = q_now[c.src]
-            slope = float(c.slope(qs))
-            a[self._q_off[c.dep]] = 1.0
-            a[self._q_off[c.src]] = -slope
-            val = float(c.value(qs)) - slope * qs
-            rows += [a, -a]
-            rhs += [val + 1e-9, -val + 1e-9]
-        if rows:
-            self._half = self.solver.add_joint_space_half_spaces_constraint(np.array(rows), np.array(rhs))
-            self._half.configure("hover", "soft", 1e4)
+        self._set_half_spaces(rows, rhs)
 
     # -------------------------------------------------------------- one finger
     def solve_finger(self, target: PressTarget, q_base: np.ndarray,
@@ -419,12 +345,9 @@ class HandIK:
         self.set_q(q_start)
         err, ang = errors()
         posture = q_start if posture is None else posture
-        self.posture.set_joints({n: float(v) for n, v in zip(self._names, posture)})
-        self.stay.set_joints({n: float(v) for n, v in zip(self._names, q_start)})
         # the arm (rail, wrist) is pulled towards ``posture``'s, not held where it is
-        self.arm_task.set_joints({n: float(posture[self.hand.index[n]]) for n in self._arm})
-        for f in list(self._tasks):
-            self.solver.remove_task(self._tasks.pop(f))
+        self._set_joint_tasks(posture, q_start, posture)
+        self._drop_tasks()
         pos = self.solver.add_position_task("palm_center", point - offset_m * nrm)
         pos.configure("palm_position", "soft", 1e3)
         ax = self.solver.add_axisalign_task("palm_center", np.array([0.0, 0.0, 1.0]), nrm)
@@ -438,7 +361,7 @@ class HandIK:
                     it -= 1
                     break
                 if self._nonlinear:
-                    self._set_half_spaces(())
+                    self._set_half_spaces([], [])
                 try:
                     self.solver.solve(True)
                 except RuntimeError:  # a rank-deficient step: return what we have

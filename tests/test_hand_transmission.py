@@ -1,4 +1,4 @@
-"""The hand's transmission found once (``HandModel._transmission``): a hand whose laws
+"""The hand's transmission found once (``MotorMap.fixed``): a hand whose laws
 are all linear has the same ``dq_dindependent`` columns and ``motor_ratio`` at every
 pose, so ``motor_torques`` and ``motor_ratio`` read them from set-up. They must give
 the straightforward computation's numbers to the bit (plans stay byte-identical)."""
@@ -21,9 +21,9 @@ def straight_ratio(hand, q: np.ndarray) -> np.ndarray:
     r = np.empty(hand.n_motor)
     for m, a in enumerate(hand.actuators):
         if a.mk5 is not None:
-            r[m] = mk5.dqmot_dq1(MK5_TABLES[a.mk5.table][a.mk5.finger], q[hand._drive[m]])
+            r[m] = mk5.dqmot_dq1(MK5_TABLES[a.mk5.table][a.mk5.finger], q[hand.motor_map.drive[m]])
         else:
-            r[m] = float(hand._C[m] @ S[:, col[int(hand._drive[m])]])
+            r[m] = float(hand.motor_map.C[m] @ S[:, col[int(hand.motor_map.drive[m])]])
     return r
 
 
@@ -33,7 +33,7 @@ def straight_torques(hand, q: np.ndarray, tau: np.ndarray) -> np.ndarray:
     ratio = straight_ratio(hand, q)
     out = np.empty(hand.n_motor)
     for m, a in enumerate(hand.actuators):
-        out[m] = float(S[:, col[int(hand._drive[m])]] @ tau) / ratio[m] / a.efficiency
+        out[m] = float(S[:, col[int(hand.motor_map.drive[m])]] @ tau) / ratio[m] / a.efficiency
     return out
 
 
@@ -62,8 +62,8 @@ def test_a_source_not_finite_is_computed_not_read(hand) -> None:
 
 
 def test_fixed_transmission_only_for_linear_hands(hand) -> None:
-    assert hand._fixed is not None
-    assert load_hand("mk5")._fixed is None
+    assert hand.motor_map.fixed is not None
+    assert load_hand("mk5").motor_map.fixed is None
     ratio = hand.motor_ratio(hand.q_neutral)
     ratio[:] = 0.0  # (a copy: the hand's own stays)
     assert np.all(hand.motor_ratio(hand.q_neutral) != 0.0)

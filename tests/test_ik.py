@@ -114,7 +114,7 @@ def test_a_solve_that_cycles_ends_where_every_step_taken_ends():
         for p in presses:
             y = float(np.clip(ik._tip(p.finger)[1], *p.y_range_m))
             ik._tasks[p.finger].target_world = np.array([p.point_m[0], y, p.point_m[2]])
-        ik._set_half_spaces(())
+        ik._set_hover(())
         solve_step(True)
         ik.robot.update_kinematics()
     q = h.apply_couplings(np.clip(ik.get_q(), h.lower, h.upper))

@@ -121,9 +121,10 @@ def test_limits_couplings_and_motors_are_the_same_numbers(hands) -> None:
     right, left = hands
     assert left.side == "left" and right.side == "right"
     assert left.joint_names == right.joint_names and left.motor_names == right.motor_names
-    for a in ("lower", "upper", "velocity", "acceleration", "jerk", "stop_margin", "_C",
+    for a in ("lower", "upper", "velocity", "acceleration", "jerk", "stop_margin",
               "motor_speed", "motor_peak_torque"):
         assert np.array_equal(getattr(left, a), getattr(right, a)), a
+    assert np.array_equal(left.motor_map.C, right.motor_map.C)
     assert left.spec.couplings == right.spec.couplings
     assert left.spec.actuators == right.spec.actuators
     assert left.spec.play_posture == right.spec.play_posture

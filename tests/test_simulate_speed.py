@@ -28,7 +28,7 @@ def test_transmission_is_the_hands_own_bit_for_bit(name):
         cols, ratio = tr.at(q)
         S = hand.dq_dindependent(q)
         assert np.array_equal(ratio, hand.motor_ratio(q))
-        for m, d in enumerate(hand._drive):
+        for m, d in enumerate(hand.motor_map.drive):
             assert np.array_equal(cols[m], S[:, col[int(d)]])
         assert np.array_equal(tr.motor_torques(q, tau), hand.motor_torques(q, tau))
 
@@ -166,7 +166,7 @@ def test_servo_motor_torques_are_the_hands_own_bit_for_bit():
     rng = np.random.default_rng(5)
     for name in ("default", "mk5", "agh"):
         hand = load_hand(name)
-        drive = np.array(hand._drive)
+        drive = np.array(hand.motor_map.drive)
         q = np.array([hand.apply_couplings(rng.uniform(hand.lower, hand.upper))
                       for _ in range(50)])
         force = rng.normal(size=(50, hand.n_motor))

@@ -5,12 +5,15 @@ Built once per run (``load_hand``) and passed down. Joint vectors ``q`` are in
 the hand's joint order (``HandModel.joint_names``: the URDF's movable joints
 in file order), SI units (rad, m). The IK (placo) and the independent check
 both read limits, couplings and actuators from here, never from a copy.
+
+The model holds the joints, their limits and the Pinocchio kinematics; its couplings
+(``planner.hand.couplings``) and its motors and drives (``planner.hand.motormap``)
+are objects of their own that it builds at set-up and answers through.
 """
 
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -18,37 +21,12 @@ import pinocchio as pin
 
 from planner.errors import InputError
 from planner.hand.builders import load_hand_spec
-from planner.hand.mk5_tables import MK5_TABLES
-from planner.hand.spec import PALM_FRAME, HandSpec, LinearCoupling, Mk5Coupling
+from planner.hand.couplings import CouplingLaw, CouplingMap
+from planner.hand.motormap import MotorMap
+from planner.hand.spec import PALM_FRAME, HandSpec
 from planner.hand.urdf import urdf_sha256, urdf_text
 
 GRAVITY_WORLD = np.array([0.0, 0.0, -9.81])
-
-
-@dataclass(frozen=True)
-class CouplingLaw:
-    """``q[dep] = f(q[src])`` with derivative ``df``; index form of a coupling."""
-
-    dep: int
-    src: int
-    kind: str
-    ratio: float = 0.0
-    offset: float = 0.0
-    mk5: object = None  # Mk5FingerParams for the nonlinear law
-
-    def value(self, q_src):
-        if self.kind == "linear":
-            return self.ratio * q_src + self.offset
-        from planner.hand import mk5
-
-        return mk5.q2_of_q1(self.mk5, q_src) - q_src
-
-    def slope(self, q_src):
-        if self.kind == "linear":
-            return self.ratio + 0.0 * q_src
-        from planner.hand import mk5
-
-        return mk5.dq2_dq1(self.mk5, q_src) - 1.0
 
 
 class HandModel:
@@ -96,51 +74,18 @@ class HandModel:
         self._tip_ids = [self.pin_model.getFrameId(f) for f in self.tip_frames]
         self._palm_id = self.pin_model.getFrameId(PALM_FRAME)
 
-        # couplings
-        laws = []
-        for c in spec.couplings:
-            if isinstance(c, LinearCoupling):
-                laws.append(CouplingLaw(self.index[c.joint], self.index[c.source], "linear",
-                                        c.ratio, c.offset))
-            elif isinstance(c, Mk5Coupling):
-                laws.append(CouplingLaw(self.index[c.joint], self.index[c.source], "mk5",
-                                        mk5=MK5_TABLES[c.table][c.finger]))
-        self.couplings: tuple[CouplingLaw, ...] = tuple(laws)
-        dep = {c.dep for c in laws}
-        # the linear laws at once (none of their sources is a dependent joint: no chain),
-        # then the others in order
-        lin = [c for c in laws if c.kind == "linear"]
-        chained = any(c.src in dep for c in laws)
-        self._lin = None if chained or not lin else (
-            np.array([c.dep for c in lin]), np.array([c.src for c in lin]),
-            np.array([c.ratio for c in lin]), np.array([c.offset for c in lin]))
-        self._other_laws = tuple(c for c in laws if c.kind != "linear") if self._lin else laws
-        self.independent = np.array([i for i in range(self.n) if i not in dep])
-        self.dependent = np.array(sorted(dep), dtype=int)
-
-        # actuators
+        # couplings (``planner.hand.couplings``), motors and drives (``planner.hand.motormap``)
+        self.coupling_map = CouplingMap(spec.couplings, self.index, self.n)
+        self.couplings: tuple[CouplingLaw, ...] = self.coupling_map.laws
+        self.independent = self.coupling_map.independent
+        self.dependent = self.coupling_map.dependent
+        self.motor_map = MotorMap(spec.actuators, self.index, self.coupling_map)
         self.actuators = spec.actuators
-        self.motor_names = tuple(a.name for a in spec.actuators)
-        self.n_motor = len(self.actuators)
-        self.motor_speed = np.array([a.speed_rad_s for a in self.actuators])
-        self.motor_peak_torque = np.array([a.peak_torque_nm for a in self.actuators])
-        self._drive = np.array([self.index[a.drives] for a in self.actuators])
-        C = np.zeros((self.n_motor, self.n))
-        for m, a in enumerate(self.actuators):
-            for jn, c in a.coefficients:
-                C[m, self.index[jn]] = c
-        self._C = C
-        col = {int(j): k for k, j in enumerate(self.independent)}
-        self._drive_col = [col[int(d)] for d in self._drive]
-        self._efficiency = [a.efficiency for a in self.actuators]
-        # (every law linear, no Mk5 motor: ``dq_dindependent`` and ``motor_ratio`` are the
-        # same at every q whose coupling sources are finite; found once, ``_transmission``)
-        self._fixed = None
-        if all(c.kind == "linear" for c in laws) and all(a.mk5 is None for a in self.actuators):
-            self._lin_src = np.array([c.src for c in laws], dtype=int)
-            self._fixed = self._transmission_at(np.zeros(self.n))
-            for a in (*self._fixed[0], self._fixed[1]):
-                a.setflags(write=False)
+        self.motor_names = self.motor_map.motor_names
+        self.n_motor = self.motor_map.n_motor
+        self.motor_speed = self.motor_map.motor_speed
+        self.motor_peak_torque = self.motor_map.motor_peak_torque
+        self._drive = self.motor_map.drive  # (read by planner.simulate)
 
         lo = np.where(np.isfinite(self.lower), self.lower, -1.0)
         hi = np.where(np.isfinite(self.upper), self.upper, 1.0)
@@ -170,37 +115,19 @@ class HandModel:
 
     def apply_couplings(self, q: np.ndarray) -> np.ndarray:
         """A copy of ``q`` with every dependent joint set from its source."""
-        q = np.array(q, dtype=float)
-        if self._lin is not None:
-            dep, src, ratio, offset = self._lin
-            q[..., dep] = ratio * q[..., src] + offset
-        for c in self._other_laws:
-            q[..., c.dep] = c.value(q[..., c.src])
-        return q
+        return self.coupling_map.apply(q)
 
     def coupling_errors(self, q: np.ndarray) -> np.ndarray:
         """``q[dep] - f(q[src])`` for every coupling (rad); shape (..., n_couplings)."""
-        q = np.asarray(q, dtype=float)
-        return np.stack([q[..., c.dep] - c.value(q[..., c.src]) for c in self.couplings], axis=-1) \
-            if self.couplings else np.zeros(q.shape[:-1] + (0,))
+        return self.coupling_map.errors(q)
 
     def coupling_jacobian(self, q: np.ndarray) -> np.ndarray:
         """d(coupling_errors)/dq, shape (n_couplings, n)."""
-        G = np.zeros((len(self.couplings), self.n))
-        for k, c in enumerate(self.couplings):
-            G[k, c.dep] = 1.0
-            G[k, c.src] = -float(c.slope(q[c.src]))
-        return G
+        return self.coupling_map.jacobian(q)
 
     def dq_dindependent(self, q: np.ndarray) -> np.ndarray:
         """Map from independent joint velocities to all joint velocities, (n, n_independent)."""
-        S = np.zeros((self.n, len(self.independent)))
-        col = {int(j): k for k, j in enumerate(self.independent)}
-        for j, k in col.items():
-            S[j, k] = 1.0
-        for c in self.couplings:
-            S[c.dep, col[c.src]] = float(c.slope(q[c.src]))
-        return S
+        return self.coupling_map.dq_dindependent(q)
 
     # ------------------------------------------------------------ kinematics
     def _pin_q(self, q: np.ndarray) -> np.ndarray:
@@ -264,88 +191,30 @@ class HandModel:
     # ------------------------------------------------------------ actuators
     def motor_angles(self, q: np.ndarray) -> np.ndarray:
         """Motor shaft angles (rad) for joint positions ``q``; works on (..., n) arrays."""
-        q = np.asarray(q, dtype=float)
-        qm = q @ self._C.T
-        for m, a in enumerate(self.actuators):
-            if a.mk5 is not None:
-                from planner.hand import mk5
-
-                qm[..., m] = mk5.qmot_of_q1(MK5_TABLES[a.mk5.table][a.mk5.finger],
-                                            q[..., self.index[a.mk5.source]])
-        return qm
+        return self.motor_map.motor_angles(q)
 
     def motor_sensitivity(self, q: np.ndarray, step: float = 1e-4) -> np.ndarray:
         """Per row of ``q`` (T, n) and motor: the sum over joints of |d q_motor / d q_j|
-        (how far a motor's angle moves when every joint moves by one unit): the rows of
-        the linear transmissions' matrix, and finite differences of ``step`` where a
-        motor's law is not linear (the Mk5's)."""
-        q = np.atleast_2d(np.asarray(q, dtype=float))
-        out = np.tile(np.abs(self._C).sum(axis=1), (len(q), 1))
-        nonlinear = [m for m, a in enumerate(self.actuators) if a.mk5 is not None]
-        if nonlinear:
-            qm = self.motor_angles(q)
-            fd = np.zeros_like(qm)
-            for j in range(self.n):
-                qp = q.copy()
-                qp[:, j] += step
-                fd += np.abs(self.motor_angles(qp) - qm) / step
-            out[:, nonlinear] = fd[:, nonlinear]
-        return out
-
-    def _transmission_at(self, q: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
-        """(each motor's column of ``dq_dindependent(q)``, ``motor_ratio(q)``), computed."""
-        S = self.dq_dindependent(q)
-        return [S[:, c] for c in self._drive_col], self._motor_ratio(q, S)
-
-    def _transmission(self, q: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
-        """``_transmission_at(q)``; for a hand whose laws are all linear the one found at
-        set-up (a linear law's slope is its ratio at every finite source: the same
-        numbers, so the same arithmetic on them gives the same bits)."""
-        if self._fixed is not None and np.isfinite(q[self._lin_src]).all():
-            return self._fixed
-        return self._transmission_at(q)
+        (``MotorMap.motor_sensitivity``)."""
+        return self.motor_map.motor_sensitivity(q, step)
 
     def transmission_key(self, q: np.ndarray) -> bytes:
         """What ``motor_torques`` and ``motor_ratio`` read of ``q``: at two poses of equal
-        keys they are the same functions, bit for bit (an all-linear hand's: one key at
-        every pose whose coupling sources are finite; else the whole pose)."""
-        q = np.asarray(q, dtype=float)
-        if self._fixed is not None and np.isfinite(q[self._lin_src]).all():
-            return b"fixed"
-        return q.tobytes()
+        keys they are the same functions, bit for bit (``MotorMap.key``)."""
+        return self.motor_map.key(q)
 
     def motor_ratio(self, q: np.ndarray) -> np.ndarray:
         """dq_motor / dq_drive for each motor (rad per rad of its driven joint) at ``q``."""
-        return self._transmission(np.asarray(q, dtype=float))[1].copy()
-
-    def _motor_ratio(self, q: np.ndarray, S: np.ndarray) -> np.ndarray:
-        """``motor_ratio`` with ``S = dq_dindependent(q)``."""
-        r = np.empty(self.n_motor)
-        for m, a in enumerate(self.actuators):
-            if a.mk5 is not None:
-                from planner.hand import mk5
-
-                p = MK5_TABLES[a.mk5.table][a.mk5.finger]
-                r[m] = mk5.dqmot_dq1(p, q[self._drive[m]])
-            else:
-                r[m] = float(self._C[m] @ S[:, self._drive_col[m]])
-        return r
+        return self.motor_map.motor_ratio(q)
 
     def motor_velocities(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """Motor shaft speeds (rad/s) for joint speeds ``qd`` at ``q`` (couplings respected)."""
-        return self.motor_ratio(q) * qd[self._drive]
+        return self.motor_map.motor_velocities(q, qd)
 
     def motor_torques(self, q: np.ndarray, tau_joint: np.ndarray) -> np.ndarray:
-        """Motor torques (N m) that supply joint torques ``tau_joint`` by virtual work.
-
-        ``tau_m = (dq/dq_m)^T tau_joint / efficiency`` where ``dq/dq_m`` moves
-        the motor's driven joint and every joint coupled to it.
-        """
-        cols, ratio = self._transmission(np.asarray(q, dtype=float))
-        out = np.empty(self.n_motor)
-        for m, (dq_ddrive, eff) in enumerate(zip(cols, self._efficiency)):
-            out[m] = float(dq_ddrive @ tau_joint) / ratio[m] / eff
-        return out
+        """Motor torques (N m) that supply joint torques ``tau_joint`` by virtual work
+        (``MotorMap.motor_torques``)."""
+        return self.motor_map.motor_torques(q, tau_joint)
 
     def press_torques(self, q: np.ndarray, forces_n: dict[str, float]) -> np.ndarray:
         """Motor torques (N m) holding ``q`` against gravity while the named
