@@ -331,7 +331,7 @@ class Atlas:
                                                           p.wrist_flex_rad, p.wrist_dev_rad,
                                                           p.press_depth_m)],
                 "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES,
-                              "footprint-grown", "press-body-to-bed", PRESS_DEPTH_ITERATIONS]}
+                              "footprint-grown", "press-body-to-bed-both-ways", PRESS_DEPTH_ITERATIONS]}
 
     def _load(self, path: Path) -> None:
         if not path.exists():
@@ -416,7 +416,11 @@ class Atlas:
         stop short of the key bed (a pad that is its finger's lowest point, on a black
         key: 6 mm down leaves the key 1 mm past the key-down depth, which a servo's
         tracking under the key's spring loses, 2-2.5 mm measured in physics), until its
-        body reaches the bed (``KEY_DIP_M``; the pad no deeper than the dip)."""
+        body reaches the bed (``KEY_DIP_M``; the pad no deeper than the dip); shallower
+        where the press depth would put the lowest body past the bed by more than the
+        bed's margin (``OWN_BED_MARGIN_M``, check's rule: a pad sphere of 5 mm below its
+        pad point at the press depth of 6 mm reaches 11.1 mm, past the 11 mm allowed),
+        until it is at the bed: the key is fully down either way (the bed stops it)."""
         front = finger in self.front
         depth = self.press_depth_m
         for _ in range(PRESS_DEPTH_ITERATIONS):
@@ -429,8 +433,8 @@ class Atlas:
                 break
             tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
             want = kb.KEY_DIP_M - self._body_below_tip_m(r.q, finger, tip)  # (<= the dip)
-            if want <= depth + 1e-4:
-                break
+            if depth - OWN_BED_MARGIN_M + 1e-4 <= want <= depth + 1e-4:
+                break  # (the body between the bed and its margin past it)
             depth, base = want, r.q
         return Press(target, r)
 
