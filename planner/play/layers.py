@@ -223,19 +223,9 @@ class Layers(Costs):
             cands = self._candidates(new, press_key)
             if p is None or len(cands) <= 3:
                 keep = cands
-            else:  # (the candidates by place, found by bisection: here, the nearest
-                # below and above in each posture, and each posture's best for the fingers)
-                rails, bests = self._cand_rails[press_key]
-                places, here = self.places, p.place
-                keep = []
-                for q in sorted(bests, key=lambda q: q != places.posture_of(here)):
-                    at = places.place(q, places.rail_i(here))
-                    i = bisect.bisect_left(rails, at)
-                    j = i + 1 if i < len(rails) and rails[i] == at else i
-                    keep += [c for c in cands[i:j] + cands[max(0, i - 1):i] + cands[j:j + 1]
-                             if places.posture_of(c[0]) == q and c not in keep]
-                    if bests[q] not in keep:
-                        keep.append(bests[q])
+            else:
+                keep = _nearest_and_best(self.places, cands, p.place,
+                                         self._cand_rails[press_key])
             self._rails_to[key] = keep
         return keep
 
@@ -315,18 +305,21 @@ class Layers(Costs):
         return got
 
 
-def _nearest_and_best(places: Places, cands: list[tuple[int, float]], here: int
-                      ) -> list[tuple[int, float]]:
+def _nearest_and_best(places: Places, cands: list[tuple[int, float]], here: int,
+                      index: tuple | None = None) -> list[tuple[int, float]]:
     """Of ``cands`` ((place, tie-break), by place), in each posture: the place at
-    ``here``'s rail index, the nearest below and above it, and the one of least
-    tie-break (the fingers nearest their natural places)."""
+    ``here``'s rail index, the nearest below and above it (found by bisection), and the
+    one of least tie-break (the fingers nearest their natural places). ``index``: the
+    candidates' places and each posture's best, when made already (``_candidates``)."""
+    if index is None:
+        bests: dict[int, tuple[int, float]] = {}
+        for c in cands:
+            q = places.posture_of(c[0])
+            if q not in bests or c[1] < bests[q][1]:
+                bests[q] = c
+        index = ([c[0] for c in cands], bests)
+    rails, bests = index
     out: list[tuple[int, float]] = []
-    bests: dict[int, tuple[int, float]] = {}
-    for c in cands:
-        q = places.posture_of(c[0])
-        if q not in bests or c[1] < bests[q][1]:
-            bests[q] = c
-    rails = [c[0] for c in cands]
     for q in sorted(bests, key=lambda q: q != places.posture_of(here)):
         at = places.place(q, places.rail_i(here))
         i = bisect.bisect_left(rails, at)
