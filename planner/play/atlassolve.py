@@ -143,7 +143,7 @@ class EntrySolver:
             tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
             want = kb.KEY_DIP_M - self._body_below_tip_m(r.q, finger, tip)  # (<= the dip)
             if depth - OWN_BED_MARGIN_M + 1e-4 <= want <= depth + 1e-4:
-                break  # (the body between the bed and its margin past it)
+                break  # (the body between the bed and its margin past it, 0.1 mm in)
             depth, base = want, r.q
         return Press(target, r)
 
