@@ -4,7 +4,8 @@ the cheapest transition from a state of the event before.
 An event's new notes are struck all, or fewer (a run of them in pitch order) or none,
 each note left out costing its frames; held notes are kept (their fingers stay, the rail
 too unless they can follow their keys) or cut. Every finger choice for the notes struck,
-in the hand's order, and every rail worth a move (``Layers._moves_to``) is a transition,
+in the hand's order, and every rail worth a move (``Layers._moves_to``, and
+``Layers._keeping``: the places where the notes sounding can ride along) is a transition,
 costed by ``planner.play.costs``. A layer keeps, of each hand shape (the rail and the
 fingers on the notes sounding), the cheapest state, and of those the ``BEAM`` cheapest
 (``_prune``). A transition that cannot beat its shape's best or the beam's last state
