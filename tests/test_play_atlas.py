@@ -268,3 +268,43 @@ def test_a_press_stops_with_its_body_at_the_bed_both_ways(places):
     depth = key.top_z_m - _tip(atlas, e, "press", rail)[2]
     assert depth < atlas.press_depth_m - 5e-4  # (the pad shallower than the press depth)
     assert atlas.bodies.clear(q, "middle", pitch)
+
+
+def _pad_centre_above_tip_m(atlas, q, finger):
+    """How far the pad sphere's centre lies above the pad point at ``q`` (m)."""
+    p, _ = atlas.bodies.points(q, finger)
+    h = atlas.hand
+    return float(p[0, 2] - h.tip_positions(q)[h.fingers.index(finger)][2])
+
+
+def test_every_press_is_made_with_the_pad_facing_the_key(places):
+    """A press counts only with the pad facing down into the key (the pad point below
+    its sphere's centre): every kept entry of the default hand's postures does (a sample
+    of each table), the pad's normal 74 deg from straight down at most."""
+    n = 0
+    for atlas in places.atlases:
+        for (f, pc, k), e in sorted(atlas._entries.items())[::11]:
+            if e is None:
+                continue
+            q = atlas.full_q(e, "press", atlas.rail_for(f, 60 + pc, k))
+            assert _pad_centre_above_tip_m(atlas, q, f) > 0.0, (f, pc, k)
+            n += 1
+    assert n > 100
+
+
+def test_a_finger_whose_pad_faces_up_presses_nothing():
+    """The AGH hand's near pair leans pads up at its play posture (hands/agh.toml): a
+    press made shallower until its lowest body is at the bed would put its thumb's key
+    down with the back of its distal segment (the pad point 4.3 mm above the key's top,
+    the key already down at the waiting pose: a wrong press before the note). The thumb
+    gets no entry; the index, pad down, keeps its seven white keys."""
+    hand = load_hand("agh")
+    atlas = Places(hand).atlas
+    for pc in range(12):
+        assert atlas.entry_at("thumb", pc, 0) is None
+    assert atlas.body_refused("thumb", 64, atlas.rail_for("thumb", 64, 0))
+    kept = [pc for pc in range(12) if atlas.entry_at("index", pc, 0) is not None]
+    assert kept == [0, 2, 4, 5, 7, 9, 11]
+    e = atlas.entry_at("index", 4, 0)
+    q = atlas.full_q(e, "press", atlas.rail_for("index", 64, 0))
+    assert _pad_centre_above_tip_m(atlas, q, "index") > 0.0

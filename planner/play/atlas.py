@@ -309,7 +309,8 @@ class Atlas(EntrySolver):
                                                           p.wrist_flex_rad, p.wrist_dev_rad,
                                                           p.press_depth_m)],
                 "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES,
-                              "footprint-grown", "press-body-to-bed-both-ways", PRESS_DEPTH_ITERATIONS]}
+                              "footprint-grown", "press-body-to-bed-both-ways", "pad-faces-key",
+                              PRESS_DEPTH_ITERATIONS]}
 
     def _load(self, path: Path) -> None:
         if not path.exists():

@@ -82,6 +82,9 @@ class EntrySolver:
         js = h.joint_slice(finger)
         if not all(h.within_plan_limits(q) for q in poses):
             return None
+        if self.bodies is not None and not self._pad_faces_key(poses[0], finger):
+            self._body_refused.add((finger, pitch_class, k))
+            return None
         for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
                        (poses[1], poses[0])):
             if not path_clear(h, qa, qb, finger, pitch):
@@ -146,6 +149,19 @@ class EntrySolver:
                 break  # (the body between the bed and its margin past it, 0.1 mm in)
             depth, base = want, r.q
         return Press(target, r)
+
+    def _pad_faces_key(self, q: np.ndarray, finger: str) -> bool:
+        """True when the press at ``q`` presses with the pad: the pad point (a point of
+        the pad sphere's surface, ``planner.hand.bodies``) lies below the sphere's
+        centre, so the pad's outward normal there points down, into the key. A press
+        shallower than the press depth (the lowest body at the bed) could otherwise be
+        made by the back of a finger whose pad faces up (the AGH hand's near pair at its
+        play lean: the pad point 7.2 mm above the centre, 4.3 mm above the key's top,
+        the key pressed by the distal segment; and at its waiting pose the key was down
+        already)."""
+        p, _ = self.bodies.points(q, finger)  # (shape 0: the pad sphere, its centre)
+        tip = self.hand.tip_positions(q)[self.hand.fingers.index(finger)]
+        return bool(p[0, 2] > tip[2])
 
     def _body_below_tip_m(self, q: np.ndarray, finger: str, tip: np.ndarray) -> float:
         """How far the finger's lowest body point lies below its pad point at ``q`` (m, >= 0)."""
