@@ -4,7 +4,8 @@ the cheapest transition from a state of the event before.
 An event's new notes are struck all, or fewer (a run of them in pitch order) or none,
 each note left out costing its frames; held notes are kept (their fingers stay, the rail
 too unless they can follow their keys) or cut. Every finger choice for the notes struck,
-in the hand's order, and every rail worth a move (``Layers._moves_to``) is a transition,
+in the hand's order, and every rail worth a move (``Layers._moves_to``, and
+``Layers._keeping``: the places where the notes sounding can ride along) is a transition,
 costed by ``planner.play.costs``. A layer keeps, of each hand shape (the rail and the
 fingers on the notes sounding), the cheapest state, and of those the ``BEAM`` cheapest
 (``_prune``). A transition that cannot beat its shape's best or the beam's last state
@@ -19,9 +20,9 @@ import math
 from collections.abc import Sequence
 
 from planner.music import keyboard as kb
+from planner.play.armcost import TIE_RAIL_PER_M
 from planner.play.costs import (
     TIE_DX_PER_M,
-    TIE_RAIL_PER_M,
     CostMemo,
     Costs,
     Prev,
@@ -164,6 +165,9 @@ class Layers(Costs):
             rails = self._rails_to.get((strike.press_key, None if p is None else p.place))
             if rails is None:
                 rails = self._moves_to(new, strike.press_key, p)
+            if p is not None and p.fingers:  # (and the places the notes sounding can
+                # ride to)
+                rails = self._keeping(new, strike, p, rails)
         if p is None:  # (the song's first notes: from anywhere, no move lost)
             for place, tie in rails:
                 total, shape = cost + tie, (place, sounding_t)
@@ -231,21 +235,41 @@ class Layers(Costs):
             cands = self._candidates(new, press_key)
             if p is None or len(cands) <= 3:
                 keep = cands
-            else:  # (the candidates by place, found by bisection: here, the nearest
-                # below and above in each posture, and each posture's best for the fingers)
-                rails, bests = self._cand_rails[press_key]
-                places, here = self.places, p.place
-                keep = []
-                for q in sorted(bests, key=lambda q: q != places.posture_of(here)):
-                    at = places.place(q, places.rail_i(here))
-                    i = bisect.bisect_left(rails, at)
-                    j = i + 1 if i < len(rails) and rails[i] == at else i
-                    keep += [c for c in cands[i:j] + cands[max(0, i - 1):i] + cands[j:j + 1]
-                             if places.posture_of(c[0]) == q and c not in keep]
-                    if bests[q] not in keep:
-                        keep.append(bests[q])
+            else:
+                keep = _nearest_and_best(self.places, cands, p.place,
+                                         self._cand_rails[press_key])
             self._rails_to[key] = keep
         return keep
+
+    def _keeping(self, new: dict[int, str], strike: _Strike, p: State,
+                 rails: list[tuple[int, float]]) -> list[tuple[int, float]]:
+        """``rails`` (``_moves_to``'s places) and the places to which the notes sounding
+        in ``p`` whose fingers strike none of ``new`` can ride along on the arm's move
+        (their fingers have their keys there too): for each such note and for all of them,
+        in each posture, the nearest places each way and the best for the fingers, as
+        ``_moves_to`` chooses (memoised per keys, fingers and place before).
+        ``_moves_to`` picks its moves by the new notes alone, for which a longer move is
+        never cheaper; it is where it lets a key sounding stay down to its end (or past
+        the event, held) instead of coming up before the move."""
+        pitch, force = self.pitch, self.force
+        riders = tuple((m, f) for m, f in p.fingers if f not in strike.busy)
+        if not riders:
+            return rails
+        key = (strike.press_key, p.place, tuple((pitch[m], force[m], f) for m, f in riders))
+        got = self._keep_to.get(key)
+        if got is None:
+            got = list(rails)
+            cands = self._candidates(new, strike.press_key)
+            groups = [riders] + ([(r,) for r in riders] if len(riders) > 1 else [])
+            for group in groups:
+                ok = None
+                for m, f in group:
+                    r = self.rails(f, m)
+                    ok = r if ok is None else ok & r
+                got += [c for c in _nearest_and_best(
+                    self.places, [c for c in cands if c[0] in ok], p.place) if c not in got]
+            self._keep_to[key] = got
+        return got
 
     def _candidates(self, new: dict[int, str], key: tuple) -> list[tuple[int, float]]:
         """(place, tie-break) of every place from which the fingers of
@@ -295,6 +319,32 @@ class Layers(Costs):
                     last[f] = (m, r)
             got = ctx.recent[busy] = tuple(sorted((m, f, r) for f, (m, r) in last.items()))
         return got
+
+
+def _nearest_and_best(places: Places, cands: list[tuple[int, float]], here: int,
+                      index: tuple | None = None) -> list[tuple[int, float]]:
+    """Of ``cands`` ((place, tie-break), by place), in each posture: the place at
+    ``here``'s rail index, the nearest below and above it (found by bisection), and the
+    one of least tie-break (the fingers nearest their natural places). ``index``: the
+    candidates' places and each posture's best, when made already (``_candidates``)."""
+    if index is None:
+        bests: dict[int, tuple[int, float]] = {}
+        for c in cands:
+            q = places.posture_of(c[0])
+            if q not in bests or c[1] < bests[q][1]:
+                bests[q] = c
+        index = ([c[0] for c in cands], bests)
+    rails, bests = index
+    out: list[tuple[int, float]] = []
+    for q in sorted(bests, key=lambda q: q != places.posture_of(here)):
+        at = places.place(q, places.rail_i(here))
+        i = bisect.bisect_left(rails, at)
+        j = i + 1 if i < len(rails) and rails[i] == at else i
+        out += [c for c in cands[i:j] + cands[max(0, i - 1):i] + cands[j:j + 1]
+                if places.posture_of(c[0]) == q and c not in out]
+        if bests[q] not in out:
+            out.append(bests[q])
+    return out
 
 
 def _prune(layer):

@@ -1,0 +1,148 @@
+"""What a move of the arm costs the fingering's programme, in frames of music lost
+(``planner.play.costs``' currency): the fingers that do not ride along lift after their
+keys come up, the arm moves (as slow as its slowest rider), the new fingers descend; a
+note sounding rides along where its finger has its key at the new place, strikes none of
+the new notes and its key stays down past the move's end (``HOLD_PAST_S``), as the motion
+holds it (``planner.play.motion``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from planner.play.follow import HOLD_PAST_S
+
+if TYPE_CHECKING:
+    from planner.play.costs import Prev
+
+TIE_RAIL_PER_M = 5.0  # frames per metre of rail moved: a tie-break, not a cost
+
+
+class ArmCosts:
+    """The arm's moves in ``planner.play.costs.Costs`` (its base: it reads the song's
+    times, the memos and the finger timings that ``Costs`` keeps)."""
+
+    def _rail_loss(self, prev: Prev, new: dict[int, str], place: int, kept=()) -> float:
+        """Frames lost to a move of the rail to ``place`` after ``prev``: a finger of
+        ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
+        other lifts after its key comes up; then the rail moves (as slow as its slowest
+        follower), and the new fingers descend. Each new key goes down as late as the
+        latest of what it waits for: the rail, its own finger crossing from its last key
+        (while the rail moves) or striking again after following it, another finger
+        leaving its key. A ``kept`` note (sounding past the event) must follow, or the
+        move is not made (inf)."""
+        key = (place, tuple(new.items()))
+        got = prev.release.get(key)
+        if got is None:
+            got = prev.release[key] = self._release_of(prev, place, new)
+        release_t, followers = got
+        if kept and not followers.issuperset(kept):
+            return math.inf
+        around = prev.around.get(followers)
+        if around is None:
+            around = prev.around[followers] = (
+                {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
+                {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
+        by_finger, by_key, lifted = around
+        t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
+        timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
+        loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
+        for n, f in new.items():
+            times = timing.get((pitch[n], f, place))
+            after_s = (times or self._times(n, f, place))[1]
+            late = release_t + after_s - t_down[n]
+            m = by_finger.get(f)
+            if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
+                m, r = lifted[f]
+                gap = gaps.get((pitch[m], f, r, pitch[n], place), False)
+                if gap is False:
+                    gap = self._move_gap_s(m, f, r, n, place)
+                if gap is None:
+                    return math.inf
+                late = max(late, gap - (t_down[n] - t_up[m]))
+            elif m is not None:  # (it followed its key: it is at place now)
+                early, again = self._strike_again(m, place, n, f, place)
+                if math.isinf(again):
+                    return math.inf
+                loss += early / dt
+                late = max(late, again)
+            if by_key:
+                other = by_key.get(self.pitch[n])
+                if other is not None and other[1] != f:
+                    late = max(late, self._leave_key_s(other, n, f, place))
+            loss += max(0.0, late) / dt
+        return loss
+
+    def _release_of(self, ctx: Prev, place: int, new: dict[int, str]
+                    ) -> tuple[float, frozenset]:
+        """When the arm arrives at ``place`` after ``ctx``'s state (the lifters' key up,
+        a held note's at this event, their lift, and the move), and which notes ride
+        along: those whose finger strikes none of the ``new`` notes, whose path is clear
+        (``Places.follow_clear``) and whose key stays down ``HOLD_PAST_S`` past the move's
+        end (``_riders``), as the motion holds them."""
+        T = self.places.arm_time_s(ctx.state.place, place)
+        if not ctx.follows:  # (no note sounding that could ride along: the last lift)
+            return ctx.lift_end + T, _NONE
+        strikers = set(new.values())
+        cands = []  # (note, finger, the move's latest end, its time)
+        for m, f, a, window_s, press_s in ctx.follows:
+            # (an entry serves every key of its pitch class at its place: the key is the
+            # entry and the rail's step, never the rail's index, which names another
+            # entry for each of those keys)
+            b = self.entry(m, f, place)
+            if b is None or f in strikers:  # (it cannot press the key from there, or
+                continue  # strikes next: it does not ride along)
+            key = (a, place - ctx.state.place)
+            got = self._follows.get(key)  # (its time, whether its path is clear, its
+            if got is None:  # lift's key crossing: found only when a note's time fits)
+                got = self._follows[key] = [self.places.follow_s(a, b), None, None]
+            # (the move fits inside the note, after its press and before its lift)
+            if window_s >= got[0] + press_s:
+                if got[1] is None:
+                    got[1] = self.places.follow_clear(a, b)
+                    got[2] = self.places.lift(b, "high").cross_s
+                if got[1] and self._follow_path(m, f, ctx.state.place, place):  # (its press done: the descent's end, ``press_min_s`` less the
+                    # lift to its key crossing)
+                    done = self._t_down[m] + press_s - self.places.lift(a, "high").cross_s
+                    cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
+        arrive = min((self._t_down[n] - self._times(n, f, place)[1] for n, f in new.items()),
+                     default=math.inf)
+        return self._riders(ctx, cands, T, arrive)
+
+    def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
+        """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
+        to ``place``, the rails the motion moves (memoised by key and places)."""
+        key = (self.pitch[m], f, here, place)
+        got = self._paths.get(key)
+        if got is None:
+            got = self._paths[key] = self.places.follow_path_clear(
+                self.entry(m, f, here), self.entry(m, f, place), self.pitch[m],
+                self.places.rail_m(here), self.places.rail_m(place))
+        return got
+
+    @staticmethod
+    def _riders(ctx: Prev, cands: list, T: float, arrive: float) -> tuple[float, frozenset]:
+        """The arm's arrival and the notes riding along, of ``cands`` (note and finger, the
+        latest end of the move that keeps its key down, the move's time carrying it, when
+        its press is done): the move starts once every other finger has lifted on time
+        and every rider's press is done, and takes the arm's ``T`` or its riders' moves;
+        a rider whose key would come up before the move ends, or before it could end
+        without hurrying the others' lifts where the new notes (``arrive``, their wish)
+        do not ask that anyway, lifts instead: of those, the one whose key comes up first,
+        and the others are weighed again without it (the motion's rule,
+        ``Motion._move_rail``)."""
+        while True:
+            riders = frozenset(c[0] for c in cands)
+            release = next((v for v, m, f in ctx.lifts if (m, f) not in riders), -math.inf)
+            start = max([release] + [c[3] for c in cands])
+            move_s = max([T] + [c[2] for c in cands])
+            late = [c for c in cands if c[1] < min(arrive, start + move_s)
+                    or c[1] < c[3] + move_s]
+            if not late:
+                return start + move_s, riders
+            first = min(late, key=lambda c: (c[1], c[0]))
+            cands = [c for c in cands if c is not first]
+
+
+_NONE: frozenset = frozenset()  # (no note rides along)

@@ -1,0 +1,244 @@
+"""How one atlas entry is solved (``planner.play.atlas``' ``Atlas`` is built on
+``EntrySolver``): a finger's four poses over a key by single-finger IK (or along its arc),
+within the planning limits, the tip's straight moves between them clear of the other keys
+and, with a ``[play]`` posture, the finger's bodies too (``planner.play.fingerbody``); and
+the largest key force the motors hold at the press.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from planner.hand.model import HandModel
+from planner.hand.tendon import actuator_capacity
+from planner.ik import (
+    PREPARE_HEIGHT_M,
+    IKResult,
+    PressTarget,
+    press_target,
+    press_x_range,
+    surfaces_under,
+)
+from planner.music import keyboard as kb
+from planner.play.fingerbody import OWN_BED_MARGIN_M, FingerBodies
+
+STEP_M = 0.001  # the atlas samples dx this often
+HIGH_Z_M = kb.BLACK_TOP_Z_M + 0.0075  # a finger moving sideways keeps its tip this high
+PRESS_DEPTH_ITERATIONS = 3  # ``Atlas._press``: the pad's depth found again from the body's
+REPEAT_DEPTH_M = kb.DOWN_DEPTH_M - 0.002  # a repeated key rises to this depth (see above)
+CLEARANCE_M = 0.001  # a tip passing over a key it does not press stays this far above it
+TIP_RADIUS_M = 0.002  # ... counting the pad's size (a key's footprint grows by this)
+PATH_SAMPLES = 12  # a straight move is checked at this many points
+BODY_SAMPLES = 5  # ... and its finger's body at this many (each a forward kinematics of
+# every segment: the ends and every quarter, so that a curl between two clear ends shows)
+
+
+@dataclass(frozen=True, eq=False)  # (entries are made once and compared by identity)
+class AtlasEntry:
+    """One finger over one key at one ``dx`` (key centre x - rail): its joints (in
+    ``hand.joint_slice(finger)`` order) pressing, waiting and crossing high."""
+
+    finger: str
+    pitch_class: int
+    dx_m: float
+    press: np.ndarray
+    rise: np.ndarray
+    hover: np.ndarray
+    high: np.ndarray
+    max_force_n: float
+    posture: int = 0  # which of the hand's play postures (``Atlas.posture_index``)
+
+
+class Press(NamedTuple):
+    """A press pose's IK target and result (``Atlas._press``)."""
+
+    target: PressTarget
+    result: IKResult
+
+
+class EntrySolver:
+    """The solving of ``Atlas``' entries (its base: it reads the atlas's hand, IK,
+    natural hand, bodies and grid)."""
+
+    def _solve(self, finger: str, pitch_class: int, k: int) -> AtlasEntry | None:
+        h = self.hand
+        pitch = self._solved_on(finger, pitch_class, k)
+        if pitch is None:
+            return None
+        rail = self.rail_for(finger, pitch, k)
+        base = self.base.copy()
+        if self.rail is not None:
+            if not h.plan_lower[self.rail] <= rail <= h.plan_upper[self.rail]:
+                return None
+            base[self.rail] = rail
+        poses = (self._arc_poses(finger, pitch, rail) if finger in self.arc_joint
+                 else self._ik_poses(finger, pitch, base))
+        if poses is None:
+            return None
+        js = h.joint_slice(finger)
+        if not all(h.within_plan_limits(q) for q in poses):
+            return None
+        if self.bodies is not None and not self._pad_faces_key(poses[0], finger):
+            self._body_refused.add((finger, pitch_class, k))
+            return None
+        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
+                       (poses[1], poses[0])):
+            if not path_clear(h, qa, qb, finger, pitch):
+                return None
+        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
+                       (poses[1], poses[0])):
+            if self.bodies is not None and not bodies_clear(self.bodies, qa, qb, finger, pitch):
+                self._body_refused.add((finger, pitch_class, k))
+                return None
+        return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
+                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger),
+                          self.posture_index)
+
+    def _ik_poses(self, finger: str, pitch: int, base: np.ndarray) -> list[np.ndarray] | None:
+        """Press, rise, hover and high by single-finger IK: the tip on the key's press
+        point, then straight above it at each height."""
+        r = self._press(finger, pitch, base)
+        if r is None:
+            return None
+        target = r.target
+        r = r.result
+        tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
+        top = kb.key(pitch).top_z_m
+        # (with the body rule the key rises as far as the finger's body lets it: its
+        # rise lifts the body, not only the pad point, to the repeat depth)
+        below_tip = 0.0 if self.bodies is None else self._body_below_tip_m(r.q, finger, tip)
+        poses = [r.q]
+        for z in (top - REPEAT_DEPTH_M + below_tip, top + PREPARE_HEIGHT_M, HIGH_Z_M):
+            self.solves += 1
+            up = self.ik.solve_finger(
+                PressTarget(finger, pitch, (float(tip[0]), float(tip[1]), z), target.y_range_m),
+                poses[-1])
+            if not up.converged:
+                return None
+            poses.append(up.q)
+        return poses
+
+    def _press(self, finger: str, pitch: int, base: np.ndarray) -> Press | None:
+        """The press pose by single-finger IK: the pad point ``press_depth_m`` below the
+        key's top; with the body rule, deeper where the finger's lowest body point would
+        stop short of the key bed (a pad that is its finger's lowest point, on a black
+        key: 6 mm down leaves the key 1 mm past the key-down depth, which a servo's
+        tracking under the key's spring loses, 2-2.5 mm measured in physics), until its
+        body reaches the bed (``KEY_DIP_M``; the pad no deeper than the dip); shallower
+        where the press depth would put the lowest body past the bed by more than the
+        bed's margin (``OWN_BED_MARGIN_M``, check's rule: a pad sphere of 5 mm below its
+        pad point at the press depth of 6 mm reaches 11.1 mm, past the 11 mm allowed),
+        until it is at the bed: the key is fully down either way (the bed stops it)."""
+        front = finger in self.front
+        depth = self.press_depth_m
+        for _ in range(PRESS_DEPTH_ITERATIONS):
+            target = press_target(finger, pitch, depth, front)
+            self.solves += 1
+            r = self.ik.solve_finger(target, base)
+            if not r.converged:
+                return None
+            if self.bodies is None:
+                break
+            tip = self.hand.tip_positions(r.q)[self.hand.fingers.index(finger)]
+            want = kb.KEY_DIP_M - self._body_below_tip_m(r.q, finger, tip)  # (<= the dip)
+            if depth - OWN_BED_MARGIN_M + 1e-4 <= want <= depth + 1e-4:
+                break  # (the body between the bed and its margin past it, 0.1 mm in)
+            depth, base = want, r.q
+        return Press(target, r)
+
+    def _pad_faces_key(self, q: np.ndarray, finger: str) -> bool:
+        """True when the press at ``q`` presses with the pad: the pad point (a point of
+        the pad sphere's surface, ``planner.hand.bodies``) lies below the sphere's
+        centre, so the pad's outward normal there points down, into the key. A press
+        shallower than the press depth (the lowest body at the bed) could otherwise be
+        made by the back of a finger whose pad faces up (the AGH hand's near pair at its
+        play lean: the pad point 7.2 mm above the centre, 4.3 mm above the key's top,
+        the key pressed by the distal segment; and at its waiting pose the key was down
+        already)."""
+        p, _ = self.bodies.points(q, finger)  # (shape 0: the pad sphere, its centre)
+        tip = self.hand.tip_positions(q)[self.hand.fingers.index(finger)]
+        return bool(p[0, 2] > tip[2])
+
+    def _body_below_tip_m(self, q: np.ndarray, finger: str, tip: np.ndarray) -> float:
+        """How far the finger's lowest body point lies below its pad point at ``q`` (m, >= 0)."""
+        p, r = self.bodies.points(q, finger)
+        return max(0.0, float(tip[2] - np.min(p[:, 2] - r)))
+
+    def _arc_poses(self, finger: str, pitch: int, rail: float) -> list[np.ndarray] | None:
+        """Press, rise, hover and high of a one-DOF finger on its arc
+        (``planner.play.arc``): the press where flexing brings the tip down to full dip,
+        which must be on the part of the key the finger presses (``press_x_range``, inset
+        by the pad's radius, and the press target's y range); the others where opening
+        from there brings it back up to each height."""
+        arc = self._arcs[finger]
+        top = kb.key(pitch).top_z_m
+        s = [arc.descend(top - self.press_depth_m)]
+        if s[0] is None:
+            return None
+        x, y, _ = arc.tip(s[0], rail)
+        front = finger in self.front
+        x_lo, x_hi = press_x_range(finger, pitch, TIP_RADIUS_M, front)
+        y_lo, y_hi = press_target(finger, pitch, self.press_depth_m, front).y_range_m
+        if not (x_lo <= x <= x_hi and y_lo <= y <= y_hi):
+            return None
+        for z in (top - REPEAT_DEPTH_M, top + PREPARE_HEIGHT_M, HIGH_Z_M):
+            s.append(arc.ascend(z, s[-1]))
+            if s[-1] is None:
+                return None
+        return [arc.q(si, rail) for si in s]
+
+
+def path_clear(hand: HandModel, qa: np.ndarray, qb: np.ndarray, finger: str,
+               own_pitch: int | None) -> bool:
+    """True when ``finger``'s tip, on the straight joint-space move qa -> qb, stays
+    ``CLEARANCE_M`` above every key it passes over (footprints grown by
+    ``TIP_RADIUS_M``) except inside key ``own_pitch``'s footprint (shrunk by it), where
+    it may press down to full dip."""
+    f = hand.fingers.index(finger)
+    s = np.linspace(0.0, 1.0, PATH_SAMPLES)
+    tips = np.array([hand.tip_positions(hand.apply_couplings(qa + si * (qb - qa)))[f]
+                     for si in s])
+    x, y, z = tips[:, 0], tips[:, 1], tips[:, 2]
+    over = surfaces_under(x, y, TIP_RADIUS_M)
+    ok = z >= over + CLEARANCE_M
+    if own_pitch is not None:
+        k = kb.key(own_pitch)
+        inside = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
+                  & (k.y_min_m + TIP_RADIUS_M <= y) & (y <= k.y_max_m - TIP_RADIUS_M)
+                  & (z >= k.top_z_m - kb.KEY_DIP_M - 1e-4))
+        if k.black is False:  # a white key's footprint stops at the black keys beside it
+            inside &= surfaces_under(x, y, TIP_RADIUS_M) <= k.top_z_m
+        ok |= inside
+    return bool(ok.all())
+
+
+def bodies_clear(bodies: FingerBodies, qa: np.ndarray, qb: np.ndarray, finger: str,
+                 own_pitch: int) -> bool:
+    """True when ``finger``'s body (``planner.play.fingerbody``: the collision bodies of
+    spec section 3) is clear of the keys all along the straight joint-space move qa -> qb
+    (``BODY_SAMPLES`` points, both ends included): no other key reached by more than
+    ``OTHER_KEY_TOLERANCE_M``, its own key (pressed) by at most ``OWN_BED_MARGIN_M``."""
+    return all(bodies.clear(bodies.hand.apply_couplings(qa + si * (qb - qa)), finger, own_pitch)
+               for si in np.linspace(0.0, 1.0, BODY_SAMPLES))
+
+
+def max_key_force_n(hand: HandModel, q: np.ndarray, finger: str) -> float:
+    """The largest upward key force (N) on ``finger``'s tip that every motor holds at
+    ``q`` with gravity: tau(f) = tau(0) + f (tau(1) - tau(0)), each |tau_m| <= its
+    capacity (``actuator_capacity``: peak torque, or tendon force x spool radius)."""
+    tau0 = hand.press_torques(q, {})
+    tau1 = hand.press_torques(q, {finger: 1.0}) - tau0
+    peak = actuator_capacity(hand).torque_nm
+    best = math.inf
+    for t0, t1, p in zip(tau0, tau1, peak):
+        if abs(t0) > p:
+            return 0.0
+        if t1 > 1e-12:
+            best = min(best, (p - t0) / t1)
+        elif t1 < -1e-12:
+            best = min(best, (-p - t0) / t1)
+    return float(best)
