@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from planner.resultform import listing, plain
+from planner.simulate.report import play_lines
 from planner.simulate.scores import JointTracking, MotorEffort, PhysicsPlay
 
 
@@ -85,20 +86,7 @@ class PairSimulateReport:
                 else "")
         L.append(f"task {self.task}, two hands {self.hand}, contact {self.contact}, "
                  f"{self.rows} rows, {self.duration_s:.3f} s simulated{took}")
-        p = self.play
-        L.append(f"keys: {len(p.played)} key presses in physics (either hand)")
-        if p.f1 is not None:
-            kin = "" if self.kinematic_f1 is None else f"; kinematic F1 {self.kinematic_f1:.4f}"
-            L.append(f"song {self.song}: physics frame F1 {p.f1:.4f} over {p.song_frames} "
-                     f"frames (precision {p.precision:.4f}, recall {p.recall:.4f}){kin}; "
-                     f"notes hit {p.notes_hit}/{p.notes}, {len(p.late)} late, "
-                     f"{len(p.wrong_keys)} wrong keys, {len(p.overhangs)} overhangs")
-        listing(L, "wrong keys", p.wrong_keys, lambda w: (
-            f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
-            f"{'+'.join(w.fingers) or 'no finger (the key returning)'}"))
-        listing(L, "missed notes", p.missed, lambda m: (
-            f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
-            f"down {m.fraction_down:.0%}  {m.reason}"))
+        play_lines(L, self.play, self.song, self.kinematic_f1, " (either hand)")
         L.append(f"between the hands: {len(self.touches)} contacts in physics")
         listing(L, "contacts between the hands", self.touches, lambda c: (
             f"{c.start_s:8.3f}-{c.end_s:.3f} s (row {c.row}, {c.rows} rows)  {c.left_geom} "

@@ -55,19 +55,7 @@ class SimulateReport:
                  f"{self.duration_s:.3f} s simulated{took}")
         p = self.play
         if p is not None:
-            L.append(f"keys: {len(p.played)} key presses in physics")
-            if p.f1 is not None:
-                kin = "" if self.kinematic_f1 is None else f"; kinematic F1 {self.kinematic_f1:.4f}"
-                L.append(f"song {self.song}: physics frame F1 {p.f1:.4f} over {p.song_frames} "
-                         f"frames (precision {p.precision:.4f}, recall {p.recall:.4f}){kin}; "
-                         f"notes hit {p.notes_hit}/{p.notes}, {len(p.late)} late, "
-                         f"{len(p.wrong_keys)} wrong keys, {len(p.overhangs)} overhangs")
-            listing(L, "wrong keys", p.wrong_keys, lambda w: (
-                f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
-                f"{'+'.join(w.fingers) or 'no finger (the key returning)'}"))
-            listing(L, "missed notes", p.missed, lambda m: (
-                f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
-                f"down {m.fraction_down:.0%}  {m.reason}"))
+            play_lines(L, p, self.song, self.kinematic_f1)
         c = self.catch
         if c is not None:
             L.append(f"catch: ball {'HELD' if c.held else 'NOT held'} from {c.held_from_s:.3f} s "
@@ -85,3 +73,23 @@ class SimulateReport:
             L.append(f"  {j.name:18s} {j.max_error * f:8.2f} {unit}  rms {j.rms_error * f:6.2f}"
                      f"  worst at {j.at_s:.3f} s")
         return "\n".join(L)
+
+
+def play_lines(L: list[str], p: PhysicsPlay, song: str | None, kinematic_f1: float | None,
+               keys_note: str = "") -> None:
+    """Append a replay's key lines to the summary ``L``: the key presses, the song's
+    physics scores beside the kinematic F1, the wrong keys and the missed notes (one
+    hand's replay, or both hands' with ``keys_note``)."""
+    L.append(f"keys: {len(p.played)} key presses in physics{keys_note}")
+    if p.f1 is not None:
+        kin = "" if kinematic_f1 is None else f"; kinematic F1 {kinematic_f1:.4f}"
+        L.append(f"song {song}: physics frame F1 {p.f1:.4f} over {p.song_frames} "
+                 f"frames (precision {p.precision:.4f}, recall {p.recall:.4f}){kin}; "
+                 f"notes hit {p.notes_hit}/{p.notes}, {len(p.late)} late, "
+                 f"{len(p.wrong_keys)} wrong keys, {len(p.overhangs)} overhangs")
+    listing(L, "wrong keys", p.wrong_keys, lambda w: (
+        f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
+        f"{'+'.join(w.fingers) or 'no finger (the key returning)'}"))
+    listing(L, "missed notes", p.missed, lambda m: (
+        f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
+        f"down {m.fraction_down:.0%}  {m.reason}"))
