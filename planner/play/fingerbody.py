@@ -84,6 +84,7 @@ class FingerBodies:
                 tuple(1 if b.p0_m == b.p1_m else AXIS_SAMPLES for b in mine))
         boxes = [(k.pitch, b) for k in key_bodies() for b in k.boxes]
         self.box_pitch = np.array([p for p, _ in boxes])
+        self._pressed: dict[int | None, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         c = np.array([b.center_m for _, b in boxes])
         h = np.array([b.half_m for _, b in boxes])
         self.box_lo, self.box_hi = c - h, c + h
@@ -192,19 +193,39 @@ class FingerBodies:
             ok[sl], own_depth[sl] = self._clear_chunk(P[sl], r, own_pitch)
         return ok, own_depth
 
-    def _clear_chunk(self, P: np.ndarray, r: np.ndarray, own_pitch: int | None
-                     ) -> tuple[np.ndarray, np.ndarray]:
+    def pressed_boxes(self, pitch: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The keys' boxes with key ``pitch``'s pressed to its bed, and which are its:
+        (own (B,) bool, lo (B, 3), hi (B, 3)), made once per key."""
+        got = self._pressed.get(pitch)
+        if got is None:
+            own = self.box_pitch == pitch
+            lo, hi = self.box_lo.copy(), self.box_hi.copy()
+            lo[own, 2] -= kb.KEY_DIP_M
+            hi[own, 2] -= kb.KEY_DIP_M
+            got = self._pressed[pitch] = (own, lo, hi)
+        return got
+
+    def boxes_clear(self, P: np.ndarray, r: np.ndarray, own_pitch: int | None
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Whether each configuration's points ``P`` (K, m, 3), radii ``r`` (m,), reach
+        no other key's box by more than ``OTHER_KEY_TOLERANCE_M`` and the pressed key's
+        (``own_pitch``, at its bed) by no more than ``OWN_BED_MARGIN_M``: (ok (K,) bool,
+        and the points' bounds grown by the largest radius and the tolerance, lo and hi
+        (3,))."""
         reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
-        p_lo, p_hi = P.reshape(-1, 3).min(axis=0) - reach, P.reshape(-1, 3).max(axis=0) + reach
-        own = self.box_pitch == own_pitch
-        lo, hi = self.box_lo.copy(), self.box_hi.copy()
-        lo[own, 2] -= kb.KEY_DIP_M
-        hi[own, 2] -= kb.KEY_DIP_M
+        flat = P.reshape(-1, 3)
+        p_lo, p_hi = flat.min(axis=0) - reach, flat.max(axis=0) + reach
+        own, lo, hi = self.pressed_boxes(own_pitch)
         near = np.all((lo <= p_hi) & (hi >= p_lo), axis=1)
         pen = box_penetration(P, r, lo[near], hi[near])  # (K, boxes near)
         own = own[near]
         ok = np.all(pen[:, ~own] <= OTHER_KEY_TOLERANCE_M, axis=1) \
             & np.all(pen[:, own] <= OWN_BED_MARGIN_M, axis=1)
+        return ok, p_lo, p_hi
+
+    def _clear_chunk(self, P: np.ndarray, r: np.ndarray, own_pitch: int | None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        ok, p_lo, p_hi = self.boxes_clear(P, r, own_pitch)
         fp = footprints()
         near = np.all((fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2]), axis=1)
         others = sorted({int(k) + kb.LOWEST_PITCH for k in fp.key[near]} - {own_pitch})

@@ -26,13 +26,12 @@ import numpy as np
 
 from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M
 from planner.music import keyboard as kb
-from planner.music.keybodies import box_penetration, footprints
+from planner.music.keybodies import footprints
 from planner.play.atlas import PATH_SAMPLES, TIP_RADIUS_M, Atlas, AtlasEntry
 from planner.play.fingerbody import (
     AXIS_SAMPLES,
     MANY_CHUNK,
     OTHER_KEY_TOLERANCE_M,
-    OWN_BED_MARGIN_M,
     FingerBodies,
 )
 from planner.play.fingerchain import FingerChain
@@ -128,15 +127,7 @@ def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -
     ``FingerBodies.clear_many`` and its own-key depth, from the same numbers (the same
     boxes' penetrations; every footprint column's depth in one array, not key by key:
     ``keybodies.key_depths``' elementwise arithmetic, its reductions exact), (K,) bool."""
-    reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
-    flat = P.reshape(-1, 3)
-    p_lo, p_hi = flat.min(axis=0) - reach, flat.max(axis=0) + reach
-    own, lo, hi = _boxes(bodies, pitch)
-    near = np.all((lo <= p_hi) & (hi >= p_lo), axis=1)
-    pen = box_penetration(P, r, lo[near], hi[near])  # (K, boxes near)
-    own = own[near]
-    ok = np.all(pen[:, ~own] <= OTHER_KEY_TOLERANCE_M, axis=1) \
-        & np.all(pen[:, own] <= OWN_BED_MARGIN_M, axis=1)
+    ok, p_lo, p_hi = bodies.boxes_clear(P, r, pitch)
     fp = footprints()
     near = np.all((fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2]), axis=1)
     mine = fp.key == pitch - kb.LOWEST_PITCH
@@ -158,19 +149,3 @@ def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -
         ok &= np.all(depth[:, :n_other] < DOWN_DEPTH_M, axis=1)
     own_depth = depth[:, n_other:].max(axis=1)
     return ok & (own_depth <= BODY_BED_DEPTH_M) & (own_depth >= kb.DOWN_DEPTH_M + HOLD_MARGIN_M)
-
-
-_BOXES: dict[tuple[int, int], tuple] = {}  # (``_boxes``)
-
-
-def _boxes(bodies: FingerBodies, pitch: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The key boxes with key ``pitch``'s pressed to its bed (``FingerBodies.clear_many``'s),
-    and which are its: (own (B,) bool, lo (B, 3), hi (B, 3)), made once per hand and key."""
-    got = _BOXES.get((id(bodies), pitch))
-    if got is None or got[0] is not bodies:
-        own = bodies.box_pitch == pitch
-        lo, hi = bodies.box_lo.copy(), bodies.box_hi.copy()
-        lo[own, 2] -= kb.KEY_DIP_M
-        hi[own, 2] -= kb.KEY_DIP_M
-        got = _BOXES[(id(bodies), pitch)] = (bodies, own, lo, hi)
-    return got[1:]
