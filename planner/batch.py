@@ -38,7 +38,8 @@ RESERVED_STEMS = ("summary",)  # the summary's file names (summary.csv, summary.
 MIDI_MAGIC = (b"MThd", b"RIFF")  # a standard MIDI file, or one wrapped in RIFF (RMID)
 SUMMARY_FIELDS = ("song", "notes", "played", "infeasible", "frame_f1", "check_ok",
                   "planning_s", "realtime_factor", "trajectory", "error", "physics_f1",
-                  "physics_wrong_keys", "physics_saturated_ms", "physics_ok")
+                  "physics_wrong_keys", "physics_saturated_ms", "physics_ok",
+                  "physics_saturated_motor")
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,46 @@ class SongResult:
     physics_wrong_keys: int | None = None
     physics_saturated_ms: float | None = None  # the longest run of a motor at its limit
     physics_ok: bool | None = None
+    physics_saturated_motor: str | None = None  # the motor of that run ("" when none)
+
+
+@dataclass(frozen=True)
+class PhysicsTotals:
+    """The physics replays of a batch together: how many songs were replayed (and their
+    verdict OK), their mean and lowest F1 (the song), the wrong keys of all of them, the
+    longest motor saturation of any (its song and motor: "" when none saturated)."""
+
+    replayed: int
+    ok: int
+    mean_f1: float
+    min_f1: float
+    min_f1_song: str
+    wrong_keys: int
+    saturated_ms: float
+    saturated_song: str
+    saturated_motor: str
+
+    def format(self) -> str:
+        sat = (f"{self.saturated_ms:.0f} ms ({self.saturated_motor}, {self.saturated_song})"
+               if self.saturated_ms > 0 else "0 ms")
+        return (f"physics: {self.replayed} replayed, {self.ok} OK; F1 mean {self.mean_f1:.4f}, "
+                f"lowest {self.min_f1:.4f} ({self.min_f1_song}); {self.wrong_keys} wrong keys; "
+                f"longest motor saturation {sat}")
+
+
+def physics_totals(results: tuple[SongResult, ...]) -> PhysicsTotals | None:
+    """The ``PhysicsTotals`` of the results replayed in physics (None: none was)."""
+    rs = [r for r in results if r.physics_f1 is not None and not r.error]
+    if not rs:
+        return None
+    low = min(rs, key=lambda r: r.physics_f1)
+    sat = max(rs, key=lambda r: r.physics_saturated_ms)
+    return PhysicsTotals(len(rs), sum(bool(r.physics_ok) for r in rs),
+                         sum(r.physics_f1 for r in rs) / len(rs), low.physics_f1, low.song,
+                         sum(r.physics_wrong_keys for r in rs), sat.physics_saturated_ms,
+                         sat.song if sat.physics_saturated_ms > 0 else "",
+                         (sat.physics_saturated_motor or "") if sat.physics_saturated_ms > 0
+                         else "")
 
 
 @dataclass(frozen=True)
@@ -87,15 +128,27 @@ class BatchSummary:
         return not any(r.error or not r.check_ok or r.physics_ok is False
                        for r in self.results)
 
+    @property
+    def physics(self) -> PhysicsTotals | None:
+        """The physics replays together (None: the batch replayed none)."""
+        return physics_totals(self.results)
+
     def to_dict(self) -> dict:
-        """``batch --json``: the counts and every song's result."""
-        return {"command": "batch", "planned": self.planned, "skipped": self.skipped,
-                "failed": self.failed, "songs": [asdict(r) for r in self.results]}
+        """``batch --json``: the counts, the physics totals (null without ``--physics``)
+        and every song's result."""
+        ph = self.physics
+        return {"command": "batch", "ok": self.ok, "planned": self.planned,
+                "skipped": self.skipped, "failed": self.failed,
+                "physics": None if ph is None else asdict(ph),
+                "songs": [asdict(r) for r in self.results]}
 
     def format(self, out_dir: str | os.PathLike) -> str:
-        """The closing line: the counts and where the summary is."""
-        return (f"{len(self.results)} songs: {self.planned} planned, {self.skipped} done "
+        """The closing lines: the counts and where the summary is; the physics totals
+        when the plans were replayed."""
+        line = (f"{len(self.results)} songs: {self.planned} planned, {self.skipped} done "
                 f"before, {self.failed} failed -> {Path(out_dir) / 'summary.csv'}")
+        ph = self.physics
+        return line if ph is None else f"{line}\n{ph.format()}"
 
 
 def format_song_line(r: SongResult) -> str:
@@ -108,7 +161,9 @@ def format_song_line(r: SongResult) -> str:
                + (" (done before)" if r.skipped else f", {r.realtime_factor:.0f}x"))
         if r.physics_f1 is not None:
             msg += (f"; physics F1 {r.physics_f1:.4f}, {r.physics_wrong_keys} wrong keys, "
-                    f"longest motor saturation {r.physics_saturated_ms:.0f} ms, "
+                    f"longest motor saturation {r.physics_saturated_ms:.0f} ms"
+                    + (f" ({r.physics_saturated_motor})" if r.physics_saturated_motor else "")
+                    + ", "
                     f"{'OK' if r.physics_ok else 'FAILED'}")
     return f"{r.song}: {msg}"
 
@@ -333,11 +388,13 @@ def physics_verdict(traj_path: str, song_path: str) -> dict:
 
     rep = simulate_trajectory(traj_path, song_path)
     play = rep.play
+    worst = max(rep.motors, key=lambda m: m.saturated_s, default=None)
+    sat_s = 0.0 if worst is None else worst.saturated_s
     return {"physics_f1": None if play.f1 is None else float(play.f1),
             "physics_wrong_keys": len(play.wrong_keys),
-            "physics_saturated_ms": 1000.0 * max((m.saturated_s for m in rep.motors),
-                                                 default=0.0),
-            "physics_ok": bool(rep.ok)}
+            "physics_saturated_ms": 1000.0 * sat_s,
+            "physics_ok": bool(rep.ok),
+            "physics_saturated_motor": worst.name if sat_s > 0 else ""}
 
 
 @cache
@@ -358,4 +415,6 @@ def _write_summary(summary: BatchSummary, out: Path) -> None:
     w.writeheader()
     w.writerows(rows)
     write_file(out / "summary.csv", buf.getvalue())
-    write_file(out / "summary.json", json.dumps({"songs": rows}, indent=1) + "\n")
+    ph = summary.physics
+    write_file(out / "summary.json", json.dumps(
+        {"songs": rows, "physics": None if ph is None else asdict(ph)}, indent=1) + "\n")

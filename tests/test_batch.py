@@ -127,9 +127,45 @@ def test_physics_replays_every_plan_and_records_its_verdict(tmp_path):
     assert r.physics_wrong_keys >= 0 and r.physics_saturated_ms >= 0.0
     assert phys.ok == (r.check_ok and r.physics_ok)
     header = (tmp_path / "out" / "summary.csv").read_text().splitlines()[0].split(",")
-    assert header[-4:] == ["physics_f1", "physics_wrong_keys", "physics_saturated_ms",
-                           "physics_ok"]
+    assert header[-5:] == ["physics_f1", "physics_wrong_keys", "physics_saturated_ms",
+                           "physics_ok", "physics_saturated_motor"]
     rec = json.loads((tmp_path / "out" / "twinkle.json").read_text())
     assert rec["physics_f1"] == r.physics_f1
+    assert (r.physics_saturated_motor != "") == (r.physics_saturated_ms > 0)
+    # the totals: in the closing lines, --json and summary.json
+    ph = phys.physics
+    assert (ph.replayed, ph.mean_f1, ph.min_f1, ph.wrong_keys) == (
+        1, r.physics_f1, r.physics_f1, r.physics_wrong_keys)
+    assert ph.saturated_ms == r.physics_saturated_ms and ph.ok == int(r.physics_ok)
+    assert f"physics: 1 replayed, {ph.ok} OK; F1 mean {r.physics_f1:.4f}" in phys.format(
+        tmp_path / "out")
+    assert phys.to_dict()["physics"]["wrong_keys"] == r.physics_wrong_keys
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["physics"][
+        "mean_f1"] == r.physics_f1
+    assert plain.physics is None and plain.to_dict()["physics"] is None
+    assert "\nphysics:" not in plain.format(tmp_path / "out")
     again = batch_plan(d, tmp_path / "out", workers=1, physics=True)
     assert again.results[0].skipped and again.results[0].physics_f1 == r.physics_f1
+    assert again.physics == ph  # (the totals of the records read back)
+
+
+def test_physics_totals_of_several_songs():
+    """The batch's physics totals: the mean and the lowest F1 with its song, the wrong
+    keys summed, the longest saturation with its song and motor; songs without a replay
+    (or without a plan) are not counted."""
+    from planner.batch import SongResult, physics_totals
+
+    def res(song, f1, wrong, sat_ms, motor, ok=True, error=""):
+        return SongResult(song, 10, 10, 0, 1.0, True, 1.0, 10.0, f"{song}.csv", error,
+                          physics_f1=f1, physics_wrong_keys=wrong, physics_saturated_ms=sat_ms,
+                          physics_ok=ok, physics_saturated_motor=motor)
+
+    rs = (res("a.mid", 0.9, 1, 0.0, ""), res("b.mid", 0.7, 2, 30.0, "motor.rail", ok=False),
+          res("c.mid", None, None, None, None), res("d.mid", 0.8, 0, 10.0, "motor.reach"),
+          res("e.mid", 0.1, 9, 90.0, "motor.x", error="planning failed"))
+    t = physics_totals(rs)
+    assert (t.replayed, t.ok, t.min_f1, t.min_f1_song, t.wrong_keys) == (3, 2, 0.7, "b.mid", 3)
+    assert abs(t.mean_f1 - 0.8) < 1e-12
+    assert (t.saturated_ms, t.saturated_song, t.saturated_motor) == (30.0, "b.mid", "motor.rail")
+    assert "longest motor saturation 30 ms (motor.rail, b.mid)" in t.format()
+    assert physics_totals(rs[2:3]) is None

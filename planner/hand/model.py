@@ -85,7 +85,6 @@ class HandModel:
         self.n_motor = self.motor_map.n_motor
         self.motor_speed = self.motor_map.motor_speed
         self.motor_peak_torque = self.motor_map.motor_peak_torque
-        self._drive = self.motor_map.drive  # (read by planner.simulate)
 
         lo = np.where(np.isfinite(self.lower), self.lower, -1.0)
         hi = np.where(np.isfinite(self.upper), self.upper, 1.0)

@@ -69,7 +69,7 @@ def servo_set(hand: HandModel) -> ServoSet:
     peak = np.array(hand.motor_peak_torque, dtype=float)
     arm = np.array([a.rotor_inertia_kg_m2 for a in hand.actuators]) * ratio ** 2
     kp = peak * eff * ratio ** 2 / MOTOR_ERROR_AT_PEAK_RAD
-    return ServoSet(hand.motor_names, np.array(hand._drive), ratio, eff, peak, arm, kp)
+    return ServoSet(hand.motor_names, np.array(hand.motor_map.drive), ratio, eff, peak, arm, kp)
 
 
 def joined_servos(sets: list[ServoSet], prefixes: list[str], n_joints: list[int]) -> ServoSet:
@@ -100,11 +100,11 @@ class Transmission:
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand
         reads = {int(c.src) for c in hand.couplings if c.kind != "linear"}
-        reads |= {int(hand._drive[m]) for m, a in enumerate(hand.actuators)
+        reads |= {int(hand.motor_map.drive[m]) for m, a in enumerate(hand.actuators)
                   if a.mk5 is not None}
         self._reads = np.array(sorted(reads), dtype=int)
         col = {int(j): k for k, j in enumerate(hand.independent)}
-        self._cols = [col[int(d)] for d in hand._drive]
+        self._cols = [col[int(d)] for d in hand.motor_map.drive]
         self._eff = [a.efficiency for a in hand.actuators]
         self._cache: dict[bytes, tuple] = {}
 
@@ -189,7 +189,7 @@ def reference(hand: HandModel, q: np.ndarray, t_s: np.ndarray,
             cols, r = tr.at(row)
             hit = done[key] = ([float(c @ tau) for c in cols], np.abs(r))
         ff[i], ratio[i] = hit
-    drive = np.array(hand._drive)
+    drive = np.array(hand.motor_map.drive)
     return Reference(q[:, drive], qd[:, drive], ff, ratio)
 
 
@@ -197,5 +197,5 @@ def motor_torques_nm(hand: HandModel, q: np.ndarray, force: np.ndarray) -> np.nd
     """Motor torques (N m) behind servo forces ``force`` (n_motor,) on the driven joints
     at ``q``: ``HandModel.motor_torques`` of those joint torques."""
     tau = np.zeros(hand.n)
-    tau[np.array(hand._drive)] = force
+    tau[np.array(hand.motor_map.drive)] = force
     return hand.motor_torques(q, tau)

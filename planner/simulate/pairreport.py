@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from planner.resultform import listing, plain
-from planner.simulate.report import play_lines
+from planner.simulate.report import effort_lines, play_lines
 from planner.simulate.scores import JointTracking, MotorEffort, PhysicsPlay
 
 
@@ -96,14 +96,5 @@ class PairSimulateReport:
                      f": its notes (by_hand) {h.notes_hit}/{h.notes} sound")
             L.append(f"hand {h.prefix} {h.hand}{notes}, {h.wrong_keys} wrong keys by its "
                      "fingers")
-            L.append("  motors (peak demand / limit, longest saturation):")
-            for m in h.motors:
-                L.append(f"    {m.name:26s} {m.peak_demand_nm:8.3f} / {m.limit_nm:.3f} N m "
-                         f"({m.ratio:5.2f})  {m.saturated_s * 1000:5.0f} ms at {m.at_s:.3f} s")
-            L.append("  tracking error per joint (max, rms):")
-            for j in h.tracking:
-                unit = "mm" if j.name.endswith("rail") else "deg"
-                f = 1000.0 if unit == "mm" else 57.29577951308232
-                L.append(f"    {j.name:24s} {j.max_error * f:8.2f} {unit}  rms "
-                         f"{j.rms_error * f:6.2f}  worst at {j.at_s:.3f} s")
+            effort_lines(L, h.motors, h.tracking, "  ", (26, 24))
         return "\n".join(L)

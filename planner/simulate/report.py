@@ -62,16 +62,7 @@ class SimulateReport:
                      f"to the end ({c.end_distance_m * 1000:.1f} mm from the palm centre at the "
                      f"end, {c.contacts_at_end} contacts); peak contact force "
                      f"{c.peak_contact_force_n:.1f} N")
-        L.append("motors (peak demand / limit, longest saturation):")
-        for m in self.motors:
-            L.append(f"  {m.name:22s} {m.peak_demand_nm:8.3f} / {m.limit_nm:.3f} N m "
-                     f"({m.ratio:5.2f})  {m.saturated_s * 1000:5.0f} ms at {m.at_s:.3f} s")
-        L.append("tracking error per joint (max, rms):")
-        for j in self.tracking:
-            unit = "mm" if j.name == "rail" else "deg"
-            f = 1000.0 if unit == "mm" else 57.29577951308232
-            L.append(f"  {j.name:18s} {j.max_error * f:8.2f} {unit}  rms {j.rms_error * f:6.2f}"
-                     f"  worst at {j.at_s:.3f} s")
+        effort_lines(L, self.motors, self.tracking)
         return "\n".join(L)
 
 
@@ -93,3 +84,23 @@ def play_lines(L: list[str], p: PhysicsPlay, song: str | None, kinematic_f1: flo
     listing(L, "missed notes", p.missed, lambda m: (
         f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
         f"down {m.fraction_down:.0%}  {m.reason}"))
+
+
+def effort_lines(L: list[str], motors: tuple[MotorEffort, ...],
+                 tracking: tuple[JointTracking, ...], indent: str = "",
+                 name_width: tuple[int, int] = (22, 18)) -> None:
+    """Append a hand's motor and tracking lines to the summary ``L``: each motor's peak
+    demand beside its limit and its longest saturation, each joint's tracking error (mm
+    for the rail, deg for the others), headed at ``indent``, the names padded to
+    ``name_width`` (motors, joints)."""
+    mw, jw = name_width
+    L.append(f"{indent}motors (peak demand / limit, longest saturation):")
+    for m in motors:
+        L.append(f"{indent}  {m.name:{mw}s} {m.peak_demand_nm:8.3f} / {m.limit_nm:.3f} N m "
+                 f"({m.ratio:5.2f})  {m.saturated_s * 1000:5.0f} ms at {m.at_s:.3f} s")
+    L.append(f"{indent}tracking error per joint (max, rms):")
+    for j in tracking:
+        unit = "mm" if j.name.endswith("rail") else "deg"
+        f = 1000.0 if unit == "mm" else 57.29577951308232
+        L.append(f"{indent}  {j.name:{jw}s} {j.max_error * f:8.2f} {unit}  rms "
+                 f"{j.rms_error * f:6.2f}  worst at {j.at_s:.3f} s")

@@ -140,7 +140,7 @@ def motor_efforts(rec: SimRecord, hand: HandModel) -> tuple[MotorEffort, ...]:
     T = len(rec.t_s)
     from planner.simulate.actuators import Transmission
 
-    drive = np.array(hand._drive)
+    drive = np.array(hand.motor_map.drive)
     tr = Transmission(hand)  # (hand.motor_torques, once per distinct transmission)
     demand = tr.servo_motor_torques(rec.q_sim, rec.servo_demand, drive)
     finger_of = {}
