@@ -50,23 +50,42 @@ def ends(q: np.ndarray, rest_q: np.ndarray, jerk: np.ndarray, dt: float) -> dict
     return {"rest": rest, "start": start, "stop": stop}
 
 
-def judge(csv: Path, song: Path, rest_q: np.ndarray, hand) -> str:
+def judge(csv: Path, song: Path, rest_q: np.ndarray, hand) -> dict:
+    """One plan's facts (``line`` formats them)."""
     from planner.check import check_trajectory
 
     rep = check_trajectory(str(csv), str(song))
     rp = rep.replay
     e = ends(rp.q, rest_q, hand.jerk, 1.0 / rep.rate_hz)
-    still = e["rest"] <= WRITE_TOL and e["start"] <= 0.0 and e["stop"] <= 0.0
-    down0 = int(rp.down[0].sum()) + int(rp.down[-1].sum())
-    bad = [f"{lc.category} {lc.count} ({lc.worst:.6g}/{lc.limit:.6g} {lc.name} at {lc.time_s:.2f} s)"
-           for lc in rep.limits if lc.count]
     pr = rep.play
-    wrong = len(pr.wrong_presses)
-    beds = len(pr.key_bed_hits) + len(pr.body_bed_hits)
-    return (f"{song.name:28s} check {'ok  ' if rep.ok else 'FAIL'} F1 {pr.f1:.4f} "
-            f"rest {'yes' if still else 'NO '} (|q-rest| {e['rest']:.1e}, start {e['start']:+.1e},"
-            f" stop {e['stop']:+.1e}) keys down at ends {down0} wrong {wrong} beds {beds} "
-            f"limits {'; '.join(bad) if bad else 'none'}")
+    return {"song": song.name, "ok": bool(rep.ok), "f1": float(pr.f1), **e,
+            "still": e["rest"] <= WRITE_TOL and e["start"] <= 0.0 and e["stop"] <= 0.0,
+            "down": int(rp.down[0].sum()) + int(rp.down[-1].sum()),
+            "wrong": len(pr.wrong_presses),
+            "beds": len(pr.key_bed_hits) + len(pr.body_bed_hits),
+            "violations": sum(lc.count for lc in rep.limits),
+            "limits": [f"{lc.category} {lc.count} ({lc.worst:.6g}/{lc.limit:.6g} {lc.name} at "
+                       f"{lc.time_s:.2f} s)" for lc in rep.limits if lc.count]}
+
+
+def line(j: dict) -> str:
+    return (f"{j['song']:28s} check {'ok  ' if j['ok'] else 'FAIL'} F1 {j['f1']:.4f} "
+            f"rest {'yes' if j['still'] else 'NO '} (|q-rest| {j['rest']:.1e}, start "
+            f"{j['start']:+.1e}, stop {j['stop']:+.1e}) keys down at ends {j['down']} wrong "
+            f"{j['wrong']} beds {j['beds']} limits "
+            f"{'; '.join(j['limits']) if j['limits'] else 'none'}")
+
+
+def totals(js: list[dict]) -> str:
+    """The songs together: one table row (the history pages' columns)."""
+    if not js:
+        return "no song judged"
+    return (f"| {len(js)} | {sum(j['ok'] for j in js)} | {sum(j['still'] for j in js)} | "
+            f"{max(j['rest'] for j in js):.1e} | {max(j['start'] for j in js):+.1e} / "
+            f"{max(j['stop'] for j in js):+.1e} | {sum(j['down'] for j in js)} | "
+            f"{sum(j['violations'] for j in js)} | {sum(j['wrong'] for j in js)} | "
+            f"{sum(j['beds'] for j in js)} | {np.mean([j['f1'] for j in js]):.4f} "
+            f"({min(j['f1'] for j in js):.4f}) |")
 
 
 def main(argv: list[str]) -> int:
@@ -86,6 +105,7 @@ def main(argv: list[str]) -> int:
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "PYTHONPATH": str(tree)}
+    judged, failed = [], 0
     for song in songs_of(a.songs):
         csv = out / f"{song.stem}.csv"
         r = subprocess.run([sys.executable, str(tree / "cli.py"), "play", str(song), "--hand",
@@ -93,8 +113,14 @@ def main(argv: list[str]) -> int:
                            check=False)
         if r.returncode not in (0, 1) or not csv.exists():
             print(f"{song.name:28s} play exit {r.returncode}: {r.stderr.strip()[-200:]}")
+            failed += 1
             continue
-        print(judge(csv, song, rest_q, hand), flush=True)
+        judged.append(judge(csv, song, rest_q, hand))
+        print(line(judged[-1]), flush=True)
+    print(f"\n{failed} songs without a plan\n| songs | check ok | rest to rest | worst \\|q - rest\\| "
+          "| slack start / end | keys down at the ends | limit violations (any category) | "
+          "wrong presses | bed hits | F1 mean (lowest) |")
+    print(totals(judged))
     return 0
 
 

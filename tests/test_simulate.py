@@ -135,8 +135,15 @@ def test_real_plan_in_physics(twinkle, capsys):
     assert rep.kinematic_f1 == pytest.approx(1.0, abs=1e-4)
     track = {j.name: j for j in rep.tracking}
     assert track["rail"].max_error < 0.002  # m
+    # the rig's axes in m (their lines in mm), the others in rad (deg)
+    assert {n for n, j in track.items() if j.unit == "m"} == {"rail", "reach"}
+    assert {j.unit for n, j in track.items() if n not in ("rail", "reach")} == {"rad"}
+    lines = {ln.split()[0]: ln for ln in rep.summary().splitlines()
+             if ln.startswith("  ") and ln.split()[0] in track}
+    assert " mm " in lines["reach"] and " mm " in lines["rail"] and " deg " in lines["wrist_flex"]
     rc = main(["simulate", str(twinkle), SONG, "--contact", "pads", "--json"])
     out = json.loads(capsys.readouterr().out)
+    assert {j["name"]: j["unit"] for j in out["tracking"]}["reach"] == "m"
     assert rc == 0 and out["command"] == "simulate" and out["ok"] is True
     assert set(out) >= {"play", "motors", "tracking", "problems", "kinematic_f1",
                         "realtime_factor"}

@@ -91,7 +91,7 @@ def effort_lines(L: list[str], motors: tuple[MotorEffort, ...],
                  name_width: tuple[int, int] = (22, 18)) -> None:
     """Append a hand's motor and tracking lines to the summary ``L``: each motor's peak
     demand beside its limit and its longest saturation, each joint's tracking error (mm
-    for the rail, deg for the others), headed at ``indent``, the names padded to
+    for a rig axis, deg for the others), headed at ``indent``, the names padded to
     ``name_width`` (motors, joints)."""
     mw, jw = name_width
     L.append(f"{indent}motors (peak demand / limit, longest saturation):")
@@ -100,7 +100,7 @@ def effort_lines(L: list[str], motors: tuple[MotorEffort, ...],
                  f"({m.ratio:5.2f})  {m.saturated_s * 1000:5.0f} ms at {m.at_s:.3f} s")
     L.append(f"{indent}tracking error per joint (max, rms):")
     for j in tracking:
-        unit = "mm" if j.name.endswith("rail") else "deg"
+        unit = "mm" if j.unit == "m" else "deg"
         f = 1000.0 if unit == "mm" else 57.29577951308232
         L.append(f"{indent}  {j.name:{jw}s} {j.max_error * f:8.2f} {unit}  rms "
                  f"{j.rms_error * f:6.2f}  worst at {j.at_s:.3f} s")

@@ -55,9 +55,10 @@ class MotorEffort:
 @dataclass(frozen=True)
 class JointTracking:
     name: str
-    max_error: float  # rad (m for the rail)
+    max_error: float  # rad (m for a rig axis: the rail, the reach)
     rms_error: float
     at_s: float
+    unit: str = "rad"  # "m" for a rig axis (a prismatic joint)
 
 
 @dataclass(frozen=True)
@@ -169,7 +170,8 @@ def tracking(rec: SimRecord, hand: HandModel) -> tuple[JointTracking, ...]:
     err = np.abs(rec.q_sim - rec.q_ref)
     worst = err.argmax(axis=0)
     return tuple(JointTracking(n, float(err[worst[i], i]), float(np.sqrt(np.mean(err[:, i] ** 2))),
-                               float(rec.t_s[worst[i]])) for i, n in enumerate(hand.joint_names))
+                               float(rec.t_s[worst[i]]), "m" if n in hand.rig_joints else "rad")
+                 for i, n in enumerate(hand.joint_names))
 
 
 def score_catch(rec: SimRecord, intercept_t: float, radius_m: float) -> PhysicsCatch:
