@@ -98,12 +98,12 @@ def physics_totals(results: tuple[SongResult, ...]) -> PhysicsTotals | None:
         return None
     low = min(rs, key=lambda r: r.physics_f1)
     sat = max(rs, key=lambda r: r.physics_saturated_ms)
+    any_sat = sat.physics_saturated_ms > 0
     return PhysicsTotals(len(rs), sum(bool(r.physics_ok) for r in rs),
                          sum(r.physics_f1 for r in rs) / len(rs), low.physics_f1, low.song,
                          sum(r.physics_wrong_keys for r in rs), sat.physics_saturated_ms,
-                         sat.song if sat.physics_saturated_ms > 0 else "",
-                         (sat.physics_saturated_motor or "") if sat.physics_saturated_ms > 0
-                         else "")
+                         sat.song if any_sat else "",
+                         (sat.physics_saturated_motor or "") if any_sat else "")
 
 
 @dataclass(frozen=True)
