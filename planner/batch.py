@@ -39,7 +39,7 @@ MIDI_MAGIC = (b"MThd", b"RIFF")  # a standard MIDI file, or one wrapped in RIFF 
 SUMMARY_FIELDS = ("song", "notes", "played", "infeasible", "frame_f1", "check_ok",
                   "planning_s", "realtime_factor", "trajectory", "error", "physics_f1",
                   "physics_wrong_keys", "physics_saturated_ms", "physics_ok",
-                  "physics_saturated_motor")
+                  "physics_saturated_motor", "physics_error")
 
 
 @dataclass(frozen=True)
@@ -65,18 +65,21 @@ class SongResult:
     physics_saturated_ms: float | None = None  # the longest run of a motor at its limit
     physics_ok: bool | None = None
     physics_saturated_motor: str | None = None  # the motor of that run ("" when none)
+    physics_error: str = ""  # why the replay of a plan failed (the plan and check stand)
 
 
 @dataclass(frozen=True)
 class PhysicsTotals:
-    """The physics replays of a batch together: how many songs were replayed (and their
-    verdict OK), their mean and lowest F1 (the song), the wrong keys of all of them, the
-    longest motor saturation of any (its song and motor: "" when none saturated)."""
+    """The physics replays of a batch together: how many plans were replayed (their
+    verdict OK; the replays that failed to run), the mean and lowest F1 (its song; None
+    when no replay ran), the wrong keys of all of them, the longest motor saturation of
+    any (its song and motor: "" when none saturated)."""
 
     replayed: int
     ok: int
-    mean_f1: float
-    min_f1: float
+    failed: int
+    mean_f1: float | None
+    min_f1: float | None
     min_f1_song: str
     wrong_keys: int
     saturated_ms: float
@@ -86,22 +89,31 @@ class PhysicsTotals:
     def format(self) -> str:
         sat = (f"{self.saturated_ms:.0f} ms ({self.saturated_motor}, {self.saturated_song})"
                if self.saturated_ms > 0 else "0 ms")
-        return (f"physics: {self.replayed} replayed, {self.ok} OK; F1 mean {self.mean_f1:.4f}, "
-                f"lowest {self.min_f1:.4f} ({self.min_f1_song}); {self.wrong_keys} wrong keys; "
-                f"longest motor saturation {sat}")
+        f1 = ("no F1" if self.mean_f1 is None else
+              f"F1 mean {self.mean_f1:.4f}, lowest {self.min_f1:.4f} ({self.min_f1_song})")
+        failed = f" ({self.failed} failed to run)" if self.failed else ""
+        return (f"physics: {self.replayed} replayed{failed}, {self.ok} OK; {f1}; "
+                f"{self.wrong_keys} wrong keys; longest motor saturation {sat}")
 
 
 def physics_totals(results: tuple[SongResult, ...]) -> PhysicsTotals | None:
-    """The ``PhysicsTotals`` of the results replayed in physics (None: none was)."""
-    rs = [r for r in results if r.physics_f1 is not None and not r.error]
-    if not rs:
+    """The ``PhysicsTotals`` of the plans replayed in physics, or whose replay failed
+    (None: the batch replayed none)."""
+    tried = [r for r in results if not r.error and (r.physics_f1 is not None
+                                                    or r.physics_error)]
+    if not tried:
         return None
-    low = min(rs, key=lambda r: r.physics_f1)
-    sat = max(rs, key=lambda r: r.physics_saturated_ms)
-    any_sat = sat.physics_saturated_ms > 0
-    return PhysicsTotals(len(rs), sum(bool(r.physics_ok) for r in rs),
-                         sum(r.physics_f1 for r in rs) / len(rs), low.physics_f1, low.song,
-                         sum(r.physics_wrong_keys for r in rs), sat.physics_saturated_ms,
+    rs = [r for r in tried if r.physics_f1 is not None]
+    low = min(rs, key=lambda r: r.physics_f1, default=None)
+    sat = max(rs, key=lambda r: r.physics_saturated_ms, default=None)
+    any_sat = sat is not None and sat.physics_saturated_ms > 0
+    return PhysicsTotals(len(tried), sum(bool(r.physics_ok) for r in tried),
+                         sum(bool(r.physics_error) for r in tried),
+                         sum(r.physics_f1 for r in rs) / len(rs) if rs else None,
+                         None if low is None else low.physics_f1,
+                         "" if low is None else low.song,
+                         sum(r.physics_wrong_keys for r in rs),
+                         sat.physics_saturated_ms if any_sat else 0.0,
                          sat.song if any_sat else "",
                          (sat.physics_saturated_motor or "") if any_sat else "")
 
@@ -159,7 +171,9 @@ def format_song_line(r: SongResult) -> str:
         msg = (f"{r.played}/{r.notes} played, frame F1 {r.frame_f1:.4f}, check "
                f"{'OK' if r.check_ok else 'FAILED'}"
                + (" (done before)" if r.skipped else f", {r.realtime_factor:.0f}x"))
-        if r.physics_f1 is not None:
+        if r.physics_error:
+            msg += f"; physics FAILED: {r.physics_error}"
+        elif r.physics_f1 is not None:
             msg += (f"; physics F1 {r.physics_f1:.4f}, {r.physics_wrong_keys} wrong keys, "
                     f"longest motor saturation {r.physics_saturated_ms:.0f} ms"
                     + (f" ({r.physics_saturated_motor})" if r.physics_saturated_motor else "")
@@ -332,8 +346,8 @@ def _done(song: Path, out: Path, hand: str, physics: bool = False) -> SongResult
         return None
     if r.error or r.song_sha256 != _song_sha256(song) or r.hand != hand:
         return None
-    if physics and r.physics_f1 is None:
-        return None
+    if physics and (r.physics_f1 is None or r.physics_error):
+        return None  # (not replayed, or the replay failed: again)
     from planner.trajfile import read_trajectory
 
     try:
@@ -368,7 +382,7 @@ def plan_one(song_path: str, out_dir: str, hand_name: str, physics: bool = False
                        infeasible=len(plan.verdict.skipped), frame_f1=float(rep.play.f1),
                        check_ok=bool(rep.ok), planning_s=float(plan.planning_s),
                        realtime_factor=float(song_s / plan.planning_s), **base,
-                       **(physics_verdict(traj_path, song_path) if physics else {}))
+                       **(_physics_fields(traj_path, song_path) if physics else {}))
     except (InputError, PlannerError) as e:
         r = SongResult(notes=0, played=0, infeasible=0, frame_f1=0.0, check_ok=False,
                        planning_s=0.0, realtime_factor=0.0, error=str(e), **base)
@@ -380,6 +394,16 @@ def plan_one(song_path: str, out_dir: str, hand_name: str, physics: bool = False
     record = {k: v for k, v in asdict(r).items() if k != "skipped"}
     write_file(Path(out_dir) / f"{song.stem}.json", json.dumps(record, indent=1) + "\n")
     return r
+
+
+def _physics_fields(traj_path: str, song_path: str) -> dict:
+    """``physics_verdict``; a replay that fails (bad input to MuJoCo, a bug) fails the
+    song's physics with its one-line reason, keeping its plan and check."""
+    try:
+        return physics_verdict(traj_path, song_path)
+    except Exception as e:  # noqa: BLE001 -- (the replay's failure, not the plan's)
+        first = (str(e).strip().splitlines() or [""])[0]
+        return {"physics_ok": False, "physics_error": f"{type(e).__name__}: {first}"[:500]}
 
 
 def physics_verdict(traj_path: str, song_path: str) -> dict:

@@ -6,12 +6,12 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import pytest
 
-from planner.batch import batch_plan
+from planner.batch import batch_plan, format_song_line
 from planner.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -127,15 +127,15 @@ def test_physics_replays_every_plan_and_records_its_verdict(tmp_path):
     assert r.physics_wrong_keys >= 0 and r.physics_saturated_ms >= 0.0
     assert phys.ok == (r.check_ok and r.physics_ok)
     header = (tmp_path / "out" / "summary.csv").read_text().splitlines()[0].split(",")
-    assert header[-5:] == ["physics_f1", "physics_wrong_keys", "physics_saturated_ms",
-                           "physics_ok", "physics_saturated_motor"]
+    assert header[-6:] == ["physics_f1", "physics_wrong_keys", "physics_saturated_ms",
+                           "physics_ok", "physics_saturated_motor", "physics_error"]
     rec = json.loads((tmp_path / "out" / "twinkle.json").read_text())
     assert rec["physics_f1"] == r.physics_f1
     assert (r.physics_saturated_motor != "") == (r.physics_saturated_ms > 0)
     # the totals: in the closing lines, --json and summary.json
     ph = phys.physics
-    assert (ph.replayed, ph.mean_f1, ph.min_f1, ph.wrong_keys) == (
-        1, r.physics_f1, r.physics_f1, r.physics_wrong_keys)
+    assert (ph.replayed, ph.failed, ph.mean_f1, ph.min_f1, ph.wrong_keys) == (
+        1, 0, r.physics_f1, r.physics_f1, r.physics_wrong_keys)
     assert ph.saturated_ms == r.physics_saturated_ms and ph.ok == int(r.physics_ok)
     assert f"physics: 1 replayed, {ph.ok} OK; F1 mean {r.physics_f1:.4f}" in phys.format(
         tmp_path / "out")
@@ -164,8 +164,42 @@ def test_physics_totals_of_several_songs():
           res("c.mid", None, None, None, None), res("d.mid", 0.8, 0, 10.0, "motor.reach"),
           res("e.mid", 0.1, 9, 90.0, "motor.x", error="planning failed"))
     t = physics_totals(rs)
-    assert (t.replayed, t.ok, t.min_f1, t.min_f1_song, t.wrong_keys) == (3, 2, 0.7, "b.mid", 3)
+    assert (t.replayed, t.ok, t.failed, t.min_f1, t.min_f1_song, t.wrong_keys) == (
+        3, 2, 0, 0.7, "b.mid", 3)
     assert abs(t.mean_f1 - 0.8) < 1e-12
     assert (t.saturated_ms, t.saturated_song, t.saturated_motor) == (30.0, "b.mid", "motor.rail")
     assert "longest motor saturation 30 ms (motor.rail, b.mid)" in t.format()
+    # a replay that failed to run: counted, not OK, no F1 of its own
+    broken = replace(rs[2], physics_ok=False, physics_error="RuntimeError: boom")
+    t = physics_totals((*rs, broken))
+    assert (t.replayed, t.ok, t.failed, t.min_f1) == (4, 2, 1, 0.7)
+    assert "4 replayed (1 failed to run), 2 OK" in t.format()
+    alone = physics_totals((broken,))
+    assert (alone.replayed, alone.failed, alone.mean_f1, alone.saturated_ms) == (1, 1, None, 0.0)
+    assert "no F1" in alone.format()
     assert physics_totals(rs[2:3]) is None
+
+
+def test_a_replay_that_fails_keeps_the_plan_and_fails_the_physics(tmp_path, monkeypatch):
+    """A physics replay that raises fails that song's physics with its one-line reason;
+    the plan and its check stand (not a failed song), the batch is not OK, and the next
+    physics batch replays it again."""
+    from planner import batch
+
+    def boom(traj, song):
+        raise RuntimeError("boom\nsecond line")
+
+    d = tmp_path / "songs"
+    d.mkdir()
+    (d / "twinkle.mid").write_bytes((ROOT / "songs" / "twinkle.mid").read_bytes())
+    monkeypatch.setattr(batch, "physics_verdict", boom)
+    s = batch_plan(d, tmp_path / "out", workers=1, physics=True)
+    r = s.results[0]
+    assert not r.error and r.played > 0 and r.check_ok
+    assert (r.physics_ok, r.physics_f1, r.physics_error) == (False, None, "RuntimeError: boom")
+    assert not s.ok and s.failed == 0 and s.physics.failed == 1
+    assert format_song_line(r).endswith("; physics FAILED: RuntimeError: boom")
+    monkeypatch.undo()
+    again = batch_plan(d, tmp_path / "out", workers=1, physics=True)
+    r2 = again.results[0]
+    assert not r2.skipped and r2.physics_f1 is not None and not r2.physics_error
