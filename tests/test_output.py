@@ -124,7 +124,10 @@ def test_signal_stops_cleanly_and_leaves_a_visibly_incomplete_file(tmp_path, sig
     write_notes_midi([Note(60 + (k % 5) * 2, 0.3 * k, 0.3 * k + 0.25, 80) for k in range(3000)],
                      long_song)
     out = tmp_path / "o.csv"
-    p = _cli("play", long_song, "-o", out, stderr=subprocess.PIPE, text=True)
+    # (SIGINT as a terminal leaves it: a shell starts a background job, a suite run with
+    # `&` included, with SIGINT ignored, and Python then keeps ignoring it, as it should)
+    p = _cli("play", long_song, "-o", out, stderr=subprocess.PIPE, text=True,
+             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     _wait_for_rows(out, 20, p)
     p.send_signal(sig)
     _, err = p.communicate(timeout=120)
