@@ -257,13 +257,17 @@ class CatchPlanner:
         q_pre[arm] += soft_stop.first_offset
         T_m = dyn.move_time(self.q_rest, q_pre)
         ready = t_react + T_m
-        if ready > min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i):
+        due = min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i)
+        if ready > due:
             reasons.append(Reason(CatchReason.TOO_SOON,
                                   f"too fast: the open pre-catch pose is reached at {ready:.3f} s, "
                                   f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
                                   f"(t = {pose.t_i:.3f} s)"))
         s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
                           pad_time_s(soft_stop.v_rel), r)
+        if ready <= due:  # the move calmer where it is still there before the stop's
+            # ramp and the closing's start (``calm_move_time``)
+            T_m = dyn.calm_move_time(self.q_rest, q_pre, t_react, min(s_c, due))
         turn0 = hold.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
         turn, t, Q, T_m, s_c, verdict = self._closing_rows(
             flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,

@@ -56,6 +56,12 @@ from planner.trajectory import LIMIT_MARGIN, MIN_PHASE_S, PEAK_ACC, PEAK_VEL, ph
 
 STOP_SHARE = 0.8  # the ramps load every motor to at most 80 % of its capacity: issue 15's
 # 20 % headroom, left for what the model does not see (friction, the fingers' moves)
+MOVE_SHARE = 0.6  # the move to the pre-catch pose, where the time allows, keeps every motor
+# within 60 % of its capacity (``StopDynamics.calm_move_time``): the inertia model of
+# ``move_time`` (``accel_room``, the poses at the move's ends) is 10-12 % under the replay's
+# peak (MuJoCo, full contact; 30 deg from 1.5 and 3 m, the move within STOP_SHARE 0.80:
+# 0.90 and 0.88 of wrist_dev's 2.00 N m), and the catch's target is 20 % headroom in physics
+MOVE_SPARE_S = 0.01  # ... and still reaches its pose one row (at 100 Hz) before it is due
 TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
 CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)  # the arm's speed when it meets the ball, tried as a
 # share of its speed after the recoil
@@ -223,6 +229,15 @@ class StopDynamics:
         arm's part of that acceleration alone within the room too (how a live session
         bounds its re-aims, ``planner.catch.live.motion``)."""
         return self.room_time((q_from, q_to), q_to - q_from, STOP_SHARE, arm_alone)
+
+    def calm_move_time(self, q_from: np.ndarray, q_to: np.ndarray, t_start: float,
+                       due: float) -> float:
+        """``move_time``, or the slower move with every motor within ``MOVE_SHARE`` when,
+        started at ``t_start``, it is still there ``MOVE_SPARE_S`` before ``due`` (the
+        stop's ramp, the ball, the closing's start: nothing else moves later)."""
+        T = self.move_time(q_from, q_to)
+        calm = self.room_time((q_from, q_to), q_to - q_from, MOVE_SHARE)
+        return max(T, calm) if t_start + calm <= due - MOVE_SPARE_S else T
 
     def room_time(self, ends: tuple[np.ndarray, np.ndarray], dq: np.ndarray, share: float,
                   arm_alone: bool = False) -> float:

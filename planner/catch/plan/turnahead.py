@@ -235,8 +235,11 @@ class HoldTurn:
             if not h.lower[i] + pad <= pre[i] <= h.upper[i] - pad:
                 continue
             T_pre = self.dyn.move_time(self.q_rest, pre)
-            if rows_args.t_react + T_pre > (stop.start_s if np.any(stop.qd) else pose.t_i):
+            due = stop.start_s if np.any(stop.qd) else pose.t_i
+            if rows_args.t_react + T_pre > due:
                 continue
+            T_pre = self.dyn.calm_move_time(self.q_rest, pre, rows_args.t_react,
+                                            min(due, rows_args.s_c))
             turn = Turn(turn0.delta, max(p.end_s for p in prof) - start, start, prof)
             args = replace(rows_args, T_m=T_pre)
             t, Q = self.rows(args, turn)
