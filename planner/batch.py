@@ -28,7 +28,7 @@ import io
 import json
 import os
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from functools import cache
 from pathlib import Path
 
@@ -230,6 +230,9 @@ def batch_plan(songs_dir: str | os.PathLike, out_dir: str | os.PathLike, workers
         for s, r in _run(todo, out, hand, workers, address, physics):
             record(s, r)
     except KeyboardInterrupt:  # (the workers are stopped: the summary of what is done)
+        for s in todo:  # (a worker writes its record before this process hears of it)
+            if s not in results and (late := _done(s, out, hand, physics)) is not None:
+                results[s] = replace(late, skipped=False)  # (done by this run)
         _write_summary(BatchSummary(tuple(results[s] for s in songs if s in results)), out)
         raise
     summary = BatchSummary(tuple(results[s] for s in songs))

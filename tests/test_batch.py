@@ -203,3 +203,28 @@ def test_a_replay_that_fails_keeps_the_plan_and_fails_the_physics(tmp_path, monk
     again = batch_plan(d, tmp_path / "out", workers=1, physics=True)
     r2 = again.results[0]
     assert not r2.skipped and r2.physics_f1 is not None and not r2.physics_error
+
+
+def test_an_interrupt_after_a_record_is_written_keeps_it_in_the_summary(songs, tmp_path,
+                                                                         monkeypatch):
+    """A worker writes a song's record before the batch hears of it; a signal between the
+    two still leaves that song in the summary (as planned by this run), like its record."""
+    import csv
+
+    from planner import batch
+
+    real = batch.plan_one
+
+    def then_interrupted(*args):
+        real(*args)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(batch, "plan_one", then_interrupted)
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):
+        batch_plan(songs, out, workers=1)
+    rows = list(csv.DictReader((out / "summary.csv").open()))
+    assert [r["song"] for r in rows] == ["leaps.mid"]  # (the first song by name)
+    assert sorted(p.name for p in out.glob("*.json")) == ["leaps.json", "summary.json"]
+    rec = json.loads((out / "leaps.json").read_text())
+    assert rows[0]["check_ok"] == "True" and float(rows[0]["frame_f1"]) == rec["frame_f1"]
