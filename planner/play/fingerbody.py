@@ -102,7 +102,7 @@ class FingerBodies:
         (another finger's call at the same ``q`` just before)."""
         h, s = self.hand, self.shapes[finger]
         if update:
-            h._update(q)
+            h.update_frames(q)
         R, t = h.T_world_root[:3, :3], h.T_world_root[:3, 3]
         pts, rad = [], []
         for fid, a, b, r, n in zip(s.frames, s.p0, s.p1, s.radius_m, s.n_points):
