@@ -83,33 +83,33 @@ class FingerChain:
         ``FrameChain.positions`` and ``FingerBodies.points_many``."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         n = len(Q)
-        # (every joint's value, cosine and sine for every point's row at once: rows
-        # point-major, the points of the deepest links first, ``_local``)
+        if n == 0:
+            return np.empty((0, 3)), np.empty((0, len(self._shape_of), 3))
         if self._pad:
             Q = np.concatenate([Q, np.zeros((n, 1))], axis=1)
-        q = Q[:, self._cols]  # (the cosines and sines of the configurations' joints, then
-        # tiled: the same numbers, an elementwise function)
+        # (every joint's value, cosine and sine for each configuration, broadcast over
+        # the points: the rows of ``p`` are point-major, the points of the deepest links
+        # first, ``_local``; (points, n) as a view)
+        q = Q[:, self._cols]
         cos_q = np.cos(q)
-        tiles = (self.n_points, 1)
-        q_all, sin_all = np.tile(q, tiles), np.tile(np.sin(q), tiles)
-        cos_all, vers_all = np.tile(cos_q, tiles), np.tile(1.0 - cos_q, tiles)
+        sin_q, vers_q = np.sin(q), 1.0 - cos_q
         p = np.empty((0, 3))
         for depth in range(len(self.joints), 0, -1):
             loc = self._local.get(depth)
             if loc is not None:  # (this joint's links' points join the others here)
                 p = np.concatenate([p, np.repeat(loc, n, axis=0)])
             _, prismatic, k, R, t = self.joints[depth - 1]
-            rows = len(p)
+            j = depth - 1
             if prismatic:
-                p = p + q_all[:rows, depth - 1, None] * k
+                p = (p.reshape(-1, n, 3) + (q[:, j, None] * k)[None]).reshape(-1, 3)
             else:  # Rodrigues, as ``FrameChain``: p cos + (k x p) sin + k (k . p)(1 - cos)
-                k_a, k_b = self._cross[depth - 1]
+                k_a, k_b = self._cross[j]
                 kxp = k_a * p[:, _NEXT2]
                 kxp -= k_b * p[:, _NEXT1]
-                kxp *= sin_all[:rows, depth - 1, None]
+                kxp.reshape(-1, n, 3)[...] *= sin_q[None, :, j, None]  # (views: in place)
                 along = (p @ k)[:, None] * k
-                along *= vers_all[:rows, depth - 1, None]
-                p = p * cos_all[:rows, depth - 1, None]
+                along.reshape(-1, n, 3)[...] *= vers_q[None, :, j, None]
+                p = (p.reshape(-1, n, 3) * cos_q[None, :, j, None]).reshape(-1, 3)
                 p += kxp
                 p += along
             # (the joint's placement; a rotation that is the identity and a translation
