@@ -163,7 +163,7 @@ def test_finger_lengths_are_table2_upper_limits(hand, urdf_root, finger: str) ->
     ids = [model.getJointId(f"{finger}_{j}") for j in ("mcp_flex", "pip", "dip")]
     for _ in range(3):
         q = random_q(hand, rng)
-        pin.forwardKinematics(model, data, hand._pin_q(q))
+        pin.forwardKinematics(model, data, hand.pin_q(q))
         p = [data.oMi[i].translation for i in ids]
         assert np.linalg.norm(p[1] - p[0]) == pytest.approx(base, abs=1e-12)
         assert np.linalg.norm(p[2] - p[1]) == pytest.approx(middle, abs=1e-12)

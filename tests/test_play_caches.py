@@ -20,10 +20,10 @@ def straight_cap(hand, postures, dq) -> float:
     m = hand.pin_model
     data = m.createData()
     cap = RAIL_TORQUE_SHARE * actuator_capacity(hand).torque_nm
-    vi = hand._pin_v_idx
+    vi = hand.pin_v_idx
     best = np.inf
     for q in postures:
-        qp, v = hand._pin_q(q), np.zeros(m.nv)
+        qp, v = hand.pin_q(q), np.zeros(m.nv)
         unit = np.zeros(m.nv)
         unit[vi] = dq
         tau_g = pin.rnea(m, data, qp, v, np.zeros(m.nv))[vi]

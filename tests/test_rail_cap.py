@@ -26,8 +26,8 @@ def planner():
 def _motor_torques_at(hand, q, a_rail):
     m = hand.pin_model
     acc = np.zeros(m.nv)
-    acc[hand._pin_v_idx[hand.index["rail"]]] = a_rail
-    tau = pin.rnea(m, m.createData(), hand._pin_q(q), np.zeros(m.nv), acc)[hand._pin_v_idx]
+    acc[hand.pin_v_idx[hand.index["rail"]]] = a_rail
+    tau = pin.rnea(m, m.createData(), hand.pin_q(q), np.zeros(m.nv), acc)[hand.pin_v_idx]
     return hand.motor_torques(q, tau)
 
 

@@ -129,31 +129,33 @@ class HandModel:
         return self.coupling_map.dq_dindependent(q)
 
     # ------------------------------------------------------------ kinematics
-    def _pin_q(self, q: np.ndarray) -> np.ndarray:
+    def pin_q(self, q: np.ndarray) -> np.ndarray:
+        """Pinocchio's configuration vector (nq,) of ``q`` (the hand's joint order)."""
         qp = np.zeros(self.pin_model.nq)
         qp[self._pin_idx] = q
         return qp
 
-    def _update(self, q: np.ndarray) -> None:
-        pin.framesForwardKinematics(self.pin_model, self.pin_data, self._pin_q(q))
+    def update_frames(self, q: np.ndarray) -> None:
+        """Every frame's placement at ``q`` in ``pin_data`` (``oMf``)."""
+        pin.framesForwardKinematics(self.pin_model, self.pin_data, self.pin_q(q))
 
     def tip_position(self, q: np.ndarray, finger: int) -> np.ndarray:
         """World position of one fingertip pad point (index in ``FINGERS``), m."""
-        pin.forwardKinematics(self.pin_model, self.pin_data, self._pin_q(q))
+        pin.forwardKinematics(self.pin_model, self.pin_data, self.pin_q(q))
         p = pin.updateFramePlacement(self.pin_model, self.pin_data, self._tip_ids[finger]).translation
         return self.T_world_root[:3, :3] @ p + self.T_world_root[:3, 3]
 
     def tip_positions(self, q: np.ndarray) -> np.ndarray:
         """World positions of the five fingertip pad points, (5, 3) in m, order ``FINGERS``."""
         # joint placements, then only the five tip frames (twice as fast as every frame)
-        pin.forwardKinematics(self.pin_model, self.pin_data, self._pin_q(q))
+        pin.forwardKinematics(self.pin_model, self.pin_data, self.pin_q(q))
         m, d = self.pin_model, self.pin_data
         tips = np.array([pin.updateFramePlacement(m, d, i).translation for i in self._tip_ids])
         return tips @ self.T_world_root[:3, :3].T + self.T_world_root[:3, 3]
 
     def frame_pose(self, q: np.ndarray, frame: str) -> np.ndarray:
         """4x4 world pose of a URDF frame."""
-        self._update(q)
+        self.update_frames(q)
         return self.T_world_root @ self.pin_data.oMf[self.pin_model.getFrameId(frame)].homogeneous
 
     def palm_pose(self, q: np.ndarray) -> np.ndarray:
@@ -161,23 +163,24 @@ class HandModel:
 
     def tip_jacobians(self, q: np.ndarray) -> np.ndarray:
         """World-frame position Jacobians of the fingertips, (5, 3, n) in our joint order."""
-        pin.computeJointJacobians(self.pin_model, self.pin_data, self._pin_q(q))
+        pin.computeJointJacobians(self.pin_model, self.pin_data, self.pin_q(q))
         pin.updateFramePlacements(self.pin_model, self.pin_data)
         R = self.T_world_root[:3, :3]
         out = np.empty((len(self._tip_ids), 3, self.n))
         for k, fid in enumerate(self._tip_ids):
             J = pin.getFrameJacobian(self.pin_model, self.pin_data, fid,
                                      pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-            out[k] = R @ J[:3, self._pin_v_idx]
+            out[k] = R @ J[:3, self.pin_v_idx]
         return out
 
     @property
-    def _pin_v_idx(self) -> np.ndarray:
+    def pin_v_idx(self) -> np.ndarray:
+        """Each of the hand's joints' index in Pinocchio's velocity vector."""
         return self._pin_idx  # all joints are 1-DOF: idx_q == idx_v
 
     def gravity_torques(self, q: np.ndarray) -> np.ndarray:
         """Joint torques holding the hand still against gravity (N m, N for the rail)."""
-        g = pin.computeGeneralizedGravity(self.pin_model, self.pin_data, self._pin_q(q))
+        g = pin.computeGeneralizedGravity(self.pin_model, self.pin_data, self.pin_q(q))
         return g[self._pin_idx]
 
     def within_limits(self, q: np.ndarray, tol: float = 1e-9) -> bool:

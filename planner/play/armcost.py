@@ -106,6 +106,8 @@ class ArmCosts:
                     # lift to its key crossing)
                     done = self._t_down[m] + press_s - self.places.lift(a, "high").cross_s
                     cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
+        if not cands:  # (``_riders``' answer when none rides along: the last lift, the move)
+            return ctx.lift_end + T, _NONE
         arrive = min((self._t_down[n] - self._times(n, f, place)[1] for n, f in new.items()),
                      default=math.inf)
         return self._riders(ctx, cands, T, arrive)

@@ -48,6 +48,7 @@ from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.music.keybodies import box_penetration, footprints, key_depths
 from planner.play.fingerchain import FingerChain
+from planner.play.halving import all_along, max_along, min_along, sum3
 from planner.simulate.keyboard import key_bodies
 
 OTHER_KEY_TOLERANCE_M = 0.0005  # see the module docstring
@@ -84,7 +85,7 @@ class FingerBodies:
                 tuple(1 if b.p0_m == b.p1_m else AXIS_SAMPLES for b in mine))
         boxes = [(k.pitch, b) for k in key_bodies() for b in k.boxes]
         self.box_pitch = np.array([p for p, _ in boxes])
-        self._pressed: dict[int | None, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._pressed: dict[int | None, tuple[np.ndarray, ...]] = {}
         c = np.array([b.center_m for _, b in boxes])
         h = np.array([b.half_m for _, b in boxes])
         self.box_lo, self.box_hi = c - h, c + h
@@ -101,7 +102,7 @@ class FingerBodies:
         (another finger's call at the same ``q`` just before)."""
         h, s = self.hand, self.shapes[finger]
         if update:
-            h._update(q)
+            h.update_frames(q)
         R, t = h.T_world_root[:3, :3], h.T_world_root[:3, 3]
         pts, rad = [], []
         for fid, a, b, r, n in zip(s.frames, s.p0, s.p1, s.radius_m, s.n_points):
@@ -196,13 +197,19 @@ class FingerBodies:
     def pressed_boxes(self, pitch: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The keys' boxes with key ``pitch``'s pressed to its bed, and which are its:
         (own (B,) bool, lo (B, 3), hi (B, 3)), made once per key."""
+        return self._pressed_boxes(pitch)[:3]
+
+    def _pressed_boxes(self, pitch: int | None) -> tuple[np.ndarray, ...]:
+        """``pressed_boxes`` and each box's allowed penetration (``boxes_clear``'s: the
+        pressed key's ``OWN_BED_MARGIN_M``, another's ``OTHER_KEY_TOLERANCE_M``)."""
         got = self._pressed.get(pitch)
         if got is None:
             own = self.box_pitch == pitch
             lo, hi = self.box_lo.copy(), self.box_hi.copy()
             lo[own, 2] -= kb.KEY_DIP_M
             hi[own, 2] -= kb.KEY_DIP_M
-            got = self._pressed[pitch] = (own, lo, hi)
+            allowed = np.where(own, OWN_BED_MARGIN_M, OTHER_KEY_TOLERANCE_M)
+            got = self._pressed[pitch] = (own, lo, hi, allowed)
         return got
 
     def boxes_clear(self, P: np.ndarray, r: np.ndarray, own_pitch: int | None
@@ -214,14 +221,11 @@ class FingerBodies:
         (3,))."""
         reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
         flat = P.reshape(-1, 3)
-        p_lo, p_hi = flat.min(axis=0) - reach, flat.max(axis=0) + reach
-        own, lo, hi = self.pressed_boxes(own_pitch)
-        near = np.all((lo <= p_hi) & (hi >= p_lo), axis=1)
-        pen = box_penetration(P, r, lo[near], hi[near])  # (K, boxes near)
-        own = own[near]
-        ok = np.all(pen[:, ~own] <= OTHER_KEY_TOLERANCE_M, axis=1) \
-            & np.all(pen[:, own] <= OWN_BED_MARGIN_M, axis=1)
-        return ok, p_lo, p_hi
+        p_lo, p_hi = min_along(flat, 0) - reach, max_along(flat, 0) + reach
+        _, lo, hi, allowed = self._pressed_boxes(own_pitch)
+        near = all_along((lo <= p_hi) & (hi >= p_lo), 1)
+        pen = many_box_penetration(P, r, lo[near], hi[near])  # (K, boxes near)
+        return all_along(pen <= allowed[near], 1), p_lo, p_hi
 
     def _clear_chunk(self, P: np.ndarray, r: np.ndarray, own_pitch: int | None
                      ) -> tuple[np.ndarray, np.ndarray]:
@@ -236,3 +240,13 @@ class FingerBodies:
             own_depth = key_depths(P, r, [own_pitch])[:, 0]
             ok &= own_depth <= BODY_BED_DEPTH_M
         return ok, own_depth
+
+
+def many_box_penetration(P: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                         ) -> np.ndarray:
+    """``keybodies.box_penetration`` of many configurations' points ``P`` (K, m, 3), radii
+    ``r`` (m,), boxes [lo, hi] (B, 3): (K, B), the same numbers (its sum of three
+    squares in numpy's order, its maximum by halving: ``planner.play.halving``)."""
+    d = np.maximum(np.maximum(lo - P[..., None, :], P[..., None, :] - hi), 0.0)
+    dist = np.sqrt(sum3(d * d))  # (K, m, B); 0 inside
+    return max_along(r[:, None] - dist, 1)

@@ -67,6 +67,15 @@ class FingerChain:
         self.n_points = start
         self.n_shape = tuple(s.n_points)
         self._t = np.linspace(0.0, 1.0, axis_samples)[:, None]  # (``points_many``'s)
+        # (Rodrigues' k x p in three array operations: each column's two products and
+        # their difference, k[1] p[2] - k[2] p[1] and so on, gathered by these columns)
+        self._cross = [(k[[1, 2, 0]], k[[2, 0, 1]]) for _, _, k, _, _ in self.joints]
+        self._identity = [bool(np.array_equal(R, np.eye(3))) for _, _, _, R, _ in self.joints]
+        self._moved = [bool(t.any()) for _, _, _, _, t in self.joints]
+        # (the shapes' axes: every axis point's shape and its fraction of the axis, in
+        # ``points_many``'s order, shape by shape)
+        self._shape_of = np.repeat(np.arange(len(self.n_shape)), self.n_shape)
+        self._t_of = np.concatenate([self._t[:m, 0] for m in self.n_shape])[None, :, None]
 
     def carry(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """At configurations ``Q`` (N, n; the hand's joint order, couplings applied): the
@@ -74,34 +83,47 @@ class FingerChain:
         ``FrameChain.positions`` and ``FingerBodies.points_many``."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         n = len(Q)
-        # (every joint's value, cosine and sine for every point's row at once: rows
-        # point-major, the points of the deepest links first, ``_local``)
+        if n == 0:
+            return np.empty((0, 3)), np.empty((0, len(self._shape_of), 3))
         if self._pad:
             Q = np.concatenate([Q, np.zeros((n, 1))], axis=1)
-        q_all = np.tile(Q[:, self._cols], (self.n_points, 1))
-        cos_all, sin_all = np.cos(q_all), np.sin(q_all)
+        # (every joint's value, cosine and sine for each configuration, broadcast over
+        # the points: the rows of ``p`` are point-major, the points of the deepest links
+        # first, ``_local``; (points, n) as a view)
+        q = Q[:, self._cols]
+        cos_q = np.cos(q)
+        sin_q, vers_q = np.sin(q), 1.0 - cos_q
         p = np.empty((0, 3))
         for depth in range(len(self.joints), 0, -1):
             loc = self._local.get(depth)
             if loc is not None:  # (this joint's links' points join the others here)
                 p = np.concatenate([p, np.repeat(loc, n, axis=0)])
             _, prismatic, k, R, t = self.joints[depth - 1]
-            rows = len(p)
+            j = depth - 1
             if prismatic:
-                p = p + q_all[:rows, depth - 1, None] * k
+                p = (p.reshape(-1, n, 3) + (q[:, j, None] * k)[None]).reshape(-1, 3)
             else:  # Rodrigues, as ``FrameChain``: p cos + (k x p) sin + k (k . p)(1 - cos)
-                c, s = cos_all[:rows, depth - 1, None], sin_all[:rows, depth - 1, None]
-                kxp = np.empty_like(p)
-                kxp[:, 0] = k[1] * p[:, 2] - k[2] * p[:, 1]
-                kxp[:, 1] = k[2] * p[:, 0] - k[0] * p[:, 2]
-                kxp[:, 2] = k[0] * p[:, 1] - k[1] * p[:, 0]
-                p = p * c + kxp * s + (p @ k)[:, None] * k * (1.0 - c)
-            p = p @ R.T + t
+                k_a, k_b = self._cross[j]
+                kxp = k_a * p[:, _NEXT2]
+                kxp -= k_b * p[:, _NEXT1]
+                kxp.reshape(-1, n, 3)[...] *= sin_q[None, :, j, None]  # (views: in place)
+                along = (p @ k)[:, None] * k
+                along.reshape(-1, n, 3)[...] *= vers_q[None, :, j, None]
+                p = (p.reshape(-1, n, 3) * cos_q[None, :, j, None]).reshape(-1, 3)
+                p += kxp
+                p += along
+            # (the joint's placement; a rotation that is the identity and a translation
+            # of zeros change no number but an exact zero's sign, which no comparison sees)
+            if not self._identity[depth - 1]:
+                p = p @ R.T
+            if self._moved[depth - 1]:
+                p = p + t
         T = self.T_world_root
         w = (p @ T[:3, :3].T + T[:3, 3]).reshape(self.n_points, n, 3)[self._row]
-        tip, ends = w[0], w[1:]
-        pts = []
-        for j, m in enumerate(self.n_shape):  # (each shape's axis, as ``points_many``)
-            wa, wb = ends[2 * j][:, None], ends[2 * j + 1][:, None]
-            pts.append(wa + self._t[None, :m] * (wb - wa))
-        return tip, np.concatenate(pts, axis=1)
+        # (each shape's axis, as ``points_many``: wa + t (wb - wa), every shape at once)
+        wa, wb = w[1::2].transpose(1, 0, 2), w[2::2].transpose(1, 0, 2)
+        return w[0], wa[:, self._shape_of] + self._t_of * (wb - wa)[:, self._shape_of]
+
+
+_NEXT1 = np.array([1, 2, 0])  # (each column's next, and the one after: ``carry``'s k x p)
+_NEXT2 = np.array([2, 0, 1])

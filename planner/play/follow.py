@@ -35,6 +35,7 @@ from planner.play.fingerbody import (
     FingerBodies,
 )
 from planner.play.fingerchain import FingerChain
+from planner.play.halving import all_along, max_along, min_along
 
 HOLD_MARGIN_M = 0.001  # a key held while the arm moves stays this far inside its down range
 FOLLOW_STEP_M = 0.002  # a follow is tested every 2 mm of the arm's travel: a body sphere
@@ -77,16 +78,33 @@ def paths_clear(atlas: Atlas, finger: str, pitch: int, QA: np.ndarray, QB: np.nd
     bodies = atlas.bodies
     chain = finger_chain(bodies, finger)
     radii = bodies.radii(finger)
-    travel = np.linalg.norm((QB - QA)[:, arm], axis=1)
-    counts = np.array([samples(float(t)) for t in travel])
+    d = (QB - QA)[:, arm]  # (the arm's travel, ``np.linalg.norm``'s: one or two joints'
+    d *= d  # squares, their sum exact in any order)
+    travel = np.sqrt(d[:, 0] + d[:, 1] if len(arm) == 2 else d.sum(axis=1))
+    counts = [samples(float(t)) for t in travel]
+    if len(counts) == 1:  # (one move: the programme's and the motion's question)
+        return _clear(atlas, chain, radii, pitch, QA, QB, _fractions(counts[0]))
+    counts = np.array(counts)
     out = np.zeros(len(QA), dtype=bool)
     for n_s in sorted(set(counts.tolist())):
         idx = np.flatnonzero(counts == n_s)
-        S = np.linspace(0.0, 1.0, n_s)
+        S = _fractions(n_s)
         for lo in range(0, len(idx), PAIR_CHUNK):
             sel = idx[lo:lo + PAIR_CHUNK]
             out[sel] = _clear(atlas, chain, radii, pitch, QA[sel], QB[sel], S)
     return out
+
+
+_FRACTIONS: dict[int, np.ndarray] = {}  # (``_fractions``)
+
+
+def _fractions(n_s: int) -> np.ndarray:
+    """``n_s`` points from 0 to 1 (``np.linspace``; made once per count, read-only)."""
+    got = _FRACTIONS.get(n_s)
+    if got is None:
+        got = _FRACTIONS[n_s] = np.linspace(0.0, 1.0, n_s)
+        got.flags.writeable = False
+    return got
 
 
 _CHAINS: dict[tuple[int, str], tuple[FingerBodies, FingerChain]] = {}  # (``finger_chain``)
@@ -107,16 +125,17 @@ def _clear(atlas: Atlas, chain: FingerChain, radii: np.ndarray, pitch: int,
     n, m = len(qa), len(S)
     Q = (qa[:, None, :] + S[None, :, None] * (qb - qa)[:, None, :]).reshape(n * m, -1)
     tips, points = chain.carry(hand.apply_couplings(Q))
-    x, y, _ = tips.T
+    x, y = tips[:, 0], tips[:, 1]
     inside = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
               & (k.y_min_m + TIP_RADIUS_M <= y) & (y <= k.y_max_m - TIP_RADIUS_M))
-    ok = inside.reshape(n, m).all(axis=1)
+    ok = all_along(inside.reshape(n, m), 1)
     if not ok.any():
         return ok
-    rows = np.repeat(ok, m)
-    held = np.concatenate([held_clear(atlas.bodies, points[rows][lo:lo + MANY_CHUNK], radii, pitch)
-                           for lo in range(0, int(rows.sum()), MANY_CHUNK)])
-    ok[ok] = held.reshape(-1, m).all(axis=1)
+    if not ok.all():
+        points = points[np.repeat(ok, m)]
+    held = np.concatenate([held_clear(atlas.bodies, points[lo:lo + MANY_CHUNK], radii, pitch)
+                           for lo in range(0, len(points), MANY_CHUNK)])
+    ok[ok] = all_along(held.reshape(-1, m), 1)
     return ok
 
 
@@ -128,24 +147,38 @@ def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -
     boxes' penetrations; every footprint column's depth in one array, not key by key:
     ``keybodies.key_depths``' elementwise arithmetic, its reductions exact), (K,) bool."""
     ok, p_lo, p_hi = bodies.boxes_clear(P, r, pitch)
-    fp = footprints()
-    near = np.all((fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2]), axis=1)
-    mine = fp.key == pitch - kb.LOWEST_PITCH
-    other = near & ~mine  # (the other keys' footprints near, grown by the tolerance; the
-    # key's own as they are)
-    cols_lo = np.concatenate([fp.lo[other] - OTHER_KEY_TOLERANCE_M, fp.lo[mine] - 0.0])
-    cols_hi = np.concatenate([fp.hi[other] + OTHER_KEY_TOLERANCE_M, fp.hi[mine] + 0.0])
-    top = np.concatenate([fp.top_m[other], fp.top_m[mine]])
-    dx = np.maximum(np.maximum(cols_lo[:, 0] - P[:, :, None, 0], P[:, :, None, 0] - cols_hi[:, 0]),
-                    0.0)
-    dy = np.maximum(np.maximum(cols_lo[:, 1] - P[:, :, None, 1], P[:, :, None, 1] - cols_hi[:, 1]),
-                    0.0)
-    d = np.sqrt(dx * dx + dy * dy)  # (K, m, columns)
+    fp, (not_mine, own_lo, own_hi, own_top, lo_grown, hi_grown) = footprints(), _columns(pitch)
+    near = (fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2])
+    other = near[:, 0] & near[:, 1] & not_mine
+    # (the other keys' footprints near, grown by the tolerance; the key's own as they are)
+    cols_lo = np.concatenate([lo_grown[other], own_lo])
+    cols_hi = np.concatenate([hi_grown[other], own_hi])
+    top = np.concatenate([fp.top_m[other], own_top])
+    P_xy = P[:, :, None, :2]
+    dxy = np.maximum(np.maximum(cols_lo - P_xy, P_xy - cols_hi), 0.0)  # (K, m, columns, 2)
+    dxy *= dxy
+    d = np.sqrt(dxy[..., 0] + dxy[..., 1])  # (K, m, columns)
     r2 = (r * r)[None, :, None] - d * d
     low = np.where(r2 >= 0.0, P[:, :, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
-    depth = top[None] + -low.min(axis=1)  # (K, columns)
-    n_other = int(other.sum())
+    depth = top[None] + -min_along(low, 1)  # (K, columns)
+    n_other = len(cols_lo) - len(own_lo)
     if n_other:
-        ok &= np.all(depth[:, :n_other] < DOWN_DEPTH_M, axis=1)
-    own_depth = depth[:, n_other:].max(axis=1)
+        ok &= all_along(depth[:, :n_other] < DOWN_DEPTH_M, 1)
+    own_depth = max_along(depth[:, n_other:], 1)
     return ok & (own_depth <= BODY_BED_DEPTH_M) & (own_depth >= kb.DOWN_DEPTH_M + HOLD_MARGIN_M)
+
+
+_COLUMNS: dict[int, tuple[np.ndarray, ...]] = {}  # (``_columns``)
+
+
+def _columns(pitch: int) -> tuple[np.ndarray, ...]:
+    """The footprint columns ``held_clear`` measures for key ``pitch`` (made once per
+    key): which rectangles are another key's, the key's own rectangles (lo, hi, top) as
+    they are, and every rectangle grown by ``OTHER_KEY_TOLERANCE_M`` (lo, hi)."""
+    got = _COLUMNS.get(pitch)
+    if got is None:
+        fp = footprints()
+        mine = fp.key == pitch - kb.LOWEST_PITCH
+        got = _COLUMNS[pitch] = (~mine, fp.lo[mine] - 0.0, fp.hi[mine] + 0.0, fp.top_m[mine],
+                                 fp.lo - OTHER_KEY_TOLERANCE_M, fp.hi + OTHER_KEY_TOLERANCE_M)
+    return got

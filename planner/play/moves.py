@@ -450,14 +450,14 @@ def path_acceleration_cap(hand: HandModel, postures, dq: np.ndarray) -> float:
     m = hand.pin_model
     data = m.createData()
     cap = RAIL_TORQUE_SHARE * actuator_capacity(hand).torque_nm
-    vi = hand._pin_v_idx
+    vi = hand.pin_v_idx
     best = np.inf
     seen = set()
     v = np.zeros(m.nv)  # (no speed, no acceleration; and the unit acceleration along dq)
     unit = np.zeros(m.nv)
     unit[vi] = dq
     for q in postures:
-        qp = hand._pin_q(q)
+        qp = hand.pin_q(q)
         tau_g = pin.rnea(m, data, qp, v, v)[vi]
         tau_1 = pin.rnea(m, data, qp, v, unit)[vi] - tau_g
         # (a posture whose torques and transmission equal one's before gives its motor
