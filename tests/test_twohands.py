@@ -18,6 +18,7 @@ from planner.check import check_trajectory
 from planner.hand.model import load_hand
 from planner.music.midi import Note, load_song, write_notes_midi
 from planner.play.hands import LEFT, RIGHT
+from planner.play.stream import Planner
 from planner.play.twohands import (
     UNBOUNDED_M,
     PairPlanner,
@@ -122,6 +123,18 @@ def test_inner_edge_never_exceeds_the_pairs_farthest_reach(pair) -> None:
         got = pair.edges[side].inner_m(q)
         assert got.shape == (2,) and (got <= pair.reach(side).inner_extent_m + 1e-9).all()
         assert (got > 0.0).all()
+
+
+def test_narrow_tucks_the_idle_fingers_nearer_the_rail(pair) -> None:
+    # (one hand's idle pose, the nearest its natural one, against the pair's narrowed one:
+    # the narrowed reaches less far towards the other hand)
+    one = Planner(load_hand("default"))
+    right = pair.planners[RIGHT]
+    assert one.places.idle.fingers == right.places.idle.fingers != ()
+    base = one.atlas.base
+    q = np.array([one.places.idle.tuck(base), right.places.idle.tuck(base)])
+    wide, narrow = pair.edges[RIGHT].inner_m(q)
+    assert narrow < wide - 0.02
 
 
 def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:

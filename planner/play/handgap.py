@@ -136,7 +136,8 @@ def hand_reach(places: Places) -> HandReach:
     """The hand's ``HandReach`` over ``hand_poses`` (``InnerEdge``'s bodies; the rail at
     0, so a point's x is its distance from the rail)."""
     h = places.hand
-    Q = hand_poses(places)
+    Q = np.unique(hand_poses(places), axis=0)  # (the same poses once: 2798 of 16091 rows
+    # on the default hand; the extent is the most over the set)
     lo, hi = InnerEdge(h).extents_m(Q)
     n = round(SPAN_M / STEP_M)
     dx = [places.natural_dx[f] + k * STEP_M for at in places.atlases for f in h.fingers
