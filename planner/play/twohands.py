@@ -287,16 +287,19 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     module docstring) and write the two-hand file to ``out_path`` ('-': stdout; None:
     in memory, ``TwoHandPlan.text``). The clock starts after the pair's set-up.
 
-    Three ways are planned and the one playing the most frames of music kept (the first
-    of equals): the right hand first, the left hand first (where the parts overlap, the
-    hand planned first takes the keys both want), and the better of the two again with
-    the notes left out for the other hand's clearance given to that hand."""
+    The right hand is planned first; when that leaves a note out for the other hand's
+    clearance (``SkipReason.OTHER_HAND``: the hands want the same keys), the left hand
+    first too, and the way playing more frames of music is kept (the right hand first
+    of equals): the hand planned first takes the keys both want. (A hand with no notes
+    plans nothing the order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
     places = {s: pp.planners[s].places for s in SIDES}
     a = assign_hands(song.notes, pp.gap, places, rate_hz)
-    tried = [plan_pass(song, pp, a, first, rate_hz, song_name) for first in (RIGHT, LEFT)]
+    tried = [plan_pass(song, pp, a, RIGHT, rate_hz, song_name)]
+    if all(a.notes_of(s) for s in SIDES) and tried[0].skipped_for(SkipReason.OTHER_HAND):
+        tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
     best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
     rows = _one_clock(best.plans, rate_hz)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
