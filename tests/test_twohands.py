@@ -66,9 +66,10 @@ def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     assert (gap >= need - 1e-9).all()
     assert plan.least_rail_gap_m < pair.gap.rail_gap_m  # (nearer than the worst reach)
     assert gap.min() < pair.gap.rail_gap_m + 0.05  # (the hands did meet)
-    # (both orders planned, the one playing the most frames kept)
-    assert sorted(f for f, _ in plan.tried) == [LEFT, RIGHT]
-    assert dict(plan.tried)[first] == max(fr for _, fr in plan.tried)
+    # (the hands contest keys: both orders and the right hand alone planned, the way
+    # playing the most frames kept)
+    assert [w for w, _ in plan.tried] == ["right first", "left first", "right alone"]
+    assert max(fr for _, fr in plan.tried) == dict(plan.tried)[f"{first} first"]
     rep = check_trajectory(str(out), song)
     assert rep.gap.collision_rows == 0 and rep.gap.least_m >= 0.010
     assert rep.ok, rep.problems

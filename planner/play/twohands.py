@@ -102,7 +102,7 @@ class TwoHandPlan:
     least_rail_gap_m: float  # the rails' least distance apart over the rows
     text: str | None = None  # the file, planned in memory (no path)
     first: str = RIGHT  # the hand planned first
-    # (every way planned: the hand planned first, the frames of music played)
+    # (every way planned, ``PairPass.way``, and the frames of music it played)
     tried: tuple[tuple[str, float], ...] = ()
 
     def left_out(self) -> list[tuple[int, object]]:
@@ -239,6 +239,13 @@ class PairPass:
     notes_of: tuple[tuple[int, ...], tuple[int, ...]]
     played_frames: float
 
+    @property
+    def way(self) -> str:
+        """How it was planned: ``right first``, ``left first``, or ``right alone`` (the
+        other hand with no notes)."""
+        alone = [s for s, idx in zip(SIDES, self.notes_of) if idx]
+        return f"{alone[0]} alone" if len(alone) == 1 else f"{self.first} first"
+
     def skipped_for(self, reason: SkipReason) -> list[tuple[int, object]]:
         """(song index, ``Skip``) of every note left out for ``reason``."""
         return [(idx[s.note], s) for idx, p in zip(self.notes_of, self.plans)
@@ -289,9 +296,11 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
 
     The right hand is planned first; when that leaves a note out for the other hand's
     clearance (``SkipReason.OTHER_HAND``: the hands want the same keys), the left hand
-    first too, and the way playing more frames of music is kept (the right hand first
-    of equals): the hand planned first takes the keys both want. (A hand with no notes
-    plans nothing the order could change.)"""
+    first too (the hand planned first takes the keys both want), and the right hand
+    alone, every note its own, as one hand plays the file (where the parts lie within
+    one hand's reach, two hands only get in each other's way); the way playing the most
+    frames of music is kept (the earlier of equals). (A hand with no notes plans nothing
+    the order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
@@ -300,13 +309,14 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     tried = [plan_pass(song, pp, a, RIGHT, rate_hz, song_name)]
     if all(a.notes_of(s) for s in SIDES) and tried[0].skipped_for(SkipReason.OTHER_HAND):
         tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
+        tried.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
     best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
     rows = _one_clock(best.plans, rate_hz)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
     plan = TwoHandPlan(best.assignment, pp.gap, best.plans, best.notes_of, rows, 0.0, least,
                        first=best.first,
-                       tried=tuple((p.first, p.played_frames) for p in tried))
+                       tried=tuple((p.way, p.played_frames) for p in tried))
     text = write_two_hands(plan, song, pp, out_path, rate_hz, song_name)
     return replace(plan, planning_s=time.perf_counter() - t_start, text=text)
 

@@ -81,7 +81,7 @@ def two_plan_dict(song_name: str, notes, plan: TwoHandPlan, out: str, setup_s: f
         "hint": plan.assignment.source.value,
         "rail_gap_m": plan.gap.rail_gap_m, "least_rail_gap_m": plan.least_rail_gap_m,
         "first_hand": plan.first,
-        "tried": [{"first_hand": f, "played_frames": fr} for f, fr in plan.tried],
+        "tried": [{"way": w, "played_frames": fr} for w, fr in plan.tried],
         "rows": len(plan.rows.t_s), "trajectory": out, "song_s": song_s,
         "planning_s": plan.planning_s, "setup_s": setup_s,
         "realtime_factor": song_s / plan.planning_s if plan.planning_s > 0 else None,
