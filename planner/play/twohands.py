@@ -2,13 +2,16 @@
 right hand, both planned so that they never come within their clearance, one file.
 
 **The stages.** ``planner.play.hands`` gives each note a hand (the file's parts a
-strong hint, weighed in frames of music). The right hand is planned first by the
-one-hand planner (``plan_song``), each of its notes pressed only from rail positions that
-leave the left hand room for its own notes sounding then (a lower bound); then the left
-hand, each of its notes pressed only from rail positions at least the rail gap
-(``planner.play.handgap``) left of where the right hand's rail *is* at every row over the
-note's window (an upper bound read from the right hand's rows). A note whose every place
-breaks its bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand.
+strong hint, weighed in frames of music). One hand is planned first by the one-hand
+planner (``plan_song``), each of its notes pressed only from rail positions that leave
+the other hand room for its own notes sounding then (``room_bounds``); then the other
+hand, each of its notes pressed only from rail positions that keep its bodies, at their
+farthest reach (``planner.play.handgap``), the clearance from the first hand's bodies as
+they *are* at every row over the note's window (``clear_bounds``: the first hand's
+inner edge, ``InnerEdge``, read from its rows). A note whose every place breaks its
+bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand. Which
+hand goes first, or whether one hand plays alone, is decided by the frames of music each
+way plays (``plan_two_hands``).
 
 **Why the rails stay apart between the notes too.** A note's window runs from its hand's
 previous onset to its hand's next onset (and half of the next notes' length, the latest a
@@ -296,19 +299,19 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
 
     The right hand is planned first; when that leaves a note out for the other hand's
     clearance (``SkipReason.OTHER_HAND``: the hands want the same keys), the left hand
-    first too (the hand planned first takes the keys both want), and the right hand
+    first too (the hand planned first takes the keys both want); and the right hand
     alone, every note its own, as one hand plays the file (where the parts lie within
-    one hand's reach, two hands only get in each other's way); the way playing the most
-    frames of music is kept (the earlier of equals). (A hand with no notes plans nothing
-    the order could change.)"""
+    one hand's reach, two hands only get in each other's way). The way playing the most frames of music is kept (the earlier of
+    equals). (A hand with no notes plans nothing the order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
     places = {s: pp.planners[s].places for s in SIDES}
     a = assign_hands(song.notes, pp.gap, places, rate_hz)
     tried = [plan_pass(song, pp, a, RIGHT, rate_hz, song_name)]
-    if all(a.notes_of(s) for s in SIDES) and tried[0].skipped_for(SkipReason.OTHER_HAND):
-        tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
+    if all(a.notes_of(s) for s in SIDES):
+        if tried[0].skipped_for(SkipReason.OTHER_HAND):
+            tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
         tried.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
     best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
     rows = _one_clock(best.plans, rate_hz)
