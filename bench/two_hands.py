@@ -4,7 +4,7 @@ checked (frame F1 against the whole song, both parts: what a listener hears; the
 plan also against its own part, ``1h own``, as ``check`` judges it) and replayed
 in MuJoCo (full contact; ``--no-physics`` to skip): check F1, physics F1, wrong keys,
 collisions between the hands (check's bodies, physics' contacts), notes per hand, notes
-left out, the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
+left out, the hand planned first (``1st``), the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
 for every piece, as ``batch`` plans).
 
     python bench/two_hands.py [--corpus DIR] [--only S] [--no-physics]
@@ -55,7 +55,7 @@ def main() -> int:
           f"{pp.gap.rail_gap_m * 1000:.1f} mm, key gap {pp.gap.key_gap_m * 1000:.1f} mm")
     head = (f"{'piece':22s} {'notes':>5s} | {'1h own':>6s} {'1h chk':>6s} {'1h phy':>6s} {'wr':>3s} "
             f"{'RTF':>5s} | {'2h chk':>6s} {'2h phy':>6s} {'wr':>3s} {'coll':>4s} "
-            f"{'L':>4s} {'R':>4s} {'out':>4s} {'RTF':>5s} {'gap mm':>6s} check")
+            f"{'L':>4s} {'R':>4s} {'out':>4s} {'RTF':>5s} {'gap mm':>6s} 1st check")
     print(head)
     rows = []
     with tempfile.TemporaryDirectory() as d:
@@ -85,12 +85,14 @@ def main() -> int:
                  "coll": chk2.gap.collision_rows + (len(ph2.touches) if ph2 else 0),
                  "L": len(plan2.notes_of[0]), "R": len(plan2.notes_of[1]),
                  "out": len(plan2.left_out()), "rtf2": song_s / plan2.planning_s,
-                 "gap": chk2.gap.least_m * 1000, "ok": chk2.ok}
+                 "gap": chk2.gap.least_m * 1000, "ok": chk2.ok,
+                 "first": getattr(plan2, "first", "right")[0].upper()}
             rows.append(r)
             print(f"{r['piece'][:22]:22s} {r['notes']:5d} | {r['own1']:6.4f} {r['chk1']:6.4f} {r['phy1']:6.4f} "
                   f"{r['wr1']:3d} {r['rtf1']:4.0f}x | {r['chk2']:6.4f} {r['phy2']:6.4f} "
                   f"{r['wr2']:3d} {r['coll']:4d} {r['L']:4d} {r['R']:4d} {r['out']:4d} "
-                  f"{r['rtf2']:4.0f}x {r['gap']:6.1f} {'ok' if r['ok'] else 'FAIL'}",
+                  f"{r['rtf2']:4.0f}x {r['gap']:6.1f} {r['first']:>3s} "
+                  f"{'ok' if r['ok'] else 'FAIL'}",
                   flush=True)
     if rows:
         def mean(k):

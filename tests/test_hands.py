@@ -117,3 +117,14 @@ def test_same_notes_same_assignment(places) -> None:
     notes = ordered([note(60 + (7 * i) % 25, 0.2 * i, 0.2 * i + 0.3, i % 2, i % 2)
                      for i in range(40)])
     assert assign_hands(notes, GAP, places) == assign_hands(notes, GAP, places)
+
+
+def test_one_hand_gives_every_note_to_it(places) -> None:
+    notes = ordered([note(72 + i % 3, 0.5 * i, 0.5 * i + 0.4, 0, 0) for i in range(6)]
+                    + [note(48 + i % 3, 0.5 * i, 0.5 * i + 0.4, 1, 1) for i in range(6)])
+    a = assign_hands(notes, GAP, places)
+    one = a.one_hand(RIGHT)
+    assert one.hand == tuple(RIGHT for _ in notes) and one.hint == a.hint
+    assert [m.note for m in one.moved] == [i for i, h in enumerate(a.hint) if h == LEFT]
+    assert {m.reason for m in one.moved} == {MoveReason.ONE_HAND}
+    assert one.notes_of(LEFT) == ()

@@ -18,7 +18,15 @@ from planner.check import check_trajectory
 from planner.hand.model import load_hand
 from planner.music.midi import Note, load_song, write_notes_midi
 from planner.play.hands import LEFT, RIGHT
-from planner.play.twohands import PairPlanner, left_bounds, plan_two_hands, windows
+from planner.play.stream import Planner
+from planner.play.twohands import (
+    UNBOUNDED_M,
+    PairPlanner,
+    clear_bounds,
+    left_bounds,
+    plan_two_hands,
+    windows,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -48,8 +56,20 @@ def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     qL, qR = plan.rows.q
     gap = qR[:, pair.hands[RIGHT].index["rail"]] - qL[:, pair.hands[LEFT].index["rail"]]
     assert gap.min() == pytest.approx(plan.least_rail_gap_m)
-    assert plan.least_rail_gap_m >= pair.gap.rail_gap_m - 1e-9
+    # (row by row the hand planned second keeps its farthest reach and the clearance from
+    # the first one's bodies as they are in that row)
+    first = plan.first
+    second = LEFT if first == RIGHT else RIGHT
+    q_first = plan.rows.q[0 if first == LEFT else 1]
+    need = (pair.edges[first].inner_m(q_first) + pair.reach(second).inner_extent_m
+            + pair.gap.clearance_m)
+    assert (gap >= need - 1e-9).all()
+    assert plan.least_rail_gap_m < pair.gap.rail_gap_m  # (nearer than the worst reach)
     assert gap.min() < pair.gap.rail_gap_m + 0.05  # (the hands did meet)
+    # (the hands contest keys: both orders and the right hand alone planned, the way
+    # playing the most frames kept)
+    assert [w for w, _ in plan.tried] == ["right first", "left first", "right alone"]
+    assert max(fr for _, fr in plan.tried) == dict(plan.tried)[f"{first} first"]
     rep = check_trajectory(str(out), song)
     assert rep.gap.collision_rows == 0 and rep.gap.least_m >= 0.010
     assert rep.ok, rep.problems
@@ -87,6 +107,37 @@ def test_left_bound_is_the_right_rail_less_the_gap_over_the_window(pair) -> None
     assert b[1][1] == pytest.approx(0.10 - pair.gap.rail_gap_m)
 
 
+def test_clear_bounds_keep_the_reach_from_the_first_hands_edge() -> None:
+    notes = [Note(48, 1.0, 1.2, 80), Note(72, 1.0, 1.2, 80)]
+    t = np.arange(0, 300) / 100.0
+    edge = np.where(t < 1.5, 0.20, 0.25)  # (the first hand's inner edge, row by row)
+    (lo, hi), = clear_bounds(notes, LEFT, (0,), t, edge, 0.1, 0.01)
+    assert lo == -UNBOUNDED_M and hi == pytest.approx(0.10)  # (its least, less the reach)
+    (lo, hi), = clear_bounds(notes, RIGHT, (1,), t, edge, 0.1, 0.01)
+    assert hi == UNBOUNDED_M and lo == pytest.approx(0.35)  # (its most, plus the reach)
+
+
+def test_inner_edge_never_exceeds_the_pairs_farthest_reach(pair) -> None:
+    for side in (LEFT, RIGHT):
+        pl = pair.planners[side]
+        q = np.array([pl.rest_q, pl.places.idle.tuck(pl.atlas.base)])
+        got = pair.edges[side].inner_m(q)
+        assert got.shape == (2,) and (got <= pair.reach(side).inner_extent_m + 1e-9).all()
+        assert (got > 0.0).all()
+
+
+def test_narrow_tucks_the_idle_fingers_nearer_the_rail(pair) -> None:
+    # (one hand's idle pose, the nearest its natural one, against the pair's narrowed one:
+    # the narrowed reaches less far towards the other hand)
+    one = Planner(load_hand("default"))
+    right = pair.planners[RIGHT]
+    assert one.places.idle.fingers == right.places.idle.fingers != ()
+    base = one.atlas.base
+    q = np.array([one.places.idle.tuck(base), right.places.idle.tuck(base)])
+    wide, narrow = pair.edges[RIGHT].inner_m(q)
+    assert narrow < wide - 0.02
+
+
 def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     r = subprocess.run([sys.executable, str(ROOT / "cli.py"), *args], cwd=cwd,
                        capture_output=True, text=True, timeout=900, check=False)
@@ -117,7 +168,7 @@ def test_cli_one_part_file_split_by_pitch(tmp_path) -> None:
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert d["hint"] == "split" and [h["notes"] for h in d["hands"]] == [8, 8]
-    assert d["least_rail_gap_m"] >= d["rail_gap_m"] - 1e-9
+    assert d["least_rail_gap_m"] > 0.0 and d["first_hand"] in ("left", "right")
     rep = check_trajectory(str(tmp_path / "one.csv"), load_song(tmp_path / "one.mid",
                                                                 every_part=True))
     assert rep.ok and rep.play.f1 > 0.9, rep.problems

@@ -28,17 +28,18 @@ def run(a: argparse.Namespace) -> int:
                               replay=bool(a.report or a.html))
     from planner.check.pairreport import PairReport
 
-    if (a.report or a.html) and isinstance(report, PairReport):
-        from planner.errors import InputError
-
-        raise InputError(f"{a.trajectory}: --report and --html draw a one-hand plan; this "
-                         "file has two hands (no pictures of two yet)")
+    pair = isinstance(report, PairReport)
     if a.played:
         from planner.music.midi import Note, write_notes_midi
 
         eps = report.play.played if report.play is not None else ()
         write_notes_midi([Note(e.pitch, e.start_s, e.end_s, 64) for e in eps], a.played)
-    if a.report or a.html:
+    if (a.report or a.html) and pair:  # (each hand's pictures: planner.report.pair)
+        from planner.report.pair import draw_pair_reports
+
+        draw_pair_reports(a.trajectory, a.song, song_options(a), a.report, a.html,
+                          enabled=not a.json)
+    elif a.report or a.html:
         draw_checked(report, a.report, a.html, enabled=not a.json)
     print(json.dumps(report.to_dict()) if a.json else report.summary())
     return 0 if report.ok else 1

@@ -23,9 +23,6 @@ def run_two(a: argparse.Namespace, names: tuple[str, str]) -> int:
     if a.track is not None or a.channel is not None:
         raise InputError("two hands play every part of the file: --track and --channel are "
                          "for one hand")
-    if a.report or a.html:
-        raise InputError("--report and --html draw one hand's plan; check a two-hand file "
-                         "with check")
     song = load_song(a.song, transpose=a.transpose, every_part=True)
     left, right = (load_hand(n) for n in names)
     name = os.path.basename(a.song)
@@ -38,6 +35,15 @@ def run_two(a: argparse.Namespace, names: tuple[str, str]) -> int:
         sys.stdout.write(json.dumps(two_plan_dict(name, song.notes, plan, out, setup_s)) + "\n")
     else:
         sys.stderr.write(format_two_summary(name, song.notes, plan, out, setup_s) + "\n")
+    if a.report or a.html:  # (each hand's pictures: ``planner.report.pair``)
+        from planner.report.pair import draw_pair_reports, side_path
+
+        draw_pair_reports(out, a.song, {"transpose": a.transpose}, a.report, a.html,
+                          enabled=not a.json)
+        if not a.json:
+            sys.stderr.write(("" if not a.report else f"report -> {a.report} (left, right)\n")
+                             + ("" if not a.html else "html -> " + ", ".join(
+                                 side_path(a.html, s) for s in ("left", "right")) + "\n"))
     verdicts = [p.verdict for p in plan.plans]
     if any(v.rejected for v in verdicts):
         return 1

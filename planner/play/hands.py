@@ -57,6 +57,7 @@ class MoveReason(enum.Enum):
     SPAN = "span"  # its hand's notes sounding with it would not fit the hand's span
     CROSSING = "crossing"  # its hand would come within the clearance of the other
     TIME = "time"  # its hand cannot move there in time; the other loses fewer frames
+    ONE_HAND = "one_hand"  # one hand playing every note played more frames than two
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,16 @@ class HandAssignment:
     def notes_of(self, side: str) -> tuple[int, ...]:
         """The indices of the notes ``side`` plays, in the song's order."""
         return tuple(i for i, h in enumerate(self.hand) if h == side)
+
+    def one_hand(self, side: str = RIGHT) -> HandAssignment:
+        """Every note ``side``'s (the other hand rests): a note its part gives the other
+        hand is moved (``MoveReason.ONE_HAND``)."""
+        return HandAssignment(
+            tuple(side for _ in self.hand), self.hint,
+            tuple(Moved(i, MoveReason.ONE_HAND, (0.0, 0.0), f"the {side} hand plays every "
+                        "note: one hand played more frames of music than two")
+                  for i, h in enumerate(self.hint) if h != side),
+            self.source, self.split_pitch)
 
 
 def hint_hands(notes) -> tuple[tuple[str, ...], HintSource, int | None]:

@@ -101,27 +101,25 @@ class IdleFingers:
             return
         h, fb = self.hand, self.atlas.bodies
         sign = -1.0 if h.side == "right" else 1.0  # (the inner side: the thumb's)
-        for f in self.fingers:
+        for f in self.fingers:  # (every grid pose's reach at once, then the body rule
+            # tested from the least reach up: the first pose it admits is the one)
             js = h.joint_slice(f)
             natural = self.atlas.base[js]
-            best = None
-            for c in itertools.product(*(np.linspace(h.plan_lower[j], h.plan_upper[j],
-                                                     IDLE_STEPS) for j in js)):
-                c = np.array(c)
-                if not self._enters_no_key(f, c):
-                    continue
-                Q = []
+            cands = [np.array(c) for c in itertools.product(
+                *(np.linspace(h.plan_lower[j], h.plan_upper[j], IDLE_STEPS) for j in js))]
+            Q = []
+            for c in cands:
                 for a in self.atlases:
                     q = a.base.copy()
                     q[self.rail], q[js] = 0.0, c
                     Q.append(q)
-                P = fb.points_many(h.apply_couplings(np.array(Q)), f)
-                reach = float((sign * P[..., 0] + fb.radii(f)).max())
-                key = (round(reach, 9), float(np.abs(c - natural).sum()), tuple(c))
-                if best is None or key < best[0]:
-                    best = (key, c)
-            if best is not None:
-                self._poses[f] = best[1]
+            P = fb.points_many(h.apply_couplings(np.array(Q)), f)
+            reach = (sign * P[..., 0] + fb.radii(f)).reshape(len(cands), -1).max(axis=1)
+            for *_, i in sorted((round(float(reach[i]), 9), float(np.abs(c - natural).sum()),
+                                 tuple(c), i) for i, c in enumerate(cands)):
+                if self._enters_no_key(f, cands[i]):
+                    self._poses[f] = cands[i]
+                    break
 
     def _enters_no_key(self, finger: str, joints: np.ndarray) -> bool:
         """Whether ``finger``'s body with its joints at ``joints``, the rest of the hand

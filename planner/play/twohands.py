@@ -2,13 +2,16 @@
 right hand, both planned so that they never come within their clearance, one file.
 
 **The stages.** ``planner.play.hands`` gives each note a hand (the file's parts a
-strong hint, weighed in frames of music). The right hand is planned first by the
-one-hand planner (``plan_song``), each of its notes pressed only from rail positions that
-leave the left hand room for its own notes sounding then (a lower bound); then the left
-hand, each of its notes pressed only from rail positions at least the rail gap
-(``planner.play.handgap``) left of where the right hand's rail *is* at every row over the
-note's window (an upper bound read from the right hand's rows). A note whose every place
-breaks its bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand.
+strong hint, weighed in frames of music). One hand is planned first by the one-hand
+planner (``plan_song``), each of its notes pressed only from rail positions that leave
+the other hand room for its own notes sounding then (``room_bounds``); then the other
+hand, each of its notes pressed only from rail positions that keep its bodies, at their
+farthest reach (``planner.play.handgap``), the clearance from the first hand's bodies as
+they *are* at every row over the note's window (``clear_bounds``: the first hand's
+inner edge, ``InnerEdge``, read from its rows). A note whose every place breaks its
+bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand. Which
+hand goes first, or whether one hand plays alone, is decided by the frames of music each
+way plays (``plan_two_hands``).
 
 **Why the rails stay apart between the notes too.** A note's window runs from its hand's
 previous onset to its hand's next onset (and half of the next notes' length, the latest a
@@ -42,8 +45,8 @@ from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.music.midi import Song
-from planner.play.costs import CostMemo, Costs
-from planner.play.handgap import HandGap, hand_gap
+from planner.play.costs import CostMemo, Costs, SkipReason
+from planner.play.handgap import HandGap, HandReach, InnerEdge, hand_gap
 from planner.play.hands import LEFT, RIGHT, SIDES, HandAssignment, assign_hands
 from planner.play.motion import DROP_FRACTION
 from planner.play.places import Places
@@ -70,6 +73,11 @@ class PairPlanner:
         for pl in self.planners.values():  # (the idle fingers tucked in: the hands nearer)
             pl.places.idle.narrow()
         self.gap: HandGap = hand_gap(self.planners[LEFT].places, self.planners[RIGHT].places)
+        self.edges = {s: InnerEdge(h) for s, h in self.hands.items()}
+
+    def reach(self, side: str) -> HandReach:
+        """``side``'s ``HandReach`` (of the pair's ``HandGap``)."""
+        return self.gap.left if side == LEFT else self.gap.right
 
 
 @dataclass(frozen=True)
@@ -96,6 +104,9 @@ class TwoHandPlan:
     planning_s: float
     least_rail_gap_m: float  # the rails' least distance apart over the rows
     text: str | None = None  # the file, planned in memory (no path)
+    first: str = RIGHT  # the hand planned first
+    # (every way planned, ``PairPass.way``, and the frames of music it played)
+    tried: tuple[tuple[str, float], ...] = ()
 
     def left_out(self) -> list[tuple[int, object]]:
         """Every note not played, as (song index, ``Skip`` of its hand's plan), by note."""
@@ -133,35 +144,64 @@ def windows(notes, idx: tuple[int, ...], out_of: frozenset[int] = frozenset()
     return out
 
 
+def room_bounds(notes, side: str, own: tuple[int, ...], other: tuple[int, ...], gap: HandGap,
+                out_of: frozenset[int] = frozenset()) -> list[tuple[float, float]]:
+    """The bounds of the hand planned first (``side``): per note of ``own``, its rail no
+    nearer the other hand than leaves that hand room for its notes (``other``) sounding
+    in the note's window, their keys at the other hand's farthest reach towards it, plus
+    the rail gap (the right hand above, the left below)."""
+    reach = gap.left if side == RIGHT else gap.right
+    xs = [(notes[i].onset_s, notes[i].offset_s, kb.key(notes[i].pitch).center_x_m)
+          for i in other]
+    out = []
+    for t0, t1 in windows(notes, own, out_of):
+        need = [x for a, b, x in xs if a < t1 and b > t0]
+        if side == RIGHT:
+            lo = (max(need) - reach.key_hi_m + gap.rail_gap_m) if need else -UNBOUNDED_M
+            out.append((lo, UNBOUNDED_M))
+        else:
+            hi = (min(need) - reach.key_lo_m - gap.rail_gap_m) if need else UNBOUNDED_M
+            out.append((-UNBOUNDED_M, hi))
+    return out
+
+
 def right_bounds(notes, left: tuple[int, ...], right: tuple[int, ...], gap: HandGap,
                  out_of: frozenset[int] = frozenset()) -> list[tuple[float, float]]:
-    """The right hand's rail bounds: above the rail the left hand needs for its notes
-    sounding in each right note's window (their keys at its farthest reach), plus the
-    rail gap."""
-    lx = [(notes[i].onset_s, notes[i].offset_s, kb.key(notes[i].pitch).center_x_m)
-          for i in left]
+    """``room_bounds`` of the right hand planned first."""
+    return room_bounds(notes, RIGHT, right, left, gap, out_of)
+
+
+def clear_bounds(notes, side: str, own: tuple[int, ...], edge_t_s: np.ndarray,
+                 edge_m: np.ndarray, reach_m: float, dt_s: float,
+                 out_of: frozenset[int] = frozenset()) -> list[tuple[float, float]]:
+    """The bounds of the hand planned second (``side``): per note of ``own``, its rail
+    ``reach_m`` (its own bodies' farthest reach towards the other hand, plus the
+    clearance) from the other hand's inner edge (``edge_m`` at song times ``edge_t_s``:
+    per row of the other hand, its rail less (a right hand) or plus (a left one) its
+    bodies' reach towards this hand in that row's pose, ``InnerEdge``) at every row of
+    the note's window (one row more each side: the rows' clock samples the other hand's
+    moves); the left hand below, the right above."""
     out = []
-    for t0, t1 in windows(notes, right, out_of):
-        need = [x for a, b, x in lx if a < t1 and b > t0]
-        lo = (max(need) - gap.left.key_hi_m + gap.rail_gap_m) if need else -UNBOUNDED_M
-        out.append((lo, UNBOUNDED_M))
+    for t0, t1 in windows(notes, own, out_of):
+        a = 0 if t0 == -math.inf else int(np.searchsorted(edge_t_s, t0 - dt_s, side="left"))
+        b = (len(edge_t_s) if t1 == math.inf
+             else int(np.searchsorted(edge_t_s, t1 + dt_s, side="right")))
+        seg = edge_m[max(0, a - 1):b + 1]
+        if side == LEFT:
+            out.append((-UNBOUNDED_M, float(seg.min()) - reach_m))
+        else:
+            out.append((float(seg.max()) + reach_m, UNBOUNDED_M))
     return out
 
 
 def left_bounds(notes, left: tuple[int, ...], rail_t_s: np.ndarray, rail_m: np.ndarray,
                 gap: HandGap, dt_s: float, out_of: frozenset[int] = frozenset()
                 ) -> list[tuple[float, float]]:
-    """The left hand's rail bounds: below the right hand's rail (``rail_m`` at song times
-    ``rail_t_s``, its rows) less the rail gap, at every row of each left note's window
-    (one row more each side: the rows' clock samples the right hand's moves)."""
-    out = []
-    for t0, t1 in windows(notes, left, out_of):
-        a = 0 if t0 == -math.inf else int(np.searchsorted(rail_t_s, t0 - dt_s, side="left"))
-        b = (len(rail_t_s) if t1 == math.inf
-             else int(np.searchsorted(rail_t_s, t1 + dt_s, side="right")))
-        seg = rail_m[max(0, a - 1):b + 1]
-        out.append((-UNBOUNDED_M, float(seg.min()) - gap.rail_gap_m))
-    return out
+    """``clear_bounds`` of the left hand planned after the right one, the right hand's
+    bodies taken at their farthest reach whatever its pose: below its rail (``rail_m``)
+    less the rail gap."""
+    return clear_bounds(notes, LEFT, left, rail_t_s, rail_m - gap.right.inner_extent_m,
+                        gap.left.inner_extent_m + gap.clearance_m, dt_s, out_of)
 
 
 def settled_bounds(notes, places: Places, memo: CostMemo, rate_hz: float,
@@ -185,41 +225,101 @@ def _sub_song(song: Song, idx: tuple[int, ...]) -> Song:
     return replace(song, notes=tuple(song.notes[i] for i in idx), part=None)
 
 
+def _other(side: str) -> str:
+    return RIGHT if side == LEFT else LEFT
+
+
+@dataclass(frozen=True)
+class PairPass:
+    """One way of planning the pair: an assignment, the hand planned first (``first``),
+    each hand's plan (left, right), each hand's notes as song indices, and the frames of
+    music the two plans play (``played_frames``: the played notes' lengths at the rate,
+    the currency the weighing and the frame F1 count in)."""
+
+    assignment: HandAssignment
+    first: str
+    plans: tuple[PlayPlan, PlayPlan]
+    notes_of: tuple[tuple[int, ...], tuple[int, ...]]
+    played_frames: float
+
+    @property
+    def way(self) -> str:
+        """How it was planned: ``right first``, ``left first``, or ``right alone`` (the
+        other hand with no notes)."""
+        alone = [s for s, idx in zip(SIDES, self.notes_of) if idx]
+        return f"{alone[0]} alone" if len(alone) == 1 else f"{self.first} first"
+
+    def skipped_for(self, reason: SkipReason) -> list[tuple[int, object]]:
+        """(song index, ``Skip``) of every note left out for ``reason``."""
+        return [(idx[s.note], s) for idx, p in zip(self.notes_of, self.plans)
+                for s in p.verdict.skipped if s.reason is reason]
+
+
+def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
+              song_name: str = "") -> PairPass:
+    """Plan both hands by ``a``: the hand ``first`` leaving the other room for its notes
+    (``room_bounds``), then the other within the first one's rows (``clear_bounds``,
+    settled: ``settled_bounds``)."""
+    notes = song.notes
+    idx = {s: a.notes_of(s) for s in SIDES}
+    subs = {s: _sub_song(song, idx[s]) for s in SIDES}
+    second = _other(first)
+    plans: dict[str, PlayPlan] = {}
+    # (the first hand's bound leaves the other room; it keeps no clearance itself, the
+    # second hand's bound does: its windows are its notes' own, none taken out)
+    bounds = room_bounds(notes, first, idx[first], idx[second], pp.gap)
+    plans[first] = plan_song(subs[first], pp.hands[first], None, rate_hz, song_name=song_name,
+                             planner=pp.planners[first], rail_bounds=bounds)
+    tr = plans[first].trajectory
+    edge_t_s = tr.t_s - plans[first].song_start_s
+    inner_m = pp.edges[first].inner_m(tr.q)
+    rail_m = tr.q[:, pp.hands[first].index["rail"]]
+    edge_m = rail_m - inner_m if first == RIGHT else rail_m + inner_m
+    reach_m = pp.reach(second).inner_extent_m + pp.gap.clearance_m
+    pl = pp.planners[second]
+    bounds = settled_bounds(
+        subs[second].notes, pl.places, pl.memo, rate_hz,
+        lambda out: clear_bounds(notes, second, idx[second], edge_t_s, edge_m, reach_m,
+                                 1.0 / rate_hz, out))
+    plans[second] = plan_song(subs[second], pp.hands[second], None, rate_hz,
+                              song_name=song_name, planner=pl, rail_bounds=bounds)
+    played = 0.0
+    for s in SIDES:
+        out = {k.note for k in plans[s].verdict.skipped}
+        played += sum(notes[i].duration_s for k, i in enumerate(idx[s]) if k not in out)
+    return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (idx[LEFT], idx[RIGHT]),
+                    played * rate_hz)
+
+
 def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
                    rate_hz: float = 100.0, song_name: str = "") -> TwoHandPlan:
     """Plan ``song`` (every part: ``load_song(..., every_part=True)``) on both hands (the
     module docstring) and write the two-hand file to ``out_path`` ('-': stdout; None:
-    in memory, ``TwoHandPlan.text``). The clock starts after the pair's set-up."""
+    in memory, ``TwoHandPlan.text``). The clock starts after the pair's set-up.
+
+    The right hand is planned first; when that leaves a note out for the other hand's
+    clearance (``SkipReason.OTHER_HAND``: the hands want the same keys), the left hand
+    first too (the hand planned first takes the keys both want); and the right hand
+    alone, every note its own, as one hand plays the file (where the parts lie within
+    one hand's reach, two hands only get in each other's way). The way playing the most frames of music is kept (the earlier of
+    equals). (A hand with no notes plans nothing the order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
     places = {s: pp.planners[s].places for s in SIDES}
     a = assign_hands(song.notes, pp.gap, places, rate_hz)
-    idx = {s: a.notes_of(s) for s in SIDES}
-    notes = song.notes
-    plans: dict[str, PlayPlan] = {}
-    subs = {s: _sub_song(song, idx[s]) for s in SIDES}
-
-    def settled(side: str, bounds_of) -> list[tuple[float, float]]:
-        pl = pp.planners[side]
-        return settled_bounds(subs[side].notes, pl.places, pl.memo, rate_hz, bounds_of)
-
-    # (the right hand's bound leaves the left room; it keeps no clearance itself, the left
-    # hand's bound does: its windows are its notes' own, none taken out)
-    bounds = right_bounds(notes, idx[LEFT], idx[RIGHT], pp.gap)
-    plans[RIGHT] = plan_song(subs[RIGHT], pp.hands[RIGHT], None, rate_hz, song_name=song_name,
-                             planner=pp.planners[RIGHT], rail_bounds=bounds)
-    tr = plans[RIGHT].trajectory
-    rail_t_s, rail_m = tr.t_s - plans[RIGHT].song_start_s, tr.q[:, pp.hands[RIGHT].index["rail"]]
-    bounds = settled(LEFT, lambda out: left_bounds(notes, idx[LEFT], rail_t_s, rail_m, pp.gap,
-                                                   1.0 / rate_hz, out))
-    plans[LEFT] = plan_song(subs[LEFT], pp.hands[LEFT], None, rate_hz, song_name=song_name,
-                            planner=pp.planners[LEFT], rail_bounds=bounds)
-    rows = _one_clock((plans[LEFT], plans[RIGHT]), rate_hz, tr)
+    tried = [plan_pass(song, pp, a, RIGHT, rate_hz, song_name)]
+    if all(a.notes_of(s) for s in SIDES):
+        if tried[0].skipped_for(SkipReason.OTHER_HAND):
+            tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
+        tried.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
+    best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
+    rows = _one_clock(best.plans, rate_hz)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
-    plan = TwoHandPlan(a, pp.gap, (plans[LEFT], plans[RIGHT]), (idx[LEFT], idx[RIGHT]), rows,
-                       0.0, least)
+    plan = TwoHandPlan(best.assignment, pp.gap, best.plans, best.notes_of, rows, 0.0, least,
+                       first=best.first,
+                       tried=tuple((p.way, p.played_frames) for p in tried))
     text = write_two_hands(plan, song, pp, out_path, rate_hz, song_name)
     return replace(plan, planning_s=time.perf_counter() - t_start, text=text)
 
@@ -232,7 +332,7 @@ def two_hand_metadata(song: Song, plan: TwoHandPlan, rate_hz: float, song_name: 
             "song": song_name or os.path.basename(song.source), "notes": len(song.notes),
             "track": None, "channel": None, "transpose": song.transpose, "every_part": True,
             "song_start_s": plan.rows.song_start_s, "rail_gap_m": plan.gap.rail_gap_m,
-            "hint": plan.assignment.source.value}
+            "hint": plan.assignment.source.value, "first_hand": plan.first}
 
 
 def end_claims(plan: TwoHandPlan, notes) -> tuple[dict, dict[str, list[int]]]:
@@ -271,9 +371,9 @@ def write_two_hands(plan: TwoHandPlan, song: Song, pp: PairPlanner, out_path: st
     return w.text
 
 
-def _one_clock(plans: tuple[PlayPlan, PlayPlan], rate_hz: float, right_tr) -> PairRows:
+def _one_clock(plans: tuple[PlayPlan, PlayPlan], rate_hz: float) -> PairRows:
     """Both plans' rows on one clock (module docstring)."""
-    trs = (plans[0].trajectory, right_tr)
+    trs = tuple(p.trajectory for p in plans)
     start = max(p.song_start_s for p in plans)
     lead = [round((start - p.song_start_s) * rate_hz) for p in plans]
     n = max(len(tr.t_s) + k for tr, k in zip(trs, lead))

@@ -45,8 +45,9 @@ def format_two_summary(song_name: str, notes, plan: TwoHandPlan, out: str,
         (f"planning {plan.planning_s * 1000:.0f} ms "
          + ("" if setup_s is None else f"(after the pair's set-up, {setup_s * 1000:.0f} ms) ")
          + f"for {song_s:.2f} s of music (real-time factor {rtf:.0f}x); "
-         f"rails kept {plan.gap.rail_gap_m * 1000:.0f} mm apart or more (least "
-         f"{plan.least_rail_gap_m * 1000:.0f} mm)"),
+         f"the {plan.first} hand planned first; the rails {plan.least_rail_gap_m * 1000:.0f} "
+         f"mm apart at least (the bodies' farthest reach, {plan.gap.rail_gap_m * 1000:.0f} "
+         "mm, kept where both may reach it)"),
         (f"hands ({plan.assignment.source.value}): "
          + "; ".join(f"{f['hand']} {f['notes']} notes, {f['played']} played, frame F1 "
                      f"{f['frame_f1']:.4f}" for f in hand_facts(plan))
@@ -79,6 +80,8 @@ def two_plan_dict(song_name: str, notes, plan: TwoHandPlan, out: str, setup_s: f
                   for m in plan.assignment.moved],
         "hint": plan.assignment.source.value,
         "rail_gap_m": plan.gap.rail_gap_m, "least_rail_gap_m": plan.least_rail_gap_m,
+        "first_hand": plan.first,
+        "tried": [{"way": w, "played_frames": fr} for w, fr in plan.tried],
         "rows": len(plan.rows.t_s), "trajectory": out, "song_s": song_s,
         "planning_s": plan.planning_s, "setup_s": setup_s,
         "realtime_factor": song_s / plan.planning_s if plan.planning_s > 0 else None,
