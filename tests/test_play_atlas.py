@@ -308,3 +308,28 @@ def test_a_finger_whose_pad_faces_up_presses_nothing():
     e = atlas.entry_at("index", 4, 0)
     q = atlas.full_q(e, "press", atlas.rail_for("index", 64, 0))
     assert _pad_centre_above_tip_m(atlas, q, "index") > 0.0
+
+
+def test_an_abducted_finger_presses_with_its_pad_body_centred_on_the_key(atlas):
+    """The index over C 19-27 mm off its natural place (the first posture): with its pad
+    point on the key's centre the pad sphere's centre lies 1.7-2.5 mm aside and its side
+    reaches the next key's column (the body rule refuses it); the press is solved again
+    with the sphere's centre over the press point: an entry, its body clear of every other
+    key, the sphere's centre within 1.5 mm of the key's centre (0.2-1.2 mm: the finger's
+    pose changes with the shift), the pad point 2.1-2.7 mm beside it. Where the pad point
+    on the centre was clear (10 mm off), it stays there."""
+    for k in (-27, -23, -19, 19, 23, 27):
+        e = atlas.entry_at("index", 0, k)
+        assert e is not None
+        pitch = atlas._solved_on("index", 0, k)
+        q = atlas.full_q(e, "press", atlas.rail_for("index", pitch, k))
+        p, _ = atlas.bodies.points(q, "index")
+        tip = atlas.hand.tip_positions(q)[atlas.hand.fingers.index("index")]
+        x = kb.key(pitch).center_x_m
+        assert abs(p[0, 0] - x) <= 0.0015 and abs(tip[0] - x) >= 0.002
+        assert atlas.bodies.clear(q, "index", pitch)
+    e = atlas.entry_at("index", 0, 10)
+    pitch = atlas._solved_on("index", 0, 10)
+    q = atlas.full_q(e, "press", atlas.rail_for("index", pitch, 10))
+    tip = atlas.hand.tip_positions(q)[atlas.hand.fingers.index("index")]
+    assert abs(tip[0] - kb.key(pitch).center_x_m) <= PRESS_TOL_M

@@ -146,6 +146,49 @@ def test_a_state_is_immutable_and_equal_by_value():
         a.place = 4
 
 
+def test_a_state_carries_the_notes_it_strikes_late(hand_parts):
+    """``State.late``: a note struck late is part of the state (two states that differ in
+    it are two), and the state's ``Prev`` times that note's key from when it went down:
+    a rider's press is done that much later, its key's window that much shorter."""
+    from planner.play.costs import State
+    from planner.play.fingering import FingeringProblem
+
+    notes = [Note(60, 0.0, 0.4, 80), Note(62, 0.4, 0.8, 80)]
+    fp = FingeringProblem(notes, hand_parts, 100.0)
+    place = min(fp.rails("index", 0))
+    on_time = State(place, ((0, "index"),))
+    late = State(place, ((0, "index"),), (), ((0, 0.03),))
+    assert on_time != late and len({on_time, late}) == 2
+    (_, _, _, w0, _, d0), = fp.prev(on_time, 0.1).follows
+    (_, _, _, w1, _, d1), = fp.prev(late, 0.1).follows
+    assert d0 == pytest.approx(fp.t_down(0)) and d1 == pytest.approx(fp.t_down(0) + 0.03)
+    assert w1 == pytest.approx(w0 - 0.03)
+
+
+def test_the_lateness_a_state_carries_is_what_its_step_priced(hand_parts):
+    """A quick stepwise run (7.5 notes per second, up and down an octave and a half: the
+    hand moves at nearly every note): every state the programme keeps carries as late
+    only notes it strikes at its event, and no more late than its step's loss."""
+    from planner.play.costs import ONSET_TOL_S
+    from planner.play.fingering import FingeringProblem
+
+    line = [60, 62, 64, 65, 67, 69, 71, 72, 74, 76, 77, 79, 77, 76, 74, 72, 71, 69, 67]
+    notes = [Note(p, 0.134 * k, 0.134 * (k + 1), 80) for k, p in enumerate(line)]
+    fp = FingeringProblem(notes, hand_parts, 100.0)
+    prev, seen_late = {}, 0
+    for t, new in events(notes):
+        layer = fp._layer(prev, t, new)
+        for s, (cost, before) in layer.items():
+            assert {n for n, _ in s.late} <= set(new)
+            assert all(late_s > 0 for _, late_s in s.late)
+            if before is not None:
+                step = cost - prev[before][0]
+                assert sum(late_s for _, late_s in s.late) / fp.dt <= step + ONSET_TOL_S
+            seen_late += bool(s.late)
+        prev = layer
+    assert seen_late  # (the run is quick enough that some states strike late)
+
+
 def test_a_layer_holds_one_state_per_hand_shape_cheapest_first(hand_parts):
     """The programme's layers (what each event keeps): at most BEAM states, one of each
     hand shape (rail and fingers on the notes sounding), at most PER_RAIL at one rail,

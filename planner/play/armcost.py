@@ -16,6 +16,8 @@ from planner.play.follow import HOLD_PAST_S
 if TYPE_CHECKING:
     from planner.play.costs import Prev
 
+LATE_MIN_S = 1e-3  # a key down later than this is carried as late (``costs.State.late``):
+# far below a frame (10 ms at 100 Hz), above the float noise of the times it comes from
 TIE_RAIL_PER_M = 5.0  # frames per metre of rail moved: a tie-break, not a cost
 
 
@@ -23,7 +25,8 @@ class ArmCosts:
     """The arm's moves in ``planner.play.costs.Costs`` (its base: it reads the song's
     times, the memos and the finger timings that ``Costs`` keeps)."""
 
-    def _rail_loss(self, prev: Prev, new: dict[int, str], place: int, kept=()) -> float:
+    def _rail_loss(self, prev: Prev, new: dict[int, str], place: int, kept=(),
+                   lates: list | None = None) -> float:
         """Frames lost to a move of the rail to ``place`` after ``prev``: a finger of
         ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
         other lifts after its key comes up; then the rail moves (as slow as its slowest
@@ -31,7 +34,8 @@ class ArmCosts:
         latest of what it waits for: the rail, its own finger crossing from its last key
         (while the rail moves) or striking again after following it, another finger
         leaving its key. A ``kept`` note (sounding past the event) must follow, or the
-        move is not made (inf)."""
+        move is not made (inf). ``lates``: gets (note, seconds) of each note struck late
+        (``State.late``)."""
         key = (place, tuple(new.items()))
         got = prev.release.get(key)
         if got is None:
@@ -72,6 +76,8 @@ class ArmCosts:
                 if other is not None and other[1] != f:
                     late = max(late, self._leave_key_s(other, n, f, place))
             loss += max(0.0, late) / dt
+            if lates is not None and late > LATE_MIN_S:
+                lates.append((n, late))
         return loss
 
     def _release_of(self, ctx: Prev, place: int, new: dict[int, str]
@@ -86,7 +92,7 @@ class ArmCosts:
             return ctx.lift_end + T, _NONE
         strikers = set(new.values())
         cands = []  # (note, finger, the move's latest end, its time)
-        for m, f, a, window_s, press_s in ctx.follows:
+        for m, f, a, window_s, press_s, down_s in ctx.follows:
             # (an entry serves every key of its pitch class at its place: the key is the
             # entry and the rail's step, never the rail's index, which names another
             # entry for each of those keys)
@@ -104,7 +110,7 @@ class ArmCosts:
                     got[2] = self.places.lift(b, "high").cross_s
                 if got[1] and self._follow_path(m, f, ctx.state.place, place):  # (its press done: the descent's end, ``press_min_s`` less the
                     # lift to its key crossing)
-                    done = self._t_down[m] + press_s - self.places.lift(a, "high").cross_s
+                    done = down_s + press_s - self.places.lift(a, "high").cross_s
                     cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
         if not cands:  # (``_riders``' answer when none rides along: the last lift, the move)
             return ctx.lift_end + T, _NONE

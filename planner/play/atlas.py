@@ -51,6 +51,7 @@ from planner.play.atlassolve import (
     BODY_SAMPLES,
     CLEARANCE_M,
     HIGH_Z_M,
+    PAD_CENTRE_ITERATIONS,
     PATH_SAMPLES,
     PRESS_DEPTH_ITERATIONS,
     REPEAT_DEPTH_M,
@@ -310,6 +311,7 @@ class Atlas(EntrySolver):
                                                           p.press_depth_m)],
                 "body_rule": [OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, BODY_SAMPLES,
                               "footprint-grown", "press-body-to-bed-both-ways", "pad-faces-key",
+                              "pad-body-centred", PAD_CENTRE_ITERATIONS,
                               PRESS_DEPTH_ITERATIONS]}
 
     def _load(self, path: Path) -> None:

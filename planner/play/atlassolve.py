@@ -7,6 +7,7 @@ the largest key force the motors hold at the press.
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -27,6 +28,10 @@ from planner.music import keyboard as kb
 from planner.play.fingerbody import OWN_BED_MARGIN_M, FingerBodies
 
 STEP_M = 0.001  # the atlas samples dx this often
+PAD_CENTRE_TOL_M = 1e-4  # a press the body rule refuses is tried again with the pad
+# sphere's centre over the press point where it lies further aside than this (``_solve``),
+PAD_CENTRE_ITERATIONS = 3  # ... at most this often (the sphere moves with the pad point
+# but for the finger's change of pose: each try brings its centre nearer)
 HIGH_Z_M = kb.BLACK_TOP_Z_M + 0.0075  # a finger moving sideways keeps its tip this high
 PRESS_DEPTH_ITERATIONS = 3  # ``Atlas._press``: the pad's depth found again from the body's
 REPEAT_DEPTH_M = kb.DOWN_DEPTH_M - 0.002  # a repeated key rises to this depth (see above)
@@ -53,6 +58,15 @@ class AtlasEntry:
     posture: int = 0  # which of the hand's play postures (``Atlas.posture_index``)
 
 
+class _Verdict(enum.Enum):
+    """An entry's poses (``EntrySolver._verdict``): kept, refused by the body rule, or
+    none (no IK, the limits, the tip's path)."""
+
+    OK = "ok"
+    BODY = "body"
+    NONE = "none"
+
+
 class Press(NamedTuple):
     """A press pose's IK target and result (``Atlas._press``)."""
 
@@ -75,33 +89,65 @@ class EntrySolver:
             if not h.plan_lower[self.rail] <= rail <= h.plan_upper[self.rail]:
                 return None
             base[self.rail] = rail
-        poses = (self._arc_poses(finger, pitch, rail) if finger in self.arc_joint
+        arc = finger in self.arc_joint
+        poses = (self._arc_poses(finger, pitch, rail) if arc
                  else self._ik_poses(finger, pitch, base))
-        if poses is None:
+        verdict = self._verdict(finger, pitch, poses)
+        shift, tried = 0.0, poses
+        for _ in range(PAD_CENTRE_ITERATIONS):  # (the pad's body centred on the key)
+            if verdict is not _Verdict.BODY or arc or tried is None:
+                break
+            step = self._pad_off_centre_m(tried[0], finger)
+            if abs(step) <= PAD_CENTRE_TOL_M:
+                break
+            shift += step
+            tried = self._ik_poses(finger, pitch, base, shift)
+            if self._verdict(finger, pitch, tried) is _Verdict.OK:
+                poses, verdict = tried, _Verdict.OK
+        if verdict is _Verdict.BODY:
+            self._body_refused.add((finger, pitch_class, k))
+        if verdict is not _Verdict.OK:
             return None
         js = h.joint_slice(finger)
-        if not all(h.within_plan_limits(q) for q in poses):
-            return None
-        if self.bodies is not None and not self._pad_faces_key(poses[0], finger):
-            self._body_refused.add((finger, pitch_class, k))
-            return None
-        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
-                       (poses[1], poses[0])):
-            if not path_clear(h, qa, qb, finger, pitch):
-                return None
-        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
-                       (poses[1], poses[0])):
-            if self.bodies is not None and not bodies_clear(self.bodies, qa, qb, finger, pitch):
-                self._body_refused.add((finger, pitch_class, k))
-                return None
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
                           *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger),
                           self.posture_index)
 
-    def _ik_poses(self, finger: str, pitch: int, base: np.ndarray) -> list[np.ndarray] | None:
+    def _verdict(self, finger: str, pitch: int, poses: list[np.ndarray] | None) -> _Verdict:
+        """Whether ``poses`` (press, rise, hover, high) make an entry: within the planning
+        limits, the tip's moves between them clear of the other keys and, with the body
+        rule, the pad facing the key and the finger's bodies clear all along them."""
+        h = self.hand
+        if poses is None or not all(h.within_plan_limits(q) for q in poses):
+            return _Verdict.NONE
+        if self.bodies is not None and not self._pad_faces_key(poses[0], finger):
+            return _Verdict.BODY
+        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
+                       (poses[1], poses[0])):
+            if not path_clear(h, qa, qb, finger, pitch):
+                return _Verdict.NONE
+        for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
+                       (poses[1], poses[0])):
+            if self.bodies is not None and not bodies_clear(self.bodies, qa, qb, finger, pitch):
+                return _Verdict.BODY
+        return _Verdict.OK
+
+    def _pad_off_centre_m(self, q: np.ndarray, finger: str) -> float:
+        """How far (x, m) the press at ``q`` has its pad point beside the pad sphere's
+        centre: an abducted finger's pad sphere lies to one side of its pad point, so a pad
+        point on the key's centre puts the sphere's side into the next key (the index
+        finger 17-27 mm off its natural place: the sphere's centre 1.7-2.5 mm aside, its
+        8.6 mm radius reaching the neighbour's column; 0.5-1 mm further over clears it)."""
+        p, _ = self.bodies.points(q, finger)  # (shape 0: the pad sphere, its centre)
+        tip = self.hand.tip_positions(q)[self.hand.fingers.index(finger)]
+        return float(tip[0] - p[0, 0])
+
+    def _ik_poses(self, finger: str, pitch: int, base: np.ndarray,
+                  shift_m: float = 0.0) -> list[np.ndarray] | None:
         """Press, rise, hover and high by single-finger IK: the tip on the key's press
-        point, then straight above it at each height."""
-        r = self._press(finger, pitch, base)
+        point (``shift_m`` along x from it, ``_press``), then straight above it at each
+        height."""
+        r = self._press(finger, pitch, base, shift_m)
         if r is None:
             return None
         target = r.target
@@ -122,7 +168,8 @@ class EntrySolver:
             poses.append(up.q)
         return poses
 
-    def _press(self, finger: str, pitch: int, base: np.ndarray) -> Press | None:
+    def _press(self, finger: str, pitch: int, base: np.ndarray,
+               shift_m: float = 0.0) -> Press | None:
         """The press pose by single-finger IK: the pad point ``press_depth_m`` below the
         key's top; with the body rule, deeper where the finger's lowest body point would
         stop short of the key bed (a pad that is its finger's lowest point, on a black
@@ -132,11 +179,22 @@ class EntrySolver:
         where the press depth would put the lowest body past the bed by more than the
         bed's margin (``OWN_BED_MARGIN_M``, check's rule: a pad sphere of 5 mm below its
         pad point at the press depth of 6 mm reaches 11.1 mm, past the 11 mm allowed),
-        until it is at the bed: the key is fully down either way (the bed stops it)."""
+        until it is at the bed: the key is fully down either way (the bed stops it).
+        ``shift_m``: the pad point that far along x from the press point (the pad's body
+        centred on it, ``_solve``), kept inside the part of the key the finger presses
+        (``press_x_range``, inset by the pad's radius); None outside it."""
         front = finger in self.front
         depth = self.press_depth_m
+        if shift_m:
+            x_lo, x_hi = press_x_range(finger, pitch, TIP_RADIUS_M, front)
+            x = press_target(finger, pitch, depth, front).point_m[0] + shift_m
+            if not x_lo <= x <= x_hi:
+                return None
         for _ in range(PRESS_DEPTH_ITERATIONS):
             target = press_target(finger, pitch, depth, front)
+            if shift_m:
+                x, y, z = target.point_m
+                target = PressTarget(finger, pitch, (x + shift_m, y, z), target.y_range_m)
             self.solves += 1
             r = self.ik.solve_finger(target, base)
             if not r.converged:

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 from planner.music import keyboard as kb
 from planner.music.keyboard import pitch_name
-from planner.play.armcost import ArmCosts
+from planner.play.armcost import LATE_MIN_S, ArmCosts
 from planner.play.force import press_force_n
 from planner.play.places import RAIL_STEP_M, Places
 
@@ -68,19 +68,23 @@ class State:
     """A state of the programme: the hand's place (``planner.play.places``), the notes
     sounding with their fingers (``fingers``: (note, finger), by note) and ``recent``:
     (note, finger, rail index it was at), the last notes of fingers not sounding, ended
-    within RECENT_S. Immutable (its slots are set once; it is hashed many times, its
-    hash kept). ``notes`` are the notes sounding; ``last_notes`` every finger's note that
+    within RECENT_S; ``late``: (note, seconds) of the notes it struck late (their keys
+    down that much after their time: a rider's press is done that much later, its key's
+    window that much shorter, ``Prev.follows``). Immutable (its slots are set once; it is
+    hashed many times, its hash kept). ``notes`` are the notes sounding; ``last_notes`` every finger's note that
     still matters to its next move, sounding or recent, with the rail index it is (or
     was last) pressed from."""
 
-    __slots__ = ("_hash", "fingers", "last_notes", "notes", "place", "recent")
+    __slots__ = ("_hash", "fingers", "last_notes", "late", "notes", "place", "recent")
 
     def __init__(self, place: int, fingers: tuple[tuple[int, str], ...],
-                 recent: tuple[tuple[int, str, int], ...] = ()) -> None:
+                 recent: tuple[tuple[int, str, int], ...] = (),
+                 late: tuple[tuple[int, float], ...] = ()) -> None:
         object.__setattr__(self, "place", place)
         object.__setattr__(self, "fingers", fingers)
         object.__setattr__(self, "recent", recent)
-        object.__setattr__(self, "_hash", hash((place, fingers, recent)))
+        object.__setattr__(self, "late", late)
+        object.__setattr__(self, "_hash", hash((place, fingers, recent, late)))
 
     def __setattr__(self, name, value):
         raise AttributeError("State is immutable")
@@ -98,13 +102,14 @@ class State:
     def __eq__(self, other) -> bool:
         return (self is other or isinstance(other, State) and self._hash == other._hash
                 and self.place == other.place and self.fingers == other.fingers
-                and self.recent == other.recent)
+                and self.recent == other.recent and self.late == other.late)
 
     def __hash__(self) -> int:
         return self._hash
 
     def __repr__(self) -> str:
-        return f"State(place={self.place}, fingers={self.fingers}, recent={self.recent})"
+        return (f"State(place={self.place}, fingers={self.fingers}, recent={self.recent}, "
+                f"late={self.late})")
 
 
 class Prev:
@@ -129,13 +134,18 @@ class Prev:
                               + min(t_up[m], cut_up), m, f)
                              for m, f, r in state.last_notes), key=lambda x: -x[0])
         self.lift_end = self.lifts[0][0] if self.lifts else -math.inf  # (the latest)
-        # (the notes sounding that might ride along: their entry, frames and press)
+        # (the notes sounding that might ride along: their entry, the time their key is
+        # down (from when it went down: a note struck late, ``State.late``, has less),
+        # their press and when their key went down)
+        late = dict(state.late)
         self.follows = [] if costs.places.rail is None else [
-            (m, f, a, t_up[m] - t_down[m], costs.places.press_min_s(a))
-            for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None]
+            (m, f, a, t_up[m] - down, costs.places.press_min_s(a), down)
+            for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None
+            for down in (t_down[m] + late.get(m, 0.0),)]
         self.release: dict[tuple, tuple[float, frozenset]] = {}  # by place and new notes
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
-        self.steps: dict[tuple, float] = {}  # a transition's loss, by (notes, rail, kept)
+        self.steps: dict[tuple, tuple] = {}  # a transition's loss and its late notes, by
+        # (notes, rail, kept)
         self.recent: dict[frozenset, tuple] = {}  # ``State.recent`` after, by fingers sounding
 
 
@@ -369,10 +379,12 @@ class Costs(ArmCosts):
             got = at[state] = Prev(self, state, t)
         return got
 
-    def _same_rail_loss(self, prev: Prev, new_notes: dict[int, str]) -> float:
+    def _same_rail_loss(self, prev: Prev, new_notes: dict[int, str],
+                        lates: list | None = None) -> float:
         """Frames lost by the new notes struck with the rail where it is: each key down
         as late as the latest of what it waits for (another finger leaving the key, its
-        own finger's move from its last key), a repeated key let up early."""
+        own finger's move from its last key), a repeated key let up early. ``lates``:
+        gets (note, seconds) of each note struck late (``State.late``)."""
         place, last, on_key = prev.state.place, prev.last, prev.on_key
         loss = 0.0
         for n, f in new_notes.items():
@@ -388,6 +400,8 @@ class Costs(ArmCosts):
                 loss += early / self.dt
                 late = max(late, again)
             loss += max(0.0, late) / self.dt
+            if lates is not None and late > LATE_MIN_S:
+                lates.append((n, late))
         return loss
 
     def _strike_again(self, m: int, r: int, n: int, f: str, place: int) -> tuple[float, float]:

@@ -194,17 +194,20 @@ class Layers(Costs):
                 if crossing:
                     continue
             key = (sounding_t, place, kept)
-            step = steps.get(key)
-            if step is None:
-                step = steps[key] = self._same_rail_loss(ctx, new) if place == here \
-                    else self._rail_loss(ctx, new, place, kept)
+            got = steps.get(key)
+            if got is None:  # (its loss, and the notes it strikes late: ``State.late``)
+                lates: list = []
+                step = self._same_rail_loss(ctx, new, lates) if place == here \
+                    else self._rail_loss(ctx, new, place, kept, lates)
+                got = steps[key] = (step, tuple(sorted(lates)))
+            step = got[0]
             total = cost + step + tie
             if step == math.inf or total > bound:  # (inf: no move gets there)
                 continue
             if old is None or total < old[0]:
                 if recent is None:
                     recent = self._recent(ctx, busy)
-                s = State(place, sounding_t, recent)
+                s = State(place, sounding_t, recent, got[1])
                 if old is not None and old[2] != s:
                     del layer[shape]  # (another state of the shape: it comes after)
                 layer[shape] = (total, p, s)
