@@ -25,6 +25,8 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.play.fingerbody import OWN_BED_MARGIN_M, FingerBodies
+from planner.play.force import descent_poses, press_capacity_n
+from planner.play.planar import planar_press_target
 
 STEP_M = 0.001  # the atlas samples dx this often
 HIGH_Z_M = kb.BLACK_TOP_Z_M + 0.0075  # a finger moving sideways keeps its tip this high
@@ -95,7 +97,8 @@ class EntrySolver:
                 self._body_refused.add((finger, pitch_class, k))
                 return None
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
-                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger),
+                          *(q[js].copy() for q in poses),
+                          press_capacity_n(h, descent_poses(h, poses[2], poses[0]), finger, pitch),
                           self.posture_index)
 
     def _ik_poses(self, finger: str, pitch: int, base: np.ndarray) -> list[np.ndarray] | None:
@@ -136,7 +139,10 @@ class EntrySolver:
         front = finger in self.front
         depth = self.press_depth_m
         for _ in range(PRESS_DEPTH_ITERATIONS):
-            target = press_target(finger, pitch, depth, front)
+            target = planar_press_target(self.hand, press_target(finger, pitch, depth, front),
+                                         base, TIP_RADIUS_M, front)
+            if target is None:
+                return None
             self.solves += 1
             r = self.ik.solve_finger(target, base)
             if not r.converged:
