@@ -17,9 +17,12 @@ friction ``mu N`` against that slide (``PAD_FRICTION``, the replay's rubber pad)
 motors must hold ``N (z - mu s)`` (``s`` the slide's horizontal unit direction) with
 gravity, each within its capacity (``actuator_capacity``). A press counts only if at every
 sampled depth down to the key-down depth that ``N`` is at least the spring's force; its
-capacity is then the smallest ``N`` the motors hold along the descent (friction counted)
-and at the press pose (no slide: the pad rests). Where the descent fails, 0: no note is
-pressed there (its notes are left out for ``torque``).
+capacity is then the force the motors hold at the press pose (the key at its depth, the
+pad at rest: no friction), which the note's press force is compared with (a note's force
+is the one it is held down with; on the way down the key asks its spring's). Where the
+descent fails, 0: no note is pressed there (its notes are left out for ``torque``). (On the
+default hand the descent with friction holds 1.8-1.9 N where its spring asks 0.94 N at
+most: no press of its atlas fails it.)
 
 Measured on the Mk5's pinky (docs/history/2026-12-06-three-hands.md): the press pose
 alone holds 1.79 N, the descent with the pad's friction 0.39 N against the key's 0.51 N at
@@ -57,13 +60,13 @@ def held_force_n(hand: HandModel, q: np.ndarray, finger: str,
     holds at ``q`` with gravity, the key pushing the pad with ``N (-mu s_x, -mu s_y, 1)``
     (``slide_xy``: the pad's sliding direction on the key, unit, or None at rest):
     tau(N) = tau(0) + N (tau(1) - tau(0)), each |tau_m| within its capacity."""
-    push = np.array([0.0, 0.0, 1.0])
-    if slide_xy is not None:
-        push[:2] = -friction * np.asarray(slide_xy, dtype=float)
-    grav = hand.gravity_torques(q)
-    J = hand.tip_jacobians(q)[hand.fingers.index(finger)]
-    tau0 = hand.motor_torques(q, grav)
-    tau1 = hand.motor_torques(q, grav - J.T @ push) - tau0
+    tau0 = hand.press_torques(q, {})
+    if slide_xy is None:  # (a vertical push: ``HandModel.press_torques``, to the bit)
+        tau1 = hand.press_torques(q, {finger: 1.0}) - tau0
+    else:
+        push = np.array([*(-friction * np.asarray(slide_xy, dtype=float)), 1.0])
+        J = hand.tip_jacobians(q)[hand.fingers.index(finger)]
+        tau1 = hand.motor_torques(q, hand.gravity_torques(q) - J.T @ push) - tau0
     peak = actuator_capacity(hand).torque_nm
     best = math.inf
     for t0, t1, p in zip(tau0, tau1, peak):
@@ -78,22 +81,21 @@ def held_force_n(hand: HandModel, q: np.ndarray, finger: str,
 
 def descent_poses(hand: HandModel, hover: np.ndarray, press: np.ndarray) -> list[np.ndarray]:
     """``DESCENT_SAMPLES`` poses on the straight joint-space move hover -> press (the
-    couplings applied: a one-DOF finger's are on its arc)."""
-    return [hand.apply_couplings(hover + s * (press - hover))
-            for s in np.linspace(0.0, 1.0, DESCENT_SAMPLES)]
+    couplings applied: a one-DOF finger's are on its arc), the last ``press`` itself."""
+    return [*(hand.apply_couplings(hover + s * (press - hover))
+              for s in np.linspace(0.0, 1.0, DESCENT_SAMPLES)[:-1]), press]
 
 
 def press_capacity_n(hand: HandModel, poses: Sequence[np.ndarray], finger: str,
                      pitch: int) -> float:
     """The press force (N) ``finger`` can give on key ``pitch`` along ``poses`` (hover
     to press, ``descent_poses``): 0 where at some depth to the key-down depth the motors
-    cannot hold the key's spring with the pad's friction; else the smallest force they
-    hold on the key along the descent and at the press (see the module docstring)."""
+    cannot hold the key's spring with the pad's friction; else the force they hold on
+    the key at the press pose (see the module docstring)."""
     f = hand.fingers.index(finger)
     top = kb.key(pitch).top_z_m
     key = key_body(pitch)
     tips = np.array([hand.tip_positions(q)[f] for q in poses])
-    best = held_force_n(hand, poses[-1], finger)
     for i in range(len(poses) - 1):
         depth = top - tips[i + 1, 2]
         if depth <= 0.0:
@@ -105,5 +107,4 @@ def press_capacity_n(hand: HandModel, poses: Sequence[np.ndarray], finger: str,
         held = held_force_n(hand, poses[i + 1], finger, slide, PAD_FRICTION)
         if held < front_force_n(key, min(depth, kb.DOWN_DEPTH_M)):
             return 0.0
-        best = min(best, held)
-    return best
+    return held_force_n(hand, poses[-1], finger)
