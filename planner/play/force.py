@@ -44,7 +44,9 @@ from planner.simulate.keyboard import front_force_n, key_body
 
 MIN_FORCE_N = 0.5
 MAX_FORCE_N = 3.0
-DESCENT_SAMPLES = 12  # poses along the move hover -> press (both ends included)
+DESCENT_SAMPLES = 12  # poses along the move hover -> press (both ends), as the atlas's path
+# test (``PATH_SAMPLES``): from 5.5 mm above the key to 6 mm into it, about 1 mm apart, the
+# first below the key's top within about 1 mm of it
 SLIDE_MIN_M = 1e-7  # a pad moving less than this along the key between samples rests
 
 
