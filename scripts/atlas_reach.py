@@ -12,8 +12,9 @@ reach 0: these hands have no reach axis) and the press depth, and counts, per fi
 atlas samples (``dx`` every ``--kstep`` mm over the atlas's span) whose entry it keeps:
 every pose found within the limits, the tip's path and the finger's bodies clear of every
 other key and of the bed (``planner.play.fingerbody``, spec section 2). Each kept press is
-counted (if it holds ``--force``; ``weak``: the kept presses that do not) in its key
-class:
+counted (if it holds ``--force``; ``weak``: the kept presses that do not, among them every
+press whose motors cannot drive the key down its travel with the pad's friction,
+``planner.play.force.press_capacity_n``) in its key class:
 
 * ``Wf``: a white key pressed in front of the black keys (y < their front edge);
 * ``Wb``: a white key pressed between the black keys;

@@ -14,7 +14,8 @@ Per finger (thumb included):
   at ``FLEXED_RAD`` (45 deg, the issue's estimate), clipped to its range; abduction 0.
 * **Key press at the weakest posture**: the smallest of the atlas's ``max_force_n``
   over every press pose the finger has (``planner.play.atlas``: the poses ``play``
-  presses with, gravity at the keyboard mount included); beside it the motor torque
+  presses with, gravity at the keyboard mount included; 0 where the motors cannot drive
+  the key down its travel, ``DESCENT_PART``); beside it the motor torque
   a 1 N key press needs there, against the seed's 0.144 N m (line 82).
 * **Actuation time, open to closed**: each tendon-driven flexion joint from its lower
   to its upper limit, rest to rest at its speed and acceleration limits
@@ -48,6 +49,9 @@ ACTUATION_REQUIRED_S = (0.150, 0.300)  # seed 000 Table 1, line 40
 ACTUATION_TOL_S = 0.050  # seed 000 Table 1, line 40: the tolerance, +-50 ms
 PRESS_REQUIRED_NM = 0.144  # seed 000, line 82: motor torque to press a key
 PRESS_KEY_FORCE_N = 1.0  # seed 000, line 82: "about 1Nm of force to press a piano key"
+# a press pose whose motors cannot drive the key down its travel (planner.play.force:
+# its spring with the pad's friction) holds no note: its ``max_force_n`` is 0
+DESCENT_PART = "the descent: the key's spring with the pad's friction (planner.play.force)"
 KGF_N = 9.81  # one kilogram-force (the seed's g, line 177)
 
 
@@ -216,7 +220,8 @@ def press_strength(hand: HandModel) -> dict[str, tuple[float | None, str, float 
         load = np.abs(hand.press_torques(q, {f: F})) / cap.torque_nm
         m = int(np.argmax(load))
         need = np.abs(hand.press_torques(q, {f: PRESS_KEY_FORCE_N}))[_finger_motors(hand, f)]
-        out[f] = (float(F), cap.part(m), float(need.max()))
+        part = DESCENT_PART if F == 0.0 else cap.part(m)
+        out[f] = (float(F), part, float(need.max()))
     return out
 
 

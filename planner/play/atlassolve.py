@@ -26,6 +26,8 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.play.fingerbody import OWN_BED_MARGIN_M, FingerBodies
+from planner.play.force import descent_poses, press_capacity_n
+from planner.play.planar import planar_press_target
 
 STEP_M = 0.001  # the atlas samples dx this often
 PAD_CENTRE_TOL_M = 1e-4  # a press the body rule refuses is tried again with the pad
@@ -110,7 +112,8 @@ class EntrySolver:
             return None
         js = h.joint_slice(finger)
         return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
-                          *(q[js].copy() for q in poses), max_key_force_n(h, poses[0], finger),
+                          *(q[js].copy() for q in poses),
+                          press_capacity_n(h, descent_poses(h, poses[2], poses[0]), finger, pitch),
                           self.posture_index)
 
     def _verdict(self, finger: str, pitch: int, poses: list[np.ndarray] | None) -> _Verdict:
@@ -195,6 +198,9 @@ class EntrySolver:
             if shift_m:
                 x, y, z = target.point_m
                 target = PressTarget(finger, pitch, (x + shift_m, y, z), target.y_range_m)
+            target = planar_press_target(self.hand, target, base, TIP_RADIUS_M, front)
+            if target is None:
+                return None
             self.solves += 1
             r = self.ik.solve_finger(target, base)
             if not r.converged:
