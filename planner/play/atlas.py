@@ -64,6 +64,8 @@ from planner.play.atlassolve import (
     path_clear,
 )
 from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, FingerBodies
+from planner.play.force import DESCENT_SAMPLES
+from planner.simulate.hand_mjcf import PAD_FRICTION
 
 __all__ = ["BODY_SAMPLES", "CLEARANCE_M", "HIGH_Z_M", "PATH_SAMPLES", "REPEAT_DEPTH_M",
            "SPAN_M", "STEP_M", "TIP_RADIUS_M", "Atlas", "AtlasEntry", "bodies_clear",
@@ -297,6 +299,8 @@ class Atlas(EntrySolver):
                                            actuator_capacity(self.hand).torque_nm],
                            "base": [round(float(x), 12) for x in self.base],
                            "stop_margin": [round(float(x), 12) for x in self.hand.stop_margin],
+                           "press_force": ["descent-with-friction", DESCENT_SAMPLES,
+                                           PAD_FRICTION, "x-locked-at-its-tip"],
                            **self._posture_params()},
                           sort_keys=True)
 

@@ -8,14 +8,12 @@ the largest key force the motors hold at the press.
 from __future__ import annotations
 
 import enum
-import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
 from planner.hand.model import HandModel
-from planner.hand.tendon import actuator_capacity
 from planner.ik import (
     PREPARE_HEIGHT_M,
     IKResult,
@@ -26,7 +24,7 @@ from planner.ik import (
 )
 from planner.music import keyboard as kb
 from planner.play.fingerbody import OWN_BED_MARGIN_M, FingerBodies
-from planner.play.force import descent_poses, press_capacity_n
+from planner.play.force import descent_poses, held_force_n, press_capacity_n
 from planner.play.planar import planar_press_target
 
 STEP_M = 0.001  # the atlas samples dx this often
@@ -292,17 +290,5 @@ def bodies_clear(bodies: FingerBodies, qa: np.ndarray, qb: np.ndarray, finger: s
 
 def max_key_force_n(hand: HandModel, q: np.ndarray, finger: str) -> float:
     """The largest upward key force (N) on ``finger``'s tip that every motor holds at
-    ``q`` with gravity: tau(f) = tau(0) + f (tau(1) - tau(0)), each |tau_m| <= its
-    capacity (``actuator_capacity``: peak torque, or tendon force x spool radius)."""
-    tau0 = hand.press_torques(q, {})
-    tau1 = hand.press_torques(q, {finger: 1.0}) - tau0
-    peak = actuator_capacity(hand).torque_nm
-    best = math.inf
-    for t0, t1, p in zip(tau0, tau1, peak):
-        if abs(t0) > p:
-            return 0.0
-        if t1 > 1e-12:
-            best = min(best, (p - t0) / t1)
-        elif t1 < -1e-12:
-            best = min(best, (-p - t0) / t1)
-    return float(best)
+    ``q`` with gravity (``planner.play.force.held_force_n`` with a vertical push)."""
+    return held_force_n(hand, q, finger)
