@@ -233,7 +233,7 @@ def _other(side: str) -> str:
 class PairPass:
     """One way of planning the pair: an assignment, the hand planned first (``first``),
     each hand's plan (left, right), each hand's notes as song indices, and the frames of
-    music the two plans play (``played_frames``: the played notes' lengths at the rate,
+    music the two plans play (``played_frames``: the played notes' lengths in whole frames at the rate,
     the currency the weighing and the frame F1 count in)."""
 
     assignment: HandAssignment
@@ -283,12 +283,13 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
                                  1.0 / rate_hz, out))
     plans[second] = plan_song(subs[second], pp.hands[second], None, rate_hz,
                               song_name=song_name, planner=pl, rail_bounds=bounds)
-    played = 0.0
-    for s in SIDES:
+    played = 0  # (whole frames: ways playing the same music tie exactly, the earlier kept;
+    for s in SIDES:  # a sum of seconds differs in its last bits with the notes' order)
         out = {k.note for k in plans[s].verdict.skipped}
-        played += sum(notes[i].duration_s for k, i in enumerate(idx[s]) if k not in out)
+        played += sum(round(notes[i].duration_s * rate_hz)
+                      for k, i in enumerate(idx[s]) if k not in out)
     return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (idx[LEFT], idx[RIGHT]),
-                    played * rate_hz)
+                    float(played))
 
 
 def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
