@@ -83,6 +83,41 @@ class MeetPose:
     ik_iterations: int
 
 
+@dataclass(frozen=True)
+class MoveIn:
+    """The move from rest to the pre-catch pose (``q_pre``: the open pose, the stopping
+    motion's first offset on the arm): its duration, when the closing starts, and why the
+    hand is not there in time (None: it is)."""
+
+    q_pre: np.ndarray
+    move_s: float
+    close_start_s: float
+    too_soon: Reason | None
+
+
+def move_in(h: HandModel, dyn: StopDynamics, flight: Flight, C: np.ndarray, r: float, closing: Closing,
+            pose: MeetPose, soft_stop: SoftStop, q_rest: np.ndarray, t_react: float) -> MoveIn:
+    """The move to the pre-catch pose, starting at ``t_react``: due before the ball and the
+    stopping motion's ramp; where it is in time, calmer (``StopDynamics.calm_move_time``)
+    as long as it is still there before the ramp and the closing's start."""
+    q_pre = pose.q_open.copy()
+    q_pre[list(soft_stop.arm)] += soft_stop.first_offset
+    move_s = dyn.move_time(q_rest, q_pre)
+    ready = t_react + move_s
+    due = min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i)
+    too_soon = None
+    if ready > due:
+        too_soon = Reason(CatchReason.TOO_SOON,
+                          f"too fast: the open pre-catch pose is reached at {ready:.3f} s, "
+                          f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
+                          f"(t = {pose.t_i:.3f} s)")
+    s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
+                      pad_time_s(soft_stop.v_rel), r)
+    if too_soon is None:
+        move_s = dyn.calm_move_time(q_rest, q_pre, t_react, min(s_c, due))
+    return MoveIn(q_pre, move_s, s_c, too_soon)
+
+
 def tip_reach_m(h: HandModel, q0: np.ndarray) -> float:
     """Bound on any fingertip's distance from palm_center over the joint box (m): the sum
     of each finger's segment lengths from the palm centre at ``q0`` (triangle inequality),
@@ -251,23 +286,9 @@ class CatchPlanner:
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
-        # timing: the move to the pre-catch pose, the stopping motion, the closing move
-        arm = list(soft_stop.arm)
-        q_pre = pose.q_open.copy()
-        q_pre[arm] += soft_stop.first_offset
-        T_m = dyn.move_time(self.q_rest, q_pre)
-        ready = t_react + T_m
-        due = min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i)
-        if ready > due:
-            reasons.append(Reason(CatchReason.TOO_SOON,
-                                  f"too fast: the open pre-catch pose is reached at {ready:.3f} s, "
-                                  f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
-                                  f"(t = {pose.t_i:.3f} s)"))
-        s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
-                          pad_time_s(soft_stop.v_rel), r)
-        if ready <= due:  # the move calmer where it is still there before the stop's
-            # ramp and the closing's start (``calm_move_time``)
-            T_m = dyn.calm_move_time(self.q_rest, q_pre, t_react, min(s_c, due))
+        move = move_in(h, dyn, flight, C, r, closing, pose, soft_stop, self.q_rest, t_react)
+        reasons += [move.too_soon] if move.too_soon else []
+        q_pre, T_m, s_c = move.q_pre, move.move_s, move.close_start_s
         turn0 = hold.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
         turn, t, Q, T_m, s_c, verdict = self._closing_rows(
             flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
@@ -278,7 +299,7 @@ class CatchPlanner:
         if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
             q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
         q_closed = pose.q_closed.copy()
-        q_closed[arm] += soft_stop.last_offset
+        q_closed[list(soft_stop.arm)] += soft_stop.last_offset
         q_closed += turn.delta  # the pose the ball is held in (the turn ends at rest)
         pose = replace(pose, q_closed=q_closed)
         fv = self.forces(flight, pose, t, Q, r, verdict.grasp_t,
