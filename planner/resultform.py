@@ -22,6 +22,13 @@ def listing(L: list[str], title: str, items, fmt, first: int = 10) -> None:
         L.append(f"  ... and {len(items) - first} more")
 
 
+def missed_note_line(m) -> str:
+    """A missed note's line in a summary (the check's and the physics' alike): its time,
+    name, pitch, how much of it its key was down and why."""
+    return (f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
+            f"down {m.fraction_down:.0%}  {m.reason}")
+
+
 def plain(x: Any) -> Any:
     """``x`` as JSON takes it: dataclasses as dicts, sequences and arrays as lists, NumPy
     scalars as Python's, an enum as its value, a non-finite float as None (null)."""

@@ -10,7 +10,7 @@ import numpy as np
 from planner.check.ballroll import ROLL_ROOM_M
 from planner.check.claims import CountMismatch
 from planner.check.criteria import BODY_BED_DEPTH_M, INTERCEPT_TOL_M, KEY_BED_DEPTH_M
-from planner.resultform import listing, plain
+from planner.resultform import listing, missed_note_line, plain
 
 
 @dataclass(frozen=True)
@@ -335,9 +335,7 @@ def play_lines(L: list[str], p: PlayResult, song: str | None, min_f1: float | No
     listing(L, "wrong presses", p.wrong_presses, lambda w: (
         f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
         f"{'+'.join(w.fingers) or '?'}"))
-    listing(L, "missed notes", p.missed, lambda m: (
-        f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
-        f"down {m.fraction_down:.0%}  {m.reason}"))
+    listing(L, "missed notes", p.missed, missed_note_line)
     listing(L, "late notes", p.late, lambda n: (
         f"{n.onset_s:8.3f} s  {n.name:4s} ({n.pitch})  key down {n.late_s * 1000:.0f} ms "
         "after the onset"))

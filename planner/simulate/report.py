@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from planner.resultform import listing, plain
+from planner.resultform import listing, missed_note_line, plain
 from planner.simulate.scores import JointTracking, MotorEffort, PhysicsCatch, PhysicsPlay
 
 
@@ -81,9 +81,7 @@ def play_lines(L: list[str], p: PhysicsPlay, song: str | None, kinematic_f1: flo
     listing(L, "wrong keys", p.wrong_keys, lambda w: (
         f"{w.start_s:8.3f}-{w.end_s:.3f} s  {w.name:4s} ({w.pitch})  "
         f"{'+'.join(w.fingers) or 'no finger (the key returning)'}"))
-    listing(L, "missed notes", p.missed, lambda m: (
-        f"{m.onset_s:8.3f}-{m.offset_s:.3f} s  {m.name:4s} ({m.pitch})  "
-        f"down {m.fraction_down:.0%}  {m.reason}"))
+    listing(L, "missed notes", p.missed, missed_note_line)
 
 
 def effort_lines(L: list[str], motors: tuple[MotorEffort, ...],
