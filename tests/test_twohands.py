@@ -23,7 +23,6 @@ from planner.play.twohands import (
     UNBOUNDED_M,
     PairPlanner,
     clear_bounds,
-    left_bounds,
     plan_two_hands,
     windows,
 )
@@ -100,7 +99,9 @@ def test_left_bound_is_the_right_rail_less_the_gap_over_the_window(pair) -> None
     notes = [Note(48, 1.0, 1.2, 80), Note(50, 2.0, 2.2, 80)]
     t = np.arange(0, 400) / 100.0
     rail = np.where(t < 1.5, 0.30, 0.10)  # (the right hand comes down at 1.5 s)
-    b = left_bounds(notes, (0, 1), t, rail, pair.gap, 0.01)
+    gap = pair.gap  # (the right hand's bodies at their farthest reach whatever its pose)
+    b = clear_bounds(notes, LEFT, (0, 1), t, rail - gap.right.inner_extent_m,
+                     gap.left.inner_extent_m + gap.clearance_m, 0.01)
     # (the first note's window lasts to the second's onset and half of it: it holds the
     # rail from before the right hand came down to after)
     assert b[0][1] == pytest.approx(0.10 - pair.gap.rail_gap_m)

@@ -165,12 +165,6 @@ def room_bounds(notes, side: str, own: tuple[int, ...], other: tuple[int, ...], 
     return out
 
 
-def right_bounds(notes, left: tuple[int, ...], right: tuple[int, ...], gap: HandGap,
-                 out_of: frozenset[int] = frozenset()) -> list[tuple[float, float]]:
-    """``room_bounds`` of the right hand planned first."""
-    return room_bounds(notes, RIGHT, right, left, gap, out_of)
-
-
 def clear_bounds(notes, side: str, own: tuple[int, ...], edge_t_s: np.ndarray,
                  edge_m: np.ndarray, reach_m: float, dt_s: float,
                  out_of: frozenset[int] = frozenset()) -> list[tuple[float, float]]:
@@ -192,16 +186,6 @@ def clear_bounds(notes, side: str, own: tuple[int, ...], edge_t_s: np.ndarray,
         else:
             out.append((float(seg.max()) + reach_m, UNBOUNDED_M))
     return out
-
-
-def left_bounds(notes, left: tuple[int, ...], rail_t_s: np.ndarray, rail_m: np.ndarray,
-                gap: HandGap, dt_s: float, out_of: frozenset[int] = frozenset()
-                ) -> list[tuple[float, float]]:
-    """``clear_bounds`` of the left hand planned after the right one, the right hand's
-    bodies taken at their farthest reach whatever its pose: below its rail (``rail_m``)
-    less the rail gap."""
-    return clear_bounds(notes, LEFT, left, rail_t_s, rail_m - gap.right.inner_extent_m,
-                        gap.left.inner_extent_m + gap.clearance_m, dt_s, out_of)
 
 
 def settled_bounds(notes, places: Places, memo: CostMemo, rate_hz: float,
