@@ -9,6 +9,7 @@ leaves every sum as it was (``sha256sum -c OLD/SHA256SUMS`` in the new DIR).
 
 from __future__ import annotations
 
+import argparse
 import hashlib
 import sys
 from pathlib import Path
@@ -24,7 +25,10 @@ from planner.errors import InputError
 
 
 def main(argv: list[str]) -> int:
-    out = Path(argv[0])
+    ap = argparse.ArgumentParser(description="The catch's files and their sums, to compare "
+                                 "two checkouts byte for byte.")
+    ap.add_argument("dir", help="folder for the catch files and SHA256SUMS")
+    out = Path(ap.parse_args(argv).dir)
     out.mkdir(parents=True, exist_ok=True)
     pl, ball = get_planner("default"), get_ball("tennis")
     for h in (-0.3, 0.0, 0.3):
