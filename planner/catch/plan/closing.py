@@ -261,7 +261,7 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
     tt = np.arange(max(want, t_i - (closing.reach_m + r) / speed), t_i, 0.001)
     if tt.size == 0:
         return want
-    b_pc = _ball_in_palm(hand, flight, C, q_open, tt, t_i, stop)
+    b_pc = ball_in_palm(hand, flight, C, q_open, tt, t_i, stop)
     # candidate starts, earliest first (np.linspace's numbers, written out); the fingers'
     # bodies from the closing table (the more closed of the two neighbouring samples): no
     # point within its radius + TOUCH_CLEAR_M of the ball's surface. The pad point is on
@@ -286,7 +286,7 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
     return float(t_i)
 
 
-def _ball_in_palm(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarray,
+def ball_in_palm(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarray,
                   tt: np.ndarray, t_i: float, stop) -> np.ndarray:
     """The ball's centre at times ``tt`` (before the intercept ``t_i``) in the palm's
     frame (the palm at ``q_open``, or on its stopping motion ``stop``: at ``q_open`` at
