@@ -251,7 +251,7 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
     ball is judged in the frame of the moving palm, which recedes along the flight and
     keeps the ball among the fingers longer than a palm at rest (the live catch, whose
     rows cannot be re-made once written: at rest, the closing started early and the
-    thumb's body met the true flight 0.2-2.4 mm deep 15-20 ms before the palm on 5 of 20
+    thumb's body met the true flight 0.2-1.4 mm deep 15-20 ms before the palm on 5 of 20
     throws at 100 Hz / 5 mm, each dropped in the replay)."""
     want = earliest_close_start(closing, t_i, ready, stop_t)
     if closing.u_grasp is None or want >= t_i:
@@ -287,7 +287,7 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
 
 
 def ball_in_palm(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarray,
-                  tt: np.ndarray, t_i: float, stop) -> np.ndarray:
+                 tt: np.ndarray, t_i: float, stop) -> np.ndarray:
     """The ball's centre at times ``tt`` (before the intercept ``t_i``) in the palm's
     frame (the palm at ``q_open``, or on its stopping motion ``stop``: at ``q_open`` at
     the intercept, the motion's travel from there)."""
