@@ -20,6 +20,7 @@ from planner.catch.live.stopper import LiveStopper
 from planner.catch.plan.closing import close_start, earliest_close_start
 from planner.catch.plan.planner import PLAN_BUDGET_S, SIGNAL_S, CatchPlanner, MeetPose
 from planner.catch.plan.results import Closing
+from planner.catch.plan.stopping import SoftStop
 from planner.hand.model import HandModel
 
 
@@ -33,6 +34,7 @@ class CloseAsk(NamedTuple):
     ready: float
     stop_t: float
     t_b: float
+    stop: SoftStop | None = None  # the palm's stopping motion (None: at rest)
 
 
 class DeferredClosing:
@@ -48,11 +50,12 @@ class DeferredClosing:
         self.computed = 0  # closing starts computed (``close_start``)
 
     def compute(self, flight: Flight, q_open: np.ndarray, t_i: float, ready: float,
-                stop_t: float) -> float:
-        """``close_start`` for these inputs, counted."""
+                stop_t: float, stop: SoftStop | None = None) -> float:
+        """``close_start`` for these inputs (the ball in the frame of the palm on its
+        stopping motion ``stop``), counted."""
         self.computed += 1
         return close_start(self.hand, flight, self.C, q_open, self.closing, t_i, ready,
-                           stop_t, self.radius_m)
+                           stop_t, self.radius_m, stop)
 
     def retime(self, m: LiveMotion, ask: CloseAsk, rows_to_s: float) -> None:
         """The closing re-timed for the newest estimate; this observation's rows end at
@@ -71,7 +74,7 @@ class DeferredClosing:
         ask = self.ask
         if ask is None or m.close_start_s > t_b:
             return
-        s_c = self.compute(ask.flight, ask.q_open, ask.t_i, ask.ready, ask.stop_t)
+        s_c = self.compute(ask.flight, ask.q_open, ask.t_i, ask.ready, ask.stop_t, ask.stop)
         m.set_closing(max(s_c, ask.t_b), self.closing.duration_s)
         self.ask = None
 
@@ -124,7 +127,8 @@ class LiveReplan:
             # earlier than its earliest (then no closing time is needed: the same decision)
             late = go + (START_SLACK_S if moves(stop) else 0.0) >= rest_by
             if late or go >= earliest_close_start(cl, pose.t_i, t_b + T_m, stop_t):
-                s_c = self.closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t)
+                s_c = self.closings.compute(flight, pose.q_open, pose.t_i, t_b + T_m, stop_t,
+                                            stop)
                 if go >= s_c or late:
                     if moves(stop) and t_b + T_m > stop.start_s:  # too late for it: its
                         stop, q_pre, T_m = sp.slower(pose, t_b)  # ramp shorter
@@ -136,7 +140,8 @@ class LiveReplan:
                 self.kept_targets += 1
             if m.close_start_s > t_b:
                 self.closings.retime(m, CloseAsk(flight, pose.q_open, pose.t_i,
-                                                   m.fingers_open_s, stop_t, t_b), rows_to_s)
+                                                   m.fingers_open_s, stop_t, t_b, stop),
+                                     rows_to_s)
         if moves(stop) and m.moving and not sp.fixed and fix_s >= stop.start_s:
             sp.fix(pose, t_b)  # the next rows reach its ramp: the motion is the rows' now
         return pose
