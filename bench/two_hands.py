@@ -19,9 +19,9 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-from collections import Counter
 import tempfile
 import time
+from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
