@@ -9,9 +9,11 @@ hand, each of its notes pressed only from rail positions that keep its bodies, a
 farthest reach (``planner.play.handgap``), the clearance from the first hand's bodies as
 they *are* at every row over the note's window (``clear_bounds``: the first hand's
 inner edge, ``InnerEdge``, read from its rows). A note whose every place breaks its
-bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand. Which
-hand goes first, or whether one hand plays alone, is decided by the frames of music each
-way plays (``plan_two_hands``).
+bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand. The
+notes the first hand leaves out are handed to the second (``HandAssignment.hand_over``),
+planned with its own notes within the first one's rows: it plays them where it is free. Which hand goes first, or whether one hand
+plays alone (the other taking only what it leaves out), is decided by the frames of
+music each way plays (``plan_two_hands``).
 
 **Why the rails stay apart between the notes too.** A note's window runs from its hand's
 previous onset to its hand's next onset (and half of the next notes' length, the latest a
@@ -309,7 +311,8 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     clearance (``SkipReason.OTHER_HAND``: the hands want the same keys), the left hand
     first too (the hand planned first takes the keys both want); and the right hand
     alone, every note its own, as one hand plays the file (where the parts lie within
-    one hand's reach, two hands only get in each other's way). The way playing the most frames of music is kept (the earlier of
+    one hand's reach, two hands only get in each other's way), the left one given what
+    it leaves out. Every way hands the notes its first hand leaves out to the other. The way playing the most frames of music is kept (the earlier of
     equals). (A hand with no notes plans nothing the order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
