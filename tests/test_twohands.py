@@ -82,6 +82,8 @@ def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     # (a note the hand planned first left out was planned again on the other hand, which
     # either plays it or names why not)
     second_i = 1 if first == LEFT else 0
+    handed = [m for m in plan.assignment.moved if m.reason is MoveReason.LEFT_OUT]
+    assert handed  # (the hands meet: the first leaves notes out, the second is given them)
     for m in plan.assignment.moved:
         if m.reason is MoveReason.LEFT_OUT:
             assert m.note in plan.planned_of[1 - second_i] and m.note in plan.planned_of[second_i]
