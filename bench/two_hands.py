@@ -4,7 +4,9 @@ checked (frame F1 against the whole song, both parts: what a listener hears; the
 plan also against its own part, ``1h own``, as ``check`` judges it) and replayed
 in MuJoCo (full contact; ``--no-physics`` to skip): check F1, physics F1, wrong keys,
 collisions between the hands (check's bodies, physics' contacts), notes per hand, notes
-left out, the hand planned first (``1st``), the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
+left out (and, after the table, every note left out by its hand and reason), the way
+kept (``way``: ``R``/``L`` the right or left hand first, ``RA`` the right hand alone, the
+left one given what it leaves out), the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
 for every piece, as ``batch`` plans).
 
     python bench/two_hands.py [--corpus DIR] [--only S] [--no-physics]
@@ -19,6 +21,7 @@ import statistics
 import sys
 import tempfile
 import time
+from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
@@ -55,9 +58,10 @@ def main() -> int:
           f"{pp.gap.rail_gap_m * 1000:.1f} mm, key gap {pp.gap.key_gap_m * 1000:.1f} mm")
     head = (f"{'piece':22s} {'notes':>5s} | {'1h own':>6s} {'1h chk':>6s} {'1h phy':>6s} {'wr':>3s} "
             f"{'RTF':>5s} | {'2h chk':>6s} {'2h phy':>6s} {'wr':>3s} {'coll':>4s} "
-            f"{'L':>4s} {'R':>4s} {'out':>4s} {'RTF':>5s} {'gap mm':>6s} 1st check")
+            f"{'L':>4s} {'R':>4s} {'out':>4s} {'RTF':>5s} {'gap mm':>6s} way check")
     print(head)
     rows = []
+    reasons: Counter = Counter()
     with tempfile.TemporaryDirectory() as d:
         for p in songs:
             whole = load_song(p, every_part=True)
@@ -86,12 +90,15 @@ def main() -> int:
                  "L": len(plan2.notes_of[0]), "R": len(plan2.notes_of[1]),
                  "out": len(plan2.left_out()), "rtf2": song_s / plan2.planning_s,
                  "gap": chk2.gap.least_m * 1000, "ok": chk2.ok,
-                 "first": getattr(plan2, "first", "right")[0].upper()}
+                 "way": {"right first": "R", "left first": "L",
+                         "right alone": "RA"}.get(plan2.way, plan2.way)}
+            reasons.update((plan2.assignment.hand[i], s.reason.value)
+                           for i, s in plan2.left_out())
             rows.append(r)
             print(f"{r['piece'][:22]:22s} {r['notes']:5d} | {r['own1']:6.4f} {r['chk1']:6.4f} {r['phy1']:6.4f} "
                   f"{r['wr1']:3d} {r['rtf1']:4.0f}x | {r['chk2']:6.4f} {r['phy2']:6.4f} "
                   f"{r['wr2']:3d} {r['coll']:4d} {r['L']:4d} {r['R']:4d} {r['out']:4d} "
-                  f"{r['rtf2']:4.0f}x {r['gap']:6.1f} {r['first']:>3s} "
+                  f"{r['rtf2']:4.0f}x {r['gap']:6.1f} {r['way']:>3s} "
                   f"{'ok' if r['ok'] else 'FAIL'}",
                   flush=True)
     if rows:
@@ -105,6 +112,8 @@ def main() -> int:
               f"{sum(r['coll'] for r in rows):4d} {'':4s} {'':4s} "
               f"{sum(r['out'] for r in rows):4d} "
               f"{statistics.median(r['rtf2'] for r in rows):4.0f}x")
+        print("left out (two hands), by hand and reason: " + ", ".join(
+            f"{h} {why} {k}" for (h, why), k in sorted(reasons.items(), key=lambda x: -x[1])))
         print(f"lowest physics F1: one hand {min(r['phy1'] for r in rows):.4f}, two hands "
               f"{min(r['phy2'] for r in rows):.4f}")
     return 0

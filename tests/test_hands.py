@@ -128,3 +128,20 @@ def test_one_hand_gives_every_note_to_it(places) -> None:
     assert [m.note for m in one.moved] == [i for i, h in enumerate(a.hint) if h == LEFT]
     assert {m.reason for m in one.moved} == {MoveReason.ONE_HAND}
     assert one.notes_of(LEFT) == ()
+
+
+def test_hand_over_gives_left_out_notes_to_the_other_hand(places) -> None:
+    notes = ordered([note(72 + i % 3, 0.5 * i, 0.5 * i + 0.4, 0, 0) for i in range(6)]
+                    + [note(48 + i % 3, 0.5 * i, 0.5 * i + 0.4, 1, 1) for i in range(6)])
+    one = assign_hands(notes, GAP, places).one_hand(RIGHT)
+    right = [i for i, h in enumerate(one.hint) if h == RIGHT]
+    left = [i for i, h in enumerate(one.hint) if h == LEFT]
+    # (a note of the right part the right hand left out: moved for that reason; a note
+    # of the left part, moved to the right hand for one hand, given back: moved no more)
+    got = one.hand_over({right[0]: "too_late: x", left[0]: "chord: y"}, LEFT)
+    assert got.hand[right[0]] == LEFT and got.hand[left[0]] == LEFT
+    why = {m.note: m for m in got.moved}
+    assert why[right[0]].reason is MoveReason.LEFT_OUT and "too_late: x" in why[right[0]].detail
+    assert left[0] not in why
+    assert set(why) == set(left[1:]) | {right[0]}
+    assert got.notes_of(LEFT) == tuple(sorted([right[0], left[0]]))

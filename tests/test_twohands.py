@@ -17,7 +17,7 @@ import pytest
 from planner.check import check_trajectory
 from planner.hand.model import load_hand
 from planner.music.midi import Note, load_song, write_notes_midi
-from planner.play.hands import LEFT, RIGHT
+from planner.play.hands import LEFT, RIGHT, MoveReason
 from planner.play.stream import Planner
 from planner.play.twohands import (
     UNBOUNDED_M,
@@ -68,7 +68,8 @@ def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     # (the hands contest keys: both orders and the right hand alone planned, the way
     # playing the most frames kept)
     assert [w for w, _ in plan.tried] == ["right first", "left first", "right alone"]
-    assert max(fr for _, fr in plan.tried) == dict(plan.tried)[f"{first} first"]
+    assert max(fr for _, fr in plan.tried) == dict(plan.tried)[plan.way]
+    assert plan.way.startswith(first)
     rep = check_trajectory(str(out), song)
     assert rep.gap.collision_rows == 0 and rep.gap.least_m >= 0.010
     assert rep.ok, rep.problems
@@ -78,6 +79,15 @@ def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     assert rep.play.f1 > 0.5 and len(left_out) < len(song.notes) // 2
     assert set(plan.played_of(LEFT)) | set(plan.played_of(RIGHT)) == (
         set(range(len(song.notes))) - left_out)
+    # (a note the hand planned first left out was planned again on the other hand, which
+    # either plays it or names why not)
+    second_i = 1 if first == LEFT else 0
+    handed = [m for m in plan.assignment.moved if m.reason is MoveReason.LEFT_OUT]
+    assert handed  # (the hands meet: the first leaves notes out, the second is given them)
+    for m in plan.assignment.moved:
+        if m.reason is MoveReason.LEFT_OUT:
+            assert m.note in plan.planned_of[1 - second_i] and m.note in plan.planned_of[second_i]
+            assert m.note in plan.notes_of[second_i]
 
 
 def test_same_song_same_bytes(pair, tmp_path) -> None:

@@ -58,6 +58,8 @@ class MoveReason(enum.Enum):
     CROSSING = "crossing"  # its hand would come within the clearance of the other
     TIME = "time"  # its hand cannot move there in time; the other loses fewer frames
     ONE_HAND = "one_hand"  # one hand playing every note played more frames than two
+    LEFT_OUT = "left_out"  # the hand planned first left it out; the other, planned after
+    # within the first one's rows, is given it (``planner.play.twohands``)
 
 
 @dataclass(frozen=True)
@@ -96,6 +98,22 @@ class HandAssignment:
                         "note: one hand played more frames of music than two")
                   for i, h in enumerate(self.hint) if h != side),
             self.source, self.split_pitch)
+
+    def hand_over(self, notes: dict[int, str], to: str) -> HandAssignment:
+        """These notes (song index: a sentence why their hand left them out) given to
+        ``to`` (``MoveReason.LEFT_OUT``); a note moved before keeps its first reason, one
+        given back to its part's hand is moved no more."""
+        hand = list(self.hand)
+        moved = {m.note: m for m in self.moved}
+        for i, why in notes.items():
+            hand[i] = to
+            if to == self.hint[i]:
+                moved.pop(i, None)
+            elif i not in moved:
+                moved[i] = Moved(i, MoveReason.LEFT_OUT, (0.0, 0.0),
+                                 f"the {self.hand[i]} hand, planned first, left it out: {why}")
+        return HandAssignment(tuple(hand), self.hint, tuple(moved[i] for i in sorted(moved)),
+                              self.source, self.split_pitch)
 
 
 def hint_hands(notes) -> tuple[tuple[str, ...], HintSource, int | None]:

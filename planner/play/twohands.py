@@ -9,9 +9,11 @@ hand, each of its notes pressed only from rail positions that keep its bodies, a
 farthest reach (``planner.play.handgap``), the clearance from the first hand's bodies as
 they *are* at every row over the note's window (``clear_bounds``: the first hand's
 inner edge, ``InnerEdge``, read from its rows). A note whose every place breaks its
-bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand. Which
-hand goes first, or whether one hand plays alone, is decided by the frames of music each
-way plays (``plan_two_hands``).
+bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand. The
+notes the first hand leaves out are handed to the second (``HandAssignment.hand_over``),
+planned with its own notes within the first one's rows: it plays them where it is free. Which hand goes first, or whether one hand
+plays alone (the other taking only what it leaves out), is decided by the frames of
+music each way plays (``plan_two_hands``).
 
 **Why the rails stay apart between the notes too.** A note's window runs from its hand's
 previous onset to its hand's next onset (and half of the next notes' length, the latest a
@@ -93,8 +95,10 @@ class PairRows:
 @dataclass(frozen=True)
 class TwoHandPlan:
     """What ``plan_two_hands`` did: the assignment, each hand's one-hand plan (in memory,
-    its song the hand's notes: ``plans``, left then right), each hand's notes as indices
-    of the song (``notes_of``), the rows on one clock, and the clock after set-up."""
+    ``plans``, left then right), each hand's notes as indices of the song (``notes_of``:
+    the hand each note was last planned on), the rows on one clock, and the clock after
+    set-up. ``planned_of``: each plan's song as indices of the song (None: ``notes_of``);
+    the hand planned first's holds the notes it left out and handed over too."""
 
     assignment: HandAssignment
     gap: HandGap
@@ -107,18 +111,27 @@ class TwoHandPlan:
     first: str = RIGHT  # the hand planned first
     # (every way planned, ``PairPass.way``, and the frames of music it played)
     tried: tuple[tuple[str, float], ...] = ()
+    planned_of: tuple[tuple[int, ...], tuple[int, ...]] | None = None
+    way: str = ""  # the way kept (``PairPass.way``)
 
     def left_out(self) -> list[tuple[int, object]]:
         """Every note not played, as (song index, ``Skip`` of its hand's plan), by note."""
-        out = [(idx[s.note], s) for idx, p in zip(self.notes_of, self.plans)
-               for s in p.verdict.skipped]
-        return sorted(out, key=lambda x: x[0])
+        return left_out_of(self.plans, self.planned_of or self.notes_of, self.notes_of)
 
     def played_of(self, side: str) -> list[int]:
         """The song indices of the notes ``side`` plays (its notes but those left out)."""
         i = SIDES.index(side)
         out = {s.note for s in self.plans[i].verdict.skipped}
-        return [n for k, n in enumerate(self.notes_of[i]) if k not in out]
+        return [n for k, n in enumerate((self.planned_of or self.notes_of)[i]) if k not in out]
+
+
+def left_out_of(plans, planned_of, notes_of) -> list[tuple[int, object]]:
+    """(song index, ``Skip``) of every note its hand (``notes_of``) left out, by note: a
+    note the hand planned first left out and handed over is the other hand's."""
+    mine = [set(idx) for idx in notes_of]
+    out = [(idx[s.note], s) for k, (idx, p) in enumerate(zip(planned_of, plans))
+           for s in p.verdict.skipped if idx[s.note] in mine[k]]
+    return sorted(out, key=lambda x: x[0])
 
 
 def windows(notes, idx: tuple[int, ...], out_of: frozenset[int] = frozenset()
@@ -215,27 +228,32 @@ def _other(side: str) -> str:
 
 @dataclass(frozen=True)
 class PairPass:
-    """One way of planning the pair: an assignment, the hand planned first (``first``),
-    each hand's plan (left, right), each hand's notes as song indices, and the frames of
-    music the two plans play (``played_frames``: the played notes' lengths in whole frames at the rate,
-    the currency the weighing and the frame F1 count in)."""
+    """One way of planning the pair: an assignment (the notes the hand planned first left
+    out handed over: ``HandAssignment.hand_over``), the hand planned first (``first``),
+    each hand's plan (left, right), each hand's notes as song indices (``notes_of``) and
+    each plan's (``planned_of``), the frames of music the two plans play
+    (``played_frames``: the played notes' lengths in whole frames at the rate, the
+    currency the weighing and the frame F1 count in), and ``alone``: the assignment
+    planned gave every note to the hand planned first."""
 
     assignment: HandAssignment
     first: str
     plans: tuple[PlayPlan, PlayPlan]
     notes_of: tuple[tuple[int, ...], tuple[int, ...]]
     played_frames: float
+    planned_of: tuple[tuple[int, ...], tuple[int, ...]]
+    alone: bool = False
 
     @property
     def way(self) -> str:
         """How it was planned: ``right first``, ``left first``, or ``right alone`` (the
-        other hand with no notes)."""
-        alone = [s for s, idx in zip(SIDES, self.notes_of) if idx]
-        return f"{alone[0]} alone" if len(alone) == 1 else f"{self.first} first"
+        other hand given only the notes the first one left out)."""
+        return f"{self.first} {'alone' if self.alone else 'first'}"
 
     def skipped_for(self, reason: SkipReason) -> list[tuple[int, object]]:
-        """(song index, ``Skip``) of every note left out for ``reason``."""
-        return [(idx[s.note], s) for idx, p in zip(self.notes_of, self.plans)
+        """(song index, ``Skip``) of every note a plan left out for ``reason`` (the notes
+        handed over too)."""
+        return [(idx[s.note], s) for idx, p in zip(self.planned_of, self.plans)
                 for s in p.verdict.skipped if s.reason is reason]
 
 
@@ -243,7 +261,9 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
               song_name: str = "") -> PairPass:
     """Plan both hands by ``a``: the hand ``first`` leaving the other room for its notes
     (``room_bounds``), then the other within the first one's rows (``clear_bounds``,
-    settled: ``settled_bounds``)."""
+    settled: ``settled_bounds``), its notes and every note the first one left out (the
+    second hand's programme weighs them in the same frames as its own: a note it cannot
+    play is left out again, one it plays instead of its own costs it fewer frames)."""
     notes = song.notes
     idx = {s: a.notes_of(s) for s in SIDES}
     subs = {s: _sub_song(song, idx[s]) for s in SIDES}
@@ -254,6 +274,10 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     bounds = room_bounds(notes, first, idx[first], idx[second], pp.gap)
     plans[first] = plan_song(subs[first], pp.hands[first], None, rate_hz, song_name=song_name,
                              planner=pp.planners[first], rail_bounds=bounds)
+    given = {idx[first][s.note]: f"{s.reason.value}: {s.detail}"
+             for s in plans[first].verdict.skipped}
+    planned = {first: idx[first], second: tuple(sorted(set(idx[second]) | set(given)))}
+    subs[second] = _sub_song(song, planned[second])
     tr = plans[first].trajectory
     edge_t_s = tr.t_s - plans[first].song_start_s
     inner_m = pp.edges[first].inner_m(tr.q)
@@ -263,7 +287,7 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     pl = pp.planners[second]
     bounds = settled_bounds(
         subs[second].notes, pl.places, pl.memo, rate_hz,
-        lambda out: clear_bounds(notes, second, idx[second], edge_t_s, edge_m, reach_m,
+        lambda out: clear_bounds(notes, second, planned[second], edge_t_s, edge_m, reach_m,
                                  1.0 / rate_hz, out))
     plans[second] = plan_song(subs[second], pp.hands[second], None, rate_hz,
                               song_name=song_name, planner=pl, rail_bounds=bounds)
@@ -271,9 +295,10 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     for s in SIDES:  # a sum of seconds differs in its last bits with the notes' order)
         out = {k.note for k in plans[s].verdict.skipped}
         played += sum(round(notes[i].duration_s * rate_hz)
-                      for k, i in enumerate(idx[s]) if k not in out)
-    return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (idx[LEFT], idx[RIGHT]),
-                    float(played))
+                      for k, i in enumerate(planned[s]) if k not in out)
+    a = a.hand_over(given, second)
+    return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
+                    float(played), (planned[LEFT], planned[RIGHT]), not idx[second])
 
 
 def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
@@ -286,7 +311,8 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     clearance (``SkipReason.OTHER_HAND``: the hands want the same keys), the left hand
     first too (the hand planned first takes the keys both want); and the right hand
     alone, every note its own, as one hand plays the file (where the parts lie within
-    one hand's reach, two hands only get in each other's way). The way playing the most frames of music is kept (the earlier of
+    one hand's reach, two hands only get in each other's way), the left one given what
+    it leaves out. Every way hands the notes its first hand leaves out to the other. The way playing the most frames of music is kept (the earlier of
     equals). (A hand with no notes plans nothing the order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
@@ -304,7 +330,8 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
     plan = TwoHandPlan(best.assignment, pp.gap, best.plans, best.notes_of, rows, 0.0, least,
                        first=best.first,
-                       tried=tuple((p.way, p.played_frames) for p in tried))
+                       tried=tuple((p.way, p.played_frames) for p in tried),
+                       planned_of=best.planned_of, way=best.way)
     text = write_two_hands(plan, song, pp, out_path, rate_hz, song_name)
     return replace(plan, planning_s=time.perf_counter() - t_start, text=text)
 

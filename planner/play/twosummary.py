@@ -20,10 +20,11 @@ def hand_facts(plan: TwoHandPlan) -> list[dict]:
     (against its notes), the notes given to it against the file's parts."""
     out = []
     moved_to = Counter(plan.assignment.hand[m.note] for m in plan.assignment.moved)
+    out_of = Counter(plan.assignment.hand[i] for i, _ in plan.left_out())
     for side, idx, p in zip(SIDES, plan.notes_of, plan.plans):
         v = p.verdict
         out.append({"hand": side, "notes": len(idx), "played": v.played,
-                    "left_out": len(v.skipped), "frame_f1": v.score.f1,
+                    "left_out": out_of.get(side, 0), "frame_f1": v.score.f1,
                     "given_from_other_part": moved_to.get(side, 0),
                     "wrong_presses": len(v.score.wrong_presses)})
     return out
@@ -80,7 +81,7 @@ def two_plan_dict(song_name: str, notes, plan: TwoHandPlan, out: str, setup_s: f
                   for m in plan.assignment.moved],
         "hint": plan.assignment.source.value,
         "rail_gap_m": plan.gap.rail_gap_m, "least_rail_gap_m": plan.least_rail_gap_m,
-        "first_hand": plan.first,
+        "first_hand": plan.first, "way": plan.way,
         "tried": [{"way": w, "played_frames": fr} for w, fr in plan.tried],
         "rows": len(plan.rows.t_s), "trajectory": out, "song_s": song_s,
         "planning_s": plan.planning_s, "setup_s": setup_s,
