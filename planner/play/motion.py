@@ -142,6 +142,8 @@ class _Finger:
     note: int | None = None  # the note it presses
     up_s: float = -math.inf  # when that note's key is to come up
     high_s: float = 0.0  # when it was last back at crossing height
+    safe_s: float = 0.0  # ... and clear above every key on its way there (the arm may move:
+    # ``planner.play.highclear``)
 
 
 @dataclass(frozen=True)
@@ -203,6 +205,10 @@ def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: fl
         return want, steps, "hover"
     if across is not None:
         steps.append((t, across))
+    # (from crossing height it may start down while the rail moves, clear above every key
+    # until the rail is still: ``planner.play.highclear``)
+    low = max(t + across_s, rail_free_s - moves.descent_clear_s(e, d_high.move), committed_s,
+              after_s)
     t_desc = max(want - d_high.cross_s, low)
     steps.append((t_desc, d_high.move))
     return t_desc + d_high.cross_s, steps, "high"
@@ -303,6 +309,7 @@ class Motion(ArmMotion):
             track.free_s = max(track.free_s, t_s)
         for st in self.fingers.values():
             st.high_s = max(st.high_s, t_s)
+            st.safe_s = max(st.safe_s, t_s)
         self.committed_s = max(self.committed_s, t_s)
 
     # ------------------------------------------------------------------ timing targets
@@ -321,7 +328,7 @@ class Motion(ArmMotion):
         e = self.entry(a)
         if abs(self.arm_track.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
             strikers = self._strikers.get(self.t_down(a.note), set()) | {a.finger}
-            self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.after_rail_s(e),
+            self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.rail_descent_s(e),
                             strikers)
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
@@ -375,6 +382,7 @@ class Motion(ArmMotion):
         else:
             t0 = max(st.track.free_s, self.committed_s)
         end = st.track.add(t0, up.move)
+        st.safe_s = end - up.move.duration_s + self.moves.rise_clear_s(st.entry, up.move)
         st.pose, st.note, st.high_s = "high", None, end
         return end
 
