@@ -68,8 +68,7 @@ class ArmMotion:
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():
             if id(st) not in held and st.pose != "high":
-                up = up_move(self.moves, st)
-                self._to_high(st, t0 - self.moves.rise_clear_s(st.entry, up.move) + up.cross_s)
+                self._to_high(st, self.lift_by_s(st, t0, arrive_by_s))
         t0 = max([t0] + [st.safe_s for st in self.fingers.values() if id(st) not in held])
         k = len(self.arm_track.q)
         self.arm_track.add(t0, part(move, 0, k))

@@ -248,6 +248,8 @@ class Motion(ArmMotion):
         self._tuck()
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
         self._strikers: dict[float, set[str]] = {}  # (``expect``: by key-down time)
+        self._next: dict[str, tuple[list[float], list[Assignment]]] = {}  # (``expect``:
+        # each finger's notes to strike, by key-down time)
         self.outcomes: dict[int, Outcome] = {}
 
     def entry(self, a: Assignment) -> AtlasEntry | None:
@@ -403,6 +405,32 @@ class Motion(ArmMotion):
         along on a move of the arm (``_holds``)."""
         for a in assignments:
             self._strikers.setdefault(self.t_down(a.note), set()).add(a.finger)
+            times, notes = self._next.setdefault(a.finger, ([], []))
+            i = bisect.bisect_right(times, self.t_down(a.note))
+            times.insert(i, self.t_down(a.note))
+            notes.insert(i, a)
+
+    def lift_by_s(self, st: _Finger, arm_s: float, after_s: float) -> float:
+        """The latest key-up of pressing (or waiting) finger ``st`` for a move of the arm
+        starting at ``arm_s``: clear above every key by then (``planner.play.highclear``),
+        and, where it strikes again after ``after_s`` (``expect``), at crossing height in
+        time to move across and down onto that key on time (its lift's end is where its
+        move across starts); never later than the lift that ends at ``arm_s``."""
+        up = up_move(self.moves, st)
+        by_end = arm_s - up.duration_s + up.cross_s
+        latest = arm_s - self.moves.rise_clear_s(st.entry, up.move) + up.cross_s
+        times, notes = self._next.get(st.entry.finger, ((), ()))
+        i = bisect.bisect_right(times, after_s)
+        if i < len(times):
+            e = self.entry(notes[i])
+            across = None if e is None else (None if e is st.entry else self.moves.across(
+                st.entry, e))
+            if e is None or across is None and e is not st.entry:
+                return by_end
+            across_s = 0.0 if across is None else across.duration_s
+            high_by = times[i] - self.moves.descend(e, "high").cross_s - across_s
+            latest = min(latest, high_by - up.duration_s + up.cross_s)
+        return max(by_end, latest)
 
     def cut(self, note: int, release_s: float) -> None:
         """The programme cut ``note`` (held) at ``release_s``: its key comes up by then."""
