@@ -415,7 +415,9 @@ class Motion(ArmMotion):
         starting at ``arm_s``: clear above every key by then (``planner.play.highclear``),
         and, where it strikes again after ``after_s`` (``expect``), at crossing height in
         time to move across and down onto that key on time (its lift's end is where its
-        move across starts); never later than the lift that ends at ``arm_s``."""
+        move across starts: a finger striking the move's note lifts that early even where
+        the arm starts later); where no checked path takes it there, by the lift that
+        ends at ``arm_s``."""
         up = up_move(self.moves, st)
         by_end = arm_s - up.duration_s + up.cross_s
         latest = arm_s - self.moves.rise_clear_s(st.entry, up.move) + up.cross_s
@@ -430,7 +432,7 @@ class Motion(ArmMotion):
             across_s = 0.0 if across is None else across.duration_s
             high_by = times[i] - self.moves.descend(e, "high").cross_s - across_s
             latest = min(latest, high_by - up.duration_s + up.cross_s)
-        return max(by_end, latest)
+        return latest
 
     def cut(self, note: int, release_s: float) -> None:
         """The programme cut ``note`` (held) at ``release_s``: its key comes up by then."""
