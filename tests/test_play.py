@@ -229,10 +229,12 @@ def test_a_held_key_the_hand_must_leave_is_let_go_and_named(planner, tmp_path):
     bass = next(a for a in res.fingering.assignments if a.note == 0)
     assert bass.release_s == pytest.approx(0.5)
     pressed = [p for p in rep.play.played if p.pitch == 48]
-    # (within two rows of the cut: the lift is timed to the finger's lowest body point,
-    # yet check's body rule finds C3 down in the rows at 0.50 and 0.51 s; not explained
-    # yet: docs/design/play.md, limits; the note sounds on, so no wrong press)
-    assert len(pressed) == 1 and pressed[0].end_s <= 0.52 + 1e-9
+    # (within four rows of the cut: the finger lifts for the arm's move as late as it can
+    # be clear above every key when the arm starts (planner.play.highclear), the end of
+    # its lift overlapping the move, two rows later than a lift that ended before it; and
+    # check's body rule finds C3 down one or two rows past the lift's key crossing, not
+    # explained yet: docs/design/play.md, limits; the note sounds on, so no wrong press)
+    assert len(pressed) == 1 and pressed[0].end_s <= 0.54 + 1e-9
     assert rep.play.notes_hit >= len(notes) - 2
     skipped = [s.note for s in res.verdict.skipped]
     assert skipped[0] == 0 and len(skipped) <= 2  # (C3 down 1/6 of its frames: missed)

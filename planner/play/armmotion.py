@@ -68,9 +68,8 @@ class ArmMotion:
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():
             if id(st) not in held and st.pose != "high":
-                up = up_move(self.moves, st)
-                self._to_high(st, t0 - up.duration_s + up.cross_s)
-        t0 = max([t0] + [st.high_s for st in self.fingers.values() if id(st) not in held])
+                self._to_high(st, self.lift_by_s(st, t0, arrive_by_s))
+        t0 = max([t0] + [st.safe_s for st in self.fingers.values() if id(st) not in held])
         k = len(self.arm_track.q)
         self.arm_track.add(t0, part(move, 0, k))
         self.posture = posture
@@ -115,10 +114,10 @@ class ArmMotion:
             if id(st) in held:
                 ready = max(ready, st.track.free_s)
             elif st.pose == "high":
-                ready = max(ready, st.high_s)  # (a finger moving across up there may go on)
-            else:  # it lifts first: as soon as its press is done, at the latest
-                up = up_move(self.moves, st)
-                ready = max(ready, st.track.free_s + up.duration_s)
+                ready = max(ready, st.safe_s)  # (a finger moving across up there may go on)
+            else:  # it lifts first: as soon as its press is done, at the latest (the arm
+                up = up_move(self.moves, st)  # moves once it is clear above every key)
+                ready = max(ready, st.track.free_s + self.moves.rise_clear_s(st.entry, up.move))
         return move, max(ready, arrive_by_s - move.duration_s)
 
     def _natural_ready(self, holds) -> float:
@@ -130,13 +129,13 @@ class ArmMotion:
             if id(st) in held:
                 ready = max(ready, st.track.free_s)
             elif st.pose == "high":
-                ready = max(ready, st.high_s)
+                ready = max(ready, st.safe_s)
             else:
                 up = up_move(self.moves, st)
                 t0 = max(st.track.free_s, self.committed_s)
                 if st.pose == "press":
                     t0 = max(t0, st.up_s - up.cross_s)
-                ready = max(ready, t0 + up.duration_s)
+                ready = max(ready, t0 + self.moves.rise_clear_s(st.entry, up.move))
         return ready
 
     def _holds(self, rail_m: float, posture: int):

@@ -348,20 +348,24 @@ class Costs(ArmCosts):
         return e
 
     def _times(self, note: int, finger: str, place: int) -> tuple[float, float]:
-        """(``Moves.before_rail_s``, ``Moves.after_rail_s``) of the entry (memoised: the
-        programme reads them for every transition)."""
+        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry: around a move
+        of the arm, key up to the lifting finger clear above every key, and the descent's
+        part after the arm is still (memoised: the programme reads them for every
+        transition)."""
         key = (self.pitch[note], finger, place)
         got = self._timing.get(key)
         if got is None:
             e = self.entry(note, finger, place)
-            got = self._timing[key] = (self.places.before_rail_s(e), self.places.after_rail_s(e))
+            got = self._timing[key] = (self.places.rail_lift_s(e), self.places.rail_descent_s(e))
         return got
 
     def before_rail_s(self, note: int, finger: str, place: int) -> float:
-        return self._times(note, finger, place)[0]
+        """Key up to the end of the lift to crossing height (``Moves.before_rail_s``)."""
+        return self.places.before_rail_s(self.entry(note, finger, place))
 
     def after_rail_s(self, note: int, finger: str, place: int) -> float:
-        return self._times(note, finger, place)[1]
+        """A descent from crossing height to key down (``Moves.after_rail_s``)."""
+        return self.places.after_rail_s(self.entry(note, finger, place))
 
     def forget(self, until_s: float = math.inf) -> None:
         """Drop what only the events before ``until_s``, decided, can use (memory stays

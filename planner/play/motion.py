@@ -142,6 +142,8 @@ class _Finger:
     note: int | None = None  # the note it presses
     up_s: float = -math.inf  # when that note's key is to come up
     high_s: float = 0.0  # when it was last back at crossing height
+    safe_s: float = 0.0  # ... and clear above every key on its way there (the arm may move:
+    # ``planner.play.highclear``)
 
 
 @dataclass(frozen=True)
@@ -203,6 +205,10 @@ def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: fl
         return want, steps, "hover"
     if across is not None:
         steps.append((t, across))
+    # (from crossing height it may start down while the rail moves, clear above every key
+    # until the rail is still: ``planner.play.highclear``)
+    low = max(t + across_s, rail_free_s - moves.descent_clear_s(e, d_high.move), committed_s,
+              after_s)
     t_desc = max(want - d_high.cross_s, low)
     steps.append((t_desc, d_high.move))
     return t_desc + d_high.cross_s, steps, "high"
@@ -242,6 +248,8 @@ class Motion(ArmMotion):
         self._tuck()
         self.committed_s = 0.0  # nothing may start before this (rows written up to it)
         self._strikers: dict[float, set[str]] = {}  # (``expect``: by key-down time)
+        self._next: dict[str, tuple[list[float], list[Assignment]]] = {}  # (``expect``:
+        # each finger's notes to strike, by key-down time)
         self.outcomes: dict[int, Outcome] = {}
 
     def entry(self, a: Assignment) -> AtlasEntry | None:
@@ -303,6 +311,7 @@ class Motion(ArmMotion):
             track.free_s = max(track.free_s, t_s)
         for st in self.fingers.values():
             st.high_s = max(st.high_s, t_s)
+            st.safe_s = max(st.safe_s, t_s)
         self.committed_s = max(self.committed_s, t_s)
 
     # ------------------------------------------------------------------ timing targets
@@ -321,7 +330,7 @@ class Motion(ArmMotion):
         e = self.entry(a)
         if abs(self.arm_track.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
             strikers = self._strikers.get(self.t_down(a.note), set()) | {a.finger}
-            self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.after_rail_s(e),
+            self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.rail_descent_s(e),
                             strikers)
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
@@ -375,6 +384,7 @@ class Motion(ArmMotion):
         else:
             t0 = max(st.track.free_s, self.committed_s)
         end = st.track.add(t0, up.move)
+        st.safe_s = end - up.move.duration_s + self.moves.rise_clear_s(st.entry, up.move)
         st.pose, st.note, st.high_s = "high", None, end
         return end
 
@@ -395,6 +405,34 @@ class Motion(ArmMotion):
         along on a move of the arm (``_holds``)."""
         for a in assignments:
             self._strikers.setdefault(self.t_down(a.note), set()).add(a.finger)
+            times, notes = self._next.setdefault(a.finger, ([], []))
+            i = bisect.bisect_right(times, self.t_down(a.note))
+            times.insert(i, self.t_down(a.note))
+            notes.insert(i, a)
+
+    def lift_by_s(self, st: _Finger, arm_s: float, after_s: float) -> float:
+        """The latest key-up of pressing (or waiting) finger ``st`` for a move of the arm
+        starting at ``arm_s``: clear above every key by then (``planner.play.highclear``),
+        and, where it strikes again after ``after_s`` (``expect``), at crossing height in
+        time to move across and down onto that key on time (its lift's end is where its
+        move across starts: a finger striking the move's note lifts that early even where
+        the arm starts later); where no checked path takes it there, by the lift that
+        ends at ``arm_s``."""
+        up = up_move(self.moves, st)
+        by_end = arm_s - up.duration_s + up.cross_s
+        latest = arm_s - self.moves.rise_clear_s(st.entry, up.move) + up.cross_s
+        times, notes = self._next.get(st.entry.finger, ((), ()))
+        i = bisect.bisect_right(times, after_s)
+        if i < len(times):
+            e = self.entry(notes[i])
+            across = None if e is None else (None if e is st.entry else self.moves.across(
+                st.entry, e))
+            if e is None or across is None and e is not st.entry:
+                return by_end
+            across_s = 0.0 if across is None else across.duration_s
+            high_by = times[i] - self.moves.descend(e, "high").cross_s - across_s
+            latest = min(latest, high_by - up.duration_s + up.cross_s)
+        return latest
 
     def cut(self, note: int, release_s: float) -> None:
         """The programme cut ``note`` (held) at ``release_s``: its key comes up by then."""

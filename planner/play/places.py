@@ -25,6 +25,7 @@ import numpy as np
 from planner.hand.model import HandModel
 from planner.play.atlas import PATH_SAMPLES, Atlas, AtlasEntry, posture_count
 from planner.play.follow import canonical_pitch, follow_ends, paths_clear
+from planner.play.highclear import HighClear
 from planner.play.idle import IdleFingers
 from planner.play.moves import Moves, path_acceleration_cap
 from planner.play.profile import Move, capped_move, path_caps
@@ -43,6 +44,7 @@ class Places:
         self.hand = hand
         self.atlases = tuple(Atlas(hand, posture=i) for i in range(posture_count(hand)))
         self.moves = tuple(Moves(hand, a) for a in self.atlases)
+        self.high = HighClear(hand, self.atlases)  # (when a tip is high enough for the arm)
         self.atlas, self.home = self.atlases[0], self.moves[0]  # (the rest pose's posture)
         self.rail = self.atlas.rail
         self.reach = hand.index.get("reach")
@@ -207,6 +209,25 @@ class Places:
 
     def after_rail_s(self, e: AtlasEntry) -> float:
         return self.moves[e.posture].after_rail_s(e)
+
+    def rail_lift_s(self, e: AtlasEntry) -> float:
+        """Key up to the lifting finger clear above every key for good: the arm may move
+        from then on (``planner.play.highclear``; ``before_rail_s`` is to the lift's end)."""
+        u = self.lift(e, "high")
+        return max(0.0, self.high.rise_clear_s(e, u.move) - u.cross_s)
+
+    def rail_descent_s(self, e: AtlasEntry) -> float:
+        """The start of the descent from crossing height that the arm must have ended
+        by, to key down: the descent's part below the clear height (``after_rail_s`` is
+        all of it)."""
+        d = self.descend(e, "high")
+        return max(0.0, d.cross_s - self.high.descent_clear_s(e, d.move))
+
+    def rise_clear_s(self, e: AtlasEntry, move: Move) -> float:
+        return self.high.rise_clear_s(e, move)
+
+    def descent_clear_s(self, e: AtlasEntry, move: Move) -> float:
+        return self.high.descent_clear_s(e, move)
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         """A finger's lift from ``a``, its move across and its descent onto ``b`` (the

@@ -1,0 +1,114 @@
+"""When a finger going up or down is high enough for the arm to move under it.
+
+The arm moves (the rail, the reach axis) only while every finger that does not follow its
+key is clear above every key top wherever the rail is: with the body rule, every body of
+the finger ``CLEARANCE_M`` above the black keys' tops (the clearance a tip keeps over a
+key it passes, ``planner.play.atlassolve``); without it, the tip above ``HIGH_SAFE_Z_M``
+(``planner.play.movetable``: the rule a finger's own move across at crossing height
+keeps while the arm moves). A lift to crossing height (the tip at ``HIGH_Z_M``, 7.5 mm
+above the black tops) passes that height before its end, and a descent from crossing
+height leaves it after its start: the arm may start once every lifting finger is above
+it for good, and a descent may start while the arm still moves, as long as the finger
+stays above it until the arm is still. The lift's slow last millimetres (the profile's
+braking) and the descent's first overlap the arm's move instead of adding to it (a
+pose at crossing height whose body is not that high: the whole lift, as before).
+
+``HighClear`` finds, for a straight move of one finger's joints (``profile.Move``), the
+time from which (a rise) or until which (a descent) the finger stays above that height: the
+point of the path where it crosses it, by forward kinematics at ``SAMPLES`` points and
+bisection between the two around the crossing (the height along a straight
+joint-space move between poses straight above the key is monotone there), then the
+time at which the move's profile reaches that point. The path's point is memoised per
+entry and poses; the time is the move's own (a move slowed for the motors reaches it
+later).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.hand.model import HandModel
+from planner.music import keyboard as kb
+from planner.play.atlas import Atlas, AtlasEntry
+from planner.play.atlassolve import CLEARANCE_M
+from planner.play.movetable import HIGH_SAFE_Z_M
+from planner.play.profile import Move
+
+SAMPLES = 5  # points of the path tested by forward kinematics (ends included)
+BISECTIONS = 5  # then halvings between the two samples around the crossing: 1/128 of
+# the path (about 0.25 mm of a 30 mm lift), the answer on the safe side
+BODY_CLEAR_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M  # every body this high clears every key
+TIME_STEPS = 400  # the time is read from the profile at this many steps (the later/
+# earlier one, on the safe side: 0.15 ms of a 60 ms lift)
+
+
+class HighClear:
+    """The moments a finger passes the height that clears every key, on its way up or
+    down."""
+
+    def __init__(self, hand: HandModel, atlases: tuple[Atlas, ...]) -> None:
+        self.hand = hand
+        self.atlases = atlases
+        self._path: dict[tuple, float] = {}
+
+    def rise_clear_s(self, e: AtlasEntry, move: Move) -> float:
+        """Seconds into ``move`` (``e``'s finger rising) from which it stays clear above
+        every key to the move's end (its duration if it never is, or only at
+        the end)."""
+        s = self._point(e, move, True)
+        if s <= 0.0 or move.duration_s <= 0.0:
+            return 0.0
+        t = np.linspace(0.0, move.duration_s, TIME_STEPS + 1)
+        i = int(np.searchsorted(move.s(t), s, side="left"))
+        return float(t[min(i, TIME_STEPS)])
+
+    def descent_clear_s(self, e: AtlasEntry, move: Move) -> float:
+        """Seconds into ``move`` (``e``'s finger descending from crossing height) until
+        which it stays clear above every key (0 if it starts below that)."""
+        s = self._point(e, move, False)
+        if s <= 0.0 or move.duration_s <= 0.0:
+            return 0.0
+        t = np.linspace(0.0, move.duration_s, TIME_STEPS + 1)
+        i = int(np.searchsorted(move.s(t), s, side="right")) - 1
+        return float(t[max(i, 0)])
+
+    def _point(self, e: AtlasEntry, move: Move, rising: bool) -> float:
+        """The path parameter where the finger crosses the clear height: rising, the least
+        from which every point after it is clear (1: none but the end); descending, the
+        greatest up to which every point is (0: the start is not). A descent from a pose
+        is the lift to it backwards: one search for both (memoised by the low end and
+        the way up)."""
+        low, up = (move.q_a, move.dq) if rising else (move.q_a + move.dq, -move.dq)
+        key = (id(e), low.tobytes(), up.tobytes())
+        got = self._path.get(key)
+        if got is None:
+            got = self._path[key] = self._rise_point(e, low, up)
+        return got if rising else 1.0 - got
+
+    def _rise_point(self, e: AtlasEntry, q_low: np.ndarray, dq: np.ndarray) -> float:
+        ss = np.linspace(0.0, 1.0, SAMPLES)
+        bad = [i for i, s in enumerate(ss) if not self._clear(e, q_low + s * dq)]
+        if not bad:
+            return 0.0
+        i = bad[-1]
+        if i == SAMPLES - 1:
+            return 1.0
+        lo, hi = ss[i], ss[i + 1]  # (lo below, hi clear: the answer hi, the safe side)
+        for _ in range(BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            if self._clear(e, q_low + mid * dq):
+                hi = mid
+            else:
+                lo = mid
+        return float(hi)
+
+    def _clear(self, e: AtlasEntry, q_finger: np.ndarray) -> bool:
+        h = self.hand
+        q = self.atlases[e.posture].base.copy()
+        q[h.joint_slice(e.finger)] = q_finger
+        q = h.apply_couplings(q)
+        bodies = self.atlases[e.posture].bodies
+        if bodies is None:
+            return bool(h.tip_position(q, h.fingers.index(e.finger))[2] >= HIGH_SAFE_Z_M)
+        p, r = bodies.points(q, e.finger)
+        return bool(np.min(p[:, 2] - r) >= BODY_CLEAR_Z_M)
