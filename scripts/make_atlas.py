@@ -6,9 +6,10 @@ about 1 ms a pose); the table saves that time and holds exactly what the solver 
 It also writes the hand's move table (``planner.play.movetable``: every entry's key
 crossings, which pairs of entries a finger moves between clear of the keys, which it
 can hold a key down between while the rail moves: ``planner/tables/moves-<URDF
-hash>.npz``), which the planner would otherwise find by forward kinematics when it first
-needs them. Run from the repository root after changing a hand, the IK, the atlas or
-the moves:
+hash>.npz``; with several play postures also the moves across from another posture's
+entries and the arm's moves between postures at every step of the rail), which the
+planner would otherwise find by forward kinematics when it first needs them. Run from
+the repository root after changing a hand, the IK, the atlas or the moves:
 
     python scripts/make_atlas.py [--hand NAME] [--moves-only]
 
