@@ -6,9 +6,10 @@ about 1 ms a pose); the table saves that time and holds exactly what the solver 
 It also writes the hand's move table (``planner.play.movetable``: every entry's key
 crossings, which pairs of entries a finger moves between clear of the keys, which it
 can hold a key down between while the rail moves: ``planner/tables/moves-<URDF
-hash>.npz``), which the planner would otherwise find by forward kinematics when it first
-needs them. Run from the repository root after changing a hand, the IK, the atlas or
-the moves:
+hash>.npz``; with several play postures also the moves across from another posture's
+entries and the arm's moves between postures at every step of the rail), which the
+planner would otherwise find by forward kinematics when it first needs them. Run from
+the repository root after changing a hand, the IK, the atlas or the moves:
 
     python scripts/make_atlas.py [--hand NAME] [--moves-only]
 
@@ -16,6 +17,7 @@ the moves:
 """
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -27,10 +29,12 @@ from planner.play.atlas import Atlas, posture_count, table_path
 from planner.play.moves import Moves
 from planner.play.movetable import MoveTable, make_table
 from planner.play.movetable import table_path as moves_path
+from planner.play.places import RAIL_STEP_M, Places
 
 
-def make(hand, posture: int, moves_only: bool) -> None:
-    """The atlas and the move table of one play posture of ``hand``."""
+def make(hand, posture: int, moves_only: bool) -> Atlas:
+    """The atlas of one play posture of ``hand`` (solved in full, written unless
+    ``moves_only``)."""
     path = table_path(hand.urdf_sha256, posture)
     atlas = Atlas(hand, posture=posture)
     t0 = time.perf_counter()
@@ -42,13 +46,36 @@ def make(hand, posture: int, moves_only: bool) -> None:
         atlas.save(path)
         print(f"{path}: {n} entries of {len(atlas._entries)} samples, {atlas.solves} IK "
               f"solves, {time.perf_counter() - t0:.1f} s")
+    return atlas
+
+
+def make_moves(hand, atlases: list[Atlas], posture: int, places: Places | None) -> None:
+    """The move table of one play posture, with the pairs from every other posture's
+    entries and the arm's moves to the postures after it (``Places.arm_time_s``, every
+    step of the rail's travel; ``places``: the hand's, None with one posture)."""
     t1 = time.perf_counter()
+    atlas = atlases[posture]
     moves = Moves(hand, atlas)
     # (found afresh, not read back)
     moves.table = MoveTable(hand.fingers, atlas.natural_dx, posture)
     out = moves_path(hand.urdf_sha256, posture)
-    make_table(moves, out, moves.params())
+    n = make_table(moves, out, moves.params(),
+                   [(a, None if places is None or i < posture else _arm_s(places, posture, i))
+                    for i, a in enumerate(atlases) if i != posture])
     print(f"{out}: the moves of {n} entries, {time.perf_counter() - t1:.1f} s")
+
+
+def _arm_s(places: Places, posture: int, other: int) -> tuple[int, list[float]]:
+    """The arm's move from ``posture`` at rail 0 to ``other`` at every step of the rail
+    that its travel allows (``Places.arm_time_s``' question): the first step and the
+    durations."""
+    r = places.rail
+    lo = math.ceil(places.hand.plan_lower[r] / RAIL_STEP_M)
+    hi = math.floor(places.hand.plan_upper[r] / RAIL_STEP_M)
+    steps = range(lo - hi, hi - lo + 1)
+    return steps[0], [places.arm_move((0.0, places.reach_m(posture)),
+                                      (s * RAIL_STEP_M, places.reach_m(other))).duration_s
+                      for s in steps]
 
 
 def main() -> int:
@@ -58,8 +85,10 @@ def main() -> int:
                     help="keep the shipped atlas; write the move table of its entries")
     a = ap.parse_args()
     hand = load_hand(a.hand)
-    for i in range(posture_count(hand)):
-        make(hand, i, a.moves_only)
+    atlases = [make(hand, i, a.moves_only) for i in range(posture_count(hand))]
+    places = Places(hand) if len(atlases) > 1 and atlases[0].rail is not None else None
+    for i in range(len(atlases)):
+        make_moves(hand, atlases, i, places)
     return 0
 
 

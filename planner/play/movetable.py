@@ -10,7 +10,16 @@ of entries, found once per hand and shipped beside the atlas
   is clear of the keys (``Moves.across``);
 * for every pair of one finger's entries on one key (two places relative to the rail),
   whether the finger can hold the key down while the rail carries it from one to the
-  other (``Moves.follow``).
+  other (``Moves.follow``);
+* across play postures (a hand with several, ``planner.play.places``): for every pair of
+  one finger's entries, one of another posture (``a``) and one of the table's own
+  (``b``), whether its move across at crossing height is clear (the arm in ``b``'s
+  posture, ``Places.move_gap_s``), the other postures' entries in their own tables'
+  order (their keys kept beside, the matrix used only where they match); and the arm's
+  move to each later posture at every step of the rail (``Places.arm_time_s``). (A
+  finger holding its key from another posture's entry, ``Places.follow_clear``, is not
+  here: the body rule's follow test of every such pair would take about half an hour
+  a hand on two cores, measured on one key's 65 x 65 pairs, 16 s.)
 
 A planner that meets a hand without a table finds each of these when first needed
 (about 4 000 pairs a song, most of a cold plan's time: ``docs/history/play-second-design.md``).
@@ -69,6 +78,15 @@ class MoveTable:
         self._across: dict[str, np.ndarray] = {}
         self._follow: dict[tuple[str, int], np.ndarray] = {}
         self._keys: dict[int, tuple] = {}  # (entry, its ``key``) by the entry's id
+        self.keys: list[tuple[str, int, int]] = []  # (the entries' keys, the table's order)
+        # (across postures, by the other posture: its entries' keys, their places, and
+        # the matrices by finger)
+        self.cross_keys: dict[int, list[tuple[str, int, int]]] = {}
+        self._x_index: dict[int, dict[tuple[str, int, int], tuple[int, int]]] = {}
+        self._x_across: dict[tuple[str, int], np.ndarray] = {}
+        # (the arm's moves to another posture: by it, the rail's steps of the first
+        # duration and the durations, step by step: ``Places.arm_time_s``)
+        self._x_arm: dict[int, tuple[int, list[float]]] = {}
 
     def key(self, e: AtlasEntry) -> tuple[str, int, int]:
         got = self._keys.get(id(e))  # (by the entry, held: its id is not reused)
@@ -87,6 +105,10 @@ class MoveTable:
         return None if row is None else float(row[column])
 
     def across_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool | None:
+        if a.posture != self.posture:  # (from another posture's entry: ``cross_pair``)
+            got = self._cross_pair(a, b)
+            m = None if got is None else self._x_across.get((a.finger, a.posture))
+            return None if m is None else bool(m[got[0][0], got[1][0]])
         ia, ib = self._index.get(self.key(a)), self._index.get(self.key(b))
         if ia is None or ib is None or a.finger not in self._across:
             return None
@@ -105,6 +127,23 @@ class MoveTable:
         key (None: not in the table)."""
         return self._index.get(self.key(e))
 
+    def arm_s(self, other: int, steps: int) -> float | None:
+        """The arm's move from this posture at rail 0 to posture ``other`` at ``steps`` of
+        the rail (``Places.arm_move``'s duration; None: not in the table)."""
+        got = self._x_arm.get(other)
+        if got is None or not 0 <= steps - got[0] < len(got[1]):
+            return None
+        return got[1][steps - got[0]]
+
+    def _cross_pair(self, a: AtlasEntry, b: AtlasEntry):
+        """The places of ``a`` (another posture's entry) among its posture's and of ``b``
+        among this table's, or None."""
+        index = self._x_index.get(a.posture)
+        if index is None or b.posture != self.posture:
+            return None
+        ia, ib = index.get(self.key(a)[:3]), self._index.get(self.key(b))
+        return None if ia is None or ib is None else (ia, ib)
+
     def follow_clear(self, a: AtlasEntry, b: AtlasEntry) -> bool | None:
         ia, ib = self._index.get(self.key(a)), self._index.get(self.key(b))
         m = self._follow.get((a.finger, a.pitch_class))
@@ -122,7 +161,10 @@ class MoveTable:
             keys = [(self.fingers[int(f)], int(pc), int(k)) for f, pc, k in z["key"]]
             for key, row, sc in zip(keys, z["cross_s"], z["tendon_scale"]):
                 self.crossings[key], self.scales[key] = row, sc
-            self._index = _indices(keys)
+            self._index, self.keys = _indices(keys), keys
+            for name in z.files:  # (across postures: ``make_table``'s ``others``)
+                if name.startswith("xkey_"):
+                    self._load_cross(z, int(name[5:]))
             for f in self.fingers:
                 n = sum(k[0] == f for k in keys)
                 if f"across_{f}" in z:
@@ -132,6 +174,24 @@ class MoveTable:
                     if name in z:
                         m = sum(k[0] == f and k[1] == pc for k in keys)
                         self._follow[(f, pc)] = _unpack(z[name], m)
+
+
+    def _load_cross(self, z, other: int) -> None:
+        keys = [(self.fingers[int(f)], int(pc), int(k)) for f, pc, k in z[f"xkey_{other}"]]
+        self.cross_keys[other], self._x_index[other] = keys, _indices(keys)
+        if f"xarm_{other}" in z:
+            self._x_arm[other] = (int(z[f"xarm_lo_{other}"]), z[f"xarm_{other}"].tolist())
+        for f in self.fingers:
+            n_a, n_b = (sum(k[0] == f for k in ks) for ks in (keys, self.keys))
+            name = f"xacross_{f}_{other}"
+            if name in z:
+                self._x_across[(f, other)] = _unpack(z[name], n_a, n_b)
+
+    def drop_cross(self, other: int) -> None:
+        """Forget the pairs from posture ``other`` (its entries are not those the table
+        was made with: ``Places`` compares the keys)."""
+        self._x_index.pop(other, None)
+        self._x_arm.pop(other, None)
 
 
 def _indices(keys) -> dict[tuple[str, int, int], tuple[int, int]]:
@@ -144,18 +204,29 @@ def _indices(keys) -> dict[tuple[str, int, int], tuple[int, int]]:
     return out
 
 
-def _unpack(bits: np.ndarray, n: int) -> np.ndarray:
-    return np.unpackbits(bits, count=n * n).astype(bool).reshape(n, n)
+def _unpack(bits: np.ndarray, n: int, m: int | None = None) -> np.ndarray:
+    m = n if m is None else m
+    return np.unpackbits(bits, count=n * m).astype(bool).reshape(n, m)
 
 
 # ---------------------------------------------------------------------- making it
-def make_table(moves, path: Path, params: str) -> int:
-    """Find every answer for ``moves``' atlas (solved in full) and write the table;
-    returns the number of entries."""
-    atlas, hand = moves.atlas, moves.hand
+def table_entries(atlas) -> tuple[list, list[AtlasEntry]]:
+    """An atlas's (solved in full) entries' keys and entries, in a table's order."""
+    hand = atlas.hand
     order = sorted((k for k, e in atlas._entries.items() if e is not None),
                    key=lambda k: (hand.fingers.index(k[0]), k[1], k[2]))
-    entries = [atlas._entries[k] for k in order]
+    return order, [atlas._entries[k] for k in order]
+
+
+def make_table(moves, path: Path, params: str, others=()) -> int:
+    """Find every answer for ``moves``' atlas (solved in full) and write the table;
+    ``others``: the hand's other play postures' atlases (solved in full) and the arm's
+    moves to each (the rail's first step and the
+    durations step by step, ``Places.arm_time_s``; or None), for the pairs across
+    postures. Returns the number of
+    entries."""
+    atlas, hand = moves.atlas, moves.hand
+    order, entries = table_entries(atlas)
     arrays: dict[str, np.ndarray] = {
         "key": np.array([(hand.fingers.index(f), pc, k) for f, pc, k in order],
                         dtype=np.int16).reshape(-1, 3),
@@ -174,21 +245,53 @@ def make_table(moves, path: Path, params: str) -> int:
             on_key = [e for e in mine if e.pitch_class == pc]
             if on_key:
                 arrays[f"follow_{f}_{pc}"] = np.packbits(_follow_matrix(moves, f, pc, on_key))
+    for other, arm_s in others:
+        arrays.update(_cross_arrays(moves, entries, other))
+        if arm_s is not None:  # (the arm's moves to the other posture, every step)
+            lo, durations = arm_s
+            arrays[f"xarm_lo_{other.posture_index}"] = np.array(lo)
+            arrays[f"xarm_{other.posture_index}"] = np.array(durations, dtype=float)
     with open(path, "wb") as fh:
         np.savez_compressed(fh, **arrays)
     return len(entries)
 
 
-def _pair_tips(moves, finger: str, cols: np.ndarray, A: np.ndarray, S: np.ndarray) -> np.ndarray:
+def _cross_arrays(moves, entries: list[AtlasEntry], other) -> dict:
+    """The pairs from the entries of ``other`` (another posture's atlas) to ``entries``
+    (``moves``' own): ``Moves.across``' test at this posture's natural pose, with the
+    other posture's keys."""
+    hand, p = moves.hand, other.posture_index
+    order, theirs = table_entries(other)
+    out = {f"xkey_{p}": np.array([(hand.fingers.index(f), pc, k) for f, pc, k in order],
+                                 dtype=np.int16).reshape(-1, 3)}
+    S = np.array(ACROSS_SAMPLES)
+    for f in hand.fingers:
+        mine, yours = [e for e in entries if e.finger == f], [e for e in theirs if e.finger == f]
+        if not mine or not yours:
+            continue
+        A = np.array([e.high for e in yours] + [e.high for e in mine])
+        z = _pair_tips(moves, f, moves.js[f], A, S, len(yours))[:, 2]
+        out[f"xacross_{f}_{p}"] = np.packbits(
+            (z >= HIGH_SAFE_Z_M).reshape(-1, len(S)).all(axis=1))
+    return out
+
+
+def _pair_tips(moves, finger: str, cols: np.ndarray, A: np.ndarray, S: np.ndarray,
+               split: int | None = None) -> np.ndarray:
     """The finger's tip positions (n * n * len(S), 3) along the straight move between
     every pair (i, j) of the rows of ``A`` (values of the joints ``cols``, the rest of
     the hand at the atlas's natural posture), at each path parameter of ``S``: row
-    (i * n + j) * len(S) + s."""
+    (i * n + j) * len(S) + s. ``split``: only the pairs from the first ``split`` rows to
+    the others (row (i * (n - split) + j) * len(S) + s)."""
     n = len(A)
-    I, J = np.divmod(np.arange(n * n), n)
+    if split is None:
+        I, J = np.divmod(np.arange(n * n), n)
+    else:
+        I, J = np.divmod(np.arange(split * (n - split)), n - split)
+        J = J + split
     chain = FrameChain(moves.hand, f"{finger}_tip")
     base = moves.atlas.base
-    out = np.empty((n * n * len(S), 3))
+    out = np.empty((len(I) * len(S), 3))
     for lo in range(0, len(out), _BATCH):
         hi = min(len(out), lo + _BATCH)
         pair, s = np.divmod(np.arange(lo, hi), len(S))

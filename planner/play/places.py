@@ -45,6 +45,10 @@ class Places:
         self.atlases = tuple(Atlas(hand, posture=i) for i in range(posture_count(hand)))
         self.moves = tuple(Moves(hand, a) for a in self.atlases)
         self.high = HighClear(hand, self.atlases)  # (when a tip is high enough for the arm)
+        for m in self.moves:  # (the pairs across postures only where made with their entries)
+            for p, keys in m.table.cross_keys.items():
+                if p >= len(self.moves) or keys != self.moves[p].table.keys:
+                    m.table.drop_cross(p)
         self.atlas, self.home = self.atlases[0], self.moves[0]  # (the rest pose's posture)
         self.rail = self.atlas.rail
         self.reach = hand.index.get("reach")
@@ -144,10 +148,13 @@ class Places:
         else:
             key = (pa, pb, steps) if pa < pb else (pb, pa, -steps)
         got = self._arm_s.get(key)
+        if got is None and pa != pb:  # (the move table's, made by the same ``arm_move``)
+            got = self.moves[key[0]].table.arm_s(key[1], key[2])
         if got is None:
-            got = self._arm_s[key] = self.arm_move(
+            got = self.arm_move(
                 (0.0, self.reach_m(key[0])), (key[2] * RAIL_STEP_M, self.reach_m(key[1]))
             ).duration_s
+        self._arm_s[key] = got
         return got
 
     def arm_move(self, a: tuple[float, float], b: tuple[float, float]) -> Move:
