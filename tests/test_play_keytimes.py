@@ -11,34 +11,37 @@ import pytest
 import planner
 from planner.hand.model import load_hand
 from planner.play.keytimes import (
-    KEY_DOWN_ROWS,
-    KEY_UP_ROWS,
-    ROW_MARGIN,
+    DRIVE_LAG_S,
+    ROW_MARGIN_S,
+    down_rows,
     key_down_s,
     key_up_s,
     sounding_frames,
+    up_rows,
 )
 
 
-@pytest.mark.parametrize("rate_hz", [100.0, 50.0, 120.0])
-def test_crossings_sit_at_the_edges_of_their_row_intervals(rate_hz):
-    """Down: within the row interval before the note's first row, ``ROW_MARGIN`` after the
-    row before it; up: within the interval before the first row at or after its end,
-    ``ROW_MARGIN`` before that row; and a note's frames are its rows."""
+@pytest.mark.parametrize(("rate_hz", "down"), [(100.0, 0.9), (120.0, 0.88), (50.0, 0.5),
+                                               (1.0, 0.5)])
+def test_crossings_lead_the_drive_lag_within_their_row_intervals(rate_hz, down):
+    """Down: inside the row interval before the note's first row, ``DRIVE_LAG_S`` before
+    that row where the rows leave room (at least the middle, at least ``ROW_MARGIN_S``
+    after the row before); up: inside the interval before the first row at or after its
+    end, as far after the note's last row; and a note's frames are its rows."""
     dt = 1.0 / rate_hz
+    assert down_rows(dt) == pytest.approx(down) and up_rows(dt) == pytest.approx(1.0 - down)
     rng = np.random.default_rng(7)
-    onsets = np.concatenate([rng.uniform(0.0, 20.0, 500), np.arange(0, 200) * dt])
+    onsets = np.concatenate([rng.uniform(0.0, 20.0, 300), np.arange(0, 200) * dt])
     for on in onsets.tolist():
         off = on + float(rng.uniform(dt, 2.0))
         first = math.ceil(on / dt - 1e-9)  # the note's first row
         after = math.ceil(off / dt - 1e-9)  # the first row at or after its end
-        down, up = key_down_s(on, dt), key_up_s(off, dt)
-        assert (first - 1) * dt < down < first * dt
-        assert down - (first - 1) * dt == pytest.approx(ROW_MARGIN * dt, abs=1e-9)
-        assert (after - 1) * dt < up < after * dt
-        assert after * dt - up == pytest.approx(ROW_MARGIN * dt, abs=1e-9)
-        assert sounding_frames(down, up, dt) == pytest.approx(after - first, abs=1e-6)
-    assert KEY_DOWN_ROWS > 0.5 > KEY_UP_ROWS  # (earlier and later than the middle)
+        d, u = key_down_s(on, dt), key_up_s(off, dt)
+        assert (first - 1) * dt + ROW_MARGIN_S - 1e-12 <= d <= first * dt - 0.5 * dt + 1e-12
+        assert first * dt - d == pytest.approx(max(0.5 * dt, min(DRIVE_LAG_S, dt - ROW_MARGIN_S)))
+        assert (after - 1) * dt + 0.5 * dt - 1e-12 <= u <= after * dt - ROW_MARGIN_S + 1e-12
+        assert u - (after - 1) * dt == pytest.approx(first * dt - d)
+        assert sounding_frames(d, u, dt) == pytest.approx(after - first, abs=1e-6)
 
 
 def test_fast_notes_sound_in_physics_from_their_first_row(tmp_path):

@@ -20,38 +20,55 @@ of a 10 ms row at the descent's 3-4.5 mm per row) and comes up before it. Crossi
 middle of the interval (as the plan did) left the physics one frame short at about a
 third of the fast notes' starts and the chords' ends.
 
-The plan therefore crosses as early as the row grid allows going down and as late as it
-allows going up: ``KEY_DOWN_ROWS`` before the note's first row (``ROW_MARGIN`` of a row
-after the row before it, which the check then sees up), ``KEY_UP_ROWS`` before the first
-row after the note (``ROW_MARGIN`` of a row before it). The check judges the rows as they
-are and scores them the same; the physics gains the margin it lacks.
+The plan therefore leads by that lag where its rows leave room: the key-down crossing
+that much before the note's first row (``down_rows``) and the key-up crossing that much
+after its last (``up_rows`` before the row after it), ``DRIVE_LAG_S`` in rows but never less than half a row (the interval's
+middle, where the plan crossed before) nor closer than ``ROW_MARGIN_S`` to the
+neighbouring row (which the check then sees up). At 100 Hz that is 0.9 of a row each
+way; at 50 Hz and slower the middle, as before. The check judges the rows as they are
+and scores them the same; the physics gains the margin it lacks.
 """
 
 from __future__ import annotations
 
 import math
 
-# Kept from the neighbouring row, in rows: the key crossing is found to ``moves.CROSS_TOL``
-# of its move's path (microseconds) and the rows are floats written to 1e-9; a tenth of a
-# row (1 ms at 100 Hz, the physics replay's step) keeps the row before a note up and the
-# row after it free by the rows, with three orders of magnitude to spare.
-ROW_MARGIN = 0.1
-KEY_DOWN_ROWS = 1.0 - ROW_MARGIN  # the key-down crossing, rows before the note's first row
-KEY_UP_ROWS = ROW_MARGIN  # the key-up crossing, rows before the first row after the note
+# The hand's lag on a key in the physics replay, as a time: 2-2.5 mm of descent at the
+# crossing's 0.3-0.45 m/s, 4.4-8.3 ms on the sample songs (history above); 10 ms bounds it.
+DRIVE_LAG_S = 0.010
+# Kept from the neighbouring row: the key crossing is found to ``moves.CROSS_TOL`` of its
+# move's path (microseconds) and the rows are floats written to 1e-9; 1 ms (the physics
+# replay's step) keeps the row before a note up and the row after it free by the rows,
+# three orders of magnitude to spare.
+ROW_MARGIN_S = 0.001
+
+
+def down_rows(dt_s: float) -> float:
+    """How far (rows) the key-down crossing precedes a note's first row, at rows ``dt_s``
+    apart: the lag in rows, at least half a row, at most a row less the margin."""
+    rate = 1.0 / dt_s
+    return max(0.5, min(DRIVE_LAG_S * rate, 1.0 - ROW_MARGIN_S * rate))
+
+
+def up_rows(dt_s: float) -> float:
+    """How far (rows) the key-up crossing precedes the first row after a note: a row less
+    ``down_rows`` (the lag after its last row), computed from the margin side."""
+    rate = 1.0 / dt_s
+    return min(0.5, max(1.0 - DRIVE_LAG_S * rate, ROW_MARGIN_S * rate))
 
 
 def key_down_s(onset_s: float, dt_s: float) -> float:
     """When the rows put a key down for a note starting at ``onset_s``."""
-    return (math.ceil(onset_s / dt_s - 1e-9) - KEY_DOWN_ROWS) * dt_s
+    return (math.ceil(onset_s / dt_s - 1e-9) - down_rows(dt_s)) * dt_s
 
 
 def key_up_s(offset_s: float, dt_s: float) -> float:
     """When the rows let a key up for a note (or a hold) ending at ``offset_s``."""
-    return (math.ceil(offset_s / dt_s - 1e-9) - KEY_UP_ROWS) * dt_s
+    return (math.ceil(offset_s / dt_s - 1e-9) - up_rows(dt_s)) * dt_s
 
 
 def sounding_frames(down_s: float, up_s: float, dt_s: float) -> float:
     """The rows a key put down at ``down_s`` (``key_down_s``) and let up at ``up_s``
     (``key_up_s``) sounds: the frames between the two crossings, less the parts of a row
     they sit inside the neighbouring row intervals."""
-    return (up_s - down_s) / dt_s - (KEY_DOWN_ROWS - KEY_UP_ROWS)
+    return (up_s - down_s) / dt_s - (down_rows(dt_s) - up_rows(dt_s))
