@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 
 # The hand's lag on a key in the physics replay, as a time: 2-2.5 mm of descent at the
-# crossing's 0.3-0.45 m/s, 4.4-8.3 ms on the sample songs (history above); 10 ms bounds it.
+# crossing's 0.3-0.45 m/s, 4.4-8.3 ms on the sample songs (the history page above); 10 ms bounds it.
 DRIVE_LAG_S = 0.010
 # Kept from the neighbouring row: the key crossing is found to ``moves.CROSS_TOL`` of its
 # move's path (microseconds) and the rows are floats written to 1e-9; 1 ms (the physics
