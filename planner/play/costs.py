@@ -24,6 +24,7 @@ from planner.music import keyboard as kb
 from planner.music.keyboard import pitch_name
 from planner.play.armcost import LATE_MIN_S, ArmCosts
 from planner.play.force import press_force_n
+from planner.play.keytimes import key_down_s, key_up_s, sounding_frames
 from planner.play.places import RAIL_STEP_M, Places
 
 RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing
@@ -122,7 +123,7 @@ class Prev:
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
         # (a held note let go at this event: its key comes up when the new notes' go down)
-        self.cut_up = cut_up = (math.ceil(t / costs.dt - 1e-9) - 0.5) * costs.dt
+        self.cut_up = cut_up = key_up_s(t, costs.dt)
         pitch, t_up, t_down = costs.pitch, costs._t_up, costs._t_down
         self.held = [(m, f) for m, f in state.fingers if costs.offset[m] > t + ONSET_TOL_S]
         self.last = {f: (m, r) for m, f, r in state.last_notes}
@@ -193,8 +194,8 @@ class Costs(ArmCosts):
         self.pitch = [n.pitch for n in notes]
         self.force = [press_force_n(n.velocity) for n in notes]
         self.offset = [n.offset_s for n in notes]
-        self._t_down = [(math.ceil(n.onset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
-        self._t_up = [(math.ceil(n.offset_s / self.dt - 1e-9) - 0.5) * self.dt for n in notes]
+        self._t_down = [key_down_s(n.onset_s, self.dt) for n in notes]
+        self._t_up = [key_up_s(n.offset_s, self.dt) for n in notes]
         # (two hands: per note, the rail's grid indices it may be pressed from, the other
         # hand's clearance kept; None: the whole travel, as one hand plays)
         self.bound: list[tuple[int, int]] | None = None if rail_bounds is None else [
@@ -329,15 +330,17 @@ class Costs(ArmCosts):
 
     # ------------------------------------------------------------------ timing model
     def t_down(self, note: int) -> float:
-        """When the key should go down: half a frame before the note's first row."""
+        """When the key should go down: early in the row before the note's first row
+        (``keytimes.key_down_s``)."""
         return self._t_down[note]
 
     def frames(self, note: int) -> float:
         """The frames ``note`` sounds (what leaving it out costs)."""
-        return (self._t_up[note] - self._t_down[note]) / self.dt
+        return sounding_frames(self._t_down[note], self._t_up[note], self.dt)
 
     def t_up(self, note: int) -> float:
-        """When it should come up: half a frame before the first row at or after its end."""
+        """When it should come up: late in the row before the first row at or after its
+        end (``keytimes.key_up_s``)."""
         return self._t_up[note]
 
     def entry(self, note: int, finger: str, place: int):

@@ -11,9 +11,11 @@ the plan safe are few and hold by construction:
   is higher than a black key's top, at any rail), or holds its key down following it
   (``planner.play.follow``: tip on the key, body holding it down and clear of every
   other key, checked along the very move; into another posture too);
-* a key goes down half a frame before the note's first row and comes up half a frame
-  before the first row at or after its end, or as close to that as the moves allow: down
-  later, up earlier, never the other way (a key down outside its note is a wrong note).
+* a key goes down early in the row before the note's first row and comes up late in the
+  row before the first row at or after its end (``planner.play.keytimes``: the hand the
+  servos drive lags its rows into a key and leaves it early), or as close to that as the
+  moves allow: down later, up earlier, never the other way (a key down outside its note
+  is a wrong note).
 
 Notes are placed in onset order (a causal schedule: later notes never move what was
 placed for earlier ones, except to lift a held finger before a rail move). A note whose
@@ -35,6 +37,7 @@ from planner.play.armmotion import ArmMotion, up_move
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
+from planner.play.keytimes import key_down_s, key_up_s
 from planner.play.places import Places
 from planner.play.profile import Move, path_s
 
@@ -316,12 +319,12 @@ class Motion(ArmMotion):
 
     # ------------------------------------------------------------------ timing targets
     def t_down(self, note: int) -> float:
-        return (math.ceil(self.notes[note].onset_s / self.dt - 1e-9) - 0.5) * self.dt
+        return key_down_s(self.notes[note].onset_s, self.dt)
 
     def t_up(self, note: int, release_s: float | None = None) -> float:
         end = self.notes[note].offset_s if release_s is None else min(release_s,
                                                                        self.notes[note].offset_s)
-        return (math.ceil(end / self.dt - 1e-9) - 0.5) * self.dt
+        return key_up_s(end, self.dt)
 
     # ------------------------------------------------------------------ placing
     def place(self, a: Assignment) -> Outcome:
