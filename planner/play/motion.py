@@ -31,13 +31,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from planner.check.criteria import NOTE_HIT_FRACTION
 from planner.music import keyboard as kb
 from planner.play.armload import within_motors
 from planner.play.armmotion import ArmMotion, up_move
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
-from planner.play.keytimes import key_down_s, key_up_s
+from planner.play.keytimes import DRIVE_LAG_S, ROW_MARGIN_S, key_down_s, key_up_s
 from planner.play.places import Places
 from planner.play.profile import Move, path_s
 
@@ -350,7 +351,8 @@ class Motion(ArmMotion):
         down_at, steps, start = found
         desc = timed_by.descend(e, start)
         press_end = down_at + desc.duration_s - desc.cross_s
-        up = self.t_up(a.note, a.release_s)
+        up = self._held_enough_s(a.note, down_at, self.t_up(a.note, a.release_s),
+                                 self.t_up(a.note))
         lift = self.moves.lift(e, "high")
         shortest = self.moves.press_min_s(e)
         if up - want < shortest:
@@ -381,6 +383,9 @@ class Motion(ArmMotion):
             return st.high_s
         up = up_move(self.moves, st)
         if st.pose == "press":
+            o = self.outcomes.get(st.note) if st.note is not None else None
+            if o is not None and o.down_s is not None and latest_s < st.up_s:
+                latest_s = self._held_enough_s(st.note, o.down_s, latest_s, st.up_s)
             t0 = min(st.up_s, latest_s) - up.cross_s
             t0 = max(t0, st.track.free_s, self.committed_s)
             self._shorten(st, t0 + up.cross_s)
@@ -390,6 +395,29 @@ class Motion(ArmMotion):
         st.safe_s = end - up.move.duration_s + self.moves.rise_clear_s(st.entry, up.move)
         st.pose, st.note, st.high_s = "high", None, end
         return end
+
+    def _held_enough_s(self, note: int, down_s: float, cut_s: float, up_s: float) -> float:
+        """The key-up of ``note`` (down at ``down_s``, due up at ``up_s``) cut to ``cut_s``
+        (a move needs the finger), kept down long enough that the hardware still sounds
+        the note where the check's rule does: a note the cut leaves down in at least
+        ``NOTE_HIT_FRACTION`` of its frames (a hit by the rows) stays down until that share
+        holds with the drive's lag at both ends (``DRIVE_LAG_S``: the key goes down later
+        and comes up earlier than the rows); a cut that loses the note anyway is left as
+        it is (the replay names it missed)."""
+        if cut_s >= up_s:
+            return cut_s
+        n, dt = self.notes[note], self.dt
+        k0, k1 = math.ceil(n.onset_s / dt - 1e-9), math.ceil(n.offset_s / dt - 1e-9)
+        need = math.ceil(NOTE_HIT_FRACTION * (k1 - k0) - 1e-9)  # the note's rows to hit it
+
+        def rows_down(a_s: float, b_s: float) -> int:  # its rows k with a_s <= k dt < b_s
+            return max(0, min(k1, math.ceil(b_s / dt - 1e-9))
+                       - max(k0, math.ceil(a_s / dt - 1e-9)))
+
+        if rows_down(down_s, cut_s) < need:
+            return cut_s
+        first = max(k0, math.ceil((down_s + DRIVE_LAG_S) / dt - 1e-9))
+        return min(up_s, max(cut_s, (first + need - 1) * dt + DRIVE_LAG_S + ROW_MARGIN_S))
 
     def _release_others_on(self, pitch: int, finger: str) -> float:
         """Another finger on key ``pitch`` (pressing or waiting) leaves it, on time, for
