@@ -47,7 +47,9 @@ def test_crossings_lead_the_drive_lag_within_their_row_intervals(rate_hz, down):
 def test_fast_notes_sound_in_physics_from_their_first_row(tmp_path):
     """The sample song ``fast`` (10-frame notes at 8.8 per second) planned and replayed
     in full contact: the physics finds every note the check finds and loses almost no
-    frame against it (a key struck at the middle of the row before its note, as the plan
+    frame against it: at most one a late note (a late key-down crosses where its move
+    brings it, not at its row's edge, so the drive's lag may cost its first frame), none
+    an on-time note (a key struck at the middle of the row before its note, as the plan
     did, sounded a frame late in physics at 16 of its 40 notes: 0.9007 against the check's
     0.9276)."""
     pytest.importorskip("mujoco")
@@ -63,4 +65,4 @@ def test_fast_notes_sound_in_physics_from_their_first_row(tmp_path):
     assert phys.play.notes_hit == check.play.notes_hit
     assert not phys.play.wrong_keys
     lost = (check.play.f1 - phys.play.f1) * phys.play.song_frames
-    assert lost <= 4.0, (check.play.f1, phys.play.f1)
+    assert lost <= len(check.play.late) + 1e-6, (check.play.f1, phys.play.f1, check.play.late)
