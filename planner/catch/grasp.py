@@ -36,10 +36,10 @@ Required force (``stop_force`` / ``hold_force``):
 * holding: ``F_req = -SAFETY * m g`` with the seed's safety factor 1.5 on the
   grip (David: "a safety factor of 1.5"), with moment balance.
 
-OSQP settings: eps_abs = eps_rel = 1e-6 (N), no polishing, one solver per problem
-size set up once and then updated and warm-started (problems of consecutive
-throws are alike: this is what keeps a plan within its latency budget); the
-result is accepted only if every motor is within 1e-4 of its capacity.
+OSQP settings: eps_abs = eps_rel = 1e-6 (N), no polishing, a solver set up for each
+problem (cold: a solver kept and warm-started from the previous throw's problem
+answered within the tolerance but with digits that depended on the throws planned
+before); the result is accepted only if every motor is within 1e-4 of its capacity.
 
 ``build_grasp_problem`` assembles the QP (pure data); ``solve_grasp`` solves it
 and raises ``InfeasibleError`` (primal infeasible: no force split keeps every
@@ -293,9 +293,8 @@ def build_grasp_problem(hand: HandModel, q: np.ndarray, contacts: list[Contact],
                         lower, upper)
 
 
-_SOLVERS: dict[tuple[int, int], DenseQp] = {}
 _SETTINGS = {"eps_abs": _EPS, "eps_rel": _EPS, "eps_prim_inf": 1e-6, "eps_dual_inf": 1e-6,
-                 "max_iter": 20000, "polishing": False, "warm_starting": True,
+                 "max_iter": 20000, "polishing": False, "warm_starting": False,
                  "adaptive_rho_interval": ADAPTIVE_RHO_INTERVAL}
 
 
@@ -309,11 +308,10 @@ class GraspFrictionError(InfeasibleError):
 
 
 def _osqp_solve(prob: GraspProblem):
-    """OSQP on ``prob``: set up once per problem size (full dense patterns), then updated
-    and warm-started from the previous solution of that size (consecutive throws give
-    similar problems); solutions agree with a cold start to the solver tolerance."""
-    solver = _SOLVERS.setdefault(prob.A.shape, DenseQp(**_SETTINGS))
-    return solver.solve(prob.P, prob.c, prob.A, prob.lower, prob.upper)
+    """OSQP on ``prob``, set up for it alone (cold): the answer a function of the problem.
+    (A solver kept per size and warm-started from the previous solution answered to the
+    solver tolerance, and that last digit depended on what had been solved before.)"""
+    return DenseQp(**_SETTINGS).solve(prob.P, prob.c, prob.A, prob.lower, prob.upper)
 
 
 def solve_grasp(prob: GraspProblem) -> GraspResult:

@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
-from functools import partial
 from itertools import pairwise
 
 import numpy as np
@@ -40,7 +39,6 @@ from planner.catch.plan.stopping import (
     ROLL_WEIGHT,
     SoftStop,
     StopDynamics,
-    contact_speeds,
     plan_stop,
 )
 from planner.catch.plan.turnahead import (
@@ -156,10 +154,6 @@ class CatchPlanner:
         self.rig_turn = HoldTurn(self.hand, self.rig, self.rig_dyn, self.kin, self.q_rest,
                                  self._falling_rows)
         self.ball_forces = BallForces(self.hand, self.kin)
-        # the fall's plans solve the contact QPs with solvers of their own: OSQP's state
-        # after a solve (its step size) moves the last digit of the next, and the plans
-        # without the fall keep their bytes
-        self._fall_speeds = partial(contact_speeds, qps={})
         self._closings: dict[tuple[float, bool], Closing] = {}
 
     def closing(self, radius: float, bodies: bool = True) -> Closing:
@@ -280,8 +274,7 @@ class CatchPlanner:
             return t_react + dyn.move_time(self.q_rest, q_pre)
 
         ic, _, soft_stop = plan_stop(dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
-                                     ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0,
-                                     self._fall_speeds if fall else None)
+                                     ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0)
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:

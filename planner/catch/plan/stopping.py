@@ -76,8 +76,6 @@ _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried
 _MAX_SHRINK = 6
 _MIN_SPEED = 0.05  # arm speeds below this share of their limits are not worth a motion
 _FD_M = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
-_QPS: dict[int, DenseQp] = {}  # one cold OSQP solver per number of arm joints (3; 4 with the
-# reach): one size's problems never re-set up the other's (the arm alone's bytes kept)
 
 
 def ramp_integral(u: np.ndarray) -> np.ndarray:
@@ -344,14 +342,16 @@ def contact_qp(J: np.ndarray, v_ball: np.ndarray, normal: np.ndarray,
 
 
 def contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
-                   normal: np.ndarray, roll_weight: float = ROLL_WEIGHT,
-                   qps: dict[int, DenseQp] | None = None) -> np.ndarray:
-    """The QP (``contact_qp``) within -bound <= x <= bound, by OSQP (zeros when unsolved);
-    ``qps``: the solvers to use, one per number of arm joints (default: the module's)."""
+                   normal: np.ndarray, roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
+    """The QP (``contact_qp``) within -bound <= x <= bound, by OSQP (zeros when unsolved):
+    a solver set up for this problem alone, so that the speeds are a function of the
+    arguments. (A solver kept between solves keeps its adapted step size rho even without
+    warm starting: the next problem's answer then depended on the plans before it, and
+    one throw, 75 deg from 1.0 m, was feasible or not by what had been planned before.)"""
     k = J.shape[1]
     P, c = contact_qp(J, v_ball, normal, roll_weight)
-    qp = (_QPS if qps is None else qps).setdefault(k, DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000,
-                                    polishing=True, warm_starting=False))
+    qp = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True,
+                 warm_starting=False)
     res = qp.solve(P, c, np.eye(k), -bound, bound)
     if not res.solved:
         return np.zeros(k)
