@@ -83,7 +83,12 @@ def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     # either plays it or names why not)
     second_i = 1 if first == LEFT else 0
     handed = [m for m in plan.assignment.moved if m.reason is MoveReason.LEFT_OUT]
-    assert handed  # (the hands meet: the first leaves notes out, the second is given them)
+    fi = 1 - second_i
+    first_out = {plan.planned_of[fi][s.note] for s in plan.plans[fi].verdict.skipped}
+    # (every note the first hand left out is the second's now: handed over, or given back
+    # to the hand it is written for)
+    assert first_out and first_out <= set(plan.notes_of[second_i])
+    assert {m.note for m in handed} <= first_out
     for m in plan.assignment.moved:
         if m.reason is MoveReason.LEFT_OUT:
             assert m.note in plan.planned_of[1 - second_i] and m.note in plan.planned_of[second_i]
