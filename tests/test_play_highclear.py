@@ -36,7 +36,7 @@ def test_a_lift_is_clear_from_its_clear_moment_to_its_end(places):
     seen = 0
     for e in _entries(places):
         u = places.lift(e, "high")
-        t_clear = places.rise_clear_s(e, u.move)
+        t_clear = places.high.rise_clear_s(e, u.move)
         # (the key comes up first; the last part of the lift overlaps the arm's move)
         assert u.cross_s < t_clear < u.move.duration_s
         assert places.rail_lift_s(e) < places.before_rail_s(e)
@@ -51,7 +51,7 @@ def test_a_lift_is_clear_from_its_clear_moment_to_its_end(places):
 def test_a_descent_is_clear_until_its_clear_moment(places):
     for e in _entries(places):
         d = places.descend(e, "high")
-        t_clear = places.descent_clear_s(e, d.move)
+        t_clear = places.high.descent_clear_s(e, d.move)
         assert 0.0 < t_clear < d.cross_s
         assert places.rail_descent_s(e) == pytest.approx(d.cross_s - t_clear)
         for t in np.linspace(0.0, t_clear, 25):

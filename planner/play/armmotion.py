@@ -117,7 +117,7 @@ class ArmMotion:
                 ready = max(ready, st.safe_s)  # (a finger moving across up there may go on)
             else:  # it lifts first: as soon as its press is done, at the latest (the arm
                 up = up_move(self.moves, st)  # moves once it is clear above every key)
-                ready = max(ready, st.track.free_s + self.moves.rise_clear_s(st.entry, up.move))
+                ready = max(ready, st.track.free_s + self.moves.high.rise_clear_s(st.entry, up.move))
         return move, max(ready, arrive_by_s - move.duration_s)
 
     def _natural_ready(self, holds) -> float:
@@ -135,7 +135,7 @@ class ArmMotion:
                 t0 = max(st.track.free_s, self.committed_s)
                 if st.pose == "press":
                     t0 = max(t0, st.up_s - up.cross_s)
-                ready = max(ready, t0 + self.moves.rise_clear_s(st.entry, up.move))
+                ready = max(ready, t0 + self.moves.high.rise_clear_s(st.entry, up.move))
         return ready
 
     def _holds(self, rail_m: float, posture: int):

@@ -211,7 +211,7 @@ def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: fl
         steps.append((t, across))
     # (from crossing height it may start down while the rail moves, clear above every key
     # until the rail is still: ``planner.play.highclear``)
-    low = max(t + across_s, rail_free_s - moves.descent_clear_s(e, d_high.move), committed_s,
+    low = max(t + across_s, rail_free_s - moves.high.descent_clear_s(e, d_high.move), committed_s,
               after_s)
     t_desc = max(want - d_high.cross_s, low)
     steps.append((t_desc, d_high.move))
@@ -392,7 +392,7 @@ class Motion(ArmMotion):
         else:
             t0 = max(st.track.free_s, self.committed_s)
         end = st.track.add(t0, up.move)
-        st.safe_s = end - up.move.duration_s + self.moves.rise_clear_s(st.entry, up.move)
+        st.safe_s = end - up.move.duration_s + self.moves.high.rise_clear_s(st.entry, up.move)
         st.pose, st.note, st.high_s = "high", None, end
         return end
 
@@ -451,7 +451,7 @@ class Motion(ArmMotion):
         ends at ``arm_s``."""
         up = up_move(self.moves, st)
         by_end = arm_s - up.duration_s + up.cross_s
-        latest = arm_s - self.moves.rise_clear_s(st.entry, up.move) + up.cross_s
+        latest = arm_s - self.moves.high.rise_clear_s(st.entry, up.move) + up.cross_s
         times, notes = self._next.get(st.entry.finger, ((), ()))
         i = bisect.bisect_right(times, after_s)
         if i < len(times):

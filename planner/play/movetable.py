@@ -194,6 +194,15 @@ class MoveTable:
         self._x_arm.pop(other, None)
 
 
+def drop_stale_cross(tables: list[MoveTable]) -> None:
+    """Each posture's table (``tables[i]``) keeps its pairs across from posture ``p`` only
+    where they were made with the entries ``tables[p]`` holds (their keys equal)."""
+    for t in tables:
+        for p, keys in list(t.cross_keys.items()):
+            if p >= len(tables) or keys != tables[p].keys:
+                t.drop_cross(p)
+
+
 def _indices(keys) -> dict[tuple[str, int, int], tuple[int, int]]:
     """Each entry's place among its finger's entries and among its finger's on its key."""
     out, per_f, per_key = {}, {}, {}

@@ -28,6 +28,7 @@ from planner.play.follow import canonical_pitch, follow_ends, paths_clear
 from planner.play.highclear import HighClear
 from planner.play.idle import IdleFingers
 from planner.play.moves import Moves, path_acceleration_cap
+from planner.play.movetable import drop_stale_cross
 from planner.play.profile import Move, capped_move, path_caps
 from planner.play.tendonload import hand_load, slowed
 
@@ -45,10 +46,7 @@ class Places:
         self.atlases = tuple(Atlas(hand, posture=i) for i in range(posture_count(hand)))
         self.moves = tuple(Moves(hand, a) for a in self.atlases)
         self.high = HighClear(hand, self.atlases)  # (when a tip is high enough for the arm)
-        for m in self.moves:  # (the pairs across postures only where made with their entries)
-            for p, keys in m.table.cross_keys.items():
-                if p >= len(self.moves) or keys != self.moves[p].table.keys:
-                    m.table.drop_cross(p)
+        drop_stale_cross([m.table for m in self.moves])
         self.atlas, self.home = self.atlases[0], self.moves[0]  # (the rest pose's posture)
         self.rail = self.atlas.rail
         self.reach = hand.index.get("reach")
@@ -229,12 +227,6 @@ class Places:
         all of it)."""
         d = self.descend(e, "high")
         return max(0.0, d.cross_s - self.high.descent_clear_s(e, d.move))
-
-    def rise_clear_s(self, e: AtlasEntry, move: Move) -> float:
-        return self.high.rise_clear_s(e, move)
-
-    def descent_clear_s(self, e: AtlasEntry, move: Move) -> float:
-        return self.high.descent_clear_s(e, move)
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         """A finger's lift from ``a``, its move across and its descent onto ``b`` (the
