@@ -144,3 +144,30 @@ def test_the_fall_keeps_the_ball_on_the_palm(pl):
     lo, hi = allowed_accel(pl.rig_dyn, q, z, pl.rig.i_reach, b, np.array([1.0, 0.0, 0.0]), up)
     mu_g = CONE_SHARE * PALM_MU * 9.81
     assert lo == pytest.approx(-mu_g, rel=1e-9) and hi == pytest.approx(mu_g, rel=1e-9)
+
+
+def test_the_fall_ends_without_leaving_the_ball(pl, tmp_path):
+    """75 deg from 1 m is caught with the hand falling on the reach axis; the fall stops by
+    the rows' end no harder than the riding ball allows: from 30 ms after the intercept on,
+    the palm target never accelerates away from the ball faster than gravity follows it
+    (m (a - g) . n >= 0: the contact cannot pull). The fall once stopped within its last row
+    (18.7 m/s^2 from 0.187 m/s) and the replay's resting ball left the palm."""
+    from planner.check.ball import CONE_TOL_N
+    from planner.check.kinematics import Kinematics
+    from planner.hand.model import GRAVITY_WORLD
+
+    p = plan_throw(75.0, 1.0, 0.0, planner=pl)
+    assert p.feasible, p.reasons
+    out = tmp_path / "c.csv"
+    write_plan(p, str(out))
+    tr = read_trajectory(str(out))
+    i = pl.hand.index["reach"]
+    assert np.ptp(tr.q[:, i]) > 0.05  # the hand falls on the reach axis
+    _, palm = Kinematics(pl.hand, np.array(tr.metadata["T_world_root"])).frames(tr.q)
+    r, m = tr.metadata["ball"]["radius"], tr.metadata["ball"]["mass"]
+    centre = palm[:, :3, 3] + r * palm[:, :3, 2]
+    dt = float(tr.t_s[1] - tr.t_s[0])
+    a = (centre[2:] - 2.0 * centre[1:-1] + centre[:-2]) / (dt * dt)
+    f_n = m * np.einsum("ij,ij->i", a - GRAVITY_WORLD, palm[1:-1, :3, 2])
+    late = tr.t_s[1:-1] > p.intercept.t_s + 0.03
+    assert f_n[late].min() >= -CONE_TOL_N

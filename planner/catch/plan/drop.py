@@ -104,13 +104,24 @@ def allowed_accel(dyn, q: np.ndarray, qdd: np.ndarray, i_reach: int, b: np.ndarr
     return float(lo), float(hi)
 
 
-def can_stop(u: float, pos: float, lo: float, hi: float, a_max: float, left_s: float
-             ) -> bool:
+def brake_room(u: float, lo_a: float, hi_a: float, a_max: float) -> float:
+    """The deceleration (m/s^2, > 0) a row lets the reach brake its speed ``u`` with: at
+    most ``a_max``, and within the row's ``allowed_accel`` (``lo_a``, ``hi_a``: the motors'
+    room and the riding ball's contact, which cannot pull: a palm braked faster than that
+    leaves the ball; a fall stopped within one row at the rows' end threw the resting ball
+    off the palm in the replay). ``a_max`` where the row allows no braking at all."""
+    room = -lo_a if u > 0.0 else hi_a
+    return min(a_max, room) if room > 1e-9 else a_max
+
+
+def can_stop(u: float, pos: float, lo: float, hi: float, a_max: float, left_s: float,
+             a_end: float | None = None) -> bool:
     """Whether the reach at ``pos`` moving at ``u`` can still stop (at ``a_max``) within
-    [``lo``, ``hi``] and within ``left_s``."""
+    [``lo``, ``hi``], and (at ``a_end``, ``a_max`` if not given) within ``left_s``."""
     stop_d = u * u / (2.0 * a_max)
+    a_end = a_max if a_end is None else a_end
     return not ((u < 0 and pos - stop_d < lo) or (u > 0 and pos + stop_d > hi)
-                or abs(u) > a_max * left_s)
+                or abs(u) > a_end * left_s)
 
 
 def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
@@ -150,6 +161,9 @@ def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
     ball = BallOnPalm(radius_m, inertia_ratio, PALM_MU)
     fallen = palm.copy()
     ball.land(fallen, t, k0 - 1, t_land_s, np.asarray(v_ball, dtype=float))
+    # the braking the rows' last pose allows the ball (the stop by the rows' end is there)
+    end_room = allowed_accel(dyn, Q[n - 3], qdd[n - 3], i_reach, acc[n - 3] - GRAVITY_WORLD,
+                             e_r, palm[n - 3, :3, 2])
     for k in range(k0, n - 2):
         fallen[k, :3, 3] = palm[k, :3, 3] + p[k] * e_r
         x = max(ball.step_to(fallen, t, k), 0.0)
@@ -161,9 +175,12 @@ def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
         # bounded to make it no worse)
         lo_a, hi_a = (min(lo_a, 0.0), max(hi_a, 0.0)) if lo_a <= hi_a else (0.0, 0.0)
         a_o = float(np.clip(a_o, max(-a_max, lo_a), min(a_max, hi_a)))
-        # the range and the rows' end: able to stop in time (at a_max) after this step
+        # the range and the rows' end: able to stop in time after this step (by the rows'
+        # end braking no harder than the ball on the palm allows)
         u1 = float(np.clip(u + a_o * dt, -v_max, v_max))
-        if not can_stop(u1, base[k + 1] + p[k] + u1 * dt, lo, hi, a_max, (n - 3 - k) * dt):
+        a_stop = brake_room(u1, *end_room, a_max)  # (the ball stays on the palm meanwhile)
+        if not can_stop(u1, base[k + 1] + p[k] + u1 * dt, lo, hi, a_max, (n - 3 - k) * dt,
+                        a_stop):
             # brake: within the motors' room where that still stops within the travel
             a_o = float(np.clip(-u / dt, max(-a_max, lo_a), min(a_max, hi_a)))
             if not can_stop(u + a_o * dt, base[k + 1] + p[k] + (u + a_o * dt) * dt, lo, hi,
