@@ -55,22 +55,12 @@ class HighClear:
         """Seconds into ``move`` (``e``'s finger rising) from which it stays clear above
         every key to the move's end (its duration if it never is, or only at
         the end)."""
-        s = self._point(e, move, True)
-        if s <= 0.0 or move.duration_s <= 0.0:
-            return 0.0
-        t = np.linspace(0.0, move.duration_s, TIME_STEPS + 1)
-        i = int(np.searchsorted(move.s(t), s, side="left"))
-        return float(t[min(i, TIME_STEPS)])
+        return _time_at(move, self._point(e, move, True), rising=True)
 
     def descent_clear_s(self, e: AtlasEntry, move: Move) -> float:
         """Seconds into ``move`` (``e``'s finger descending from crossing height) until
         which it stays clear above every key (0 if it starts below that)."""
-        s = self._point(e, move, False)
-        if s <= 0.0 or move.duration_s <= 0.0:
-            return 0.0
-        t = np.linspace(0.0, move.duration_s, TIME_STEPS + 1)
-        i = int(np.searchsorted(move.s(t), s, side="right")) - 1
-        return float(t[max(i, 0)])
+        return _time_at(move, self._point(e, move, False), rising=False)
 
     def _point(self, e: AtlasEntry, move: Move, rising: bool) -> float:
         """The path parameter where the finger crosses the clear height: rising, the least
@@ -112,3 +102,15 @@ class HighClear:
             return bool(h.tip_position(q, h.fingers.index(e.finger))[2] >= HIGH_SAFE_Z_M)
         p, r = bodies.points(q, e.finger)
         return bool(np.min(p[:, 2] - r) >= BODY_CLEAR_Z_M)
+
+
+def _time_at(move: Move, s: float, rising: bool) -> float:
+    """When ``move``'s profile reaches path point ``s``, read at ``TIME_STEPS`` steps on
+    the safe side: rising, the first step at or past it; descending, the last step at or
+    before it (0 for a point at the start, or a move of no duration)."""
+    if s <= 0.0 or move.duration_s <= 0.0:
+        return 0.0
+    t = np.linspace(0.0, move.duration_s, TIME_STEPS + 1)
+    if rising:
+        return float(t[min(int(np.searchsorted(move.s(t), s, side="left")), TIME_STEPS)])
+    return float(t[max(int(np.searchsorted(move.s(t), s, side="right")) - 1, 0)])

@@ -57,14 +57,21 @@ def up_rows(dt_s: float) -> float:
     return min(0.5, max(1.0 - DRIVE_LAG_S * rate, ROW_MARGIN_S * rate))
 
 
+def first_row(t_s: float, dt_s: float) -> int:
+    """The index of the first row at or after ``t_s`` (rows ``dt_s`` apart from 0; the
+    check's frames of a note are its rows from ``first_row(onset)`` to before
+    ``first_row(offset)``)."""
+    return math.ceil(t_s / dt_s - 1e-9)
+
+
 def key_down_s(onset_s: float, dt_s: float) -> float:
     """When the rows put a key down for a note starting at ``onset_s``."""
-    return (math.ceil(onset_s / dt_s - 1e-9) - down_rows(dt_s)) * dt_s
+    return (first_row(onset_s, dt_s) - down_rows(dt_s)) * dt_s
 
 
 def key_up_s(offset_s: float, dt_s: float) -> float:
     """When the rows let a key up for a note (or a hold) ending at ``offset_s``."""
-    return (math.ceil(offset_s / dt_s - 1e-9) - up_rows(dt_s)) * dt_s
+    return (first_row(offset_s, dt_s) - up_rows(dt_s)) * dt_s
 
 
 def sounding_frames(down_s: float, up_s: float, dt_s: float) -> float:

@@ -38,7 +38,7 @@ from planner.play.armmotion import ArmMotion, up_move
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
-from planner.play.keytimes import DRIVE_LAG_S, ROW_MARGIN_S, key_down_s, key_up_s
+from planner.play.keytimes import DRIVE_LAG_S, ROW_MARGIN_S, first_row, key_down_s, key_up_s
 from planner.play.places import Places
 from planner.play.profile import Move, path_s
 
@@ -384,7 +384,7 @@ class Motion(ArmMotion):
         up = up_move(self.moves, st)
         if st.pose == "press":
             o = self.outcomes.get(st.note) if st.note is not None else None
-            if o is not None and o.down_s is not None and latest_s < st.up_s:
+            if o is not None and o.down_s is not None:
                 latest_s = self._held_enough_s(st.note, o.down_s, latest_s, st.up_s)
             t0 = min(st.up_s, latest_s) - up.cross_s
             t0 = max(t0, st.track.free_s, self.committed_s)
@@ -407,16 +407,12 @@ class Motion(ArmMotion):
         if cut_s >= up_s:
             return cut_s
         n, dt = self.notes[note], self.dt
-        k0, k1 = math.ceil(n.onset_s / dt - 1e-9), math.ceil(n.offset_s / dt - 1e-9)
+        k0, k1 = first_row(n.onset_s, dt), first_row(n.offset_s, dt)
         need = math.ceil(NOTE_HIT_FRACTION * (k1 - k0) - 1e-9)  # the note's rows to hit it
-
-        def rows_down(a_s: float, b_s: float) -> int:  # its rows k with a_s <= k dt < b_s
-            return max(0, min(k1, math.ceil(b_s / dt - 1e-9))
-                       - max(k0, math.ceil(a_s / dt - 1e-9)))
-
-        if rows_down(down_s, cut_s) < need:
+        # (its rows k with down_s <= k dt < cut_s: a hit by the rows, or lost anyway)
+        if max(0, min(k1, first_row(cut_s, dt)) - max(k0, first_row(down_s, dt))) < need:
             return cut_s
-        first = max(k0, math.ceil((down_s + DRIVE_LAG_S) / dt - 1e-9))
+        first = max(k0, first_row(down_s + DRIVE_LAG_S, dt))
         return min(up_s, max(cut_s, (first + need - 1) * dt + DRIVE_LAG_S + ROW_MARGIN_S))
 
     def _release_others_on(self, pitch: int, finger: str) -> float:
@@ -456,9 +452,10 @@ class Motion(ArmMotion):
         i = bisect.bisect_right(times, after_s)
         if i < len(times):
             e = self.entry(notes[i])
-            across = None if e is None else (None if e is st.entry else self.moves.across(
-                st.entry, e))
-            if e is None or across is None and e is not st.entry:
+            if e is None:
+                return by_end
+            across = None if e is st.entry else self.moves.across(st.entry, e)
+            if across is None and e is not st.entry:
                 return by_end
             across_s = 0.0 if across is None else across.duration_s
             high_by = times[i] - self.moves.descend(e, "high").cross_s - across_s
