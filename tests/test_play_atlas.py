@@ -8,10 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M
 from planner.hand.model import load_hand
 from planner.ik import PREPARE_HEIGHT_M, PRESS_TOL_M, press_target
 from planner.music import keyboard as kb
 from planner.play.atlas import HIGH_Z_M, REPEAT_DEPTH_M, STEP_M, Atlas, max_key_force_n, path_clear
+from planner.play.atlassolve import BODY_REFUSALS, Refusal
 from planner.play.movetable import HIGH_SAFE_Z_M
 from planner.play.places import Places
 
@@ -242,12 +244,52 @@ def test_every_press_is_clear_of_the_other_keys_as_a_body(places, posture):
 
 def test_the_seed_thumb_presses_no_key_with_its_body_clear(places):
     """A seed inconsistency the body rule makes plain: the default hand's thumb (seed
-    Table 2's upper-limit column, 1.5x: its end 33 mm long over a white key 23.5 mm wide)
-    has no press pose clear of the neighbouring keys in any play posture; the fingering
-    plays without it (docs/history/2026-12-06-play-posture.md)."""
+    Table 2's upper-limit column, 1.5x: its pad sphere 24 mm across, its distal segment 33
+    mm, over a white key 22.5 mm wide) has no press pose clear of the neighbouring keys in
+    any play posture; the fingering plays without it (docs/history/2026-12-06-play-posture.md,
+    2026-12-06-play-quality2.md)."""
     for atlas in places.atlases:
         assert not any(atlas.samples("thumb", p) for p in range(60, 72))
     assert any(places.atlases[0].samples(f, 62) for f in ("index", "middle", "ring", "pinky"))
+
+
+def test_the_thumb_is_refused_by_its_reach_and_then_by_its_width(places):
+    """Why the thumb has no entry (``EntrySolver.refusal``, the entry's own steps): with the
+    forearm in the first two postures its tip reaches no key (no pose); in the third it
+    reaches the white keys' front, where its body, even with the pad sphere's centre over
+    the key's centre, reaches below the key-down depth in a neighbour's column (it sounds),
+    and no black key (their front 60 mm in)."""
+    first, _, third = places.atlases
+    for pc, k in ((0, 0), (4, -20), (1, 10)):
+        assert first.refusal("thumb", pc, k).refusal is Refusal.REACH
+    white = [third.refusal("thumb", pc, k) for pc, k in ((0, -21), (4, -15), (7, -27))]
+    for v in white:
+        assert v.refusal is Refusal.BODY
+        assert v.other_column_m > DOWN_DEPTH_M and v.centred_column_m > DOWN_DEPTH_M
+        assert abs(v.pad_offset_m) > 0.002  # (its pad point beside the sphere's centre)
+    assert third.refusal("thumb", 1, -21).refusal is Refusal.REACH
+
+
+def test_a_refusal_agrees_with_the_table(places):
+    """``refusal`` solves a sample again by the entry's steps: None exactly where the
+    shipped table has an entry, a body refusal exactly where it says ``body_refused``, and
+    a kept press within the body rule (no other key's box reached by more than 0.5 mm nor
+    its column to the key-down depth, its own key no more than 1 mm past the bed)."""
+    atlas = places.atlases[1]
+    kinds = set()
+    for f, pc, k in [("index", 0, -5), ("middle", 1, 0), ("middle", 2, 4), ("ring", 4, 12),
+                     ("ring", 6, -3), ("pinky", 5, 0), ("pinky", 8, 0), ("index", 6, 20)]:
+        v = atlas.refusal(f, pc, k)
+        pitch = atlas._solved_on(f, pc, k)
+        has = atlas.entry_at(f, pc, k) is not None
+        assert (v.refusal is None) == has, (f, pc, k)
+        assert (v.refusal in BODY_REFUSALS) == atlas.body_refused(
+            f, pitch, atlas.rail_for(f, pitch, k)), (f, pc, k)
+        if has:
+            assert v.other_box_m <= 0.0005 + 1e-9 and v.other_column_m < DOWN_DEPTH_M
+            assert v.own_column_m <= BODY_BED_DEPTH_M + 1e-9
+        kinds.add(v.refusal)
+    assert {None, Refusal.BODY} <= kinds
 
 
 def test_a_press_stops_with_its_body_at_the_bed_both_ways(places):

@@ -23,7 +23,8 @@ from planner.ik import (
     surfaces_under,
 )
 from planner.music import keyboard as kb
-from planner.play.fingerbody import OWN_BED_MARGIN_M, FingerBodies
+from planner.music.keybodies import key_depths
+from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M, OWN_BED_MARGIN_M, FingerBodies
 from planner.play.force import descent_poses, held_force_n, press_capacity_n
 from planner.play.planar import planar_press_target
 
@@ -58,13 +59,42 @@ class AtlasEntry:
     posture: int = 0  # which of the hand's play postures (``Atlas.posture_index``)
 
 
-class _Verdict(enum.Enum):
-    """An entry's poses (``EntrySolver._verdict``): kept, refused by the body rule, or
-    none (no IK, the limits, the tip's path)."""
+class Refusal(enum.Enum):
+    """Why an atlas sample has no entry (``EntrySolver._verdict``; ``EntrySolver.refusal``
+    measures it), in the order the rules are tried: the first three leave nothing for the
+    body rule to judge, the last two are the body rule's (a note only they leave without a
+    finger is left out for its bodies: ``body``)."""
 
-    OK = "ok"
-    BODY = "body"
-    NONE = "none"
+    REACH = "reach"  # no pose: the IK puts the tip on the key's press point, or straight
+    # above it at the rise, hover or crossing height, no nearer than its tolerance
+    LIMITS = "limits"  # a pose outside the planning limits (hard stops less their margins)
+    TIP_PATH = "tip_path"  # the tip's straight move between two poses passes through
+    # another key (``path_clear``)
+    PAD_UP = "pad_up"  # the press made with the back of the finger (``_pad_faces_key``)
+    BODY = "body"  # a body reaches another key or past its own key's bed, at a pose or
+    # along a move (``bodies_clear``)
+
+
+BODY_REFUSALS = frozenset({Refusal.PAD_UP, Refusal.BODY})
+
+
+class SampleVerdict(NamedTuple):
+    """One atlas sample judged again (``EntrySolver.refusal``): why it has no entry (None:
+    it has one) and, where a press pose was found, how its bodies lie there: the deepest
+    any body reaches below another key's top inside that key's footprint column (grown by
+    the body rule's tolerance; a key sounds from the key-down depth, 5 mm), the deepest
+    into another key's box at rest (the rule allows 0.5 mm), the deepest below its own
+    key's top inside its column (the bed is 10 mm down, the rule allows 11 mm), how far
+    the pad point lies beside the pad sphere's centre along x, and the first depth again
+    with the pad point moved by that much (the sphere's centre over the press point;
+    ``_pad_off_centre_m``); m, nan without a press pose."""
+
+    refusal: Refusal | None
+    other_column_m: float
+    other_box_m: float
+    own_column_m: float
+    pad_offset_m: float
+    centred_column_m: float
 
 
 class Press(NamedTuple):
@@ -79,6 +109,27 @@ class EntrySolver:
     natural hand, bodies and grid)."""
 
     def _solve(self, finger: str, pitch_class: int, k: int) -> AtlasEntry | None:
+        tried = self._tried(finger, pitch_class, k)
+        if tried is None:
+            return None
+        pitch, poses, refusal = tried
+        if refusal in BODY_REFUSALS:
+            self._body_refused.add((finger, pitch_class, k))
+        if refusal is not None:
+            return None
+        h = self.hand
+        js = h.joint_slice(finger)
+        return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
+                          *(q[js].copy() for q in poses),
+                          press_capacity_n(h, descent_poses(h, poses[2], poses[0]), finger, pitch),
+                          self.posture_index)
+
+    def _tried(self, finger: str, pitch_class: int, k: int
+               ) -> tuple[int, list[np.ndarray] | None, Refusal | None] | None:
+        """The key a sample is solved on, its poses (the last tried where none passes: the
+        pad's body centred on the key where the body rule refused the first) and why they
+        make no entry (None: they make one); None where the sample has no key or the rail
+        cannot go there."""
         h = self.hand
         pitch = self._solved_on(finger, pitch_class, k)
         if pitch is None:
@@ -95,43 +146,75 @@ class EntrySolver:
         verdict = self._verdict(finger, pitch, poses)
         shift, tried = 0.0, poses
         for _ in range(PAD_CENTRE_ITERATIONS):  # (the pad's body centred on the key)
-            if verdict is not _Verdict.BODY or arc or tried is None:
+            if verdict not in BODY_REFUSALS or arc or tried is None:
                 break
             step = self._pad_off_centre_m(tried[0], finger)
             if abs(step) <= PAD_CENTRE_TOL_M:
                 break
             shift += step
             tried = self._ik_poses(finger, pitch, base, shift)
-            if self._verdict(finger, pitch, tried) is _Verdict.OK:
-                poses, verdict = tried, _Verdict.OK
-        if verdict is _Verdict.BODY:
-            self._body_refused.add((finger, pitch_class, k))
-        if verdict is not _Verdict.OK:
-            return None
-        js = h.joint_slice(finger)
-        return AtlasEntry(finger, pitch_class, self.natural_dx[finger] + k * STEP_M,
-                          *(q[js].copy() for q in poses),
-                          press_capacity_n(h, descent_poses(h, poses[2], poses[0]), finger, pitch),
-                          self.posture_index)
+            if self._verdict(finger, pitch, tried) is None:
+                poses, verdict = tried, None
+        return pitch, poses, verdict
 
-    def _verdict(self, finger: str, pitch: int, poses: list[np.ndarray] | None) -> _Verdict:
-        """Whether ``poses`` (press, rise, hover, high) make an entry: within the planning
-        limits, the tip's moves between them clear of the other keys and, with the body
-        rule, the pad facing the key and the finger's bodies clear all along them."""
+    def refusal(self, finger: str, pitch_class: int, k: int) -> SampleVerdict | None:
+        """Sample ``k`` of ``finger`` over ``pitch_class`` solved again (neither read from
+        the table nor kept) and judged: why it has no entry and where its bodies lie at its
+        press pose, and at the press with the pad sphere's centre over the press point
+        (``SampleVerdict``); None where the sample has no key or no rail place. A
+        measurement (``bench/atlas_refusals.py``) by the entry's own steps."""
+        tried = self._tried(finger, pitch_class, k)
+        if tried is None:
+            return None
+        pitch, poses, refusal = tried
+        nan = float("nan")
+        if poses is None or self.bodies is None:
+            return SampleVerdict(refusal, nan, nan, nan, nan, nan)
+        column, box, own, offset = self._bodies_at(poses[0], finger, pitch)
+        centred = nan
+        if finger not in self.arc_joint:
+            base = self.base.copy()
+            if self.rail is not None:
+                base[self.rail] = self.rail_for(finger, pitch, k)
+            press = self._press(finger, pitch, base, offset)
+            if press is not None:
+                centred = self._bodies_at(press.result.q, finger, pitch)[0]
+        return SampleVerdict(refusal, column, box, own, offset, centred)
+
+    def _bodies_at(self, q: np.ndarray, finger: str, pitch: int
+                   ) -> tuple[float, float, float, float]:
+        """``SampleVerdict``'s depths at the press pose ``q`` and the pad's offset."""
+        p, r = self.bodies.points(q, finger)
+        others = [o for o in range(pitch - 4, pitch + 5)
+                  if o != pitch and kb.LOWEST_PITCH <= o <= kb.HIGHEST_PITCH]
+        column = key_depths(p[None], r, others, OTHER_KEY_TOLERANCE_M)[0]
+        boxes = self.bodies.box_depths(p, r, pitch)[self.bodies.box_pitch != pitch]
+        own = key_depths(p[None], r, [pitch])[0, 0]
+        return (float(column.max()), float(boxes.max()), float(own),
+                self._pad_off_centre_m(q, finger))
+
+    def _verdict(self, finger: str, pitch: int, poses: list[np.ndarray] | None
+                 ) -> Refusal | None:
+        """Whether ``poses`` (press, rise, hover, high) make an entry (None) or why not:
+        within the planning limits, the tip's moves between them clear of the other keys
+        and, with the body rule, the pad facing the key and the finger's bodies clear all
+        along them."""
         h = self.hand
-        if poses is None or not all(h.within_plan_limits(q) for q in poses):
-            return _Verdict.NONE
+        if poses is None:
+            return Refusal.REACH
+        if not all(h.within_plan_limits(q) for q in poses):
+            return Refusal.LIMITS
         if self.bodies is not None and not self._pad_faces_key(poses[0], finger):
-            return _Verdict.BODY
+            return Refusal.PAD_UP
         for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
                        (poses[1], poses[0])):
             if not path_clear(h, qa, qb, finger, pitch):
-                return _Verdict.NONE
+                return Refusal.TIP_PATH
         for qa, qb in ((poses[3], poses[2]), (poses[2], poses[0]), (poses[3], poses[0]),
                        (poses[1], poses[0])):
             if self.bodies is not None and not bodies_clear(self.bodies, qa, qb, finger, pitch):
-                return _Verdict.BODY
-        return _Verdict.OK
+                return Refusal.BODY
+        return None
 
     def _pad_off_centre_m(self, q: np.ndarray, finger: str) -> float:
         """How far (x, m) the press at ``q`` has its pad point beside the pad sphere's
