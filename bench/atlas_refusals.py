@@ -2,8 +2,8 @@
 atlas samples (``dx`` every ``--kstep`` mm over the atlas's span, every pitch class) by
 the rule that refuses them (``planner.play.atlassolve.Refusal``: no pose, the limits, the
 tip's path, the pad facing up, the bodies), each solved again by the atlas's own steps
-(``EntrySolver.refusal``), white and black keys apart; for the samples whose press pose
-was found, the median and least depth any body reaches below another key's top inside
+(``EntrySolver.refusal``), white and black keys apart; for the samples the body rule
+refuses, the median and least depth any body reaches below another key's top inside
 that key's footprint column (a key sounds from 5 mm) and into another key's box (the rule
 allows 0.5 mm), and the column depth again with the pad sphere's centre over the press
 point (``centred``); and the farthest the finger's tip reaches into the keyboard (y, mm: its
@@ -30,6 +30,7 @@ from planner.errors import InputError
 from planner.hand.model import load_hand
 from planner.music import keyboard as kb
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, posture_count
+from planner.play.atlassolve import BODY_REFUSALS
 
 WORKSPACE_SAMPLES = 20000  # joint configurations drawn per finger (seeded: same output)
 
@@ -84,6 +85,8 @@ def main(argv: list[str] | None = None) -> int:
                         if v is None:
                             continue
                         count[v.refusal.value if v.refusal else "entry"] += 1
+                        if v.refusal not in BODY_REFUSALS:
+                            continue
                         if not np.isnan(v.other_column_m):
                             column.append(1000 * v.other_column_m)
                             box.append(1000 * v.other_box_m)
