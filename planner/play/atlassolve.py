@@ -66,7 +66,8 @@ class Refusal(enum.Enum):
     finger is left out for its bodies: ``body``)."""
 
     REACH = "reach"  # no pose: the IK puts the tip on the key's press point, or straight
-    # above it at the rise, hover or crossing height, no nearer than its tolerance
+    # above it at the rise, hover or crossing height, no nearer than its tolerance (a
+    # one-DOF finger: its arc comes down off the part of the key it presses)
     LIMITS = "limits"  # a pose outside the planning limits (hard stops less their margins)
     TIP_PATH = "tip_path"  # the tip's straight move between two poses passes through
     # another key (``path_clear``)
@@ -97,6 +98,16 @@ class SampleVerdict(NamedTuple):
     centred_column_m: float
 
 
+class Tried(NamedTuple):
+    """A sample's poses as ``EntrySolver._tried`` leaves them: the key they are solved on,
+    the poses (press, rise, hover, high; the last tried where none passes; None: no pose)
+    and why they make no entry (None: they make one)."""
+
+    pitch: int
+    poses: list[np.ndarray] | None
+    refusal: Refusal | None
+
+
 class Press(NamedTuple):
     """A press pose's IK target and result (``Atlas._press``)."""
 
@@ -124,12 +135,10 @@ class EntrySolver:
                           press_capacity_n(h, descent_poses(h, poses[2], poses[0]), finger, pitch),
                           self.posture_index)
 
-    def _tried(self, finger: str, pitch_class: int, k: int
-               ) -> tuple[int, list[np.ndarray] | None, Refusal | None] | None:
-        """The key a sample is solved on, its poses (the last tried where none passes: the
-        pad's body centred on the key where the body rule refused the first) and why they
-        make no entry (None: they make one); None where the sample has no key or the rail
-        cannot go there."""
+    def _tried(self, finger: str, pitch_class: int, k: int) -> Tried | None:
+        """A sample's poses (the pad's body centred on the key where the body rule refused
+        the first) and why they make no entry (``Tried``); None where the sample has no
+        key or the rail cannot go there."""
         h = self.hand
         pitch = self._solved_on(finger, pitch_class, k)
         if pitch is None:
@@ -155,7 +164,7 @@ class EntrySolver:
             tried = self._ik_poses(finger, pitch, base, shift)
             if self._verdict(finger, pitch, tried) is None:
                 poses, verdict = tried, None
-        return pitch, poses, verdict
+        return Tried(pitch, poses, verdict)
 
     def refusal(self, finger: str, pitch_class: int, k: int) -> SampleVerdict | None:
         """Sample ``k`` of ``finger`` over ``pitch_class`` solved again (neither read from
