@@ -99,3 +99,27 @@ def test_steep_short_throw_held_at_the_phase_whose_last_sample_flickers(tmp_path
     c = simulate_trajectory(str(path)).catch
     assert c.held, c
     assert c.last_touch_s is not None and c.left_at_s is None
+
+
+def test_too_fast_to_stop_names_the_speeds_behind_its_force():
+    """A throw too fast to stop (15 deg through 3 m: the wrist flexion's motor) names the
+    ball's speed relative to the palm beside its flight's: the pad's force it names is the
+    pad's rule for that speed (m v^2 / (2 d), within the ball's weight and the palm's own
+    acceleration), and the palm recedes (the relative speed is below the flight's)."""
+    import re
+
+    from planner.catch.plan.api import get_planner, plan_throw
+    from planner.catch.plan.reasons import CatchReason
+    from planner.check.ballstop import PAD_GIVE_M
+
+    p = plan_throw(15.0, 3.0, 0.0, planner=get_planner("default"))
+    assert not p.feasible
+    r = next(r for r in p.reasons if r.kind is CatchReason.TOO_FAST_TO_STOP)
+    m = re.search(r"meets the palm at ([\d.]+) m/s \(its flight ([\d.]+) m/s\), ([\d.]+) N "
+                  r"needs motor\.(\w+) at ([\d.]+) N m > its \w+ limit ([\d.]+) N m", r.detail)
+    assert m, r.detail
+    v_rel, v_flight, force_n, _, torque_nm, cap_nm = (
+        float(x) if i != 3 else x for i, x in enumerate(m.groups()))
+    mass = p.flight.ball.mass_kg
+    assert abs(force_n - mass * v_rel ** 2 / (2 * PAD_GIVE_M)) < mass * 9.81 * 3
+    assert v_rel < v_flight and torque_nm > cap_nm
