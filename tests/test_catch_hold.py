@@ -123,3 +123,10 @@ def test_too_fast_to_stop_names_the_speeds_behind_its_force():
     mass = p.flight.ball.mass_kg
     assert abs(force_n - mass * v_rel ** 2 / (2 * PAD_GIVE_M)) < mass * 9.81 * 3
     assert v_rel < v_flight and torque_nm > cap_nm
+
+
+def test_rows_ending_before_the_grasp_window_are_not_held_and_say_so():
+    """Rows that end before ``intercept_t + GRASP_WINDOW_S``: not held, for that reason."""
+    ball, n, f = _resting(10)
+    c = score_catch(_record(ball, n, f), intercept_t=0.1, radius_m=R_M)
+    assert not c.held and "rows end at" in c.why_not

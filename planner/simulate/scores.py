@@ -94,12 +94,15 @@ class PhysicsCatch:
     contacts_at_end: int
     left_at_s: float | None = None  # the first row after held_from_s beyond the grasp
     last_touch_s: float | None = None  # the end of the last row interval the hand touched it
+    end_s: float | None = None  # the last row's time
 
     @property
     def why_not(self) -> str:
         """Why the ball is not held ('' when it is)."""
         if self.held:
             return ""
+        if self.end_s is not None and self.end_s < self.held_from_s:
+            return f"the rows end at {self.end_s:.3f} s, before {self.held_from_s:.3f} s"
         if self.left_at_s is not None:
             return (f"it left the hand at {self.left_at_s:.3f} s "
                     f"({self.end_distance_m * 1000:.1f} mm from the palm centre at the end)")
@@ -215,4 +218,5 @@ def score_catch(rec: SimRecord, intercept_t: float, radius_m: float) -> PhysicsC
     held = bool(after.any() and not len(out) and rests)
     return PhysicsCatch(held, t0, float(dist[-1]), float(np.max(rec.ball_force_n)),
                         int(rec.ball_contacts[-1]),
-                        float(rec.t_s[out[0]]) if len(out) else None, last_touch)
+                        float(rec.t_s[out[0]]) if len(out) else None, last_touch,
+                        float(rec.t_s[-1]))
