@@ -470,3 +470,32 @@ def test_move_check_tries_durations_from_one_start():
                 np.testing.assert_array_equal(kept.c, seg.c)
             seen.add(ok)
     assert seen == {True, False}
+
+
+def test_search_memo_is_the_searches_without_it():
+    """``find_intercept``/``find_intercept_near`` with a ``memo`` shared between searches of
+    one flight at several tilts (the live session's tilted search and its untilted retry)
+    give each search's own answer: tilted, untilted, near and whole-path, in either order,
+    including the position-only fallback that faces no tilt."""
+    from planner.catch.plan.intercept import Intercept, find_intercept_near
+
+    wr = get_planner("default").wrist
+    C = np.array([1.5, 0.0, 0.0])
+    r = BALL.radius_m
+    seen_unaligned = 0
+    for angle in (20.0, 40.0, 60.0, 75.0):
+        fl = predict_throw(angle, 1.5, 0.0, BALL, drag=True)
+        t_c = float(fl.time_at_x(1.5))
+        tilts = (math.radians(-25.0), 0.0, math.radians(10.0), 0.0)
+        memo: dict = {}
+        for tilt in tilts:
+            ic = find_intercept(wr, fl, C, r, t_c, tilt, memo)
+            assert ic == find_intercept(wr, fl, C, r, t_c, tilt)
+            seen_unaligned += not ic.aligned
+        prev = find_intercept(wr, fl, C, r, t_c)
+        for p in (prev, Intercept(prev.t, prev.theta, prev.dev, prev.rail, 0.0, False, None)):
+            memo = {}
+            for tilt in tilts:
+                assert (find_intercept_near(wr, fl, C, r, p, p.t + 0.005, 0.02, tilt, memo)
+                        == find_intercept_near(wr, fl, C, r, p, p.t + 0.005, 0.02, tilt))
+    assert seen_unaligned  # (the position-only answer, shared by the memo, was exercised)

@@ -58,10 +58,11 @@ class SimulateReport:
             play_lines(L, p, self.song, self.kinematic_f1)
         c = self.catch
         if c is not None:
+            lt = "never" if c.last_touch_s is None else f"{c.last_touch_s:.3f} s"
             L.append(f"catch: ball {'HELD' if c.held else 'NOT held'} from {c.held_from_s:.3f} s "
                      f"to the end ({c.end_distance_m * 1000:.1f} mm from the palm centre at the "
-                     f"end, {c.contacts_at_end} contacts); peak contact force "
-                     f"{c.peak_contact_force_n:.1f} N")
+                     f"end, {c.contacts_at_end} contacts, last touched at {lt}); peak contact "
+                     f"force {c.peak_contact_force_n:.1f} N")
         effort_lines(L, self.motors, self.tracking)
         return "\n".join(L)
 

@@ -17,17 +17,23 @@ tracking error per joint, and for a catch whether the ball stays in the hand.
   ball (a position servo closing on a rigid ball stalls at its torque: the grip's force
   is then the motor's peak, and whether it holds is what is scored).
 * Catch: the ball is held when, from ``intercept_t + GRASP_WINDOW_S`` to the end, it
-  stays within ``radius + GRASP_TOL_M`` of the palm centre (criteria) touching the hand.
+  stays within ``radius + GRASP_TOL_M`` of the palm centre (criteria) and the hand touches
+  it (a contact pushing on it at some physics step) within the last ``REST_WINDOW_S``: a
+  ball at rest in the hand may be seen without contact at one step (a resting contact
+  flickers at the solver's scale), a ball the hand no longer supports falls out of the
+  grasp's tolerance within that window.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from planner.check.criteria import GRASP_TOL_M, GRASP_WINDOW_S, LATE_S
 from planner.check.keys import key_episodes, score_song
+from planner.check.kinematics import G
 from planner.check.results import KeyEpisode, LateNote, MissedNote
 from planner.hand.model import HandModel
 from planner.hand.spec import FINGERS
@@ -35,6 +41,9 @@ from planner.simulate.keyboard import key_bodies
 from planner.simulate.replay import SimRecord
 
 SATURATION_MAX_S = LATE_S  # a motor short of torque for longer than a late note's 20 ms
+# The window over which a held ball must be touched: the time a ball without support takes
+# to fall the grasp's tolerance from rest, sqrt(2 GRASP_TOL_M / g) (45 ms for 10 mm).
+REST_WINDOW_S = math.sqrt(2.0 * GRASP_TOL_M / G)
 
 
 @dataclass(frozen=True)
@@ -83,6 +92,24 @@ class PhysicsCatch:
     end_distance_m: float  # ball centre to palm centre at the end
     peak_contact_force_n: float
     contacts_at_end: int
+    left_at_s: float | None = None  # the first row after held_from_s beyond the grasp
+    last_touch_s: float | None = None  # the end of the last row interval the hand touched it
+    end_s: float | None = None  # the last row's time
+
+    @property
+    def why_not(self) -> str:
+        """Why the ball is not held ('' when it is)."""
+        if self.held:
+            return ""
+        if self.end_s is not None and self.end_s < self.held_from_s:
+            return f"the rows end at {self.end_s:.3f} s, before {self.held_from_s:.3f} s"
+        if self.left_at_s is not None:
+            return (f"it left the hand at {self.left_at_s:.3f} s "
+                    f"({self.end_distance_m * 1000:.1f} mm from the palm centre at the end)")
+        if self.last_touch_s is None:
+            return "the hand never touched it"
+        return (f"the hand last touched it at {self.last_touch_s:.3f} s, more than "
+                f"{REST_WINDOW_S * 1000:.0f} ms before the end")
 
 
 def key_down(rec: SimRecord) -> np.ndarray:
@@ -175,11 +202,21 @@ def tracking(rec: SimRecord, hand: HandModel) -> tuple[JointTracking, ...]:
 
 
 def score_catch(rec: SimRecord, intercept_t: float, radius_m: float) -> PhysicsCatch:
+    """Whether the ball stays in the hand (module docstring): within the grasp's reach of
+    the palm at every row from ``intercept_t + GRASP_WINDOW_S``, touched within the last
+    ``REST_WINDOW_S`` (a row's force is the peak over the physics steps since the row
+    before: the window judges the contact over its steps, not at one sample)."""
     dist = np.linalg.norm(rec.ball_m - rec.palm_m, axis=1)
     t0 = intercept_t + GRASP_WINDOW_S
     after = rec.t_s >= t0
     # a ball inside the hand: its centre within reach of the palm and touching the hand
     near = dist <= radius_m * 2 + GRASP_TOL_M
-    held = bool(after.any() and np.all(near[after]) and rec.ball_contacts[-1] > 0)
+    out = np.flatnonzero(after & ~near)
+    touched = np.flatnonzero((rec.ball_force_n > 0.0) | (rec.ball_contacts > 0))
+    last_touch = float(rec.t_s[touched[-1]]) if len(touched) else None
+    rests = last_touch is not None and last_touch > float(rec.t_s[-1]) - REST_WINDOW_S
+    held = bool(after.any() and not len(out) and rests)
     return PhysicsCatch(held, t0, float(dist[-1]), float(np.max(rec.ball_force_n)),
-                        int(rec.ball_contacts[-1]))
+                        int(rec.ball_contacts[-1]),
+                        float(rec.t_s[out[0]]) if len(out) else None, last_touch,
+                        float(rec.t_s[-1]))

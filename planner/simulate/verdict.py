@@ -34,8 +34,7 @@ def physics_problems(play, motors, catch, min_f1, strict, claims) -> list[str]:
                        f"{m.at_s:.3f} s (asked {m.peak_demand_nm:.3f} N m at peak, gives "
                        f"{m.limit_nm:.3f})")
     if catch is not None and not catch.held:
-        out.append(f"ball not held in physics: {catch.end_distance_m * 1000:.1f} mm from the "
-                   f"palm centre at the end")
+        out.append(f"ball not held in physics: {catch.why_not}")
     return out
 
 

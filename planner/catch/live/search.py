@@ -56,26 +56,29 @@ class LiveSearch:
     def next(self, flight: Flight, t_s: float, prev: Intercept | None,
              t_i: float | None) -> Intercept:
         """The intercept of ``flight`` (observed up to ``t_s``) warm-started from ``prev``,
-        the last re-plan's (its time ``t_i``; None: the first fit's)."""
+        the last re-plan's (its time ``t_i``; None: the first fit's). The tilted search
+        and its untilted retry share the path's samples and the position-only fallback
+        (``find_intercept``'s ``memo``: the same flight)."""
+        memo: dict = {}
         if self.tilt and prev is not None and prev.reason is None and not prev.aligned:
             prev = None  # a tilted palm's crossing may lie beyond the near window of the
             # position-only intercept: searched along the whole path (as a first fit's)
             self.prior = None
-        ic = self._next(flight, t_s, prev, t_i)
+        ic = self._next(flight, t_s, prev, t_i, memo)
         if self.tilt and (ic.reason is not None or not ic.aligned):  # the tilted palm
             tilt, self.tilt = self.tilt, 0.0  # faces no pose: the untilted one (as the
-            ic = self._next(flight, t_s, prev, t_i)  # planned catch's tilt search)
+            ic = self._next(flight, t_s, prev, t_i, memo)  # planned catch's tilt search)
             self.tilt = tilt
         return ic
 
     def _next(self, flight: Flight, t_s: float, prev: Intercept | None,
-              t_i: float | None) -> Intercept:
+              t_i: float | None, memo: dict | None = None) -> Intercept:
         """``next`` at the tilt ``self.tilt``."""
         if prev is None:
             if self.prior is not None:
                 return find_intercept_near(self.wrist, flight, self.C, self.radius_m,
-                                           self.prior, self.prior.t, NEAR_S, self.tilt)
-            return self.search(flight)
+                                           self.prior, self.prior.t, NEAR_S, self.tilt, memo)
+            return self.search(flight, memo)
         if prev.reason is not None and t_s < self.searched_s + REACH_RETRY_S - 1e-9:
             flight.integrate_to(t_i + NEAR_S)
             return prev
@@ -83,12 +86,12 @@ class LiveSearch:
         # reach, the whole-path search's span)
         flight.integrate_to(t_i + (SEARCH_AFTER_S if prev.reason else NEAR_S))
         ic = find_intercept_near(self.wrist, flight, self.C, self.radius_m, prev, t_i, NEAR_S,
-                                 self.tilt)
+                                 self.tilt, memo)
         if ic.reason is not None:  # (out of reach: the whole path was searched)
             self.searched_s = t_s
         return ic
 
-    def search(self, flight: Flight | None) -> Intercept | None:
+    def search(self, flight: Flight | None, memo: dict | None = None) -> Intercept | None:
         """The intercept searched along the whole of ``flight`` near the catch point (the
         first look's, or the first fit's without one)."""
         if flight is None:
@@ -97,4 +100,4 @@ class LiveSearch:
             t_c = float(flight.time_at_x(float(self.C[0])))
         except InfeasibleError:
             t_c = closest_time(flight, self.C)
-        return find_intercept(self.wrist, flight, self.C, self.radius_m, t_c, self.tilt)
+        return find_intercept(self.wrist, flight, self.C, self.radius_m, t_c, self.tilt, memo)

@@ -47,9 +47,13 @@ class BallForces:
         centre_i = palm_target(h, q_i, r)
         stop, contact = self._stop_load(flight, pose, t, Q, grasp_t)
         if stop.headroom < -RATE_TOL:  # the check's tolerance (one rule)
+            # (the pad's force grows with the square of the ball's speed relative to the
+            # palm: beside the flight's own speed it shows what the arm's recoil took off)
             reasons.append(Reason(CatchReason.TOO_FAST_TO_STOP, (
                 f"too fast to stop (over the palm's {100 * PAD_GIVE_M:g} cm and the arm's "
-                f"stopping motion): {stop.force_n:.1f} N needs motor.{stop.motor} at "
+                f"stopping motion): the ball meets the palm at {stop.speed_m_s:.2f} m/s "
+                f"(its flight {float(np.linalg.norm(pose.v_i)):.2f} m/s), "
+                f"{stop.force_n:.1f} N needs motor.{stop.motor} at "
                 f"{abs(stop.torque_nm):.2f} N m > its {stop.limiting_part} limit "
                 f"{stop.capacity_nm:.2f} N m")))
         if stop.cone_margin_n is not None and stop.cone_margin_n < 0:

@@ -186,14 +186,23 @@ class Wrist:
 
 
 def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float,
-                   tilt: float = 0.0) -> Intercept:
+                   tilt: float = 0.0, memo: dict | None = None) -> Intercept:
     """Where and when the palm meets the ball near ``C`` (``planner.catch.plan.api``, step 1),
     searched around ``t_c`` (the throw's time at the catch point); ``tilt``: the palm
     normal turned this far (rad, about the flexion axis) from facing the ball (the soft
-    catch's choice, ``planner.catch.plan.stopping``); 0 faces it. The reach axis at 0."""
-    t = np.linspace(max(0.0, t_c - SEARCH_BEFORE_S), t_c + SEARCH_AFTER_S, _N_SEARCH)
-    b = flight.position(t) - C
-    v = flight.velocity(t)
+    catch's choice, ``planner.catch.plan.stopping``); 0 faces it. The reach axis at 0.
+    ``memo``: a dict kept by the caller for searches of this one flight, ``C`` and ``r``
+    at several tilts (the live session's tilted search and its untilted retry): the path's
+    samples and the position-only fallback (which faces no tilt) are computed once."""
+    key = ("path", t_c)
+    if memo is not None and key in memo:
+        t, b, v = memo[key]
+    else:
+        t = np.linspace(max(0.0, t_c - SEARCH_BEFORE_S), t_c + SEARCH_AFTER_S, _N_SEARCH)
+        b = flight.position(t) - C
+        v = flight.velocity(t)
+        if memo is not None:
+            memo[key] = (t, b, v)
     _, hgt = wr.aligned(b, v, r, tilt)
     # first crossing of the palm plane (+ before, - after)
     down = np.flatnonzero((hgt[:-1] > 0) & (hgt[1:] <= 0))
@@ -207,7 +216,12 @@ def find_intercept(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: floa
         sol = wr.dev_rail(s_vec, r)
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             return Intercept(ti, th, sol[0], sol[1], abs(tilt), True, None)
-    return _position_only(wr, flight, C, r, t, b=b)
+    if memo is None:
+        return _position_only(wr, flight, C, r, t, b=b)
+    key = ("position only", t_c)
+    if key not in memo:
+        memo[key] = _position_only(wr, flight, C, r, t, b=b)
+    return memo[key]
 
 
 def find_intercept_square(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_c: float,
@@ -263,7 +277,8 @@ def find_intercept_square(wr: Wrist, flight: Flight, C: np.ndarray, r: float, t_
 
 
 def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev: Intercept,
-                        t_prev: float, half_width_s: float, tilt: float = 0.0) -> Intercept:
+                        t_prev: float, half_width_s: float, tilt: float = 0.0,
+                        memo: dict | None = None) -> Intercept:
     """``find_intercept`` warm-started from a previous intercept time ``t_prev`` (a live
     re-plan: the flight moved a little): the palm-plane crossing bracketed within
     ``half_width_s`` of it and found by the same secant, or (no aligned pose) the palm's
@@ -272,9 +287,9 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
     finds it there. A previous intercept out of reach is no pose to start from (as the
     first plan's ``session._prior``): the full search at once (around ``t_prev``).
     ``tilt``: ``find_intercept``'s (the palm turned from facing the ball; its position-only
-    fallback faces none)."""
+    fallback faces none); ``memo``: ``find_intercept``'s."""
     if prev.reason is not None:
-        return find_intercept(wr, flight, C, r, t_prev, tilt)
+        return find_intercept(wr, flight, C, r, t_prev, tilt, memo)
     ta, tb = max(0.0, t_prev - half_width_s), t_prev + half_width_s
     fa, fb = wr.aligned1(flight, C, ta, r, tilt)[2], wr.aligned1(flight, C, tb, r, tilt)[2]
     if fa > 0 >= fb:
@@ -284,10 +299,15 @@ def find_intercept_near(wr: Wrist, flight: Flight, C: np.ndarray, r: float, prev
         if sol is not None and wr.flex_lim[0] <= th <= wr.flex_lim[1]:
             return Intercept(ti, th, sol[0], sol[1], abs(tilt), True, None)
     devs = (prev.dev,) if not prev.aligned else None
-    ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR), devs)
-    if ic.reason is not None and devs is not None:
-        ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR))
-    return ic if ic.reason is None else find_intercept(wr, flight, C, r, t_prev, tilt)
+    key = ("near position only", ta, tb, devs)  # (faces no tilt)
+    ic = None if memo is None else memo.get(key)
+    if ic is None:
+        ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR), devs)
+        if ic.reason is not None and devs is not None:
+            ic = _position_only(wr, flight, C, r, np.linspace(ta, tb, _N_NEAR))
+        if memo is not None:
+            memo[key] = ic
+    return ic if ic.reason is None else find_intercept(wr, flight, C, r, t_prev, tilt, memo)
 
 
 def _crossing(wr: Wrist, flight: Flight, C: np.ndarray, rho: float, ta: float, tb: float,
