@@ -110,3 +110,30 @@ def test_collided_notes_finds_the_windows_of_the_rows_too_near(pair) -> None:
     # (a collision no window holds: None)
     assert collided_notes(t, ql, qr, edges, 0.0, [(2.5, 3.0)], 0.01,
                           pair.gap.clearance_m) is None
+
+
+def test_a_handed_note_refused_for_the_first_hands_bodies_is_named_by_the_first_hands_reason(
+) -> None:
+    from types import SimpleNamespace
+
+    from planner.play.costs import Skip, SkipReason
+    from planner.play.twohands import left_out_of
+
+    def plan(*skips):
+        return SimpleNamespace(verdict=SimpleNamespace(skipped=list(skips)))
+
+    # (song notes 0..3: the right hand, planned first, has 0, 1, 2 and leaves 1 (late) and
+    # 2 (held) out; the left hand has its own 3 and both handed notes: it refuses 1 for
+    # the right hand's bodies, 2 for being late, and its own 3 for the right hand's bodies)
+    right = plan(Skip(1, SkipReason.TOO_LATE, "late"), Skip(2, SkipReason.HELD, "held"))
+    left = plan(Skip(0, SkipReason.OTHER_HAND, "bodies"), Skip(1, SkipReason.TOO_LATE, "late2"),
+                Skip(2, SkipReason.OTHER_HAND, "bodies2"))
+    planned_of = ((1, 2, 3), (0, 1, 2))
+    notes_of = ((1, 2, 3), (0,))
+    got = dict(left_out_of((left, right), planned_of, notes_of))
+    assert sorted(got) == [1, 2, 3]
+    # (the loss is the right hand's: its reason, the refusal in the detail)
+    assert got[1].reason is SkipReason.TOO_LATE
+    assert got[1].detail.startswith("late;") and got[1].detail.endswith("bodies")
+    assert got[2].reason is SkipReason.TOO_LATE and got[2].detail == "late2"
+    assert got[3].reason is SkipReason.OTHER_HAND and got[3].detail == "bodies2"

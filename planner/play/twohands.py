@@ -280,12 +280,14 @@ class PairPass:
     played_frames: float
     planned_of: tuple[tuple[int, ...], tuple[int, ...]]
     alone: bool = False
+    back: bool = False  # the first hand planned again with what the second left out
 
     @property
     def way(self) -> str:
         """How it was planned: ``right first``, ``left first``, or ``right alone`` (the
-        other hand given only the notes the first one left out)."""
-        return f"{self.first} {'alone' if self.alone else 'first'}"
+        other hand given only the notes the first one left out); `` back``: then the
+        first hand planned again with the notes the second left out (``hand_back``)."""
+        return f"{self.first} {'alone' if self.alone else 'first'}{' back' if self.back else ''}"
 
     def skipped_for(self, reason: SkipReason) -> list[tuple[int, object]]:
         """(song index, ``Skip``) of every note a plan left out for ``reason`` (the notes
@@ -438,6 +440,45 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
                     float(played), (planned[LEFT], planned[RIGHT]), not idx[second])
 
 
+def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
+              song_name: str = "") -> PairPass | None:
+    """``p`` with the notes its second hand left out handed back to the first: the first
+    hand planned again, its notes but those the second plays and with those, within the
+    second one's rows as they are (``_plan_second``: the same rule the second kept from
+    the first one's rows, so the pair keeps its clearance; the second's plan is
+    unchanged). None when the second hand left nothing out."""
+    first, second = p.first, _other(p.first)
+    f, s = SIDES.index(first), SIDES.index(second)
+    gone = {p.planned_of[s][k.note] for k in p.plans[s].verdict.skipped}
+    if not gone:
+        return None
+    plays = set(p.planned_of[s]) - gone
+    idx = tuple(sorted((set(p.planned_of[f]) - plays) | gone))
+    sub = _sub_song(song, idx)
+    tr = p.plans[s].trajectory
+    inner_m = pp.edges[second].inner_m(tr.q)
+    rail_m = tr.q[:, pp.hands[second].index["rail"]]
+    edge = FirstEdge(tr.t_s - p.plans[s].song_start_s,
+                     rail_m - inner_m if second == RIGHT else rail_m + inner_m)
+    again = _plan_second(song, pp, first, idx, sub, p.plans[s], edge, rate_hz, song_name)
+    plans = {first: again, second: p.plans[s]}
+    planned = {first: idx, second: p.planned_of[s]}
+    a = p.assignment.hand_over({i: _why(p, i) for i in idx if p.assignment.hand[i] != first},
+                               first)
+    played = sum(_played_frames(plans[x], planned[x], song.notes, rate_hz) for x in SIDES)
+    return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
+                    float(played), (planned[LEFT], planned[RIGHT]), p.alone, True)
+
+
+def _why(p: PairPass, i: int) -> str:
+    """Why ``p``'s hand of note ``i`` (song index) left it out (its plan's ``Skip``)."""
+    k = SIDES.index(p.assignment.hand[i])
+    for s in p.plans[k].verdict.skipped:
+        if p.planned_of[k][s.note] == i:
+            return f"{s.reason.value}: {s.detail}"
+    return "left out"
+
+
 def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
                    rate_hz: float = 100.0, song_name: str = "") -> TwoHandPlan:
     """Plan ``song`` (every part: ``load_song(..., every_part=True)``) on both hands (the
@@ -462,6 +503,10 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
             tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
         tried.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
     best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
+    back = hand_back(song, pp, best, rate_hz, song_name)
+    if back is not None:
+        tried.append(back)
+        best = max((best, back), key=lambda p: p.played_frames)
     rows = _one_clock(best.plans, rate_hz)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
