@@ -11,9 +11,13 @@ they *are* at every row over the note's window (``clear_bounds``: the first hand
 inner edge, ``InnerEdge``, read from its rows). A note whose every place breaks its
 bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand. The
 notes the first hand leaves out are handed to the second (``HandAssignment.hand_over``),
-planned with its own notes within the first one's rows: it plays them where it is free. Which hand goes first, or whether one hand
-plays alone (the other taking only what it leaves out), is decided by the frames of
-music each way plays (``plan_two_hands``).
+planned with its own notes within the first one's rows: it plays them where it is free.
+Where the farthest-reach rule leaves the second hand's notes out, the second hand is
+planned again on the reach of the places that press each note, confirmed on both hands'
+rows by the check's judge (``planner.play.handclear``). Which hand goes first, or whether
+one hand plays alone (the other taking only what it leaves out), is decided by the
+frames of music each way plays (``plan_two_hands``); the way kept is then planned once
+more with the notes its second hand left out handed back to the first (``hand_back``).
 
 **Why the rails stay apart between the notes too.** A note's window runs from its hand's
 previous onset to its hand's next onset (and half of the next notes' length, the latest a
