@@ -6,7 +6,8 @@ in MuJoCo (full contact; ``--no-physics`` to skip): check F1, physics F1, wrong 
 collisions between the hands (check's bodies, physics' contacts), notes per hand, notes
 left out (and, after the table, every note left out by its hand and reason), the way
 kept (``way``: ``R``/``L`` the right or left hand first, ``RA`` the right hand alone, the
-left one given what it leaves out), the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
+left one given what it leaves out; ``+``: then the first hand planned again with what the
+second left out), the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
 for every piece, as ``batch`` plans).
 
     python bench/two_hands.py [--corpus DIR] [--only S] [--no-physics]
@@ -90,8 +91,9 @@ def main() -> int:
                  "L": len(plan2.notes_of[0]), "R": len(plan2.notes_of[1]),
                  "out": len(plan2.left_out()), "rtf2": song_s / plan2.planning_s,
                  "gap": chk2.gap.least_m * 1000, "ok": chk2.ok,
-                 "way": {"right first": "R", "left first": "L",
-                         "right alone": "RA"}.get(plan2.way, plan2.way)}
+                 "way": {"right first": "R", "left first": "L", "right alone": "RA"}.get(
+                     plan2.way.removesuffix(" back"), plan2.way)
+                 + ("+" if plan2.way.endswith(" back") else "")}
             reasons.update((plan2.assignment.hand[i], s.reason.value)
                            for i, s in plan2.left_out())
             rows.append(r)

@@ -59,7 +59,8 @@ class MoveReason(enum.Enum):
     TIME = "time"  # its hand cannot move there in time; the other loses fewer frames
     ONE_HAND = "one_hand"  # one hand playing every note played more frames than two
     LEFT_OUT = "left_out"  # the hand planned first left it out; the other, planned after
-    # within the first one's rows, is given it (``planner.play.twohands``)
+    # within the first one's rows, is given it; or the hand planned second left it out and
+    # the first, planned again within the second one's rows, is (``planner.play.twohands``)
 
 
 @dataclass(frozen=True)
@@ -111,7 +112,7 @@ class HandAssignment:
                 moved.pop(i, None)
             elif i not in moved:
                 moved[i] = Moved(i, MoveReason.LEFT_OUT, (0.0, 0.0),
-                                 f"the {self.hand[i]} hand, planned first, left it out: {why}")
+                                 f"the {self.hand[i]} hand left it out: {why}")
         return HandAssignment(tuple(hand), self.hint, tuple(moved[i] for i in sorted(moved)),
                               self.source, self.split_pitch)
 

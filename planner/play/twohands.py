@@ -11,9 +11,13 @@ they *are* at every row over the note's window (``clear_bounds``: the first hand
 inner edge, ``InnerEdge``, read from its rows). A note whose every place breaks its
 bound is left out (``SkipReason.OTHER_HAND``), never played into the other hand. The
 notes the first hand leaves out are handed to the second (``HandAssignment.hand_over``),
-planned with its own notes within the first one's rows: it plays them where it is free. Which hand goes first, or whether one hand
-plays alone (the other taking only what it leaves out), is decided by the frames of
-music each way plays (``plan_two_hands``).
+planned with its own notes within the first one's rows: it plays them where it is free.
+Where the farthest-reach rule leaves the second hand's notes out, the second hand is
+planned again on the reach of the places that press each note, confirmed on both hands'
+rows by the check's judge (``planner.play.handclear``). Which hand goes first, or whether
+one hand plays alone (the other taking only what it leaves out), is decided by the
+frames of music each way plays (``plan_two_hands``); the way kept is then planned once
+more with the notes its second hand left out handed back to the first (``hand_back``).
 
 **Why the rails stay apart between the notes too.** A note's window runs from its hand's
 previous onset to its hand's next onset (and half of the next notes' length, the latest a
@@ -40,6 +44,7 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -48,6 +53,13 @@ from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.music.midi import Song
 from planner.play.costs import CostMemo, Costs, SkipReason
+from planner.play.handclear import (
+    MAX_ROUNDS,
+    PlaceReach,
+    collided_notes,
+    least_reach_m,
+    loose_bound,
+)
 from planner.play.handgap import HandGap, HandReach, InnerEdge, hand_gap
 from planner.play.hands import LEFT, RIGHT, SIDES, HandAssignment, assign_hands
 from planner.play.motion import DROP_FRACTION
@@ -76,6 +88,9 @@ class PairPlanner:
             pl.places.idle.narrow()
         self.gap: HandGap = hand_gap(self.planners[LEFT].places, self.planners[RIGHT].places)
         self.edges = {s: InnerEdge(h) for s, h in self.hands.items()}
+        # (each place's own reach towards the other hand: the second hand's loosened rule)
+        self.place_reach = {s: PlaceReach(self.planners[s].places, self.edges[s])
+                            for s in SIDES}
 
     def reach(self, side: str) -> HandReach:
         """``side``'s ``HandReach`` (of the pair's ``HandGap``)."""
@@ -127,10 +142,22 @@ class TwoHandPlan:
 
 def left_out_of(plans, planned_of, notes_of) -> list[tuple[int, object]]:
     """(song index, ``Skip``) of every note its hand (``notes_of``) left out, by note: a
-    note the hand planned first left out and handed over is the other hand's."""
+    note the hand planned first left out and handed over is the other hand's. A handed
+    note the other hand refused for the first one's bodies (``SkipReason.OTHER_HAND``:
+    the first hand over its key, as it was when it left the note out) is named by why the
+    first hand left it out, the refusal added to the detail: the loss is the first hand's."""
     mine = [set(idx) for idx in notes_of]
-    out = [(idx[s.note], s) for k, (idx, p) in enumerate(zip(planned_of, plans))
-           for s in p.verdict.skipped if idx[s.note] in mine[k]]
+    skips = [{idx[s.note]: s for s in p.verdict.skipped} for idx, p in zip(planned_of, plans)]
+    out = []
+    for k in range(len(plans)):
+        for i, s in skips[k].items():
+            if i not in mine[k]:
+                continue
+            before = skips[1 - k].get(i)
+            if s.reason is SkipReason.OTHER_HAND and before is not None:
+                s = replace(before, detail=f"{before.detail}; handed to the other hand, "
+                                           f"which could not take it: {s.detail}")
+            out.append((i, s))
     return sorted(out, key=lambda x: x[0])
 
 
@@ -178,27 +205,34 @@ def room_bounds(notes, side: str, own: tuple[int, ...], other: tuple[int, ...], 
     return out
 
 
-def clear_bounds(notes, side: str, own: tuple[int, ...], edge_t_s: np.ndarray,
-                 edge_m: np.ndarray, reach_m: float, dt_s: float,
-                 out_of: frozenset[int] = frozenset()) -> list[tuple[float, float]]:
-    """The bounds of the hand planned second (``side``): per note of ``own``, its rail
-    ``reach_m`` (its own bodies' farthest reach towards the other hand, plus the
-    clearance) from the other hand's inner edge (``edge_m`` at song times ``edge_t_s``:
-    per row of the other hand, its rail less (a right hand) or plus (a left one) its
-    bodies' reach towards this hand in that row's pose, ``InnerEdge``) at every row of
-    the note's window (one row more each side: the rows' clock samples the other hand's
-    moves); the left hand below, the right above."""
+def clear_limits(notes, side: str, own: tuple[int, ...], edge_t_s: np.ndarray,
+                 edge_m: np.ndarray, dt_s: float, out_of: frozenset[int] = frozenset()
+                 ) -> list[float]:
+    """Per note of ``own`` (the hand planned second, ``side``), the other hand's inner edge
+    nearest this hand over the note's window (``edge_m`` at song times ``edge_t_s``: per
+    row of the other hand, its rail less (a right hand) or plus (a left one) its bodies'
+    reach towards this hand in that row's pose, ``InnerEdge``; one row more each side:
+    the rows' clock samples the other hand's moves): the least for a left hand, the most
+    for a right one."""
     out = []
     for t0, t1 in windows(notes, own, out_of):
         a = 0 if t0 == -math.inf else int(np.searchsorted(edge_t_s, t0 - dt_s, side="left"))
         b = (len(edge_t_s) if t1 == math.inf
              else int(np.searchsorted(edge_t_s, t1 + dt_s, side="right")))
         seg = edge_m[max(0, a - 1):b + 1]
-        if side == LEFT:
-            out.append((-UNBOUNDED_M, float(seg.min()) - reach_m))
-        else:
-            out.append((float(seg.max()) + reach_m, UNBOUNDED_M))
+        out.append(float(seg.min()) if side == LEFT else float(seg.max()))
     return out
+
+
+def clear_bounds(notes, side: str, own: tuple[int, ...], edge_t_s: np.ndarray,
+                 edge_m: np.ndarray, reach_m: float, dt_s: float,
+                 out_of: frozenset[int] = frozenset()) -> list[tuple[float, float]]:
+    """The bounds of the hand planned second (``side``) by the farthest-reach rule: per
+    note of ``own``, its rail ``reach_m`` (its own bodies' farthest reach towards the
+    other hand, plus the clearance) from the other hand's inner edge at every row of the
+    note's window (``clear_limits``); the left hand below, the right above."""
+    return [(-UNBOUNDED_M, e - reach_m) if side == LEFT else (e + reach_m, UNBOUNDED_M)
+            for e in clear_limits(notes, side, own, edge_t_s, edge_m, dt_s, out_of)]
 
 
 def settled_bounds(notes, places: Places, memo: CostMemo, rate_hz: float,
@@ -208,13 +242,20 @@ def settled_bounds(notes, places: Places, memo: CostMemo, rate_hz: float,
     plays within their bound (``Costs.reason``: out of reach, too short, the other hand's)
     taken out, again until no more notes fall out (windows only grow, so bounds only
     tighten: it ends)."""
+    return settle(notes, places, memo, rate_hz, bounds_of)[0]
+
+
+def settle(notes, places: Places, memo: CostMemo, rate_hz: float,
+           bounds_of: Callable[[frozenset[int]], list[tuple[float, float]]]
+           ) -> tuple[list[tuple[float, float]], frozenset[int]]:
+    """``settled_bounds`` and the notes taken out (positions in ``notes``)."""
     out_of: frozenset[int] = frozenset()
     while True:
         bounds = bounds_of(out_of)
         costs = Costs(notes, places, rate_hz, memo, bounds)
         now = frozenset(k for k in range(len(notes)) if costs.reason(k) is not None)
         if now <= out_of:
-            return bounds
+            return bounds, out_of
         out_of |= now
 
 
@@ -243,18 +284,129 @@ class PairPass:
     played_frames: float
     planned_of: tuple[tuple[int, ...], tuple[int, ...]]
     alone: bool = False
+    back: bool = False  # the first hand planned again with what the second left out
 
     @property
     def way(self) -> str:
         """How it was planned: ``right first``, ``left first``, or ``right alone`` (the
-        other hand given only the notes the first one left out)."""
-        return f"{self.first} {'alone' if self.alone else 'first'}"
+        other hand given only the notes the first one left out); `` back``: then the
+        first hand planned again with the notes the second left out (``hand_back``)."""
+        return f"{self.first} {'alone' if self.alone else 'first'}{' back' if self.back else ''}"
 
     def skipped_for(self, reason: SkipReason) -> list[tuple[int, object]]:
         """(song index, ``Skip``) of every note a plan left out for ``reason`` (the notes
         handed over too)."""
         return [(idx[s.note], s) for idx, p in zip(self.planned_of, self.plans)
                 for s in p.verdict.skipped if s.reason is reason]
+
+
+class FirstEdge(NamedTuple):
+    """The hand planned first's inner edge (towards the other hand, m) per row of its
+    plan, at song times ``t_s``."""
+
+    t_s: np.ndarray
+    x_m: np.ndarray
+
+
+def _room(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
+          other: tuple[int, ...], sub: Song, rate_hz: float) -> list[tuple[float, float]]:
+    """The hand planned first's bounds: per note of ``own``, its places' own reach
+    (``planner.play.handclear.PlaceReach``) the clearance beyond the least the other hand
+    must reach to press its notes sounding in the note's window (``least_reach_m``); never
+    tighter than ``room_bounds`` (the other hand's farthest reach and the rail gap). Only
+    room: the second hand keeps the clearance from the first one's rows as they are."""
+    strict = room_bounds(song.notes, side, own, other, pp.gap)
+    osd = _other(side)
+    opl, pl = pp.planners[osd], pp.planners[side]
+    o_costs = Costs(song.notes, opl.places, rate_hz, opl.memo)
+    need = {i: least_reach_m(o_costs, pp.place_reach[osd], i, osd) for i in other}
+    free = Costs(sub.notes, pl.places, rate_hz, pl.memo)
+    c = pp.gap.clearance_m
+    out = []
+    for k, (t0, t1) in enumerate(windows(song.notes, own)):
+        xs = [need[i] for i in other if song.notes[i].onset_s < t1
+              and song.notes[i].offset_s > t0]
+        if not xs or any(x is None for x in xs):
+            out.append(strict[k])
+            continue
+        lim = max(xs) + c if side == RIGHT else min(xs) - c
+        out.append(loose_bound(free, pp.place_reach[side], k, side, lim, strict[k]))
+    return out
+
+
+def _played_frames(plan: PlayPlan, idx: tuple[int, ...], notes, rate_hz: float) -> int:
+    """The frames of music ``plan`` (of the notes ``idx``) plays, in whole frames (ways
+    playing the same music tie exactly; a sum of seconds differs in its last bits with
+    the notes' order)."""
+    out = {k.note for k in plan.verdict.skipped}
+    return sum(round(notes[i].duration_s * rate_hz) for k, i in enumerate(idx) if k not in out)
+
+
+def _plan_second(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], sub: Song,
+                 first: PlayPlan, edge: FirstEdge, rate_hz: float, song_name: str) -> PlayPlan:
+    """The hand planned second (``side``, its notes ``idx`` as ``sub``) within the first
+    one's rows: by the farthest-reach rule (``clear_bounds``, settled); where that leaves
+    a note out for the other hand, again with each note's bound loosened to the reach of
+    the places that press it, confirmed on both hands' rows by the check's judge
+    (``planner.play.handclear``); the plan playing more frames kept (the first of equals)."""
+    notes, pl, dt = song.notes, pp.planners[side], 1.0 / rate_hz
+    reach_m = pp.reach(side).inner_extent_m + pp.gap.clearance_m
+    bounds = settled_bounds(
+        sub.notes, pl.places, pl.memo, rate_hz,
+        lambda out: clear_bounds(notes, side, idx, edge.t_s, edge.x_m, reach_m, dt, out))
+    strict = plan_song(sub, pp.hands[side], None, rate_hz, song_name=song_name, planner=pl,
+                       rail_bounds=bounds)
+    refused = [s.note for s in strict.verdict.skipped if s.reason is SkipReason.OTHER_HAND]
+    if not refused:
+        return strict
+    loose = _plan_loose(song, pp, side, idx, sub, first, edge, rate_hz, song_name, refused)
+    if loose is not None and (_played_frames(loose, idx, notes, rate_hz)
+                              > _played_frames(strict, idx, notes, rate_hz)):
+        return loose
+    return strict
+
+
+def _plan_loose(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], sub: Song,
+                first: PlayPlan, edge: FirstEdge, rate_hz: float, song_name: str,
+                refused: list[int]) -> PlayPlan | None:
+    """``_plan_second``'s loosened plan (``planner.play.handclear``), or None when the
+    check's judge still finds the hands too near after ``MAX_ROUNDS`` plans, or when no
+    note the farthest-reach rule refused (``refused``, positions in ``sub``) has a place
+    within its loosened bound (then the plan would be the same)."""
+    notes, pl, dt = song.notes, pp.planners[side], 1.0 / rate_hz
+    c = pp.gap.clearance_m
+    reach_m = pp.reach(side).inner_extent_m + c
+    free = Costs(sub.notes, pl.places, rate_hz, pl.memo)  # (every place: no bound)
+    back: set[int] = set()  # (the notes held to the farthest-reach rule)
+    got: dict[str, frozenset[int]] = {}
+
+    def bounds_of(out: frozenset[int]) -> list[tuple[float, float]]:
+        got["out"] = out
+        lims = clear_limits(notes, side, idx, edge.t_s, edge.x_m, dt, out)
+        res = []
+        for k, e in enumerate(lims):
+            strict = (-UNBOUNDED_M, e - reach_m) if side == LEFT else (e + reach_m, UNBOUNDED_M)
+            res.append(strict if k in back else loose_bound(
+                free, pp.place_reach[side], k, side, e - c if side == LEFT else e + c, strict))
+        return res
+
+    for _ in range(MAX_ROUNDS):
+        bounds = settled_bounds(sub.notes, pl.places, pl.memo, rate_hz, bounds_of)
+        placed = Costs(sub.notes, pl.places, rate_hz, pl.memo, bounds)
+        if all(placed.reason(k) is not None for k in refused):
+            return None
+        plan = plan_song(sub, pp.hands[side], None, rate_hz, song_name=song_name, planner=pl,
+                         rail_bounds=bounds)
+        rows = _one_clock((plan, first) if side == LEFT else (first, plan), rate_hz)
+        hit = collided_notes(rows.t_s, rows.q[0], rows.q[1],
+                             (pp.edges[LEFT], pp.edges[RIGHT]), rows.song_start_s,
+                             windows(notes, idx, got["out"]), dt, c)
+        if hit is not None and not hit:
+            return plan
+        if hit is None or hit <= back:
+            return None
+        back |= hit
+    return None
 
 
 def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
@@ -271,7 +423,7 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     plans: dict[str, PlayPlan] = {}
     # (the first hand's bound leaves the other room; it keeps no clearance itself, the
     # second hand's bound does: its windows are its notes' own, none taken out)
-    bounds = room_bounds(notes, first, idx[first], idx[second], pp.gap)
+    bounds = _room(song, pp, first, idx[first], idx[second], subs[first], rate_hz)
     plans[first] = plan_song(subs[first], pp.hands[first], None, rate_hz, song_name=song_name,
                              planner=pp.planners[first], rail_bounds=bounds)
     given = {idx[first][s.note]: f"{s.reason.value}: {s.detail}"
@@ -283,22 +435,52 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     inner_m = pp.edges[first].inner_m(tr.q)
     rail_m = tr.q[:, pp.hands[first].index["rail"]]
     edge_m = rail_m - inner_m if first == RIGHT else rail_m + inner_m
-    reach_m = pp.reach(second).inner_extent_m + pp.gap.clearance_m
-    pl = pp.planners[second]
-    bounds = settled_bounds(
-        subs[second].notes, pl.places, pl.memo, rate_hz,
-        lambda out: clear_bounds(notes, second, planned[second], edge_t_s, edge_m, reach_m,
-                                 1.0 / rate_hz, out))
-    plans[second] = plan_song(subs[second], pp.hands[second], None, rate_hz,
-                              song_name=song_name, planner=pl, rail_bounds=bounds)
-    played = 0  # (whole frames: ways playing the same music tie exactly, the earlier kept;
-    for s in SIDES:  # a sum of seconds differs in its last bits with the notes' order)
-        out = {k.note for k in plans[s].verdict.skipped}
-        played += sum(round(notes[i].duration_s * rate_hz)
-                      for k, i in enumerate(planned[s]) if k not in out)
+    edge = FirstEdge(edge_t_s, edge_m)
+    plans[second] = _plan_second(song, pp, second, planned[second], subs[second], plans[first],
+                                 edge, rate_hz, song_name)
+    played = sum(_played_frames(plans[s], planned[s], notes, rate_hz) for s in SIDES)
     a = a.hand_over(given, second)
     return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
                     float(played), (planned[LEFT], planned[RIGHT]), not idx[second])
+
+
+def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
+              song_name: str = "") -> PairPass | None:
+    """``p`` with the notes its second hand left out handed back to the first: the first
+    hand planned again, its notes but those the second plays and with those, within the
+    second one's rows as they are (``_plan_second``: the same rule the second kept from
+    the first one's rows, so the pair keeps its clearance; the second's plan is
+    unchanged). None when the second hand left nothing out."""
+    first, second = p.first, _other(p.first)
+    f, s = SIDES.index(first), SIDES.index(second)
+    gone = {p.planned_of[s][k.note] for k in p.plans[s].verdict.skipped}
+    if not gone:
+        return None
+    plays = set(p.planned_of[s]) - gone
+    idx = tuple(sorted((set(p.planned_of[f]) - plays) | gone))
+    sub = _sub_song(song, idx)
+    tr = p.plans[s].trajectory
+    inner_m = pp.edges[second].inner_m(tr.q)
+    rail_m = tr.q[:, pp.hands[second].index["rail"]]
+    edge = FirstEdge(tr.t_s - p.plans[s].song_start_s,
+                     rail_m - inner_m if second == RIGHT else rail_m + inner_m)
+    again = _plan_second(song, pp, first, idx, sub, p.plans[s], edge, rate_hz, song_name)
+    plans = {first: again, second: p.plans[s]}
+    planned = {first: idx, second: p.planned_of[s]}
+    a = p.assignment.hand_over({i: _why(p, i) for i in idx if p.assignment.hand[i] != first},
+                               first)
+    played = sum(_played_frames(plans[x], planned[x], song.notes, rate_hz) for x in SIDES)
+    return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
+                    float(played), (planned[LEFT], planned[RIGHT]), p.alone, True)
+
+
+def _why(p: PairPass, i: int) -> str:
+    """Why ``p``'s hand of note ``i`` (song index) left it out (its plan's ``Skip``)."""
+    k = SIDES.index(p.assignment.hand[i])
+    for s in p.plans[k].verdict.skipped:
+        if p.planned_of[k][s.note] == i:
+            return f"{s.reason.value}: {s.detail}"
+    return "left out"
 
 
 def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
@@ -325,6 +507,10 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
             tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
         tried.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
     best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
+    back = hand_back(song, pp, best, rate_hz, song_name)
+    if back is not None:
+        tried.append(back)
+        best = max((best, back), key=lambda p: p.played_frames)
     rows = _one_clock(best.plans, rate_hz)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())

@@ -1,0 +1,142 @@
+"""The hand planned second's clearance judged on the poses it presses each note with, then
+confirmed on both hands' rows by the check's own bodies (``play --hands 2``:
+``planner.play.twohands``).
+
+**The rule it loosens.** The hand planned second keeps, at every row of a note's window,
+its rail its *farthest* reach (``HandReach.inner_extent_m``: over every pose the planner
+puts the hand in, the index finger abducted towards the other hand, 96.5 mm on the default
+pair) plus the clearance from the first hand's bodies as they are (``clear_bounds``). It is
+exact whatever the second hand's poses, and it refuses a note whose key lies a finger's
+width from the first hand's bodies but whose place would need that farthest pose on the
+rail's side of the key (on the two-hand corpus, notes 70-140 mm clear of the first hand's
+bodies when struck were left out so).
+
+**The place's own reach.** Each place a finger presses a key from has its own poses (the
+atlas entry's press, rise, hover and high, the idle fingers tucked): ``PlaceReach`` is the
+farthest its bodies reach from the rail towards the other hand over those four poses (the
+check's bodies and kinematics, the rail at 0). A note's **loosened bound** is the farthest
+rail (towards the other hand) of the places that press it with their own reach clear of
+the first hand's inner edge over the window by the clearance (``loose_bound``); never
+tighter than the farthest-reach rule's.
+
+**Confirmed, not assumed.** The loosened bound is a bound on the rail, not on the poses:
+another finger pressing from a place within it, the hand between two places, or a pose of
+a chord's other note may reach further. So the plan it gives is replayed with the first
+hand's rows on one clock (the rows as the file holds them, six decimals) through the
+check's own judge of the hands' distance (``planner.check.handgap.GapJudge``); the notes
+whose windows hold a row under the clearance go back to the farthest-reach rule and the
+hand is planned again (``collided_notes``), until no row is under it; past
+``MAX_ROUNDS`` the farthest-reach plan is kept (exact by construction). The plan is
+exact by the check's own test either way.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from planner.check.handgap import GapJudge
+from planner.play.atlas import SPAN_M, STEP_M
+from planner.play.costs import Costs
+from planner.play.handgap import InnerEdge
+from planner.play.places import Places
+from planner.trajfile import as_written
+
+MAX_ROUNDS = 3  # the second hand planned again at most this often with the notes of its
+# collisions back on the farthest-reach rule (each round one more one-hand plan; the
+# collisions a loosened bound causes are few: the farthest-reach plan kept past them)
+
+
+class PlaceReach:
+    """Per place a finger presses a key from, how far the hand's bodies reach from the rail
+    towards the other hand over that place's four poses (module docstring), by the atlas
+    entry: ``reach_m(finger, pitch, place)``."""
+
+    def __init__(self, places: Places, edge: InnerEdge) -> None:
+        self.places = places
+        h = places.hand
+        n = round(SPAN_M / STEP_M)
+        keys, Q = [], []
+        for p, at in enumerate(places.atlases):
+            tucked = places.idle.tuck(at.base)
+            for f in h.fingers:
+                for pc in range(12):
+                    for k in range(-n, n + 1):
+                        e = at.entry_at(f, pc, k)
+                        if e is not None:
+                            keys.append((p, f, pc, k))
+                            Q += [at.full_q(e, pose, 0.0, tucked)
+                                  for pose in ("press", "rise", "hover", "high")]
+        if not keys:
+            self._reach: dict = {}
+            return
+        Q = h.apply_couplings(np.array(Q))
+        uniq, inv = np.unique(Q, axis=0, return_inverse=True)  # (each distinct pose once)
+        inner = edge.inner_m(uniq)[np.ravel(inv)].reshape(len(keys), 4).max(axis=1)
+        self._reach = dict(zip(keys, inner.tolist()))
+
+    def reach_m(self, finger: str, pitch: int, place: int) -> float:
+        """The place's reach towards the other hand (m from its rail); ``math.inf`` for a
+        place the finger presses the key from none of its entries (never clear)."""
+        p = self.places.posture_of(place)
+        at = self.places.atlases[p]
+        k = at.grid_index(finger, pitch, self.places.rail_m(place))
+        return self._reach.get((p, finger, pitch % 12, k), math.inf)
+
+
+def loose_bound(costs: Costs, pr: PlaceReach, note: int, side: str, limit_m: float,
+                strict: tuple[float, float]) -> tuple[float, float]:
+    """``note``'s loosened rail bound (module docstring): ``limit_m`` is the farthest x the
+    hand's bodies may reach (the first hand's inner edge over the window less the
+    clearance, or plus it for a right hand); ``strict``: the farthest-reach rule's bound,
+    which it never tightens. ``costs`` has no bounds (every place that presses the note)."""
+    pitch = costs.notes[note].pitch
+    rail_m = costs.places.rail_m
+    ok = [rail_m(q) for f in costs.places.hand.fingers for q in costs.rails(f, note)
+          if (rail_m(q) + pr.reach_m(f, pitch, q) <= limit_m if side == "left"
+              else rail_m(q) - pr.reach_m(f, pitch, q) >= limit_m)]
+    lo, hi = strict
+    if not ok:
+        return strict
+    if side == "left":
+        return lo, max(hi, max(ok))
+    return min(lo, min(ok)), hi
+
+
+def collided_notes(t_s: np.ndarray, q_left: np.ndarray, q_right: np.ndarray,
+                   edges: tuple[InnerEdge, InnerEdge], song_start_s: float,
+                   note_windows: Sequence[tuple[float, float]], dt_s: float,
+                   clearance_m: float) -> set[int] | None:
+    """The positions (in ``note_windows``' order) of the notes whose windows (song time)
+    hold a row where the hands' bodies are under ``clearance_m`` apart (the check's judge,
+    on the rows as the file holds them; one row more each side); an empty set when no row
+    is; None when some row is but no window holds it."""
+    judge = GapJudge(tuple(e.kin for e in edges), tuple(e.bodies for e in edges),
+                     ("left.", "right."), clearance_m)
+    judge.add(as_written(t_s), as_written(q_left), as_written(q_right))
+    gap = judge.finish(float(t_s[-1]) + dt_s)
+    if gap.ok:
+        return set()
+    hit = set()
+    for c in gap.collisions:
+        a, b = c.start_s - song_start_s - dt_s, c.end_s - song_start_s + dt_s
+        hit |= {k for k, (t0, t1) in enumerate(note_windows) if t0 < b and t1 > a}
+    return hit or None
+
+
+def least_reach_m(costs: Costs, pr: PlaceReach, note: int, side: str) -> float | None:
+    """How far towards the other hand a hand (``side``) must reach, at the least, to
+    press ``note`` (``costs``: no bounds): over every place that presses it, its rail plus
+    its reach (a left hand: the least), or less it (a right hand: the most); None when no
+    place does."""
+    pitch = costs.notes[note].pitch
+    rail_m = costs.places.rail_m
+    xs = [rail_m(q) + pr.reach_m(f, pitch, q) if side == "left"
+          else rail_m(q) - pr.reach_m(f, pitch, q)
+          for f in costs.places.hand.fingers for q in costs.rails(f, note)]
+    xs = [x for x in xs if math.isfinite(x)]
+    if not xs:
+        return None
+    return min(xs) if side == "left" else max(xs)
