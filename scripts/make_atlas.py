@@ -4,9 +4,9 @@ where the planner loads it from (``planner/tables/atlas-<URDF hash>.npz``). With
 the planner solves the entries it needs when it first needs them (single-finger IK,
 about 1 ms a pose); the table saves that time and holds exactly what the solver gives.
 It also writes the hand's move table (``planner.play.movetable``: every entry's key
-crossings, which pairs of entries a finger moves between clear of the keys, which it
-can hold a key down between while the rail moves: ``planner/tables/moves-<URDF
-hash>.npz``; with several play postures also the moves across from another posture's
+crossings, the moments its lifts and descents are clear above every key, which pairs
+of entries a finger moves between clear of the keys, which it can hold a key down
+between while the rail moves: ``planner/tables/moves-<URDF hash>.npz``; with several play postures also the moves across from another posture's
 entries and the arm's moves between postures at every step of the rail), which the
 planner would otherwise find by forward kinematics when it first needs them. Run from
 the repository root after changing a hand, the IK, the atlas or the moves:
@@ -25,6 +25,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner.hand.model import load_hand
+from planner.play import highclear
 from planner.play.atlas import Atlas, posture_count, table_path
 from planner.play.moves import Moves
 from planner.play.movetable import MoveTable, make_table
@@ -61,7 +62,8 @@ def make_moves(hand, atlases: list[Atlas], posture: int, places: Places | None) 
     out = moves_path(hand.urdf_sha256, posture)
     n = make_table(moves, out, moves.params(),
                    [(a, None if places is None or i < posture else _arm_s(places, posture, i))
-                    for i, a in enumerate(atlases) if i != posture])
+                    for i, a in enumerate(atlases) if i != posture],
+                   (highclear.HighClear(hand, atlases), highclear.params()))
     print(f"{out}: the moves of {n} entries, {time.perf_counter() - t1:.1f} s")
 
 

@@ -25,13 +25,16 @@ later).
 
 from __future__ import annotations
 
+import json
+from collections.abc import Mapping, Sequence
+
 import numpy as np
 
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.play.atlas import Atlas, AtlasEntry
 from planner.play.atlassolve import CLEARANCE_M
-from planner.play.movetable import HIGH_SAFE_Z_M
+from planner.play.movetable import HIGH_SAFE_Z_M, MoveTable
 from planner.play.profile import Move
 
 SAMPLES = 5  # points of the path tested by forward kinematics (ends included)
@@ -40,27 +43,73 @@ BISECTIONS = 5  # then halvings between the two samples around the crossing: 1/1
 BODY_CLEAR_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M  # every body this high clears every key
 TIME_STEPS = 400  # the time is read from the profile at this many steps (the later/
 # earlier one, on the safe side: 0.15 ms of a 60 ms lift)
+CLEAR_MOVES = ("lift", "rise", "descent")  # an entry's moves whose moments are shipped:
+# ``Moves.lift(e, "high")``, ``Moves.rise(e)``, ``Moves.descend(e, "high")``
+
+
+def params() -> str:
+    """What the shipped moments depend on besides the move table's own parameters (a
+    table made with others is not read: ``MoveTable.clear_s``)."""
+    return json.dumps({"samples": SAMPLES, "bisections": BISECTIONS,
+                       "body_clear_z_m": BODY_CLEAR_Z_M, "high_safe_z_m": HIGH_SAFE_Z_M,
+                       "time_steps": TIME_STEPS, "moves": CLEAR_MOVES}, sort_keys=True)
 
 
 class HighClear:
     """The moments a finger passes the height that clears every key, on its way up or
     down."""
 
-    def __init__(self, hand: HandModel, atlases: tuple[Atlas, ...]) -> None:
+    def __init__(self, hand: HandModel, atlases: Sequence[Atlas] | Mapping[int, Atlas],
+                 moves: Sequence | None = None) -> None:
+        """``atlases``: by play posture; ``moves``: each posture's ``Moves`` (its move
+        table's shipped moments, read when its moves are the entry's own; None: every
+        moment searched)."""
         self.hand = hand
         self.atlases = atlases
+        self.moves = moves
         self._path: dict[tuple, float] = {}
+        self._params = params()
 
     def rise_clear_s(self, e: AtlasEntry, move: Move) -> float:
         """Seconds into ``move`` (``e``'s finger rising) from which it stays clear above
         every key to the move's end (its duration if it never is, or only at
         the end)."""
+        got = self._shipped(e, move, True)
+        if got is not None:
+            return got
         return _time_at(move, self._point(e, move, True), rising=True)
 
     def descent_clear_s(self, e: AtlasEntry, move: Move) -> float:
         """Seconds into ``move`` (``e``'s finger descending from crossing height) until
         which it stays clear above every key (0 if it starts below that)."""
+        got = self._shipped(e, move, False)
+        if got is not None:
+            return got
         return _time_at(move, self._point(e, move, False), rising=False)
+
+    def clear_row(self, e: AtlasEntry, moves) -> list[float]:
+        """The moments of ``e``'s ``CLEAR_MOVES`` (``moves``: its posture's ``Moves``),
+        searched: the move table's row."""
+        return [self.rise_clear_s(e, moves.lift(e, "high").move),
+                self.rise_clear_s(e, moves.rise(e).move),
+                self.descent_clear_s(e, moves.descend(e, "high").move)]
+
+    def _shipped(self, e: AtlasEntry, move: Move, rising: bool) -> float | None:
+        """The move table's moment when ``move`` is one of the entry's own
+        ``CLEAR_MOVES`` (the very object its ``Moves`` keeps), else None."""
+        if self.moves is None:
+            return None
+        m = self.moves[e.posture]
+        table: MoveTable = m.table
+        if rising:
+            if move is m.lift(e, "high").move:
+                return table.clear_s(e, 0, self._params)
+            if move is m.rise(e).move:
+                return table.clear_s(e, 1, self._params)
+            return None
+        if move is m.descend(e, "high").move:
+            return table.clear_s(e, 2, self._params)
+        return None
 
     def _point(self, e: AtlasEntry, move: Move, rising: bool) -> float:
         """The path parameter where the finger crosses the clear height: rising, the least

@@ -6,6 +6,9 @@ of entries, found once per hand and shipped beside the atlas
   the same), ``Moves._cross``;
 * how much slower than its joints allow each of an entry's moves runs within the
   tendons' capacity (``Moves.entry_scale``, ``planner.play.tendonload``);
+* the moments an entry's lift to crossing height, its rise from the waiting pose and
+  its descent from crossing height pass the height that clears every key
+  (``planner.play.highclear``, with that module's parameters beside them);
 * for every pair of one finger's entries, whether its move across at crossing height
   is clear of the keys (``Moves.across``);
 * for every pair of one finger's entries on one key (two places relative to the rail),
@@ -74,6 +77,10 @@ class MoveTable:
         self.posture = posture  # (the atlas's play posture: another's entries are not here)
         self.crossings: dict[tuple[str, int, int], np.ndarray] = {}
         self.scales: dict[tuple[str, int, int], np.ndarray] = {}  # (``SCALE_PAIRS``' order)
+        # (``HighClear``'s moments, ``CLEAR_MOVES``' order, and the parameters they were
+        # found with)
+        self.clears: dict[tuple[str, int, int], list[float]] = {}
+        self.clear_params: str | None = None
         self._index: dict[tuple[str, int, int], tuple[int, int]] = {}  # in finger, in key
         self._across: dict[str, np.ndarray] = {}
         self._follow: dict[tuple[str, int], np.ndarray] = {}
@@ -99,6 +106,14 @@ class MoveTable:
     def crossing(self, e: AtlasEntry, column: int) -> float | None:
         row = self.crossings.get(self.key(e))
         return None if row is None else float(row[column])
+
+    def clear_s(self, e: AtlasEntry, column: int, params: str) -> float | None:
+        """``HighClear``'s moment of the entry's move ``column`` (``highclear.CLEAR_MOVES``),
+        None when the table was made with other ``params`` of its search or lacks it."""
+        if params != self.clear_params:
+            return None
+        row = self.clears.get(self.key(e))
+        return None if row is None else row[column]
 
     def tendon_scale(self, e: AtlasEntry, column: int) -> float | None:
         row = self.scales.get(self.key(e))
@@ -162,6 +177,9 @@ class MoveTable:
             for key, row, sc in zip(keys, z["cross_s"], z["tendon_scale"]):
                 self.crossings[key], self.scales[key] = row, sc
             self._index, self.keys = _indices(keys), keys
+            if "clear_s" in z:  # (floats as Python's: the programme reads them as they are)
+                self.clears = dict(zip(keys, z["clear_s"].tolist()))
+                self.clear_params = str(z["clear_params"])
             for name in z.files:  # (across postures: ``make_table``'s ``others``)
                 if name.startswith("xkey_"):
                     self._load_cross(z, int(name[5:]))
@@ -227,12 +245,13 @@ def table_entries(atlas) -> tuple[list, list[AtlasEntry]]:
     return order, [atlas._entries[k] for k in order]
 
 
-def make_table(moves, path: Path, params: str, others=()) -> int:
+def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
     """Find every answer for ``moves``' atlas (solved in full) and write the table;
     ``others``: the hand's other play postures' atlases (solved in full) and the arm's
     moves to each (the rail's first step and the
     durations step by step, ``Places.arm_time_s``; or None), for the pairs across
-    postures. Returns the number of
+    postures; ``high``: a ``HighClear`` that searches every moment (none shipped), and
+    its parameters (``highclear.params``), or None. Returns the number of
     entries."""
     atlas, hand = moves.atlas, moves.hand
     order, entries = table_entries(atlas)
@@ -245,6 +264,10 @@ def make_table(moves, path: Path, params: str, others=()) -> int:
         "tendon_scale": np.array([[moves.entry_scale(e, c) for c in range(4)]
                                   for e in entries]).reshape(-1, 4),
         "params": np.array(params)}
+    if high is not None:  # (``HighClear``'s moments of every entry, and its parameters)
+        high, clear_params = high
+        arrays["clear_s"] = np.array([high.clear_row(e, moves) for e in entries]).reshape(-1, 3)
+        arrays["clear_params"] = np.array(clear_params)
     for f in hand.fingers:
         mine = [e for e in entries if e.finger == f]
         arrays[f"across_{f}"] = np.packbits(_across_matrix(moves, f, mine))

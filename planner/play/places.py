@@ -45,7 +45,8 @@ class Places:
         self.hand = hand
         self.atlases = tuple(Atlas(hand, posture=i) for i in range(posture_count(hand)))
         self.moves = tuple(Moves(hand, a) for a in self.atlases)
-        self.high = HighClear(hand, self.atlases)  # (when a tip is high enough for the arm)
+        self.high = HighClear(hand, self.atlases, self.moves)  # (when a tip is high enough
+        # for the arm; the move tables' moments)
         drop_stale_cross([m.table for m in self.moves])
         self.atlas, self.home = self.atlases[0], self.moves[0]  # (the rest pose's posture)
         self.rail = self.atlas.rail
