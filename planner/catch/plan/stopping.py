@@ -13,7 +13,9 @@ What is chosen, by optimisation:
   minimising |v_ball - J qd|^2 (J the palm target's Jacobian over the arm joints), i.e.
   the ball's speed relative to the palm and with it the pad's force (its square), within
   every arm joint's speed limit and the speeds the ramps can reach in the time there is
-  and within the joints' range;
+  and within the joints' range; where that optimum moves the palm into the ball and the
+  pad's force then needs more than a motor's capacity, the palm giving with the ball along
+  its normal is searched too (``contact_speeds(..., give=True)``, ``_best_tilt``);
 * the ramps' durations: the shortest whose peak acceleration keeps every joint within its
   acceleration limit and every motor within ``STOP_SHARE`` of its capacity while it moves
   the hand's own inertia (and, ramping out, the ball riding on the palm) against gravity;
@@ -342,17 +344,24 @@ def contact_qp(J: np.ndarray, v_ball: np.ndarray, normal: np.ndarray,
 
 
 def contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
-                   normal: np.ndarray, roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
+                   normal: np.ndarray, roll_weight: float = ROLL_WEIGHT, give: bool = False
+                   ) -> np.ndarray:
     """The QP (``contact_qp``) within -bound <= x <= bound, by OSQP (zeros when unsolved):
     a solver set up for this problem alone, so that the speeds are a function of the
-    arguments. (A solver kept between solves keeps its adapted step size rho even without
+    arguments. ``give``: and the palm target never moving into the ball along the palm's
+    ``normal`` (n . J x <= 0, n facing the arriving ball): the ball's speed into the palm
+    is then at most its own. (A solver kept between solves keeps its adapted step size rho even without
     warm starting: the next problem's answer then depended on the plans before it, and
     one throw, 75 deg from 1.0 m, was feasible or not by what had been planned before.)"""
     k = J.shape[1]
     P, c = contact_qp(J, v_ball, normal, roll_weight)
     qp = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True,
                  warm_starting=False)
-    res = qp.solve(P, c, np.eye(k), -bound, bound)
+    if give:
+        A = np.vstack([np.eye(k), normal / np.linalg.norm(normal) @ J])
+        res = qp.solve(P, c, A, np.append(-bound, -np.inf), np.append(bound, 0.0))
+    else:
+        res = qp.solve(P, c, np.eye(k), -bound, bound)
     if not res.solved:
         return np.zeros(k)
     return np.clip(res.x, -bound, bound)
@@ -375,6 +384,7 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
                           rw=roll_weight, speeds=speeds)
     ic, q_open, stop = best[1]
+    speeds = best[2]  # the palm giving with the ball, if the search chose that
     if not np.any(stop.qd):
         return best[1]
     # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
@@ -408,8 +418,25 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
                q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
                soft: bool, roll_weight: float,
                speeds: Callable[..., np.ndarray] | None = None):
-    """``plan_stop``'s tilt search: (key, (intercept, open pose, stop)) of the tilt whose
-    pad phase needs the least of the motor closest to its capacity; None: no tilt reaches."""
+    """``plan_stop``'s tilt search: (key, (intercept, open pose, stop), contact speeds'
+    solver) of the tilt whose pad phase needs the least of the motor closest to its
+    capacity; None: no tilt reaches. Where that stop closes the palm on the ball beyond a
+    motor (``_closes_beyond_a_motor``) the search is run again with the palm giving with
+    the ball (``giving_speeds``), and the better kept."""
+    best = _placed_search(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s,
+                          soft, roll_weight, speeds)
+    if best is not None and speeds is None and _closes_beyond_a_motor(best[1]):
+        gave = _placed_search(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by,
+                              row_s, soft, roll_weight, giving_speeds)
+        if gave is not None and gave[0] < best[0]:
+            best = gave
+    return best
+
+
+def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
+                   q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
+                   soft: bool, roll_weight: float, speeds: Callable[..., np.ndarray] | None):
+    """``_best_tilt``'s search with one contact speeds' solver over the palm's placements."""
     best = None
     square = dyn.joints.i_reach is not None
     for placed in ((True, False) if square else (False,)):
@@ -444,8 +471,29 @@ def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.
             key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
             if found is not None and key >= found[0]:
                 break
-            found = (key, cand)
+            found = (key, cand, speeds)
     return found
+
+
+def giving_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray, normal: np.ndarray,
+                  roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
+    """``contact_speeds`` with the palm giving with the ball (``give``)."""
+    return contact_speeds(J, v_ball, bound, normal, roll_weight, give=True)
+
+
+def _closes_beyond_a_motor(cand) -> bool:
+    """Whether the stopping motion of ``cand`` (intercept, open pose, stop) moves the palm
+    into the ball (against the ball's velocity relative to it) with the pad's force then
+    beyond a motor's capacity.
+    A palm closing on the ball adds its speed to the ball's normal speed, whose square sets
+    the pad's force (m v^2 / 2 d, ``planner.check.ballstop``): the roll term's tangential
+    match is bought with force. On the steep throws (75 deg from 2 m on, the arm alone) that
+    met the ball 0.5-0.6 m/s faster than it flies and needed 2.9-5.4 N m of the wrist
+    flexion's 2.00; there ``_best_tilt`` also searches the palm giving with the ball
+    (``giving_speeds``) and keeps the better. A closing palm within every motor keeps its
+    match: the roll it cancels holds steep short throws (-0.3 m / 75 deg / 1.5 m)."""
+    _, _, stop = cand
+    return float(stop.v_rel @ stop.v_palm) < 0.0 and float(stop.motor_ratio.max()) > 1.0
 
 
 def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
