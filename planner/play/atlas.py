@@ -231,6 +231,11 @@ class Atlas(EntrySolver):
             self._entries[key] = self._solve(finger, pitch_class, k)
         return self._entries[key]
 
+    def solved(self) -> dict[tuple[str, int, int], AtlasEntry]:
+        """The entries found so far by (finger, pitch class, sample), in the order they
+        were found or read (the samples with no entry left out)."""
+        return {k: e for k, e in self._entries.items() if e is not None}
+
     def body_refused(self, finger: str, pitch: int, rail_m: float) -> bool:
         """Whether the finger would press key ``pitch`` from ``rail_m`` (snapped to the grid)
         but for its body (the poses found within the limits, a body not clear of the keys)."""

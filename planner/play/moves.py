@@ -372,9 +372,10 @@ def _table_records(atlas: Atlas, table: MoveTable, js: dict[str, list[int]],
     them equal)."""
     cols = {p: i for i, p in enumerate(ENDS)}
     out: dict[int, EntryRecord] = {}
+    solved = atlas.solved().values()
     for f, jf in js.items():
-        es = [(e, k) for e in atlas._entries.values() if e is not None
-              and e.finger == f and (k := table.key(e)) in table.crossings]
+        es = [(e, k) for e in solved
+              if e.finger == f and (k := table.key(e)) in table.crossings]
         if not es:
             continue
         index = [table._index[k] for _, k in es]

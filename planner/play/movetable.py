@@ -239,10 +239,9 @@ def _unpack(bits: np.ndarray, n: int, m: int | None = None) -> np.ndarray:
 # ---------------------------------------------------------------------- making it
 def table_entries(atlas) -> tuple[list, list[AtlasEntry]]:
     """An atlas's (solved in full) entries' keys and entries, in a table's order."""
-    hand = atlas.hand
-    order = sorted((k for k, e in atlas._entries.items() if e is not None),
-                   key=lambda k: (hand.fingers.index(k[0]), k[1], k[2]))
-    return order, [atlas._entries[k] for k in order]
+    hand, solved = atlas.hand, atlas.solved()
+    order = sorted(solved, key=lambda k: (hand.fingers.index(k[0]), k[1], k[2]))
+    return order, [solved[k] for k in order]
 
 
 def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
