@@ -378,7 +378,7 @@ def _table_records(atlas: Atlas, table: MoveTable, js: dict[str, list[int]],
               if e.finger == f and (k := table.key(e)) in table.crossings]
         if not es:
             continue
-        index = [table._index[k] for _, k in es]
+        index = [table.index(e) for e, _ in es]
         c = np.array([table.crossings[k] for _, k in es])
         es = [e for e, _ in es]
         press, high = np.array([e.press for e in es]), np.array([e.high for e in es])
