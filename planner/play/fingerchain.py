@@ -76,11 +76,20 @@ class FingerChain:
         # ``points_many``'s order, shape by shape)
         self._shape_of = np.repeat(np.arange(len(self.n_shape)), self.n_shape)
         self._t_of = np.concatenate([self._t[:m, 0] for m in self.n_shape])[None, :, None]
+        self._axes = axis_steps(self.joints, self.T_world_root)
 
     def carry(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """At configurations ``Q`` (N, n; the hand's joint order, couplings applied): the
         tip's world position (N, 3) and the shapes' sampled axis points (N, m, 3), as
-        ``FrameChain.positions`` and ``FingerBodies.points_many``."""
+        ``FrameChain.positions`` and ``FingerBodies.points_many``; a chain of axis-aligned
+        joints by ``carry_axes`` (the same numbers), any other by ``carry_general``."""
+        if self._axes is None:
+            return self.carry_general(Q)
+        return self.carry_axes(Q)
+
+    def carry_general(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``carry`` of any chain: Rodrigues on the points' rows, the placements' matrix
+        products."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         n = len(Q)
         if n == 0:
@@ -119,10 +128,88 @@ class FingerChain:
             if self._moved[depth - 1]:
                 p = p + t
         T = self.T_world_root
-        w = (p @ T[:3, :3].T + T[:3, 3]).reshape(self.n_points, n, 3)[self._row]
+        return self._axes_of((p @ T[:3, :3].T + T[:3, 3]).reshape(self.n_points, n, 3))
+
+    def carry_axes(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``carry`` of a chain whose joint axes are coordinate axes (``axis_steps``):
+        each coordinate an array of its own (points, N), each joint's Rodrigues on the two
+        coordinates it turns. The numbers are ``carry_general``'s, operation by
+        operation: with ``k = s e_i`` (s = +-1) the cross product ``k x p`` is the other
+        two coordinates exchanged, one negated (its products by 0 and +-1 exact), ``k . p``
+        is ``s p_i`` (a dot product whose other terms are exact zeros), so coordinate i
+        becomes ``p_i cos + p_i (1 - cos)`` and the others ``p_a cos -+ p_b sin``, each
+        rounded where ``carry_general`` rounds it; the terms it adds that are exact zeros
+        (and a translation's zero components, and an identity rotation) change no number
+        but a zero's sign, which no comparison sees."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        n = len(Q)
+        if n == 0:
+            return np.empty((0, 3)), np.empty((0, len(self._shape_of), 3))
+        if self._pad:
+            Q = np.concatenate([Q, np.zeros((n, 1))], axis=1)
+        q = Q[:, self._cols]  # (the cosines and sines of ``carry_general``'s arrays,
+        cos_q = np.cos(q)  # then a row per joint)
+        sin_q, vers_q = np.sin(q).T, (1.0 - cos_q).T
+        q, cos_q = q.T, cos_q.T
+        c = [np.empty((0, n))] * 3  # (each coordinate: points-major rows, as ``p``'s)
+        for depth in range(len(self.joints), 0, -1):
+            loc = self._local.get(depth)
+            if loc is not None:
+                c = [np.concatenate([c[i], np.repeat(loc[:, i:i + 1], n, axis=1)])
+                     for i in range(3)]
+            j = depth - 1
+            i, s, shift = self._axes[j]
+            if self.joints[j][1]:  # (prismatic: p + q k)
+                c[i] = c[i] + (q[j] if s > 0 else -q[j])
+            else:
+                a, b = (i + 1) % 3, (i + 2) % 3
+                ca, cb, ci = c[a], c[b], c[i]
+                sa, sb = ca * sin_q[j], cb * sin_q[j]
+                na, nb = ca * cos_q[j], cb * cos_q[j]
+                if s > 0:
+                    na -= sb
+                    nb += sa
+                else:
+                    na += sb
+                    nb -= sa
+                ni = ci * cos_q[j]
+                ni += ci * vers_q[j]
+                c = [None] * 3
+                c[a], c[b], c[i] = na, nb, ni
+            for k, v in shift:
+                c[k] = c[k] + v
+        for k, v in self._axes[-1]:  # (the root's placement: a translation)
+            c[k] = c[k] + v
+        return self._axes_of(np.stack(c, axis=-1))
+
+    def _axes_of(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The tip and the shapes' sampled axes from every carried point ``w``
+        (points, N, 3; point-major rows, ``_row``'s order)."""
+        w = w[self._row]
         # (each shape's axis, as ``points_many``: wa + t (wb - wa), every shape at once)
         wa, wb = w[1::2].transpose(1, 0, 2), w[2::2].transpose(1, 0, 2)
         return w[0], wa[:, self._shape_of] + self._t_of * (wb - wa)[:, self._shape_of]
+
+
+def axis_steps(joints: list, T_world_root: np.ndarray) -> list | None:
+    """``carry_axes``' steps when every joint's axis is a coordinate axis (+-1 in one
+    component, exact zeros in the others), every joint's placement rotation and the
+    root's are the identity: per joint (the axis's coordinate, its sign, the placement's
+    non-zero translation components (coordinate, value)), then the root's translation;
+    None otherwise (``carry_general``)."""
+    eye = np.eye(3)
+    if not np.array_equal(T_world_root[:3, :3], eye):
+        return None
+    steps = []
+    for _, _, k, R, t in joints:
+        nz = np.flatnonzero(k)
+        if len(nz) != 1 or abs(k[nz[0]]) != 1.0 or not np.array_equal(R, eye):
+            return None
+        steps.append((int(nz[0]), float(k[nz[0]]),
+                      [(c, float(t[c])) for c in range(3) if t[c] != 0.0]))
+    steps.append([(c, float(T_world_root[c, 3])) for c in range(3)
+                  if T_world_root[c, 3] != 0.0])
+    return steps
 
 
 _NEXT1 = np.array([1, 2, 0])  # (each column's next, and the one after: ``carry``'s k x p)

@@ -32,6 +32,7 @@ from planner.play.fingerbody import (
     AXIS_SAMPLES,
     MANY_CHUNK,
     OTHER_KEY_TOLERANCE_M,
+    OWN_BED_MARGIN_M,
     FingerBodies,
 )
 from planner.play.fingerchain import FingerChain
@@ -144,9 +145,25 @@ def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -
     (m,), are clear of every key but ``pitch`` and of its bed and hold ``pitch`` down
     (``HOLD_MARGIN_M`` past the key-down depth in its footprint column): the booleans of
     ``FingerBodies.clear_many`` and its own-key depth, from the same numbers (the same
-    boxes' penetrations; every footprint column's depth in one array, not key by key:
-    ``keybodies.key_depths``' elementwise arithmetic, its reductions exact), (K,) bool."""
-    ok, p_lo, p_hi = bodies.boxes_clear(P, r, pitch)
+    boxes' penetrations, ``FingerBodies.boxes_clear``'s; every footprint column's depth
+    in one array, not key by key: ``keybodies.key_depths``' elementwise arithmetic, its
+    reductions exact), (K,) bool.
+
+    Each coordinate is an array of its own, (points, K), and every array is (points,
+    boxes or columns, K): the same elementwise operations on the same numbers as
+    ``boxes_clear``'s (K, points, boxes, 3) arrays, whose last axis of 2 or 3 made numpy
+    loop over a few elements at a time (an elementwise operation's result does not
+    depend on the array's layout; a maximum, a minimum and a logical and are exact in any
+    order)."""
+    X, Y, Z = (np.ascontiguousarray(P[:, :, c].T) for c in range(3))
+    # (``boxes_clear``: the points' bounds grown by the largest radius and the tolerance,
+    # the boxes near them, each one's deepest penetration within its allowance)
+    reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
+    p_lo = np.array([W.min() for W in (X, Y, Z)]) - reach
+    p_hi = np.array([W.max() for W in (X, Y, Z)]) + reach
+    lo, hi, allowed = _boxes(bodies, pitch)
+    near = all_along((lo <= p_hi) & (hi >= p_lo), 1)
+    ok = all_along(box_penetration(X, Y, Z, r, lo[near], hi[near]) <= allowed[near, None], 0)
     fp, (not_mine, own_lo, own_hi, own_top, lo_grown, hi_grown) = footprints(), _columns(pitch)
     near = (fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2])
     other = near[:, 0] & near[:, 1] & not_mine
@@ -154,18 +171,52 @@ def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -
     cols_lo = np.concatenate([lo_grown[other], own_lo])
     cols_hi = np.concatenate([hi_grown[other], own_hi])
     top = np.concatenate([fp.top_m[other], own_top])
-    P_xy = P[:, :, None, :2]
-    dxy = np.maximum(np.maximum(cols_lo - P_xy, P_xy - cols_hi), 0.0)  # (K, m, columns, 2)
-    dxy *= dxy
-    d = np.sqrt(dxy[..., 0] + dxy[..., 1])  # (K, m, columns)
-    r2 = (r * r)[None, :, None] - d * d
-    low = np.where(r2 >= 0.0, P[:, :, None, 2] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
-    depth = top[None] + -min_along(low, 1)  # (K, columns)
+    dx = _outside(X, cols_lo[:, 0], cols_hi[:, 0])  # (m, columns, K)
+    dx += _outside(Y, cols_lo[:, 1], cols_hi[:, 1])
+    d = np.sqrt(dx)
+    r2 = (r * r)[:, None, None] - d * d
+    low = np.where(r2 >= 0.0, Z[:, None, :] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
+    depth = top[:, None] + -min_along(low, 0)  # (columns, K)
     n_other = len(cols_lo) - len(own_lo)
     if n_other:
-        ok &= all_along(depth[:, :n_other] < DOWN_DEPTH_M, 1)
-    own_depth = max_along(depth[:, n_other:], 1)
+        ok &= all_along(depth[:n_other] < DOWN_DEPTH_M, 0)
+    own_depth = max_along(depth[n_other:], 0)
     return ok & (own_depth <= BODY_BED_DEPTH_M) & (own_depth >= kb.DOWN_DEPTH_M + HOLD_MARGIN_M)
+
+
+def _outside(W: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """How far each point's coordinate ``W`` (m, K) is outside each interval [lo, hi]
+    (B,), squared: (m, B, K), ``max(lo - w, w - hi, 0)`` squared."""
+    d = np.maximum(np.maximum(lo[:, None] - W[:, None, :], W[:, None, :] - hi[:, None]), 0.0)
+    d *= d
+    return d
+
+
+def box_penetration(X: np.ndarray, Y: np.ndarray, Z: np.ndarray, r: np.ndarray,
+                    lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``fingerbody.many_box_penetration`` of points whose coordinates are ``X``, ``Y``,
+    ``Z`` (m, K each), radii ``r`` (m,), boxes [lo, hi] (B, 3): (B, K), the same numbers
+    (its sum of three squares in its order, (x + y) + z; its maximum exact)."""
+    dd = _outside(X, lo[:, 0], hi[:, 0])
+    dd += _outside(Y, lo[:, 1], hi[:, 1])
+    dd += _outside(Z, lo[:, 2], hi[:, 2])
+    return max_along(r[:, None, None] - np.sqrt(dd), 0)
+
+
+_BOXES: dict[tuple[int, int | None], tuple] = {}  # (``_boxes``)
+
+
+def _boxes(bodies: FingerBodies, pitch: int | None) -> tuple[np.ndarray, ...]:
+    """The keys' boxes with key ``pitch`` pressed (``FingerBodies.pressed_boxes``: lo,
+    hi) and each one's allowed penetration (``FingerBodies.boxes_clear``'s: the pressed
+    key's ``OWN_BED_MARGIN_M``, another's ``OTHER_KEY_TOLERANCE_M``), once per key."""
+    key = (id(bodies), pitch)
+    got = _BOXES.get(key)
+    if got is None or got[0] is not bodies:
+        own, lo, hi = bodies.pressed_boxes(pitch)
+        got = _BOXES[key] = (bodies, lo, hi, np.where(own, OWN_BED_MARGIN_M,
+                                                      OTHER_KEY_TOLERANCE_M))
+    return got[1:]
 
 
 _COLUMNS: dict[int, tuple[np.ndarray, ...]] = {}  # (``_columns``)
