@@ -77,6 +77,7 @@ class FingerChain:
         self._shape_of = np.repeat(np.arange(len(self.n_shape)), self.n_shape)
         self._t_of = np.concatenate([self._t[:m, 0] for m in self.n_shape])[None, :, None]
         self._axes = axis_steps(self.joints, self.T_world_root)
+        self.axis_aligned = self._axes is not None  # (``carry_axes``' chains)
 
     def carry(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """At configurations ``Q`` (N, n; the hand's joint order, couplings applied): the
@@ -85,6 +86,8 @@ class FingerChain:
         joints by ``carry_axes`` (the same numbers), any other by ``carry_general``."""
         if self._axes is None:
             return self.carry_general(Q)
+        if len(np.atleast_2d(Q)) == 0:
+            return np.empty((0, 3)), np.empty((0, len(self._shape_of), 3))
         return self.carry_axes(Q)
 
     def carry_general(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -130,9 +133,32 @@ class FingerChain:
         T = self.T_world_root
         return self._axes_of((p @ T[:3, :3].T + T[:3, 3]).reshape(self.n_points, n, 3))
 
+    def carry_coords(self, Q: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+        """``carry``'s numbers with each coordinate of the shapes' points an array of its
+        own: the tip (N, 3) and the points' x, y and z, (m, N) each. A chain of
+        axis-aligned joints (``carry_axes``' steps) carries them so; any other's
+        ``carry_general`` points are taken apart."""
+        if self._axes is None or len(np.atleast_2d(Q)) == 0:
+            tips, P = self.carry(Q)
+            return tips, tuple(np.ascontiguousarray(P[:, :, c].T) for c in range(3))
+        c = self._carried(Q)
+        w = [v[self._row] for v in c]  # (points, N) each, ``_axes_of``' order
+        t = self._t_of[0]  # (m, 1)
+        out = []
+        for v in w:  # (each shape's axis, as ``_axes_of``: wa + t (wb - wa))
+            wa, wb = v[1::2], v[2::2]
+            out.append(wa[self._shape_of] + t * (wb - wa)[self._shape_of])
+        return np.stack([v[0] for v in w], axis=-1), tuple(out)
+
     def carry_axes(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``carry`` of a chain whose joint axes are coordinate axes (``axis_steps``):
-        each coordinate an array of its own (points, N), each joint's Rodrigues on the two
+        """``carry``'s answer by ``_carried``: the chain's points with each coordinate an
+        array of its own."""
+        return self._axes_of(np.stack(self._carried(Q), axis=-1))
+
+    def _carried(self, Q: np.ndarray) -> list[np.ndarray]:
+        """Every point of ``_local`` carried to the world (N > 0 configurations), for a
+        chain whose joint axes are coordinate axes (``axis_steps``): each coordinate an
+        array of its own, x, y and z (points, N), each joint's Rodrigues on the two
         coordinates it turns. The numbers are ``carry_general``'s, operation by
         operation: with ``k = s e_i`` (s = +-1) the cross product ``k x p`` is the other
         two coordinates exchanged, one negated (its products by 0 and +-1 exact), ``k . p``
@@ -143,8 +169,6 @@ class FingerChain:
         but a zero's sign, which no comparison sees."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         n = len(Q)
-        if n == 0:
-            return np.empty((0, 3)), np.empty((0, len(self._shape_of), 3))
         if self._pad:
             Q = np.concatenate([Q, np.zeros((n, 1))], axis=1)
         q = Q[:, self._cols]  # (the cosines and sines of ``carry_general``'s arrays,
@@ -180,7 +204,7 @@ class FingerChain:
                 c[k] = c[k] + v
         for k, v in self._axes[-1]:  # (the root's placement: a translation)
             c[k] = c[k] + v
-        return self._axes_of(np.stack(c, axis=-1))
+        return c
 
     def _axes_of(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The tip and the shapes' sampled axes from every carried point ``w``

@@ -83,8 +83,18 @@ def paths_clear(atlas: Atlas, finger: str, pitch: int, QA: np.ndarray, QB: np.nd
     d *= d  # squares, their sum exact in any order)
     travel = np.sqrt(d[:, 0] + d[:, 1] if len(arm) == 2 else d.sum(axis=1))
     counts = [samples(float(t)) for t in travel]
-    if len(counts) == 1:  # (one move: the programme's and the motion's question)
-        return _clear(atlas, chain, radii, pitch, QA, QB, _fractions(counts[0]))
+    if len(counts) == 1:  # (one move: the programme's and the motion's question, asked
+        # again by the motion of a move the programme asked: the answer of the same
+        # numbers, ``ANSWERS`` of them kept per hand)
+        memo = _answers(atlas)
+        key = (finger, pitch, QA.tobytes(), QB.tobytes(), tuple(arm))
+        got = memo.get(key)
+        if got is None:
+            if len(memo) >= ANSWERS:
+                memo.clear()
+            got = memo[key] = bool(_clear(atlas, chain, radii, pitch, QA, QB,
+                                          _fractions(counts[0]))[0])
+        return np.array([got])
     counts = np.array(counts)
     out = np.zeros(len(QA), dtype=bool)
     for n_s in sorted(set(counts.tolist())):
@@ -94,6 +104,20 @@ def paths_clear(atlas: Atlas, finger: str, pitch: int, QA: np.ndarray, QB: np.nd
             sel = idx[lo:lo + PAIR_CHUNK]
             out[sel] = _clear(atlas, chain, radii, pitch, QA[sel], QB[sel], S)
     return out
+
+
+ANSWERS = 50_000  # one-move answers kept (``paths_clear``; about 0.6 kB each: a song
+# asks 1,000-3,500 moves, a few per cent of them twice)
+_ANSWERS: dict[tuple[int, int], tuple] = {}  # (``_answers``)
+
+
+def _answers(atlas: Atlas) -> dict:
+    """The one-move answers of ``atlas``' hand and bodies (``paths_clear``)."""
+    key = (id(atlas.hand), id(atlas.bodies))
+    got = _ANSWERS.get(key)
+    if got is None or got[0] is not atlas.hand or got[1] is not atlas.bodies:
+        got = _ANSWERS[key] = (atlas.hand, atlas.bodies, {})
+    return got[2]
 
 
 _FRACTIONS: dict[int, np.ndarray] = {}  # (``_fractions``)
@@ -125,7 +149,7 @@ def _clear(atlas: Atlas, chain: FingerChain, radii: np.ndarray, pitch: int,
     hand, k = atlas.hand, kb.key(pitch)
     n, m = len(qa), len(S)
     Q = (qa[:, None, :] + S[None, :, None] * (qb - qa)[:, None, :]).reshape(n * m, -1)
-    tips, points = chain.carry(hand.apply_couplings(Q))
+    tips, (X, Y, Z) = chain.carry_coords(hand.apply_couplings(Q))
     x, y = tips[:, 0], tips[:, 1]
     inside = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
               & (k.y_min_m + TIP_RADIUS_M <= y) & (y <= k.y_max_m - TIP_RADIUS_M))
@@ -133,9 +157,12 @@ def _clear(atlas: Atlas, chain: FingerChain, radii: np.ndarray, pitch: int,
     if not ok.any():
         return ok
     if not ok.all():
-        points = points[np.repeat(ok, m)]
-    held = np.concatenate([held_clear(atlas.bodies, points[lo:lo + MANY_CHUNK], radii, pitch)
-                           for lo in range(0, len(points), MANY_CHUNK)])
+        keep = np.repeat(ok, m)
+        X, Y, Z = X[:, keep], Y[:, keep], Z[:, keep]
+    held = np.concatenate([
+        held_coords(atlas.bodies, X[:, lo:lo + MANY_CHUNK], Y[:, lo:lo + MANY_CHUNK],
+                    Z[:, lo:lo + MANY_CHUNK], radii, pitch)
+        for lo in range(0, X.shape[1], MANY_CHUNK)])
     ok[ok] = all_along(held.reshape(-1, m), 1)
     return ok
 
@@ -155,7 +182,14 @@ def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -
     loop over a few elements at a time (an elementwise operation's result does not
     depend on the array's layout; a maximum, a minimum and a logical and are exact in any
     order)."""
-    X, Y, Z = (np.ascontiguousarray(P[:, :, c].T) for c in range(3))
+    return held_coords(bodies, *(np.ascontiguousarray(P[:, :, c].T) for c in range(3)),
+                       r, pitch)
+
+
+def held_coords(bodies: FingerBodies, X: np.ndarray, Y: np.ndarray, Z: np.ndarray,
+                r: np.ndarray, pitch: int) -> np.ndarray:
+    """``held_clear`` of points whose coordinates are ``X``, ``Y``, ``Z`` (m, K each):
+    (K,) bool."""
     # (``boxes_clear``: the points' bounds grown by the largest radius and the tolerance,
     # the boxes near them, each one's deepest penetration within its allowance)
     reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
