@@ -124,15 +124,15 @@ def main(argv: list[str]) -> int:
                 for f in FIELDS:
                     med[k][f].append(statistics.median(j[f] for j in got[k]))
                 med[k]["rtf"].append(got[k][0]["song_s"] / med[k]["planning_s"][-1])
-            print(f"{song.stem[:40]:40s} {med['this']['rtf'][-1]:8.0f}x {med['vs']['rtf'][-1]:7.0f}x "
+            print(f"{song.stem[:40]:40s} {med['this']['rtf'][-1]:8.1f}x {med['vs']['rtf'][-1]:7.1f}x "
                   f"{med['this']['rtf'][-1] / med['vs']['rtf'][-1]:6.2f} "
                   f"{1000 * med['this']['first_row_s'][-1]:11.0f} "
                   f"{1000 * med['vs']['first_row_s'][-1]:9.0f}", flush=True)
     print(f"\n{len(songs)} songs, {a.repeat} runs each, medians over the songs of each song's median:")
     for k, tree in trees.items():
         m = {f: statistics.median(v) for f, v in med[k].items()}
-        print(f"  {k:5s} ({tree}): real-time factor {m['rtf']:.0f}x (lowest "
-              f"{min(med[k]['rtf']):.0f}x), planning {1000 * m['planning_s']:.0f} ms, first row "
+        print(f"  {k:5s} ({tree}): real-time factor {m['rtf']:.1f}x (lowest "
+              f"{min(med[k]['rtf']):.1f}x), planning {1000 * m['planning_s']:.0f} ms, first row "
               f"{1000 * m['first_row_s']:.0f} ms (highest {1000 * max(med[k]['first_row_s']):.0f}), "
               f"set-up {1000 * m['setup_s']:.0f} ms")
     ratios = [x / y for x, y in zip(med["this"]["rtf"], med["vs"]["rtf"])]
