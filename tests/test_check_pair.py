@@ -123,6 +123,29 @@ def test_the_gap_is_the_least_over_every_pair_of_bodies(pair) -> None:
             assert bool(got.collisions) == (want < HANDS_GAP_M)
 
 
+def test_hits_only_finds_the_same_collisions(pair) -> None:
+    """The planner's confirmation (``hits_only``: a row measured to its first pair under
+    the limit, no least distance sought) finds the collisions the exact judge finds:
+    the same runs, rows and times, with the left hand swept along the rail into the
+    right one and back."""
+    plan = read_plan(str(pair.path))
+    kins = tuple(Kinematics(p.hand, p.T_world_root) for p in plan.hands)
+    bodies = tuple(collision_bodies(p.hand.spec) for p in plan.hands)
+    ql, qr = pair.q
+    n = len(ql)
+    a = ql.copy()
+    a[:, 0] += 0.5 * np.sin(np.linspace(0.0, 2.0 * np.pi, n)) ** 2  # (to 0.5 m and back)
+    runs = []
+    for hits_only in (False, True):
+        judge = GapJudge(kins, bodies, plan.pair.prefixes, hits_only=hits_only)
+        for b in range(0, n, 97):  # (blocks: a run carried across them)
+            judge.add(pair.t_s[b:b + 97], a[b:b + 97], qr[b:b + 97])
+        got = judge.finish(float(pair.t_s[-1]) + 0.01)
+        runs.append([(c.start_s, c.row, c.end_s, c.rows) for c in got.collisions])
+        assert all(c.least_m < HANDS_GAP_M for c in got.collisions)
+    assert runs[0] and runs[1] == runs[0]
+
+
 def test_each_hand_is_held_to_its_own_claims(pair, tmp_path) -> None:
     """A note the end marker gives the right hand that the left one plays: the right
     hand's claim fails (named with the note), the whole song's keys are still right."""

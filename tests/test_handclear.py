@@ -13,7 +13,7 @@ import pytest
 from planner.music import keyboard as kb
 from planner.music.midi import Note
 from planner.play.costs import Costs
-from planner.play.handclear import collided_notes, least_reach_m, loose_bound
+from planner.play.handclear import NoteReaches, collided_notes, least_reach_m, loose_bound
 from planner.play.hands import LEFT, RIGHT
 from planner.play.places import RAIL_STEP_M
 from planner.play.twohands import UNBOUNDED_M, PairPlanner
@@ -51,7 +51,7 @@ def test_place_reach_within_the_farthest_and_mostly_less(pair, side) -> None:
 def test_least_reach_is_beyond_the_key_and_within_the_farthest(pair, side) -> None:
     costs = _costs(pair, side, [Note(64, 0.0, 0.5, 80)])
     x = kb.key(64).center_x_m
-    need = least_reach_m(costs, pair.place_reach[side], 0, side)
+    need = least_reach_m(NoteReaches(costs, pair.place_reach[side]), 0, side)
     assert need is not None
     # (the finger on the key reaches past its centre towards the other hand, and no
     # further than a place at the farthest reach)
@@ -65,12 +65,13 @@ def test_least_reach_is_beyond_the_key_and_within_the_farthest(pair, side) -> No
 def test_loose_bound_never_tighter_than_the_farthest_reach_rule(pair, side) -> None:
     costs = _costs(pair, side, [Note(64, 0.0, 0.5, 80)])
     pr = pair.place_reach[side]
+    nr = NoteReaches(costs, pr)
     x = kb.key(64).center_x_m
     reach = pair.reach(side).inner_extent_m
     for d in (0.0, 0.02, 0.04, 0.06, 0.1, 0.2):
         lim = x + d if side == LEFT else x - d  # (the bodies may reach this far)
         strict = (-UNBOUNDED_M, lim - reach) if side == LEFT else (lim + reach, UNBOUNDED_M)
-        lo, hi = loose_bound(costs, pr, 0, side, lim, strict)
+        lo, hi = loose_bound(nr, 0, side, lim, strict)
         assert (hi >= strict[1] and lo == strict[0]) if side == LEFT else (
             lo <= strict[0] and hi == strict[1])
         # (every place the loosened bound was made of keeps its bodies within the limit)
@@ -85,10 +86,10 @@ def test_loose_bound_never_tighter_than_the_farthest_reach_rule(pair, side) -> N
             assert (lo, hi) == strict
     # (the other hand's bodies just as far as the least this note needs: the farthest-reach
     # rule refuses every place, the places' own reach keeps the one that needs least)
-    lim = least_reach_m(costs, pr, 0, side)
+    lim = least_reach_m(nr, 0, side)
     strict = (-UNBOUNDED_M, lim - reach) if side == LEFT else (lim + reach, UNBOUNDED_M)
     rails = [costs.places.rail_m(q) for f in costs.places.hand.fingers for q in costs.rails(f, 0)]
-    lo, hi = loose_bound(costs, pr, 0, side, lim, strict)
+    lo, hi = loose_bound(nr, 0, side, lim, strict)
     inside = [r for r in rails if lo - 1e-9 <= r <= hi + 1e-9]
     strict_in = [r for r in rails if strict[0] - 1e-9 <= r <= strict[1] + 1e-9]
     assert not strict_in and inside

@@ -213,3 +213,27 @@ def test_hand_back_plans_the_first_hand_again_with_what_the_second_left_out(pair
               - {b.planned_of[k][x.note] for x in b.plans[k].verdict.skipped} for k in (0, 1)]
     assert not played[0] & played[1]
     assert all(b.assignment.hand[i] == RIGHT for i in b.planned_of[f])
+
+
+def test_settle_asks_no_note_out_again(pair, monkeypatch) -> None:
+    """``settle``: a note taken out stays out (windows only grow, bounds only tighten),
+    so the next round asks only the others; the same bounds and notes out."""
+    from planner.music import keyboard as kb
+    from planner.play import twohands
+    from planner.play.costs import Costs
+
+    pl = pair.planners[LEFT]
+    notes = [Note(p, 0.5 * i, 0.5 * i + 0.3, 80) for i, p in enumerate((48, 50, 72, 52, 53))]
+    hi = kb.key(60).center_x_m - 0.05  # (the left hand's rail below middle C: C5 out)
+    asked: list[int] = []
+    reason = Costs.reason
+
+    def counted(self, k):
+        asked.append(k)
+        return reason(self, k)
+
+    monkeypatch.setattr(Costs, "reason", counted)
+    bounds, out = twohands.settle(notes, pl.places, pl.memo, 100.0,
+                                  lambda out: [(-UNBOUNDED_M, hi)] * len(notes))
+    assert out == frozenset({2}) and bounds == [(-UNBOUNDED_M, hi)] * len(notes)
+    assert asked.count(2) == 1 and sorted(asked) == [0, 0, 1, 1, 2, 3, 3, 4, 4]

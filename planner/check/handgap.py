@@ -99,8 +99,15 @@ class GapJudge:
     each hand's joint rows), then ``finish``."""
 
     def __init__(self, kins: tuple[Kinematics, Kinematics], bodies: tuple[tuple[Body, ...], ...],
-                 prefixes: tuple[str, str], limit_m: float = HANDS_GAP_M) -> None:
+                 prefixes: tuple[str, str], limit_m: float = HANDS_GAP_M,
+                 hits_only: bool = False) -> None:
         self._kins, self._bodies = kins, bodies
+        # (``hits_only``: only which rows are under the limit, the collisions' rows and
+        # times exact, as the planner's confirmation reads them: a row is measured to its
+        # first pair of bodies under the limit, and the plan's least distance is not
+        # sought; a collision's ``least_m`` is then a distance under the limit, not the
+        # least, and the result's ``least_m`` is inf)
+        self._hits_only = hits_only
         self._shapes = tuple(_Shapes(b, p) for b, p in zip(bodies, prefixes))
         self._limit = limit_m
         self._best = (np.inf, 0.0, -1, -1)  # (least distance, time, left body, right body)
@@ -120,9 +127,11 @@ class GapJudge:
             poses.append(sh.poses(pb))
         lb = self._row_bounds(poses[0][0], poses[1][0])
         measured: dict[int, tuple[float, int, int]] = {}
+        row = self._row_hit if self._hits_only else self._row_least
         for k in np.flatnonzero(lb < self._limit):  # (every row that may collide)
-            measured[int(k)] = self._row_least(poses, int(k))
-        for k in np.argsort(lb, kind="stable"):  # (the plan's least distance, exact)
+            measured[int(k)] = row(poses, int(k))
+        # (the plan's least distance, exact; not sought for hits only)
+        for k in ([] if self._hits_only else np.argsort(lb, kind="stable")):
             if lb[k] >= self._best[0]:
                 break
             d, i, j = measured.get(int(k)) or self._row_least(poses, int(k))
@@ -169,6 +178,27 @@ class GapJudge:
                     best, at = dist, flat
         i, j = divmod(at, n)
         return best, i, j
+
+    def _row_hit(self, poses, k: int) -> tuple[float, int, int]:
+        """Whether distinct row ``k`` is under the limit: (a distance under it and its two
+        bodies), the pairs measured in the order of their spheres' gaps, only those whose
+        gap is under the limit (a pair at least its gap apart); (inf, -1, -1) when none is
+        under it. The same rows as ``_row_least`` finds under the limit."""
+        (cl, Rl), (cr, Rr) = poses
+        sl, sr = self._shapes
+        d = cl[k][:, None] - cr[k][None]
+        gap = (np.sqrt(np.einsum("ijk,ijk->ij", d, d))
+               - sl.radius_m[:, None] - sr.radius_m[None]).ravel()
+        n = len(sr.radius_m)
+        near = np.flatnonzero(gap < self._limit)
+        for flat in near[np.argsort(gap[near], kind="stable")].tolist():
+            i, j = divmod(flat, n)
+            dist = float(coal.distance(sl.shapes[i], coal.Transform3s(Rl[k, i], cl[k, i]),
+                                       sr.shapes[j], coal.Transform3s(Rr[k, j], cr[k, j]),
+                                       self._req, coal.DistanceResult()))
+            if dist < self._limit:
+                return dist, i, j
+        return np.inf, -1, -1
 
     def _collisions(self, t: np.ndarray, of: np.ndarray,
                     measured: dict[int, tuple[float, int, int]]) -> None:

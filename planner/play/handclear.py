@@ -86,23 +86,45 @@ class PlaceReach:
         return self._reach.get((p, finger, pitch % 12, k), math.inf)
 
 
-def loose_bound(costs: Costs, pr: PlaceReach, note: int, side: str, limit_m: float,
+class NoteReaches:
+    """Per note of a song, every place that presses it (``costs``: no bounds): its rail (m)
+    and the hand's reach from there towards the other hand (``PlaceReach``), as arrays,
+    gathered once per note and read by every bound the rounds try (``loose_bound``,
+    ``least_reach_m``)."""
+
+    def __init__(self, costs: Costs, pr: PlaceReach) -> None:
+        self.costs, self.pr = costs, pr
+        self._of: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def of(self, note: int) -> tuple[np.ndarray, np.ndarray]:
+        """``note``'s places' rails (m) and reaches (m, ``math.inf``: never clear)."""
+        got = self._of.get(note)
+        if got is None:
+            c = self.costs
+            pitch = c.notes[note].pitch
+            rail_m, reach_m = c.places.rail_m, self.pr.reach_m
+            qs = [(f, q) for f in c.places.hand.fingers for q in c.rails(f, note)]
+            got = self._of[note] = (np.array([rail_m(q) for _, q in qs], dtype=float),
+                                    np.array([reach_m(f, pitch, q) for f, q in qs],
+                                             dtype=float))
+        return got
+
+
+def loose_bound(nr: NoteReaches, note: int, side: str, limit_m: float,
                 strict: tuple[float, float]) -> tuple[float, float]:
     """``note``'s loosened rail bound (module docstring): ``limit_m`` is the farthest x the
     hand's bodies may reach (the first hand's inner edge over the window less the
     clearance, or plus it for a right hand); ``strict``: the farthest-reach rule's bound,
-    which it never tightens. ``costs`` has no bounds (every place that presses the note)."""
-    pitch = costs.notes[note].pitch
-    rail_m = costs.places.rail_m
-    ok = [rail_m(q) for f in costs.places.hand.fingers for q in costs.rails(f, note)
-          if (rail_m(q) + pr.reach_m(f, pitch, q) <= limit_m if side == "left"
-              else rail_m(q) - pr.reach_m(f, pitch, q) >= limit_m)]
+    which it never tightens. ``nr``: the song's places with no bounds (every place that
+    presses the note)."""
+    rail, reach = nr.of(note)
+    ok = rail[rail + reach <= limit_m] if side == "left" else rail[rail - reach >= limit_m]
     lo, hi = strict
-    if not ok:
+    if not ok.size:
         return strict
     if side == "left":
-        return lo, max(hi, max(ok))
-    return min(lo, min(ok)), hi
+        return lo, max(hi, float(ok.max()))
+    return min(lo, float(ok.min())), hi
 
 
 def collided_notes(t_s: np.ndarray, q_left: np.ndarray, q_right: np.ndarray,
@@ -114,7 +136,7 @@ def collided_notes(t_s: np.ndarray, q_left: np.ndarray, q_right: np.ndarray,
     on the rows as the file holds them; one row more each side); an empty set when no row
     is; None when some row is but no window holds it."""
     judge = GapJudge(tuple(e.kin for e in edges), tuple(e.bodies for e in edges),
-                     ("left.", "right."), clearance_m)
+                     ("left.", "right."), clearance_m, hits_only=True)
     judge.add(as_written(t_s), as_written(q_left), as_written(q_right))
     gap = judge.finish(float(t_s[-1]) + dt_s)
     if gap.ok:
@@ -126,17 +148,14 @@ def collided_notes(t_s: np.ndarray, q_left: np.ndarray, q_right: np.ndarray,
     return hit or None
 
 
-def least_reach_m(costs: Costs, pr: PlaceReach, note: int, side: str) -> float | None:
+def least_reach_m(nr: NoteReaches, note: int, side: str) -> float | None:
     """How far towards the other hand a hand (``side``) must reach, at the least, to
-    press ``note`` (``costs``: no bounds): over every place that presses it, its rail plus
-    its reach (a left hand: the least), or less it (a right hand: the most); None when no
-    place does."""
-    pitch = costs.notes[note].pitch
-    rail_m = costs.places.rail_m
-    xs = [rail_m(q) + pr.reach_m(f, pitch, q) if side == "left"
-          else rail_m(q) - pr.reach_m(f, pitch, q)
-          for f in costs.places.hand.fingers for q in costs.rails(f, note)]
-    xs = [x for x in xs if math.isfinite(x)]
-    if not xs:
+    press ``note`` (``nr``: the song's places with no bounds): over every place that
+    presses it, its rail plus its reach (a left hand: the least), or less it (a right
+    hand: the most); None when no place does."""
+    rail, reach = nr.of(note)
+    xs = rail + reach if side == "left" else rail - reach
+    xs = xs[np.isfinite(xs)]
+    if not xs.size:
         return None
-    return min(xs) if side == "left" else max(xs)
+    return float(xs.min()) if side == "left" else float(xs.max())

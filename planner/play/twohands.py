@@ -55,6 +55,7 @@ from planner.music.midi import Song
 from planner.play.costs import CostMemo, Costs, SkipReason
 from planner.play.handclear import (
     MAX_ROUNDS,
+    NoteReaches,
     PlaceReach,
     collided_notes,
     least_reach_m,
@@ -253,8 +254,10 @@ def settle(notes, places: Places, memo: CostMemo, rate_hz: float,
     while True:
         bounds = bounds_of(out_of)
         costs = Costs(notes, places, rate_hz, memo, bounds)
-        now = frozenset(k for k in range(len(notes)) if costs.reason(k) is not None)
-        if now <= out_of:
+        # (the notes out already stay out: only the others are asked)
+        now = frozenset(k for k in range(len(notes))
+                        if k not in out_of and costs.reason(k) is not None)
+        if not now:
             return bounds, out_of
         out_of |= now
 
@@ -318,9 +321,9 @@ def _room(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
     strict = room_bounds(song.notes, side, own, other, pp.gap)
     osd = _other(side)
     opl, pl = pp.planners[osd], pp.planners[side]
-    o_costs = Costs(song.notes, opl.places, rate_hz, opl.memo)
-    need = {i: least_reach_m(o_costs, pp.place_reach[osd], i, osd) for i in other}
-    free = Costs(sub.notes, pl.places, rate_hz, pl.memo)
+    o_reach = NoteReaches(Costs(song.notes, opl.places, rate_hz, opl.memo), pp.place_reach[osd])
+    need = {i: least_reach_m(o_reach, i, osd) for i in other}
+    free = NoteReaches(Costs(sub.notes, pl.places, rate_hz, pl.memo), pp.place_reach[side])
     c = pp.gap.clearance_m
     out = []
     for k, (t0, t1) in enumerate(windows(song.notes, own)):
@@ -330,7 +333,7 @@ def _room(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
             out.append(strict[k])
             continue
         lim = max(xs) + c if side == RIGHT else min(xs) - c
-        out.append(loose_bound(free, pp.place_reach[side], k, side, lim, strict[k]))
+        out.append(loose_bound(free, k, side, lim, strict[k]))
     return out
 
 
@@ -376,7 +379,8 @@ def _plan_loose(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], su
     notes, pl, dt = song.notes, pp.planners[side], 1.0 / rate_hz
     c = pp.gap.clearance_m
     reach_m = pp.reach(side).inner_extent_m + c
-    free = Costs(sub.notes, pl.places, rate_hz, pl.memo)  # (every place: no bound)
+    # (every place: no bound)
+    free = NoteReaches(Costs(sub.notes, pl.places, rate_hz, pl.memo), pp.place_reach[side])
     back: set[int] = set()  # (the notes held to the farthest-reach rule)
     got: dict[str, frozenset[int]] = {}
 
@@ -387,7 +391,7 @@ def _plan_loose(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], su
         for k, e in enumerate(lims):
             strict = (-UNBOUNDED_M, e - reach_m) if side == LEFT else (e + reach_m, UNBOUNDED_M)
             res.append(strict if k in back else loose_bound(
-                free, pp.place_reach[side], k, side, e - c if side == LEFT else e + c, strict))
+                free, k, side, e - c if side == LEFT else e + c, strict))
         return res
 
     for _ in range(MAX_ROUNDS):
