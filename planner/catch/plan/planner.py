@@ -22,6 +22,7 @@ from planner.catch.plan.arm import (
 )
 from planner.catch.plan.ballforces import BallForces
 from planner.catch.plan.closing import close_start, make_closing
+from planner.catch.plan.contactqp import ROLL_WEIGHT
 from planner.catch.plan.drop import add_drop
 from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
@@ -36,7 +37,6 @@ from planner.catch.plan.results import (
 )
 from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
-    ROLL_WEIGHT,
     SoftStop,
     StopDynamics,
     plan_stop,
