@@ -153,6 +153,10 @@ class CatchPlanner:
         self.rig_dyn = StopDynamics(self.hand, self.rig, self.kin)
         self.rig_turn = HoldTurn(self.hand, self.rig, self.rig_dyn, self.kin, self.q_rest,
                                  self._falling_rows)
+        # the arm alone meeting the ball, the hand then falling with it on the reach axis
+        # (``plan``: where the arm alone loses the ball to the roll and the reach's plan fails)
+        self.arm_fall_turn = HoldTurn(self.hand, self.joints, self.dyn, self.kin, self.q_rest,
+                                      self._falling_rows)
         self.ball_forces = BallForces(self.hand, self.kin)
         self._closings: dict[tuple[float, bool], Closing] = {}
 
@@ -197,6 +201,20 @@ class CatchPlanner:
                     other = replace(fell, notes=fell.notes + (
                         "the hand falls with the ball on the reach axis while the wrist turns: "
                         "on the reach without the fall " + reasons_text(other.reasons),))
+            if not other.feasible and CatchReason.ROLL in plan.reason_kinds:
+                # the arm alone meets the ball (the reach held until it lands), then the hand
+                # falls with it on the reach axis: where the reach's own intercept fails
+                # (too fast to stop at its square intercept, or the roll with the fall)
+                fell = self._plans(args, soft, True, fall=True)
+                if fell.feasible:
+                    plan = replace(fell, notes=fell.notes + (
+                        "the arm alone meets the ball, the hand then falls with it on the "
+                        "reach axis: without the fall " + reasons_text(plan.reasons)
+                        + "; with the rig's reach axis moving too: "
+                        + reasons_text(other.reasons) + fell_why,))
+                    return replace(plan, planning_s=time.perf_counter() - t0)
+                fell_why += "; the arm alone, the hand falling on the reach axis: " + \
+                    reasons_text(fell.reasons)
             if other.feasible:
                 plan = replace(other, notes=other.notes + (
                     "the rig's reach axis moves (the palm square to the throw on it where it "
@@ -254,7 +272,8 @@ class CatchPlanner:
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
-        dyn, hold = (self.rig_dyn, self.rig_turn) if rig else (self.dyn, self.turn)
+        dyn, hold = (self.rig_dyn, self.rig_turn) if rig else \
+            (self.dyn, self.arm_fall_turn if fall else self.turn)
         h, C = self.hand, np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
         closing = self.closing(r, bodies)
