@@ -178,7 +178,7 @@ def test_the_arm_alone_meets_the_ball_and_the_hand_falls_with_it(pl, tmp_path):
     reach's square intercept is too fast to stop; the arm alone meeting the ball (the reach
     held at 0 until it lands) with the hand then falling with it on the reach axis
     (``CatchPlanner.arm_fall_turn``) is feasible, ``check`` confirms it, the reach moves only
-    after the intercept and within its travel, and MuJoCo holds the ball (measured: 46 mm
+    after the intercept and within its travel, and MuJoCo holds the ball (measured: 34 mm
     from the palm centre at the end)."""
     p = plan_throw(65.0, 1.0, -0.3, planner=pl)
     assert p.feasible, p.reasons
@@ -199,37 +199,4 @@ def test_the_arm_alone_meets_the_ball_and_the_hand_falls_with_it(pl, tmp_path):
     from planner.simulate import simulate_trajectory
 
     c = simulate_trajectory(str(out)).catch
-    assert c is not None and c.held and c.end_distance_m < 0.046 + 0.010
-
-
-def test_the_fall_brings_a_ball_resting_towards_the_wrist_back():
-    """The fall's law (``drop.fall_accel``) feeds the ball's place on the palm back, not only
-    its speed: a ball at rest 20 mm towards the wrist (where a speed law leaves it) is
-    accelerated back towards the palm target, critically damped with DROP_SETTLE_S."""
-    from planner.catch.plan.drop import DROP_SETTLE_S, fall_accel
-
-    k, lever, along = 5.0 / 7.0, -0.9, 1.0
-    for x, vx in ((0.02, 0.0), (0.02, 0.3), (0.0, 0.3)):
-        a_r = fall_accel(x, vx, along, lever, k, 0.0, 0.01, 1e9)
-        w = along - k * lever * a_r  # the along-palm acceleration the fall leaves
-        assert w == pytest.approx(-(2.0 * vx / DROP_SETTLE_S + x / DROP_SETTLE_S ** 2))
-        assert w < 0.0
-
-
-def test_a_short_flat_throw_is_caught_with_the_fall_steered_by_the_balls_place(pl, tmp_path):
-    """+0.3 m / 25 deg / 2.0 m: the arm alone lets the ball roll 210 mm, the reach with the
-    speed-only fall 45 mm (42 mm of palm); with the fall steered by the ball's place too it
-    is feasible, ``check`` confirms it and MuJoCo holds the ball (measured: 38 mm from the
-    palm centre at the end)."""
-    p = plan_throw(25.0, 2.0, 0.3, planner=pl)
-    assert p.feasible, p.reasons
-    assert any(n.startswith("the hand falls with the ball") for n in p.notes)
-    out = tmp_path / "c.csv"
-    write_plan(p, str(out))
-    rep = check_trajectory(str(out))
-    assert rep.ok, rep.problems
-    pytest.importorskip("mujoco")
-    from planner.simulate import simulate_trajectory
-
-    c = simulate_trajectory(str(out)).catch
-    assert c is not None and c.held and c.end_distance_m < 0.038 + 0.010
+    assert c is not None and c.held and c.end_distance_m < 0.034 + 0.010

@@ -9,8 +9,7 @@ a translation upstream of the wrist: it moves the palm target along one fixed di
 e_r without turning the palm, so it changes a by a_r e_r and nothing else. Where e_r . y is
 far from 0 (a steep palm: e_r . y = -0.95 on 15 deg / 1 m's intercept pose) the reach
 accelerating at a_r = ((g - a_0) . y - w) / (e_r . y) makes the along-palm acceleration w,
-chosen to bring the ball's roll towards the wrist to rest and the ball back towards the palm
-target (w = -2 v / T - x / T^2, critically damped, T ``DROP_SETTLE_S``): the hand
+chosen to bring the ball's roll towards the wrist to rest (``DROP_SETTLE_S``): the hand
 falls with the ball, as in free fall when w = 0, while the wrist's turn (already in the
 rows) levels the palm. The fall is bounded by the reach's travel, speed and acceleration
 (its limits at ``LIMIT_MARGIN``): the axis brakes in time to stop within its range and by
@@ -34,9 +33,8 @@ from planner.check.ballstop import PALM_MU
 from planner.hand.model import GRAVITY_WORLD
 from planner.trajectory import LIMIT_MARGIN
 
-DROP_SETTLE_S = 0.03  # the law's time constant: it brings the ball's roll towards the wrist
-# to rest, and the ball back to the palm target, critically damped (x'' = -2 x'/T - x/T^2)
-# with T this long: three rows at 100 Hz (the rows' own rate is the finest the check sees)
+DROP_SETTLE_S = 0.03  # the law brings the ball's roll towards the wrist to rest in about
+# this long: three rows at 100 Hz (the rows' own rate is the finest the check sees)
 CONE_SHARE = 0.95  # the fall keeps the ball's force within this share of the palm's friction
 # (tan of the cone's half angle): on the cone's edge itself the check's rule on the written
 # rows (rounded, their accelerations second differences) found it 0.00 N outside
@@ -67,11 +65,7 @@ def fall_accel(x: float, vx: float, along: float, lever: float, k_roll: float, u
         return a_brake
     if abs(lever) < MIN_LEVER:
         return 0.0
-    # a ball towards the wrist (x > 0) or rolling there: brought back to the palm target,
-    # critically damped with the time constant DROP_SETTLE_S (its position fed back as well
-    # as its speed: a speed law alone leaves the ball where its roll stopped)
-    w = -(2.0 * vx / DROP_SETTLE_S + x / DROP_SETTLE_S ** 2) if x > 0.0 or vx > 0.0 \
-        else min(along, 0.0)
+    w = -vx / DROP_SETTLE_S if x > 0.0 or vx > 0.0 else min(along, 0.0)
     return (along - w) / (k_roll * lever)
 
 
