@@ -191,38 +191,9 @@ class CatchPlanner:
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._plans(args, soft, True)
         if not plan.feasible and soft and self.rig.i_reach is not None:
-            other = self._plans(args, soft, True, rig=True)
-            fell_why = ""
-            if not other.feasible and CatchReason.ROLL in other.reason_kinds:
-                # the hand falling with the ball on the reach axis while the wrist turns
-                fell = self._plans(args, soft, True, rig=True, fall=True)
-                fell_why = "; the hand falling with the ball on it: " + reasons_text(fell.reasons)
-                if fell.feasible:
-                    other = replace(fell, notes=fell.notes + (
-                        "the hand falls with the ball on the reach axis while the wrist turns: "
-                        "on the reach without the fall " + reasons_text(other.reasons),))
-            if not other.feasible and CatchReason.ROLL in plan.reason_kinds:
-                # the arm alone meets the ball (the reach held until it lands), then the hand
-                # falls with it on the reach axis: where the reach's own intercept fails
-                # (too fast to stop at its square intercept, or the roll with the fall)
-                fell = self._plans(args, soft, True, fall=True)
-                if fell.feasible:
-                    plan = replace(fell, notes=fell.notes + (
-                        "the arm alone meets the ball, the hand then falls with it on the "
-                        "reach axis: without the fall " + reasons_text(plan.reasons)
-                        + "; with the rig's reach axis moving too: "
-                        + reasons_text(other.reasons) + fell_why,))
-                    return replace(plan, planning_s=time.perf_counter() - t0)
-                fell_why += "; the arm alone, the hand falling on the reach axis: " + \
-                    reasons_text(fell.reasons)
-            if other.feasible:
-                plan = replace(other, notes=other.notes + (
-                    "the rig's reach axis moves (the palm square to the throw on it where it "
-                    "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
-            else:
-                plan = replace(plan, notes=plan.notes + (
-                    "with the rig's reach axis moving too: " + reasons_text(other.reasons)
-                    + fell_why,))
+            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, **kw), plan)
+            if plan.feasible:
+                return replace(plan, planning_s=time.perf_counter() - t0)
         if not plan.feasible and CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
@@ -432,6 +403,44 @@ class CatchPlanner:
                grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:
         """``BallForces.forces`` of this hand (stopping and holding the ball judged)."""
         return self.ball_forces.forces(flight, pose, t, Q, r, grasp_t, soft)
+
+
+def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
+    """``CatchPlanner.plan``'s fallbacks on the rig's reach axis for ``plan`` (the arm
+    alone's, infeasible); ``plans(rig=, fall=)``: ``CatchPlanner._plans`` of the throw. The
+    reach moves too (the palm square to the throw on it); where that loses the ball to the
+    roll, the hand falls with the ball on the reach axis once it lands; where the arm alone
+    loses it to the roll and those fail, the arm alone meets the ball (the reach held until
+    it lands) and the hand then falls with it (``CatchPlanner.arm_fall_turn``). The first
+    feasible, with a note naming what failed; else ``plan`` with their reasons in a note."""
+    other = plans(rig=True)
+    fell_why = ""
+    if not other.feasible and CatchReason.ROLL in other.reason_kinds:
+        # the hand falling with the ball on the reach axis while the wrist turns
+        fell = plans(rig=True, fall=True)
+        fell_why = "; the hand falling with the ball on it: " + reasons_text(fell.reasons)
+        if fell.feasible:
+            other = replace(fell, notes=fell.notes + (
+                "the hand falls with the ball on the reach axis while the wrist turns: "
+                "on the reach without the fall " + reasons_text(other.reasons),))
+    if not other.feasible and CatchReason.ROLL in plan.reason_kinds:
+        # the arm alone meets the ball, then the hand falls with it on the reach axis: where
+        # the reach's own intercept fails (too fast to stop there, or the roll with the fall)
+        fell = plans(fall=True)
+        if fell.feasible:
+            return replace(fell, notes=fell.notes + (
+                "the arm alone meets the ball, the hand then falls with it on the "
+                "reach axis: without the fall " + reasons_text(plan.reasons)
+                + "; with the rig's reach axis moving too: "
+                + reasons_text(other.reasons) + fell_why,))
+        fell_why += "; the arm alone, the hand falling on the reach axis: " + \
+            reasons_text(fell.reasons)
+    if other.feasible:
+        return replace(other, notes=other.notes + (
+            "the rig's reach axis moves (the palm square to the throw on it where it "
+            "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
+    return replace(plan, notes=plan.notes + (
+        "with the rig's reach axis moving too: " + reasons_text(other.reasons) + fell_why,))
 
 
 def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,
