@@ -1,5 +1,5 @@
 """The palm gives with the ball where closing on it would need more than a motor
-(planner.catch.plan.stopping: contact_speeds(..., give=True), stop_profile): the ball's
+(planner.catch.plan.contactqp: contact_speeds(..., give=True); stopping.stop_profile): the ball's
 speed into the palm is then no more than its own. No wall-clock assertions."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 
 from planner.catch.live.stop import box_qp
 from planner.catch.plan.api import get_planner
-from planner.catch.plan.stopping import ROLL_WEIGHT, contact_qp, contact_speeds
+from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_qp, contact_speeds
 
 
 @pytest.fixture(scope="module")

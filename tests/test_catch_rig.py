@@ -171,3 +171,32 @@ def test_the_fall_ends_without_leaving_the_ball(pl, tmp_path):
     f_n = m * np.einsum("ij,ij->i", a - GRAVITY_WORLD, palm[1:-1, :3, 2])
     late = tr.t_s[1:-1] > p.intercept.t_s + 0.03
     assert f_n[late].min() >= -CONE_TOL_N
+
+
+def test_the_arm_alone_meets_the_ball_and_the_hand_falls_with_it(pl, tmp_path):
+    """-0.3 m / 65 deg / 1.0 m: the arm alone loses the ball to the roll (85 mm) and the
+    reach's square intercept is too fast to stop; the arm alone meeting the ball (the reach
+    held at 0 until it lands) with the hand then falling with it on the reach axis
+    (``CatchPlanner.arm_fall_turn``) is feasible, ``check`` confirms it, the reach moves only
+    after the intercept and within its travel, and MuJoCo holds the ball (measured: 34 mm
+    from the palm centre at the end)."""
+    p = plan_throw(65.0, 1.0, -0.3, planner=pl)
+    assert p.feasible, p.reasons
+    note = [n for n in p.notes if n.startswith("the arm alone meets the ball, the hand then")]
+    assert note and "rolls off the palm's wrist side" in note[0]
+    assert "too fast to stop" in note[0]  # the reach's own plan, named
+    out = tmp_path / "c.csv"
+    write_plan(p, str(out))
+    rep = check_trajectory(str(out))
+    assert rep.ok, rep.problems
+    i = pl.hand.index["reach"]
+    tr = read_trajectory(str(out))
+    before = tr.t_s <= p.intercept.t_s
+    assert np.allclose(tr.q[before, i], 0.0, atol=1e-9)  # the arm alone meets the ball
+    assert np.all(tr.q[:, i] >= pl.hand.lower[i]) and np.all(tr.q[:, i] <= pl.hand.upper[i])
+    assert tr.q[~before, i].min() < -0.01  # then the hand gives way downwards
+    pytest.importorskip("mujoco")
+    from planner.simulate import simulate_trajectory
+
+    c = simulate_trajectory(str(out)).catch
+    assert c is not None and c.held and c.end_distance_m < 0.034 + 0.010

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from planner.catch.live.stop import box_qp, giving_contact_speeds, scaled
-from planner.catch.plan.stopping import SoftStop, contact_qp, contact_speeds
+from planner.catch.plan.contactqp import contact_qp, contact_speeds
+from planner.catch.plan.stopping import SoftStop
 
 
 def test_box_qp_is_the_osqp_minimum():

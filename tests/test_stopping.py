@@ -185,7 +185,7 @@ def _along_palm(pl, q, v):
 
 
 def test_the_ball_held_rolls_into_the_fingers_not_off_the_wrist(pl):
-    """The hold (``stopping.ROLL_WEIGHT``, ``hold_turn``): 60 deg from 1.5 m met by the palm
+    """The hold (``contactqp.ROLL_WEIGHT``, ``hold_turn``): 60 deg from 1.5 m met by the palm
     with the contact speeds of the old QP (weight 1) leaves the ball rolling towards the
     wrist (the palm's +y) at 0.56 m/s; with the roll weighed at 0.10 m/s, under a quarter of
     that. The plan's last row (every joint at rest) has the palm facing up, its downhill

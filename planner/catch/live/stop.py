@@ -28,12 +28,11 @@ import numpy as np
 
 from planner.catch.flight.path import Ball, Flight, predict_throw
 from planner.catch.live.search import NEAR_S
+from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_qp
 from planner.catch.plan.stopping import (
-    ROLL_WEIGHT,
     SoftStop,
     StopAsk,
     StopDynamics,
-    contact_qp,
     stop_profile,
     stop_tilt,
 )
@@ -104,7 +103,7 @@ def box_qp(P: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.n
 
 
 def giving_contact_speeds(k_flex: int):
-    """``stopping.contact_speeds``' QP (``contact_qp``) solved exactly (``box_qp``), the
+    """``contactqp.contact_speeds``' QP (``contact_qp``) solved exactly (``box_qp``), the
     wrist flexion (column ``k_flex``) bounded to the side on which it moves the palm
     against its normal (away from the arriving ball): the palm gives with the ball. (Unbounded, a noisy early estimate's
     optimum can turn the palm into the ball, trading the pad's normal speed for the roll

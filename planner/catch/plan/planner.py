@@ -22,6 +22,7 @@ from planner.catch.plan.arm import (
 )
 from planner.catch.plan.ballforces import BallForces
 from planner.catch.plan.closing import close_start, make_closing
+from planner.catch.plan.contactqp import ROLL_WEIGHT
 from planner.catch.plan.drop import add_drop
 from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
@@ -36,7 +37,6 @@ from planner.catch.plan.results import (
 )
 from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
-    ROLL_WEIGHT,
     SoftStop,
     StopDynamics,
     plan_stop,
@@ -153,6 +153,10 @@ class CatchPlanner:
         self.rig_dyn = StopDynamics(self.hand, self.rig, self.kin)
         self.rig_turn = HoldTurn(self.hand, self.rig, self.rig_dyn, self.kin, self.q_rest,
                                  self._falling_rows)
+        # the arm alone meeting the ball, the hand then falling with it on the reach axis
+        # (``plan``: where the arm alone loses the ball to the roll and the reach's plan fails)
+        self.arm_fall_turn = HoldTurn(self.hand, self.joints, self.dyn, self.kin, self.q_rest,
+                                      self._falling_rows)
         self.ball_forces = BallForces(self.hand, self.kin)
         self._closings: dict[tuple[float, bool], Closing] = {}
 
@@ -187,24 +191,9 @@ class CatchPlanner:
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._plans(args, soft, True)
         if not plan.feasible and soft and self.rig.i_reach is not None:
-            other = self._plans(args, soft, True, rig=True)
-            fell_why = ""
-            if not other.feasible and CatchReason.ROLL in other.reason_kinds:
-                # the hand falling with the ball on the reach axis while the wrist turns
-                fell = self._plans(args, soft, True, rig=True, fall=True)
-                fell_why = "; the hand falling with the ball on it: " + reasons_text(fell.reasons)
-                if fell.feasible:
-                    other = replace(fell, notes=fell.notes + (
-                        "the hand falls with the ball on the reach axis while the wrist turns: "
-                        "on the reach without the fall " + reasons_text(other.reasons),))
-            if other.feasible:
-                plan = replace(other, notes=other.notes + (
-                    "the rig's reach axis moves (the palm square to the throw on it where it "
-                    "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
-            else:
-                plan = replace(plan, notes=plan.notes + (
-                    "with the rig's reach axis moving too: " + reasons_text(other.reasons)
-                    + fell_why,))
+            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, **kw), plan)
+            if plan.feasible:
+                return replace(plan, planning_s=time.perf_counter() - t0)
         if not plan.feasible and CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
@@ -254,7 +243,8 @@ class CatchPlanner:
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
-        dyn, hold = (self.rig_dyn, self.rig_turn) if rig else (self.dyn, self.turn)
+        dyn, hold = (self.rig_dyn, self.rig_turn) if rig else \
+            (self.dyn, self.arm_fall_turn if fall else self.turn)
         h, C = self.hand, np.asarray(catch_point, dtype=float)
         r = float(flight.ball.radius_m)
         closing = self.closing(r, bodies)
@@ -413,6 +403,44 @@ class CatchPlanner:
                grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:
         """``BallForces.forces`` of this hand (stopping and holding the ball judged)."""
         return self.ball_forces.forces(flight, pose, t, Q, r, grasp_t, soft)
+
+
+def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
+    """``CatchPlanner.plan``'s fallbacks on the rig's reach axis for ``plan`` (the arm
+    alone's, infeasible); ``plans(rig=, fall=)``: ``CatchPlanner._plans`` of the throw. The
+    reach moves too (the palm square to the throw on it); where that loses the ball to the
+    roll, the hand falls with the ball on the reach axis once it lands; where the arm alone
+    loses it to the roll and those fail, the arm alone meets the ball (the reach held until
+    it lands) and the hand then falls with it (``CatchPlanner.arm_fall_turn``). The first
+    feasible, with a note naming what failed; else ``plan`` with their reasons in a note."""
+    other = plans(rig=True)
+    fell_why = ""
+    if not other.feasible and CatchReason.ROLL in other.reason_kinds:
+        # the hand falling with the ball on the reach axis while the wrist turns
+        fell = plans(rig=True, fall=True)
+        fell_why = "; the hand falling with the ball on it: " + reasons_text(fell.reasons)
+        if fell.feasible:
+            other = replace(fell, notes=fell.notes + (
+                "the hand falls with the ball on the reach axis while the wrist turns: "
+                "on the reach without the fall " + reasons_text(other.reasons),))
+    if not other.feasible and CatchReason.ROLL in plan.reason_kinds:
+        # the arm alone meets the ball, then the hand falls with it on the reach axis: where
+        # the reach's own intercept fails (too fast to stop there, or the roll with the fall)
+        fell = plans(fall=True)
+        if fell.feasible:
+            return replace(fell, notes=fell.notes + (
+                "the arm alone meets the ball, the hand then falls with it on the "
+                "reach axis: without the fall " + reasons_text(plan.reasons)
+                + "; with the rig's reach axis moving too: "
+                + reasons_text(other.reasons) + fell_why,))
+        fell_why += "; the arm alone, the hand falling on the reach axis: " + \
+            reasons_text(fell.reasons)
+    if other.feasible:
+        return replace(other, notes=other.notes + (
+            "the rig's reach axis moves (the palm square to the throw on it where it "
+            "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
+    return replace(plan, notes=plan.notes + (
+        "with the rig's reach axis moving too: " + reasons_text(other.reasons) + fell_why,))
 
 
 def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,

@@ -26,12 +26,9 @@ What is chosen, by optimisation:
 The rows' dynamics are then judged by the check's own rule (``planner.check.ball``); a
 ball that no such motion stops within every motor's capacity is "too fast to stop".
 
-Holding the ball (``docs/history/physics-replay.md``, "Catch"): nothing on the palm's wrist side
-stops a ball rolling there, so (1) the QP weighs the relative speed along the palm
-``ROLL_WEIGHT`` times its normal part (a tangential speed is not absorbed by the pad: the
-ball keeps 5/7 of it as a roll), and (2) once the grasp is made the wrist turns the closed
-hand (``planner.catch.plan.holdturn``) until the palm faces up with its downhill towards
-the fingers: the ball rolls into the closed fingers and the palm carries its weight.
+Holding the ball: the contact speeds' QP (``planner.catch.plan.contactqp``) weighs the
+relative speed along the palm ``ROLL_WEIGHT`` times its normal part, and once the grasp is
+made the wrist turns the closed hand (``planner.catch.plan.holdturn``) until the palm faces up.
 """
 
 from __future__ import annotations
@@ -46,6 +43,7 @@ import pinocchio as pin
 from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix, palm_jacobian
 from planner.catch.plan.arm import CatchJoints, open_from, palm_target
+from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_speeds, giving_speeds
 from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_intercept_square
 from planner.catch.plan.results import Closing
 from planner.check.ball import ball_loads
@@ -53,7 +51,6 @@ from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_t
 from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
 from planner.hand.tendon import actuator_capacity
-from planner.qp import DenseQp
 from planner.trajectory import LIMIT_MARGIN, MIN_PHASE_S, PEAK_ACC, PEAK_VEL, phase_duration
 
 STOP_SHARE = 0.8  # the ramps load every motor to at most 80 % of its capacity: issue 15's
@@ -67,12 +64,6 @@ MOVE_SPARE_S = 0.01  # ... and still reaches its pose one row (at 100 Hz) before
 TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
 CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)  # the arm's speed when it meets the ball, tried as a
 # share of its speed after the recoil
-ROLL_WEIGHT = 30.0  # the contact-speed QP weighs the ball's speed along the palm this many
-# times its speed into it: the pad absorbs the normal part (its force grows with its square),
-# nothing absorbs the tangential part -- a sphere keeps 5/7 of it as a roll (rolling, no
-# friction stops it) that leaves the open wrist side before the fingers close. Measured
-# (bench_simulate.py --catch-grid, held of 25, the planner as committed): weight 1 -> 15,
-# 10 -> 18, 30 -> 23, 100 -> 18 (100 gives up the soft catch's normal speed as well)
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -332,41 +323,6 @@ class StopDynamics:
         return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
 
 
-def contact_qp(J: np.ndarray, v_ball: np.ndarray, normal: np.ndarray,
-               roll_weight: float = ROLL_WEIGHT) -> tuple[np.ndarray, np.ndarray]:
-    """The contact speeds' QP objective (P, c) of x^T P x / 2 + c^T x: |W^1/2 (v_ball -
-    J x)|^2 + 1e-6 |x|^2, W weighting the relative velocity's part along the palm
-    ``roll_weight`` times its part along the palm's ``normal``."""
-    k = J.shape[1]
-    n = normal / np.linalg.norm(normal)
-    W = roll_weight * np.eye(3) + (1.0 - roll_weight) * np.outer(n, n)
-    return 2.0 * (J.T @ W @ J + 1e-6 * np.eye(k)), -2.0 * J.T @ W @ v_ball
-
-
-def contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
-                   normal: np.ndarray, roll_weight: float = ROLL_WEIGHT, give: bool = False
-                   ) -> np.ndarray:
-    """The QP (``contact_qp``) within -bound <= x <= bound, by OSQP (zeros when unsolved):
-    a solver set up for this problem alone, so that the speeds are a function of the
-    arguments. ``give``: and the palm target never moving into the ball along the palm's
-    ``normal`` (n . J x <= 0, n facing the arriving ball): the ball's speed into the palm
-    is then at most its own. (A solver kept between solves keeps its adapted step size rho even without
-    warm starting: the next problem's answer then depended on the plans before it, and
-    one throw, 75 deg from 1.0 m, was feasible or not by what had been planned before.)"""
-    k = J.shape[1]
-    P, c = contact_qp(J, v_ball, normal, roll_weight)
-    qp = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True,
-                 warm_starting=False)
-    if give:
-        A = np.vstack([np.eye(k), normal / np.linalg.norm(normal) @ J])
-        res = qp.solve(P, c, A, np.append(-bound, -np.inf), np.append(bound, 0.0))
-    else:
-        res = qp.solve(P, c, np.eye(k), -bound, bound)
-    if not res.solved:
-        return np.zeros(k)
-    return np.clip(res.x, -bound, bound)
-
-
 def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
               soft: bool = True, roll_weight: float = ROLL_WEIGHT,
@@ -473,12 +429,6 @@ def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.
                 break
             found = (key, cand, speeds)
     return found
-
-
-def giving_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray, normal: np.ndarray,
-                  roll_weight: float = ROLL_WEIGHT) -> np.ndarray:
-    """``contact_speeds`` with the palm giving with the ball (``give``)."""
-    return contact_speeds(J, v_ball, bound, normal, roll_weight, give=True)
 
 
 def _closes_beyond_a_motor(cand) -> bool:
