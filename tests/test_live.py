@@ -15,6 +15,7 @@ from planner.catch.flight.livefit import LIVE_STEP_FACTOR, LiveFit
 from planner.catch.flight.observe import fit_observations
 from planner.catch.flight.path import Flight, get_ball, predict_throw, step_for
 from planner.catch.live.motion import LiveMotion, rest_by_s
+from planner.catch.live.search import TILT_STEPS
 from planner.catch.live.session import HELD, CatchSession
 from planner.catch.plan.api import get_planner
 from planner.catch.plan.arm import open_from
@@ -147,11 +148,20 @@ def test_session_first_plan_starts_from_the_first_look(live_run):
             break
     np.testing.assert_array_equal(first.flight.v0, lf.flight.v0)
     t_c = float(lf.flight.time_at_x(1.5))
-    # (at the soft stop's palm tilt, ``live.stop.StopTable``; untilted where the tilted palm
-    # faces no pose, as ``LiveSearch.next``)
-    full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m, t_c, first._search.tilt)
+    # (at the soft stop's palm tilt, ``live.stop.StopTable``; where the tilted palm faces no
+    # pose, the largest share of the tilt that does, by ``LiveSearch.next``'s bisection)
+    tilt = first._search.tilt
+    full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m, t_c, tilt)
     if not full.aligned:
         full = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m, t_c)
+        lo, hi = 0.0, 1.0
+        for _ in range(TILT_STEPS if full.aligned and full.reason is None else 0):
+            part = find_intercept(pl.wrist, lf.flight, first.C, BALL.radius_m, t_c,
+                                  0.5 * (lo + hi) * tilt)
+            if part.reason is None and part.aligned:
+                lo, full = 0.5 * (lo + hi), part
+            else:
+                hi = 0.5 * (lo + hi)
     ic = first.pose.ic
     assert abs(ic.t - full.t) < 1e-6 and abs(ic.theta - full.theta) < 1e-6
     assert abs(ic.dev - full.dev) < 1e-6 and abs(ic.rail - full.rail) < 1e-6

@@ -222,7 +222,8 @@ class CatchSession:
         if self.t_i is not None and t_b >= self.t_i and self.pose.ic.reason is None:  # too
             # late to act before the ball (an estimate out of reach has no such time: a
             # first fit of a few noisy observations may put its nearest point in the past)
-            return self._finish(f"the observation at t = {t:.3f} s acts after the intercept")
+            return self._finish(f"the observation at t = {t:.3f} s acts after the intercept",
+                                t_react + period)
         old_seg = self.motion.seg
         self.pose = self.replanner.replan(fit.flight, t, t_b, period,
                                           self._last_row_s(t_react + period), self.pose, self.t_i)
@@ -308,9 +309,12 @@ class CatchSession:
         return out[0] if len(out) == 1 else np.concatenate(out)
 
     # ------------------------------------------------------------ the end
-    def _finish(self, why: str) -> np.ndarray:
+    def _finish(self, why: str, near_s: float = -math.inf) -> np.ndarray:
         """The rest of the plan (started now if the hand is still waiting), written; then
-        judged, and the end marker."""
+        judged, and the end marker. The rows up to ``near_s`` (the ending observation's
+        reach, as every observation's rows) are written first where no wrist turn can
+        start among them (its earliest start, ``turn_from``, after them: the same rows),
+        the turn and the rest after them: the latency is to those first rows."""
         m, cl, sp = self.motion, self.closing, self.stopper
         pose, h = self.pose, self.pl.hand
         self.replanner.closings.due(m, math.inf)
@@ -332,14 +336,19 @@ class CatchSession:
         t2 = np.array([t_static, t_static + self.dt])
         off = arm_offset(stop, t2, h.n)
         q_held = m.rows(t2)[0] + (0.0 if off is None else off[0])
-        grasp = m.close_start_s + (cl.u_grasp or 1.0) * m.close_s
-        self.turn = live_turn(self.pl.dyn, q_held,
-                              max(grasp, pose.t_i + sp.pad_s(pose), m.seg.end_s),
-                              (self.next_row + sum(len(c.t) for c in self._ahead)) * self.dt)
-        self.turn = sp.within_limits(self.turn)
+        grasp = max(m.close_start_s + (cl.u_grasp or 1.0) * m.close_s,
+                    pose.t_i + sp.pad_s(pose), m.seg.end_s)
+        first_free_s = (self.next_row + sum(len(c.t) for c in self._ahead)) * self.dt
+        near = (self._write_to(near_s) if math.isfinite(near_s)
+                and self._last_row_s(near_s) <= max(grasp, first_free_s) else np.empty((0, 0)))
+        out_s, out_cpu_s = self.rows_out_s, self.rows_cpu_s
+        self.turn = sp.within_limits(live_turn(self.pl.dyn, q_held, grasp, first_free_s))
         if self.turn is not None:
             t_static = max(t_static, self.turn.end_s)
         rows = self._write_to(max(pose.t_i + HOLD_AFTER_S, t_static + self.dt))
+        if len(near):
+            self.rows_out_s, self.rows_cpu_s = out_s, out_cpu_s
+            rows = near if not len(rows) else np.concatenate([near, rows])
         self.uncertainty = self.fit.intercept_sigma(self.flight, pose.t_i)  # (of the last
         # estimate only: what the plan reports)
         self.drag_estimate = (estimate_drag(self.fit.times, self.fit.positions, self.flight,
