@@ -92,6 +92,15 @@ def test_caught_with_the_reach_in_physics(pl, tmp_path):
     assert c is not None and c.held and c.end_distance_m < 0.0335 + 0.010
 
 
+def checked_reach(p, pl, tmp_path):
+    """The plan written, ``check`` confirming it; its rows and the reach joint's index."""
+    out = tmp_path / "c.csv"
+    write_plan(p, str(out))
+    rep = check_trajectory(str(out))
+    assert rep.ok, rep.problems
+    return read_trajectory(str(out)), pl.hand.index["reach"]
+
+
 def test_the_hand_falls_with_the_ball_where_the_reach_alone_lets_it_roll(pl, tmp_path):
     """-0.3 m / 75 deg / 1.0 m: on the reach without the fall the ball rolls off the palm's
     wrist side (the note says so); with the hand falling on the reach axis after the ball
@@ -101,12 +110,7 @@ def test_the_hand_falls_with_the_ball_where_the_reach_alone_lets_it_roll(pl, tmp
     assert p.feasible, p.reasons
     note = [n for n in p.notes if n.startswith("the hand falls with the ball")]
     assert note and "rolls off the palm's wrist side" in note[0]
-    out = tmp_path / "c.csv"
-    write_plan(p, str(out))
-    rep = check_trajectory(str(out))
-    assert rep.ok, rep.problems
-    i = pl.hand.index["reach"]
-    tr = read_trajectory(str(out))
+    tr, i = checked_reach(p, pl, tmp_path)
     after = tr.t_s > p.intercept.t_s
     assert np.all(tr.q[:, i] >= pl.hand.lower[i]) and np.all(tr.q[:, i] <= pl.hand.upper[i])
     assert tr.q[after, i].min() < tr.q[~after, i][-1] - 0.01  # the hand gives way downwards
@@ -185,12 +189,7 @@ def test_the_arm_alone_meets_the_ball_and_the_hand_falls_with_it(pl, tmp_path):
     note = [n for n in p.notes if n.startswith("the arm alone meets the ball, the hand then")]
     assert note and "rolls off the palm's wrist side" in note[0]
     assert "too fast to stop" in note[0]  # the reach's own plan, named
-    out = tmp_path / "c.csv"
-    write_plan(p, str(out))
-    rep = check_trajectory(str(out))
-    assert rep.ok, rep.problems
-    i = pl.hand.index["reach"]
-    tr = read_trajectory(str(out))
+    tr, i = checked_reach(p, pl, tmp_path)
     before = tr.t_s <= p.intercept.t_s
     assert np.allclose(tr.q[before, i], 0.0, atol=1e-9)  # the arm alone meets the ball
     assert np.all(tr.q[:, i] >= pl.hand.lower[i]) and np.all(tr.q[:, i] <= pl.hand.upper[i])
@@ -198,5 +197,5 @@ def test_the_arm_alone_meets_the_ball_and_the_hand_falls_with_it(pl, tmp_path):
     pytest.importorskip("mujoco")
     from planner.simulate import simulate_trajectory
 
-    c = simulate_trajectory(str(out)).catch
+    c = simulate_trajectory(str(tmp_path / "c.csv")).catch
     assert c is not None and c.held and c.end_distance_m < 0.034 + 0.010

@@ -149,22 +149,32 @@ class GapJudge:
         lo_r, hi_r = (cr - rr).min(axis=1), (cr + rr).max(axis=1)
         return np.maximum(np.maximum(lo_r - hi_l, lo_l - hi_r).max(axis=1), 0.0)
 
-    def _row_least(self, poses, k: int) -> tuple[float, int, int]:
-        """The exact least distance of distinct row ``k`` and its two bodies: the pair of
-        the least sphere gap measured first, then only the pairs whose gap is under the
-        least found, in the order of their gaps."""
-        (cl, Rl), (cr, Rr) = poses
+    def _sphere_gaps(self, poses, k: int) -> tuple[np.ndarray, int]:
+        """Distinct row ``k``'s gaps between every pair of bodies' bounding spheres
+        (left body major, flattened) and the right hand's body count."""
+        (cl, _), (cr, _) = poses
         sl, sr = self._shapes
         d = cl[k][:, None] - cr[k][None]
         gap = (np.sqrt(np.einsum("ijk,ijk->ij", d, d))
                - sl.radius_m[:, None] - sr.radius_m[None]).ravel()
-        n = len(sr.radius_m)
+        return gap, len(sr.radius_m)
+
+    def _pair_distance(self, poses, k: int, i: int, j: int) -> float:
+        """The exact distance of distinct row ``k``'s left body ``i`` and right body ``j``."""
+        (cl, Rl), (cr, Rr) = poses
+        sl, sr = self._shapes
+        return float(coal.distance(sl.shapes[i], coal.Transform3s(Rl[k, i], cl[k, i]),
+                                   sr.shapes[j], coal.Transform3s(Rr[k, j], cr[k, j]),
+                                   self._req, coal.DistanceResult()))
+
+    def _row_least(self, poses, k: int) -> tuple[float, int, int]:
+        """The exact least distance of distinct row ``k`` and its two bodies: the pair of
+        the least sphere gap measured first, then only the pairs whose gap is under the
+        least found, in the order of their gaps."""
+        gap, n = self._sphere_gaps(poses, k)
 
         def measure(flat: int) -> float:
-            i, j = divmod(flat, n)
-            return float(coal.distance(sl.shapes[i], coal.Transform3s(Rl[k, i], cl[k, i]),
-                                       sr.shapes[j], coal.Transform3s(Rr[k, j], cr[k, j]),
-                                       self._req, coal.DistanceResult()))
+            return self._pair_distance(poses, k, *divmod(flat, n))
 
         first = int(np.argmin(gap))
         best, at = measure(first), first
@@ -184,18 +194,11 @@ class GapJudge:
         bodies), the pairs measured in the order of their spheres' gaps, only those whose
         gap is under the limit (a pair at least its gap apart); (inf, -1, -1) when none is
         under it. The same rows as ``_row_least`` finds under the limit."""
-        (cl, Rl), (cr, Rr) = poses
-        sl, sr = self._shapes
-        d = cl[k][:, None] - cr[k][None]
-        gap = (np.sqrt(np.einsum("ijk,ijk->ij", d, d))
-               - sl.radius_m[:, None] - sr.radius_m[None]).ravel()
-        n = len(sr.radius_m)
+        gap, n = self._sphere_gaps(poses, k)
         near = np.flatnonzero(gap < self._limit)
         for flat in near[np.argsort(gap[near], kind="stable")].tolist():
             i, j = divmod(flat, n)
-            dist = float(coal.distance(sl.shapes[i], coal.Transform3s(Rl[k, i], cl[k, i]),
-                                       sr.shapes[j], coal.Transform3s(Rr[k, j], cr[k, j]),
-                                       self._req, coal.DistanceResult()))
+            dist = self._pair_distance(poses, k, i, j)
             if dist < self._limit:
                 return dist, i, j
         return np.inf, -1, -1
