@@ -40,12 +40,12 @@ def make(hand, posture: int, moves_only: bool) -> Atlas:
     atlas = Atlas(hand, posture=posture)
     t0 = time.perf_counter()
     if not moves_only:
-        atlas._entries.clear()  # (solved afresh, not read back from an older table)
+        atlas.forget()  # (solved afresh, not read back from an older table)
     n = atlas.solve_all()
     if not moves_only:
         path.parent.mkdir(parents=True, exist_ok=True)
         atlas.save(path)
-        print(f"{path}: {n} entries of {len(atlas._entries)} samples, {atlas.solves} IK "
+        print(f"{path}: {n} entries of {atlas.asked()} samples, {atlas.solves} IK "
               f"solves, {time.perf_counter() - t0:.1f} s")
     return atlas
 

@@ -33,8 +33,8 @@ def shapes_as_first_written(hand, fb, Q, finger):
 def configurations(places: Places, finger: str, n: int, rng) -> np.ndarray:
     """``n`` hands of every posture, the finger at its atlas entries' poses (and between
     them), the arm anywhere along the keys: (n, joints), couplings applied."""
-    entries = [e for a in places.atlases for e in a._entries.values()
-               if e is not None and e.finger == finger]
+    entries = [e for a in places.atlases for e in a.solved().values()
+               if e.finger == finger]
     hand = places.hand
     js = hand.joint_slice(finger)
     Q = []
@@ -59,7 +59,7 @@ def test_one_pass_gives_each_chains_numbers_to_the_bit(places, n):
     rng = np.random.default_rng(n)
     hand, fb = places.hand, places.atlas.bodies
     for f in hand.fingers:
-        if not any(e is not None and e.finger == f for e in places.atlas._entries.values()):
+        if not any(e.finger == f for e in places.atlas.solved().values()):
             continue
         Q = configurations(places, f, n, rng)
         tip, pts = FingerChain(hand, fb.shapes[f], f, AXIS_SAMPLES).carry(Q)

@@ -192,7 +192,7 @@ def test_the_shipped_table_is_the_solvers_own(atlas, posture):
     assert table_path(h.urdf_sha256, posture).exists(), "run python scripts/make_atlas.py"
     shipped = Atlas(h, posture=posture)
     fresh = Atlas(h, posture=posture)
-    fresh._entries.clear()
+    fresh.forget()
     n = 0
     for f, pc, k in [("thumb", 7, 10), ("index", 0, -5), ("middle", 1, 0), ("ring", 4, 12),
                      ("pinky", 10, -20), ("index", 6, 20), ("pinky", 3, -25), ("middle", 4, 5),

@@ -19,8 +19,8 @@ def places():
 
 
 def _entries(atlas, finger=None):
-    return [e for e in atlas._entries.values()
-            if e is not None and (finger is None or e.finger == finger)]
+    return [e for e in atlas.solved().values()
+            if finger is None or e.finger == finger]
 
 
 def test_the_default_hand_ships_its_pairs_across_postures(places):

@@ -231,6 +231,15 @@ class Atlas(EntrySolver):
             self._entries[key] = self._solve(finger, pitch_class, k)
         return self._entries[key]
 
+    def forget(self) -> None:
+        """Drop every entry found or read, so that the next asks solve afresh (a table
+        remade from the hand, not read back from an older one)."""
+        self._entries.clear()
+
+    def asked(self) -> int:
+        """How many samples have been asked (with or without an entry)."""
+        return len(self._entries)
+
     def solved(self) -> dict[tuple[str, int, int], AtlasEntry]:
         """The entries found so far by (finger, pitch class, sample), in the order they
         were found or read (the samples with no entry left out)."""
