@@ -7,8 +7,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from planner.resultform import listing, plain
-from planner.simulate.report import effort_lines, play_lines
+from planner.resultform import listing
+from planner.simulate.report import Replay, effort_lines, play_lines
 from planner.simulate.scores import JointTracking, MotorEffort, PhysicsPlay
 
 
@@ -41,15 +41,7 @@ class HandsTouch:
 
 
 @dataclass(frozen=True)
-class PairSimulateReport:
-    trajectory: str
-    song: str | None
-    task: str
-    hand: str
-    contact: str
-    rows: int
-    duration_s: float
-    wall_s: float
+class PairSimulateReport(Replay):
     play: PhysicsPlay
     hands: tuple[HandPhysics, HandPhysics]
     touches: tuple[HandsTouch, ...]
@@ -57,35 +49,19 @@ class PairSimulateReport:
     problems: tuple[str, ...]
 
     @property
-    def ok(self) -> bool:
-        return not self.problems
-
-    @property
-    def realtime_factor(self) -> float:
-        return self.duration_s / self.wall_s if self.wall_s > 0 else float("inf")
-
-    @property
     def motors(self) -> tuple[MotorEffort, ...]:
         """Every motor of both hands (named ``motor.<prefix><name>``)."""
         return tuple(m for h in self.hands for m in h.motors)
 
     def to_dict(self) -> dict[str, Any]:
-        d = plain(self)
-        d["command"] = "simulate"
-        d["ok"] = self.ok
-        d["realtime_factor"] = self.realtime_factor
+        d = self.json_head()
         for h, dh in zip(self.hands, d["hands"]):
             for m, dd in zip(h.motors, dh["motors"]):
                 dd["ratio"] = m.ratio
         return d
 
     def summary(self, timing: bool = True) -> str:
-        L = [f"simulate {self.trajectory}: {'OK' if self.ok else 'FAILED'}"]
-        L.extend(f"  - {p}" for p in self.problems)
-        took = (f" in {self.wall_s:.2f} s ({self.realtime_factor:.1f}x real time)" if timing
-                else "")
-        L.append(f"task {self.task}, two hands {self.hand}, contact {self.contact}, "
-                 f"{self.rows} rows, {self.duration_s:.3f} s simulated{took}")
+        L = self.head_lines(timing, f"two hands {self.hand}")
         play_lines(L, self.play, self.song, self.kinematic_f1, " (either hand)")
         L.append(f"between the hands: {len(self.touches)} contacts in physics")
         listing(L, "contacts between the hands", self.touches, lambda c: (

@@ -11,7 +11,13 @@ from planner.simulate.scores import JointTracking, MotorEffort, PhysicsCatch, Ph
 
 
 @dataclass(frozen=True)
-class SimulateReport:
+class Replay:
+    """What every physics replay's report opens with (one hand's, ``SimulateReport``; a
+    pair's, ``planner.simulate.pairreport``): the file, the song, the task, the hand, the
+    contact model, the rows replayed and how long they took. A report adds its own
+    fields after these and ends with ``problems`` (its verdict: ``ok`` when there are
+    none)."""
+
     trajectory: str
     song: str | None
     task: str
@@ -20,6 +26,39 @@ class SimulateReport:
     rows: int
     duration_s: float
     wall_s: float
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems  # type: ignore[attr-defined]
+
+    @property
+    def realtime_factor(self) -> float:
+        return self.duration_s / self.wall_s if self.wall_s > 0 else float("inf")
+
+    def json_head(self) -> dict[str, Any]:
+        """The report as JSON takes it, with the command, the verdict and the real-time
+        factor."""
+        d = plain(self)
+        d["command"] = "simulate"
+        d["ok"] = self.ok
+        d["realtime_factor"] = self.realtime_factor
+        return d
+
+    def head_lines(self, timing: bool, hands: str) -> list[str]:
+        """The summary's first lines: the verdict, the problems, what was replayed
+        (``hands``: "hand NAME" or "two hands NAME"); ``timing`` False leaves out the wall
+        time."""
+        L = [f"simulate {self.trajectory}: {'OK' if self.ok else 'FAILED'}"]
+        L.extend(f"  - {p}" for p in self.problems)  # type: ignore[attr-defined]
+        took = (f" in {self.wall_s:.2f} s ({self.realtime_factor:.1f}x real time)" if timing
+                else "")
+        L.append(f"task {self.task}, {hands}, contact {self.contact}, {self.rows} rows, "
+                 f"{self.duration_s:.3f} s simulated{took}")
+        return L
+
+
+@dataclass(frozen=True)
+class SimulateReport(Replay):
     play: PhysicsPlay | None
     catch: PhysicsCatch | None
     motors: tuple[MotorEffort, ...]
@@ -27,19 +66,8 @@ class SimulateReport:
     kinematic_f1: float | None  # the kinematic check's F1 of the same file and song
     problems: tuple[str, ...]
 
-    @property
-    def ok(self) -> bool:
-        return not self.problems
-
-    @property
-    def realtime_factor(self) -> float:
-        return self.duration_s / self.wall_s if self.wall_s > 0 else float("inf")
-
     def to_dict(self) -> dict[str, Any]:
-        d = plain(self)
-        d["command"] = "simulate"
-        d["ok"] = self.ok
-        d["realtime_factor"] = self.realtime_factor
+        d = self.json_head()
         for m, dd in zip(self.motors, d["motors"]):
             dd["ratio"] = m.ratio
         return d
@@ -47,12 +75,7 @@ class SimulateReport:
     def summary(self, timing: bool = True) -> str:
         """The report as text; ``timing`` False leaves out the wall time (a picture's
         page: the same bytes for the same input)."""
-        L = [f"simulate {self.trajectory}: {'OK' if self.ok else 'FAILED'}"]
-        L.extend(f"  - {p}" for p in self.problems)
-        took = (f" in {self.wall_s:.2f} s ({self.realtime_factor:.1f}x real time)" if timing
-                else "")
-        L.append(f"task {self.task}, hand {self.hand}, contact {self.contact}, {self.rows} rows, "
-                 f"{self.duration_s:.3f} s simulated{took}")
+        L = self.head_lines(timing, f"hand {self.hand}")
         p = self.play
         if p is not None:
             play_lines(L, p, self.song, self.kinematic_f1)
