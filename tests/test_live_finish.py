@@ -66,3 +66,28 @@ def test_the_file_is_the_same_as_written_at_once(monkeypatch):
     whole, _, _, at_turn = _run(monkeypatch, split=False)
     assert whole.text == split.text
     assert at_turn[0] < split.next_row  # (the whole plan: nothing written before the turn)
+
+
+def _session_text(monkeypatch, ahead: bool):
+    """The file of ``_run``'s throw, with the wrist's turn computed ahead (``HeldTurn``) or
+    only at the end; and whether the end's turn was the one computed ahead."""
+    used: list[bool] = []
+    turn = live_ending.live_turn
+
+    def spy(*a, **k):
+        used.append(len(a) > 4 and a[4] is not None or k.get("hold") is not None)
+        return turn(*a, **k)
+
+    monkeypatch.setattr(live_ending, "live_turn", spy)
+    if not ahead:
+        monkeypatch.setattr(LiveEnding, "warm", lambda self: None)
+    s, _, _, _ = _run(monkeypatch, split=True)
+    monkeypatch.undo()
+    return s.text, used
+
+
+def test_the_turn_computed_ahead_is_the_same_file(monkeypatch):
+    ahead, used = _session_text(monkeypatch, ahead=True)
+    at_end, used_at_end = _session_text(monkeypatch, ahead=False)
+    assert ahead == at_end
+    assert used == [True] and used_at_end == [False]

@@ -28,7 +28,7 @@ import numpy as np
 
 from planner.catch.flight.dragfit import DragEstimate, estimate_drag
 from planner.catch.live.stop import arm_offset, moves
-from planner.catch.live.turn import LiveTurn, live_turn
+from planner.catch.live.turn import HeldTurn, LiveTurn, live_turn
 from planner.catch.plan.closing import close_start
 from planner.catch.plan.planner import HOLD_AFTER_S, roll_reasons
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
@@ -52,6 +52,7 @@ class LiveEnding:
         self.plan: CatchPlan | None = None
         self.uncertainty: dict[str, float] | None = None
         self.drag_estimate: DragEstimate | None = None
+        self.held_turn = HeldTurn(session.pl.dyn)  # (the turn computed ahead, ``warm``)
 
     def finish(self, why: str, near_s: float = -math.inf) -> Written:
         """The rest of the plan (started now if the hand is still waiting), written; then
@@ -65,18 +66,14 @@ class LiveEnding:
         if not sp.fixed:
             sp.fix(s.pose, max(s.written_to_s, 0.0))
         s.pose = pose = sp.met(s.pose, s.flight)
-        stop = sp.stop
-        t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s,
-                       stop.end_s if moves(stop) else -math.inf)
-        t2 = np.array([t_static, t_static + s.dt])
-        off = arm_offset(stop, t2, s.pl.hand.n)
-        q_held = m.rows(t2)[0] + (0.0 if off is None else off[0])
+        t_static, q_held = self._held()
         grasp = max(m.close_start_s + (s.closing.u_grasp or 1.0) * m.close_s,
                     pose.t_i + sp.pad_s(pose), m.seg.end_s)
         first_free_s = s.formatted_rows * s.dt
         near = (s.write_to(near_s) if math.isfinite(near_s)
                 and s.last_row_s(near_s) <= max(grasp, first_free_s) else None)
-        self.turn = sp.within_limits(live_turn(s.pl.dyn, q_held, grasp, first_free_s))
+        self.turn = sp.within_limits(live_turn(s.pl.dyn, q_held, grasp, first_free_s,
+                                               self.held_turn.of(q_held)))
         if self.turn is not None:
             t_static = max(t_static, self.turn.end_s)
         rest = s.write_to(max(pose.t_i + HOLD_AFTER_S, t_static + s.dt))
@@ -85,6 +82,25 @@ class LiveEnding:
             return rest
         return near if not len(rest.rows) else near._replace(
             rows=np.concatenate([near.rows, rest.rows]))
+
+    def _held(self) -> tuple[float, np.ndarray]:
+        """When the hand comes to rest holding the ball (before its wrist's turn) and the
+        pose it holds it in: the motion's and the stop's ends."""
+        s = self.session
+        m, stop = s.motion, s.stopper.stop
+        t_static = max(m.close_start_s + m.close_s, m.seg.end_s, m.fingers_open_s,
+                       stop.end_s if moves(stop) else -math.inf)
+        t2 = np.array([t_static, t_static + s.dt])
+        off = arm_offset(stop, t2, s.pl.hand.n)
+        return t_static, m.rows(t2)[0] + (0.0 if off is None else off[0])
+
+    def warm(self) -> None:
+        """After an observation's rows, once the stop is fixed and the hand moving: the
+        wrist's turn from the pose the hand will hold the ball in, computed ahead
+        (``HeldTurn``)."""
+        s = self.session
+        if s.stopper.fixed and s.motion.moving and s.stopper.stop is not None:
+            self.held_turn.warm(self._held()[1])
 
     def _start_if_waiting(self) -> None:
         """A hand still waiting for its move starts it now, to the stop's pre-catch pose,

@@ -247,7 +247,9 @@ class CatchSession:
         self.flight, self.t_i = fit.flight, self.pose.t_i
         if self.writer is None:
             self._open()
-        return self.write_to(t_react + period, t_b, old_seg)
+        written = self.write_to(t_react + period, t_b, old_seg)
+        self.ending.warm()  # (after the rows: the wrist's turn ahead, once the stop is fixed)
+        return written
 
     def finish(self) -> np.ndarray:
         """The end of the observations: the rest of the plan follows the last estimate
