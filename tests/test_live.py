@@ -16,11 +16,12 @@ from planner.catch.flight.observe import fit_observations
 from planner.catch.flight.path import Flight, get_ball, predict_throw, step_for
 from planner.catch.live.motion import LiveMotion, rest_by_s
 from planner.catch.live.search import TILT_STEPS
-from planner.catch.live.session import HELD, CatchSession
+from planner.catch.live.session import CatchSession
 from planner.catch.plan.api import get_planner
 from planner.catch.plan.arm import open_from
 from planner.catch.plan.intercept import find_intercept
 from planner.catch.plan.planner import PLAN_BUDGET_S, SIGNAL_S
+from planner.catch.plan.results import HELD
 from planner.catch.plan.turnahead import rows_within_limits
 from planner.check import check_trajectory
 from planner.errors import InputError

@@ -38,7 +38,7 @@ def test_closing_time_deferred_is_the_same_plan(throw):
     lazy = _session(*throw)
 
     def every_time(s):  # every re-plan's rows "reach" the closing: computed each time
-        s._last_row_s = lambda t_end_s: np.inf
+        s.last_row_s = lambda t_end_s: np.inf
 
     full = _session(*throw, patch=every_time)
     assert lazy.text == full.text

@@ -27,6 +27,7 @@ from dataclasses import replace
 import numpy as np
 
 from planner.catch.flight.path import Ball, Flight, predict_throw
+from planner.catch.live import stopcache
 from planner.catch.live.search import NEAR_S
 from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_qp
 from planner.catch.plan.stopping import (
@@ -201,7 +202,22 @@ class StopTable:
                float(row_s))
         table = _TABLES.get(key)
         if table is None:
-            table = _TABLES[key] = cls.make(pl, C, ball, drag, row_s)
+            table = _TABLES[key] = cls.kept(pl, C, ball, drag, row_s)
+        return table
+
+    @classmethod
+    def kept(cls, pl, C: np.ndarray, ball: Ball, drag: bool, row_s: float) -> StopTable:
+        """The table read from the cache between runs where one is kept for this key
+        (``live.stopcache``: ``HAND_PLANNER_CACHE`` set), else made (and kept there)."""
+        d = stopcache.cache_dir()
+        if d is None:
+            return cls.make(pl, C, ball, drag, row_s)
+        path = stopcache.table_path(d, stopcache.table_key(pl, C, ball, drag, row_s))
+        parts = stopcache.load(path) if path.exists() else None
+        if parts is not None:
+            return cls(*parts)
+        table = cls.make(pl, C, ball, drag, row_s)
+        stopcache.save(path, table.angles_deg, table.tilts_rad, table.stops, table.prior)
         return table
 
     @classmethod

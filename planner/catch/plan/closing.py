@@ -44,15 +44,21 @@ _CAND_STEPS = np.arange(N_CAND, dtype=float)  # the candidates' steps from the e
 def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
                  r: float, bodies: bool = True) -> Closing:
     """The closing move for a ball of radius ``r`` on the palm (``planner.catch.plan.api``,
-    step 2): fingertips ``TIP_GAP_M`` outside the ball, each ``TIP_ELEVATION_DEG`` above
-    its equator on its finger's side (IK, the arm locked); the grasp condition along the
-    min-jerk move in the palm frame. ``bodies``: the fingers' bodies, too, kept
-    ``BODY_CLEAR_M`` outside the ball (False: the fingertips alone, the closing before
-    the bodies were judged; the planner's fallback when the later grasp is too late)."""
+    step 2): the closed pose (``closed_pose``) and the move to it (``closing_from``)."""
+    return closing_from(hand, joints, wrist, r, closed_pose(hand, ik, joints, wrist, r, bodies))
+
+
+def closed_pose(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
+                r: float, bodies: bool = True) -> np.ndarray:
+    """The closed hand on a ball of radius ``r`` on the palm: fingertips ``TIP_GAP_M``
+    outside the ball, each ``TIP_ELEVATION_DEG`` above its equator on its finger's side (IK,
+    the arm locked), the arm's joints at the zero pose. ``bodies``: the fingers' bodies,
+    too, kept ``BODY_CLEAR_M`` outside the ball (False: the fingertips alone, the closing
+    before the bodies were judged; the planner's fallback when the later grasp is too
+    late). (``planner.catch.plan.closingtable`` ships it per hand and ball.)"""
     h = hand
     q0 = zero_pose(h)
     centre = wrist.pc0 + r * wrist.n0
-    T_pc = h.palm_pose(q0)
     # each fingertip TIP_ELEVATION_DEG above the ball's equator; a finger whose body is
     # then inside the ball (its pad sphere curled into it) higher, in steps, up to
     # TIP_ELEVATION_MAX_DEG, before its flexion is opened (``_bodies_clear``)
@@ -70,6 +76,19 @@ def make_closing(hand: HandModel, ik: HandIK, joints: CatchJoints, wrist: Wrist,
         q = _bodies_clear(h, set(joints.flexion_idx), q0, q, centre, r + BODY_CLEAR_M)
     q_closed = q.copy()
     q_closed[list(joints.arm)] = q0[list(joints.arm)]
+    return q_closed
+
+
+def closing_from(hand: HandModel, joints: CatchJoints, wrist: Wrist, r: float,
+                 q_closed: np.ndarray) -> Closing:
+    """The closing move to the closed pose ``q_closed`` (``closed_pose``) for a ball of
+    radius ``r``: the grasp condition along the min-jerk move in the palm frame, the
+    fingers' bodies along it."""
+    h = hand
+    q0 = zero_pose(h)
+    centre = wrist.pc0 + r * wrist.n0
+    T_pc = h.palm_pose(q0)
+    fb = FingerBodies(h)
     q_open = open_from(h, joints, q0, q_closed)
     dist = np.linalg.norm(h.tip_positions(q_closed) - centre, axis=1)
     # table of the closing move in the palm frame
@@ -198,6 +217,13 @@ def body_gaps_m(hand: HandModel, q: np.ndarray, centre: np.ndarray, r: float,
 
 
 _CLEAR_BISECT = 20  # bisection steps of a finger's opening (2^-20 of its travel)
+
+
+def closed_pose_constants() -> tuple[float, ...]:
+    """The constants ``closed_pose`` reads (the shipped poses' parameters,
+    ``closingtable.params``)."""
+    return (TIP_GAP_M, BODY_CLEAR_M, TIP_ELEVATION_DEG, TIP_ELEVATION_MAX_DEG,
+            ELEVATION_STEP_DEG, _ELEVATION_TRIES, _N_CLOSE, _CLEAR_BISECT)
 
 
 def _bodies_clear(hand: HandModel, flexion: set[int], q_from: np.ndarray, q: np.ndarray,

@@ -21,7 +21,8 @@ from planner.catch.plan.arm import (
     zero_pose,
 )
 from planner.catch.plan.ballforces import BallForces
-from planner.catch.plan.closing import close_start, make_closing
+from planner.catch.plan.closing import close_start, closed_pose, closing_from
+from planner.catch.plan.closingtable import shipped_closed_pose
 from planner.catch.plan.contactqp import ROLL_WEIGHT
 from planner.catch.plan.drop import add_drop
 from planner.catch.plan.geometry import rot1
@@ -162,12 +163,16 @@ class CatchPlanner:
 
     def closing(self, radius: float, bodies: bool = True) -> Closing:
         """The closing move for a ball of ``radius`` (cached); ``bodies``: the fingers'
-        bodies kept clear of the ball, not only their tips (``make_closing``)."""
+        bodies kept clear of the ball, not only their tips (``make_closing``; the closed pose
+        shipped where ``closingtable`` has it)."""
         key = (round(float(radius), 9), bool(bodies))
         c = self._closings.get(key)
         if c is None:
-            c = self._closings[key] = make_closing(self.hand, self.ik, self.joints,
-                                                   self.wrist, float(radius), bool(bodies))
+            h, j, w, r = self.hand, self.joints, self.wrist, float(radius)
+            q = shipped_closed_pose(h, j, w, r, bool(bodies))  # (``closingtable``)
+            if q is None:
+                q = closed_pose(h, self.ik, j, w, r, bool(bodies))
+            c = self._closings[key] = closing_from(h, j, w, r, q)
         return c
 
     # ------------------------------------------------------------ plan
