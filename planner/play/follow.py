@@ -46,6 +46,9 @@ FOLLOW_STEP_M = 0.002  # a follow is tested every 2 mm of the arm's travel: a bo
 HOLD_PAST_S = 0.01  # a key held through a move of the arm comes up at least this long after
 # it (a frame at 100 Hz: the key is seen down in the row after the move)
 PAIR_CHUNK = 256  # pairs tested at once (bounded memory)
+HIGH_MARGIN_M = 0.001  # a body point this far above every key's top reaches no key
+# (``low_points``): 1 mm, far past the rounding of the distances measured (1e-16 m),
+# within the 2-3 mm of any rule's threshold (0.5 mm tolerance, 5 mm down, 6 mm held)
 
 
 def canonical_pitch(e: AtlasEntry) -> int:
@@ -189,13 +192,40 @@ def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -
 def held_coords(bodies: FingerBodies, X: np.ndarray, Y: np.ndarray, Z: np.ndarray,
                 r: np.ndarray, pitch: int) -> np.ndarray:
     """``held_clear`` of points whose coordinates are ``X``, ``Y``, ``Z`` (m, K each):
-    (K,) bool."""
+    (K,) bool; ``held_coords_all``'s answer from the points low enough to matter
+    (``low_points``: two thirds of a finger's points are far above every key)."""
+    keep = low_points(bodies, Z, r, pitch)
+    if keep is None:
+        return held_coords_all(bodies, X, Y, Z, r, pitch)
+    if not keep.any():  # (no point reaches down to a key top: none holds the key)
+        return np.zeros(Z.shape[1], dtype=bool)
+    return held_coords_all(bodies, X[keep], Y[keep], Z[keep], r[keep], pitch)
+
+
+def low_points(bodies: FingerBodies, Z: np.ndarray, r: np.ndarray, pitch: int
+               ) -> np.ndarray | None:
+    """Which points (rows of ``Z``, (m, K); radii ``r``) come within ``HIGH_MARGIN_M``
+    of the highest top of the boxes and footprint columns ``held_coords_all`` measures,
+    in any configuration; None when all do. A point that stays above that, its sphere's
+    lowest point more than ``HIGH_MARGIN_M`` over every top, changes none of its
+    answers: its penetration of any box is below -1 mm (every allowance is >= 0), its
+    depth in any column below -1 mm (the rules ask depths against 5, 6 and 11 mm), and
+    a column's depth it does not set stays below 0 or is the same number."""
+    ceiling = _boxes(bodies, pitch)[3]
+    keep = (Z.min(axis=1) - r) <= ceiling
+    return None if keep.all() else keep
+
+
+def held_coords_all(bodies: FingerBodies, X: np.ndarray, Y: np.ndarray, Z: np.ndarray,
+                    r: np.ndarray, pitch: int) -> np.ndarray:
+    """``held_clear`` of points whose coordinates are ``X``, ``Y``, ``Z`` (m, K each),
+    every point measured: (K,) bool."""
     # (``boxes_clear``: the points' bounds grown by the largest radius and the tolerance,
     # the boxes near them, each one's deepest penetration within its allowance)
     reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
     p_lo = np.array([W.min() for W in (X, Y, Z)]) - reach
     p_hi = np.array([W.max() for W in (X, Y, Z)]) + reach
-    lo, hi, allowed = _boxes(bodies, pitch)
+    lo, hi, allowed, _ = _boxes(bodies, pitch)
     near = all_along((lo <= p_hi) & (hi >= p_lo), 1)
     ok = all_along(box_penetration(X, Y, Z, r, lo[near], hi[near]) <= allowed[near, None], 0)
     fp, (not_mine, own_lo, own_hi, own_top, lo_grown, hi_grown) = footprints(), _columns(pitch)
@@ -242,14 +272,17 @@ _BOXES: dict[tuple[int, int | None], tuple] = {}  # (``_boxes``)
 
 def _boxes(bodies: FingerBodies, pitch: int | None) -> tuple[np.ndarray, ...]:
     """The keys' boxes with key ``pitch`` pressed (``FingerBodies.pressed_boxes``: lo,
-    hi) and each one's allowed penetration (``FingerBodies.boxes_clear``'s: the pressed
-    key's ``OWN_BED_MARGIN_M``, another's ``OTHER_KEY_TOLERANCE_M``), once per key."""
+    hi), each one's allowed penetration (``FingerBodies.boxes_clear``'s: the pressed
+    key's ``OWN_BED_MARGIN_M``, another's ``OTHER_KEY_TOLERANCE_M``) and ``low_points``'
+    ceiling (the highest top of a box or a footprint column, ``HIGH_MARGIN_M`` over it),
+    once per key."""
     key = (id(bodies), pitch)
     got = _BOXES.get(key)
     if got is None or got[0] is not bodies:
         own, lo, hi = bodies.pressed_boxes(pitch)
+        ceiling = max(float(hi[:, 2].max()), float(footprints().top_m.max())) + HIGH_MARGIN_M
         got = _BOXES[key] = (bodies, lo, hi, np.where(own, OWN_BED_MARGIN_M,
-                                                      OTHER_KEY_TOLERANCE_M))
+                                                      OTHER_KEY_TOLERANCE_M), ceiling)
     return got[1:]
 
 
