@@ -144,18 +144,22 @@ class FingerChain:
 
     def carry_coords(self, Q: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """``carry``'s numbers with each coordinate of the shapes' points an array of its
-        own: the tip (N, 3) and the points' x, y and z, (m, N) each. A chain of
-        axis-aligned joints (``carry_axes``' steps) carries them so; any other's
-        ``carry_general`` points are taken apart."""
+        own: the tip (N, 3) and the points' x, y and z, (m, N) each (``carry_stacked``)."""
+        tips, c = self.carry_stacked(Q)
+        return tips, (c[0], c[1], c[2])
+
+    def carry_stacked(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``carry``'s numbers, the shapes' points as one array of coordinates: the tip
+        (N, 3) and the points (3, m, N). A chain of axis-aligned joints (``carry_axes``'
+        steps) carries them so; any other's ``carry_general`` points are taken apart."""
         if self._axes is None or len(np.atleast_2d(Q)) == 0:
             tips, P = self.carry(Q)
-            return tips, tuple(np.ascontiguousarray(P[:, :, c].T) for c in range(3))
+            return tips, np.ascontiguousarray(P.transpose(2, 1, 0))
         c = self._carried(Q)  # (3, carried points, N)
         # (each shape's axis, as ``_axes_of``: wa + t (wb - wa), its two ends gathered
         # for every axis point at once: the same differences, taken after the gather)
         a = c[:, self._end_a]
-        out = a + self._t_of[0] * (c[:, self._end_b] - a)
-        return c[:, self._row[0]].T, (out[0], out[1], out[2])
+        return c[:, self._row[0]].T, a + self._t_of[0] * (c[:, self._end_b] - a)
 
     def carry_axes(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``carry``'s answer by ``_carried``: the chain's points with each coordinate an
