@@ -219,7 +219,8 @@ def test_the_low_points_hold_to_the_last_bit(places):
     """One point over the middle of a white key's front, every other far above the keys
     (dropped by ``low_points``): at the height where the key stops being held (the
     hold's depth, one unit in the last place of the height apart) the fast path answers
-    as every point's, on both sides; with every point high, neither holds the key."""
+    as every point's and as ``FingerBodies.clear_many`` with the hold's depth, on both
+    sides; with every point high, neither holds the key."""
     fb = places.atlas.bodies
     f = _fingers(places)[0]
     r = fb.radii(f)
@@ -235,6 +236,9 @@ def test_the_low_points_hold_to_the_last_bit(places):
             keep = low_points(fb, z, r, pitch)
             assert keep is not None and keep.tolist() == [True] + [False] * (len(r) - 1)
             assert held_coords(fb, x, y, z, r, pitch).tolist() == [want], (pitch, h)
+            # (and the general path's answer: ``clear_many`` and the hold's depth)
+            clear, depth = fb.clear_many(np.stack([x.T, y.T, z.T], axis=-1), r, pitch)
+            assert (clear & (depth >= kb.DOWN_DEPTH_M + HOLD_MARGIN_M)).tolist() == [want]
         z[0, 0] = k.top_z_m + 0.05
         assert not held_coords(fb, x, y, z, r, pitch)[0]
         assert not held_coords_all(fb, x, y, z, r, pitch)[0]
