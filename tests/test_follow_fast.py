@@ -2,7 +2,8 @@
 joints carried a coordinate at a time (``FingerChain.carry_axes``, ``carry_coords``)
 gives ``carry_general``'s numbers to the bit; the boxes' penetrations and the held test
 on coordinate arrays (``follow.box_penetration``, ``held_coords``) give
-``FingerBodies``' own; one move's answer remembered by ``paths_clear`` is the answer of
+``FingerBodies``' own; the held test of the points low enough to matter (``low_points``)
+gives every point's answer, to the last bit of a point's height; one move's answer remembered by ``paths_clear`` is the answer of
 the same move tested among many (the path that remembers nothing), on random moves of
 every finger, both answers met."""
 
@@ -21,6 +22,8 @@ from planner.play.follow import (
     finger_chain,
     held_clear,
     held_coords,
+    held_coords_all,
+    low_points,
     paths_clear,
 )
 from planner.play.places import Places
@@ -167,3 +170,75 @@ def test_a_remembered_move_is_the_move_tested_among_many(places):
                     assert one.tolist() == [bool(many[i])], (f, pitch, i)
             seen.update(many.tolist())
     assert seen == {True, False}
+
+
+def _coords(P: np.ndarray) -> tuple[np.ndarray, ...]:
+    return tuple(np.ascontiguousarray(P[:, :, c].T) for c in range(3))
+
+
+def test_the_low_points_give_every_points_answer(places):
+    """``held_coords`` (the points ``low_points`` keeps) answers as ``held_coords_all``
+    (every point), one configuration or many at once, every finger, nine keys."""
+    rng = np.random.default_rng(17)
+    fb = places.atlas.bodies
+    dropped, seen = 0, set()
+    for f in _fingers(places):
+        P = fb.points_many(_configurations(places, f, 90, rng), f)
+        r = fb.radii(f)
+        X, Y, Z = _coords(P)
+        for pitch in range(59, 68):
+            for K in (slice(0, 1), slice(1, 19), slice(None)):
+                x, y, z = X[:, K], Y[:, K], Z[:, K]
+                want = held_coords_all(fb, x, y, z, r, pitch)
+                assert np.array_equal(held_coords(fb, x, y, z, r, pitch), want), (f, pitch, K)
+                keep = low_points(fb, z, r, pitch)
+                dropped += keep is not None and 0 < keep.sum() < len(r)
+                seen.update(want.tolist())
+    assert dropped and seen == {True, False}
+
+
+def _hold_edge(fb, x: np.ndarray, y: np.ndarray, z: np.ndarray, r: np.ndarray,
+               pitch: int) -> tuple[float, float]:
+    """The two adjacent heights of the first point between which ``held_coords_all``'s
+    answer turns (held below, not held above), by bisection on the floats."""
+    lo, hi = kb.key(pitch).top_z_m - 0.008 + r[0], kb.key(pitch).top_z_m + r[0]
+
+    def held(h: float) -> bool:
+        z[0, 0] = h
+        return bool(held_coords_all(fb, x, y, z, r, pitch)[0])
+    assert held(lo) and not held(hi)
+    while np.nextafter(lo, hi) < hi:
+        mid = lo + (hi - lo) / 2
+        if mid in (lo, hi):
+            mid = np.nextafter(lo, hi)
+        lo, hi = (mid, hi) if held(mid) else (lo, mid)
+    return lo, hi
+
+
+def test_the_low_points_hold_to_the_last_bit(places):
+    """One point over the middle of a white key's front, every other far above the keys
+    (dropped by ``low_points``): at the height where the key stops being held (the
+    hold's depth, one unit in the last place of the height apart) the fast path answers
+    as every point's and as ``FingerBodies.clear_many`` with the hold's depth, on both
+    sides; with every point high, neither holds the key."""
+    fb = places.atlas.bodies
+    f = _fingers(places)[0]
+    r = fb.radii(f)
+    for pitch in (60, 64, 65):
+        k = kb.key(pitch)
+        x = np.full((len(r), 1), k.center_x_m)
+        y = np.full((len(r), 1), k.y_min_m + 0.01)
+        z = np.full((len(r), 1), k.top_z_m + 0.05)
+        lo, hi = _hold_edge(fb, x, y, z, r, pitch)
+        assert np.nextafter(lo, hi) == hi
+        for h, want in ((lo, True), (hi, False)):
+            z[0, 0] = h
+            keep = low_points(fb, z, r, pitch)
+            assert keep is not None and keep.tolist() == [True] + [False] * (len(r) - 1)
+            assert held_coords(fb, x, y, z, r, pitch).tolist() == [want], (pitch, h)
+            # (and the general path's answer: ``clear_many`` and the hold's depth)
+            clear, depth = fb.clear_many(np.stack([x.T, y.T, z.T], axis=-1), r, pitch)
+            assert (clear & (depth >= kb.DOWN_DEPTH_M + HOLD_MARGIN_M)).tolist() == [want]
+        z[0, 0] = k.top_z_m + 0.05
+        assert not held_coords(fb, x, y, z, r, pitch)[0]
+        assert not held_coords_all(fb, x, y, z, r, pitch)[0]

@@ -78,6 +78,15 @@ class FingerChain:
         self._t_of = np.concatenate([self._t[:m, 0] for m in self.n_shape])[None, :, None]
         self._axes = axis_steps(self.joints, self.T_world_root)
         self.axis_aligned = self._axes is not None  # (``carry_axes``' chains)
+        # (``_carried``'s start: every point of ``_local``, (3, points, 1), in its rows'
+        # order; and how many rows the points of each joint and the deeper ones fill)
+        self._local_c = np.concatenate([self._local[d] for d in depths]).T[:, :, None].copy()
+        self._rows_at = {d: sum(len(self._local[e]) for e in depths if e >= d)
+                         for d in range(1, len(self.joints) + 1)}
+        # (``carry_coords``: each axis point's two ends, the rows of ``_axes_of``'s
+        # ``w[1::2]`` and ``w[2::2]`` gathered by ``_shape_of``)
+        self._end_a = self._row[1::2][self._shape_of]
+        self._end_b = self._row[2::2][self._shape_of]
 
     def carry(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """At configurations ``Q`` (N, n; the hand's joint order, couplings applied): the
@@ -135,38 +144,41 @@ class FingerChain:
 
     def carry_coords(self, Q: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """``carry``'s numbers with each coordinate of the shapes' points an array of its
-        own: the tip (N, 3) and the points' x, y and z, (m, N) each. A chain of
-        axis-aligned joints (``carry_axes``' steps) carries them so; any other's
-        ``carry_general`` points are taken apart."""
+        own: the tip (N, 3) and the points' x, y and z, (m, N) each (``carry_stacked``)."""
+        tips, c = self.carry_stacked(Q)
+        return tips, (c[0], c[1], c[2])
+
+    def carry_stacked(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``carry``'s numbers, the shapes' points as one array of coordinates: the tip
+        (N, 3) and the points (3, m, N). A chain of axis-aligned joints (``carry_axes``'
+        steps) carries them so; any other's ``carry_general`` points are taken apart."""
         if self._axes is None or len(np.atleast_2d(Q)) == 0:
             tips, P = self.carry(Q)
-            return tips, tuple(np.ascontiguousarray(P[:, :, c].T) for c in range(3))
-        c = self._carried(Q)
-        w = [v[self._row] for v in c]  # (points, N) each, ``_axes_of``' order
-        t = self._t_of[0]  # (m, 1)
-        out = []
-        for v in w:  # (each shape's axis, as ``_axes_of``: wa + t (wb - wa))
-            wa, wb = v[1::2], v[2::2]
-            out.append(wa[self._shape_of] + t * (wb - wa)[self._shape_of])
-        return np.stack([v[0] for v in w], axis=-1), tuple(out)
+            return tips, np.ascontiguousarray(P.transpose(2, 1, 0))
+        c = self._carried(Q)  # (3, carried points, N)
+        # (each shape's axis, as ``_axes_of``: wa + t (wb - wa), its two ends gathered
+        # for every axis point at once: the same differences, taken after the gather)
+        a = c[:, self._end_a]
+        return c[:, self._row[0]].T, a + self._t_of[0] * (c[:, self._end_b] - a)
 
     def carry_axes(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``carry``'s answer by ``_carried``: the chain's points with each coordinate an
         array of its own."""
-        return self._axes_of(np.stack(self._carried(Q), axis=-1))
+        return self._axes_of(np.moveaxis(self._carried(Q), 0, -1))
 
-    def _carried(self, Q: np.ndarray) -> list[np.ndarray]:
+    def _carried(self, Q: np.ndarray) -> np.ndarray:
         """Every point of ``_local`` carried to the world (N > 0 configurations), for a
-        chain whose joint axes are coordinate axes (``axis_steps``): each coordinate an
-        array of its own, x, y and z (points, N), each joint's Rodrigues on the two
-        coordinates it turns. The numbers are ``carry_general``'s, operation by
-        operation: with ``k = s e_i`` (s = +-1) the cross product ``k x p`` is the other
-        two coordinates exchanged, one negated (its products by 0 and +-1 exact), ``k . p``
-        is ``s p_i`` (a dot product whose other terms are exact zeros), so coordinate i
-        becomes ``p_i cos + p_i (1 - cos)`` and the others ``p_a cos -+ p_b sin``, each
-        rounded where ``carry_general`` rounds it; the terms it adds that are exact zeros
-        (and a translation's zero components, and an identity rotation) change no number
-        but a zero's sign, which no comparison sees."""
+        chain whose joint axes are coordinate axes (``axis_steps``): x, y and z, (3,
+        points, N), each joint's Rodrigues on the two coordinates it turns, in place on
+        the rows of the points its links hold (the deepest links' first: a prefix). The
+        numbers are ``carry_general``'s, operation by operation: with ``k = s e_i``
+        (s = +-1) the cross product ``k x p`` is the other two coordinates exchanged, one
+        negated (its products by 0 and +-1 exact), ``k . p`` is ``s p_i`` (a dot product
+        whose other terms are exact zeros), so coordinate i becomes
+        ``p_i cos + p_i (1 - cos)`` and the others ``p_a cos -+ p_b sin``, each rounded
+        where ``carry_general`` rounds it; the terms it adds that are exact zeros (and a
+        translation's zero components, and an identity rotation) change no number but a
+        zero's sign, which no comparison sees."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         n = len(Q)
         if self._pad:
@@ -175,35 +187,30 @@ class FingerChain:
         cos_q = np.cos(q)  # then a row per joint)
         sin_q, vers_q = np.sin(q).T, (1.0 - cos_q).T
         q, cos_q = q.T, cos_q.T
-        c = [np.empty((0, n))] * 3  # (each coordinate: points-major rows, as ``p``'s)
+        c = np.empty((3, self.n_points, n))
+        c[...] = self._local_c  # (every point where its own link's joint holds it)
         for depth in range(len(self.joints), 0, -1):
-            loc = self._local.get(depth)
-            if loc is not None:
-                c = [np.concatenate([c[i], np.repeat(loc[:, i:i + 1], n, axis=1)])
-                     for i in range(3)]
             j = depth - 1
+            v = c[:, :self._rows_at[depth]]  # (the points of this joint's links and deeper)
             i, s, shift = self._axes[j]
             if self.joints[j][1]:  # (prismatic: p + q k)
-                c[i] = c[i] + (q[j] if s > 0 else -q[j])
+                v[i] += q[j] if s > 0 else -q[j]
             else:
                 a, b = (i + 1) % 3, (i + 2) % 3
-                ca, cb, ci = c[a], c[b], c[i]
-                sa, sb = ca * sin_q[j], cb * sin_q[j]
-                na, nb = ca * cos_q[j], cb * cos_q[j]
+                turned = v * sin_q[j]  # (p_a sin, p_b sin; p_i sin unused)
+                along = v[i] * vers_q[j]
+                v *= cos_q[j]
                 if s > 0:
-                    na -= sb
-                    nb += sa
+                    v[a] -= turned[b]
+                    v[b] += turned[a]
                 else:
-                    na += sb
-                    nb -= sa
-                ni = ci * cos_q[j]
-                ni += ci * vers_q[j]
-                c = [None] * 3
-                c[a], c[b], c[i] = na, nb, ni
-            for k, v in shift:
-                c[k] = c[k] + v
-        for k, v in self._axes[-1]:  # (the root's placement: a translation)
-            c[k] = c[k] + v
+                    v[a] += turned[b]
+                    v[b] -= turned[a]
+                v[i] += along
+            for k, w in shift:
+                v[k] += w
+        for k, w in self._axes[-1]:  # (the root's placement: a translation)
+            c[k] += w
         return c
 
     def _axes_of(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -36,7 +36,7 @@ from planner.play.fingerbody import (
     FingerBodies,
 )
 from planner.play.fingerchain import FingerChain
-from planner.play.halving import all_along, max_along, min_along
+from planner.play.halving import all_along
 
 HOLD_MARGIN_M = 0.001  # a key held while the arm moves stays this far inside its down range
 FOLLOW_STEP_M = 0.002  # a follow is tested every 2 mm of the arm's travel: a body sphere
@@ -46,6 +46,9 @@ FOLLOW_STEP_M = 0.002  # a follow is tested every 2 mm of the arm's travel: a bo
 HOLD_PAST_S = 0.01  # a key held through a move of the arm comes up at least this long after
 # it (a frame at 100 Hz: the key is seen down in the row after the move)
 PAIR_CHUNK = 256  # pairs tested at once (bounded memory)
+HIGH_MARGIN_M = 0.001  # a body point this far above every key's top reaches no key
+# (``low_points``): 1 mm, far past the rounding of the distances measured (1e-16 m),
+# within the 2-3 mm of any rule's threshold (0.5 mm tolerance, 5 mm down, 6 mm held)
 
 
 def canonical_pitch(e: AtlasEntry) -> int:
@@ -149,21 +152,18 @@ def _clear(atlas: Atlas, chain: FingerChain, radii: np.ndarray, pitch: int,
     hand, k = atlas.hand, kb.key(pitch)
     n, m = len(qa), len(S)
     Q = (qa[:, None, :] + S[None, :, None] * (qb - qa)[:, None, :]).reshape(n * m, -1)
-    tips, (X, Y, Z) = chain.carry_coords(hand.apply_couplings(Q))
+    tips, C = chain.carry_stacked(hand.apply_couplings(Q))
     x, y = tips[:, 0], tips[:, 1]
     inside = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
               & (k.y_min_m + TIP_RADIUS_M <= y) & (y <= k.y_max_m - TIP_RADIUS_M))
-    ok = all_along(inside.reshape(n, m), 1)
+    ok = inside.reshape(n, m).all(axis=1)
     if not ok.any():
         return ok
     if not ok.all():
-        keep = np.repeat(ok, m)
-        X, Y, Z = X[:, keep], Y[:, keep], Z[:, keep]
-    held = np.concatenate([
-        held_coords(atlas.bodies, X[:, lo:lo + MANY_CHUNK], Y[:, lo:lo + MANY_CHUNK],
-                    Z[:, lo:lo + MANY_CHUNK], radii, pitch)
-        for lo in range(0, X.shape[1], MANY_CHUNK)])
-    ok[ok] = all_along(held.reshape(-1, m), 1)
+        C = C[:, :, np.repeat(ok, m)]
+    held = np.concatenate([held_stacked(atlas.bodies, C[:, :, lo:lo + MANY_CHUNK], radii, pitch)
+                           for lo in range(0, C.shape[2], MANY_CHUNK)])
+    ok[ok] = held.reshape(-1, m).all(axis=1)
     return ok
 
 
@@ -176,28 +176,69 @@ def held_clear(bodies: FingerBodies, P: np.ndarray, r: np.ndarray, pitch: int) -
     in one array, not key by key: ``keybodies.key_depths``' elementwise arithmetic, its
     reductions exact), (K,) bool.
 
-    Each coordinate is an array of its own, (points, K), and every array is (points,
-    boxes or columns, K): the same elementwise operations on the same numbers as
-    ``boxes_clear``'s (K, points, boxes, 3) arrays, whose last axis of 2 or 3 made numpy
-    loop over a few elements at a time (an elementwise operation's result does not
-    depend on the array's layout; a maximum, a minimum and a logical and are exact in any
-    order)."""
-    return held_coords(bodies, *(np.ascontiguousarray(P[:, :, c].T) for c in range(3)),
-                       r, pitch)
+    The points are one array (coordinates, points, K), and every array made from it is
+    (coordinates, points, boxes or columns, K): the same elementwise operations on the
+    same numbers as ``boxes_clear``'s (K, points, boxes, 3) arrays, whose last axis of 2
+    or 3 made numpy loop over a few elements at a time (an elementwise operation's
+    result does not depend on the array's layout; a maximum, a minimum and a logical
+    and are exact in any order)."""
+    return held_stacked(bodies, np.ascontiguousarray(P.transpose(2, 1, 0)), r, pitch)
 
 
 def held_coords(bodies: FingerBodies, X: np.ndarray, Y: np.ndarray, Z: np.ndarray,
                 r: np.ndarray, pitch: int) -> np.ndarray:
     """``held_clear`` of points whose coordinates are ``X``, ``Y``, ``Z`` (m, K each):
-    (K,) bool."""
+    (K,) bool (``held_stacked``)."""
+    return held_stacked(bodies, np.stack((X, Y, Z)), r, pitch)
+
+
+def held_stacked(bodies: FingerBodies, C: np.ndarray, r: np.ndarray, pitch: int
+                 ) -> np.ndarray:
+    """``held_clear`` of points whose coordinates are ``C`` (3, m, K): (K,) bool;
+    ``held_all``'s answer from the points low enough to matter (``low_points``: two
+    thirds of a finger's points are far above every key)."""
+    keep = low_points(bodies, C[2], r, pitch)
+    if keep is None:
+        return held_all(bodies, C, r, pitch)
+    if not keep.any():  # (no point reaches down to a key top: none holds the key)
+        return np.zeros(C.shape[2], dtype=bool)
+    return held_all(bodies, C[:, keep], r[keep], pitch)
+
+
+def low_points(bodies: FingerBodies, Z: np.ndarray, r: np.ndarray, pitch: int
+               ) -> np.ndarray | None:
+    """Which points (rows of ``Z``, (m, K); radii ``r``) come within ``HIGH_MARGIN_M``
+    of the highest top of the boxes and footprint columns ``held_all`` measures, in any
+    configuration; None when all do. A point that stays above that, its sphere's lowest
+    point more than ``HIGH_MARGIN_M`` over every top, changes none of its answers: its
+    penetration of any box is below -1 mm (every allowance is >= 0), its depth in any
+    column below -1 mm (the rules ask depths against 5, 6 and 11 mm), and a column's
+    depth it does not set stays below 0 or is the same number."""
+    ceiling = _boxes(bodies, pitch)[3]
+    keep = (Z.min(axis=1) - r) <= ceiling
+    return None if keep.all() else keep
+
+
+def held_coords_all(bodies: FingerBodies, X: np.ndarray, Y: np.ndarray, Z: np.ndarray,
+                    r: np.ndarray, pitch: int) -> np.ndarray:
+    """``held_all`` of points whose coordinates are ``X``, ``Y``, ``Z`` (m, K each)."""
+    return held_all(bodies, np.stack((X, Y, Z)), r, pitch)
+
+
+def held_all(bodies: FingerBodies, C: np.ndarray, r: np.ndarray, pitch: int) -> np.ndarray:
+    """``held_clear`` of points whose coordinates are ``C`` (3, m, K), every point
+    measured: (K,) bool. (Its reductions are numpy's along the first axis, over rows of
+    many numbers (boxes or columns times configurations): exact, as any order of a
+    minimum, a maximum or a logical and, and there twice as fast as
+    ``planner.play.halving``'s, which wins where the rows are two or three numbers.)"""
     # (``boxes_clear``: the points' bounds grown by the largest radius and the tolerance,
     # the boxes near them, each one's deepest penetration within its allowance)
     reach = float(r.max()) + OTHER_KEY_TOLERANCE_M
-    p_lo = np.array([W.min() for W in (X, Y, Z)]) - reach
-    p_hi = np.array([W.max() for W in (X, Y, Z)]) + reach
-    lo, hi, allowed = _boxes(bodies, pitch)
+    p_lo = C.min(axis=(1, 2)) - reach
+    p_hi = C.max(axis=(1, 2)) + reach
+    lo, hi, allowed, _ = _boxes(bodies, pitch)
     near = all_along((lo <= p_hi) & (hi >= p_lo), 1)
-    ok = all_along(box_penetration(X, Y, Z, r, lo[near], hi[near]) <= allowed[near, None], 0)
+    ok = (box_penetration_stacked(C, r, lo[near], hi[near]) <= allowed[near, None]).all(axis=0)
     fp, (not_mine, own_lo, own_hi, own_top, lo_grown, hi_grown) = footprints(), _columns(pitch)
     near = (fp.lo <= p_hi[:2]) & (fp.hi >= p_lo[:2])
     other = near[:, 0] & near[:, 1] & not_mine
@@ -205,23 +246,26 @@ def held_coords(bodies: FingerBodies, X: np.ndarray, Y: np.ndarray, Z: np.ndarra
     cols_lo = np.concatenate([lo_grown[other], own_lo])
     cols_hi = np.concatenate([hi_grown[other], own_hi])
     top = np.concatenate([fp.top_m[other], own_top])
-    dx = _outside(X, cols_lo[:, 0], cols_hi[:, 0])  # (m, columns, K)
-    dx += _outside(Y, cols_lo[:, 1], cols_hi[:, 1])
-    d = np.sqrt(dx)
+    dxy = _outside(C[:2], cols_lo, cols_hi)  # (2, m, columns, K)
+    d = np.sqrt(dxy[0] + dxy[1])
     r2 = (r * r)[:, None, None] - d * d
-    low = np.where(r2 >= 0.0, Z[:, None, :] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
-    depth = top[:, None] + -min_along(low, 0)  # (columns, K)
+    low = np.where(r2 >= 0.0, C[2][:, None, :] - np.sqrt(np.maximum(r2, 0.0)), np.inf)
+    depth = top[:, None] + -low.min(axis=0)  # (columns, K)
     n_other = len(cols_lo) - len(own_lo)
     if n_other:
-        ok &= all_along(depth[:n_other] < DOWN_DEPTH_M, 0)
-    own_depth = max_along(depth[n_other:], 0)
+        ok &= (depth[:n_other] < DOWN_DEPTH_M).all(axis=0)
+    own_depth = depth[n_other:].max(axis=0)
     return ok & (own_depth <= BODY_BED_DEPTH_M) & (own_depth >= kb.DOWN_DEPTH_M + HOLD_MARGIN_M)
 
 
-def _outside(W: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """How far each point's coordinate ``W`` (m, K) is outside each interval [lo, hi]
-    (B,), squared: (m, B, K), ``max(lo - w, w - hi, 0)`` squared."""
-    d = np.maximum(np.maximum(lo[:, None] - W[:, None, :], W[:, None, :] - hi[:, None]), 0.0)
+def _outside(C: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """How far each point's coordinates ``C`` (c, m, K) are outside each box [lo, hi]
+    (B, c or more: its first c), squared, coordinate by coordinate: (c, m, B, K),
+    ``max(lo - w, w - hi, 0)`` squared."""
+    c = len(C)
+    W = C[:, :, None, :]
+    lo_, hi_ = lo[:, :c].T[:, None, :, None], hi[:, :c].T[:, None, :, None]
+    d = np.maximum(np.maximum(lo_ - W, W - hi_), 0.0)
     d *= d
     return d
 
@@ -230,11 +274,19 @@ def box_penetration(X: np.ndarray, Y: np.ndarray, Z: np.ndarray, r: np.ndarray,
                     lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """``fingerbody.many_box_penetration`` of points whose coordinates are ``X``, ``Y``,
     ``Z`` (m, K each), radii ``r`` (m,), boxes [lo, hi] (B, 3): (B, K), the same numbers
-    (its sum of three squares in its order, (x + y) + z; its maximum exact)."""
-    dd = _outside(X, lo[:, 0], hi[:, 0])
-    dd += _outside(Y, lo[:, 1], hi[:, 1])
-    dd += _outside(Z, lo[:, 2], hi[:, 2])
-    return max_along(r[:, None, None] - np.sqrt(dd), 0)
+    (``box_penetration_stacked``)."""
+    return box_penetration_stacked(np.stack((X, Y, Z)), r, lo, hi)
+
+
+def box_penetration_stacked(C: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                            ) -> np.ndarray:
+    """``box_penetration`` of points whose coordinates are ``C`` (3, m, K): (B, K), its
+    sum of three squares in ``many_box_penetration``'s order, (x + y) + z, its maximum
+    exact."""
+    d = _outside(C, lo, hi)
+    dd = d[0] + d[1]
+    dd += d[2]
+    return (r[:, None, None] - np.sqrt(dd)).max(axis=0)
 
 
 _BOXES: dict[tuple[int, int | None], tuple] = {}  # (``_boxes``)
@@ -242,14 +294,17 @@ _BOXES: dict[tuple[int, int | None], tuple] = {}  # (``_boxes``)
 
 def _boxes(bodies: FingerBodies, pitch: int | None) -> tuple[np.ndarray, ...]:
     """The keys' boxes with key ``pitch`` pressed (``FingerBodies.pressed_boxes``: lo,
-    hi) and each one's allowed penetration (``FingerBodies.boxes_clear``'s: the pressed
-    key's ``OWN_BED_MARGIN_M``, another's ``OTHER_KEY_TOLERANCE_M``), once per key."""
+    hi), each one's allowed penetration (``FingerBodies.boxes_clear``'s: the pressed
+    key's ``OWN_BED_MARGIN_M``, another's ``OTHER_KEY_TOLERANCE_M``) and ``low_points``'
+    ceiling (the highest top of a box or a footprint column, ``HIGH_MARGIN_M`` over it),
+    once per key."""
     key = (id(bodies), pitch)
     got = _BOXES.get(key)
     if got is None or got[0] is not bodies:
         own, lo, hi = bodies.pressed_boxes(pitch)
+        ceiling = max(float(hi[:, 2].max()), float(footprints().top_m.max())) + HIGH_MARGIN_M
         got = _BOXES[key] = (bodies, lo, hi, np.where(own, OWN_BED_MARGIN_M,
-                                                      OTHER_KEY_TOLERANCE_M))
+                                                      OTHER_KEY_TOLERANCE_M), ceiling)
     return got[1:]
 
 
