@@ -268,7 +268,11 @@ class HoldTurn:
         ``_FINE_S`` (the rows' second differences smooth the short ramps' peaks)."""
         if not rows_within_limits(self.hand, t, Q, 1e-9):
             return False
-        t_f, Q_f = self.rows(replace(rows_args, rate_hz=1.0 / _FINE_S), turn)
+        # (without the hand's fall on the reach axis, ``planner.catch.plan.drop``: it moves
+        # only rows after the landing, and only rows up to the intercept are judged here; it
+        # was two thirds of the fall's plans' time at this rate)
+        t_f, Q_f = self.rows(replace(rows_args, rate_hz=1.0 / _FINE_S, inertia_ratio=None),
+                             turn)
         a_f = np.diff(Q_f, 2, axis=0) / (_FINE_S * _FINE_S)
         for k in np.flatnonzero((t_f[1:-1] >= turn.start_s) & (t_f[1:-1] <= rows_args.pose.t_i)):
             MH, room = self.dyn.accel_room(Q_f[k + 1])
