@@ -136,7 +136,7 @@ def test_the_hand_falls_with_the_ball_where_the_reach_alone_lets_it_roll(pl, tmp
 
 def test_the_fall_moves_no_row_up_to_the_landing(pl):
     """``add_drop`` changes the reach only on rows after the first row past the landing
-    (``HoldTurn._within`` judges the motors up to the intercept on rows without the fall):
+    (``HoldTurn._motors_within`` judges the motors up to the intercept on rows without the fall):
     75 deg from 1.0 m, whose plan falls, its rows with and without the fall."""
     from planner.catch.plan.drop import add_drop
 
