@@ -69,11 +69,11 @@ def test_a_plan_of_the_arm_alone_holds_the_reach(pl):
 
 def test_a_steep_fast_throw_names_its_limit_with_its_number(pl):
     """75 deg from 2.5 m arrives at 7.0 m/s: with the arm alone and with the reach axis too,
-    the palm's tilt in 5 and in 1 deg steps, stopping it needs more of the wrist flexion's
-    motor than its 2 N m: too fast to stop (a hard limit), with the force and the torque in
-    the reason (the 5 deg search's: 2.56 N m); the reach's try is noted. (75 deg from 2.0 m,
-    this test's throw before the 1 deg tilts, is caught now:
-    ``test_the_palm_tilted_in_1_deg_steps_stops_a_steep_throw``.)"""
+    the stop searched in coarse and in fine steps, stopping it needs more of the wrist
+    flexion's motor than its 2 N m: too fast to stop (a hard limit), with the force and the
+    torque in the reason (the coarse search's: 2.56 N m); the reach's try is noted. (75 deg
+    from 2.0 m, this test's throw before the fine search, is caught now:
+    ``test_the_stop_searched_in_finer_steps_catches_a_fast_throw``.)"""
     p = plan_throw(75.0, 2.5, 0.0, planner=pl)
     assert not p.feasible and CatchReason.TOO_FAST_TO_STOP in p.reason_kinds
     fast = next(r for r in p.reasons if r.kind in HARD_LIMITS)
@@ -81,20 +81,24 @@ def test_a_steep_fast_throw_names_its_limit_with_its_number(pl):
                   r"([\d.]+) N m", str(fast))
     assert m and float(m.group(2)) > float(m.group(3)) == 2.0
     assert any(n.startswith("with the rig's reach axis moving too: ") for n in p.notes)
-    assert not any("1 deg steps" in n for n in p.notes)  # the finer search found nothing
+    assert not any("finer steps" in n for n in p.notes)  # the finer search found nothing
 
 
-@pytest.mark.parametrize("throw", [(75.0, 2.0, 0.0), (75.0, 2.5, 0.3)])
-def test_the_palm_tilted_in_1_deg_steps_stops_a_steep_throw(pl, tmp_path, throw):
-    """75 deg from 2.0 m (height 0) and from 2.5 m (height +0.3 m): with the palm's tilts in
-    5 deg steps every plan is too fast to stop (the arm alone: 2.03 and 2.39 N m of the wrist
-    flexion's 2.00); the reach's square intercept tilted 4 deg (between the 5 deg steps) is
-    stopped within every motor, the plan says so, and ``check`` confirms it."""
+@pytest.mark.parametrize("throw, on_the_reach", [((75.0, 2.0, 0.0), True),
+                                                  ((75.0, 2.5, 0.3), True),
+                                                  ((45.0, 4.0, -0.3), False)])
+def test_the_stop_searched_in_finer_steps_catches_a_fast_throw(pl, tmp_path, throw,
+                                                              on_the_reach):
+    """75 deg from 2.0 m (height 0) and from 2.5 m (+0.3 m), 45 deg from 4.0 m (-0.3 m): with
+    the stop's coarse steps (tilts 5 deg, contact shares 0.1) every plan is too fast to stop
+    (the arm alone: 2.03, 2.39 and 2.08 N m of the wrist flexion's 2.00); in the finer steps
+    (``FINE_STOP``) the ball is stopped within every motor (the steep ones by the reach's
+    square intercept, 45 deg by the arm alone), the plan says so, ``check`` confirms it."""
     p = plan_throw(*throw, planner=pl)
     assert p.feasible, p.reasons
-    note = [n for n in p.notes if n.startswith("the palm's tilt searched in 1 deg steps")]
+    note = [n for n in p.notes if n.startswith("the stop searched in finer steps")]
     assert note and "too fast to stop" in note[0]
-    assert any(n.startswith("the rig's reach axis moves") for n in p.notes)
+    assert any(n.startswith("the rig's reach axis moves") for n in p.notes) == on_the_reach
     checked_reach(p, pl, tmp_path)
 
 

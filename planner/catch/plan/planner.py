@@ -37,10 +37,11 @@ from planner.catch.plan.results import (
 )
 from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
-    TILTS_DEG,
-    TILTS_FINE_DEG,
+    COARSE_STOP,
+    FINE_STOP,
     SoftStop,
     StopDynamics,
+    StopGrid,
     plan_stop,
 )
 from planner.catch.plan.turnahead import (
@@ -195,13 +196,13 @@ class CatchPlanner:
         if plan.feasible:
             return replace(plan, planning_s=time.perf_counter() - t0)
         if soft and CatchReason.TOO_FAST_TO_STOP in plan.reason_kinds:
-            # the palm's tilt in 1 deg steps (``TILTS_FINE_DEG``): the pad's load is not
-            # monotone in it at the 5 deg steps (the first plan's reasons kept when this fails)
-            finer = self._on_the_rig(args, soft, TILTS_FINE_DEG)
+            # the stop's tilts and contact shares in finer steps (``FINE_STOP``): the rows'
+            # load is not monotone at the coarse ones (the first plan kept when this fails)
+            finer = self._on_the_rig(args, soft, FINE_STOP)
             if finer.feasible:
                 return replace(finer, planning_s=time.perf_counter() - t0, notes=finer.notes + (
-                    "the palm's tilt searched in 1 deg steps: in 5 deg steps "
-                    + reasons_text(plan.reasons),))
+                    "the stop searched in finer steps (the palm's tilt 1 deg, the contact share "
+                    "0.05): in the coarse ones " + reasons_text(plan.reasons),))
         if CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
@@ -213,27 +214,27 @@ class CatchPlanner:
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
         return replace(plan, planning_s=time.perf_counter() - t0)
 
-    def _on_the_rig(self, args: tuple, soft: bool, tilts: tuple[float, ...] = TILTS_DEG
+    def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP
                     ) -> CatchPlan:
         """``_plans`` of the arm alone, then (where infeasible) ``reach_fallbacks`` on the
-        rig's reach axis; ``tilts``: the palm's tilts the soft stop searches (deg)."""
-        plan = self._plans(args, soft, True, tilts=tilts)
+        rig's reach axis; ``grid``: the soft stop's search steps."""
+        plan = self._plans(args, soft, True, grid=grid)
         if not plan.feasible and soft and self.rig.i_reach is not None:
-            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, tilts=tilts,
-                                                            **kw), plan)
+            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, grid=grid, **kw),
+                                   plan)
         return plan
 
     def _plans(self, args: tuple, soft: bool, bodies: bool, rig: bool = False,
-               fall: bool = False, tilts: tuple[float, ...] = TILTS_DEG) -> CatchPlan:
+               fall: bool = False, grid: StopGrid = COARSE_STOP) -> CatchPlan:
         """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing;
-        ``rig``: the reach axis moves too; ``tilts``: the soft stop's tilts (deg)."""
+        ``rig``: the reach axis moves too; ``grid``: the soft stop's search steps."""
         plan, ahead = self._plan(*args, soft=soft, bodies=bodies, rig=rig, fall=fall,
-                                 tilts=tilts)
+                                 grid=grid)
         for mode in ((TurnMode.EARLY,) if ahead else ()) + (TurnMode.LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
             other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies, rig=rig,
-                               fall=fall, tilts=tilts)[0]
+                               fall=fall, grid=grid)[0]
             if other.feasible:
                 what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
                         "after the arm has stopped", None: "no turn to hold the ball"}[mode]
@@ -251,7 +252,7 @@ class CatchPlanner:
               throw: ThrowInfo | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
               bodies: bool = True, rig: bool = False, fall: bool = False,
-              tilts: tuple[float, ...] = TILTS_DEG) -> tuple[CatchPlan, bool]:
+              grid: StopGrid = COARSE_STOP) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
         (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
@@ -260,7 +261,7 @@ class CatchPlanner:
         rig's reach axis moves too (``catch_joints(..., reach=True)``): the intercept may put
         the palm square to the throw on it, and the stopping motion uses it. ``fall``: the
         rows fall with the ball on the reach axis once it lands (``planner.catch.plan.drop``).
-        ``tilts``: the palm's tilts the soft stop searches (deg, ``plan_stop``)."""
+        ``grid``: the soft stop's search steps (``plan_stop``)."""
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
@@ -286,7 +287,7 @@ class CatchPlanner:
 
         ic, _, soft_stop = plan_stop(dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
                                      ready_by, 1.0 / rate_hz, soft,
-                                     ROLL_WEIGHT if turn_mode else 1.0, tilts_deg=tilts)
+                                     ROLL_WEIGHT if turn_mode else 1.0, grid=grid)
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:

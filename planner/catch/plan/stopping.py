@@ -62,15 +62,30 @@ MOVE_SHARE = 0.6  # the move to the pre-catch pose, where the time allows, keeps
 # 0.90 and 0.88 of wrist_dev's 2.00 N m), and the catch's target is 20 % headroom in physics
 MOVE_SPARE_S = 0.01  # ... and still reaches its pose one row (at 100 Hz) before it is due
 TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
-TILTS_FINE_DEG = (0.0, *(-float(k) for k in range(1, 16)), *(float(k) for k in range(1, 16)))
-# ... where those leave the ball too fast to stop (``CatchPlanner.plan``): 1 deg steps to
-# +-15 deg. The pad's load is not monotone in the tilt at 5 deg steps (the search goes
-# outwards while it improves): measured on the wide grid's 28 throws too fast to stop with
-# 5 deg steps, 1 deg steps stop 0 m / 75 deg / 2.0 m and +0.3 m / 75 deg / 2.5 m within
-# every motor, 2.5 deg steps only the first, and every tilt of the 1 deg grid tried (no
-# early end) no more (docs/history/2026-12-07-catch-tilt.md)
 CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)  # the arm's speed when it meets the ball, tried as a
 # share of its speed after the recoil
+TILTS_FINE_DEG = (0.0, *(-float(k) for k in range(1, 16)), *(float(k) for k in range(1, 16)))
+CONTACT_SHARES_FINE = tuple(k / 20 for k in range(19, 3, -1))  # 0.95 ... 0.2
+# ... where those leave the ball too fast to stop (``CatchPlanner.plan``): the tilts in 1 deg
+# steps to +-15 deg, the shares in steps of 0.05 to 0.2. Both searches go on while they
+# improve, and the rows' load is not monotone at the coarse steps: measured on the wide
+# grid's 28 throws too fast to stop (docs/history/2026-12-07-catch-tilt.md), the fine grid
+# stops three within every motor (0 m / 75 deg / 2.0 m, +0.3 m / 75 deg / 2.5 m: the tilts;
+# -0.3 m / 45 deg / 4.0 m: the shares); 2.5 deg tilts only the first, every tilt of the
+# 1 deg grid tried (no early end) no more than the 1 deg search, +-20 deg no more.
+
+
+@dataclass(frozen=True)
+class StopGrid:
+    """The soft stop's search steps: the palm's tilts (deg, 0 first, each side outwards in
+    order) and the contact shares (slower while it helps)."""
+
+    tilts_deg: tuple[float, ...] = TILTS_DEG
+    shares: tuple[float, ...] = CONTACT_SHARES
+
+
+COARSE_STOP = StopGrid()  # every plan's
+FINE_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE)  # where that is too fast to stop
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -334,16 +349,16 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
               soft: bool = True, roll_weight: float = ROLL_WEIGHT,
               speeds: Callable[..., np.ndarray] | None = None,
-              tilts_deg: tuple[float, ...] = TILTS_DEG
+              grid: StopGrid = COARSE_STOP
               ) -> tuple[Intercept, np.ndarray, SoftStop]:
     """The intercept, its open pose and the stopping motion (module docstring). ``ready_by``:
     a function of the pre-catch pose -> when the hand can be there. ``soft`` False: the palm
     waits at rest (the stopping is the pad's alone). ``roll_weight``: the contact-speed QP's
     weight on the ball's speed along the palm (1: none above its speed into it). ``speeds``:
-    the contact speeds' QP solver (``StopAsk``; None: ``contact_speeds``). ``tilts_deg``: the
-    palm's tilts searched (``TILTS_DEG``, or ``TILTS_FINE_DEG``)."""
+    the contact speeds' QP solver (``StopAsk``; None: ``contact_speeds``). ``grid``: the
+    palm's tilts and the contact shares searched (``COARSE_STOP``, or ``FINE_STOP``)."""
     best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, soft,
-                      roll_weight, speeds, tilts_deg)
+                      roll_weight, speeds, grid.tilts_deg)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
@@ -354,7 +369,7 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
         return best[1]
     # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
     judged = (dyn.judge(stop, q_open, flight, r), stop)
-    for share in CONTACT_SHARES:  # slower while it helps
+    for share in grid.shares:  # slower while it helps
         # from the speeds the last one found within the joints' range
         warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
         cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
