@@ -189,7 +189,8 @@ class CatchPlanner:
         the turn has levelled it (``TurnMode.AHEAD``: ``HoldTurn.ahead_rows``), else from the grasp on
         (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
         (``TurnMode.LATE``), else none (the plan without the hold) -- the first of those that is
-        feasible."""
+        feasible. Where every plan is infeasible and too fast to stop among its reasons, they
+        are planned again with the soft stop searched in finer steps (``FINE_STOP``)."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._on_the_rig(args, soft)

@@ -69,7 +69,7 @@ CONTACT_SHARES_FINE = tuple(k / 20 for k in range(19, 3, -1))  # 0.95 ... 0.2
 # ... where those leave the ball too fast to stop (``CatchPlanner.plan``): the tilts in 1 deg
 # steps to +-15 deg, the shares in steps of 0.05 to 0.2. Both searches go on while they
 # improve, and the rows' load is not monotone at the coarse steps: measured on the wide
-# grid's 28 throws too fast to stop (docs/history/2026-12-07-catch-tilt.md), the fine grid
+# grid's 28 throws too fast to stop (docs/history/2026-12-07-catch-finer.md), the fine grid
 # stops three within every motor (0 m / 75 deg / 2.0 m, +0.3 m / 75 deg / 2.5 m: the tilts;
 # -0.3 m / 45 deg / 4.0 m: the shares); 2.5 deg tilts only the first, every tilt of the
 # 1 deg grid tried (no early end) no more than the 1 deg search, +-20 deg no more.
