@@ -68,16 +68,38 @@ def test_a_plan_of_the_arm_alone_holds_the_reach(pl):
 
 
 def test_a_steep_fast_throw_names_its_limit_with_its_number(pl):
-    """75 deg from 2 m arrives at 6.3 m/s: with the arm alone and with the reach axis too,
-    stopping it needs more of the wrist flexion's motor than its 2 N m: too fast to stop (a
-    hard limit), with the force and the torque in the reason; the reach's try is noted."""
-    p = plan_throw(75.0, 2.0, 0.0, planner=pl)
+    """75 deg from 2.5 m arrives at 7.0 m/s: with the arm alone and with the reach axis too,
+    the stop searched in coarse and in fine steps, stopping it needs more of the wrist
+    flexion's motor than its 2 N m: too fast to stop (a hard limit), with the force and the
+    torque in the reason (the coarse search's: 2.56 N m); the reach's try is noted. (75 deg
+    from 2.0 m, this test's throw before the fine search, is caught now:
+    ``test_the_stop_searched_in_finer_steps_catches_a_fast_throw``.)"""
+    p = plan_throw(75.0, 2.5, 0.0, planner=pl)
     assert not p.feasible and CatchReason.TOO_FAST_TO_STOP in p.reason_kinds
     fast = next(r for r in p.reasons if r.kind in HARD_LIMITS)
     m = re.search(r"([\d.]+) N needs motor\.wrist_flex at ([\d.]+) N m > its gear limit "
                   r"([\d.]+) N m", str(fast))
     assert m and float(m.group(2)) > float(m.group(3)) == 2.0
     assert any(n.startswith("with the rig's reach axis moving too: ") for n in p.notes)
+    assert not any("finer steps" in n for n in p.notes)  # the finer search found nothing
+
+
+@pytest.mark.parametrize("throw, on_the_reach", [((75.0, 2.0, 0.0), True),
+                                                  ((75.0, 2.5, 0.3), True),
+                                                  ((45.0, 4.0, -0.3), False)])
+def test_the_stop_searched_in_finer_steps_catches_a_fast_throw(pl, tmp_path, throw,
+                                                              on_the_reach):
+    """75 deg from 2.0 m (height 0) and from 2.5 m (+0.3 m), 45 deg from 4.0 m (-0.3 m): with
+    the stop's coarse steps (tilts 5 deg, contact shares 0.1) every plan is too fast to stop
+    (the arm alone: 2.03, 2.39 and 2.08 N m of the wrist flexion's 2.00); in the finer steps
+    (``FINE_STOP``) the ball is stopped within every motor (the steep ones by the reach's
+    square intercept, 45 deg by the arm alone), the plan says so, ``check`` confirms it."""
+    p = plan_throw(*throw, planner=pl)
+    assert p.feasible, p.reasons
+    note = [n for n in p.notes if n.startswith("the stop searched in finer steps")]
+    assert note and "too fast to stop" in note[0]
+    assert any(n.startswith("the rig's reach axis moves") for n in p.notes) == on_the_reach
+    checked_reach(p, pl, tmp_path)
 
 
 def test_caught_with_the_reach_in_physics(pl, tmp_path):
@@ -114,6 +136,25 @@ def test_the_hand_falls_with_the_ball_where_the_reach_alone_lets_it_roll(pl, tmp
     after = tr.t_s > p.intercept.t_s
     assert np.all(tr.q[:, i] >= pl.hand.lower[i]) and np.all(tr.q[:, i] <= pl.hand.upper[i])
     assert tr.q[after, i].min() < tr.q[~after, i][-1] - 0.01  # the hand gives way downwards
+
+
+def test_the_fall_moves_no_row_up_to_the_landing(pl):
+    """``add_drop`` changes the reach only on rows after the first row past the landing
+    (``HoldTurn._motors_within`` judges the motors up to the intercept on rows without the fall):
+    75 deg from 1.0 m, whose plan falls, its rows with and without the fall."""
+    from planner.catch.plan.drop import add_drop
+
+    p = plan_throw(75.0, 1.0, 0.0, planner=pl)
+    assert p.feasible, p.reasons
+    t, Q, t_i = p.rows.t, p.rows.q, p.intercept.t_s
+    flat = Q.copy()
+    flat[t > t_i, pl.rig.i_reach] = Q[t <= t_i, pl.rig.i_reach][-1]  # the fall taken out
+    out = add_drop(pl.rig_dyn, t, flat, pl.rig.i_reach, t_i, p.flight.velocity(t_i),
+                   0.0335, 0.6)
+    assert out is not flat  # it falls
+    k0 = int(np.flatnonzero(t > t_i)[0])
+    assert np.array_equal(out[: k0 + 1], flat[: k0 + 1])
+    assert np.any(out[k0 + 1:] != flat[k0 + 1:])
 
 
 def test_the_fall_keeps_rows_that_roll_less_without_it(pl):

@@ -311,3 +311,33 @@ def test_the_summary_does_not_call_a_turning_palm_at_rest(tmp_path, capsys):
     (stopping,) = [x for x in err.splitlines() if x.lstrip().startswith("stopping (")]
     assert "(the palm not giving with the ball)" in stopping and "at rest" not in stopping
     assert "note: the wrist's turn under way at 6.7 rad/s" in err
+
+
+def test_the_fine_tilts_find_a_stop_between_the_coarse_steps(pl):
+    """75 deg from 2 m on the rig's reach axis: the 5 deg tilts' search stops at 5 deg with
+    the rows' wrist flexion beyond its capacity (the check's rule, ``StopDynamics.judge``:
+    headroom -0.30); the 1 deg tilts go on to 4 deg, within every motor (+0.42)."""
+    from planner.catch.flight.path import get_ball, predict_throw
+    from planner.catch.plan.stopping import (
+        COARSE_STOP,
+        FINE_STOP,
+        TILTS_FINE_DEG,
+        StopGrid,
+        plan_stop,
+    )
+
+    assert TILTS_FINE_DEG[0] == 0.0 and set(COARSE_STOP.tilts_deg) <= set(TILTS_FINE_DEG)
+    assert set(COARSE_STOP.shares) <= set(FINE_STOP.shares)
+    fl = predict_throw(75.0, 2.0, 0.0, get_ball("tennis"), False)
+    C = np.array([2.0, 0.0, 0.0])
+    r = fl.ball.radius_m
+    dyn = pl.rig_dyn
+    ready = lambda q: 0.03 + dyn.move_time(pl.q_rest, q)
+    judged = []
+    for grid in (COARSE_STOP, StopGrid(TILTS_FINE_DEG)):
+        _, q_open, stop = plan_stop(dyn, pl.wrist, fl, C, r, pl.q_zero, pl.closing(r),
+                                    fl.time_at_x(2.0), ready, 0.01, True, grid=grid)
+        judged.append((round(math.degrees(stop.tilt_rad), 6), dyn.judge(stop, q_open, fl, r)))
+    coarse, fine = judged
+    assert coarse[0] == 5.0 and coarse[1][1] < 0.0
+    assert fine[0] == 4.0 and fine[1] == (True, pytest.approx(0.42, abs=0.01))

@@ -40,6 +40,29 @@ CONE_SHARE = 0.95  # the fall keeps the ball's force within this share of the pa
 # rows (rounded, their accelerations second differences) found it 0.00 N outside
 MIN_LEVER = 0.2  # below this |e_r . y| the reach barely moves the ball along the palm (a
 # palm near perpendicular to the forearm's line): the axis then only brakes
+ROLLS_KEPT = 8  # ``rolled_m``'s last answers kept: a plan's rows are judged for the roll by
+# ``add_drop`` (with and without the fall), by the turn's search and by the plan's reasons
+
+
+_rolls: dict[bytes, float] = {}
+
+
+def rolled_m(t: np.ndarray, palm: np.ndarray, radius_m: float, t_land_s: float,
+             v_ball: np.ndarray, inertia_ratio: float) -> float:
+    """``roll_towards_wrist_m`` (the check's roll model on the palm poses ``palm`` at
+    ``t``), its last ``ROLLS_KEPT`` answers kept by their arguments' bytes (a function of
+    them: the same answer as computed anew)."""
+    key = b"".join((np.ascontiguousarray(t, dtype=float).tobytes(),
+                    np.ascontiguousarray(palm, dtype=float).tobytes(),
+                    np.array([radius_m, t_land_s, inertia_ratio], dtype=float).tobytes(),
+                    np.ascontiguousarray(v_ball, dtype=float).tobytes()))
+    hit = _rolls.pop(key, None)
+    if hit is None:
+        hit = roll_towards_wrist_m(t, palm, radius_m, t_land_s, v_ball, inertia_ratio)
+        if len(_rolls) >= ROLLS_KEPT:
+            _rolls.pop(next(iter(_rolls)))
+    _rolls[key] = hit  # the newest last: the least recently asked for goes first
+    return hit
 
 
 def reach_direction(kin, q: np.ndarray, i_reach: int, radius_m: float) -> np.ndarray:
@@ -195,7 +218,7 @@ def add_drop(dyn, t: np.ndarray, Q: np.ndarray, i_reach: int, t_land_s: float,
     out = Q.copy()
     out[:, i_reach] = base + p
     _, palm_out = kin.frames(out)
-    rolled = [roll_towards_wrist_m(t, P, radius_m, t_land_s, v_ball, inertia_ratio)
+    rolled = [rolled_m(t, P, radius_m, t_land_s, v_ball, inertia_ratio)
               for P in (palm, palm_out)]
     return out if rolled[1] < rolled[0] else Q  # the law's fall only where it rolls less
     # (its braking can roll the ball more than the rows alone where the travel is short)

@@ -38,8 +38,11 @@ from planner.catch.plan.results import (
 )
 from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
+    COARSE_STOP,
+    FINE_STOP,
     SoftStop,
     StopDynamics,
+    StopGrid,
     plan_stop,
 )
 from planner.catch.plan.turnahead import (
@@ -191,15 +194,22 @@ class CatchPlanner:
         the turn has levelled it (``TurnMode.AHEAD``: ``HoldTurn.ahead_rows``), else from the grasp on
         (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
         (``TurnMode.LATE``), else none (the plan without the hold) -- the first of those that is
-        feasible."""
+        feasible. Where every plan is infeasible and too fast to stop among its reasons, they
+        are planned again with the soft stop searched in finer steps (``FINE_STOP``)."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
-        plan = self._plans(args, soft, True)
-        if not plan.feasible and soft and self.rig.i_reach is not None:
-            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, **kw), plan)
-            if plan.feasible:
-                return replace(plan, planning_s=time.perf_counter() - t0)
-        if not plan.feasible and CatchReason.GRASP in plan.reason_kinds:
+        plan = self._on_the_rig(args, soft)
+        if plan.feasible:
+            return replace(plan, planning_s=time.perf_counter() - t0)
+        if soft and CatchReason.TOO_FAST_TO_STOP in plan.reason_kinds:
+            # the stop's tilts and contact shares in finer steps (``FINE_STOP``): the rows'
+            # load is not monotone at the coarse ones (the first plan kept when this fails)
+            finer = self._on_the_rig(args, soft, FINE_STOP)
+            if finer.feasible:
+                return replace(finer, planning_s=time.perf_counter() - t0, notes=finer.notes + (
+                    "the stop searched in finer steps (the palm's tilt 1 deg, the contact share "
+                    "0.05): in the coarse ones " + reasons_text(plan.reasons),))
+        if CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
             # what was too late
@@ -210,16 +220,27 @@ class CatchPlanner:
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
         return replace(plan, planning_s=time.perf_counter() - t0)
 
+    def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP
+                    ) -> CatchPlan:
+        """``_plans`` of the arm alone, then (where infeasible) ``reach_fallbacks`` on the
+        rig's reach axis; ``grid``: the soft stop's search steps."""
+        plan = self._plans(args, soft, True, grid=grid)
+        if not plan.feasible and soft and self.rig.i_reach is not None:
+            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, grid=grid, **kw),
+                                   plan)
+        return plan
+
     def _plans(self, args: tuple, soft: bool, bodies: bool, rig: bool = False,
-               fall: bool = False) -> CatchPlan:
+               fall: bool = False, grid: StopGrid = COARSE_STOP) -> CatchPlan:
         """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing;
-        ``rig``: the reach axis moves too."""
-        plan, ahead = self._plan(*args, soft=soft, bodies=bodies, rig=rig, fall=fall)
+        ``rig``: the reach axis moves too; ``grid``: the soft stop's search steps."""
+        plan, ahead = self._plan(*args, soft=soft, bodies=bodies, rig=rig, fall=fall,
+                                 grid=grid)
         for mode in ((TurnMode.EARLY,) if ahead else ()) + (TurnMode.LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
             other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies, rig=rig,
-                               fall=fall)[0]
+                               fall=fall, grid=grid)[0]
             if other.feasible:
                 what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
                         "after the arm has stopped", None: "no turn to hold the ball"}[mode]
@@ -236,7 +257,8 @@ class CatchPlanner:
     def _plan(self, flight: Flight, catch_point: np.ndarray, rate_hz: float, t_info: float,
               throw: ThrowInfo | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
-              bodies: bool = True, rig: bool = False, fall: bool = False) -> tuple[CatchPlan, bool]:
+              bodies: bool = True, rig: bool = False, fall: bool = False,
+              grid: StopGrid = COARSE_STOP) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
         (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
@@ -244,7 +266,8 @@ class CatchPlanner:
         rest: no turn under way then (the roll rule's turn is the grasp's). ``rig``: the
         rig's reach axis moves too (``catch_joints(..., reach=True)``): the intercept may put
         the palm square to the throw on it, and the stopping motion uses it. ``fall``: the
-        rows fall with the ball on the reach axis once it lands (``planner.catch.plan.drop``)."""
+        rows fall with the ball on the reach axis once it lands (``planner.catch.plan.drop``).
+        ``grid``: the soft stop's search steps (``plan_stop``)."""
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
@@ -269,7 +292,8 @@ class CatchPlanner:
             return t_react + dyn.move_time(self.q_rest, q_pre)
 
         ic, _, soft_stop = plan_stop(dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
-                                     ready_by, 1.0 / rate_hz, soft, ROLL_WEIGHT if turn_mode else 1.0)
+                                     ready_by, 1.0 / rate_hz, soft,
+                                     ROLL_WEIGHT if turn_mode else 1.0, grid=grid)
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:

@@ -64,6 +64,28 @@ MOVE_SPARE_S = 0.01  # ... and still reaches its pose one row (at 100 Hz) before
 TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
 CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)  # the arm's speed when it meets the ball, tried as a
 # share of its speed after the recoil
+TILTS_FINE_DEG = (0.0, *(-float(k) for k in range(1, 16)), *(float(k) for k in range(1, 16)))
+CONTACT_SHARES_FINE = tuple(k / 20 for k in range(19, 3, -1))  # 0.95 ... 0.2
+# ... where those leave the ball too fast to stop (``CatchPlanner.plan``): the tilts in 1 deg
+# steps to +-15 deg, the shares in steps of 0.05 to 0.2. Both searches go on while they
+# improve, and the rows' load is not monotone at the coarse steps: measured on the wide
+# grid's 28 throws too fast to stop (docs/history/2026-12-07-catch-finer.md), the fine grid
+# stops three within every motor (0 m / 75 deg / 2.0 m, +0.3 m / 75 deg / 2.5 m: the tilts;
+# -0.3 m / 45 deg / 4.0 m: the shares); 2.5 deg tilts only the first, every tilt of the
+# 1 deg grid tried (no early end) no more than the 1 deg search, +-20 deg no more.
+
+
+@dataclass(frozen=True)
+class StopGrid:
+    """The soft stop's search steps: the palm's tilts (deg, 0 first, each side outwards in
+    order) and the contact shares (slower while it helps)."""
+
+    tilts_deg: tuple[float, ...] = TILTS_DEG
+    shares: tuple[float, ...] = CONTACT_SHARES
+
+
+COARSE_STOP = StopGrid()  # every plan's
+FINE_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE)  # where that is too fast to stop
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -326,15 +348,17 @@ class StopDynamics:
 def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
               soft: bool = True, roll_weight: float = ROLL_WEIGHT,
-              speeds: Callable[..., np.ndarray] | None = None
+              speeds: Callable[..., np.ndarray] | None = None,
+              grid: StopGrid = COARSE_STOP
               ) -> tuple[Intercept, np.ndarray, SoftStop]:
     """The intercept, its open pose and the stopping motion (module docstring). ``ready_by``:
     a function of the pre-catch pose -> when the hand can be there. ``soft`` False: the palm
     waits at rest (the stopping is the pad's alone). ``roll_weight``: the contact-speed QP's
     weight on the ball's speed along the palm (1: none above its speed into it). ``speeds``:
-    the contact speeds' QP solver (``StopAsk``; None: ``contact_speeds``)."""
+    the contact speeds' QP solver (``StopAsk``; None: ``contact_speeds``). ``grid``: the
+    palm's tilts and the contact shares searched (``COARSE_STOP``, or ``FINE_STOP``)."""
     best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, soft,
-                      roll_weight, speeds)
+                      roll_weight, speeds, grid.tilts_deg)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
@@ -345,7 +369,7 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
         return best[1]
     # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
     judged = (dyn.judge(stop, q_open, flight, r), stop)
-    for share in CONTACT_SHARES:  # slower while it helps
+    for share in grid.shares:  # slower while it helps
         # from the speeds the last one found within the joints' range
         warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
         cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
@@ -373,17 +397,18 @@ def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
 def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
                q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
                soft: bool, roll_weight: float,
-               speeds: Callable[..., np.ndarray] | None = None):
-    """``plan_stop``'s tilt search: (key, (intercept, open pose, stop), contact speeds'
+               speeds: Callable[..., np.ndarray] | None = None,
+               tilts_deg: tuple[float, ...] = TILTS_DEG):
+    """``plan_stop``'s tilt search (over ``tilts_deg``): (key, (intercept, open pose, stop), contact speeds'
     solver) of the tilt whose pad phase needs the least of the motor closest to its
     capacity; None: no tilt reaches. Where that stop closes the palm on the ball beyond a
     motor (``_closes_beyond_a_motor``) the search is run again with the palm giving with
     the ball (``giving_speeds``), and the better kept."""
     best = _placed_search(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s,
-                          soft, roll_weight, speeds)
+                          soft, roll_weight, speeds, tilts_deg)
     if best is not None and speeds is None and _closes_beyond_a_motor(best[1]):
         gave = _placed_search(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by,
-                              row_s, soft, roll_weight, giving_speeds)
+                              row_s, soft, roll_weight, giving_speeds, tilts_deg)
         if gave is not None and gave[0] < best[0]:
             best = gave
     return best
@@ -391,7 +416,8 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
 
 def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
                    q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
-                   soft: bool, roll_weight: float, speeds: Callable[..., np.ndarray] | None):
+                   soft: bool, roll_weight: float, speeds: Callable[..., np.ndarray] | None,
+                   tilts_deg: tuple[float, ...] = TILTS_DEG):
     """``_best_tilt``'s search with one contact speeds' solver over the palm's placements."""
     best = None
     square = dyn.joints.i_reach is not None
@@ -404,7 +430,7 @@ def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarra
             return find_intercept(wrist, flight, C, r, t_c, tilt_rad)
 
         found = _tilt_search(dyn, place, flight, r, q_zero, closing, ready_by, row_s, soft,
-                             roll_weight, speeds)
+                             roll_weight, speeds, tilts_deg)
         if found is not None and (best is None or found[0] < best[0]):
             best = found
     return best
@@ -412,10 +438,12 @@ def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarra
 
 def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.ndarray,
                  closing: Closing, ready_by, row_s: float, soft: bool, roll_weight: float,
-                 speeds: Callable[..., np.ndarray] | None):
-    """``_best_tilt`` at one placement of the palm (``place``: tilt -> intercept or None)."""
+                 speeds: Callable[..., np.ndarray] | None,
+                 tilts_deg: tuple[float, ...] = TILTS_DEG):
+    """``_best_tilt`` at one placement of the palm (``place``: tilt -> intercept or None),
+    over ``tilts_deg`` (0, then each side outwards in their order)."""
     found = None
-    for side in ((0.0, *(x for x in TILTS_DEG if x < 0)), tuple(x for x in TILTS_DEG if x > 0)):
+    for side in ((0.0, *(x for x in tilts_deg if x < 0)), tuple(x for x in tilts_deg if x > 0)):
         # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
         # the wrist changes smoothly with it)
         for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):

@@ -36,10 +36,11 @@ import numpy as np
 
 from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix
+from planner.catch.plan.drop import rolled_m
 from planner.catch.plan.holdturn import TURN_SHARE, hold_turn
 from planner.catch.plan.results import Closing
 from planner.catch.plan.stopping import SoftStop, StopDynamics
-from planner.check.ballroll import ROLL_ROOM_M, roll_towards_wrist_m
+from planner.check.ballroll import ROLL_ROOM_M
 from planner.trajectory import LIMIT_MARGIN
 
 
@@ -100,7 +101,8 @@ class TurnRows(NamedTuple):
     T_m: float
 
 
-_FINE_S = 0.002  # the motors' room before the intercept judged every 2 ms (``_within``)
+_FINE_S = 0.002  # the motors' room before the intercept judged every 2 ms
+# (``_motors_within``)
 AHEAD_SHARES = tuple(k / 20 for k in range(1, 21))  # the roll rule's turns under way at the
 # intercept, slowest first: their speed then, as a share of what the stop leaves the flexion
 # (its speed limit less the stop's own flexion speed: ``ahead_turn``), in steps of 5 % (with
@@ -209,7 +211,7 @@ class HoldTurn:
         before the stop begins (the move-in and the turn's ramp may overlap), its rows within
         every joint's speed and acceleration limit and, from the turn's start to the
         intercept (the check judges the hand's inertia from there on), the arm's motors within
-        ``STOP_SHARE`` of their capacity, the closing fingers' reaction included (``_within``);
+        ``STOP_SHARE`` of their capacity, the closing fingers' reaction included (``_motors_within``);
         a candidate that is not is skipped. A plan whose least rolling turn lets the ball roll
         beyond the room is infeasible (the roll rule's reason). Returns the ``TurnRows``."""
         pose, q_pre, stop = rows_args.pose, rows_args.q_pre, rows_args.stop
@@ -242,8 +244,10 @@ class HoldTurn:
                                             min(due, rows_args.s_c))
             turn = Turn(turn0.delta, max(p.end_s for p in prof) - start, start, prof)
             args = replace(rows_args, T_m=T_pre)
+            if not self._motors_within(turn, args):  # (before the rows: their fall, where
+                continue  # they fall with the ball, is most of their time)
             t, Q = self.rows(args, turn)
-            if not self._within(turn, args, t, Q):
+            if not rows_within_limits(self.hand, t, Q, 1e-9):
                 continue
             rolled = self.rolled(t, Q, pose.t_i, flight)
             if rolled < best_roll:
@@ -253,22 +257,26 @@ class HoldTurn:
         return best
 
     def rolled(self, t: np.ndarray, Q: np.ndarray, t_i: float, flight: Flight) -> float:
-        """The ball's largest roll towards the wrist on the rows (``roll_towards_wrist_m``)."""
+        """The ball's largest roll towards the wrist on the rows (``roll_towards_wrist_m``,
+        by ``drop.rolled_m``: the rows' rolls asked for again are not computed again)."""
         _, palm = self.kin.frames(Q)
-        return roll_towards_wrist_m(t, palm, float(flight.ball.radius_m), t_i,
-                                    flight.velocity(t_i), flight.ball.inertia_ratio)
+        return rolled_m(t, palm, float(flight.ball.radius_m), t_i, flight.velocity(t_i),
+                        flight.ball.inertia_ratio)
 
-    def _within(self, turn: Turn, rows_args: RowsArgs, t: np.ndarray, Q: np.ndarray) -> bool:
-        """Every joint within its speed and acceleration limits on the rows ``t``, ``Q``, and
-        from the turn's start to the intercept (where the check's rule takes over) the arm's
-        motors within ``STOP_SHARE`` of their capacity with the hand's inertia at the rows'
-        accelerations (``accel_room``, as ``move_time``), the closing fingers' included: their
-        reaction on the wrist (0.8 N m of the wrist flexion motor's 2 N m on 20 deg / 1.5 m,
-        where the arm's own part asks 1.4), judged on the same motion sampled every
-        ``_FINE_S`` (the rows' second differences smooth the short ramps' peaks)."""
-        if not rows_within_limits(self.hand, t, Q, 1e-9):
-            return False
-        t_f, Q_f = self.rows(replace(rows_args, rate_hz=1.0 / _FINE_S), turn)
+    def _motors_within(self, turn: Turn, rows_args: RowsArgs) -> bool:
+        """From the turn's start to the intercept (where the check's rule takes over) the
+        arm's motors within ``STOP_SHARE`` of their capacity with the hand's inertia at the
+        rows' accelerations (``accel_room``, as ``move_time``), the closing fingers'
+        included: their reaction on the wrist (0.8 N m of the wrist flexion motor's 2 N m on
+        20 deg / 1.5 m, where the arm's own part asks 1.4), judged on the rows' motion
+        sampled every ``_FINE_S`` (the rows' second differences smooth the short ramps'
+        peaks). (``ahead_rows`` also holds every joint within its speed and acceleration
+        limits on the rows themselves.)"""
+        # (without the hand's fall on the reach axis, ``planner.catch.plan.drop``: it moves
+        # only rows after the landing, and only rows up to the intercept are judged here; it
+        # was two thirds of the fall's plans' time at this rate)
+        t_f, Q_f = self.rows(replace(rows_args, rate_hz=1.0 / _FINE_S, inertia_ratio=None),
+                             turn)
         a_f = np.diff(Q_f, 2, axis=0) / (_FINE_S * _FINE_S)
         for k in np.flatnonzero((t_f[1:-1] >= turn.start_s) & (t_f[1:-1] <= rows_args.pose.t_i)):
             MH, room = self.dyn.accel_room(Q_f[k + 1])
