@@ -52,9 +52,10 @@ class ArmCosts:
         t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
         timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
         loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
+        col = self._descent_column(prev.state.place, place)
         for n, f in new.items():
             times = timing.get((pitch[n], f, place))
-            after_s = (times or self._times(n, f, place))[1]
+            after_s = (times or self._times(n, f, place))[col]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
@@ -88,8 +89,11 @@ class ArmCosts:
         (``Places.follow_clear``) and whose key stays down ``HOLD_PAST_S`` past the move's
         end (``_riders``), as the motion holds them."""
         T = self.places.arm_time_s(ctx.state.place, place)
+        col = self._descent_column(ctx.state.place, place)
+        lifts, lift_end = (ctx.lifts, ctx.lift_end) if col == 1 \
+            else (ctx.lifts_black, ctx.lift_end_black)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift)
-            return ctx.lift_end + T, _NONE
+            return lift_end + T, _NONE
         strikers = set(new.values())
         cands = []  # (note, finger, the move's latest end, its time)
         for m, f, a, window_s, press_s, down_s in ctx.follows:
@@ -113,10 +117,18 @@ class ArmCosts:
                     done = down_s + press_s - self.places.lift(a, "high").cross_s
                     cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
         if not cands:  # (``_riders``' answer when none rides along: the last lift, the move)
-            return ctx.lift_end + T, _NONE
-        arrive = min((self._t_down[n] - self._times(n, f, place)[1] for n, f in new.items()),
+            return lift_end + T, _NONE
+        arrive = min((self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()),
                      default=math.inf)
-        return self._riders(ctx, cands, T, arrive)
+        return self._riders(lifts, cands, T, arrive)
+
+    def _descent_column(self, here: int, place: int) -> int:
+        """``Costs._times``' column of the descent's part after a move of the arm from
+        place ``here`` to ``place``: the front rule's where the move keeps the play
+        posture, the black rule's where it changes it (``planner.play.highclear``; the
+        lift's column is the one before)."""
+        po = self.places.posture_of
+        return 1 if po(here) == po(place) else 3
 
     def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
         """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
@@ -130,8 +142,10 @@ class ArmCosts:
         return got
 
     @staticmethod
-    def _riders(ctx: Prev, cands: list, T: float, arrive: float) -> tuple[float, frozenset]:
-        """The arm's arrival and the notes riding along, of ``cands`` (note and finger, the
+    def _riders(lifts: list, cands: list, T: float, arrive: float) -> tuple[float, frozenset]:
+        """The arm's arrival and the notes riding along, of ``cands`` (``lifts``: when each
+        finger of the state before is clear above every key, ``Prev.lifts`` or
+        ``Prev.lifts_black`` by the move's rule; note and finger, the
         latest end of the move that keeps its key down, the move's time carrying it, when
         its press is done): the move starts once every other finger has lifted on time
         and every rider's press is done, and takes the arm's ``T`` or its riders' moves;
@@ -142,7 +156,7 @@ class ArmCosts:
         ``Motion._move_rail``)."""
         while True:
             riders = frozenset(c[0] for c in cands)
-            release = next((v for v, m, f in ctx.lifts if (m, f) not in riders), -math.inf)
+            release = next((v for v, m, f in lifts if (m, f) not in riders), -math.inf)
             start = max([release] + [c[3] for c in cands])
             move_s = max([T] + [c[2] for c in cands])
             late = [c for c in cands if c[1] < min(arrive, start + move_s)

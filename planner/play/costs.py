@@ -117,8 +117,9 @@ class Prev:
     """What a state of the event before tells every transition from it, worked out once
     (the programme weighs hundreds of transitions from each state)."""
 
-    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lift_end", "lifts",
-                 "on_key", "recent", "release", "state", "steps")
+    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lift_end",
+                 "lift_end_black", "lifts", "lifts_black", "on_key", "recent", "release",
+                 "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -129,12 +130,18 @@ class Prev:
         self.last = {f: (m, r) for m, f, r in state.last_notes}
         self.on_key = {pitch[m]: (m, f) for m, f, r in state.last_notes if r == state.place}
         self.fresh = [(m, f, r) for m, f, r in state.last_notes if t_up[m] > t - RECENT_S]
-        # (before a move of the rail: when each finger's lift ends, latest first)
+        # (before a move of the rail: when each finger is clear above every key, latest
+        # first; by the front rule for a move that keeps the play posture, by the black
+        # rule for one that changes it: ``planner.play.highclear``)
         timing = costs._timing  # (``Costs._times``' memo, read here: most find it)
-        self.lifts = sorted((((timing.get((pitch[m], f, r)) or costs._times(m, f, r))[0]
-                              + min(t_up[m], cut_up), m, f)
-                             for m, f, r in state.last_notes), key=lambda x: -x[0])
+        times = [((timing.get((pitch[m], f, r)) or costs._times(m, f, r)),
+                  min(t_up[m], cut_up), m, f) for m, f, r in state.last_notes]
+        self.lifts = sorted(((ts[0] + up, m, f) for ts, up, m, f in times),
+                            key=lambda x: -x[0])
+        self.lifts_black = sorted(((ts[2] + up, m, f) for ts, up, m, f in times),
+                                  key=lambda x: -x[0])
         self.lift_end = self.lifts[0][0] if self.lifts else -math.inf  # (the latest)
+        self.lift_end_black = self.lifts_black[0][0] if self.lifts_black else -math.inf
         # (the notes sounding that might ride along: their entry, the time their key is
         # down (from when it went down: a note struck late, ``State.late``, has less),
         # their press and when their key went down)
@@ -350,16 +357,19 @@ class Costs(ArmCosts):
             e = self._entry[key] = self.places.entry(finger, key[0], place)
         return e
 
-    def _times(self, note: int, finger: str, place: int) -> tuple[float, float]:
-        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry: around a move
-        of the arm, key up to the lifting finger clear above every key, and the descent's
-        part after the arm is still (memoised: the programme reads them for every
-        transition)."""
+    def _times(self, note: int, finger: str, place: int
+               ) -> tuple[float, float, float, float]:
+        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry by the front
+        rule (a move of the arm that keeps the play posture), then the same by the black
+        rule (one that changes it): around a move of the arm, key up to the lifting
+        finger clear above every key, and the descent's part after the arm is still
+        (memoised: the programme reads them for every transition)."""
         key = (self.pitch[note], finger, place)
         got = self._timing.get(key)
         if got is None:
-            e = self.entry(note, finger, place)
-            got = self._timing[key] = (self.places.rail_lift_s(e), self.places.rail_descent_s(e))
+            e, p = self.entry(note, finger, place), self.places
+            got = self._timing[key] = (p.rail_lift_s(e), p.rail_descent_s(e),
+                                       p.rail_lift_s(e, False), p.rail_descent_s(e, False))
         return got
 
     def before_rail_s(self, note: int, finger: str, place: int) -> float:
