@@ -58,8 +58,11 @@ class ArmCosts:
             after_s = (times or self._times(n, f, place))[col]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
+            came = None if m is None else (m, place)  # (its last key and place: where it
+            # followed its key to, or below where it lifted from; ``Costs._leave_key_s``)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
                 m, r = lifted[f]
+                came = (m, r)
                 gap = gaps.get((pitch[m], f, r, pitch[n], place), False)
                 if gap is False:
                     gap = self._move_gap_s(m, f, r, n, place)
@@ -75,7 +78,7 @@ class ArmCosts:
             if by_key:
                 other = by_key.get(self.pitch[n])
                 if other is not None and other[1] != f:
-                    late = max(late, self._leave_key_s(other, n, f, place))
+                    late = max(late, self._leave_key_s(other, n, f, place, came))
             loss += max(0.0, late) / dt
             if lates is not None and late > LATE_MIN_S:
                 lates.append((n, late))

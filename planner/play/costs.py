@@ -408,7 +408,7 @@ class Costs(ArmCosts):
             late = 0.0
             other = on_key.get(self.pitch[n])
             if other is not None and other[1] != f:  # another finger leaves the key first
-                late = self._leave_key_s(other, n, f, place)
+                late = self._leave_key_s(other, n, f, place, last.get(f))
             if f in last:
                 m, r = last[f]
                 early, again = self._strike_again(m, r, n, f, place)
@@ -445,9 +445,28 @@ class Costs(ArmCosts):
                                                           self.entry(n, f, place))
         return got
 
-    def _leave_key_s(self, other: tuple[int, str], n: int, f: str, place: int) -> float:
+    def _leave_key_s(self, other: tuple[int, str], n: int, f: str, place: int,
+                     came: tuple[int, int] | None = None) -> float:
         """Seconds late when finger ``f`` strikes ``n`` on the key another finger has
-        (``other``: its note and finger): that one lifts first, then this one descends."""
+        (``other``: its note and finger): that one lifts first, then this one moves
+        across from its last key (``came``: its note and place; None: it has none) and
+        descends, as the motion plays it (``Motion._release_others_on``: the striker's
+        move across starts once the key is free)."""
         m2, g = other
-        gap = self.before_rail_s(m2, g, place) + self.after_rail_s(n, f, place)
+        across = 0.0 if came is None else (self._across_s(came[0], f, came[1], n, place) or 0.0)
+        gap = self.before_rail_s(m2, g, place) + across + self.after_rail_s(n, f, place)
         return max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
+
+    def _across_s(self, m: int, f: str, r: int, n: int, place: int) -> float | None:
+        """Finger ``f``'s move across at crossing height from its entry on ``m`` at place
+        ``r`` to its entry on ``n`` at ``place``: the motion's very move (``Places.across``,
+        timed within the tendons' capacity; 0 for the same entry, None where none is
+        clear; memoised by keys and places)."""
+        key = ("across", self.pitch[m], f, r, self.pitch[n], place)
+        got = self._gaps.get(key, False)
+        if got is False:
+            a, b = self.entry(m, f, r), self.entry(n, f, place)
+            move = None if a is None or b is None or a is b else self.places.across(a, b)
+            got = self._gaps[key] = 0.0 if a is b else (None if move is None
+                                                         else move.duration_s)
+        return got
