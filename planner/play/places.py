@@ -217,16 +217,15 @@ class Places:
         return self.moves[e.posture].after_rail_s(e)
 
     def rail_lift_s(self, e: AtlasEntry, front: bool = True) -> float:
-        """Key up to the lifting finger clear above every key for good: the arm may move
-        from then on (``planner.play.highclear``; ``before_rail_s`` is to the lift's end);
-        ``front``: the arm keeps its play posture (the front rule), else the black rule."""
+        """Key up to the lifting finger clear above every key for good (``front``: by the
+        front rule, ``planner.play.highclear``): the arm may move from then on."""
         u = self.lift(e, "high")
         return max(0.0, self.high.rise_clear_s(e, u.move, front) - u.cross_s)
 
     def rail_descent_s(self, e: AtlasEntry, front: bool = True) -> float:
         """The start of the descent from crossing height that the arm must have ended
-        by, to key down: the descent's part below the clear height (``after_rail_s`` is
-        all of it); ``front`` as in ``rail_lift_s``."""
+        by, to key down: the descent's part below the clear height (``front``: by the
+        front rule; ``after_rail_s`` is all of it)."""
         d = self.descend(e, "high")
         return max(0.0, d.cross_s - self.high.descent_clear_s(e, d.move, front))
 
