@@ -22,9 +22,16 @@ from dataclasses import dataclass
 
 from planner.music import keyboard as kb
 from planner.music.keyboard import pitch_name
-from planner.play.armcost import LATE_MIN_S, ArmCosts
+from planner.play.armcost import ArmCosts
 from planner.play.force import press_force_n
-from planner.play.keytimes import key_down_s, key_up_s, sounding_frames
+from planner.play.keytimes import (
+    LATE_MIN_S,
+    key_down_s,
+    key_up_s,
+    late_frames,
+    sounding_frames,
+    struck_s,
+)
 from planner.play.places import RAIL_STEP_M, Places
 
 RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing
@@ -71,21 +78,25 @@ class State:
     (note, finger, rail index it was at), the last notes of fingers not sounding, ended
     within RECENT_S; ``late``: (note, seconds) of the notes it struck late (their keys
     down that much after their time: a rider's press is done that much later, its key's
-    window that much shorter, ``Prev.follows``). Immutable (its slots are set once; it is
+    window that much shorter, ``Prev.follows``); ``rode``: (note, seconds) of the notes
+    that rode along on the arm's move into this state and when that move ended (their
+    fingers are busy until then: ``ArmCosts._cut_up_s``). Immutable (its slots are set once; it is
     hashed many times, its hash kept). ``notes`` are the notes sounding; ``last_notes`` every finger's note that
     still matters to its next move, sounding or recent, with the rail index it is (or
     was last) pressed from."""
 
-    __slots__ = ("_hash", "fingers", "last_notes", "late", "notes", "place", "recent")
+    __slots__ = ("_hash", "fingers", "last_notes", "late", "notes", "place", "recent", "rode")
 
     def __init__(self, place: int, fingers: tuple[tuple[int, str], ...],
                  recent: tuple[tuple[int, str, int], ...] = (),
-                 late: tuple[tuple[int, float], ...] = ()) -> None:
+                 late: tuple[tuple[int, float], ...] = (),
+                 rode: tuple[tuple[int, float], ...] = ()) -> None:
         object.__setattr__(self, "place", place)
         object.__setattr__(self, "fingers", fingers)
         object.__setattr__(self, "recent", recent)
         object.__setattr__(self, "late", late)
-        object.__setattr__(self, "_hash", hash((place, fingers, recent, late)))
+        object.__setattr__(self, "rode", rode)
+        object.__setattr__(self, "_hash", hash((place, fingers, recent, late, rode)))
 
     def __setattr__(self, name, value):
         raise AttributeError("State is immutable")
@@ -103,14 +114,15 @@ class State:
     def __eq__(self, other) -> bool:
         return (self is other or isinstance(other, State) and self._hash == other._hash
                 and self.place == other.place and self.fingers == other.fingers
-                and self.recent == other.recent and self.late == other.late)
+                and self.recent == other.recent and self.late == other.late
+                and self.rode == other.rode)
 
     def __hash__(self) -> int:
         return self._hash
 
     def __repr__(self) -> str:
         return (f"State(place={self.place}, fingers={self.fingers}, recent={self.recent}, "
-                f"late={self.late})")
+                f"late={self.late}, rode={self.rode})")
 
 
 class Prev:
@@ -416,9 +428,10 @@ class Costs(ArmCosts):
                     return math.inf
                 loss += early / self.dt
                 late = max(late, again)
-            loss += max(0.0, late) / self.dt
+            loss += late_frames(late, self.dt)
             if lates is not None and late > LATE_MIN_S:
-                lates.append((n, late))
+                lates.append((n, struck_s(self.notes[n].onset_s, self._t_down[n] + late,
+                                          self.dt) - self._t_down[n]))
         return loss
 
     def _strike_again(self, m: int, r: int, n: int, f: str, place: int) -> tuple[float, float]:

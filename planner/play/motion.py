@@ -31,14 +31,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from planner.check.criteria import NOTE_HIT_FRACTION
 from planner.music import keyboard as kb
 from planner.play.armload import within_motors
 from planner.play.armmotion import ArmMotion, up_move
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
-from planner.play.keytimes import DRIVE_LAG_S, ROW_MARGIN_S, first_row, key_down_s, key_up_s
+from planner.play.keytimes import held_enough_s, key_down_s, key_up_s, struck_s
 from planner.play.places import Places
 from planner.play.profile import Move, path_s
 
@@ -356,6 +355,10 @@ class Motion(ArmMotion):
             places, st, e, want, after, self.arm_track.free_s, self.committed_s,
             self.arm_front))
         down_at, steps, start = found
+        struck = struck_s(n.onset_s, down_at, self.dt)  # (a late key: after the first row)
+        if struck > down_at:  # (the last step is the descent: it starts that much later)
+            steps = steps[:-1] + [(steps[-1][0] + struck - down_at, steps[-1][1])]
+            down_at = struck
         desc = timed_by.descend(e, start)
         press_end = down_at + desc.duration_s - desc.cross_s
         up = self._held_enough_s(a.note, down_at, self.t_up(a.note, a.release_s),
@@ -406,23 +409,9 @@ class Motion(ArmMotion):
         return end
 
     def _held_enough_s(self, note: int, down_s: float, cut_s: float, up_s: float) -> float:
-        """The key-up of ``note`` (down at ``down_s``, due up at ``up_s``) cut to ``cut_s``
-        (a move needs the finger), kept down long enough that the hardware still sounds
-        the note where the check's rule does: a note the cut leaves down in at least
-        ``NOTE_HIT_FRACTION`` of its frames (a hit by the rows) stays down until that share
-        holds with the drive's lag at both ends (``DRIVE_LAG_S``: the key goes down later
-        and comes up earlier than the rows); a cut that loses the note anyway is left as
-        it is (the replay names it missed)."""
-        if cut_s >= up_s:
-            return cut_s
-        n, dt = self.notes[note], self.dt
-        k0, k1 = first_row(n.onset_s, dt), first_row(n.offset_s, dt)
-        need = math.ceil(NOTE_HIT_FRACTION * (k1 - k0) - 1e-9)  # the note's rows to hit it
-        # (its rows k with down_s <= k dt < cut_s: a hit by the rows, or lost anyway)
-        if max(0, min(k1, first_row(cut_s, dt)) - max(k0, first_row(down_s, dt))) < need:
-            return cut_s
-        first = max(k0, first_row(down_s + DRIVE_LAG_S, dt))
-        return min(up_s, max(cut_s, (first + need - 1) * dt + DRIVE_LAG_S + ROW_MARGIN_S))
+        """``keytimes.held_enough_s`` of ``note`` (the programme reads the same)."""
+        n = self.notes[note]
+        return held_enough_s(n.onset_s, n.offset_s, down_s, cut_s, up_s, self.dt)
 
     def _release_others_on(self, pitch: int, finger: str) -> float:
         """Another finger on key ``pitch`` (pressing or waiting) leaves it, on time, for
