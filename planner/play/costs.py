@@ -471,10 +471,9 @@ class Costs(ArmCosts):
         return max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
 
     def _across_s(self, m: int, f: str, r: int, n: int, place: int) -> float | None:
-        """Finger ``f``'s move across at crossing height from its entry on ``m`` at place
-        ``r`` to its entry on ``n`` at ``place``: the motion's very move (``Places.across``,
-        timed within the tendons' capacity; 0 for the same entry, None where none is
-        clear; memoised by keys and places)."""
+        """Finger ``f``'s move across from its entry on ``m`` at place ``r`` to its entry
+        on ``n`` at ``place``: the motion's very move (``Places.across``; 0 for the same
+        entry, None where none is clear; memoised by keys and places)."""
         key = ("across", self.pitch[m], f, r, self.pitch[n], place)
         got = self._gaps.get(key, False)
         if got is False:
