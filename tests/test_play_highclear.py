@@ -1,13 +1,23 @@
 """When a finger going up or down is clear above every key (planner/play/highclear.py):
-the arm may move from the lift's clear moment on and until the descent's; the moments
-shipped in the move tables are those the search finds."""
+the arm may move from the lift's clear moment on and until the descent's, by the black
+rule (every body above the black tops) and by the front rule (a body in front of the
+black keys above the white tops); the moments shipped in the move tables are those the
+search finds."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from planner.play.highclear import BODY_CLEAR_Z_M, HighClear, params
+from planner.play.highclear import (
+    BODY_CLEAR_Z_M,
+    CLEAR_MOVES,
+    CLEAR_RULES,
+    FRONT_CLEAR_Z_M,
+    FRONT_Y_M,
+    HighClear,
+    params,
+)
 from planner.play.places import Places
 from planner.play.tendonload import slowed
 
@@ -17,12 +27,32 @@ def places(hand) -> Places:
     return Places(hand)
 
 
-def _lowest_body_z(places: Places, e, move, t_s: float) -> float:
+def _bodies(places: Places, e, move, t_s: float):
     h, atlas = places.hand, places.atlases[e.posture]
     q = atlas.base.copy()
     q[h.joint_slice(e.finger)] = move.at(t_s)[0]
-    p, r = atlas.bodies.points(h.apply_couplings(q), e.finger)
+    return atlas.bodies.points(h.apply_couplings(q), e.finger)
+
+
+def _lowest_body_z(places: Places, e, move, t_s: float) -> float:
+    p, r = _bodies(places, e, move, t_s)
     return float(np.min(p[:, 2] - r))
+
+
+def _front_clear(places: Places, e, move, t_s: float) -> bool:
+    """Every body clear above the black tops, or in front of the black keys (less the
+    body rule's tolerance) and clear above the white tops: computed here from the
+    keyboard's numbers."""
+    p, r = _bodies(places, e, move, t_s)
+    low = p[:, 2] - r
+    front = p[:, 1] + r <= 0.060 - 0.0005
+    return bool(np.all((low >= 0.0125 + 0.001 - 1e-9) | (front & (low >= 0.001 - 1e-9))))
+
+
+def test_the_front_rule_numbers():
+    assert FRONT_CLEAR_Z_M == pytest.approx(0.001)  # 1 mm above the white tops
+    assert FRONT_Y_M == pytest.approx(0.0595)  # the black keys' front less 0.5 mm
+    assert BODY_CLEAR_Z_M == pytest.approx(0.0135)
 
 
 def _entries(places: Places):
@@ -38,10 +68,10 @@ def test_a_lift_is_clear_from_its_clear_moment_to_its_end(places):
     seen = 0
     for e in _entries(places):
         u = places.lift(e, "high")
-        t_clear = places.high.rise_clear_s(e, u.move)
+        t_clear = places.high.rise_clear_s(e, u.move, front=False)
         # (the key comes up first; the last part of the lift overlaps the arm's move)
         assert u.cross_s < t_clear < u.move.duration_s
-        assert places.rail_lift_s(e) < places.before_rail_s(e)
+        assert places.rail_lift_s(e, False) < places.before_rail_s(e)
         for t in np.linspace(t_clear, u.move.duration_s, 25):
             assert _lowest_body_z(places, e, u.move, t) >= BODY_CLEAR_Z_M - 1e-9
         # (just before it, the finger is still lower: the moment is not too late by much)
@@ -53,12 +83,37 @@ def test_a_lift_is_clear_from_its_clear_moment_to_its_end(places):
 def test_a_descent_is_clear_until_its_clear_moment(places):
     for e in _entries(places):
         d = places.descend(e, "high")
-        t_clear = places.high.descent_clear_s(e, d.move)
+        t_clear = places.high.descent_clear_s(e, d.move, front=False)
         assert 0.0 < t_clear < d.cross_s
-        assert places.rail_descent_s(e) == pytest.approx(d.cross_s - t_clear)
+        assert places.rail_descent_s(e, False) == pytest.approx(d.cross_s - t_clear)
         for t in np.linspace(0.0, t_clear, 25):
             assert _lowest_body_z(places, e, d.move, t) >= BODY_CLEAR_Z_M - 1e-9
         assert _lowest_body_z(places, e, d.move, t_clear + 0.002) < BODY_CLEAR_Z_M + 3e-4
+
+
+def test_the_front_rule_is_clear_from_its_moments_and_earlier_in_front(places):
+    """By the front rule a lift is clear from its moment to its end and a descent from
+    its start to its moment (tested at 41 points, finer than the search's 33); never
+    later than the black rule's; earlier on the default hand's white-key entries in
+    front of the black keys (posture 0, rail 0: the middle finger on C4, the ring and
+    pinky on D4 and E4), the same on its black-key entries."""
+    earlier = 0
+    for e in _entries(places):
+        u, d = places.lift(e, "high"), places.descend(e, "high")
+        t_up = places.high.rise_clear_s(e, u.move)
+        t_down = places.high.descent_clear_s(e, d.move)
+        assert t_up <= places.high.rise_clear_s(e, u.move, front=False)
+        assert t_down >= places.high.descent_clear_s(e, d.move, front=False)
+        for t in np.linspace(t_up, u.move.duration_s, 41):
+            assert _front_clear(places, e, u.move, t)
+        for t in np.linspace(0.0, t_down, 41):
+            assert _front_clear(places, e, d.move, t)
+        if e.pitch_class in (1, 6):
+            assert places.rail_lift_s(e) == places.rail_lift_s(e, False)
+        if places.rail_lift_s(e) < places.rail_lift_s(e, False) - 0.010:
+            assert places.rail_descent_s(e) < places.rail_descent_s(e, False) - 0.010
+            earlier += 1
+    assert earlier >= 4
 
 
 def _searched(places: Places) -> HighClear:
@@ -77,11 +132,13 @@ def test_the_shipped_moments_are_those_searched(places):
         entries = [e for e in moves.atlas._entries.values() if e is not None]
         for i in rng.choice(len(entries), 30, replace=False):
             e = entries[i]
-            row = [moves.table.clear_s(e, c, params()) for c in range(3)]
+            row = [moves.table.clear_s(e, c, params())
+                   for c in range(len(CLEAR_MOVES) * len(CLEAR_RULES))]
             assert None not in row
             assert row == searched.clear_row(e, moves)
             assert row == places.high.clear_row(e, moves)
             assert places.high.rise_clear_s(e, moves.lift(e, "high").move) == row[0]
+            assert places.high.rise_clear_s(e, moves.lift(e, "high").move, False) == row[3]
 
 
 def test_a_move_not_the_entrys_own_is_searched(places):

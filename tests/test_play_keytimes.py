@@ -12,11 +12,16 @@ import planner
 from planner.hand.model import load_hand
 from planner.play.keytimes import (
     DRIVE_LAG_S,
+    LATE_MIN_S,
     ROW_MARGIN_S,
     down_rows,
+    first_row,
+    held_enough_s,
     key_down_s,
     key_up_s,
+    late_frames,
     sounding_frames,
+    struck_s,
     up_rows,
 )
 
@@ -66,3 +71,43 @@ def test_fast_notes_sound_in_physics_from_their_first_row(tmp_path):
     assert not phys.play.wrong_keys
     lost = (check.play.f1 - phys.play.f1) * phys.play.song_frames
     assert lost <= len(check.play.late) + 1e-6, (check.play.f1, phys.play.f1, check.play.late)
+
+
+def test_a_late_key_costs_what_the_physics_loses():
+    """On time within ``LATE_MIN_S``; then a whole frame (the target leads the first row
+    by about the drive's lag: any later and the physics is down after that row), and a
+    frame more for each row's time."""
+    dt = 0.01
+    assert late_frames(0.0, dt) == 0.0 and late_frames(LATE_MIN_S, dt) == 0.0
+    assert late_frames(0.002, dt) == 1.0 and late_frames(0.0099, dt) == 1.0
+    assert late_frames(0.0101, dt) == 2.0 and late_frames(0.035, dt) == 4.0
+
+
+@pytest.mark.parametrize("rate_hz", [100.0, 50.0])
+def test_a_late_key_before_the_first_row_goes_down_just_after_it(rate_hz):
+    """A key its moves bring down after its target but before the note's first row goes
+    down ``ROW_MARGIN_S`` after that row (the physics loses the row either way); on time,
+    or already past the row, where its moves bring it."""
+    dt = 1.0 / rate_hz
+    for on in (0.1234, 0.5, 1.0 - 1e-4, 2.718):
+        want, edge = key_down_s(on, dt), first_row(on, dt) * dt + ROW_MARGIN_S
+        assert struck_s(on, want, dt) == want
+        assert struck_s(on, want + 0.5 * LATE_MIN_S, dt) == want + 0.5 * LATE_MIN_S
+        for late in (2 * LATE_MIN_S, 0.5 * (edge - want)):
+            assert struck_s(on, want + late, dt) == edge
+        assert struck_s(on, edge + 0.003, dt) == edge + 0.003
+
+
+def test_a_cut_note_is_held_until_the_physics_sounds_it():
+    """A note cut early (a move needs its finger) stays down until half its rows hold
+    with the drive's lag at both ends; a cut that loses it anyway, or none, stays."""
+    dt = 0.01
+    on, off = 0.341, 0.455  # (11 rows: 0.35 to 0.45; 6 to hit it)
+    down, up = key_down_s(on, dt), key_up_s(off, dt)
+    assert held_enough_s(on, off, down, up + 0.01, up, dt) == up + 0.01  # (no cut)
+    assert held_enough_s(on, off, down, 0.38, up, dt) == 0.38  # (lost anyway: 3 rows)
+    assert held_enough_s(on, off, down, 0.40, up, dt) == 0.40  # (5 rows: lost anyway)
+    # (6 rows by the rows, 5 with the lag: held until the 6th row after the lag, 0.41)
+    kept = held_enough_s(on, off, down, 0.41, up, dt)
+    assert kept == pytest.approx(0.36 + 5 * dt + DRIVE_LAG_S + ROW_MARGIN_S)
+    assert held_enough_s(on, off, down, 0.43, up, dt) == 0.43  # (enough already)

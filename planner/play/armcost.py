@@ -12,12 +12,16 @@ import math
 from typing import TYPE_CHECKING
 
 from planner.play.follow import HOLD_PAST_S
+from planner.play.keytimes import (  # (LATE_MIN_S: a key later, ``costs.State.late``)
+    LATE_MIN_S,
+    held_enough_s,
+    late_frames,
+    struck_s,
+)
 
 if TYPE_CHECKING:
     from planner.play.costs import Prev
 
-LATE_MIN_S = 1e-3  # a key down later than this is carried as late (``costs.State.late``):
-# far below a frame (10 ms at 100 Hz), above the float noise of the times it comes from
 TIE_RAIL_PER_M = 5.0  # frames per metre of rail moved: a tie-break, not a cost
 
 
@@ -26,7 +30,7 @@ class ArmCosts:
     times, the memos and the finger timings that ``Costs`` keeps)."""
 
     def _rail_loss(self, prev: Prev, new: dict[int, str], place: int, kept=(),
-                   lates: list | None = None) -> float:
+                   lates: list | None = None, rode: list | None = None) -> float:
         """Frames lost to a move of the rail to ``place`` after ``prev``: a finger of
         ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
         other lifts after its key comes up; then the rail moves (as slow as its slowest
@@ -35,7 +39,8 @@ class ArmCosts:
         (while the rail moves) or striking again after following it, another finger
         leaving its key. A ``kept`` note (sounding past the event) must follow, or the
         move is not made (inf). ``lates``: gets (note, seconds) of each note struck late
-        (``State.late``)."""
+        (``State.late``); ``rode``: gets (note, finger, the move's end) of each note
+        riding along (its finger's place is ``place`` after: ``layers.rode_to``)."""
         key = (place, tuple(new.items()))
         got = prev.release.get(key)
         if got is None:
@@ -43,6 +48,14 @@ class ArmCosts:
         release_t, followers = got
         if kept and not followers.issuperset(kept):
             return math.inf
+        if rode is not None and followers:  # (the move ends as late as lets the new keys
+            # go down on time, the motion's: ``ArmMotion._move_rail``)
+            col = self._descent_column(prev.state.place, place)
+            by_s = min([self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()]
+                       + [self._t_up[m] - self.places.lift(self.entry(m, f, place), "high").cross_s
+                          - HOLD_PAST_S for m, f in followers])
+            end_s = max(release_t, by_s)  # (early for a rider whose key comes up before)
+            rode.extend((m, f, end_s) for m, f in followers)
         around = prev.around.get(followers)
         if around is None:
             around = prev.around[followers] = (
@@ -52,19 +65,27 @@ class ArmCosts:
         t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
         timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
         loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
+        col = self._descent_column(prev.state.place, place)
         for n, f in new.items():
             times = timing.get((pitch[n], f, place))
-            after_s = (times or self._times(n, f, place))[1]
+            after_s = (times or self._times(n, f, place))[col]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
+            came = None if m is None else (m, place)  # (its last key and place: where it
+            # followed its key to, or below where it lifted from; ``Costs._leave_key_s``)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
                 m, r = lifted[f]
+                came = (m, r)
                 gap = gaps.get((pitch[m], f, r, pitch[n], place), False)
                 if gap is False:
                     gap = self._move_gap_s(m, f, r, n, place)
                 if gap is None:
                     return math.inf
-                late = max(late, gap - (t_down[n] - t_up[m]))
+                if gap > t_down[n] - t_up[m]:  # (it lets its key up early to strike on
+                    # time, as far as its note still sounds: ``Motion.lift_by_s``)
+                    up = self._cut_up_s(prev, m, t_down[n] - gap, self.entry(m, f, r))
+                    loss += (t_up[m] - up) / dt
+                    late = max(late, up + gap - t_down[n])
             elif m is not None:  # (it followed its key: it is at place now)
                 early, again = self._strike_again(m, place, n, f, place)
                 if math.isinf(again):
@@ -74,11 +95,27 @@ class ArmCosts:
             if by_key:
                 other = by_key.get(self.pitch[n])
                 if other is not None and other[1] != f:
-                    late = max(late, self._leave_key_s(other, n, f, place))
-            loss += max(0.0, late) / dt
+                    late = max(late, self._leave_key_s(other, n, f, place, came))
+            loss += late_frames(late, dt)
             if lates is not None and late > LATE_MIN_S:
-                lates.append((n, late))
+                lates.append((n, struck_s(self.notes[n].onset_s, t_down[n] + late, self.dt)
+                              - t_down[n]))
         return loss
+
+    def _cut_up_s(self, prev: Prev, m: int, cut_s: float, e) -> float:
+        """When note ``m``'s key (its entry ``e``) comes up when its finger is wanted by
+        ``cut_s``: the motion's rule, ``keytimes.held_enough_s`` (from when its key went
+        down: a note struck late, ``State.late``, that much later), and not before its
+        lift can start: a note that rode along on the arm's move into ``prev``'s state
+        (``State.rode``) once that move is over (``Motion._to_high``)."""
+        late = dict(prev.state.late).get(m, 0.0)
+        n = self.notes[m]
+        up = held_enough_s(n.onset_s, n.offset_s, self._t_down[m] + late, cut_s,
+                           self._t_up[m], self.dt)
+        free = dict(prev.state.rode).get(m)
+        if free is not None:
+            up = max(up, free + self.places.lift(e, "high").cross_s)
+        return up
 
     def _release_of(self, ctx: Prev, place: int, new: dict[int, str]
                     ) -> tuple[float, frozenset]:
@@ -88,8 +125,11 @@ class ArmCosts:
         (``Places.follow_clear``) and whose key stays down ``HOLD_PAST_S`` past the move's
         end (``_riders``), as the motion holds them."""
         T = self.places.arm_time_s(ctx.state.place, place)
+        col = self._descent_column(ctx.state.place, place)
+        lifts, lift_end = (ctx.lifts, ctx.lift_end) if col == 1 \
+            else (ctx.lifts_black, ctx.lift_end_black)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift)
-            return ctx.lift_end + T, _NONE
+            return lift_end + T, _NONE
         strikers = set(new.values())
         cands = []  # (note, finger, the move's latest end, its time)
         for m, f, a, window_s, press_s, down_s in ctx.follows:
@@ -113,10 +153,18 @@ class ArmCosts:
                     done = down_s + press_s - self.places.lift(a, "high").cross_s
                     cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
         if not cands:  # (``_riders``' answer when none rides along: the last lift, the move)
-            return ctx.lift_end + T, _NONE
-        arrive = min((self._t_down[n] - self._times(n, f, place)[1] for n, f in new.items()),
+            return lift_end + T, _NONE
+        arrive = min((self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()),
                      default=math.inf)
-        return self._riders(ctx, cands, T, arrive)
+        return self._riders(lifts, cands, T, arrive)
+
+    def _descent_column(self, here: int, place: int) -> int:
+        """``Costs._times``' column of the descent's part after a move of the arm from
+        place ``here`` to ``place``: the front rule's where the move keeps the play
+        posture, the black rule's where it changes it (``planner.play.highclear``; the
+        lift's column is the one before)."""
+        po = self.places.posture_of
+        return 1 if po(here) == po(place) else 3
 
     def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
         """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
@@ -130,8 +178,10 @@ class ArmCosts:
         return got
 
     @staticmethod
-    def _riders(ctx: Prev, cands: list, T: float, arrive: float) -> tuple[float, frozenset]:
-        """The arm's arrival and the notes riding along, of ``cands`` (note and finger, the
+    def _riders(lifts: list, cands: list, T: float, arrive: float) -> tuple[float, frozenset]:
+        """The arm's arrival and the notes riding along, of ``cands`` (``lifts``: when each
+        finger of the state before is clear above every key, ``Prev.lifts`` or
+        ``Prev.lifts_black`` by the move's rule; note and finger, the
         latest end of the move that keeps its key down, the move's time carrying it, when
         its press is done): the move starts once every other finger has lifted on time
         and every rider's press is done, and takes the arm's ``T`` or its riders' moves;
@@ -142,7 +192,7 @@ class ArmCosts:
         ``Motion._move_rail``)."""
         while True:
             riders = frozenset(c[0] for c in cands)
-            release = next((v for v, m, f in ctx.lifts if (m, f) not in riders), -math.inf)
+            release = next((v for v, m, f in lifts if (m, f) not in riders), -math.inf)
             start = max([release] + [c[3] for c in cands])
             move_s = max([T] + [c[2] for c in cands])
             late = [c for c in cands if c[1] < min(arrive, start + move_s)

@@ -48,13 +48,14 @@ class ArmMotion:
         earliest, which ends early for them only where it need not wait for the other
         fingers' lifts (the programme's rule, ``Costs._riders``)."""
         r0 = self.arm_track.q[0]
+        front = posture == self.posture  # (a move that changes the posture: the black rule)
         holds = [h for h in self._holds(rail_m, posture) if h[1].finger not in strikers]
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
             end_by = min([arrive_by_s] + [st.up_s - self.moves.lift(e, "high").cross_s
                                           - HOLD_PAST_S for st, e in holds])
             move, t0 = self._rail_timing(r0, rail_m, posture, end_by, holds)
-            natural = self._natural_ready(holds) + move.duration_s
+            natural = self._natural_ready(holds, front) + move.duration_s
             late = [(st.up_s - self.moves.lift(e, "high").cross_s - HOLD_PAST_S, i)
                     for i, (st, e) in enumerate(holds)]
             late = [(end, i) for end, i in late if t0 + move.duration_s > end + HOLD_PAST_S / 2
@@ -68,11 +69,12 @@ class ArmMotion:
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():
             if id(st) not in held and st.pose != "high":
-                self._to_high(st, self.lift_by_s(st, t0, arrive_by_s))
-        t0 = max([t0] + [st.safe_s for st in self.fingers.values() if id(st) not in held])
+                self._to_high(st, self.lift_by_s(st, t0, arrive_by_s, front))
+        t0 = max([t0] + [st.safe_s if front else st.black_s
+                         for st in self.fingers.values() if id(st) not in held])
         k = len(self.arm_track.q)
         self.arm_track.add(t0, part(move, 0, k))
-        self.posture = posture
+        self.posture, self.arm_front = posture, front
         for st, e in holds:
             n = len(st.entry.press)
             st.track.add(t0, part(move, k, n))
@@ -110,32 +112,35 @@ class ArmMotion:
                 self.hand.fingers.index(st.entry.finger) for st, _ in holds))
         ready = max(self.arm_track.free_s, self.committed_s)
         held = {id(st) for st, _ in holds}
+        front = posture == self.posture  # (``planner.play.highclear``'s rule)
         for st in self.fingers.values():
             if id(st) in held:
                 ready = max(ready, st.track.free_s)
-            elif st.pose == "high":
-                ready = max(ready, st.safe_s)  # (a finger moving across up there may go on)
+            elif st.pose == "high":  # (a finger moving across up there may go on)
+                ready = max(ready, st.safe_s if front else st.black_s)
             else:  # it lifts first: as soon as its press is done, at the latest (the arm
                 up = up_move(self.moves, st)  # moves once it is clear above every key)
-                ready = max(ready, st.track.free_s + self.moves.high.rise_clear_s(st.entry, up.move))
+                ready = max(ready, st.track.free_s
+                            + self.moves.high.rise_clear_s(st.entry, up.move, front))
         return move, max(ready, arrive_by_s - move.duration_s)
 
-    def _natural_ready(self, holds) -> float:
+    def _natural_ready(self, holds, front: bool) -> float:
         """When the arm could start with ``holds`` riding along and every other finger
-        lifted at its key's own time (none let up early)."""
+        lifted at its key's own time (none let up early; ``front``: the move keeps the
+        play posture, ``planner.play.highclear``)."""
         held = {id(st) for st, _ in holds}
         ready = max(self.arm_track.free_s, self.committed_s)
         for st in self.fingers.values():
             if id(st) in held:
                 ready = max(ready, st.track.free_s)
             elif st.pose == "high":
-                ready = max(ready, st.safe_s)
+                ready = max(ready, st.safe_s if front else st.black_s)
             else:
                 up = up_move(self.moves, st)
                 t0 = max(st.track.free_s, self.committed_s)
                 if st.pose == "press":
                     t0 = max(t0, st.up_s - up.cross_s)
-                ready = max(ready, t0 + self.moves.high.rise_clear_s(st.entry, up.move))
+                ready = max(ready, t0 + self.moves.high.rise_clear_s(st.entry, up.move, front))
         return ready
 
     def _holds(self, rail_m: float, posture: int):

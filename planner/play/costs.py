@@ -22,9 +22,16 @@ from dataclasses import dataclass
 
 from planner.music import keyboard as kb
 from planner.music.keyboard import pitch_name
-from planner.play.armcost import LATE_MIN_S, ArmCosts
+from planner.play.armcost import ArmCosts
 from planner.play.force import press_force_n
-from planner.play.keytimes import key_down_s, key_up_s, sounding_frames
+from planner.play.keytimes import (
+    LATE_MIN_S,
+    key_down_s,
+    key_up_s,
+    late_frames,
+    sounding_frames,
+    struck_s,
+)
 from planner.play.places import RAIL_STEP_M, Places
 
 RECENT_S = 0.3  # a finger's note ended longer ago than this costs its next move nothing
@@ -71,21 +78,25 @@ class State:
     (note, finger, rail index it was at), the last notes of fingers not sounding, ended
     within RECENT_S; ``late``: (note, seconds) of the notes it struck late (their keys
     down that much after their time: a rider's press is done that much later, its key's
-    window that much shorter, ``Prev.follows``). Immutable (its slots are set once; it is
+    window that much shorter, ``Prev.follows``); ``rode``: (note, seconds) of the notes
+    that rode along on the arm's move into this state and when that move ended (their
+    fingers are busy until then: ``ArmCosts._cut_up_s``). Immutable (its slots are set once; it is
     hashed many times, its hash kept). ``notes`` are the notes sounding; ``last_notes`` every finger's note that
     still matters to its next move, sounding or recent, with the rail index it is (or
     was last) pressed from."""
 
-    __slots__ = ("_hash", "fingers", "last_notes", "late", "notes", "place", "recent")
+    __slots__ = ("_hash", "fingers", "last_notes", "late", "notes", "place", "recent", "rode")
 
     def __init__(self, place: int, fingers: tuple[tuple[int, str], ...],
                  recent: tuple[tuple[int, str, int], ...] = (),
-                 late: tuple[tuple[int, float], ...] = ()) -> None:
+                 late: tuple[tuple[int, float], ...] = (),
+                 rode: tuple[tuple[int, float], ...] = ()) -> None:
         object.__setattr__(self, "place", place)
         object.__setattr__(self, "fingers", fingers)
         object.__setattr__(self, "recent", recent)
         object.__setattr__(self, "late", late)
-        object.__setattr__(self, "_hash", hash((place, fingers, recent, late)))
+        object.__setattr__(self, "rode", rode)
+        object.__setattr__(self, "_hash", hash((place, fingers, recent, late, rode)))
 
     def __setattr__(self, name, value):
         raise AttributeError("State is immutable")
@@ -103,22 +114,24 @@ class State:
     def __eq__(self, other) -> bool:
         return (self is other or isinstance(other, State) and self._hash == other._hash
                 and self.place == other.place and self.fingers == other.fingers
-                and self.recent == other.recent and self.late == other.late)
+                and self.recent == other.recent and self.late == other.late
+                and self.rode == other.rode)
 
     def __hash__(self) -> int:
         return self._hash
 
     def __repr__(self) -> str:
         return (f"State(place={self.place}, fingers={self.fingers}, recent={self.recent}, "
-                f"late={self.late})")
+                f"late={self.late}, rode={self.rode})")
 
 
 class Prev:
     """What a state of the event before tells every transition from it, worked out once
     (the programme weighs hundreds of transitions from each state)."""
 
-    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lift_end", "lifts",
-                 "on_key", "recent", "release", "state", "steps")
+    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lift_end",
+                 "lift_end_black", "lifts", "lifts_black", "on_key", "recent", "release",
+                 "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -129,12 +142,18 @@ class Prev:
         self.last = {f: (m, r) for m, f, r in state.last_notes}
         self.on_key = {pitch[m]: (m, f) for m, f, r in state.last_notes if r == state.place}
         self.fresh = [(m, f, r) for m, f, r in state.last_notes if t_up[m] > t - RECENT_S]
-        # (before a move of the rail: when each finger's lift ends, latest first)
+        # (before a move of the rail: when each finger is clear above every key, latest
+        # first; by the front rule for a move that keeps the play posture, by the black
+        # rule for one that changes it: ``planner.play.highclear``)
         timing = costs._timing  # (``Costs._times``' memo, read here: most find it)
-        self.lifts = sorted((((timing.get((pitch[m], f, r)) or costs._times(m, f, r))[0]
-                              + min(t_up[m], cut_up), m, f)
-                             for m, f, r in state.last_notes), key=lambda x: -x[0])
+        times = [((timing.get((pitch[m], f, r)) or costs._times(m, f, r)),
+                  min(t_up[m], cut_up), m, f) for m, f, r in state.last_notes]
+        self.lifts = sorted(((ts[0] + up, m, f) for ts, up, m, f in times),
+                            key=lambda x: -x[0])
+        self.lifts_black = sorted(((ts[2] + up, m, f) for ts, up, m, f in times),
+                                  key=lambda x: -x[0])
         self.lift_end = self.lifts[0][0] if self.lifts else -math.inf  # (the latest)
+        self.lift_end_black = self.lifts_black[0][0] if self.lifts_black else -math.inf
         # (the notes sounding that might ride along: their entry, the time their key is
         # down (from when it went down: a note struck late, ``State.late``, has less),
         # their press and when their key went down)
@@ -350,16 +369,19 @@ class Costs(ArmCosts):
             e = self._entry[key] = self.places.entry(finger, key[0], place)
         return e
 
-    def _times(self, note: int, finger: str, place: int) -> tuple[float, float]:
-        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry: around a move
-        of the arm, key up to the lifting finger clear above every key, and the descent's
-        part after the arm is still (memoised: the programme reads them for every
-        transition)."""
+    def _times(self, note: int, finger: str, place: int
+               ) -> tuple[float, float, float, float]:
+        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry by the front
+        rule (a move of the arm that keeps the play posture), then the same by the black
+        rule (one that changes it): around a move of the arm, key up to the lifting
+        finger clear above every key, and the descent's part after the arm is still
+        (memoised: the programme reads them for every transition)."""
         key = (self.pitch[note], finger, place)
         got = self._timing.get(key)
         if got is None:
-            e = self.entry(note, finger, place)
-            got = self._timing[key] = (self.places.rail_lift_s(e), self.places.rail_descent_s(e))
+            e, p = self.entry(note, finger, place), self.places
+            got = self._timing[key] = (p.rail_lift_s(e), p.rail_descent_s(e),
+                                       p.rail_lift_s(e, False), p.rail_descent_s(e, False))
         return got
 
     def before_rail_s(self, note: int, finger: str, place: int) -> float:
@@ -398,7 +420,7 @@ class Costs(ArmCosts):
             late = 0.0
             other = on_key.get(self.pitch[n])
             if other is not None and other[1] != f:  # another finger leaves the key first
-                late = self._leave_key_s(other, n, f, place)
+                late = self._leave_key_s(other, n, f, place, last.get(f))
             if f in last:
                 m, r = last[f]
                 early, again = self._strike_again(m, r, n, f, place)
@@ -406,9 +428,10 @@ class Costs(ArmCosts):
                     return math.inf
                 loss += early / self.dt
                 late = max(late, again)
-            loss += max(0.0, late) / self.dt
+            loss += late_frames(late, self.dt)
             if lates is not None and late > LATE_MIN_S:
-                lates.append((n, late))
+                lates.append((n, struck_s(self.notes[n].onset_s, self._t_down[n] + late,
+                                          self.dt) - self._t_down[n]))
         return loss
 
     def _strike_again(self, m: int, r: int, n: int, f: str, place: int) -> tuple[float, float]:
@@ -435,9 +458,27 @@ class Costs(ArmCosts):
                                                           self.entry(n, f, place))
         return got
 
-    def _leave_key_s(self, other: tuple[int, str], n: int, f: str, place: int) -> float:
+    def _leave_key_s(self, other: tuple[int, str], n: int, f: str, place: int,
+                     came: tuple[int, int] | None = None) -> float:
         """Seconds late when finger ``f`` strikes ``n`` on the key another finger has
-        (``other``: its note and finger): that one lifts first, then this one descends."""
+        (``other``: its note and finger): that one lifts first, then this one moves
+        across from its last key (``came``: its note and place; None: it has none) and
+        descends, as the motion plays it (``Motion._release_others_on``: the striker's
+        move across starts once the key is free)."""
         m2, g = other
-        gap = self.before_rail_s(m2, g, place) + self.after_rail_s(n, f, place)
+        across = 0.0 if came is None else (self._across_s(came[0], f, came[1], n, place) or 0.0)
+        gap = self.before_rail_s(m2, g, place) + across + self.after_rail_s(n, f, place)
         return max(0.0, gap - (self.t_down(n) - self.t_up(m2)))
+
+    def _across_s(self, m: int, f: str, r: int, n: int, place: int) -> float | None:
+        """Finger ``f``'s move across from its entry on ``m`` at place ``r`` to its entry
+        on ``n`` at ``place``: the motion's very move (``Places.across``; 0 for the same
+        entry, None where none is clear; memoised by keys and places)."""
+        key = ("across", self.pitch[m], f, r, self.pitch[n], place)
+        got = self._gaps.get(key, False)
+        if got is False:
+            a, b = self.entry(m, f, r), self.entry(n, f, place)
+            move = None if a is None or b is None or a is b else self.places.across(a, b)
+            got = self._gaps[key] = 0.0 if a is b else (None if move is None
+                                                         else move.duration_s)
+        return got

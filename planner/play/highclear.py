@@ -13,6 +13,18 @@ stays above it until the arm is still. The lift's slow last millimetres (the pro
 braking) and the descent's first overlap the arm's move instead of adding to it (a
 pose at crossing height whose body is not that high: the whole lift, as before).
 
+**The front rule.** A body in front of the black keys (a press on a white key's wide
+front: the default hand's long fingers in its first postures) passes over nothing but
+the white keys' tops while the rail moves along x: there it is clear ``CLEARANCE_M``
+above the white tops (``FRONT_CLEAR_Z_M``), where it lies in front of the black keys'
+front less the body rule's tolerance (``FRONT_Y_M``). A point of the path is clear when
+each body of the finger is clear by the black rule or by this one; the path is tested at
+``FRONT_SAMPLES`` points (the two rules together need not be monotone along it: a
+finger lifting from a front press may pass behind ``FRONT_Y_M`` before it is above the
+black tops). A move of the arm that changes the play posture moves the hand along y
+(the reach axis): the fingers' moments around it are the black rule's alone
+(``front=False``). Both are shipped in the move tables (``CLEAR_COLUMNS``).
+
 ``HighClear`` finds, for a straight move of one finger's joints (``profile.Move``), the
 time from which (a rise) or until which (a descent) the finger stays above that height: the
 point of the path where it crosses it, by forward kinematics at ``SAMPLES`` points and
@@ -34,6 +46,7 @@ from planner.hand.model import HandModel
 from planner.music import keyboard as kb
 from planner.play.atlas import Atlas, AtlasEntry
 from planner.play.atlassolve import CLEARANCE_M
+from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M
 from planner.play.movetable import HIGH_SAFE_Z_M, MoveTable
 from planner.play.profile import Move
 
@@ -41,10 +54,26 @@ SAMPLES = 5  # points of the path tested by forward kinematics (ends included)
 BISECTIONS = 5  # then halvings between the two samples around the crossing: 1/128 of
 # the path (about 0.25 mm of a 30 mm lift), the answer on the safe side
 BODY_CLEAR_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M  # every body this high clears every key
+WHITE_TOP_Z_M = 0.0  # the white keys' tops (``planner.music.keyboard.key``)
+FRONT_CLEAR_Z_M = WHITE_TOP_Z_M + CLEARANCE_M  # a body in front of the black keys this
+# high clears every key under it (the same clearance over the white tops)
+FRONT_Y_M = kb.BLACK_Y0_M - OTHER_KEY_TOLERANCE_M  # ... in front of this: the black keys'
+# front less the body rule's tolerance (``planner.play.fingerbody``: a body touching a key
+# by that much does not press it; the rail lands up to that far off its sample)
+FRONT_SAMPLES = 33  # the front rule's points of the path (ends included), then
+FRONT_BISECTIONS = 2  # halvings: the same 1/128 of the path as the black rule's search
 TIME_STEPS = 400  # the time is read from the profile at this many steps (the later/
 # earlier one, on the safe side: 0.15 ms of a 60 ms lift)
 CLEAR_MOVES = ("lift", "rise", "descent")  # an entry's moves whose moments are shipped:
 # ``Moves.lift(e, "high")``, ``Moves.rise(e)``, ``Moves.descend(e, "high")``
+CLEAR_RULES = ("front", "black")  # the table's columns: each move by the front rule, then
+# each by the black rule alone (``column``)
+
+
+def column(move: int, front: bool) -> int:
+    """The move table's column of ``CLEAR_MOVES[move]``'s moment by the front rule (or
+    the black rule alone)."""
+    return move + (0 if front else len(CLEAR_MOVES))
 
 
 def params() -> str:
@@ -52,7 +81,10 @@ def params() -> str:
     table made with others is not read: ``MoveTable.clear_s``)."""
     return json.dumps({"samples": SAMPLES, "bisections": BISECTIONS,
                        "body_clear_z_m": BODY_CLEAR_Z_M, "high_safe_z_m": HIGH_SAFE_Z_M,
-                       "time_steps": TIME_STEPS, "moves": CLEAR_MOVES}, sort_keys=True)
+                       "time_steps": TIME_STEPS, "moves": CLEAR_MOVES,
+                       "front_clear_z_m": FRONT_CLEAR_Z_M, "front_y_m": FRONT_Y_M,
+                       "front_samples": FRONT_SAMPLES, "front_bisections": FRONT_BISECTIONS,
+                       "rules": CLEAR_RULES}, sort_keys=True)
 
 
 class HighClear:
@@ -70,31 +102,34 @@ class HighClear:
         self._path: dict[tuple, float] = {}
         self._params = params()
 
-    def rise_clear_s(self, e: AtlasEntry, move: Move) -> float:
+    def rise_clear_s(self, e: AtlasEntry, move: Move, front: bool = True) -> float:
         """Seconds into ``move`` (``e``'s finger rising) from which it stays clear above
         every key to the move's end (its duration if it never is, or only at
-        the end)."""
-        got = self._shipped(e, move, True)
+        the end); ``front``: by the front rule too (False: the black rule alone, a
+        move of the arm that changes the play posture)."""
+        got = self._shipped(e, move, True, front)
         if got is not None:
             return got
-        return _time_at(move, self._point(e, move, True), rising=True)
+        return _time_at(move, self._point(e, move, True, front), rising=True)
 
-    def descent_clear_s(self, e: AtlasEntry, move: Move) -> float:
+    def descent_clear_s(self, e: AtlasEntry, move: Move, front: bool = True) -> float:
         """Seconds into ``move`` (``e``'s finger descending from crossing height) until
-        which it stays clear above every key (0 if it starts below that)."""
-        got = self._shipped(e, move, False)
+        which it stays clear above every key (0 if it starts below that); ``front`` as
+        in ``rise_clear_s``."""
+        got = self._shipped(e, move, False, front)
         if got is not None:
             return got
-        return _time_at(move, self._point(e, move, False), rising=False)
+        return _time_at(move, self._point(e, move, False, front), rising=False)
 
     def clear_row(self, e: AtlasEntry, moves) -> list[float]:
-        """The moments of ``e``'s ``CLEAR_MOVES`` (``moves``: its posture's ``Moves``),
-        searched: the move table's row."""
-        return [self.rise_clear_s(e, moves.lift(e, "high").move),
-                self.rise_clear_s(e, moves.rise(e).move),
-                self.descent_clear_s(e, moves.descend(e, "high").move)]
+        """The moments of ``e``'s ``CLEAR_MOVES`` (``moves``: its posture's ``Moves``) by
+        each of ``CLEAR_RULES``, searched: the move table's row."""
+        return [m for front in (True, False) for m in (
+            self.rise_clear_s(e, moves.lift(e, "high").move, front),
+            self.rise_clear_s(e, moves.rise(e).move, front),
+            self.descent_clear_s(e, moves.descend(e, "high").move, front))]
 
-    def _shipped(self, e: AtlasEntry, move: Move, rising: bool) -> float | None:
+    def _shipped(self, e: AtlasEntry, move: Move, rising: bool, front: bool) -> float | None:
         """The move table's moment when ``move`` is one of the entry's own
         ``CLEAR_MOVES`` (the very object its ``Moves`` keeps), else None."""
         if self.moves is None:
@@ -103,45 +138,49 @@ class HighClear:
         table: MoveTable = m.table
         if rising:
             if move is m.lift(e, "high").move:
-                return table.clear_s(e, 0, self._params)
+                return table.clear_s(e, column(0, front), self._params)
             if move is m.rise(e).move:
-                return table.clear_s(e, 1, self._params)
+                return table.clear_s(e, column(1, front), self._params)
             return None
         if move is m.descend(e, "high").move:
-            return table.clear_s(e, 2, self._params)
+            return table.clear_s(e, column(2, front), self._params)
         return None
 
-    def _point(self, e: AtlasEntry, move: Move, rising: bool) -> float:
+    def _point(self, e: AtlasEntry, move: Move, rising: bool, front: bool) -> float:
         """The path parameter where the finger crosses the clear height: rising, the least
         from which every point after it is clear (1: none but the end); descending, the
         greatest up to which every point is (0: the start is not). A descent from a pose
-        is the lift to it backwards: one search for both (memoised by the low end and
-        the way up)."""
+        is the lift to it backwards: one search for both (memoised by the low end, the
+        way up and the rule; a hand without the body rule has one rule)."""
+        front = front and self.atlases[e.posture].bodies is not None
         low, up = (move.q_a, move.dq) if rising else (move.q_a + move.dq, -move.dq)
-        key = (id(e), low.tobytes(), up.tobytes())
+        key = (id(e), low.tobytes(), up.tobytes(), front)
         got = self._path.get(key)
         if got is None:
-            got = self._path[key] = self._rise_point(e, low, up)
+            got = self._path[key] = self._rise_point(e, low, up, front)
         return got if rising else 1.0 - got
 
-    def _rise_point(self, e: AtlasEntry, q_low: np.ndarray, dq: np.ndarray) -> float:
-        ss = np.linspace(0.0, 1.0, SAMPLES)
-        bad = [i for i, s in enumerate(ss) if not self._clear(e, q_low + s * dq)]
+    def _rise_point(self, e: AtlasEntry, q_low: np.ndarray, dq: np.ndarray,
+                    front: bool) -> float:
+        samples, bisections = (FRONT_SAMPLES, FRONT_BISECTIONS) if front \
+            else (SAMPLES, BISECTIONS)
+        ss = np.linspace(0.0, 1.0, samples)
+        bad = [i for i, s in enumerate(ss) if not self._clear(e, q_low + s * dq, front)]
         if not bad:
             return 0.0
         i = bad[-1]
-        if i == SAMPLES - 1:
+        if i == samples - 1:
             return 1.0
         lo, hi = ss[i], ss[i + 1]  # (lo below, hi clear: the answer hi, the safe side)
-        for _ in range(BISECTIONS):
+        for _ in range(bisections):
             mid = 0.5 * (lo + hi)
-            if self._clear(e, q_low + mid * dq):
+            if self._clear(e, q_low + mid * dq, front):
                 hi = mid
             else:
                 lo = mid
         return float(hi)
 
-    def _clear(self, e: AtlasEntry, q_finger: np.ndarray) -> bool:
+    def _clear(self, e: AtlasEntry, q_finger: np.ndarray, front: bool) -> bool:
         h = self.hand
         q = self.atlases[e.posture].base.copy()
         q[h.joint_slice(e.finger)] = q_finger
@@ -150,7 +189,13 @@ class HighClear:
         if bodies is None:
             return bool(h.tip_position(q, h.fingers.index(e.finger))[2] >= HIGH_SAFE_Z_M)
         p, r = bodies.points(q, e.finger)
-        return bool(np.min(p[:, 2] - r) >= BODY_CLEAR_Z_M)
+        low = p[:, 2] - r
+        if not front:
+            return bool(np.min(low) >= BODY_CLEAR_Z_M)
+        # (each body clear by the black rule, or in front of the black keys and clear
+        # above the white ones)
+        return bool(np.all((low >= BODY_CLEAR_Z_M)
+                           | ((p[:, 1] + r <= FRONT_Y_M) & (low >= FRONT_CLEAR_Z_M))))
 
 
 def _time_at(move: Move, s: float, rising: bool) -> float:

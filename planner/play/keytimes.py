@@ -27,11 +27,23 @@ middle, where the plan crossed before) nor closer than ``ROW_MARGIN_S`` to the
 neighbouring row (which the check then sees up). At 100 Hz that is 0.9 of a row each
 way; at 50 Hz and slower the middle, as before. The check judges the rows as they are
 and scores them the same; the physics gains the margin it lacks.
+
+The lead is all the row allows, about the lag itself: a key that goes down later than its
+``key_down_s`` by any amount is down in the physics after the note's first row, and the
+physics loses that frame, where the check (judging the rows) loses none until the
+lateness passes the lead. The fingering's programme counts a late key the physics' way
+(``late_frames``): a whole frame from the first millisecond (``LATE_MIN_S``), a frame
+more for each row's time later. And the rows say so: a key that cannot go down by its
+target but could before the note's first row goes down just after that row instead
+(``struck_s``): the physics loses that row either way, and the check, judging the rows,
+now loses it too (it must never confirm a frame the physics refutes).
 """
 
 from __future__ import annotations
 
 import math
+
+from planner.check.criteria import NOTE_HIT_FRACTION
 
 # The hand's lag on a key in the physics replay, as a time: 2-2.5 mm of descent at the
 # crossing's 0.3-0.45 m/s, 4.4-8.3 ms on the sample songs (the history page above); 10 ms bounds it.
@@ -41,6 +53,9 @@ DRIVE_LAG_S = 0.010
 # replay's step) keeps the row before a note up and the row after it free by the rows,
 # three orders of magnitude to spare.
 ROW_MARGIN_S = 0.001
+# A key down this much after its target is on time: far below a frame (10 ms at 100 Hz),
+# above the float noise of the times it is worked out from.
+LATE_MIN_S = 1e-3
 
 
 def down_rows(dt_s: float) -> float:
@@ -79,3 +94,50 @@ def sounding_frames(down_s: float, up_s: float, dt_s: float) -> float:
     (``key_up_s``) sounds: the frames between the two crossings, less the parts of a row
     they sit inside the neighbouring row intervals."""
     return (up_s - down_s) / dt_s - (down_rows(dt_s) - up_rows(dt_s))
+
+
+def held_enough_s(onset_s: float, offset_s: float, down_s: float, cut_s: float,
+                  up_s: float, dt_s: float) -> float:
+    """The key-up of a note (``onset_s`` to ``offset_s``; down at ``down_s``, due up at
+    ``up_s``) cut to ``cut_s`` (a move needs the finger), kept down long enough that the
+    hardware still sounds the note where the check's rule does: a note the cut leaves
+    down in at least ``NOTE_HIT_FRACTION`` of its frames (a hit by the rows) stays down
+    until that share holds with the drive's lag at both ends (``DRIVE_LAG_S``: the key
+    goes down later and comes up earlier than the rows); a cut that loses the note
+    anyway is left as it is (the replay names it missed). The motion's rule
+    (``Motion._to_high``, ``Motion.place``) and the programme's estimate of it
+    (``ArmCosts._rail_loss``: a finger that lifts early for a move of the arm to strike
+    again on time)."""
+    if cut_s >= up_s:
+        return cut_s
+    k0, k1 = first_row(onset_s, dt_s), first_row(offset_s, dt_s)
+    need = math.ceil(NOTE_HIT_FRACTION * (k1 - k0) - 1e-9)  # the note's rows to hit it
+    # (its rows k with down_s <= k dt < cut_s: a hit by the rows, or lost anyway)
+    if max(0, min(k1, first_row(cut_s, dt_s)) - max(k0, first_row(down_s, dt_s))) < need:
+        return cut_s
+    first = max(k0, first_row(down_s + DRIVE_LAG_S, dt_s))
+    return min(up_s, max(cut_s, (first + need - 1) * dt_s + DRIVE_LAG_S + ROW_MARGIN_S))
+
+
+def late_frames(late_s: float, dt_s: float) -> float:
+    """The frames a note loses in the physics when its key goes down ``late_s`` after its
+    ``key_down_s`` (rows ``dt_s`` apart): none when on time (within ``LATE_MIN_S``), else
+    the rows from its first row to the one the drive's lag puts the key down before: the
+    target leads the first row by about the lag, so a row for every row's time late,
+    begun."""
+    if late_s <= LATE_MIN_S:
+        return 0.0
+    return float(math.ceil(late_s / dt_s - 1e-9))
+
+
+def struck_s(onset_s: float, down_s: float, dt_s: float) -> float:
+    """When the rows put down the key of a note starting at ``onset_s`` that its moves
+    could bring down at ``down_s`` at the earliest: then; or, when that is late (past
+    ``key_down_s`` by more than ``LATE_MIN_S``) but before the note's first row,
+    ``ROW_MARGIN_S`` after that row (the drive's lag loses the row in the physics either
+    way: the rows lose it too). The motion's rule (``Motion.place``) and the programme's
+    (``State.late``)."""
+    edge = first_row(onset_s, dt_s) * dt_s + ROW_MARGIN_S
+    if key_down_s(onset_s, dt_s) + LATE_MIN_S < down_s < edge:
+        return edge
+    return down_s

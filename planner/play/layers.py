@@ -195,11 +195,13 @@ class Layers(Costs):
                     continue
             key = (sounding_t, place, kept)
             got = steps.get(key)
-            if got is None:  # (its loss, and the notes it strikes late: ``State.late``)
+            if got is None:  # (its loss, the notes it strikes late, ``State.late``, and
+                # those that ride along on the arm's move, ``ArmCosts._rail_loss``)
                 lates: list = []
+                rode: list = []
                 step = self._same_rail_loss(ctx, new, lates) if place == here \
-                    else self._rail_loss(ctx, new, place, kept, lates)
-                got = steps[key] = (step, tuple(sorted(lates)))
+                    else self._rail_loss(ctx, new, place, kept, lates, rode)
+                got = steps[key] = (step, tuple(sorted(lates)), tuple(sorted(rode)))
             step = got[0]
             total = cost + step + tie
             if step == math.inf or total > bound:  # (inf: no move gets there)
@@ -207,7 +209,8 @@ class Layers(Costs):
             if old is None or total < old[0]:
                 if recent is None:
                     recent = self._recent(ctx, busy)
-                s = State(place, sounding_t, recent, got[1])
+                s = State(place, sounding_t, rode_to(recent, got[2], place), got[1],
+                          tuple((m, end_s) for m, _, end_s in got[2]))
                 if old is not None and old[2] != s:
                     del layer[shape]  # (another state of the shape: it comes after)
                 layer[shape] = (total, p, s)
@@ -322,6 +325,17 @@ class Layers(Costs):
                     last[f] = (m, r)
             got = ctx.recent[busy] = tuple(sorted((m, f, r) for f, (m, r) in last.items()))
         return got
+
+
+def rode_to(recent: tuple, rode: tuple, place: int) -> tuple:
+    """``State.recent`` after a move to ``place`` on which the notes ``rode`` ((note,
+    finger, the move's end)) rode along: their fingers are over their keys from there
+    now, as the motion carried them (``ArmMotion._move_rail``), not where they were
+    struck."""
+    if not rode:
+        return recent
+    moved = {(m, f) for m, f, _ in rode}
+    return tuple(sorted((m, f, place if (m, f) in moved else r) for m, f, r in recent))
 
 
 def _nearest_and_best(places: Places, cands: list[tuple[int, float]], here: int,

@@ -31,14 +31,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from planner.check.criteria import NOTE_HIT_FRACTION
 from planner.music import keyboard as kb
 from planner.play.armload import within_motors
 from planner.play.armmotion import ArmMotion, up_move
 from planner.play.atlas import SPAN_M, STEP_M, Atlas, AtlasEntry
 from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
-from planner.play.keytimes import DRIVE_LAG_S, ROW_MARGIN_S, first_row, key_down_s, key_up_s
+from planner.play.keytimes import held_enough_s, key_down_s, key_up_s, struck_s
 from planner.play.places import Places
 from planner.play.profile import Move, path_s
 
@@ -148,6 +147,7 @@ class _Finger:
     high_s: float = 0.0  # when it was last back at crossing height
     safe_s: float = 0.0  # ... and clear above every key on its way there (the arm may move:
     # ``planner.play.highclear``)
+    black_s: float = 0.0  # ... by the black rule alone (the arm may change its posture)
 
 
 @dataclass(frozen=True)
@@ -160,12 +160,14 @@ class Outcome:
 
 
 def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: float,
-             rail_free_s: float, committed_s: float):
+             rail_free_s: float, committed_s: float, front: bool = True):
     """The moves that bring finger ``st`` from where it is to key-down on ``e`` (no
     earlier than ``want``, no move starting before ``after_s`` nor ``committed_s`` (the
     rows written), below crossing height only once the rail is still, at
-    ``rail_free_s``): (key-down moment, [(t0, move), ...], the pose its last descent
-    starts from), or None when no checked path leads there."""
+    ``rail_free_s``, or clear above every key until then by the front rule, ``front``,
+    or the black rule alone, after a move that changed the play posture): (key-down
+    moment, [(t0, move), ...], the pose its last descent starts from), or None when no
+    checked path leads there."""
     floor = max(rail_free_s, committed_s, after_s)
     if st.pose == "press" and st.entry is e:  # the same key again: up to rise, down
         lift, desc = moves.lift(e, "rise"), moves.descend(e, "rise")
@@ -211,8 +213,8 @@ def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: fl
         steps.append((t, across))
     # (from crossing height it may start down while the rail moves, clear above every key
     # until the rail is still: ``planner.play.highclear``)
-    low = max(t + across_s, rail_free_s - moves.high.descent_clear_s(e, d_high.move), committed_s,
-              after_s)
+    low = max(t + across_s, rail_free_s - moves.high.descent_clear_s(e, d_high.move, front),
+              committed_s, after_s)
     t_desc = max(want - d_high.cross_s, low)
     steps.append((t_desc, d_high.move))
     return t_desc + d_high.cross_s, steps, "high"
@@ -236,6 +238,7 @@ class Motion(ArmMotion):
         if places.rail is not None:
             self.q0[places.rail] = rail0_m
         self.posture = posture
+        self.arm_front = True  # (the arm's last move kept its play posture: ``approach``)
         # (the arm's joints, ``arm``, as one track: the rail alone on a hand without a reach axis)
         self.arm_track = _Track(np.array([rail0_m, places.reach_m(posture)][:max(1, len(self.arm))]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
@@ -316,6 +319,7 @@ class Motion(ArmMotion):
         for st in self.fingers.values():
             st.high_s = max(st.high_s, t_s)
             st.safe_s = max(st.safe_s, t_s)
+            st.black_s = max(st.black_s, t_s)
         self.committed_s = max(self.committed_s, t_s)
 
     # ------------------------------------------------------------------ timing targets
@@ -334,21 +338,27 @@ class Motion(ArmMotion):
         e = self.entry(a)
         if abs(self.arm_track.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
             strikers = self._strikers.get(self.t_down(a.note), set()) | {a.finger}
-            self._move_rail(a.rail_m, a.posture, self.t_down(a.note) - self.moves.rail_descent_s(e),
-                            strikers)
+            front = a.posture == self.posture
+            self._move_rail(a.rail_m, a.posture,
+                            self.t_down(a.note) - self.moves.rail_descent_s(e, front), strikers)
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
         after = self._release_others_on(n.pitch, a.finger)
         found = approach(self.moves, st, e, want, after, self.arm_track.free_s,
-                         self.committed_s)
+                         self.committed_s, self.arm_front)
         if found is None:
             out = Outcome(a.note, None, None, SkipReason.NO_PATH,
                           f"no checked path of the {a.finger} to it")
             self.outcomes[a.note] = out
             return out
         found, timed_by = within_motors(self, a.finger, found, lambda places: approach(
-            places, st, e, want, after, self.arm_track.free_s, self.committed_s))
+            places, st, e, want, after, self.arm_track.free_s, self.committed_s,
+            self.arm_front))
         down_at, steps, start = found
+        struck = struck_s(n.onset_s, down_at, self.dt)  # (a late key: after the first row)
+        if struck > down_at:  # (the last step is the descent: it starts that much later)
+            steps = steps[:-1] + [(steps[-1][0] + struck - down_at, steps[-1][1])]
+            down_at = struck
         desc = timed_by.descend(e, start)
         press_end = down_at + desc.duration_s - desc.cross_s
         up = self._held_enough_s(a.note, down_at, self.t_up(a.note, a.release_s),
@@ -393,27 +403,15 @@ class Motion(ArmMotion):
             t0 = max(st.track.free_s, self.committed_s)
         end = st.track.add(t0, up.move)
         st.safe_s = end - up.move.duration_s + self.moves.high.rise_clear_s(st.entry, up.move)
+        st.black_s = end - up.move.duration_s + self.moves.high.rise_clear_s(
+            st.entry, up.move, front=False)
         st.pose, st.note, st.high_s = "high", None, end
         return end
 
     def _held_enough_s(self, note: int, down_s: float, cut_s: float, up_s: float) -> float:
-        """The key-up of ``note`` (down at ``down_s``, due up at ``up_s``) cut to ``cut_s``
-        (a move needs the finger), kept down long enough that the hardware still sounds
-        the note where the check's rule does: a note the cut leaves down in at least
-        ``NOTE_HIT_FRACTION`` of its frames (a hit by the rows) stays down until that share
-        holds with the drive's lag at both ends (``DRIVE_LAG_S``: the key goes down later
-        and comes up earlier than the rows); a cut that loses the note anyway is left as
-        it is (the replay names it missed)."""
-        if cut_s >= up_s:
-            return cut_s
-        n, dt = self.notes[note], self.dt
-        k0, k1 = first_row(n.onset_s, dt), first_row(n.offset_s, dt)
-        need = math.ceil(NOTE_HIT_FRACTION * (k1 - k0) - 1e-9)  # the note's rows to hit it
-        # (its rows k with down_s <= k dt < cut_s: a hit by the rows, or lost anyway)
-        if max(0, min(k1, first_row(cut_s, dt)) - max(k0, first_row(down_s, dt))) < need:
-            return cut_s
-        first = max(k0, first_row(down_s + DRIVE_LAG_S, dt))
-        return min(up_s, max(cut_s, (first + need - 1) * dt + DRIVE_LAG_S + ROW_MARGIN_S))
+        """``keytimes.held_enough_s`` of ``note`` (the programme reads the same)."""
+        n = self.notes[note]
+        return held_enough_s(n.onset_s, n.offset_s, down_s, cut_s, up_s, self.dt)
 
     def _release_others_on(self, pitch: int, finger: str) -> float:
         """Another finger on key ``pitch`` (pressing or waiting) leaves it, on time, for
@@ -437,9 +435,10 @@ class Motion(ArmMotion):
             times.insert(i, self.t_down(a.note))
             notes.insert(i, a)
 
-    def lift_by_s(self, st: _Finger, arm_s: float, after_s: float) -> float:
+    def lift_by_s(self, st: _Finger, arm_s: float, after_s: float, front: bool = True) -> float:
         """The latest key-up of pressing (or waiting) finger ``st`` for a move of the arm
-        starting at ``arm_s``: clear above every key by then (``planner.play.highclear``),
+        starting at ``arm_s``: clear above every key by then (``planner.play.highclear``,
+        by the front rule or, ``front`` False, a move that changes the posture, the black),
         and, where it strikes again after ``after_s`` (``expect``), at crossing height in
         time to move across and down onto that key on time (its lift's end is where its
         move across starts: a finger striking the move's note lifts that early even where
@@ -447,7 +446,7 @@ class Motion(ArmMotion):
         ends at ``arm_s``."""
         up = up_move(self.moves, st)
         by_end = arm_s - up.duration_s + up.cross_s
-        latest = arm_s - self.moves.high.rise_clear_s(st.entry, up.move) + up.cross_s
+        latest = arm_s - self.moves.high.rise_clear_s(st.entry, up.move, front) + up.cross_s
         times, notes = self._next.get(st.entry.finger, ((), ()))
         i = bisect.bisect_right(times, after_s)
         if i < len(times):

@@ -39,6 +39,8 @@ from planner.play.atlas import (
 )
 from planner.play.follow import FOLLOW_STEP_M, HOLD_MARGIN_M
 from planner.play.followmoves import FollowMoves
+from planner.play.margin import margin_scale
+from planner.play.margin import params as margin_params
 from planner.play.movetable import (
     ACROSS_SAMPLES,
     ENDS,
@@ -142,7 +144,8 @@ class Moves(FollowMoves):
         tolerance, the joints' limits."""
         h = self.hand
         # (with the body rule, its follow test: ``planner.play.follow``)
-        rule = {} if self.atlas.bodies is None else {"follow_step_m": FOLLOW_STEP_M}
+        rule = {} if self.atlas.bodies is None else {"follow_step_m": FOLLOW_STEP_M,
+                                                     "margin": margin_params()}
         return json.dumps({**rule, "atlas": self.atlas._params(), "cross_tol": CROSS_TOL,
                            "limit_fraction": LIMIT_FRACTION, "path_samples": PATH_SAMPLES,
                            "across_samples": ACROSS_SAMPLES, "high_safe_z_m": HIGH_SAFE_Z_M,
@@ -167,13 +170,17 @@ class Moves(FollowMoves):
     def _entry_scale(self, e: AtlasEntry, column: int) -> float:
         """How much slower than its joints allow the move between the entry's poses
         ``SCALE_PAIRS[column]`` runs to keep its tendons within their share of capacity
-        (``TendonLoad.time_scale``; the move table's, when it has the entry)."""
+        (``TendonLoad.time_scale``), and then to keep its servos' lag clear of the other
+        black keys (``planner.play.margin``; the move table's, when it has the entry)."""
         got = self.table.tendon_scale(e, column)
         if got is not None:
             return got
         a, b = (getattr(e, p) for p in SCALE_PAIRS[column])
         top = kb.key(60 + e.pitch_class).top_z_m if column < 3 else None
-        return self.finger_scale(e.finger, a, b, self._move(e.finger, a, b), top)
+        move = self._move(e.finger, a, b)
+        scale = self.finger_scale(e.finger, a, b, move, top)
+        return scale * margin_scale(self.atlas, e.finger, e.pitch_class, e.dx_m,
+                                    slowed(move, scale))
 
     def finger_scale(self, finger: str, qa: np.ndarray, qb: np.ndarray, move: Move,
                      key_top_z_m: float | None = None) -> float:

@@ -7,8 +7,9 @@ of entries, found once per hand and shipped beside the atlas
 * how much slower than its joints allow each of an entry's moves runs within the
   tendons' capacity (``Moves.entry_scale``, ``planner.play.tendonload``);
 * the moments an entry's lift to crossing height, its rise from the waiting pose and
-  its descent from crossing height pass the height that clears every key
-  (``planner.play.highclear``, with that module's parameters beside them);
+  its descent from crossing height pass the height that clears every key, by the front
+  rule and by the black rule alone (``planner.play.highclear``, with that module's
+  parameters beside them);
 * for every pair of one finger's entries, whether its move across at crossing height
   is clear of the keys (``Moves.across``);
 * for every pair of one finger's entries on one key (two places relative to the rail),
@@ -108,7 +109,7 @@ class MoveTable:
         return None if row is None else float(row[column])
 
     def clear_s(self, e: AtlasEntry, column: int, params: str) -> float | None:
-        """``HighClear``'s moment of the entry's move ``column`` (``highclear.CLEAR_MOVES``),
+        """``HighClear``'s moment of the entry's move ``column`` (``highclear.column``),
         None when the table was made with other ``params`` of its search or lacks it."""
         if params != self.clear_params:
             return None
@@ -265,7 +266,8 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
         "params": np.array(params)}
     if high is not None:  # (``HighClear``'s moments of every entry, and its parameters)
         high, clear_params = high
-        arrays["clear_s"] = np.array([high.clear_row(e, moves) for e in entries]).reshape(-1, 3)
+        rows = [high.clear_row(e, moves) for e in entries]
+        arrays["clear_s"] = np.array(rows).reshape(len(rows), len(rows[0]) if rows else 0)
         arrays["clear_params"] = np.array(clear_params)
     for f in hand.fingers:
         mine = [e for e in entries if e.finger == f]

@@ -216,18 +216,18 @@ class Places:
     def after_rail_s(self, e: AtlasEntry) -> float:
         return self.moves[e.posture].after_rail_s(e)
 
-    def rail_lift_s(self, e: AtlasEntry) -> float:
-        """Key up to the lifting finger clear above every key for good: the arm may move
-        from then on (``planner.play.highclear``; ``before_rail_s`` is to the lift's end)."""
+    def rail_lift_s(self, e: AtlasEntry, front: bool = True) -> float:
+        """Key up to the lifting finger clear above every key for good (``front``: by the
+        front rule, ``planner.play.highclear``): the arm may move from then on."""
         u = self.lift(e, "high")
-        return max(0.0, self.high.rise_clear_s(e, u.move) - u.cross_s)
+        return max(0.0, self.high.rise_clear_s(e, u.move, front) - u.cross_s)
 
-    def rail_descent_s(self, e: AtlasEntry) -> float:
+    def rail_descent_s(self, e: AtlasEntry, front: bool = True) -> float:
         """The start of the descent from crossing height that the arm must have ended
-        by, to key down: the descent's part below the clear height (``after_rail_s`` is
-        all of it)."""
+        by, to key down: the descent's part below the clear height (``front``: by the
+        front rule; ``after_rail_s`` is all of it)."""
         d = self.descend(e, "high")
-        return max(0.0, d.cross_s - self.high.descent_clear_s(e, d.move))
+        return max(0.0, d.cross_s - self.high.descent_clear_s(e, d.move, front))
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         """A finger's lift from ``a``, its move across and its descent onto ``b`` (the
