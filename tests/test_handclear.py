@@ -16,7 +16,8 @@ from planner.play.costs import Costs
 from planner.play.handclear import NoteReaches, collided_notes, least_reach_m, loose_bound
 from planner.play.hands import LEFT, RIGHT
 from planner.play.places import RAIL_STEP_M
-from planner.play.twohands import UNBOUNDED_M, PairPlanner
+from planner.play.twobounds import UNBOUNDED_M
+from planner.play.twohands import PairPlanner
 
 
 @pytest.fixture(scope="module")
@@ -118,7 +119,7 @@ def test_a_handed_note_refused_for_the_first_hands_bodies_is_named_by_the_first_
     from types import SimpleNamespace
 
     from planner.play.costs import Skip, SkipReason
-    from planner.play.twohands import left_out_of
+    from planner.play.twoplan import left_out_of
 
     def plan(*skips):
         return SimpleNamespace(verdict=SimpleNamespace(skipped=list(skips)))
