@@ -54,7 +54,8 @@ def test_clear_bounds_keep_the_reach_from_the_first_hands_edge() -> None:
 
 def test_settle_asks_no_note_out_again(pair, monkeypatch) -> None:
     """``settle``: a note taken out stays out (windows only grow, bounds only tighten),
-    so the next round asks only the others; the same bounds and notes out."""
+    so the next round asks only the others, and of those only the ones whose bound
+    changed (here none: each note asked once); the same bounds and notes out."""
     from planner.music import keyboard as kb
     from planner.play.costs import Costs
 
@@ -72,4 +73,41 @@ def test_settle_asks_no_note_out_again(pair, monkeypatch) -> None:
     bounds, out = settle(notes, pl.places, pl.memo, 100.0,
                          lambda out: [(-UNBOUNDED_M, hi)] * len(notes))
     assert out == frozenset({2}) and bounds == [(-UNBOUNDED_M, hi)] * len(notes)
-    assert asked.count(2) == 1 and sorted(asked) == [0, 0, 1, 1, 2, 3, 3, 4, 4]
+    assert sorted(asked) == [0, 1, 2, 3, 4]
+
+
+def test_settle_asks_again_only_the_notes_whose_bound_changed(pair, monkeypatch) -> None:
+    """``settle`` with a bound that tightens note 3's when note 2 is out: note 3 asked
+    again, no other; the same bounds and notes out as asking every note every round."""
+    from planner.music import keyboard as kb
+    from planner.play.costs import Costs
+
+    pl = pair.planners[LEFT]
+    notes = [Note(p, 0.5 * i, 0.5 * i + 0.3, 80) for i, p in enumerate((48, 50, 72, 52, 53))]
+    hi = kb.key(60).center_x_m - 0.05  # (the left hand's rail below middle C: C5 out)
+    tight = kb.key(52).center_x_m - 0.3  # (E3 out of reach from below it)
+
+    def bounds_of(out):
+        return [(-UNBOUNDED_M, tight if k == 3 and 2 in out else hi) for k in range(5)]
+
+    def every_round():  # (the rounds asking every note not out)
+        out: frozenset[int] = frozenset()
+        while True:
+            costs = Costs(notes, pl.places, 100.0, pl.memo, bounds_of(out))
+            now = frozenset(k for k in range(5) if k not in out and costs.reason(k))
+            if not now:
+                return bounds_of(out), out
+            out |= now
+
+    want = every_round()
+    asked: list[int] = []
+    reason = Costs.reason
+
+    def counted(self, k):
+        asked.append(k)
+        return reason(self, k)
+
+    monkeypatch.setattr(Costs, "reason", counted)
+    got = settle(notes, pl.places, pl.memo, 100.0, bounds_of)
+    assert got == want and got[1] == frozenset({2, 3})
+    assert sorted(asked) == [0, 1, 2, 3, 3, 4]

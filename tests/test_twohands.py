@@ -174,3 +174,32 @@ def test_hand_back_plans_the_first_hand_again_with_what_the_second_left_out(pair
               - {b.planned_of[k][x.note] for x in b.plans[k].verdict.skipped} for k in (0, 1)]
     assert not played[0] & played[1]
     assert all(b.assignment.hand[i] == RIGHT for i in b.planned_of[f])
+
+
+def test_plan_reads_give_each_plan_its_own_rows_and_plan_two_hands_lets_them_go(pair,
+                                                                                tmp_path
+                                                                                ) -> None:
+    from planner.play.twobounds import first_edge
+    from planner.play.twoplan import PlanReads, one_clock
+
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    plan = plan_two_hands(song, pair)
+    assert len(pair.reads) == 0  # (no plan held once the pair is planned)
+    reads = PlanReads()
+    for p in plan.plans:
+        tr = reads(p)
+        assert reads(p) is tr  # (read once)
+        fresh = p.trajectory
+        assert np.array_equal(tr.t_s, fresh.t_s) and np.array_equal(tr.q, fresh.q)
+    assert len(reads) == 2
+    # (the rows on one clock and the first hand's edge the same with the reads as without)
+    with_reads, without = one_clock(plan.plans, 100.0, reads), one_clock(plan.plans, 100.0)
+    assert with_reads.song_start_s == without.song_start_s == plan.rows.song_start_s
+    for a, b, c in zip(with_reads.q, without.q, plan.rows.q):
+        assert np.array_equal(a, b) and np.array_equal(a, c)
+    for k, side in enumerate((LEFT, RIGHT)):
+        e1 = first_edge(plan.plans[k], pair.hands[side], pair.edges[side], side, reads)
+        e2 = first_edge(plan.plans[k], pair.hands[side], pair.edges[side], side)
+        assert np.array_equal(e1.t_s, e2.t_s) and np.array_equal(e1.x_m, e2.x_m)
+    reads.clear()
+    assert len(reads) == 0

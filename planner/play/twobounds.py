@@ -39,6 +39,7 @@ if TYPE_CHECKING:
     from planner.hand.model import HandModel
     from planner.play.stream import PlayPlan
     from planner.play.twohands import PairPlanner
+    from planner.trajfile import Trajectory
 
 UNBOUNDED_M = 10.0  # a bound no rail reaches (the travel is a few metres at most)
 
@@ -132,15 +133,20 @@ def settle(notes, places: Places, memo: CostMemo, rate_hz: float,
            ) -> tuple[list[tuple[float, float]], frozenset[int]]:
     """``settled_bounds`` and the notes taken out (positions in ``notes``)."""
     out_of: frozenset[int] = frozenset()
+    before: list[tuple[float, float]] | None = None
     while True:
         bounds = bounds_of(out_of)
         costs = Costs(notes, places, rate_hz, memo, bounds)
-        # (the notes out already stay out: only the others are asked)
+        # (the notes out already stay out: only the others are asked, and of those only
+        # the ones whose bound changed: ``Costs.reason`` reads the note and its own bound
+        # only, so a note some place played within the same bound still is)
         now = frozenset(k for k in range(len(notes))
-                        if k not in out_of and costs.reason(k) is not None)
+                        if k not in out_of and (before is None or bounds[k] != before[k])
+                        and costs.reason(k) is not None)
         if not now:
             return bounds, out_of
         out_of |= now
+        before = bounds
 
 
 class FirstEdge(NamedTuple):
@@ -151,10 +157,12 @@ class FirstEdge(NamedTuple):
     x_m: np.ndarray
 
 
-def first_edge(plan: PlayPlan, hand: HandModel, edge: InnerEdge, side: str) -> FirstEdge:
+def first_edge(plan: PlayPlan, hand: HandModel, edge: InnerEdge, side: str,
+               read: Callable[[PlayPlan], Trajectory] | None = None) -> FirstEdge:
     """``side``'s inner edge per row of its plan ``plan`` (its rail less, a right hand, or
-    plus, a left one, its bodies' reach towards the other hand in that row's pose)."""
-    tr = plan.trajectory
+    plus, a left one, its bodies' reach towards the other hand in that row's pose);
+    ``read``: a plan's rows (``planner.play.twoplan.PlanReads``; None: ``plan.trajectory``)."""
+    tr = plan.trajectory if read is None else read(plan)
     inner_m = edge.inner_m(tr.q)
     rail_m = tr.q[:, hand.index["rail"]]
     return FirstEdge(tr.t_s - plan.song_start_s,

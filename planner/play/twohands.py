@@ -47,7 +47,7 @@ from planner.play.twobounds import (
     settled_bounds,
     windows,
 )
-from planner.play.twoplan import TwoHandPlan, one_clock, write_two_hands
+from planner.play.twoplan import PlanReads, TwoHandPlan, one_clock, write_two_hands
 
 
 class PairPlanner:
@@ -72,6 +72,9 @@ class PairPlanner:
         # (each place's own reach towards the other hand: the second hand's loosened rule)
         self.place_reach = {s: PlaceReach(self.planners[s].places, self.edges[s])
                             for s in SIDES}
+        # (each plan's rows read once while a pair is planned: ``plan_two_hands`` lets
+        # them go when it is done)
+        self.reads = PlanReads()
 
     def reach(self, side: str) -> HandReach:
         """``side``'s ``HandReach`` (of the pair's ``HandGap``)."""
@@ -179,7 +182,7 @@ def _plan_loose(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], su
             return None
         plan = plan_song(sub, pp.hands[side], None, rate_hz, song_name=song_name, planner=pl,
                          rail_bounds=bounds)
-        rows = one_clock((plan, first) if side == LEFT else (first, plan), rate_hz)
+        rows = one_clock((plan, first) if side == LEFT else (first, plan), rate_hz, pp.reads)
         hit = collided_notes(rows.t_s, rows.q[0], rows.q[1],
                              (pp.edges[LEFT], pp.edges[RIGHT]), rows.song_start_s,
                              windows(notes, idx, got["out"]), dt, c)
@@ -212,7 +215,7 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
              for s in plans[first].verdict.skipped}
     planned = {first: idx[first], second: tuple(sorted(set(idx[second]) | set(given)))}
     subs[second] = _sub_song(song, planned[second])
-    edge = first_edge(plans[first], pp.hands[first], pp.edges[first], first)
+    edge = first_edge(plans[first], pp.hands[first], pp.edges[first], first, pp.reads)
     plans[second] = _plan_second(song, pp, second, planned[second], subs[second], plans[first],
                                  edge, rate_hz, song_name)
     played = sum(_played_frames(plans[s], planned[s], notes, rate_hz) for s in SIDES)
@@ -236,7 +239,7 @@ def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
     plays = set(p.planned_of[s]) - gone
     idx = tuple(sorted((set(p.planned_of[f]) - plays) | gone))
     sub = _sub_song(song, idx)
-    edge = first_edge(p.plans[s], pp.hands[second], pp.edges[second], second)
+    edge = first_edge(p.plans[s], pp.hands[second], pp.edges[second], second, pp.reads)
     again = _plan_second(song, pp, first, idx, sub, p.plans[s], edge, rate_hz, song_name)
     plans = {first: again, second: p.plans[s]}
     planned = {first: idx, second: p.planned_of[s]}
@@ -272,6 +275,16 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
+    pp.reads.clear()
+    try:
+        return _plan_two_hands(song, pp, out_path, rate_hz, song_name, t_start)
+    finally:
+        pp.reads.clear()
+
+
+def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: float,
+                    song_name: str, t_start: float) -> TwoHandPlan:
+    """``plan_two_hands`` after its input's check (``t_start``: its clock's start)."""
     places = {s: pp.planners[s].places for s in SIDES}
     a = assign_hands(song.notes, pp.gap, places, rate_hz)
     tried = [plan_pass(song, pp, a, RIGHT, rate_hz, song_name)]
@@ -284,7 +297,7 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     if back is not None:
         tried.append(back)
         best = max((best, back), key=lambda p: p.played_frames)
-    rows = one_clock(best.plans, rate_hz)
+    rows = one_clock(best.plans, rate_hz, pp.reads)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
     plan = TwoHandPlan(best.assignment, pp.gap, best.plans, best.notes_of, rows, 0.0, least,

@@ -11,6 +11,7 @@ row (rest) to the end, so both hands' rows are on one clock with one ``song_star
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -22,6 +23,7 @@ from planner.play.costs import SkipReason
 from planner.play.handgap import HandGap
 from planner.play.hands import LEFT, RIGHT, SIDES, HandAssignment
 from planner.play.stream import ROW_BLOCK, PlayPlan
+from planner.trajfile import Trajectory
 
 if TYPE_CHECKING:
     from planner.play.twohands import PairPlanner
@@ -138,9 +140,42 @@ def write_two_hands(plan: TwoHandPlan, song: Song, pp: PairPlanner, out_path: st
     return w.text
 
 
-def one_clock(plans: tuple[PlayPlan, PlayPlan], rate_hz: float) -> PairRows:
-    """Both plans' rows on one clock (module docstring)."""
-    trs = tuple(p.trajectory for p in plans)
+READS_HELD = 32  # plans ``PlanReads`` holds at most (a pair plans at most 14 one-hand
+# plans: four ways, each its first hand once and its second up to 1 + MAX_ROUNDS times;
+# past this it starts afresh, so calls outside ``plan_two_hands`` never grow it unbounded)
+
+
+class PlanReads:
+    """Each one-hand plan's rows read back from its text once (``KeptText.trajectory``
+    parses the whole text at every call; a plan is read by ``first_edge``, by each
+    loosened round's ``one_clock`` and by the kept way's): by the plan's identity, the
+    plan held with its rows so that identity is never reused while it is held."""
+
+    def __init__(self) -> None:
+        self._got: dict[int, tuple[PlayPlan, Trajectory]] = {}
+
+    def __call__(self, plan: PlayPlan) -> Trajectory:
+        """``plan.trajectory``, parsed at the first call for ``plan``."""
+        got = self._got.get(id(plan))
+        if got is None:
+            if len(self._got) >= READS_HELD:
+                self._got.clear()
+            got = self._got[id(plan)] = (plan, plan.trajectory)
+        return got[1]
+
+    def clear(self) -> None:
+        """Let every plan held go."""
+        self._got.clear()
+
+    def __len__(self) -> int:
+        return len(self._got)
+
+
+def one_clock(plans: tuple[PlayPlan, PlayPlan], rate_hz: float,
+              read: Callable[[PlayPlan], Trajectory] | None = None) -> PairRows:
+    """Both plans' rows on one clock (module docstring); ``read``: a plan's rows
+    (``PlanReads``; None: ``plan.trajectory``)."""
+    trs = tuple(p.trajectory if read is None else read(p) for p in plans)
     start = max(p.song_start_s for p in plans)
     lead = [round((start - p.song_start_s) * rate_hz) for p in plans]
     n = max(len(tr.t_s) + k for tr, k in zip(trs, lead))
