@@ -44,7 +44,8 @@ if TYPE_CHECKING:  # (what editors and type checkers see; at run time: on first 
     from planner.pairfile import PairPlan, PairWriter
     from planner.planfile import read_plan
     from planner.play import Planner, PlayPlan, plan_song
-    from planner.play.twohands import PairPlanner, TwoHandPlan, plan_two_hands
+    from planner.play.twohands import PairPlanner, plan_two_hands
+    from planner.play.twoplan import TwoHandPlan
     from planner.simulate import simulate_trajectory
     from planner.simulate.report import SimulateReport
     from planner.trajfile import Trajectory, read_trajectory
@@ -59,7 +60,7 @@ _API = {
     "PlayPlan": "planner.play",
     "plan_song": "planner.play",
     "PairPlanner": "planner.play.twohands",
-    "TwoHandPlan": "planner.play.twohands",
+    "TwoHandPlan": "planner.play.twoplan",
     "plan_two_hands": "planner.play.twohands",
     "plan_catch": "planner.catch",
     "CatchSession": "planner.catch",

@@ -16,7 +16,8 @@ from planner.play.costs import Costs
 from planner.play.handclear import NoteReaches, collided_notes, least_reach_m, loose_bound
 from planner.play.hands import LEFT, RIGHT
 from planner.play.places import RAIL_STEP_M
-from planner.play.twohands import UNBOUNDED_M, PairPlanner
+from planner.play.twobounds import UNBOUNDED_M
+from planner.play.twohands import PairPlanner
 
 
 @pytest.fixture(scope="module")
@@ -118,7 +119,7 @@ def test_a_handed_note_refused_for_the_first_hands_bodies_is_named_by_the_first_
     from types import SimpleNamespace
 
     from planner.play.costs import Skip, SkipReason
-    from planner.play.twohands import left_out_of
+    from planner.play.twoplan import left_out_of
 
     def plan(*skips):
         return SimpleNamespace(verdict=SimpleNamespace(skipped=list(skips)))
@@ -138,3 +139,36 @@ def test_a_handed_note_refused_for_the_first_hands_bodies_is_named_by_the_first_
     assert got[1].detail.startswith("late;") and got[1].detail.endswith("bodies")
     assert got[2].reason is SkipReason.TOO_LATE and got[2].detail == "late2"
     assert got[3].reason is SkipReason.OTHER_HAND and got[3].detail == "bodies2"
+
+
+def _gathered(costs, pr, note):
+    """``note``'s places' rails and reaches gathered afresh (no ``PlaceReach.presses``)."""
+    qs = [(f, q) for f in costs.places.hand.fingers for q in costs.rails(f, note)]
+    return (np.array([costs.places.rail_m(q) for _, q in qs]),
+            np.array([pr.reach_m(f, costs.notes[note].pitch, q) for f, q in qs]))
+
+
+@pytest.mark.parametrize("side", [LEFT, RIGHT])
+def test_note_reaches_shared_by_key_and_force_equal_a_fresh_gathering(pair, side) -> None:
+    pr = pair.place_reach[side]
+    a = _costs(pair, side, [Note(64, 0.0, 0.5, 80)])
+    # (the same key and velocity at another position, among other notes; and softer)
+    b = _costs(pair, side, [Note(60, 0.0, 0.2, 80), Note(64, 1.0, 1.3, 80),
+                            Note(64, 2.0, 2.5, 20)])
+    got_a = NoteReaches(a, pr).of(0)
+    nr_b = NoteReaches(b, pr)
+    assert nr_b.of(1) is got_a  # (gathered once for the key and force)
+    for costs, nr, k in ((a, NoteReaches(a, pr), 0), (b, nr_b, 0), (b, nr_b, 1), (b, nr_b, 2)):
+        rail, reach = nr.of(k)
+        fresh_rail, fresh_reach = _gathered(costs, pr, k)
+        assert rail.size and np.array_equal(rail, fresh_rail)
+        assert np.array_equal(reach, fresh_reach)
+
+
+def test_note_reaches_refuse_bounded_costs_and_other_places(pair) -> None:
+    pl = pair.planners[LEFT]
+    bounded = Costs([Note(64, 0.0, 0.5, 80)], pl.places, 100.0, pl.memo, [(-1.0, 1.0)])
+    with pytest.raises(ValueError):
+        NoteReaches(bounded, pair.place_reach[LEFT])
+    with pytest.raises(ValueError):
+        NoteReaches(_costs(pair, LEFT, [Note(64, 0.0, 0.5, 80)]), pair.place_reach[RIGHT])

@@ -6,7 +6,6 @@ line's errors and its one-part file."""
 from __future__ import annotations
 
 import json
-import math
 import subprocess
 import sys
 from pathlib import Path
@@ -19,13 +18,7 @@ from planner.hand.model import load_hand
 from planner.music.midi import Note, load_song, write_notes_midi
 from planner.play.hands import LEFT, RIGHT, MoveReason
 from planner.play.stream import Planner
-from planner.play.twohands import (
-    UNBOUNDED_M,
-    PairPlanner,
-    clear_bounds,
-    plan_two_hands,
-    windows,
-)
+from planner.play.twohands import PairPlanner, plan_two_hands
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -100,38 +93,6 @@ def test_same_song_same_bytes(pair, tmp_path) -> None:
     song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
     a, b = (plan_two_hands(song, pair).text for _ in range(2))
     assert a == b and a.startswith("#")
-
-
-def test_windows_skip_the_notes_out_of_reach() -> None:
-    notes = [Note(60, t, t + 0.2, 80) for t in (0.0, 1.0, 2.0, 3.0)]
-    w = windows(notes, (0, 1, 2, 3))
-    assert w[0] == (-math.inf, 1.1) and w[1] == (0.0, 2.1) and w[3] == (2.0, math.inf)
-    # (the note at 2 s played by no place: the hand stays from the one at 1 s to 3 s)
-    w = windows(notes, (0, 1, 2, 3), frozenset({2}))
-    assert w[1] == (0.0, 3.1) and w[3] == (1.0, math.inf)
-
-
-def test_left_bound_is_the_right_rail_less_the_gap_over_the_window(pair) -> None:
-    notes = [Note(48, 1.0, 1.2, 80), Note(50, 2.0, 2.2, 80)]
-    t = np.arange(0, 400) / 100.0
-    rail = np.where(t < 1.5, 0.30, 0.10)  # (the right hand comes down at 1.5 s)
-    gap = pair.gap  # (the right hand's bodies at their farthest reach whatever its pose)
-    b = clear_bounds(notes, LEFT, (0, 1), t, rail - gap.right.inner_extent_m,
-                     gap.left.inner_extent_m + gap.clearance_m, 0.01)
-    # (the first note's window lasts to the second's onset and half of it: it holds the
-    # rail from before the right hand came down to after)
-    assert b[0][1] == pytest.approx(0.10 - pair.gap.rail_gap_m)
-    assert b[1][1] == pytest.approx(0.10 - pair.gap.rail_gap_m)
-
-
-def test_clear_bounds_keep_the_reach_from_the_first_hands_edge() -> None:
-    notes = [Note(48, 1.0, 1.2, 80), Note(72, 1.0, 1.2, 80)]
-    t = np.arange(0, 300) / 100.0
-    edge = np.where(t < 1.5, 0.20, 0.25)  # (the first hand's inner edge, row by row)
-    (lo, hi), = clear_bounds(notes, LEFT, (0,), t, edge, 0.1, 0.01)
-    assert lo == -UNBOUNDED_M and hi == pytest.approx(0.10)  # (its least, less the reach)
-    (lo, hi), = clear_bounds(notes, RIGHT, (1,), t, edge, 0.1, 0.01)
-    assert hi == UNBOUNDED_M and lo == pytest.approx(0.35)  # (its most, plus the reach)
 
 
 def test_inner_edge_never_exceeds_the_pairs_farthest_reach(pair) -> None:
@@ -215,25 +176,30 @@ def test_hand_back_plans_the_first_hand_again_with_what_the_second_left_out(pair
     assert all(b.assignment.hand[i] == RIGHT for i in b.planned_of[f])
 
 
-def test_settle_asks_no_note_out_again(pair, monkeypatch) -> None:
-    """``settle``: a note taken out stays out (windows only grow, bounds only tighten),
-    so the next round asks only the others; the same bounds and notes out."""
-    from planner.music import keyboard as kb
-    from planner.play import twohands
-    from planner.play.costs import Costs
+def test_plan_reads_give_each_plan_its_own_rows_and_plan_two_hands_lets_them_go(pair,
+                                                                                tmp_path
+                                                                                ) -> None:
+    from planner.play.twobounds import first_edge
+    from planner.play.twoplan import PlanReads, one_clock
 
-    pl = pair.planners[LEFT]
-    notes = [Note(p, 0.5 * i, 0.5 * i + 0.3, 80) for i, p in enumerate((48, 50, 72, 52, 53))]
-    hi = kb.key(60).center_x_m - 0.05  # (the left hand's rail below middle C: C5 out)
-    asked: list[int] = []
-    reason = Costs.reason
-
-    def counted(self, k):
-        asked.append(k)
-        return reason(self, k)
-
-    monkeypatch.setattr(Costs, "reason", counted)
-    bounds, out = twohands.settle(notes, pl.places, pl.memo, 100.0,
-                                  lambda out: [(-UNBOUNDED_M, hi)] * len(notes))
-    assert out == frozenset({2}) and bounds == [(-UNBOUNDED_M, hi)] * len(notes)
-    assert asked.count(2) == 1 and sorted(asked) == [0, 0, 1, 1, 2, 3, 3, 4, 4]
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    plan = plan_two_hands(song, pair)
+    assert len(pair.reads) == 0  # (no plan held once the pair is planned)
+    reads = PlanReads()
+    for p in plan.plans:
+        tr = reads(p)
+        assert reads(p) is tr  # (read once)
+        fresh = p.trajectory
+        assert np.array_equal(tr.t_s, fresh.t_s) and np.array_equal(tr.q, fresh.q)
+    assert len(reads) == 2
+    # (the rows on one clock and the first hand's edge the same with the reads as without)
+    with_reads, without = one_clock(plan.plans, 100.0, reads), one_clock(plan.plans, 100.0)
+    assert with_reads.song_start_s == without.song_start_s == plan.rows.song_start_s
+    for a, b, c in zip(with_reads.q, without.q, plan.rows.q):
+        assert np.array_equal(a, b) and np.array_equal(a, c)
+    for k, side in enumerate((LEFT, RIGHT)):
+        e1 = first_edge(plan.plans[k], pair.hands[side], pair.edges[side], side, reads)
+        e2 = first_edge(plan.plans[k], pair.hands[side], pair.edges[side], side)
+        assert np.array_equal(e1.t_s, e2.t_s) and np.array_equal(e1.x_m, e2.x_m)
+    reads.clear()
+    assert len(reads) == 0

@@ -69,6 +69,9 @@ class PlaceReach:
                             keys.append((p, f, pc, k))
                             Q += [at.full_q(e, pose, 0.0, tucked)
                                   for pose in ("press", "rise", "hover", "high")]
+        # (every place that presses a key with a force, with its reach: ``NoteReaches``'
+        # arrays, shared by every song and way the pair plans)
+        self.presses: dict[tuple[int, float], tuple[np.ndarray, np.ndarray]] = {}
         if not keys:
             self._reach: dict = {}
             return
@@ -89,24 +92,29 @@ class PlaceReach:
 class NoteReaches:
     """Per note of a song, every place that presses it (``costs``: no bounds): its rail (m)
     and the hand's reach from there towards the other hand (``PlaceReach``), as arrays,
-    gathered once per note and read by every bound the rounds try (``loose_bound``,
+    gathered once per key and force (``Costs.rails``' own key: the places that press a note
+    with no bounds are its key's and its force's) and kept in ``PlaceReach.presses`` for
+    every song and way of the pair, read by every bound the rounds try (``loose_bound``,
     ``least_reach_m``)."""
 
     def __init__(self, costs: Costs, pr: PlaceReach) -> None:
+        if costs.bound is not None or costs.places is not pr.places:
+            raise ValueError("NoteReaches reads every place of the reach's own hand: "
+                             "costs with no bounds, on the same places")
         self.costs, self.pr = costs, pr
-        self._of: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def of(self, note: int) -> tuple[np.ndarray, np.ndarray]:
         """``note``'s places' rails (m) and reaches (m, ``math.inf``: never clear)."""
-        got = self._of.get(note)
+        c = self.costs
+        key = (c.pitch[note], c.force[note])
+        got = self.pr.presses.get(key)
         if got is None:
-            c = self.costs
-            pitch = c.notes[note].pitch
+            pitch = c.pitch[note]
             rail_m, reach_m = c.places.rail_m, self.pr.reach_m
             qs = [(f, q) for f in c.places.hand.fingers for q in c.rails(f, note)]
-            got = self._of[note] = (np.array([rail_m(q) for _, q in qs], dtype=float),
-                                    np.array([reach_m(f, pitch, q) for f, q in qs],
-                                             dtype=float))
+            got = self.pr.presses[key] = (
+                np.array([rail_m(q) for _, q in qs], dtype=float),
+                np.array([reach_m(f, pitch, q) for f, q in qs], dtype=float))
         return got
 
 

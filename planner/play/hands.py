@@ -43,6 +43,11 @@ LEFT, RIGHT = "left", "right"
 SIDES = (LEFT, RIGHT)
 
 
+def other_side(side: str) -> str:
+    """The other hand's side."""
+    return RIGHT if side == LEFT else LEFT
+
+
 class HintSource(enum.Enum):
     """How the file's parts gave the hint."""
 

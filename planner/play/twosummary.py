@@ -8,7 +8,7 @@ from collections import Counter
 
 from planner.music.keyboard import pitch_name
 from planner.play.hands import SIDES
-from planner.play.twohands import TwoHandPlan
+from planner.play.twoplan import TwoHandPlan
 
 
 def _song_s(notes) -> float:
