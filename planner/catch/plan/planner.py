@@ -216,7 +216,7 @@ class CatchPlanner:
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
         if soft and not plan.feasible:  # the palm turned up past facing the ball (the roll)
             plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, **kw), plan,
-                                    self.wrist)
+                                    self.wrist, self.rig.i_reach is not None)
         return replace(plan, planning_s=time.perf_counter() - t0)
 
     def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP
