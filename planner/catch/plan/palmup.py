@@ -35,10 +35,11 @@ from planner.hand.model import GRAVITY_WORLD
 PALM_UP_TILTS_DEG = (20.0, 25.0, 30.0, 35.0, 40.0)  # how far the palm is turned up past
 # facing the ball, tried in this order (the least first: the plan nearest the facing catch).
 # 20 deg is the first beyond the soft stop's own search (TILTS_FINE_DEG: to 15 deg, for the
-# motors' load); 40 deg the last the pad's stop keeps in the palm's friction cone (mu 0.8)
-# on the roll rule's throws (measured: 0 m / 25 deg / 1.0 m leaves it by 2.9 N at 50 deg,
-# 0 m / 20 deg / 1.0 m by 0.6 N at 30 deg); 5 deg apart as the coarse stop's tilts (10 deg
-# steps missed 0 m / 20 deg / 1.0 m: 152 mm of roll at 20 deg, the cone at 30 deg)
+# motors' load); to 40 deg: further up the pad's stop leaves the palm's friction cone (mu
+# 0.8: it must take out the ball's speed along the palm, |v| sin(tilt); measured, 0 m / 25
+# deg / 1.0 m leaves it by 2.9 N at 50 deg, 0 m / 20 deg / 1.0 m by 0.2-0.6 N from 25 deg);
+# 5 deg apart as the coarse stop's tilts (the least tilt that holds: the palm nearest
+# facing the ball)
 
 
 def palm_up_sign(wrist: Wrist) -> float:
@@ -63,7 +64,7 @@ def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wr
     """``plan`` (infeasible, the roll among its reasons) planned again with the palm turned
     up past facing the ball (``palm_up_grids``): on the rig's reach axis where the hand has
     one (``reach``; the arm alone places the ball on a palm tilted this far at few tilts:
-    none on the wide grid's roll throws), else by the arm alone; ``plans(rig=, grid=)``:
+    0 m / 25 deg / 1.0 m at none of 20-50 deg), else by the arm alone; ``plans(rig=, grid=)``:
     ``CatchPlanner._plans`` of the throw. The first feasible, with a note naming the tilt and
     what failed facing the ball; else ``plan`` with each tilt's first reason in a note."""
     if CatchReason.ROLL not in plan.reason_kinds:
