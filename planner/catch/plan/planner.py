@@ -28,6 +28,7 @@ from planner.catch.plan.drop import add_drop
 from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.plan.mount import CatchMount
+from planner.catch.plan.palmup import palm_up_fallback
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.results import (
     CatchPlan,
@@ -218,6 +219,9 @@ class CatchPlanner:
                 plan = replace(other, notes=other.notes + (
                     "the fingertips' closing (bodies not kept clear of the ball): the "
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
+        if soft and not plan.feasible:  # the palm turned up past facing the ball (the roll)
+            plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, **kw), plan,
+                                    self.wrist, self.rig.i_reach is not None)
         return replace(plan, planning_s=time.perf_counter() - t0)
 
     def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP

@@ -441,9 +441,12 @@ def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.
                  speeds: Callable[..., np.ndarray] | None,
                  tilts_deg: tuple[float, ...] = TILTS_DEG):
     """``_best_tilt`` at one placement of the palm (``place``: tilt -> intercept or None),
-    over ``tilts_deg`` (0, then each side outwards in their order)."""
+    over ``tilts_deg`` (0, then each side outwards in their order; a grid without 0, as
+    ``planner.catch.plan.palmup``'s, in its own order)."""
     found = None
-    for side in ((0.0, *(x for x in tilts_deg if x < 0)), tuple(x for x in tilts_deg if x > 0)):
+    sides = ((0.0, *(x for x in tilts_deg if x < 0)), tuple(x for x in tilts_deg if x > 0)) \
+        if 0.0 in tilts_deg else (tuple(tilts_deg),)
+    for side in sides:
         # outwards from 0 on each side, while the tilt keeps helping (the load's lever about
         # the wrist changes smoothly with it)
         for tilt in (side if soft else side[:1] if side and side[0] == 0.0 else ()):

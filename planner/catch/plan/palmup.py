@@ -1,0 +1,84 @@
+"""The palm-up catch (issue 31, item 4): where every other plan of a throw loses the ball to
+the roll rule (``planner.check.ballroll``: it rolls off the palm's wrist side before the
+wrist's turn levels the palm), the palm meets the ball turned up, past facing it, about the
+wrist's flexion axis -- as a person catches a short or steep throw palm up.
+
+Why it holds (``docs/history/2026-12-07-catch-palmup.md``): a palm that faces the ball of a
+short flat throw stands steep (0 m / 25 deg / 1.0 m: its normal 67 deg from up, the wrist
+below the fingers), so the landed ball rolls down towards the wrist under gravity while the
+wrist's turn levels the palm, and keeps that speed on the level palm. Turned up by a tilt
+beta past facing, the palm is beta less steep when the ball lands (gravity's pull towards
+the wrist 5/7 g sin(steepness)), and the ball's own speed along it, |v| sin(beta), points
+towards the fingers (a palm turned up receives the ball moving towards its finger side,
+where the fingers and the palm's cup stop it; the roll rule counts no roll that way). The
+rig's reach axis puts the tilted palm on the ball's path (``find_intercept_square``: the
+arm alone places the ball on a tilted palm at few tilts); the soft stop, the turn, the
+self-check and the roll rule are the planner's as for any plan. The tilt is bounded by the
+palm's friction cone: the pad's stopping force must stay within it, and the larger the tilt
+the larger the ball's speed along the palm it must take out (measured, 0 m / 25 deg /
+1.0 m: the stop leaves the cone from 50 deg).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from planner.catch.plan.intercept import Wrist
+from planner.catch.plan.reasons import CatchReason, reasons_text
+from planner.catch.plan.results import CatchPlan
+from planner.catch.plan.stopping import CONTACT_SHARES, StopGrid
+from planner.hand.model import GRAVITY_WORLD
+
+PALM_UP_TILTS_DEG = (20.0, 25.0, 30.0, 35.0, 40.0)  # how far the palm is turned up past
+# facing the ball, tried in this order (the least first: the plan nearest the facing catch).
+# 20 deg is the first beyond the soft stop's own search (TILTS_FINE_DEG: to 15 deg, for the
+# motors' load); to 40 deg: further up the pad's stop leaves the palm's friction cone (mu
+# 0.8: it must take out the ball's speed along the palm, |v| sin(tilt); measured, 0 m / 25
+# deg / 1.0 m leaves it by 2.9 N at 50 deg, 0 m / 20 deg / 1.0 m by 0.2-0.6 N from 25 deg);
+# 5 deg apart as the coarse stop's tilts (the least tilt that holds: the palm nearest
+# facing the ball)
+
+
+def palm_up_sign(wrist: Wrist) -> float:
+    """The sign of the flexion (rad about ``wrist.e_f``) that turns the palm's normal
+    towards up (against gravity) from the zero-flexion palm: +1 or -1. The normal n(theta)
+    = Rot(e_f, theta) n0 rises at d(n . up)/d theta = (e_f x n(theta)) . up, taken at
+    theta 0 (the tilts stop short of a palm facing straight up, where it changes sign)."""
+    up = -np.asarray(GRAVITY_WORLD, dtype=float)
+    rise = float(np.cross(wrist.e_f, wrist.n0) @ up)
+    return 1.0 if rise >= 0.0 else -1.0
+
+
+def palm_up_grids(wrist: Wrist) -> tuple[StopGrid, ...]:
+    """The soft stop's grids of the palm-up catch: one tilt each (``PALM_UP_TILTS_DEG``, the
+    side ``palm_up_sign`` turns up), the contact shares as every plan's."""
+    s = palm_up_sign(wrist)
+    return tuple(StopGrid((s * tilt,), CONTACT_SHARES) for tilt in PALM_UP_TILTS_DEG)
+
+
+def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wrist,
+                     reach: bool) -> CatchPlan:
+    """``plan`` (infeasible, the roll among its reasons) planned again with the palm turned
+    up past facing the ball (``palm_up_grids``): on the rig's reach axis where the hand has
+    one (``reach``; the arm alone places the ball on a palm tilted this far at few tilts:
+    0 m / 25 deg / 1.0 m at none of 20-50 deg), else by the arm alone; ``plans(rig=, grid=)``:
+    ``CatchPlanner._plans`` of the throw. The first feasible, with a note naming the tilt and
+    what failed facing the ball; else ``plan`` with each tilt's first reason in a note."""
+    if CatchReason.ROLL not in plan.reason_kinds:
+        return plan
+    tried = []
+    for grid in palm_up_grids(wrist):
+        tilt = abs(grid.tilts_deg[0])
+        other = plans(rig=reach, grid=grid)
+        if other.feasible:
+            return replace(other, notes=other.notes + (
+                f"the palm meets the ball turned up {tilt:g} deg past facing it"
+                f"{' (the reach axis placing it)' if reach else ''}: facing the ball "
+                + reasons_text(plan.reasons),))
+        tried.append(f"{tilt:g} deg: " + reasons_text(other.reasons[:1]))
+    return replace(plan, notes=plan.notes + (
+        "the palm turned up past facing the ball: " + "; ".join(tried),))
+
