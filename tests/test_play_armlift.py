@@ -1,0 +1,75 @@
+"""Keys let up early for a move of the arm (planner/play/armcost.py ``ArmCosts._cut_lifts``):
+the programme's estimate of the new key's down and of the cut key's up is the motion's
+(planner/play/motion.py ``Motion.lift_by_s``): a finger whose key is due up after the arm
+must start, to put the next key down on time, lets it up that early, held as long as its
+note still sounds (``keytimes.held_enough_s``)."""
+
+from __future__ import annotations
+
+import pytest
+
+from planner.music.midi import Note
+from planner.play.costs import Costs, State
+from planner.play.fingering import Assignment
+from planner.play.motion import Motion
+from planner.play.places import Places
+
+
+@pytest.fixture(scope="module")
+def places(hand) -> Places:
+    return Places(hand)
+
+
+def _case(places, start_s: float, pitch: int, posture: int, finger: str):
+    """The index holds C4 from ``start_s`` to 1.0 s, then ``finger`` strikes ``pitch`` at
+    1.0 s from the nearest place of ``posture`` (the rail's move too long to start after
+    C4's key is due up); the programme's and the motion's key times."""
+    notes = (Note(60, start_s, 1.0, 80), Note(pitch, 1.0, 1.5, 80))
+    costs = Costs(notes, places, 100.0)
+    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == 0),
+               key=lambda p: abs(places.rail_i(p)))
+    there = min((p for p in costs.rails(finger, 1) if places.posture_of(p) == posture),
+                key=lambda p: abs(places.rail_i(p) - places.rail_i(here)))
+    assert costs.entry(0, "index", there) is None  # (C4 cannot ride along)
+    state = State(here, ((0, "index"),))
+    prev = costs.prev(state, notes[1].onset_s)
+    lates: list = []
+    loss = costs._rail_loss(prev, {1: finger}, there, (), lates, [])
+    _, _, cut_loss, ups = prev.release[(there, ((1, finger),))]
+    planned_down = costs.t_down(1) + dict(lates).get(1, 0.0)
+    planned_up = ups.get(0, costs.t_up(0))
+
+    motion = Motion(notes, places, 100.0, places.rail_m(here))
+    plays = [Assignment(0, "index", places.rail_m(here)),
+             Assignment(1, finger, places.rail_m(there), posture=posture)]
+    motion.expect(plays)
+    for a in plays:
+        assert motion.place(a).down_s is not None
+    motion.finish(2.0)
+    return (planned_down, planned_up, cut_loss, loss), motion.outcomes, costs
+
+
+@pytest.mark.parametrize(("pitch", "posture", "finger"), [
+    (76, 0, "middle"),  # (E5, far along the rail in the same posture)
+    (76, 0, "index"),  # (the cut finger strikes again)
+    (72, 1, "pinky"),  # (C5, into another posture: the black rule's lift)
+])
+def test_the_arm_starts_on_time_when_the_programme_says(places, pitch, posture, finger):
+    (down, up, cut_loss, loss), out, costs = _case(places, 0.4, pitch, posture, finger)
+    assert out[1].down_s == pytest.approx(down, abs=1e-6)
+    assert out[0].up_s == pytest.approx(up, abs=1e-6)
+    assert up < costs.t_up(0) - 0.03  # (cut: the move takes longer than C4 leaves it)
+    assert cut_loss == pytest.approx((costs.t_up(0) - up) / costs.dt)
+    assert loss >= cut_loss
+
+
+def test_a_shorter_note_is_held_until_it_sounds(places):
+    """C4 from 0.58 s: cut to the arm's start (as from 0.4 s) it would sound too few of its
+    rows for a hit with the drive's lag; the motion holds it that much longer and the new
+    key goes down late, as the programme says."""
+    (_, cut_up, _, _), _, _ = _case(places, 0.4, 76, 0, "middle")
+    (down, up, _, _), out, costs = _case(places, 0.58, 76, 0, "middle")
+    assert out[1].down_s == pytest.approx(down, abs=1e-6)
+    assert out[0].up_s == pytest.approx(up, abs=1e-6)
+    assert up > cut_up + 0.005  # (held past the arm's wish)
+    assert down > costs.t_down(1) + 0.005  # (late)
