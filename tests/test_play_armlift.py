@@ -73,3 +73,35 @@ def test_a_shorter_note_is_held_until_it_sounds(places):
     assert out[0].up_s == pytest.approx(up, abs=1e-6)
     assert up > cut_up + 0.005  # (held past the arm's wish)
     assert down > costs.t_down(1) + 0.005  # (late)
+
+
+def test_a_chord_after_the_arm_goes_down_when_the_programme_says(places):
+    """A chord struck after a move of the arm (C5 by the index, F5 by the middle, whose
+    descent's part below the clear height is 20 ms longer): the move ends by the latest that lets each
+    of its keys go down on time after its own descent's part below the clear height (the
+    programme's ``arrive``); the motion once timed it by the first note's descent alone,
+    and a note whose descent has the longer part went down late (10-17 ms, the pinky and
+    ring on ``chorale_duo_bwv274``) where the programme said on time."""
+    notes = (Note(60, 0.4, 1.0, 80), Note(72, 1.0, 1.5, 80), Note(77, 1.0, 1.5, 80))
+    costs = Costs(notes, places, 100.0)
+    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == 0),
+               key=lambda p: abs(places.rail_i(p)))
+    both = [p for p in costs.rails("index", 1) & costs.rails("middle", 2)
+            if places.posture_of(p) == 0]
+    descents = {p: [places.rail_descent_s(costs.entry(n, f, p))
+                    for n, f in ((1, "index"), (2, "middle"))] for p in both}
+    there = min(both, key=lambda p: (descents[p][0] - descents[p][1], p))
+    assert descents[there][1] > descents[there][0] + 0.01  # (the second's part longer)
+    prev = costs.prev(State(here, ((0, "index"),)), 1.0)
+    lates: list = []
+    costs._rail_loss(prev, {1: "index", 2: "middle"}, there, (), lates, [])
+    motion = Motion(notes, places, 100.0, places.rail_m(here))
+    plays = [Assignment(0, "index", places.rail_m(here)),
+             Assignment(1, "index", places.rail_m(there)),
+             Assignment(2, "middle", places.rail_m(there))]
+    motion.expect(plays)
+    for a in plays:
+        assert motion.place(a).down_s is not None
+    for n in (1, 2):
+        want = costs.t_down(n) + dict(lates).get(n, 0.0)
+        assert motion.outcomes[n].down_s == pytest.approx(want, abs=1e-6)

@@ -170,7 +170,7 @@ class ArmCosts:
                 return lift_end + T, _NONE, 0.0, _NO_CUT
             release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, col - 1)
             return release + T, _NONE, loss, ups
-        return (*self._riders(lifts, cands, T, arrive), 0.0, _NO_CUT)
+        return self._riders(ctx, lifts, cands, T, arrive, col - 1)
 
     def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: int
                    ) -> tuple[float, float, dict]:
@@ -220,8 +220,8 @@ class ArmCosts:
                 self.places.rail_m(here), self.places.rail_m(place))
         return got
 
-    @staticmethod
-    def _riders(lifts: list, cands: list, T: float, arrive: float) -> tuple[float, frozenset]:
+    def _riders(self, ctx: Prev, lifts: list, cands: list, T: float, arrive: float,
+                lift_col: int) -> tuple[float, frozenset, float, dict]:
         """The arm's arrival and the notes riding along, of ``cands`` (``lifts``: when each
         finger of the state before is clear above every key, ``Prev.lifts`` or
         ``Prev.lifts_black`` by the move's rule; note and finger, the
@@ -232,7 +232,9 @@ class ArmCosts:
         without hurrying the others' lifts where the new notes (``arrive``, their wish)
         do not ask that anyway, lifts instead: of those, the one whose key comes up first,
         and the others are weighed again without it (the motion's rule,
-        ``Motion._move_rail``)."""
+        ``Motion._move_rail``). Then the other fingers' keys let up early for the move to
+        end by the new notes' wish and before every rider's key comes up (``_cut_lifts``:
+        their frames lost, their key-ups; ``lift_col``: ``lifts``' column)."""
         while True:
             riders = frozenset(c[0] for c in cands)
             release = next((v for v, m, f in lifts if (m, f) not in riders), -math.inf)
@@ -241,9 +243,15 @@ class ArmCosts:
             late = [c for c in cands if c[1] < min(arrive, start + move_s)
                     or c[1] < c[3] + move_s]
             if not late:
-                return start + move_s, riders
+                break
             first = min(late, key=lambda c: (c[1], c[0]))
             cands = [c for c in cands if c is not first]
+        end_by = min([arrive] + [c[1] for c in cands])
+        if start + move_s <= end_by:
+            return start + move_s, riders, 0.0, _NO_CUT
+        release, loss, ups = self._cut_lifts(
+            ctx, [x for x in lifts if (x[1], x[2]) not in riders], end_by - move_s, lift_col)
+        return max([release] + [c[3] for c in cands]) + move_s, riders, loss, ups
 
 
 _NONE: frozenset = frozenset()  # (no note rides along)
