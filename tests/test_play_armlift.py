@@ -105,3 +105,36 @@ def test_a_chord_after_the_arm_goes_down_when_the_programme_says(places):
     for n in (1, 2):
         want = costs.t_down(n) + dict(lates).get(n, 0.0)
         assert motion.outcomes[n].down_s == pytest.approx(want, abs=1e-6)
+
+
+@pytest.mark.parametrize(("pitch", "finger", "here", "there", "up_tol_s"), [
+    (67, "ring", 6, 14, 1e-6),
+    (72, "pinky", 6, 15, 1e-3),  # (the cut key's up 0.73 ms early: left, the page)
+])
+def test_a_rider_keeps_its_key_and_the_others_are_cut(places, pitch, finger, here, there,
+                                                      up_tol_s):
+    """The middle holds E4 through a move of the rail (it rides along), the index's C4 is
+    due up at the move's note: the index lets it up early for the arm to start on time
+    (``ArmCosts._riders`` then ``_cut_lifts``), and the new key goes down when the
+    programme says."""
+    notes = (Note(60, 0.4, 1.0, 80), Note(64, 0.4, 1.6, 80), Note(pitch, 1.0, 1.5, 80))
+    costs = Costs(notes, places, 100.0)
+    prev = costs.prev(State(here, ((0, "index"), (1, "middle"))), 1.0)
+    lates: list = []
+    rode: list = []
+    costs._rail_loss(prev, {2: finger}, there, (), lates, rode)
+    _, riders, _, ups = prev.release[(there, ((2, finger),))]
+    assert riders == {(1, "middle")} and set(ups) == {0}
+    assert ups[0] < costs.t_up(0) - 0.1
+    motion = Motion(notes, places, 100.0, places.rail_m(here))
+    plays = [Assignment(0, "index", places.rail_m(here)),
+             Assignment(1, "middle", places.rail_m(here)),
+             Assignment(2, finger, places.rail_m(there))]
+    motion.expect(plays)
+    for a in plays:
+        assert motion.place(a).down_s is not None
+    motion.finish(2.0)
+    assert motion.outcomes[2].down_s == pytest.approx(
+        costs.t_down(2) + dict(lates).get(2, 0.0), abs=1e-6)
+    assert motion.outcomes[0].up_s == pytest.approx(ups[0], abs=up_tol_s)
+    assert motion.outcomes[1].up_s == costs.t_up(1)  # (it rode along to its end)
