@@ -97,9 +97,9 @@ def test_distance_and_arm_time_are_the_straight_ones(places) -> None:
 
 
 def test_arm_move_line_is_the_samples_one_by_one(places, monkeypatch) -> None:
-    """``Places.arm_move`` builds its line's samples as one array: the rows it hands
+    """``Places.arm_move`` (``ArmMoves.arm_move``) builds its line's samples as one array: the rows it hands
     ``path_acceleration_cap`` are the samples built one by one."""
-    import planner.play.places as pp
+    import planner.play.armmoves as pp
 
     h, cols = places.hand, places.arm
     got = []

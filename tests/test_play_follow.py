@@ -175,9 +175,9 @@ def test_the_arm_time_is_the_same_whichever_way_is_asked_first(places):
     planned before it by the same planner. Its rail mirrored is another move (a right
     hand is not its mirror image)."""
     a, b = places.place(0, 3), places.place(2, -4)
-    places._arm_s.clear()
+    places.arms._arm_s.clear()
     first = (places.arm_time_s(a, b), places.arm_time_s(b, a))
-    places._arm_s.clear()
+    places.arms._arm_s.clear()
     second = (places.arm_time_s(b, a), places.arm_time_s(a, b))
     assert first[0] == first[1] == second[0] == second[1]
     reach = places.reach_m

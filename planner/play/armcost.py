@@ -45,7 +45,7 @@ class ArmCosts:
         got = prev.release.get(key)
         if got is None:
             got = prev.release[key] = self._release_of(prev, place, new)
-        release_t, followers = got
+        release_t, followers, cut_loss, cut_ups = got
         if kept and not followers.issuperset(kept):
             return math.inf
         if rode is not None and followers:  # (the move ends as late as lets the new keys
@@ -64,7 +64,7 @@ class ArmCosts:
         by_finger, by_key, lifted = around
         t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
         timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
-        loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
+        loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place) + cut_loss
         col = self._descent_column(prev.state.place, place)
         for n, f in new.items():
             times = timing.get((pitch[n], f, place))
@@ -82,9 +82,11 @@ class ArmCosts:
                 if gap is None:
                     return math.inf
                 if gap > t_down[n] - t_up[m]:  # (it lets its key up early to strike on
-                    # time, as far as its note still sounds: ``Motion.lift_by_s``)
-                    up = self._cut_up_s(prev, m, t_down[n] - gap, self.entry(m, f, r))
-                    loss += (t_up[m] - up) / dt
+                    # time, as far as its note still sounds: ``Motion.lift_by_s``; from
+                    # where the arm's start cut it already, ``_cut_lifts``)
+                    base = cut_ups.get(m, t_up[m])
+                    up = min(base, self._cut_up_s(prev, m, t_down[n] - gap, self.entry(m, f, r)))
+                    loss += (base - up) / dt
                     late = max(late, up + gap - t_down[n])
             elif m is not None:  # (it followed its key: it is at place now)
                 early, again = self._strike_again(m, place, n, f, place)
@@ -118,18 +120,26 @@ class ArmCosts:
         return up
 
     def _release_of(self, ctx: Prev, place: int, new: dict[int, str]
-                    ) -> tuple[float, frozenset]:
+                    ) -> tuple[float, frozenset, float, dict]:
         """When the arm arrives at ``place`` after ``ctx``'s state (the lifters' key up,
         a held note's at this event, their lift, and the move), and which notes ride
         along: those whose finger strikes none of the ``new`` notes, whose path is clear
         (``Places.follow_clear``) and whose key stays down ``HOLD_PAST_S`` past the move's
-        end (``_riders``), as the motion holds them."""
+        end (``_riders``), as the motion holds them; then the frames lost by keys let up
+        early for the arm to start on time and those keys' ups (``_cut_lifts``; none
+        where a note may ride along)."""
         T = self.places.arm_time_s(ctx.state.place, place)
         col = self._descent_column(ctx.state.place, place)
         lifts, lift_end = (ctx.lifts, ctx.lift_end) if col == 1 \
             else (ctx.lifts_black, ctx.lift_end_black)
-        if not ctx.follows:  # (no note sounding that could ride along: the last lift)
-            return lift_end + T, _NONE
+        if not ctx.follows:  # (no note sounding that could ride along: the last lift, or
+            # the lifts cut for the arm to start on time)
+            arrive = min((self._t_down[n] - self._times(n, f, place)[col]
+                          for n, f in new.items()), default=math.inf)
+            if lift_end + T <= arrive:
+                return lift_end + T, _NONE, 0.0, _NO_CUT
+            release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, col - 1)
+            return release + T, _NONE, loss, ups
         strikers = set(new.values())
         cands = []  # (note, finger, the move's latest end, its time)
         for m, f, a, window_s, press_s, down_s in ctx.follows:
@@ -152,11 +162,44 @@ class ArmCosts:
                     # lift to its key crossing)
                     done = down_s + press_s - self.places.lift(a, "high").cross_s
                     cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
-        if not cands:  # (``_riders``' answer when none rides along: the last lift, the move)
-            return lift_end + T, _NONE
         arrive = min((self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()),
                      default=math.inf)
-        return self._riders(lifts, cands, T, arrive)
+        if not cands:  # (``_riders``' answer when none rides along: the last lift, or the
+            # lifts cut for the arm to start on time; the move)
+            if lift_end + T <= arrive:
+                return lift_end + T, _NONE, 0.0, _NO_CUT
+            release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, col - 1)
+            return release + T, _NONE, loss, ups
+        return self._riders(ctx, lifts, cands, T, arrive, col - 1)
+
+    def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: int
+                   ) -> tuple[float, float, dict]:
+        """The motion's lifts before a move of the arm that must start by ``start_s`` to
+        put the new keys down on time (``Motion.lift_by_s``: each finger's key up by
+        then less its lift to clear above every key; ``lifts``: ``Prev.lifts`` or
+        ``Prev.lifts_black``, ``lift_col`` its ``Costs._times`` column): a key due up
+        later comes up that early, but held as long as its note still sounds
+        (``keytimes.held_enough_s``, ``_cut_up_s``) and never before its shortest press
+        (``Moves.press_min_s``; the motion lifts once the press is done). Returns when
+        every finger is clear, the frames the early keys-up lose, and their new key-ups
+        by note."""
+        release, loss, ups = -math.inf, 0.0, {}
+        late = dict(ctx.state.late)
+        for clear, m, f in lifts:  # (latest first: once one is clear in time, all are)
+            if clear <= start_s:
+                release = max(release, clear)
+                break
+            r = ctx.last[f][1]
+            lift_s = (self._timing.get((self.pitch[m], f, r)) or self._times(m, f, r))[lift_col]
+            e = self.entry(m, f, r)
+            due = clear - lift_s  # (its key's up: its own, or this event's for a held note)
+            up = min(due, self._cut_up_s(ctx, m, start_s - lift_s, e))
+            up = max(up, min(due, self._t_down[m] + late.get(m, 0.0)
+                             + self.places.press_min_s(e)))
+            loss += (due - up) / self.dt
+            ups[m] = up
+            release = max(release, up + lift_s)
+        return release, loss, ups
 
     def _descent_column(self, here: int, place: int) -> int:
         """``Costs._times``' column of the descent's part after a move of the arm from
@@ -177,8 +220,8 @@ class ArmCosts:
                 self.places.rail_m(here), self.places.rail_m(place))
         return got
 
-    @staticmethod
-    def _riders(lifts: list, cands: list, T: float, arrive: float) -> tuple[float, frozenset]:
+    def _riders(self, ctx: Prev, lifts: list, cands: list, T: float, arrive: float,
+                lift_col: int) -> tuple[float, frozenset, float, dict]:
         """The arm's arrival and the notes riding along, of ``cands`` (``lifts``: when each
         finger of the state before is clear above every key, ``Prev.lifts`` or
         ``Prev.lifts_black`` by the move's rule; note and finger, the
@@ -189,7 +232,9 @@ class ArmCosts:
         without hurrying the others' lifts where the new notes (``arrive``, their wish)
         do not ask that anyway, lifts instead: of those, the one whose key comes up first,
         and the others are weighed again without it (the motion's rule,
-        ``Motion._move_rail``)."""
+        ``Motion._move_rail``). Then the other fingers' keys let up early for the move to
+        end by the new notes' wish and before every rider's key comes up (``_cut_lifts``:
+        their frames lost, their key-ups; ``lift_col``: ``lifts``' column)."""
         while True:
             riders = frozenset(c[0] for c in cands)
             release = next((v for v, m, f in lifts if (m, f) not in riders), -math.inf)
@@ -198,9 +243,16 @@ class ArmCosts:
             late = [c for c in cands if c[1] < min(arrive, start + move_s)
                     or c[1] < c[3] + move_s]
             if not late:
-                return start + move_s, riders
+                break
             first = min(late, key=lambda c: (c[1], c[0]))
             cands = [c for c in cands if c is not first]
+        end_by = min([arrive] + [c[1] for c in cands])
+        if start + move_s <= end_by:
+            return start + move_s, riders, 0.0, _NO_CUT
+        release, loss, ups = self._cut_lifts(
+            ctx, [x for x in lifts if (x[1], x[2]) not in riders], end_by - move_s, lift_col)
+        return max([release] + [c[3] for c in cands]) + move_s, riders, loss, ups
 
 
 _NONE: frozenset = frozenset()  # (no note rides along)
+_NO_CUT: dict = {}  # (no key let up early for the arm: ``_cut_lifts``; never written)

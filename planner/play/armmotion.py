@@ -43,7 +43,7 @@ class ArmMotion:
         go down on time, once every finger is at crossing height, except those holding a
         key which can follow it (``Moves.follow``: the rail and their joints on one
         straight time-optimal move, the tip kept on the key; into another posture, the
-        reach axis too: ``Places.carry_move``) and strike none of the notes the move is
+        reach axis too: ``ArmMoves.carry_move``) and strike none of the notes the move is
         for (``strikers``): their keys come up ``HOLD_PAST_S`` after the move at the
         earliest, which ends early for them only where it need not wait for the other
         fingers' lifts (the programme's rule, ``Costs._riders``)."""
@@ -88,8 +88,8 @@ class ArmMotion:
         b = (rail_m, self.places.reach_m(posture))
         move = self.places.arm_move(a, b)
         n = len(self.arm_track.q)
-        if holds and posture != self.posture:  # (the reach axis too: ``Places.carry_move``)
-            move = self.places.carry_move(np.array(a[:n]), np.array(b[:n]),
+        if holds and posture != self.posture:  # (the reach axis too: ``ArmMoves.carry_move``)
+            move = self.places.arms.carry_move(np.array(a[:n]), np.array(b[:n]),
                                           [(st.entry, e) for st, e in holds])
         elif holds:  # (the same posture: the reach axis, if any, stays)
             qa, qb = [np.array(a[:n])], [np.array(b[:n])]
@@ -108,7 +108,7 @@ class ArmMotion:
         if holds:  # (timed within the tendons' capacity, the followers' keys pushing back)
             cols = np.concatenate([self.arm[:n]] + [self.hand.joint_slice(st.entry.finger)
                                                     for st, _ in holds])
-            move = self.places.tendon_slowed(move, self.posture, cols, tuple(
+            move = self.places.arms.tendon_slowed(move, self.posture, cols, tuple(
                 self.hand.fingers.index(st.entry.finger) for st, _ in holds))
         ready = max(self.arm_track.free_s, self.committed_s)
         held = {id(st) for st, _ in holds}

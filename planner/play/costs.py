@@ -162,7 +162,7 @@ class Prev:
             (m, f, a, t_up[m] - down, costs.places.press_min_s(a), down)
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None
             for down in (t_down[m] + late.get(m, 0.0),)]
-        self.release: dict[tuple, tuple[float, frozenset]] = {}  # by place and new notes
+        self.release: dict[tuple, tuple] = {}  # by place and new notes (``_release_of``)
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
         self.steps: dict[tuple, tuple] = {}  # a transition's loss and its late notes, by
         # (notes, rail, kept)

@@ -339,8 +339,7 @@ class Motion(ArmMotion):
         if abs(self.arm_track.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
             strikers = self._strikers.get(self.t_down(a.note), set()) | {a.finger}
             front = a.posture == self.posture
-            self._move_rail(a.rail_m, a.posture,
-                            self.t_down(a.note) - self.moves.rail_descent_s(e, front), strikers)
+            self._move_rail(a.rail_m, a.posture, self._arrive_by_s(a, e, front), strikers)
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
         after = self._release_others_on(n.pitch, a.finger)
@@ -384,6 +383,25 @@ class Motion(ArmMotion):
             out = Outcome(a.note, down_at, up)
         self.outcomes[a.note] = out
         return out
+
+    def _arrive_by_s(self, a: Assignment, e: AtlasEntry, front: bool) -> float:
+        """When the arm's move for note ``a`` (its entry ``e``) must end: the latest that
+        lets every key of its onset struck from the same place (``expect``) go down on
+        time, each after its own descent's part below the clear height (``front``: the
+        front rule's; the programme's ``arrive``, ``ArmCosts._release_of``)."""
+        t = self.t_down(a.note)
+        by = t - self.moves.rail_descent_s(e, front)
+        for g in self._strikers.get(t, ()):
+            times, notes = self._next.get(g, ((), ()))
+            i = bisect.bisect_left(times, t)
+            while i < len(times) and times[i] == t:
+                b = notes[i]
+                if b.rail_m == a.rail_m and b.posture == a.posture:
+                    eb = self.entry(b)
+                    if eb is not None:
+                        by = min(by, t - self.moves.rail_descent_s(eb, front))
+                i += 1
+        return by
 
     def _to_high(self, st: _Finger, latest_s: float = math.inf) -> float:
         """The finger rises to crossing height: a pressing one lets its key up at its

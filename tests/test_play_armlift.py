@@ -1,0 +1,140 @@
+"""Keys let up early for a move of the arm (planner/play/armcost.py ``ArmCosts._cut_lifts``):
+the programme's estimate of the new key's down and of the cut key's up is the motion's
+(planner/play/motion.py ``Motion.lift_by_s``): a finger whose key is due up after the arm
+must start, to put the next key down on time, lets it up that early, held as long as its
+note still sounds (``keytimes.held_enough_s``)."""
+
+from __future__ import annotations
+
+import pytest
+
+from planner.music.midi import Note
+from planner.play.costs import Costs, State
+from planner.play.fingering import Assignment
+from planner.play.motion import Motion
+from planner.play.places import Places
+
+
+@pytest.fixture(scope="module")
+def places(hand) -> Places:
+    return Places(hand)
+
+
+def _case(places, start_s: float, pitch: int, posture: int, finger: str):
+    """The index holds C4 from ``start_s`` to 1.0 s, then ``finger`` strikes ``pitch`` at
+    1.0 s from the nearest place of ``posture`` (the rail's move too long to start after
+    C4's key is due up); the programme's and the motion's key times."""
+    notes = (Note(60, start_s, 1.0, 80), Note(pitch, 1.0, 1.5, 80))
+    costs = Costs(notes, places, 100.0)
+    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == 0),
+               key=lambda p: abs(places.rail_i(p)))
+    there = min((p for p in costs.rails(finger, 1) if places.posture_of(p) == posture),
+                key=lambda p: abs(places.rail_i(p) - places.rail_i(here)))
+    assert costs.entry(0, "index", there) is None  # (C4 cannot ride along)
+    state = State(here, ((0, "index"),))
+    prev = costs.prev(state, notes[1].onset_s)
+    lates: list = []
+    loss = costs._rail_loss(prev, {1: finger}, there, (), lates, [])
+    _, _, cut_loss, ups = prev.release[(there, ((1, finger),))]
+    planned_down = costs.t_down(1) + dict(lates).get(1, 0.0)
+    planned_up = ups.get(0, costs.t_up(0))
+
+    motion = Motion(notes, places, 100.0, places.rail_m(here))
+    plays = [Assignment(0, "index", places.rail_m(here)),
+             Assignment(1, finger, places.rail_m(there), posture=posture)]
+    motion.expect(plays)
+    for a in plays:
+        assert motion.place(a).down_s is not None
+    motion.finish(2.0)
+    return (planned_down, planned_up, cut_loss, loss), motion.outcomes, costs
+
+
+@pytest.mark.parametrize(("pitch", "posture", "finger"), [
+    (76, 0, "middle"),  # (E5, far along the rail in the same posture)
+    (76, 0, "index"),  # (the cut finger strikes again)
+    (72, 1, "pinky"),  # (C5, into another posture: the black rule's lift)
+])
+def test_the_arm_starts_on_time_when_the_programme_says(places, pitch, posture, finger):
+    (down, up, cut_loss, loss), out, costs = _case(places, 0.4, pitch, posture, finger)
+    assert out[1].down_s == pytest.approx(down, abs=1e-6)
+    assert out[0].up_s == pytest.approx(up, abs=1e-6)
+    assert up < costs.t_up(0) - 0.03  # (cut: the move takes longer than C4 leaves it)
+    assert cut_loss == pytest.approx((costs.t_up(0) - up) / costs.dt)
+    assert loss >= cut_loss
+
+
+def test_a_shorter_note_is_held_until_it_sounds(places):
+    """C4 from 0.58 s: cut to the arm's start (as from 0.4 s) it would sound too few of its
+    rows for a hit with the drive's lag; the motion holds it that much longer and the new
+    key goes down late, as the programme says."""
+    (_, cut_up, _, _), _, _ = _case(places, 0.4, 76, 0, "middle")
+    (down, up, _, _), out, costs = _case(places, 0.58, 76, 0, "middle")
+    assert out[1].down_s == pytest.approx(down, abs=1e-6)
+    assert out[0].up_s == pytest.approx(up, abs=1e-6)
+    assert up > cut_up + 0.005  # (held past the arm's wish)
+    assert down > costs.t_down(1) + 0.005  # (late)
+
+
+def test_a_chord_after_the_arm_goes_down_when_the_programme_says(places):
+    """A chord struck after a move of the arm (C5 by the index, F5 by the middle, whose
+    descent's part below the clear height is 20 ms longer): the move ends by the latest that lets each
+    of its keys go down on time after its own descent's part below the clear height (the
+    programme's ``arrive``); the motion once timed it by the first note's descent alone,
+    and a note whose descent has the longer part went down late (10-17 ms, the pinky and
+    ring on ``chorale_duo_bwv274``) where the programme said on time."""
+    notes = (Note(60, 0.4, 1.0, 80), Note(72, 1.0, 1.5, 80), Note(77, 1.0, 1.5, 80))
+    costs = Costs(notes, places, 100.0)
+    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == 0),
+               key=lambda p: abs(places.rail_i(p)))
+    both = [p for p in costs.rails("index", 1) & costs.rails("middle", 2)
+            if places.posture_of(p) == 0]
+    descents = {p: [places.rail_descent_s(costs.entry(n, f, p))
+                    for n, f in ((1, "index"), (2, "middle"))] for p in both}
+    there = min(both, key=lambda p: (descents[p][0] - descents[p][1], p))
+    assert descents[there][1] > descents[there][0] + 0.01  # (the second's part longer)
+    prev = costs.prev(State(here, ((0, "index"),)), 1.0)
+    lates: list = []
+    costs._rail_loss(prev, {1: "index", 2: "middle"}, there, (), lates, [])
+    motion = Motion(notes, places, 100.0, places.rail_m(here))
+    plays = [Assignment(0, "index", places.rail_m(here)),
+             Assignment(1, "index", places.rail_m(there)),
+             Assignment(2, "middle", places.rail_m(there))]
+    motion.expect(plays)
+    for a in plays:
+        assert motion.place(a).down_s is not None
+    for n in (1, 2):
+        want = costs.t_down(n) + dict(lates).get(n, 0.0)
+        assert motion.outcomes[n].down_s == pytest.approx(want, abs=1e-6)
+
+
+@pytest.mark.parametrize(("pitch", "finger", "here", "there", "up_tol_s"), [
+    (67, "ring", 6, 14, 1e-6),
+    (72, "pinky", 6, 15, 1e-3),  # (the cut key's up 0.73 ms early: left, the page)
+])
+def test_a_rider_keeps_its_key_and_the_others_are_cut(places, pitch, finger, here, there,
+                                                      up_tol_s):
+    """The middle holds E4 through a move of the rail (it rides along), the index's C4 is
+    due up at the move's note: the index lets it up early for the arm to start on time
+    (``ArmCosts._riders`` then ``_cut_lifts``), and the new key goes down when the
+    programme says."""
+    notes = (Note(60, 0.4, 1.0, 80), Note(64, 0.4, 1.6, 80), Note(pitch, 1.0, 1.5, 80))
+    costs = Costs(notes, places, 100.0)
+    prev = costs.prev(State(here, ((0, "index"), (1, "middle"))), 1.0)
+    lates: list = []
+    rode: list = []
+    costs._rail_loss(prev, {2: finger}, there, (), lates, rode)
+    _, riders, _, ups = prev.release[(there, ((2, finger),))]
+    assert riders == {(1, "middle")} and set(ups) == {0}
+    assert ups[0] < costs.t_up(0) - 0.1
+    motion = Motion(notes, places, 100.0, places.rail_m(here))
+    plays = [Assignment(0, "index", places.rail_m(here)),
+             Assignment(1, "middle", places.rail_m(here)),
+             Assignment(2, finger, places.rail_m(there))]
+    motion.expect(plays)
+    for a in plays:
+        assert motion.place(a).down_s is not None
+    motion.finish(2.0)
+    assert motion.outcomes[2].down_s == pytest.approx(
+        costs.t_down(2) + dict(lates).get(2, 0.0), abs=1e-6)
+    assert motion.outcomes[0].up_s == pytest.approx(ups[0], abs=up_tol_s)
+    assert motion.outcomes[1].up_s == costs.t_up(1)  # (it rode along to its end)
