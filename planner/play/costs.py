@@ -428,8 +428,7 @@ class Costs(ArmCosts):
             late = 0.0
             other = on_key.get(self.pitch[n])
             if other is not None and other[1] != f:  # another finger leaves the key first
-                late = self._leave_key_s(other, n, f, place,
-                                         last[f] if f in last else prev.older.get(f))
+                late = self._leave_key_s(other, n, f, place, last.get(f) or prev.older.get(f))
             if f in last:
                 m, r = last[f]
                 early, again = self._strike_again(m, r, n, f, place)
