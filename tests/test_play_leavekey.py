@@ -7,8 +7,9 @@ from __future__ import annotations
 import pytest
 
 from planner.music.midi import Note
-from planner.play.costs import Costs, State
+from planner.play.costs import RECENT_S, Costs, State
 from planner.play.fingering import Assignment
+from planner.play.layers import Layers
 from planner.play.motion import Motion
 from planner.play.places import Places
 
@@ -38,6 +39,42 @@ def test_a_key_taken_over_goes_down_when_the_programme_says(places, gap_s):
     costs._same_rail_loss(costs.prev(state, notes[2].onset_s), {2: "index"}, lates)
     assert [n for n, _ in lates] == [2]  # (late: the key is taken over, not on time)
     planned = costs.t_down(2) + lates[0][1]
+
+    motion = Motion(notes, places, 100.0, places.rail_m(place))
+    plays = [Assignment(0, "index", places.rail_m(place)),
+             Assignment(1, "middle", places.rail_m(place)),
+             Assignment(2, "index", places.rail_m(place))]
+    motion.expect(plays)
+    for a in plays:
+        assert motion.place(a).down_s is not None
+    assert motion.outcomes[2].down_s == pytest.approx(planned, abs=1e-6)
+
+
+@pytest.mark.parametrize("gap_s", [0.004, 0.04])
+def test_a_key_taken_over_by_a_finger_idle_longer_than_recent(places, gap_s):
+    """The index's last note (C4) ended 0.4 s before the middle's E4 and longer than
+    RECENT_S before it takes E4 over: not in ``State.recent`` but in ``State.older`` (where
+    it waits over C4's entry); it moves across from there once the key is free, as the
+    motion plays it (before: no move across counted, 85 ms early on the default hand)."""
+    notes = (Note(60, 0.4, 0.5, 80), Note(64, 0.9, 1.4, 80), Note(64, 1.4 + gap_s, 1.9, 80))
+    assert notes[1].onset_s - notes[0].offset_s > RECENT_S
+    costs = Costs(notes, places, 100.0)
+    common = costs.rails("index", 0) & costs.rails("middle", 1) & costs.rails("index", 2)
+    place = min((p for p in common if places.posture_of(p) == 0),
+                key=lambda p: abs(places.rail_i(p)))
+    # (the programme's state after the middle's note: the index's note older than recent)
+    before = costs.prev(State(place, ((0, "index"),)), notes[1].onset_s)
+    recent, older = Layers._recent(before, frozenset({"middle"}))
+    assert (recent, older) == ((), ((0, "index", place),))
+    state = State(place, ((1, "middle"),), recent, older=older)
+    lates: list = []
+    costs._same_rail_loss(costs.prev(state, notes[2].onset_s), {2: "index"}, lates)
+    assert [n for n, _ in lates] == [2]
+    planned = costs.t_down(2) + lates[0][1]
+    unmoved: list = []  # (the same without the index's older note: no move across)
+    costs._same_rail_loss(costs.prev(State(place, ((1, "middle"),)), notes[2].onset_s),
+                          {2: "index"}, unmoved)
+    assert planned > costs.t_down(2) + dict(unmoved).get(2, 0.0) + 0.005
 
     motion = Motion(notes, places, 100.0, places.rail_m(place))
     plays = [Assignment(0, "index", places.rail_m(place)),

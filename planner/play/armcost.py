@@ -71,8 +71,9 @@ class ArmCosts:
             after_s = (times or self._times(n, f, place))[col]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
-            came = None if m is None else (m, place)  # (its last key and place: where it
-            # followed its key to, or below where it lifted from; ``Costs._leave_key_s``)
+            came = prev.older.get(f) if m is None else (m, place)  # (its last key and
+            # place: where it followed its key to, or below where it lifted from, or an
+            # older note's, where it waits; ``Costs._leave_key_s``)
             if m is None and f in lifted:  # it lifts, crosses (while the rail moves), down
                 m, r = lifted[f]
                 came = (m, r)

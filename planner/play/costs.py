@@ -80,23 +80,30 @@ class State:
     down that much after their time: a rider's press is done that much later, its key's
     window that much shorter, ``Prev.follows``); ``rode``: (note, seconds) of the notes
     that rode along on the arm's move into this state and when that move ended (their
-    fingers are busy until then: ``ArmCosts._cut_up_s``). Immutable (its slots are set once; it is
+    fingers are busy until then: ``ArmCosts._cut_up_s``); ``older``: (note, finger, rail
+    index) the last notes of the fingers neither sounding nor recent, ended longer ago
+    (such a finger waits at crossing height over that key's entry, carried with the hand:
+    the motion moves it across from there to a key it takes over from another finger,
+    ``Costs._leave_key_s``). Immutable (its slots are set once; it is
     hashed many times, its hash kept). ``notes`` are the notes sounding; ``last_notes`` every finger's note that
     still matters to its next move, sounding or recent, with the rail index it is (or
     was last) pressed from."""
 
-    __slots__ = ("_hash", "fingers", "last_notes", "late", "notes", "place", "recent", "rode")
+    __slots__ = ("_hash", "fingers", "last_notes", "late", "notes", "older", "place", "recent",
+                 "rode")
 
     def __init__(self, place: int, fingers: tuple[tuple[int, str], ...],
                  recent: tuple[tuple[int, str, int], ...] = (),
                  late: tuple[tuple[int, float], ...] = (),
-                 rode: tuple[tuple[int, float], ...] = ()) -> None:
+                 rode: tuple[tuple[int, float], ...] = (),
+                 older: tuple[tuple[int, str, int], ...] = ()) -> None:
         object.__setattr__(self, "place", place)
         object.__setattr__(self, "fingers", fingers)
         object.__setattr__(self, "recent", recent)
         object.__setattr__(self, "late", late)
         object.__setattr__(self, "rode", rode)
-        object.__setattr__(self, "_hash", hash((place, fingers, recent, late, rode)))
+        object.__setattr__(self, "older", older)
+        object.__setattr__(self, "_hash", hash((place, fingers, recent, late, rode, older)))
 
     def __setattr__(self, name, value):
         raise AttributeError("State is immutable")
@@ -115,14 +122,14 @@ class State:
         return (self is other or isinstance(other, State) and self._hash == other._hash
                 and self.place == other.place and self.fingers == other.fingers
                 and self.recent == other.recent and self.late == other.late
-                and self.rode == other.rode)
+                and self.rode == other.rode and self.older == other.older)
 
     def __hash__(self) -> int:
         return self._hash
 
     def __repr__(self) -> str:
         return (f"State(place={self.place}, fingers={self.fingers}, recent={self.recent}, "
-                f"late={self.late}, rode={self.rode})")
+                f"late={self.late}, rode={self.rode}, older={self.older})")
 
 
 class Prev:
@@ -130,7 +137,7 @@ class Prev:
     (the programme weighs hundreds of transitions from each state)."""
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lift_end",
-                 "lift_end_black", "lifts", "lifts_black", "on_key", "recent", "release",
+                 "lift_end_black", "lifts", "lifts_black", "older", "on_key", "recent", "release",
                  "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
@@ -140,6 +147,7 @@ class Prev:
         pitch, t_up, t_down = costs.pitch, costs._t_up, costs._t_down
         self.held = [(m, f) for m, f in state.fingers if costs.offset[m] > t + ONSET_TOL_S]
         self.last = {f: (m, r) for m, f, r in state.last_notes}
+        self.older = {f: (m, r) for m, f, r in state.older}  # (the fingers' older notes)
         self.on_key = {pitch[m]: (m, f) for m, f, r in state.last_notes if r == state.place}
         self.fresh = [(m, f, r) for m, f, r in state.last_notes if t_up[m] > t - RECENT_S]
         # (before a move of the rail: when each finger is clear above every key, latest
@@ -420,7 +428,7 @@ class Costs(ArmCosts):
             late = 0.0
             other = on_key.get(self.pitch[n])
             if other is not None and other[1] != f:  # another finger leaves the key first
-                late = self._leave_key_s(other, n, f, place, last.get(f))
+                late = self._leave_key_s(other, n, f, place, last.get(f) or prev.older.get(f))
             if f in last:
                 m, r = last[f]
                 early, again = self._strike_again(m, r, n, f, place)

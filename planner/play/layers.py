@@ -209,8 +209,9 @@ class Layers(Costs):
             if old is None or total < old[0]:
                 if recent is None:
                     recent = self._recent(ctx, busy)
-                s = State(place, sounding_t, rode_to(recent, got[2], place), got[1],
-                          tuple((m, end_s) for m, _, end_s in got[2]))
+                s = State(place, sounding_t, rode_to(recent[0], got[2], place), got[1],
+                          tuple((m, end_s) for m, _, end_s in got[2]),
+                          rode_to(recent[1], got[2], place))
                 if old is not None and old[2] != s:
                     del layer[shape]  # (another state of the shape: it comes after)
                 layer[shape] = (total, p, s)
@@ -312,18 +313,23 @@ class Layers(Costs):
         return tuple((pitch[n], force[n], f) for n, f in new.items())
 
     @staticmethod
-    def _recent(ctx: Prev, busy: frozenset[str]) -> tuple[tuple[int, str, int], ...]:
-        """The last notes of the fingers not sounding now (``busy``: those sounding),
-        ended within RECENT_S of the event (a note of the state before that is not
-        sounding now has just ended), with the rail they were pressed from (memoised
-        per state before and fingers sounding)."""
+    def _recent(ctx: Prev, busy: frozenset[str]) -> tuple[tuple, tuple]:
+        """``State.recent`` and ``State.older`` after: the last notes of the fingers not
+        sounding now (``busy``: those sounding), ended within RECENT_S of the event (a
+        note of the state before that is not sounding now has just ended), and those
+        ended before, with the rail they were pressed from (memoised per state before
+        and fingers sounding)."""
         got = ctx.recent.get(busy)
         if got is None:
             last: dict[str, tuple[int, int]] = {}
             for m, f, r in ctx.fresh:
                 if f not in busy:
                     last[f] = (m, r)
-            got = ctx.recent[busy] = tuple(sorted((m, f, r) for f, (m, r) in last.items()))
+            older = {f: mr for f, mr in (*ctx.older.items(), *ctx.last.items())
+                     if f not in busy and f not in last}
+            got = ctx.recent[busy] = (
+                tuple(sorted((m, f, r) for f, (m, r) in last.items())),
+                tuple(sorted((m, f, r) for f, (m, r) in older.items())))
         return got
 
 
