@@ -26,13 +26,31 @@ def _notes(gap_s: float) -> tuple[Note, ...]:
             Note(64, 0.60 + gap_s, 1.20, 80))
 
 
+def _index_place(costs: Costs, places: Places) -> int:
+    """The posture-0 place nearest the rail's middle from which the index plays notes 0
+    and 2 and the middle note 1."""
+    common = costs.rails("index", 0) & costs.rails("middle", 1) & costs.rails("index", 2)
+    return min((p for p in common if places.posture_of(p) == 0),
+               key=lambda p: abs(places.rail_i(p)))
+
+
+def _motion_down_s(notes, places: Places, place: int) -> float:
+    """The motion's key-down of note 2 with the index, the middle, the index at ``place``."""
+    rail_m = places.rail_m(place)
+    motion = Motion(notes, places, 100.0, rail_m)
+    plays = [Assignment(0, "index", rail_m), Assignment(1, "middle", rail_m),
+             Assignment(2, "index", rail_m)]
+    motion.expect(plays)
+    for a in plays:
+        assert motion.place(a).down_s is not None
+    return motion.outcomes[2].down_s
+
+
 @pytest.mark.parametrize("gap_s", [0.004, 0.02, 0.04])
 def test_a_key_taken_over_goes_down_when_the_programme_says(places, gap_s):
     notes = _notes(gap_s)
     costs = Costs(notes, places, 100.0)
-    common = costs.rails("index", 0) & costs.rails("middle", 1) & costs.rails("index", 2)
-    place = min((p for p in common if places.posture_of(p) == 0),
-                key=lambda p: abs(places.rail_i(p)))
+    place = _index_place(costs, places)
     # (the state before the third note: the middle sounding, the index's last note recent)
     state = State(place, ((1, "middle"),), ((0, "index", place),))
     lates: list = []
@@ -40,14 +58,7 @@ def test_a_key_taken_over_goes_down_when_the_programme_says(places, gap_s):
     assert [n for n, _ in lates] == [2]  # (late: the key is taken over, not on time)
     planned = costs.t_down(2) + lates[0][1]
 
-    motion = Motion(notes, places, 100.0, places.rail_m(place))
-    plays = [Assignment(0, "index", places.rail_m(place)),
-             Assignment(1, "middle", places.rail_m(place)),
-             Assignment(2, "index", places.rail_m(place))]
-    motion.expect(plays)
-    for a in plays:
-        assert motion.place(a).down_s is not None
-    assert motion.outcomes[2].down_s == pytest.approx(planned, abs=1e-6)
+    assert _motion_down_s(notes, places, place) == pytest.approx(planned, abs=1e-6)
 
 
 @pytest.mark.parametrize("gap_s", [0.004, 0.04])
@@ -59,9 +70,7 @@ def test_a_key_taken_over_by_a_finger_idle_longer_than_recent(places, gap_s):
     notes = (Note(60, 0.4, 0.5, 80), Note(64, 0.9, 1.4, 80), Note(64, 1.4 + gap_s, 1.9, 80))
     assert notes[1].onset_s - notes[0].offset_s > RECENT_S
     costs = Costs(notes, places, 100.0)
-    common = costs.rails("index", 0) & costs.rails("middle", 1) & costs.rails("index", 2)
-    place = min((p for p in common if places.posture_of(p) == 0),
-                key=lambda p: abs(places.rail_i(p)))
+    place = _index_place(costs, places)
     # (the programme's state after the middle's note: the index's note older than recent)
     before = costs.prev(State(place, ((0, "index"),)), notes[1].onset_s)
     recent, older = Layers._recent(before, frozenset({"middle"}))
@@ -76,11 +85,4 @@ def test_a_key_taken_over_by_a_finger_idle_longer_than_recent(places, gap_s):
                           {2: "index"}, unmoved)
     assert planned > costs.t_down(2) + dict(unmoved).get(2, 0.0) + 0.005
 
-    motion = Motion(notes, places, 100.0, places.rail_m(place))
-    plays = [Assignment(0, "index", places.rail_m(place)),
-             Assignment(1, "middle", places.rail_m(place)),
-             Assignment(2, "index", places.rail_m(place))]
-    motion.expect(plays)
-    for a in plays:
-        assert motion.place(a).down_s is not None
-    assert motion.outcomes[2].down_s == pytest.approx(planned, abs=1e-6)
+    assert _motion_down_s(notes, places, place) == pytest.approx(planned, abs=1e-6)

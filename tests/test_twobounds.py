@@ -52,16 +52,10 @@ def test_clear_bounds_keep_the_reach_from_the_first_hands_edge() -> None:
     assert hi == UNBOUNDED_M and lo == pytest.approx(0.35)  # (its most, plus the reach)
 
 
-def test_settle_asks_no_note_out_again(pair, monkeypatch) -> None:
-    """``settle``: a note taken out stays out (windows only grow, bounds only tighten),
-    so the next round asks only the others, and of those only the ones whose bound
-    changed (here none: each note asked once); the same bounds and notes out."""
-    from planner.music import keyboard as kb
+def _count_reasons(monkeypatch) -> list[int]:
+    """The notes ``Costs.reason`` is asked about from now on, in order (patched)."""
     from planner.play.costs import Costs
 
-    pl = pair.planners[LEFT]
-    notes = [Note(p, 0.5 * i, 0.5 * i + 0.3, 80) for i, p in enumerate((48, 50, 72, 52, 53))]
-    hi = kb.key(60).center_x_m - 0.05  # (the left hand's rail below middle C: C5 out)
     asked: list[int] = []
     reason = Costs.reason
 
@@ -70,6 +64,19 @@ def test_settle_asks_no_note_out_again(pair, monkeypatch) -> None:
         return reason(self, k)
 
     monkeypatch.setattr(Costs, "reason", counted)
+    return asked
+
+
+def test_settle_asks_no_note_out_again(pair, monkeypatch) -> None:
+    """``settle``: a note taken out stays out (windows only grow, bounds only tighten),
+    so the next round asks only the others, and of those only the ones whose bound
+    changed (here none: each note asked once); the same bounds and notes out."""
+    from planner.music import keyboard as kb
+
+    pl = pair.planners[LEFT]
+    notes = [Note(p, 0.5 * i, 0.5 * i + 0.3, 80) for i, p in enumerate((48, 50, 72, 52, 53))]
+    hi = kb.key(60).center_x_m - 0.05  # (the left hand's rail below middle C: C5 out)
+    asked = _count_reasons(monkeypatch)
     bounds, out = settle(notes, pl.places, pl.memo, 100.0,
                          lambda out: [(-UNBOUNDED_M, hi)] * len(notes))
     assert out == frozenset({2}) and bounds == [(-UNBOUNDED_M, hi)] * len(notes)
@@ -100,14 +107,7 @@ def test_settle_asks_again_only_the_notes_whose_bound_changed(pair, monkeypatch)
             out |= now
 
     want = every_round()
-    asked: list[int] = []
-    reason = Costs.reason
-
-    def counted(self, k):
-        asked.append(k)
-        return reason(self, k)
-
-    monkeypatch.setattr(Costs, "reason", counted)
+    asked = _count_reasons(monkeypatch)
     got = settle(notes, pl.places, pl.memo, 100.0, bounds_of)
     assert got == want and got[1] == frozenset({2, 3})
     assert sorted(asked) == [0, 1, 2, 3, 3, 4]
