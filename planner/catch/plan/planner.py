@@ -202,14 +202,10 @@ class CatchPlanner:
         plan = self._on_the_rig(args, soft)
         if plan.feasible:
             return replace(plan, planning_s=time.perf_counter() - t0)
-        if soft and CatchReason.TOO_FAST_TO_STOP in plan.reason_kinds:
-            # the stop's tilts and contact shares in finer steps (``FINE_STOP``): the rows'
-            # load is not monotone at the coarse ones (the first plan kept when this fails)
-            finer = self._on_the_rig(args, soft, FINE_STOP)
+        if soft:
+            finer = finer_stop_fallback(lambda: self._on_the_rig(args, soft, FINE_STOP), plan)
             if finer.feasible:
-                return replace(finer, planning_s=time.perf_counter() - t0, notes=finer.notes + (
-                    "the stop searched in finer steps (the palm's tilt 1 deg, the contact share "
-                    "0.05): in the coarse ones " + reasons_text(plan.reasons),))
+                return replace(finer, planning_s=time.perf_counter() - t0)
         if CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
@@ -436,6 +432,20 @@ class CatchPlanner:
                grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:
         """``BallForces.forces`` of this hand (stopping and holding the ball judged)."""
         return self.ball_forces.forces(flight, pose, t, Q, r, grasp_t, soft)
+
+
+def finer_stop_fallback(replan, plan: CatchPlan) -> CatchPlan:
+    """Where ``plan`` is too fast to stop among its reasons, ``replan()`` (the same plans
+    with the soft stop's tilts and contact shares in finer steps, ``FINE_STOP``: the rows'
+    load is not monotone at the coarse ones), noted, if feasible; else ``plan``."""
+    if CatchReason.TOO_FAST_TO_STOP not in plan.reason_kinds:
+        return plan
+    finer = replan()
+    if not finer.feasible:
+        return plan
+    return replace(finer, notes=finer.notes + (
+        "the stop searched in finer steps (the palm's tilt 1 deg, the contact share "
+        "0.05): in the coarse ones " + reasons_text(plan.reasons),))
 
 
 def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
