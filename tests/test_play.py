@@ -93,11 +93,31 @@ def test_tips_clear_the_keys_while_the_arm_travels(planner, tmp_path, name):
     path = tmp_path / f"{name}.csv"
     plan_song(load_song(ROOT / "songs" / f"{name}.mid"), planner.hand, str(path),
               planner=planner)
+    _assert_tips_clear_while(planner.hand, read_trajectory(str(path)), "rail")
+
+
+def test_tips_clear_the_keys_while_the_arm_changes_posture(planner, tmp_path):
+    """The same whenever the reach axis moves (a change of play posture: white keys in
+    the first posture, black keys in the others, so the hand goes in and out of the
+    keyboard): before a move out, a finger's lift is clear by the front rule (its body
+    in front of the black keys only goes further out: ``highclear.front_rules``)."""
+    pitches = [64, 66, 67, 69, 71, 73, 74, 76, 74, 73, 71, 69, 67, 66, 64, 62, 61, 62, 64]
+    notes = [Note(p, 0.25 * i, 0.25 * i + 0.22, 80) for i, p in enumerate(pitches)]
+    _, rep, path = _plan(planner, notes, tmp_path)
+    _safe(rep)
     tr = read_trajectory(str(path))
-    hand = planner.hand
-    rail = hand.joint_names.index("rail")
-    step = np.abs(np.diff(tr.q[:, rail])) > 1e-7
-    moving = np.flatnonzero(step[:-1] & step[1:]) + 1  # the rail moves into and out of the row
+    reach = np.diff(tr.q[:, planner.hand.joint_names.index("reach")])
+    assert (reach < -1e-7).sum() > 0 and (reach > 1e-7).sum() > 0  # (moves out and in)
+    _assert_tips_clear_while(planner.hand, tr, "reach")
+
+
+def _assert_tips_clear_while(hand, tr, joint: str) -> None:
+    """Every row in which ``joint`` (the rail, the reach axis) moves into and out: each
+    tip high, in front of the black keys above the white tops, holding its key, or in
+    front of the keyboard (``test_tips_clear_the_keys_while_the_arm_travels``)."""
+    col = hand.joint_names.index(joint)
+    step = np.abs(np.diff(tr.q[:, col])) > 1e-7
+    moving = np.flatnonzero(step[:-1] & step[1:]) + 1  # it moves into and out of the row
     assert moving.size > 0
     tips = np.array([hand.tip_positions(q) for q in tr.q[moving]])  # (T, 5, 3)
     high = tips[..., 2] >= kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M - 1e-3

@@ -20,13 +20,14 @@ def places(hand) -> Places:
     return Places(hand)
 
 
-def _case(places, start_s: float, pitch: int, posture: int, finger: str):
-    """The index holds C4 from ``start_s`` to 1.0 s, then ``finger`` strikes ``pitch`` at
-    1.0 s from the nearest place of ``posture`` (the rail's move too long to start after
-    C4's key is due up); the programme's and the motion's key times."""
+def _case(places, start_s: float, pitch: int, posture: int, finger: str, start: int = 0):
+    """The index holds C4 from ``start_s`` to 1.0 s (from the nearest place of posture
+    ``start`` to the rail's 0), then ``finger`` strikes ``pitch`` at 1.0 s from the
+    nearest place of ``posture`` (the rail's move too long to start after C4's key is due
+    up); the programme's and the motion's key times."""
     notes = (Note(60, start_s, 1.0, 80), Note(pitch, 1.0, 1.5, 80))
     costs = Costs(notes, places, 100.0)
-    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == 0),
+    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == start),
                key=lambda p: abs(places.rail_i(p)))
     there = min((p for p in costs.rails(finger, 1) if places.posture_of(p) == posture),
                 key=lambda p: abs(places.rail_i(p) - places.rail_i(here)))
@@ -39,8 +40,8 @@ def _case(places, start_s: float, pitch: int, posture: int, finger: str):
     planned_down = costs.t_down(1) + dict(lates).get(1, 0.0)
     planned_up = ups.get(0, costs.t_up(0))
 
-    motion = Motion(notes, places, 100.0, places.rail_m(here))
-    plays = [Assignment(0, "index", places.rail_m(here)),
+    motion = Motion(notes, places, 100.0, places.rail_m(here), start)
+    plays = [Assignment(0, "index", places.rail_m(here), posture=start),
              Assignment(1, finger, places.rail_m(there), posture=posture)]
     motion.expect(plays)
     for a in plays:
@@ -61,6 +62,32 @@ def test_the_arm_starts_on_time_when_the_programme_says(places, pitch, posture, 
     assert up < costs.t_up(0) - 0.03  # (cut: the move takes longer than C4 leaves it)
     assert cut_loss == pytest.approx((costs.t_up(0) - up) / costs.dt)
     assert loss >= cut_loss
+
+
+def test_a_move_out_of_the_keyboard_lifts_by_the_front_rule(places):
+    """The index on C4's front in the second posture, then E5 in the first (the hand
+    moves out of the keyboard): the index's body, in front of the black keys once its
+    lift is clear by the front rule, only goes further out, so the arm may start then
+    (``highclear.front_rules``), earlier than by the black rule; the descents after a
+    change of posture keep the black rule, and so do the lifts before a move in. The
+    programme's key times are the motion's."""
+    (down, up, cut_loss, loss), out, costs = _case(places, 0.4, 76, 0, "middle", start=1)
+    assert out[1].down_s == pytest.approx(down, abs=1e-6)
+    assert out[0].up_s == pytest.approx(up, abs=1e-6)
+    assert up < costs.t_up(0) - 0.03
+    assert cut_loss == pytest.approx((costs.t_up(0) - up) / costs.dt)
+    assert loss >= cut_loss
+    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == 1),
+               key=lambda p: abs(places.rail_i(p)))
+    there = min((p for p in costs.rails("middle", 1) if places.posture_of(p) == 0),
+                key=lambda p: abs(places.rail_i(p) - places.rail_i(here)))
+    e = costs.entry(0, "index", here)
+    assert places.rail_lift_s(e) < places.rail_lift_s(e, False) - 0.010  # (this case
+    # tests the front rule's moment: earlier)
+    assert (costs._lift_column(here, there), costs._descent_column(here, there)) == (0, 3)
+    assert (costs._lift_column(there, here), costs._descent_column(there, here)) == (2, 3)
+    assert (costs._lift_column(here, here + 1), costs._descent_column(here, here + 1)) \
+        == (0, 1)  # (the same posture, a step along the rail: the front rule both ways)
 
 
 def test_a_shorter_note_is_held_until_it_sounds(places):

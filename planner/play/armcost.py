@@ -12,6 +12,7 @@ import math
 from typing import TYPE_CHECKING
 
 from planner.play.follow import HOLD_PAST_S
+from planner.play.highclear import front_rules
 from planner.play.keytimes import (  # (LATE_MIN_S: a key later, ``costs.State.late``)
     LATE_MIN_S,
     held_enough_s,
@@ -131,7 +132,8 @@ class ArmCosts:
         where a note may ride along)."""
         T = self.places.arm_time_s(ctx.state.place, place)
         col = self._descent_column(ctx.state.place, place)
-        lifts, lift_end = (ctx.lifts, ctx.lift_end) if col == 1 \
+        lift_col = self._lift_column(ctx.state.place, place)
+        lifts, lift_end = (ctx.lifts, ctx.lift_end) if lift_col == 0 \
             else (ctx.lifts_black, ctx.lift_end_black)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift, or
             # the lifts cut for the arm to start on time)
@@ -139,7 +141,7 @@ class ArmCosts:
                           for n, f in new.items()), default=math.inf)
             if lift_end + T <= arrive:
                 return lift_end + T, _NONE, 0.0, _NO_CUT
-            release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, col - 1)
+            release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, lift_col)
             return release + T, _NONE, loss, ups
         strikers = set(new.values())
         cands = []  # (note, finger, the move's latest end, its time)
@@ -169,9 +171,9 @@ class ArmCosts:
             # lifts cut for the arm to start on time; the move)
             if lift_end + T <= arrive:
                 return lift_end + T, _NONE, 0.0, _NO_CUT
-            release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, col - 1)
+            release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, lift_col)
             return release + T, _NONE, loss, ups
-        return self._riders(ctx, lifts, cands, T, arrive, col - 1)
+        return self._riders(ctx, lifts, cands, T, arrive, lift_col)
 
     def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: int
                    ) -> tuple[float, float, dict]:
@@ -204,11 +206,23 @@ class ArmCosts:
 
     def _descent_column(self, here: int, place: int) -> int:
         """``Costs._times``' column of the descent's part after a move of the arm from
-        place ``here`` to ``place``: the front rule's where the move keeps the play
-        posture, the black rule's where it changes it (``planner.play.highclear``; the
-        lift's column is the one before)."""
-        po = self.places.posture_of
-        return 1 if po(here) == po(place) else 3
+        place ``here`` to ``place``: the front rule's (1) where the move keeps the play
+        posture, the black rule's (3) where it changes it
+        (``planner.play.highclear.front_rules``)."""
+        return 1 if self._front_rules(here, place)[1] else 3
+
+    def _lift_column(self, here: int, place: int) -> int:
+        """``Costs._times``' column of the lifts before a move of the arm from place
+        ``here`` to ``place``: the front rule's (0) where the move keeps the play posture
+        or moves the hand out of the keyboard, the black rule's (2) where it moves it in
+        (``planner.play.highclear.front_rules``)."""
+        return 0 if self._front_rules(here, place)[0] else 2
+
+    def _front_rules(self, here: int, place: int) -> tuple[bool, bool]:
+        """``highclear.front_rules`` of a move of the arm from place ``here`` to
+        ``place``: whether its lifts, and its descents, may keep the front rule."""
+        po, reach = self.places.posture_of, self.places.reach_m
+        return front_rules(reach(po(here)), reach(po(place)))
 
     def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
         """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``

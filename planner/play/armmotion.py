@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner.play.follow import HOLD_PAST_S
+from planner.play.highclear import front_rules
 from planner.play.places import Places
 from planner.play.profile import Move, straight_move
 
@@ -48,7 +49,10 @@ class ArmMotion:
         earliest, which ends early for them only where it need not wait for the other
         fingers' lifts (the programme's rule, ``Costs._riders``)."""
         r0 = self.arm_track.q[0]
-        front = posture == self.posture  # (a move that changes the posture: the black rule)
+        # (the lifts' rule and the descents': a change of posture times its descents by
+        # the black rule, and its lifts too where it moves the hand into the keyboard:
+        # ``highclear.front_rules``)
+        front, descent_front = self.front_rules(posture)
         holds = [h for h in self._holds(rail_m, posture) if h[1].finger not in strikers]
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
@@ -74,7 +78,7 @@ class ArmMotion:
                          for st in self.fingers.values() if id(st) not in held])
         k = len(self.arm_track.q)
         self.arm_track.add(t0, part(move, 0, k))
-        self.posture, self.arm_front = posture, front
+        self.posture, self.arm_front = posture, descent_front
         for st, e in holds:
             n = len(st.entry.press)
             st.track.add(t0, part(move, k, n))
@@ -112,7 +116,7 @@ class ArmMotion:
                 self.hand.fingers.index(st.entry.finger) for st, _ in holds))
         ready = max(self.arm_track.free_s, self.committed_s)
         held = {id(st) for st, _ in holds}
-        front = posture == self.posture  # (``planner.play.highclear``'s rule)
+        front = self.front_rules(posture)[0]  # (the lifts': ``planner.play.highclear``)
         for st in self.fingers.values():
             if id(st) in held:
                 ready = max(ready, st.track.free_s)
@@ -123,6 +127,11 @@ class ArmMotion:
                 ready = max(ready, st.track.free_s
                             + self.moves.high.rise_clear_s(st.entry, up.move, front))
         return move, max(ready, arrive_by_s - move.duration_s)
+
+    def front_rules(self, posture: int) -> tuple[bool, bool]:
+        """``highclear.front_rules`` of a move of the arm into play posture ``posture``:
+        whether its lifts, and its descents, keep the front rule."""
+        return front_rules(self.places.reach_m(self.posture), self.places.reach_m(posture))
 
     def _natural_ready(self, holds, front: bool) -> float:
         """When the arm could start with ``holds`` riding along and every other finger

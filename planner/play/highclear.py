@@ -22,8 +22,16 @@ each body of the finger is clear by the black rule or by this one; the path is t
 ``FRONT_SAMPLES`` points (the two rules together need not be monotone along it: a
 finger lifting from a front press may pass behind ``FRONT_Y_M`` before it is above the
 black tops). A move of the arm that changes the play posture moves the hand along y
-(the reach axis): the fingers' moments around it are the black rule's alone
-(``front=False``). Both are shipped in the move tables (``CLEAR_COLUMNS``).
+(the reach axis, + into the keyboard: a translation, the heights unchanged). Before a
+move out of the keyboard the lifts keep the front rule (``front_rules``): a body in front
+of the black keys at the lift's moment only goes further out while the arm moves. Before
+a move in, the lifts are the black rule's alone (the move carries the bodies towards the
+black keys), and so are the descents after any change of posture. (After a move in, a
+body in front at the descent's moment was further out before: the front rule would hold
+there too, but the arm, moving as late as the descents allow, then ends later, and the
+fingers riding along with it stay busy longer: 4 chorales' frame F1 down by up to 0.010,
+``docs/history/2026-12-07-play-notes.md``.) Both rules' moments are shipped in the move
+tables (``CLEAR_COLUMNS``).
 
 ``HighClear`` finds, for a straight move of one finger's joints (``profile.Move``), the
 time from which (a rise) or until which (a descent) the finger stays above that height: the
@@ -68,6 +76,18 @@ CLEAR_MOVES = ("lift", "rise", "descent")  # an entry's moves whose moments are 
 # ``Moves.lift(e, "high")``, ``Moves.rise(e)``, ``Moves.descend(e, "high")``
 CLEAR_RULES = ("front", "black")  # the table's columns: each move by the front rule, then
 # each by the black rule alone (``column``)
+
+
+def front_rules(reach_from_m: float, reach_to_m: float) -> tuple[bool, bool]:
+    """Whether the lifts before a move of the arm from reach ``reach_from_m`` to
+    ``reach_to_m`` (the reach axis: + into the keyboard), and the descents after it, are
+    timed by the front rule (True) or the black rule alone (False): both by the front
+    rule where the reach stays; the lifts where the move takes the hand out of the
+    keyboard (a body in front of the black keys only goes further out); the descents of
+    a change of posture by the black rule (the module's docstring)."""
+    if reach_to_m == reach_from_m:
+        return True, True
+    return reach_to_m < reach_from_m, False
 
 
 def column(move: int, front: bool) -> int:

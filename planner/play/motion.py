@@ -338,7 +338,7 @@ class Motion(ArmMotion):
         e = self.entry(a)
         if abs(self.arm_track.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
             strikers = self._strikers.get(self.t_down(a.note), set()) | {a.finger}
-            front = a.posture == self.posture
+            front = self.front_rules(a.posture)[1]  # (the descents')
             self._move_rail(a.rail_m, a.posture, self._arrive_by_s(a, e, front), strikers)
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
