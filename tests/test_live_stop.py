@@ -10,7 +10,13 @@ import numpy as np
 
 from planner.catch import CatchSession, get_planner
 from planner.catch.flight.path import get_ball, predict_throw
-from planner.catch.live.stop import LATE_STEPS, box_qp, giving_contact_speeds, scaled
+from planner.catch.live.stop import (
+    LATE_STEPS,
+    box_qp,
+    column_medians,
+    giving_contact_speeds,
+    scaled,
+)
 from planner.catch.plan.contactqp import contact_qp, contact_speeds
 from planner.catch.plan.stopping import SoftStop
 
@@ -115,3 +121,14 @@ def test_the_slower_stop_is_the_bisection_of_scaled_stops():
         assert got[2] == ref.ready(float(t_b)) - float(t_b)
         shares.add(lo)
     assert any(0.0 < k < 1.0 for k in shares) and len(shares) > 2
+
+
+def test_column_medians_are_np_median():
+    """The stop table's prior (``column_medians``) is ``np.median``'s, bit for bit, for
+    odd and even counts (the table has up to 15 throws; one is left out where no throw
+    passes its catch point)."""
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 3, 14, 15):
+        P = rng.normal(size=(n, 5))
+        P[rng.integers(0, n, 2), 1] = 0.25  # (ties)
+        assert np.array_equal(column_medians(P), np.median(P, axis=0))
