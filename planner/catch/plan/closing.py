@@ -305,10 +305,13 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
         dd *= dd  # (the norm over the last axis, written out: np.linalg.norm is slow there)
         d = np.sqrt(dd[..., 0] + dd[..., 1] + dd[..., 2])
         g = np.flatnonzero(~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2)))
-        if g.size:
-            g = g[~_bodies_touch(closing, k[g], b_pc, r + TOUCH_CLEAR_M)]
-            if g.size:
-                return float(c[g[0]])
+        # the bodies of the earliest whose tips are clear first (usually clear), then
+        # of the rest of the chunk's
+        for part in (g[:1], g[1:]):
+            if part.size:
+                part = part[~_bodies_touch(closing, k[part], b_pc, r + TOUCH_CLEAR_M)]
+                if part.size:
+                    return float(c[part[0]])
     return float(t_i)
 
 
