@@ -172,7 +172,7 @@ class LiveStopper:
         scale = self.range_scale(pose.q_open[arm], stop.qd * s[0], stop.qd * s[4])
         stop = self.stop = replace(stop, t_i=float(pose.t_i), qd=stop.qd * scale)
         self.q_pre = pose.q_open.copy()
-        self.q_pre[arm] += stop.qd * s[0]  # (its first offset: the knots are t_i's alone)
+        self.q_pre[arm] += stop.qd * s[0]  # (its first offset: the knot s[0] is not t_i's)
         return stop
 
     def range_scale(self, q: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
