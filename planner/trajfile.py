@@ -109,6 +109,17 @@ def format_rows(t_s: np.ndarray, q: np.ndarray, q_motor: np.ndarray) -> Formatte
                                                      as_written(body[new])[of_row]]), q)
 
 
+def joined_rows(parts: list[FormattedRows]) -> FormattedRows:
+    """Successive rows formatted apart (``format_rows``), as one: the same text, values
+    and rows, for one ``TrajectoryWriter.append`` (one guard over them all, whose speeds
+    across the parts' seams are those the parts' own appends would judge)."""
+    if len(parts) == 1:
+        return parts[0]
+    return FormattedRows(np.concatenate([p.t_s for p in parts]), "".join(p.text for p in parts),
+                         np.concatenate([p.written for p in parts]),
+                         np.concatenate([p.q for p in parts]))
+
+
 def metadata_line(metadata: dict[str, Any]) -> str:
     """A file's first line: ``# `` and its metadata as JSON, format and version first."""
     meta = {"format": FORMAT, "version": VERSION, **metadata}

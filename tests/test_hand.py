@@ -488,3 +488,18 @@ def test_press_torque_index_mcp(hand) -> None:
     loaded = {hand.motor_names[k] for k in np.flatnonzero(np.abs(tau) > 1e-12)}
     assert loaded == {"index_mcp", "index_pip", "wrist_flex"}
     assert tau[hand.motor_names.index("index_pip")] > 0
+
+
+def test_palm_poses_are_palm_pose_row_by_row(hand) -> None:
+    """``palm_poses`` (the joints and the palm frame alone) gives ``palm_pose``'s numbers
+    bit for bit, mounted or not, and leaves the other frames of ``pin_data`` alone."""
+    rng = np.random.default_rng(7)
+    Q = np.array([random_q(hand, rng) for _ in range(12)])
+    T = np.array([1.0, 0.0, 0.0, 0.3, 0.0, 0.0, -1.0, 0.1, 0.0, 1.0, 0.0, 0.5, 0, 0, 0, 1.0])
+    for h in (hand, hand.mounted(T.reshape(4, 4))):
+        want = np.array([h.palm_pose(q) for q in Q])
+        tip_frame = h.pin_data.oMf[h.pin_model.getFrameId(h.tip_frames[0])].homogeneous.copy()
+        got = h.palm_poses(Q)
+        assert got.shape == (12, 4, 4) and np.array_equal(got, want)
+        assert np.array_equal(
+            h.pin_data.oMf[h.pin_model.getFrameId(h.tip_frames[0])].homogeneous, tip_frame)

@@ -42,6 +42,30 @@ def test_the_moving_palm_between_its_knots(pl):
     assert np.abs(rest - exact).max() > 2e-3  # (the palm does move: the test can fail)
 
 
+def test_the_moving_palm_is_np_interp_of_its_knots(pl):
+    """``ball_in_palm`` on a stopping motion: the palm's pose at its knots (one FK each)
+    and ``np.interp`` of each of its 12 elements between them, element by element, bit for
+    bit (the knots' times end at the last sample, which takes the last knot's pose)."""
+    p = plan_throw(40.0, 2.0, 0.1, planner=pl)
+    stop = p.forces.soft
+    assert stop is not None and np.any(stop.qd)
+    t_i = p.intercept.t_s
+    q_i = np.array([np.interp(t_i, p.rows.t, p.rows.q[:, j]) for j in range(p.rows.q.shape[1])])
+    n = len(q_i)
+    for span_s in (0.0, 0.004, 0.0305, 0.08):
+        tt = np.arange(t_i - span_s - 0.001, t_i, 0.001)
+        knots = np.linspace(tt[0], tt[-1],
+                            max(2, int(np.ceil((tt[-1] - tt[0]) / cl.PALM_KNOT_S)) + 1))
+        Q = q_i + stop.offset(knots, n) - stop.offset(np.array([t_i]), n)
+        K = np.array([pl.hand.palm_pose(q) for q in Q])
+        T = np.stack([np.interp(tt, knots, K[:, i, j]) for i in range(3) for j in range(4)],
+                     axis=1).reshape(len(tt), 3, 4)
+        want = np.einsum("ti,tij->tj", p.flight.position(tt) - (p.catch_point + T[:, :, 3]),
+                         T[:, :, :3])
+        got = cl.ball_in_palm(pl.hand, p.flight, p.catch_point, q_i, tt, t_i, stop)
+        assert np.array_equal(got, want)
+
+
 def test_the_live_thumb_waits_for_the_ball(pl):
     """bench_live's throw 6 at 100 Hz / 5 mm (44.3 deg, 2.50 m, -0.11 m; the noise of its
     configuration's seed): with the closing timed on the palm at rest, the thumb's body met

@@ -3,9 +3,20 @@ slower motion of a late hand. No wall-clock assertions."""
 
 from __future__ import annotations
 
+import copy
+import dataclasses
+
 import numpy as np
 
-from planner.catch.live.stop import box_qp, giving_contact_speeds, scaled
+from planner.catch import CatchSession, get_planner
+from planner.catch.flight.path import get_ball, predict_throw
+from planner.catch.live.stop import (
+    LATE_STEPS,
+    box_qp,
+    column_medians,
+    giving_contact_speeds,
+    scaled,
+)
 from planner.catch.plan.contactqp import contact_qp, contact_speeds
 from planner.catch.plan.stopping import SoftStop
 
@@ -73,3 +84,51 @@ def test_simulate_replays_the_ball_the_check_judges():
     assert src["ball"] != tr.metadata["ball"]
     planned = parse_trajectory(plan_catch(30.0, 1.5, 0.0, "default").text)
     assert judged_source(planned, "planned.csv") is planned.metadata
+
+
+def _same_stop(a: SoftStop, b: SoftStop) -> bool:
+    return all(np.array_equal(getattr(a, f.name), getattr(b, f.name))
+               for f in dataclasses.fields(SoftStop))
+
+
+def test_the_slower_stop_is_the_bisection_of_scaled_stops():
+    """``LiveStopper.slower`` bisects in numbers (no stop made at each step): the stop,
+    its pre-catch pose and the move's duration are those of the bisection over the
+    stops themselves (``scaled``, then ``shifted`` through the pose, ``ready`` against
+    their ramps' start) bit for bit, for a moving hand late by a range of times (some
+    shares strictly between 0 and 1)."""
+    pl, ball = get_planner("default"), get_ball("tennis")
+    fl = predict_throw(30.0, 1.5, 0.0, ball, drag=True)
+    s = CatchSession(1.5, 0.0, ball=ball, drag=True, planner=pl)
+    t = 0.01
+    while not (s.motion.moving and s.pose is not None and s.stopper.nominal is not None):
+        s.observe(t, fl.position(t))
+        t += 0.01
+    sp, shares = s.stopper, set()
+    base = sp.nominal
+    for t_b in np.linspace(t, base.start_s, 12):
+        got = copy.copy(sp).slower(s.pose, float(t_b))
+        ref = copy.copy(sp)
+        lo, hi = 0.0, 1.0
+        for _ in range(LATE_STEPS):
+            k = 0.5 * (lo + hi)
+            ref.stop = scaled(base, k)
+            ref.shifted(s.pose)
+            lo, hi = (k, hi) if ref.ready(float(t_b)) <= ref.stop.start_s else (lo, k)
+        ref.stop = scaled(base, lo)
+        ref.shifted(s.pose)
+        assert _same_stop(got[0], ref.stop) and np.array_equal(got[1], ref.q_pre)
+        assert got[2] == ref.ready(float(t_b)) - float(t_b)
+        shares.add(lo)
+    assert any(0.0 < k < 1.0 for k in shares) and len(shares) > 2
+
+
+def test_column_medians_are_np_median():
+    """The stop table's prior (``column_medians``) is ``np.median``'s, bit for bit, for
+    odd and even counts (the table has up to 15 throws; one is left out where no throw
+    passes its catch point)."""
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 3, 14, 15):
+        P = rng.normal(size=(n, 5))
+        P[rng.integers(0, n, 2), 1] = 0.25  # (ties)
+        assert np.array_equal(column_medians(P), np.median(P, axis=0))

@@ -161,6 +161,17 @@ class HandModel:
     def palm_pose(self, q: np.ndarray) -> np.ndarray:
         return self.frame_pose(q, PALM_FRAME)
 
+    def palm_poses(self, Q: np.ndarray) -> np.ndarray:
+        """``palm_pose`` of each row of ``Q``, (K, 4, 4): the joints' placements and the
+        palm frame's alone (the same numbers; the other frames' in ``pin_data`` are left
+        as they were)."""
+        m, d = self.pin_model, self.pin_data
+        out = np.empty((len(Q), 4, 4))
+        for k, q in enumerate(Q):
+            pin.forwardKinematics(m, d, self.pin_q(q))
+            out[k] = self.T_world_root @ pin.updateFramePlacement(m, d, self._palm_id).homogeneous
+        return out
+
     def tip_jacobians(self, q: np.ndarray) -> np.ndarray:
         """World-frame position Jacobians of the fingertips, (5, 3, n) in our joint order."""
         pin.computeJointJacobians(self.pin_model, self.pin_data, self.pin_q(q))

@@ -72,7 +72,7 @@ from planner.catch.plan.results import CatchPlan, ThrowInfo, catch_metadata
 from planner.catch.plan.stopping import SoftStop
 from planner.errors import InputError
 from planner.hand.model import HandModel
-from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows
+from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows, joined_rows
 
 
 class _Chunk(NamedTuple):
@@ -327,13 +327,14 @@ class CatchSession:
         self._ahead = []
         if not chunks:
             return NOTHING
-        out = [self.writer.append(c.rows) for c in chunks]
+        out = self.writer.append(joined_rows([c.rows for c in chunks]))  # (the rows
+        # formatted ahead and the new ones: one guard, one flush)
         at_s, cpu_at_s = time.perf_counter(), time.thread_time()
         for c in chunks:
             self._t.append(c.t)
             self._q.append(c.Q)
             self.next_row += len(c.t)
-        return Written(out[0] if len(out) == 1 else np.concatenate(out), at_s, cpu_at_s)
+        return Written(out, at_s, cpu_at_s)
 
 
 def _point(xyz: Any) -> np.ndarray:

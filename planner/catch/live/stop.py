@@ -66,37 +66,40 @@ def box_qp(P: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.n
     """min x^T P x / 2 + c^T x within lo <= x <= hi (lo <= 0 <= hi), P positive definite:
     the exact minimiser by the primal active-set method (from x = 0; a bound met on the
     way is held; a held bound whose multiplier says the objective falls off it is
-    released). Finite for a strictly convex problem: a few steps for three variables."""
+    released). Finite for a strictly convex problem: a few steps for three variables.
+    (The steps' scalar tests in Python floats: the same IEEE arithmetic as numpy's
+    scalars, without their overhead.)"""
     n = len(c)
     x = np.zeros(n)
-    at = np.zeros(n, dtype=int)  # 0 free, -1 at lo, +1 at hi
+    at = [0] * n  # 0 free, -1 at lo, +1 at hi
+    lo_l, hi_l = lo.tolist(), hi.tolist()
     for _ in range(8 * n + 8):
-        free = at == 0
+        f = [i for i in range(n) if at[i] == 0]
         target = x.copy()
-        if free.any():
-            f = np.flatnonzero(free)
-            fixed = np.flatnonzero(~free)
-            rhs = -(c[f] + P[np.ix_(f, fixed)] @ x[fixed])
-            target[f] = np.linalg.solve(P[np.ix_(f, f)], rhs)
+        if f:
+            fixed = [i for i in range(n) if at[i] != 0]
+            rhs = -(c[f] + P[f][:, fixed] @ x[fixed])
+            target[f] = np.linalg.solve(P[f][:, f], rhs)
         d = target - x
+        dl, xl = d.tolist(), x.tolist()
         alpha, block = 1.0, -1
-        for i in np.flatnonzero(free):
-            if d[i] > _KKT_TOL and x[i] + d[i] > hi[i]:
-                a = (hi[i] - x[i]) / d[i]
-            elif d[i] < -_KKT_TOL and x[i] + d[i] < lo[i]:
-                a = (lo[i] - x[i]) / d[i]
+        for i in f:
+            if dl[i] > _KKT_TOL and xl[i] + dl[i] > hi_l[i]:
+                a = (hi_l[i] - xl[i]) / dl[i]
+            elif dl[i] < -_KKT_TOL and xl[i] + dl[i] < lo_l[i]:
+                a = (lo_l[i] - xl[i]) / dl[i]
             else:
                 continue
             if a < alpha:
-                alpha, block = a, int(i)
+                alpha, block = a, i
         x = x + alpha * d
         if block >= 0:
-            at[block] = 1 if d[block] > 0 else -1
-            x[block] = hi[block] if at[block] > 0 else lo[block]
+            at[block] = 1 if dl[block] > 0 else -1
+            x[block] = hi_l[block] if at[block] > 0 else lo_l[block]
             continue
-        g = P @ x + c
-        lam = np.where(at < 0, g, np.where(at > 0, -g, np.inf))  # >= 0 at a true optimum
-        k = int(np.argmin(lam))
+        g = (P @ x + c).tolist()  # the multipliers, >= 0 at a true optimum
+        lam = [g[i] if at[i] < 0 else -g[i] if at[i] > 0 else math.inf for i in range(n)]
+        k = min(range(n), key=lam.__getitem__)
         if lam[k] >= -_KKT_TOL:
             return np.clip(x, lo, hi)
         at[k] = 0
@@ -172,6 +175,15 @@ def met_on_the_moving_palm(stop: SoftStop, target_m: np.ndarray, ball_m: np.ndar
     vv = float(vr @ vr)
     shift = float(d0 @ vr) / vv if vv > 0 else 0.0
     return stop.t_i - min(max(shift, -NEAR_S), NEAR_S)
+
+
+def column_medians(P: np.ndarray) -> np.ndarray:
+    """``np.median(P, axis=0)``'s numbers for finite ``P`` (each column's middle value
+    sorted; the mean of the middle two for an even count), without ``numpy.ma``, which
+    ``np.median`` imports on its first use: ~20 ms of ``catch --live``'s set-up CPU."""
+    s = np.sort(P, axis=0)
+    h = len(s) // 2
+    return s[h].copy() if len(s) % 2 else (s[h - 1] + s[h]) / 2.0
 
 
 TABLE_ANGLES_DEG = tuple(range(10, 81, 5))  # launch angles of the table's throws: the
@@ -255,8 +267,7 @@ class StopTable:
             stops.append(live_stop(dyn, fl.velocity(ic.t), float(ball.mass_kg), r, q_open,
                                    float(ic.t), ready_by, row_s))
             pres.append(q_open[list(dyn.arm)] + stops[-1].first_offset)
-        prior = (np.median(np.array(pres), axis=0) if pres
-                 else pl.q_rest[list(dyn.arm)].copy())
+        prior = column_medians(np.array(pres)) if pres else pl.q_rest[list(dyn.arm)].copy()
         return cls(np.array(angles), np.array(tilts), tuple(stops), prior)
 
     def entry_for(self, flight: Flight) -> tuple[float, SoftStop | None]:

@@ -38,7 +38,7 @@ from planner.catch.live.stop import (
 )
 from planner.catch.live.turn import LiveTurn
 from planner.catch.plan.arm import palm_target
-from planner.catch.plan.stopping import SoftStop
+from planner.catch.plan.stopping import SoftStop, stop_knots
 from planner.catch.plan.turnahead import TURN_GROW, TURN_TRIES, rows_within_limits
 from planner.trajectory import phase_duration
 
@@ -115,26 +115,36 @@ class LiveStopper:
         rest when none is. Returns the stop, its pre-catch pose and the move's duration
         from ``t_b``."""
         base = self.nominal if self.nominal is not None else self.stop
+        m, arm = self.motion, list(self.pl.joints.arm)
+        q_now = m.seg.state1(t_b)[0] if m.moving else None  # (the same at every step)
         lo, hi = 0.0, 1.0
-        for _ in range(LATE_STEPS):
-            k = 0.5 * (lo + hi)
-            self.stop = scaled(base, k)
-            self.shifted(pose)
-            lo, hi = (k, hi) if self.ready(t_b) <= self.stop.start_s else (lo, k)
+        for _ in range(LATE_STEPS):  # (each step's stop in numbers: ``scaled`` then
+            k = 0.5 * (lo + hi)  # ``shifted``, their arithmetic, no stop made)
+            qd, ramp_in_s = k * base.qd, k * base.ramp_in_s
+            s = stop_knots(base.contact_share, base.t_i, base.row_s, ramp_in_s,
+                           base.recoil_s, base.hold_s, k * base.ramp_out_s)
+            qd = qd * self.range_scale(pose.q_open[arm], qd * s[0], qd * s[4])
+            q_pre = pose.q_open.copy()
+            q_pre[arm] += qd * s[0]
+            start_s = float(pose.t_i) - base.row_s - ramp_in_s
+            lo, hi = (k, hi) if self.ready(t_b, q_pre, q_now) <= start_s else (lo, k)
         self.stop = scaled(base, lo)
         self.shifted(pose)
         return self.stop, self.q_pre, self.ready(t_b) - t_b
 
-    def ready(self, t_b: float) -> float:
-        """When the arm can be at rest at the pre-catch pose ``q_pre`` if it goes there
-        from ``t_b`` (from rest: ``LiveMotion.move_time``)."""
-        m = self.motion
+    def ready(self, t_b: float, q_pre: np.ndarray | None = None,
+              q_now: np.ndarray | None = None) -> float:
+        """When the arm can be at rest at the pre-catch pose ``q_pre`` (None: ``self.q_pre``)
+        if it goes there from ``t_b`` (from rest: ``LiveMotion.move_time``); ``q_now``: the
+        moving arm's joints at ``t_b`` when known."""
+        m, q_pre = self.motion, self.q_pre if q_pre is None else q_pre
         if not m.moving:
-            return t_b + m.move_time(self.pl.q_rest, self.q_pre)
+            return t_b + m.move_time(self.pl.q_rest, q_pre)
         arm = list(self.pl.joints.arm)  # (a re-aim from the moving arm's state: its shortest,
         # the joints' limits alone; ``LiveMotion.reaim`` then keeps the motors within theirs)
-        return t_b + phase_duration(self.q_pre[arm] - m.seg.state1(t_b)[0],
-                                    m.hand.velocity[arm], m.hand.acceleration[arm], 0.0)
+        q_now = m.seg.state1(t_b)[0] if q_now is None else q_now
+        return t_b + phase_duration(q_pre[arm] - q_now, m.hand.velocity[arm],
+                                    m.hand.acceleration[arm], 0.0)
 
     def for_estimate(self, pose, t_b: float, fix_s: float) -> SoftStop | None:
         """The table's stopping motion for the estimate (``StopTable``) through ``pose``;
@@ -154,21 +164,29 @@ class LiveStopper:
         """The moving hand's stopping motion (chosen when it started to move: its speeds
         and ramps kept, so that the re-aims follow the estimate, not a new motion) through
         ``pose``, the newest intercept."""
-        stop, h, arm = self.stop, self.pl.hand, list(self.pl.joints.arm)
+        stop, arm = self.stop, list(self.pl.joints.arm)
         if stop is None:
             self.q_pre = pose.q_open
             return None
-        q = pose.q_open[arm]
-        lo, hi = h.lower[arm], h.upper[arm]
-        scale = np.ones(len(arm))  # a joint whose travel would leave its range from the
-        for off in (stop.first_offset, stop.last_offset):  # newer pose slower (as
-            room = np.where(off < 0, q - lo, hi - q)  # ``stop_profile`` slows it)
-            over = np.abs(off) > room
-            scale[over] = np.minimum(scale[over], np.maximum(room[over], 0.0) / np.abs(off[over]))
+        s = stop.knots()
+        scale = self.range_scale(pose.q_open[arm], stop.qd * s[0], stop.qd * s[4])
         stop = self.stop = replace(stop, t_i=float(pose.t_i), qd=stop.qd * scale)
         self.q_pre = pose.q_open.copy()
-        self.q_pre[arm] += stop.first_offset
+        self.q_pre[arm] += stop.qd * s[0]  # (its first offset: the knot s[0] is not t_i's)
         return stop
+
+    def range_scale(self, q: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
+        """The arm joints' speed factors that keep a stop's travel from ``q`` (the arm
+        joints of the intercept pose) to its ``first`` and ``last`` offsets within their
+        range: a joint that would leave it slower (as ``stop_profile`` slows it)."""
+        arm, h = list(self.pl.joints.arm), self.pl.hand
+        lo, hi = h.lower[arm], h.upper[arm]
+        scale = np.ones(len(arm))
+        for off in (first, last):
+            room = np.where(off < 0, q - lo, hi - q)
+            over = np.abs(off) > room
+            scale[over] = np.minimum(scale[over], np.maximum(room[over], 0.0) / np.abs(off[over]))
+        return scale
 
     def adds_within_limits(self) -> bool:
         """Whether the arm's move, where it still runs after the ramp starts, and the

@@ -305,10 +305,13 @@ def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarr
         dd *= dd  # (the norm over the last axis, written out: np.linalg.norm is slow there)
         d = np.sqrt(dd[..., 0] + dd[..., 1] + dd[..., 2])
         g = np.flatnonzero(~np.any(d < r + TOUCH_CLEAR_M, axis=(1, 2)))
-        if g.size:
-            g = g[~_bodies_touch(closing, k[g], b_pc, r + TOUCH_CLEAR_M)]
-            if g.size:
-                return float(c[g[0]])
+        # the bodies of the earliest whose tips are clear first (usually clear), then
+        # of the rest of the chunk's
+        for part in (g[:1], g[1:]):
+            if part.size:
+                part = part[~_bodies_touch(closing, k[part], b_pc, r + TOUCH_CLEAR_M)]
+                if part.size:
+                    return float(c[part[0]])
     return float(t_i)
 
 
@@ -322,12 +325,18 @@ def ball_in_palm(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndar
         return (flight.position(tt) - (C + T[:3, 3])) @ T[:3, :3]
     n = len(q_open)
     knots = np.linspace(tt[0], tt[-1], max(2, math.ceil((tt[-1] - tt[0]) / PALM_KNOT_S) + 1))
-    Q = q_open + stop.offset(knots, n) - stop.offset(np.array([t_i]), n)
-    T = np.array([hand.palm_pose(q) for q in Q])
+    off = stop.offset(np.append(knots, t_i), n)  # (the knots' and the intercept's)
+    F = hand.palm_poses(q_open + off[:-1] - off[-1])[:, :3, :].reshape(len(knots), 12)
     # the palm's pose between the knots, element by element (a smooth motion: see
-    # ``PALM_KNOT_S``)
-    T = np.stack([np.interp(tt, knots, T[:, i, j]) for i in range(3) for j in range(4)],
-                 axis=1).reshape(len(tt), 3, 4)
+    # ``PALM_KNOT_S``): ``np.interp``'s arithmetic, the 12 elements at once
+    inner = tt < knots[-1]  # (the last sample: the last knot's pose)
+    x = tt[inner]
+    j = np.searchsorted(knots, x, side="right") - 1
+    T = np.empty((len(tt), 12))
+    T[inner] = (F[j + 1] - F[j]) / (knots[j + 1] - knots[j])[:, None] * (x - knots[j])[:, None] \
+        + F[j]
+    T[~inner] = F[-1]
+    T = T.reshape(len(tt), 3, 4)
     rel = flight.position(tt) - (C + T[:, :, 3])
     return np.einsum("ti,tij->tj", rel, T[:, :, :3])
 

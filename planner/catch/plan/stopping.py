@@ -104,6 +104,21 @@ _ROOMS_KEPT = 4  # accel_room results kept (the rest pose and the latest few; th
 # recently used dropped)
 
 
+def stop_knots(c: float, t_i: float, row_s: float, ramp_in_s: float, recoil_s: float,
+               hold_s: float, ramp_out_s: float) -> tuple[float, float, float, float, float,
+                                                          float]:
+    """A ``SoftStop``'s sigma at the ramp-in's start and end, the recoil's end, the hold's
+    end, the end; and the time the hold ends (its fields: the contact share ``c``, ...):
+    one definition, for a stop and for the numbers of one not made (``live.stopper``'s
+    bisection of a slower stop)."""
+    t4 = t_i + recoil_s + hold_s
+    s2 = -c * row_s
+    s1 = s2 - 0.5 * c * ramp_in_s
+    s3 = 0.5 * recoil_s * (1.0 + c)
+    s4 = s3 + hold_s
+    return s1, s2, s3, s4, s4 + 0.5 * ramp_out_s, t4
+
+
 @dataclass(frozen=True)
 class SoftStop:
     """The arm's stopping motion of one catch (see the module docstring): its speed factor
@@ -144,21 +159,17 @@ class SoftStop:
         """When the arm is at rest with the ball."""
         return self.t_i + self.recoil_s + self.hold_s + self.ramp_out_s
 
-    def _knots(self) -> tuple[float, float, float, float, float, float]:
+    def knots(self) -> tuple[float, float, float, float, float, float]:
         """sigma at the ramp-in's start and end, the recoil's end, the hold's end, the end;
-        and the time the hold ends."""
-        c, t4 = self.contact_share, self.t_i + self.recoil_s + self.hold_s
-        s2 = -c * self.row_s
-        s1 = s2 - 0.5 * c * self.ramp_in_s
-        s3 = 0.5 * self.recoil_s * (1.0 + c)
-        s4 = s3 + self.hold_s
-        return s1, s2, s3, s4, s4 + 0.5 * self.ramp_out_s, t4
+        and the time the hold ends (``stop_knots``)."""
+        return stop_knots(self.contact_share, self.t_i, self.row_s, self.ramp_in_s,
+                          self.recoil_s, self.hold_s, self.ramp_out_s)
 
     def sigma(self, t_s: np.ndarray) -> np.ndarray:
         """The profile's time-like scalar at ``t_s`` (0 at the intercept)."""
         t = np.atleast_1d(np.asarray(t_s, dtype=float))
         c, ti = self.contact_share, self.t_i
-        s1, _, s3, s4, _, t4 = self._knots()
+        s1, _, s3, s4, _, t4 = self.knots()
         out = np.full(t.shape, s1)
         if self.ramp_in_s > 0:
             u = (t - self.start_s) / self.ramp_in_s
@@ -184,11 +195,11 @@ class SoftStop:
 
     @property
     def first_offset(self) -> np.ndarray:
-        return self.qd * self._knots()[0]
+        return self.qd * self.knots()[0]
 
     @property
     def last_offset(self) -> np.ndarray:
-        return self.qd * self._knots()[4]
+        return self.qd * self.knots()[4]
 
 
 class StopDynamics:
