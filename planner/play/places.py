@@ -26,6 +26,8 @@ from planner.hand.model import HandModel
 from planner.play.armmoves import PLACE_STRIDE, RAIL_STEP_M, ArmMoves
 from planner.play.atlas import Atlas, AtlasEntry, posture_count
 from planner.play.follow import canonical_pitch, follow_ends, paths_clear
+from planner.play.followtable import FollowTable, table_path
+from planner.play.followtable import params as follow_params
 from planner.play.highclear import HighClear
 from planner.play.idle import IdleFingers
 from planner.play.moves import Moves
@@ -60,6 +62,12 @@ class Places:
         self._cross_clear: dict[tuple[int, int], bool] = {}
         self._cross_arm: dict[tuple[int, int, float], tuple | None] = {}  # (``follow_s``)
         self.idle = IdleFingers(hand, self.atlases, self.rail)  # (fingers that press no key)
+        # (the follow test's answers on the rail's grid, shipped: ``follow_path_clear``)
+        self.follows = FollowTable()
+        path = table_path(hand.urdf_sha256)
+        if self.rail is not None and self.atlas.bodies is not None and path.exists():
+            self.follows.load(path, follow_params(self))
+        self._finger_i = {f: i for i, f in enumerate(hand.fingers)}
 
     @property
     def postures(self) -> int:
@@ -219,14 +227,40 @@ class Places:
         at ``rail_a_m`` to entry ``b`` at ``rail_b_m``: the body rule's test on the very
         move the motion makes (``planner.play.follow``; the move table tested each pair
         at its entries' own ``dx``, which the rail's grid misses by up to half the atlas's
-        step). True without the body rule (the table's answer stands)."""
+        step). True without the body rule (the table's answer stands). On the rail's
+        grid, with the entries of the finger on the key there, the shipped answer
+        (``planner.play.followtable``: the same test on the same move)."""
         if self.atlas.bodies is None or self.rail is None:
             return True
+        if len(self.follows):
+            got = self._follow_row(a, b, pitch, rail_a_m, rail_b_m)
+            if got is not None:
+                return got
+        qa, qb = self.follow_ends_on_rail(a, b, rail_a_m, rail_b_m)
+        return bool(paths_clear(self.atlas, a.finger, pitch, qa[None], qb[None], self.arm)[0])
+
+    def _follow_row(self, a: AtlasEntry, b: AtlasEntry, pitch: int, rail_a_m: float,
+                    rail_b_m: float) -> bool | None:
+        """``follow_path_clear``'s answer from the shipped table: when both rails are on
+        the grid (the very floats ``rail_m`` gives) and ``a`` and ``b`` are the finger's
+        entries on the key there (the move the table tested); None otherwise."""
+        ia, ib = round(rail_a_m / RAIL_STEP_M), round(rail_b_m / RAIL_STEP_M)
+        if ia * RAIL_STEP_M != rail_a_m or ib * RAIL_STEP_M != rail_b_m:
+            return None
+        pa, pb = self.place(a.posture, ia), self.place(b.posture, ib)
+        if self.entry(a.finger, pitch, pa) is not a or self.entry(b.finger, pitch, pb) is not b:
+            return None
+        return self.follows.get(self._finger_i[a.finger], pitch, pa, pb)
+
+    def follow_ends_on_rail(self, a: AtlasEntry, b: AtlasEntry, rail_a_m: float,
+                            rail_b_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """The whole hand at ``follow_path_clear``'s ends: each entry's posture's base,
+        the rail where given, the finger pressing."""
         js = self.hand.joint_slice(a.finger)
         qa, qb = self.atlases[a.posture].base.copy(), self.atlases[b.posture].base.copy()
         qa[self.rail], qb[self.rail] = rail_a_m, rail_b_m
         qa[js], qb[js] = a.press, b.press
-        return bool(paths_clear(self.atlas, a.finger, pitch, qa[None], qb[None], self.arm)[0])
+        return qa, qb
 
     def descend(self, e: AtlasEntry, start: str):
         return self.moves[e.posture].descend(e, start)

@@ -1,0 +1,152 @@
+"""The follow test's answers on the rail's grid, shipped: whether a finger holding a key
+follows it through a move of the arm from one place to another (``Places.follow_path_clear``:
+``planner.play.follow``'s body rule on the very move the motion makes, the rail on the
+``RAIL_STEP_M`` grid at both ends), for every finger, key and pair of places from which
+the finger has an entry on the key and whose entries the move table lets follow
+(``Places.follow_clear``: the programme asks the path of no other pair).
+
+The programme asks a few thousand of these a song (``ArmCosts._follow_path``), each
+about 0.3 ms of forward kinematics and box tests; the table answers them by a look-up.
+It holds the answers the code gives (``make_table`` asks ``follow.paths_clear_each``,
+which answers as ``paths_clear``: the same moves, the same numbers), and it is used only
+where it was made with the same hand, parameters and entries (``params``: the move
+tables' parameters of every posture, the follow test's constants, and a digest of every
+posture's base configuration and its entries' press poses). A question outside it
+(another rail, another pair) is answered by forward kinematics, as without a table.
+
+    python scripts/make_atlas.py --follows-only   (or with the atlas and its move tables)
+"""
+
+from __future__ import annotations
+
+import bisect
+import hashlib
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from planner.music import keyboard as kb
+from planner.play import follow
+from planner.play.armmoves import RAIL_STEP_M
+from planner.play.atlas import TABLE_DIR
+
+VERSION = 1  # the table's layout and what it answers (a table of another is not used)
+_PLACE_BITS = 20  # a place's bits in a row's code (places lie within +-2^19: a few
+# postures times ``PLACE_STRIDE``)
+
+
+def table_path(urdf_sha256: str) -> Path:
+    """Where a hand's follow table is shipped (beside its atlas and move tables)."""
+    return TABLE_DIR / f"follows-{urdf_sha256[:16]}.npz"
+
+
+def code(finger_i: int, pitch: int, place_a: int, place_b: int) -> int:
+    """A row's key as one int: the finger's index, the key, the two places."""
+    half = 1 << (_PLACE_BITS - 1)
+    return ((((finger_i << 7) | pitch) << _PLACE_BITS | (place_a + half)) << _PLACE_BITS
+            | (place_b + half))
+
+
+def params(places) -> str:
+    """What the answers depend on besides the hand's URDF (its table's name): each
+    posture's move-table parameters (the atlas's, the body rule's, the follow step), the
+    rail's grid, the follow test's constants, and a digest of each posture's base
+    configuration and of its entries (keys and press poses)."""
+    h = hashlib.sha256()
+    for atlas in places.atlases:
+        h.update(np.ascontiguousarray(atlas.base, dtype=float).tobytes())
+        solved = atlas.solved()
+        for key in sorted(solved, key=lambda k: (places.hand.fingers.index(k[0]), k[1], k[2])):
+            h.update(repr(key).encode())
+            h.update(np.ascontiguousarray(solved[key].press, dtype=float).tobytes())
+    return json.dumps({"version": VERSION, "moves": [m.params() for m in places.moves],
+                       "rail_step_m": RAIL_STEP_M, "arm": places.arm,
+                       "follow": [follow.HOLD_MARGIN_M, follow.FOLLOW_STEP_M,
+                                  follow.HIGH_MARGIN_M],
+                       "entries": h.hexdigest()}, sort_keys=True)
+
+
+class FollowTable:
+    """The shipped answers of one hand (``load``; empty when none fits)."""
+
+    def __init__(self) -> None:
+        self._codes: list[int] = []
+        self._answers = b""
+
+    def __len__(self) -> int:
+        return len(self._codes)
+
+    def load(self, path: Path, want: str) -> bool:
+        """Read ``path`` if it was made with parameters ``want``; whether it was."""
+        if not path.exists():
+            return False
+        with np.load(path, allow_pickle=False) as z:
+            if str(z["params"]) != want:
+                return False
+            self._codes = z["code"].tolist()
+            self._answers = np.unpackbits(z["answer"], count=len(self._codes)).tobytes()
+        return True
+
+    def get(self, finger_i: int, pitch: int, place_a: int, place_b: int) -> bool | None:
+        """The answer of that row; None when the table has none."""
+        c = code(finger_i, pitch, place_a, place_b)
+        i = bisect.bisect_left(self._codes, c)
+        if i < len(self._codes) and self._codes[i] == c:
+            return self._answers[i] == 1
+        return None
+
+
+def domain(places, fingers=None, pitches=None) -> list[tuple[int, int, list]]:
+    """The rows a table holds, by finger and key: (finger index, pitch, [(place a, entry
+    a, place b, entry b), ...]) for every pair of places of the rail's travel (within
+    ``Costs.rails``' 5 cm of the key) from which the finger has an entry on the key and
+    whose entries may follow (``Places.follow_clear``); of ``fingers`` and ``pitches``
+    only when given."""
+    hand, r = places.hand, places.rail
+    lo = math.ceil(hand.plan_lower[r] / RAIL_STEP_M)
+    hi = math.floor(hand.plan_upper[r] / RAIL_STEP_M)
+    out = []
+    for fi, f in enumerate(hand.fingers):
+        if fingers is not None and f not in fingers:
+            continue
+        for pitch in kb.ALL_PITCHES if pitches is None else pitches:
+            x = kb.key(pitch).center_x_m - places.natural_dx[f]
+            ilo = max(lo, math.ceil((x - REACH_M) / RAIL_STEP_M))
+            ihi = min(hi, math.floor((x + REACH_M) / RAIL_STEP_M))
+            ends = [(q, e) for p in range(places.postures) for i in range(ilo, ihi + 1)
+                    if (e := places.entry(f, pitch, q := places.place(p, i))) is not None]
+            pairs = [(qa, a, qb, b) for qa, a in ends for qb, b in ends
+                     if places.follow_clear(a, b)]
+            if pairs:
+                out.append((fi, pitch, pairs))
+    return out
+
+
+REACH_M = 0.05  # the places of a key a table covers: this far from the finger's natural
+# place over it (``Costs.rails``' span; the atlas's entries reach ``SPAN_M``, 45 mm)
+
+
+def answer_pairs(places, finger_i: int, pitch: int, pairs: list) -> np.ndarray:
+    """The follow test of ``domain``'s ``pairs`` of one finger and key, by forward
+    kinematics (``follow.paths_clear_each``: ``Places.follow_path_clear``'s moves)."""
+    QA, QB = zip(*[places.follow_ends_on_rail(a, b, places.rail_m(qa), places.rail_m(qb))
+                   for qa, a, qb, b in pairs])
+    return follow.paths_clear_each(places.atlas, places.hand.fingers[finger_i], pitch,
+                                   np.array(QA), np.array(QB), places.arm)
+
+
+def make_table(places, path: Path) -> int:
+    """Find every answer of ``domain(places)`` (``follow.paths_clear_each``, key by key)
+    and write the table; returns its rows."""
+    codes, answers = [], []
+    for fi, pitch, pairs in domain(places):
+        codes += [code(fi, pitch, qa, qb) for qa, _, qb, _ in pairs]
+        answers += answer_pairs(places, fi, pitch, pairs).tolist()
+    order = np.argsort(codes, kind="stable")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, params=np.array(params(places)),
+                        code=np.array(codes, dtype=np.int64)[order],
+                        answer=np.packbits(np.array(answers, dtype=bool)[order]))
+    return len(codes)
