@@ -9,7 +9,14 @@ import pytest
 
 from planner.hand.model import load_hand
 from planner.play import follow
-from planner.play.followtable import FollowTable, answer_pairs, domain, params, table_path
+from planner.play.followtable import (
+    FollowTable,
+    answer_pairs,
+    cross_pairs,
+    domain,
+    params,
+    table_path,
+)
 from planner.play.places import RAIL_STEP_M, Places
 
 
@@ -110,3 +117,28 @@ def test_a_table_of_other_entries_is_not_used(places, tmp_path):
     t = FollowTable()
     assert not t.load(tmp_path / "t.npz", want) and len(t) == 0
     assert t.get(0, 60, 0, 0) is None
+
+
+def test_the_pairs_across_postures_are_what_the_code_finds(places):
+    """300 of the table's pairs across postures, drawn at random, and every pair of the
+    thumb on one key: ``Places.follow_clear`` and ``Places.follow_s`` read from the
+    table are those a hand's ``Places`` without the table finds (the same float); both
+    answers occur."""
+    bare = Places(places.hand)
+    bare.follows = FollowTable()
+    cross = cross_pairs(places)
+    codes = sorted(cross)
+    rng = np.random.default_rng(5)
+    pick = [codes[i] for i in rng.choice(len(codes), 300, replace=False)]
+    thumb = [c for c, (a, _) in cross.items() if a.finger == "thumb" and a.pitch_class == 4]
+    seen = set()
+    for c in pick + thumb:
+        a, b = cross[c]
+        assert places._cross_row(a, b) is not None
+        # (the same atlases' entries in both: the same keys and poses, other objects)
+        ea = bare.atlases[a.posture].entry_at(a.finger, a.pitch_class, places.sample_of(a))
+        eb = bare.atlases[b.posture].entry_at(b.finger, b.pitch_class, places.sample_of(b))
+        assert places.follow_clear(a, b) == bare.follow_clear(ea, eb)
+        assert places.follow_s(a, b) == bare.follow_s(ea, eb)
+        seen.add(places.follow_clear(a, b))
+    assert seen == {True, False}

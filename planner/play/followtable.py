@@ -5,6 +5,11 @@ follows it through a move of the arm from one place to another (``Places.follow_
 the finger has an entry on the key and whose entries the move table lets follow
 (``Places.follow_clear``: the programme asks the path of no other pair).
 
+With several play postures it holds too, for every pair of one finger's entries on one
+key in two postures met on that grid, the follow across postures: whether its path is
+clear and how long it takes (``Places.follow_clear``, ``Places.follow_s``: each asked of
+a pair of entries, found by forward kinematics and the arm's timing when first asked).
+
 The programme asks a few thousand of these a song (``ArmCosts._follow_path``), each
 about 0.3 ms of forward kinematics and box tests; the table answers them by a look-up.
 It holds the answers the code gives (``make_table`` asks ``follow.paths_clear_each``,
@@ -32,7 +37,7 @@ from planner.play import follow
 from planner.play.armmoves import RAIL_STEP_M
 from planner.play.atlas import TABLE_DIR
 
-VERSION = 1  # the table's layout and what it answers (a table of another is not used)
+VERSION = 2  # the table's layout and what it answers (a table of another is not used)
 _PLACE_BITS = 20  # a place's bits in a row's code (places lie within +-2^19: a few
 # postures times ``PLACE_STRIDE``)
 
@@ -47,6 +52,14 @@ def code(finger_i: int, pitch: int, place_a: int, place_b: int) -> int:
     half = 1 << (_PLACE_BITS - 1)
     return ((((finger_i << 7) | pitch) << _PLACE_BITS | (place_a + half)) << _PLACE_BITS
             | (place_b + half))
+
+
+def cross_code(finger_i: int, pitch_class: int, posture_a: int, k_a: int, posture_b: int,
+               k_b: int) -> int:
+    """A pair across postures as one int: the finger's index, the pitch class, each
+    entry's posture and sample (``Atlas.entry_at``'s ``k``, within +-2^7)."""
+    return ((((((finger_i << 4) | pitch_class) << 4 | posture_a) << 8 | (k_a + 128)) << 4
+             | posture_b) << 8) | (k_b + 128)
 
 
 def params(places) -> str:
@@ -74,6 +87,9 @@ class FollowTable:
     def __init__(self) -> None:
         self._codes: list[int] = []
         self._answers = b""
+        self._xcodes: list[int] = []  # (the pairs across postures, ``cross``)
+        self._xclear = b""
+        self._xs: list[float] = []
 
     def __len__(self) -> int:
         return len(self._codes)
@@ -87,6 +103,9 @@ class FollowTable:
                 return False
             self._codes = z["code"].tolist()
             self._answers = np.unpackbits(z["answer"], count=len(self._codes)).tobytes()
+            self._xcodes = z["xcode"].tolist()
+            self._xclear = np.unpackbits(z["xclear"], count=len(self._xcodes)).tobytes()
+            self._xs = z["xfollow_s"].tolist()  # (floats as Python's, as they were found)
         return True
 
     def get(self, finger_i: int, pitch: int, place_a: int, place_b: int) -> bool | None:
@@ -98,29 +117,62 @@ class FollowTable:
         return None
 
 
+    def cross(self, finger_i: int, pitch_class: int, posture_a: int, k_a: int,
+              posture_b: int, k_b: int) -> tuple[bool, float] | None:
+        """The follow across postures of that pair: whether its path is clear and its
+        time; None when the table has none."""
+        c = cross_code(finger_i, pitch_class, posture_a, k_a, posture_b, k_b)
+        i = bisect.bisect_left(self._xcodes, c)
+        if i < len(self._xcodes) and self._xcodes[i] == c:
+            return self._xclear[i] == 1, self._xs[i]
+        return None
+
+
+def ends(places, finger: str, pitch: int) -> list[tuple[int, object]]:
+    """The places of the rail's grid from which ``finger`` has an entry on key ``pitch``
+    (within ``REACH_M`` of its natural place over it, and the rail's travel), with those
+    entries: (place, entry), posture by posture."""
+    hand, r = places.hand, places.rail
+    lo = max(math.ceil(hand.plan_lower[r] / RAIL_STEP_M),
+             math.ceil((kb.key(pitch).center_x_m - places.natural_dx[finger] - REACH_M)
+                       / RAIL_STEP_M))
+    hi = min(math.floor(hand.plan_upper[r] / RAIL_STEP_M),
+             math.floor((kb.key(pitch).center_x_m - places.natural_dx[finger] + REACH_M)
+                        / RAIL_STEP_M))
+    return [(q, e) for p in range(places.postures) for i in range(lo, hi + 1)
+            if (e := places.entry(finger, pitch, q := places.place(p, i))) is not None]
+
+
 def domain(places, fingers=None, pitches=None) -> list[tuple[int, int, list]]:
     """The rows a table holds, by finger and key: (finger index, pitch, [(place a, entry
     a, place b, entry b), ...]) for every pair of places of the rail's travel (within
     ``Costs.rails``' 5 cm of the key) from which the finger has an entry on the key and
     whose entries may follow (``Places.follow_clear``); of ``fingers`` and ``pitches``
     only when given."""
-    hand, r = places.hand, places.rail
-    lo = math.ceil(hand.plan_lower[r] / RAIL_STEP_M)
-    hi = math.floor(hand.plan_upper[r] / RAIL_STEP_M)
     out = []
-    for fi, f in enumerate(hand.fingers):
+    for fi, f in enumerate(places.hand.fingers):
         if fingers is not None and f not in fingers:
             continue
         for pitch in kb.ALL_PITCHES if pitches is None else pitches:
-            x = kb.key(pitch).center_x_m - places.natural_dx[f]
-            ilo = max(lo, math.ceil((x - REACH_M) / RAIL_STEP_M))
-            ihi = min(hi, math.floor((x + REACH_M) / RAIL_STEP_M))
-            ends = [(q, e) for p in range(places.postures) for i in range(ilo, ihi + 1)
-                    if (e := places.entry(f, pitch, q := places.place(p, i))) is not None]
-            pairs = [(qa, a, qb, b) for qa, a in ends for qb, b in ends
-                     if places.follow_clear(a, b)]
+            on = ends(places, f, pitch)
+            pairs = [(qa, a, qb, b) for qa, a in on for qb, b in on if places.follow_clear(a, b)]
             if pairs:
                 out.append((fi, pitch, pairs))
+    return out
+
+
+def cross_pairs(places) -> dict[int, tuple]:
+    """Every pair of one finger's entries on one key in two postures that ``ends`` meets
+    (by ``cross_code``): the entries."""
+    out = {}
+    for fi, f in enumerate(places.hand.fingers):
+        for pitch in kb.ALL_PITCHES:
+            on = [e for _, e in ends(places, f, pitch)]
+            for a in on:
+                for b in on:
+                    if a.posture != b.posture:
+                        out[cross_code(fi, a.pitch_class, a.posture, places.sample_of(a),
+                                       b.posture, places.sample_of(b))] = (a, b)
     return out
 
 
@@ -140,13 +192,21 @@ def answer_pairs(places, finger_i: int, pitch: int, pairs: list) -> np.ndarray:
 def make_table(places, path: Path) -> int:
     """Find every answer of ``domain(places)`` (``follow.paths_clear_each``, key by key)
     and write the table; returns its rows."""
+    places.follows = FollowTable()  # (found afresh, not read back)
     codes, answers = [], []
     for fi, pitch, pairs in domain(places):
         codes += [code(fi, pitch, qa, qb) for qa, _, qb, _ in pairs]
         answers += answer_pairs(places, fi, pitch, pairs).tolist()
+    cross = cross_pairs(places)
+    xcodes = sorted(cross)
+    xclear = [places.follow_clear(*cross[c]) for c in xcodes]
+    xs = [places.follow_s(*cross[c]) for c in xcodes]
     order = np.argsort(codes, kind="stable")
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, params=np.array(params(places)),
                         code=np.array(codes, dtype=np.int64)[order],
-                        answer=np.packbits(np.array(answers, dtype=bool)[order]))
-    return len(codes)
+                        answer=np.packbits(np.array(answers, dtype=bool)[order]),
+                        xcode=np.array(xcodes, dtype=np.int64),
+                        xclear=np.packbits(np.array(xclear, dtype=bool)),
+                        xfollow_s=np.array(xs, dtype=float))
+    return len(codes) + len(xcodes)

@@ -24,7 +24,7 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.play.armmoves import PLACE_STRIDE, RAIL_STEP_M, ArmMoves
-from planner.play.atlas import Atlas, AtlasEntry, posture_count
+from planner.play.atlas import STEP_M, Atlas, AtlasEntry, posture_count
 from planner.play.follow import canonical_pitch, follow_ends, paths_clear
 from planner.play.followtable import FollowTable, table_path
 from planner.play.followtable import params as follow_params
@@ -188,6 +188,10 @@ class Places:
             return self.moves[a.posture].follow_s(a, b)
         key = (id(a), id(b))
         got = self._cross_s.get(key)
+        if got is None and len(self.follows):  # (the shipped time of the pair)
+            row = self._cross_row(a, b)
+            if row is not None:
+                got = self._cross_s[key] = row[1]
         if got is None:
             qa, qb = follow_ends(self.atlases[a.posture], self.atlases[b.posture], a, b)
             cols = self.arms.carry_cols(a.finger)
@@ -212,11 +216,31 @@ class Places:
             return False
         key = (id(a), id(b))
         got = self._cross_clear.get(key)
+        if got is None and len(self.follows):  # (the shipped answer of the pair)
+            row = self._cross_row(a, b)
+            if row is not None:
+                got = self._cross_clear[key] = row[0]
         if got is None:
             qa, qb = follow_ends(self.atlases[a.posture], self.atlases[b.posture], a, b)
             got = self._cross_clear[key] = bool(paths_clear(
                 self.atlas, a.finger, canonical_pitch(a), qa[None], qb[None], self.arm)[0])
         return got
+
+    def sample_of(self, e: AtlasEntry) -> int:
+        """The entry's sample in its atlas (``Atlas.entry_at``'s ``k``: its ``dx`` less the
+        finger's natural one, in ``STEP_M``)."""
+        return round((e.dx_m - self.natural_dx[e.finger]) / STEP_M)
+
+    def _cross_row(self, a: AtlasEntry, b: AtlasEntry) -> tuple[bool, float] | None:
+        """The shipped follow across postures of entries ``a`` and ``b`` (of one finger
+        and key; ``FollowTable.cross``) when they are their atlases' entries at their
+        samples (the pair the table found); None otherwise."""
+        ka, kb_ = self.sample_of(a), self.sample_of(b)
+        if self.atlases[a.posture].entry_at(a.finger, a.pitch_class, ka) is not a \
+                or self.atlases[b.posture].entry_at(b.finger, b.pitch_class, kb_) is not b:
+            return None
+        return self.follows.cross(self._finger_i[a.finger], a.pitch_class, a.posture, ka,
+                                  b.posture, kb_)
 
     def follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
         return self.moves[a.posture].follow(a, b) if a.posture == b.posture else None
