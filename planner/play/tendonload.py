@@ -88,6 +88,10 @@ class TendonLoad:
         self.motors = np.arange(hand.n_motor) if every_motor else tendon_motors(hand)
         self.capacity_nm = TENDON_SHARE * actuator_capacity(hand).torque_nm[self.motors]
         self.samples = np.linspace(0.0, 1.0, PATH_SAMPLES)
+        # (every coupling and transmission linear: one motor matrix for every pose,
+        # ``motor_torque_matrix``'s own test, and the couplings elementwise)
+        self.linear = (all(c.kind == "linear" for c in hand.couplings)
+                       and all(getattr(a, "mk5", None) is None for a in hand.actuators))
 
     def params(self) -> dict:
         """What the bound depends on besides the hand (for the move table's parameters)."""
@@ -107,12 +111,11 @@ class TendonLoad:
         zero = np.zeros(hand.n)
         Q = hand.apply_couplings(q_a[None, :] + self.samples[:, None] * dq[None, :])
         pushes = self._pushes(Q, pressing, key_top_z_m)
-        for i, s in enumerate(self.samples.tolist()):
-            q0, q1 = (hand.apply_couplings(q_a + x * dq) for x in (s - _STEP, s + _STEP))
-            q = Q[i]
-            q_s = (q1 - q0) / (2.0 * _STEP)
-            q_ss = (q1 - 2.0 * q + q0) / (_STEP * _STEP)
-            M = motor_torque_matrix(hand, q)[m]
+        Q_s, Q_ss = self._tangents(q_a, dq, Q)
+        M_lin = motor_torque_matrix(hand, Q[0])[m] if self.linear else None
+        for i in range(n):
+            q, q_s, q_ss = Q[i], Q_s[i], Q_ss[i]
+            M = motor_torque_matrix(hand, q)[m] if M_lin is None else M_lin
             g = kin.gravity(q)
             pushed = g.copy()
             if pushes[i]:
@@ -122,6 +125,23 @@ class TendonLoad:
             tau_k, tau_c = kin.inertials(q, ((zero, q_s), (q_s, q_ss)))
             K[i], C[i] = M @ tau_k, M @ tau_c
         return static, K, C
+
+    def _tangents(self, q_a: np.ndarray, dq: np.ndarray, Q: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """The path's tangent and curvature at each sample (``Q``: the samples' points),
+        central differences ``_STEP`` either side. With linear couplings every sample's
+        at once (each row's numbers those of the row alone: elementwise operations, and
+        ``s -+ _STEP`` and its product by ``dq`` rounded as Python's floats); otherwise
+        sample by sample (a law solved iteratively may take as many steps as its
+        hardest row)."""
+        if self.linear:
+            S = self.samples[:, None]
+            Q0 = self.hand.apply_couplings(q_a[None, :] + (S - _STEP) * dq[None, :])
+            Q1 = self.hand.apply_couplings(q_a[None, :] + (S + _STEP) * dq[None, :])
+        else:
+            Q0, Q1 = (np.array([self.hand.apply_couplings(q_a + x * dq)
+                                for x in (self.samples + h).tolist()]) for h in (-_STEP, _STEP))
+        return (Q1 - Q0) / (2.0 * _STEP), (Q1 - 2.0 * Q + Q0) / (_STEP * _STEP)
 
     def _pushes(self, Q: np.ndarray, pressing: tuple[int, ...], key_top_z_m: float | None
                 ) -> np.ndarray:
