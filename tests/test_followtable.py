@@ -14,6 +14,7 @@ from planner.play.followtable import (
     answer_pairs,
     cross_pairs,
     domain,
+    ends,
     params,
     table_path,
 )
@@ -141,4 +142,26 @@ def test_the_pairs_across_postures_are_what_the_code_finds(places):
         assert places.follow_clear(a, b) == bare.follow_clear(ea, eb)
         assert places.follow_s(a, b) == bare.follow_s(ea, eb)
         seen.add(places.follow_clear(a, b))
+    assert seen == {True, False}
+
+
+def test_the_press_poses_are_what_the_code_finds(places):
+    """Every finger on eight keys across the keyboard: the table's press answers are
+    those ``Places.presses_clear`` finds without it, place by place and for the places
+    of each press force (``Costs.rails``' lists: the entries strong enough); both
+    answers occur."""
+    bare = Places(places.hand)
+    bare.follows = FollowTable()
+    seen = set()
+    for fi, f in enumerate(places.hand.fingers):
+        for pitch in (21, 35, 44, 60, 61, 78, 97, 108):
+            on = ends(places, f, pitch)
+            got = [places.follows.press(fi, pitch, q) for q, _ in on]
+            assert None not in got
+            assert got == [bare.presses_clear(f, pitch, [q])[0] for q, _ in on]
+            for force in (2.0, 6.0, 12.0):
+                strong = [q for q, e in on if e.max_force_n >= force]
+                assert places.presses_clear(f, pitch, strong) \
+                    == bare.presses_clear(f, pitch, strong)
+            seen |= set(got)
     assert seen == {True, False}

@@ -10,6 +10,12 @@ key in two postures met on that grid, the follow across postures: whether its pa
 clear and how long it takes (``Places.follow_clear``, ``Places.follow_s``: each asked of
 a pair of entries, found by forward kinematics and the arm's timing when first asked).
 
+And whether each of those entries' press poses, with the rail there, keeps the finger's
+body clear of the other keys (``Places.presses_clear``, asked of every place of a key a
+finger may press: the first window's programme asks hundreds), for the fingers whose
+chain ``follow.FingerChain`` carries by elementwise operations alone (the answer of a
+place does not depend on the others asked with it).
+
 The programme asks a few thousand of these a song (``ArmCosts._follow_path``), each
 about 0.3 ms of forward kinematics and box tests; the table answers them by a look-up.
 It holds the answers the code gives (``make_table`` asks ``follow.paths_clear_each``,
@@ -37,7 +43,7 @@ from planner.play import follow
 from planner.play.armmoves import RAIL_STEP_M
 from planner.play.atlas import TABLE_DIR
 
-VERSION = 2  # the table's layout and what it answers (a table of another is not used)
+VERSION = 3  # the table's layout and what it answers (a table of another is not used)
 _PLACE_BITS = 20  # a place's bits in a row's code (places lie within +-2^19: a few
 # postures times ``PLACE_STRIDE``)
 
@@ -90,6 +96,8 @@ class FollowTable:
         self._xcodes: list[int] = []  # (the pairs across postures, ``cross``)
         self._xclear = b""
         self._xs: list[float] = []
+        self._pcodes: list[int] = []  # (the press poses, ``press``)
+        self._pclear = b""
 
     def __len__(self) -> int:
         return len(self._codes)
@@ -106,6 +114,8 @@ class FollowTable:
             self._xcodes = z["xcode"].tolist()
             self._xclear = np.unpackbits(z["xclear"], count=len(self._xcodes)).tobytes()
             self._xs = z["xfollow_s"].tolist()  # (floats as Python's, as they were found)
+            self._pcodes = z["pcode"].tolist()
+            self._pclear = np.unpackbits(z["pclear"], count=len(self._pcodes)).tobytes()
         return True
 
     def get(self, finger_i: int, pitch: int, place_a: int, place_b: int) -> bool | None:
@@ -125,6 +135,16 @@ class FollowTable:
         i = bisect.bisect_left(self._xcodes, c)
         if i < len(self._xcodes) and self._xcodes[i] == c:
             return self._xclear[i] == 1, self._xs[i]
+        return None
+
+
+    def press(self, finger_i: int, pitch: int, place: int) -> bool | None:
+        """Whether the finger's press pose on the key from ``place`` is clear of the
+        other keys; None when the table has none."""
+        c = code(finger_i, pitch, place, place)
+        i = bisect.bisect_left(self._pcodes, c)
+        if i < len(self._pcodes) and self._pcodes[i] == c:
+            return self._pclear[i] == 1
         return None
 
 
@@ -201,12 +221,23 @@ def make_table(places, path: Path) -> int:
     xcodes = sorted(cross)
     xclear = [places.follow_clear(*cross[c]) for c in xcodes]
     xs = [places.follow_s(*cross[c]) for c in xcodes]
+    pcodes, pclear = [], []
+    for fi, f in enumerate(places.hand.fingers):
+        if not follow.finger_chain(places.atlas.bodies, f).axis_aligned:
+            continue
+        for pitch in kb.ALL_PITCHES:
+            on = [q for q, _ in ends(places, f, pitch)]
+            pcodes += [code(fi, pitch, q, q) for q in on]
+            pclear += places.presses_clear(f, pitch, on)
     order = np.argsort(codes, kind="stable")
+    porder = np.argsort(pcodes, kind="stable")
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, params=np.array(params(places)),
                         code=np.array(codes, dtype=np.int64)[order],
                         answer=np.packbits(np.array(answers, dtype=bool)[order]),
                         xcode=np.array(xcodes, dtype=np.int64),
                         xclear=np.packbits(np.array(xclear, dtype=bool)),
-                        xfollow_s=np.array(xs, dtype=float))
-    return len(codes) + len(xcodes)
+                        xfollow_s=np.array(xs, dtype=float),
+                        pcode=np.array(pcodes, dtype=np.int64)[porder],
+                        pclear=np.packbits(np.array(pclear, dtype=bool)[porder]))
+    return len(codes) + len(xcodes) + len(pcodes)

@@ -102,9 +102,15 @@ class Places:
         puts it (the atlas's body rule, ``FingerBodies.clear``: the atlas tested the pose
         at its entry's own ``dx``, which the rail's grid misses by up to half its step,
         and a body's side beside a key's wall can reach a millimetre deeper for that).
-        All True without the body rule."""
+        All True without the body rule; the shipped answers where the table has every
+        place (``planner.play.followtable``)."""
         if self.atlas.bodies is None or self.rail is None or not places:
             return [True] * len(places)
+        if len(self.follows):  # (the shipped answers: ``planner.play.followtable``)
+            fi = self._finger_i[finger]
+            got = [self.follows.press(fi, pitch, q) for q in places]
+            if None not in got:
+                return got
         Q = []
         for place in places:
             e = self.entry(finger, pitch, place)
