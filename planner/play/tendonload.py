@@ -191,13 +191,31 @@ def scale_for(static: np.ndarray, K: np.ndarray, C: np.ndarray, speed2: np.ndarr
     capacity up to its own ``u``; ``sigma`` from the smallest."""
     ka = np.abs(K)[:, None, :] * peak_acceleration
     cv = C[:, None, :] * speed2[:, None, None]
-    cap = capacity_nm[None, None, :]
+    # (the three lines' values at u = 0 and slopes as one array each: the same numbers,
+    # and the smallest room of all, a minimum being exact in any order)
+    h0 = np.stack((np.abs(static), static, -static))
+    slope = np.empty(h0.shape)
+    slope[0], slope[1], slope[2] = ka, ka + cv, ka - cv
+    grows = (slope > 0.0) & (h0 < capacity_nm)  # (a static overload: not the timing's)
     u = 1.0
-    for h0, slope in ((np.abs(static), ka), (static, ka + cv), (-static, ka - cv)):
-        h0, slope = np.broadcast_arrays(h0, slope)
-        grows = (slope > 0.0) & (h0 < cap)  # (a static overload: not the timing's)
-        if np.any(grows):
-            room = (np.broadcast_to(cap, h0.shape)[grows] - h0[grows]) / slope[grows]
+    if grows.any():
+        room = float(np.min((np.broadcast_to(capacity_nm, h0.shape)[grows] - h0[grows])
+                            / slope[grows]))
+        if not room >= 0.0:  # (not a number: each line on its own, as Python's ``min``
+            return _scale_by_line(h0, slope, grows, capacity_nm)  # passes one by)
+        u = min(u, room)
+    return 1.0 if u >= 1.0 else min(MAX_SCALE, 1.0 / math.sqrt(u))
+
+
+def _scale_by_line(h0: np.ndarray, slope: np.ndarray, grows: np.ndarray,
+                   capacity_nm: np.ndarray) -> float:
+    """``scale_for`` line by line (each line's smallest room, then the smallest of
+    those, ``min`` passing by a line's that is not a number)."""
+    u = 1.0
+    for k in range(len(h0)):
+        if grows[k].any():
+            room = (np.broadcast_to(capacity_nm, h0[k].shape)[grows[k]] - h0[k][grows[k]]) \
+                / slope[k][grows[k]]
             u = min(u, float(np.min(room)))
     return 1.0 if u >= 1.0 else min(MAX_SCALE, 1.0 / math.sqrt(u))
 
