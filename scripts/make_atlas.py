@@ -13,7 +13,10 @@ the repository root after changing a hand, the IK, the atlas or the moves:
 
     python scripts/make_atlas.py [--hand NAME] [--moves-only]
 
-(``--moves-only``: keep the shipped atlas, write the move table of its entries.)
+(``--moves-only``: keep the shipped atlas, write the move table of its entries.) Last it
+writes the hand's follow table (``planner.play.followtable``: the follow test's answers on
+the rail's grid, for a hand with a rail and the atlas's body rule; ``--follows-only``:
+keep the shipped atlas and move tables, write only it).
 """
 
 import argparse
@@ -25,7 +28,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner.hand.model import load_hand
-from planner.play import highclear
+from planner.play import followtable, highclear
 from planner.play.atlas import Atlas, posture_count, table_path
 from planner.play.moves import Moves
 from planner.play.movetable import MoveTable, make_table
@@ -85,13 +88,29 @@ def main() -> int:
     ap.add_argument("--hand", default="default")
     ap.add_argument("--moves-only", action="store_true",
                     help="keep the shipped atlas; write the move table of its entries")
+    ap.add_argument("--follows-only", action="store_true",
+                    help="keep the shipped atlas and move tables; write the follow table")
     a = ap.parse_args()
     hand = load_hand(a.hand)
-    atlases = [make(hand, i, a.moves_only) for i in range(posture_count(hand))]
-    places = Places(hand) if len(atlases) > 1 and atlases[0].rail is not None else None
-    for i in range(len(atlases)):
-        make_moves(hand, atlases, i, places)
+    if not a.follows_only:
+        atlases = [make(hand, i, a.moves_only) for i in range(posture_count(hand))]
+        places = Places(hand) if len(atlases) > 1 and atlases[0].rail is not None else None
+        for i in range(len(atlases)):
+            make_moves(hand, atlases, i, places)
+    make_follows(hand)
     return 0
+
+
+def make_follows(hand) -> None:
+    """The hand's follow table, of the shipped atlas and move tables (none without a
+    rail or the body rule)."""
+    t0 = time.perf_counter()
+    places = Places(hand)
+    if places.rail is None or places.atlas.bodies is None:
+        return
+    out = followtable.table_path(hand.urdf_sha256)
+    n = followtable.make_table(places, out)
+    print(f"{out}: {n} follows, {time.perf_counter() - t0:.1f} s")
 
 
 if __name__ == "__main__":

@@ -112,11 +112,11 @@ class ArmCosts:
         down: a note struck late, ``State.late``, that much later), and not before its
         lift can start: a note that rode along on the arm's move into ``prev``'s state
         (``State.rode``) once that move is over (``Motion._to_high``)."""
-        late = dict(prev.state.late).get(m, 0.0)
+        late = prev.late_of.get(m, 0.0)
         n = self.notes[m]
         up = held_enough_s(n.onset_s, n.offset_s, self._t_down[m] + late, cut_s,
                            self._t_up[m], self.dt)
-        free = dict(prev.state.rode).get(m)
+        free = prev.rode_of.get(m)
         if free is not None:
             up = max(up, free + self.places.lift(e, "high").cross_s)
         return up
@@ -187,7 +187,7 @@ class ArmCosts:
         every finger is clear, the frames the early keys-up lose, and their new key-ups
         by note."""
         release, loss, ups = -math.inf, 0.0, {}
-        late = dict(ctx.state.late)
+        late = ctx.late_of
         for clear, m, f in lifts:  # (latest first: once one is clear in time, all are)
             if clear <= start_s:
                 release = max(release, clear)

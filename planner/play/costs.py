@@ -136,9 +136,9 @@ class Prev:
     """What a state of the event before tells every transition from it, worked out once
     (the programme weighs hundreds of transitions from each state)."""
 
-    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "lift_end",
+    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
                  "lift_end_black", "lifts", "lifts_black", "older", "on_key", "recent", "release",
-                 "state", "steps")
+                 "rode_of", "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -165,7 +165,10 @@ class Prev:
         # (the notes sounding that might ride along: their entry, the time their key is
         # down (from when it went down: a note struck late, ``State.late``, has less),
         # their press and when their key went down)
-        late = dict(state.late)
+        # (the notes struck late and those that rode along, by note: ``State.late``,
+        # ``State.rode``)
+        self.late_of = late = dict(state.late)
+        self.rode_of = dict(state.rode)
         self.follows = [] if costs.places.rail is None else [
             (m, f, a, t_up[m] - down, costs.places.press_min_s(a), down)
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None

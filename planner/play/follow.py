@@ -109,6 +109,63 @@ def paths_clear(atlas: Atlas, finger: str, pitch: int, QA: np.ndarray, QB: np.nd
     return out
 
 
+def paths_clear_each(atlas: Atlas, finger: str, pitch: int, QA: np.ndarray, QB: np.ndarray,
+                     arm: list[int]) -> np.ndarray:
+    """``paths_clear`` of each move ``QA[i]`` -> ``QB[i]`` asked alone, (N,) bool, in one
+    pass over every move's samples (each its own count: one stacked array, not one
+    numpy call per move); each answer kept as ``paths_clear``'s one-move answer, which
+    the motion asks again. A chain whose joints are not coordinate axes (its matrix
+    products are BLAS calls whose rounding may depend on the array's shape) asks move by
+    move. Every number of a move's samples is an elementwise operation on its own
+    configuration (``FingerChain._carried``), and ``held_stacked``'s answer for one
+    configuration does not depend on the others measured with it (``low_points``, the
+    boxes and columns near: ``held_all``), so the answers are ``paths_clear``'s."""
+    chain = finger_chain(atlas.bodies, finger)
+    if not chain.axis_aligned:
+        return np.array([bool(paths_clear(atlas, finger, pitch, QA[i:i + 1], QB[i:i + 1], arm)[0])
+                         for i in range(len(QA))], dtype=bool)
+    memo, arm_t = _answers(atlas), tuple(arm)
+    keys = [(finger, pitch, QA[i].tobytes(), QB[i].tobytes(), arm_t) for i in range(len(QA))]
+    out = np.array([bool(memo.get(k, False)) for k in keys], dtype=bool)
+    todo = [i for i, k in enumerate(keys) if k not in memo]
+    if todo:
+        d = (QB[todo] - QA[todo])[:, arm]  # (``paths_clear``'s travel, operation by operation)
+        d *= d
+        travel = np.sqrt(d[:, 0] + d[:, 1] if len(arm) == 2 else d.sum(axis=1))
+        got = _clear_each(atlas, chain, atlas.bodies.radii(finger), pitch, QA[todo], QB[todo],
+                          [samples(float(t)) for t in travel])
+        if len(memo) + len(todo) > ANSWERS:
+            memo.clear()
+        for i, g in zip(todo, got.tolist()):
+            out[i] = memo[keys[i]] = g
+    return out
+
+
+def _clear_each(atlas: Atlas, chain: FingerChain, radii: np.ndarray, pitch: int,
+                qa: np.ndarray, qb: np.ndarray, counts: list[int]) -> np.ndarray:
+    """``_clear`` of each move with its own count of samples (``counts``), all moves'
+    samples one array: ``qa + s (qb - qa)``, the tip test and ``held_stacked`` per
+    configuration, each move's answers joined by ``np.logical_and.reduceat``."""
+    hand, k = atlas.hand, kb.key(pitch)
+    S = np.concatenate([_fractions(c) for c in counts])
+    move = np.repeat(np.arange(len(qa)), counts)
+    starts = np.cumsum([0, *counts[:-1]])
+    Q = qa[move] + S[:, None] * (qb - qa)[move]
+    tips, C = chain.carry_stacked(hand.apply_couplings(Q))
+    x, y = tips[:, 0], tips[:, 1]
+    inside = ((k.x_min_m + TIP_RADIUS_M <= x) & (x <= k.x_max_m - TIP_RADIUS_M)
+              & (k.y_min_m + TIP_RADIUS_M <= y) & (y <= k.y_max_m - TIP_RADIUS_M))
+    ok = np.logical_and.reduceat(inside, starts)
+    if not ok.any():
+        return ok
+    held = np.zeros(len(S), dtype=bool)
+    rows = np.flatnonzero(ok[move])  # (the samples of the moves whose tip stays inside)
+    C = C[:, :, rows]
+    held[rows] = np.concatenate([held_stacked(atlas.bodies, C[:, :, lo:lo + MANY_CHUNK], radii,
+                                              pitch) for lo in range(0, C.shape[2], MANY_CHUNK)])
+    return ok & np.logical_and.reduceat(held, starts)
+
+
 ANSWERS = 50_000  # one-move answers kept (``paths_clear``; about 0.6 kB each: a song
 # asks 1,000-3,500 moves, a few per cent of them twice)
 _ANSWERS: dict[tuple[int, int], tuple] = {}  # (``_answers``)

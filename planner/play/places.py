@@ -24,8 +24,10 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.play.armmoves import PLACE_STRIDE, RAIL_STEP_M, ArmMoves
-from planner.play.atlas import Atlas, AtlasEntry, posture_count
+from planner.play.atlas import STEP_M, Atlas, AtlasEntry, posture_count
 from planner.play.follow import canonical_pitch, follow_ends, paths_clear
+from planner.play.followtable import FollowTable, table_path
+from planner.play.followtable import params as follow_params
 from planner.play.highclear import HighClear
 from planner.play.idle import IdleFingers
 from planner.play.moves import Moves
@@ -60,6 +62,12 @@ class Places:
         self._cross_clear: dict[tuple[int, int], bool] = {}
         self._cross_arm: dict[tuple[int, int, float], tuple | None] = {}  # (``follow_s``)
         self.idle = IdleFingers(hand, self.atlases, self.rail)  # (fingers that press no key)
+        # (the follow test's answers on the rail's grid, shipped: ``follow_path_clear``)
+        self.follows = FollowTable()
+        path = table_path(hand.urdf_sha256)
+        if self.rail is not None and self.atlas.bodies is not None and path.exists():
+            self.follows.load(path, follow_params(self))
+        self._finger_i = {f: i for i, f in enumerate(hand.fingers)}
 
     @property
     def postures(self) -> int:
@@ -94,9 +102,15 @@ class Places:
         puts it (the atlas's body rule, ``FingerBodies.clear``: the atlas tested the pose
         at its entry's own ``dx``, which the rail's grid misses by up to half its step,
         and a body's side beside a key's wall can reach a millimetre deeper for that).
-        All True without the body rule."""
+        All True without the body rule; the shipped answers where the table has every
+        place (``planner.play.followtable``)."""
         if self.atlas.bodies is None or self.rail is None or not places:
             return [True] * len(places)
+        if len(self.follows):  # (the shipped answers: ``planner.play.followtable``)
+            fi = self._finger_i[finger]
+            got = [self.follows.press(fi, pitch, q) for q in places]
+            if None not in got:
+                return got
         Q = []
         for place in places:
             e = self.entry(finger, pitch, place)
@@ -180,6 +194,10 @@ class Places:
             return self.moves[a.posture].follow_s(a, b)
         key = (id(a), id(b))
         got = self._cross_s.get(key)
+        if got is None and len(self.follows):  # (the shipped time of the pair)
+            row = self._cross_row(a, b)
+            if row is not None:
+                got = self._cross_s[key] = row[1]
         if got is None:
             qa, qb = follow_ends(self.atlases[a.posture], self.atlases[b.posture], a, b)
             cols = self.arms.carry_cols(a.finger)
@@ -204,11 +222,31 @@ class Places:
             return False
         key = (id(a), id(b))
         got = self._cross_clear.get(key)
+        if got is None and len(self.follows):  # (the shipped answer of the pair)
+            row = self._cross_row(a, b)
+            if row is not None:
+                got = self._cross_clear[key] = row[0]
         if got is None:
             qa, qb = follow_ends(self.atlases[a.posture], self.atlases[b.posture], a, b)
             got = self._cross_clear[key] = bool(paths_clear(
                 self.atlas, a.finger, canonical_pitch(a), qa[None], qb[None], self.arm)[0])
         return got
+
+    def sample_of(self, e: AtlasEntry) -> int:
+        """The entry's sample in its atlas (``Atlas.entry_at``'s ``k``: its ``dx`` less the
+        finger's natural one, in ``STEP_M``)."""
+        return round((e.dx_m - self.natural_dx[e.finger]) / STEP_M)
+
+    def _cross_row(self, a: AtlasEntry, b: AtlasEntry) -> tuple[bool, float] | None:
+        """The shipped follow across postures of entries ``a`` and ``b`` (of one finger
+        and key; ``FollowTable.cross``) when they are their atlases' entries at their
+        samples (the pair the table found); None otherwise."""
+        ka, kb_ = self.sample_of(a), self.sample_of(b)
+        if self.atlases[a.posture].entry_at(a.finger, a.pitch_class, ka) is not a \
+                or self.atlases[b.posture].entry_at(b.finger, b.pitch_class, kb_) is not b:
+            return None
+        return self.follows.cross(self._finger_i[a.finger], a.pitch_class, a.posture, ka,
+                                  b.posture, kb_)
 
     def follow(self, a: AtlasEntry, b: AtlasEntry) -> Move | None:
         return self.moves[a.posture].follow(a, b) if a.posture == b.posture else None
@@ -219,14 +257,40 @@ class Places:
         at ``rail_a_m`` to entry ``b`` at ``rail_b_m``: the body rule's test on the very
         move the motion makes (``planner.play.follow``; the move table tested each pair
         at its entries' own ``dx``, which the rail's grid misses by up to half the atlas's
-        step). True without the body rule (the table's answer stands)."""
+        step). True without the body rule (the table's answer stands). On the rail's
+        grid, with the entries of the finger on the key there, the shipped answer
+        (``planner.play.followtable``: the same test on the same move)."""
         if self.atlas.bodies is None or self.rail is None:
             return True
+        if len(self.follows):
+            got = self._follow_row(a, b, pitch, rail_a_m, rail_b_m)
+            if got is not None:
+                return got
+        qa, qb = self.follow_ends_on_rail(a, b, rail_a_m, rail_b_m)
+        return bool(paths_clear(self.atlas, a.finger, pitch, qa[None], qb[None], self.arm)[0])
+
+    def _follow_row(self, a: AtlasEntry, b: AtlasEntry, pitch: int, rail_a_m: float,
+                    rail_b_m: float) -> bool | None:
+        """``follow_path_clear``'s answer from the shipped table: when both rails are on
+        the grid (the very floats ``rail_m`` gives) and ``a`` and ``b`` are the finger's
+        entries on the key there (the move the table tested); None otherwise."""
+        ia, ib = round(rail_a_m / RAIL_STEP_M), round(rail_b_m / RAIL_STEP_M)
+        if ia * RAIL_STEP_M != rail_a_m or ib * RAIL_STEP_M != rail_b_m:
+            return None
+        pa, pb = self.place(a.posture, ia), self.place(b.posture, ib)
+        if self.entry(a.finger, pitch, pa) is not a or self.entry(b.finger, pitch, pb) is not b:
+            return None
+        return self.follows.get(self._finger_i[a.finger], pitch, pa, pb)
+
+    def follow_ends_on_rail(self, a: AtlasEntry, b: AtlasEntry, rail_a_m: float,
+                            rail_b_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """The whole hand at ``follow_path_clear``'s ends: each entry's posture's base,
+        the rail where given, the finger pressing."""
         js = self.hand.joint_slice(a.finger)
         qa, qb = self.atlases[a.posture].base.copy(), self.atlases[b.posture].base.copy()
         qa[self.rail], qb[self.rail] = rail_a_m, rail_b_m
         qa[js], qb[js] = a.press, b.press
-        return bool(paths_clear(self.atlas, a.finger, pitch, qa[None], qb[None], self.arm)[0])
+        return qa, qb
 
     def descend(self, e: AtlasEntry, start: str):
         return self.moves[e.posture].descend(e, start)

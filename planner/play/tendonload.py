@@ -88,6 +88,10 @@ class TendonLoad:
         self.motors = np.arange(hand.n_motor) if every_motor else tendon_motors(hand)
         self.capacity_nm = TENDON_SHARE * actuator_capacity(hand).torque_nm[self.motors]
         self.samples = np.linspace(0.0, 1.0, PATH_SAMPLES)
+        # (every coupling and transmission linear: one motor matrix for every pose,
+        # ``motor_torque_matrix``'s own test, and the couplings elementwise)
+        self.linear = (all(c.kind == "linear" for c in hand.couplings)
+                       and all(getattr(a, "mk5", None) is None for a in hand.actuators))
 
     def params(self) -> dict:
         """What the bound depends on besides the hand (for the move table's parameters)."""
@@ -107,12 +111,11 @@ class TendonLoad:
         zero = np.zeros(hand.n)
         Q = hand.apply_couplings(q_a[None, :] + self.samples[:, None] * dq[None, :])
         pushes = self._pushes(Q, pressing, key_top_z_m)
-        for i, s in enumerate(self.samples.tolist()):
-            q0, q1 = (hand.apply_couplings(q_a + x * dq) for x in (s - _STEP, s + _STEP))
-            q = Q[i]
-            q_s = (q1 - q0) / (2.0 * _STEP)
-            q_ss = (q1 - 2.0 * q + q0) / (_STEP * _STEP)
-            M = motor_torque_matrix(hand, q)[m]
+        Q_s, Q_ss = self._tangents(q_a, dq, Q)
+        M_lin = motor_torque_matrix(hand, Q[0])[m] if self.linear else None
+        for i in range(n):
+            q, q_s, q_ss = Q[i], Q_s[i], Q_ss[i]
+            M = motor_torque_matrix(hand, q)[m] if M_lin is None else M_lin
             g = kin.gravity(q)
             pushed = g.copy()
             if pushes[i]:
@@ -122,6 +125,23 @@ class TendonLoad:
             tau_k, tau_c = kin.inertials(q, ((zero, q_s), (q_s, q_ss)))
             K[i], C[i] = M @ tau_k, M @ tau_c
         return static, K, C
+
+    def _tangents(self, q_a: np.ndarray, dq: np.ndarray, Q: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """The path's tangent and curvature at each sample (``Q``: the samples' points),
+        central differences ``_STEP`` either side. With linear couplings every sample's
+        at once (each row's numbers those of the row alone: elementwise operations, and
+        ``s -+ _STEP`` and its product by ``dq`` rounded as Python's floats); otherwise
+        sample by sample (a law solved iteratively may take as many steps as its
+        hardest row)."""
+        if self.linear:
+            S = self.samples[:, None]
+            Q0 = self.hand.apply_couplings(q_a[None, :] + (S - _STEP) * dq[None, :])
+            Q1 = self.hand.apply_couplings(q_a[None, :] + (S + _STEP) * dq[None, :])
+        else:
+            Q0, Q1 = (np.array([self.hand.apply_couplings(q_a + x * dq)
+                                for x in (self.samples + h).tolist()]) for h in (-_STEP, _STEP))
+        return (Q1 - Q0) / (2.0 * _STEP), (Q1 - 2.0 * Q + Q0) / (_STEP * _STEP)
 
     def _pushes(self, Q: np.ndarray, pressing: tuple[int, ...], key_top_z_m: float | None
                 ) -> np.ndarray:
@@ -171,13 +191,31 @@ def scale_for(static: np.ndarray, K: np.ndarray, C: np.ndarray, speed2: np.ndarr
     capacity up to its own ``u``; ``sigma`` from the smallest."""
     ka = np.abs(K)[:, None, :] * peak_acceleration
     cv = C[:, None, :] * speed2[:, None, None]
-    cap = capacity_nm[None, None, :]
+    # (the three lines' values at u = 0 and slopes as one array each: the same numbers,
+    # and the smallest room of all, a minimum being exact in any order)
+    h0 = np.stack((np.abs(static), static, -static))
+    slope = np.empty(h0.shape)
+    slope[0], slope[1], slope[2] = ka, ka + cv, ka - cv
+    grows = (slope > 0.0) & (h0 < capacity_nm)  # (a static overload: not the timing's)
     u = 1.0
-    for h0, slope in ((np.abs(static), ka), (static, ka + cv), (-static, ka - cv)):
-        h0, slope = np.broadcast_arrays(h0, slope)
-        grows = (slope > 0.0) & (h0 < cap)  # (a static overload: not the timing's)
-        if np.any(grows):
-            room = (np.broadcast_to(cap, h0.shape)[grows] - h0[grows]) / slope[grows]
+    if grows.any():
+        room = float(np.min((np.broadcast_to(capacity_nm, h0.shape)[grows] - h0[grows])
+                            / slope[grows]))
+        if not room >= 0.0:  # (not a number: each line on its own, as Python's ``min``
+            return _scale_by_line(h0, slope, grows, capacity_nm)  # passes one by)
+        u = min(u, room)
+    return 1.0 if u >= 1.0 else min(MAX_SCALE, 1.0 / math.sqrt(u))
+
+
+def _scale_by_line(h0: np.ndarray, slope: np.ndarray, grows: np.ndarray,
+                   capacity_nm: np.ndarray) -> float:
+    """``scale_for`` line by line (each line's smallest room, then the smallest of
+    those, ``min`` passing by a line's that is not a number)."""
+    u = 1.0
+    for k in range(len(h0)):
+        if grows[k].any():
+            room = (np.broadcast_to(capacity_nm, h0[k].shape)[grows[k]] - h0[k][grows[k]]) \
+                / slope[k][grows[k]]
             u = min(u, float(np.min(room)))
     return 1.0 if u >= 1.0 else min(MAX_SCALE, 1.0 / math.sqrt(u))
 
