@@ -41,6 +41,7 @@ from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
     COARSE_STOP,
     FINE_STOP,
+    JOINT_STOP,
     SoftStop,
     StopDynamics,
     StopGrid,
@@ -204,6 +205,9 @@ class CatchPlanner:
             return replace(plan, planning_s=time.perf_counter() - t0)
         if soft:
             finer = finer_stop_fallback(lambda: self._on_the_rig(args, soft, FINE_STOP), plan)
+            if not finer.feasible:  # each arm joint ramping in its own time
+                finer = finer_stop_fallback(lambda: self._on_the_rig(args, soft, JOINT_STOP),
+                                            plan, JOINT_STOP_NOTE)
             if finer.feasible:
                 return replace(finer, planning_s=time.perf_counter() - t0)
         if CatchReason.GRASP in plan.reason_kinds:
@@ -434,18 +438,23 @@ class CatchPlanner:
         return self.ball_forces.forces(flight, pose, t, Q, r, grasp_t, soft)
 
 
-def finer_stop_fallback(replan, plan: CatchPlan) -> CatchPlan:
+FINE_STOP_NOTE = "the stop searched in finer steps (the palm's tilt 1 deg, the contact share 0.05)"
+JOINT_STOP_NOTE = ("the stop with per-joint ramps (each arm joint ramping and recoiling in its "
+                   "own time, the finer steps)")
+
+
+def finer_stop_fallback(replan, plan: CatchPlan, note: str = FINE_STOP_NOTE) -> CatchPlan:
     """Where ``plan`` is too fast to stop among its reasons, ``replan()`` (the same plans
     with the soft stop's tilts and contact shares in finer steps, ``FINE_STOP``: the rows'
-    load is not monotone at the coarse ones), noted, if feasible; else ``plan``."""
+    load is not monotone at the coarse ones; or with per-joint ramps too, ``JOINT_STOP``),
+    noted, if feasible; else ``plan``."""
     if CatchReason.TOO_FAST_TO_STOP not in plan.reason_kinds:
         return plan
     finer = replan()
     if not finer.feasible:
         return plan
     return replace(finer, notes=finer.notes + (
-        "the stop searched in finer steps (the palm's tilt 1 deg, the contact share "
-        "0.05): in the coarse ones " + reasons_text(plan.reasons),))
+        note + ": in the coarse ones " + reasons_text(plan.reasons),))
 
 
 def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
