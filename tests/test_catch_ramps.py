@@ -1,6 +1,7 @@
 """The soft stop with per-joint ramps (``planner.catch.plan.ramps``, ``softstop``): each
-arm joint ramps (and recoils) in its own time within its own limits; a throw too fast to
-stop with one ramp time for every joint is caught (``JOINT_STOP``, issue 31)."""
+arm joint ramps (and recoils) in its own time within its own limits; throws too fast to
+stop with one ramp time for every joint are caught (``JOINT_STOP``, ``LOADED_STOP``,
+issue 31)."""
 
 from __future__ import annotations
 
@@ -9,10 +10,10 @@ import pytest
 
 from planner.catch.grasp import motor_torque_matrix
 from planner.catch.plan.api import get_planner, plan_throw, write_plan
-from planner.catch.plan.planner import JOINT_STOP_NOTE
+from planner.catch.plan.planner import JOINT_STOP_NOTE, LOADED_STOP_NOTE
 from planner.catch.plan.ramps import joint_ramps, min_jerk_acc
 from planner.catch.plan.softstop import SoftStop
-from planner.catch.plan.stopping import STOP_SHARE
+from planner.catch.plan.stopping import STOP_SHARE, recoil_shares
 from planner.check import check_trajectory
 from planner.trajectory import PEAK_VEL
 
@@ -22,11 +23,16 @@ def pl():
     return get_planner("default")
 
 
-@pytest.fixture(scope="module")
-def caught(pl):
-    """0 m / 15 deg / 3.5 m: too fast to stop on main (a2f3801: 86.8 N, motor.wrist_flex at
-    2.08 N m by the coarse search, the fine one no better)."""
-    return plan_throw(15.0, 3.5, 0.0, planner=pl)
+# too fast to stop on main (a2f3801, the coarse search's numbers; the fine one no better):
+# 0 m / 15 deg / 3.5 m 86.8 N, motor.wrist_flex at 2.08 N m; -0.3 m / 65 deg / 3.5 m 68.1 N,
+# 2.37 N m (and the roll)
+THROWS = {(15.0, 3.5, 0.0): JOINT_STOP_NOTE, (65.0, 3.5, -0.3): LOADED_STOP_NOTE}
+
+
+@pytest.fixture(scope="module", params=sorted(THROWS))
+def caught(pl, request):
+    a, d, h = request.param
+    return plan_throw(a, d, h, planner=pl), THROWS[request.param]
 
 
 def _ramp_case(pl):
@@ -106,12 +112,14 @@ def test_per_joint_profile_meets_the_ball_at_every_joints_contact_speed():
 
 
 def test_a_too_fast_throw_is_caught_with_per_joint_ramps(caught, tmp_path):
-    """0 m / 15 deg / 3.5 m: feasible with the per-joint stop (the note names the coarse
+    """0 m / 15 deg / 3.5 m (every joint recoiling), -0.3 m / 65 deg / 3.5 m (the wrist
+    flexion alone recoiling): feasible with the per-joint stop (the note names the coarse
     search's too fast to stop), ``check`` confirms the written plan."""
-    p = caught
+    p, expected = caught
     assert p.feasible, p.reasons
     note = p.notes[-1]
-    assert note.startswith(JOINT_STOP_NOTE + ": in the coarse ones too fast to stop")
+    assert note.startswith(expected + ": in the coarse ones ")
+    assert "too fast to stop" in note
     assert p.forces.soft is not None and p.forces.soft.per_joint
     out = tmp_path / "c.csv"
     write_plan(p, str(out))
@@ -120,16 +128,37 @@ def test_a_too_fast_throw_is_caught_with_per_joint_ramps(caught, tmp_path):
 
 
 def test_the_per_joint_catch_is_held_within_every_motor(caught, tmp_path):
-    """The same catch replayed in MuJoCo (full contact): held, no motor saturated longer
-    than one 10 ms row (measured: 34 mm from the palm centre; the wrist flexion's peak 0.79
-    of its 2.00 N m, no motor saturated)."""
+    """The same catches replayed in MuJoCo (full contact): held, no motor saturated longer
+    than one 10 ms row (measured: 34 and 35 mm from the palm centre; the wrist flexion's
+    peak 0.79 and 0.66 of its 2.00 N m, no motor saturated)."""
     pytest.importorskip("mujoco")
     from planner.simulate import simulate_trajectory
 
     out = tmp_path / "c.csv"
-    write_plan(caught, str(out))
+    write_plan(caught[0], str(out))
     res = simulate_trajectory(str(out))
     assert res.catch is not None and res.catch.held
     assert all(m.saturated_s <= 0.010 for m in res.motors)
     flex = next(m for m in res.motors if m.name == "motor.wrist_flex")
     assert flex.ratio <= 1.0
+
+
+def test_the_recoil_shares_keep_each_joint_within_its_acceleration(pl):
+    """``recoil_shares``: every joint's recoil from its contact speed to its full speed
+    within its acceleration limit over the recoil's time (the reach, 40 m/s^2, meets the
+    ball nearer its full speed than the flexion); with ``loaded_only`` the joints whose own
+    motor is within STOP_SHARE meet it at full speed (share 1)."""
+    dyn, arm, q, qd_c, _ = _ramp_case(pl)
+    recoil_s, share = 0.01, 0.6
+    ratio = np.zeros(len(dyn.cap))
+    c_flex, c_reach = arm.index(pl.rig.i_flex), arm.index(pl.rig.i_reach)
+    qd_c[c_flex] = -2.0  # (1 / 0.6 - 1) 2 rad/s over 10 ms: 133 rad/s^2, within its 294
+    M = np.abs(motor_torque_matrix(pl.hand, q)[:, arm])
+    ratio[np.argmax(M[:, c_flex])] = 1.2  # the flexion's motor beyond its share
+    c = recoil_shares(dyn, q, qd_c, ratio, share, recoil_s, False)
+    assert np.all(c >= share) and np.all(c <= 1.0)
+    assert np.all((1.0 / c - 1.0) * np.abs(qd_c) <= dyn.a_max * recoil_s + 1e-9)
+    assert c[c_flex] == pytest.approx(share) and c[c_reach] > share
+    only = recoil_shares(dyn, q, qd_c, ratio, share, recoil_s, True)
+    assert only[c_flex] == pytest.approx(share)
+    assert np.all(np.delete(only, c_flex) == 1.0)

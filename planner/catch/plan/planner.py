@@ -42,6 +42,7 @@ from planner.catch.plan.stopping import (
     COARSE_STOP,
     FINE_STOP,
     JOINT_STOP,
+    LOADED_STOP,
     SoftStop,
     StopDynamics,
     StopGrid,
@@ -205,9 +206,11 @@ class CatchPlanner:
             return replace(plan, planning_s=time.perf_counter() - t0)
         if soft:
             finer = finer_stop_fallback(lambda: self._on_the_rig(args, soft, FINE_STOP), plan)
-            if not finer.feasible:  # each arm joint ramping in its own time
-                finer = finer_stop_fallback(lambda: self._on_the_rig(args, soft, JOINT_STOP),
-                                            plan, JOINT_STOP_NOTE)
+            for grid, note in ((JOINT_STOP, JOINT_STOP_NOTE), (LOADED_STOP, LOADED_STOP_NOTE)):
+                if finer.feasible:  # each arm joint ramping (and recoiling) in its own way
+                    break
+                finer = finer_stop_fallback(lambda g=grid: self._on_the_rig(args, soft, g),
+                                            plan, note)
             if finer.feasible:
                 return replace(finer, planning_s=time.perf_counter() - t0)
         if CatchReason.GRASP in plan.reason_kinds:
@@ -441,6 +444,8 @@ class CatchPlanner:
 FINE_STOP_NOTE = "the stop searched in finer steps (the palm's tilt 1 deg, the contact share 0.05)"
 JOINT_STOP_NOTE = ("the stop with per-joint ramps (each arm joint ramping and recoiling in its "
                    "own time, the finer steps)")
+LOADED_STOP_NOTE = ("the stop with per-joint ramps, the loaded motor's joint alone recoiling "
+                    "(the finer steps)")
 
 
 def finer_stop_fallback(replan, plan: CatchPlan, note: str = FINE_STOP_NOTE) -> CatchPlan:

@@ -23,11 +23,22 @@ others in the shortest common time the motors then allow.
 from __future__ import annotations
 
 import math
+from enum import Enum
 
 import numpy as np
 
 from planner.catch.grasp import motor_torque_matrix
 from planner.trajectory import MIN_PHASE_S, PEAK_VEL
+
+
+class JointRamps(Enum):
+    """How the soft stop's arm joints ramp and recoil (``planner.catch.plan.stopping``)."""
+
+    NONE = "one"  # one ramp time and one contact share for every joint (every plan's)
+    EACH = "each"  # each joint's ramps in its own time; every joint recoils
+    LOADED = "loaded"  # ... only the joints whose own motor the pad loads beyond the
+    # stop's share recoil
+
 
 RAMP_SAMPLES = 161  # instants per ramp (its longest) at which the motors are judged: the
 # min-jerk acceleration 30 u^2 (1 - u)^2 varies by < 0.1 % of its peak between samples
@@ -88,12 +99,12 @@ def joint_ramps(dyn, q: np.ndarray, qd: np.ndarray, room: np.ndarray, lead,
     """Every arm joint's ramp time (s) between rest and ``qd`` at the pose ``q`` (module
     docstring), or None where the common ramp ``common_s`` is as good (no joint would leave
     its range with it) or no per-joint ramps keep the motors within ``share`` of their
-    capacity. ``room``: each joint's room (>= 0) in
-    the direction it travels over the ramp; ``lead``: the time-like travel (s, at speed
-    qd; one, or every joint's) beside the ramp's own half (the ramp-in's row before the intercept, the ramp-out's
-    recoil and hold): a joint travels |qd_j| (lead + T_j / 2). ``load``: (n, k) extra
-    joint torque per unit arm acceleration (the riding ball); ``sign``: +1 the ramp from
-    rest to ``qd`` (its acceleration along qd), -1 the ramp from ``qd`` to rest."""
+    capacity. ``room``: each joint's room (>= 0) in the direction it travels over the
+    ramp; ``lead``: the time-like travel (s, at speed qd; one, or every joint's) beside the
+    ramp's own half (the ramp-in's row before the intercept, the ramp-out's recoil and
+    hold): a joint travels |qd_j| (lead + T_j / 2). ``load``: (n, k) extra joint torque per
+    unit arm acceleration (the riding ball); ``sign``: +1 the ramp from rest to ``qd`` (its
+    acceleration along qd), -1 the ramp from ``qd`` to rest."""
     if not math.isfinite(common_s) or not np.any(qd):
         return None
     moving = np.abs(qd) > 0

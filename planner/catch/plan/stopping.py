@@ -45,7 +45,7 @@ from planner.catch.grasp import motor_torque_matrix, palm_jacobian
 from planner.catch.plan.arm import CatchJoints, open_from, palm_target
 from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_speeds, giving_speeds
 from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_intercept_square
-from planner.catch.plan.ramps import joint_ramps
+from planner.catch.plan.ramps import JointRamps, joint_ramps
 from planner.catch.plan.results import Closing
 from planner.catch.plan.softstop import SoftStop, ramp_integral  # noqa: F401 (here before)
 from planner.check.ball import ball_loads
@@ -84,13 +84,15 @@ class StopGrid:
 
     tilts_deg: tuple[float, ...] = TILTS_DEG
     shares: tuple[float, ...] = CONTACT_SHARES
-    per_joint: bool = False  # each arm joint's ramps in its own time (``ramps.joint_ramps``)
+    per_joint: JointRamps = JointRamps.NONE  # one ramp time, or each arm joint's own
 
 
 COARSE_STOP = StopGrid()  # every plan's
 FINE_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE)  # where that is too fast to stop
-JOINT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, True)  # ... and where that is too,
-# each arm joint ramping in its own time (``with_joint_ramps``)
+JOINT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.EACH)  # ... and where
+# that is too, each arm joint ramping in its own time (``with_joint_ramps``)
+LOADED_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED)  # ... and only
+# the loaded motors' joints recoiling (``recoil_shares``)
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -311,7 +313,8 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
                q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
                soft: bool, roll_weight: float,
                speeds: Callable[..., np.ndarray] | None = None,
-               tilts_deg: tuple[float, ...] = TILTS_DEG, per_joint: bool = False):
+               tilts_deg: tuple[float, ...] = TILTS_DEG,
+               per_joint: JointRamps = JointRamps.NONE):
     """``plan_stop``'s tilt search (over ``tilts_deg``): (key, (intercept, open pose, stop), contact speeds'
     solver) of the tilt whose pad phase needs the least of the motor closest to its
     capacity; None: no tilt reaches. Where that stop closes the palm on the ball beyond a
@@ -330,7 +333,8 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
 def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
                    q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
                    soft: bool, roll_weight: float, speeds: Callable[..., np.ndarray] | None,
-                   tilts_deg: tuple[float, ...] = TILTS_DEG, per_joint: bool = False):
+                   tilts_deg: tuple[float, ...] = TILTS_DEG,
+               per_joint: JointRamps = JointRamps.NONE):
     """``_best_tilt``'s search with one contact speeds' solver over the palm's placements."""
     best = None
     square = dyn.joints.i_reach is not None
@@ -352,7 +356,8 @@ def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarra
 def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.ndarray,
                  closing: Closing, ready_by, row_s: float, soft: bool, roll_weight: float,
                  speeds: Callable[..., np.ndarray] | None,
-                 tilts_deg: tuple[float, ...] = TILTS_DEG, per_joint: bool = False):
+                 tilts_deg: tuple[float, ...] = TILTS_DEG,
+               per_joint: JointRamps = JointRamps.NONE):
     """``_best_tilt`` at one placement of the palm (``place``: tilt -> intercept or None),
     over ``tilts_deg`` (0, then each side outwards in their order; a grid without 0, as
     ``planner.catch.plan.palmup``'s, in its own order)."""
@@ -395,9 +400,9 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
                closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
                tilt_rad: float, share: float, bound0: np.ndarray | None = None,
                rw: float = ROLL_WEIGHT, speeds: Callable[..., np.ndarray] | None = None,
-               per_joint: bool = False):
+               per_joint: JointRamps = JointRamps.NONE):
     """The stopping motion at the intercept ``ic`` (``stop_profile``), from its open pose;
-    ``per_joint``: each arm joint ramps in its own time."""
+    ``per_joint``: one ramp time for every arm joint, or each joint's own."""
     h, j = dyn.hand, dyn.joints
     q = q_zero.copy()
     q[j.i_flex], q[j.i_dev] = ic.theta, ic.dev
@@ -428,7 +433,8 @@ class StopAsk:
     bound: np.ndarray
     roll_weight: float = ROLL_WEIGHT
     speeds: Callable[..., np.ndarray] | None = None  # None: ``contact_speeds`` (OSQP)
-    per_joint: bool = False  # each arm joint's ramps in its own time (``with_joint_ramps``)
+    per_joint: JointRamps = JointRamps.NONE  # each arm joint's ramps in its own time
+    # (``with_joint_ramps``) and which joints recoil (``recoil_shares``)
 
 
 def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
@@ -459,9 +465,9 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         qd = qd_c / share
         recoil = max(t_pad, row_s) if moving and share < 1.0 else 0.0
         shares = None
-        if recoil and ask.per_joint:  # each joint recoils within its acceleration limit:
-            # (1 / c_j - 1) |qd_c,j| <= a_max,j x recoil
-            shares = np.maximum(share, np.abs(qd_c) / (np.abs(qd_c) + dyn.a_max * recoil))
+        if recoil and ask.per_joint is not JointRamps.NONE:
+            shares = recoil_shares(dyn, q_open, qd_c, ratio, share, recoil,
+                                   ask.per_joint is JointRamps.LOADED)
             qd = qd_c / shares
         elif recoil and np.any((1.0 - share) * np.abs(qd) > dyn.a_max * recoil):
             return _at_rest(t_i, ask.tilt_rad, arm, v_rel, F, ratio, cone, t_pad)
@@ -472,7 +478,7 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
                         v_rel, F, ratio, cone, shares=shares)
         if not moving:
             return stop
-        if ask.per_joint:
+        if ask.per_joint is not JointRamps.NONE:
             stop = with_joint_ramps(dyn, stop, q_open, load)
         # how much slower each joint must go: its travel grows with its speed (the ramps'
         # durations are set by the joint that needs the longest), the ramp-in's time too
@@ -496,6 +502,24 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         if not np.any(bound > _MIN_SPEED * dyn.v_max):
             break
     return None
+
+
+def recoil_shares(dyn: StopDynamics, q: np.ndarray, qd_c: np.ndarray, ratio: np.ndarray,
+                  share: float, recoil_s: float, loaded_only: bool) -> np.ndarray:
+    """Per-joint contact shares of the recoil (``StopAsk.per_joint``): every arm joint (or,
+    ``loaded_only``, those whose own motor the pad loads beyond ``STOP_SHARE`` of its
+    capacity, ``ratio``: every motor's, ``pad_load``) meets the ball at ``share`` of its
+    speed and recoils with it, each within its acceleration limit over ``recoil_s``
+    ((1 / c_j - 1) |qd_c,j| <= a_max,j recoil_s: a joint with a low limit, the reach, meets
+    it nearer its full speed); the others at their full speed (a recoil adds the palm's
+    acceleration to the pad's force: along the palm it may leave the friction cone, and
+    only the loaded motor's own joint relieves it)."""
+    c = np.maximum(share, np.abs(qd_c) / (np.abs(qd_c) + dyn.a_max * recoil_s))
+    if not loaded_only:
+        return c
+    M = np.abs(motor_torque_matrix(dyn.hand, q)[:, list(dyn.arm)])
+    own = np.argmax(M, axis=0)  # each arm joint's own motor
+    return np.where(ratio[own] > STOP_SHARE, c, 1.0)
 
 
 def with_joint_ramps(dyn: StopDynamics, stop: SoftStop, q_open: np.ndarray,
