@@ -1,7 +1,6 @@
 """The soft stop with per-joint ramps (``planner.catch.plan.ramps``, ``softstop``): each
 arm joint ramps (and recoils) in its own time within its own limits; throws too fast to
-stop with one ramp time for every joint are caught (``JOINT_STOP``, ``LOADED_STOP``,
-issue 31)."""
+stop with one ramp time for every joint are caught (``JOINT_STOPS``, issue 31)."""
 
 from __future__ import annotations
 
@@ -10,10 +9,10 @@ import pytest
 
 from planner.catch.grasp import motor_torque_matrix
 from planner.catch.plan.api import get_planner, plan_throw, write_plan
-from planner.catch.plan.planner import JOINT_STOP_NOTE, LOADED_STOP_NOTE
+from planner.catch.plan.planner import joint_stop_note
 from planner.catch.plan.ramps import joint_ramps, min_jerk_acc
 from planner.catch.plan.softstop import SoftStop
-from planner.catch.plan.stopping import STOP_SHARE, recoil_shares
+from planner.catch.plan.stopping import JOINT_STOP, LOADED_TILT_STOP, STOP_SHARE, recoil_shares
 from planner.check import check_trajectory
 from planner.trajectory import PEAK_VEL
 
@@ -26,7 +25,8 @@ def pl():
 # too fast to stop on main (a2f3801, the coarse search's numbers; the fine one no better):
 # 0 m / 15 deg / 3.5 m 86.8 N, motor.wrist_flex at 2.08 N m; -0.3 m / 65 deg / 3.5 m 68.1 N,
 # 2.37 N m (and the roll)
-THROWS = {(15.0, 3.5, 0.0): JOINT_STOP_NOTE, (65.0, 3.5, -0.3): LOADED_STOP_NOTE}
+THROWS = {(15.0, 3.5, 0.0): joint_stop_note(JOINT_STOP),
+          (65.0, 3.5, -0.3): joint_stop_note(LOADED_TILT_STOP)}
 
 
 @pytest.fixture(scope="module", params=sorted(THROWS))

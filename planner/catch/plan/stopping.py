@@ -85,14 +85,20 @@ class StopGrid:
     tilts_deg: tuple[float, ...] = TILTS_DEG
     shares: tuple[float, ...] = CONTACT_SHARES
     per_joint: JointRamps = JointRamps.NONE  # one ramp time, or each arm joint's own
+    every_tilt: bool = False  # every tilt's recoil judged on the rows (else the tilt whose
+    # pad load at full speed is least, then its recoil)
 
 
 COARSE_STOP = StopGrid()  # every plan's
 FINE_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE)  # where that is too fast to stop
-JOINT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.EACH)  # ... and where
-# that is too, each arm joint ramping in its own time (``with_joint_ramps``)
-LOADED_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED)  # ... and only
-# the loaded motors' joints recoiling (``recoil_shares``)
+# ... and where that is too, each arm joint ramping in its own time (``with_joint_ramps``),
+# every tilt's recoil judged; then only the loaded motors' joints recoiling
+# (``recoil_shares``), every tilt's, then the least loaded tilt's (measured on main's 25
+# too fast to stop: docs/history/2026-12-07-catch-ramps.md)
+JOINT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.EACH, True)
+LOADED_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED, True)
+LOADED_TILT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED)
+JOINT_STOPS = (JOINT_STOP, LOADED_STOP, LOADED_TILT_STOP)
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -271,16 +277,37 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     weight on the ball's speed along the palm (1: none above its speed into it). ``speeds``:
     the contact speeds' QP solver (``StopAsk``; None: ``contact_speeds``). ``grid``: the
     palm's tilts and the contact shares searched (``COARSE_STOP``, or ``FINE_STOP``)."""
+    search = (dyn, flight, r, q_zero, closing, ready_by, row_s, roll_weight, grid)
+    if grid.every_tilt and soft:
+        # every tilt's own recoil judged on the rows (the tilt's pad load at full speed does
+        # not order the recoiled stops)
+        found = None
+        for tilt in grid.tilts_deg:
+            one = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s,
+                             soft, roll_weight, speeds, (tilt,), grid.per_joint)
+            if one is not None:
+                got = _recoiled(search, one)
+                if found is None or got[0] > found[0]:
+                    found = got
+        if found is not None:
+            return found[1]
     best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, soft,
                       roll_weight, speeds, grid.tilts_deg, grid.per_joint)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
                           rw=roll_weight, speeds=speeds)
+    return _recoiled(search, best)[1]
+
+
+def _recoiled(search: tuple, best) -> tuple:
+    """``plan_stop``'s recoil search from the tilt search's ``best``: (the judged key or
+    None, (intercept, open pose, stop))."""
+    dyn, flight, r, q_zero, closing, ready_by, row_s, roll_weight, grid = search
     ic, q_open, stop = best[1]
     speeds = best[2]  # the palm giving with the ball, if the search chose that
     if not np.any(stop.qd):
-        return best[1]
+        return (False, -math.inf), best[1]
     # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
     judged = (dyn.judge(stop, q_open, flight, r), stop)
     for share in grid.shares:  # slower while it helps
@@ -295,7 +322,7 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
         if j[0] <= judged[0]:
             break
         judged, stop = j, cand
-    return ic, q_open, judged[1]
+    return judged[0], (ic, q_open, judged[1])
 
 
 def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
