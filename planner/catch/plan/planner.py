@@ -199,19 +199,14 @@ class CatchPlanner:
         (``TurnMode.LATE``), else none (the plan without the hold) -- the first of those that is
         feasible. Where every plan is infeasible and too fast to stop among its reasons, they
         are planned again with the soft stop searched in finer steps (``FINE_STOP``), then
-        with per-joint ramps and recoils (``JOINT_STOPS``, in order)."""
+        with per-joint ramps and recoils (``joint_stop_fallbacks``)."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._on_the_rig(args, soft)
         if plan.feasible:
             return replace(plan, planning_s=time.perf_counter() - t0)
         if soft:
-            finer = finer_stop_fallback(lambda: self._on_the_rig(args, soft, FINE_STOP), plan)
-            for grid in JOINT_STOPS:
-                if finer.feasible:  # each arm joint ramping (and recoiling) in its own way
-                    break
-                finer = finer_stop_fallback(lambda g=grid: self._on_the_rig(args, soft, g),
-                                            plan, joint_stop_note(grid))
+            finer = joint_stop_fallbacks(lambda g: self._on_the_rig(args, soft, g), plan)
             if finer.feasible:
                 return replace(finer, planning_s=time.perf_counter() - t0)
         if CatchReason.GRASP in plan.reason_kinds:
@@ -451,6 +446,18 @@ def joint_stop_note(grid: StopGrid) -> str:
            "the loaded motor's joint alone recoiling")
     how = "every tilt's recoil judged" if grid.every_tilt else "the least loaded tilt"
     return f"the stop with per-joint ramps ({who}, {how}, the finer steps)"
+
+
+def joint_stop_fallbacks(replan, plan: CatchPlan) -> CatchPlan:
+    """``finer_stop_fallback`` with ``FINE_STOP``, then with each of ``JOINT_STOPS`` in order
+    (per-joint ramps and recoils) while none is feasible: the first feasible plan
+    (``replan(grid)``), noted; else ``plan``."""
+    finer = finer_stop_fallback(lambda: replan(FINE_STOP), plan)
+    for grid in JOINT_STOPS:
+        if finer.feasible:
+            break
+        finer = finer_stop_fallback(lambda g=grid: replan(g), plan, joint_stop_note(grid))
+    return finer
 
 
 def finer_stop_fallback(replan, plan: CatchPlan, note: str = FINE_STOP_NOTE) -> CatchPlan:
