@@ -18,7 +18,7 @@ from planner.catch.live.stop import (
     scaled,
 )
 from planner.catch.plan.contactqp import contact_qp, contact_speeds
-from planner.catch.plan.stopping import SoftStop
+from planner.catch.plan.softstop import SoftStop
 
 
 def test_box_qp_is_the_osqp_minimum():

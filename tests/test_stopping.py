@@ -10,7 +10,7 @@ import pytest
 
 from planner.catch.plan.api import get_planner, plan_catch, plan_throw
 from planner.catch.plan.reasons import CatchReason
-from planner.catch.plan.stopping import ramp_integral
+from planner.catch.plan.softstop import ramp_integral
 from planner.check import check_trajectory
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.trajfile import read_trajectory

@@ -20,7 +20,7 @@ from planner.catch.live.stopper import LiveStopper
 from planner.catch.plan.closing import close_start, earliest_close_start
 from planner.catch.plan.planner import PLAN_BUDGET_S, SIGNAL_S, CatchPlanner, MeetPose
 from planner.catch.plan.results import Closing
-from planner.catch.plan.stopping import SoftStop
+from planner.catch.plan.softstop import SoftStop
 from planner.hand.model import HandModel
 
 

@@ -69,7 +69,7 @@ from planner.catch.live.turn import LiveTurn
 from planner.catch.plan.arm import open_from
 from planner.catch.plan.planner import PLAN_BUDGET_S, SIGNAL_S, CatchPlanner
 from planner.catch.plan.results import CatchPlan, ThrowInfo, catch_metadata
-from planner.catch.plan.stopping import SoftStop
+from planner.catch.plan.softstop import SoftStop
 from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows, joined_rows

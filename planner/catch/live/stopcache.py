@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.catch.plan.stopping import SoftStop
+from planner.catch.plan.softstop import SoftStop
 
 CACHE_ENV = "HAND_PLANNER_CACHE"  # a directory: the stop tables kept between runs
 PACKAGE_DIR = Path(__file__).parents[2]  # planner/

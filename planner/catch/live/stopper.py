@@ -38,7 +38,7 @@ from planner.catch.live.stop import (
 )
 from planner.catch.live.turn import LiveTurn
 from planner.catch.plan.arm import palm_target
-from planner.catch.plan.stopping import SoftStop, stop_knots
+from planner.catch.plan.softstop import SoftStop, stop_knots
 from planner.catch.plan.turnahead import TURN_GROW, TURN_TRIES, rows_within_limits
 from planner.trajectory import phase_duration
 

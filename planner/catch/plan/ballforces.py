@@ -15,7 +15,7 @@ from planner.catch.plan.arm import palm_target
 from planner.catch.plan.geometry import interp_row
 from planner.catch.plan.reasons import CatchReason, Reason
 from planner.catch.plan.results import Forces, ForcesVerdict
-from planner.catch.plan.stopping import SoftStop
+from planner.catch.plan.softstop import SoftStop
 from planner.check.ball import ball_load_instants, contact_loads, phase_loads
 from planner.check.ballstop import PAD_GIVE_M
 from planner.check.criteria import GRASP_TOL_M

@@ -29,6 +29,7 @@ from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.plan.mount import CatchMount
 from planner.catch.plan.palmup import palm_up_fallback
+from planner.catch.plan.ramps import JointRamps
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.results import (
     CatchPlan,
@@ -41,6 +42,7 @@ from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
     COARSE_STOP,
     FINE_STOP,
+    JOINT_STOPS,
     SoftStop,
     StopDynamics,
     StopGrid,
@@ -196,14 +198,15 @@ class CatchPlanner:
         (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
         (``TurnMode.LATE``), else none (the plan without the hold) -- the first of those that is
         feasible. Where every plan is infeasible and too fast to stop among its reasons, they
-        are planned again with the soft stop searched in finer steps (``FINE_STOP``)."""
+        are planned again with the soft stop searched in finer steps (``FINE_STOP``), then
+        with per-joint ramps and recoils (``joint_stop_fallbacks``)."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._on_the_rig(args, soft)
         if plan.feasible:
             return replace(plan, planning_s=time.perf_counter() - t0)
         if soft:
-            finer = finer_stop_fallback(lambda: self._on_the_rig(args, soft, FINE_STOP), plan)
+            finer = joint_stop_fallbacks(lambda g: self._on_the_rig(args, soft, g), plan)
             if finer.feasible:
                 return replace(finer, planning_s=time.perf_counter() - t0)
         if CatchReason.GRASP in plan.reason_kinds:
@@ -434,18 +437,41 @@ class CatchPlanner:
         return self.ball_forces.forces(flight, pose, t, Q, r, grasp_t, soft)
 
 
-def finer_stop_fallback(replan, plan: CatchPlan) -> CatchPlan:
+FINE_STOP_NOTE = "the stop searched in finer steps (the palm's tilt 1 deg, the contact share 0.05)"
+
+
+def joint_stop_note(grid: StopGrid) -> str:
+    """The note of a plan made with per-joint ramps (``JOINT_STOPS``)."""
+    who = ("every arm joint recoiling" if grid.per_joint is JointRamps.EACH else
+           "the loaded motor's joint alone recoiling")
+    how = "every tilt's recoil judged" if grid.every_tilt else "the least loaded tilt"
+    return f"the stop with per-joint ramps ({who}, {how}, the finer steps)"
+
+
+def joint_stop_fallbacks(replan, plan: CatchPlan) -> CatchPlan:
+    """``finer_stop_fallback`` with ``FINE_STOP``, then with each of ``JOINT_STOPS`` in order
+    (per-joint ramps and recoils) while none is feasible: the first feasible plan
+    (``replan(grid)``), noted; else ``plan``."""
+    finer = finer_stop_fallback(lambda: replan(FINE_STOP), plan)
+    for grid in JOINT_STOPS:
+        if finer.feasible:
+            break
+        finer = finer_stop_fallback(lambda g=grid: replan(g), plan, joint_stop_note(grid))
+    return finer
+
+
+def finer_stop_fallback(replan, plan: CatchPlan, note: str = FINE_STOP_NOTE) -> CatchPlan:
     """Where ``plan`` is too fast to stop among its reasons, ``replan()`` (the same plans
     with the soft stop's tilts and contact shares in finer steps, ``FINE_STOP``: the rows'
-    load is not monotone at the coarse ones), noted, if feasible; else ``plan``."""
+    load is not monotone at the coarse ones; or with per-joint ramps too, ``JOINT_STOPS``),
+    noted, if feasible; else ``plan``."""
     if CatchReason.TOO_FAST_TO_STOP not in plan.reason_kinds:
         return plan
     finer = replan()
     if not finer.feasible:
         return plan
     return replace(finer, notes=finer.notes + (
-        "the stop searched in finer steps (the palm's tilt 1 deg, the contact share "
-        "0.05): in the coarse ones " + reasons_text(plan.reasons),))
+        note + ": in the coarse ones " + reasons_text(plan.reasons),))
 
 
 def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:

@@ -19,7 +19,7 @@ from planner.hand.model import HandModel
 from planner.trajfile import KeptText
 
 if TYPE_CHECKING:
-    from planner.catch.plan.stopping import SoftStop
+    from planner.catch.plan.softstop import SoftStop
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -45,7 +45,9 @@ from planner.catch.grasp import motor_torque_matrix, palm_jacobian
 from planner.catch.plan.arm import CatchJoints, open_from, palm_target
 from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_speeds, giving_speeds
 from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_intercept_square
+from planner.catch.plan.ramps import JointRamps, joint_ramps
 from planner.catch.plan.results import Closing
+from planner.catch.plan.softstop import SoftStop
 from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.check.kinematics import Kinematics
@@ -82,10 +84,21 @@ class StopGrid:
 
     tilts_deg: tuple[float, ...] = TILTS_DEG
     shares: tuple[float, ...] = CONTACT_SHARES
+    per_joint: JointRamps = JointRamps.NONE  # one ramp time, or each arm joint's own
+    every_tilt: bool = False  # every tilt's recoil judged on the rows (else the tilt whose
+    # pad load at full speed is least, then its recoil)
 
 
 COARSE_STOP = StopGrid()  # every plan's
 FINE_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE)  # where that is too fast to stop
+# ... and where that is too, each arm joint ramping in its own time (``with_joint_ramps``),
+# every tilt's recoil judged; then only the loaded motors' joints recoiling
+# (``recoil_shares``), every tilt's, then the least loaded tilt's (measured on main's 25
+# too fast to stop: docs/history/2026-12-07-catch-ramps.md)
+JOINT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.EACH, True)
+LOADED_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED, True)
+LOADED_TILT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED)
+JOINT_STOPS = (JOINT_STOP, LOADED_STOP, LOADED_TILT_STOP)
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -93,113 +106,9 @@ _MIN_SPEED = 0.05  # arm speeds below this share of their limits are not worth a
 _FD_M = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
 
 
-def ramp_integral(u: np.ndarray) -> np.ndarray:
-    """The integral over [0, u] of the min-jerk rise (10 s^3 - 15 s^4 + 6 s^5), u clipped to
-    [0, 1]: 2.5 u^4 - 3 u^5 + u^6 (1/2 at u = 1)."""
-    u = np.clip(u, 0.0, 1.0)
-    return u ** 4 * (2.5 - 3.0 * u + u * u)
-
-
 _ROOMS_KEPT = 4  # accel_room results kept (the rest pose and the latest few; the least
 # recently used dropped)
 
-
-def stop_knots(c: float, t_i: float, row_s: float, ramp_in_s: float, recoil_s: float,
-               hold_s: float, ramp_out_s: float) -> tuple[float, float, float, float, float,
-                                                          float]:
-    """A ``SoftStop``'s sigma at the ramp-in's start and end, the recoil's end, the hold's
-    end, the end; and the time the hold ends (its fields: the contact share ``c``, ...):
-    one definition, for a stop and for the numbers of one not made (``live.stopper``'s
-    bisection of a slower stop)."""
-    t4 = t_i + recoil_s + hold_s
-    s2 = -c * row_s
-    s1 = s2 - 0.5 * c * ramp_in_s
-    s3 = 0.5 * recoil_s * (1.0 + c)
-    s4 = s3 + hold_s
-    return s1, s2, s3, s4, s4 + 0.5 * ramp_out_s, t4
-
-
-@dataclass(frozen=True)
-class SoftStop:
-    """The arm's stopping motion of one catch (see the module docstring): its speed factor
-    sigma' rises (min-jerk, ``ramp_in_s``) to ``contact_share`` one row before the
-    intercept, holds it to the intercept, rises linearly to 1 over ``recoil_s`` (the hand
-    recoiling under the ball's push), holds 1 for ``hold_s``, falls to rest (min-jerk,
-    ``ramp_out_s``). The arm's speeds at factor 1 are ``qd``."""
-
-    tilt_rad: float
-    arm: tuple[int, ...]  # the arm joints' indices (hand order)
-    qd: np.ndarray  # their speeds at factor 1 (after the recoil)
-    contact_share: float  # the speed factor when the palm meets the ball
-    t_i: float
-    row_s: float  # one row interval: the contact speed is held this long before the ball
-    ramp_in_s: float
-    recoil_s: float
-    hold_s: float
-    ramp_out_s: float
-    pad_s: float  # how long the pad takes to stop the ball relative to the palm
-    v_palm: np.ndarray  # palm target velocity at the intercept (m/s)
-    v_rel: np.ndarray  # the ball's velocity relative to it (m/s)
-    force_n: np.ndarray  # the pad's force on the ball (N)
-    motor_ratio: np.ndarray  # |torque| / capacity of every motor while the pad stops it
-    cone_margin_n: float
-
-    @property
-    def qd_c(self) -> np.ndarray:
-        """The arm's speeds when the palm meets the ball."""
-        return self.contact_share * self.qd
-
-    @property
-    def start_s(self) -> float:
-        """When the arm starts its ramp (it holds its pre-catch pose until then)."""
-        return self.t_i - self.row_s - self.ramp_in_s
-
-    @property
-    def end_s(self) -> float:
-        """When the arm is at rest with the ball."""
-        return self.t_i + self.recoil_s + self.hold_s + self.ramp_out_s
-
-    def knots(self) -> tuple[float, float, float, float, float, float]:
-        """sigma at the ramp-in's start and end, the recoil's end, the hold's end, the end;
-        and the time the hold ends (``stop_knots``)."""
-        return stop_knots(self.contact_share, self.t_i, self.row_s, self.ramp_in_s,
-                          self.recoil_s, self.hold_s, self.ramp_out_s)
-
-    def sigma(self, t_s: np.ndarray) -> np.ndarray:
-        """The profile's time-like scalar at ``t_s`` (0 at the intercept)."""
-        t = np.atleast_1d(np.asarray(t_s, dtype=float))
-        c, ti = self.contact_share, self.t_i
-        s1, _, s3, s4, _, t4 = self.knots()
-        out = np.full(t.shape, s1)
-        if self.ramp_in_s > 0:
-            u = (t - self.start_s) / self.ramp_in_s
-            out = np.where(t > self.start_s, s1 + c * self.ramp_in_s * ramp_integral(u), out)
-        tau = t - ti
-        out = np.where(t > ti - self.row_s, np.minimum(tau, 0.0) * c, out)
-        if self.recoil_s > 0:
-            w = np.clip(tau, 0.0, self.recoil_s)
-            out = np.where(t > ti, c * w + (1.0 - c) * w * w / (2.0 * self.recoil_s), out)
-        out = np.where(t > ti + self.recoil_s, s3 + np.minimum(t - ti - self.recoil_s,
-                                                                self.hold_s), out)
-        if self.ramp_out_s > 0:
-            u = np.clip((t - t4) / self.ramp_out_s, 0.0, 1.0)
-            out = np.where(t > t4, s4 + self.ramp_out_s * (u - ramp_integral(u)), out)
-        return out
-
-    def offset(self, t_s: np.ndarray, n: int) -> np.ndarray:
-        """(T, n) joint offsets from the intercept pose (only the arm joints move)."""
-        t = np.atleast_1d(t_s)
-        out = np.zeros((len(t), n))
-        out[:, list(self.arm)] = np.outer(self.sigma(t), self.qd)
-        return out
-
-    @property
-    def first_offset(self) -> np.ndarray:
-        return self.qd * self.knots()[0]
-
-    @property
-    def last_offset(self) -> np.ndarray:
-        return self.qd * self.knots()[4]
 
 
 class StopDynamics:
@@ -368,30 +277,52 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     weight on the ball's speed along the palm (1: none above its speed into it). ``speeds``:
     the contact speeds' QP solver (``StopAsk``; None: ``contact_speeds``). ``grid``: the
     palm's tilts and the contact shares searched (``COARSE_STOP``, or ``FINE_STOP``)."""
+    search = (dyn, flight, r, q_zero, closing, ready_by, row_s, roll_weight, grid)
+    if grid.every_tilt and soft:
+        # every tilt's own recoil judged on the rows (the tilt's pad load at full speed does
+        # not order the recoiled stops)
+        found = None
+        for tilt in grid.tilts_deg:
+            one = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s,
+                             soft, roll_weight, speeds, (tilt,), grid.per_joint)
+            if one is not None:
+                got = _recoiled(search, one)
+                if found is None or got[0] > found[0]:
+                    found = got
+        if found is not None:
+            return found[1]
     best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, soft,
-                      roll_weight, speeds, grid.tilts_deg)
+                      roll_weight, speeds, grid.tilts_deg, grid.per_joint)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
                           rw=roll_weight, speeds=speeds)
+    return _recoiled(search, best)[1]
+
+
+def _recoiled(search: tuple, best) -> tuple:
+    """``plan_stop``'s recoil search from the tilt search's ``best``: (the judged key or
+    None, (intercept, open pose, stop))."""
+    dyn, flight, r, q_zero, closing, ready_by, row_s, roll_weight, grid = search
     ic, q_open, stop = best[1]
     speeds = best[2]  # the palm giving with the ball, if the search chose that
     if not np.any(stop.qd):
-        return best[1]
+        return (False, -math.inf), best[1]
     # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
     judged = (dyn.judge(stop, q_open, flight, r), stop)
     for share in grid.shares:  # slower while it helps
         # from the speeds the last one found within the joints' range
         warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
         cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
-                          stop.tilt_rad, share, warm, rw=roll_weight, speeds=speeds)[2]
+                          stop.tilt_rad, share, warm, rw=roll_weight, speeds=speeds,
+                          per_joint=grid.per_joint)[2]
         if cand.contact_share == 1.0:
             break
         j = (dyn.judge(cand, q_open, flight, r), cand)
         if j[0] <= judged[0]:
             break
         judged, stop = j, cand
-    return ic, q_open, judged[1]
+    return judged[0], (ic, q_open, judged[1])
 
 
 def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
@@ -409,17 +340,18 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
                q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
                soft: bool, roll_weight: float,
                speeds: Callable[..., np.ndarray] | None = None,
-               tilts_deg: tuple[float, ...] = TILTS_DEG):
+               tilts_deg: tuple[float, ...] = TILTS_DEG,
+               per_joint: JointRamps = JointRamps.NONE):
     """``plan_stop``'s tilt search (over ``tilts_deg``): (key, (intercept, open pose, stop), contact speeds'
     solver) of the tilt whose pad phase needs the least of the motor closest to its
     capacity; None: no tilt reaches. Where that stop closes the palm on the ball beyond a
     motor (``_closes_beyond_a_motor``) the search is run again with the palm giving with
     the ball (``giving_speeds``), and the better kept."""
     best = _placed_search(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s,
-                          soft, roll_weight, speeds, tilts_deg)
+                          soft, roll_weight, speeds, tilts_deg, per_joint)
     if best is not None and speeds is None and _closes_beyond_a_motor(best[1]):
         gave = _placed_search(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by,
-                              row_s, soft, roll_weight, giving_speeds, tilts_deg)
+                              row_s, soft, roll_weight, giving_speeds, tilts_deg, per_joint)
         if gave is not None and gave[0] < best[0]:
             best = gave
     return best
@@ -428,7 +360,8 @@ def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r
 def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
                    q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
                    soft: bool, roll_weight: float, speeds: Callable[..., np.ndarray] | None,
-                   tilts_deg: tuple[float, ...] = TILTS_DEG):
+                   tilts_deg: tuple[float, ...] = TILTS_DEG,
+               per_joint: JointRamps = JointRamps.NONE):
     """``_best_tilt``'s search with one contact speeds' solver over the palm's placements."""
     best = None
     square = dyn.joints.i_reach is not None
@@ -441,7 +374,7 @@ def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarra
             return find_intercept(wrist, flight, C, r, t_c, tilt_rad)
 
         found = _tilt_search(dyn, place, flight, r, q_zero, closing, ready_by, row_s, soft,
-                             roll_weight, speeds, tilts_deg)
+                             roll_weight, speeds, tilts_deg, per_joint)
         if found is not None and (best is None or found[0] < best[0]):
             best = found
     return best
@@ -450,7 +383,8 @@ def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarra
 def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.ndarray,
                  closing: Closing, ready_by, row_s: float, soft: bool, roll_weight: float,
                  speeds: Callable[..., np.ndarray] | None,
-                 tilts_deg: tuple[float, ...] = TILTS_DEG):
+                 tilts_deg: tuple[float, ...] = TILTS_DEG,
+               per_joint: JointRamps = JointRamps.NONE):
     """``_best_tilt`` at one placement of the palm (``place``: tilt -> intercept or None),
     over ``tilts_deg`` (0, then each side outwards in their order; a grid without 0, as
     ``planner.catch.plan.palmup``'s, in its own order)."""
@@ -465,7 +399,8 @@ def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.
             if ic is None or ic.reason is not None or (tilt != 0.0 and not ic.aligned):
                 break
             cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
-                              math.radians(tilt), 1.0, rw=roll_weight, speeds=speeds)
+                              math.radians(tilt), 1.0, rw=roll_weight, speeds=speeds,
+                              per_joint=per_joint)
             key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
             if found is not None and key >= found[0]:
                 break
@@ -491,8 +426,10 @@ def _closes_beyond_a_motor(cand) -> bool:
 def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
                closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
                tilt_rad: float, share: float, bound0: np.ndarray | None = None,
-               rw: float = ROLL_WEIGHT, speeds: Callable[..., np.ndarray] | None = None):
-    """The stopping motion at the intercept ``ic`` (``stop_profile``), from its open pose."""
+               rw: float = ROLL_WEIGHT, speeds: Callable[..., np.ndarray] | None = None,
+               per_joint: JointRamps = JointRamps.NONE):
+    """The stopping motion at the intercept ``ic`` (``stop_profile``), from its open pose;
+    ``per_joint``: one ramp time for every arm joint, or each joint's own."""
     h, j = dyn.hand, dyn.joints
     q = q_zero.copy()
     q[j.i_flex], q[j.i_dev] = ic.theta, ic.dev
@@ -504,7 +441,8 @@ def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
     bound = (dyn.v_max.copy() if bound0 is None else bound0.copy()) if soft \
         else np.zeros(len(dyn.arm))
     stop = stop_profile(dyn, flight.velocity(ic.t), float(flight.ball.mass_kg), r, q_open,
-                        float(ic.t), ready_by, row_s, StopAsk(tilt_rad, share, bound, rw, speeds))
+                        float(ic.t), ready_by, row_s,
+                        StopAsk(tilt_rad, share, bound, rw, speeds, per_joint))
     if stop is None:
         return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False,
                           tilt_rad, 1.0, rw=rw, speeds=speeds)
@@ -522,6 +460,8 @@ class StopAsk:
     bound: np.ndarray
     roll_weight: float = ROLL_WEIGHT
     speeds: Callable[..., np.ndarray] | None = None  # None: ``contact_speeds`` (OSQP)
+    per_joint: JointRamps = JointRamps.NONE  # each arm joint's ramps in its own time
+    # (``with_joint_ramps``) and which joints recoil (``recoil_shares``)
 
 
 def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
@@ -551,15 +491,22 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         t_pad = pad_time_s(v_rel)
         qd = qd_c / share
         recoil = max(t_pad, row_s) if moving and share < 1.0 else 0.0
-        if recoil and np.any((1.0 - share) * np.abs(qd) > dyn.a_max * recoil):
+        shares = None
+        if recoil and ask.per_joint is not JointRamps.NONE:
+            shares = recoil_shares(dyn, q_open, qd_c, ratio, share, recoil,
+                                   ask.per_joint is JointRamps.LOADED)
+            qd = qd_c / shares
+        elif recoil and np.any((1.0 - share) * np.abs(qd) > dyn.a_max * recoil):
             return _at_rest(t_i, ask.tilt_rad, arm, v_rel, F, ratio, cone, t_pad)
         stop = SoftStop(ask.tilt_rad, tuple(arm), qd, share if moving else 1.0, t_i,
                         row_s if moving else 0.0, dyn.ramp_time(q_open, qd_c), recoil,
                         max(0.0, t_pad - recoil) + row_s if moving else 0.0,
                         dyn.ramp_time(q_open, qd, load) if moving else 0.0, t_pad, J @ qd_c,
-                        v_rel, F, ratio, cone)
+                        v_rel, F, ratio, cone, shares=shares)
         if not moving:
             return stop
+        if ask.per_joint is not JointRamps.NONE:
+            stop = with_joint_ramps(dyn, stop, q_open, load)
         # how much slower each joint must go: its travel grows with its speed (the ramps'
         # durations are set by the joint that needs the longest), the ramp-in's time too
         scale = np.ones(len(arm))
@@ -582,6 +529,49 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         if not np.any(bound > _MIN_SPEED * dyn.v_max):
             break
     return None
+
+
+def recoil_shares(dyn: StopDynamics, q: np.ndarray, qd_c: np.ndarray, ratio: np.ndarray,
+                  share: float, recoil_s: float, loaded_only: bool) -> np.ndarray:
+    """Per-joint contact shares of the recoil (``StopAsk.per_joint``): every arm joint (or,
+    ``loaded_only``, those whose own motor the pad loads beyond ``STOP_SHARE`` of its
+    capacity, ``ratio``: every motor's, ``pad_load``) meets the ball at ``share`` of its
+    speed and recoils with it, each within its acceleration limit over ``recoil_s``
+    ((1 / c_j - 1) |qd_c,j| <= a_max,j recoil_s: a joint with a low limit, the reach, meets
+    it nearer its full speed); the others at their full speed (a recoil adds the palm's
+    acceleration to the pad's force: along the palm it may leave the friction cone, and
+    only the loaded motor's own joint relieves it)."""
+    c = np.maximum(share, np.abs(qd_c) / (np.abs(qd_c) + dyn.a_max * recoil_s))
+    if not loaded_only:
+        return c
+    M = np.abs(motor_torque_matrix(dyn.hand, q)[:, list(dyn.arm)])
+    own = np.argmax(M, axis=0)  # each arm joint's own motor
+    return np.where(ratio[own] > STOP_SHARE, c, 1.0)
+
+
+def with_joint_ramps(dyn: StopDynamics, stop: SoftStop, q_open: np.ndarray,
+                     load: np.ndarray) -> SoftStop:
+    """``stop`` with each arm joint's ramp-in and ramp-out in its own time
+    (``planner.catch.plan.ramps.joint_ramps``) where one common time would take a joint
+    out of its range; ``load``: the riding ball's (the ramp-out's)."""
+    arm = list(dyn.arm)
+    q, lo, hi = q_open[arm], dyn.hand.lower[arm], dyn.hand.upper[arm]
+    qd_c, c = stop.qd_c, stop.joint_ramps()[2]
+    # the ramp-in travels against the contact speeds (to its start), the ramp-out with them
+    room_in = np.maximum(np.where(qd_c > 0, q - lo, hi - q), 0.0)
+    room_out = np.maximum(np.where(stop.qd > 0, hi - q, q - lo), 0.0)
+    rin = joint_ramps(dyn, q_open, qd_c, room_in, stop.row_s, stop.ramp_in_s, STOP_SHARE)
+    lead_out = 0.5 * stop.recoil_s * (1.0 + c) + stop.hold_s  # sigma at the ramp-out's start
+    # (every joint's)
+    rout = joint_ramps(dyn, q_open, stop.qd, room_out, lead_out, stop.ramp_out_s, STOP_SHARE,
+                       load, sign=-1.0)
+    if rin is None and rout is None and stop.shares is None:
+        return stop
+    k = len(arm)
+    rin = np.full(k, stop.ramp_in_s) if rin is None else rin
+    rout = np.full(k, stop.ramp_out_s) if rout is None else rout
+    return replace(stop, ramp_in_s=float(np.max(rin)), ramp_out_s=float(np.max(rout)),
+                   ramps_in_s=rin, ramps_out_s=rout)
 
 
 def _at_rest(t_i: float, tilt_rad: float, arm: list[int], v_rel, F, ratio, cone,

@@ -39,7 +39,8 @@ from planner.catch.grasp import motor_torque_matrix
 from planner.catch.plan.drop import rolled_m
 from planner.catch.plan.holdturn import TURN_SHARE, hold_turn
 from planner.catch.plan.results import Closing
-from planner.catch.plan.stopping import SoftStop, StopDynamics
+from planner.catch.plan.softstop import SoftStop
+from planner.catch.plan.stopping import StopDynamics
 from planner.check.ballroll import ROLL_ROOM_M
 from planner.trajectory import LIMIT_MARGIN
 
@@ -129,7 +130,7 @@ def ahead_turn(dyn: StopDynamics, stop: SoftStop, q_land: np.ndarray, q_held: np
     c = arm.index(i)
     d = float(delta[i])
     sgn = float(np.sign(d))
-    qs = float(stop.qd[c]) * sgn if stop.ramp_out_s > 0 else 0.0  # the stop's, along the turn
+    qs = float(stop.qd[c]) * sgn if stop.ramp_out_of(c) > 0 else 0.0  # the stop's, along the turn
     w = share * (float(dyn.v_max[c]) - abs(qs))
     if d == 0.0 or w <= 0.0:
         return None
@@ -143,10 +144,11 @@ def ahead_turn(dyn: StopDynamics, stop: SoftStop, q_land: np.ndarray, q_held: np
     if not (np.isfinite(up) and np.isfinite(down)):
         return None
     t_i, z = stop.t_i, np.zeros(3)
-    t_k = stop.t_i + stop.recoil_s + stop.hold_s + stop.ramp_out_s  # the kept part at speed
+    out_s = stop.ramp_out_of(c)  # the flexion's own ramp to rest (per-joint ramps: its own)
+    t_k = stop.t_i + stop.recoil_s + stop.hold_s + out_s  # the kept part at speed
     # the fall to rest starts at t_c: w (t_c - t_i + down/2) + keep (t_c - t_k + out/2 +
     # down/2) = |d| (the travel after the intercept)
-    t_c = (abs(d) - 0.5 * down * (w + keep) - 0.5 * keep * stop.ramp_out_s + w * t_i
+    t_c = (abs(d) - 0.5 * down * (w + keep) - 0.5 * keep * out_s + w * t_i
            + keep * t_k) / (w + keep)
     if t_c < (t_k if keep > 0 else t_i):
         return None
@@ -156,7 +158,7 @@ def ahead_turn(dyn: StopDynamics, stop: SoftStop, q_land: np.ndarray, q_held: np
     if keep > 0:
         qk = np.zeros(len(arm))
         qk[c] = sgn * keep
-        out.append(SoftStop(0.0, tuple(arm), qk, 1.0, float(t_k), 0.0, float(stop.ramp_out_s),
+        out.append(SoftStop(0.0, tuple(arm), qk, 1.0, float(t_k), 0.0, float(out_s),
                             0.0, float(t_c - t_k), float(down), 0.0, z, z.copy(), z.copy(),
                             np.zeros(len(dyn.cap)), 0.0))
     return tuple(out)
