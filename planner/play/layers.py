@@ -29,6 +29,7 @@ from planner.play.costs import (
     State,
 )
 from planner.play.places import PLACE_STRIDE, Places
+from planner.play.roomcost import RoomCost
 
 THUMB = "thumb"
 BEAM = 20  # states kept per event (measured: docs/history/play-second-design.md, "Speed")
@@ -63,8 +64,10 @@ class Layers(Costs):
 
     def __init__(self, notes, places: Places, rate_hz: float,
                  memo: CostMemo | None = None,
-                 rail_bounds: Sequence[tuple[float, float]] | None = None) -> None:
+                 rail_bounds: Sequence[tuple[float, float]] | None = None,
+                 room: RoomCost | None = None) -> None:
         super().__init__(notes, places, rate_hz, memo, rail_bounds)
+        self.room = room  # (two hands, the hand planned first: the room it takes costs)
         # (the fingers in the order of their keys: a left hand's thumb is its highest)
         self._order = {f: i for i, f in enumerate(places.hand.fingers_low_to_high)}
         self._bound_at: tuple = (None, 0, math.inf)  # (layer, its size, its bound)
@@ -79,6 +82,8 @@ class Layers(Costs):
         if self.bound is not None:  # (two hands: the event's rail bound, its notes' one,
             # which a hand that strikes none of them must keep too)
             self._stay_bound = self.bound[new[0]]  # (uncut: the hand's rail, any key)
+        if self.room is not None:
+            self.room.at(t)
         # (by hand shape, the rail and the fingers on the notes sounding: the cheapest
         # state of each, the only one the pruning can keep; (cost, state before, state))
         layer: dict[tuple, tuple[float, State | None, State]] = {}
@@ -171,6 +176,8 @@ class Layers(Costs):
         if p is None:  # (the song's first notes: from anywhere, no move lost)
             for place, tie in rails:
                 total, shape = cost + tie, (place, sounding_t)
+                if self.room is not None:
+                    total += self.room.frames(place, sounding_t)
                 old = layer.get(shape)
                 if total <= bound and (old is None or total < old[0]):
                     layer[shape] = (total, None, State(place, sounding_t))
@@ -204,6 +211,8 @@ class Layers(Costs):
                 got = steps[key] = (step, tuple(sorted(lates)), tuple(sorted(rode)))
             step = got[0]
             total = cost + step + tie
+            if self.room is not None:
+                total += self.room.frames(place, sounding_t)
             if step == math.inf or total > bound:  # (inf: no move gets there)
                 continue
             if old is None or total < old[0]:

@@ -1,0 +1,79 @@
+"""What the room the hand planned first takes from the other hand's notes costs
+(``planner.play.roomcost``, built by ``planner.play.twobounds.room_cost``): a dive of the
+right hand over a note of its own part it does not hold (handed to the left) costs the
+frames that note sounds while the dive lasts; a place clear of the note, or a state
+holding the note, costs nothing."""
+
+from __future__ import annotations
+
+import pytest
+
+from planner.hand.model import load_hand
+from planner.music.midi import Note, Song
+from planner.play.costs import Costs
+from planner.play.hands import RIGHT
+from planner.play.roomcost import RoomClaim, RoomCost
+from planner.play.twobounds import room_cost
+from planner.play.twohands import PairPlanner
+
+RATE_HZ = 100.0
+
+
+@pytest.fixture(scope="module")
+def pair() -> PairPlanner:
+    return PairPlanner(load_hand("default-left"), load_hand("default"))
+
+
+def _song() -> tuple[Song, tuple[int, ...], tuple[int, ...]]:
+    """The left hand's C3 (0.5-1.0 s); the right part's C4 (0.5-0.8 s), E4 (0.5-1.0 s) and
+    G4 at 0.7 s: the right hand's events at 0.5 and 0.7 s."""
+    notes = (Note(48, 0.5, 1.0, 80, 1), Note(60, 0.5, 0.8, 80, 0), Note(64, 0.5, 1.0, 80, 0),
+             Note(67, 0.7, 0.9, 80, 0))
+    return Song(notes, 1.0), (1, 2, 3), (0,)
+
+
+def test_a_dive_over_a_handed_note_costs_its_frames_while_it_lasts(pair) -> None:
+    song, own, other = _song()
+    rc = room_cost(song, pair, RIGHT, own, other, RATE_HZ)
+    pl = pair.planners[RIGHT]
+    costs = Costs([song.notes[i] for i in own], pl.places, RATE_HZ, pl.memo)
+    c4 = next(c for c in rc.claims if c.own == 0)  # (C4's claim: the left's least reach)
+    assert (c4.t0_s, c4.t1_s) == (0.5, 0.8)
+    rc.at(0.5)  # (the state lasts to the next event, G4 at 0.7 s: 20 frames of C4)
+    blocked = clear = 0
+    for f in pl.places.hand.fingers:
+        for place in sorted(costs.rails(f, 1)):  # (every place pressing E4)
+            edge_m = pl.places.rail_m(place) - pair.place_reach[RIGHT].reach_m(f, 64, place)
+            got = rc.frames(place, ((1, f),))  # (holding E4, not C4: handed over)
+            if edge_m < c4.edge_m:
+                assert got == pytest.approx(20.0)
+                blocked += 1
+            else:
+                assert got == 0.0
+                clear += 1
+    assert blocked and clear  # (the dives down to C4 and the places above it both seen)
+    rc.at(0.7)  # (G4's event lasts to the song's end: C4 sounds 10 frames more, and E4,
+    # not held by a state holding G4 alone, 30 more)
+    low = min(q for f in pl.places.hand.fingers for q in costs.rails(f, 2))
+    assert rc.frames(low, ((2, "thumb"),)) == pytest.approx(40.0)
+
+
+def test_a_claim_counts_only_the_frames_within_the_event() -> None:
+    # (a right hand on a rail of its place index in cm, reaching 1 cm: events at 0, 1, 2 s;
+    # a note of the other hand's sounding 0.5-1.5 s needs the edge at or above 0.10 m)
+    rc = RoomCost([RoomClaim(0.5, 1.5, 0.10)], RIGHT, [0.0, 1.0, 2.0], [60, 62, 64],
+                  lambda f, p, q: 0.01, 0.05, lambda q: q / 100.0, RATE_HZ)
+    rc.at(0.0)
+    assert rc.frames(5, ((0, "index"),)) == pytest.approx(50.0)  # (0.5-1.0 s blocked)
+    assert rc.frames(11, ((0, "index"),)) == 0.0  # (the edge at 0.10 m: clear)
+    assert rc.frames(11, ()) == pytest.approx(50.0)  # (no note held: the farthest reach)
+    rc.at(1.0)
+    assert rc.frames(5, ((1, "index"),)) == pytest.approx(50.0)  # (1.0-1.5 s)
+    rc.at(2.0)
+    assert rc.frames(5, ((2, "index"),)) == 0.0  # (the note is over)
+    # (a note of the hand's own part held by the state claims nothing)
+    own = RoomCost([RoomClaim(0.0, 1.0, 0.10, own=0)], RIGHT, [0.0, 1.0], [60, 62],
+                   lambda f, p, q: 0.01, 0.05, lambda q: q / 100.0, RATE_HZ)
+    own.at(0.0)
+    assert own.frames(5, ((0, "index"),)) == 0.0
+    assert own.frames(5, ((1, "index"),)) == pytest.approx(100.0)
