@@ -10,7 +10,7 @@ import pytest
 
 from planner.hand.model import load_hand
 from planner.music.midi import Note, Song
-from planner.play.costs import Costs
+from planner.play.costs import Costs, State
 from planner.play.hands import RIGHT
 from planner.play.roomcost import RoomClaim, RoomCost
 from planner.play.twobounds import room_cost
@@ -77,3 +77,16 @@ def test_a_claim_counts_only_the_frames_within_the_event() -> None:
     own.at(0.0)
     assert own.frames(5, ((0, "index"),)) == 0.0
     assert own.frames(5, ((1, "index"),)) == pytest.approx(100.0)
+
+
+def test_a_note_the_hand_struck_claims_nothing_after_it_lets_it_go() -> None:
+    # (the hand's own note, 0-2 s, needs the edge at or above 0.10 m: events at 0, 1 s)
+    rc = RoomCost([RoomClaim(0.0, 2.0, 0.10, own=0)], RIGHT, [0.0, 1.0], [60, 62],
+                  lambda f, p, q: 0.01, 0.05, lambda q: q / 100.0, RATE_HZ)
+    rc.at(1.0)
+    struck = State(5, ((0, "index"),))  # (the state before held it: struck, let go now)
+    left_out = State(5, ((1, "index"),))  # (the state before never struck it: handed over)
+    assert rc.frames(5, ((1, "middle"),), struck) == 0.0
+    assert rc.frames(5, ((1, "middle"),), left_out) == pytest.approx(100.0)
+    gone = State(5, (), recent=((0, "index", 5),))  # (its finger's last note, let go)
+    assert rc.frames(5, ((1, "middle"),), gone) == 0.0

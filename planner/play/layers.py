@@ -212,7 +212,7 @@ class Layers(Costs):
             step = got[0]
             total = cost + step + tie
             if self.room is not None:
-                total += self.room.frames(place, sounding_t)
+                total += self.room.frames(place, sounding_t, p)
             if step == math.inf or total > bound:  # (inf: no move gets there)
                 continue
             if old is None or total < old[0]:

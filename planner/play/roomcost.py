@@ -18,8 +18,9 @@ state of the first hand's programme whose inner edge (its rail less, a right han
 plus, a left one, its places' own reach: ``PlaceReach`` of the notes it holds; the hand's
 farthest reach where it holds none) lies inside a claim pays the frames of the claim that
 overlap the state's time (from its event to the next one): the frames the other hand
-cannot play there. A note of the first hand's own that the state holds claims nothing
-(it is played). Where no state blocks, no cost changes: the programme weighs what it
+cannot play there. A note of the first hand's own that the state holds, or that the
+state before holds or its fingers last struck, claims nothing (it is played: a note let
+go early is not handed over). Where no state blocks, no cost changes: the programme weighs what it
 weighed before. One hand alone is planned with no ``RoomCost`` (nothing changes).
 """
 
@@ -30,7 +31,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from planner.play.costs import ONSET_TOL_S
+from planner.play.costs import ONSET_TOL_S, State
 from planner.play.hands import RIGHT
 
 
@@ -66,6 +67,7 @@ class RoomCost:
         self.pitch, self.reach_m, self.farthest_m = pitch, reach_m, farthest_m
         self.rail_m, self.rate_hz = rail_m, rate_hz
         self._now: list[tuple[float, float, int]] = []  # (frames, edge, own) at the event
+        self._owns: tuple[int, ...] = ()  # (the hand's own notes claiming at the event)
         self._memo: dict[tuple, float] = {}
 
     def at(self, t_s: float) -> None:
@@ -77,26 +79,39 @@ class RoomCost:
         self._now = [((min(c.t1_s, next_s) - max(c.t0_s, t_s)) * self.rate_hz, c.edge_m, c.own)
                      for c in self.claims[:end] if c.t1_s > t_s]
         self._now = [x for x in self._now if x[0] > 0.0 and math.isfinite(x[0])]
+        self._owns = tuple(sorted({own for _, _, own in self._now if own >= 0}))
         self._memo = {}
 
-    def frames(self, place: int, sounding: Sequence[tuple[int, str]]) -> float:
+    def frames(self, place: int, sounding: Sequence[tuple[int, str]],
+               before: State | None = None) -> float:
         """The frames the state at ``place`` holding ``sounding`` ((note, finger): its
-        notes, positions in the first hand's notes) blocks at the event (``at``)."""
+        notes, positions in the first hand's notes) blocks at the event (``at``), coming
+        from ``before`` (the state of the event before; None: the first): a note of the
+        hand's own that ``before`` holds or its fingers last struck (``State.fingers``,
+        ``recent``, ``older``) was played, not handed over, and claims nothing."""
         if not self._now:
             return 0.0
-        key = (place, tuple(sounding))
+        played: tuple = ()
+        if before is not None and self._owns:
+            hist = {m for m, _ in before.fingers}
+            hist.update(m for m, _, _ in before.recent)
+            hist.update(m for m, _, _ in before.older)
+            played = tuple(j for j in self._owns if j in hist)
+        key = (place, tuple(sounding), played)
         got = self._memo.get(key)
         if got is None:
-            got = self._memo[key] = self._blocked(place, sounding)
+            got = self._memo[key] = self._blocked(place, sounding, played)
         return got
 
-    def _blocked(self, place: int, sounding: Sequence[tuple[int, str]]) -> float:
+    def _blocked(self, place: int, sounding: Sequence[tuple[int, str]],
+                 played: tuple[int, ...]) -> float:
         reach = max((self.reach_m(f, self.pitch[m], place) for m, f in sounding),
                     default=self.farthest_m)
         if not math.isfinite(reach):
             reach = self.farthest_m
         rail = self.rail_m(place)
         held = {m for m, _ in sounding}
+        held.update(played)
         if self.right:
             edge = rail - reach
             return sum(fr for fr, e, own in self._now if edge < e and own not in held)
