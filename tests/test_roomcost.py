@@ -84,9 +84,22 @@ def test_a_note_the_hand_struck_claims_nothing_after_it_lets_it_go() -> None:
     rc = RoomCost([RoomClaim(0.0, 2.0, 0.10, own=0)], RIGHT, [0.0, 1.0], [60, 62],
                   lambda f, p, q: 0.01, 0.05, lambda q: q / 100.0, RATE_HZ)
     rc.at(1.0)
-    struck = State(5, ((0, "index"),))  # (the state before held it: struck, let go now)
-    left_out = State(5, ((1, "index"),))  # (the state before never struck it: handed over)
+    struck = State(20, ((0, "index"),))  # (the state before held it: struck, let go now)
+    left_out = State(20, ((1, "index"),))  # (never struck it, its room left free)
     assert rc.frames(5, ((1, "middle"),), struck) == 0.0
     assert rc.frames(5, ((1, "middle"),), left_out) == pytest.approx(100.0)
-    gone = State(5, (), recent=((0, "index", 5),))  # (its finger's last note, let go)
+    gone = State(20, (), recent=((0, "index", 20),))  # (its finger's last note, let go)
     assert rc.frames(5, ((1, "middle"),), gone) == 0.0
+
+
+def test_a_handed_note_costs_the_move_into_its_room_not_the_stay() -> None:
+    # (the hand's own note, 0-2 s, needs the edge at or above 0.10 m: events at 0, 1 s;
+    # the state before at place 5 (edge 0.04 m: over the note) or 20 (0.19 m: clear))
+    rc = RoomCost([RoomClaim(0.0, 2.0, 0.10, own=0)], RIGHT, [0.0, 1.0], [60, 62],
+                  lambda f, p, q: 0.01, 0.05, lambda q: q / 100.0, RATE_HZ)
+    rc.at(1.0)
+    stayed = State(5, ((1, "index"),))
+    came = State(20, ((1, "index"),))
+    assert rc.frames(5, ((1, "middle"),), stayed) == 0.0  # (left out where it stood)
+    assert rc.frames(5, ((1, "middle"),), came) == pytest.approx(100.0)  # (the dive)
+    assert rc.frames(20, ((1, "middle"),), came) == 0.0  # (clear)

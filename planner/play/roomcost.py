@@ -18,9 +18,12 @@ state of the first hand's programme whose inner edge (its rail less, a right han
 plus, a left one, its places' own reach: ``PlaceReach`` of the notes it holds; the hand's
 farthest reach where it holds none) lies inside a claim pays the frames of the claim that
 overlap the state's time (from its event to the next one): the frames the other hand
-cannot play there. A note of the first hand's own that the state holds, or that the
-state before holds or its fingers last struck, claims nothing (it is played: a note let
-go early is not handed over). Where no state blocks, no cost changes: the programme weighs what it
+cannot play there. A note of the first hand's own (one it may hand over) claims only
+where the state moves into its room: leaving a note out where the hand stands already is
+priced at its frames, as one hand prices it (charging the room too would price it twice,
+and tip the programme into notes its estimates play but the motion cannot: measured on
+``schoenberg_op19_6``), and a note the hand played (holds, or its fingers last struck)
+is not handed over. Where no state blocks, no cost changes: the programme weighs what it
 weighed before. One hand alone is planned with no ``RoomCost`` (nothing changes).
 """
 
@@ -86,34 +89,45 @@ class RoomCost:
                before: State | None = None) -> float:
         """The frames the state at ``place`` holding ``sounding`` ((note, finger): its
         notes, positions in the first hand's notes) blocks at the event (``at``), coming
-        from ``before`` (the state of the event before; None: the first): a note of the
-        hand's own that ``before`` holds or its fingers last struck (``State.fingers``,
-        ``recent``, ``older``) was played, not handed over, and claims nothing."""
+        from ``before`` (the state of the event before; None: the first). A note of the
+        hand's own claims only where the state moves into its room: not where ``before``
+        blocked it already (leaving it out there is its frames, as one hand weighs it), nor
+        when it was played (``sounding`` holds it, or ``before`` holds it or its fingers
+        last struck it: ``State.fingers``, ``recent``, ``older``; a note let go early is
+        not handed over)."""
         if not self._now:
             return 0.0
-        played: tuple = ()
-        if before is not None and self._owns:
-            hist = {m for m, _ in before.fingers}
-            hist.update(m for m, _, _ in before.recent)
-            hist.update(m for m, _, _ in before.older)
-            played = tuple(j for j in self._owns if j in hist)
-        key = (place, tuple(sounding), played)
+        owns: tuple = ()
+        if self._owns:
+            done = {m for m, _ in sounding}
+            if before is not None:
+                done.update(m for m, _ in before.fingers)
+                done.update(m for m, _, _ in before.recent)
+                done.update(m for m, _, _ in before.older)
+                was = self._edge(before.place, before.fingers)
+                done.update(own for _, e, own in self._now
+                            if own >= 0 and self._blocks(was, e))
+            owns = tuple(j for j in self._owns if j not in done)
+        key = (place, tuple(sounding), owns)
         got = self._memo.get(key)
         if got is None:
-            got = self._memo[key] = self._blocked(place, sounding, played)
+            edge = self._edge(place, sounding)
+            got = self._memo[key] = sum(fr for fr, e, own in self._now
+                                        if (own < 0 or own in owns) and self._blocks(edge, e))
         return got
 
-    def _blocked(self, place: int, sounding: Sequence[tuple[int, str]],
-                 played: tuple[int, ...]) -> float:
-        reach = max((self.reach_m(f, self.pitch[m], place) for m, f in sounding),
-                    default=self.farthest_m)
-        if not math.isfinite(reach):
-            reach = self.farthest_m
-        rail = self.rail_m(place)
-        held = {m for m, _ in sounding}
-        held.update(played)
-        if self.right:
-            edge = rail - reach
-            return sum(fr for fr, e, own in self._now if edge < e and own not in held)
-        edge = rail + reach
-        return sum(fr for fr, e, own in self._now if edge > e and own not in held)
+    def _edge(self, place: int, sounding: Sequence[tuple[int, str]]) -> float:
+        """The inner edge of the hand at ``place`` holding ``sounding`` (m)."""
+        key = ("edge", place, tuple(sounding))
+        got = self._memo.get(key)
+        if got is None:
+            reach = max((self.reach_m(f, self.pitch[m], place) for m, f in sounding),
+                        default=self.farthest_m)
+            if not math.isfinite(reach):
+                reach = self.farthest_m
+            rail = self.rail_m(place)
+            got = self._memo[key] = rail - reach if self.right else rail + reach
+        return got
+
+    def _blocks(self, edge_m: float, claim_m: float) -> bool:
+        return edge_m < claim_m if self.right else edge_m > claim_m
