@@ -1,8 +1,9 @@
 """What the room the hand planned first takes from the other hand's notes costs
 (``planner.play.roomcost``, built by ``planner.play.twobounds.room_cost``): a dive of the
 right hand over a note of its own part it does not hold (handed to the left) costs the
-frames that note sounds while the dive lasts; a place clear of the note, or a state
-holding the note, costs nothing."""
+share of that note's frames the left would play, while the dive lasts; a place clear of
+the note, or a state holding the note, costs nothing; leaving a handed note out costs the
+rest of its frames, so that left out and blocked it costs all of them."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from planner.music.midi import Note, Song
 from planner.play.costs import Costs, State
 from planner.play.hands import RIGHT
 from planner.play.roomcost import RoomClaim, RoomCost
-from planner.play.twobounds import room_cost
+from planner.play.twobounds import HANDED_SHARE, room_cost
 from planner.play.twohands import PairPlanner
 
 RATE_HZ = 100.0
@@ -39,6 +40,7 @@ def test_a_dive_over_a_handed_note_costs_its_frames_while_it_lasts(pair) -> None
     costs = Costs([song.notes[i] for i in own], pl.places, RATE_HZ, pl.memo)
     c4 = next(c for c in rc.claims if c.own == 0)  # (C4's claim: the left's least reach)
     assert (c4.t0_s, c4.t1_s) == (0.5, 0.8)
+    w = HANDED_SHARE  # (a handed note's frames the left would play, paid by the room)
     rc.at(0.5)  # (the state lasts to the next event, G4 at 0.7 s: 20 frames of C4)
     blocked = clear = 0
     for f in pl.places.hand.fingers:
@@ -46,7 +48,7 @@ def test_a_dive_over_a_handed_note_costs_its_frames_while_it_lasts(pair) -> None
             edge_m = pl.places.rail_m(place) - pair.place_reach[RIGHT].reach_m(f, 64, place)
             got = rc.frames(place, ((1, f),))  # (holding E4, not C4: handed over)
             if edge_m < c4.edge_m:
-                assert got == pytest.approx(20.0)
+                assert got == pytest.approx(20.0 * w)
                 blocked += 1
             else:
                 assert got == 0.0
@@ -55,7 +57,7 @@ def test_a_dive_over_a_handed_note_costs_its_frames_while_it_lasts(pair) -> None
     rc.at(0.7)  # (G4's event lasts to the song's end: C4 sounds 10 frames more, and E4,
     # not held by a state holding G4 alone, 30 more)
     low = min(q for f in pl.places.hand.fingers for q in costs.rails(f, 2))
-    assert rc.frames(low, ((2, "thumb"),)) == pytest.approx(40.0)
+    assert rc.frames(low, ((2, "thumb"),)) == pytest.approx(40.0 * w)
 
 
 def test_a_claim_counts_only_the_frames_within_the_event() -> None:
@@ -92,14 +94,16 @@ def test_a_note_the_hand_struck_claims_nothing_after_it_lets_it_go() -> None:
     assert rc.frames(5, ((1, "middle"),), gone) == 0.0
 
 
-def test_a_handed_note_costs_the_move_into_its_room_not_the_stay() -> None:
-    # (the hand's own note, 0-2 s, needs the edge at or above 0.10 m: events at 0, 1 s;
-    # the state before at place 5 (edge 0.04 m: over the note) or 20 (0.19 m: clear))
-    rc = RoomCost([RoomClaim(0.0, 2.0, 0.10, own=0)], RIGHT, [0.0, 1.0], [60, 62],
-                  lambda f, p, q: 0.01, 0.05, lambda q: q / 100.0, RATE_HZ)
-    rc.at(1.0)
-    stayed = State(5, ((1, "index"),))
-    came = State(20, ((1, "index"),))
-    assert rc.frames(5, ((1, "middle"),), stayed) == 0.0  # (left out where it stood)
-    assert rc.frames(5, ((1, "middle"),), came) == pytest.approx(100.0)  # (the dive)
-    assert rc.frames(20, ((1, "middle"),), came) == 0.0  # (clear)
+def test_a_handed_note_left_out_costs_its_frames_where_blocked_and_less_where_free() -> None:
+    # (the hand's own note, 0-1 s (100 frames), needs the edge at or above 0.10 m; the
+    # other hand plays 0.4 of what it is handed where it has the room)
+    rc = RoomCost([RoomClaim(0.0, 1.0, 0.10, own=0)], RIGHT, [0.0, 1.0], [60, 62],
+                  lambda f, p, q: 0.01, 0.05, lambda q: q / 100.0, RATE_HZ, share=0.4)
+    rc.at(0.0)
+    left_out = rc.left_out(0, 100.0)
+    assert left_out == pytest.approx(60.0)
+    # (left out and blocked for its whole sounding: all its frames, as one hand pays)
+    assert left_out + rc.frames(5, ((1, "index"),)) == pytest.approx(100.0)
+    assert left_out + rc.frames(20, ((1, "index"),)) == pytest.approx(60.0)  # (room left)
+    assert rc.left_out(1, 80.0) == 80.0  # (a note with no claim: the other hand cannot
+    # press it, nothing handed)

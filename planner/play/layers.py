@@ -90,7 +90,9 @@ class Layers(Costs):
         for size in range(min(len(new), len(self.places.hand.fingers)), -1, -1):
             for i in range(len(new) - size + 1):
                 sub = new[i:i + size]
-                left_out = sum(self.frames(n) for n in new if n not in sub)
+                left_out = sum(self.frames(n) if self.room is None
+                               else self.room.left_out(n, self.frames(n))
+                               for n in new if n not in sub)
                 self._extend(layer, prev, t, sub, left_out)
         if not layer and self.bound is not None and prev:  # (no state keeps the bound:
             # the hand stays where it is rather than the programme lose its path)

@@ -12,19 +12,21 @@ to both hands (the two-hand corpus's ``clara_polonaise1_3``: 498 -> 155 frames o
 handed notes played, ``docs/history/2026-12-07-two-hands5.md``).
 
 **The charge.** Each note the other hand plays or may be handed (every note of the first
-hand's part) claims, over the time it sounds, the rail beyond the least the other hand
-must reach to press it (``planner.play.handclear.least_reach_m``) and the clearance. A
-state of the first hand's programme whose inner edge (its rail less, a right hand, or
-plus, a left one, its places' own reach: ``PlaceReach`` of the notes it holds; the hand's
-farthest reach where it holds none) lies inside a claim pays the frames of the claim that
-overlap the state's time (from its event to the next one): the frames the other hand
-cannot play there. A note of the first hand's own (one it may hand over) claims only
-where the state moves into its room: leaving a note out where the hand stands already is
-priced at its frames, as one hand prices it (charging the room too would price it twice,
-and tip the programme into notes its estimates play but the motion cannot: measured on
-``schoenberg_op19_6``), and a note the hand played (holds, or its fingers last struck)
-is not handed over. Where no state blocks, no cost changes: the programme weighs what it
-weighed before. One hand alone is planned with no ``RoomCost`` (nothing changes).
+hand's part the other hand can press) claims, over the time it sounds, the rail beyond
+the least the other hand must reach to press it (``planner.play.handclear.least_reach_m``)
+and the clearance. A state of the first hand's programme whose inner edge (its rail less,
+a right hand, or plus, a left one, its places' own reach: ``PlaceReach`` of the notes it
+holds; the hand's farthest reach where it holds none) lies inside a claim pays the frames
+of the claim that overlap the state's time (from its event to the next one): the other
+hand's notes all of them, a note of its own the ``share`` of them the other hand plays of
+what it is handed where it has the room (measured: ``twobounds.HANDED_SHARE``). Leaving
+such a note out costs the rest of its frames (``left_out``): left out and blocked, all
+its frames, as one hand pays; left out with the room left, less. (Charging the room on
+top of the whole note priced a note left out twice where the hand stood over it, and
+tipped the programme into notes its estimates play but the motion cannot: measured on
+``schoenberg_op19_6``.) A note of its own the hand played (holds, or its fingers last
+struck) is not handed over and claims nothing. One hand alone is planned with no
+``RoomCost``: nothing changes.
 """
 
 from __future__ import annotations
@@ -62,7 +64,7 @@ class RoomCost:
     def __init__(self, claims: Sequence[RoomClaim], side: str, onsets_s: Sequence[float],
                  pitch: Sequence[int],
                  reach_m: Callable[[str, int, int], float], farthest_m: float,
-                 rail_m: Callable[[int], float], rate_hz: float) -> None:
+                 rail_m: Callable[[int], float], rate_hz: float, share: float = 1.0) -> None:
         self.claims = sorted(claims, key=lambda c: (c.t0_s, c.t1_s, c.edge_m, c.own))
         self._starts = [c.t0_s for c in self.claims]
         self.onsets_s = sorted(onsets_s)
@@ -70,6 +72,8 @@ class RoomCost:
         self.pitch, self.reach_m, self.farthest_m = pitch, reach_m, farthest_m
         self.rail_m, self.rate_hz = rail_m, rate_hz
         self._now: list[tuple[float, float, int]] = []  # (frames, edge, own) at the event
+        self.share = share
+        self.handed = frozenset(c.own for c in self.claims if c.own >= 0)
         self._owns: tuple[int, ...] = ()  # (the hand's own notes claiming at the event)
         self._memo: dict[tuple, float] = {}
 
@@ -85,16 +89,22 @@ class RoomCost:
         self._owns = tuple(sorted({own for _, _, own in self._now if own >= 0}))
         self._memo = {}
 
+    def left_out(self, note: int, frames: float) -> float:
+        """What leaving ``note`` (a position in the hand's notes, sounding ``frames``) out
+        costs: a note the other hand can press is handed over, and played there (the
+        share ``share``) where the hand leaves it the room: that share is paid by the room
+        it takes (``frames``), the rest here; any other note all its frames."""
+        return frames * (1.0 - self.share) if note in self.handed else frames
+
     def frames(self, place: int, sounding: Sequence[tuple[int, str]],
                before: State | None = None) -> float:
         """The frames the state at ``place`` holding ``sounding`` ((note, finger): its
         notes, positions in the first hand's notes) blocks at the event (``at``), coming
-        from ``before`` (the state of the event before; None: the first). A note of the
-        hand's own claims only where the state moves into its room: not where ``before``
-        blocked it already (leaving it out there is its frames, as one hand weighs it), nor
-        when it was played (``sounding`` holds it, or ``before`` holds it or its fingers
-        last struck it: ``State.fingers``, ``recent``, ``older``; a note let go early is
-        not handed over)."""
+        from ``before`` (the state of the event before; None: the first): the other
+        hand's notes' whole, the hand's own (handed over) their ``share``; a note of the
+        hand's own that it played (``sounding`` holds it, or ``before`` holds it or its
+        fingers last struck it: ``State.fingers``, ``recent``, ``older``) is not handed
+        over and claims nothing."""
         if not self._now:
             return 0.0
         owns: tuple = ()
@@ -104,15 +114,13 @@ class RoomCost:
                 done.update(m for m, _ in before.fingers)
                 done.update(m for m, _, _ in before.recent)
                 done.update(m for m, _, _ in before.older)
-                was = self._edge(before.place, before.fingers)
-                done.update(own for _, e, own in self._now
-                            if own >= 0 and self._blocks(was, e))
             owns = tuple(j for j in self._owns if j not in done)
         key = (place, tuple(sounding), owns)
         got = self._memo.get(key)
         if got is None:
             edge = self._edge(place, sounding)
-            got = self._memo[key] = sum(fr for fr, e, own in self._now
+            got = self._memo[key] = sum(fr if own < 0 else fr * self.share
+                                        for fr, e, own in self._now
                                         if (own < 0 or own in owns) and self._blocks(edge, e))
         return got
 

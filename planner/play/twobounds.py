@@ -43,6 +43,10 @@ if TYPE_CHECKING:
     from planner.trajfile import Trajectory
 
 UNBOUNDED_M = 10.0  # a bound no rail reaches (the travel is a few metres at most)
+HANDED_SHARE = 0.4  # of the frames of the notes the hand planned first hands over, the
+# share the second hand plays where the first leaves it room (measured on the two-hand
+# corpus, main a2f3801, both orders: played / (played + refused for reasons other than
+# the first hand's bodies); docs/history/2026-12-07-two-hands6.md)
 
 
 def windows(notes, idx: tuple[int, ...], out_of: frozenset[int] = frozenset()
@@ -218,4 +222,4 @@ def room_cost(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
     places, reach = pp.planners[side].places, pp.place_reach[side]
     return RoomCost(claims, side, [song.notes[i].onset_s for i in own],
                     [song.notes[i].pitch for i in own], reach.reach_m,
-                    pp.reach(side).inner_extent_m, places.rail_m, rate_hz)
+                    pp.reach(side).inner_extent_m, places.rail_m, rate_hz, HANDED_SHARE)
