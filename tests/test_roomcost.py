@@ -7,15 +7,18 @@ rest of its frames, so that left out and blocked it costs all of them."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from planner.hand.model import load_hand
 from planner.music.midi import Note, Song
 from planner.play.costs import Costs, State
-from planner.play.hands import RIGHT
+from planner.play.hands import LEFT, RIGHT, assign_hands
 from planner.play.roomcost import RoomClaim, RoomCost
-from planner.play.twobounds import HANDED_SHARE, room_cost
-from planner.play.twohands import PairPlanner
+from planner.play.stream import plan_song
+from planner.play.twobounds import HANDED_SHARE, room, room_cost
+from planner.play.twohands import PairPlanner, plan_pass
 
 RATE_HZ = 100.0
 
@@ -107,3 +110,20 @@ def test_a_handed_note_left_out_costs_its_frames_where_blocked_and_less_where_fr
     assert left_out + rc.frames(20, ((1, "index"),)) == pytest.approx(60.0)  # (room left)
     assert rc.left_out(1, 80.0) == 80.0  # (a note with no claim: the other hand cannot
     # press it, nothing handed)
+
+
+def test_a_hand_planned_alone_pays_no_room(pair) -> None:
+    # (the right hand alone, every note its own: planned as one hand plays the file, the
+    # left given only what it leaves out; a room cost would make it differ)
+    notes = tuple(Note(p, 0.25 * i, 0.25 * i + 0.2, 80, 0) for i, p in
+                  enumerate([60, 64, 67, 72, 48, 52, 55, 60]))
+    song = Song(notes, 2.5)
+    places = {s: pair.planners[s].places for s in (LEFT, RIGHT)}
+    a = assign_hands(song.notes, pair.gap, places, RATE_HZ).one_hand(RIGHT)
+    way = plan_pass(song, pair, a, RIGHT, RATE_HZ)
+    idx = a.notes_of(RIGHT)
+    sub = replace(song, notes=tuple(notes[i] for i in idx), part=None)
+    bounds = room(song, pair, RIGHT, idx, (), sub, RATE_HZ)
+    one = plan_song(sub, pair.hands[RIGHT], None, RATE_HZ, planner=pair.planners[RIGHT],
+                    rail_bounds=bounds)
+    assert way.alone and way.plans[1].text == one.text
