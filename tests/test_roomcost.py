@@ -99,7 +99,7 @@ def test_a_note_the_hand_struck_claims_nothing_after_it_lets_it_go() -> None:
 
 def test_a_handed_note_left_out_costs_its_frames_where_blocked_and_less_where_free() -> None:
     # (the hand's own note, 0-1 s (100 frames), needs the edge at or above 0.10 m; the
-    # other hand plays 0.4 of what it is handed where it has the room)
+    # other hand plays, say, 0.4 of what it is handed where it has the room)
     rc = RoomCost([RoomClaim(0.0, 1.0, 0.10, own=0)], RIGHT, [0.0, 1.0], [60, 62],
                   lambda f, p, q: 0.01, 0.05, lambda q: q / 100.0, RATE_HZ, share=0.4)
     rc.at(0.0)
