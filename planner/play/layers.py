@@ -29,6 +29,7 @@ from planner.play.costs import (
     State,
 )
 from planner.play.places import PLACE_STRIDE, Places
+from planner.play.roomcost import RoomCost
 
 THUMB = "thumb"
 BEAM = 20  # states kept per event (measured: docs/history/play-second-design.md, "Speed")
@@ -63,8 +64,10 @@ class Layers(Costs):
 
     def __init__(self, notes, places: Places, rate_hz: float,
                  memo: CostMemo | None = None,
-                 rail_bounds: Sequence[tuple[float, float]] | None = None) -> None:
+                 rail_bounds: Sequence[tuple[float, float]] | None = None,
+                 room: RoomCost | None = None) -> None:
         super().__init__(notes, places, rate_hz, memo, rail_bounds)
+        self.room = room  # (two hands, the hand planned first: the room it takes costs)
         # (the fingers in the order of their keys: a left hand's thumb is its highest)
         self._order = {f: i for i, f in enumerate(places.hand.fingers_low_to_high)}
         self._bound_at: tuple = (None, 0, math.inf)  # (layer, its size, its bound)
@@ -79,13 +82,17 @@ class Layers(Costs):
         if self.bound is not None:  # (two hands: the event's rail bound, its notes' one,
             # which a hand that strikes none of them must keep too)
             self._stay_bound = self.bound[new[0]]  # (uncut: the hand's rail, any key)
+        if self.room is not None:
+            self.room.at(t)
         # (by hand shape, the rail and the fingers on the notes sounding: the cheapest
         # state of each, the only one the pruning can keep; (cost, state before, state))
         layer: dict[tuple, tuple[float, State | None, State]] = {}
         for size in range(min(len(new), len(self.places.hand.fingers)), -1, -1):
             for i in range(len(new) - size + 1):
                 sub = new[i:i + size]
-                left_out = sum(self.frames(n) for n in new if n not in sub)
+                left_out = sum(self.frames(n) if self.room is None
+                               else self.room.left_out(n, self.frames(n))
+                               for n in new if n not in sub)
                 self._extend(layer, prev, t, sub, left_out)
         if not layer and self.bound is not None and prev:  # (no state keeps the bound:
             # the hand stays where it is rather than the programme lose its path)
@@ -171,6 +178,8 @@ class Layers(Costs):
         if p is None:  # (the song's first notes: from anywhere, no move lost)
             for place, tie in rails:
                 total, shape = cost + tie, (place, sounding_t)
+                if self.room is not None:
+                    total += self.room.frames(place, sounding_t)
                 old = layer.get(shape)
                 if total <= bound and (old is None or total < old[0]):
                     layer[shape] = (total, None, State(place, sounding_t))
@@ -204,6 +213,8 @@ class Layers(Costs):
                 got = steps[key] = (step, tuple(sorted(lates)), tuple(sorted(rode)))
             step = got[0]
             total = cost + step + tie
+            if self.room is not None:
+                total += self.room.frames(place, sounding_t, p)
             if step == math.inf or total > bound:  # (inf: no move gets there)
                 continue
             if old is None or total < old[0]:

@@ -25,6 +25,7 @@ from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.places import Places
 from planner.play.rest import REST_RAIL_M, Legs, WayIn, legs_between, rest_pose, way_in
+from planner.play.roomcost import RoomCost
 from planner.selfcheck import SelfCheck, Verdict
 from planner.trajfile import MIN_ROWS, KeptText, TrajectoryWriter
 
@@ -81,14 +82,17 @@ class Planner:
 def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz: float = 100.0,
               song_name: str = "", planner: Planner | None = None,
               on_progress: Callable[[int, int], None] | None = None,
-              rail_bounds: Sequence[tuple[float, float]] | None = None) -> PlayPlan:
+              rail_bounds: Sequence[tuple[float, float]] | None = None,
+              room: RoomCost | None = None) -> PlayPlan:
     """Plan ``song`` on ``hand`` and stream the trajectory to ``out_path`` ('-': stdout;
     None: keep it in memory, ``PlayPlan.text``).
     ``on_progress(notes_decided, notes)`` is called as the notes are decided (played or
     left out), chunk by chunk. The clock (``planning_s``, ``first_row_s``) starts after
     the hand's set-up (``Planner``, built here when none is given). ``rail_bounds``: per
     note, the rail's (lowest, highest) position it may be pressed from (two hands:
-    ``planner.play.twohands``; None: the whole travel)."""
+    ``planner.play.twohands``; None: the whole travel); ``room``: what the room the hand
+    takes from the other hand's notes costs (two hands, the hand planned first:
+    ``planner.play.roomcost``; None: nothing)."""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     pl = planner or Planner(hand)
@@ -100,7 +104,7 @@ def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz:
     try:
         with _cyclic_gc_paused():
             rows, fingering = _plan(notes, pl, rate_hz, hand, writer, on_progress,
-                                    rail_bounds)
+                                    rail_bounds, room)
         left_out = {s.note: (s.reason, s.detail) for s in fingering.skipped}
         left_out.update({o.note: (o.skip, o.detail)
                          for o in rows.motion.outcomes.values() if o.skip is not None})
@@ -133,13 +137,13 @@ def _cyclic_gc_paused():
 
 
 def _plan(notes, pl: Planner, rate_hz: float, hand: HandModel, writer: TrajectoryWriter,
-          on_progress=None, rail_bounds=None):
+          on_progress=None, rail_bounds=None, room=None):
     """Fingering chunk by chunk (``FingeringProblem.chunks``, in the song's time), each
     chunk's notes placed in time order (a cut before the notes that start with it) in
     the file's time (the song shifted by the way in from rest: ``planner.play.rest``),
     rows written up to where nothing can change any more, then the way back to rest.
     Returns the rows (their motion and the song's shift) and the fingering (song time)."""
-    problem = FingeringProblem(notes, pl.places, rate_hz, pl.memo, rail_bounds)
+    problem = FingeringProblem(notes, pl.places, rate_hz, pl.memo, rail_bounds, room)
     rest_q = pl.rest_q.copy()
     rows: _Rows | None = None
     done: dict[int, Assignment] = {}

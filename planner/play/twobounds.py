@@ -34,6 +34,7 @@ from planner.play.handgap import HandGap, InnerEdge
 from planner.play.hands import LEFT, RIGHT, other_side
 from planner.play.motion import DROP_FRACTION
 from planner.play.places import Places
+from planner.play.roomcost import RoomClaim, RoomCost
 
 if TYPE_CHECKING:
     from planner.hand.model import HandModel
@@ -42,6 +43,12 @@ if TYPE_CHECKING:
     from planner.trajfile import Trajectory
 
 UNBOUNDED_M = 10.0  # a bound no rail reaches (the travel is a few metres at most)
+HANDED_SHARE = 0.68  # of the frames of the notes the hand planned first hands over, the
+# share the second hand plays where the first leaves it room: measured on material that is
+# not the two-hand corpus, 48 random two-hand songs (bench/random_songs.py's generators, a
+# right part and a left part an octave lower, seeds 0-47; main a2f3801, both orders): of
+# the frames handed over, 2 210 played, 1 032 left out for reasons other than the first
+# hand's bodies (docs/history/2026-12-07-two-hands6.md)
 
 
 def windows(notes, idx: tuple[int, ...], out_of: frozenset[int] = frozenset()
@@ -194,3 +201,27 @@ def room(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
         out.append(loose_bound(free, k, side, lim, strict[k]))
     return out
 
+
+
+def room_cost(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
+              other: tuple[int, ...], rate_hz: float) -> RoomCost:
+    """What the room the hand planned first (``side``, its notes ``own``) takes costs
+    (``planner.play.roomcost``): every note of the other hand's (``other``) and of its
+    own part (which it hands over when it leaves it out) claims, while it sounds, the
+    rail beyond the least the other hand must reach to press it (``least_reach_m``) and
+    the clearance; a note the other hand presses from no place claims nothing."""
+    osd = other_side(side)
+    opl = pp.planners[osd]
+    o_reach = NoteReaches(Costs(song.notes, opl.places, rate_hz, opl.memo), pp.place_reach[osd])
+    c = pp.gap.clearance_m if side == RIGHT else -pp.gap.clearance_m
+    pos = {i: k for k, i in enumerate(own)}
+    claims = []
+    for i in sorted(set(own) | set(other)):
+        x = least_reach_m(o_reach, i, osd)
+        if x is not None:
+            n = song.notes[i]
+            claims.append(RoomClaim(n.onset_s, n.offset_s, x + c, pos.get(i, -1)))
+    places, reach = pp.planners[side].places, pp.place_reach[side]
+    return RoomCost(claims, side, [song.notes[i].onset_s for i in own],
+                    [song.notes[i].pitch for i in own], reach.reach_m,
+                    pp.reach(side).inner_extent_m, places.rail_m, rate_hz, HANDED_SHARE)

@@ -44,6 +44,7 @@ from planner.play.twobounds import (
     clear_limits,
     first_edge,
     room,
+    room_cost,
     settled_bounds,
     windows,
 )
@@ -209,8 +210,12 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     # (the first hand's bound leaves the other room; it keeps no clearance itself, the
     # second hand's bound does: its windows are its notes' own, none taken out)
     bounds = room(song, pp, first, idx[first], idx[second], subs[first], rate_hz)
+    # (and pays, in frames, for the room it takes from the other hand's notes and from
+    # those it hands over: ``planner.play.roomcost``; a hand planned alone is planned as
+    # one hand plays the file, the way that bounds a pair's loss against one hand)
+    cost = room_cost(song, pp, first, idx[first], idx[second], rate_hz) if idx[second] else None
     plans[first] = plan_song(subs[first], pp.hands[first], None, rate_hz, song_name=song_name,
-                             planner=pp.planners[first], rail_bounds=bounds)
+                             planner=pp.planners[first], rail_bounds=bounds, room=cost)
     given = {idx[first][s.note]: f"{s.reason.value}: {s.detail}"
              for s in plans[first].verdict.skipped}
     planned = {first: idx[first], second: tuple(sorted(set(idx[second]) | set(given)))}
