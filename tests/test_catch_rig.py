@@ -68,13 +68,15 @@ def test_a_plan_of_the_arm_alone_holds_the_reach(pl):
 
 
 def test_a_steep_fast_throw_names_its_limit_with_its_number(pl):
-    """75 deg from 2.5 m arrives at 7.0 m/s: with the arm alone and with the reach axis too,
-    the stop searched in coarse and in fine steps, stopping it needs more of the wrist
-    flexion's motor than its 2 N m: too fast to stop (a hard limit), with the force and the
-    torque in the reason (the coarse search's: 2.56 N m); the reach's try is noted. (75 deg
-    from 2.0 m, this test's throw before the fine search, is caught now:
-    ``test_the_stop_searched_in_finer_steps_catches_a_fast_throw``.)"""
-    p = plan_throw(75.0, 2.5, 0.0, planner=pl)
+    """75 deg from 3.0 m arrives at 7.7 m/s: with the arm alone and with the reach axis too,
+    the stop searched in coarse and in fine steps and with per-joint ramps, stopping it
+    needs more of the wrist flexion's motor than its 2 N m: too fast to stop (a hard limit),
+    with the force and the torque in the reason (the coarse search's: 3.03 N m); the
+    reach's try is noted. (75 deg from 2.0 m, this test's throw before the fine search, is
+    caught now: ``test_the_stop_searched_in_finer_steps_catches_a_fast_throw``; 75 deg from
+    2.5 m, its throw before the recoil judged with the fingers closing
+    (``LOADED_FINGERS_STOP``), too: docs/history/2026-12-07-catch-ramps2.md.)"""
+    p = plan_throw(75.0, 3.0, 0.0, planner=pl)
     assert not p.feasible and CatchReason.TOO_FAST_TO_STOP in p.reason_kinds
     fast = next(r for r in p.reasons if r.kind in HARD_LIMITS)
     m = re.search(r"([\d.]+) N needs motor\.wrist_flex at ([\d.]+) N m > its gear limit "

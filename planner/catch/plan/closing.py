@@ -17,7 +17,7 @@ from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M
 from planner.hand.model import HandModel
 from planner.ik import HandIK, PressTarget
 from planner.play.fingerbody import FingerBodies
-from planner.trajectory import min_jerk, phase_duration
+from planner.trajectory import Phase, min_jerk, phase_duration, sample
 
 GRASP_MARGIN_M = 0.002  # planned with this much to spare
 PALM_KNOT_S = 0.010  # the moving palm's pose computed this often before the intercept and
@@ -265,6 +265,19 @@ def earliest_close_start(closing: Closing, t_i: float, ready: float, stop_t: flo
     if closing.u_grasp is None:
         return max(ready, t_i)
     return max(ready, t_i + stop_t - closing.u_grasp * closing.duration_s)
+
+
+def closing_offsets(closing: Closing, finger_idx: np.ndarray, q_open: np.ndarray,
+                    t_s: np.ndarray, t_i: float, stop_t: float) -> np.ndarray:
+    """The fingers' offsets from ``q_open`` at times ``t_s`` (rows, one per time) of the
+    closing started at ``earliest_close_start`` (the hand ready before it: the rows' own
+    start when no fingertip would touch the ball first; a later one leaves them more open)
+    for a ball meeting the palm at ``t_i`` and stopped by its pad in ``stop_t``."""
+    delta = np.zeros(len(q_open))
+    delta[finger_idx] = closing.q_closed[finger_idx] - q_open[finger_idx]
+    s_c = earliest_close_start(closing, t_i, -math.inf, stop_t)
+    return sample([Phase(delta, closing.duration_s)], np.array([s_c]), t_s,
+                  np.zeros(len(q_open)))
 
 
 def close_start(hand: HandModel, flight: Flight, C: np.ndarray, q_open: np.ndarray,

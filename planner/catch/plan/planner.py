@@ -445,6 +445,7 @@ def joint_stop_note(grid: StopGrid) -> str:
     who = ("every arm joint recoiling" if grid.per_joint is JointRamps.EACH else
            "the loaded motor's joint alone recoiling")
     how = "every tilt's recoil judged" if grid.every_tilt else "the least loaded tilt"
+    how += " with the fingers closing" if grid.fingers_judged else ""
     return f"the stop with per-joint ramps ({who}, {how}, the finer steps)"
 
 

@@ -43,6 +43,7 @@ import pinocchio as pin
 from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix, palm_jacobian
 from planner.catch.plan.arm import CatchJoints, open_from, palm_target
+from planner.catch.plan.closing import closing_offsets
 from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_speeds, giving_speeds
 from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_intercept_square
 from planner.catch.plan.ramps import JointRamps, joint_ramps
@@ -87,6 +88,8 @@ class StopGrid:
     per_joint: JointRamps = JointRamps.NONE  # one ramp time, or each arm joint's own
     every_tilt: bool = False  # every tilt's recoil judged on the rows (else the tilt whose
     # pad load at full speed is least, then its recoil)
+    fingers_judged: bool = False  # the recoil judged with the fingers closing as the rows
+    # close them (``StopDynamics.judge``'s ``closing``; else open)
 
 
 COARSE_STOP = StopGrid()  # every plan's
@@ -98,7 +101,14 @@ FINE_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE)  # where that is too f
 JOINT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.EACH, True)
 LOADED_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED, True)
 LOADED_TILT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED)
-JOINT_STOPS = (JOINT_STOP, LOADED_STOP, LOADED_TILT_STOP)
+# ... and where those are too, the flexion alone recoiling, every tilt's recoil judged with
+# the fingers closing as the rows close them: the open hand's judge is optimistic where the
+# closing is under way at the intercept (0 m / 65 deg / 4.0 m, tilt -13 deg: judged headroom
+# +0.13 open, the rows' -0.015). Every joint recoiling so judged was measured too and not
+# kept: it made -0.3 m / 65 deg / 4.0 m pass the check, and the replay lost the ball at
+# 1.82 s (docs/history/2026-12-07-catch-ramps2.md)
+LOADED_FINGERS_STOP = replace(LOADED_STOP, fingers_judged=True)
+JOINT_STOPS = (JOINT_STOP, LOADED_STOP, LOADED_TILT_STOP, LOADED_FINGERS_STOP)
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -238,16 +248,20 @@ class StopDynamics:
                     float(np.min(self.a_max / np.maximum(np.abs(qd), 1e-12))))
         return max(MIN_PHASE_S, PEAK_VEL / s_max)
 
-    def judge(self, stop: SoftStop, q_open: np.ndarray, flight: Flight, r: float
-              ) -> tuple[bool, float]:
+    def judge(self, stop: SoftStop, q_open: np.ndarray, flight: Flight, r: float,
+              closing: Closing | None = None) -> tuple[bool, float]:
         """The check's rule (``planner.check.ball.ball_loads``) on the rows around the
-        intercept that ``stop`` gives the arm (the fingers open): whether the ball stays in
-        the palm's friction cone while the pad stops it, and the least motor headroom."""
+        intercept that ``stop`` gives the arm (the fingers open, or ``closing``: closing as
+        the rows close them, ``closing_offsets``): whether the ball stays in the palm's
+        friction cone while the pad stops it, and the least motor headroom."""
         dt = stop.row_s
         k0 = math.floor(stop.t_i / dt)
         n = math.ceil((stop.pad_s + stop.recoil_s) / dt) + 3
         t = np.arange(k0 - 2, k0 + n) * dt
         Q = np.tile(q_open, (len(t), 1)) + stop.offset(t, self.hand.n)
+        if closing is not None:
+            Q = self.hand.apply_couplings(Q + closing_offsets(
+                closing, self.joints.finger_idx, q_open, t, stop.t_i, stop.pad_s))
         _, palm = self.kin.frames(Q)
         b = flight.to_metadata()
         ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
@@ -309,7 +323,8 @@ def _recoiled(search: tuple, best) -> tuple:
     if not np.any(stop.qd):
         return (False, -math.inf), best[1]
     # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
-    judged = (dyn.judge(stop, q_open, flight, r), stop)
+    fingers = closing if grid.fingers_judged else None
+    judged = (dyn.judge(stop, q_open, flight, r, fingers), stop)
     for share in grid.shares:  # slower while it helps
         # from the speeds the last one found within the joints' range
         warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
@@ -318,7 +333,7 @@ def _recoiled(search: tuple, best) -> tuple:
                           per_joint=grid.per_joint)[2]
         if cand.contact_share == 1.0:
             break
-        j = (dyn.judge(cand, q_open, flight, r), cand)
+        j = (dyn.judge(cand, q_open, flight, r, fingers), cand)
         if j[0] <= judged[0]:
             break
         judged, stop = j, cand
