@@ -228,3 +228,31 @@ def test_the_judge_with_the_closing_fingers_is_nearer_the_rows(pl, planned):
     assert ok
     assert closing_h >= 0.0 and rows >= 0.0
     assert abs(closing_h - rows) < abs(open_h - rows)
+
+
+def test_joint_stops_are_tried_only_within_their_reach():
+    """``JOINT_STOPS`` are tried only where the coarse plan's worst motor needs at most
+    ``JOINT_STOPS_REACH`` over its limit (beyond, they cost seconds for an infeasible answer):
+    ``FINE_STOP`` is tried either way."""
+    from types import SimpleNamespace
+
+    from planner.catch.plan.planner import JOINT_STOPS_REACH, joint_stop_fallbacks
+    from planner.catch.plan.reasons import CatchReason
+    from planner.catch.plan.stopping import FINE_STOP, JOINT_STOPS
+
+    asked = []
+
+    def replan(grid):
+        asked.append(grid)
+        return SimpleNamespace(feasible=False)
+
+    def coarse(headroom):
+        return SimpleNamespace(feasible=False, reasons=(),
+                               reason_kinds=frozenset({CatchReason.TOO_FAST_TO_STOP}),
+                               forces=SimpleNamespace(stop=SimpleNamespace(headroom=headroom)))
+
+    far = coarse(-JOINT_STOPS_REACH - 0.01)
+    assert joint_stop_fallbacks(replan, far) is far and asked == [FINE_STOP]
+    asked.clear()
+    near = coarse(-JOINT_STOPS_REACH + 0.01)
+    assert joint_stop_fallbacks(replan, near) is near and asked == [FINE_STOP, *JOINT_STOPS]

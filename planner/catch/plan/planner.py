@@ -449,11 +449,23 @@ def joint_stop_note(grid: StopGrid) -> str:
     return f"the stop with per-joint ramps ({who}, {how}, the finer steps)"
 
 
+JOINT_STOPS_REACH = 0.5  # the most a motor's need may exceed its limit in the coarse plan
+# (|torque| / capacity - 1) for ``JOINT_STOPS`` to be tried: on the wide grid the largest
+# they took below the limit was 2.83 N m of the wrist flexion's 2.00 (+0.3 m / 75 deg /
+# 3.0 m: 0.42 over; docs/history/2026-12-07-catch-ramps2.md); a throw needing 1.5x its
+# motor is beyond them, and trying costs 10-60 s of planning (30 deg / 10 m: 13.6 s for an
+# infeasible answer that took 1.3 s before they existed)
+
+
 def joint_stop_fallbacks(replan, plan: CatchPlan) -> CatchPlan:
-    """``finer_stop_fallback`` with ``FINE_STOP``, then with each of ``JOINT_STOPS`` in order
+    """``finer_stop_fallback`` with ``FINE_STOP``, then, where the coarse plan's worst motor
+    is within ``JOINT_STOPS_REACH`` of its limit, with each of ``JOINT_STOPS`` in order
     (per-joint ramps and recoils) while none is feasible: the first feasible plan
     (``replan(grid)``), noted; else ``plan``."""
     finer = finer_stop_fallback(lambda: replan(FINE_STOP), plan)
+    stop = plan.forces.stop if plan.forces is not None else None
+    if stop is not None and stop.headroom < -JOINT_STOPS_REACH:
+        return finer  # (beyond what per-joint ramps take off: not tried)
     for grid in JOINT_STOPS:
         if finer.feasible:
             break
