@@ -28,9 +28,11 @@ from planner.catch.plan.softstop import SoftStop
 
 CACHE_ENV = "HAND_PLANNER_CACHE"  # a directory: the stop tables kept between runs
 PACKAGE_DIR = Path(__file__).parents[2]  # planner/
-_SCALARS = tuple(f.name for f in dataclasses.fields(SoftStop)
-                 if f.name not in ("arm", "qd", "v_palm", "v_rel", "force_n", "motor_ratio"))
 _ARRAYS = ("qd", "v_palm", "v_rel", "force_n", "motor_ratio")
+_PER_JOINT = ("ramps_in_s", "ramps_out_s", "shares")  # (None in every live stop: the
+# planned catch's per-joint stops, ``planner.catch.plan.ramps``, are not kept)
+_SCALARS = tuple(f.name for f in dataclasses.fields(SoftStop)
+                 if f.name not in ("arm", *_ARRAYS, *_PER_JOINT))
 
 
 def cache_dir() -> Path | None:
@@ -81,7 +83,7 @@ def save(path: Path, angles_deg: np.ndarray, tilts_rad: np.ndarray,
          stops: tuple[SoftStop, ...], prior: np.ndarray) -> None:
     """Write a table (atomically: a reader sees the whole file or none); ignored when the
     directory cannot be written."""
-    if not stops:
+    if not stops or any(s.per_joint for s in stops):
         return
     arm = np.array(stops[0].arm, dtype=int)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
