@@ -11,14 +11,24 @@ palm's tasks on it. With ``planner.ik``, the only modules of the planner that im
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
-import placo
 
 from planner.hand.model import HandModel
 
+SOLVER_PARTS = frozenset({"robot", "solver", "_names", "_v_off", "_q_off", "_nq", "_gears",
+                          "_nonlinear", "posture", "stay", "_arm", "arm_task", "_tasks",
+                          "_half"})  # what ``PlacoHand.build`` makes (placo's objects and
+# what is read from them)
+
 
 class PlacoHand:
-    """A placo kinematics solver for one hand, built once and reused for every solve."""
+    """A placo kinematics solver for one hand, built once, on first use (``build``), and
+    reused for every solve. Until then nothing of placo is loaded: the live catch's palm
+    poses are confirmed by the hand model's forward kinematics where the warm start meets
+    the task already (``HandIK.solve_palm``), and its start (``catch --live``) is ready
+    for the first observation ~0.03 s of CPU sooner without placo's import and robot."""
 
     def __init__(self, hand: HandModel, limits: tuple[np.ndarray, np.ndarray] | None = None
                  ) -> None:
@@ -26,6 +36,21 @@ class PlacoHand:
         the hand's hard stops; ``play``'s atlas: ``HandModel.plan_lower``/``plan_upper``)."""
         self.hand = hand
         self.lower, self.upper = (hand.lower, hand.upper) if limits is None else limits
+
+    def __getattr__(self, name: str) -> Any:
+        """A part of the solver (``SOLVER_PARTS``) asked for before it is built: built now
+        (once; the same objects in the same order as when built at once)."""
+        if name in SOLVER_PARTS and "hand" in self.__dict__ and "robot" not in self.__dict__:
+            self.build()
+            return getattr(self, name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def build(self) -> None:
+        """The placo robot from the hand's URDF, its solver, limits, couplings and joint
+        tasks."""
+        import placo
+
+        hand = self.hand
         # the URDF text is passed directly: no temporary file
         self.robot = placo.RobotWrapper("", placo.Flags.ignore_collisions, hand.urdf)
         self.robot.set_T_world_fbase(hand.T_world_root)
