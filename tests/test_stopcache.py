@@ -75,3 +75,21 @@ def test_a_file_that_cannot_be_read_is_made_again(monkeypatch, tmp_path, content
     table = StopTable.kept(pl, C, BALL, False, ROW_S)
     _same(table, StopTable.make(pl, C, BALL, False, ROW_S))
     _same(StopTable.kept(pl, C, BALL, False, ROW_S), table)  # (written again, then read)
+
+
+def test_a_file_whose_arrays_do_not_match_is_made_again(monkeypatch, tmp_path):
+    """A kept file with a field missing or one stop short (written by hand, or by a
+    version whose table had another shape) is not read: the table is made again."""
+    pl = get_planner("default")
+    monkeypatch.setenv(stopcache.CACHE_ENV, str(tmp_path))
+    made = StopTable.kept(pl, C, BALL, False, ROW_S)
+    path = stopcache.table_path(tmp_path, stopcache.table_key(pl, C, BALL, False, ROW_S))
+    with np.load(path) as z:
+        arrays = {n: z[n] for n in z.files}
+    field = min(set(arrays) - {"arm", "angles_deg", "tilts_rad", "prior"})
+    for broken in ({n: a for n, a in arrays.items() if n != field},
+                   dict(arrays, **{field: arrays[field][:-1]})):
+        with open(path, "wb") as fh:
+            np.savez(fh, **broken)
+        assert stopcache.load(path) is None
+        _same(StopTable.kept(pl, C, BALL, False, ROW_S), made)

@@ -69,14 +69,20 @@ def load(path: Path):
     """The parts of a kept table (angles, tilts, stops, prior), None when it cannot be
     read."""
     try:
-        with np.load(path, allow_pickle=False) as z:
-            arm = tuple(int(i) for i in z["arm"])
-            stops = tuple(SoftStop(**{n: float(z[n][k]) for n in _SCALARS},
-                                   **{n: z[n][k].copy() for n in _ARRAYS}, arm=arm)
-                          for k in range(len(z["angles_deg"])))
-            return z["angles_deg"].copy(), z["tilts_rad"].copy(), stops, z["prior"].copy()
+        with np.load(path, allow_pickle=False) as z:  # (each array read from the file
+            a = {n: z[n] for n in ("arm", "angles_deg", "tilts_rad", "prior", *_SCALARS,
+                                   *_ARRAYS)}  # once: ``z[n]`` parses it again each time)
     except (OSError, EOFError, KeyError, ValueError, zipfile.BadZipFile):
         return None
+    arm = tuple(int(i) for i in a["arm"])
+    scalars = {n: a[n].tolist() for n in _SCALARS}  # (Python floats: float(x) of each)
+    try:
+        stops = tuple(SoftStop(**{n: scalars[n][k] for n in _SCALARS},
+                               **{n: a[n][k].copy() for n in _ARRAYS}, arm=arm)
+                      for k in range(len(a["angles_deg"])))
+    except (IndexError, TypeError, ValueError):
+        return None
+    return a["angles_deg"], a["tilts_rad"], stops, a["prior"]
 
 
 def save(path: Path, angles_deg: np.ndarray, tilts_rad: np.ndarray,
