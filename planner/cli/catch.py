@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import os
 import sys
 
 from planner.cli.options import add_pictures, draw_checked
@@ -70,9 +71,25 @@ def run(a: argparse.Namespace) -> int:
     return 1 if (a.strict and not res.feasible) else 0
 
 
+LIVE_BLAS_THREADS = "1"  # OpenBLAS's threads for ``catch --live``: its matrices are at most
+# the hand's joints square (3-variable QPs, 6-joint Jacobians), which OpenBLAS multiplies on
+# one thread whatever it is allowed; with the default (a thread per core) it only starts
+# and parks the others: 0.017 s of CPU of the start before the first observation, 0.035 s
+# over the process (this 2-core machine, 9 alternated runs; docs/history/2026-12-07-ready.md)
+
+
+def one_blas_thread() -> None:
+    """OpenBLAS kept to ``LIVE_BLAS_THREADS`` unless the user set its thread count: read
+    when numpy is first imported, so only where it has not been yet (a program that runs
+    ``main`` after its own numpy keeps its own)."""
+    if "numpy" not in sys.modules:
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", LIVE_BLAS_THREADS)
+
+
 def run_live(a: argparse.Namespace) -> int:
     """``catch --live``: observations from stdin (``planner.catch.livecli``) handed to a
     ``CatchSession``; the summary once it has ended."""
+    one_blas_thread()
     import numpy as np
 
     from planner.catch.live.session import CatchSession
