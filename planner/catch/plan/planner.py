@@ -29,7 +29,6 @@ from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.plan.mount import CatchMount
 from planner.catch.plan.palmup import palm_up_fallback
-from planner.catch.plan.ramps import JointRamps
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.results import (
     CatchPlan,
@@ -41,13 +40,12 @@ from planner.catch.plan.results import (
 from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
     COARSE_STOP,
-    FINE_STOP,
-    JOINT_STOPS,
     SoftStop,
     StopDynamics,
     StopGrid,
     plan_stop,
 )
+from planner.catch.plan.stopstages import joint_stop_fallbacks
 from planner.catch.plan.turnahead import (
     HoldStart,
     HoldTurn,
@@ -198,8 +196,8 @@ class CatchPlanner:
         (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
         (``TurnMode.LATE``), else none (the plan without the hold) -- the first of those that is
         feasible. Where every plan is infeasible and too fast to stop among its reasons, they
-        are planned again with the soft stop searched in finer steps (``FINE_STOP``), then
-        with per-joint ramps and recoils (``joint_stop_fallbacks``)."""
+        are planned again with the soft stop searched in finer steps, then with per-joint
+        ramps and recoils (``planner.catch.plan.stopstages``)."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
         plan = self._on_the_rig(args, soft)
@@ -435,56 +433,6 @@ class CatchPlanner:
                grasp_t: float | None = None, soft: SoftStop | None = None) -> ForcesVerdict:
         """``BallForces.forces`` of this hand (stopping and holding the ball judged)."""
         return self.ball_forces.forces(flight, pose, t, Q, r, grasp_t, soft)
-
-
-FINE_STOP_NOTE = "the stop searched in finer steps (the palm's tilt 1 deg, the contact share 0.05)"
-
-
-def joint_stop_note(grid: StopGrid) -> str:
-    """The note of a plan made with per-joint ramps (``JOINT_STOPS``)."""
-    who = ("every arm joint recoiling" if grid.per_joint is JointRamps.EACH else
-           "the loaded motor's joint alone recoiling")
-    how = "every tilt's recoil judged" if grid.every_tilt else "the least loaded tilt"
-    how += " with the fingers closing" if grid.fingers_judged else ""
-    return f"the stop with per-joint ramps ({who}, {how}, the finer steps)"
-
-
-JOINT_STOPS_REACH = 0.5  # the most a motor's need may exceed its limit in the coarse plan
-# (|torque| / capacity - 1) for ``JOINT_STOPS`` to be tried: on the wide grid the largest
-# they took below the limit was 2.83 N m of the wrist flexion's 2.00 (+0.3 m / 75 deg /
-# 3.0 m: 0.42 over; docs/history/2026-12-07-catch-ramps2.md); a throw needing 1.5x its
-# motor is beyond them, and trying costs 10-60 s of planning (30 deg / 10 m: 13.6 s for an
-# infeasible answer that took 1.3 s before they existed)
-
-
-def joint_stop_fallbacks(replan, plan: CatchPlan) -> CatchPlan:
-    """``finer_stop_fallback`` with ``FINE_STOP``, then, where the coarse plan's worst motor
-    is within ``JOINT_STOPS_REACH`` of its limit, with each of ``JOINT_STOPS`` in order
-    (per-joint ramps and recoils) while none is feasible: the first feasible plan
-    (``replan(grid)``), noted; else ``plan``."""
-    finer = finer_stop_fallback(lambda: replan(FINE_STOP), plan)
-    stop = plan.forces.stop if plan.forces is not None else None
-    if stop is not None and stop.headroom < -JOINT_STOPS_REACH:
-        return finer  # (beyond what per-joint ramps take off: not tried)
-    for grid in JOINT_STOPS:
-        if finer.feasible:
-            break
-        finer = finer_stop_fallback(lambda g=grid: replan(g), plan, joint_stop_note(grid))
-    return finer
-
-
-def finer_stop_fallback(replan, plan: CatchPlan, note: str = FINE_STOP_NOTE) -> CatchPlan:
-    """Where ``plan`` is too fast to stop among its reasons, ``replan()`` (the same plans
-    with the soft stop's tilts and contact shares in finer steps, ``FINE_STOP``: the rows'
-    load is not monotone at the coarse ones; or with per-joint ramps too, ``JOINT_STOPS``),
-    noted, if feasible; else ``plan``."""
-    if CatchReason.TOO_FAST_TO_STOP not in plan.reason_kinds:
-        return plan
-    finer = replan()
-    if not finer.feasible:
-        return plan
-    return replace(finer, notes=finer.notes + (
-        note + ": in the coarse ones " + reasons_text(plan.reasons),))
 
 
 def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
