@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from itertools import pairwise
 
@@ -200,55 +201,57 @@ class CatchPlanner:
         ramps and recoils (``planner.catch.plan.stopstages``)."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
-        plan = self._on_the_rig(args, soft)
+        stops: dict = {}  # this plan's stops (``stop_of``), made once each
+        plan = self._on_the_rig(args, soft, stops=stops)
         if plan.feasible:
             return replace(plan, planning_s=time.perf_counter() - t0)
         if soft:
-            finer = joint_stop_fallbacks(lambda g: self._on_the_rig(args, soft, g), plan)
+            finer = joint_stop_fallbacks(lambda g: self._on_the_rig(args, soft, g, stops), plan)
             if finer.feasible:
                 return replace(finer, planning_s=time.perf_counter() - t0)
         if CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
             # what was too late
-            other = self._plans(args, soft, False)
+            other = self._plans(args, soft, False, stops=stops)
             if other.feasible:
                 plan = replace(other, notes=other.notes + (
                     "the fingertips' closing (bodies not kept clear of the ball): the "
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
         if soft and not plan.feasible:  # the palm turned up past facing the ball (the roll)
-            plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, **kw), plan,
+            plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, stops=stops, **kw), plan,
                                     self.wrist, self.rig.i_reach is not None)
         return replace(plan, planning_s=time.perf_counter() - t0)
 
-    def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP
-                    ) -> CatchPlan:
+    def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP,
+                    stops: dict | None = None) -> CatchPlan:
         """``_plans`` of the arm alone, then (where infeasible) ``reach_fallbacks`` on the
-        rig's reach axis; ``grid``: the soft stop's search steps."""
-        plan = self._plans(args, soft, True, grid=grid)
+        rig's reach axis; ``grid``: the soft stop's search steps; ``stops``: ``stop_of``'s."""
+        plan = self._plans(args, soft, True, grid=grid, stops=stops)
         if not plan.feasible and soft and self.rig.i_reach is not None:
-            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, grid=grid, **kw),
-                                   plan)
+            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, grid=grid,
+                                                            stops=stops, **kw), plan)
         return plan
 
     def _plans(self, args: tuple, soft: bool, bodies: bool, rig: bool = False,
-               fall: bool = False, grid: StopGrid = COARSE_STOP) -> CatchPlan:
+               fall: bool = False, grid: StopGrid = COARSE_STOP, stops: dict | None = None
+               ) -> CatchPlan:
         """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing;
         ``rig``: the reach axis moves too; ``grid``: the soft stop's search steps."""
         plan, ahead = self._plan(*args, soft=soft, bodies=bodies, rig=rig, fall=fall,
-                                 grid=grid)
+                                 grid=grid, stops=stops)
         for mode in ((TurnMode.EARLY,) if ahead else ()) + (TurnMode.LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
             other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies, rig=rig,
-                               fall=fall, grid=grid)[0]
+                               fall=fall, grid=grid, stops=stops)[0]
             if other.feasible:
                 what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
                         "after the arm has stopped", None: "no turn to hold the ball"}[mode]
                 plan = replace(other, notes=other.notes + (
                     f"{what}: the earlier turn failed (" + reasons_text(plan.reasons) + ")",))
         if soft and not plan.feasible and not rig:
-            still = self._plan(*args, soft=False, bodies=bodies)[0]
+            still = self._plan(*args, soft=False, bodies=bodies, stops=stops)[0]
             if still.feasible:
                 plan = replace(still, notes=still.notes + (
                     "the palm waits at rest: the soft catch failed (" +
@@ -259,7 +262,8 @@ class CatchPlanner:
               throw: ThrowInfo | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
               bodies: bool = True, rig: bool = False, fall: bool = False,
-              grid: StopGrid = COARSE_STOP) -> tuple[CatchPlan, bool]:
+              grid: StopGrid = COARSE_STOP, stops: dict | None = None
+              ) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
         (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
@@ -268,7 +272,8 @@ class CatchPlanner:
         rig's reach axis moves too (``catch_joints(..., reach=True)``): the intercept may put
         the palm square to the throw on it, and the stopping motion uses it. ``fall``: the
         rows fall with the ball on the reach axis once it lands (``planner.catch.plan.drop``).
-        ``grid``: the soft stop's search steps (``plan_stop``)."""
+        ``grid``: the soft stop's search steps (``plan_stop``); ``stops``: the stops this
+        ``plan`` has made (``stop_of``)."""
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
@@ -292,9 +297,10 @@ class CatchPlanner:
         def ready_by(q_pre: np.ndarray) -> float:
             return t_react + dyn.move_time(self.q_rest, q_pre)
 
-        ic, _, soft_stop = plan_stop(dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
-                                     ready_by, 1.0 / rate_hz, soft,
-                                     ROLL_WEIGHT if turn_mode else 1.0, grid=grid)
+        rw = ROLL_WEIGHT if turn_mode else 1.0
+        ic, _, soft_stop = stop_of(stops, (rig, soft, bodies, rw, grid), lambda: plan_stop(
+            dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c, ready_by, 1.0 / rate_hz,
+            soft, rw, grid=grid))
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:
@@ -303,8 +309,8 @@ class CatchPlanner:
         reasons += [move.too_soon] if move.too_soon else []
         q_pre, T_m, s_c = move.q_pre, move.move_s, move.close_start_s
         turn0 = hold.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
-        turn, t, Q, T_m, s_c, verdict = self._closing_rows(
-            flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
+        turn, t, Q, T_m, s_c, verdict = closing_rows(
+            self.rows, flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
                                                   s_c, rate_hz, float(flight.ball.inertia_ratio) if fall else None))
         reasons += verdict.reasons
         reasons += roll_reasons(hold, flight, t, Q, pose.t_i)
@@ -328,32 +334,6 @@ class CatchPlanner:
             forces=fv.forces,
             t=t, Q=Q, t_info_s=float(t_info), flight_time_s=flight_time_s, uncertainty=unc,
             notes=_turn_note(turn, pose.t_i), planning_s=time.perf_counter() - t0), ahead
-
-    def _closing_rows(self, flight: Flight, C: np.ndarray, hold: HoldTurn, turn0: HoldStart,
-                      turn_mode: TurnMode | None, rows_args: RowsArgs):
-        """The rows with the wrist's turn as ``turn_mode`` says and their self-check
-        (``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
-        keeps it near the fingers longer, so the closing waits a little more when a tip meets
-        it. Returns the turn, the rows, the move-in's duration, the closing's start and the
-        self-check's results; ``hold``: the turn's choices (the arm's joints it moves with)."""
-        pose, stop, closing = rows_args.pose, rows_args.stop, rows_args.closing
-        s_c = rows_args.s_c
-        r = float(flight.ball.radius_m)
-        for _ in range(_CLOSE_TRIES):
-            args = replace(rows_args, s_c=s_c)
-            if turn_mode == TurnMode.AHEAD:
-                made = hold.ahead_rows(turn0, args, flight)
-            else:
-                made = hold.turned_rows(turn0, turn_mode, args)
-            turn, t, Q, T_used = made.turn, made.t, made.Q, made.T_m
-            t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
-            checked = self.rows.check(flight, C, r, t, Q, pose.t_i, t_static, rows_args.rate_hz,
-                                      closing.reason is not None)
-            if all(x.kind is not CatchReason.FINGERS for x in checked.reasons) or \
-                    not np.any(stop.qd) or s_c >= pose.t_i:
-                break
-            s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
-        return turn, t, Q, T_used, s_c, checked
 
     def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
              ic: Intercept) -> MeetPose:
@@ -471,6 +451,46 @@ def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
             "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
     return replace(plan, notes=plan.notes + (
         "with the rig's reach axis moving too: " + reasons_text(other.reasons) + fell_why,))
+
+
+def closing_rows(rows: RowCheck, flight: Flight, C: np.ndarray, hold: HoldTurn,
+             turn0: HoldStart, turn_mode: TurnMode | None, rows_args: RowsArgs):
+    """The rows with the wrist's turn as ``turn_mode`` says and their self-check
+    (``rows``: ``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
+    keeps it near the fingers longer, so the closing waits a little more when a tip meets
+    it. Returns the turn, the rows, the move-in's duration, the closing's start and the
+    self-check's results; ``hold``: the turn's choices (the arm's joints it moves with)."""
+    pose, stop, closing = rows_args.pose, rows_args.stop, rows_args.closing
+    s_c = rows_args.s_c
+    r = float(flight.ball.radius_m)
+    for _ in range(_CLOSE_TRIES):
+        args = replace(rows_args, s_c=s_c)
+        if turn_mode == TurnMode.AHEAD:
+            made = hold.ahead_rows(turn0, args, flight)
+        else:
+            made = hold.turned_rows(turn0, turn_mode, args)
+        turn, t, Q, T_used = made.turn, made.t, made.Q, made.T_m
+        t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
+        checked = rows.check(flight, C, r, t, Q, pose.t_i, t_static, rows_args.rate_hz,
+                                  closing.reason is not None)
+        if all(x.kind is not CatchReason.FINGERS for x in checked.reasons) or \
+                not np.any(stop.qd) or s_c >= pose.t_i:
+            break
+        s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
+    return turn, t, Q, T_used, s_c, checked
+
+
+def stop_of(stops: dict | None, key: tuple, make: Callable[[], tuple]) -> tuple:
+    """``make()`` (``plan_stop``'s result), made once per ``key`` within one
+    ``CatchPlanner.plan`` (``stops``, that plan's; None: made anew): the same throw's stop
+    for the same hand joints, soft catch, closing, roll weight and grid is the same stop,
+    and the turn's modes (three of them with one roll weight), the hand falling on the
+    reach axis and the fallbacks' plans ask for it again."""
+    if stops is None:
+        return make()
+    if key not in stops:
+        stops[key] = make()
+    return stops[key]
 
 
 def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,
