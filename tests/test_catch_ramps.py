@@ -9,7 +9,7 @@ import pytest
 
 from planner.balls import get_ball
 from planner.catch.grasp import motor_torque_matrix
-from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.api import plan_throw, write_plan
 from planner.catch.plan.closing import closing_offsets, earliest_close_start
 from planner.catch.plan.ramps import joint_ramps, min_jerk_acc, recoil_shares
 from planner.catch.plan.softstop import SoftStop
@@ -22,12 +22,6 @@ from planner.catch.plan.stopstages import (
 )
 from planner.check import check_trajectory
 from planner.trajectory import PEAK_VEL
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
-
 
 # too fast to stop on main (a2f3801, the coarse search's numbers; the fine one no better):
 # 0 m / 15 deg / 3.5 m 86.8 N, motor.wrist_flex at 2.08 N m; -0.3 m / 65 deg / 3.5 m 68.1 N,

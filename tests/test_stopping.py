@@ -8,17 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from planner.catch.plan.api import get_planner, plan_catch, plan_throw
+from planner.catch.plan.api import plan_catch, plan_throw
 from planner.catch.plan.reasons import CatchReason
 from planner.catch.plan.softstop import ramp_integral
 from planner.check import check_trajectory
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.trajfile import read_trajectory
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
 
 
 @pytest.fixture(scope="module")
