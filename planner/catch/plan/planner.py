@@ -455,8 +455,8 @@ def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
 
 def closing_rows(rows: RowCheck, flight: Flight, C: np.ndarray, hold: HoldTurn,
              turn0: HoldStart, turn_mode: TurnMode | None, rows_args: RowsArgs):
-    """The rows with the wrist's turn as ``turn_mode`` says and their self-check
-    (``rows``: ``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
+    """The rows with the wrist's turn as ``turn_mode`` says and their self-check (``rows``:
+    ``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
     keeps it near the fingers longer, so the closing waits a little more when a tip meets
     it. Returns the turn, the rows, the move-in's duration, the closing's start and the
     self-check's results; ``hold``: the turn's choices (the arm's joints it moves with)."""
@@ -472,7 +472,7 @@ def closing_rows(rows: RowCheck, flight: Flight, C: np.ndarray, hold: HoldTurn,
         turn, t, Q, T_used = made.turn, made.t, made.Q, made.T_m
         t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
         checked = rows.check(flight, C, r, t, Q, pose.t_i, t_static, rows_args.rate_hz,
-                                  closing.reason is not None)
+                             closing.reason is not None)
         if all(x.kind is not CatchReason.FINGERS for x in checked.reasons) or \
                 not np.any(stop.qd) or s_c >= pose.t_i:
             break
