@@ -1,5 +1,5 @@
-"""Fixtures shared by the test modules: the shipped hands, loaded once per module, and a
-trajectory file as the command line plans it."""
+"""Fixtures shared by the test modules: the shipped hands, loaded once per module, the
+default hand's catch planner, and a trajectory file as the command line plans it."""
 
 import contextlib
 import io
@@ -24,6 +24,15 @@ def hand() -> HandModel:
 def mk5() -> HandModel:
     """The Mk5 hand (four-bar couplings, seed 003)."""
     return load_hand("mk5")
+
+
+@pytest.fixture(scope="module")
+def pl():
+    """The default hand's catch planner (``planner.catch.plan.api.get_planner``: built once
+    per process, shared by the catch tests)."""
+    from planner.catch.plan.api import get_planner
+
+    return get_planner("default")
 
 
 @pytest.fixture(scope="module")

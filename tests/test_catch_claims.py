@@ -23,11 +23,6 @@ HELD_CLAIM = "the end marker claims the catch held; the rows above say otherwise
 
 
 @pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
-
-
-@pytest.fixture(scope="module")
 def still_plan(pl):
     """30 deg from 1.5 m with the wrist's flexion held where it is at the intercept: the
     palm is not turned up and the ball rolls off its wrist side (the planner's model)."""

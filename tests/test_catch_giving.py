@@ -8,13 +8,7 @@ import numpy as np
 import pytest
 
 from planner.catch.live.stop import box_qp
-from planner.catch.plan.api import get_planner
 from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_qp, contact_speeds
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
 
 
 def test_a_palm_that_would_close_on_the_ball_gives_with_it():

@@ -7,13 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner.catch.plan.api import get_planner, plan_throw
+from planner.catch.plan.api import plan_throw
 from planner.catch.plan.stopping import MOVE_SHARE, MOVE_SPARE_S, STOP_SHARE
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
 
 
 def _move_peak_share(dyn, q_from, q_to, T):

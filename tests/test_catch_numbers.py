@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from cli import main as cli_main
-from planner.catch import CatchSession, get_planner, plan_throw
+from planner.catch import CatchSession, plan_throw
 from planner.catch.flight.dragfit import KNOWN_REL_SIGMA, estimate_drag
 from planner.catch.flight.observe import fit_observations
 from planner.catch.flight.path import Flight, get_ball, predict_throw
@@ -18,11 +18,6 @@ from planner.check.ballstop import PAD_GIVE_M
 from planner.trajfile import parse_trajectory
 
 BALL = get_ball("tennis")
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
 
 
 def test_impact_and_riding_are_named_apart(pl, capsys, tmp_path):

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.api import plan_throw, write_plan
 from planner.catch.plan.geometry import rot1
 from planner.catch.plan.palmup import (
     PALM_UP_TILTS_DEG,
@@ -21,11 +21,6 @@ from planner.catch.plan.stopping import CONTACT_SHARES
 from planner.check import check_trajectory
 from planner.check.ballroll import ROLL_ROOM_M
 from planner.hand.model import GRAVITY_WORLD
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
 
 
 @pytest.fixture(scope="module")

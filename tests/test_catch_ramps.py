@@ -9,26 +9,19 @@ import pytest
 
 from planner.balls import get_ball
 from planner.catch.grasp import motor_torque_matrix
-from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.api import plan_throw, write_plan
 from planner.catch.plan.closing import closing_offsets, earliest_close_start
-from planner.catch.plan.planner import joint_stop_note
-from planner.catch.plan.ramps import joint_ramps, min_jerk_acc
+from planner.catch.plan.ramps import joint_ramps, min_jerk_acc, recoil_shares
 from planner.catch.plan.softstop import SoftStop
-from planner.catch.plan.stopping import (
+from planner.catch.plan.stopping import STOP_SHARE
+from planner.catch.plan.stopstages import (
     JOINT_STOP,
     LOADED_FINGERS_STOP,
     LOADED_TILT_STOP,
-    STOP_SHARE,
-    recoil_shares,
+    joint_stop_note,
 )
 from planner.check import check_trajectory
 from planner.trajectory import PEAK_VEL
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
-
 
 # too fast to stop on main (a2f3801, the coarse search's numbers; the fine one no better):
 # 0 m / 15 deg / 3.5 m 86.8 N, motor.wrist_flex at 2.08 N m; -0.3 m / 65 deg / 3.5 m 68.1 N,
@@ -178,11 +171,11 @@ def test_the_recoil_shares_keep_each_joint_within_its_acceleration(pl):
     qd_c[c_flex] = -2.0  # (1 / 0.6 - 1) 2 rad/s over 10 ms: 133 rad/s^2, within its 294
     M = np.abs(motor_torque_matrix(pl.hand, q)[:, arm])
     ratio[np.argmax(M[:, c_flex])] = 1.2  # the flexion's motor beyond its share
-    c = recoil_shares(dyn, q, qd_c, ratio, share, recoil_s, False)
+    c = recoil_shares(dyn, q, qd_c, ratio, share, recoil_s, False, STOP_SHARE)
     assert np.all(c >= share) and np.all(c <= 1.0)
     assert np.all((1.0 / c - 1.0) * np.abs(qd_c) <= dyn.a_max * recoil_s + 1e-9)
     assert c[c_flex] == pytest.approx(share) and c[c_reach] > share
-    only = recoil_shares(dyn, q, qd_c, ratio, share, recoil_s, True)
+    only = recoil_shares(dyn, q, qd_c, ratio, share, recoil_s, True, STOP_SHARE)
     assert only[c_flex] == pytest.approx(share)
     assert np.all(np.delete(only, c_flex) == 1.0)
 
@@ -236,9 +229,13 @@ def test_joint_stops_are_tried_only_within_their_reach():
     ``FINE_STOP`` is tried either way."""
     from types import SimpleNamespace
 
-    from planner.catch.plan.planner import JOINT_STOPS_REACH, joint_stop_fallbacks
     from planner.catch.plan.reasons import CatchReason
-    from planner.catch.plan.stopping import FINE_STOP, JOINT_STOPS
+    from planner.catch.plan.stopstages import (
+        FINE_STOP,
+        JOINT_STOPS,
+        JOINT_STOPS_REACH,
+        joint_stop_fallbacks,
+    )
 
     asked = []
 

@@ -12,17 +12,12 @@ import numpy as np
 import pytest
 
 from planner.catch.flight.path import get_ball, predict_throw
-from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.api import plan_throw, write_plan
 from planner.catch.plan.arm import palm_target
 from planner.catch.plan.intercept import find_intercept_square
 from planner.catch.plan.reasons import HARD_LIMITS, CatchReason
 from planner.check import check_trajectory
 from planner.trajfile import read_trajectory
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
 
 
 def test_the_square_intercept_puts_the_palm_on_the_path(pl):

@@ -17,11 +17,6 @@ from planner.check import check_trajectory
 from planner.trajfile import parse_trajectory
 
 
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
-
-
 def test_the_moving_palm_between_its_knots(pl):
     """The palm's poses every ``PALM_KNOT_S``, interpolated: the ball in its frame within
     0.5 mm of every instant's own pose, on a planned catch's stopping motion."""

@@ -12,17 +12,12 @@ import pytest
 
 from cli import main as cli_main
 from planner.balls import BALLS, file_inertia_ratio, get_ball
-from planner.catch.plan.api import get_planner, plan_throw, write_plan
+from planner.catch.plan.api import plan_throw, write_plan
 from planner.catch.plan.reasons import CatchReason
 from planner.catch.plan.results import Rows
 from planner.check import check_trajectory
 from planner.check.ballroll import ROLL_ROOM_M, ROLL_TOL_M, roll_problem
 from planner.trajfile import read_trajectory
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
 
 
 def _rolled(pl, p) -> float:

@@ -8,17 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from planner.catch.plan.api import get_planner, plan_catch, plan_throw
+from planner.catch.plan.api import plan_catch, plan_throw
 from planner.catch.plan.reasons import CatchReason
 from planner.catch.plan.softstop import ramp_integral
 from planner.check import check_trajectory
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.trajfile import read_trajectory
-
-
-@pytest.fixture(scope="module")
-def pl():
-    return get_planner("default")
 
 
 @pytest.fixture(scope="module")
@@ -318,13 +313,8 @@ def test_the_fine_tilts_find_a_stop_between_the_coarse_steps(pl):
     the rows' wrist flexion beyond its capacity (the check's rule, ``StopDynamics.judge``:
     headroom -0.30); the 1 deg tilts go on to 4 deg, within every motor (+0.42)."""
     from planner.catch.flight.path import get_ball, predict_throw
-    from planner.catch.plan.stopping import (
-        COARSE_STOP,
-        FINE_STOP,
-        TILTS_FINE_DEG,
-        StopGrid,
-        plan_stop,
-    )
+    from planner.catch.plan.stopping import COARSE_STOP, StopGrid, plan_stop
+    from planner.catch.plan.stopstages import FINE_STOP, TILTS_FINE_DEG
 
     assert TILTS_FINE_DEG[0] == 0.0 and set(COARSE_STOP.tilts_deg) <= set(TILTS_FINE_DEG)
     assert set(COARSE_STOP.shares) <= set(FINE_STOP.shares)

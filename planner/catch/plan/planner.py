@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from itertools import pairwise
 
@@ -29,7 +30,6 @@ from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.plan.mount import CatchMount
 from planner.catch.plan.palmup import palm_up_fallback
-from planner.catch.plan.ramps import JointRamps
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.results import (
     CatchPlan,
@@ -41,13 +41,12 @@ from planner.catch.plan.results import (
 from planner.catch.plan.rowcheck import RowCheck
 from planner.catch.plan.stopping import (
     COARSE_STOP,
-    FINE_STOP,
-    JOINT_STOPS,
     SoftStop,
     StopDynamics,
     StopGrid,
     plan_stop,
 )
+from planner.catch.plan.stopstages import joint_stop_fallbacks
 from planner.catch.plan.turnahead import (
     HoldStart,
     HoldTurn,
@@ -198,59 +197,61 @@ class CatchPlanner:
         (``TurnMode.EARLY``, when the rule started it earlier), else after the arm has stopped
         (``TurnMode.LATE``), else none (the plan without the hold) -- the first of those that is
         feasible. Where every plan is infeasible and too fast to stop among its reasons, they
-        are planned again with the soft stop searched in finer steps (``FINE_STOP``), then
-        with per-joint ramps and recoils (``joint_stop_fallbacks``)."""
+        are planned again with the soft stop searched in finer steps, then with per-joint
+        ramps and recoils (``planner.catch.plan.stopstages``)."""
         t0 = time.perf_counter()
         args = (flight, catch_point, rate_hz, t_info, throw, flight_time_s, fit)
-        plan = self._on_the_rig(args, soft)
+        stops: dict = {}  # this plan's stops (``stop_of``), made once each
+        plan = self._on_the_rig(args, soft, stops=stops)
         if plan.feasible:
             return replace(plan, planning_s=time.perf_counter() - t0)
         if soft:
-            finer = joint_stop_fallbacks(lambda g: self._on_the_rig(args, soft, g), plan)
+            finer = joint_stop_fallbacks(lambda g: self._on_the_rig(args, soft, g, stops), plan)
             if finer.feasible:
                 return replace(finer, planning_s=time.perf_counter() - t0)
         if CatchReason.GRASP in plan.reason_kinds:
             # the closing with the fingers' bodies clear of the ball grasps a little later
             # (its fingertips end a few mm further out): the fingertips' closing, if that is
             # what was too late
-            other = self._plans(args, soft, False)
+            other = self._plans(args, soft, False, stops=stops)
             if other.feasible:
                 plan = replace(other, notes=other.notes + (
                     "the fingertips' closing (bodies not kept clear of the ball): the "
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
         if soft and not plan.feasible:  # the palm turned up past facing the ball (the roll)
-            plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, **kw), plan,
+            plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, stops=stops, **kw), plan,
                                     self.wrist, self.rig.i_reach is not None)
         return replace(plan, planning_s=time.perf_counter() - t0)
 
-    def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP
-                    ) -> CatchPlan:
+    def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP,
+                    stops: dict | None = None) -> CatchPlan:
         """``_plans`` of the arm alone, then (where infeasible) ``reach_fallbacks`` on the
-        rig's reach axis; ``grid``: the soft stop's search steps."""
-        plan = self._plans(args, soft, True, grid=grid)
+        rig's reach axis; ``grid``: the soft stop's search steps; ``stops``: ``stop_of``'s."""
+        plan = self._plans(args, soft, True, grid=grid, stops=stops)
         if not plan.feasible and soft and self.rig.i_reach is not None:
-            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, grid=grid, **kw),
-                                   plan)
+            plan = reach_fallbacks(lambda **kw: self._plans(args, soft, True, grid=grid,
+                                                            stops=stops, **kw), plan)
         return plan
 
     def _plans(self, args: tuple, soft: bool, bodies: bool, rig: bool = False,
-               fall: bool = False, grid: StopGrid = COARSE_STOP) -> CatchPlan:
+               fall: bool = False, grid: StopGrid = COARSE_STOP, stops: dict | None = None
+               ) -> CatchPlan:
         """``plan``'s fallbacks (the turn's modes, the palm at rest) with one closing;
         ``rig``: the reach axis moves too; ``grid``: the soft stop's search steps."""
         plan, ahead = self._plan(*args, soft=soft, bodies=bodies, rig=rig, fall=fall,
-                                 grid=grid)
+                                 grid=grid, stops=stops)
         for mode in ((TurnMode.EARLY,) if ahead else ()) + (TurnMode.LATE, None):
             if plan.feasible or set(plan.reason_kinds) <= _NOT_THE_TURN:
                 break
             other = self._plan(*args, soft=soft, turn_mode=mode, bodies=bodies, rig=rig,
-                               fall=fall, grid=grid)[0]
+                               fall=fall, grid=grid, stops=stops)[0]
             if other.feasible:
                 what = {TurnMode.EARLY: "the turn from the grasp", TurnMode.LATE:
                         "after the arm has stopped", None: "no turn to hold the ball"}[mode]
                 plan = replace(other, notes=other.notes + (
                     f"{what}: the earlier turn failed (" + reasons_text(plan.reasons) + ")",))
         if soft and not plan.feasible and not rig:
-            still = self._plan(*args, soft=False, bodies=bodies)[0]
+            still = self._plan(*args, soft=False, bodies=bodies, stops=stops)[0]
             if still.feasible:
                 plan = replace(still, notes=still.notes + (
                     "the palm waits at rest: the soft catch failed (" +
@@ -261,7 +262,8 @@ class CatchPlanner:
               throw: ThrowInfo | None, flight_time_s: float | None,
               fit: FitResult | None, soft: bool, turn_mode: TurnMode | None = TurnMode.AHEAD,
               bodies: bool = True, rig: bool = False, fall: bool = False,
-              grid: StopGrid = COARSE_STOP) -> tuple[CatchPlan, bool]:
+              grid: StopGrid = COARSE_STOP, stops: dict | None = None
+              ) -> tuple[CatchPlan, bool]:
         """``plan`` with the soft catch on or off, the wrist's turn by the roll rule
         (TurnMode.AHEAD), from the grasp (TurnMode.EARLY), after the arm's stop (TurnMode.LATE) or none
         (None: nor the contact speeds' roll term); and whether the turn starts before the
@@ -270,7 +272,8 @@ class CatchPlanner:
         rig's reach axis moves too (``catch_joints(..., reach=True)``): the intercept may put
         the palm square to the throw on it, and the stopping motion uses it. ``fall``: the
         rows fall with the ball on the reach axis once it lands (``planner.catch.plan.drop``).
-        ``grid``: the soft stop's search steps (``plan_stop``)."""
+        ``grid``: the soft stop's search steps (``plan_stop``); ``stops``: the stops this
+        ``plan`` has made (``stop_of``)."""
         t0 = time.perf_counter()
         if not soft and turn_mode == TurnMode.AHEAD:
             turn_mode = TurnMode.EARLY
@@ -294,9 +297,10 @@ class CatchPlanner:
         def ready_by(q_pre: np.ndarray) -> float:
             return t_react + dyn.move_time(self.q_rest, q_pre)
 
-        ic, _, soft_stop = plan_stop(dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c,
-                                     ready_by, 1.0 / rate_hz, soft,
-                                     ROLL_WEIGHT if turn_mode else 1.0, grid=grid)
+        rw = ROLL_WEIGHT if turn_mode else 1.0
+        ic, _, soft_stop = stop_of(stops, (rig, soft, bodies, rw, grid), lambda: plan_stop(
+            dyn, self.wrist, flight, C, r, self.q_zero, closing, t_c, ready_by, 1.0 / rate_hz,
+            soft, rw, grid=grid))
         pose = self.meet(flight, C, r, closing, ic)
         soft_stop = replace(soft_stop, t_i=float(pose.t_i))
         if pose.ic.reason:
@@ -305,8 +309,8 @@ class CatchPlanner:
         reasons += [move.too_soon] if move.too_soon else []
         q_pre, T_m, s_c = move.q_pre, move.move_s, move.close_start_s
         turn0 = hold.hold(pose, soft_stop) if turn_mode else HoldStart(np.zeros(h.n), 0.0)
-        turn, t, Q, T_m, s_c, verdict = self._closing_rows(
-            flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
+        turn, t, Q, T_m, s_c, verdict = closing_rows(
+            self.rows, flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
                                                   s_c, rate_hz, float(flight.ball.inertia_ratio) if fall else None))
         reasons += verdict.reasons
         reasons += roll_reasons(hold, flight, t, Q, pose.t_i)
@@ -330,32 +334,6 @@ class CatchPlanner:
             forces=fv.forces,
             t=t, Q=Q, t_info_s=float(t_info), flight_time_s=flight_time_s, uncertainty=unc,
             notes=_turn_note(turn, pose.t_i), planning_s=time.perf_counter() - t0), ahead
-
-    def _closing_rows(self, flight: Flight, C: np.ndarray, hold: HoldTurn, turn0: HoldStart,
-                      turn_mode: TurnMode | None, rows_args: RowsArgs):
-        """The rows with the wrist's turn as ``turn_mode`` says and their self-check
-        (``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
-        keeps it near the fingers longer, so the closing waits a little more when a tip meets
-        it. Returns the turn, the rows, the move-in's duration, the closing's start and the
-        self-check's results; ``hold``: the turn's choices (the arm's joints it moves with)."""
-        pose, stop, closing = rows_args.pose, rows_args.stop, rows_args.closing
-        s_c = rows_args.s_c
-        r = float(flight.ball.radius_m)
-        for _ in range(_CLOSE_TRIES):
-            args = replace(rows_args, s_c=s_c)
-            if turn_mode == TurnMode.AHEAD:
-                made = hold.ahead_rows(turn0, args, flight)
-            else:
-                made = hold.turned_rows(turn0, turn_mode, args)
-            turn, t, Q, T_used = made.turn, made.t, made.Q, made.T_m
-            t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
-            checked = self.rows.check(flight, C, r, t, Q, pose.t_i, t_static, rows_args.rate_hz,
-                                      closing.reason is not None)
-            if all(x.kind is not CatchReason.FINGERS for x in checked.reasons) or \
-                    not np.any(stop.qd) or s_c >= pose.t_i:
-                break
-            s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
-        return turn, t, Q, T_used, s_c, checked
 
     def meet(self, flight: Flight, C: np.ndarray, r: float, closing: Closing,
              ic: Intercept) -> MeetPose:
@@ -437,56 +415,6 @@ class CatchPlanner:
         return self.ball_forces.forces(flight, pose, t, Q, r, grasp_t, soft)
 
 
-FINE_STOP_NOTE = "the stop searched in finer steps (the palm's tilt 1 deg, the contact share 0.05)"
-
-
-def joint_stop_note(grid: StopGrid) -> str:
-    """The note of a plan made with per-joint ramps (``JOINT_STOPS``)."""
-    who = ("every arm joint recoiling" if grid.per_joint is JointRamps.EACH else
-           "the loaded motor's joint alone recoiling")
-    how = "every tilt's recoil judged" if grid.every_tilt else "the least loaded tilt"
-    how += " with the fingers closing" if grid.fingers_judged else ""
-    return f"the stop with per-joint ramps ({who}, {how}, the finer steps)"
-
-
-JOINT_STOPS_REACH = 0.5  # the most a motor's need may exceed its limit in the coarse plan
-# (|torque| / capacity - 1) for ``JOINT_STOPS`` to be tried: on the wide grid the largest
-# they took below the limit was 2.83 N m of the wrist flexion's 2.00 (+0.3 m / 75 deg /
-# 3.0 m: 0.42 over; docs/history/2026-12-07-catch-ramps2.md); a throw needing 1.5x its
-# motor is beyond them, and trying costs 10-60 s of planning (30 deg / 10 m: 13.6 s for an
-# infeasible answer that took 1.3 s before they existed)
-
-
-def joint_stop_fallbacks(replan, plan: CatchPlan) -> CatchPlan:
-    """``finer_stop_fallback`` with ``FINE_STOP``, then, where the coarse plan's worst motor
-    is within ``JOINT_STOPS_REACH`` of its limit, with each of ``JOINT_STOPS`` in order
-    (per-joint ramps and recoils) while none is feasible: the first feasible plan
-    (``replan(grid)``), noted; else ``plan``."""
-    finer = finer_stop_fallback(lambda: replan(FINE_STOP), plan)
-    stop = plan.forces.stop if plan.forces is not None else None
-    if stop is not None and stop.headroom < -JOINT_STOPS_REACH:
-        return finer  # (beyond what per-joint ramps take off: not tried)
-    for grid in JOINT_STOPS:
-        if finer.feasible:
-            break
-        finer = finer_stop_fallback(lambda g=grid: replan(g), plan, joint_stop_note(grid))
-    return finer
-
-
-def finer_stop_fallback(replan, plan: CatchPlan, note: str = FINE_STOP_NOTE) -> CatchPlan:
-    """Where ``plan`` is too fast to stop among its reasons, ``replan()`` (the same plans
-    with the soft stop's tilts and contact shares in finer steps, ``FINE_STOP``: the rows'
-    load is not monotone at the coarse ones; or with per-joint ramps too, ``JOINT_STOPS``),
-    noted, if feasible; else ``plan``."""
-    if CatchReason.TOO_FAST_TO_STOP not in plan.reason_kinds:
-        return plan
-    finer = replan()
-    if not finer.feasible:
-        return plan
-    return replace(finer, notes=finer.notes + (
-        note + ": in the coarse ones " + reasons_text(plan.reasons),))
-
-
 def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
     """``CatchPlanner.plan``'s fallbacks on the rig's reach axis for ``plan`` (the arm
     alone's, infeasible); ``plans(rig=, fall=)``: ``CatchPlanner._plans`` of the throw. The
@@ -523,6 +451,46 @@ def reach_fallbacks(plans, plan: CatchPlan) -> CatchPlan:
             "reaches): the arm alone failed (" + reasons_text(plan.reasons) + ")",))
     return replace(plan, notes=plan.notes + (
         "with the rig's reach axis moving too: " + reasons_text(other.reasons) + fell_why,))
+
+
+def closing_rows(rows: RowCheck, flight: Flight, C: np.ndarray, hold: HoldTurn,
+             turn0: HoldStart, turn_mode: TurnMode | None, rows_args: RowsArgs):
+    """The rows with the wrist's turn as ``turn_mode`` says and their self-check (``rows``:
+    ``RowCheck.check``); ``close_start`` sees the palm at rest: a palm moving with the ball
+    keeps it near the fingers longer, so the closing waits a little more when a tip meets
+    it. Returns the turn, the rows, the move-in's duration, the closing's start and the
+    self-check's results; ``hold``: the turn's choices (the arm's joints it moves with)."""
+    pose, stop, closing = rows_args.pose, rows_args.stop, rows_args.closing
+    s_c = rows_args.s_c
+    r = float(flight.ball.radius_m)
+    for _ in range(_CLOSE_TRIES):
+        args = replace(rows_args, s_c=s_c)
+        if turn_mode == TurnMode.AHEAD:
+            made = hold.ahead_rows(turn0, args, flight)
+        else:
+            made = hold.turned_rows(turn0, turn_mode, args)
+        turn, t, Q, T_used = made.turn, made.t, made.Q, made.T_m
+        t_static = max(s_c + closing.duration_s, stop.end_s, turn.start_s + turn.duration_s)
+        checked = rows.check(flight, C, r, t, Q, pose.t_i, t_static, rows_args.rate_hz,
+                             closing.reason is not None)
+        if all(x.kind is not CatchReason.FINGERS for x in checked.reasons) or \
+                not np.any(stop.qd) or s_c >= pose.t_i:
+            break
+        s_c = min(pose.t_i, s_c + _CLOSE_STEP_S)
+    return turn, t, Q, T_used, s_c, checked
+
+
+def stop_of(stops: dict | None, key: tuple, make: Callable[[], tuple]) -> tuple:
+    """``make()`` (``plan_stop``'s result), made once per ``key`` within one
+    ``CatchPlanner.plan`` (``stops``, that plan's; None: made anew): the same throw's stop
+    for the same hand joints, soft catch, closing, roll weight and grid is the same stop,
+    and the turn's modes (three of them with one roll weight), the hand falling on the
+    reach axis and the fallbacks' plans ask for it again."""
+    if stops is None:
+        return make()
+    if key not in stops:
+        stops[key] = make()
+    return stops[key]
 
 
 def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,

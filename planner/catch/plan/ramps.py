@@ -23,11 +23,13 @@ others in the shortest common time the motors then allow.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from enum import Enum
 
 import numpy as np
 
 from planner.catch.grasp import motor_torque_matrix
+from planner.catch.plan.softstop import SoftStop
 from planner.trajectory import MIN_PHASE_S, PEAK_VEL
 
 
@@ -131,3 +133,46 @@ def joint_ramps(dyn, q: np.ndarray, qd: np.ndarray, room: np.ndarray, lead,
         else:
             lo = mid
     return ramps(hi)
+
+
+def recoil_shares(dyn, q: np.ndarray, qd_c: np.ndarray, ratio: np.ndarray, share: float,
+                  recoil_s: float, loaded_only: bool, stop_share: float) -> np.ndarray:
+    """Per-joint contact shares of the recoil (``stopping.StopAsk.per_joint``): every arm
+    joint (or, ``loaded_only``, those whose own motor the pad loads beyond ``stop_share``
+    of its capacity, ``stopping.STOP_SHARE``; ``ratio``: every motor's, ``pad_load``) meets
+    the ball at ``share`` of its speed and recoils with it, each within its acceleration limit over ``recoil_s``
+    ((1 / c_j - 1) |qd_c,j| <= a_max,j recoil_s: a joint with a low limit, the reach, meets
+    it nearer its full speed); the others at their full speed (a recoil adds the palm's
+    acceleration to the pad's force: along the palm it may leave the friction cone, and
+    only the loaded motor's own joint relieves it)."""
+    c = np.maximum(share, np.abs(qd_c) / (np.abs(qd_c) + dyn.a_max * recoil_s))
+    if not loaded_only:
+        return c
+    M = np.abs(motor_torque_matrix(dyn.hand, q)[:, list(dyn.arm)])
+    own = np.argmax(M, axis=0)  # each arm joint's own motor
+    return np.where(ratio[own] > stop_share, c, 1.0)
+
+
+def with_joint_ramps(dyn, stop: SoftStop, q_open: np.ndarray, load: np.ndarray,
+                     share: float) -> SoftStop:
+    """``stop`` with each arm joint's ramp-in and ramp-out in its own time (``joint_ramps``,
+    every motor within ``share`` of its capacity) where one common time would take a joint
+    out of its range; ``load``: the riding ball's (the ramp-out's)."""
+    arm = list(dyn.arm)
+    q, lo, hi = q_open[arm], dyn.hand.lower[arm], dyn.hand.upper[arm]
+    qd_c, c = stop.qd_c, stop.joint_ramps()[2]
+    # the ramp-in travels against the contact speeds (to its start), the ramp-out with them
+    room_in = np.maximum(np.where(qd_c > 0, q - lo, hi - q), 0.0)
+    room_out = np.maximum(np.where(stop.qd > 0, hi - q, q - lo), 0.0)
+    rin = joint_ramps(dyn, q_open, qd_c, room_in, stop.row_s, stop.ramp_in_s, share)
+    lead_out = 0.5 * stop.recoil_s * (1.0 + c) + stop.hold_s  # sigma at the ramp-out's start
+    # (every joint's)
+    rout = joint_ramps(dyn, q_open, stop.qd, room_out, lead_out, stop.ramp_out_s, share,
+                       load, sign=-1.0)
+    if rin is None and rout is None and stop.shares is None:
+        return stop
+    k = len(arm)
+    rin = np.full(k, stop.ramp_in_s) if rin is None else rin
+    rout = np.full(k, stop.ramp_out_s) if rout is None else rout
+    return replace(stop, ramp_in_s=float(np.max(rin)), ramp_out_s=float(np.max(rout)),
+                   ramps_in_s=rin, ramps_out_s=rout)

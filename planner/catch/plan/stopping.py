@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -46,7 +46,7 @@ from planner.catch.plan.arm import CatchJoints, open_from, palm_target
 from planner.catch.plan.closing import closing_offsets
 from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_speeds, giving_speeds
 from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_intercept_square
-from planner.catch.plan.ramps import JointRamps, joint_ramps
+from planner.catch.plan.ramps import JointRamps, recoil_shares, with_joint_ramps
 from planner.catch.plan.results import Closing
 from planner.catch.plan.softstop import SoftStop
 from planner.check.ball import ball_loads
@@ -67,16 +67,6 @@ MOVE_SPARE_S = 0.01  # ... and still reaches its pose one row (at 100 Hz) before
 TILTS_DEG = (0.0, -5.0, -10.0, 5.0, 10.0)  # palm tilts tried (deg about the flexion axis)
 CONTACT_SHARES = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)  # the arm's speed when it meets the ball, tried as a
 # share of its speed after the recoil
-TILTS_FINE_DEG = (0.0, *(-float(k) for k in range(1, 16)), *(float(k) for k in range(1, 16)))
-CONTACT_SHARES_FINE = tuple(k / 20 for k in range(19, 3, -1))  # 0.95 ... 0.2
-# ... where those leave the ball too fast to stop (``CatchPlanner.plan``): the tilts in 1 deg
-# steps to +-15 deg, the shares in steps of 0.05 to 0.2. Both searches go on while they
-# improve, and the rows' load is not monotone at the coarse steps: measured on the wide
-# grid's 28 throws too fast to stop (docs/history/2026-12-07-catch-finer.md), the fine grid
-# stops three within every motor (0 m / 75 deg / 2.0 m, +0.3 m / 75 deg / 2.5 m: the tilts;
-# -0.3 m / 45 deg / 4.0 m: the shares); 2.5 deg tilts only the first, every tilt of the
-# 1 deg grid tried (no early end) no more than the 1 deg search, +-20 deg no more.
-
 
 @dataclass(frozen=True)
 class StopGrid:
@@ -93,22 +83,6 @@ class StopGrid:
 
 
 COARSE_STOP = StopGrid()  # every plan's
-FINE_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE)  # where that is too fast to stop
-# ... and where that is too, each arm joint ramping in its own time (``with_joint_ramps``),
-# every tilt's recoil judged; then only the loaded motors' joints recoiling
-# (``recoil_shares``), every tilt's, then the least loaded tilt's (measured on main's 25
-# too fast to stop: docs/history/2026-12-07-catch-ramps.md)
-JOINT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.EACH, True)
-LOADED_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED, True)
-LOADED_TILT_STOP = StopGrid(TILTS_FINE_DEG, CONTACT_SHARES_FINE, JointRamps.LOADED)
-# ... and where those are too, the flexion alone recoiling, every tilt's recoil judged with
-# the fingers closing as the rows close them: the open hand's judge is optimistic where the
-# closing is under way at the intercept (0 m / 65 deg / 4.0 m, tilt -13 deg: judged headroom
-# +0.13 open, the rows' -0.015). Every joint recoiling so judged was measured too and not
-# kept: it made -0.3 m / 65 deg / 4.0 m pass the check, and the replay lost the ball at
-# 1.82 s (docs/history/2026-12-07-catch-ramps2.md)
-LOADED_FINGERS_STOP = replace(LOADED_STOP, fingers_judged=True)
-JOINT_STOPS = (JOINT_STOP, LOADED_STOP, LOADED_TILT_STOP, LOADED_FINGERS_STOP)
 _SHRINK = 0.95  # a profile that leaves the joints' range (or its time) is tried again with
 # the speeds its overshoot asks for, times this (the QP then shares the speeds anew)
 _MAX_SHRINK = 6
@@ -279,6 +253,28 @@ class StopDynamics:
         return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
 
 
+@dataclass(frozen=True)
+class StopSearch:
+    """What the soft stop's searches of one throw start from (``plan_stop``'s arguments):
+    the hand's dynamics, the wrist's geometry, the flight, the catch point ``C`` (catch
+    frame), the ball's radius ``r``, the hand's zero pose, the closing move, the time the
+    ball reaches the catch plane ``t_c``, ``ready_by`` (a function of the pre-catch pose ->
+    when the hand can be there), the rows' step and the contact speeds' roll weight. The
+    tilt search and the recoil search take it whole."""
+
+    dyn: StopDynamics
+    wrist: Wrist
+    flight: Flight
+    C: np.ndarray
+    r: float
+    q_zero: np.ndarray
+    closing: Closing
+    t_c: float
+    ready_by: Callable[[np.ndarray], float]
+    row_s: float
+    roll_weight: float = ROLL_WEIGHT
+
+
 def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
               soft: bool = True, roll_weight: float = ROLL_WEIGHT,
@@ -290,46 +286,44 @@ def plan_stop(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     waits at rest (the stopping is the pad's alone). ``roll_weight``: the contact-speed QP's
     weight on the ball's speed along the palm (1: none above its speed into it). ``speeds``:
     the contact speeds' QP solver (``StopAsk``; None: ``contact_speeds``). ``grid``: the
-    palm's tilts and the contact shares searched (``COARSE_STOP``, or ``FINE_STOP``)."""
-    search = (dyn, flight, r, q_zero, closing, ready_by, row_s, roll_weight, grid)
+    palm's tilts and the contact shares searched (``COARSE_STOP``, or the later stages'
+    ``planner.catch.plan.stopstages``)."""
+    search = StopSearch(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s,
+                        roll_weight)
     if grid.every_tilt and soft:
         # every tilt's own recoil judged on the rows (the tilt's pad load at full speed does
         # not order the recoiled stops)
         found = None
         for tilt in grid.tilts_deg:
-            one = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s,
-                             soft, roll_weight, speeds, (tilt,), grid.per_joint)
+            one = _best_tilt(search, soft, speeds, (tilt,), grid.per_joint)
             if one is not None:
-                got = _recoiled(search, one)
+                got = _recoiled(search, grid, one)
                 if found is None or got[0] > found[0]:
                     found = got
         if found is not None:
             return found[1]
-    best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, soft,
-                      roll_weight, speeds, grid.tilts_deg, grid.per_joint)
+    best = _best_tilt(search, soft, speeds, grid.tilts_deg, grid.per_joint)
     if best is None:  # no tilt reaches: the untilted intercept says why
         ic = find_intercept(wrist, flight, C, r, t_c)
-        return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False, 0.0, 1.0,
-                          rw=roll_weight, speeds=speeds)
-    return _recoiled(search, best)[1]
+        return _candidate(search, ic, False, 0.0, 1.0, speeds=speeds)
+    return _recoiled(search, grid, best)[1]
 
 
-def _recoiled(search: tuple, best) -> tuple:
-    """``plan_stop``'s recoil search from the tilt search's ``best``: (the judged key or
-    None, (intercept, open pose, stop))."""
-    dyn, flight, r, q_zero, closing, ready_by, row_s, roll_weight, grid = search
+def _recoiled(search: StopSearch, grid: StopGrid, best) -> tuple:
+    """``plan_stop``'s recoil search from the tilt search's ``best`` over ``grid``'s contact
+    shares: (the judged key or None, (intercept, open pose, stop))."""
+    dyn, flight, r = search.dyn, search.flight, search.r
     ic, q_open, stop = best[1]
     speeds = best[2]  # the palm giving with the ball, if the search chose that
     if not np.any(stop.qd):
         return (False, -math.inf), best[1]
     # the recoil: meet the ball slower and let its push speed the arm up (judged on rows)
-    fingers = closing if grid.fingers_judged else None
+    fingers = search.closing if grid.fingers_judged else None
     judged = (dyn.judge(stop, q_open, flight, r, fingers), stop)
     for share in grid.shares:  # slower while it helps
         # from the speeds the last one found within the joints' range
         warm = np.where(np.abs(stop.qd) < dyn.v_max - 1e-9, np.abs(stop.qd), dyn.v_max)
-        cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, True,
-                          stop.tilt_rad, share, warm, rw=roll_weight, speeds=speeds,
+        cand = _candidate(search, ic, True, stop.tilt_rad, share, warm, speeds=speeds,
                           per_joint=grid.per_joint)[2]
         if cand.contact_share == 1.0:
             break
@@ -346,60 +340,49 @@ def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r:
     """The palm's tilt (rad) ``plan_stop`` chooses for this throw (its contact share 1:
     the tilt is chosen before the share), 0 when no tilt reaches; ``speeds``: the contact
     speeds' QP solver (``StopAsk``)."""
-    best = _best_tilt(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s, True,
-                      ROLL_WEIGHT, speeds)
+    search = StopSearch(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s)
+    best = _best_tilt(search, True, speeds)
     return 0.0 if best is None else float(best[1][2].tilt_rad)
 
 
-def _best_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
-               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
-               soft: bool, roll_weight: float,
-               speeds: Callable[..., np.ndarray] | None = None,
+def _best_tilt(search: StopSearch, soft: bool, speeds: Callable[..., np.ndarray] | None = None,
                tilts_deg: tuple[float, ...] = TILTS_DEG,
                per_joint: JointRamps = JointRamps.NONE):
-    """``plan_stop``'s tilt search (over ``tilts_deg``): (key, (intercept, open pose, stop), contact speeds'
-    solver) of the tilt whose pad phase needs the least of the motor closest to its
-    capacity; None: no tilt reaches. Where that stop closes the palm on the ball beyond a
-    motor (``_closes_beyond_a_motor``) the search is run again with the palm giving with
-    the ball (``giving_speeds``), and the better kept."""
-    best = _placed_search(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s,
-                          soft, roll_weight, speeds, tilts_deg, per_joint)
+    """``plan_stop``'s tilt search (over ``tilts_deg``): (key, (intercept, open pose, stop),
+    contact speeds' solver) of the tilt whose pad phase needs the least of the motor closest
+    to its capacity; None: no tilt reaches. Where that stop closes the palm on the ball
+    beyond a motor (``_closes_beyond_a_motor``) the search is run again with the palm giving
+    with the ball (``giving_speeds``), and the better kept."""
+    best = _placed_search(search, soft, speeds, tilts_deg, per_joint)
     if best is not None and speeds is None and _closes_beyond_a_motor(best[1]):
-        gave = _placed_search(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by,
-                              row_s, soft, roll_weight, giving_speeds, tilts_deg, per_joint)
+        gave = _placed_search(search, soft, giving_speeds, tilts_deg, per_joint)
         if gave is not None and gave[0] < best[0]:
             best = gave
     return best
 
 
-def _placed_search(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
-                   q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
-                   soft: bool, roll_weight: float, speeds: Callable[..., np.ndarray] | None,
-                   tilts_deg: tuple[float, ...] = TILTS_DEG,
-               per_joint: JointRamps = JointRamps.NONE):
+def _placed_search(search: StopSearch, soft: bool, speeds: Callable[..., np.ndarray] | None,
+                   tilts_deg: tuple[float, ...], per_joint: JointRamps):
     """``_best_tilt``'s search with one contact speeds' solver over the palm's placements."""
     best = None
-    square = dyn.joints.i_reach is not None
-    for placed in ((True, False) if square else (False,)):
+    s = search
+    for placed in ((True, False) if s.dyn.joints.i_reach is not None else (False,)):
         # the palm square to the throw on the reach axis (``find_intercept_square``), then
         # the reach held at 0 and the deviation placing the ball (``find_intercept``)
         def place(tilt_rad: float, placed: bool = placed) -> Intercept | None:
             if placed:
-                return find_intercept_square(wrist, flight, C, r, t_c, tilt_rad)
-            return find_intercept(wrist, flight, C, r, t_c, tilt_rad)
+                return find_intercept_square(s.wrist, s.flight, s.C, s.r, s.t_c, tilt_rad)
+            return find_intercept(s.wrist, s.flight, s.C, s.r, s.t_c, tilt_rad)
 
-        found = _tilt_search(dyn, place, flight, r, q_zero, closing, ready_by, row_s, soft,
-                             roll_weight, speeds, tilts_deg, per_joint)
+        found = _tilt_search(search, place, soft, speeds, tilts_deg, per_joint)
         if found is not None and (best is None or found[0] < best[0]):
             best = found
     return best
 
 
-def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.ndarray,
-                 closing: Closing, ready_by, row_s: float, soft: bool, roll_weight: float,
-                 speeds: Callable[..., np.ndarray] | None,
-                 tilts_deg: tuple[float, ...] = TILTS_DEG,
-               per_joint: JointRamps = JointRamps.NONE):
+def _tilt_search(search: StopSearch, place, soft: bool,
+                 speeds: Callable[..., np.ndarray] | None, tilts_deg: tuple[float, ...],
+                 per_joint: JointRamps):
     """``_best_tilt`` at one placement of the palm (``place``: tilt -> intercept or None),
     over ``tilts_deg`` (0, then each side outwards in their order; a grid without 0, as
     ``planner.catch.plan.palmup``'s, in its own order)."""
@@ -413,8 +396,7 @@ def _tilt_search(dyn: StopDynamics, place, flight: Flight, r: float, q_zero: np.
             ic = place(math.radians(tilt))
             if ic is None or ic.reason is not None or (tilt != 0.0 and not ic.aligned):
                 break
-            cand = _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, soft,
-                              math.radians(tilt), 1.0, rw=roll_weight, speeds=speeds,
+            cand = _candidate(search, ic, soft, math.radians(tilt), 1.0, speeds=speeds,
                               per_joint=per_joint)
             key = (cand[2].cone_margin_n < 0, float(cand[2].motor_ratio.max()))
             if found is not None and key >= found[0]:
@@ -438,29 +420,28 @@ def _closes_beyond_a_motor(cand) -> bool:
     return float(stop.v_rel @ stop.v_palm) < 0.0 and float(stop.motor_ratio.max()) > 1.0
 
 
-def _candidate(dyn: StopDynamics, flight: Flight, r: float, q_zero: np.ndarray,
-               closing: Closing, ic: Intercept, ready_by, row_s: float, soft: bool,
-               tilt_rad: float, share: float, bound0: np.ndarray | None = None,
-               rw: float = ROLL_WEIGHT, speeds: Callable[..., np.ndarray] | None = None,
+def _candidate(search: StopSearch, ic: Intercept, soft: bool, tilt_rad: float, share: float,
+               bound0: np.ndarray | None = None,
+               speeds: Callable[..., np.ndarray] | None = None,
                per_joint: JointRamps = JointRamps.NONE):
     """The stopping motion at the intercept ``ic`` (``stop_profile``), from its open pose;
     ``per_joint``: one ramp time for every arm joint, or each joint's own."""
+    dyn, flight = search.dyn, search.flight
     h, j = dyn.hand, dyn.joints
-    q = q_zero.copy()
+    q = search.q_zero.copy()
     q[j.i_flex], q[j.i_dev] = ic.theta, ic.dev
     if j.i_rail is not None:
         q[j.i_rail] = ic.rail
     if j.i_reach is not None:
         q[j.i_reach] = ic.reach
-    q_open = open_from(h, j, q, closing.q_closed)
+    q_open = open_from(h, j, q, search.closing.q_closed)
     bound = (dyn.v_max.copy() if bound0 is None else bound0.copy()) if soft \
         else np.zeros(len(dyn.arm))
-    stop = stop_profile(dyn, flight.velocity(ic.t), float(flight.ball.mass_kg), r, q_open,
-                        float(ic.t), ready_by, row_s,
-                        StopAsk(tilt_rad, share, bound, rw, speeds, per_joint))
+    stop = stop_profile(dyn, flight.velocity(ic.t), float(flight.ball.mass_kg), search.r,
+                        q_open, float(ic.t), search.ready_by, search.row_s,
+                        StopAsk(tilt_rad, share, bound, search.roll_weight, speeds, per_joint))
     if stop is None:
-        return _candidate(dyn, flight, r, q_zero, closing, ic, ready_by, row_s, False,
-                          tilt_rad, 1.0, rw=rw, speeds=speeds)
+        return _candidate(search, ic, False, tilt_rad, 1.0, speeds=speeds)
     return ic, q_open, stop
 
 
@@ -509,7 +490,7 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         shares = None
         if recoil and ask.per_joint is not JointRamps.NONE:
             shares = recoil_shares(dyn, q_open, qd_c, ratio, share, recoil,
-                                   ask.per_joint is JointRamps.LOADED)
+                                   ask.per_joint is JointRamps.LOADED, STOP_SHARE)
             qd = qd_c / shares
         elif recoil and np.any((1.0 - share) * np.abs(qd) > dyn.a_max * recoil):
             return _at_rest(t_i, ask.tilt_rad, arm, v_rel, F, ratio, cone, t_pad)
@@ -521,7 +502,7 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         if not moving:
             return stop
         if ask.per_joint is not JointRamps.NONE:
-            stop = with_joint_ramps(dyn, stop, q_open, load)
+            stop = with_joint_ramps(dyn, stop, q_open, load, STOP_SHARE)
         # how much slower each joint must go: its travel grows with its speed (the ramps'
         # durations are set by the joint that needs the longest), the ramp-in's time too
         scale = np.ones(len(arm))
@@ -544,49 +525,6 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         if not np.any(bound > _MIN_SPEED * dyn.v_max):
             break
     return None
-
-
-def recoil_shares(dyn: StopDynamics, q: np.ndarray, qd_c: np.ndarray, ratio: np.ndarray,
-                  share: float, recoil_s: float, loaded_only: bool) -> np.ndarray:
-    """Per-joint contact shares of the recoil (``StopAsk.per_joint``): every arm joint (or,
-    ``loaded_only``, those whose own motor the pad loads beyond ``STOP_SHARE`` of its
-    capacity, ``ratio``: every motor's, ``pad_load``) meets the ball at ``share`` of its
-    speed and recoils with it, each within its acceleration limit over ``recoil_s``
-    ((1 / c_j - 1) |qd_c,j| <= a_max,j recoil_s: a joint with a low limit, the reach, meets
-    it nearer its full speed); the others at their full speed (a recoil adds the palm's
-    acceleration to the pad's force: along the palm it may leave the friction cone, and
-    only the loaded motor's own joint relieves it)."""
-    c = np.maximum(share, np.abs(qd_c) / (np.abs(qd_c) + dyn.a_max * recoil_s))
-    if not loaded_only:
-        return c
-    M = np.abs(motor_torque_matrix(dyn.hand, q)[:, list(dyn.arm)])
-    own = np.argmax(M, axis=0)  # each arm joint's own motor
-    return np.where(ratio[own] > STOP_SHARE, c, 1.0)
-
-
-def with_joint_ramps(dyn: StopDynamics, stop: SoftStop, q_open: np.ndarray,
-                     load: np.ndarray) -> SoftStop:
-    """``stop`` with each arm joint's ramp-in and ramp-out in its own time
-    (``planner.catch.plan.ramps.joint_ramps``) where one common time would take a joint
-    out of its range; ``load``: the riding ball's (the ramp-out's)."""
-    arm = list(dyn.arm)
-    q, lo, hi = q_open[arm], dyn.hand.lower[arm], dyn.hand.upper[arm]
-    qd_c, c = stop.qd_c, stop.joint_ramps()[2]
-    # the ramp-in travels against the contact speeds (to its start), the ramp-out with them
-    room_in = np.maximum(np.where(qd_c > 0, q - lo, hi - q), 0.0)
-    room_out = np.maximum(np.where(stop.qd > 0, hi - q, q - lo), 0.0)
-    rin = joint_ramps(dyn, q_open, qd_c, room_in, stop.row_s, stop.ramp_in_s, STOP_SHARE)
-    lead_out = 0.5 * stop.recoil_s * (1.0 + c) + stop.hold_s  # sigma at the ramp-out's start
-    # (every joint's)
-    rout = joint_ramps(dyn, q_open, stop.qd, room_out, lead_out, stop.ramp_out_s, STOP_SHARE,
-                       load, sign=-1.0)
-    if rin is None and rout is None and stop.shares is None:
-        return stop
-    k = len(arm)
-    rin = np.full(k, stop.ramp_in_s) if rin is None else rin
-    rout = np.full(k, stop.ramp_out_s) if rout is None else rout
-    return replace(stop, ramp_in_s=float(np.max(rin)), ramp_out_s=float(np.max(rout)),
-                   ramps_in_s=rin, ramps_out_s=rout)
 
 
 def _at_rest(t_i: float, tilt_rad: float, arm: list[int], v_rel, F, ratio, cone,
