@@ -12,7 +12,6 @@ import math
 from typing import TYPE_CHECKING
 
 from planner.play.follow import HOLD_PAST_S
-from planner.play.highclear import front_rules
 from planner.play.keytimes import (  # (LATE_MIN_S: a key later, ``costs.State.late``)
     LATE_MIN_S,
     held_enough_s,
@@ -51,8 +50,9 @@ class ArmCosts:
             return math.inf
         if rode is not None and followers:  # (the move ends as late as lets the new keys
             # go down on time, the motion's: ``ArmMotion._move_rail``)
-            col = self._descent_column(prev.state.place, place)
-            by_s = min([self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()]
+            here = prev.state.place
+            by_s = min([self._t_down[n] - self._times(n, f, place)[self._descent_col(here, place, n, f)]
+                        for n, f in new.items()]
                        + [self._t_up[m] - self.places.lift(self.entry(m, f, place), "high").cross_s
                           - HOLD_PAST_S for m, f in followers])
             end_s = max(release_t, by_s)  # (early for a rider whose key comes up before)
@@ -66,10 +66,10 @@ class ArmCosts:
         t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
         timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
         loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place) + cut_loss
-        col = self._descent_column(prev.state.place, place)
+        here = prev.state.place
         for n, f in new.items():
             times = timing.get((pitch[n], f, place))
-            after_s = (times or self._times(n, f, place))[col]
+            after_s = (times or self._times(n, f, place))[self._descent_col(here, place, n, f)]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
             came = prev.older.get(f) if m is None else (m, place)  # (its last key and
@@ -131,14 +131,13 @@ class ArmCosts:
         early for the arm to start on time and those keys' ups (``_cut_lifts``; none
         where a note may ride along)."""
         T = self.places.arm_time_s(ctx.state.place, place)
-        col = self._descent_column(ctx.state.place, place)
-        lift_col = self._lift_column(ctx.state.place, place)
-        lifts, lift_end = (ctx.lifts, ctx.lift_end) if lift_col == 0 \
-            else (ctx.lifts_black, ctx.lift_end_black)
+        here = ctx.state.place
+        lift_col = (here, place)
+        lifts, lift_end = self._lifts(ctx, place)
+        arrive = min((self._t_down[n] - self._times(n, f, place)[self._descent_col(here, place, n, f)]
+                      for n, f in new.items()), default=math.inf)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift, or
             # the lifts cut for the arm to start on time)
-            arrive = min((self._t_down[n] - self._times(n, f, place)[col]
-                          for n, f in new.items()), default=math.inf)
             if lift_end + T <= arrive:
                 return lift_end + T, _NONE, 0.0, _NO_CUT
             release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, lift_col)
@@ -165,8 +164,6 @@ class ArmCosts:
                     # lift to its key crossing)
                     done = down_s + press_s - self.places.lift(a, "high").cross_s
                     cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
-        arrive = min((self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()),
-                     default=math.inf)
         if not cands:  # (``_riders``' answer when none rides along: the last lift, or the
             # lifts cut for the arm to start on time; the move)
             if lift_end + T <= arrive:
@@ -175,12 +172,13 @@ class ArmCosts:
             return release + T, _NONE, loss, ups
         return self._riders(ctx, lifts, cands, T, arrive, lift_col)
 
-    def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: int
+    def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: tuple[int, int]
                    ) -> tuple[float, float, dict]:
         """The motion's lifts before a move of the arm that must start by ``start_s`` to
         put the new keys down on time (``Motion.lift_by_s``: each finger's key up by
         then less its lift to clear above every key; ``lifts``: ``Prev.lifts`` or
-        ``Prev.lifts_black``, ``lift_col`` its ``Costs._times`` column): a key due up
+        ``Prev.lifts_black`` or a mix (``_lifts``), ``lift_col``: the move's places, which
+        give each finger's ``Costs._times`` column, ``_lift_col``): a key due up
         later comes up that early, but held as long as its note still sounds
         (``keytimes.held_enough_s``, ``_cut_up_s``) and never before its shortest press
         (``Moves.press_min_s``; the motion lifts once the press is done). Returns when
@@ -193,7 +191,8 @@ class ArmCosts:
                 release = max(release, clear)
                 break
             r = ctx.last[f][1]
-            lift_s = (self._timing.get((self.pitch[m], f, r)) or self._times(m, f, r))[lift_col]
+            lift_s = (self._timing.get((self.pitch[m], f, r)) or self._times(m, f, r))[
+                self._lift_col(*lift_col, m, f, r)]
             e = self.entry(m, f, r)
             due = clear - lift_s  # (its key's up: its own, or this event's for a held note)
             up = min(due, self._cut_up_s(ctx, m, start_s - lift_s, e))
@@ -204,25 +203,50 @@ class ArmCosts:
             release = max(release, up + lift_s)
         return release, loss, ups
 
-    def _descent_column(self, here: int, place: int) -> int:
-        """``Costs._times``' column of the descent's part after a move of the arm from
-        place ``here`` to ``place``: the front rule's (1) where the move keeps the play
-        posture, the black rule's (3) where it changes it
-        (``planner.play.highclear.front_rules``)."""
-        return 1 if self._front_rules(here, place)[1] else 3
+    def _descent_col(self, here: int, place: int, n: int, f: str) -> int:
+        """``Costs._times``' column of note ``n``'s descent (finger ``f``) after a move of
+        the arm from place ``here`` to ``place``: the front rule's (1) where the move keeps
+        the play posture, or moves the hand out of the keyboard no further than the
+        entry's bodies stay in front of the black keys, the black rule's (3) otherwise
+        (``HighClear.descent_front``)."""
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return 1
+        reach = self.places.reach_m
+        return 1 if self.places.high.descent_front(self.entry(n, f, place), reach(po(here)),
+                                                   reach(po(place))) else 3
 
-    def _lift_column(self, here: int, place: int) -> int:
-        """``Costs._times``' column of the lifts before a move of the arm from place
-        ``here`` to ``place``: the front rule's (0) where the move keeps the play posture
-        or moves the hand out of the keyboard, the black rule's (2) where it moves it in
-        (``planner.play.highclear.front_rules``)."""
-        return 0 if self._front_rules(here, place)[0] else 2
+    def _lift_col(self, here: int, place: int, m: int, f: str, r: int) -> int:
+        """``Costs._times``' column of the lift of note ``m``'s finger ``f`` (pressed from
+        place ``r``) before a move of the arm from place ``here`` to ``place``: the front
+        rule's (0) where the move keeps the play posture, moves the hand out of the
+        keyboard, or in no further than the entry's bodies stay in front of the black
+        keys, the black rule's (2) otherwise (``HighClear.lift_front``)."""
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return 0
+        reach = self.places.reach_m
+        return 0 if self.places.high.lift_front(self.entry(m, f, r), reach(po(here)),
+                                                reach(po(place))) else 2
 
-    def _front_rules(self, here: int, place: int) -> tuple[bool, bool]:
-        """``highclear.front_rules`` of a move of the arm from place ``here`` to
-        ``place``: whether its lifts, and its descents, may keep the front rule."""
-        po, reach = self.places.posture_of, self.places.reach_m
-        return front_rules(reach(po(here)), reach(po(place)))
+    def _lifts(self, ctx: Prev, place: int) -> tuple[list, float]:
+        """When each finger of ``ctx``'s state is clear above every key before a move of
+        the arm to ``place`` (latest first), and the latest: ``Prev.lifts`` (the front
+        rule), ``Prev.lifts_black``, or each finger's own (``_lift_col``; memoised per
+        posture moved to)."""
+        here = ctx.state.place
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return ctx.lifts, ctx.lift_end
+        got = ctx.lifts_to.get(po(place))
+        if got is None:
+            black = {(m, f): v for v, m, f in ctx.lifts_black}
+            rails = {(m, f): r for m, f, r in ctx.state.last_notes}
+            lifts = sorted(((v if self._lift_col(here, place, m, f, rails[m, f]) == 0
+                             else black[m, f], m, f) for v, m, f in ctx.lifts),
+                           key=lambda x: -x[0])
+            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf)
+        return got
 
     def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
         """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
@@ -236,10 +260,10 @@ class ArmCosts:
         return got
 
     def _riders(self, ctx: Prev, lifts: list, cands: list, T: float, arrive: float,
-                lift_col: int) -> tuple[float, frozenset, float, dict]:
+                lift_col: tuple[int, int]) -> tuple[float, frozenset, float, dict]:
         """The arm's arrival and the notes riding along, of ``cands`` (``lifts``: when each
         finger of the state before is clear above every key, ``Prev.lifts`` or
-        ``Prev.lifts_black`` by the move's rule; note and finger, the
+        ``Prev.lifts_black`` or a mix by the move's rule, ``_lifts``; note and finger, the
         latest end of the move that keeps its key down, the move's time carrying it, when
         its press is done): the move starts once every other finger has lifted on time
         and every rider's press is done, and takes the arm's ``T`` or its riders' moves;
@@ -249,7 +273,7 @@ class ArmCosts:
         and the others are weighed again without it (the motion's rule,
         ``Motion._move_rail``). Then the other fingers' keys let up early for the move to
         end by the new notes' wish and before every rider's key comes up (``_cut_lifts``:
-        their frames lost, their key-ups; ``lift_col``: ``lifts``' column)."""
+        their frames lost, their key-ups; ``lift_col``: the move's places)."""
         while True:
             riders = frozenset(c[0] for c in cands)
             release = next((v for v, m, f in lifts if (m, f) not in riders), -math.inf)

@@ -46,6 +46,7 @@ later).
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -120,6 +121,7 @@ class HighClear:
         self.atlases = atlases
         self.moves = moves
         self._path: dict[tuple, float] = {}
+        self._room: dict[int, tuple[AtlasEntry, float]] = {}  # (``front_room_m``)
         self._params = params()
 
     def rise_clear_s(self, e: AtlasEntry, move: Move, front: bool = True) -> float:
@@ -148,6 +150,56 @@ class HighClear:
             self.rise_clear_s(e, moves.lift(e, "high").move, front),
             self.rise_clear_s(e, moves.rise(e).move, front),
             self.descent_clear_s(e, moves.descend(e, "high").move, front))]
+
+    def front_room_m(self, e: AtlasEntry) -> float:
+        """How far the arm may carry entry ``e``'s finger into the keyboard (+y) while it
+        goes up (or out while it comes down) with its front rule's moments still true:
+        the least distance, over the points of its ways up (``Moves.lift(e, "high")``
+        from the press, ``Moves.rise(e)`` from hover; a descent from crossing height is
+        the lift backwards; ``FRONT_SAMPLES`` points each) where it is clear by the front
+        rule, from ``FRONT_Y_M`` to the furthest-in body lower than the black rule's
+        height (inf: none lower; 0 without the body rule). Memoised per entry."""
+        got = self._room.get(id(e))
+        if got is not None:
+            return got[1]
+        room = 0.0
+        bodies = self.atlases[e.posture].bodies
+        if bodies is not None and self.moves is not None:
+            h, m = self.hand, self.moves[e.posture]
+            ss = np.linspace(0.0, 1.0, FRONT_SAMPLES)[:, None]
+            Q = np.repeat(self.atlases[e.posture].base[None], 2 * FRONT_SAMPLES, axis=0)
+            Q[:, h.joint_slice(e.finger)] = np.concatenate(
+                [up.q_a + ss * up.dq for up in (m.lift(e, "high").move, m.rise(e).move)])
+            Q = np.array([h.apply_couplings(q) for q in Q])
+            p, r = bodies.points_many(Q, e.finger), bodies.radii(e.finger)
+            low, y = p[:, :, 2] - r, p[:, :, 1] + r
+            black = low >= BODY_CLEAR_Z_M
+            clear = np.all(black | ((y <= FRONT_Y_M) & (low >= FRONT_CLEAR_Z_M)), axis=1)
+            lows = ~black & clear[:, None]  # (the bodies the front rule alone counts clear)
+            room = float(FRONT_Y_M - np.max(y[lows])) if lows.any() else math.inf
+        self._room[id(e)] = (e, room)  # (the entry kept: its id stays its own)
+        return room
+
+    def lift_front(self, e: AtlasEntry | None, reach_from_m: float, reach_to_m: float) -> bool:
+        """Whether entry ``e``'s lift before a move of the arm from reach ``reach_from_m``
+        to ``reach_to_m`` is timed by the front rule: ``front_rules``' lifts, and on a
+        move into the keyboard where every body the rule finds clear in front of the black
+        keys stays in front while the arm carries it in (``front_room_m``)."""
+        if front_rules(reach_from_m, reach_to_m)[0]:
+            return True
+        return e is not None and self.front_room_m(e) >= reach_to_m - reach_from_m
+
+    def descent_front(self, e: AtlasEntry | None, reach_from_m: float,
+                      reach_to_m: float) -> bool:
+        """Whether entry ``e``'s descent after a move of the arm from reach
+        ``reach_from_m`` to ``reach_to_m`` is timed by the front rule: ``front_rules``'
+        descents, and on a move out of the keyboard where every body the rule finds clear
+        in front of the black keys was in front while the arm carried it out
+        (``front_room_m``: the descent's path is its lift's backwards)."""
+        if front_rules(reach_from_m, reach_to_m)[1]:
+            return True
+        return e is not None and reach_to_m < reach_from_m \
+            and self.front_room_m(e) >= reach_from_m - reach_to_m
 
     def _shipped(self, e: AtlasEntry, move: Move, rising: bool, front: bool) -> float | None:
         """The move table's moment when ``move`` is one of the entry's own
