@@ -39,13 +39,13 @@ def _lowest_body_z(places: Places, e, move, t_s: float) -> float:
     return float(np.min(p[:, 2] - r))
 
 
-def _front_clear(places: Places, e, move, t_s: float) -> bool:
+def _front_clear(places: Places, e, move, t_s: float, dy_m: float = 0.0) -> bool:
     """Every body clear above the black tops, or in front of the black keys (less the
     body rule's tolerance) and clear above the white tops: computed here from the
-    keyboard's numbers."""
+    keyboard's numbers (``dy_m``: with the hand that much further into the keyboard)."""
     p, r = _bodies(places, e, move, t_s)
     low = p[:, 2] - r
-    front = p[:, 1] + r <= 0.060 - 0.0005
+    front = p[:, 1] + dy_m + r <= 0.060 - 0.0005
     return bool(np.all((low >= 0.0125 + 0.001 - 1e-9) | (front & (low >= 0.001 - 1e-9))))
 
 
@@ -114,6 +114,61 @@ def test_the_front_rule_is_clear_from_its_moments_and_earlier_in_front(places):
             assert places.rail_descent_s(e) < places.rail_descent_s(e, False) - 0.010
             earlier += 1
     assert earlier >= 4
+
+
+def test_a_body_in_front_stays_in_front_while_the_arm_moves_by_its_room(places):
+    """``HighClear.front_room_m``: with the hand carried that far into the keyboard (the
+    reach axis), every point of the entry's lift from its front-rule moment to its end,
+    and of its descent from its start to its moment, is still clear by the front rule
+    (tested at 41 points, finer than the 33 the room is measured at; so a lift before a
+    move of the arm into the keyboard, or a descent after a move out, no longer than the
+    room keeps the front rule's moments); 1 mm further, some point is not (the room is
+    the bound). At rail 0 on the default hand: in the first posture the pinky on E4 has
+    41.2 mm, the ring 20.9 mm, the middle on C4 9.0 mm (its body reaches further in); in
+    the second the pinky on E4 16.9 mm; a black-key entry's bodies are never in front
+    (inf: its moments are the black rule's)."""
+    rooms = {}
+    for e in _entries(places):
+        room = places.high.front_room_m(e)
+        rooms[e.posture, e.finger, e.pitch_class] = room
+        if not np.isfinite(room):
+            assert places.rail_lift_s(e) == places.rail_lift_s(e, False)
+            continue
+        assert room > 0.0
+        u, d = places.lift(e, "high"), places.descend(e, "high")
+        t_up = places.high.rise_clear_s(e, u.move)
+        t_down = places.high.descent_clear_s(e, d.move)
+        for t in np.linspace(t_up, u.move.duration_s, 41):
+            assert _front_clear(places, e, u.move, t, room)
+        for t in np.linspace(0.0, t_down, 41):
+            assert _front_clear(places, e, d.move, t, room)
+        assert not all(_front_clear(places, e, u.move, t, room + 0.001)
+                       for t in np.linspace(t_up, u.move.duration_s, 41))
+    assert [round(1000 * rooms[k], 1) for k in ((0, "pinky", 4), (0, "ring", 4),
+                                                 (0, "middle", 0), (1, "pinky", 4))] \
+        == [41.2, 20.9, 9.0, 16.9]
+    assert all(not np.isfinite(v) for k, v in rooms.items() if k[2] in (1, 6))
+
+
+def test_the_entrys_rule_for_a_move_of_the_arm(places):
+    """``lift_front`` and ``descent_front``: the front rule where the reach stays, for the
+    lifts before a move out of the keyboard and the descents after a move into it never
+    (the page's measurement: kept as the black rule's), and for a lift before a move in
+    or a descent after a move out where the entry's room holds the move's length."""
+    e = next(x for x in _entries(places) if (x.posture, x.finger, x.pitch_class)
+             == (0, "pinky", 4))
+    assert places.high.front_room_m(e) == pytest.approx(0.0412, abs=1e-4)
+    r0, r1, r2 = (places.reach_m(i) for i in range(3))
+    hc = places.high
+    assert hc.lift_front(e, r0, r0) and hc.descent_front(e, r0, r0)
+    assert hc.lift_front(e, r0, r1) and not hc.lift_front(e, r0, r2)  # (25 and 75 mm in)
+    assert hc.lift_front(e, r2, r0) and hc.lift_front(e, r1, r0)  # (out)
+    assert hc.descent_front(e, r1, r0) and not hc.descent_front(e, r2, r0)  # (out)
+    assert not hc.descent_front(e, r0, r1)  # (in: the black rule)
+    m = next(x for x in _entries(places) if (x.posture, x.finger, x.pitch_class)
+             == (0, "middle", 0))
+    assert not hc.lift_front(m, r0, r1) and not hc.descent_front(m, r1, r0)
+    assert not hc.lift_front(None, r0, r1) and hc.lift_front(None, r1, r0)
 
 
 def _searched(places: Places) -> HighClear:

@@ -158,7 +158,8 @@ class HighClear:
         from the press, ``Moves.rise(e)`` from hover; a descent from crossing height is
         the lift backwards; ``FRONT_SAMPLES`` points each) where it is clear by the front
         rule, from ``FRONT_Y_M`` to the furthest-in body lower than the black rule's
-        height (inf: none lower; 0 without the body rule). Memoised per entry."""
+        height, each sample's y grown by its step to the next along the path (inf: none
+        lower; 0 without the body rule). Memoised per entry."""
         got = self._room.get(id(e))
         if got is not None:
             return got[1]
@@ -176,6 +177,12 @@ class HighClear:
             black = low >= BODY_CLEAR_Z_M
             clear = np.all(black | ((y <= FRONT_Y_M) & (low >= FRONT_CLEAR_Z_M)), axis=1)
             lows = ~black & clear[:, None]  # (the bodies the front rule alone counts clear)
+            # (between two samples a body lies within its change between them of either:
+            # each sample's y is taken with the larger step to its neighbours on its path)
+            step = np.abs(np.diff(y.reshape(2, FRONT_SAMPLES, -1), axis=1))
+            pad = np.zeros((2, 1, step.shape[2]))
+            step = np.maximum(np.concatenate([pad, step], 1), np.concatenate([step, pad], 1))
+            y = y + step.reshape(y.shape)
             room = float(FRONT_Y_M - np.max(y[lows])) if lows.any() else math.inf
         self._room[id(e)] = (e, room)  # (the entry kept: its id stays its own)
         return room
