@@ -109,7 +109,7 @@ def test_a_lift_into_the_keyboard_keeps_the_front_rule_where_its_body_stays_in_f
     in front, and its lift is timed by the front rule (``lift_front``): E4's key, cut for
     the arm's start, comes up 21 ms later than by the black rule, the frames cut fewer by
     as much, in the programme as in the motion."""
-    (down, up, cut_loss, loss), out, costs = _case(places, 0.4, 73, 1, "middle", first=64)
+    (down, up, cut_loss, _), out, costs = _case(places, 0.4, 73, 1, "middle", first=64)
     here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == 0),
                key=lambda p: abs(places.rail_i(p)))
     e = costs.entry(0, "index", here)
