@@ -171,7 +171,7 @@ class HighClear:
             Q = np.repeat(self.atlases[e.posture].base[None], 2 * FRONT_SAMPLES, axis=0)
             Q[:, h.joint_slice(e.finger)] = np.concatenate(
                 [up.q_a + ss * up.dq for up in (m.lift(e, "high").move, m.rise(e).move)])
-            Q = np.array([h.apply_couplings(q) for q in Q])
+            Q = h.apply_couplings(Q)  # (row by row: its laws act on the last axis)
             p, r = bodies.points_many(Q, e.finger), bodies.radii(e.finger)
             low, y = p[:, :, 2] - r, p[:, :, 1] + r
             black = low >= BODY_CLEAR_Z_M
