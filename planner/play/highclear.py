@@ -25,8 +25,12 @@ black tops). A move of the arm that changes the play posture moves the hand alon
 (the reach axis, + into the keyboard: a translation, the heights unchanged). Before a
 move out of the keyboard the lifts keep the front rule (``front_rules``): a body in front
 of the black keys at the lift's moment only goes further out while the arm moves. Before
-a move in, the lifts are the black rule's alone (the move carries the bodies towards the
-black keys), and so are the descents after any change of posture. (After a move in, a
+a move in, which carries the bodies towards the black keys, a lift keeps the front rule
+only where every body the rule finds clear below the black tops lies further in front of
+the black keys than the move is long (``HighClear.front_room_m``, ``lift_front``; else
+the black rule), and so does a descent after a move out (``descent_front``: its path is
+the lift's backwards, its bodies further in until the arm is still); the descents after
+a move in keep the black rule. (After a move in, a
 body in front at the descent's moment was further out before: the front rule would hold
 there too, but the arm, moving as late as the descents allow, then ends later, and the
 fingers riding along with it stay busy longer: 4 chorales' frame F1 down by up to 0.010,
