@@ -12,6 +12,7 @@ import math
 from typing import TYPE_CHECKING
 
 from planner.play.follow import HOLD_PAST_S
+from planner.play.highclear import front_rules
 from planner.play.keytimes import (  # (LATE_MIN_S: a key later, ``costs.State.late``)
     LATE_MIN_S,
     held_enough_s,
@@ -50,9 +51,8 @@ class ArmCosts:
             return math.inf
         if rode is not None and followers:  # (the move ends as late as lets the new keys
             # go down on time, the motion's: ``ArmMotion._move_rail``)
-            here = prev.state.place
-            by_s = min([self._t_down[n] - self._times(n, f, place)[self._descent_col(here, place, n, f)]
-                        for n, f in new.items()]
+            col = self._descent_column(prev.state.place, place)
+            by_s = min([self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()]
                        + [self._t_up[m] - self.places.lift(self.entry(m, f, place), "high").cross_s
                           - HOLD_PAST_S for m, f in followers])
             end_s = max(release_t, by_s)  # (early for a rider whose key comes up before)
@@ -66,10 +66,10 @@ class ArmCosts:
         t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
         timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
         loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place) + cut_loss
-        here = prev.state.place
+        col = self._descent_column(prev.state.place, place)
         for n, f in new.items():
             times = timing.get((pitch[n], f, place))
-            after_s = (times or self._times(n, f, place))[self._descent_col(here, place, n, f)]
+            after_s = (times or self._times(n, f, place))[col]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
             came = prev.older.get(f) if m is None else (m, place)  # (its last key and
@@ -131,13 +131,13 @@ class ArmCosts:
         early for the arm to start on time and those keys' ups (``_cut_lifts``; none
         where a note may ride along)."""
         T = self.places.arm_time_s(ctx.state.place, place)
-        here = ctx.state.place
-        lift_col = (here, place)
+        col = self._descent_column(ctx.state.place, place)
+        lift_col = (ctx.state.place, place)
         lifts, lift_end = self._lifts(ctx, place)
-        arrive = min((self._t_down[n] - self._times(n, f, place)[self._descent_col(here, place, n, f)]
-                      for n, f in new.items()), default=math.inf)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift, or
             # the lifts cut for the arm to start on time)
+            arrive = min((self._t_down[n] - self._times(n, f, place)[col]
+                          for n, f in new.items()), default=math.inf)
             if lift_end + T <= arrive:
                 return lift_end + T, _NONE, 0.0, _NO_CUT
             release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, lift_col)
@@ -164,6 +164,8 @@ class ArmCosts:
                     # lift to its key crossing)
                     done = down_s + press_s - self.places.lift(a, "high").cross_s
                     cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
+        arrive = min((self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()),
+                     default=math.inf)
         if not cands:  # (``_riders``' answer when none rides along: the last lift, or the
             # lifts cut for the arm to start on time; the move)
             if lift_end + T <= arrive:
@@ -203,18 +205,12 @@ class ArmCosts:
             release = max(release, up + lift_s)
         return release, loss, ups
 
-    def _descent_col(self, here: int, place: int, n: int, f: str) -> int:
-        """``Costs._times``' column of note ``n``'s descent (finger ``f``) after a move of
-        the arm from place ``here`` to ``place``: the front rule's (1) where the move keeps
-        the play posture, or moves the hand out of the keyboard no further than the
-        entry's bodies stay in front of the black keys, the black rule's (3) otherwise
-        (``HighClear.descent_front``)."""
-        po = self.places.posture_of
-        if po(here) == po(place):
-            return 1
-        reach = self.places.reach_m
-        return 1 if self.places.high.descent_front(self.entry(n, f, place), reach(po(here)),
-                                                   reach(po(place))) else 3
+    def _descent_column(self, here: int, place: int) -> int:
+        """``Costs._times``' column of the descent's part after a move of the arm from
+        place ``here`` to ``place``: the front rule's (1) where the move keeps the play
+        posture, the black rule's (3) where it changes it
+        (``planner.play.highclear.front_rules``)."""
+        return 1 if self._front_rules(here, place)[1] else 3
 
     def _lift_col(self, here: int, place: int, m: int, f: str, r: int) -> int:
         """``Costs._times``' column of the lift of note ``m``'s finger ``f`` (pressed from
@@ -247,6 +243,12 @@ class ArmCosts:
                            key=lambda x: -x[0])
             got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf)
         return got
+
+    def _front_rules(self, here: int, place: int) -> tuple[bool, bool]:
+        """``highclear.front_rules`` of a move of the arm from place ``here`` to
+        ``place``: whether its lifts, and its descents, may keep the front rule."""
+        po, reach = self.places.posture_of, self.places.reach_m
+        return front_rules(reach(po(here)), reach(po(place)))
 
     def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
         """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``

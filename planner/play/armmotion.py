@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner.play.follow import HOLD_PAST_S
+from planner.play.highclear import front_rules
 from planner.play.places import Places
 from planner.play.profile import Move, straight_move
 
@@ -51,7 +52,7 @@ class ArmMotion:
         # (the lifts' rule, finger by finger: a change of posture that moves the hand into
         # the keyboard times a lift by the black rule unless its bodies stay in front of
         # the black keys: ``HighClear.lift_front``)
-        front = self.lift_rules(posture)
+        front, descent_front = self.lift_rules(posture), self.front_rules(posture)[1]
         holds = [h for h in self._holds(rail_m, posture) if h[1].finger not in strikers]
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
@@ -77,8 +78,7 @@ class ArmMotion:
                          for st in self.fingers.values() if id(st) not in held])
         k = len(self.arm_track.q)
         self.arm_track.add(t0, part(move, 0, k))
-        self.arm_reach = (self.places.reach_m(self.posture), self.places.reach_m(posture))
-        self.posture = posture
+        self.posture, self.arm_front = posture, descent_front
         for st, e in holds:
             n = len(st.entry.press)
             st.track.add(t0, part(move, k, n))
@@ -128,6 +128,11 @@ class ArmMotion:
                             + self.moves.high.rise_clear_s(st.entry, up.move, front(st)))
         return move, max(ready, arrive_by_s - move.duration_s)
 
+    def front_rules(self, posture: int) -> tuple[bool, bool]:
+        """``highclear.front_rules`` of a move of the arm into play posture ``posture``:
+        whether its lifts, and its descents, keep the front rule."""
+        return front_rules(self.places.reach_m(self.posture), self.places.reach_m(posture))
+
     def lift_rules(self, posture: int):
         """Whether a finger's lift before a move of the arm into play posture ``posture``
         keeps the front rule (``HighClear.lift_front`` of its entry), as a function of
@@ -136,12 +141,6 @@ class ArmMotion:
         if a == b:
             return lambda st: True
         return lambda st: self.moves.high.lift_front(st.entry, a, b)
-
-    def descent_front(self, e) -> bool:
-        """Whether entry ``e``'s descent after the arm's last move keeps the front rule
-        (``HighClear.descent_front``)."""
-        a, b = self.arm_reach
-        return a == b or self.moves.high.descent_front(e, a, b)
 
     def _natural_ready(self, holds, front) -> float:
         """When the arm could start with ``holds`` riding along and every other finger

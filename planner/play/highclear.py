@@ -26,11 +26,11 @@ black tops). A move of the arm that changes the play posture moves the hand alon
 move out of the keyboard the lifts keep the front rule (``front_rules``): a body in front
 of the black keys at the lift's moment only goes further out while the arm moves. Before
 a move in, which carries the bodies towards the black keys, a lift keeps the front rule
-only where every body the rule finds clear below the black tops lies further in front of
-the black keys than the move is long (``HighClear.front_room_m``, ``lift_front``; else
-the black rule), and so does a descent after a move out (``descent_front``: its path is
-the lift's backwards, its bodies further in until the arm is still); the descents after
-a move in keep the black rule. (After a move in, a
+where every body the rule finds clear below the black tops lies further in front of the
+black keys than the arm can carry it until it is above them (``HighClear.front_room_m``
+against the move's length or ``reach_bound_m`` of the lift's time from its front moment
+to its black one; ``lift_front``), else the black rule's. The descents after any change of
+posture keep the black rule. (After a move in, a
 body in front at the descent's moment was further out before: the front rule would hold
 there too, but the arm, moving as late as the descents allow, then ends later, and the
 fingers riding along with it stay busy longer: 4 chorales' frame F1 down by up to 0.010,
@@ -157,13 +157,12 @@ class HighClear:
 
     def front_room_m(self, e: AtlasEntry) -> float:
         """How far the arm may carry entry ``e``'s finger into the keyboard (+y) while it
-        goes up (or out while it comes down) with its front rule's moments still true:
-        the least distance, over the points of its ways up (``Moves.lift(e, "high")``
-        from the press, ``Moves.rise(e)`` from hover; a descent from crossing height is
-        the lift backwards; ``FRONT_SAMPLES`` points each) where it is clear by the front
-        rule, from ``FRONT_Y_M`` to the furthest-in body lower than the black rule's
-        height, each sample's y grown by its step to the next along the path (inf: none
-        lower; 0 without the body rule). Memoised per entry."""
+        goes up with its front rule's moments still true: the least distance, over the
+        points of its ways up (``Moves.lift(e, "high")`` from the press, ``Moves.rise(e)``
+        from hover; ``FRONT_SAMPLES`` points each) where it is clear by the front rule,
+        from ``FRONT_Y_M`` to the furthest-in body lower than the black rule's height,
+        each sample's y grown by its step to the next along the path (inf: none lower; 0
+        without the body rule). Memoised per entry."""
         got = self._room.get(id(e))
         if got is not None:
             return got[1]
@@ -191,26 +190,38 @@ class HighClear:
         self._room[id(e)] = (e, room)  # (the entry kept: its id stays its own)
         return room
 
+    def reach_bound_m(self, t_s: float) -> float:
+        """The furthest the arm's reach axis can move in ``t_s`` from rest: its acceleration within its bound ``A`` and changing no
+        faster than its jerk bound ``J`` (the posture's moves', ``Moves.acceleration``,
+        ``jerk``: every move of the arm keeps them), so ``J t^3 / 6`` up to ``A / J`` and
+        at ``A`` after (inf on a hand without the reach axis or the move tables)."""
+        j = self.hand.index.get("reach")
+        if j is None or self.moves is None:
+            return math.inf
+        a, jerk = float(self.moves[0].acceleration[j]), float(self.moves[0].jerk[j])
+        t1 = a / jerk
+        if t_s <= t1:
+            return jerk * t_s ** 3 / 6.0
+        u = t_s - t1
+        return jerk * t1 ** 3 / 6.0 + 0.5 * a * t1 * u + 0.5 * a * u * u
+
     def lift_front(self, e: AtlasEntry | None, reach_from_m: float, reach_to_m: float) -> bool:
         """Whether entry ``e``'s lift before a move of the arm from reach ``reach_from_m``
         to ``reach_to_m`` is timed by the front rule: ``front_rules``' lifts, and on a
         move into the keyboard where every body the rule finds clear in front of the black
-        keys stays in front while the arm carries it in (``front_room_m``)."""
+        keys stays in front while the arm carries it in (``front_room_m``) as far as the
+        move goes, or as far as the arm can move (``reach_bound_m``) from the lift's front
+        moment, the earliest it starts, to its black moment, from which every body is
+        above the black tops (the later of its ways up: from the press, from hover)."""
         if front_rules(reach_from_m, reach_to_m)[0]:
             return True
-        return e is not None and self.front_room_m(e) >= reach_to_m - reach_from_m
-
-    def descent_front(self, e: AtlasEntry | None, reach_from_m: float,
-                      reach_to_m: float) -> bool:
-        """Whether entry ``e``'s descent after a move of the arm from reach
-        ``reach_from_m`` to ``reach_to_m`` is timed by the front rule: ``front_rules``'
-        descents, and on a move out of the keyboard where every body the rule finds clear
-        in front of the black keys was in front while the arm carried it out
-        (``front_room_m``: the descent's path is its lift's backwards)."""
-        if front_rules(reach_from_m, reach_to_m)[1]:
-            return True
-        return e is not None and reach_to_m < reach_from_m \
-            and self.front_room_m(e) >= reach_from_m - reach_to_m
+        if e is None:
+            return False
+        m = self.moves[e.posture] if self.moves is not None else None
+        gap = math.inf if m is None else max(
+            self.rise_clear_s(e, up, False) - self.rise_clear_s(e, up)
+            for up in (m.lift(e, "high").move, m.rise(e).move))
+        return self.front_room_m(e) >= min(reach_to_m - reach_from_m, self.reach_bound_m(gap))
 
     def _shipped(self, e: AtlasEntry, move: Move, rising: bool, front: bool) -> float | None:
         """The move table's moment when ``move`` is one of the entry's own
