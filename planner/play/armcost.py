@@ -132,8 +132,7 @@ class ArmCosts:
         where a note may ride along)."""
         T = self.places.arm_time_s(ctx.state.place, place)
         col = self._descent_column(ctx.state.place, place)
-        lift_col = (ctx.state.place, place)
-        lifts, lift_end = self._lifts(ctx, place)
+        lifts, lift_end, lift_col = self._lifts(ctx, place)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift, or
             # the lifts cut for the arm to start on time)
             arrive = min((self._t_down[n] - self._times(n, f, place)[col]
@@ -174,13 +173,13 @@ class ArmCosts:
             return release + T, _NONE, loss, ups
         return self._riders(ctx, lifts, cands, T, arrive, lift_col)
 
-    def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: tuple[int, int]
+    def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: dict | None
                    ) -> tuple[float, float, dict]:
         """The motion's lifts before a move of the arm that must start by ``start_s`` to
         put the new keys down on time (``Motion.lift_by_s``: each finger's key up by
         then less its lift to clear above every key; ``lifts``: ``Prev.lifts`` or
-        ``Prev.lifts_black`` or a mix (``_lifts``), ``lift_col``: the move's places, which
-        give each finger's ``Costs._times`` column, ``_lift_col``): a key due up
+        ``Prev.lifts_black`` or a mix, ``lift_col`` each one's ``Costs._times`` column by
+        note and finger, None: all the front rule's, ``_lifts``): a key due up
         later comes up that early, but held as long as its note still sounds
         (``keytimes.held_enough_s``, ``_cut_up_s``) and never before its shortest press
         (``Moves.press_min_s``; the motion lifts once the press is done). Returns when
@@ -194,7 +193,7 @@ class ArmCosts:
                 break
             r = ctx.last[f][1]
             lift_s = (self._timing.get((self.pitch[m], f, r)) or self._times(m, f, r))[
-                self._lift_col(*lift_col, m, f, r)]
+                0 if lift_col is None else lift_col[m, f]]
             e = self.entry(m, f, r)
             due = clear - lift_s  # (its key's up: its own, or this event's for a held note)
             up = min(due, self._cut_up_s(ctx, m, start_s - lift_s, e))
@@ -225,23 +224,24 @@ class ArmCosts:
         return 0 if self.places.high.lift_front(self.entry(m, f, r), reach(po(here)),
                                                 reach(po(place))) else 2
 
-    def _lifts(self, ctx: Prev, place: int) -> tuple[list, float]:
+    def _lifts(self, ctx: Prev, place: int) -> tuple[list, float, dict | None]:
         """When each finger of ``ctx``'s state is clear above every key before a move of
-        the arm to ``place`` (latest first), and the latest: ``Prev.lifts`` (the front
-        rule), ``Prev.lifts_black``, or each finger's own (``_lift_col``; memoised per
-        posture moved to)."""
+        the arm to ``place`` (latest first), the latest, and each one's ``Costs._times``
+        column by note and finger (None: all the front rule's): ``Prev.lifts``, or each
+        finger's by its entry's rule (``_lift_col``; memoised per posture moved to)."""
         here = ctx.state.place
         po = self.places.posture_of
         if po(here) == po(place):
-            return ctx.lifts, ctx.lift_end
+            return ctx.lifts, ctx.lift_end, None
         got = ctx.lifts_to.get(po(place))
         if got is None:
             black = {(m, f): v for v, m, f in ctx.lifts_black}
-            rails = {(m, f): r for m, f, r in ctx.state.last_notes}
-            lifts = sorted(((v if self._lift_col(here, place, m, f, rails[m, f]) == 0
-                             else black[m, f], m, f) for v, m, f in ctx.lifts),
-                           key=lambda x: -x[0])
-            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf)
+            cols = {(m, f): self._lift_col(here, place, m, f, r)
+                    for m, f, r in ctx.state.last_notes}
+            lifts = sorted(((v if cols[m, f] == 0 else black[m, f], m, f)
+                            for v, m, f in ctx.lifts), key=lambda x: -x[0])
+            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
+                                             cols)
         return got
 
     def _front_rules(self, here: int, place: int) -> tuple[bool, bool]:
@@ -262,7 +262,7 @@ class ArmCosts:
         return got
 
     def _riders(self, ctx: Prev, lifts: list, cands: list, T: float, arrive: float,
-                lift_col: tuple[int, int]) -> tuple[float, frozenset, float, dict]:
+                lift_col: dict | None) -> tuple[float, frozenset, float, dict]:
         """The arm's arrival and the notes riding along, of ``cands`` (``lifts``: when each
         finger of the state before is clear above every key, ``Prev.lifts`` or
         ``Prev.lifts_black`` or a mix by the move's rule, ``_lifts``; note and finger, the
@@ -275,7 +275,7 @@ class ArmCosts:
         and the others are weighed again without it (the motion's rule,
         ``Motion._move_rail``). Then the other fingers' keys let up early for the move to
         end by the new notes' wish and before every rider's key comes up (``_cut_lifts``:
-        their frames lost, their key-ups; ``lift_col``: the move's places)."""
+        their frames lost, their key-ups; ``lift_col``: ``lifts``' columns)."""
         while True:
             riders = frozenset(c[0] for c in cands)
             release = next((v for v, m, f in lifts if (m, f) not in riders), -math.inf)

@@ -126,6 +126,7 @@ class HighClear:
         self.moves = moves
         self._path: dict[tuple, float] = {}
         self._room: dict[int, tuple[AtlasEntry, float]] = {}  # (``front_room_m``)
+        self._lift_front: dict[tuple, tuple[AtlasEntry, bool]] = {}  # (``lift_front``)
         self._params = params()
 
     def rise_clear_s(self, e: AtlasEntry, move: Move, front: bool = True) -> float:
@@ -217,11 +218,17 @@ class HighClear:
             return True
         if e is None:
             return False
+        key = (id(e), reach_to_m - reach_from_m)
+        got = self._lift_front.get(key)
+        if got is not None:
+            return got[1]
         m = self.moves[e.posture] if self.moves is not None else None
         gap = math.inf if m is None else max(
             self.rise_clear_s(e, up, False) - self.rise_clear_s(e, up)
             for up in (m.lift(e, "high").move, m.rise(e).move))
-        return self.front_room_m(e) >= min(reach_to_m - reach_from_m, self.reach_bound_m(gap))
+        ok = self.front_room_m(e) >= min(key[1], self.reach_bound_m(gap))
+        self._lift_front[key] = (e, ok)  # (memoised by entry and move: the entry kept)
+        return ok
 
     def _shipped(self, e: AtlasEntry, move: Move, rising: bool, front: bool) -> float | None:
         """The move table's moment when ``move`` is one of the entry's own
