@@ -20,12 +20,13 @@ def places(hand) -> Places:
     return Places(hand)
 
 
-def _case(places, start_s: float, pitch: int, posture: int, finger: str, start: int = 0):
-    """The index holds C4 from ``start_s`` to 1.0 s (from the nearest place of posture
-    ``start`` to the rail's 0), then ``finger`` strikes ``pitch`` at 1.0 s from the
-    nearest place of ``posture`` (the rail's move too long to start after C4's key is due
-    up); the programme's and the motion's key times."""
-    notes = (Note(60, start_s, 1.0, 80), Note(pitch, 1.0, 1.5, 80))
+def _case(places, start_s: float, pitch: int, posture: int, finger: str, start: int = 0,
+          first: int = 60):
+    """The index holds C4 (or ``first``) from ``start_s`` to 1.0 s (from the nearest place
+    of posture ``start`` to the rail's 0), then ``finger`` strikes ``pitch`` at 1.0 s from
+    the nearest place of ``posture`` (the rail's move too long to start after C4's key is
+    due up); the programme's and the motion's key times."""
+    notes = (Note(first, start_s, 1.0, 80), Note(pitch, 1.0, 1.5, 80))
     costs = Costs(notes, places, 100.0)
     here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == start),
                key=lambda p: abs(places.rail_i(p)))
@@ -69,8 +70,12 @@ def test_a_move_out_of_the_keyboard_lifts_by_the_front_rule(places):
     moves out of the keyboard): the index's body, in front of the black keys once its
     lift is clear by the front rule, only goes further out, so the arm may start then
     (``highclear.front_rules``), earlier than by the black rule; the descents after a
-    change of posture keep the black rule, and so do the lifts before a move in. The
-    programme's key times are the motion's."""
+    change of posture keep the black rule. The middle's body on E5's front in the first
+    posture lies 9.2 mm in front of the black keys' front less the tolerance
+    (``HighClear.front_room_m``): less than the 25 mm the reach moves and than the
+    reach axis goes between its lift's front and black moments, so its lift before the
+    move back in keeps the black rule (``HighClear.lift_front``). The programme's key
+    times are the motion's."""
     (down, up, cut_loss, loss), out, costs = _case(places, 0.4, 76, 0, "middle", start=1)
     assert out[1].down_s == pytest.approx(down, abs=1e-6)
     assert out[0].up_s == pytest.approx(up, abs=1e-6)
@@ -84,10 +89,47 @@ def test_a_move_out_of_the_keyboard_lifts_by_the_front_rule(places):
     e = costs.entry(0, "index", here)
     assert places.rail_lift_s(e) < places.rail_lift_s(e, False) - 0.010  # (this case
     # tests the front rule's moment: earlier)
-    assert (costs._lift_column(here, there), costs._descent_column(here, there)) == (0, 3)
-    assert (costs._lift_column(there, here), costs._descent_column(there, here)) == (2, 3)
-    assert (costs._lift_column(here, here + 1), costs._descent_column(here, here + 1)) \
+    em = costs.entry(1, "middle", there)
+    assert places.high.front_room_m(em) == pytest.approx(0.0092, abs=1e-4)
+    assert places.reach_m(1) - places.reach_m(0) == pytest.approx(0.025)
+    assert (costs._lift_col(here, there, 0, "index", here),
+            costs._descent_column(here, there)) == (0, 3)
+    assert (costs._lift_col(there, here, 1, "middle", there),
+            costs._descent_column(there, here)) == (2, 3)
+    assert (costs._lift_col(here, here + 1, 0, "index", here),
+            costs._descent_column(here, here + 1)) \
         == (0, 1)  # (the same posture, a step along the rail: the front rule both ways)
+
+
+def test_a_lift_into_the_keyboard_keeps_the_front_rule_where_its_body_stays_in_front(
+        places, monkeypatch):
+    """The index on E4's front in the first posture, then the middle on C#5 in the second
+    (the hand moves 25 mm into the keyboard): every body of the index that the front rule
+    counts clear below the black tops lies 30.4 mm in front of the black keys' front less
+    the tolerance (``HighClear.front_room_m``), so the arm carrying it 25 mm in leaves it
+    in front, and its lift is timed by the front rule (``lift_front``): E4's key, cut for
+    the arm's start, comes up 21 ms later than by the black rule, the frames cut fewer by
+    as much, in the programme as in the motion."""
+    (down, up, cut_loss, _), out, costs = _case(places, 0.4, 73, 1, "middle", first=64)
+    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == 0),
+               key=lambda p: abs(places.rail_i(p)))
+    e = costs.entry(0, "index", here)
+    assert places.high.front_room_m(e) == pytest.approx(0.0304, abs=1e-4)
+    assert places.high.lift_front(e, places.reach_m(0), places.reach_m(1))
+    assert places.high.lift_front(e, places.reach_m(0), places.reach_m(2))  # (75 mm in:
+    # further than the room, but the arm moves at most the reach's bound from the lift's
+    # front moment to its black one)
+    gain_s = places.rail_lift_s(e, False) - places.rail_lift_s(e)
+    assert gain_s == pytest.approx(0.0212, abs=2e-4)
+    assert out[1].down_s == pytest.approx(down, abs=1e-6)
+    assert out[0].up_s == pytest.approx(up, abs=1e-6)
+    assert up < costs.t_up(0) - 0.03  # (cut)
+    monkeypatch.setattr(type(places.high), "lift_front", lambda self, e, a, b: a >= b)
+    (down_b, up_b, cut_b, _), out_b, _ = _case(places, 0.4, 73, 1, "middle", first=64)
+    assert out_b[0].up_s == pytest.approx(up_b, abs=1e-6)
+    assert up == pytest.approx(up_b + gain_s, abs=1e-6)  # (held that much longer)
+    assert cut_loss == pytest.approx(cut_b - gain_s / costs.dt, abs=1e-6)
+    assert down == pytest.approx(down_b, abs=1e-6)
 
 
 def test_a_shorter_note_is_held_until_it_sounds(places):

@@ -39,13 +39,13 @@ def _lowest_body_z(places: Places, e, move, t_s: float) -> float:
     return float(np.min(p[:, 2] - r))
 
 
-def _front_clear(places: Places, e, move, t_s: float) -> bool:
+def _front_clear(places: Places, e, move, t_s: float, dy_m: float = 0.0) -> bool:
     """Every body clear above the black tops, or in front of the black keys (less the
     body rule's tolerance) and clear above the white tops: computed here from the
-    keyboard's numbers."""
+    keyboard's numbers (``dy_m``: with the hand that much further into the keyboard)."""
     p, r = _bodies(places, e, move, t_s)
     low = p[:, 2] - r
-    front = p[:, 1] + r <= 0.060 - 0.0005
+    front = p[:, 1] + dy_m + r <= 0.060 - 0.0005
     return bool(np.all((low >= 0.0125 + 0.001 - 1e-9) | (front & (low >= 0.001 - 1e-9))))
 
 
@@ -114,6 +114,100 @@ def test_the_front_rule_is_clear_from_its_moments_and_earlier_in_front(places):
             assert places.rail_descent_s(e) < places.rail_descent_s(e, False) - 0.010
             earlier += 1
     assert earlier >= 4
+
+
+def test_a_body_in_front_stays_in_front_while_the_arm_moves_by_its_room(places):
+    """``HighClear.front_room_m``: with the hand carried that far into the keyboard (the
+    reach axis), every point of the entry's lift from its front-rule moment to its end,
+    and of its descent from its start to its moment, is still clear by the front rule
+    (tested at 41 points, finer than the 33 the room is measured at; so a lift before a
+    move of the arm into the keyboard, or a descent after a move out, no longer than the
+    room keeps the front rule's moments); 1 mm further, some point is not (the room is
+    the bound). At rail 0 on the default hand: in the first posture the pinky on E4 has
+    41.2 mm, the ring 20.9 mm, the middle on C4 9.0 mm (its body reaches further in); in
+    the second the pinky on E4 16.9 mm; a black-key entry's bodies are never in front
+    (inf: its moments are the black rule's)."""
+    rooms = {}
+    for e in _entries(places):
+        room = places.high.front_room_m(e)
+        rooms[e.posture, e.finger, e.pitch_class] = room
+        if not np.isfinite(room):
+            assert places.rail_lift_s(e) == places.rail_lift_s(e, False)
+            continue
+        assert room > 0.0
+        u, d = places.lift(e, "high"), places.descend(e, "high")
+        t_up = places.high.rise_clear_s(e, u.move)
+        t_down = places.high.descent_clear_s(e, d.move)
+        for t in np.linspace(t_up, u.move.duration_s, 41):
+            assert _front_clear(places, e, u.move, t, room)
+        for t in np.linspace(0.0, t_down, 41):
+            assert _front_clear(places, e, d.move, t, room)
+        assert not all(_front_clear(places, e, u.move, t, room + 0.001)
+                       for t in np.linspace(t_up, u.move.duration_s, 41))
+    assert [round(1000 * rooms[k], 1) for k in ((0, "pinky", 4), (0, "ring", 4),
+                                                 (0, "middle", 0), (1, "pinky", 4))] \
+        == [41.2, 20.9, 9.0, 16.9]
+    assert all(not np.isfinite(v) for k, v in rooms.items() if k[2] in (1, 6))
+
+
+def test_the_reach_bound_holds_every_move_of_the_arm(places):
+    """``HighClear.reach_bound_m``: the reach axis's bound from rest (acceleration 40 m/s^2
+    reached over its 5 ms jerk ramp: 0.17 mm in 5 ms, 6.2 mm in 20 ms), the double
+    integral of ``min(J t, A)`` worked out here step by step; every move of the arm
+    between the postures (with rail steps of 0-0.3 m) moves the reach no further from its
+    start, nor within its last moments, than the bound of that time."""
+    hc, h = places.high, places.hand
+    j = h.index["reach"]
+    a, jerk = places.moves[0].acceleration[j], places.moves[0].jerk[j]
+    assert (a, jerk) == (40.0, 8000.0)
+    dt = 1e-6
+    t = np.arange(0.0, 0.04, dt)
+    v = np.cumsum(np.minimum(jerk * t, a)) * dt
+    x = np.cumsum(v) * dt
+    for ts in (0.002, 0.005, 0.01, 0.02, 0.035):
+        assert hc.reach_bound_m(ts) == pytest.approx(x[round(ts / dt) - 1], rel=1e-3)
+    assert hc.reach_bound_m(0.005) == pytest.approx(1.667e-4, rel=1e-3)
+    assert hc.reach_bound_m(0.02) == pytest.approx(6.167e-3, rel=1e-3)
+    r = [places.reach_m(i) for i in range(places.postures)]
+    for p0 in range(3):
+        for p1 in range(3):
+            for rail_m in (0.0, 0.042, 0.3):
+                if p0 == p1:
+                    continue
+                move = places.arm_move((0.0, r[p0]), (rail_m, r[p1]))
+                ts = np.linspace(0.0, move.duration_s, 201)
+                reach = np.array([move.at(t_s)[0][1] for t_s in ts])
+                gone = np.abs(reach - reach[0])
+                left = np.abs(reach[-1] - reach)
+                assert all(gone[k] <= hc.reach_bound_m(ts[k]) + 1e-12 for k in range(201))
+                assert all(left[k] <= hc.reach_bound_m(ts[-1] - ts[k]) + 1e-12
+                           for k in range(201))
+
+
+def test_the_entrys_rule_for_a_move_of_the_arm(places):
+    """``lift_front``: the front rule where the reach stays and before a move out of the
+    keyboard; before a move in where the entry's room holds the move's length, or the
+    reach axis's reach (``reach_bound_m``) in the time from the lift's front moment to
+    its black one (the later of its lift from the press and its rise from hover). On the
+    first posture at rail 0: the pinky on E4 (room 41.2 mm, 35.1 ms: 21.3 mm) and the
+    ring (20.9 mm, 26.6 ms: 11.7 mm) keep it into either other posture, 25 or 75 mm in;
+    the middle on C4 (9.0 mm, 27.6 ms: 12.7 mm) keeps the black rule."""
+    hc = places.high
+    r0, r1, r2 = (places.reach_m(i) for i in range(3))
+    got = {}
+    for e in _entries(places):
+        if e.posture != 0:
+            continue
+        m = places.moves[0]
+        gap = max(hc.rise_clear_s(e, up, False) - hc.rise_clear_s(e, up)
+                  for up in (m.lift(e, "high").move, m.rise(e).move))
+        got[e.finger] = (round(1000 * hc.front_room_m(e), 1), round(1000 * gap, 1),
+                         round(1000 * hc.reach_bound_m(gap), 1),
+                         hc.lift_front(e, r0, r1), hc.lift_front(e, r0, r2))
+        assert hc.lift_front(e, r0, r0) and hc.lift_front(e, r1, r0) and hc.lift_front(e, r2, r0)
+    assert got == {"pinky": (41.2, 35.1, 21.3, True, True), "ring": (20.9, 26.6, 11.7, True, True),
+                   "middle": (9.0, 27.6, 12.7, False, False)}
+    assert not hc.lift_front(None, r0, r1) and hc.lift_front(None, r1, r0)
 
 
 def _searched(places: Places) -> HighClear:

@@ -132,9 +132,7 @@ class ArmCosts:
         where a note may ride along)."""
         T = self.places.arm_time_s(ctx.state.place, place)
         col = self._descent_column(ctx.state.place, place)
-        lift_col = self._lift_column(ctx.state.place, place)
-        lifts, lift_end = (ctx.lifts, ctx.lift_end) if lift_col == 0 \
-            else (ctx.lifts_black, ctx.lift_end_black)
+        lifts, lift_end, lift_col = self._lifts(ctx, place)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift, or
             # the lifts cut for the arm to start on time)
             arrive = min((self._t_down[n] - self._times(n, f, place)[col]
@@ -175,12 +173,13 @@ class ArmCosts:
             return release + T, _NONE, loss, ups
         return self._riders(ctx, lifts, cands, T, arrive, lift_col)
 
-    def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: int
+    def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: dict | None
                    ) -> tuple[float, float, dict]:
         """The motion's lifts before a move of the arm that must start by ``start_s`` to
         put the new keys down on time (``Motion.lift_by_s``: each finger's key up by
         then less its lift to clear above every key; ``lifts``: ``Prev.lifts`` or
-        ``Prev.lifts_black``, ``lift_col`` its ``Costs._times`` column): a key due up
+        ``Prev.lifts_black`` or a mix, ``lift_col`` each one's ``Costs._times`` column by
+        note and finger, None: all the front rule's, ``_lifts``): a key due up
         later comes up that early, but held as long as its note still sounds
         (``keytimes.held_enough_s``, ``_cut_up_s``) and never before its shortest press
         (``Moves.press_min_s``; the motion lifts once the press is done). Returns when
@@ -193,7 +192,8 @@ class ArmCosts:
                 release = max(release, clear)
                 break
             r = ctx.last[f][1]
-            lift_s = (self._timing.get((self.pitch[m], f, r)) or self._times(m, f, r))[lift_col]
+            lift_s = (self._timing.get((self.pitch[m], f, r)) or self._times(m, f, r))[
+                0 if lift_col is None else lift_col[m, f]]
             e = self.entry(m, f, r)
             due = clear - lift_s  # (its key's up: its own, or this event's for a held note)
             up = min(due, self._cut_up_s(ctx, m, start_s - lift_s, e))
@@ -211,12 +211,38 @@ class ArmCosts:
         (``planner.play.highclear.front_rules``)."""
         return 1 if self._front_rules(here, place)[1] else 3
 
-    def _lift_column(self, here: int, place: int) -> int:
-        """``Costs._times``' column of the lifts before a move of the arm from place
-        ``here`` to ``place``: the front rule's (0) where the move keeps the play posture
-        or moves the hand out of the keyboard, the black rule's (2) where it moves it in
-        (``planner.play.highclear.front_rules``)."""
-        return 0 if self._front_rules(here, place)[0] else 2
+    def _lift_col(self, here: int, place: int, m: int, f: str, r: int) -> int:
+        """``Costs._times``' column of the lift of note ``m``'s finger ``f`` (pressed from
+        place ``r``) before a move of the arm from place ``here`` to ``place``: the front
+        rule's (0) where the move keeps the play posture, moves the hand out of the
+        keyboard, or in no further than the entry's bodies stay in front of the black
+        keys, the black rule's (2) otherwise (``HighClear.lift_front``)."""
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return 0
+        reach = self.places.reach_m
+        return 0 if self.places.high.lift_front(self.entry(m, f, r), reach(po(here)),
+                                                reach(po(place))) else 2
+
+    def _lifts(self, ctx: Prev, place: int) -> tuple[list, float, dict | None]:
+        """When each finger of ``ctx``'s state is clear above every key before a move of
+        the arm to ``place`` (latest first), the latest, and each one's ``Costs._times``
+        column by note and finger (None: all the front rule's): ``Prev.lifts``, or each
+        finger's by its entry's rule (``_lift_col``; memoised per posture moved to)."""
+        here = ctx.state.place
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return ctx.lifts, ctx.lift_end, None
+        got = ctx.lifts_to.get(po(place))
+        if got is None:
+            black = {(m, f): v for v, m, f in ctx.lifts_black}
+            cols = {(m, f): self._lift_col(here, place, m, f, r)
+                    for m, f, r in ctx.state.last_notes}
+            lifts = sorted(((v if cols[m, f] == 0 else black[m, f], m, f)
+                            for v, m, f in ctx.lifts), key=lambda x: -x[0])
+            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
+                                             cols)
+        return got
 
     def _front_rules(self, here: int, place: int) -> tuple[bool, bool]:
         """``highclear.front_rules`` of a move of the arm from place ``here`` to
@@ -236,10 +262,10 @@ class ArmCosts:
         return got
 
     def _riders(self, ctx: Prev, lifts: list, cands: list, T: float, arrive: float,
-                lift_col: int) -> tuple[float, frozenset, float, dict]:
+                lift_col: dict | None) -> tuple[float, frozenset, float, dict]:
         """The arm's arrival and the notes riding along, of ``cands`` (``lifts``: when each
         finger of the state before is clear above every key, ``Prev.lifts`` or
-        ``Prev.lifts_black`` by the move's rule; note and finger, the
+        ``Prev.lifts_black`` or a mix by the move's rule, ``_lifts``; note and finger, the
         latest end of the move that keeps its key down, the move's time carrying it, when
         its press is done): the move starts once every other finger has lifted on time
         and every rider's press is done, and takes the arm's ``T`` or its riders' moves;
@@ -249,7 +275,7 @@ class ArmCosts:
         and the others are weighed again without it (the motion's rule,
         ``Motion._move_rail``). Then the other fingers' keys let up early for the move to
         end by the new notes' wish and before every rider's key comes up (``_cut_lifts``:
-        their frames lost, their key-ups; ``lift_col``: ``lifts``' column)."""
+        their frames lost, their key-ups; ``lift_col``: ``lifts``' columns)."""
         while True:
             riders = frozenset(c[0] for c in cands)
             release = next((v for v, m, f in lifts if (m, f) not in riders), -math.inf)

@@ -49,10 +49,10 @@ class ArmMotion:
         earliest, which ends early for them only where it need not wait for the other
         fingers' lifts (the programme's rule, ``Costs._riders``)."""
         r0 = self.arm_track.q[0]
-        # (the lifts' rule and the descents': a change of posture times its descents by
-        # the black rule, and its lifts too where it moves the hand into the keyboard:
-        # ``highclear.front_rules``)
-        front, descent_front = self.front_rules(posture)
+        # (the lifts' rule, finger by finger: a change of posture that moves the hand into
+        # the keyboard times a lift by the black rule unless its bodies stay in front of
+        # the black keys: ``HighClear.lift_front``)
+        front, descent_front = self.lift_rules(posture), self.front_rules(posture)[1]
         holds = [h for h in self._holds(rail_m, posture) if h[1].finger not in strikers]
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
@@ -73,8 +73,8 @@ class ArmMotion:
         held = {id(st) for st, _ in holds}
         for st in self.fingers.values():
             if id(st) not in held and st.pose != "high":
-                self._to_high(st, self.lift_by_s(st, t0, arrive_by_s, front))
-        t0 = max([t0] + [st.safe_s if front else st.black_s
+                self._to_high(st, self.lift_by_s(st, t0, arrive_by_s, front(st)))
+        t0 = max([t0] + [st.safe_s if front(st) else st.black_s
                          for st in self.fingers.values() if id(st) not in held])
         k = len(self.arm_track.q)
         self.arm_track.add(t0, part(move, 0, k))
@@ -116,16 +116,16 @@ class ArmMotion:
                 self.hand.fingers.index(st.entry.finger) for st, _ in holds))
         ready = max(self.arm_track.free_s, self.committed_s)
         held = {id(st) for st, _ in holds}
-        front = self.front_rules(posture)[0]  # (the lifts': ``planner.play.highclear``)
+        front = self.lift_rules(posture)  # (the lifts': ``planner.play.highclear``)
         for st in self.fingers.values():
             if id(st) in held:
                 ready = max(ready, st.track.free_s)
             elif st.pose == "high":  # (a finger moving across up there may go on)
-                ready = max(ready, st.safe_s if front else st.black_s)
+                ready = max(ready, st.safe_s if front(st) else st.black_s)
             else:  # it lifts first: as soon as its press is done, at the latest (the arm
                 up = up_move(self.moves, st)  # moves once it is clear above every key)
                 ready = max(ready, st.track.free_s
-                            + self.moves.high.rise_clear_s(st.entry, up.move, front))
+                            + self.moves.high.rise_clear_s(st.entry, up.move, front(st)))
         return move, max(ready, arrive_by_s - move.duration_s)
 
     def front_rules(self, posture: int) -> tuple[bool, bool]:
@@ -133,23 +133,33 @@ class ArmMotion:
         whether its lifts, and its descents, keep the front rule."""
         return front_rules(self.places.reach_m(self.posture), self.places.reach_m(posture))
 
-    def _natural_ready(self, holds, front: bool) -> float:
+    def lift_rules(self, posture: int):
+        """Whether a finger's lift before a move of the arm into play posture ``posture``
+        keeps the front rule (``HighClear.lift_front`` of its entry), as a function of
+        the finger (``_Finger``)."""
+        a, b = self.places.reach_m(self.posture), self.places.reach_m(posture)
+        if a == b:
+            return lambda st: True
+        return lambda st: self.moves.high.lift_front(st.entry, a, b)
+
+    def _natural_ready(self, holds, front) -> float:
         """When the arm could start with ``holds`` riding along and every other finger
-        lifted at its key's own time (none let up early; ``front``: the move keeps the
-        play posture, ``planner.play.highclear``)."""
+        lifted at its key's own time (none let up early; ``front``: whether a finger's
+        lift keeps the front rule, ``lift_rules``)."""
         held = {id(st) for st, _ in holds}
         ready = max(self.arm_track.free_s, self.committed_s)
         for st in self.fingers.values():
             if id(st) in held:
                 ready = max(ready, st.track.free_s)
             elif st.pose == "high":
-                ready = max(ready, st.safe_s if front else st.black_s)
+                ready = max(ready, st.safe_s if front(st) else st.black_s)
             else:
                 up = up_move(self.moves, st)
                 t0 = max(st.track.free_s, self.committed_s)
                 if st.pose == "press":
                     t0 = max(t0, st.up_s - up.cross_s)
-                ready = max(ready, t0 + self.moves.high.rise_clear_s(st.entry, up.move, front))
+                ready = max(ready, t0 + self.moves.high.rise_clear_s(st.entry, up.move,
+                                                                     front(st)))
         return ready
 
     def _holds(self, rail_m: float, posture: int):

@@ -137,8 +137,8 @@ class Prev:
     (the programme weighs hundreds of transitions from each state)."""
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
-                 "lift_end_black", "lifts", "lifts_black", "older", "on_key", "recent", "release",
-                 "rode_of", "state", "steps")
+                 "lift_end_black", "lifts", "lifts_black", "lifts_to", "older", "on_key", "recent",
+                 "release", "rode_of", "state", "steps")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -162,6 +162,8 @@ class Prev:
                                   key=lambda x: -x[0])
         self.lift_end = self.lifts[0][0] if self.lifts else -math.inf  # (the latest)
         self.lift_end_black = self.lifts_black[0][0] if self.lifts_black else -math.inf
+        self.lifts_to: dict[int, tuple] = {}  # (each finger's rule, by posture moved to:
+        # ``ArmCosts._lifts``)
         # (the notes sounding that might ride along: their entry, the time their key is
         # down (from when it went down: a note struck late, ``State.late``, has less),
         # their press and when their key went down)

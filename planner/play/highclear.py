@@ -25,8 +25,12 @@ black tops). A move of the arm that changes the play posture moves the hand alon
 (the reach axis, + into the keyboard: a translation, the heights unchanged). Before a
 move out of the keyboard the lifts keep the front rule (``front_rules``): a body in front
 of the black keys at the lift's moment only goes further out while the arm moves. Before
-a move in, the lifts are the black rule's alone (the move carries the bodies towards the
-black keys), and so are the descents after any change of posture. (After a move in, a
+a move in, which carries the bodies towards the black keys, a lift keeps the front rule
+where every body the rule finds clear below the black tops lies further in front of the
+black keys than the arm can carry it until it is above them (``HighClear.front_room_m``
+against the move's length or ``reach_bound_m`` of the lift's time from its front moment
+to its black one; ``lift_front``), else the black rule's. The descents after any change of
+posture keep the black rule. (After a move in, a
 body in front at the descent's moment was further out before: the front rule would hold
 there too, but the arm, moving as late as the descents allow, then ends later, and the
 fingers riding along with it stay busy longer: 4 chorales' frame F1 down by up to 0.010,
@@ -46,6 +50,7 @@ later).
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -120,6 +125,8 @@ class HighClear:
         self.atlases = atlases
         self.moves = moves
         self._path: dict[tuple, float] = {}
+        self._room: dict[int, tuple[AtlasEntry, float]] = {}  # (``front_room_m``)
+        self._lift_front: dict[tuple, tuple[AtlasEntry, bool]] = {}  # (``lift_front``)
         self._params = params()
 
     def rise_clear_s(self, e: AtlasEntry, move: Move, front: bool = True) -> float:
@@ -148,6 +155,80 @@ class HighClear:
             self.rise_clear_s(e, moves.lift(e, "high").move, front),
             self.rise_clear_s(e, moves.rise(e).move, front),
             self.descent_clear_s(e, moves.descend(e, "high").move, front))]
+
+    def front_room_m(self, e: AtlasEntry) -> float:
+        """How far the arm may carry entry ``e``'s finger into the keyboard (+y) while it
+        goes up with its front rule's moments still true: the least distance, over the
+        points of its ways up (``Moves.lift(e, "high")`` from the press, ``Moves.rise(e)``
+        from hover; ``FRONT_SAMPLES`` points each) where it is clear by the front rule,
+        from ``FRONT_Y_M`` to the furthest-in body lower than the black rule's height,
+        each sample's y grown by its step to the next along the path (inf: none lower; 0
+        without the body rule). Memoised per entry."""
+        got = self._room.get(id(e))
+        if got is not None:
+            return got[1]
+        room = 0.0
+        bodies = self.atlases[e.posture].bodies
+        if bodies is not None and self.moves is not None:
+            h, m = self.hand, self.moves[e.posture]
+            ss = np.linspace(0.0, 1.0, FRONT_SAMPLES)[:, None]
+            Q = np.repeat(self.atlases[e.posture].base[None], 2 * FRONT_SAMPLES, axis=0)
+            Q[:, h.joint_slice(e.finger)] = np.concatenate(
+                [up.q_a + ss * up.dq for up in (m.lift(e, "high").move, m.rise(e).move)])
+            Q = h.apply_couplings(Q)  # (row by row: its laws act on the last axis)
+            p, r = bodies.points_many(Q, e.finger), bodies.radii(e.finger)
+            low, y = p[:, :, 2] - r, p[:, :, 1] + r
+            black = low >= BODY_CLEAR_Z_M
+            clear = np.all(black | ((y <= FRONT_Y_M) & (low >= FRONT_CLEAR_Z_M)), axis=1)
+            lows = ~black & clear[:, None]  # (the bodies the front rule alone counts clear)
+            # (between two samples a body lies within its change between them of either:
+            # each sample's y is taken with the larger step to its neighbours on its path)
+            step = np.abs(np.diff(y.reshape(2, FRONT_SAMPLES, -1), axis=1))
+            pad = np.zeros((2, 1, step.shape[2]))
+            step = np.maximum(np.concatenate([pad, step], 1), np.concatenate([step, pad], 1))
+            y = y + step.reshape(y.shape)
+            room = float(FRONT_Y_M - np.max(y[lows])) if lows.any() else math.inf
+        self._room[id(e)] = (e, room)  # (the entry kept: its id stays its own)
+        return room
+
+    def reach_bound_m(self, t_s: float) -> float:
+        """The furthest the arm's reach axis can move in ``t_s`` from rest: its acceleration within its bound ``A`` and changing no
+        faster than its jerk bound ``J`` (the posture's moves', ``Moves.acceleration``,
+        ``jerk``: every move of the arm keeps them), so ``J t^3 / 6`` up to ``A / J`` and
+        at ``A`` after (inf on a hand without the reach axis or the move tables)."""
+        j = self.hand.index.get("reach")
+        if j is None or self.moves is None:
+            return math.inf
+        a, jerk = float(self.moves[0].acceleration[j]), float(self.moves[0].jerk[j])
+        t1 = a / jerk
+        if t_s <= t1:
+            return jerk * t_s ** 3 / 6.0
+        u = t_s - t1
+        return jerk * t1 ** 3 / 6.0 + 0.5 * a * t1 * u + 0.5 * a * u * u
+
+    def lift_front(self, e: AtlasEntry | None, reach_from_m: float, reach_to_m: float) -> bool:
+        """Whether entry ``e``'s lift before a move of the arm from reach ``reach_from_m``
+        to ``reach_to_m`` is timed by the front rule: ``front_rules``' lifts, and on a
+        move into the keyboard where every body the rule finds clear in front of the black
+        keys stays in front while the arm carries it in (``front_room_m``) as far as the
+        move goes, or as far as the arm can move (``reach_bound_m``) from the lift's front
+        moment, the earliest it starts, to its black moment, from which every body is
+        above the black tops (the later of its ways up: from the press, from hover)."""
+        if front_rules(reach_from_m, reach_to_m)[0]:
+            return True
+        if e is None:
+            return False
+        key = (id(e), reach_to_m - reach_from_m)
+        got = self._lift_front.get(key)
+        if got is not None:
+            return got[1]
+        m = self.moves[e.posture] if self.moves is not None else None
+        gap = math.inf if m is None else max(
+            self.rise_clear_s(e, up, False) - self.rise_clear_s(e, up)
+            for up in (m.lift(e, "high").move, m.rise(e).move))
+        ok = self.front_room_m(e) >= min(key[1], self.reach_bound_m(gap))
+        self._lift_front[key] = (e, ok)  # (memoised by entry and move: the entry kept)
+        return ok
 
     def _shipped(self, e: AtlasEntry, move: Move, rising: bool, front: bool) -> float | None:
         """The move table's moment when ``move`` is one of the entry's own
