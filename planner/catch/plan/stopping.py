@@ -111,6 +111,7 @@ class StopDynamics:
         self._rooms: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}  # accel_room's last
         # results by q (a live session asks for the rest pose's at every observation
         # until the hand moves)
+        self._poses: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # at_pose's
         self.cap = actuator_capacity(hand).torque_nm
         self.v_max = LIMIT_MARGIN * hand.velocity[list(self.arm)]
         self.a_max = LIMIT_MARGIN * hand.acceleration[list(self.arm)]
@@ -196,10 +197,25 @@ class StopDynamics:
         out = (M @ H, STOP_SHARE * self.cap - np.abs(M @ g))
         for a in out:
             a.setflags(write=False)
-        if len(self._rooms) >= _ROOMS_KEPT:
-            self._rooms.pop(next(iter(self._rooms)))
-        self._rooms[key] = out
-        return out
+        return _kept(self._rooms, key, out)
+
+    def at_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """What ``ramp_time`` and ``pad_load`` read of the pose ``q`` alone, computed once
+        for the latest few poses (a stop's search asks for them at one open pose at every
+        step): (M, gravity, J_palm), the motors' torque per joint torque
+        (``motor_torque_matrix``), the joints' gravity torque (``joint_torques`` at rest)
+        and the palm centre's Jacobian (``palm_jacobian``); read-only."""
+        key = q.tobytes()
+        hit = self._poses.pop(key, None)
+        if hit is not None:
+            self._poses[key] = hit
+            return hit
+        z = np.zeros(len(self.arm))
+        out = (motor_torque_matrix(self.hand, q), self.joint_torques(q, z, z),
+               palm_jacobian(self.hand, q))
+        for a in out:
+            a.setflags(write=False)
+        return _kept(self._poses, key, out)
 
     def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None,
                   share: float = STOP_SHARE) -> float:
@@ -209,10 +225,10 @@ class StopDynamics:
         acceleration (the riding ball). inf when gravity and speed alone leave no room."""
         if not np.any(qd):
             return 0.0
-        M = motor_torque_matrix(self.hand, q)
+        M, g, _ = self.at_pose(q)
         z = np.zeros_like(qd)
         base = M @ self.joint_torques(q, qd, z)
-        per = M @ (self.joint_torques(q, z, qd) - self.joint_torques(q, z, z)
+        per = M @ (self.joint_torques(q, z, qd) - g
                    + (load @ qd if load is not None else 0.0))
         room = share * self.cap - np.abs(base)
         need = np.abs(per) > 1e-12
@@ -248,9 +264,18 @@ class StopDynamics:
         """The pad's force on the ball, every motor's |torque| / capacity while it acts (the
         hand at speed ``qd``, not accelerating), and its friction-cone margin."""
         F = pad_force_n(mass, v_rel)
-        tau = self.joint_torques(q, qd, np.zeros_like(qd)) + palm_jacobian(self.hand, q).T @ F
-        M = motor_torque_matrix(self.hand, q)
+        M, _, J_palm = self.at_pose(q)
+        tau = self.joint_torques(q, qd, np.zeros_like(qd)) + J_palm.T @ F
         return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
+
+
+def _kept(kept: dict, key: bytes, value):
+    """``value`` kept in ``kept`` under ``key`` as the newest of at most ``_ROOMS_KEPT`` (the
+    least recently used dropped)."""
+    if len(kept) >= _ROOMS_KEPT:
+        kept.pop(next(iter(kept)))
+    kept[key] = value
+    return value
 
 
 @dataclass(frozen=True)
