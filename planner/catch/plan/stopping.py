@@ -49,7 +49,6 @@ from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_
 from planner.catch.plan.ramps import JointRamps, recoil_shares, with_joint_ramps
 from planner.catch.plan.results import Closing
 from planner.catch.plan.softstop import SoftStop
-from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
@@ -256,6 +255,9 @@ class StopDynamics:
         b = flight.to_metadata()
         ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
                 "radius": float(r), "mass": float(b["mass"]), "drag": float(b["drag"])}
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.check.ball import ball_loads
+
         ld = ball_loads(t, Q, self.kin, palm, ball, stop.t_i, PAD_GIVE_M)[0]
         return ld.cone_margin_n is None or ld.cone_margin_n >= 0, float(ld.headroom)
 
