@@ -363,34 +363,39 @@ def _recoiled(search: StopSearch, grid: StopGrid, best) -> tuple:
 
 def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
-              speeds: Callable[..., np.ndarray] | None = None) -> float:
+              speeds: Callable[..., np.ndarray] | None = None,
+              placed_at: dict[float, Intercept] | None = None) -> float:
     """The palm's tilt (rad) ``plan_stop`` chooses for this throw (its contact share 1:
     the tilt is chosen before the share), 0 when no tilt reaches; ``speeds``: the contact
-    speeds' QP solver (``StopAsk``)."""
+    speeds' QP solver (``StopAsk``). ``placed_at``: a dict given is filled with the
+    intercepts ``find_intercept`` gave the search (the reach held at 0), by tilt (rad)."""
     search = StopSearch(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s)
-    best = _best_tilt(search, True, speeds)
+    best = _best_tilt(search, True, speeds, placed_at=placed_at)
     return 0.0 if best is None else float(best[1][2].tilt_rad)
 
 
 def _best_tilt(search: StopSearch, soft: bool, speeds: Callable[..., np.ndarray] | None = None,
                tilts_deg: tuple[float, ...] = TILTS_DEG,
-               per_joint: JointRamps = JointRamps.NONE):
-    """``plan_stop``'s tilt search (over ``tilts_deg``): (key, (intercept, open pose, stop),
+               per_joint: JointRamps = JointRamps.NONE,
+               placed_at: dict[float, Intercept] | None = None):
+    """``plan_stop``'s tilt search (over ``tilts_deg``; ``placed_at``: ``stop_tilt``'s): (key, (intercept, open pose, stop),
     contact speeds' solver) of the tilt whose pad phase needs the least of the motor closest
     to its capacity; None: no tilt reaches. Where that stop closes the palm on the ball
     beyond a motor (``_closes_beyond_a_motor``) the search is run again with the palm giving
     with the ball (``giving_speeds``), and the better kept."""
-    best = _placed_search(search, soft, speeds, tilts_deg, per_joint)
+    best = _placed_search(search, soft, speeds, tilts_deg, per_joint, placed_at)
     if best is not None and speeds is None and _closes_beyond_a_motor(best[1]):
-        gave = _placed_search(search, soft, giving_speeds, tilts_deg, per_joint)
+        gave = _placed_search(search, soft, giving_speeds, tilts_deg, per_joint, placed_at)
         if gave is not None and gave[0] < best[0]:
             best = gave
     return best
 
 
 def _placed_search(search: StopSearch, soft: bool, speeds: Callable[..., np.ndarray] | None,
-                   tilts_deg: tuple[float, ...], per_joint: JointRamps):
-    """``_best_tilt``'s search with one contact speeds' solver over the palm's placements."""
+                   tilts_deg: tuple[float, ...], per_joint: JointRamps,
+                   placed_at: dict[float, Intercept] | None = None):
+    """``_best_tilt``'s search with one contact speeds' solver over the palm's placements
+    (``placed_at``: ``stop_tilt``'s)."""
     best = None
     s = search
     for placed in ((True, False) if s.dyn.joints.i_reach is not None else (False,)):
@@ -399,7 +404,10 @@ def _placed_search(search: StopSearch, soft: bool, speeds: Callable[..., np.ndar
         def place(tilt_rad: float, placed: bool = placed) -> Intercept | None:
             if placed:
                 return find_intercept_square(s.wrist, s.flight, s.C, s.r, s.t_c, tilt_rad)
-            return find_intercept(s.wrist, s.flight, s.C, s.r, s.t_c, tilt_rad)
+            ic = find_intercept(s.wrist, s.flight, s.C, s.r, s.t_c, tilt_rad)
+            if placed_at is not None:
+                placed_at[tilt_rad] = ic
+            return ic
 
         found = _tilt_search(search, place, soft, speeds, tilts_deg, per_joint)
         if found is not None and (best is None or found[0] < best[0]):
