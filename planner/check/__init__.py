@@ -23,7 +23,10 @@ The package: ``criteria`` (the rules, imported by the planners' self-checks
 too), ``kinematics`` (its own Pinocchio model), ``keys`` (play), ``ball``
 (catch), ``limits`` (the audit), ``worst`` and ``episodes`` (a category's worst and the
 keys' runs merged across blocks of rows: a play file is judged as a stream unless its
-per-row arrays are asked for), ``results`` (frozen results, summary, JSON).
+per-row arrays are asked for), ``results`` (frozen results, summary, JSON),
+``trajcheck`` (``check_trajectory`` and ``check_play``: a file read and judged). The
+package imports its names on first use (``planner.lazy``): a planner importing one rule
+(``kinematics``, ``ballstop``) does not load the others.
 
 The file contract (``planner.trajfile``): rows at ``rate_hz`` from t = 0 (within
 ``ROW_TIME_TOL_S``), no gap, at least two rows; a damaged file is bad input (exit
