@@ -38,7 +38,7 @@ def test_the_stream_is_taken(planned, monkeypatch):
         seen.append(s.rows)
         return s
 
-    monkeypatch.setattr("planner.check.stream_trajectory", spy)
+    monkeypatch.setattr("planner.check.trajcheck.stream_trajectory", spy)
     check_trajectory(str(planned), str(SCALE), replay=False)
     assert seen and seen[0] > 100
 

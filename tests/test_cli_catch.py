@@ -1,5 +1,6 @@
 """``catch --live``'s start (planner/cli/catch.py): OpenBLAS kept to one thread unless the
-user set its count; the set-up loads no placo (tests/test_placo_hand.py)."""
+user set its count; the set-up loads no placo (tests/test_placo_hand.py) and none of what
+only the session's ending uses."""
 
 import os
 import subprocess
@@ -42,3 +43,34 @@ def test_a_program_with_its_own_numpy_keeps_its_threads(monkeypatch):
     monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
     one_blas_thread()
     assert "OPENBLAS_NUM_THREADS" not in os.environ
+
+
+ENDING_ONLY = ("planner.check.ball", "planner.check.ballbodies", "planner.check.ballpalm",
+               "planner.check.ballroll", "planner.check.limits", "planner.check.results",
+               "planner.qp", "planner.catch.plan.drop", "planner.catch.flight.dragfit")
+UNUSED = ("planner.check.trajcheck", "planner.check.keys", "planner.check.verdict")  # the
+# check's entry points and play rules: a live session uses none of them
+SESSION = ("import sys, numpy as np; "
+           "from planner.catch.live.session import CatchSession; "
+           "from planner.catch.flight.path import get_ball, predict_throw; "
+           "ending, unused = sys.argv[1].split(','), sys.argv[2].split(','); "
+           "s = CatchSession(1.5, 0.0, ball='tennis', drag=True); "
+           "print(','.join(m for m in ending + unused if m in sys.modules) or '-'); "
+           "fl = predict_throw(30.0, 1.5, 0.0, get_ball('tennis'), drag=True); "
+           "rng = np.random.default_rng(3); k = 0\n"
+           "while not s.done and k < 300:\n"
+           "    k += 1; s.observe(k / 100.0, fl.position(k / 100.0) + rng.normal(0.0, 0.002, 3))\n"
+           "print(s.outcome, ','.join(m for m in ending if m not in sys.modules) or '-', "
+           "','.join(m for m in unused if m in sys.modules) or '-')")
+
+
+def test_the_live_start_imports_none_of_what_only_its_ending_uses():
+    """A live session set up (ready for its first observation) has imported none of the
+    modules only its ending uses (the check's ball rules, the grasp QP's OSQP wrapper, the
+    hand's drop, the drag's fit) nor the check's entry points; the session of a 30 deg /
+    1.5 m throw then ends, held, with every one of the first imported (so the list names
+    what the ending really uses) and still none of the second."""
+    r = subprocess.run([sys.executable, "-c", SESSION, ",".join(ENDING_ONLY), ",".join(UNUSED)],
+                       cwd=ROOT, capture_output=True, text=True, check=False)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["-", "held", "-", "-"], r.stdout + r.stderr

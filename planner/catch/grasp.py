@@ -61,7 +61,6 @@ from planner.errors import InfeasibleError, InputError, SolverError
 from planner.hand.model import GRAVITY_WORLD, HandModel
 from planner.hand.spec import PALM_FRAME
 from planner.hand.tendon import actuator_capacity
-from planner.qp import DenseQp
 
 MU_RUBBER = 0.8  # seed (David): rubber pads
 FACETS = 8
@@ -311,6 +310,9 @@ def _osqp_solve(prob: GraspProblem):
     """OSQP on ``prob``, set up for it alone (cold): the answer a function of the problem.
     (A solver kept per size and warm-started from the previous solution answered to the
     solver tolerance, and that last digit depended on what had been solved before.)"""
+    # (first used by the ending of a live session: not imported at its start)
+    from planner.qp import DenseQp
+
     return DenseQp(**_SETTINGS).solve(prob.P, prob.c, prob.A, prob.lower, prob.upper)
 
 
@@ -347,6 +349,9 @@ def _infeasible(prob: GraspProblem) -> InfeasibleError:
         W = prob.tau_map / prob.capacity[:, None]
         P = 2.0 * (W.T @ W + 1e-6 * np.eye(nx))
         c = 2.0 * W.T @ (prob.tau_offset / prob.capacity)
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.qp import DenseQp
+
         solver = DenseQp(eps_abs=_EPS, eps_rel=_EPS, max_iter=20000,
                          adaptive_rho_interval=ADAPTIVE_RHO_INTERVAL)
         res = solver.solve(P, c, A, prob.lower[:-n_motor], prob.upper[:-n_motor])

@@ -26,7 +26,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from planner.catch.flight.dragfit import DragEstimate, estimate_drag
 from planner.catch.live.stop import arm_offset, moves
 from planner.catch.live.turn import HeldTurn, LiveTurn, live_turn
 from planner.catch.plan.closing import close_start
@@ -36,6 +35,7 @@ from planner.catch.plan.results import GIVEN_UP, HELD, CatchPlan, make_catch_pla
 from planner.errors import InfeasibleError
 
 if TYPE_CHECKING:
+    from planner.catch.flight.dragfit import DragEstimate
     from planner.catch.live.session import CatchSession, Written
 
 
@@ -125,6 +125,8 @@ class LiveEnding:
         fit, flight = s.fit, s.flight
         self.uncertainty = fit.intercept_sigma(flight, s.pose.t_i)  # (of the last estimate
         # only: what the plan reports)
+        from planner.catch.flight.dragfit import estimate_drag  # (the ending's alone)
+
         self.drag_estimate = (estimate_drag(fit.times, fit.positions, flight, s.ball)
                               if s.drag else None)
         self.plan = self._judge(t_static)

@@ -51,12 +51,11 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from planner.catch import grasp as gq
-from planner.catch.flight.dragfit import DragEstimate
 from planner.catch.flight.livefit import LiveFit
 from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.ending import LiveEnding
@@ -73,6 +72,9 @@ from planner.catch.plan.softstop import SoftStop
 from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.trajfile import FormattedRows, TrajectoryWriter, format_rows, joined_rows
+
+if TYPE_CHECKING:
+    from planner.catch.flight.dragfit import DragEstimate
 
 
 class _Chunk(NamedTuple):

@@ -251,9 +251,12 @@ class StopTable:
                 t_c = float(fl.time_at_x(float(C[0])))
             except (InputError, InfeasibleError):
                 continue
+            placed: dict = {}  # (the search's intercepts by tilt: the one chosen not found again)
             tilt = stop_tilt(dyn, pl.wrist, fl, C, r, pl.q_zero, closing, t_c, ready_by, row_s,
-                             giving_contact_speeds(dyn.arm.index(dyn.joints.i_flex)))
-            ic = find_intercept(pl.wrist, fl, C, r, t_c, tilt)
+                             giving_contact_speeds(dyn.arm.index(dyn.joints.i_flex)), placed)
+            ic = placed.get(tilt)
+            if ic is None:
+                ic = find_intercept(pl.wrist, fl, C, r, t_c, tilt)
             if ic.reason is not None:
                 continue
             q = pl.q_zero.copy()

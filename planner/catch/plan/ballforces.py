@@ -16,11 +16,9 @@ from planner.catch.plan.geometry import interp_row
 from planner.catch.plan.reasons import CatchReason, Reason
 from planner.catch.plan.results import Forces, ForcesVerdict
 from planner.catch.plan.softstop import SoftStop
-from planner.check.ball import ball_load_instants, contact_loads, phase_loads
 from planner.check.ballstop import PAD_GIVE_M
 from planner.check.criteria import GRASP_TOL_M
 from planner.check.kinematics import Kinematics
-from planner.check.limits import RATE_TOL
 from planner.hand.model import HandModel
 
 if TYPE_CHECKING:
@@ -40,6 +38,9 @@ class BallForces:
         the pad, the hand's inertia, the friction cone) and holding it in the closed hand
         (the grasp QP): their results (None where infeasible), the reasons, and the ball's
         centre on the palm at the intercept."""
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.check.limits import RATE_TOL
+
         h, mass = self.hand, float(flight.ball.mass_kg)
         hold = None
         reasons = []
@@ -75,6 +76,9 @@ class BallForces:
         """The check's stopping load on the rows from the one before the intercept (only the
         ball's velocity enters it: its launch point needs no shift to the reference frame),
         and the impact and riding loads named apart (``ContactLoads``)."""
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.check.ball import ball_load_instants, contact_loads, phase_loads
+
         k0 = max(0, int(np.searchsorted(t, pose.t_i, side="right")) - 2)
         b = flight.to_metadata()
         ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),

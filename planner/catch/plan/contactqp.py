@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.qp import DenseQp
-
 ROLL_WEIGHT = 30.0  # the contact-speed QP weighs the ball's speed along the palm this many
 # times its speed into it: the pad absorbs the normal part (its force grows with its square),
 # nothing absorbs the tangential part -- a sphere keeps 5/7 of it as a roll (rolling, no
@@ -49,6 +47,8 @@ def contact_speeds(J: np.ndarray, v_ball: np.ndarray, bound: np.ndarray,
     is then at most its own. (A solver kept between solves keeps its adapted step size rho even without
     warm starting: the next problem's answer then depended on the plans before it, and
     one throw, 75 deg from 1.0 m, was feasible or not by what had been planned before.)"""
+    from planner.qp import DenseQp  # (the planned catch's: a live session solves by ``box_qp``)
+
     k = J.shape[1]
     P, c = contact_qp(J, v_ball, normal, roll_weight)
     qp = DenseQp(eps_abs=1e-9, eps_rel=1e-9, max_iter=4000, polishing=True,

@@ -25,7 +25,6 @@ from planner.catch.plan.ballforces import BallForces
 from planner.catch.plan.closing import close_start, closed_pose, closing_from
 from planner.catch.plan.closingtable import shipped_closed_pose
 from planner.catch.plan.contactqp import ROLL_WEIGHT
-from planner.catch.plan.drop import add_drop
 from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.plan.mount import CatchMount
@@ -55,7 +54,6 @@ from planner.catch.plan.turnahead import (
     TurnMode,
     ahead_shift,
 )
-from planner.check.ballroll import roll_judged, roll_problem
 from planner.check.ballstop import pad_time_s
 from planner.check.kinematics import Kinematics
 from planner.errors import InfeasibleError, PlannerError
@@ -406,6 +404,9 @@ class CatchPlanner:
         t, Q = self._rows(a, turn)
         if a.inertia_ratio is None or self.rig.i_reach is None:
             return t, Q
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.catch.plan.drop import add_drop
+
         return t, add_drop(self.rig_dyn, t, Q, self.rig.i_reach, float(a.pose.t_i),
                            a.pose.v_i, float(a.closing.radius), a.inertia_ratio)
 
@@ -497,6 +498,9 @@ def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,
                  t_i: float) -> list[Reason]:
     """The roll rule's reason on these rows (``planner.check.ballroll``: the ball landing at
     ``t_i``, ``HoldTurn.rolled``; on a hand the rule judges), if any."""
+    # (first used by the ending of a live session: not imported at its start)
+    from planner.check.ballroll import roll_judged, roll_problem
+
     if not roll_judged(turn.hand.name):
         return []
     rolled = roll_problem(turn.rolled(t, Q, t_i, flight))

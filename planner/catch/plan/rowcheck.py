@@ -15,7 +15,6 @@ from planner.catch.flight.path import Flight
 from planner.catch.plan.arm import palm_target
 from planner.catch.plan.geometry import interp_row
 from planner.catch.plan.reasons import CatchReason, Reason
-from planner.check.ballbodies import finger_hit, finger_hit_problem
 from planner.check.criteria import GRASP_MIN_TIPS, GRASP_TOL_M, GRASP_WINDOW_S, INTERCEPT_TOL_M
 from planner.check.kinematics import Kinematics
 from planner.hand.bodies import collision_bodies
@@ -102,6 +101,9 @@ class RowCheck:
                 reasons.append(Reason(CatchReason.FINGERS, (
                     f"fingers in the way: {h.fingers[f]} tip inside the ball at "
                     f"t = {tt[before][k]:.3f} s, before the intercept")))
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.check.ballbodies import finger_hit, finger_hit_problem
+
         hit = finger_hit(self._bodies, self._kin.link_poses, t, Q, t_i,
                          lambda ts: flight.position(ts) - C, r)
         hit_reason = finger_hit_problem(hit)

@@ -49,7 +49,6 @@ from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_
 from planner.catch.plan.ramps import JointRamps, recoil_shares, with_joint_ramps
 from planner.catch.plan.results import Closing
 from planner.catch.plan.softstop import SoftStop
-from planner.check.ball import ball_loads
 from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
 from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
@@ -111,6 +110,7 @@ class StopDynamics:
         self._rooms: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}  # accel_room's last
         # results by q (a live session asks for the rest pose's at every observation
         # until the hand moves)
+        self._poses: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # at_pose's
         self.cap = actuator_capacity(hand).torque_nm
         self.v_max = LIMIT_MARGIN * hand.velocity[list(self.arm)]
         self.a_max = LIMIT_MARGIN * hand.acceleration[list(self.arm)]
@@ -196,10 +196,25 @@ class StopDynamics:
         out = (M @ H, STOP_SHARE * self.cap - np.abs(M @ g))
         for a in out:
             a.setflags(write=False)
-        if len(self._rooms) >= _ROOMS_KEPT:
-            self._rooms.pop(next(iter(self._rooms)))
-        self._rooms[key] = out
-        return out
+        return _kept(self._rooms, key, out)
+
+    def at_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """What ``ramp_time`` and ``pad_load`` read of the pose ``q`` alone, computed once
+        for the latest few poses (a stop's search asks for them at one open pose at every
+        step): (M, gravity, J_palm), the motors' torque per joint torque
+        (``motor_torque_matrix``), the joints' gravity torque (``joint_torques`` at rest)
+        and the palm centre's Jacobian (``palm_jacobian``); read-only."""
+        key = q.tobytes()
+        hit = self._poses.pop(key, None)
+        if hit is not None:
+            self._poses[key] = hit
+            return hit
+        z = np.zeros(len(self.arm))
+        out = (motor_torque_matrix(self.hand, q), self.joint_torques(q, z, z),
+               palm_jacobian(self.hand, q))
+        for a in out:
+            a.setflags(write=False)
+        return _kept(self._poses, key, out)
 
     def ramp_time(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray | None = None,
                   share: float = STOP_SHARE) -> float:
@@ -209,10 +224,10 @@ class StopDynamics:
         acceleration (the riding ball). inf when gravity and speed alone leave no room."""
         if not np.any(qd):
             return 0.0
-        M = motor_torque_matrix(self.hand, q)
+        M, g, _ = self.at_pose(q)
         z = np.zeros_like(qd)
         base = M @ self.joint_torques(q, qd, z)
-        per = M @ (self.joint_torques(q, z, qd) - self.joint_torques(q, z, z)
+        per = M @ (self.joint_torques(q, z, qd) - g
                    + (load @ qd if load is not None else 0.0))
         room = share * self.cap - np.abs(base)
         need = np.abs(per) > 1e-12
@@ -240,6 +255,9 @@ class StopDynamics:
         b = flight.to_metadata()
         ball = {"p0": np.asarray(b["p0"], dtype=float), "v0": np.asarray(b["v0"], dtype=float),
                 "radius": float(r), "mass": float(b["mass"]), "drag": float(b["drag"])}
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.check.ball import ball_loads
+
         ld = ball_loads(t, Q, self.kin, palm, ball, stop.t_i, PAD_GIVE_M)[0]
         return ld.cone_margin_n is None or ld.cone_margin_n >= 0, float(ld.headroom)
 
@@ -248,9 +266,18 @@ class StopDynamics:
         """The pad's force on the ball, every motor's |torque| / capacity while it acts (the
         hand at speed ``qd``, not accelerating), and its friction-cone margin."""
         F = pad_force_n(mass, v_rel)
-        tau = self.joint_torques(q, qd, np.zeros_like(qd)) + palm_jacobian(self.hand, q).T @ F
-        M = motor_torque_matrix(self.hand, q)
+        M, _, J_palm = self.at_pose(q)
+        tau = self.joint_torques(q, qd, np.zeros_like(qd)) + J_palm.T @ F
         return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
+
+
+def _kept(kept: dict, key: bytes, value):
+    """``value`` kept in ``kept`` under ``key`` as the newest of at most ``_ROOMS_KEPT`` (the
+    least recently used dropped)."""
+    if len(kept) >= _ROOMS_KEPT:
+        kept.pop(next(iter(kept)))
+    kept[key] = value
+    return value
 
 
 @dataclass(frozen=True)
@@ -336,34 +363,39 @@ def _recoiled(search: StopSearch, grid: StopGrid, best) -> tuple:
 
 def stop_tilt(dyn: StopDynamics, wrist: Wrist, flight: Flight, C: np.ndarray, r: float,
               q_zero: np.ndarray, closing: Closing, t_c: float, ready_by, row_s: float,
-              speeds: Callable[..., np.ndarray] | None = None) -> float:
+              speeds: Callable[..., np.ndarray] | None = None,
+              placed_at: dict[float, Intercept] | None = None) -> float:
     """The palm's tilt (rad) ``plan_stop`` chooses for this throw (its contact share 1:
     the tilt is chosen before the share), 0 when no tilt reaches; ``speeds``: the contact
-    speeds' QP solver (``StopAsk``)."""
+    speeds' QP solver (``StopAsk``). ``placed_at``: a dict given is filled with the
+    intercepts ``find_intercept`` gave the search (the reach held at 0), by tilt (rad)."""
     search = StopSearch(dyn, wrist, flight, C, r, q_zero, closing, t_c, ready_by, row_s)
-    best = _best_tilt(search, True, speeds)
+    best = _best_tilt(search, True, speeds, placed_at=placed_at)
     return 0.0 if best is None else float(best[1][2].tilt_rad)
 
 
 def _best_tilt(search: StopSearch, soft: bool, speeds: Callable[..., np.ndarray] | None = None,
                tilts_deg: tuple[float, ...] = TILTS_DEG,
-               per_joint: JointRamps = JointRamps.NONE):
-    """``plan_stop``'s tilt search (over ``tilts_deg``): (key, (intercept, open pose, stop),
+               per_joint: JointRamps = JointRamps.NONE,
+               placed_at: dict[float, Intercept] | None = None):
+    """``plan_stop``'s tilt search (over ``tilts_deg``; ``placed_at``: ``stop_tilt``'s): (key, (intercept, open pose, stop),
     contact speeds' solver) of the tilt whose pad phase needs the least of the motor closest
     to its capacity; None: no tilt reaches. Where that stop closes the palm on the ball
     beyond a motor (``_closes_beyond_a_motor``) the search is run again with the palm giving
     with the ball (``giving_speeds``), and the better kept."""
-    best = _placed_search(search, soft, speeds, tilts_deg, per_joint)
+    best = _placed_search(search, soft, speeds, tilts_deg, per_joint, placed_at)
     if best is not None and speeds is None and _closes_beyond_a_motor(best[1]):
-        gave = _placed_search(search, soft, giving_speeds, tilts_deg, per_joint)
+        gave = _placed_search(search, soft, giving_speeds, tilts_deg, per_joint, placed_at)
         if gave is not None and gave[0] < best[0]:
             best = gave
     return best
 
 
 def _placed_search(search: StopSearch, soft: bool, speeds: Callable[..., np.ndarray] | None,
-                   tilts_deg: tuple[float, ...], per_joint: JointRamps):
-    """``_best_tilt``'s search with one contact speeds' solver over the palm's placements."""
+                   tilts_deg: tuple[float, ...], per_joint: JointRamps,
+                   placed_at: dict[float, Intercept] | None = None):
+    """``_best_tilt``'s search with one contact speeds' solver over the palm's placements
+    (``placed_at``: ``stop_tilt``'s)."""
     best = None
     s = search
     for placed in ((True, False) if s.dyn.joints.i_reach is not None else (False,)):
@@ -372,7 +404,10 @@ def _placed_search(search: StopSearch, soft: bool, speeds: Callable[..., np.ndar
         def place(tilt_rad: float, placed: bool = placed) -> Intercept | None:
             if placed:
                 return find_intercept_square(s.wrist, s.flight, s.C, s.r, s.t_c, tilt_rad)
-            return find_intercept(s.wrist, s.flight, s.C, s.r, s.t_c, tilt_rad)
+            ic = find_intercept(s.wrist, s.flight, s.C, s.r, s.t_c, tilt_rad)
+            if placed_at is not None:
+                placed_at[tilt_rad] = ic
+            return ic
 
         found = _tilt_search(search, place, soft, speeds, tilts_deg, per_joint)
         if found is not None and (best is None or found[0] < best[0]):

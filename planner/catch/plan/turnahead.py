@@ -36,12 +36,10 @@ import numpy as np
 
 from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix
-from planner.catch.plan.drop import rolled_m
 from planner.catch.plan.holdturn import TURN_SHARE, hold_turn
 from planner.catch.plan.results import Closing
 from planner.catch.plan.softstop import SoftStop
 from planner.catch.plan.stopping import StopDynamics
-from planner.check.ballroll import ROLL_ROOM_M
 from planner.trajectory import LIMIT_MARGIN
 
 
@@ -216,6 +214,9 @@ class HoldTurn:
         ``STOP_SHARE`` of their capacity, the closing fingers' reaction included (``_motors_within``);
         a candidate that is not is skipped. A plan whose least rolling turn lets the ball roll
         beyond the room is infeasible (the roll rule's reason). Returns the ``TurnRows``."""
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.check.ballroll import ROLL_ROOM_M
+
         pose, q_pre, stop = rows_args.pose, rows_args.q_pre, rows_args.stop
         early = self.turned_rows(turn0, TurnMode.EARLY, rows_args)
         best_roll, best = self.rolled(early.t, early.Q, pose.t_i, flight), early
@@ -261,6 +262,9 @@ class HoldTurn:
     def rolled(self, t: np.ndarray, Q: np.ndarray, t_i: float, flight: Flight) -> float:
         """The ball's largest roll towards the wrist on the rows (``roll_towards_wrist_m``,
         by ``drop.rolled_m``: the rows' rolls asked for again are not computed again)."""
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.catch.plan.drop import rolled_m
+
         _, palm = self.kin.frames(Q)
         return rolled_m(t, palm, float(flight.ball.radius_m), t_i, flight.velocity(t_i),
                         flight.ball.inertia_ratio)
