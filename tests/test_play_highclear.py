@@ -15,6 +15,7 @@ from planner.play.highclear import (
     CLEAR_RULES,
     FRONT_CLEAR_Z_M,
     FRONT_Y_M,
+    ROOM_COLUMN,
     HighClear,
     params,
 )
@@ -227,12 +228,14 @@ def test_the_shipped_moments_are_those_searched(places):
         for i in rng.choice(len(entries), 30, replace=False):
             e = entries[i]
             row = [moves.table.clear_s(e, c, params())
-                   for c in range(len(CLEAR_MOVES) * len(CLEAR_RULES))]
+                   for c in range(len(CLEAR_MOVES) * len(CLEAR_RULES) + 1)]
             assert None not in row
             assert row == searched.clear_row(e, moves)
             assert row == places.high.clear_row(e, moves)
             assert places.high.rise_clear_s(e, moves.lift(e, "high").move) == row[0]
             assert places.high.rise_clear_s(e, moves.lift(e, "high").move, False) == row[3]
+            # (the front room, read: what forward kinematics finds on the entry's moves)
+            assert places.high.front_room_m(e) == row[ROOM_COLUMN] == searched.room_of(e, moves)
 
 
 def test_a_move_not_the_entrys_own_is_searched(places):

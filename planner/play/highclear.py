@@ -81,6 +81,8 @@ CLEAR_MOVES = ("lift", "rise", "descent")  # an entry's moves whose moments are 
 # ``Moves.lift(e, "high")``, ``Moves.rise(e)``, ``Moves.descend(e, "high")``
 CLEAR_RULES = ("front", "black")  # the table's columns: each move by the front rule, then
 # each by the black rule alone (``column``)
+ROOM_COLUMN = len(CLEAR_MOVES) * len(CLEAR_RULES)  # the table's column after the moments:
+# the entry's front room (``HighClear.front_room_m``, a function of the entry alone)
 
 
 def front_rules(reach_from_m: float, reach_to_m: float) -> tuple[bool, bool]:
@@ -109,7 +111,7 @@ def params() -> str:
                        "time_steps": TIME_STEPS, "moves": CLEAR_MOVES,
                        "front_clear_z_m": FRONT_CLEAR_Z_M, "front_y_m": FRONT_Y_M,
                        "front_samples": FRONT_SAMPLES, "front_bisections": FRONT_BISECTIONS,
-                       "rules": CLEAR_RULES}, sort_keys=True)
+                       "rules": CLEAR_RULES, "room_column": ROOM_COLUMN}, sort_keys=True)
 
 
 class HighClear:
@@ -150,11 +152,13 @@ class HighClear:
 
     def clear_row(self, e: AtlasEntry, moves) -> list[float]:
         """The moments of ``e``'s ``CLEAR_MOVES`` (``moves``: its posture's ``Moves``) by
-        each of ``CLEAR_RULES``, searched: the move table's row."""
+        each of ``CLEAR_RULES``, searched, then its front room (``room_of``, column
+        ``ROOM_COLUMN``): the move table's row."""
         return [m for front in (True, False) for m in (
             self.rise_clear_s(e, moves.lift(e, "high").move, front),
             self.rise_clear_s(e, moves.rise(e).move, front),
-            self.descent_clear_s(e, moves.descend(e, "high").move, front))]
+            self.descent_clear_s(e, moves.descend(e, "high").move, front))
+            ] + [self.room_of(e, moves)]
 
     def front_room_m(self, e: AtlasEntry) -> float:
         """How far the arm may carry entry ``e``'s finger into the keyboard (+y) while it
@@ -163,14 +167,27 @@ class HighClear:
         from hover; ``FRONT_SAMPLES`` points each) where it is clear by the front rule,
         from ``FRONT_Y_M`` to the furthest-in body lower than the black rule's height,
         each sample's y grown by its step to the next along the path (inf: none lower; 0
-        without the body rule). Memoised per entry."""
+        without the body rule or the move tables). Read from the posture's move table where
+        it holds the entry (``ROOM_COLUMN``), else found (``room_of``); memoised per entry."""
         got = self._room.get(id(e))
         if got is not None:
             return got[1]
         room = 0.0
+        if self.moves is not None:
+            m = self.moves[e.posture]
+            room = m.table.clear_s(e, ROOM_COLUMN, self._params)
+            if room is None:
+                room = self.room_of(e, m)
+        self._room[id(e)] = (e, room)  # (the entry kept: its id stays its own)
+        return room
+
+    def room_of(self, e: AtlasEntry, m) -> float:
+        """``front_room_m`` of entry ``e`` found by forward kinematics on its posture's
+        moves ``m`` (its ``Moves``): 0 without the body rule."""
+        room = 0.0
         bodies = self.atlases[e.posture].bodies
-        if bodies is not None and self.moves is not None:
-            h, m = self.hand, self.moves[e.posture]
+        if bodies is not None:
+            h = self.hand
             ss = np.linspace(0.0, 1.0, FRONT_SAMPLES)[:, None]
             Q = np.repeat(self.atlases[e.posture].base[None], 2 * FRONT_SAMPLES, axis=0)
             Q[:, h.joint_slice(e.finger)] = np.concatenate(
@@ -188,7 +205,6 @@ class HighClear:
             step = np.maximum(np.concatenate([pad, step], 1), np.concatenate([step, pad], 1))
             y = y + step.reshape(y.shape)
             room = float(FRONT_Y_M - np.max(y[lows])) if lows.any() else math.inf
-        self._room[id(e)] = (e, room)  # (the entry kept: its id stays its own)
         return room
 
     def reach_bound_m(self, t_s: float) -> float:
