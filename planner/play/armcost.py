@@ -216,11 +216,9 @@ class ArmCosts:
         place ``r``) before a move of the arm from place ``here`` to ``place``: the front
         rule's (0) where the move keeps the play posture, moves the hand out of the
         keyboard, or in no further than the entry's bodies stay in front of the black
-        keys, the black rule's (2) otherwise (``HighClear.lift_front``)."""
-        po = self.places.posture_of
-        if po(here) == po(place):
-            return 0
-        reach = self.places.reach_m
+        keys, the black rule's (2) otherwise (``HighClear.lift_front``, which answers the
+        move that keeps the posture too; ``_lifts`` does not ask it)."""
+        po, reach = self.places.posture_of, self.places.reach_m
         return 0 if self.places.high.lift_front(self.entry(m, f, r), reach(po(here)),
                                                 reach(po(place))) else 2
 
