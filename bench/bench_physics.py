@@ -32,6 +32,9 @@ from collections import defaultdict
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+
+from corpusargs import add_corpus_args, chosen_songs
 
 
 def category(p: Path) -> str:
@@ -110,11 +113,7 @@ def speed_against(songs: list[Path], other: Path, reps: int, hand_name: str) -> 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--corpus", default=str(ROOT.parent / "shared" / "corpus"))
-    ap.add_argument("--tree", default=str(ROOT), help="the checkout whose planner is measured")
-    ap.add_argument("--hand", default="default")
-    ap.add_argument("--only", default=None,
-                    help="only songs whose name holds one of these (comma-separated)")
+    add_corpus_args(ap)
     ap.add_argument("--speed-against", type=Path, default=None, metavar="TREE",
                     help="the replay's speed, this checkout against TREE, side by side")
     ap.add_argument("--reps", type=int, default=3, help="--speed-against: replays per tree")
@@ -126,11 +125,8 @@ def main() -> int:
     from planner.play import Planner, plan_song
     from planner.simulate import simulate_trajectory
 
-    songs = sorted(Path(a.corpus).glob("*.mid"))
-    if a.only:
-        songs = [s for s in songs if any(w in s.stem for w in a.only.split(","))]
+    songs = chosen_songs(a)
     if not songs:
-        print(f"{a.corpus}: no song (*.mid) selected", file=sys.stderr)
         return 2
     if a.speed_against is not None:
         return speed_against(songs, a.speed_against, a.reps, a.hand)

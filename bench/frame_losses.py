@@ -34,6 +34,10 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+
+from corpusargs import add_corpus_args, chosen_songs
+
 LOOK_S = 0.1  # s: how far before a press (after a release) the rows are read for its cause
 # (a finger's move between keys takes 30-155 ms on the default hand: design/play.md)
 MOVE_EPS = 1e-6  # (m) a change of the rail or the reach axis between rows that is a move
@@ -145,11 +149,7 @@ def song_losses(rp, notes, skipped: dict, arm, show: bool, name: str) -> dict:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--corpus", default=str(ROOT.parent / "shared" / "corpus"))
-    ap.add_argument("--tree", default=str(ROOT), help="the checkout whose planner is measured")
-    ap.add_argument("--hand", default="default")
-    ap.add_argument("--only", default=None,
-                    help="only songs whose name holds one of these (comma-separated)")
+    add_corpus_args(ap)
     ap.add_argument("--notes", action="store_true", help="one line per note losing frames")
     a = ap.parse_args()
     sys.path.insert(0, a.tree)
@@ -159,11 +159,8 @@ def main() -> int:
     from planner.planfile import read_plan
     from planner.play import Planner, plan_song
 
-    songs = sorted(Path(a.corpus).glob("*.mid"))
-    if a.only:
-        songs = [s for s in songs if any(w in s.stem for w in a.only.split(","))]
+    songs = chosen_songs(a)
     if not songs:
-        print(f"{a.corpus}: no song (*.mid) selected", file=sys.stderr)
         return 2
     hand = load_hand(a.hand)
     pl = Planner(hand)
