@@ -108,6 +108,8 @@ class Moves(FollowMoves):
         self.descend = lru_cache(maxsize=None)(self._descend)
         self.lift = lru_cache(maxsize=None)(self._lift)
         self.tendons = tendon_load(hand)
+        if self.tendons.proof is not None:  # (each finger's high poses' box, for its moves
+            self._box_high_poses()  # across: ``planner.play.tendonproof``)
         self.entry_scale = lru_cache(maxsize=None)(self._entry_scale)
         self.rise = lru_cache(maxsize=None)(self._rise)
         self.to_hover = lru_cache(maxsize=None)(self._to_hover)
@@ -137,6 +139,20 @@ class Moves(FollowMoves):
         self._times: dict[int, EntryRecord] = _table_records(
             atlas, self.table, self.js, (hand.velocity, self.acceleration, self.jerk))
         self._across_bytes, self._follow_bytes = self.table.as_bytes()
+
+    def _box_high_poses(self) -> None:
+        """The box of each finger's high poses in the atlas (its joints, couplings
+        applied), added to the tendon bound's proof: a move across between two of them
+        stays in it (a straight line, the couplings elementwise and linear)."""
+        highs: dict[str, list[np.ndarray]] = {}
+        for e in self.atlas.solved().values():
+            highs.setdefault(e.finger, []).append(e.high)
+        for f, poses in highs.items():
+            js = self.js[f]
+            Q = np.repeat(self.atlas.base[None, :], len(poses), axis=0)
+            Q[:, js] = poses
+            Q = self.hand.apply_couplings(Q)[:, js]
+            self.tendons.proof.add_box(f, Q.min(axis=0), Q.max(axis=0))
 
     def params(self) -> str:
         """What the move table depends on besides the atlas (a table made otherwise is not
