@@ -146,10 +146,15 @@ def box_gain(hand: HandModel, kin, chain: FingerChain, M: np.ndarray, lo: np.nda
     absM = np.abs(M)
     top = [np.full((len(M), n), -np.inf), np.full((len(M), len(pairs)), -np.inf)]
     low = [np.full((len(M), n), np.inf), np.full((len(M), len(pairs)), np.inf)]
-    q = np.zeros(hand.n)
+    # (the chain's own model, every other joint locked: the same H and c, in a quarter of
+    # the time a derivative)
+    model = kin.model
+    keep = {model.getJointId(hand.joint_names[j]) for j in c}
+    chain_model = pin.buildReducedModel(
+        model, [j for j in range(1, model.njoints) if j not in keep], kin.pin_q(np.zeros(hand.n)))
+    chain_data = chain_model.createData()
     for point in itertools.product(*axes):
-        q[c] = point
-        H, dH, cv, dc = _terms_at(kin, chain, kin.pin_q(q), pairs)
+        H, dH, cv, dc = _terms_at(chain_model, chain_data, np.array(point), pairs)
         for i, (val, d) in enumerate(((H, dH), (cv, dc))):
             reach = absM @ (np.abs(d) @ half).T
             top[i] = np.maximum(top[i], M @ val + reach)
@@ -162,34 +167,28 @@ def box_gain(hand: HandModel, kin, chain: FingerChain, M: np.ndarray, lo: np.nda
                    pairs)
 
 
-def _terms_at(kin, chain: FingerChain, qp: np.ndarray, pairs
+def _terms_at(model, data, q: np.ndarray, pairs
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """At Pinocchio configuration ``qp``, on the chain's joints: ``H`` (n, n), its
-    derivatives ``dH[k, j, i] = d H_jk / d q_i``, the speed torques' coefficients ``cv``
-    (n, pairs) and their derivatives ``dc[p, j, i]``."""
-    model, data = kin.model, kin.data
-    v = list(chain.v_index)
-    zero = np.zeros(model.nv)
-    sub = np.ix_(v, v)
+    """At configuration ``q`` of a chain's own ``model`` (its joints alone, in order):
+    ``H`` (n, n), its derivatives ``dH[k, j, i] = d H_jk / d q_i``, the speed torques'
+    coefficients ``cv`` (n, pairs) and their derivatives ``dc[p, j, i]``."""
+    n = model.nv
+    zero = np.zeros(n)
 
     def rnea_and_slope(vel: np.ndarray, acc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        d = pin.computeRNEADerivatives(model, data, qp, vel, acc)[0][sub].copy()
-        return pin.rnea(model, data, qp, vel, acc)[v].copy(), d
+        d = pin.computeRNEADerivatives(model, data, q, vel, acc)[0].copy()
+        return pin.rnea(model, data, q, vel, acc).copy(), d
 
     still, still_d = rnea_and_slope(zero, zero)
-    units = []
-    for k in range(len(v)):
-        e = zero.copy()
-        e[v[k]] = 1.0
-        units.append(e)
-    H = np.empty((len(v), len(v)))
-    dH = np.empty((len(v), len(v), len(v)))
+    units = list(np.eye(n))
+    H = np.empty((n, n))
+    dH = np.empty((n, n, n))
     for k, e in enumerate(units):
         tau, d = rnea_and_slope(zero, e)
         H[:, k], dH[k] = tau - still, d - still_d
     single = [rnea_and_slope(e, zero) for e in units]
-    cv = np.empty((len(v), len(pairs)))
-    dc = np.empty((len(pairs), len(v), len(v)))
+    cv = np.empty((n, len(pairs)))
+    dc = np.empty((len(pairs), n, n))
     for p, (k, l) in enumerate(pairs):
         if k == l:
             tau, d = single[k]
