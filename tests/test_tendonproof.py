@@ -14,10 +14,12 @@ import pytest
 
 from planner.hand.builders import load_hand_spec
 from planner.hand.model import HandModel, load_hand
-from planner.play.atlas import Atlas
+from planner.play.atlas import Atlas, posture_count
 from planner.play.moves import Moves
+from planner.play.movetable import MoveTable, add_proofs, table_path
 from planner.play.profile import straight_move
 from planner.play.tendonload import TendonLoad, scale_for, speed_squared_bound
+from planner.play.tendonproof import BOX_ROOM_RAD
 
 
 def _full(tl: TendonLoad, move, q_a, dq) -> tuple[np.ndarray, float]:
@@ -151,3 +153,63 @@ def test_a_weakened_tendon_is_not_proved(default_moves):
             unslowed += _full(tl, move, q_a, dq)[1] == 1.0
     assert slowed > 0
     assert unslowed > 0
+
+
+def _gains_equal(a, b) -> bool:
+    return (a.pairs == b.pairs and all(
+        np.array_equal(getattr(a, k), getattr(b, k)) and getattr(a, k).dtype == getattr(b, k).dtype
+        for k in ("mass", "mass_radius", "speed", "speed_radius")))
+
+
+@pytest.mark.parametrize("name", ["default", "default-left"])
+def test_the_shipped_gains_are_those_worked_out(name):
+    """Every play posture's move table ships the tendon proof's gain of each finger's box
+    of high poses (``MoveTable.proof_gain``): bit for bit the gain ``box_gain`` works out
+    now, and the very gain the proof reads (no box of a finger that plays goes without)."""
+    hand = load_hand(name)
+    for posture in range(posture_count(hand)):
+        moves = Moves(hand, Atlas(hand, posture=posture))
+        proof = moves.tendons.proof
+        boxes = moves.high_boxes()
+        assert sorted(boxes) == ["index", "middle", "pinky", "ring"]
+        for f, (lo, hi) in boxes.items():
+            shipped = moves.table.proof_gain(f, lo, hi, proof.params())
+            assert shipped is not None
+            assert _gains_equal(shipped, proof.box_gain(f, lo, hi))
+            # (the box as the proof holds it, and the gain it reads for it: the shipped one)
+            i = next(i for i, (l0, h0) in enumerate(proof.boxes[f])
+                     if np.array_equal(l0, lo - BOX_ROOM_RAD) and np.array_equal(h0, hi + BOX_ROOM_RAD))
+            assert _gains_equal(proof.gains[(f, i)], shipped)
+
+
+def test_gains_of_other_parameters_or_another_box_are_not_read(tmp_path):
+    """A table made with other proof parameters (its ``proof_params``) is not read, nor
+    its gain for a box an ulp wider; a table without the proof's arrays gives none; and
+    ``add_proofs`` writes into such a table the very arrays the shipped one holds."""
+    hand = load_hand("default")
+    moves = Moves(hand, Atlas(hand))
+    proof, f = moves.tendons.proof, "middle"
+    lo, hi = moves.high_boxes()[f]
+    path = table_path(hand.urdf_sha256)
+    assert moves.table.proof_gain(f, lo, hi, proof.params()) is not None
+    assert moves.table.proof_gain(f, lo, hi, proof.params().replace('"grid_points": 4',
+                                                                    '"grid_points": 5')) is None
+    assert moves.table.proof_gain(f, lo, np.nextafter(hi, np.inf), proof.params()) is None
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    other = tmp_path / "other.npz"
+    np.savez(other, **{**arrays, "proof_params": np.array(proof.params().replace(
+        '"curvature": 64.0', '"curvature": 32.0'))})
+    bare = tmp_path / "bare.npz"
+    np.savez(bare, **{k: v for k, v in arrays.items() if not k.startswith("proof_")})
+    for p in (other, bare):
+        table = MoveTable(hand.fingers, moves.atlas.natural_dx)
+        table.load(p, moves.params())
+        assert len(table.crossings) == len(moves.table.crossings)  # (the rest is read)
+        assert table.proof_gain(f, lo, hi, proof.params()) is None
+    assert add_proofs(moves, bare)
+    with np.load(bare) as z:
+        assert sorted(k for k in z.files if k.startswith("proof_")) == \
+            sorted(k for k in arrays if k.startswith("proof_"))
+        for k in z.files:
+            assert np.array_equal(z[k], arrays[k])

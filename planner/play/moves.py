@@ -108,13 +108,16 @@ class Moves(FollowMoves):
         self.descend = lru_cache(maxsize=None)(self._descend)
         self.lift = lru_cache(maxsize=None)(self._lift)
         self.tendons = tendon_load(hand)
-        if self.tendons.proof is not None:  # (each finger's high poses' box, for its moves
-            self._box_high_poses()  # across: ``planner.play.tendonproof``)
         self.entry_scale = lru_cache(maxsize=None)(self._entry_scale)
         self.rise = lru_cache(maxsize=None)(self._rise)
         self.to_hover = lru_cache(maxsize=None)(self._to_hover)
         self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
         self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
+        proof = self.tendons.proof
+        if proof is not None:  # (each finger's high poses' box, for its moves across, with
+            # its gain as the move table ships it: ``planner.play.tendonproof``)
+            for f, (lo, hi) in self.high_boxes().items():
+                proof.add_box(f, lo, hi, self.table.proof_gain(f, lo, hi, proof.params()))
         # every joint's acceleration limit, the rail's also within what the wrist holds
         self.acceleration = np.array(hand.acceleration, dtype=float)
         self.jerk = np.array(hand.jerk, dtype=float)
@@ -140,19 +143,21 @@ class Moves(FollowMoves):
             atlas, self.table, self.js, (hand.velocity, self.acceleration, self.jerk))
         self._across_bytes, self._follow_bytes = self.table.as_bytes()
 
-    def _box_high_poses(self) -> None:
-        """The box of each finger's high poses in the atlas (its joints, couplings
-        applied), added to the tendon bound's proof: a move across between two of them
-        stays in it (a straight line, the couplings elementwise and linear)."""
+    def high_boxes(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """The box (least, greatest) of each finger's high poses in the atlas (its
+        joints, couplings applied), for the tendon bound's proof: a move across between
+        two of them stays in it (a straight line, the couplings elementwise and linear)."""
         highs: dict[str, list[np.ndarray]] = {}
         for e in self.atlas.solved().values():
             highs.setdefault(e.finger, []).append(e.high)
+        out = {}
         for f, poses in highs.items():
             js = self.js[f]
             Q = np.repeat(self.atlas.base[None, :], len(poses), axis=0)
             Q[:, js] = poses
             Q = self.hand.apply_couplings(Q)[:, js]
-            self.tendons.proof.add_box(f, Q.min(axis=0), Q.max(axis=0))
+            out[f] = (Q.min(axis=0), Q.max(axis=0))
+        return out
 
     def params(self) -> str:
         """What the move table depends on besides the atlas (a table made otherwise is not

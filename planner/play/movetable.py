@@ -51,6 +51,7 @@ from planner.play.atlas import (
     AtlasEntry,
 )
 from planner.play.follow import HOLD_MARGIN_M, paths_clear
+from planner.play.tendonproof import BoxGain
 
 ENDS = ("high", "hover", "rise")  # the poses a descent starts from and a lift ends at
 # the move tests' parameters (``Moves`` and its table test the same):
@@ -95,6 +96,10 @@ class MoveTable:
         # (the arm's moves to another posture: by it, the rail's steps of the first
         # duration and the durations, step by step: ``Places.arm_time_s``)
         self._x_arm: dict[int, tuple[int, list[float]]] = {}
+        # (the tendon proof's gain of each finger's box of high poses, by finger: the box
+        # and its gain, and the parameters they were made with)
+        self.proofs: dict[str, tuple[np.ndarray, np.ndarray, BoxGain]] = {}
+        self.proof_params: str | None = None
 
     def key(self, e: AtlasEntry) -> tuple[str, int, int]:
         got = self._keys.get(id(e))  # (by the entry, held: its id is not reused)
@@ -151,6 +156,17 @@ class MoveTable:
             return None
         return got[1][steps - got[0]]
 
+    def proof_gain(self, finger: str, lo: np.ndarray, hi: np.ndarray,
+                   params: str) -> BoxGain | None:
+        """The tendon proof's gain of the finger's box ``lo``-``hi`` (``TendonProof.box_gain``),
+        None when the table was made with other ``params`` (``TendonProof.params``), for
+        another box, or lacks it."""
+        got = self.proofs.get(finger)
+        if params != self.proof_params or got is None or not (
+                np.array_equal(got[0], lo) and np.array_equal(got[1], hi)):
+            return None
+        return got[2]
+
     def _cross_pair(self, a: AtlasEntry, b: AtlasEntry):
         """The places of ``a`` (another posture's entry) among its posture's and of ``b``
         among this table's, or None."""
@@ -181,6 +197,11 @@ class MoveTable:
             if "clear_s" in z:  # (floats as Python's: the programme reads them as they are)
                 self.clears = dict(zip(keys, z["clear_s"].tolist()))
                 self.clear_params = str(z["clear_params"])
+            if "proof_params" in z:  # (the tendon proof's gains: ``proof_arrays``)
+                self.proof_params = str(z["proof_params"])
+                for f in self.fingers:
+                    if f"proof_box_{f}" in z:
+                        self.proofs[f] = _load_gain(z, f)
             for name in z.files:  # (across postures: ``make_table``'s ``others``)
                 if name.startswith("xkey_"):
                     self._load_cross(z, int(name[5:]))
@@ -232,6 +253,15 @@ def _indices(keys) -> dict[tuple[str, int, int], tuple[int, int]]:
     return out
 
 
+def _load_gain(z, finger: str) -> tuple[np.ndarray, np.ndarray, BoxGain]:
+    """A finger's box and its gain as ``proof_arrays`` wrote them."""
+    box = z[f"proof_box_{finger}"]
+    n = box.shape[1]
+    mass, speed = z[f"proof_mass_{finger}"], z[f"proof_speed_{finger}"]
+    return box[0], box[1], BoxGain(mass[0], mass[1], speed[0], speed[1],
+                                   tuple((k, j) for k in range(n) for j in range(k, n)))
+
+
 def _unpack(bits: np.ndarray, n: int, m: int | None = None) -> np.ndarray:
     m = n if m is None else m
     return np.unpackbits(bits, count=n * m).astype(bool).reshape(n, m)
@@ -269,6 +299,7 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
         rows = [high.clear_row(e, moves) for e in entries]
         arrays["clear_s"] = np.array(rows).reshape(len(rows), len(rows[0]) if rows else 0)
         arrays["clear_params"] = np.array(clear_params)
+    arrays.update(proof_arrays(moves))
     for f in hand.fingers:
         mine = [e for e in entries if e.finger == f]
         arrays[f"across_{f}"] = np.packbits(_across_matrix(moves, f, mine))
@@ -287,6 +318,37 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
     with open(path, "wb") as fh:
         np.savez_compressed(fh, **arrays)
     return len(entries)
+
+
+def proof_arrays(moves) -> dict[str, np.ndarray]:
+    """The tendon proof's gain of each finger's box of high poses (``Moves.high_boxes``,
+    ``TendonProof.box_gain``: found as a plan finds it) and the proof's parameters; none
+    for a hand without the proof."""
+    proof = moves.tendons.proof
+    if proof is None:
+        return {}
+    out = {"proof_params": np.array(proof.params())}
+    for f, (lo, hi) in moves.high_boxes().items():
+        gain = proof.box_gain(f, lo, hi)
+        if gain is not None:
+            out[f"proof_box_{f}"] = np.array([lo, hi])
+            out[f"proof_mass_{f}"] = np.array([gain.mass, gain.mass_radius])
+            out[f"proof_speed_{f}"] = np.array([gain.speed, gain.speed_radius])
+    return out
+
+
+def add_proofs(moves, path: Path) -> bool:
+    """Write ``proof_arrays`` into the move table at ``path`` (its other arrays as they
+    are; none of an older proof's kept; a hand without the proof: left as it is, False)."""
+    proofs = proof_arrays(moves)
+    if not proofs:
+        return False
+    with np.load(path, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files if not k.startswith("proof_")}
+    arrays.update(proofs)
+    with open(path, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
+    return True
 
 
 def _cross_arrays(moves, entries: list[AtlasEntry], other) -> dict:

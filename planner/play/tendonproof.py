@@ -33,7 +33,9 @@ runs.
 
 from __future__ import annotations
 
+import hashlib
 import itertools
+import json
 from dataclasses import dataclass
 
 import numpy as np
@@ -224,17 +226,39 @@ class TendonProof:
         self.static_nm = np.array([float(np.sum(absM[m, absM[m] > 0.0]
                                                 * gravity[absM[m] > 0.0]))
                                    for m in range(len(M))])
+        self._params = json.dumps({"grid_points": GRID_POINTS, "curvature": CURVATURE,
+                                   "box_room_rad": BOX_ROOM_RAD,
+                                   "motors": hashlib.sha256(np.ascontiguousarray(M).tobytes()
+                                                            ).hexdigest()[:16]},
+                                  sort_keys=True)
         self.finger_of = np.full(hand.n, -1)
         for i, f in enumerate(hand.fingers):
             self.finger_of[hand.joint_slice(f)] = i
 
-    def add_box(self, finger: str, lo: np.ndarray, hi: np.ndarray) -> None:
+    def params(self) -> str:
+        """What a box's gain depends on besides the hand's chains and the box (a shipped
+        gain made otherwise is not read: ``planner.play.movetable``): the grid, the
+        curvature bound, the box's room and the motor rows (as a digest)."""
+        return self._params
+
+    def add_box(self, finger: str, lo: np.ndarray, hi: np.ndarray,
+                gain: BoxGain | None = None) -> None:
         """A box of the finger's joints (its chain's, couplings applied) within which its
         moves are tested (a move with an end outside every box is not); the boxes are
-        tried in the order they were added, a box's gain worked out when first needed."""
-        if self.chains[finger] is not None and np.all(lo <= hi):
-            self.boxes[finger].append((np.asarray(lo, dtype=float) - BOX_ROOM_RAD,
-                                       np.asarray(hi, dtype=float) + BOX_ROOM_RAD))
+        tried in the order they were added, a box's gain worked out when first needed
+        (``gain``: its gain as shipped, ``box_gain``'s very floats). A box added again
+        is kept once."""
+        if self.chains[finger] is None or not np.all(lo <= hi):
+            return
+        box = _roomed(lo, hi)
+        for i, (l0, h0) in enumerate(self.boxes[finger]):
+            if np.array_equal(l0, box[0]) and np.array_equal(h0, box[1]):
+                if gain is not None:
+                    self.gains.setdefault((finger, i), gain)
+                return
+        if gain is not None:
+            self.gains[(finger, len(self.boxes[finger]))] = gain
+        self.boxes[finger].append(box)
 
     def gain(self, finger: str, points: np.ndarray) -> BoxGain | None:
         """The gain of the first of the finger's boxes holding every row of ``points``
@@ -247,6 +271,14 @@ class TendonProof:
                                                        self.M[:, chain.cols], lo, hi)
                 return self.gains[(finger, i)]
         return None
+
+    def box_gain(self, finger: str, lo: np.ndarray, hi: np.ndarray) -> BoxGain | None:
+        """The gain ``gain`` works out for the box ``add_box(finger, lo, hi)`` adds (None:
+        the finger proves nothing): what the move tables ship."""
+        chain = self.chains[finger]
+        if chain is None or not np.all(lo <= hi):
+            return None
+        return box_gain(self.hand, self.kin, chain, self.M[:, chain.cols], *_roomed(lo, hi))
 
     def bound_nm(self, q_a: np.ndarray, dq: np.ndarray, peak_acceleration: float,
                  peak_speed: float) -> np.ndarray | None:
@@ -292,3 +324,9 @@ class TendonProof:
         bound = self.bound_nm(q_a, dq, peak_acceleration, peak_speed)
         return bound is not None and bool(np.all(bound <= self.capacity_nm
                                                  * (1.0 - PROOF_MARGIN)))
+
+
+def _roomed(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A box widened by ``BOX_ROOM_RAD`` each side."""
+    return (np.asarray(lo, dtype=float) - BOX_ROOM_RAD,
+            np.asarray(hi, dtype=float) + BOX_ROOM_RAD)
