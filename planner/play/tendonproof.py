@@ -231,6 +231,14 @@ class TendonProof:
                                    "motors": hashlib.sha256(np.ascontiguousarray(M).tobytes()
                                                             ).hexdigest()[:16]},
                                   sort_keys=True)
+        # (what ``bound_nm`` reads: the couplings at zero, each finger's joints outside its
+        # chain, each gain's derived arrays by the gain)
+        self._coupled_zero = hand.apply_couplings(np.zeros(hand.n))
+        self._outside = {}
+        for f in hand.fingers:
+            self._outside[f] = np.ones(hand.n, dtype=bool)
+            self._outside[f][hand.joint_slice(f)] = False
+        self._of_gain: dict[int, tuple] = {}
         self.finger_of = np.full(hand.n, -1)
         for i, f in enumerate(hand.fingers):
             self.finger_of[hand.joint_slice(f)] = i
@@ -294,28 +302,39 @@ class TendonProof:
         if chain is None:
             return None
         c = chain.cols
-        tangent = hand.apply_couplings(dq) - hand.apply_couplings(np.zeros(hand.n))
-        if np.any(np.delete(tangent, c) != 0.0):
+        tangent = hand.apply_couplings(dq) - self._coupled_zero
+        if np.any(tangent[self._outside[finger]] != 0.0):
             return None  # (a coupling carries the move out of the finger)
-        points = np.stack((hand.apply_couplings(q_a), hand.apply_couplings(q_a + dq)))
+        points = hand.apply_couplings(np.stack((q_a, q_a + dq)))
         gain = self.gain(finger, points[:, c])
         if gain is None:
             return None
+        abs_mass, mass_all, speed_all, K, L = self._derived(gain)
         # (the tangent and curvature by central differences: the exact ones within their
         # rounding, a few ulps of the largest joint value over the step and its square)
         ulp = ROUNDING_FACTOR * np.spacing(np.max(np.abs(points), axis=0)[c]
                                            + np.abs(dq[c]) + 1.0)
         t = tangent[c]
         e, e2 = ulp / self.step, ulp / (self.step * self.step)
-        mass = (np.abs(gain.mass @ t) + np.abs(gain.mass) @ e
+        mass = (np.abs(gain.mass @ t) + abs_mass @ e
                 + gain.mass_radius @ (np.abs(t) + e)) * peak_acceleration \
-            + (np.abs(gain.mass) + gain.mass_radius) @ e2 * (peak_speed * peak_speed)
-        prod = np.array([t[k] * t[l] for k, l in gain.pairs])
-        slack = np.array([abs(t[k]) * e[l] + e[k] * abs(t[l]) + e[k] * e[l]
-                          for k, l in gain.pairs])
+            + mass_all @ e2 * (peak_speed * peak_speed)
+        prod = t[K] * t[L]  # (each pair's product, ``gain.pairs``' order)
+        slack = np.abs(t[K]) * e[L] + e[K] * np.abs(t[L]) + e[K] * e[L]
         speed = np.abs(gain.speed @ prod) + gain.speed_radius @ np.abs(prod) \
-            + (np.abs(gain.speed) + gain.speed_radius) @ slack
+            + speed_all @ slack
         return self.static_nm + mass + speed * (peak_speed * peak_speed)
+
+    def _derived(self, gain: BoxGain) -> tuple:
+        """What ``bound_nm`` reads of a gain besides its terms, once per gain: ``|mass|``,
+        ``|mass| + mass_radius``, ``|speed| + speed_radius`` and the pairs' two indices."""
+        got = self._of_gain.get(id(gain))
+        if got is None or got[0] is not gain:
+            K, L = (np.array([p[i] for p in gain.pairs], dtype=int) for i in (0, 1))
+            got = self._of_gain[id(gain)] = (
+                gain, (np.abs(gain.mass), np.abs(gain.mass) + gain.mass_radius,
+                       np.abs(gain.speed) + gain.speed_radius, K, L))
+        return got[1]
 
     def proves(self, q_a: np.ndarray, dq: np.ndarray, peak_acceleration: float,
                peak_speed: float) -> bool:
