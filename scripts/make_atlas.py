@@ -99,8 +99,9 @@ def main() -> int:
     a = ap.parse_args()
     hand = load_hand(a.hand)
     if a.proofs_only:
-        for i in range(posture_count(hand)):
-            make_proofs(hand, i)
+        atlases = [make(hand, i, True) for i in range(posture_count(hand))]
+        for i in range(len(atlases)):
+            make_proofs(hand, atlases, i)
         return 0
     if not a.follows_only:
         atlases = [make(hand, i, a.moves_only) for i in range(posture_count(hand))]
@@ -111,17 +112,17 @@ def main() -> int:
     return 0
 
 
-def make_proofs(hand, posture: int) -> None:
-    """The tendon proof's gains of one play posture's shipped atlas, into its shipped move
-    table (``movetable.add_proofs``)."""
+def make_proofs(hand, atlases: list[Atlas], posture: int) -> None:
+    """The tendon proof's gains of one play posture's shipped atlas (posture 0's table:
+    also the cells over every posture's), into its shipped move table
+    (``movetable.add_proofs``)."""
     t0 = time.perf_counter()
-    atlas = Atlas(hand, posture=posture)
-    atlas.solve_all()
     out = moves_path(hand.urdf_sha256, posture)
     if not out.exists():
         print(f"{out}: no move table", file=sys.stderr)
         return
-    if add_proofs(Moves(hand, atlas), out):
+    others = [a for i, a in enumerate(atlases) if i != posture] if posture == 0 else []
+    if add_proofs(Moves(hand, atlases[posture]), out, others):
         print(f"{out}: the tendon proof's gains, {time.perf_counter() - t0:.1f} s")
 
 

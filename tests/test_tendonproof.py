@@ -16,10 +16,10 @@ from planner.hand.builders import load_hand_spec
 from planner.hand.model import HandModel, load_hand
 from planner.play.atlas import Atlas, posture_count
 from planner.play.moves import Moves
-from planner.play.movetable import MoveTable, add_proofs, table_path
+from planner.play.movetable import MoveTable, add_proofs, high_boxes, table_path
 from planner.play.profile import straight_move
 from planner.play.tendonload import TendonLoad, scale_for, speed_squared_bound
-from planner.play.tendonproof import BOX_ROOM_RAD
+from planner.play.tendonproof import BOX_ROOM_RAD, GRID_CELLS
 
 
 def _full(tl: TendonLoad, move, q_a, dq) -> tuple[np.ndarray, float]:
@@ -185,7 +185,8 @@ def test_the_shipped_gains_are_those_worked_out(name):
 def test_gains_of_other_parameters_or_another_box_are_not_read(tmp_path):
     """A table made with other proof parameters (its ``proof_params``) is not read, nor
     its gain for a box an ulp wider; a table without the proof's arrays gives none; and
-    ``add_proofs`` writes into such a table the very arrays the shipped one holds."""
+    ``add_proofs`` writes into such a table the very arrays the shipped one holds (the
+    cells over every posture's among them)."""
     hand = load_hand("default")
     moves = Moves(hand, Atlas(hand))
     proof, f = moves.tendons.proof, "middle"
@@ -207,9 +208,67 @@ def test_gains_of_other_parameters_or_another_box_are_not_read(tmp_path):
         table.load(p, moves.params())
         assert len(table.crossings) == len(moves.table.crossings)  # (the rest is read)
         assert table.proof_gain(f, lo, hi, proof.params()) is None
-    assert add_proofs(moves, bare)
+    assert add_proofs(moves, bare, [Atlas(hand, posture=p) for p in range(1, posture_count(hand))])
     with np.load(bare) as z:
         assert sorted(k for k in z.files if k.startswith("proof_")) == \
             sorted(k for k in arrays if k.startswith("proof_"))
         for k in z.files:
             assert np.array_equal(z[k], arrays[k])
+
+
+@pytest.mark.parametrize("name", ["default", "default-left"])
+def test_the_shipped_cells_are_those_worked_out(name):
+    """Posture 0's move table ships each finger's cells over the hull of its high poses in
+    every posture (``MoveTable.proof_cells``): their corners and gains bit for bit what
+    ``hull_cells`` works out now over the postures' boxes, and the proof holds them."""
+    hand = load_hand(name)
+    atlases = [Atlas(hand, posture=p) for p in range(posture_count(hand))]
+    moves = Moves(hand, atlases[0])
+    proof = moves.tendons.proof
+    boxes = [high_boxes(hand, a) for a in atlases]
+    assert sorted(moves.table.proof_cells) == ["index", "middle", "pinky", "ring"]
+    for f, (lo, hi, gain) in moves.table.proof_cells.items():
+        want = proof.hull_cells(f, np.min([b[f][0] for b in boxes], axis=0),
+                                np.max([b[f][1] for b in boxes], axis=0))
+        assert np.array_equal(lo, want[0]) and np.array_equal(hi, want[1])
+        assert len(lo) == GRID_CELLS ** (len(lo[0]) - 1)
+        assert _gains_equal(gain, want[2])
+        assert proof.cells[f][0] is lo and proof.cells[f][2][0] is gain.mass
+
+
+def test_the_cells_bound_holds_on_moves_across_postures():
+    """Moves across from another posture's entry (its high pose, the rest of the hand at
+    this posture's: ``Moves.finger_scale``' question), twenty of each finger and pair of
+    postures: no box holds both ends, the cells' bound is at or above the full
+    computation's largest torque on every motor, and every such move is proved (scale 1);
+    without the cells none is bounded."""
+    hand = load_hand("default")
+    atlases = [Atlas(hand, posture=p) for p in range(posture_count(hand))]
+    moves = [Moves(hand, a) for a in atlases]
+    tl = moves[0].tendons
+    bare = TendonLoad(hand)
+    for f in ("index", "middle", "ring", "pinky"):
+        for box in tl.proof.boxes[f]:
+            bare.proof.boxes[f].append(box)
+    rng = np.random.default_rng(3)
+    proved = 0
+    for p, q in ((0, 1), (1, 0), (0, 2), (2, 1)):
+        for f in ("index", "middle", "ring", "pinky"):
+            mine = [e for e in atlases[p].solved().values() if e.finger == f]
+            theirs = [e for e in atlases[q].solved().values() if e.finger == f]
+            for _ in range(20):
+                a, b = mine[rng.integers(len(mine))], theirs[rng.integers(len(theirs))]
+                move, q_a, dq = _move(hand, f, atlases[q].base, a.high, b.high)
+                A, V = move.peak_acceleration, move.peak_speed
+                points = hand.apply_couplings(np.stack((q_a, q_a + dq)))[:, hand.joint_slice(f)]
+                if tl.proof.gain(f, points) is not None:
+                    continue  # (both ends in one posture's box: not this test's)
+                bound = tl.proof.bound_nm(q_a, dq, A, V)
+                worst, scale = _full(tl, move, q_a, dq)
+                assert bound is not None
+                assert np.all(worst <= bound), (f, p, q, worst, bound)
+                assert bare.proof.bound_nm(q_a, dq, A, V) is None
+                if tl.proof.proves(q_a, dq, A, V):
+                    assert scale == 1.0
+                    proved += 1
+    assert proved > 100

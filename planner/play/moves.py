@@ -46,6 +46,7 @@ from planner.play.movetable import (
     ENDS,
     HIGH_SAFE_Z_M,
     MoveTable,
+    high_boxes,
     table_path,
 )
 from planner.play.profile import (
@@ -118,6 +119,9 @@ class Moves(FollowMoves):
             # its gain as the move table ships it: ``planner.play.tendonproof``)
             for f, (lo, hi) in self.high_boxes().items():
                 proof.add_box(f, lo, hi, self.table.proof_gain(f, lo, hi, proof.params()))
+            if self.table.proof_params == proof.params():  # (the cells over every
+                for f, cells in self.table.proof_cells.items():  # posture: shipped only)
+                    proof.add_cells(f, *cells)
         # every joint's acceleration limit, the rail's also within what the wrist holds
         self.acceleration = np.array(hand.acceleration, dtype=float)
         self.jerk = np.array(hand.jerk, dtype=float)
@@ -144,20 +148,8 @@ class Moves(FollowMoves):
         self._across_bytes, self._follow_bytes = self.table.as_bytes()
 
     def high_boxes(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-        """The box (least, greatest) of each finger's high poses in the atlas (its
-        joints, couplings applied), for the tendon bound's proof: a move across between
-        two of them stays in it (a straight line, the couplings elementwise and linear)."""
-        highs: dict[str, list[np.ndarray]] = {}
-        for e in self.atlas.solved().values():
-            highs.setdefault(e.finger, []).append(e.high)
-        out = {}
-        for f, poses in highs.items():
-            js = self.js[f]
-            Q = np.repeat(self.atlas.base[None, :], len(poses), axis=0)
-            Q[:, js] = poses
-            Q = self.hand.apply_couplings(Q)[:, js]
-            out[f] = (Q.min(axis=0), Q.max(axis=0))
-        return out
+        """``high_boxes`` of the atlas."""
+        return high_boxes(self.hand, self.atlas)
 
     def params(self) -> str:
         """What the move table depends on besides the atlas (a table made otherwise is not

@@ -100,6 +100,9 @@ class MoveTable:
         # and its gain, and the parameters they were made with)
         self.proofs: dict[str, tuple[np.ndarray, np.ndarray, BoxGain]] = {}
         self.proof_params: str | None = None
+        # (and each finger's cells over its hull of high poses in every posture:
+        # ``TendonProof.hull_cells``, in posture 0's table)
+        self.proof_cells: dict[str, tuple[np.ndarray, np.ndarray, BoxGain]] = {}
 
     def key(self, e: AtlasEntry) -> tuple[str, int, int]:
         got = self._keys.get(id(e))  # (by the entry, held: its id is not reused)
@@ -201,7 +204,9 @@ class MoveTable:
                 self.proof_params = str(z["proof_params"])
                 for f in self.fingers:
                     if f"proof_box_{f}" in z:
-                        self.proofs[f] = _load_gain(z, f)
+                        self.proofs[f] = _load_gain(z, f, "")
+                    if f"proof_cells_box_{f}" in z:
+                        self.proof_cells[f] = _load_gain(z, f, "cells_")
             for name in z.files:  # (across postures: ``make_table``'s ``others``)
                 if name.startswith("xkey_"):
                     self._load_cross(z, int(name[5:]))
@@ -253,11 +258,11 @@ def _indices(keys) -> dict[tuple[str, int, int], tuple[int, int]]:
     return out
 
 
-def _load_gain(z, finger: str) -> tuple[np.ndarray, np.ndarray, BoxGain]:
-    """A finger's box and its gain as ``proof_arrays`` wrote them."""
-    box = z[f"proof_box_{finger}"]
-    n = box.shape[1]
-    mass, speed = z[f"proof_mass_{finger}"], z[f"proof_speed_{finger}"]
+def _load_gain(z, finger: str, kind: str) -> tuple[np.ndarray, np.ndarray, BoxGain]:
+    """A finger's box (or cells: ``kind``) and its gain as ``proof_arrays`` wrote them."""
+    box = z[f"proof_{kind}box_{finger}"]
+    n = box.shape[-1]
+    mass, speed = z[f"proof_{kind}mass_{finger}"], z[f"proof_{kind}speed_{finger}"]
     return box[0], box[1], BoxGain(mass[0], mass[1], speed[0], speed[1],
                                    tuple((k, j) for k in range(n) for j in range(k, n)))
 
@@ -299,7 +304,7 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
         rows = [high.clear_row(e, moves) for e in entries]
         arrays["clear_s"] = np.array(rows).reshape(len(rows), len(rows[0]) if rows else 0)
         arrays["clear_params"] = np.array(clear_params)
-    arrays.update(proof_arrays(moves))
+    arrays.update(proof_arrays(moves, [a for a, _ in others] if atlas.posture_index == 0 else ()))
     for f in hand.fingers:
         mine = [e for e in entries if e.finger == f]
         arrays[f"across_{f}"] = np.packbits(_across_matrix(moves, f, mine))
@@ -320,27 +325,58 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
     return len(entries)
 
 
-def proof_arrays(moves) -> dict[str, np.ndarray]:
+def high_boxes(hand, atlas) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The box (least, greatest) of each finger's high poses in the atlas (its joints,
+    couplings applied), for the tendon bound's proof: a move across between two of them
+    stays in it (a straight line, the couplings elementwise and linear)."""
+    highs: dict[str, list[np.ndarray]] = {}
+    for e in atlas.solved().values():
+        highs.setdefault(e.finger, []).append(e.high)
+    out = {}
+    for f, poses in highs.items():
+        js = hand.joint_slice(f)
+        Q = np.repeat(atlas.base[None, :], len(poses), axis=0)
+        Q[:, js] = poses
+        Q = hand.apply_couplings(Q)[:, js]
+        out[f] = (Q.min(axis=0), Q.max(axis=0))
+    return out
+
+
+def proof_arrays(moves, others=()) -> dict[str, np.ndarray]:
     """The tendon proof's gain of each finger's box of high poses (``Moves.high_boxes``,
-    ``TendonProof.box_gain``: found as a plan finds it) and the proof's parameters; none
+    ``TendonProof.box_gain``: found as a plan finds it) and the proof's parameters; with
+    ``others`` (the other play postures' atlases, in posture 0's table) also each finger's
+    cells over the hull of its boxes in every posture (``TendonProof.hull_cells``); none
     for a hand without the proof."""
     proof = moves.tendons.proof
     if proof is None:
         return {}
     out = {"proof_params": np.array(proof.params())}
-    for f, (lo, hi) in moves.high_boxes().items():
-        gain = proof.box_gain(f, lo, hi)
-        if gain is not None:
-            out[f"proof_box_{f}"] = np.array([lo, hi])
-            out[f"proof_mass_{f}"] = np.array([gain.mass, gain.mass_radius])
-            out[f"proof_speed_{f}"] = np.array([gain.speed, gain.speed_radius])
+    boxes = moves.high_boxes()
+    for f, (lo, hi) in boxes.items():
+        _put_gain(out, f, "", (lo, hi, proof.box_gain(f, lo, hi)))
+    theirs = [high_boxes(moves.hand, a) for a in others]
+    for f, (lo, hi) in boxes.items() if theirs else ():
+        los, his = [lo, *(b[f][0] for b in theirs if f in b)], [hi, *(b[f][1] for b in theirs if f in b)]
+        cells = proof.hull_cells(f, np.min(los, axis=0), np.max(his, axis=0))
+        _put_gain(out, f, "cells_", cells)
     return out
 
 
-def add_proofs(moves, path: Path) -> bool:
+def _put_gain(out: dict, finger: str, kind: str, got) -> None:
+    """A finger's box (or cells) and gain into ``out`` (``_load_gain`` reads them)."""
+    if got is None or got[2] is None:
+        return
+    lo, hi, gain = got
+    out[f"proof_{kind}box_{finger}"] = np.array([lo, hi])
+    out[f"proof_{kind}mass_{finger}"] = np.array([gain.mass, gain.mass_radius])
+    out[f"proof_{kind}speed_{finger}"] = np.array([gain.speed, gain.speed_radius])
+
+
+def add_proofs(moves, path: Path, others=()) -> bool:
     """Write ``proof_arrays`` into the move table at ``path`` (its other arrays as they
     are; none of an older proof's kept; a hand without the proof: left as it is, False)."""
-    proofs = proof_arrays(moves)
+    proofs = proof_arrays(moves, others)
     if not proofs:
         return False
     with np.load(path, allow_pickle=False) as z:

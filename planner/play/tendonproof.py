@@ -58,6 +58,11 @@ ROUNDING_FACTOR = 64.0  # the central differences' rounding bound, in units of t
 # path's point, the couplings' product and sum), 64 bounds their sum with room
 BOX_ROOM_RAD = 1e-9  # a box is widened by this each side: a move's end worked out as the
 # start plus the difference (``Moves.finger_scale``) may round an ulp or two past the pose
+GRID_CELLS = 4  # a finger's hull of high poses over every posture (the box a move across
+# from another posture's entry lies in) is cut into 4 cells a joint for its gains: over the
+# whole hull the bound is 1.2-3.7 times a motor's share where the full computation finds
+# 0.35-0.45 (two corpus pieces' 120 moves across postures, none proved); over 4^3 cells
+# every one of them is proved. 64 cells at about 10 ms each: made by ``make_atlas`` only
 CURVATURE = 64.0  # the second derivatives' bound of a term of the mass matrix or of the
 # speed torques, in units of m d(j, b) d(k, b) (or of ||I_b||): products of at most five
 # turned vectors whose r-th derivatives are at most 2^r times their length (32 the largest
@@ -239,6 +244,8 @@ class TendonProof:
             self._outside[f] = np.ones(hand.n, dtype=bool)
             self._outside[f][hand.joint_slice(f)] = False
         self._of_gain: dict[int, tuple] = {}
+        # (each finger's grid of cells over its boxes' hull, ``add_cells``)
+        self.cells: dict[str, tuple[np.ndarray, np.ndarray, tuple]] = {}
         self.finger_of = np.full(hand.n, -1)
         for i, f in enumerate(hand.fingers):
             self.finger_of[hand.joint_slice(f)] = i
@@ -306,24 +313,76 @@ class TendonProof:
         if np.any(tangent[self._outside[finger]] != 0.0):
             return None  # (a coupling carries the move out of the finger)
         points = hand.apply_couplings(np.stack((q_a, q_a + dq)))
-        gain = self.gain(finger, points[:, c])
-        if gain is None:
+        terms = self._terms_over(finger, points[:, c])
+        if terms is None:
             return None
-        abs_mass, mass_all, speed_all, K, L = self._derived(gain)
+        mass_c, mass_r, speed_c, speed_r, abs_mass, mass_all, speed_all, K, L = terms
         # (the tangent and curvature by central differences: the exact ones within their
         # rounding, a few ulps of the largest joint value over the step and its square)
         ulp = ROUNDING_FACTOR * np.spacing(np.max(np.abs(points), axis=0)[c]
                                            + np.abs(dq[c]) + 1.0)
         t = tangent[c]
         e, e2 = ulp / self.step, ulp / (self.step * self.step)
-        mass = (np.abs(gain.mass @ t) + abs_mass @ e
-                + gain.mass_radius @ (np.abs(t) + e)) * peak_acceleration \
+        mass = (np.abs(mass_c @ t) + abs_mass @ e
+                + mass_r @ (np.abs(t) + e)) * peak_acceleration \
             + mass_all @ e2 * (peak_speed * peak_speed)
-        prod = t[K] * t[L]  # (each pair's product, ``gain.pairs``' order)
+        prod = t[K] * t[L]  # (each pair's product, ``BoxGain.pairs``' order)
         slack = np.abs(t[K]) * e[L] + e[K] * np.abs(t[L]) + e[K] * e[L]
-        speed = np.abs(gain.speed @ prod) + gain.speed_radius @ np.abs(prod) \
-            + speed_all @ slack
-        return self.static_nm + mass + speed * (peak_speed * peak_speed)
+        speed = np.abs(speed_c @ prod) + speed_r @ np.abs(prod) + speed_all @ slack
+        bound = self.static_nm + mass + speed * (peak_speed * peak_speed)
+        # (over cells: each cell's bound holds where the move is in it, the largest holds)
+        return bound if bound.ndim == 1 else np.max(bound, axis=0)
+
+    def _terms_over(self, finger: str, points: np.ndarray) -> tuple | None:
+        """What ``bound_nm`` reads of the gain over the move from ``points[0]`` to
+        ``points[1]`` (its chain's joints): of the first box holding both (``gain``), else
+        of every cell of the finger's grid (``add_cells``) that meets the box of the two
+        points widened by ``BOX_ROOM_RAD`` (stacked: the move lies in those cells), when
+        the grid holds that box; else None."""
+        gain = self.gain(finger, points)
+        if gain is not None:
+            return (gain.mass, gain.mass_radius, gain.speed, gain.speed_radius,
+                    *self._derived(gain))
+        cells = self.cells.get(finger)
+        if cells is None:
+            return None
+        lo, hi, terms = cells
+        p_lo, p_hi = points.min(axis=0) - BOX_ROOM_RAD, points.max(axis=0) + BOX_ROOM_RAD
+        if not (np.all(p_lo >= lo.min(axis=0)) and np.all(p_hi <= hi.max(axis=0))):
+            return None
+        meet = np.all(lo <= p_hi, axis=1) & np.all(hi >= p_lo, axis=1)
+        return (*(a[meet] for a in terms[:7]), *terms[7:])
+
+    def add_cells(self, finger: str, lo: np.ndarray, hi: np.ndarray, gain: BoxGain) -> None:
+        """A grid of cells (``lo``, ``hi``: each cell's corners, rows; ``hull_cells``) that
+        tiles a box of the finger's joints, with their gains stacked (each array's first
+        axis the cell's): a move with an end outside every box (``add_box``) but within
+        the grid is bounded over the cells it may pass through."""
+        if self.chains[finger] is not None:
+            self.cells[finger] = (lo, hi, (gain.mass, gain.mass_radius, gain.speed,
+                                           gain.speed_radius, *self._derived(gain)))
+
+    def hull_cells(self, finger: str, lo: np.ndarray, hi: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, BoxGain] | None:
+        """The grid ``add_cells`` reads over the box ``lo``-``hi`` (widened by
+        ``BOX_ROOM_RAD``): ``GRID_CELLS`` cells a joint but the chain's first (its gain
+        does not depend on it), each cell's ``box_gain``, stacked; None for a finger that
+        proves nothing."""
+        chain = self.chains[finger]
+        if chain is None or not np.all(lo <= hi):
+            return None
+        lo, hi = _roomed(lo, hi)
+        edges = [np.array([lo[0], hi[0]])] + [np.linspace(lo[j], hi[j], GRID_CELLS + 1)
+                                              for j in range(1, len(lo))]
+        corners = [(np.array([e[k] for e, k in zip(edges, at)]),
+                    np.array([e[k + 1] for e, k in zip(edges, at)]))
+                   for at in itertools.product(*(range(len(e) - 1) for e in edges))]
+        gains = [box_gain(self.hand, self.kin, chain, self.M[:, chain.cols], a, b)
+                 for a, b in corners]
+        return (np.array([a for a, _ in corners]), np.array([b for _, b in corners]),
+                BoxGain(*(np.array([getattr(g, k) for g in gains])
+                          for k in ("mass", "mass_radius", "speed", "speed_radius")),
+                        gains[0].pairs))
 
     def _derived(self, gain: BoxGain) -> tuple:
         """What ``bound_nm`` reads of a gain besides its terms, once per gain: ``|mass|``,
