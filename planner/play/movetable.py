@@ -24,6 +24,11 @@ of entries, found once per hand and shipped beside the atlas
   finger holding its key from another posture's entry, ``Places.follow_clear``, is not
   here: the body rule's follow test of every such pair would take about half an hour
   a hand on two cores, measured on one key's 65 x 65 pairs, 16 s.)
+* for a hand whose tendon bound has its sufficient test (``planner.play.tendonproof``):
+  each finger's box of high poses and its bound (``TendonProof.box_gain``), and in
+  posture 0's table each finger's cells over its hull of high poses in every posture
+  (``TendonProof.hull_cells``), with the test's parameters (``proof_params``: a table
+  made with others, or for another box, is not read for them).
 
 A planner that meets a hand without a table finds each of these when first needed
 (about 4 000 pairs a song, most of a cold plan's time: ``docs/history/play-second-design.md``).
