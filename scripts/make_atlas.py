@@ -16,7 +16,10 @@ the repository root after changing a hand, the IK, the atlas or the moves:
 (``--moves-only``: keep the shipped atlas, write the move table of its entries.) Last it
 writes the hand's follow table (``planner.play.followtable``: the follow test's answers on
 the rail's grid, for a hand with a rail and the atlas's body rule; ``--follows-only``:
-keep the shipped atlas and move tables, write only it).
+keep the shipped atlas and move tables, write only it). ``--proofs-only``: keep the
+shipped atlas and move tables, write into each move table only the tendon proof's gains
+of each finger's box of high poses (``planner.play.tendonproof``; ``make_table`` writes
+them too).
 """
 
 import argparse
@@ -31,7 +34,7 @@ from planner.hand.model import load_hand
 from planner.play import followtable, highclear
 from planner.play.atlas import Atlas, posture_count, table_path
 from planner.play.moves import Moves
-from planner.play.movetable import MoveTable, make_table
+from planner.play.movetable import MoveTable, add_proofs, make_table
 from planner.play.movetable import table_path as moves_path
 from planner.play.places import RAIL_STEP_M, Places
 
@@ -90,8 +93,16 @@ def main() -> int:
                     help="keep the shipped atlas; write the move table of its entries")
     ap.add_argument("--follows-only", action="store_true",
                     help="keep the shipped atlas and move tables; write the follow table")
+    ap.add_argument("--proofs-only", action="store_true",
+                    help="keep the shipped atlas and move tables; write the tendon proof's "
+                         "gains into the move tables")
     a = ap.parse_args()
     hand = load_hand(a.hand)
+    if a.proofs_only:
+        atlases = [make(hand, i, True) for i in range(posture_count(hand))]
+        for i in range(len(atlases)):
+            make_proofs(hand, atlases, i)
+        return 0
     if not a.follows_only:
         atlases = [make(hand, i, a.moves_only) for i in range(posture_count(hand))]
         places = Places(hand) if len(atlases) > 1 and atlases[0].rail is not None else None
@@ -99,6 +110,20 @@ def main() -> int:
             make_moves(hand, atlases, i, places)
     make_follows(hand)
     return 0
+
+
+def make_proofs(hand, atlases: list[Atlas], posture: int) -> None:
+    """The tendon proof's gains of one play posture's shipped atlas (posture 0's table:
+    also the cells over every posture's), into its shipped move table
+    (``movetable.add_proofs``)."""
+    t0 = time.perf_counter()
+    out = moves_path(hand.urdf_sha256, posture)
+    if not out.exists():
+        print(f"{out}: no move table", file=sys.stderr)
+        return
+    others = [a for i, a in enumerate(atlases) if i != posture] if posture == 0 else []
+    if add_proofs(Moves(hand, atlases[posture]), out, others):
+        print(f"{out}: the tendon proof's gains, {time.perf_counter() - t0:.1f} s")
 
 
 def make_follows(hand) -> None:

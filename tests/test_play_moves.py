@@ -119,6 +119,12 @@ def test_a_table_of_other_parameters_is_not_used(moves, tmp_path):
     assert len(same.crossings) == len(keep)
     e = next(iter(keep.values()))
     assert same.crossing(e, 0) == moves.descend(e, "high").cross_s
+    # (the tendon proof's bound of the finger's box written with the rest, read by the
+    # table made with the same parameters only)
+    lo, hi = small.high_boxes()["index"]
+    proof = small.tendons.proof
+    assert same.proof_gain("index", lo, hi, proof.params()) is not None
+    assert other.proof_gain("index", lo, hi, proof.params()) is None
 
 
 def test_the_programmes_durations_are_the_moves_own(moves, by_fk):

@@ -46,6 +46,7 @@ from planner.play.movetable import (
     ENDS,
     HIGH_SAFE_Z_M,
     MoveTable,
+    high_boxes,
     table_path,
 )
 from planner.play.profile import (
@@ -113,6 +114,14 @@ class Moves(FollowMoves):
         self.to_hover = lru_cache(maxsize=None)(self._to_hover)
         self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
         self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
+        proof = self.tendons.proof
+        if proof is not None:  # (each finger's high poses' box, for its moves across, with
+            # its gain as the move table ships it: ``planner.play.tendonproof``)
+            for f, (lo, hi) in self.high_boxes().items():
+                proof.add_box(f, lo, hi, self.table.proof_gain(f, lo, hi, proof.params()))
+            if self.table.proof_params == proof.params():  # (the cells over every
+                for f, cells in self.table.proof_cells.items():  # posture: shipped only)
+                    proof.add_cells(f, *cells)
         # every joint's acceleration limit, the rail's also within what the wrist holds
         self.acceleration = np.array(hand.acceleration, dtype=float)
         self.jerk = np.array(hand.jerk, dtype=float)
@@ -137,6 +146,10 @@ class Moves(FollowMoves):
         self._times: dict[int, EntryRecord] = _table_records(
             atlas, self.table, self.js, (hand.velocity, self.acceleration, self.jerk))
         self._across_bytes, self._follow_bytes = self.table.as_bytes()
+
+    def high_boxes(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """``high_boxes`` of the atlas."""
+        return high_boxes(self.hand, self.atlas)
 
     def params(self) -> str:
         """What the move table depends on besides the atlas (a table made otherwise is not

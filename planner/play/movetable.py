@@ -24,6 +24,11 @@ of entries, found once per hand and shipped beside the atlas
   finger holding its key from another posture's entry, ``Places.follow_clear``, is not
   here: the body rule's follow test of every such pair would take about half an hour
   a hand on two cores, measured on one key's 65 x 65 pairs, 16 s.)
+* for a hand whose tendon bound has its sufficient test (``planner.play.tendonproof``):
+  each finger's box of high poses and its bound (``TendonProof.box_gain``), and in
+  posture 0's table each finger's cells over its hull of high poses in every posture
+  (``TendonProof.hull_cells``), with the test's parameters (``proof_params``: a table
+  made with others, or for another box, is not read for them).
 
 A planner that meets a hand without a table finds each of these when first needed
 (about 4 000 pairs a song, most of a cold plan's time: ``docs/history/play-second-design.md``).
@@ -51,6 +56,7 @@ from planner.play.atlas import (
     AtlasEntry,
 )
 from planner.play.follow import HOLD_MARGIN_M, paths_clear
+from planner.play.tendonproof import BoxGain
 
 ENDS = ("high", "hover", "rise")  # the poses a descent starts from and a lift ends at
 # the move tests' parameters (``Moves`` and its table test the same):
@@ -95,6 +101,13 @@ class MoveTable:
         # (the arm's moves to another posture: by it, the rail's steps of the first
         # duration and the durations, step by step: ``Places.arm_time_s``)
         self._x_arm: dict[int, tuple[int, list[float]]] = {}
+        # (the tendon proof's gain of each finger's box of high poses, by finger: the box
+        # and its gain, and the parameters they were made with)
+        self.proofs: dict[str, tuple[np.ndarray, np.ndarray, BoxGain]] = {}
+        self.proof_params: str | None = None
+        # (and each finger's cells over its hull of high poses in every posture:
+        # ``TendonProof.hull_cells``, in posture 0's table)
+        self.proof_cells: dict[str, tuple[np.ndarray, np.ndarray, BoxGain]] = {}
 
     def key(self, e: AtlasEntry) -> tuple[str, int, int]:
         got = self._keys.get(id(e))  # (by the entry, held: its id is not reused)
@@ -151,6 +164,17 @@ class MoveTable:
             return None
         return got[1][steps - got[0]]
 
+    def proof_gain(self, finger: str, lo: np.ndarray, hi: np.ndarray,
+                   params: str) -> BoxGain | None:
+        """The tendon proof's gain of the finger's box ``lo``-``hi`` (``TendonProof.box_gain``),
+        None when the table was made with other ``params`` (``TendonProof.params``), for
+        another box, or lacks it."""
+        got = self.proofs.get(finger)
+        if params != self.proof_params or got is None or not (
+                np.array_equal(got[0], lo) and np.array_equal(got[1], hi)):
+            return None
+        return got[2]
+
     def _cross_pair(self, a: AtlasEntry, b: AtlasEntry):
         """The places of ``a`` (another posture's entry) among its posture's and of ``b``
         among this table's, or None."""
@@ -181,6 +205,13 @@ class MoveTable:
             if "clear_s" in z:  # (floats as Python's: the programme reads them as they are)
                 self.clears = dict(zip(keys, z["clear_s"].tolist()))
                 self.clear_params = str(z["clear_params"])
+            if "proof_params" in z:  # (the tendon proof's gains: ``proof_arrays``)
+                self.proof_params = str(z["proof_params"])
+                for f in self.fingers:
+                    if f"proof_box_{f}" in z:
+                        self.proofs[f] = _load_gain(z, f, "")
+                    if f"proof_cells_box_{f}" in z:
+                        self.proof_cells[f] = _load_gain(z, f, "cells_")
             for name in z.files:  # (across postures: ``make_table``'s ``others``)
                 if name.startswith("xkey_"):
                     self._load_cross(z, int(name[5:]))
@@ -232,6 +263,15 @@ def _indices(keys) -> dict[tuple[str, int, int], tuple[int, int]]:
     return out
 
 
+def _load_gain(z, finger: str, kind: str) -> tuple[np.ndarray, np.ndarray, BoxGain]:
+    """A finger's box (or cells: ``kind``) and its gain as ``proof_arrays`` wrote them."""
+    box = z[f"proof_{kind}box_{finger}"]
+    n = box.shape[-1]
+    mass, speed = z[f"proof_{kind}mass_{finger}"], z[f"proof_{kind}speed_{finger}"]
+    return box[0], box[1], BoxGain(mass[0], mass[1], speed[0], speed[1],
+                                   tuple((k, j) for k in range(n) for j in range(k, n)))
+
+
 def _unpack(bits: np.ndarray, n: int, m: int | None = None) -> np.ndarray:
     m = n if m is None else m
     return np.unpackbits(bits, count=n * m).astype(bool).reshape(n, m)
@@ -269,6 +309,7 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
         rows = [high.clear_row(e, moves) for e in entries]
         arrays["clear_s"] = np.array(rows).reshape(len(rows), len(rows[0]) if rows else 0)
         arrays["clear_params"] = np.array(clear_params)
+    arrays.update(proof_arrays(moves, [a for a, _ in others] if atlas.posture_index == 0 else ()))
     for f in hand.fingers:
         mine = [e for e in entries if e.finger == f]
         arrays[f"across_{f}"] = np.packbits(_across_matrix(moves, f, mine))
@@ -287,6 +328,68 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
     with open(path, "wb") as fh:
         np.savez_compressed(fh, **arrays)
     return len(entries)
+
+
+def high_boxes(hand, atlas) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The box (least, greatest) of each finger's high poses in the atlas (its joints,
+    couplings applied), for the tendon bound's proof: a move across between two of them
+    stays in it (a straight line, the couplings elementwise and linear)."""
+    highs: dict[str, list[np.ndarray]] = {}
+    for e in atlas.solved().values():
+        highs.setdefault(e.finger, []).append(e.high)
+    out = {}
+    for f, poses in highs.items():
+        js = hand.joint_slice(f)
+        Q = np.repeat(atlas.base[None, :], len(poses), axis=0)
+        Q[:, js] = poses
+        Q = hand.apply_couplings(Q)[:, js]
+        out[f] = (Q.min(axis=0), Q.max(axis=0))
+    return out
+
+
+def proof_arrays(moves, others=()) -> dict[str, np.ndarray]:
+    """The tendon proof's gain of each finger's box of high poses (``Moves.high_boxes``,
+    ``TendonProof.box_gain``: found as a plan finds it) and the proof's parameters; with
+    ``others`` (the other play postures' atlases, in posture 0's table) also each finger's
+    cells over the hull of its boxes in every posture (``TendonProof.hull_cells``); none
+    for a hand without the proof."""
+    proof = moves.tendons.proof
+    if proof is None:
+        return {}
+    out = {"proof_params": np.array(proof.params())}
+    boxes = moves.high_boxes()
+    for f, (lo, hi) in boxes.items():
+        _put_gain(out, f, "", (lo, hi, proof.box_gain(f, lo, hi)))
+    theirs = [high_boxes(moves.hand, a) for a in others]
+    for f, (lo, hi) in boxes.items() if theirs else ():
+        los, his = [lo, *(b[f][0] for b in theirs if f in b)], [hi, *(b[f][1] for b in theirs if f in b)]
+        cells = proof.hull_cells(f, np.min(los, axis=0), np.max(his, axis=0))
+        _put_gain(out, f, "cells_", cells)
+    return out
+
+
+def _put_gain(out: dict, finger: str, kind: str, got) -> None:
+    """A finger's box (or cells) and gain into ``out`` (``_load_gain`` reads them)."""
+    if got is None or got[2] is None:
+        return
+    lo, hi, gain = got
+    out[f"proof_{kind}box_{finger}"] = np.array([lo, hi])
+    out[f"proof_{kind}mass_{finger}"] = np.array([gain.mass, gain.mass_radius])
+    out[f"proof_{kind}speed_{finger}"] = np.array([gain.speed, gain.speed_radius])
+
+
+def add_proofs(moves, path: Path, others=()) -> bool:
+    """Write ``proof_arrays`` into the move table at ``path`` (its other arrays as they
+    are; none of an older proof's kept; a hand without the proof: left as it is, False)."""
+    proofs = proof_arrays(moves, others)
+    if not proofs:
+        return False
+    with np.load(path, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files if not k.startswith("proof_")}
+    arrays.update(proofs)
+    with open(path, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
+    return True
 
 
 def _cross_arrays(moves, entries: list[AtlasEntry], other) -> dict:

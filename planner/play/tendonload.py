@@ -48,6 +48,7 @@ from planner.hand.model import HandModel
 from planner.hand.tendon import actuator_capacity, tendon_motors
 from planner.play.atlas import PATH_SAMPLES
 from planner.play.profile import Move
+from planner.play.tendonproof import TendonProof
 
 TENDON_SHARE = 0.95  # a move's own bound keeps each tendon motor within 95 % of its
 # capacity: the rest for what that bound leaves out, the rail accelerating while a finger
@@ -92,6 +93,11 @@ class TendonLoad:
         # ``motor_torque_matrix``'s own test, and the couplings elementwise)
         self.linear = (all(c.kind == "linear" for c in hand.couplings)
                        and all(getattr(a, "mk5", None) is None for a in hand.actuators))
+        # (a finger's moves with no key pushing back shown within the share at once where
+        # they can be: ``planner.play.tendonproof``)
+        self.proof = TendonProof(hand, self.kin, motor_torque_matrix(
+            hand, hand.apply_couplings(np.zeros(hand.n)))[self.motors], self.capacity_nm,
+            _STEP) if self.linear and not every_motor and self.motors.size else None
 
     def params(self) -> dict:
         """What the bound depends on besides the hand (for the move table's parameters)."""
@@ -165,6 +171,9 @@ class TendonLoad:
         past its share with the hand still (a static load no timing helps: the atlas's
         press forces bound those) does not slow it, nor more than ``MAX_SCALE``."""
         if move.duration_s == 0.0 or self.motors.size == 0:
+            return 1.0
+        if not pressing and self.proof is not None and self.proof.proves(
+                q_a, dq, move.peak_acceleration, move.peak_speed):
             return 1.0
         static, K, C = self.terms(q_a, dq, pressing, key_top_z_m)
         return scale_for(static, K, C, speed_squared_bound(
