@@ -21,7 +21,6 @@ from __future__ import annotations
 import os
 import stat
 import sys
-import tempfile
 from typing import IO
 
 from planner.errors import InputError, PlannerError
@@ -129,6 +128,8 @@ def write_file(path: str | os.PathLike, data: str | bytes) -> None:
 
 
 def _write_replacing(path: str, raw: bytes) -> None:
+    import tempfile  # (here: its import, ~4 ms of CPU, is not on every command's start)
+
     folder, base = os.path.split(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{base}.", suffix=".part", dir=folder or ".")
     try:
@@ -185,14 +186,29 @@ def check_dir_target(path: str, option: str) -> None:
     parent = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(parent):
         raise InputError(f"cannot make folder {path}: no folder {parent} (none is created)")
+    import tempfile
+
     _probe(lambda: os.rmdir(tempfile.mkdtemp(prefix=".probe.", dir=parent)),
            f"{path} (cannot make a folder in {parent})")
 
 
+PROBE_TRIES = 100  # names a probe tries in a folder before it gives up (as ``tempfile``'s
+# ``TMP_MAX`` bounds ``mkstemp``'s): only leftovers of earlier probes of the same name clash
+
+
 def _temp_in(folder: str) -> str:
-    fd, tmp = tempfile.mkstemp(prefix=".probe.", suffix=".part", dir=folder)
-    os.close(fd)
-    return tmp
+    """A new empty file in ``folder`` (created exclusively, mode 0600, as
+    ``tempfile.mkstemp`` makes one; named by this process and a count, without importing
+    ``tempfile``: a command probing its output path before it plans does not load it)."""
+    for k in range(PROBE_TRIES):
+        tmp = os.path.join(folder, f".probe.{os.getpid()}.{k}.part")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return tmp
+    raise FileExistsError(f"no free probe name in {folder}")
 
 
 def _probe(fn, what: str) -> None:

@@ -74,3 +74,28 @@ def test_the_live_start_imports_none_of_what_only_its_ending_uses():
                        cwd=ROOT, capture_output=True, text=True, check=False)
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["-", "held", "-", "-"], r.stdout + r.stderr
+
+
+NOT_AT_START = ("tempfile", "csv", "importlib.resources", "planner.catch.plan.palmup",
+                "planner.catch.plan.stopstages", "planner.simulate.verdict",
+                "planner.hand.mk5_tables")  # the output path's probe, the observation files'
+# reader, the hands' folder, the planned catch's fallbacks, the physics' verdict, the Mk5
+# hand's tables: none of them is what a live session of the default hand runs
+START = ("import sys; from planner.cli import main; import planner.catch.livecli as lc; "
+         "names = sys.argv[2].split(','); run = lc.run_session\n"
+         "def ready(session, stream):\n"
+         "    print(','.join(m for m in names if m in sys.modules) or '-')\n"
+         "    return run(session, stream)\n"
+         "lc.run_session = ready; print(main(['catch', '--live', '--dist', '1.5', '--drag', "
+         "'-o', sys.argv[1]]))")
+
+
+def test_the_live_start_imports_none_of_what_a_live_session_does_not_run(tmp_path):
+    """``catch --live`` into a new file, ready for its first observation (its session
+    set up, about to read stdin; ended by the empty input, exit 2): none of
+    ``NOT_AT_START`` imported, and the output path's probe left nothing beside it."""
+    r = subprocess.run([sys.executable, "-c", START, str(tmp_path / "live.csv"),
+                        ",".join(NOT_AT_START)], cwd=ROOT, stdin=subprocess.DEVNULL,
+                       capture_output=True, text=True, check=False)
+    assert r.stdout.split() == ["-", "2"], r.stdout + r.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -167,3 +167,30 @@ def test_check_into_a_closed_pipe_exits_141(tmp_path):
         err = p.stderr.read().decode()
         p.wait(timeout=300)
         assert p.returncode == 141 and err == "", (p.returncode, err)
+
+
+def test_a_new_paths_probe_leaves_nothing_and_steps_over_a_leftover(tmp_path):
+    """``check_file_target`` of a path not yet there writes a probe file beside it and
+    removes it (made exclusively, named by the process, without ``tempfile``); a leftover
+    of an earlier probe of the same name is stepped over and left as it was; a folder
+    that cannot be written is refused."""
+    from planner.errors import InputError
+    from planner.output import check_file_target
+
+    leftover = tmp_path / f".probe.{os.getpid()}.0.part"
+    leftover.write_text("earlier")
+    check_file_target(str(tmp_path / "new.csv"), "output")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [leftover.name]
+    assert leftover.read_text() == "earlier"
+    shut = tmp_path / "shut"
+    shut.mkdir()
+    shut.chmod(0o500)
+    try:
+        if os.access(shut, os.W_OK):  # (root writes anyway: nothing to refuse)
+            check_file_target(str(shut / "new.csv"), "output")
+            assert list(shut.iterdir()) == []
+        else:
+            with pytest.raises(InputError, match="cannot write"):
+                check_file_target(str(shut / "new.csv"), "output")
+    finally:
+        shut.chmod(0o700)

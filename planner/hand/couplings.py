@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.hand.mk5_tables import MK5_TABLES
 from planner.hand.spec import LinearCoupling, Mk5Coupling
 
 
@@ -56,6 +55,9 @@ class CouplingMap:
                 laws.append(CouplingLaw(index[c.joint], index[c.source], "linear",
                                         c.ratio, c.offset))
             elif isinstance(c, Mk5Coupling):
+                from planner.hand.mk5_tables import MK5_TABLES  # (an Mk5 hand's only: not
+                # imported for the others)
+
                 laws.append(CouplingLaw(index[c.joint], index[c.source], "mk5",
                                         mk5=MK5_TABLES[c.table][c.finger]))
         self.n = n

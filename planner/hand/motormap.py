@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from planner.hand.couplings import CouplingMap
-from planner.hand.mk5_tables import MK5_TABLES
 
 
 class MotorMap:
@@ -52,6 +51,7 @@ class MotorMap:
         for m, a in enumerate(self.actuators):
             if a.mk5 is not None:
                 from planner.hand import mk5
+                from planner.hand.mk5_tables import MK5_TABLES  # (an Mk5 hand's only)
 
                 qm[..., m] = mk5.qmot_of_q1(MK5_TABLES[a.mk5.table][a.mk5.finger],
                                             q[..., self._index[a.mk5.source]])
@@ -107,6 +107,7 @@ class MotorMap:
         for m, a in enumerate(self.actuators):
             if a.mk5 is not None:
                 from planner.hand import mk5
+                from planner.hand.mk5_tables import MK5_TABLES  # (an Mk5 hand's only)
 
                 p = MK5_TABLES[a.mk5.table][a.mk5.finger]
                 r[m] = mk5.dqmot_dq1(p, q[self.drive[m]])

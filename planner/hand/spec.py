@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -169,8 +168,13 @@ class HandSpec:
 # ---------------------------------------------------------------- loading
 
 
+HANDS_DIR = Path(__file__).parent / "hands"  # the shipped hands' files (the package's own
+# folder, as its other shipped tables are read: ``importlib.resources`` would import
+# ``tempfile`` and ``zipfile`` on every start, ~5 ms of CPU, for a plain folder)
+
+
 def hands_dir() -> Path:
-    return Path(str(resources.files("planner.hand") / "hands"))
+    return HANDS_DIR
 
 
 def list_hands() -> list[str]:

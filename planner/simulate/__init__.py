@@ -22,11 +22,19 @@ also on any missed or late note. MuJoCo is an optional dependency
 from __future__ import annotations
 
 import os
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from planner.simulate.verdict import Replay, physics_problems, record_problems
+from planner.lazy import lazy_dir, lazy_names
+
+if TYPE_CHECKING:
+    from planner.simulate.verdict import Replay
 
 __all__ = ["Replay", "physics_problems", "record_problems", "run_replay", "simulate_trajectory"]
+_VERDICT = {n: "planner.simulate.verdict" for n in ("Replay", "physics_problems",
+                                                     "record_problems")}
+__getattr__ = lazy_names(__name__, _VERDICT)  # (imported on first use: the package is
+# loaded for its ``keyboard`` module by every hand's finger bodies, a live catch's too)
+__dir__ = lazy_dir(globals(), _VERDICT)
 
 
 def simulate_trajectory(traj_path, song_path=None, *, contact: str = "full",
@@ -53,6 +61,7 @@ def run_replay(traj_path, song_path=None, *, contact: str = "full",
     from planner.simulate.report import SimulateReport
     from planner.simulate.scene import Ball, build_scene, require_mujoco
     from planner.simulate.scores import motor_efforts, score_catch, score_play, tracking
+    from planner.simulate.verdict import Replay, physics_problems, record_problems
 
     require_mujoco()  # the clear message before any work
     plan = read_plan(traj_path, allow_incomplete=allow_incomplete, hand_override=hand_override)

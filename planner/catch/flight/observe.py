@@ -5,7 +5,6 @@ itself, vacuum or drag, is ``planner.catch.flight.path``."""
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass, replace
 from os import PathLike
@@ -233,6 +232,9 @@ def load_observations_csv(
 def _cells(path: Path, lineno: int, line: str) -> list[str]:
     """One CSV line's fields; InputError (one line) on what the csv module refuses (a
     field over its 131,072-character limit, a stray quote)."""
+    import csv  # (a file's reader only: a live session, which fits this module's
+    # ``FitResult``s, does not load it)
+
     try:
         return next(csv.reader([line]))
     except csv.Error as e:

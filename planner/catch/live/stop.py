@@ -151,7 +151,7 @@ def scaled(stop: SoftStop, k: float) -> SoftStop:
 
 def moves(stop: SoftStop | None) -> bool:
     """Whether ``stop`` moves the arm (not the palm at rest)."""
-    return stop is not None and bool(np.any(stop.qd))
+    return stop is not None and bool(stop.qd.any())
 
 
 def arm_offset(stop: SoftStop | None, t_s: np.ndarray, n: int) -> np.ndarray | None:

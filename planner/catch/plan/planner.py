@@ -28,7 +28,6 @@ from planner.catch.plan.contactqp import ROLL_WEIGHT
 from planner.catch.plan.geometry import rot1
 from planner.catch.plan.intercept import Intercept, Wrist, closest_time, refine_time
 from planner.catch.plan.mount import CatchMount
-from planner.catch.plan.palmup import palm_up_fallback
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.results import (
     CatchPlan,
@@ -45,7 +44,6 @@ from planner.catch.plan.stopping import (
     StopGrid,
     plan_stop,
 )
-from planner.catch.plan.stopstages import joint_stop_fallbacks
 from planner.catch.plan.turnahead import (
     HoldStart,
     HoldTurn,
@@ -204,6 +202,9 @@ class CatchPlanner:
         if plan.feasible:
             return replace(plan, planning_s=time.perf_counter() - t0)
         if soft:
+            from planner.catch.plan.stopstages import joint_stop_fallbacks  # (a planned
+            # catch's fallbacks: not imported at a live session's start)
+
             finer = joint_stop_fallbacks(lambda g: self._on_the_rig(args, soft, g, stops), plan)
             if finer.feasible:
                 return replace(finer, planning_s=time.perf_counter() - t0)
@@ -217,6 +218,8 @@ class CatchPlanner:
                     "the fingertips' closing (bodies not kept clear of the ball): the "
                     "closing failed (" + reasons_text(plan.reasons) + ")",))
         if soft and not plan.feasible:  # the palm turned up past facing the ball (the roll)
+            from planner.catch.plan.palmup import palm_up_fallback
+
             plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, stops=stops, **kw), plan,
                                     self.wrist, self.rig.i_reach is not None)
         return replace(plan, planning_s=time.perf_counter() - t0)

@@ -102,6 +102,8 @@ class StopDynamics:
         self.arm = tuple(joints.arm)
         m = hand.pin_model
         self._idx = np.array([m.idx_qs[m.getJointId(n)] for n in hand.joint_names])
+        self._arm_idx = self._idx[list(self.arm)]  # (the arm's, in Pinocchio's vectors)
+        self._nq, self._nv = m.nq, m.nv
         self._data = m.createData()
         i, j = self._idx[:, None], self._idx[None, :]  # the mass matrix of our joints in
         # one take from crba's result, which fills the upper triangle only: (i, j) at
@@ -116,7 +118,7 @@ class StopDynamics:
         self.a_max = LIMIT_MARGIN * hand.acceleration[list(self.arm)]
 
     def _pq(self, q: np.ndarray) -> np.ndarray:
-        qp = np.zeros(self.hand.pin_model.nq)
+        qp = np.zeros(self._nq)
         qp[self._idx] = q
         return qp
 
@@ -132,10 +134,9 @@ class StopDynamics:
 
     def joint_torques(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """RNEA (gravity included) at arm speeds/accelerations ``v``, ``a``."""
-        m = self.hand.pin_model
-        vp, ap = np.zeros(m.nv), np.zeros(m.nv)
-        vp[self._idx[list(self.arm)]], ap[self._idx[list(self.arm)]] = v, a
-        return pin.rnea(m, self._data, self._pq(q), vp, ap)[self._idx]
+        vp, ap = np.zeros(self._nv), np.zeros(self._nv)
+        vp[self._arm_idx], ap[self._arm_idx] = v, a
+        return pin.rnea(self.hand.pin_model, self._data, self._pq(q), vp, ap)[self._idx]
 
     def move_time(self, q_from: np.ndarray, q_to: np.ndarray, arm_alone: bool = False
                   ) -> float:
@@ -170,10 +171,11 @@ class StopDynamics:
             if arm_alone:
                 per = np.maximum(per, np.abs(MH[:, arm] @ dq[arm]))
             need = per > 1e-12
-            if np.any(room[need] <= 0):
+            if (room[need] <= 0).any():  # (the arrays' own reductions: ``np.any``'s and
+                # ``np.max``'s numbers without their wrappers, ~5 us a call of the set-up's)
                 return math.inf
             if need.any():
-                T = max(T, math.sqrt(PEAK_ACC * float(np.max(per[need] / room[need]))))
+                T = max(T, math.sqrt(PEAK_ACC * float((per[need] / room[need]).max())))
         return T
 
     def accel_room(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -222,19 +224,19 @@ class StopDynamics:
         PEAK_VEL |qd| / T) within the acceleration limits and every motor within ``share``
         (``STOP_SHARE``) of its capacity; ``load``: (n, k) extra joint torque per unit arm
         acceleration (the riding ball). inf when gravity and speed alone leave no room."""
-        if not np.any(qd):
+        if not qd.any():
             return 0.0
         M, g, _ = self.at_pose(q)
-        z = np.zeros_like(qd)
+        z = np.zeros(qd.shape)
         base = M @ self.joint_torques(q, qd, z)
         per = M @ (self.joint_torques(q, z, qd) - g
                    + (load @ qd if load is not None else 0.0))
         room = share * self.cap - np.abs(base)
         need = np.abs(per) > 1e-12
-        if np.any(room[need] <= 0):
+        if (room[need] <= 0).any():
             return math.inf
-        s_max = min(float(np.min(room[need] / np.abs(per[need]))) if need.any() else math.inf,
-                    float(np.min(self.a_max / np.maximum(np.abs(qd), 1e-12))))
+        s_max = min(float((room[need] / np.abs(per[need])).min()) if need.any() else math.inf,
+                    float((self.a_max / np.maximum(np.abs(qd), 1e-12)).min()))
         return max(MIN_PHASE_S, PEAK_VEL / s_max)
 
     def judge(self, stop: SoftStop, q_open: np.ndarray, flight: Flight, r: float,
@@ -267,7 +269,7 @@ class StopDynamics:
         hand at speed ``qd``, not accelerating), and its friction-cone margin."""
         F = pad_force_n(mass, v_rel)
         M, _, J_palm = self.at_pose(q)
-        tau = self.joint_torques(q, qd, np.zeros_like(qd)) + J_palm.T @ F
+        tau = self.joint_torques(q, qd, np.zeros(qd.shape)) + J_palm.T @ F
         return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
 
 
@@ -514,9 +516,9 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
     load[arm] = mass * J.T @ J  # joint torque per unit arm acceleration of the riding ball
     lo, hi = h.lower[arm], h.upper[arm]
     for _ in range(_MAX_SHRINK + 1):
-        qd_c = speeds(J, v_ball, share * bound, normal, ask.roll_weight) if np.any(bound) \
+        qd_c = speeds(J, v_ball, share * bound, normal, ask.roll_weight) if bound.any() \
             else 0.0 * bound
-        moving = bool(np.any(qd_c))
+        moving = bool(qd_c.any())
         v_rel = v_ball - J @ qd_c
         F, ratio, cone = dyn.pad_load(q_open, qd_c, v_rel, mass, normal)
         t_pad = pad_time_s(v_rel)
@@ -527,7 +529,7 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
             shares = recoil_shares(dyn, q_open, qd_c, ratio, share, recoil,
                                    ask.per_joint is JointRamps.LOADED, STOP_SHARE)
             qd = qd_c / shares
-        elif recoil and np.any((1.0 - share) * np.abs(qd) > dyn.a_max * recoil):
+        elif recoil and ((1.0 - share) * np.abs(qd) > dyn.a_max * recoil).any():
             return _at_rest(t_i, ask.tilt_rad, arm, v_rel, F, ratio, cone, t_pad)
         stop = SoftStop(ask.tilt_rad, tuple(arm), qd, share if moving else 1.0, t_i,
                         row_s if moving else 0.0, dyn.ramp_time(q_open, qd_c), recoil,
@@ -551,13 +553,13 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         pre[arm] += stop.first_offset
         finite = math.isfinite(stop.ramp_in_s) and math.isfinite(stop.ramp_out_s)
         late = ready_by(pre) - stop.start_s if finite else math.inf
-        if late <= 0 and np.all(scale >= 1.0):
+        if late <= 0 and (scale >= 1.0).all():
             return stop
         if late > 0:  # every joint slower, its ramp shorter by the time missing
             scale = np.minimum(scale, max(0.0, 1.0 - late / max(stop.ramp_in_s, 1e-9))
                                if finite else 0.0)
         bound = np.where(scale < 1.0, _SHRINK * scale * np.abs(qd), bound)
-        if not np.any(bound > _MIN_SPEED * dyn.v_max):
+        if not (bound > _MIN_SPEED * dyn.v_max).any():
             break
     return None
 
