@@ -179,7 +179,9 @@ def _bounce(moves: Places, st: _Finger, e: AtlasEntry, want: float, floor: float
     note before's key-up ``st.up_s``: earlier where their room is less than its gap
     (``repeat_gap_s``: the programme counts the frames), played slower where it is more
     (the key up at ``st.up_s`` exactly), up to ``BOUNCE_STRETCH`` times its time; with more
-    room, None: the lift and descent from rest (``Moves.repeat_pair``) fit there."""
+    room, None: the lift and descent from rest (``Moves.repeat_pair``) fit there, and
+    those to the atlas's rise pose (2 mm above the key-down depth, crossing it faster:
+    the physics' key goes down nearer the rows' time) where the room is more still."""
     b = moves.repeat(e)
     gap = b.duration_s - 2.0 * b.cross_s
     room = want - st.up_s
@@ -211,6 +213,9 @@ def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: fl
         if got is not None:
             return got
         lift, desc = moves.repeat_pair(e)
+        up, down = moves.lift(e, "rise"), moves.descend(e, "rise")
+        if want - st.up_s >= (up.duration_s - up.cross_s) + down.cross_s:
+            lift, desc = up, down  # (room for the whole line: its faster crossings)
         t_lift = min(want - desc.cross_s - lift.duration_s, st.up_s - lift.cross_s)
         t_lift = max(t_lift, st.track.free_s, committed_s)
         if t_lift + lift.cross_s <= st.up_s + 1e-9:  # (its key up by the note before's end)
