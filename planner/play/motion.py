@@ -196,6 +196,25 @@ def _bounce(moves: Places, st: _Finger, e: AtlasEntry, want: float, floor: float
     return t0 + move.duration_s - up_s, [(t0, move)], "bounce"
 
 
+def _struck(found, struck: float, up_s: float, timed_by: Places, e: AtlasEntry):
+    """``approach``'s (key-down moment, steps, start) with the key put down at ``struck``
+    (``keytimes.struck_s``: a late key after the note's first row) where that is later:
+    the last step, the descent, starts that much later (a repeat's bounce only while its
+    key-up stays by the note before's, ``up_s``); and when the press ends (the last step's
+    end for a repeat's own moves, else the descent's from ``start``): (key-down moment,
+    steps, press end)."""
+    down_at, steps, start = found
+    t0, last = steps[-1]
+    if struck > down_at and (start != "bounce" or 2.0 * t0 + last.duration_s + struck
+                             - 2.0 * down_at <= up_s + 1e-9):
+        steps = steps[:-1] + [(t0 + struck - down_at, last)]
+        down_at = struck
+    if start in ("bounce", "repeat"):
+        return down_at, steps, steps[-1][0] + steps[-1][1].duration_s
+    desc = timed_by.descend(e, start)
+    return down_at, steps, down_at + desc.duration_s - desc.cross_s
+
+
 def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: float,
              rail_free_s: float, committed_s: float, front: bool = True):
     """The moves that bring finger ``st`` from where it is to key-down on ``e`` (no
@@ -398,19 +417,8 @@ class Motion(ArmMotion):
         found, timed_by = within_motors(self, a.finger, found, lambda places: approach(
             places, st, e, want, after, self.arm_track.free_s, self.committed_s,
             self.arm_front))
-        down_at, steps, start = found
-        struck = struck_s(n.onset_s, down_at, self.dt)  # (a late key: after the first row)
-        # (the last step is the descent: it starts that much later; a bounce only while
-        # its key-up stays within the note before's: ``_bounce``)
-        if struck > down_at and (start != "bounce" or 2.0 * steps[-1][0] + steps[-1][1].duration_s
-                                 + struck - 2.0 * down_at <= st.up_s + 1e-9):
-            steps = steps[:-1] + [(steps[-1][0] + struck - down_at, steps[-1][1])]
-            down_at = struck
-        if start in ("bounce", "repeat"):  # (the repeat's own way down: its last step's end)
-            press_end = steps[-1][0] + steps[-1][1].duration_s
-        else:
-            desc = timed_by.descend(e, start)
-            press_end = down_at + desc.duration_s - desc.cross_s
+        down_at, steps, press_end = _struck(found, struck_s(n.onset_s, found[0], self.dt),
+                                            st.up_s, timed_by, e)
         up = self._held_enough_s(a.note, down_at, self.t_up(a.note, a.release_s),
                                  self.t_up(a.note))
         lift = self.moves.lift(e, "high")

@@ -9,8 +9,8 @@ part-way (``up_s``). From them:
 
 * ``press_min_s``: the shortest key-down interval a press can make (descend to full dip,
   lift at once);
-* ``repeat_gap_s``: key up to key down again on the same key (lift to the atlas's
-  ``rise`` pose, the key 70 % back, and down);
+* ``repeat_gap_s``: key up to key down again on the same key: one ``profile.Bounce`` up
+  the press -> rise line until the key is ``REARM_M`` up, and back (``repeat``);
 * ``move_gap_s``: key up on one key to key down on another, the rail still (lift to
   crossing height, across, down);
 * ``before_rail_s`` / ``after_rail_s``: key up to the end of the lift, and the start of a
@@ -97,7 +97,91 @@ class EntryRecord(NamedTuple):
     places: tuple[int, int] | None
 
 
-class Moves(FollowMoves):
+class RepeatMoves:
+    """A ``Moves``' repeated key (its part of that class: the same hand, atlas, limits
+    and memos): one ``Bounce`` up the press -> rise line to ``REARM_M`` above the key-down
+    depth and back (``repeat``), the lift and descent from rest to the same top
+    (``repeat_pair``), and the programme's ``repeat_gap_s``."""
+
+    def repeat_gap_s(self, e: AtlasEntry) -> float:
+        """Key up to key down again on the same key: the repeat's ``Bounce`` from its
+        key-up crossing to its key-down crossing (``repeat``)."""
+        b = self.repeat(e)
+        if b is None:  # (no repeat from below: up to crossing height and down)
+            return self.before_rail_s(e) + self.after_rail_s(e)
+        return b.duration_s - 2.0 * b.cross_s
+
+    def _repeat(self, e: AtlasEntry) -> Timed | None:
+        """The repeat: one ``Bounce`` from the press straight up the atlas's press -> rise
+        line until the finger's lowest point is ``REARM_M`` above the key-down depth
+        (``repeat_apex``: the key up) and back, timed at its key-up crossing (its key-down
+        crossing is as long before its end: the same point of the line both ways); None
+        where the line never lets the key up (``repeat_apex``)."""
+        if self.repeat_apex(e) is None:
+            return None
+        sigma, s_c = self.repeat_apex(e)  # (``Motion`` asks only where ``repeat_gap_s`` has one)
+        js = self.js[e.finger]
+        move = bounce_move(e.press, e.press + sigma * (e.rise - e.press),
+                           self.hand.velocity[js], self.acceleration[js], self.jerk[js])
+        move = self._line_scaled(e, move)
+        return Timed(move, move.time_at_s(s_c / sigma))
+
+    def _repeat_pair(self, e: AtlasEntry) -> tuple[Timed, Timed] | None:
+        """A repeat with time to spare (``Motion``): the lift up the same line to the same
+        top and the descent back, two moves from rest (the finger may wait between)."""
+        if self.repeat_apex(e) is None:
+            return None
+        sigma, s_c = self.repeat_apex(e)
+        apex = e.press + sigma * (e.rise - e.press)
+        up = self._line_scaled(e, self._move(e.finger, e.press, apex))
+        down = self._line_scaled(e, self._move(e.finger, apex, e.press))
+        # (on the partial line the crossing lies at s_c / sigma going up, the rest going down)
+        return (Timed(up, up.time_at_s(s_c / sigma)),
+                Timed(down, down.time_at_s(1.0 - s_c / sigma)))
+
+    def _line_scaled(self, e: AtlasEntry, move):
+        """A move (or ``Bounce``) of the entry's finger along part of its press -> rise line,
+        slowed as the atlas's own move along the whole line is (``entry_scale``: its
+        tendons within their share, its lag beside the black keys) where that bound covers
+        it: no joint faster nor accelerating harder (it then is no faster anywhere along
+        the line: it leaves the press as that one does, or slower, and stops short of its
+        end; the bounds are the line's, ``planner.play.tendonload``); else its own."""
+        column = SCALE_PAIRS.index(("press", "rise"))
+        whole = self._move(e.finger, e.press, e.rise)
+        size, whole_size = float(np.max(np.abs(move.dq))), float(np.max(np.abs(whole.dq)))
+        if (move.peak_acceleration * size <= whole.peak_acceleration * whole_size * (1 + 1e-12)
+                and move.peak_speed * size <= whole.peak_speed * whole_size * (1 + 1e-12)):
+            return _slowed(move, self.entry_scale(e, column))
+        qa, qb = move.q_a, move.q_a + move.dq
+        top = kb.key(60 + e.pitch_class).top_z_m
+        scale = self.finger_scale(e.finger, qa, qb, move, top)
+        return _slowed(move, scale * margin_scale(self.atlas, e.finger, e.pitch_class, e.dx_m,
+                                                  _slowed(move, scale)))
+
+    def _repeat_apex(self, e: AtlasEntry) -> tuple[float, float] | None:
+        """(sigma, s_c): the path parameters on the press -> rise line where the finger's
+        lowest point is ``REARM_M`` above the key-down depth (the repeat's top; the rise
+        itself, 1, where a body of the finger keeps it lower: 4 in 661 entries of the
+        default hand come up 0.4 mm) and where it crosses the key-down depth (the lift to
+        the rise's crossing, ``lift``: the move table's); None when the line never lets
+        the key up."""
+        lift = self.lift(e, "rise")
+        s_c = float(lift.move.s(lift.cross_s))
+        if s_c >= 1.0:
+            return None
+        depth = self._depth_fn(e)
+
+        def g(s: float) -> float:
+            return depth(e.press + s * (e.rise - e.press)) - (kb.DOWN_DEPTH_M - REARM_M)
+
+        g1 = g(1.0)
+        if g1 >= 0.0:
+            return 1.0, s_c
+        # (the crossing's end is still down: the top lies between it and the rise)
+        return _crossing(g, g(s_c), g1, CROSS_TOL, s_c), s_c
+
+
+class Moves(FollowMoves, RepeatMoves):
     """Timed moves of one hand's fingers over its atlas (memoised per entry). What
     forward kinematics decides (key crossings, clear paths across and while following a
     key) is read from the hand's shipped move table (``planner.play.movetable``) when
@@ -317,75 +401,6 @@ class Moves(FollowMoves):
                 ok &= bool(z >= HIGH_SAFE_Z_M)
         return ok
 
-    def _repeat(self, e: AtlasEntry) -> Timed | None:
-        """The repeat: one ``Bounce`` from the press straight up the atlas's press -> rise
-        line until the finger's lowest point is ``REARM_M`` above the key-down depth
-        (``repeat_apex``: the key up) and back, timed at its key-up crossing (its key-down
-        crossing is as long before its end: the same point of the line both ways); None
-        where the line never lets the key up (``repeat_apex``)."""
-        if self.repeat_apex(e) is None:
-            return None
-        sigma, s_c = self.repeat_apex(e)  # (``Motion`` asks only where ``repeat_gap_s`` has one)
-        js = self.js[e.finger]
-        move = bounce_move(e.press, e.press + sigma * (e.rise - e.press),
-                           self.hand.velocity[js], self.acceleration[js], self.jerk[js])
-        move = self._line_scaled(e, move)
-        return Timed(move, move.time_at_s(s_c / sigma))
-
-    def _repeat_pair(self, e: AtlasEntry) -> tuple[Timed, Timed] | None:
-        """A repeat with time to spare (``Motion``): the lift up the same line to the same
-        top and the descent back, two moves from rest (the finger may wait between)."""
-        if self.repeat_apex(e) is None:
-            return None
-        sigma, s_c = self.repeat_apex(e)
-        apex = e.press + sigma * (e.rise - e.press)
-        up = self._line_scaled(e, self._move(e.finger, e.press, apex))
-        down = self._line_scaled(e, self._move(e.finger, apex, e.press))
-        # (on the partial line the crossing lies at s_c / sigma going up, the rest going down)
-        return (Timed(up, up.time_at_s(s_c / sigma)),
-                Timed(down, down.time_at_s(1.0 - s_c / sigma)))
-
-    def _line_scaled(self, e: AtlasEntry, move):
-        """A move (or ``Bounce``) of the entry's finger along part of its press -> rise line,
-        slowed as the atlas's own move along the whole line is (``entry_scale``: its
-        tendons within their share, its lag beside the black keys) where that bound covers
-        it: no joint faster nor accelerating harder (it then is no faster anywhere along
-        the line: it leaves the press as that one does, or slower, and stops short of its
-        end; the bounds are the line's, ``planner.play.tendonload``); else its own."""
-        column = SCALE_PAIRS.index(("press", "rise"))
-        whole = self._move(e.finger, e.press, e.rise)
-        size, whole_size = float(np.max(np.abs(move.dq))), float(np.max(np.abs(whole.dq)))
-        if (move.peak_acceleration * size <= whole.peak_acceleration * whole_size * (1 + 1e-12)
-                and move.peak_speed * size <= whole.peak_speed * whole_size * (1 + 1e-12)):
-            return _slowed(move, self.entry_scale(e, column))
-        qa, qb = move.q_a, move.q_a + move.dq
-        top = kb.key(60 + e.pitch_class).top_z_m
-        scale = self.finger_scale(e.finger, qa, qb, move, top)
-        return _slowed(move, scale * margin_scale(self.atlas, e.finger, e.pitch_class, e.dx_m,
-                                                  _slowed(move, scale)))
-
-    def _repeat_apex(self, e: AtlasEntry) -> tuple[float, float] | None:
-        """(sigma, s_c): the path parameters on the press -> rise line where the finger's
-        lowest point is ``REARM_M`` above the key-down depth (the repeat's top; the rise
-        itself, 1, where a body of the finger keeps it lower: 4 in 661 entries of the
-        default hand come up 0.4 mm) and where it crosses the key-down depth (the lift to
-        the rise's crossing, ``lift``: the move table's); None when the line never lets
-        the key up."""
-        lift = self.lift(e, "rise")
-        s_c = float(lift.move.s(lift.cross_s))
-        if s_c >= 1.0:
-            return None
-        depth = self._depth_fn(e)
-
-        def g(s: float) -> float:
-            return depth(e.press + s * (e.rise - e.press)) - (kb.DOWN_DEPTH_M - REARM_M)
-
-        g1 = g(1.0)
-        if g1 >= 0.0:
-            return 1.0, s_c
-        # (the crossing's end is still down: the top lies between it and the rise)
-        return _crossing(g, g(s_c), g1, CROSS_TOL, s_c), s_c
-
     def _rise(self, e: AtlasEntry) -> Timed:
         """Up from the waiting pose to crossing height (no key crossing)."""
         return Timed(self._entry_move(e, "hover", "high"), 0.0)
@@ -416,14 +431,6 @@ class Moves(FollowMoves):
 
     def press_min_s(self, e: AtlasEntry) -> float:
         return self._record(e).press_min_s
-
-    def repeat_gap_s(self, e: AtlasEntry) -> float:
-        """Key up to key down again on the same key: the repeat's ``Bounce`` from its
-        key-up crossing to its key-down crossing (``repeat``)."""
-        b = self.repeat(e)
-        if b is None:  # (no repeat from below: up to crossing height and down)
-            return self.before_rail_s(e) + self.after_rail_s(e)
-        return b.duration_s - 2.0 * b.cross_s
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         ra, rb = self._record(a), self._record(b)
