@@ -62,7 +62,10 @@ from planner.play.tendonload import slowed, tendon_load
 REARM_M = 0.0005  # a repeat's top: the finger's lowest point this far above the key-down
 # depth (the spec's 5 mm; any less deep is up, spec section 2), no higher: the key up in the
 # rows the repeat gives (``planner.play.keytimes``). The physics' hand rises higher still (it
-# sits 1.1-1.3 mm above its rows where a key pushes back: keytimes), so its key comes up too
+# sits 1.1-1.3 mm above its rows where a key pushes back: keytimes), so its key comes up too.
+# Measured on the two voice pieces' 40 legato repeats (docs/history/2026-12-07-play-repeat.md):
+# 0.2 / 0.5 / 1.0 mm lose 1.15 / 1.68 / 2.12 rows a repeat in the check, 2.67 / 2.40 / 2.52
+# in the physics (a lower top crosses slower: its key goes down later there)
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
 # an entry's moves timed within the tendons' capacity (``planner.play.tendonload``), each
 # pair of poses one way or the other (the bound is the same both ways: computed from the
