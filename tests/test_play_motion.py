@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner.play.motion import _Track
-from planner.play.profile import straight_move
+from planner.play.profile import bounce_move, straight_move
 
 
 def _reference(track: _Track, t_s: np.ndarray, q_start: np.ndarray) -> np.ndarray:
@@ -19,7 +19,7 @@ def _reference(track: _Track, t_s: np.ndarray, q_start: np.ndarray) -> np.ndarra
             out.append(q_start)
             continue
         s = running[-1]
-        out.append(s.move.at(t - s.t0_s)[0] if t < s.t1_s else s.move.q_a + s.move.dq)
+        out.append(s.move.at(t - s.t0_s)[0] if t < s.t1_s else s.move.q_end)
     return np.array(out).reshape(len(t_s), len(q_start))
 
 
@@ -30,9 +30,11 @@ def test_a_track_sampled_at_once_is_its_segments_row_by_row():
         track, t, q = _Track(q0.copy()), rng.uniform(0.0, 0.5), q0
         for _ in range(rng.integers(0, 8)):
             qb = q + 0.3 * rng.normal(size=3)
-            t = track.add(t + rng.uniform(0.0, 0.3),
-                          straight_move(q, qb, np.full(3, 3.0), np.full(3, 50.0),
-                                        np.full(3, 2000.0)))
+            limits = (np.full(3, 3.0), np.full(3, 50.0), np.full(3, 2000.0))
+            if rng.uniform() < 0.3:  # (a repeat's bounce: out and back where it was)
+                t = track.add(t + rng.uniform(0.0, 0.3), bounce_move(q, qb, *limits))
+                continue
+            t = track.add(t + rng.uniform(0.0, 0.3), straight_move(q, qb, *limits))
             q = qb
         t_s = np.sort(rng.uniform(0.0, 3.0, size=rng.integers(1, 300)))
         assert np.array_equal(track.at(t_s, q0), _reference(track, t_s, q0))

@@ -11,6 +11,7 @@ from scipy.optimize import linprog
 from planner.play.profile import (
     LIMIT_FRACTION,
     Move,
+    bounce_move,
     move_time_s,
     move_times_s,
     path_caps,
@@ -224,3 +225,33 @@ def test_path_caps_is_the_tightest_joints_min():
         want = None if not moving else tuple(
             min(LIMIT_FRACTION * lim[k] / d for d, *lim in moving) for k in range(3))
         assert path_caps(dq, v, a, j) == want
+
+
+@pytest.mark.parametrize("dq", [[0.02, -0.01, 0.0], [0.44, 0.0, 0.0], [0.0, 0.0, 0.5],
+                                [4.0, 0.0, 0.0], [1e-4, 0.0, 0.0]])
+def test_a_bounce_turns_within_the_caps_and_comes_back(dq):
+    """A bounce leaves from rest, turns at ``q_a + dq`` halfway, is back at rest at its
+    start at its end; sampled finely, every joint's speed, acceleration and jerk stay
+    within LIMIT_FRACTION of its limits, and the binding one reaches its cap."""
+    qa = np.array([0.1, -0.2, 0.3])
+    b = bounce_move(qa, qa + np.array(dq), V, A, J)
+    assert b.back and np.array_equal(b.q_end, qa)
+    np.testing.assert_allclose(b.at(0.0)[0], qa, atol=1e-15)
+    np.testing.assert_allclose(b.at(b.duration_s)[0], qa, atol=1e-15)
+    np.testing.assert_allclose(b.at(0.5 * b.duration_s)[0], qa + np.array(dq), atol=1e-15)
+    t = np.linspace(0.0, b.duration_s, 2401)
+    vel, acc, jerk = _differences(b.at(t), t[1] - t[0])
+    d = np.abs(np.array(dq))
+    ratios = [np.max(np.abs(x), axis=0) / (lim * LIMIT_FRACTION)
+              for x, lim in ((vel, V), (acc, A), (jerk, J))]
+    for r in ratios:
+        assert np.all(r[d > 0] <= 1.0 + 2e-3)
+    assert max(float(np.max(r[d > 0])) for r in ratios) > 0.98  # (a cap reached)
+    for s_end in (0.0, b.duration_s):  # (rest at both ends)
+        tt = np.array([s_end - 1e-7, s_end, s_end + 1e-7])
+        assert np.all(np.abs(np.diff(b.at(tt), axis=0)) < 1e-12)
+    # its key crossings: ``time_at_s`` on the way out, the same point as long before the end
+    for s in (0.1, 0.5, 0.9):
+        t_up = b.time_at_s(s)
+        assert float(b.s(t_up)) == pytest.approx(s, abs=1e-12)
+        assert float(b.s(b.duration_s - t_up)) == pytest.approx(s, abs=1e-12)

@@ -225,8 +225,8 @@ def test_shallow_press_misses_in_physics(twinkle, hand, tmp_path):
 
 def test_a_repeated_key_rises_between_its_presses(tmp_path):
     """Chords' F4 at 2.40 s and again at 3.60 s: between them the plan lifts the finger's
-    body to 3 mm below the key's top; the spec's key follows it up past the
-    5 mm key-down travel (the first, hinged key model kept its front 5.6 mm down there:
+    body to ``REARM_M`` (0.5 mm) above the 5 mm key-down travel; the spec's key follows it
+    up past that travel (the first, hinged key model kept its front 5.6 mm down there:
     the second note never sounded) and sounds again at 3.60 s."""
     song = "songs/chords.mid"
     path = tmp_path / "chords.csv"
@@ -241,6 +241,37 @@ def test_a_repeated_key_rises_between_its_presses(tmp_path):
     assert np.all(rec.key_dip_m[(t >= 3.61) & (t < 3.9), k] >= key_body(65).down_m)
     assert not any(m.pitch == 65 and abs(m.onset_s - 3.6) < 1e-6
                    for m in (*r.report.play.missed, *r.report.play.late))
+
+
+def test_legato_repeats_sound_every_note_in_physics(tmp_path):
+    """Eight legato quavers on one key (C5, 200 ms each, each ending where the next
+    starts): every repeat is one bounce (``Moves.repeat``), its key up 12 ms in the rows;
+    the check sees it up in at most 2 rows of each junction (3 with the lift and descent
+    from rest to the atlas's rise pose before). In the physics replay (full contact) the
+    key is up between every two notes and down again for each (8 key-downs): 8 notes
+    hit, none late, no wrong key, the key up at most 3 rows at each junction."""
+    from planner.music.midi import Note, Song
+    from planner.simulate import run_replay
+
+    notes = tuple(Note(72, round(0.5 + 0.2 * i, 9), round(0.7 + 0.2 * i, 9), 80)
+                  for i in range(8))
+    song = Song(notes, notes[-1].offset_s, source="repeats.mid")
+    path = tmp_path / "repeats.csv"
+    planner.plan_song(song, load_hand("default"), str(path))
+    kin = check_trajectory(str(path), song)
+    assert kin.ok and kin.play.notes_hit == 8, kin.summary()
+    r = run_replay(str(path), song)
+    play = r.report.play
+    assert play.notes_hit == 8 and not play.late and not play.missed and not play.wrong_keys
+    assert sum(ep.pitch == 72 for ep in play.played) == 8  # (each note its own key-down)
+    k, rec = 72 - 21, r.record
+    t = rec.t_s - song_start_s(read_trajectory(str(path)).metadata)
+    down_phys = rec.key_dip_m[:, k] >= key_body(72).down_m
+    down_kin = kin.replay.down[:, k]
+    for n in notes[1:]:
+        near = (t > n.onset_s - 0.06) & (t < n.onset_s + 0.06)
+        assert 1 <= np.sum(~down_kin[near]) <= 2
+        assert 1 <= np.sum(~down_phys[near]) <= 3
 
 
 def test_missing_mujoco_is_one_line_exit_2(twinkle, monkeypatch, capsys):

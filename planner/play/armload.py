@@ -101,6 +101,15 @@ class SlowedPlaces:
     def rise(self, e) -> Timed:
         return self._timed(self._places.rise(e))
 
+    def repeat(self, e) -> Timed | None:
+        got = self._places.repeat(e)
+        return None if got is None else Timed(got.move.slowed(self._sigma),
+                                              got.cross_s * self._sigma)
+
+    def repeat_pair(self, e) -> tuple[Timed, Timed] | None:
+        got = self._places.repeat_pair(e)
+        return None if got is None else (self._timed(got[0]), self._timed(got[1]))
+
     def to_hover(self, e) -> Move:
         return slowed(self._places.to_hover(e), self._sigma)
 

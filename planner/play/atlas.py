@@ -11,7 +11,9 @@ every ``STEP_M`` around each finger's natural place and solves, by single-finger
 * ``rise``: straight above it, ``REPEAT_DEPTH_M`` below the key's top: the key has come
   up past the key-down depth (spec: 5 mm) by 2 mm, 70 % of its dip back, where a key
   action is ready to strike again (a piano's repetition lever re-arms at about half the
-  dip), so a finger repeating a note goes no higher;
+  dip); a finger repeating a note goes up the line from the press towards it, only
+  ``moves.REARM_M`` above the key-down depth where it bounces (``Moves.repeat``), to it
+  where it has time to wait;
 * ``hover``: straight above that point, ``PREPARE_HEIGHT_M`` over the key's top (a finger
   about to press waits there: the spec's 5 mm, plus 0.5 mm);
 * ``high``: straight above it at ``HIGH_Z_M`` (7.5 mm above the black keys' tops), from

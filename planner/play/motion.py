@@ -39,10 +39,13 @@ from planner.play.costs import SkipReason
 from planner.play.fingering import Assignment
 from planner.play.keytimes import held_enough_s, key_down_s, key_up_s, struck_s
 from planner.play.places import Places
-from planner.play.profile import Move, path_s
+from planner.play.profile import Bounce, Move, bounce_s, path_s
 
 DROP_FRACTION = 0.5  # a note whose key cannot go down before this much of it is over is left out
 WAIT_MARGIN_S = 0.005  # a finger reaches its waiting pose at least this long before it descends
+BOUNCE_STRETCH = 2.0  # a repeat's bounce is played at most this much slower (its room that
+# much more than its gap): past it the lift and the descent from rest fit (their gap is 1.5-1.8
+# times the bounce's on the default hand) and cross the key-down depth faster
 COMMIT_MARGIN_S = 0.3  # a key due up this soon after the rows written is let up when they are
 
 
@@ -77,7 +80,7 @@ class Segment:
     """A move of one joint group (a finger, or the rail) starting at ``t0_s``."""
 
     t0_s: float
-    move: Move
+    move: Move | Bounce  # (a ``Bounce``: a repeat, out and back to its start)
 
     @property
     def t1_s(self) -> float:
@@ -99,7 +102,7 @@ class _Track:
         t0_s = max(t0_s, self.free_s)
         self.segments.append(Segment(t0_s, move))
         self.starts.append(t0_s)
-        self.q = move.q_a + move.dq
+        self.q = move.q_end
         self.free_s = t0_s + move.duration_s
         return self.free_s
 
@@ -126,14 +129,24 @@ class _Track:
         lo = int(idx[first])
         segs = self.segments[lo:int(idx[-1]) + 1]
         of = idx[first:] - lo
-        t0, dur, ta, tj = np.array([(g.t0_s, g.move.duration_s, g.move.ta_s, g.move.tj_s)
-                                  for g in segs]).T[:, of]
+        # (a repeat's ``Bounce`` comes back to its start: its own profile, ``bounce_s``,
+        # and its end at 0; its double-S phases, never read, are its halves')
+        t0, dur, ta, tj, back = np.array([
+            (g.t0_s, g.move.duration_s, *((0.5 * g.move.duration_s, 0.25 * g.move.duration_s,
+                                           1.0) if g.move.back else
+                                          (g.move.ta_s, g.move.tj_s, 0.0)))
+            for g in segs]).T[:, of]
         q_a = np.array([g.move.q_a for g in segs])[of]
         dq = np.array([g.move.dq for g in segs])[of]
         tt = t_s[first:]
         s = path_s(tt - t0, dur, ta, tj)
+        if back.any():
+            s = np.where(back > 0.0, bounce_s(tt - t0, dur), s)
+            dq_end = np.where(back[:, None] > 0.0, 0.0, dq)
+        else:
+            dq_end = dq
         moving = (tt < t0 + dur)[:, None]  # (before its end, ``Segment.t1_s``)
-        out[first:] = np.where(moving, q_a + s[:, None] * dq, q_a + dq)
+        out[first:] = np.where(moving, q_a + s[:, None] * dq, q_a + dq_end)
         return out
 
 
@@ -159,6 +172,49 @@ class Outcome:
     detail: str = ""
 
 
+def _bounce(moves: Places, st: _Finger, e: AtlasEntry, want: float, floor: float,
+            committed_s: float):
+    """A repeat of the key finger ``st`` presses (``approach``'s answer, or None): one
+    ``Bounce`` (``Moves.repeat``) that puts the key down at ``want`` and lets it up by the
+    note before's key-up ``st.up_s``: earlier where their room is less than its gap
+    (``repeat_gap_s``: the programme counts the frames), played slower where it is more
+    (the key up at ``st.up_s`` exactly), up to ``BOUNCE_STRETCH`` times its time; with more
+    room, None: the lift and descent from rest (``Moves.repeat_pair``) fit there, and
+    those to the atlas's rise pose (2 mm above the key-down depth, crossing it faster:
+    the physics' key goes down nearer the rows' time) where the room is more still."""
+    b = moves.repeat(e)
+    gap = b.duration_s - 2.0 * b.cross_s
+    room = want - st.up_s
+    if room >= BOUNCE_STRETCH * gap:
+        return None
+    sigma = max(1.0, room / gap)
+    move, up_s = b.move.slowed(sigma), b.cross_s * sigma
+    t0 = max(want - (move.duration_s - up_s), st.track.free_s, committed_s,
+             floor - 0.5 * move.duration_s)  # (its way down no earlier than a descent's)
+    if t0 + up_s > st.up_s + 1e-9:  # (the key would come up late: not this way)
+        return None
+    return t0 + move.duration_s - up_s, [(t0, move)], "bounce"
+
+
+def _struck(found, struck: float, up_s: float, timed_by: Places, e: AtlasEntry):
+    """``approach``'s (key-down moment, steps, start) with the key put down at ``struck``
+    (``keytimes.struck_s``: a late key after the note's first row) where that is later:
+    the last step, the descent, starts that much later (a repeat's bounce only while its
+    key-up stays by the note before's, ``up_s``); and when the press ends (the last step's
+    end for a repeat's own moves, else the descent's from ``start``): (key-down moment,
+    steps, press end)."""
+    down_at, steps, start = found
+    t0, last = steps[-1]
+    if struck > down_at and (start != "bounce" or 2.0 * t0 + last.duration_s + struck
+                             - 2.0 * down_at <= up_s + 1e-9):
+        steps = steps[:-1] + [(t0 + struck - down_at, last)]
+        down_at = struck
+    if start in ("bounce", "repeat"):
+        return down_at, steps, steps[-1][0] + steps[-1][1].duration_s
+    desc = timed_by.descend(e, start)
+    return down_at, steps, down_at + desc.duration_s - desc.cross_s
+
+
 def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: float,
              rail_free_s: float, committed_s: float, front: bool = True):
     """The moves that bring finger ``st`` from where it is to key-down on ``e`` (no
@@ -166,16 +222,24 @@ def approach(moves: Places, st: _Finger, e: AtlasEntry, want: float, after_s: fl
     rows written), below crossing height only once the rail is still, at
     ``rail_free_s``, or clear above every key until then by the front rule, ``front``,
     or the black rule alone, after a move that changed the play posture): (key-down
-    moment, [(t0, move), ...], the pose its last descent starts from), or None when no
+    moment, [(t0, move), ...], the pose its last descent starts from: "bounce" and
+    "repeat" for a repeat's, ``Moves.repeat`` and ``repeat_pair``), or None when no
     checked path leads there."""
     floor = max(rail_free_s, committed_s, after_s)
-    if st.pose == "press" and st.entry is e:  # the same key again: up to rise, down
-        lift, desc = moves.lift(e, "rise"), moves.descend(e, "rise")
+    if st.pose == "press" and st.entry is e and moves.repeat(e) is not None:
+        # (the same key again: a bounce, or up to the repeat's top and down)
+        got = _bounce(moves, st, e, want, floor, committed_s)
+        if got is not None:
+            return got
+        lift, desc = moves.repeat_pair(e)
+        up, down = moves.lift(e, "rise"), moves.descend(e, "rise")
+        if want - st.up_s >= (up.duration_s - up.cross_s) + down.cross_s:
+            lift, desc = up, down  # (room for the whole line: its faster crossings)
         t_lift = min(want - desc.cross_s - lift.duration_s, st.up_s - lift.cross_s)
         t_lift = max(t_lift, st.track.free_s, committed_s)
         if t_lift + lift.cross_s <= st.up_s + 1e-9:  # (its key up by the note before's end)
             t_desc = max(want - desc.cross_s, t_lift + lift.duration_s, floor)
-            return t_desc + desc.cross_s, [(t_lift, lift.move), (t_desc, desc.move)], "rise"
+            return t_desc + desc.cross_s, [(t_lift, lift.move), (t_desc, desc.move)], "repeat"
         # (a press that ends late lifts too slowly to the rise: the short move crosses the
         # key-down depth later than the lift to crossing height, which the note's own
         # check (``Motion.place``, TOO_SHORT) holds within its end: that way, then down)
@@ -353,13 +417,8 @@ class Motion(ArmMotion):
         found, timed_by = within_motors(self, a.finger, found, lambda places: approach(
             places, st, e, want, after, self.arm_track.free_s, self.committed_s,
             self.arm_front))
-        down_at, steps, start = found
-        struck = struck_s(n.onset_s, down_at, self.dt)  # (a late key: after the first row)
-        if struck > down_at:  # (the last step is the descent: it starts that much later)
-            steps = steps[:-1] + [(steps[-1][0] + struck - down_at, steps[-1][1])]
-            down_at = struck
-        desc = timed_by.descend(e, start)
-        press_end = down_at + desc.duration_s - desc.cross_s
+        down_at, steps, press_end = _struck(found, struck_s(n.onset_s, found[0], self.dt),
+                                            st.up_s, timed_by, e)
         up = self._held_enough_s(a.note, down_at, self.t_up(a.note, a.release_s),
                                  self.t_up(a.note))
         lift = self.moves.lift(e, "high")

@@ -9,8 +9,8 @@ part-way (``up_s``). From them:
 
 * ``press_min_s``: the shortest key-down interval a press can make (descend to full dip,
   lift at once);
-* ``repeat_gap_s``: key up to key down again on the same key (lift to the atlas's
-  ``rise`` pose, the key 70 % back, and down);
+* ``repeat_gap_s``: key up to key down again on the same key: one ``profile.Bounce`` up
+  the press -> rise line until the key is ``REARM_M`` up, and back (``repeat``);
 * ``move_gap_s``: key up on one key to key down on another, the rail still (lift to
   crossing height, across, down);
 * ``before_rail_s`` / ``after_rail_s``: key up to the end of the lift, and the start of a
@@ -52,6 +52,7 @@ from planner.play.movetable import (
 from planner.play.profile import (
     LIMIT_FRACTION,
     Move,
+    bounce_move,
     move_time_s,
     move_times_s,
     path_caps,
@@ -59,6 +60,13 @@ from planner.play.profile import (
 )
 from planner.play.tendonload import slowed, tendon_load
 
+REARM_M = 0.0005  # a repeat's top: the finger's lowest point this far above the key-down
+# depth (the spec's 5 mm; any less deep is up, spec section 2), no higher: the key up in the
+# rows the repeat gives (``planner.play.keytimes``). The physics' hand rises higher still (it
+# sits 1.1-1.3 mm above its rows where a key pushes back: keytimes), so its key comes up too.
+# Measured on the two voice pieces' 40 legato repeats (docs/history/2026-12-07-play-repeat.md):
+# 0.2 / 0.5 / 1.0 mm lose 1.15 / 1.68 / 2.12 rows a repeat in the check, 2.67 / 2.40 / 2.52
+# in the physics (a lower top crosses slower: its key goes down later there)
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
 # an entry's moves timed within the tendons' capacity (``planner.play.tendonload``), each
 # pair of poses one way or the other (the bound is the same both ways: computed from the
@@ -88,13 +96,96 @@ class EntryRecord(NamedTuple):
     before_rail_s: float
     after_rail_s: float
     press_min_s: float
-    repeat_gap_s: float
     high: list[float]
     press: list[float]
     places: tuple[int, int] | None
 
 
-class Moves(FollowMoves):
+class RepeatMoves:
+    """A ``Moves``' repeated key (its part of that class: the same hand, atlas, limits
+    and memos): one ``Bounce`` up the press -> rise line to ``REARM_M`` above the key-down
+    depth and back (``repeat``), the lift and descent from rest to the same top
+    (``repeat_pair``), and the programme's ``repeat_gap_s``."""
+
+    def repeat_gap_s(self, e: AtlasEntry) -> float:
+        """Key up to key down again on the same key: the repeat's ``Bounce`` from its
+        key-up crossing to its key-down crossing (``repeat``)."""
+        b = self.repeat(e)
+        if b is None:  # (no repeat from below: up to crossing height and down)
+            return self.before_rail_s(e) + self.after_rail_s(e)
+        return b.duration_s - 2.0 * b.cross_s
+
+    def _repeat(self, e: AtlasEntry) -> Timed | None:
+        """The repeat: one ``Bounce`` from the press straight up the atlas's press -> rise
+        line until the finger's lowest point is ``REARM_M`` above the key-down depth
+        (``repeat_apex``: the key up) and back, timed at its key-up crossing (its key-down
+        crossing is as long before its end: the same point of the line both ways); None
+        where the line never lets the key up (``repeat_apex``)."""
+        if self.repeat_apex(e) is None:
+            return None
+        sigma, s_c = self.repeat_apex(e)  # (``Motion`` asks only where ``repeat_gap_s`` has one)
+        js = self.js[e.finger]
+        move = bounce_move(e.press, e.press + sigma * (e.rise - e.press),
+                           self.hand.velocity[js], self.acceleration[js], self.jerk[js])
+        move = self._line_scaled(e, move)
+        return Timed(move, move.time_at_s(s_c / sigma))
+
+    def _repeat_pair(self, e: AtlasEntry) -> tuple[Timed, Timed] | None:
+        """A repeat with time to spare (``Motion``): the lift up the same line to the same
+        top and the descent back, two moves from rest (the finger may wait between)."""
+        if self.repeat_apex(e) is None:
+            return None
+        sigma, s_c = self.repeat_apex(e)
+        apex = e.press + sigma * (e.rise - e.press)
+        up = self._line_scaled(e, self._move(e.finger, e.press, apex))
+        down = self._line_scaled(e, self._move(e.finger, apex, e.press))
+        # (on the partial line the crossing lies at s_c / sigma going up, the rest going down)
+        return (Timed(up, up.time_at_s(s_c / sigma)),
+                Timed(down, down.time_at_s(1.0 - s_c / sigma)))
+
+    def _line_scaled(self, e: AtlasEntry, move):
+        """A move (or ``Bounce``) of the entry's finger along part of its press -> rise line,
+        slowed as the atlas's own move along the whole line is (``entry_scale``: its
+        tendons within their share, its lag beside the black keys) where that bound covers
+        it: no joint faster nor accelerating harder (it then is no faster anywhere along
+        the line: it leaves the press as that one does, or slower, and stops short of its
+        end; the bounds are the line's, ``planner.play.tendonload``); else its own."""
+        column = SCALE_PAIRS.index(("press", "rise"))
+        whole = self._move(e.finger, e.press, e.rise)
+        size, whole_size = float(np.max(np.abs(move.dq))), float(np.max(np.abs(whole.dq)))
+        if (move.peak_acceleration * size <= whole.peak_acceleration * whole_size * (1 + 1e-12)
+                and move.peak_speed * size <= whole.peak_speed * whole_size * (1 + 1e-12)):
+            return _slowed(move, self.entry_scale(e, column))
+        qa, qb = move.q_a, move.q_a + move.dq
+        top = kb.key(60 + e.pitch_class).top_z_m
+        scale = self.finger_scale(e.finger, qa, qb, move, top)
+        return _slowed(move, scale * margin_scale(self.atlas, e.finger, e.pitch_class, e.dx_m,
+                                                  _slowed(move, scale)))
+
+    def _repeat_apex(self, e: AtlasEntry) -> tuple[float, float] | None:
+        """(sigma, s_c): the path parameters on the press -> rise line where the finger's
+        lowest point is ``REARM_M`` above the key-down depth (the repeat's top; the rise
+        itself, 1, where a body of the finger keeps it lower: 4 in 661 entries of the
+        default hand come up 0.4 mm) and where it crosses the key-down depth (the lift to
+        the rise's crossing, ``lift``: the move table's); None when the line never lets
+        the key up."""
+        lift = self.lift(e, "rise")
+        s_c = float(lift.move.s(lift.cross_s))
+        if s_c >= 1.0:
+            return None
+        depth = self._depth_fn(e)
+
+        def g(s: float) -> float:
+            return depth(e.press + s * (e.rise - e.press)) - (kb.DOWN_DEPTH_M - REARM_M)
+
+        g1 = g(1.0)
+        if g1 >= 0.0:
+            return 1.0, s_c
+        # (the crossing's end is still down: the top lies between it and the rise)
+        return _crossing(g, g(s_c), g1, CROSS_TOL, s_c), s_c
+
+
+class Moves(FollowMoves, RepeatMoves):
     """Timed moves of one hand's fingers over its atlas (memoised per entry). What
     forward kinematics decides (key crossings, clear paths across and while following a
     key) is read from the hand's shipped move table (``planner.play.movetable``) when
@@ -111,6 +202,9 @@ class Moves(FollowMoves):
         self.tendons = tendon_load(hand)
         self.entry_scale = lru_cache(maxsize=None)(self._entry_scale)
         self.rise = lru_cache(maxsize=None)(self._rise)
+        self.repeat = lru_cache(maxsize=None)(self._repeat)
+        self.repeat_pair = lru_cache(maxsize=None)(self._repeat_pair)
+        self.repeat_apex = lru_cache(maxsize=None)(self._repeat_apex)
         self.to_hover = lru_cache(maxsize=None)(self._to_hover)
         self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
         self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
@@ -289,7 +383,7 @@ class Moves(FollowMoves):
         if e.posture == self.atlas.posture_index:
             return self._record(e)
         nan = float("nan")
-        return EntryRecord(e, nan, nan, nan, nan, e.high.tolist(), e.press.tolist(), None)
+        return EntryRecord(e, nan, nan, nan, e.high.tolist(), e.press.tolist(), None)
 
     def _across_new(self, a: AtlasEntry, b: AtlasEntry, ra: EntryRecord,
                     rb: EntryRecord) -> float | None:
@@ -338,7 +432,7 @@ class Moves(FollowMoves):
         entry: its lifts and descents at crossing height and at ``rise``, timed at their
         key crossings (worked out for every entry of the move table when the hand is set
         up, ``_table_records``; for another entry when first asked)."""
-        return tuple(self._record(e)[1:5])
+        return (*self._record(e)[1:4], self.repeat_gap_s(e))
 
     def _record(self, e: AtlasEntry) -> EntryRecord:
         """The entry's record, as kept (made from its own lifts and descents when first
@@ -346,18 +440,13 @@ class Moves(FollowMoves):
         got = self._times.get(id(e))
         if got is None or got.entry is not e:
             d, u = self.descend(e, "high"), self.lift(e, "high")
-            ur, dr = self.lift(e, "rise"), self.descend(e, "rise")
             got = self._times[id(e)] = EntryRecord(
                 e, u.duration_s - u.cross_s, d.cross_s, (d.duration_s - d.cross_s) + u.cross_s,
-                (ur.duration_s - ur.cross_s) + dr.cross_s, e.high.tolist(), e.press.tolist(),
-                self.table.index(e))
+                e.high.tolist(), e.press.tolist(), self.table.index(e))
         return got
 
     def press_min_s(self, e: AtlasEntry) -> float:
         return self._record(e).press_min_s
-
-    def repeat_gap_s(self, e: AtlasEntry) -> float:
-        return self._record(e).repeat_gap_s
 
     def move_gap_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         ra, rb = self._record(a), self._record(b)
@@ -406,24 +495,21 @@ def _table_records(atlas: Atlas, table: MoveTable, js: dict[str, list[int]],
         # (each timed within the tendons' capacity: ``Moves._entry_move``)
         sc = np.array([table.scales[table.key(e)] for e in es]).reshape(-1, 4)
         t_high = move_times_s(high - press, *lim) * sc[:, SCALE_PAIRS.index(("press", "high"))]
-        t_rise = move_times_s(np.array([e.rise for e in es]) - press, *lim) \
-            * sc[:, SCALE_PAIRS.index(("press", "rise"))]
         d_high, u_high = c[:, cols["high"]], c[:, 3 + cols["high"]]
-        d_rise, u_rise = c[:, cols["rise"]], c[:, 3 + cols["rise"]]
         for e, *rec in zip(es, (t_high - u_high).tolist(), d_high.tolist(),
-                           ((t_high - d_high) + u_high).tolist(),
-                           ((t_rise - u_rise) + d_rise).tolist(), high.tolist(),
+                           ((t_high - d_high) + u_high).tolist(), high.tolist(),
                            press.tolist(), index):
             out[id(e)] = EntryRecord(e, *rec)
     return out
 
 
-def _crossing(g, g0: float, g1: float, tol: float) -> float:
-    """The point of [0, 1] where ``g`` (``g0`` at 0, ``g1`` at 1, of opposite signs)
-    reaches 0, on its side where ``g >= 0``, within ``tol``: false position with the
-    Illinois correction (a few evaluations of ``g`` where bisection takes 14), bisecting
-    whenever one end has been replaced three times in a row (the bracket always shrinks)."""
-    lo, hi, glo, ghi = 0.0, 1.0, g0, g1
+def _crossing(g, g0: float, g1: float, tol: float, lo: float = 0.0) -> float:
+    """The point of [``lo``, 1] where ``g`` (``g0`` at ``lo``, ``g1`` at 1, of opposite
+    signs) reaches 0, on its side where ``g >= 0``, within ``tol``: false position with
+    the Illinois correction (a few evaluations of ``g`` where bisection takes 14),
+    bisecting whenever one end has been replaced three times in a row (the bracket always
+    shrinks)."""
+    hi, glo, ghi = 1.0, g0, g1
     side, run = 0, 0  # the end the last steps replaced (-1: lo, +1: hi), how many in a row
     while hi - lo > tol:
         if run >= 3:
@@ -497,3 +583,8 @@ def path_acceleration_cap(hand: HandModel, postures, dq: np.ndarray) -> float:
             best = min(best, float(np.min(np.where(np.abs(k) > 1e-12, room / np.abs(k),
                                                    np.inf))))
     return best
+
+
+def _slowed(move, sigma: float):
+    """``tendonload.slowed`` of a ``Move``, or a ``Bounce`` slowed alike."""
+    return move.slowed(sigma) if move.back else slowed(move, sigma)

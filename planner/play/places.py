@@ -298,6 +298,12 @@ class Places:
     def lift(self, e: AtlasEntry, end: str):
         return self.moves[e.posture].lift(e, end)
 
+    def repeat(self, e: AtlasEntry):
+        return self.moves[e.posture].repeat(e)
+
+    def repeat_pair(self, e: AtlasEntry):
+        return self.moves[e.posture].repeat_pair(e)
+
     def rise(self, e: AtlasEntry):
         return self.moves[e.posture].rise(e)
 

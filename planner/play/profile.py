@@ -46,6 +46,12 @@ class Move:
     ta_s: float
     tj_s: float
 
+    back = False  # (it ends at ``q_a + dq``; a ``Bounce`` comes back to ``q_a``)
+
+    @property
+    def q_end(self) -> np.ndarray:
+        return self.q_a + self.dq
+
     @property
     def peak_speed(self) -> float:
         """The path parameter's largest speed (1/s; 0 for a zero move)."""
@@ -217,3 +223,110 @@ def phases(v: float, a: float, j: float) -> tuple[float, float, float]:
         return 2.0 * ta, ta, tj
     tj = (0.5 / j) ** (1.0 / 3.0)  # nor the acceleration cap: 2 j tj^3 = 1
     return 4.0 * tj, 2.0 * tj, tj
+
+
+# A bounce (``Bounce``): out from rest and back to rest along one straight line, turning
+# at its far end under full braking. In units of its first jerk ramp (jerk 1): jerk +1 for
+# 1, then -1 for ``1 + sqrt 2`` (the speed back to 0 at the turn, the acceleration -sqrt 2
+# there), then the same mirrored in time (jerk +1, then -1): the time-optimal turn of a
+# jerk-limited line, every derivative but the jerk continuous, rest at both ends.
+_TURN_S = 2.0 + math.sqrt(2.0)  # the half's duration, in ramps
+_TURN_PEAK = 1.0 / 6.0 + (1.0 + math.sqrt(2.0)) / 2.0 + (3.0 + 2.0 * math.sqrt(2.0)) / 2.0 \
+    - (7.0 + 5.0 * math.sqrt(2.0)) / 6.0  # the half's length (1.943), in ramps
+
+
+def _turn_unit(h: np.ndarray) -> np.ndarray:
+    """The bounce's half from rest to its turn, in ramps (``h`` in [0, ``_TURN_S``])."""
+    u = h - 1.0
+    return np.where(h <= 1.0, h * h * h / 6.0, 1.0 / 6.0 + u / 2.0 + u * u / 2.0 - u * u * u / 6.0)
+
+
+def _turn_scalar(h: float) -> float:
+    """``_turn_unit`` of one time in floats (``Bounce.time_at_s`` asks it many times)."""
+    if h <= 1.0:
+        return h * h * h / 6.0
+    u = min(h, _TURN_S) - 1.0
+    return 1.0 / 6.0 + u / 2.0 + u * u / 2.0 - u * u * u / 6.0
+
+
+def bounce_s(t_s: np.ndarray, duration_s) -> np.ndarray:
+    """Path parameter of bounces of ``duration_s`` at times ``t_s`` after their start: 0 at
+    both ends (clamped), 1 at the turn halfway (element by element, as ``path_s``)."""
+    T = np.asarray(duration_s, dtype=float)
+    h = np.clip(np.minimum(t_s, T - t_s), 0.0, 0.5 * T)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(T > 0.0, _turn_unit(h * (2.0 * _TURN_S) / T) / _TURN_PEAK, 0.0)
+
+
+@dataclass(frozen=True)
+class Bounce:
+    """Out from ``q_a`` by ``dq`` and straight back, rest to rest over ``duration_s``, the
+    path parameter 1 at the turn halfway (``bounce_s``)."""
+
+    q_a: np.ndarray
+    dq: np.ndarray
+    duration_s: float
+
+    back = True
+
+    @property
+    def q_end(self) -> np.ndarray:
+        return self.q_a
+
+    @property
+    def ramp_s(self) -> float:
+        return self.duration_s / (2.0 * _TURN_S)
+
+    @property
+    def peak_speed(self) -> float:
+        return 1.0 / (_TURN_PEAK * self.ramp_s)
+
+    @property
+    def peak_acceleration(self) -> float:
+        return math.sqrt(2.0) / (_TURN_PEAK * self.ramp_s ** 2)
+
+    @property
+    def jerk(self) -> float:
+        return 1.0 / (_TURN_PEAK * self.ramp_s ** 3)
+
+    def s(self, t_s: np.ndarray) -> np.ndarray:
+        return bounce_s(np.asarray(t_s, dtype=float), self.duration_s)
+
+    def at(self, t_s) -> np.ndarray:
+        s = self.s(np.atleast_1d(t_s))
+        return self.q_a[None, :] + s[:, None] * self.dq[None, :]
+
+    def time_at_s(self, s_target: float) -> float:
+        """The first time (s after the start) at which the path parameter reaches
+        ``s_target`` (on the way out; bisection to the last float)."""
+        s_target = min(max(float(s_target), 0.0), 1.0)
+        lo, hi = 0.0, 0.5 * self.duration_s
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            if mid in (lo, hi):
+                break
+            if _turn_scalar(mid / self.ramp_s) >= s_target * _TURN_PEAK:
+                hi = mid
+            else:
+                lo = mid
+        return hi
+
+    def slowed(self, sigma: float) -> Bounce:
+        return self if sigma == 1.0 else Bounce(self.q_a, self.dq, self.duration_s * sigma)
+
+
+def bounce_move(q_a: np.ndarray, q_turn: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+                j_max: np.ndarray) -> Bounce:
+    """The fastest ``Bounce`` from ``q_a`` to ``q_turn`` and back under per-joint speed,
+    acceleration and jerk limits (``path_caps``: its ramps as long as the tightest of the
+    three asks)."""
+    q_a = np.asarray(q_a, dtype=float)
+    dq = np.asarray(q_turn, dtype=float) - q_a
+    caps = path_caps(dq.tolist(), np.asarray(v_max, dtype=float).tolist(),
+                     np.asarray(a_max, dtype=float).tolist(), np.asarray(j_max, dtype=float).tolist())
+    if caps is None:
+        return Bounce(q_a, dq, 0.0)
+    v, a, j = caps  # (the ramp r: speed 1 / (P r), acceleration sqrt 2 / (P r^2), jerk 1 / (P r^3))
+    ramp = max(1.0 / (_TURN_PEAK * v), math.sqrt(math.sqrt(2.0) / (_TURN_PEAK * a)),
+               (1.0 / (_TURN_PEAK * j)) ** (1.0 / 3.0))
+    return Bounce(q_a, dq, 2.0 * _TURN_S * ramp)
