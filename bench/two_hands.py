@@ -91,7 +91,8 @@ def main() -> int:
                  "L": len(plan2.notes_of[0]), "R": len(plan2.notes_of[1]),
                  "out": len(plan2.left_out()), "rtf2": song_s / plan2.planning_s,
                  "gap": chk2.gap.least_m * 1000, "ok": chk2.ok,
-                 "way": {"right first": "R", "left first": "L", "right alone": "RA"}.get(
+                 "way": {"right first": "R", "left first": "L", "right alone": "RA",
+                         "right first settled": "Rs", "left first settled": "Ls"}.get(
                      plan2.way.removesuffix(" back"), plan2.way)
                  + ("+" if plan2.way.endswith(" back") else "")}
             reasons.update((plan2.assignment.hand[i], s.reason.value)

@@ -43,8 +43,8 @@ from planner.play.twobounds import (
     clear_bounds,
     clear_limits,
     first_edge,
-    room,
     room_cost,
+    room_settled,
     settled_bounds,
     windows,
 )
@@ -104,13 +104,16 @@ class PairPass:
     planned_of: tuple[tuple[int, ...], tuple[int, ...]]
     alone: bool = False
     back: bool = False  # the first hand planned again with what the second left out
+    settled: bool = False  # the first hand's room settled (``plan_pass``)
 
     @property
     def way(self) -> str:
         """How it was planned: ``right first``, ``left first``, or ``right alone`` (the
-        other hand given only the notes the first one left out); `` back``: then the
-        first hand planned again with the notes the second left out (``hand_back``)."""
-        return f"{self.first} {'alone' if self.alone else 'first'}{' back' if self.back else ''}"
+        other hand given only the notes the first one left out); `` settled``: the first
+        hand's room settled (``plan_pass``); `` back``: then the first hand planned again
+        with the notes the second left out (``hand_back``)."""
+        return (f"{self.first} {'alone' if self.alone else 'first'}"
+                f"{' settled' if self.settled else ''}{' back' if self.back else ''}")
 
     def skipped_for(self, reason: SkipReason) -> list[tuple[int, object]]:
         """(song index, ``Skip``) of every note a plan left out for ``reason`` (the notes
@@ -195,13 +198,26 @@ def _plan_loose(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], su
     return None
 
 
+def settled_room(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float
+                 ) -> tuple[list[tuple[float, float]], frozenset[int]]:
+    """The room bounds of the hand ``first`` by ``a``, settled, and the notes they take
+    out (positions in its notes: ``twobounds.room_settled``)."""
+    second = other_side(first)
+    own = a.notes_of(first)
+    return room_settled(song, pp, first, own, a.notes_of(second), _sub_song(song, own),
+                        rate_hz)
+
+
 def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
-              song_name: str = "") -> PairPass:
+              song_name: str = "", settled: bool = False) -> PairPass:
     """Plan both hands by ``a``: the hand ``first`` leaving the other room for its notes
     (``room_bounds``), then the other within the first one's rows (``clear_bounds``,
     settled: ``settled_bounds``), its notes and every note the first one left out (the
     second hand's programme weighs them in the same frames as its own: a note it cannot
-    play is left out again, one it plays instead of its own costs it fewer frames)."""
+    play is left out again, one it plays instead of its own costs it fewer frames).
+    ``settled``: the first hand's room settled too (``twobounds.room_settled``: where a
+    note of its own has no place within its room, it stands where it was until its next
+    note, and leaves the other hand its room, and is charged for it, all that time)."""
     notes = song.notes
     idx = {s: a.notes_of(s) for s in SIDES}
     subs = {s: _sub_song(song, idx[s]) for s in SIDES}
@@ -209,11 +225,13 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     plans: dict[str, PlayPlan] = {}
     # (the first hand's bound leaves the other room; it keeps no clearance itself, the
     # second hand's bound does: its windows are its notes' own, none taken out)
-    bounds = room(song, pp, first, idx[first], idx[second], subs[first], rate_hz)
+    bounds, out = room_settled(song, pp, first, idx[first], idx[second], subs[first], rate_hz,
+                               settled)
     # (and pays, in frames, for the room it takes from the other hand's notes and from
     # those it hands over: ``planner.play.roomcost``; a hand planned alone is planned as
     # one hand plays the file, the way that bounds a pair's loss against one hand)
-    cost = room_cost(song, pp, first, idx[first], idx[second], rate_hz) if idx[second] else None
+    cost = (room_cost(song, pp, first, idx[first], idx[second], rate_hz, out)
+            if idx[second] else None)
     plans[first] = plan_song(subs[first], pp.hands[first], None, rate_hz, song_name=song_name,
                              planner=pp.planners[first], rail_bounds=bounds, room=cost)
     given = {idx[first][s.note]: f"{s.reason.value}: {s.detail}"
@@ -226,7 +244,8 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     played = sum(_played_frames(plans[s], planned[s], notes, rate_hz) for s in SIDES)
     a = a.hand_over(given, second)
     return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
-                    float(played), (planned[LEFT], planned[RIGHT]), not idx[second])
+                    float(played), (planned[LEFT], planned[RIGHT]), not idx[second],
+                    settled=settled)
 
 
 def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
@@ -252,7 +271,7 @@ def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
                                first)
     played = sum(_played_frames(plans[x], planned[x], song.notes, rate_hz) for x in SIDES)
     return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
-                    float(played), (planned[LEFT], planned[RIGHT]), p.alone, True)
+                    float(played), (planned[LEFT], planned[RIGHT]), p.alone, True, p.settled)
 
 
 def _why(p: PairPass, i: int) -> str:
@@ -287,15 +306,29 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
         pp.reads.clear()
 
 
+def _both_rooms(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
+                song_name: str) -> list[PairPass]:
+    """The passes with ``first`` planned first: its room as the windows of its notes give
+    it, and, where that differs (a note of its own no place plays within its room: the
+    hand stands through it), its room settled (``plan_pass``). Neither is always better:
+    the settled room leaves the other hand the keys the first one stands over, at the
+    cost of the first hand's notes near them (random two-hand songs and the two-hand
+    corpus: ``docs/history/2026-12-07-two-hands9.md``)."""
+    got = [plan_pass(song, pp, a, first, rate_hz, song_name)]
+    if a.notes_of(other_side(first)) and settled_room(song, pp, a, first, rate_hz)[1]:
+        got.append(plan_pass(song, pp, a, first, rate_hz, song_name, settled=True))
+    return got
+
+
 def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: float,
                     song_name: str, t_start: float) -> TwoHandPlan:
     """``plan_two_hands`` after its input's check (``t_start``: its clock's start)."""
     places = {s: pp.planners[s].places for s in SIDES}
     a = assign_hands(song.notes, pp.gap, places, rate_hz)
-    tried = [plan_pass(song, pp, a, RIGHT, rate_hz, song_name)]
+    tried = _both_rooms(song, pp, a, RIGHT, rate_hz, song_name)
     if all(a.notes_of(s) for s in SIDES):
-        if tried[0].skipped_for(SkipReason.OTHER_HAND):
-            tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
+        if any(p.skipped_for(SkipReason.OTHER_HAND) for p in tried):
+            tried += _both_rooms(song, pp, a, LEFT, rate_hz, song_name)
         tried.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
     best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
     back = hand_back(song, pp, best, rate_hz, song_name)
