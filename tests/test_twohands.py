@@ -60,11 +60,12 @@ def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     ways = [w for w, _ in plan.tried if not w.endswith(" back")]
     assert [w for w in ways if not w.endswith(" settled")] == [
         "right first", "left first", "right alone"]
-    assert all(ways[k - 1] + " settled" == w for k, w in enumerate(ways) if w.endswith(" settled"))
-    # (then the way kept with the notes its second hand left out handed back to the first,
-    # kept when it plays more)
+    assert all(w.removesuffix(" settled") in ways[:3] for w in ways[3:])
+    # (then the best way of the three, and the best of all where a settled one plays more,
+    # with the notes its second hand left out handed back to the first, kept when it plays
+    # more)
     backs = [w for w, _ in plan.tried[len(ways):]]
-    assert len(backs) <= 1 and all(w.endswith(" back") for w in backs)
+    assert len(backs) <= 2 and all(w.endswith(" back") for w in backs)
     assert max(fr for _, fr in plan.tried) == dict(plan.tried)[plan.way]
     assert plan.way.startswith(first)
     rep = check_trajectory(str(out), song)

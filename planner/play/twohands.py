@@ -325,16 +325,29 @@ def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: 
     """``plan_two_hands`` after its input's check (``t_start``: its clock's start)."""
     places = {s: pp.planners[s].places for s in SIDES}
     a = assign_hands(song.notes, pp.gap, places, rate_hz)
-    tried = _both_rooms(song, pp, a, RIGHT, rate_hz, song_name)
+    rf = _both_rooms(song, pp, a, RIGHT, rate_hz, song_name)
+    plain, settled = [rf[0]], rf[1:]
     if all(a.notes_of(s) for s in SIDES):
-        if any(p.skipped_for(SkipReason.OTHER_HAND) for p in tried):
-            tried += _both_rooms(song, pp, a, LEFT, rate_hz, song_name)
-        tried.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
-    best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
-    back = hand_back(song, pp, best, rate_hz, song_name)
-    if back is not None:
-        tried.append(back)
-        best = max((best, back), key=lambda p: p.played_frames)
+        if any(p.skipped_for(SkipReason.OTHER_HAND) for p in rf):
+            lf = _both_rooms(song, pp, a, LEFT, rate_hz, song_name)
+            plain.append(lf[0])
+            settled += lf[1:]
+        plain.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
+    tried = plain + settled
+    # (the best way of the windows' room and the best of all, each then handed back: a
+    # way is judged after its hand-back, and the settled ways never push out the way
+    # the windows' room keeps; max keeps the first of equals)
+    tops = [max(plain, key=lambda p: p.played_frames)]
+    if settled:
+        top = max(tried, key=lambda p: p.played_frames)
+        tops += [top] if top is not tops[0] else []
+    best = tops[0]
+    for top in tops:
+        back = hand_back(song, pp, top, rate_hz, song_name)
+        if back is not None:
+            tried.append(back)
+        best = max((best, top) + ((back,) if back is not None else ()),
+                   key=lambda p: p.played_frames)
     rows = one_clock(best.plans, rate_hz, pp.reads)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
