@@ -24,7 +24,7 @@ from planner.play.twobounds import (
     settle,
     windows,
 )
-from planner.play.twohands import PairPlanner, plan_pass
+from planner.play.twohands import PairPlanner, plan_pass, plan_two_hands
 from planner.play.twoplan import one_clock
 
 RATE_HZ = 100.0
@@ -165,6 +165,12 @@ def test_the_hand_planned_first_leaves_room_where_it_stands_through_a_note_out(p
     assert {off.planned_of[r][s.note] for s in off.plans[r].verdict.skipped
             if s.reason is SkipReason.OTHER_HAND} >= {3, 4, 5, 6}
     assert off.played_frames == 130.0
+    # (``plan_two_hands`` plans each order with both rooms, the settled one where it takes
+    # a note out: here right first 120 frames, settled 240; left first 130, settled 210)
+    two = plan_two_hands(song, pair)
+    assert dict(two.tried) == {"right first": 120.0, "left first": 130.0, "right alone": 240.0,
+                               "right first settled": 240.0, "left first settled": 210.0}
+    assert two.way == "right alone"  # (the earlier of equals: the old ways first)
     played = {i for k, i in enumerate(p.planned_of[r])
               if k not in {s.note for s in p.plans[r].verdict.skipped}}
     assert {3, 4, 5, 6} <= played

@@ -16,8 +16,9 @@ Where the farthest-reach rule leaves the second hand's notes out, the second han
 planned again on the reach of the places that press each note, confirmed on both hands'
 rows by the check's judge (``planner.play.handclear``). Which hand goes first, or whether
 one hand plays alone (the other taking only what it leaves out), is decided by the
-frames of music each way plays (``plan_two_hands``); the way kept is then planned once
-more with the notes its second hand left out handed back to the first (``hand_back``).
+frames of music each way plays (``plan_two_hands``; each order also with the first
+hand's room settled: ``plan_pass``); the best ways are then planned once more with the
+notes their second hand left out handed back to the first (``hand_back``).
 
 The bounds: ``planner.play.twobounds``; the rows on one clock and the file:
 ``planner.play.twoplan``.
@@ -294,8 +295,12 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     first too (the hand planned first takes the keys both want); and the right hand
     alone, every note its own, as one hand plays the file (where the parts lie within
     one hand's reach, two hands only get in each other's way), the left one given what
-    it leaves out. Every way hands the notes its first hand leaves out to the other. The way playing the most frames of music is kept (the earlier of
-    equals). (A hand with no notes plans nothing the order could change.)"""
+    it leaves out. Every way hands the notes its first hand leaves out to the other.
+    Each order is planned with its first hand's room settled too, where that takes a
+    note out (``_both_rooms``). The best of the three ways and the best of all are each
+    handed back (``hand_back``); the pass playing the most frames of music is kept (the
+    earlier of equals, the three ways first). (A hand with no notes plans nothing the
+    order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
