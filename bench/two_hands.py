@@ -5,7 +5,7 @@ plan also against its own part, ``1h own``, as ``check`` judges it) and replayed
 in MuJoCo (full contact; ``--no-physics`` to skip): check F1, physics F1, wrong keys,
 collisions between the hands (check's bodies, physics' contacts), notes per hand, notes
 left out (and, after the table, every note left out by its hand and reason), the way
-kept (``way``: ``R``/``L`` the right or left hand first, ``RA`` the right hand alone, the
+kept (``way``: ``R``/``L`` the right or left hand first (``Rs``/``Ls``: its room settled), ``RA`` the right hand alone, the
 left one given what it leaves out; ``+``: then the first hand planned again with what the
 second left out), the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
 for every piece, as ``batch`` plans).
@@ -91,7 +91,8 @@ def main() -> int:
                  "L": len(plan2.notes_of[0]), "R": len(plan2.notes_of[1]),
                  "out": len(plan2.left_out()), "rtf2": song_s / plan2.planning_s,
                  "gap": chk2.gap.least_m * 1000, "ok": chk2.ok,
-                 "way": {"right first": "R", "left first": "L", "right alone": "RA"}.get(
+                 "way": {"right first": "R", "left first": "L", "right alone": "RA",
+                         "right first settled": "Rs", "left first settled": "Ls"}.get(
                      plan2.way.removesuffix(" back"), plan2.way)
                  + ("+" if plan2.way.endswith(" back") else "")}
             reasons.update((plan2.assignment.hand[i], s.reason.value)

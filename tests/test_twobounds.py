@@ -1,18 +1,33 @@
 """The two hands' rail bounds (``planner.play.twobounds``): the windows of a hand's notes,
-the second hand's bounds from the first hand's inner edge, and ``settle``."""
+the second hand's bounds from the first hand's inner edge, ``settle``, and the first
+hand's room settled (a note of its own no place plays within its room: the hand stands
+where it was through it, and leaves the other hand its room there)."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from planner.hand.model import load_hand
-from planner.music.midi import Note
-from planner.play.hands import LEFT, RIGHT
-from planner.play.twobounds import UNBOUNDED_M, clear_bounds, settle, windows
-from planner.play.twohands import PairPlanner
+from planner.music.midi import Note, Song
+from planner.play.costs import SkipReason
+from planner.play.handclear import collided_notes
+from planner.play.hands import LEFT, RIGHT, SIDES, assign_hands
+from planner.play.twobounds import (
+    UNBOUNDED_M,
+    clear_bounds,
+    room_cost,
+    room_settled,
+    settle,
+    windows,
+)
+from planner.play.twohands import PairPlanner, plan_pass, plan_two_hands
+from planner.play.twoplan import one_clock
+
+RATE_HZ = 100.0
 
 
 @pytest.fixture(scope="module")
@@ -111,3 +126,56 @@ def test_settle_asks_again_only_the_notes_whose_bound_changed(pair, monkeypatch)
     got = settle(notes, pl.places, pl.memo, 100.0, bounds_of)
     assert got == want and got[1] == frozenset({2, 3})
     assert sorted(asked) == [0, 1, 2, 3, 3, 4]
+
+
+def _standing_song() -> Song:
+    """The left part's F3 at 0 s, G3 at 0.5 s (under the right part's A3, 0.45-0.85 s:
+    no place of the left's leaves the right its room for A3), A2 at 2.5 s; the right
+    part's A3, four G3s at 1.0-1.75 s (the left plays nothing then), E4 at 2.5 s."""
+    notes = [Note(53, 0.0, 0.3, 80, 1), Note(57, 0.45, 0.85, 80, 0), Note(55, 0.5, 0.8, 80, 1)]
+    notes += [Note(55, 1.0 + 0.25 * j, 1.2 + 0.25 * j, 80, 0) for j in range(4)]
+    notes += [Note(45, 2.5, 2.8, 80, 1), Note(64, 2.5, 2.8, 80, 0)]
+    return Song(tuple(notes), 2.8)
+
+
+def test_the_hand_planned_first_leaves_room_where_it_stands_through_a_note_out(pair) -> None:
+    song = _standing_song()
+    places = {s: pair.planners[s].places for s in SIDES}
+    a = assign_hands(song.notes, pair.gap, places, RATE_HZ)
+    own, other = a.notes_of(LEFT), a.notes_of(RIGHT)
+    assert own == (0, 2, 7) and other == (1, 3, 4, 5, 6, 8)
+    sub = replace(song, notes=tuple(song.notes[i] for i in own), part=None)
+    out = room_settled(song, pair, LEFT, own, other, sub, RATE_HZ)[1]
+    # (the left's G3 is no event of the left's: it stands at F3's place until A2, so F3's
+    # window, and the room it leaves, runs over the right's G3s; no place of F3's leaves
+    # it, so F3 is out too: the left moves in for A2 only)
+    assert out == frozenset({0, 1})
+    assert windows(song.notes, own, frozenset({1}))[0][1] > 2.5
+    # (and the room's charge: a state lasts to the hand's next event, A2's)
+    assert room_cost(song, pair, LEFT, own, other, RATE_HZ, out).onsets_s == [2.5]
+    p = plan_pass(song, pair, a, LEFT, RATE_HZ, settled=True)
+    r = SIDES.index(RIGHT)
+    refused = {p.planned_of[r][s.note] for s in p.plans[r].verdict.skipped
+               if s.reason is SkipReason.OTHER_HAND}
+    # (the right plays its four G3s: the room as the windows give it (not settled) has the
+    # left stand over them from F3's place, all four refused for it: 130 frames against 210)
+    assert not refused & {3, 4, 5, 6}
+    assert p.played_frames == 210.0 and p.way == "left first settled"
+    off = plan_pass(song, pair, a, LEFT, RATE_HZ)
+    assert {off.planned_of[r][s.note] for s in off.plans[r].verdict.skipped
+            if s.reason is SkipReason.OTHER_HAND} >= {3, 4, 5, 6}
+    assert off.played_frames == 130.0
+    # (``plan_two_hands`` plans each order with both rooms, the settled one where it takes
+    # a note out: here right first 120 frames, settled 240; left first 130, settled 210)
+    two = plan_two_hands(song, pair)
+    assert dict(two.tried) == {"right first": 120.0, "left first": 130.0, "right alone": 240.0,
+                               "right first settled": 240.0, "left first settled": 210.0}
+    assert two.way == "right alone"  # (the earlier of equals: the old ways first)
+    played = {i for k, i in enumerate(p.planned_of[r])
+              if k not in {s.note for s in p.plans[r].verdict.skipped}}
+    assert {3, 4, 5, 6} <= played
+    # (and no row of the two hands' under the clearance: the check's judge)
+    rows = one_clock(p.plans, RATE_HZ)
+    assert collided_notes(rows.t_s, rows.q[0], rows.q[1], (pair.edges[LEFT], pair.edges[RIGHT]),
+                          rows.song_start_s, [(-math.inf, math.inf)], 1.0 / RATE_HZ,
+                          pair.gap.clearance_m) == set()

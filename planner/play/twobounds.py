@@ -183,33 +183,52 @@ def room(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
     must reach to press its notes sounding in the note's window (``least_reach_m``); never
     tighter than ``room_bounds`` (the other hand's farthest reach and the rail gap). Only
     room: the second hand keeps the clearance from the first one's rows as they are."""
-    strict = room_bounds(song.notes, side, own, other, pp.gap)
+    return room_settled(song, pp, side, own, other, sub, rate_hz, settled=False)[0]
+
+
+def room_settled(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
+                 other: tuple[int, ...], sub: Song, rate_hz: float, settled: bool = True
+                 ) -> tuple[list[tuple[float, float]], frozenset[int]]:
+    """``room``'s bounds settled (``settle``: a note no place plays within its bound is no
+    event of the hand's, which stands where its note before left it until its next one, so
+    that note's window, and its room, runs on to it) and the notes they take out
+    (positions in ``own``); ``settled`` False: ``room``'s, none taken out."""
     osd = other_side(side)
     opl, pl = pp.planners[osd], pp.planners[side]
     o_reach = NoteReaches(Costs(song.notes, opl.places, rate_hz, opl.memo), pp.place_reach[osd])
     need = {i: least_reach_m(o_reach, i, osd) for i in other}
     free = NoteReaches(Costs(sub.notes, pl.places, rate_hz, pl.memo), pp.place_reach[side])
     c = pp.gap.clearance_m
-    out = []
-    for k, (t0, t1) in enumerate(windows(song.notes, own)):
-        xs = [need[i] for i in other if song.notes[i].onset_s < t1
-              and song.notes[i].offset_s > t0]
-        if not xs or any(x is None for x in xs):
-            out.append(strict[k])
-            continue
-        lim = max(xs) + c if side == RIGHT else min(xs) - c
-        out.append(loose_bound(free, k, side, lim, strict[k]))
-    return out
 
+    def bounds_of(out_of: frozenset[int]) -> list[tuple[float, float]]:
+        strict = room_bounds(song.notes, side, own, other, pp.gap, out_of)
+        out = []
+        for k, (t0, t1) in enumerate(windows(song.notes, own, out_of)):
+            xs = [need[i] for i in other if song.notes[i].onset_s < t1
+                  and song.notes[i].offset_s > t0]
+            if not xs or any(x is None for x in xs):
+                out.append(strict[k])
+                continue
+            lim = max(xs) + c if side == RIGHT else min(xs) - c
+            out.append(loose_bound(free, k, side, lim, strict[k]))
+        return out
+
+    if not settled:
+        return bounds_of(frozenset()), frozenset()
+    return settle(sub.notes, pl.places, pl.memo, rate_hz, bounds_of)
 
 
 def room_cost(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
-              other: tuple[int, ...], rate_hz: float) -> RoomCost:
+              other: tuple[int, ...], rate_hz: float,
+              out_of: frozenset[int] = frozenset()) -> RoomCost:
     """What the room the hand planned first (``side``, its notes ``own``) takes costs
     (``planner.play.roomcost``): every note of the other hand's (``other``) and of its
     own part (which it hands over when it leaves it out) claims, while it sounds, the
     rail beyond the least the other hand must reach to press it (``least_reach_m``) and
-    the clearance; a note the other hand presses from no place claims nothing."""
+    the clearance; a note the other hand presses from no place claims nothing. A state
+    lasts to the hand's next event: the onset of a note of ``own`` not in ``out_of``
+    (positions in ``own``: the notes no place plays within their bound, ``room_settled``,
+    which the programme makes no event of: the hand stands where it was through them)."""
     osd = other_side(side)
     opl = pp.planners[osd]
     o_reach = NoteReaches(Costs(song.notes, opl.places, rate_hz, opl.memo), pp.place_reach[osd])
@@ -222,6 +241,7 @@ def room_cost(song: Song, pp: PairPlanner, side: str, own: tuple[int, ...],
             n = song.notes[i]
             claims.append(RoomClaim(n.onset_s, n.offset_s, x + c, pos.get(i, -1)))
     places, reach = pp.planners[side].places, pp.place_reach[side]
-    return RoomCost(claims, side, [song.notes[i].onset_s for i in own],
+    return RoomCost(claims, side, [song.notes[i].onset_s for k, i in enumerate(own)
+                                   if k not in out_of],
                     [song.notes[i].pitch for i in own], reach.reach_m,
                     pp.reach(side).inner_extent_m, places.rail_m, rate_hz, HANDED_SHARE)

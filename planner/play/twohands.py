@@ -16,8 +16,9 @@ Where the farthest-reach rule leaves the second hand's notes out, the second han
 planned again on the reach of the places that press each note, confirmed on both hands'
 rows by the check's judge (``planner.play.handclear``). Which hand goes first, or whether
 one hand plays alone (the other taking only what it leaves out), is decided by the
-frames of music each way plays (``plan_two_hands``); the way kept is then planned once
-more with the notes its second hand left out handed back to the first (``hand_back``).
+frames of music each way plays (``plan_two_hands``; each order also with the first
+hand's room settled: ``plan_pass``); the best ways are then planned once more with the
+notes their second hand left out handed back to the first (``hand_back``).
 
 The bounds: ``planner.play.twobounds``; the rows on one clock and the file:
 ``planner.play.twoplan``.
@@ -43,8 +44,8 @@ from planner.play.twobounds import (
     clear_bounds,
     clear_limits,
     first_edge,
-    room,
     room_cost,
+    room_settled,
     settled_bounds,
     windows,
 )
@@ -104,13 +105,16 @@ class PairPass:
     planned_of: tuple[tuple[int, ...], tuple[int, ...]]
     alone: bool = False
     back: bool = False  # the first hand planned again with what the second left out
+    settled: bool = False  # the first hand's room settled (``plan_pass``)
 
     @property
     def way(self) -> str:
         """How it was planned: ``right first``, ``left first``, or ``right alone`` (the
-        other hand given only the notes the first one left out); `` back``: then the
-        first hand planned again with the notes the second left out (``hand_back``)."""
-        return f"{self.first} {'alone' if self.alone else 'first'}{' back' if self.back else ''}"
+        other hand given only the notes the first one left out); `` settled``: the first
+        hand's room settled (``plan_pass``); `` back``: then the first hand planned again
+        with the notes the second left out (``hand_back``)."""
+        return (f"{self.first} {'alone' if self.alone else 'first'}"
+                f"{' settled' if self.settled else ''}{' back' if self.back else ''}")
 
     def skipped_for(self, reason: SkipReason) -> list[tuple[int, object]]:
         """(song index, ``Skip``) of every note a plan left out for ``reason`` (the notes
@@ -195,13 +199,26 @@ def _plan_loose(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], su
     return None
 
 
+def settled_room(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float
+                 ) -> tuple[list[tuple[float, float]], frozenset[int]]:
+    """The room bounds of the hand ``first`` by ``a``, settled, and the notes they take
+    out (positions in its notes: ``twobounds.room_settled``)."""
+    second = other_side(first)
+    own = a.notes_of(first)
+    return room_settled(song, pp, first, own, a.notes_of(second), _sub_song(song, own),
+                        rate_hz)
+
+
 def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
-              song_name: str = "") -> PairPass:
+              song_name: str = "", settled: bool = False) -> PairPass:
     """Plan both hands by ``a``: the hand ``first`` leaving the other room for its notes
     (``room_bounds``), then the other within the first one's rows (``clear_bounds``,
     settled: ``settled_bounds``), its notes and every note the first one left out (the
     second hand's programme weighs them in the same frames as its own: a note it cannot
-    play is left out again, one it plays instead of its own costs it fewer frames)."""
+    play is left out again, one it plays instead of its own costs it fewer frames).
+    ``settled``: the first hand's room settled too (``twobounds.room_settled``: where a
+    note of its own has no place within its room, it stands where it was until its next
+    note, and leaves the other hand its room, and is charged for it, all that time)."""
     notes = song.notes
     idx = {s: a.notes_of(s) for s in SIDES}
     subs = {s: _sub_song(song, idx[s]) for s in SIDES}
@@ -209,11 +226,13 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     plans: dict[str, PlayPlan] = {}
     # (the first hand's bound leaves the other room; it keeps no clearance itself, the
     # second hand's bound does: its windows are its notes' own, none taken out)
-    bounds = room(song, pp, first, idx[first], idx[second], subs[first], rate_hz)
+    bounds, out = room_settled(song, pp, first, idx[first], idx[second], subs[first], rate_hz,
+                               settled)
     # (and pays, in frames, for the room it takes from the other hand's notes and from
     # those it hands over: ``planner.play.roomcost``; a hand planned alone is planned as
     # one hand plays the file, the way that bounds a pair's loss against one hand)
-    cost = room_cost(song, pp, first, idx[first], idx[second], rate_hz) if idx[second] else None
+    cost = (room_cost(song, pp, first, idx[first], idx[second], rate_hz, out)
+            if idx[second] else None)
     plans[first] = plan_song(subs[first], pp.hands[first], None, rate_hz, song_name=song_name,
                              planner=pp.planners[first], rail_bounds=bounds, room=cost)
     given = {idx[first][s.note]: f"{s.reason.value}: {s.detail}"
@@ -226,7 +245,8 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     played = sum(_played_frames(plans[s], planned[s], notes, rate_hz) for s in SIDES)
     a = a.hand_over(given, second)
     return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
-                    float(played), (planned[LEFT], planned[RIGHT]), not idx[second])
+                    float(played), (planned[LEFT], planned[RIGHT]), not idx[second],
+                    settled=settled)
 
 
 def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
@@ -252,7 +272,7 @@ def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
                                first)
     played = sum(_played_frames(plans[x], planned[x], song.notes, rate_hz) for x in SIDES)
     return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
-                    float(played), (planned[LEFT], planned[RIGHT]), p.alone, True)
+                    float(played), (planned[LEFT], planned[RIGHT]), p.alone, True, p.settled)
 
 
 def _why(p: PairPass, i: int) -> str:
@@ -275,8 +295,12 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     first too (the hand planned first takes the keys both want); and the right hand
     alone, every note its own, as one hand plays the file (where the parts lie within
     one hand's reach, two hands only get in each other's way), the left one given what
-    it leaves out. Every way hands the notes its first hand leaves out to the other. The way playing the most frames of music is kept (the earlier of
-    equals). (A hand with no notes plans nothing the order could change.)"""
+    it leaves out. Every way hands the notes its first hand leaves out to the other.
+    Each order is planned with its first hand's room settled too, where that takes a
+    note out (``_both_rooms``). The best of the three ways and the best of all are each
+    handed back (``hand_back``); the pass playing the most frames of music is kept (the
+    earlier of equals, the three ways first). (A hand with no notes plans nothing the
+    order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
@@ -287,21 +311,48 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
         pp.reads.clear()
 
 
+def _both_rooms(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
+                song_name: str) -> list[PairPass]:
+    """The passes with ``first`` planned first: its room as the windows of its notes give
+    it, and, where that differs (a note of its own no place plays within its room: the
+    hand stands through it), its room settled (``plan_pass``). Neither is always better:
+    the settled room leaves the other hand the keys the first one stands over, at the
+    cost of the first hand's notes near them (random two-hand songs and the two-hand
+    corpus: ``docs/history/2026-12-07-two-hands9.md``)."""
+    got = [plan_pass(song, pp, a, first, rate_hz, song_name)]
+    if a.notes_of(other_side(first)) and settled_room(song, pp, a, first, rate_hz)[1]:
+        got.append(plan_pass(song, pp, a, first, rate_hz, song_name, settled=True))
+    return got
+
+
 def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: float,
                     song_name: str, t_start: float) -> TwoHandPlan:
     """``plan_two_hands`` after its input's check (``t_start``: its clock's start)."""
     places = {s: pp.planners[s].places for s in SIDES}
     a = assign_hands(song.notes, pp.gap, places, rate_hz)
-    tried = [plan_pass(song, pp, a, RIGHT, rate_hz, song_name)]
+    rf = _both_rooms(song, pp, a, RIGHT, rate_hz, song_name)
+    plain, settled = [rf[0]], rf[1:]
     if all(a.notes_of(s) for s in SIDES):
-        if tried[0].skipped_for(SkipReason.OTHER_HAND):
-            tried.append(plan_pass(song, pp, a, LEFT, rate_hz, song_name))
-        tried.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
-    best = max(tried, key=lambda p: p.played_frames)  # (max keeps the first of equals)
-    back = hand_back(song, pp, best, rate_hz, song_name)
-    if back is not None:
-        tried.append(back)
-        best = max((best, back), key=lambda p: p.played_frames)
+        if any(p.skipped_for(SkipReason.OTHER_HAND) for p in rf):
+            lf = _both_rooms(song, pp, a, LEFT, rate_hz, song_name)
+            plain.append(lf[0])
+            settled += lf[1:]
+        plain.append(plan_pass(song, pp, a.one_hand(RIGHT), RIGHT, rate_hz, song_name))
+    tried = plain + settled
+    # (the best way of the windows' room and the best of all, each then handed back: a
+    # way is judged after its hand-back, and the settled ways never push out the way
+    # the windows' room keeps; max keeps the first of equals)
+    tops = [max(plain, key=lambda p: p.played_frames)]
+    if settled:
+        top = max(tried, key=lambda p: p.played_frames)
+        tops += [top] if top is not tops[0] else []
+    best = tops[0]
+    for top in tops:
+        back = hand_back(song, pp, top, rate_hz, song_name)
+        if back is not None:
+            tried.append(back)
+        best = max((best, top) + ((back,) if back is not None else ()),
+                   key=lambda p: p.played_frames)
     rows = one_clock(best.plans, rate_hz, pp.reads)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
