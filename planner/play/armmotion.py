@@ -14,7 +14,6 @@ from __future__ import annotations
 import numpy as np
 
 from planner.play.follow import HOLD_PAST_S
-from planner.play.highclear import front_rules
 from planner.play.places import Places
 from planner.play.profile import Move, straight_move
 
@@ -52,7 +51,7 @@ class ArmMotion:
         # (the lifts' rule, finger by finger: a change of posture that moves the hand into
         # the keyboard times a lift by the black rule unless its bodies stay in front of
         # the black keys: ``HighClear.lift_front``)
-        front, descent_front = self.lift_rules(posture), self.front_rules(posture)[1]
+        front = self.lift_rules(posture)
         holds = [h for h in self._holds(rail_m, posture) if h[1].finger not in strikers]
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
@@ -78,7 +77,8 @@ class ArmMotion:
                          for st in self.fingers.values() if id(st) not in held])
         k = len(self.arm_track.q)
         self.arm_track.add(t0, part(move, 0, k))
-        self.posture, self.arm_front = posture, descent_front
+        self.arm_reaches = (self.places.reach_m(self.posture), self.places.reach_m(posture))
+        self.posture = posture
         for st, e in holds:
             n = len(st.entry.press)
             st.track.add(t0, part(move, k, n))
@@ -127,11 +127,6 @@ class ArmMotion:
                 ready = max(ready, st.track.free_s
                             + self.moves.high.rise_clear_s(st.entry, up.move, front(st)))
         return move, max(ready, arrive_by_s - move.duration_s)
-
-    def front_rules(self, posture: int) -> tuple[bool, bool]:
-        """``highclear.front_rules`` of a move of the arm into play posture ``posture``:
-        whether its lifts, and its descents, keep the front rule."""
-        return front_rules(self.places.reach_m(self.posture), self.places.reach_m(posture))
 
     def lift_rules(self, posture: int):
         """Whether a finger's lift before a move of the arm into play posture ``posture``
