@@ -11,11 +11,18 @@ keys come up ``HOLD_PAST_S`` after the move at the earliest (the programme's rul
 
 from __future__ import annotations
 
+import bisect
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from planner.play.follow import HOLD_PAST_S
 from planner.play.places import Places
 from planner.play.profile import Move, straight_move
+
+if TYPE_CHECKING:
+    from planner.play.atlas import AtlasEntry
+    from planner.play.fingering import Assignment
 
 
 def part(move: Move, first: int, n: int) -> Move:
@@ -35,7 +42,7 @@ def up_move(moves: Places, st):
 
 class ArmMotion:
     """``Motion``'s moves of the arm (a part of ``Motion``: its fingers, tracks, posture
-    and rows written, ``_to_high``)."""
+    and rows written, ``_to_high``, the notes expected, ``entry``, ``t_down``)."""
 
     def _move_rail(self, rail_m: float, posture: int, arrive_by_s: float,
                    strikers: set[str]) -> None:
@@ -127,6 +134,35 @@ class ArmMotion:
                 ready = max(ready, st.track.free_s
                             + self.moves.high.rise_clear_s(st.entry, up.move, front(st)))
         return move, max(ready, arrive_by_s - move.duration_s)
+
+    def _arrive_by_s(self, a: Assignment, e: AtlasEntry, reaches: tuple[float, float]
+                     ) -> float:
+        """When the arm's move for note ``a`` (its entry ``e``) from reach ``reaches[0]``
+        to ``reaches[1]`` must end: the latest that lets every key of its onset struck
+        from the same place (``expect``) go down on time, each after its own descent's
+        part below the clear height (by its rule, ``HighClear.descent_front``; the
+        programme's ``arrive``, ``ArmCosts._release_of``)."""
+        t = self.t_down(a.note)
+        high = self.moves.high
+        by = t - self.moves.rail_descent_s(e, high.descent_front(e, *reaches))
+        for g in self._strikers.get(t, ()):
+            times, notes = self._next.get(g, ((), ()))
+            i = bisect.bisect_left(times, t)
+            while i < len(times) and times[i] == t:
+                b = notes[i]
+                if b.rail_m == a.rail_m and b.posture == a.posture:
+                    eb = self.entry(b)
+                    if eb is not None:
+                        by = min(by, t - self.moves.rail_descent_s(
+                            eb, high.descent_front(eb, *reaches)))
+                i += 1
+        return by
+
+    def descent_front(self, e: AtlasEntry) -> bool:
+        """Whether a descent onto ``e`` from crossing height, while the arm's last move
+        may still run, keeps the front rule (``HighClear.descent_front`` of that move's
+        reaches: the same posture, or out of the keyboard where ``e``'s room holds)."""
+        return self.moves.high.descent_front(e, *self.arm_reaches)
 
     def lift_rules(self, posture: int):
         """Whether a finger's lift before a move of the arm into play posture ``posture``

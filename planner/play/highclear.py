@@ -29,13 +29,17 @@ a move in, which carries the bodies towards the black keys, a lift keeps the fro
 where every body the rule finds clear below the black tops lies further in front of the
 black keys than the arm can carry it until it is above them (``HighClear.front_room_m``
 against the move's length or ``reach_bound_m`` of the lift's time from its front moment
-to its black one; ``lift_front``), else the black rule's. The descents after any change of
-posture keep the black rule. (After a move in, a
-body in front at the descent's moment was further out before: the front rule would hold
-there too, but the arm, moving as late as the descents allow, then ends later, and the
-fingers riding along with it stay busy longer: 4 chorales' frame F1 down by up to 0.010,
-``docs/history/2026-12-07-play-notes.md``.) Both rules' moments are shipped in the move
-tables (``CLEAR_COLUMNS``).
+to its black one; ``lift_front``), else the black rule's. A descent after a move out of
+the keyboard, which the arm ends still further in, keeps the front rule where its room
+holds the move's length or the arm's travel to rest over the descent's time from its
+black moment to its front one (``descent_front``: the descent is the lift backwards,
+the bound holds backwards from rest), else the black rule's. The descents after a move
+in keep the black rule. (A body in front at the descent's moment was further out before:
+the front rule would hold there too, but the arm, moving as late as the descents allow,
+then ends later, and the programme's choices around it lose more: 4 chorales' frame F1
+down by up to 0.010, ``docs/history/2026-12-07-play-notes.md``; the corpus 0.9659 ->
+0.9656, ``docs/history/2026-12-07-play-post.md``.) Both rules' moments are shipped in
+the move tables (``CLEAR_COLUMNS``).
 
 ``HighClear`` finds, for a straight move of one finger's joints (``profile.Move``), the
 time from which (a rise) or until which (a descent) the finger stays above that height: the
@@ -92,7 +96,8 @@ def front_rules(reach_from_m: float, reach_to_m: float) -> tuple[bool, bool]:
     timed by the front rule (True) or the black rule alone (False): both by the front
     rule where the reach stays; the lifts where the move takes the hand out of the
     keyboard (a body in front of the black keys only goes further out); the descents of
-    a change of posture by the black rule (the module's docstring)."""
+    a change of posture by the black rule (the module's docstring; after a move out, an
+    entry's own room may keep the front rule: ``HighClear.descent_front``)."""
     if reach_to_m == reach_from_m:
         return True, True
     return reach_to_m < reach_from_m, False

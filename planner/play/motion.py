@@ -385,35 +385,6 @@ class Motion(ArmMotion):
         self.outcomes[a.note] = out
         return out
 
-    def _arrive_by_s(self, a: Assignment, e: AtlasEntry, reaches: tuple[float, float]
-                     ) -> float:
-        """When the arm's move for note ``a`` (its entry ``e``) from reach ``reaches[0]``
-        to ``reaches[1]`` must end: the latest that lets every key of its onset struck
-        from the same place (``expect``) go down on time, each after its own descent's
-        part below the clear height (by its rule, ``HighClear.descent_front``; the
-        programme's ``arrive``, ``ArmCosts._release_of``)."""
-        t = self.t_down(a.note)
-        high = self.moves.high
-        by = t - self.moves.rail_descent_s(e, high.descent_front(e, *reaches))
-        for g in self._strikers.get(t, ()):
-            times, notes = self._next.get(g, ((), ()))
-            i = bisect.bisect_left(times, t)
-            while i < len(times) and times[i] == t:
-                b = notes[i]
-                if b.rail_m == a.rail_m and b.posture == a.posture:
-                    eb = self.entry(b)
-                    if eb is not None:
-                        by = min(by, t - self.moves.rail_descent_s(
-                            eb, high.descent_front(eb, *reaches)))
-                i += 1
-        return by
-
-    def descent_front(self, e: AtlasEntry) -> bool:
-        """Whether a descent onto ``e`` from crossing height, while the arm's last move
-        may still run, keeps the front rule (``HighClear.descent_front`` of that move's
-        reaches: the same posture, or out of the keyboard where ``e``'s room holds)."""
-        return self.moves.high.descent_front(e, *self.arm_reaches)
-
     def _to_high(self, st: _Finger, latest_s: float = math.inf) -> float:
         """The finger rises to crossing height: a pressing one lets its key up at its
         planned time or by ``latest_s``, whichever is first (never before its press is
