@@ -15,6 +15,11 @@ frames without its key down attributed to
   (``finger move``), else ``other``;
 * ``gap`` (frames up between the first and last frame down).
 
+The frames of ``early: posture`` are split by the reach axis's move after the key-up
+(``posture_phases``): before it starts (the lift, and the other fingers' lifts it waits
+for), while it moves (the arm), after it is still (the descents onto the new keys, and a
+note that would have sounded past them); printed below the table.
+
     python bench/frame_losses.py [--corpus DIR] [--tree DIR] [--hand NAME] [--only S,..]
         [--notes]
 
@@ -86,6 +91,24 @@ def early_cause(rp, q, arm, key, r_up, r_end, next_on_s, t_end_s, period_s) -> s
     return "other"
 
 
+POSTURE_PHASES = ("before the arm", "the arm moving", "after the arm")
+
+
+def posture_phases(q: np.ndarray, reach: int, r_up: int) -> tuple[int, int]:
+    """The reach axis's move after row ``r_up`` (a key's first row up): its first row
+    away from where it was in the row before, and its first row at its end (still in the
+    row after); rows before the first are ``POSTURE_PHASES[0]``, from the first to before
+    the end ``[1]``, from the end on ``[2]``."""
+    pos = q[:, reach]
+    r0 = max(0, r_up - 1)
+    away = np.flatnonzero(np.abs(pos[r0:] - pos[r0]) > MOVE_EPS)
+    if not len(away):
+        return len(q), len(q)
+    first = r0 + int(away[0])
+    still = np.flatnonzero(np.abs(np.diff(pos[first:])) <= MOVE_EPS)
+    return first, first + int(still[0]) if len(still) else len(q)
+
+
 def frame_weights(rp) -> np.ndarray:
     """Per row, the frame F1 a key up that should be down costs there: (1 - F1) shared
     by the row's keys missing (so the weights of a song sum to its frames times 1 - F1)."""
@@ -139,6 +162,13 @@ def song_losses(rp, notes, skipped: dict, arm, show: bool, name: str) -> dict:
             out[c][0] += 1
             out[c][1] += len(rows)
             out[c][2] += float(w[rows].sum())
+            if c == "early: posture":
+                first, end = posture_phases(q, arm[1], r0)
+                for phase, part in zip(POSTURE_PHASES, (rows[rows < first],
+                                                        rows[(rows >= first) & (rows < end)],
+                                                        rows[rows >= end])):
+                    out[f"(posture: {phase})"][1] += len(part)
+                    out[f"(posture: {phase})"][2] += float(w[part].sum())
             shown.append(f"{c} {len(rows)}")
         if show and shown:
             print(f"  {name} note {i} {n.pitch} {n.onset_s:.3f}-{n.offset_s:.3f}s "
@@ -197,6 +227,9 @@ def main() -> int:
           f"{total['(expected)'][1]}")
     print(f"{'(all lost)':28s} {'':6s} {'':10s} {lost:9.1f}   of {frames} frames "
           f"(1 - F1 over the rows, all songs: {lost / max(1, frames):.4f})")
+    for name in POSTURE_PHASES:
+        _, f, fw = total[f"(posture: {name})"]
+        print(f"{'early: posture, ' + name:34s} {f:10d} {fw:9.1f}")
     return 0
 
 

@@ -62,3 +62,22 @@ def test_a_late_press_without_a_move_is_the_finger_or_the_descent():
     out = fl.song_losses(rp, notes, {}, (RAIL, REACH), False, "t")
     got = {c: v[1] for c, v in out.items() if not c.startswith("(")}
     assert got == {"late: finger move": 3, "late: descent": 1}
+
+
+def test_the_frames_before_a_change_of_posture_split_by_the_arms_move():
+    """``early: posture``'s rows split by the reach axis's move after the key-up: D4 up
+    from row 46, the reach away from row 47 and still at its end from row 49: D4's four
+    rows up are 1 before the arm, 2 while it moves, 1 after; their weights sum to the
+    cause's."""
+    notes = (Note(62, 0.30, 0.50, 80), Note(67, 0.50, 0.60, 80))
+    rp = _rows(notes, [(62, 30, 46, 2), (67, 50, 60, 1)])
+    rp.q[46:50, REACH] = np.linspace(0.0, -0.025, 4)  # (rows 47-48 moving, 49 at its end)
+    rp.q[50:, REACH] = -0.025
+    assert fl.posture_phases(rp.q, REACH, 46) == (47, 49)
+    assert fl.posture_phases(rp.q, REACH, 60) == (100, 100)  # (no move after)
+    out = fl.song_losses(rp, notes, {}, (RAIL, REACH), False, "t")
+    assert out["early: posture"][1] == 4
+    got = [out[f"(posture: {name})"][1] for name in fl.POSTURE_PHASES]
+    assert got == [1, 2, 1]
+    assert sum(out[f"(posture: {name})"][2] for name in fl.POSTURE_PHASES) \
+        == pytest.approx(out["early: posture"][2])

@@ -21,19 +21,19 @@ def places(hand) -> Places:
 
 
 def _case(places, start_s: float, pitch: int, posture: int, finger: str, start: int = 0,
-          first: int = 60):
-    """The index holds C4 (or ``first``) from ``start_s`` to 1.0 s (from the nearest place
-    of posture ``start`` to the rail's 0), then ``finger`` strikes ``pitch`` at 1.0 s from
-    the nearest place of ``posture`` (the rail's move too long to start after C4's key is
-    due up); the programme's and the motion's key times."""
+          first: int = 60, holder: str = "index"):
+    """The index (or ``holder``) holds C4 (or ``first``) from ``start_s`` to 1.0 s (from
+    the nearest place of posture ``start`` to the rail's 0), then ``finger`` strikes
+    ``pitch`` at 1.0 s from the nearest place of ``posture`` (the rail's move too long to
+    start after C4's key is due up); the programme's and the motion's key times."""
     notes = (Note(first, start_s, 1.0, 80), Note(pitch, 1.0, 1.5, 80))
     costs = Costs(notes, places, 100.0)
-    here = min((p for p in costs.rails("index", 0) if places.posture_of(p) == start),
+    here = min((p for p in costs.rails(holder, 0) if places.posture_of(p) == start),
                key=lambda p: abs(places.rail_i(p)))
     there = min((p for p in costs.rails(finger, 1) if places.posture_of(p) == posture),
                 key=lambda p: abs(places.rail_i(p) - places.rail_i(here)))
-    assert costs.entry(0, "index", there) is None  # (C4 cannot ride along)
-    state = State(here, ((0, "index"),))
+    assert costs.entry(0, holder, there) is None  # (C4 cannot ride along)
+    state = State(here, ((0, holder),))
     prev = costs.prev(state, notes[1].onset_s)
     lates: list = []
     loss = costs._rail_loss(prev, {1: finger}, there, (), lates, [])
@@ -42,7 +42,7 @@ def _case(places, start_s: float, pitch: int, posture: int, finger: str, start: 
     planned_up = ups.get(0, costs.t_up(0))
 
     motion = Motion(notes, places, 100.0, places.rail_m(here), start)
-    plays = [Assignment(0, "index", places.rail_m(here), posture=start),
+    plays = [Assignment(0, holder, places.rail_m(here), posture=start),
              Assignment(1, finger, places.rail_m(there), posture=posture)]
     motion.expect(plays)
     for a in plays:
@@ -69,8 +69,9 @@ def test_a_move_out_of_the_keyboard_lifts_by_the_front_rule(places):
     """The index on C4's front in the second posture, then E5 in the first (the hand
     moves out of the keyboard): the index's body, in front of the black keys once its
     lift is clear by the front rule, only goes further out, so the arm may start then
-    (``highclear.front_rules``), earlier than by the black rule; the descents after a
-    change of posture keep the black rule. The middle's body on E5's front in the first
+    (``highclear.front_rules``), earlier than by the black rule; the middle's descent onto
+    E5 after it keeps the black rule (its room, below, is less than the reach axis's
+    travel over its descent: ``HighClear.descent_front``). The middle's body on E5's front in the first
     posture lies 9.2 mm in front of the black keys' front less the tolerance
     (``HighClear.front_room_m``): less than the 25 mm the reach moves and than the
     reach axis goes between its lift's front and black moments, so its lift before the
@@ -93,11 +94,11 @@ def test_a_move_out_of_the_keyboard_lifts_by_the_front_rule(places):
     assert places.high.front_room_m(em) == pytest.approx(0.0092, abs=1e-4)
     assert places.reach_m(1) - places.reach_m(0) == pytest.approx(0.025)
     assert (costs._lift_col(here, there, 0, "index", here),
-            costs._descent_column(here, there)) == (0, 3)
+            costs._descent_column(here, there, 1, "middle")) == (0, 3)
     assert (costs._lift_col(there, here, 1, "middle", there),
-            costs._descent_column(there, here)) == (2, 3)
+            costs._descent_column(there, here, 0, "index")) == (2, 3)
     assert (costs._lift_col(here, here + 1, 0, "index", here),
-            costs._descent_column(here, here + 1)) \
+            costs._descent_column(here, here + 1, 0, "index")) \
         == (0, 1)  # (the same posture, a step along the rail: the front rule both ways)
 
 
@@ -126,6 +127,40 @@ def test_a_lift_into_the_keyboard_keeps_the_front_rule_where_its_body_stays_in_f
     assert up < costs.t_up(0) - 0.03  # (cut)
     monkeypatch.setattr(type(places.high), "lift_front", lambda self, e, a, b: a >= b)
     (down_b, up_b, cut_b, _), out_b, _ = _case(places, 0.4, 73, 1, "middle", first=64)
+    assert out_b[0].up_s == pytest.approx(up_b, abs=1e-6)
+    assert up == pytest.approx(up_b + gain_s, abs=1e-6)  # (held that much longer)
+    assert cut_loss == pytest.approx(cut_b - gain_s / costs.dt, abs=1e-6)
+    assert down == pytest.approx(down_b, abs=1e-6)
+
+
+def test_a_descent_after_a_move_out_of_the_keyboard_keeps_the_front_rule_where_it_stayed_in_front(
+        places, monkeypatch):
+    """The middle holds C#4 in the second posture, then the pinky strikes E4 in the first
+    (the hand moves 25 mm out of the keyboard; the middle presses no black key there and
+    lifts): every body of the pinky's descent that the front rule counts clear below the
+    black tops lies 41.2 mm in front of the black keys' front less the tolerance, more
+    than the 25 mm the arm can still be further in, so the arm may end as late as the
+    descent's front moment (``HighClear.descent_front``): its part after the arm is 19 ms
+    shorter, the arm starts that much later and C#4's key, cut for it, comes up as much
+    later, in the programme as in the motion; the new key goes down on time either way."""
+    kw = {"first": 61, "holder": "middle", "start": 1}
+    (down, up, cut_loss, _), out, costs = _case(places, 0.4, 64, 0, "pinky", **kw)
+    here = min((p for p in costs.rails("middle", 0) if places.posture_of(p) == 1),
+               key=lambda p: abs(places.rail_i(p)))
+    there = min((p for p in costs.rails("pinky", 1) if places.posture_of(p) == 0),
+                key=lambda p: abs(places.rail_i(p) - places.rail_i(here)))
+    e = costs.entry(1, "pinky", there)
+    assert places.high.front_room_m(e) == pytest.approx(0.0412, abs=1e-4)
+    assert places.high.descent_front(e, places.reach_m(1), places.reach_m(0))
+    assert costs._descent_column(here, there, 1, "pinky") == 1
+    gain_s = places.rail_descent_s(e, False) - places.rail_descent_s(e)
+    assert gain_s == pytest.approx(0.0189, abs=5e-4)
+    assert out[1].down_s == pytest.approx(down, abs=1e-6)
+    assert down == pytest.approx(costs.t_down(1), abs=1e-6)  # (on time)
+    assert out[0].up_s == pytest.approx(up, abs=1e-6)
+    assert up < costs.t_up(0) - 0.03  # (cut)
+    monkeypatch.setattr(type(places.high), "descent_front", lambda self, e, a, b: a == b)
+    (down_b, up_b, cut_b, _), out_b, _ = _case(places, 0.4, 64, 0, "pinky", **kw)
     assert out_b[0].up_s == pytest.approx(up_b, abs=1e-6)
     assert up == pytest.approx(up_b + gain_s, abs=1e-6)  # (held that much longer)
     assert cut_loss == pytest.approx(cut_b - gain_s / costs.dt, abs=1e-6)

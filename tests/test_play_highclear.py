@@ -211,6 +211,65 @@ def test_the_entrys_rule_for_a_move_of_the_arm(places):
     assert not hc.lift_front(None, r0, r1) and hc.lift_front(None, r1, r0)
 
 
+def _ends_clear(places: Places, e, reach_from_m: float, rail_from_m: float, sigma: float,
+                front: bool) -> bool:
+    """Entry ``e``'s descent from crossing height, ``sigma`` times slower, with the arm's
+    move from (``rail_from_m``, ``reach_from_m``) to (0, ``e``'s posture's reach) ending
+    at the descent's moment by the front rule (``front``) or the black rule: clear by the
+    front rule, the hand where the arm is, at 61 moments from its start to the arm's end
+    (finer than the search's 33 points; before the arm starts, where it started)."""
+    hc = places.high
+    d = slowed(places.descend(e, "high").move, sigma)
+    t_end = hc.descent_clear_s(e, d, front)
+    reach_to = places.reach_m(e.posture)
+    arm = places.arm_move((rail_from_m, reach_from_m), (0.0, reach_to))
+    t0 = t_end - arm.duration_s
+    for t in np.linspace(0.0, t_end, 61):
+        reach = reach_from_m if t < t0 else float(arm.at(t - t0)[0][1])
+        if not _front_clear(places, e, d, t, reach - reach_to):
+            return False
+    return True
+
+
+def test_a_descent_after_a_move_out_keeps_the_front_rule_where_its_bodies_stayed_in_front(
+        places):
+    """``descent_front``: after a move of the arm out of the keyboard (the second or third
+    posture to the first, the third to the second) a descent is timed by the front rule
+    where its room holds the move's length or the reach axis's travel to rest over the
+    descent's time from its black moment to its front one at the motors' slowest (x1.5):
+    with the arm ending at that moment, every point of the descent is clear by the front
+    rule with the hand where the arm then is (at x1 and x1.5, rail steps of 0 and 42 mm).
+    At rail 0: the first posture's ring and pinky on E4 keep it after either move (their
+    rooms 20.9 and 41.2 mm against 15.7 and 13.4 mm of travel), the second posture's pinky
+    on E4 (16.9 against 15.0 mm); the middle on C4 (9.0 mm against 17.0) keeps the black
+    rule, and ended at its front moment at the slowest descent it is not clear. Moves into
+    the keyboard keep the black rule; the same posture the front rule."""
+    hc = places.high
+    r = [places.reach_m(i) for i in range(places.postures)]
+    kept = set()
+    for e in _entries(places):
+        p = e.posture
+        assert hc.descent_front(e, r[p], r[p])
+        for q in range(places.postures):
+            if q < p:
+                assert not hc.descent_front(e, r[q], r[p])  # (a move in)
+            if q <= p:
+                continue
+            rule = hc.descent_front(e, r[q], r[p])
+            for rail_m in (0.0, 0.042):
+                for sigma in (1.0, 1.5):
+                    assert _ends_clear(places, e, r[q], rail_m, sigma, rule)
+            d = places.descend(e, "high").move
+            if rule and hc.descent_clear_s(e, d) > hc.descent_clear_s(e, d, False) + 0.010:
+                kept.add((p, q, e.finger, e.pitch_class))
+    assert kept == {(0, 1, "ring", 4), (0, 2, "ring", 4), (0, 1, "pinky", 4),
+                    (0, 2, "pinky", 4), (1, 2, "pinky", 4)}
+    mid = places.atlases[0].entry("middle", 60, 0.0)
+    assert not hc.descent_front(mid, r[1], r[0])
+    assert not _ends_clear(places, mid, r[1], 0.0, 1.5, True)
+    assert not hc.descent_front(None, r[1], r[0]) and hc.descent_front(None, r[0], r[0])
+
+
 def _searched(places: Places) -> HighClear:
     """The same hand's moments with no table: every one searched by forward kinematics."""
     return HighClear(places.hand, places.atlases)

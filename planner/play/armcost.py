@@ -12,7 +12,6 @@ import math
 from typing import TYPE_CHECKING
 
 from planner.play.follow import HOLD_PAST_S
-from planner.play.highclear import front_rules
 from planner.play.keytimes import (  # (LATE_MIN_S: a key later, ``costs.State.late``)
     LATE_MIN_S,
     held_enough_s,
@@ -51,8 +50,9 @@ class ArmCosts:
             return math.inf
         if rode is not None and followers:  # (the move ends as late as lets the new keys
             # go down on time, the motion's: ``ArmMotion._move_rail``)
-            col = self._descent_column(prev.state.place, place)
-            by_s = min([self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()]
+            here = prev.state.place
+            by_s = min([self._t_down[n] - self._after_s(n, f, here, place)
+                        for n, f in new.items()]
                        + [self._t_up[m] - self.places.lift(self.entry(m, f, place), "high").cross_s
                           - HOLD_PAST_S for m, f in followers])
             end_s = max(release_t, by_s)  # (early for a rider whose key comes up before)
@@ -66,10 +66,10 @@ class ArmCosts:
         t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
         timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
         loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place) + cut_loss
-        col = self._descent_column(prev.state.place, place)
+        here = prev.state.place
         for n, f in new.items():
             times = timing.get((pitch[n], f, place))
-            after_s = (times or self._times(n, f, place))[col]
+            after_s = (times or self._times(n, f, place))[self._descent_column(here, place, n, f)]
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
             came = prev.older.get(f) if m is None else (m, place)  # (its last key and
@@ -131,11 +131,11 @@ class ArmCosts:
         early for the arm to start on time and those keys' ups (``_cut_lifts``; none
         where a note may ride along)."""
         T = self.places.arm_time_s(ctx.state.place, place)
-        col = self._descent_column(ctx.state.place, place)
+        here = ctx.state.place
         lifts, lift_end, lift_col = self._lifts(ctx, place)
         if not ctx.follows:  # (no note sounding that could ride along: the last lift, or
             # the lifts cut for the arm to start on time)
-            arrive = min((self._t_down[n] - self._times(n, f, place)[col]
+            arrive = min((self._t_down[n] - self._after_s(n, f, here, place)
                           for n, f in new.items()), default=math.inf)
             if lift_end + T <= arrive:
                 return lift_end + T, _NONE, 0.0, _NO_CUT
@@ -163,8 +163,8 @@ class ArmCosts:
                     # lift to its key crossing)
                     done = down_s + press_s - self.places.lift(a, "high").cross_s
                     cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
-        arrive = min((self._t_down[n] - self._times(n, f, place)[col] for n, f in new.items()),
-                     default=math.inf)
+        arrive = min((self._t_down[n] - self._after_s(n, f, here, place)
+                      for n, f in new.items()), default=math.inf)
         if not cands:  # (``_riders``' answer when none rides along: the last lift, or the
             # lifts cut for the arm to start on time; the move)
             if lift_end + T <= arrive:
@@ -204,12 +204,23 @@ class ArmCosts:
             release = max(release, up + lift_s)
         return release, loss, ups
 
-    def _descent_column(self, here: int, place: int) -> int:
-        """``Costs._times``' column of the descent's part after a move of the arm from
-        place ``here`` to ``place``: the front rule's (1) where the move keeps the play
-        posture, the black rule's (3) where it changes it
-        (``planner.play.highclear.front_rules``)."""
-        return 1 if self._front_rules(here, place)[1] else 3
+    def _after_s(self, n: int, f: str, here: int, place: int) -> float:
+        """Note ``n``'s finger ``f``'s descent's part after a move of the arm from place
+        ``here`` to ``place`` is over (``Costs._times``, its ``_descent_column``)."""
+        return self._times(n, f, place)[self._descent_column(here, place, n, f)]
+
+    def _descent_column(self, here: int, place: int, n: int, f: str) -> int:
+        """``Costs._times``' column of the descent's part of note ``n``'s finger ``f``
+        after a move of the arm from place ``here`` to ``place``: the front rule's (1)
+        where the move keeps the play posture, or takes the hand out of the keyboard and
+        the entry's bodies stayed in front of the black keys
+        (``HighClear.descent_front``), the black rule's (3) otherwise (the motion's
+        ``Motion.descent_front``)."""
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return 1
+        a, b = self.places.reach_m(po(here)), self.places.reach_m(po(place))
+        return 1 if self.places.high.descent_front(self.entry(n, f, place), a, b) else 3
 
     def _lift_col(self, here: int, place: int, m: int, f: str, r: int) -> int:
         """``Costs._times``' column of the lift of note ``m``'s finger ``f`` (pressed from
@@ -241,12 +252,6 @@ class ArmCosts:
             got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
                                              cols)
         return got
-
-    def _front_rules(self, here: int, place: int) -> tuple[bool, bool]:
-        """``highclear.front_rules`` of a move of the arm from place ``here`` to
-        ``place``: whether its lifts, and its descents, may keep the front rule."""
-        po, reach = self.places.posture_of, self.places.reach_m
-        return front_rules(reach(po(here)), reach(po(place)))
 
     def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
         """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``

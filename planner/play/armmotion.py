@@ -11,12 +11,18 @@ keys come up ``HOLD_PAST_S`` after the move at the earliest (the programme's rul
 
 from __future__ import annotations
 
+import bisect
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from planner.play.follow import HOLD_PAST_S
-from planner.play.highclear import front_rules
 from planner.play.places import Places
 from planner.play.profile import Move, straight_move
+
+if TYPE_CHECKING:
+    from planner.play.atlas import AtlasEntry
+    from planner.play.fingering import Assignment
 
 
 def part(move: Move, first: int, n: int) -> Move:
@@ -36,7 +42,7 @@ def up_move(moves: Places, st):
 
 class ArmMotion:
     """``Motion``'s moves of the arm (a part of ``Motion``: its fingers, tracks, posture
-    and rows written, ``_to_high``)."""
+    and rows written, ``_to_high``, the notes expected, ``entry``, ``t_down``)."""
 
     def _move_rail(self, rail_m: float, posture: int, arrive_by_s: float,
                    strikers: set[str]) -> None:
@@ -52,7 +58,7 @@ class ArmMotion:
         # (the lifts' rule, finger by finger: a change of posture that moves the hand into
         # the keyboard times a lift by the black rule unless its bodies stay in front of
         # the black keys: ``HighClear.lift_front``)
-        front, descent_front = self.lift_rules(posture), self.front_rules(posture)[1]
+        front = self.lift_rules(posture)
         holds = [h for h in self._holds(rail_m, posture) if h[1].finger not in strikers]
         while True:  # (a follower whose key would come up before the move ends lifts)
             # with followers the move ends before their keys come up: early, if need be
@@ -78,7 +84,8 @@ class ArmMotion:
                          for st in self.fingers.values() if id(st) not in held])
         k = len(self.arm_track.q)
         self.arm_track.add(t0, part(move, 0, k))
-        self.posture, self.arm_front = posture, descent_front
+        self.arm_reaches = (self.places.reach_m(self.posture), self.places.reach_m(posture))
+        self.posture = posture
         for st, e in holds:
             n = len(st.entry.press)
             st.track.add(t0, part(move, k, n))
@@ -128,10 +135,34 @@ class ArmMotion:
                             + self.moves.high.rise_clear_s(st.entry, up.move, front(st)))
         return move, max(ready, arrive_by_s - move.duration_s)
 
-    def front_rules(self, posture: int) -> tuple[bool, bool]:
-        """``highclear.front_rules`` of a move of the arm into play posture ``posture``:
-        whether its lifts, and its descents, keep the front rule."""
-        return front_rules(self.places.reach_m(self.posture), self.places.reach_m(posture))
+    def _arrive_by_s(self, a: Assignment, e: AtlasEntry, reaches: tuple[float, float]
+                     ) -> float:
+        """When the arm's move for note ``a`` (its entry ``e``) from reach ``reaches[0]``
+        to ``reaches[1]`` must end: the latest that lets every key of its onset struck
+        from the same place (``expect``) go down on time, each after its own descent's
+        part below the clear height (by its rule, ``HighClear.descent_front``; the
+        programme's ``arrive``, ``ArmCosts._release_of``)."""
+        t = self.t_down(a.note)
+        high = self.moves.high
+        by = t - self.moves.rail_descent_s(e, high.descent_front(e, *reaches))
+        for g in self._strikers.get(t, ()):
+            times, notes = self._next.get(g, ((), ()))
+            i = bisect.bisect_left(times, t)
+            while i < len(times) and times[i] == t:
+                b = notes[i]
+                if b.rail_m == a.rail_m and b.posture == a.posture:
+                    eb = self.entry(b)
+                    if eb is not None:
+                        by = min(by, t - self.moves.rail_descent_s(
+                            eb, high.descent_front(eb, *reaches)))
+                i += 1
+        return by
+
+    def descent_front(self, e: AtlasEntry) -> bool:
+        """Whether a descent onto ``e`` from crossing height, while the arm's last move
+        may still run, keeps the front rule (``HighClear.descent_front`` of that move's
+        reaches: the same posture, or out of the keyboard where ``e``'s room holds)."""
+        return self.moves.high.descent_front(e, *self.arm_reaches)
 
     def lift_rules(self, posture: int):
         """Whether a finger's lift before a move of the arm into play posture ``posture``

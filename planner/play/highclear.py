@@ -29,13 +29,17 @@ a move in, which carries the bodies towards the black keys, a lift keeps the fro
 where every body the rule finds clear below the black tops lies further in front of the
 black keys than the arm can carry it until it is above them (``HighClear.front_room_m``
 against the move's length or ``reach_bound_m`` of the lift's time from its front moment
-to its black one; ``lift_front``), else the black rule's. The descents after any change of
-posture keep the black rule. (After a move in, a
-body in front at the descent's moment was further out before: the front rule would hold
-there too, but the arm, moving as late as the descents allow, then ends later, and the
-fingers riding along with it stay busy longer: 4 chorales' frame F1 down by up to 0.010,
-``docs/history/2026-12-07-play-notes.md``.) Both rules' moments are shipped in the move
-tables (``CLEAR_COLUMNS``).
+to its black one; ``lift_front``), else the black rule's. A descent after a move out of
+the keyboard, which the arm ends still further in, keeps the front rule where its room
+holds the move's length or the arm's travel to rest over the descent's time from its
+black moment to its front one (``descent_front``: the descent is the lift backwards,
+the bound holds backwards from rest), else the black rule's. The descents after a move
+in keep the black rule. (A body in front at the descent's moment was further out before:
+the front rule would hold there too, but the arm, moving as late as the descents allow,
+then ends later, and the programme's choices around it lose more: 4 chorales' frame F1
+down by up to 0.010, ``docs/history/2026-12-07-play-notes.md``; the corpus 0.9659 ->
+0.9656, ``docs/history/2026-12-07-play-post.md``.) Both rules' moments are shipped in
+the move tables (``CLEAR_COLUMNS``).
 
 ``HighClear`` finds, for a straight move of one finger's joints (``profile.Move``), the
 time from which (a rise) or until which (a descent) the finger stays above that height: the
@@ -62,6 +66,7 @@ from planner.play.atlassolve import CLEARANCE_M
 from planner.play.fingerbody import OTHER_KEY_TOLERANCE_M
 from planner.play.movetable import HIGH_SAFE_Z_M, MoveTable
 from planner.play.profile import Move
+from planner.play.tendonload import MAX_SCALE
 
 SAMPLES = 5  # points of the path tested by forward kinematics (ends included)
 BISECTIONS = 5  # then halvings between the two samples around the crossing: 1/128 of
@@ -91,7 +96,8 @@ def front_rules(reach_from_m: float, reach_to_m: float) -> tuple[bool, bool]:
     timed by the front rule (True) or the black rule alone (False): both by the front
     rule where the reach stays; the lifts where the move takes the hand out of the
     keyboard (a body in front of the black keys only goes further out); the descents of
-    a change of posture by the black rule (the module's docstring)."""
+    a change of posture by the black rule (the module's docstring; after a move out, an
+    entry's own room may keep the front rule: ``HighClear.descent_front``)."""
     if reach_to_m == reach_from_m:
         return True, True
     return reach_to_m < reach_from_m, False
@@ -129,6 +135,7 @@ class HighClear:
         self._path: dict[tuple, float] = {}
         self._room: dict[int, tuple[AtlasEntry, float]] = {}  # (``front_room_m``)
         self._lift_front: dict[tuple, tuple[AtlasEntry, bool]] = {}  # (``lift_front``)
+        self._descent_front: dict[tuple, tuple[AtlasEntry, bool]] = {}  # (``descent_front``)
         self._params = params()
 
     def rise_clear_s(self, e: AtlasEntry, move: Move, front: bool = True) -> float:
@@ -244,6 +251,37 @@ class HighClear:
             for up in (m.lift(e, "high").move, m.rise(e).move))
         ok = self.front_room_m(e) >= min(key[1], self.reach_bound_m(gap))
         self._lift_front[key] = (e, ok)  # (memoised by entry and move: the entry kept)
+        return ok
+
+    def descent_front(self, e: AtlasEntry | None, reach_from_m: float,
+                      reach_to_m: float) -> bool:
+        """Whether entry ``e``'s descent from crossing height after a move of the arm from
+        reach ``reach_from_m`` to ``reach_to_m`` is timed by the front rule: ``front_rules``'
+        descents (the same posture), and after a move out of the keyboard where every body
+        the rule finds clear in front of the black keys stayed in front while the arm was
+        still coming out (its ``front_room_m``: the descent is the lift backwards) by as
+        much as the move's length, or as the arm's travel to rest over the descent's time
+        from its black moment to its front one (``reach_bound_m``: the bound holds
+        backwards from rest, an arm at rest with no acceleration; the time at the motors'
+        slowest, ``tendonload.MAX_SCALE``: ``armload.within_motors`` may slow a descent so
+        much). After a move into the keyboard the black rule (the front rule holds there
+        too, but a later arrival of the arm keeps riders down longer: measured worse,
+        ``docs/history/2026-12-07-play-post.md``)."""
+        if front_rules(reach_from_m, reach_to_m)[1]:
+            return True
+        if e is None or reach_to_m > reach_from_m:
+            return False
+        key = (id(e), reach_to_m - reach_from_m)
+        got = self._descent_front.get(key)
+        if got is not None:
+            return got[1]
+        m = self.moves[e.posture] if self.moves is not None else None
+        gap = math.inf
+        if m is not None:
+            d = m.descend(e, "high").move
+            gap = self.descent_clear_s(e, d) - self.descent_clear_s(e, d, False)
+        ok = self.front_room_m(e) >= min(-key[1], self.reach_bound_m(MAX_SCALE * gap))
+        self._descent_front[key] = (e, ok)  # (memoised by entry and move: the entry kept)
         return ok
 
     def _shipped(self, e: AtlasEntry, move: Move, rising: bool, front: bool) -> float | None:

@@ -302,7 +302,8 @@ class Motion(ArmMotion):
         if places.rail is not None:
             self.q0[places.rail] = rail0_m
         self.posture = posture
-        self.arm_front = True  # (the arm's last move kept its play posture: ``approach``)
+        reach = places.reach_m(posture)  # (the reach axis before and after the arm's last
+        self.arm_reaches = (reach, reach)  # move: its descents' rule, ``descent_front``)
         # (the arm's joints, ``arm``, as one track: the rail alone on a hand without a reach axis)
         self.arm_track = _Track(np.array([rail0_m, places.reach_m(posture)][:max(1, len(self.arm))]))
         self.fingers = {f: _Finger(_Track(self.q0[self.hand.joint_slice(f)].copy()))
@@ -402,21 +403,21 @@ class Motion(ArmMotion):
         e = self.entry(a)
         if abs(self.arm_track.q[0] - a.rail_m) > 1e-9 or a.posture != self.posture:
             strikers = self._strikers.get(self.t_down(a.note), set()) | {a.finger}
-            front = self.front_rules(a.posture)[1]  # (the descents')
-            self._move_rail(a.rail_m, a.posture, self._arrive_by_s(a, e, front), strikers)
+            reaches = (self.places.reach_m(self.posture), self.places.reach_m(a.posture))
+            self._move_rail(a.rail_m, a.posture, self._arrive_by_s(a, e, reaches), strikers)
         st = self.fingers[a.finger]
         want = self.t_down(a.note)
         after = self._release_others_on(n.pitch, a.finger)
+        front = self.descent_front(e)
         found = approach(self.moves, st, e, want, after, self.arm_track.free_s,
-                         self.committed_s, self.arm_front)
+                         self.committed_s, front)
         if found is None:
             out = Outcome(a.note, None, None, SkipReason.NO_PATH,
                           f"no checked path of the {a.finger} to it")
             self.outcomes[a.note] = out
             return out
         found, timed_by = within_motors(self, a.finger, found, lambda places: approach(
-            places, st, e, want, after, self.arm_track.free_s, self.committed_s,
-            self.arm_front))
+            places, st, e, want, after, self.arm_track.free_s, self.committed_s, front))
         down_at, steps, press_end = _struck(found, struck_s(n.onset_s, found[0], self.dt),
                                             st.up_s, timed_by, e)
         up = self._held_enough_s(a.note, down_at, self.t_up(a.note, a.release_s),
@@ -442,25 +443,6 @@ class Motion(ArmMotion):
             out = Outcome(a.note, down_at, up)
         self.outcomes[a.note] = out
         return out
-
-    def _arrive_by_s(self, a: Assignment, e: AtlasEntry, front: bool) -> float:
-        """When the arm's move for note ``a`` (its entry ``e``) must end: the latest that
-        lets every key of its onset struck from the same place (``expect``) go down on
-        time, each after its own descent's part below the clear height (``front``: the
-        front rule's; the programme's ``arrive``, ``ArmCosts._release_of``)."""
-        t = self.t_down(a.note)
-        by = t - self.moves.rail_descent_s(e, front)
-        for g in self._strikers.get(t, ()):
-            times, notes = self._next.get(g, ((), ()))
-            i = bisect.bisect_left(times, t)
-            while i < len(times) and times[i] == t:
-                b = notes[i]
-                if b.rail_m == a.rail_m and b.posture == a.posture:
-                    eb = self.entry(b)
-                    if eb is not None:
-                        by = min(by, t - self.moves.rail_descent_s(eb, front))
-                i += 1
-        return by
 
     def _to_high(self, st: _Finger, latest_s: float = math.inf) -> float:
         """The finger rises to crossing height: a pressing one lets its key up at its
