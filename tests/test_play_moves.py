@@ -198,8 +198,8 @@ def test_a_repeat_bounces_to_the_rearm_height_and_back(moves):
     kinematics of the rows' joints); ``repeat_gap_s`` is that time up, shorter than the
     lift and descent from rest to the same top (``repeat_pair``), which are shorter than
     those to the atlas's rise pose (the repeat before); on the default hand the key is up
-    12 ms (median of 40 entries; from rest to the rise and back: 30 ms), under 0.6 of that
-    in every entry."""
+    11.3 ms (median of 40 entries; the jerk-only bounce before: 12.1; from rest to the
+    rise and back: 30 ms), under 0.6 of that in every entry."""
     from planner.music import keyboard as kb
     from planner.play.moves import REARM_M
 
@@ -226,5 +226,6 @@ def test_a_repeat_bounces_to_the_rearm_height_and_back(moves):
             < (ur.duration_s - ur.cross_s) + dr.cross_s
         gaps.append((gap, (ur.duration_s - ur.cross_s) + dr.cross_s))
     assert len(gaps) >= 30
-    new, old = np.array(gaps).T  # (seed 8: 10.8-19.8 ms, median 12.1; before 28-35, 30.4)
-    assert 0.010 < float(np.median(new)) < 0.013 and np.all(new < 0.6 * old)
+    new, old = np.array(gaps).T  # (seed 8: 10.2-18.6 ms, median 11.3; the jerk-only bounce
+    # 10.8-19.8, 12.1; from rest to the rise and back 28-35, 30.4)
+    assert 0.010 < float(np.median(new)) < 0.0118 and np.all(new < 0.6 * old)

@@ -245,7 +245,7 @@ def test_a_repeated_key_rises_between_its_presses(tmp_path):
 
 def test_legato_repeats_sound_every_note_in_physics(tmp_path):
     """Eight legato quavers on one key (C5, 200 ms each, each ending where the next
-    starts): every repeat is one bounce (``Moves.repeat``), its key up 12 ms in the rows;
+    starts): every repeat is one bounce (``Moves.repeat``), its key up 10-11 ms in the rows;
     the check sees it up in at most 2 rows of each junction (3 with the lift and descent
     from rest to the atlas's rise pose before). In the physics replay (full contact) the
     key is up between every two notes and down again for each (8 key-downs): 8 notes

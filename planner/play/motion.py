@@ -129,19 +129,22 @@ class _Track:
         lo = int(idx[first])
         segs = self.segments[lo:int(idx[-1]) + 1]
         of = idx[first:] - lo
-        # (a repeat's ``Bounce`` comes back to its start: its own profile, ``bounce_s``,
-        # and its end at 0; its double-S phases, never read, are its halves')
-        t0, dur, ta, tj, back = np.array([
-            (g.t0_s, g.move.duration_s, *((0.5 * g.move.duration_s, 0.25 * g.move.duration_s,
-                                           1.0) if g.move.back else
-                                          (g.move.ta_s, g.move.tj_s, 0.0)))
+        # (a repeat's ``Bounce`` comes back to its start: its own profile, ``bounce_s``
+        # of its ramps ``tb``, and its end at 0; its double-S phases, never read, are its
+        # halves')
+        t0, dur, ta, tj, bj, ba, bb, back = np.array([
+            (g.t0_s, g.move.duration_s,
+             *((0.5 * g.move.duration_s, 0.25 * g.move.duration_s, g.move.tj_s, g.move.ta_s,
+                g.move.tb_s, 1.0) if g.move.back else
+               (g.move.ta_s, g.move.tj_s, 0.0, 0.0, 0.0, 0.0)))
             for g in segs]).T[:, of]
         q_a = np.array([g.move.q_a for g in segs])[of]
         dq = np.array([g.move.dq for g in segs])[of]
         tt = t_s[first:]
         s = path_s(tt - t0, dur, ta, tj)
         if back.any():
-            s = np.where(back > 0.0, bounce_s(tt - t0, dur), s)
+            k = back > 0.0
+            s[k] = bounce_s(tt[k] - t0[k], dur[k], bj[k], ba[k], bb[k])
             dq_end = np.where(back[:, None] > 0.0, 0.0, dq)
         else:
             dq_end = dq

@@ -225,47 +225,78 @@ def phases(v: float, a: float, j: float) -> tuple[float, float, float]:
     return 4.0 * tj, 2.0 * tj, tj
 
 
-# A bounce (``Bounce``): out from rest and back to rest along one straight line, turning
-# at its far end under full braking. In units of its first jerk ramp (jerk 1): jerk +1 for
-# 1, then -1 for ``1 + sqrt 2`` (the speed back to 0 at the turn, the acceleration -sqrt 2
-# there), then the same mirrored in time (jerk +1, then -1): the time-optimal turn of a
-# jerk-limited line, every derivative but the jerk continuous, rest at both ends.
-_TURN_S = 2.0 + math.sqrt(2.0)  # the half's duration, in ramps
-_TURN_PEAK = 1.0 / 6.0 + (1.0 + math.sqrt(2.0)) / 2.0 + (3.0 + 2.0 * math.sqrt(2.0)) / 2.0 \
-    - (7.0 + 5.0 * math.sqrt(2.0)) / 6.0  # the half's length (1.943), in ramps
+# A bounce (``Bounce``): out from rest to a turn at ``s`` = 1 and back to rest along one
+# straight line, its second half the first played backwards (the acceleration continuous
+# at the turn: braking both ways). Its half is the time-optimal move from rest to a stop
+# with the end acceleration free under the path caps V, A, J (Pontryagin: the jerk at
+# +-J or 0): a double-S acceleration phase to the peak speed ``vp`` (jerk +J for ``tj``,
+# the acceleration held at its peak, -J for ``tj``: ``ta`` in all), a cruise at ``vp``
+# (only where V binds), then braking: jerk -J for ``tb`` and the acceleration held at
+# -J ``tb`` (at -A where A binds) until the speed is 0 at the turn; the peak speed is the
+# largest whose distance is 1 (``bounce_move``). With A and V unbound that is jerk +J for
+# 1 ramp, -J for 1 + sqrt 2 (-sqrt 2 ramps' acceleration at the turn); with A bound, a
+# constant braking through the turn (the shape ``Move``'s double S has at its ends).
 
 
-def _turn_unit(h: np.ndarray) -> np.ndarray:
-    """The bounce's half from rest to its turn, in ramps (``h`` in [0, ``_TURN_S``])."""
-    u = h - 1.0
-    return np.where(h <= 1.0, h * h * h / 6.0, 1.0 / 6.0 + u / 2.0 + u * u / 2.0 - u * u * u / 6.0)
+def _bounce_knots(H, tj, ta, tb):
+    """The half's jerk ``J``, peak speed ``vp``, cruise ``tc`` and braking hold ``tk`` of
+    bounces with half ``H`` and ramps ``tj``, ``ta``, ``tb`` (distance 1 to the turn;
+    floats or arrays alike)."""
+    p = tj * (ta - tj)  # (vp / J)
+    tk = (p - 0.5 * tb * tb) / tb  # (the hold that brings the speed to 0: J tb tk = v1)
+    tc = H - ta - tb - tk
+    v1 = p - 0.5 * tb * tb  # (the speed at the hold's start, / J)
+    jerk = 1.0 / (0.5 * p * ta + p * tc + p * tb - tb * tb * tb / 6.0 + 0.5 * v1 * v1 / tb)
+    return jerk, jerk * p, tc, tk
 
 
-def _turn_scalar(h: float) -> float:
-    """``_turn_unit`` of one time in floats (``Bounce.time_at_s`` asks it many times)."""
-    if h <= 1.0:
-        return h * h * h / 6.0
-    u = min(h, _TURN_S) - 1.0
-    return 1.0 / 6.0 + u / 2.0 + u * u / 2.0 - u * u * u / 6.0
+def _half_s(h, H, tj, ta, tb):
+    """The path parameter at times ``h`` (in [0, ``H``]) of the half of bounces (arrays)."""
+    jerk, vp, tc, tk = _bounce_knots(H, tj, ta, tb)
+    ap = jerk * tj
+    u = np.minimum(h, ta)
+    w = ta - u
+    acc = np.where(u < tj, jerk * u * u * u / 6.0,
+                   np.where(u <= ta - tj, ap / 6.0 * (3.0 * u * u - 3.0 * tj * u + tj * tj),
+                            0.5 * vp * ta - vp * w + jerk * w * w * w / 6.0))
+    x = np.clip(h - ta - tc, 0.0, tb)  # (into the braking ramp)
+    fwd = acc + vp * np.clip(h - ta, 0.0, tc) + vp * x - jerk * x * x * x / 6.0
+    r = H - h  # (the hold, counted back from the turn: 1 there exactly)
+    return np.where(r <= tk, 1.0 - 0.5 * jerk * tb * r * r, fwd)
 
 
-def bounce_s(t_s: np.ndarray, duration_s) -> np.ndarray:
-    """Path parameter of bounces of ``duration_s`` at times ``t_s`` after their start: 0 at
-    both ends (clamped), 1 at the turn halfway (element by element, as ``path_s``)."""
-    T = np.asarray(duration_s, dtype=float)
+def _half_scalar(h: float, H: float, tj: float, ta: float, tb: float) -> float:
+    """``_half_s`` of one time in floats (``Bounce.time_at_s`` asks it many times)."""
+    jerk, vp, tc, tk = _bounce_knots(H, tj, ta, tb)
+    if H - h <= tk:
+        return 1.0 - 0.5 * jerk * tb * (H - h) ** 2
+    x = min(max(h - ta - tc, 0.0), tb)
+    cruise = vp * min(max(h - ta, 0.0), tc) + vp * x - jerk * x * x * x / 6.0
+    return _s_acc(min(h, ta), ta, tj, vp) + cruise
+
+
+def bounce_s(t_s: np.ndarray, duration_s, tj_s, ta_s, tb_s) -> np.ndarray:
+    """Path parameter of bounces of ``duration_s`` and ramps ``tj_s``, ``ta_s``, ``tb_s``
+    at times ``t_s`` after their start: 0 at both ends (clamped), 1 at the turn halfway
+    (element by element, as ``path_s``)."""
+    T, tj, ta, tb = (np.asarray(x, dtype=float) for x in (duration_s, tj_s, ta_s, tb_s))
     h = np.clip(np.minimum(t_s, T - t_s), 0.0, 0.5 * T)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(T > 0.0, _turn_unit(h * (2.0 * _TURN_S) / T) / _TURN_PEAK, 0.0)
+        return np.where(T > 0.0, _half_s(h, 0.5 * T, tj, ta, tb), 0.0)
 
 
 @dataclass(frozen=True)
 class Bounce:
     """Out from ``q_a`` by ``dq`` and straight back, rest to rest over ``duration_s``, the
-    path parameter 1 at the turn halfway (``bounce_s``)."""
+    path parameter 1 at the turn halfway (``bounce_s``; its half's acceleration phase
+    ``ta_s`` with jerk ramps ``tj_s``, its braking ramp ``tb_s``)."""
 
     q_a: np.ndarray
     dq: np.ndarray
     duration_s: float
+    tj_s: float
+    ta_s: float
+    tb_s: float
 
     back = True
 
@@ -273,24 +304,24 @@ class Bounce:
     def q_end(self) -> np.ndarray:
         return self.q_a
 
-    @property
-    def ramp_s(self) -> float:
-        return self.duration_s / (2.0 * _TURN_S)
+    def _knots(self):
+        return _bounce_knots(0.5 * self.duration_s, self.tj_s, self.ta_s, self.tb_s)
 
     @property
     def peak_speed(self) -> float:
-        return 1.0 / (_TURN_PEAK * self.ramp_s)
+        return self._knots()[1] if self.duration_s > 0.0 else 0.0
 
     @property
     def peak_acceleration(self) -> float:
-        return math.sqrt(2.0) / (_TURN_PEAK * self.ramp_s ** 2)
+        return self._knots()[0] * max(self.tj_s, self.tb_s) if self.duration_s > 0.0 else 0.0
 
     @property
     def jerk(self) -> float:
-        return 1.0 / (_TURN_PEAK * self.ramp_s ** 3)
+        return self._knots()[0] if self.duration_s > 0.0 else 0.0
 
     def s(self, t_s: np.ndarray) -> np.ndarray:
-        return bounce_s(np.asarray(t_s, dtype=float), self.duration_s)
+        return bounce_s(np.asarray(t_s, dtype=float), self.duration_s, self.tj_s, self.ta_s,
+                        self.tb_s)
 
     def at(self, t_s) -> np.ndarray:
         s = self.s(np.atleast_1d(t_s))
@@ -300,33 +331,69 @@ class Bounce:
         """The first time (s after the start) at which the path parameter reaches
         ``s_target`` (on the way out; bisection to the last float)."""
         s_target = min(max(float(s_target), 0.0), 1.0)
-        lo, hi = 0.0, 0.5 * self.duration_s
+        H = 0.5 * self.duration_s
+        lo, hi = 0.0, H
         for _ in range(80):
             mid = 0.5 * (lo + hi)
             if mid in (lo, hi):
                 break
-            if _turn_scalar(mid / self.ramp_s) >= s_target * _TURN_PEAK:
+            if _half_scalar(mid, H, self.tj_s, self.ta_s, self.tb_s) >= s_target:
                 hi = mid
             else:
                 lo = mid
         return hi
 
     def slowed(self, sigma: float) -> Bounce:
-        return self if sigma == 1.0 else Bounce(self.q_a, self.dq, self.duration_s * sigma)
+        return self if sigma == 1.0 else Bounce(self.q_a, self.dq, self.duration_s * sigma,
+                                                self.tj_s * sigma, self.ta_s * sigma,
+                                                self.tb_s * sigma)
+
+
+def _bounce_half(vp: float, a: float, j: float) -> tuple[float, float, float, float]:
+    """(tj, ta, tb, distance) of a bounce's half with peak speed ``vp`` under the caps
+    ``a``, ``j``, without its cruise (Biagiotti & Melchiorri 2008, eq. 3.30's phases)."""
+    if vp * j >= a * a:
+        tj = a / j
+        ta = tj + vp / a
+    else:
+        tj = math.sqrt(vp / j)
+        ta = 2.0 * tj
+    if vp * j >= 0.5 * a * a:  # (the braking reaches -A: held there to the turn)
+        tb = a / j
+        v1 = vp - 0.5 * j * tb * tb
+        hold = 0.5 * v1 * v1 / a
+    else:
+        tb = math.sqrt(2.0 * vp / j)
+        hold = 0.0
+    return tj, ta, tb, 0.5 * vp * ta + vp * tb - j * tb * tb * tb / 6.0 + hold
 
 
 def bounce_move(q_a: np.ndarray, q_turn: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
                 j_max: np.ndarray) -> Bounce:
     """The fastest ``Bounce`` from ``q_a`` to ``q_turn`` and back under per-joint speed,
-    acceleration and jerk limits (``path_caps``: its ramps as long as the tightest of the
-    three asks)."""
+    acceleration and jerk limits (``path_caps``): its half's peak speed the largest whose
+    distance without a cruise is at most 1 (bisection to the last float), or the speed
+    cap with a cruise over the rest."""
     q_a = np.asarray(q_a, dtype=float)
     dq = np.asarray(q_turn, dtype=float) - q_a
     caps = path_caps(dq.tolist(), np.asarray(v_max, dtype=float).tolist(),
                      np.asarray(a_max, dtype=float).tolist(), np.asarray(j_max, dtype=float).tolist())
     if caps is None:
-        return Bounce(q_a, dq, 0.0)
-    v, a, j = caps  # (the ramp r: speed 1 / (P r), acceleration sqrt 2 / (P r^2), jerk 1 / (P r^3))
-    ramp = max(1.0 / (_TURN_PEAK * v), math.sqrt(math.sqrt(2.0) / (_TURN_PEAK * a)),
-               (1.0 / (_TURN_PEAK * j)) ** (1.0 / 3.0))
-    return Bounce(q_a, dq, 2.0 * _TURN_S * ramp)
+        return Bounce(q_a, dq, 0.0, 0.0, 0.0, 0.0)
+    v, a, j = caps
+    vp = v
+    if _bounce_half(v, a, j)[3] > 1.0:  # (V not reached: the peak speed of distance 1)
+        lo, hi = 0.0, v
+        for _ in range(200):
+            vp = 0.5 * (lo + hi)
+            if vp in (lo, hi):
+                break
+            if _bounce_half(vp, a, j)[3] > 1.0:
+                hi = vp
+            else:
+                lo = vp
+        vp = lo
+    tj, ta, tb, dist = _bounce_half(vp, a, j)
+    tk = (vp - 0.5 * j * tb * tb) / (j * tb)
+    half = ta + (1.0 - dist) / vp + tb + tk
+    return Bounce(q_a, dq, 2.0 * half, tj, ta, tb)
