@@ -19,7 +19,8 @@ the rail's grid, for a hand with a rail and the atlas's body rule; ``--follows-o
 keep the shipped atlas and move tables, write only it). ``--proofs-only``: keep the
 shipped atlas and move tables, write into each move table only the tendon proof's gains
 of each finger's box of high poses (``planner.play.tendonproof``; ``make_table`` writes
-them too).
+them too). ``--repeats-only``: likewise, only each entry's repeat (``Moves.repeat_found``;
+``make_table`` writes them too).
 """
 
 import argparse
@@ -34,7 +35,7 @@ from planner.hand.model import load_hand
 from planner.play import followtable, highclear
 from planner.play.atlas import Atlas, posture_count, table_path
 from planner.play.moves import Moves
-from planner.play.movetable import MoveTable, add_proofs, make_table
+from planner.play.movetable import MoveTable, add_proofs, add_repeats, make_table
 from planner.play.movetable import table_path as moves_path
 from planner.play.places import RAIL_STEP_M, Places
 
@@ -96,8 +97,15 @@ def main() -> int:
     ap.add_argument("--proofs-only", action="store_true",
                     help="keep the shipped atlas and move tables; write the tendon proof's "
                          "gains into the move tables")
+    ap.add_argument("--repeats-only", action="store_true",
+                    help="keep the shipped atlas and move tables; write each entry's repeat "
+                         "into the move tables")
     a = ap.parse_args()
     hand = load_hand(a.hand)
+    if a.repeats_only:
+        for i in range(posture_count(hand)):
+            make_repeats(hand, make(hand, i, True))
+        return 0
     if a.proofs_only:
         atlases = [make(hand, i, True) for i in range(posture_count(hand))]
         for i in range(len(atlases)):
@@ -124,6 +132,18 @@ def make_proofs(hand, atlases: list[Atlas], posture: int) -> None:
     others = [a for i, a in enumerate(atlases) if i != posture] if posture == 0 else []
     if add_proofs(Moves(hand, atlases[posture]), out, others):
         print(f"{out}: the tendon proof's gains, {time.perf_counter() - t0:.1f} s")
+
+
+def make_repeats(hand, atlas: Atlas) -> None:
+    """Each entry's repeat of one play posture's shipped atlas, into its shipped move
+    table (``movetable.add_repeats``)."""
+    t0 = time.perf_counter()
+    out = moves_path(hand.urdf_sha256, atlas.posture_index)
+    if not out.exists():
+        print(f"{out}: no move table", file=sys.stderr)
+        return
+    n = add_repeats(Moves(hand, atlas), out)
+    print(f"{out}: the repeats of {n} entries, {time.perf_counter() - t0:.1f} s")
 
 
 def make_follows(hand) -> None:

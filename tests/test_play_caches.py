@@ -11,8 +11,8 @@ import pytest
 from planner.hand.model import load_hand
 from planner.hand.tendon import actuator_capacity
 from planner.play.atlas import PATH_SAMPLES
-from planner.play.moves import RAIL_TORQUE_SHARE, path_acceleration_cap
 from planner.play.places import Places
+from planner.play.railcap import RAIL_TORQUE_SHARE, path_acceleration_cap
 
 
 def straight_cap(hand, postures, dq) -> float:

@@ -113,7 +113,7 @@ def test_whole_hand_move_keeps_every_motor_within_its_share(planner):
     """The way in turns the wrist and runs the rail: its acceleration is capped by what
     the motors hold with the hand's inertia (``path_acceleration_cap``), so its duration
     is at least that of the joints' own limits."""
-    from planner.play.moves import RAIL_TORQUE_SHARE, path_acceleration_cap
+    from planner.play.railcap import RAIL_TORQUE_SHARE, path_acceleration_cap
 
     rest = rest_pose(planner.atlas)
     q = planner.atlas.base.copy()

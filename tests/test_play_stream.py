@@ -36,7 +36,7 @@ FLOOR = {"twinkle": 0.99, "ode_to_joy": 0.99, "chords": 0.943, "scale": 0.99,
 # fast_six_keys -> 0.8943, leaps_legato -> 0.6328: moves around a change of hand position
 # take longer)
 # (leaps 1.0 -> 0.9928, leaps_legato 0.713 -> 0.640 when the rail's acceleration was capped
-# at what the wrist motors hold, 40 -> 23 m/s^2: planner.play.moves.rail_acceleration_cap)
+# at what the wrist motors hold, 40 -> 23 m/s^2: planner.play.railcap.rail_acceleration_cap)
 
 
 @pytest.fixture(scope="module")

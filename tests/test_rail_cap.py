@@ -1,4 +1,4 @@
-"""planner.play.moves.rail_acceleration_cap: the rail accelerates no harder than the
+"""planner.play.railcap.rail_acceleration_cap: the rail accelerates no harder than the
 motors can hold the hand's inertia (inverse dynamics), checked against a finite
 difference of the joint torques and against the motors' capacity."""
 
@@ -13,7 +13,7 @@ import pytest
 from planner.hand.model import load_hand
 from planner.hand.tendon import actuator_capacity
 from planner.play import Planner
-from planner.play.moves import RAIL_TORQUE_SHARE, rail_acceleration_cap
+from planner.play.railcap import RAIL_TORQUE_SHARE, rail_acceleration_cap
 
 ROOT = Path(__file__).resolve().parents[1]
 

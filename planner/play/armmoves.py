@@ -15,8 +15,9 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.play.atlas import PATH_SAMPLES, Atlas
-from planner.play.moves import Moves, path_acceleration_cap
+from planner.play.moves import Moves
 from planner.play.profile import Move, capped_move, path_caps
+from planner.play.railcap import path_acceleration_cap
 from planner.play.tendonload import hand_load, slowed
 
 RAIL_STEP_M = 0.006  # the hand positions the programme weighs, this far apart on the rail

@@ -21,16 +21,14 @@ part-way (``up_s``). From them:
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
-import pinocchio as pin
 
-from planner.errors import PlannerError
 from planner.hand.model import HandModel
-from planner.hand.tendon import actuator_capacity
 from planner.music import keyboard as kb
 from planner.play.atlas import (
     PATH_SAMPLES,
@@ -45,6 +43,7 @@ from planner.play.movetable import (
     ACROSS_SAMPLES,
     ENDS,
     HIGH_SAFE_Z_M,
+    REPEAT_COLUMNS,
     MoveTable,
     high_boxes,
     table_path,
@@ -58,6 +57,7 @@ from planner.play.profile import (
     path_caps,
     straight_move,
 )
+from planner.play.railcap import rail_acceleration_cap
 from planner.play.tendonload import slowed, tendon_load
 
 REARM_M = 0.0005  # a repeat's top: the finger's lowest point this far above the key-down
@@ -67,6 +67,8 @@ REARM_M = 0.0005  # a repeat's top: the finger's lowest point this far above the
 # Measured on the two voice pieces' 40 legato repeats (docs/history/2026-12-07-play-repeat.md):
 # 0.2 / 0.5 / 1.0 mm lose 1.15 / 1.68 / 2.12 rows a repeat in the check, 2.67 / 2.40 / 2.52
 # in the physics (a lower top crosses slower: its key goes down later there)
+# what a move table's repeats were found with (``MoveTable.repeat_row``: read only if equal)
+REPEAT_PARAMS = json.dumps({"rearm_m": REARM_M, "columns": REPEAT_COLUMNS})
 CROSS_TOL = 1e-4  # the key crossing's path parameter is found to this precision (a few µs)
 # an entry's moves timed within the tendons' capacity (``planner.play.tendonload``), each
 # pair of poses one way or the other (the bound is the same both ways: computed from the
@@ -109,11 +111,30 @@ class RepeatMoves:
 
     def repeat_gap_s(self, e: AtlasEntry) -> float:
         """Key up to key down again on the same key: the repeat's ``Bounce`` from its
-        key-up crossing to its key-down crossing (``repeat``)."""
-        b = self.repeat(e)
-        if b is None:  # (no repeat from below: up to crossing height and down)
-            return self.before_rail_s(e) + self.after_rail_s(e)
-        return b.duration_s - 2.0 * b.cross_s
+        key-up crossing to its key-down crossing (``repeat``; no repeat from below: up to
+        crossing height and down)."""
+        return self.repeat_row(e)[4]
+
+    def _repeat_row(self, e: AtlasEntry) -> tuple[float, ...]:
+        """``repeat_found``'s row as the move table ships it (bit for bit), or found."""
+        got = self.table.repeat_row(e, REPEAT_PARAMS)
+        return self.repeat_found(e) if got is None else got
+
+    def repeat_found(self, e: AtlasEntry) -> tuple[float, ...]:
+        """(sigma, s_c, scale, cross_s, gap_s): the repeat's top and key crossing on the
+        press -> rise line (``found_apex``), how much its line slows its ``Bounce``
+        (``_line_scale``), the slowed bounce's key-up crossing, and ``repeat_gap_s``; the
+        first four NaN where the line never lets the key up (``found_apex``: None)."""
+        apex = self.found_apex(e)
+        if apex is None:
+            nan = float("nan")
+            return nan, nan, nan, nan, self.before_rail_s(e) + self.after_rail_s(e)
+        sigma, s_c = apex
+        move = self._bounce(e, sigma)
+        scale = self._line_scale(e, move)
+        b = _slowed(move, scale)
+        cross_s = b.time_at_s(s_c / sigma)
+        return sigma, s_c, scale, cross_s, b.duration_s - 2.0 * cross_s
 
     def _repeat(self, e: AtlasEntry) -> Timed | None:
         """The repeat: one ``Bounce`` from the press straight up the atlas's press -> rise
@@ -121,14 +142,20 @@ class RepeatMoves:
         (``repeat_apex``: the key up) and back, timed at its key-up crossing (its key-down
         crossing is as long before its end: the same point of the line both ways); None
         where the line never lets the key up (``repeat_apex``)."""
-        if self.repeat_apex(e) is None:
+        sigma, _, scale, cross_s, _ = self.repeat_row(e)
+        if math.isnan(sigma):  # (``Motion`` asks only where ``repeat_gap_s`` has one)
             return None
-        sigma, s_c = self.repeat_apex(e)  # (``Motion`` asks only where ``repeat_gap_s`` has one)
+        return Timed(_slowed(self._bounce(e, sigma), scale), cross_s)
+
+    def _bounce(self, e: AtlasEntry, sigma: float):
         js = self.js[e.finger]
-        move = bounce_move(e.press, e.press + sigma * (e.rise - e.press),
+        return bounce_move(e.press, e.press + sigma * (e.rise - e.press),
                            self.hand.velocity[js], self.acceleration[js], self.jerk[js])
-        move = self._line_scaled(e, move)
-        return Timed(move, move.time_at_s(s_c / sigma))
+
+    def repeat_apex(self, e: AtlasEntry) -> tuple[float, float] | None:
+        """``found_apex``, as the move table ships it or found."""
+        sigma, s_c = self.repeat_row(e)[:2]
+        return None if math.isnan(sigma) else (sigma, s_c)
 
     def _repeat_pair(self, e: AtlasEntry) -> tuple[Timed, Timed] | None:
         """A repeat with time to spare (``Motion``): the lift up the same line to the same
@@ -137,16 +164,17 @@ class RepeatMoves:
             return None
         sigma, s_c = self.repeat_apex(e)
         apex = e.press + sigma * (e.rise - e.press)
-        up = self._line_scaled(e, self._move(e.finger, e.press, apex))
-        down = self._line_scaled(e, self._move(e.finger, apex, e.press))
+        up, down = self._move(e.finger, e.press, apex), self._move(e.finger, apex, e.press)
+        up, down = _slowed(up, self._line_scale(e, up)), _slowed(down, self._line_scale(e, down))
         # (on the partial line the crossing lies at s_c / sigma going up, the rest going down)
         return (Timed(up, up.time_at_s(s_c / sigma)),
                 Timed(down, down.time_at_s(1.0 - s_c / sigma)))
 
-    def _line_scaled(self, e: AtlasEntry, move):
-        """A move (or ``Bounce``) of the entry's finger along part of its press -> rise line,
-        slowed as the atlas's own move along the whole line is (``entry_scale``: its
-        tendons within their share, its lag beside the black keys) where that bound covers
+    def _line_scale(self, e: AtlasEntry, move) -> float:
+        """How much a move (or ``Bounce``) of the entry's finger along part of its press ->
+        rise line is slowed (``_slowed``): as the atlas's own move along the whole line is
+        (``entry_scale``: its tendons within their share, its lag beside the black keys)
+        where that bound covers
         it: no joint faster nor accelerating harder (it then is no faster anywhere along
         the line: it leaves the press as that one does, or slower, and stops short of its
         end; the bounds are the line's, ``planner.play.tendonload``); else its own."""
@@ -155,14 +183,14 @@ class RepeatMoves:
         size, whole_size = float(np.max(np.abs(move.dq))), float(np.max(np.abs(whole.dq)))
         if (move.peak_acceleration * size <= whole.peak_acceleration * whole_size * (1 + 1e-12)
                 and move.peak_speed * size <= whole.peak_speed * whole_size * (1 + 1e-12)):
-            return _slowed(move, self.entry_scale(e, column))
+            return self.entry_scale(e, column)
         qa, qb = move.q_a, move.q_a + move.dq
         top = kb.key(60 + e.pitch_class).top_z_m
         scale = self.finger_scale(e.finger, qa, qb, move, top)
-        return _slowed(move, scale * margin_scale(self.atlas, e.finger, e.pitch_class, e.dx_m,
-                                                  _slowed(move, scale)))
+        return scale * margin_scale(self.atlas, e.finger, e.pitch_class, e.dx_m,
+                                    _slowed(move, scale))
 
-    def _repeat_apex(self, e: AtlasEntry) -> tuple[float, float] | None:
+    def found_apex(self, e: AtlasEntry) -> tuple[float, float] | None:
         """(sigma, s_c): the path parameters on the press -> rise line where the finger's
         lowest point is ``REARM_M`` above the key-down depth (the repeat's top; the rise
         itself, 1, where a body of the finger keeps it lower: 4 in 661 entries of the
@@ -204,7 +232,7 @@ class Moves(FollowMoves, RepeatMoves):
         self.rise = lru_cache(maxsize=None)(self._rise)
         self.repeat = lru_cache(maxsize=None)(self._repeat)
         self.repeat_pair = lru_cache(maxsize=None)(self._repeat_pair)
-        self.repeat_apex = lru_cache(maxsize=None)(self._repeat_apex)
+        self.repeat_row = lru_cache(maxsize=None)(self._repeat_row)
         self.to_hover = lru_cache(maxsize=None)(self._to_hover)
         self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
         self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
@@ -529,60 +557,6 @@ def _crossing(g, g0: float, g1: float, tol: float, lo: float = 0.0) -> float:
             if run >= 2:
                 glo *= 0.5
     return lo if glo >= 0.0 else hi
-
-
-RAIL_TORQUE_SHARE = 0.7  # the rail accelerates at most so hard that the motors holding the
-# hand against its inertia and gravity use 70 % of their capacity: the rest for the fingers'
-# own moves, whose reactions on the wrist reach 0.5 N m in the rows (at 90 % the check's
-# inverse dynamics found 8 of 71 songs 3-16 % over the wrist deviation motor's 2 N m).
-# Without it the default hand's 40 m/s^2 rail asks that motor 1.19 x its capacity (the
-# MuJoCo replay of `leaps` saturates it for 350 ms: docs/history/physics-replay.md)
-
-
-def rail_acceleration_cap(hand: HandModel, postures) -> float:
-    """The largest rail acceleration (m/s^2) at which, in each of ``postures`` (the hand
-    still otherwise), every motor stays within ``RAIL_TORQUE_SHARE`` of its capacity
-    (``path_acceleration_cap`` along the rail alone)."""
-    unit = np.zeros(hand.n)
-    unit[hand.index["rail"]] = 1.0
-    return path_acceleration_cap(hand, postures, unit)
-
-
-def path_acceleration_cap(hand: HandModel, postures, dq: np.ndarray) -> float:
-    """The largest acceleration ``s''`` of a move along ``dq`` (every joint, q'' = s'' dq)
-    at which, in each of ``postures``, every motor's torque (inverse dynamics, RNEA:
-    gravity plus the hand's inertia so accelerated, through the actuator model) stays
-    within ``RAIL_TORQUE_SHARE`` of its capacity (peak torque or tendon force:
-    ``planner.hand.tendon.actuator_capacity``)."""
-    m = hand.pin_model
-    data = m.createData()
-    cap = RAIL_TORQUE_SHARE * actuator_capacity(hand).torque_nm
-    vi = hand.pin_v_idx
-    best = np.inf
-    seen = set()
-    v = np.zeros(m.nv)  # (no speed, no acceleration; and the unit acceleration along dq)
-    unit = np.zeros(m.nv)
-    unit[vi] = dq
-    for q in postures:
-        qp = hand.pin_q(q)
-        tau_g = pin.rnea(m, data, qp, v, v)[vi]
-        tau_1 = pin.rnea(m, data, qp, v, unit)[vi] - tau_g
-        # (a posture whose torques and transmission equal one's before gives its motor
-        # torques: skipped. The arm's line: the rail and the reach, prismatic at the
-        # root, move no joint's torque, to the bit)
-        key = (hand.transmission_key(q), tau_g.tobytes(), tau_1.tobytes())
-        if key in seen:
-            continue
-        seen.add(key)
-        g, k = hand.motor_torques(q, tau_g), hand.motor_torques(q, tau_1)
-        room = cap - np.abs(g)
-        if np.any(room <= 0.0):
-            raise PlannerError(f"hand {hand.name!r}: a motor is past {RAIL_TORQUE_SHARE:.0%} "
-                               "of its capacity holding the hand still")
-        with np.errstate(divide="ignore"):
-            best = min(best, float(np.min(np.where(np.abs(k) > 1e-12, room / np.abs(k),
-                                                   np.inf))))
-    return best
 
 
 def _slowed(move, sigma: float):

@@ -64,6 +64,8 @@ HIGH_SAFE_Z_M = kb.BLACK_TOP_Z_M + CLEARANCE_M + TIP_RADIUS_M  # a tip this high
 ACROSS_SAMPLES = (0.25, 0.5, 0.75)  # a move across at crossing height is checked here: both
 # ends are at HIGH_Z_M, 4.5 mm above HIGH_SAFE_Z_M, and the tip's height along a straight
 # joint-space move is smooth, lowest near its middle (the rows' replay checks every row)
+# an entry's repeat as ``Moves.repeat_found`` finds it (NaN but the gap: no repeat)
+REPEAT_COLUMNS = ("sigma", "s_c", "scale", "cross_s", "gap_s")
 _BATCH = 60000  # configurations evaluated at once while the table is made
 
 
@@ -108,6 +110,9 @@ class MoveTable:
         # (and each finger's cells over its hull of high poses in every posture:
         # ``TendonProof.hull_cells``, in posture 0's table)
         self.proof_cells: dict[str, tuple[np.ndarray, np.ndarray, BoxGain]] = {}
+        # (each entry's repeat, ``REPEAT_COLUMNS``, and the parameters it was found with)
+        self.repeats: dict[tuple[str, int, int], tuple[float, ...]] = {}
+        self.repeat_params: str | None = None
 
     def key(self, e: AtlasEntry) -> tuple[str, int, int]:
         got = self._keys.get(id(e))  # (by the entry, held: its id is not reused)
@@ -128,6 +133,11 @@ class MoveTable:
             return None
         row = self.clears.get(self.key(e))
         return None if row is None else row[column]
+
+    def repeat_row(self, e: AtlasEntry, params: str) -> tuple[float, ...] | None:
+        """The entry's repeat (``REPEAT_COLUMNS``), None when the table was made with
+        other ``params`` (``moves.REPEAT_PARAMS``) or lacks it."""
+        return None if params != self.repeat_params else self.repeats.get(self.key(e))
 
     def tendon_scale(self, e: AtlasEntry, column: int) -> float | None:
         row = self.scales.get(self.key(e))
@@ -205,6 +215,9 @@ class MoveTable:
             if "clear_s" in z:  # (floats as Python's: the programme reads them as they are)
                 self.clears = dict(zip(keys, z["clear_s"].tolist()))
                 self.clear_params = str(z["clear_params"])
+            if "repeat_params" in z:  # (floats as Python's, as ``repeat_found`` gives them)
+                self.repeats = dict(zip(keys, map(tuple, z["repeat"].tolist())))
+                self.repeat_params = str(z["repeat_params"])
             if "proof_params" in z:  # (the tendon proof's gains: ``proof_arrays``)
                 self.proof_params = str(z["proof_params"])
                 for f in self.fingers:
@@ -303,7 +316,7 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
                             ).reshape(-1, 6),
         "tendon_scale": np.array([[moves.entry_scale(e, c) for c in range(4)]
                                   for e in entries]).reshape(-1, 4),
-        "params": np.array(params)}
+        "params": np.array(params), **repeat_arrays(moves, entries)}
     if high is not None:  # (``HighClear``'s moments of every entry, and its parameters)
         high, clear_params = high
         rows = [high.clear_row(e, moves) for e in entries]
@@ -390,6 +403,32 @@ def add_proofs(moves, path: Path, others=()) -> bool:
     with open(path, "wb") as fh:
         np.savez_compressed(fh, **arrays)
     return True
+
+
+def repeat_arrays(moves, entries: list[AtlasEntry]) -> dict[str, np.ndarray]:
+    """Each entry's repeat as ``moves`` finds it (``Moves.repeat_found``) and the
+    parameters it was found with (``moves.REPEAT_PARAMS``)."""
+    from planner.play.moves import REPEAT_PARAMS  # (moves imports this module)
+
+    rows = np.array([moves.repeat_found(e) for e in entries], dtype=float)
+    return {"repeat": rows.reshape(-1, len(REPEAT_COLUMNS)),
+            "repeat_params": np.array(REPEAT_PARAMS)}
+
+
+def add_repeats(moves, path: Path) -> int:
+    """Write ``repeat_arrays`` of the table's entries into the move table at ``path`` (its
+    other arrays as they are; ``moves`` reads that table: the crossings it ships are those
+    found); the number of entries."""
+    order, entries = table_entries(moves.atlas)
+    with np.load(path, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files if not k.startswith("repeat")}
+    fingers = moves.hand.fingers
+    if [(fingers[int(f)], int(pc), int(k)) for f, pc, k in arrays["key"]] != order:
+        raise ValueError(f"{path}: not the move table of this atlas's entries")
+    arrays.update(repeat_arrays(moves, entries))
+    with open(path, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
+    return len(entries)
 
 
 def _cross_arrays(moves, entries: list[AtlasEntry], other) -> dict:

@@ -28,8 +28,9 @@ import numpy as np
 
 from planner.play.atlas import HIGH_Z_M, PATH_SAMPLES, Atlas
 from planner.play.motion import Motion
-from planner.play.moves import Moves, path_acceleration_cap
+from planner.play.moves import Moves
 from planner.play.profile import Move, capped_move, path_caps
+from planner.play.railcap import path_acceleration_cap
 
 REST_RAIL_M = 0.0  # the rail rests with the hand over middle C (spec: x = 0), the
 # keyboard's middle: the longest way in to any key is half the keyboard's
