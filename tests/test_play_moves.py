@@ -3,7 +3,7 @@ says is what the forward kinematics finds, and a table made otherwise is not use
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
@@ -11,7 +11,7 @@ import pytest
 from planner.hand.chain import FrameChain
 from planner.hand.model import load_hand
 from planner.play.atlas import Atlas
-from planner.play.moves import Moves
+from planner.play.moves import REPEAT_PARAMS, Moves
 from planner.play.movetable import MoveTable, make_table, table_path
 
 
@@ -125,6 +125,12 @@ def test_a_table_of_other_parameters_is_not_used(moves, tmp_path):
     proof = small.tendons.proof
     assert same.proof_gain("index", lo, hi, proof.params()) is not None
     assert other.proof_gain("index", lo, hi, proof.params()) is None
+    # (each entry's repeat likewise, and not for a table of another repeat: another
+    # re-arm height, or other columns)
+    assert same.repeat_row(e, REPEAT_PARAMS) == small.repeat_found(e)
+    assert other.repeat_row(e, REPEAT_PARAMS) is None
+    assert same.repeat_row(e, REPEAT_PARAMS.replace("rearm_m", "rearm_mm")) is None
+    assert same.repeat_row(e, REPEAT_PARAMS.replace("gap_s", "gap")) is None
 
 
 def test_the_programmes_durations_are_the_moves_own(moves, by_fk):
@@ -229,3 +235,55 @@ def test_a_repeat_bounces_to_the_rearm_height_and_back(moves):
     new, old = np.array(gaps).T  # (seed 8: 10.2-18.6 ms, median 11.3; the jerk-only bounce
     # 10.8-19.8, 12.1; from rest to the rise and back 28-35, 30.4)
     assert 0.010 < float(np.median(new)) < 0.0118 and np.all(new < 0.6 * old)
+
+
+def _same_timed(a, b) -> None:
+    """Two ``Timed`` (or None) equal to the bit: their moves' every field, their crossing."""
+    assert (a is None) == (b is None)
+    if a is None:
+        return
+    assert type(a.move) is type(b.move) and a.cross_s == b.cross_s
+    for f in fields(a.move):
+        x, y = getattr(a.move, f.name), getattr(b.move, f.name)
+        assert np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y, f.name
+
+
+def _same_repeats(shipped: Moves, found: Moves, E) -> int:
+    """Every entry of ``E``: the repeat ``shipped`` reads from its move table is the one
+    ``found`` (no table) works out, bit for bit (its row, ``repeat``, ``repeat_pair``,
+    ``repeat_gap_s``); the number of entries without a repeat."""
+    none = 0
+    for e in E:
+        row = shipped.table.repeat_row(e, REPEAT_PARAMS)
+        assert row is not None
+        np.testing.assert_array_equal(np.array(row), np.array(found.repeat_found(e)))
+        assert row == shipped.repeat_row(e) and found.table.repeat_row(e, REPEAT_PARAMS) is None
+        _same_timed(shipped.repeat(e), found.repeat(e))
+        pair, pair_found = shipped.repeat_pair(e), found.repeat_pair(e)
+        assert (pair is None) == (pair_found is None)
+        for a, b in zip(pair or (), pair_found or ()):
+            _same_timed(a, b)
+        assert shipped.repeat_gap_s(e) == found.repeat_gap_s(e)
+        none += shipped.repeat(e) is None
+    return none
+
+
+def test_shipped_repeats_equal_the_ones_worked_out(moves, by_fk):
+    """The repeat the move table ships (``REPEAT_COLUMNS``: ``Moves.repeat_found`` when
+    the table was made) is the one a hand without the table works out, to the bit, on 60
+    random entries of the default hand."""
+    rng = np.random.default_rng(9)
+    E = _entries(moves)
+    assert _same_repeats(moves, by_fk, [E[i] for i in rng.choice(len(E), 60, replace=False)]) == 0
+
+
+def test_shipped_repeats_without_a_repeat_equal_the_ones_worked_out():
+    """The same on every entry of the mk5 hand, 24 of whose 159 lines never let the key up
+    (no repeat: NaN in the table, the gap up to crossing height and down)."""
+    hand = load_hand("mk5")
+    shipped = Moves(hand, Atlas(hand))
+    found = Moves(hand, shipped.atlas)
+    found.table = MoveTable(hand.fingers, shipped.atlas.natural_dx)
+    E = _entries(shipped)
+    assert len(E) == len(shipped.table.repeats)
+    assert _same_repeats(shipped, found, E) > 0
