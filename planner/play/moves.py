@@ -109,6 +109,9 @@ class RepeatMoves:
     depth and back (``repeat``), the lift and descent from rest to the same top
     (``repeat_pair``), and the programme's ``repeat_gap_s``."""
 
+    repeat_params = REPEAT_PARAMS  # (what its rows are found with: the move table's
+    # ``repeat_arrays`` reads it here, as ``movetable`` cannot import this module)
+
     def repeat_gap_s(self, e: AtlasEntry) -> float:
         """Key up to key down again on the same key: the repeat's ``Bounce`` from its
         key-up crossing to its key-down crossing (``repeat``; no repeat from below: up to

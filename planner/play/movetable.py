@@ -407,12 +407,10 @@ def add_proofs(moves, path: Path, others=()) -> bool:
 
 def repeat_arrays(moves, entries: list[AtlasEntry]) -> dict[str, np.ndarray]:
     """Each entry's repeat as ``moves`` finds it (``Moves.repeat_found``) and the
-    parameters it was found with (``moves.REPEAT_PARAMS``)."""
-    from planner.play.moves import REPEAT_PARAMS  # (moves imports this module)
-
+    parameters it was found with (``moves.repeat_params``: ``moves.REPEAT_PARAMS``)."""
     rows = np.array([moves.repeat_found(e) for e in entries], dtype=float)
     return {"repeat": rows.reshape(-1, len(REPEAT_COLUMNS)),
-            "repeat_params": np.array(REPEAT_PARAMS)}
+            "repeat_params": np.array(moves.repeat_params)}
 
 
 def add_repeats(moves, path: Path) -> int:
