@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -208,3 +209,35 @@ def test_plan_reads_give_each_plan_its_own_rows_and_plan_two_hands_lets_them_go(
         assert np.array_equal(e1.t_s, e2.t_s) and np.array_equal(e1.x_m, e2.x_m)
     reads.clear()
     assert len(reads) == 0
+
+
+def test_by_check_keeps_the_way_the_check_scores_higher_where_frames_tie(pair,
+                                                                          tmp_path) -> None:
+    """The meeting song: the right-first and left-first ways, each handed back, play the
+    same 560 frames of music (the frames' rule keeps the earlier, right first); the
+    check's frame F1 of their pairs of rows is 0.9460 against 0.9484, and ``by_check``
+    keeps left first. Its score is the check's: the F1 ``check`` finds in the file
+    written of the way kept."""
+    from planner.play.hands import assign_hands
+    from planner.play.twohands import by_check, hand_back, plan_pass
+    from planner.play.twoplan import write_two_hands
+
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    a = assign_hands(song.notes, pair.gap, {s: pair.planners[s].places for s in (LEFT, RIGHT)})
+    backs = [hand_back(song, pair, plan_pass(song, pair, a, s, 100.0), 100.0)
+             for s in (RIGHT, LEFT)]
+    assert [b.way for b in backs] == ["right first back", "left first back"]
+    assert backs[0].played_frames == backs[1].played_frames == 560
+    f1 = [pair.scorer.frame_f1(by_check(song, pair, [b], 100.0)[1], song, 100.0)
+          for b in backs]
+    assert f1[0] == pytest.approx(0.9460, abs=1e-4) and f1[1] == pytest.approx(0.9484, abs=1e-4)
+    best, rows = by_check(song, pair, backs, 100.0)
+    assert best is backs[1]
+    # (the same score as the check's, of the file written)
+    plan = plan_two_hands(song, pair)
+    out = tmp_path / "meet.csv"
+    kept = replace(plan, plans=best.plans, notes_of=best.notes_of, rows=rows,
+              planned_of=best.planned_of, assignment=best.assignment, first=best.first,
+              way=best.way)
+    write_two_hands(kept, song, pair, str(out), 100.0, "")
+    assert check_trajectory(str(out), song).play.f1 == pytest.approx(f1[1], abs=2e-3)
