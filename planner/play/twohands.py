@@ -277,6 +277,17 @@ def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
                     float(played), (planned[LEFT], planned[RIGHT]), p.alone, True, p.settled)
 
 
+def back_ceiling(song: Song, p: PairPass, rate_hz: float) -> float:
+    """The most frames ``hand_back`` of ``p`` could play: the second hand's played notes
+    (its plan unchanged) and every note the first is planned with again, all played."""
+    f, s = SIDES.index(p.first), 1 - SIDES.index(p.first)
+    gone = {p.planned_of[s][k.note] for k in p.plans[s].verdict.skipped}
+    plays = set(p.planned_of[s]) - gone
+    again = (set(p.planned_of[f]) - plays) | gone
+    return float(_played_frames(p.plans[s], p.planned_of[s], song.notes, rate_hz)
+                 + sum(round(song.notes[i].duration_s * rate_hz) for i in again))
+
+
 def _why(p: PairPass, i: int) -> str:
     """Why ``p``'s hand of note ``i`` (song index) left it out (its plan's ``Skip``)."""
     k = SIDES.index(p.assignment.hand[i])
@@ -364,12 +375,20 @@ def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: 
     if settled:
         top = max(tried, key=lambda p: p.played_frames)
         tops += [top] if top is not tops[0] else []
+    # (then every other way whose hand-back could play more than the most frames yet:
+    # ways a few frames apart before their hand-backs can be hundreds apart after)
     finals = list(tops)
-    for top in tops:
+    bar = max(p.played_frames for p in tried)
+    rest = sorted((p for p in tried if all(p is not t for t in tops)),
+                  key=lambda p: -p.played_frames)
+    for top in tops + rest:
+        if all(top is not t for t in tops) and back_ceiling(song, top, rate_hz) <= bar:
+            continue
         back = hand_back(song, pp, top, rate_hz, song_name)
         if back is not None:
             tried.append(back)
-            finals.append(back)
+            finals += [back] + ([] if any(top is f for f in finals) else [top])
+            bar = max(bar, back.played_frames)
     best, rows = by_check(song, pp, finals, rate_hz)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
