@@ -49,7 +49,8 @@ from planner.play.twobounds import (
     settled_bounds,
     windows,
 )
-from planner.play.twoplan import PlanReads, TwoHandPlan, one_clock, write_two_hands
+from planner.play.twoplan import PairRows, PlanReads, TwoHandPlan, one_clock, write_two_hands
+from planner.play.twoscore import PairScorer
 
 
 class PairPlanner:
@@ -77,6 +78,7 @@ class PairPlanner:
         # (each plan's rows read once while a pair is planned: ``plan_two_hands`` lets
         # them go when it is done)
         self.reads = PlanReads()
+        self.scorer = PairScorer(left, right)  # (the check's frame F1 of a way's rows)
 
     def reach(self, side: str) -> HandReach:
         """``side``'s ``HandReach`` (of the pair's ``HandGap``)."""
@@ -275,6 +277,17 @@ def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
                     float(played), (planned[LEFT], planned[RIGHT]), p.alone, True, p.settled)
 
 
+def back_ceiling(song: Song, p: PairPass, rate_hz: float) -> float:
+    """The most frames ``hand_back`` of ``p`` could play: the second hand's played notes
+    (its plan unchanged) and every note the first is planned with again, all played."""
+    f, s = SIDES.index(p.first), 1 - SIDES.index(p.first)
+    gone = {p.planned_of[s][k.note] for k in p.plans[s].verdict.skipped}
+    plays = set(p.planned_of[s]) - gone
+    again = (set(p.planned_of[f]) - plays) | gone
+    return float(_played_frames(p.plans[s], p.planned_of[s], song.notes, rate_hz)
+                 + sum(round(song.notes[i].duration_s * rate_hz) for i in again))
+
+
 def _why(p: PairPass, i: int) -> str:
     """Why ``p``'s hand of note ``i`` (song index) left it out (its plan's ``Skip``)."""
     k = SIDES.index(p.assignment.hand[i])
@@ -325,6 +338,22 @@ def _both_rooms(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate
     return got
 
 
+def by_check(song: Song, pp: PairPlanner, finals: list[PairPass], rate_hz: float
+              ) -> tuple[PairPass, PairRows]:
+    """Of the final ways (the best ways and their hand-backs), the one whose pair of rows
+    the check scores highest (``PairScorer.frame_f1``: both hands' keys as one, against
+    the whole song), and its rows; equals by the frames of music played, then the
+    earlier. One way: no replay."""
+    if len(finals) == 1:
+        return finals[0], one_clock(finals[0].plans, rate_hz, pp.reads)
+    got = []
+    for k, p in enumerate(finals):
+        rows = one_clock(p.plans, rate_hz, pp.reads)
+        got.append(((pp.scorer.frame_f1(rows, song, rate_hz), p.played_frames, -k), p, rows))
+    _, best, rows = max(got, key=lambda g: g[0])
+    return best, rows
+
+
 def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: float,
                     song_name: str, t_start: float) -> TwoHandPlan:
     """``plan_two_hands`` after its input's check (``t_start``: its clock's start)."""
@@ -346,14 +375,21 @@ def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: 
     if settled:
         top = max(tried, key=lambda p: p.played_frames)
         tops += [top] if top is not tops[0] else []
-    best = tops[0]
-    for top in tops:
+    # (then every other way whose hand-back could play more than the most frames yet:
+    # ways a few frames apart before their hand-backs can be hundreds apart after)
+    finals = list(tops)
+    bar = max(p.played_frames for p in tried)
+    rest = sorted((p for p in tried if all(p is not t for t in tops)),
+                  key=lambda p: -p.played_frames)
+    for top in tops + rest:
+        if all(top is not t for t in tops) and back_ceiling(song, top, rate_hz) <= bar:
+            continue
         back = hand_back(song, pp, top, rate_hz, song_name)
         if back is not None:
             tried.append(back)
-        best = max((best, top) + ((back,) if back is not None else ()),
-                   key=lambda p: p.played_frames)
-    rows = one_clock(best.plans, rate_hz, pp.reads)
+            finals += [back] + ([] if any(top is f for f in finals) else [top])
+            bar = max(bar, back.played_frames)
+    best, rows = by_check(song, pp, finals, rate_hz)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
     plan = TwoHandPlan(best.assignment, pp.gap, best.plans, best.notes_of, rows, 0.0, least,
