@@ -163,11 +163,12 @@ class RepeatMoves:
     def _repeat_pair(self, e: AtlasEntry) -> tuple[Timed, Timed] | None:
         """A repeat with time to spare (``Motion``): the lift up the same line to the same
         top and the descent back, two moves from rest (the finger may wait between)."""
-        if self.repeat_apex(e) is None:
+        apex = self.repeat_apex(e)
+        if apex is None:
             return None
-        sigma, s_c = self.repeat_apex(e)
-        apex = e.press + sigma * (e.rise - e.press)
-        up, down = self._move(e.finger, e.press, apex), self._move(e.finger, apex, e.press)
+        sigma, s_c = apex
+        top = e.press + sigma * (e.rise - e.press)
+        up, down = self._move(e.finger, e.press, top), self._move(e.finger, top, e.press)
         up, down = _slowed(up, self._line_scale(e, up)), _slowed(down, self._line_scale(e, down))
         # (on the partial line the crossing lies at s_c / sigma going up, the rest going down)
         return (Timed(up, up.time_at_s(s_c / sigma)),
