@@ -18,6 +18,7 @@ from planner.play.force import (
     held_force_n,
     press_capacity_n,
     press_force_n,
+    pressed_force_n,
 )
 from planner.play.planar import locked_in_x, planar_press_target
 from planner.simulate.keyboard import front_force_n, key_body
@@ -125,3 +126,29 @@ def test_agh_index_presses_white_keys_across_them(agh_atlas):
             rail = a.rail_for("index", pitch, k)
             x = h.tip_positions(a.full_q(a.entry("index", pitch, rail), "press", rail))[i, 0]
             assert lo - 1e-9 <= x <= hi + 1e-9
+
+
+def test_a_pose_presses_a_note_softer_where_it_holds_less():
+    """``pressed_force_n``: the note's force where the pose holds it, all the pose holds
+    where that is less, nothing where its descent does not drive the key down (0)."""
+    assert pressed_force_n(1.5, 2.9) == 1.5
+    assert pressed_force_n(3.0, 2.94) == 2.94
+    assert pressed_force_n(3.0, 0.0) == 0.0
+
+
+def test_a_forte_note_is_pressed_from_the_places_of_a_mezzo_forte_one():
+    """The default hand's ring holds at most 2.94 N at any press (the index alone 3 N),
+    so a velocity-127 note (3 N) had no place for the ring (nor the middle or pinky): the
+    fingering gave every forte note to the index. Pressed softer where its pose holds
+    less, the ring presses a forte G#4 from every place it presses a mezzo-forte one."""
+    from planner.music.midi import Note
+    from planner.play.costs import Costs
+    from planner.play.places import Places
+
+    places = Places(load_hand("default"))
+    notes = [Note(68, 0.0, 0.5, 64), Note(68, 1.0, 1.5, 127)]
+    assert press_force_n(127) > max(
+        e.max_force_n for i in range(-40, 60) for p in range(places.postures)
+        if (e := places.entry("ring", 68, places.place(p, i))) is not None)
+    c = Costs(notes, places, 100.0)
+    assert c.rails("ring", 0) and c.rails("ring", 1) == c.rails("ring", 0)

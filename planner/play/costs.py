@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from planner.music import keyboard as kb
 from planner.music.keyboard import pitch_name
 from planner.play.armcost import ArmCosts
-from planner.play.force import press_force_n
+from planner.play.force import press_force_n, pressed_force_n
 from planner.play.keytimes import (
     LATE_MIN_S,
     key_down_s,
@@ -238,7 +238,7 @@ class Costs(ArmCosts):
     # ------------------------------------------------------------------ reach
     def rails(self, finger: str, note: int) -> frozenset[int]:
         """Places (every posture's rail grid indices) from which ``finger`` presses
-        ``note`` with its force."""
+        ``note`` (with its force, or softer where the pose holds less: ``pressed_force_n``)."""
         n = self.notes[note]
         force = press_force_n(n.velocity)
         key = (finger, n.pitch, force)  # (bounded: keys and forces, not notes)
@@ -253,7 +253,7 @@ class Costs(ArmCosts):
                 for i in range(lo, hi + 1):
                     place = self.places.place(p, i)
                     e = self.places.entry(finger, n.pitch, place)
-                    if e is not None and e.max_force_n >= force:
+                    if e is not None and pressed_force_n(force, e.max_force_n) > 0.0:
                         ok.append(place)
             # (the press clear of the other keys with the rail where the place puts it)
             clear = self.places.presses_clear(finger, n.pitch, ok)

@@ -2,9 +2,17 @@
 
 ``press_force_n``: MIDI velocity -> press force at the fingertip, ``force_n = 0.5 + 2.5
 (v/127)^2``: 0.5 N is a real key's weight (the force that just holds a piano key down),
-3 N a forte press on this hand. The atlas's poses carry the largest force each can press
-within the motors' torque (``AtlasEntry.max_force_n``); the fingering uses a pose only for
-the notes it can press that hard.
+3 N a forte press (set when every press pose of the default hand held 3.58 N or more,
+docs/history/hand-strength.md). The atlas's poses carry the largest force each can press
+within the motors' torque (``AtlasEntry.max_force_n``). ``pressed_force_n``: a pose presses
+a note with the note's force, or with all it holds where that is less (a forte note
+softer, never past the motors' bound): the key goes down all the same, the rows are the
+same poses, and the replay and ``check`` push the key with its own force whatever the
+velocity. Since the tendons' design force, the default hand's poses hold 2.35-3.16 N:
+3 N only by the index, so a note asking it was the index's alone, a forte line an arm move
+at every note and every other note left out (``too_late``:
+docs/history/2026-12-07-play-forte.md). A pose whose descent does not drive the key down
+(``press_capacity_n``: 0) presses no note.
 
 ``press_capacity_n``: that force for one press, along the whole descent, not at the press
 pose alone. The key must be driven down from its top: at each depth ``d`` of its travel
@@ -54,6 +62,13 @@ def press_force_n(velocity: int) -> float:
     """Press force (N) for a MIDI velocity 0..127."""
     v = min(max(velocity, 0), 127) / 127.0
     return MIN_FORCE_N + (MAX_FORCE_N - MIN_FORCE_N) * v * v
+
+
+def pressed_force_n(force_n: float, max_force_n: float) -> float:
+    """The force (N) a press pose holding at most ``max_force_n`` (``AtlasEntry``) presses a
+    note asking ``force_n`` with: the note's, or all the pose holds where that is less; 0
+    (no note pressed there) where the pose's descent does not drive the key down."""
+    return min(force_n, max_force_n)
 
 
 def held_force_n(hand: HandModel, q: np.ndarray, finger: str,
