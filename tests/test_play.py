@@ -379,13 +379,20 @@ def test_a_forte_line_is_played_as_a_mezzo_forte_one(planner, tmp_path):
     only the index held at any press) and mezzo-forte: the index played the forte line
     alone, an arm move at every note, and left 4 of its 10 notes out (``too_late``, check
     F1 0.61 against 1.00); pressed softer where a pose holds less, the forte line is
-    played as the other, every note struck, the same frames down."""
+    played as the other, every note struck, the same frames down, and the summary names
+    the notes pressed softer than asked (none of the mezzo-forte line's)."""
+    from planner.play.summary import format_summary, softer_notes
+
     line = (68, 63, 68, 61, 68, 63, 70, 66, 68, 61)
-    got = {}
+    got, soft = {}, {}
     for v in (64, 127):
         notes = [Note(p, 0.25 * k, 0.25 * (k + 1), v) for k, p in enumerate(line)]
-        res, rep, _ = _plan(planner, notes, tmp_path, name=f"line{v}")
+        res, rep, path = _plan(planner, notes, tmp_path, name=f"line{v}")
         _safe(rep)
         assert not res.verdict.skipped, res.verdict.skipped
         got[v] = rep.play.f1
+        soft[v] = softer_notes(notes, res, planner.places)
+        text = format_summary("line", notes, res, str(path), places=planner.places)
+        assert ("softer: " in text) == bool(soft[v])
     assert got[127] == got[64] > 0.95
+    assert soft[64] == [] and soft[127] and all(f < 3.0 for _, f in soft[127])

@@ -67,7 +67,8 @@ def run(a: argparse.Namespace) -> int:
     if a.json:
         sys.stdout.write(json.dumps(plan_dict(name, song.notes, plan, out, setup_s)) + "\n")
     else:
-        sys.stderr.write(format_summary(name, song.notes, plan, out, setup_s) + "\n")
+        sys.stderr.write(format_summary(name, song.notes, plan, out, setup_s, planner.places)
+                         + "\n")
     if a.report or a.html:
         from planner.check import check_trajectory
 

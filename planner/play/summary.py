@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 
 from planner.music.keyboard import pitch_name
+from planner.play.force import press_force_n, pressed_force_n
+from planner.play.places import RAIL_STEP_M
 from planner.play.stream import PlayPlan
 
 
@@ -26,11 +28,38 @@ def part_lines(plan: PlayPlan) -> list[str]:
     return [] if plan.part is None else [f"part: {plan.part.reason}"]
 
 
+def softer_notes(notes, plan: PlayPlan, places) -> list[tuple[int, float]]:
+    """(note, force N) of the notes played with less force than their velocity asks
+    (``planner.play.force.pressed_force_n``: the pose that presses them holds less), by
+    note."""
+    out = []
+    for a in plan.fingering.assignments:
+        asked = press_force_n(notes[a.note].velocity)
+        rail_i = round(a.rail_m / RAIL_STEP_M)
+        e = places.entry(a.finger, notes[a.note].pitch, places.place(a.posture, rail_i))
+        if e is not None and pressed_force_n(asked, e.max_force_n) < asked:
+            out.append((a.note, pressed_force_n(asked, e.max_force_n)))
+    return out
+
+
+def softer_line(notes, plan: PlayPlan, places) -> list[str]:
+    """The summary's line on the notes pressed softer than asked (none when there are
+    none)."""
+    soft = softer_notes(notes, plan, places)
+    if not soft:
+        return []
+    asked = max(press_force_n(notes[n].velocity) for n, _ in soft)
+    return [(f"softer: {len(soft)} note{'' if len(soft) == 1 else 's'} pressed with "
+             f"{min(f for _, f in soft):.2f}-{max(f for _, f in soft):.2f} N, less than "
+             f"their velocity asks (up to {asked:.2f} N): their fingers' poses hold no more")]
+
+
 def format_summary(song_name: str, notes, plan: PlayPlan, out: str,
-                   setup_s: float | None = None) -> str:
+                   setup_s: float | None = None, places=None) -> str:
     """The summary: counts and the file, timing (after the hand's set-up, ``setup_s``,
-    given apart), then every note not played (with its reason), every late key and every
-    wrong press the replay finds."""
+    given apart), the notes pressed softer than asked (with the hand's ``places``), then
+    every note not played (with its reason), every late key and every wrong press the
+    replay finds."""
     v = plan.verdict
     song_s, rtf, rails = _timing(notes, plan)
     rtf = math.inf if rtf is None else rtf
@@ -42,6 +71,8 @@ def format_summary(song_name: str, notes, plan: PlayPlan, out: str,
              f"(real-time factor {rtf:.0f}x), first row after {plan.first_row_s * 1000:.0f} ms, "
              f"{rails} hand position{'' if rails == 1 else 's'}, frame F1 {v.score.f1:.4f}")]
     lines.extend(part_lines(plan))
+    if places is not None:
+        lines.extend(softer_line(notes, plan, places))
     for s in v.skipped:
         n = notes[s.note]
         lines.append(f"  infeasible: t={n.onset_s:.3f} s {pitch_name(n.pitch)} (MIDI {n.pitch}): "
