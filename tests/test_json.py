@@ -18,7 +18,7 @@ PLAY = {"command": str, "song": str, "notes": int, "played": int, "left_out": li
         "late": list, "wrong_presses": list, "frame_f1": NUM, "rows": int, "duration_s": NUM,
         "trajectory": str, "song_s": NUM, "planning_s": NUM, "first_row_s": NUM,
         "setup_s": NUM, "realtime_factor": OPT_NUM, "hand_positions": int,
-        "part": (dict, type(None))}
+        "part": (dict, type(None)), "softer": list}
 LEFT_OUT = {"note": int, "onset_s": NUM, "pitch": int, "name": str, "reason": str,
             "detail": str}
 CATCH = {"command": str, "feasible": bool, "reasons": list, "reason_kinds": list, "throw": dict,

@@ -381,7 +381,7 @@ def test_a_forte_line_is_played_as_a_mezzo_forte_one(planner, tmp_path):
     F1 0.61 against 1.00); pressed softer where a pose holds less, the forte line is
     played as the other, every note struck, the same frames down, and the summary names
     the notes pressed softer than asked (none of the mezzo-forte line's)."""
-    from planner.play.summary import format_summary, softer_notes
+    from planner.play.summary import format_summary, plan_dict, softer_notes
 
     line = (68, 63, 68, 61, 68, 63, 70, 66, 68, 61)
     got, soft = {}, {}
@@ -394,5 +394,7 @@ def test_a_forte_line_is_played_as_a_mezzo_forte_one(planner, tmp_path):
         soft[v] = softer_notes(notes, res, planner.places)
         text = format_summary("line", notes, res, str(path), places=planner.places)
         assert ("softer: " in text) == bool(soft[v])
+        d = plan_dict("line", notes, res, str(path), 0.0, planner.places)
+        assert [(x["note"], x["force_n"]) for x in d["softer"]] == soft[v]
     assert got[127] == got[64] > 0.95
     assert soft[64] == [] and soft[127] and all(f < 3.0 for _, f in soft[127])

@@ -65,7 +65,8 @@ def run(a: argparse.Namespace) -> int:
         plan = plan_song(song, hand, out, a.rate, song_name=name, planner=planner,
                          on_progress=bar.update)
     if a.json:
-        sys.stdout.write(json.dumps(plan_dict(name, song.notes, plan, out, setup_s)) + "\n")
+        sys.stdout.write(json.dumps(plan_dict(name, song.notes, plan, out, setup_s,
+                                              planner.places)) + "\n")
     else:
         sys.stderr.write(format_summary(name, song.notes, plan, out, setup_s, planner.places)
                          + "\n")

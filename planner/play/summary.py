@@ -81,11 +81,16 @@ def format_summary(song_name: str, notes, plan: PlayPlan, out: str,
     return "\n".join(lines)
 
 
-def plan_dict(song_name: str, notes, plan: PlayPlan, out: str, setup_s: float) -> dict:
+def plan_dict(song_name: str, notes, plan: PlayPlan, out: str, setup_s: float,
+              places=None) -> dict:
     """``play --json``: the summary's facts, one JSON object (units in the names; a note
-    is its index in the song, by onset then pitch, as in the end marker)."""
+    is its index in the song, by onset then pitch, as in the end marker); ``softer``, the
+    notes pressed with less force than asked, with the hand's ``places`` (else None)."""
     v = plan.verdict
     song_s, rtf, rails = _timing(notes, plan)
+    softer = None if places is None else [
+        {"note": n, "force_n": f, "asked_n": press_force_n(notes[n].velocity)}
+        for n, f in softer_notes(notes, plan, places)]
     return {
         "command": "play", "song": song_name, "notes": v.notes, "played": v.played,
         "left_out": [{"note": s.note, "onset_s": float(notes[s.note].onset_s),
@@ -99,5 +104,5 @@ def plan_dict(song_name: str, notes, plan: PlayPlan, out: str, setup_s: float) -
         "trajectory": out, "song_s": song_s, "planning_s": plan.planning_s,
         "first_row_s": plan.first_row_s, "setup_s": setup_s,
         "realtime_factor": rtf, "hand_positions": rails,
-        "part": None if plan.part is None else plan.part.to_dict(),
+        "part": None if plan.part is None else plan.part.to_dict(), "softer": softer,
     }
