@@ -48,7 +48,7 @@ class SkipReason(enum.Enum):
     OUT_OF_REACH = "out_of_reach"  # no finger presses the key from any rail position
     BODY = "body"  # a finger would press it but for its body, which touches another key or
     # the key bed (spec section 2): never pressed wrongly
-    TORQUE = "torque"  # the fingers that reach it cannot press with the note's force
+    TORQUE = "torque"  # the fingers that reach it cannot drive its key down (``force.py``)
     CHORD = "chord"  # more notes at once than the hand can hold from one position
     HELD = "held"  # the fingers that could strike it hold longer notes through it (each
     # left-out note costs its frames: the programme gives up the fewer)

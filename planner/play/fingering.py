@@ -3,8 +3,8 @@
 The song is cut at its onsets (events). At each event the hand is in a state
 (``planner.play.costs.State``): a rail position and a finger for every note sounding
 then (the new ones and those still held). A state exists only where the atlas has every
-one of those fingers over its key from that rail, pressing with the note's force within
-the motors' torque (``AtlasEntry.max_force_n``), the fingers in the order of their keys,
+one of those fingers over its key from that rail, pressing with the note's force or
+softer (``planner.play.force.pressed_force_n``), the fingers in the order of their keys,
 one note per finger; no finger passes one that has just played (the thumb on a white key
 excepted: it presses in front of the black keys). A held note keeps its finger, and the
 rail unless its finger can follow its key, or is cut at the event. Transitions cost what

@@ -26,8 +26,8 @@ motors must hold ``N (z - mu s)`` (``s`` the slide's horizontal unit direction) 
 gravity, each within its capacity (``actuator_capacity``). A press counts only if at every
 sampled depth down to the key-down depth that ``N`` is at least the spring's force; its
 capacity is then the force the motors hold at the press pose (the key at its depth, the
-pad at rest: no friction), which the note's press force is compared with (a note's force
-is the one it is held down with; on the way down the key asks its spring's). Where the
+pad at rest: no friction), the most a note is pressed with there (a note's force is the
+one it is held down with; on the way down the key asks its spring's). Where the
 descent fails, 0: no note is pressed there (its notes are left out for ``torque``). (On the
 default hand the descent with friction holds 1.8-1.9 N where its spring asks 0.94 N at
 most: no press of its atlas fails it.)
