@@ -85,6 +85,35 @@ class Kinematics:
     def gravity(self, q: np.ndarray) -> np.ndarray:
         return pin.computeGeneralizedGravity(self.model, self.data, self.pin_q(q))[self.idx]
 
+    def gravities(self, Q: np.ndarray) -> np.ndarray:
+        """``gravity`` of every row of ``Q`` (T, n); a row equal to the one before it
+        computed once (the same numbers, row by row)."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        new, of = distinct_rows(Q)
+        QP = np.zeros((int(np.count_nonzero(new)), self.model.nq))
+        QP[:, self.idx] = Q[new]
+        m, d, idx = self.model, self.data, self.idx
+        out = np.empty((len(QP), self.hand.n))
+        for k in range(len(QP)):
+            out[k] = pin.computeGeneralizedGravity(m, d, QP[k])[idx]
+        return out[of]
+
+    def moving(self, Q: np.ndarray, V: np.ndarray, A: np.ndarray, still: np.ndarray
+               ) -> np.ndarray:
+        """``inertial(q, v, a)`` of every row of ``Q, V, A`` given each row's
+        ``gravity`` (``still``, ``gravities``): RNEA(q, v, a) less RNEA(q, 0, 0), which is
+        the generalized gravity to the bit (the same recursion with the speeds and
+        accelerations zero: every term they bring is a zero added; a test holds the two
+        equal on every shipped hand)."""
+        m, d, idx = self.model, self.data, self.idx
+        QP = np.zeros((len(Q), m.nq))
+        VP, AP = np.zeros((len(Q), m.nv)), np.zeros((len(Q), m.nv))
+        QP[:, idx], VP[:, idx], AP[:, idx] = Q, V, A
+        out = np.empty((len(Q), self.hand.n))
+        for k in range(len(Q)):
+            out[k] = pin.rnea(m, d, QP[k], VP[k], AP[k])[idx] - still[k]
+        return out
+
     def inertial(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """Joint torques that move the hand at speeds ``v`` and accelerations ``a`` (our
         joint order), gravity apart: RNEA(q, v, a) - RNEA(q, 0, 0)."""
@@ -109,7 +138,8 @@ class Kinematics:
     def point_jacobians(self, q: np.ndarray, frame_ids: list[int]) -> list[np.ndarray]:
         """World position Jacobians (3, n) of frames, our joint order."""
         pin.computeJointJacobians(self.model, self.data, self.pin_q(q))
-        pin.updateFramePlacements(self.model, self.data)
+        # (no ``updateFramePlacements``: ``getFrameJacobian`` places its frame itself, from
+        # its joint's placement, the same product; the other frames are not read)
         out = []
         for fid in frame_ids:
             J = pin.getFrameJacobian(self.model, self.data, fid,
