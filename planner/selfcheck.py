@@ -132,7 +132,7 @@ class SelfCheck:
         # (the rule is row by row: a row equal to the one before it, a hand holding still,
         # is judged once; about three rows in four on the corpus)
         new, of = distinct_rows(q)
-        tips, _ = self._kin.frames_of(q[new])
+        tips = self._kin.tips_of(q[new])
         kc = key_contacts(tips)
         bk = body_keys(self._kin, q, self._bodies)
         t = rows[:, 0].copy()

@@ -103,3 +103,27 @@ def test_point_jacobians_are_those_of_every_frame_placed(name):
         pin.forwardKinematics(m, d, kin.pin_q(np.zeros(hand.n)))  # (other placements held)
         got = kin.point_jacobians(q, frames)
         assert all(np.array_equal(g, w) for g, w in zip(got, want))
+
+
+@pytest.mark.parametrize("name", HANDS)
+def test_tips_alone_are_the_frames_tips(name):
+    hand = load_hand(name)
+    kin = Kinematics(hand, hand.T_world_root)
+    Q = _poses(hand, 200, 7)
+    tips, _ = kin.frames(Q)
+    assert np.array_equal(kin.tips(Q), tips)
+    new = np.ones(len(Q), dtype=bool)
+    new[1:] = np.any(Q[1:] != Q[:-1], axis=1)
+    assert np.array_equal(kin.tips_of(Q[new]), kin.frames_of(Q[new])[0])
+
+
+@pytest.mark.parametrize("name", HANDS)
+def test_inertials_given_the_gravity_are_each_inertial(name):
+    hand = load_hand(name)
+    kin = Kinematics(hand, hand.T_world_root)
+    rng = np.random.default_rng(8)
+    for q in _poses(hand, 100, 9):
+        moves = [tuple(rng.standard_normal((2, hand.n))) for _ in range(2)]
+        want = [kin.inertial(q, v, a) for v, a in moves]
+        for got in (kin.inertials(q, moves), kin.inertials(q, moves, kin.gravity(q))):
+            assert all(np.array_equal(g, w) for g, w in zip(got, want))

@@ -44,6 +44,24 @@ class Kinematics:
         tips, palm = self.frames_of(Q[new])
         return tips[of], palm[of]
 
+    def tips(self, Q: np.ndarray) -> np.ndarray:
+        """The world tips (T, 5, 3) of ``frames`` alone (no palm placed: the same tips)."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        new, of = distinct_rows(Q)
+        return self.tips_of(Q[new])[of]
+
+    def tips_of(self, U: np.ndarray) -> np.ndarray:
+        """The tips of ``frames_of`` (rows already distinct)."""
+        tips = np.empty((len(U), len(self.tip_ids), 3))
+        QP = np.zeros((len(U), self.model.nq))
+        QP[:, self.idx] = U
+        m, d, tip_ids = self.model, self.data, self.tip_ids
+        for k in range(len(U)):
+            pin.forwardKinematics(m, d, QP[k])
+            for j, f in enumerate(tip_ids):
+                tips[k, j] = pin.updateFramePlacement(m, d, f).translation
+        return tips @ self.R.T + self.p
+
     def frames_of(self, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``frames`` of every row of ``U`` (rows already distinct: each one computed)."""
         T = len(U)
@@ -123,16 +141,19 @@ class Kinematics:
         return (pin.rnea(self.model, self.data, qp, vp, ap)
                 - pin.rnea(self.model, self.data, qp, z, z))[self.idx]
 
-    def inertials(self, q: np.ndarray, moves) -> list[np.ndarray]:
+    def inertials(self, q: np.ndarray, moves, gravity: np.ndarray | None = None
+                  ) -> list[np.ndarray]:
         """``inertial(q, v, a)`` of each ``(v, a)`` of ``moves`` at one pose, RNEA(q, 0, 0)
-        found once (the same numbers)."""
+        found once, or given (``gravity``: the pose's ``gravity``, the same numbers:
+        ``moving``)."""
         qp, z = self.pin_q(q), np.zeros(self.model.nv)
-        still = pin.rnea(self.model, self.data, qp, z, z)
+        idx = self.idx
+        still = pin.rnea(self.model, self.data, qp, z, z)[idx] if gravity is None else gravity
         out = []
         for v, a in moves:
             vp, ap = z.copy(), z.copy()
-            vp[self.idx], ap[self.idx] = v, a
-            out.append((pin.rnea(self.model, self.data, qp, vp, ap) - still)[self.idx])
+            vp[idx], ap[idx] = v, a
+            out.append(pin.rnea(self.model, self.data, qp, vp, ap)[idx] - still)
         return out
 
     def point_jacobians(self, q: np.ndarray, frame_ids: list[int]) -> list[np.ndarray]:

@@ -60,7 +60,7 @@ class RowsLoad:
 
     def torques(self, t_s: np.ndarray, Q: np.ndarray, inertia: bool = True) -> np.ndarray:
         """Motor torques (rows 1 .. len - 2 of ``t_s, Q``, motors)."""
-        tips, _ = self.kin.frames(Q)
+        tips = self.kin.tips(Q)
         depth = np.nan_to_num(key_contacts(tips).tip_depth, nan=-1.0)
         return row_motor_torques(self.hand, self.kin, t_s, Q, depth >= DOWN_DEPTH_M,
                                  self.motor_map, inertia)
