@@ -156,6 +156,22 @@ class Kinematics:
             out.append(pin.rnea(self.model, self.data, qp, vp, ap)[idx] - still)
         return out
 
+    def tips_pushed(self, Q: np.ndarray, pressing: np.ndarray, force: np.ndarray,
+                    tau: np.ndarray) -> None:
+        """``tau[k] -= J.T @ force`` for each fingertip pressing in row ``k``
+        (``pressing`` (T, 5)), ``J`` its ``point_jacobians``, tip by tip in order (the
+        same numbers as a call of ``point_jacobians`` per row)."""
+        m, d, idx, R, tip_ids = self.model, self.data, self.idx, self.R, self.tip_ids
+        rows = np.flatnonzero(pressing.any(axis=1))
+        QP = np.zeros((len(rows), m.nq))
+        QP[:, idx] = Q[rows]
+        world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        for i, k in enumerate(rows.tolist()):
+            pin.computeJointJacobians(m, d, QP[i])
+            for f in np.flatnonzero(pressing[k]).tolist():
+                J = R @ pin.getFrameJacobian(m, d, tip_ids[f], world)[:3, idx]
+                tau[k] -= J.T @ force
+
     def point_jacobians(self, q: np.ndarray, frame_ids: list[int]) -> list[np.ndarray]:
         """World position Jacobians (3, n) of frames, our joint order."""
         pin.computeJointJacobians(self.model, self.data, self.pin_q(q))

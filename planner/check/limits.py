@@ -308,12 +308,7 @@ def _joint_torques(kin: Kinematics, Q: np.ndarray, pressing_tips: np.ndarray | N
     Qn = Q[new]
     tau = kin.gravities(Qn) if gravity is None else gravity[new]
     if pressing_tips is not None:
-        tip_ids, pn = kin.tip_ids, pressing_tips[new]
-        push = np.array([0.0, 0.0, KEY_FORCE_N])
-        for k in np.flatnonzero(pn.any(axis=1)).tolist():
-            Js = kin.point_jacobians(Qn[k], [tip_ids[f] for f in np.flatnonzero(pn[k]).tolist()])
-            for J in Js:
-                tau[k] -= J.T @ push
+        kin.tips_pushed(Qn, pressing_tips[new], np.array([0.0, 0.0, KEY_FORCE_N]), tau)
     if ball_load is not None:
         bn = np.asarray(ball_load)[new]
         for k in np.flatnonzero(bn > 0):
