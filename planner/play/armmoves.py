@@ -49,7 +49,8 @@ class ArmMoves:
         # (the programme asks these of ~10^5 pairs of places a song: memoised by the pair)
         self._arm_ab: dict[tuple[int, int], float] = {}
         # (``tendon_slowed``'s factors, by the move and its joints: an arm's move carrying
-        # the same held keys comes again wherever a passage does, one in five on the corpus)
+        # the same held keys comes again wherever a passage does: 37 of 187 on three corpus
+        # pieces)
         self._sigma: dict[tuple, float] = {}
 
     def reach_m(self, posture: int) -> float:
