@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from planner.check.bodykeys import bed_hits, bed_problem, body_keys, body_names
-from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M, N_KEYS, key_contacts
+from planner.check.criteria import BODY_BED_DEPTH_M, DOWN_DEPTH_M, N_KEYS, tip_depths
 from planner.check.episodes import EpisodeStream
 from planner.check.keys import SongScore, SongScorer, frame_period, score_song
 from planner.check.kinematics import Kinematics
@@ -132,8 +132,7 @@ class SelfCheck:
         # (the rule is row by row: a row equal to the one before it, a hand holding still,
         # is judged once; about three rows in four on the corpus)
         new, of = distinct_rows(q)
-        tips, _ = self._kin.frames_of(q[new])
-        kc = key_contacts(tips)
+        depth = tip_depths(self._kin.tips_of(q[new]))[1]
         bk = body_keys(self._kin, q, self._bodies)
         t = rows[:, 0].copy()
         down = bk.down
@@ -142,7 +141,7 @@ class SelfCheck:
         self._rows += len(t)
         self._bed.add(bk.depth_m > BODY_BED_DEPTH_M, t, bk.body, bk.depth_m)
         self._audit.add(t, q, rows[:, 1 + nj:],
-                        (np.nan_to_num(kc.tip_depth, nan=-1.0) >= DOWN_DEPTH_M)[of])
+                        (np.nan_to_num(depth, nan=-1.0) >= DOWN_DEPTH_M)[of])
         if self._scorer is not None:
             self._scorer.add(t, down, finger)
         else:  # (the song's notes come with the verdict: kept as bits till then)

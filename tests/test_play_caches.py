@@ -4,6 +4,8 @@ bytes of whole plans: bench/play_bytes.py)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -114,3 +116,38 @@ def test_arm_move_line_is_the_samples_one_by_one(places, monkeypatch) -> None:
         q[cols] = qa + s * dq
         want.append(h.apply_couplings(q))
     assert len(got) == 1 and np.array_equal(got[0], np.array(want))
+
+
+def test_an_arm_moves_tendon_factor_kept_is_the_one_found_again(monkeypatch) -> None:
+    """``ArmMoves.tendon_slowed`` keeps each move's factor by the move, its joints, its
+    posture and the fingers pressing: planning ``leaps.mid`` and ``fast.mid`` (arms
+    carrying fingers that hold keys), every answer, the kept ones among them, is the
+    factor ``time_scale`` finds afresh, and the move it slows is the same."""
+    from planner.music.midi import load_song
+    from planner.play.armmoves import ArmMoves
+    from planner.play.stream import Planner, plan_song
+    from planner.play.tendonload import hand_load, slowed
+
+    hand = load_hand("default")
+    plain = ArmMoves.tendon_slowed
+    seen, kept = [], []
+
+    def checked(self, move, posture, cols, pressing):
+        key = (posture, cols.tobytes(), move.q_a.tobytes(), move.dq.tobytes(),
+               move.duration_s, move.ta_s, move.tj_s, pressing)
+        kept.append(key in seen)
+        seen.append(key)
+        got = plain(self, move, posture, cols, pressing)
+        q_a, dq = self.atlases[posture].base.copy(), np.zeros(hand.n)
+        q_a[cols], dq[cols] = move.q_a, move.dq
+        want = slowed(move, hand_load(hand).time_scale(move, q_a, dq, pressing))
+        assert (got.duration_s, got.ta_s, got.tj_s) == (want.duration_s, want.ta_s, want.tj_s)
+        assert np.array_equal(got.q_a, want.q_a) and np.array_equal(got.dq, want.dq)
+        return got
+
+    monkeypatch.setattr(ArmMoves, "tendon_slowed", checked)
+    planner = Planner(hand)
+    for song in ("leaps.mid", "fast.mid"):
+        plan_song(load_song(str(Path(__file__).resolve().parents[1] / "songs" / song)), hand,
+                  None, planner=planner)
+    assert any(kept) and not all(kept), (len(kept), sum(kept))

@@ -81,18 +81,8 @@ def key_contacts(tips: np.ndarray) -> KeyContacts:
     """Apply the spec's key-down rule to fingertip points ``tips`` (T, F, 3)."""
     tips = np.asarray(tips, dtype=float)
     T, F = tips.shape[:2]
-    kt = key_table()
-    x, y = tips[..., 0, None], tips[..., 1, None]
-    inside = (kt["x_min"] <= x) & (x <= kt["x_max"]) & (kt["y_min"] <= y) & (y <= kt["y_max"])
-    black = kt["black"]
-    in_black = inside & black
-    # white footprints minus the black rectangles; footprints of one colour do not overlap
-    in_white = inside & ~black & ~in_black.any(axis=-1, keepdims=True)
-    hit = in_black | in_white
-    any_hit = hit.any(axis=-1)
-    tip_key = np.where(any_hit, hit.argmax(axis=-1), -1)
-    top = kt["top_z"][np.maximum(tip_key, 0)]
-    tip_depth = np.where(any_hit, top - tips[..., 2], np.nan)
+    tip_key, tip_depth = tip_depths(tips)
+    any_hit = tip_key >= 0
     pressing = any_hit & (np.nan_to_num(tip_depth, nan=-1.0) >= DOWN_DEPTH_M)
     down = np.zeros((T, N_KEYS), dtype=bool)
     finger = np.full((T, N_KEYS), -1, dtype=np.int8)
@@ -107,6 +97,24 @@ def key_contacts(tips: np.ndarray) -> KeyContacts:
         finger[r[deeper], k[deeper]] = f
         best[r[deeper], k[deeper]] = d[deeper]
     return KeyContacts(down, finger, tip_key, tip_depth)
+
+
+def tip_depths(tips: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``KeyContacts.tip_key`` and ``tip_depth`` of fingertip points ``tips`` (T, F, 3):
+    the key under each tip (-1: none) and how deep below its top (NaN: none)."""
+    tips = np.asarray(tips, dtype=float)
+    kt = key_table()
+    x, y = tips[..., 0, None], tips[..., 1, None]
+    inside = (kt["x_min"] <= x) & (x <= kt["x_max"]) & (kt["y_min"] <= y) & (y <= kt["y_max"])
+    black = kt["black"]
+    in_black = inside & black
+    # white footprints minus the black rectangles; footprints of one colour do not overlap
+    in_white = inside & ~black & ~in_black.any(axis=-1, keepdims=True)
+    hit = in_black | in_white
+    any_hit = hit.any(axis=-1)
+    tip_key = np.where(any_hit, hit.argmax(axis=-1), -1)
+    top = kt["top_z"][np.maximum(tip_key, 0)]
+    return tip_key, np.where(any_hit, top - tips[..., 2], np.nan)
 
 
 def expected_keys(notes, t_s: np.ndarray) -> np.ndarray:

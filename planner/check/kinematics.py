@@ -44,6 +44,24 @@ class Kinematics:
         tips, palm = self.frames_of(Q[new])
         return tips[of], palm[of]
 
+    def tips(self, Q: np.ndarray) -> np.ndarray:
+        """The world tips (T, 5, 3) of ``frames`` alone (no palm placed: the same tips)."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        new, of = distinct_rows(Q)
+        return self.tips_of(Q[new])[of]
+
+    def tips_of(self, U: np.ndarray) -> np.ndarray:
+        """The tips of ``frames_of`` (rows already distinct)."""
+        tips = np.empty((len(U), len(self.tip_ids), 3))
+        QP = np.zeros((len(U), self.model.nq))
+        QP[:, self.idx] = U
+        m, d, tip_ids = self.model, self.data, self.tip_ids
+        for k in range(len(U)):
+            pin.forwardKinematics(m, d, QP[k])
+            for j, f in enumerate(tip_ids):
+                tips[k, j] = pin.updateFramePlacement(m, d, f).translation
+        return tips @ self.R.T + self.p
+
     def frames_of(self, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``frames`` of every row of ``U`` (rows already distinct: each one computed)."""
         T = len(U)
@@ -85,6 +103,35 @@ class Kinematics:
     def gravity(self, q: np.ndarray) -> np.ndarray:
         return pin.computeGeneralizedGravity(self.model, self.data, self.pin_q(q))[self.idx]
 
+    def gravities(self, Q: np.ndarray) -> np.ndarray:
+        """``gravity`` of every row of ``Q`` (T, n); a row equal to the one before it
+        computed once (the same numbers, row by row)."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        new, of = distinct_rows(Q)
+        QP = np.zeros((int(np.count_nonzero(new)), self.model.nq))
+        QP[:, self.idx] = Q[new]
+        m, d, idx = self.model, self.data, self.idx
+        out = np.empty((len(QP), self.hand.n))
+        for k in range(len(QP)):
+            out[k] = pin.computeGeneralizedGravity(m, d, QP[k])[idx]
+        return out[of]
+
+    def moving(self, Q: np.ndarray, V: np.ndarray, A: np.ndarray, still: np.ndarray
+               ) -> np.ndarray:
+        """``inertial(q, v, a)`` of every row of ``Q, V, A`` given each row's
+        ``gravity`` (``still``, ``gravities``): RNEA(q, v, a) less RNEA(q, 0, 0), which is
+        the generalized gravity to the bit (the same recursion with the speeds and
+        accelerations zero: every term they bring is a zero added; a test holds the two
+        equal on every shipped hand)."""
+        m, d, idx = self.model, self.data, self.idx
+        QP = np.zeros((len(Q), m.nq))
+        VP, AP = np.zeros((len(Q), m.nv)), np.zeros((len(Q), m.nv))
+        QP[:, idx], VP[:, idx], AP[:, idx] = Q, V, A
+        out = np.empty((len(Q), self.hand.n))
+        for k in range(len(Q)):
+            out[k] = pin.rnea(m, d, QP[k], VP[k], AP[k])[idx] - still[k]
+        return out
+
     def inertial(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """Joint torques that move the hand at speeds ``v`` and accelerations ``a`` (our
         joint order), gravity apart: RNEA(q, v, a) - RNEA(q, 0, 0)."""
@@ -94,22 +141,42 @@ class Kinematics:
         return (pin.rnea(self.model, self.data, qp, vp, ap)
                 - pin.rnea(self.model, self.data, qp, z, z))[self.idx]
 
-    def inertials(self, q: np.ndarray, moves) -> list[np.ndarray]:
+    def inertials(self, q: np.ndarray, moves, gravity: np.ndarray | None = None
+                  ) -> list[np.ndarray]:
         """``inertial(q, v, a)`` of each ``(v, a)`` of ``moves`` at one pose, RNEA(q, 0, 0)
-        found once (the same numbers)."""
+        found once, or given (``gravity``: the pose's ``gravity``, the same numbers:
+        ``moving``)."""
         qp, z = self.pin_q(q), np.zeros(self.model.nv)
-        still = pin.rnea(self.model, self.data, qp, z, z)
+        idx = self.idx
+        still = pin.rnea(self.model, self.data, qp, z, z)[idx] if gravity is None else gravity
         out = []
         for v, a in moves:
             vp, ap = z.copy(), z.copy()
-            vp[self.idx], ap[self.idx] = v, a
-            out.append((pin.rnea(self.model, self.data, qp, vp, ap) - still)[self.idx])
+            vp[idx], ap[idx] = v, a
+            out.append(pin.rnea(self.model, self.data, qp, vp, ap)[idx] - still)
         return out
+
+    def tips_pushed(self, Q: np.ndarray, pressing: np.ndarray, force: np.ndarray,
+                    tau: np.ndarray) -> None:
+        """``tau[k] -= J.T @ force`` for each fingertip pressing in row ``k``
+        (``pressing`` (T, 5)), ``J`` its ``point_jacobians``, tip by tip in order (the
+        same numbers as a call of ``point_jacobians`` per row)."""
+        m, d, idx, R, tip_ids = self.model, self.data, self.idx, self.R, self.tip_ids
+        rows = np.flatnonzero(pressing.any(axis=1))
+        QP = np.zeros((len(rows), m.nq))
+        QP[:, idx] = Q[rows]
+        world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        for i, k in enumerate(rows.tolist()):
+            pin.computeJointJacobians(m, d, QP[i])
+            for f in np.flatnonzero(pressing[k]).tolist():
+                J = R @ pin.getFrameJacobian(m, d, tip_ids[f], world)[:3, idx]
+                tau[k] -= J.T @ force
 
     def point_jacobians(self, q: np.ndarray, frame_ids: list[int]) -> list[np.ndarray]:
         """World position Jacobians (3, n) of frames, our joint order."""
         pin.computeJointJacobians(self.model, self.data, self.pin_q(q))
-        pin.updateFramePlacements(self.model, self.data)
+        # (no ``updateFramePlacements``: ``getFrameJacobian`` places its frame itself, from
+        # its joint's placement, the same product; the other frames are not read)
         out = []
         for fid in frame_ids:
             J = pin.getFrameJacobian(self.model, self.data, fid,

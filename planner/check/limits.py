@@ -177,11 +177,14 @@ class LimitAudit:
         lo = self._torqued - first
         if upto <= lo:
             return
+        s = max(lo - 1, 0) if inertia else lo  # (row 0 of the song has no row before
+        # it: no inertia)
+        gravity = self._kin.gravities(Q[s:upto + 1] if inertia else Q[lo:upto])
         tau = _joint_torques(self._kin, Q[lo:upto], None if P is None else P[lo:upto],
-                             None if B is None else B[lo:upto])
+                             None if B is None else B[lo:upto], gravity[lo - s:upto - s])
         if inertia:
-            s = max(lo - 1, 0)  # (row 0 of the song has no row before it: no inertia)
-            tau += _inertial_torques(self._kin, t[s:upto + 1], Q[s:upto + 1])[lo - s:upto - s]
+            tau += _inertial_torques(self._kin, t[s:upto + 1], Q[s:upto + 1],
+                                     gravity)[lo - s:upto - s]
         hand = self._hand
         # (einsum, not a matrix product: each row summed in one order whatever the block's
         # size, so a stream's rows equal the whole file's to the bit)
@@ -205,9 +208,10 @@ def row_motor_torques(hand: HandModel, kin: Kinematics, t: np.ndarray, Q: np.nda
     ``inertia`` the static torques alone; ``motor_map``: the hand's
     ``linear_motor_map``). The audit's own definition, for a planner bounding its rows
     before it writes them."""
-    tau = _joint_torques(kin, Q, pressing_tips, None)
+    gravity = kin.gravities(Q)
+    tau = _joint_torques(kin, Q, pressing_tips, None, gravity)
     if inertia:
-        tau += _inertial_torques(kin, t, Q)
+        tau += _inertial_torques(kin, t, Q, gravity)
     tau = tau[1:-1]
     return (np.einsum("tj,mj->tm", tau, motor_map) if motor_map is not None
             else _motor_torques(hand, Q[1:-1], tau))
@@ -272,10 +276,12 @@ def _stop_margin_rule(hand: HandModel, t: np.ndarray, Q: np.ndarray, worst: Wors
                               float(t[r])))
 
 
-def _inertial_torques(kin: Kinematics, t: np.ndarray, Q: np.ndarray) -> np.ndarray:
+def _inertial_torques(kin: Kinematics, t: np.ndarray, Q: np.ndarray,
+                      gravity: np.ndarray | None = None) -> np.ndarray:
     """Joint torques moving the hand through its rows (gravity apart): speeds and
     accelerations by central differences of the rows (none at the first and last row);
-    only the rows where something moves are computed."""
+    only the rows where something moves are computed (``gravity``: each row's
+    ``Kinematics.gravities``, when known)."""
     out = np.zeros_like(Q)
     if len(t) < 3:
         return out
@@ -283,28 +289,26 @@ def _inertial_torques(kin: Kinematics, t: np.ndarray, Q: np.ndarray) -> np.ndarr
     V = (Q[2:] - Q[:-2]) / (dt0 + dt1)
     A = 2.0 * ((Q[2:] - Q[1:-1]) / dt1 - (Q[1:-1] - Q[:-2]) / dt0) / (dt0 + dt1)
     moving = np.flatnonzero(np.any(V != 0.0, axis=1) | np.any(A != 0.0, axis=1))
-    for k in moving:
-        out[k + 1] = kin.inertial(Q[k + 1], V[k], A[k])
+    if len(moving):
+        still = kin.gravities(Q[moving + 1]) if gravity is None else gravity[moving + 1]
+        out[moving + 1] = kin.moving(Q[moving + 1], V[moving], A[moving], still)
     return out
 
 
 def _joint_torques(kin: Kinematics, Q: np.ndarray, pressing_tips: np.ndarray | None,
-                   ball_load: np.ndarray | None) -> np.ndarray:
-    """Static joint torques of every row: gravity, the keys pushing back on the pressing
-    fingertips (``KEY_FORCE_N``), the ball's weight on the palm. They depend on the row
-    alone: a row equal to the one before it (a hand holding still, with the same keys
-    pressed) is computed once (``distinct_rows``)."""
+                   ball_load: np.ndarray | None, gravity: np.ndarray | None = None
+                   ) -> np.ndarray:
+    """Static joint torques of every row: gravity (``gravity``: each row's, when known),
+    the keys pushing back on the pressing fingertips (``KEY_FORCE_N``), the ball's weight
+    on the palm. They depend on the row alone: a row equal to the one before it (a hand
+    holding still, with the same keys pressed) is computed once (``distinct_rows``)."""
     key = [Q] + ([] if pressing_tips is None else [pressing_tips]) \
         + ([] if ball_load is None else [np.asarray(ball_load, dtype=float)[:, None]])
     new, of = distinct_rows(np.hstack(key))
     Qn = Q[new]
-    tau = np.array([kin.gravity(q) for q in Qn])
+    tau = kin.gravities(Qn) if gravity is None else gravity[new]
     if pressing_tips is not None:
-        tip_ids, pn = kin.tip_ids, pressing_tips[new]
-        for k in np.flatnonzero(pn.any(axis=1)):
-            Js = kin.point_jacobians(Qn[k], [tip_ids[f] for f in np.flatnonzero(pn[k])])
-            for J in Js:
-                tau[k] -= J.T @ np.array([0.0, 0.0, KEY_FORCE_N])
+        kin.tips_pushed(Qn, pressing_tips[new], np.array([0.0, 0.0, KEY_FORCE_N]), tau)
     if ball_load is not None:
         bn = np.asarray(ball_load)[new]
         for k in np.flatnonzero(bn > 0):

@@ -32,7 +32,7 @@ from functools import cache
 
 import numpy as np
 
-from planner.check.criteria import DOWN_DEPTH_M, key_contacts
+from planner.check.criteria import DOWN_DEPTH_M, tip_depths
 from planner.check.kinematics import Kinematics
 from planner.check.limits import linear_motor_map, row_motor_torques
 from planner.hand.model import HandModel
@@ -60,8 +60,7 @@ class RowsLoad:
 
     def torques(self, t_s: np.ndarray, Q: np.ndarray, inertia: bool = True) -> np.ndarray:
         """Motor torques (rows 1 .. len - 2 of ``t_s, Q``, motors)."""
-        tips, _ = self.kin.frames(Q)
-        depth = np.nan_to_num(key_contacts(tips).tip_depth, nan=-1.0)
+        depth = np.nan_to_num(tip_depths(self.kin.tips(Q))[1], nan=-1.0)
         return row_motor_torques(self.hand, self.kin, t_s, Q, depth >= DOWN_DEPTH_M,
                                  self.motor_map, inertia)
 

@@ -20,12 +20,14 @@ from planner.errors import InputError
 from planner.hand.model import HandModel
 from planner.music.midi import SHIFT_DIGITS, Song, shift_notes
 from planner.music.parts import PartChoice
+from planner.play.armload import rows_load
 from planner.play.costs import CostMemo
 from planner.play.fingering import Assignment, Fingering, FingeringProblem
 from planner.play.motion import Motion
 from planner.play.places import Places
 from planner.play.rest import REST_RAIL_M, Legs, WayIn, legs_between, rest_pose, way_in
 from planner.play.roomcost import RoomCost
+from planner.play.tendonload import hand_load
 from planner.selfcheck import SelfCheck, Verdict
 from planner.trajfile import MIN_ROWS, KeptText, TrajectoryWriter
 
@@ -77,6 +79,10 @@ class Planner:
         # (the idle fingers' pose, ``IdleFingers.pose``, found and kept with the set-up: it
         # depends on the hand alone; every plan's first rows tuck them there)
         self.places.idle.tuck(self.rest_q)
+        # (the whole hand's motor bounds, of a note's rows and of the arm's moves carrying
+        # fingers: the hand's alone, built here and not while the first row waits)
+        rows_load(hand)
+        hand_load(hand)
 
 
 def plan_song(song: Song, hand: HandModel, out_path: str | None = None, rate_hz: float = 100.0,

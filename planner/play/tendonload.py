@@ -128,7 +128,7 @@ class TendonLoad:
                 for J in kin.point_jacobians(q, [kin.tip_ids[f] for f in pressing]):
                     pushed -= J.T @ np.array([0.0, 0.0, KEY_FORCE_N])
             static[i, 0], static[i, 1] = M @ g, M @ pushed
-            tau_k, tau_c = kin.inertials(q, ((zero, q_s), (q_s, q_ss)))
+            tau_k, tau_c = kin.inertials(q, ((zero, q_s), (q_s, q_ss)), g)
             K[i], C[i] = M @ tau_k, M @ tau_c
         return static, K, C
 
