@@ -35,7 +35,7 @@ from planner.hand.model import HandModel
 from planner.music.midi import Song
 from planner.play.costs import Costs, SkipReason
 from planner.play.handclear import MAX_ROUNDS, NoteReaches, PlaceReach, collided_notes, loose_bound
-from planner.play.handgap import HandGap, HandReach, InnerEdge, hand_gap
+from planner.play.handgap import HandGap, HandReach, InnerEdge, hand_gap, pose_extents
 from planner.play.hands import LEFT, RIGHT, SIDES, HandAssignment, assign_hands, other_side
 from planner.play.stream import Planner, PlayPlan, plan_song
 from planner.play.twobounds import (
@@ -70,10 +70,13 @@ class PairPlanner:
                          RIGHT: Planner(right, rest_rail_m=float(right.plan_upper[rr]))}
         for pl in self.planners.values():  # (the idle fingers tucked in: the hands nearer)
             pl.places.idle.narrow()
-        self.gap: HandGap = hand_gap(self.planners[LEFT].places, self.planners[RIGHT].places)
         self.edges = {s: InnerEdge(h) for s, h in self.hands.items()}
-        # (each place's own reach towards the other hand: the second hand's loosened rule)
-        self.place_reach = {s: PlaceReach(self.planners[s].places, self.edges[s])
+        # (every pose each hand plays in, measured once: the pair's gap and each place's
+        # own reach towards the other hand, the second hand's loosened rule)
+        ext = {s: pose_extents(self.planners[s].places, self.edges[s]) for s in SIDES}
+        self.gap: HandGap = hand_gap(self.planners[LEFT].places, self.planners[RIGHT].places,
+                                     extents=(ext[LEFT], ext[RIGHT]))
+        self.place_reach = {s: PlaceReach(self.planners[s].places, self.edges[s], ext[s])
                             for s in SIDES}
         # (each plan's rows read once while a pair is planned: ``plan_two_hands`` lets
         # them go when it is done)
