@@ -7,7 +7,12 @@ seconds / planning), the first row (``first_row_s``) and the set-up (``setup_s``
 the medians over the songs and the ratio of each tree's to the other's.
 
     python bench/play_speed.py --vs /work/main [--repeat 3] [--corpus DIR] [--only SUB]
-                               [--no-samples] [--tsv FILE] [--warm]
+                               [--no-samples] [--tsv FILE] [--warm] [--hands 2]
+
+``--hands 2``: ``cli.py play SONG --hands 2 --json``, the two-hand corpus
+(``../shared/corpus2h/`` unless ``--corpus``) and no sample songs; its clock is
+``plan_two_hands``' (after the pair's set-up, every way and the file), and a two-hand
+plan writes its file at the end: no first row (``nan``).
 
 The clock is the planner's own (``plan_song``: from after ``Planner(hand)``, the atlas
 and the timed moves loaded, to the file closed, the self-check's verdict included).
@@ -20,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -31,14 +37,17 @@ ROOT = Path(__file__).resolve().parents[1]
 FIELDS = ("planning_s", "first_row_s", "setup_s")
 
 
-def run(tree: Path, song: Path, out: str) -> dict:
+def run(tree: Path, song: Path, out: str, hands: int = 1) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree)}
     env.pop("PYTHONDONTWRITEBYTECODE", None)
+    two = ["--hands", "2"] if hands == 2 else []
     r = subprocess.run([sys.executable, str(tree / "cli.py"), "play", str(song), "-o", out,
-                        "--json"], capture_output=True, text=True, env=env, check=False)
+                        "--json", *two], capture_output=True, text=True, env=env, check=False)
     if r.returncode not in (0, 1):
         raise SystemExit(f"{tree}: {song.name}: exit {r.returncode}: {r.stderr.strip()[-300:]}")
-    return json.loads(r.stdout)
+    j = json.loads(r.stdout)
+    j.setdefault("first_row_s", math.nan)  # (two hands: the file is written at the end)
+    return j
 
 
 def worker(songs: list[str]) -> int:
@@ -98,7 +107,15 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--no-samples", action="store_true", help="the corpus alone")
     ap.add_argument("--tsv", default=None, help="also write every run here")
     ap.add_argument("--warm", action="store_true", help="one Planner per pass (bench_corpus's)")
+    ap.add_argument("--hands", type=int, choices=(1, 2), default=1,
+                    help="2: play --hands 2 on the two-hand corpus")
     a = ap.parse_args(argv)
+    if a.hands == 2:
+        if a.warm:
+            raise SystemExit("--warm plans one hand")
+        a.no_samples = True
+        if a.corpus == str(ROOT.parent / "shared" / "corpus"):
+            a.corpus = str(ROOT.parent / "shared" / "corpus2h")
     trees = {"this": ROOT, "vs": Path(a.vs).resolve()}
     songs = [] if a.no_samples else sorted((ROOT / "songs").glob("*.mid"))
     songs += sorted(Path(a.corpus).glob("*.mid"))
@@ -117,7 +134,7 @@ def main(argv: list[str]) -> int:
             for r in range(a.repeat):
                 order = ["this", "vs"] if (i + r) % 2 == 0 else ["vs", "this"]
                 for k in order:
-                    j = run(trees[k], song, os.path.join(d, f"{k}.csv"))
+                    j = run(trees[k], song, os.path.join(d, f"{k}.csv"), a.hands)
                     got[k].append(j)
                     runs.append((k, song.stem, r, j))
             for k in trees:

@@ -215,7 +215,9 @@ def settled_room(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rat
 
 
 def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
-              song_name: str = "", settled: bool = False) -> PairPass:
+              song_name: str = "", settled: bool = False,
+              room: tuple[list[tuple[float, float]], frozenset[int]] | None = None
+              ) -> PairPass:
     """Plan both hands by ``a``: the hand ``first`` leaving the other room for its notes
     (``room_bounds``), then the other within the first one's rows (``clear_bounds``,
     settled: ``settled_bounds``), its notes and every note the first one left out (the
@@ -223,7 +225,8 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     play is left out again, one it plays instead of its own costs it fewer frames).
     ``settled``: the first hand's room settled too (``twobounds.room_settled``: where a
     note of its own has no place within its room, it stands where it was until its next
-    note, and leaves the other hand its room, and is charged for it, all that time)."""
+    note, and leaves the other hand its room, and is charged for it, all that time).
+    ``room``: that room (``settled_room``'s bounds and notes out) when found already."""
     notes = song.notes
     idx = {s: a.notes_of(s) for s in SIDES}
     subs = {s: _sub_song(song, idx[s]) for s in SIDES}
@@ -231,8 +234,8 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     plans: dict[str, PlayPlan] = {}
     # (the first hand's bound leaves the other room; it keeps no clearance itself, the
     # second hand's bound does: its windows are its notes' own, none taken out)
-    bounds, out = room_settled(song, pp, first, idx[first], idx[second], subs[first], rate_hz,
-                               settled)
+    bounds, out = room or room_settled(song, pp, first, idx[first], idx[second], subs[first],
+                                       rate_hz, settled)
     # (and pays, in frames, for the room it takes from the other hand's notes and from
     # those it hands over: ``planner.play.roomcost``; a hand planned alone is planned as
     # one hand plays the file, the way that bounds a pair's loss against one hand)
@@ -321,10 +324,12 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
     pp.reads.clear()
+    pp.scorer.clear()
     try:
         return _plan_two_hands(song, pp, out_path, rate_hz, song_name, t_start)
     finally:
         pp.reads.clear()
+        pp.scorer.clear()
 
 
 def _both_rooms(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
@@ -336,8 +341,11 @@ def _both_rooms(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate
     cost of the first hand's notes near them (random two-hand songs and the two-hand
     corpus: ``docs/history/2026-12-07-two-hands9.md``)."""
     got = [plan_pass(song, pp, a, first, rate_hz, song_name)]
-    if a.notes_of(other_side(first)) and settled_room(song, pp, a, first, rate_hz)[1]:
-        got.append(plan_pass(song, pp, a, first, rate_hz, song_name, settled=True))
+    if a.notes_of(other_side(first)):
+        room = settled_room(song, pp, a, first, rate_hz)
+        if room[1]:
+            got.append(plan_pass(song, pp, a, first, rate_hz, song_name, settled=True,
+                                 room=room))
     return got
 
 
@@ -349,12 +357,10 @@ def by_check(song: Song, pp: PairPlanner, finals: list[PairPass], rate_hz: float
     earlier. One way: no replay."""
     if len(finals) == 1:
         return finals[0], one_clock(finals[0].plans, rate_hz, pp.reads)
-    got = []
-    for k, p in enumerate(finals):
-        rows = one_clock(p.plans, rate_hz, pp.reads)
-        got.append(((pp.scorer.frame_f1(rows, song, rate_hz), p.played_frames, -k), p, rows))
-    _, best, rows = max(got, key=lambda g: g[0])
-    return best, rows
+    got = [((pp.scorer.plans_f1(p.plans, song, rate_hz, pp.reads), p.played_frames, -k), p)
+           for k, p in enumerate(finals)]
+    best = max(got, key=lambda g: g[0])[1]
+    return best, one_clock(best.plans, rate_hz, pp.reads)
 
 
 def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: float,
