@@ -36,7 +36,7 @@ class PairScorer:
         self._kins = tuple(Kinematics(h, h.T_world_root) for h in (left, right))
         self._bodies = tuple(collision_bodies(h.spec) for h in (left, right))
         self._names = tuple(body_names(b)[0] for b in self._bodies)
-        self._downs: dict[int, tuple[PlayPlan, np.ndarray]] = {}
+        self._downs: dict[tuple[int, int], tuple[PlayPlan, np.ndarray]] = {}
 
     def frame_f1(self, rows: PairRows, song: Song, rate_hz: float) -> float:
         """The check's frame F1 of ``rows`` (both hands on one clock) against ``song``."""
@@ -64,11 +64,11 @@ class PairScorer:
 
     def _down(self, k: int, plan: PlayPlan, q: np.ndarray) -> np.ndarray:
         """Hand ``k``'s keys down per row of ``plan`` (its rows ``q``), found once."""
-        got = self._downs.get(id(plan))
+        got = self._downs.get((k, id(plan)))
         if got is None:
             if len(self._downs) >= READS_HELD:
                 self._downs.clear()
-            got = self._downs[id(plan)] = (
+            got = self._downs[(k, id(plan))] = (
                 plan, body_keys(self._kins[k], q, self._bodies[k]).down)
         return got[1]
 
