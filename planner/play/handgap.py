@@ -34,6 +34,8 @@ from planner.hand.bodies import body_links, collision_bodies, place
 from planner.play.atlas import SPAN_M, STEP_M
 from planner.play.places import Places
 
+POSES = ("press", "rise", "hover", "high")  # an atlas entry's poses (``AtlasEntry``): a
+# place's, as the planner puts the finger over its key
 CLEARANCE_M = HANDS_GAP_M  # every body of one hand this far from every body of the other
 # (10 mm: the check's rule, twice the rig's stop margin; docs/user/two-hands.md)
 
@@ -70,23 +72,26 @@ class HandGap:
 
 def place_poses(places: Places) -> tuple[list[tuple[int, str, int, int]], np.ndarray]:
     """Every place a finger presses a key from, as its atlas entry's key (posture, finger,
-    pitch class, grid index), and its four poses (press, rise, hover, high; the idle
-    fingers tucked, the rail at 0), four rows per place in the keys' order (couplings
-    not applied)."""
+    pitch class, grid index), and its four poses (``POSES``; ``Atlas.full_q``'s, the idle
+    fingers tucked, the rail at 0, couplings applied), four rows per place in the keys'
+    order: a finger's entries of a posture at once."""
     h = places.hand
     n = round(SPAN_M / STEP_M)
-    keys, Q = [], []
+    keys, blocks = [], []
     for p, at in enumerate(places.atlases):
         tucked = places.idle.tuck(at.base)
         for f in h.fingers:
-            for pc in range(12):
-                for k in range(-n, n + 1):
-                    e = at.entry_at(f, pc, k)
-                    if e is not None:
-                        keys.append((p, f, pc, k))
-                        Q += [at.full_q(e, pose, 0.0, tucked)
-                              for pose in ("press", "rise", "hover", "high")]
-    return keys, np.array(Q).reshape(len(Q), len(h.joint_names))
+            got = [(pc, k, at.entry_at(f, pc, k)) for pc in range(12) for k in range(-n, n + 1)]
+            got = [g for g in got if g[2] is not None]
+            if not got:
+                continue
+            B = np.repeat(tucked[None, :], len(POSES) * len(got), axis=0)
+            if at.rail is not None:
+                B[:, at.rail] = 0.0
+            B[:, h.joint_slice(f)] = [getattr(e, pose) for _, _, e in got for pose in POSES]
+            blocks.append(h.apply_couplings(B))
+            keys += [(p, f, pc, k) for pc, k, _ in got]
+    return keys, (np.concatenate(blocks) if blocks else np.zeros((0, len(h.joint_names))))
 
 
 def hand_poses(places: Places) -> np.ndarray:
@@ -135,8 +140,8 @@ def pose_extents(places: Places, edge: InnerEdge | None = None) -> PoseExtents:
     uniq, inv = np.unique(Q, axis=0, return_inverse=True)  # (the same poses once: 2798
     # of 16091 rows on the default hand)
     lo, hi = (edge or InnerEdge(places.hand)).extents_m(uniq)
-    b = len(Q) - 4 * len(keys)  # (the tucked natural hands first)
-    return PoseExtents(lo, hi, tuple(keys), np.ravel(inv)[b:].reshape(len(keys), 4))
+    b = len(Q) - len(POSES) * len(keys)  # (the tucked natural hands first)
+    return PoseExtents(lo, hi, tuple(keys), np.ravel(inv)[b:].reshape(len(keys), len(POSES)))
 
 
 class InnerEdge:
