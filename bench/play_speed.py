@@ -7,7 +7,17 @@ seconds / planning), the first row (``first_row_s``) and the set-up (``setup_s``
 the medians over the songs and the ratio of each tree's to the other's.
 
     python bench/play_speed.py --vs /work/main [--repeat 3] [--corpus DIR] [--only SUB]
-                               [--no-samples] [--tsv FILE] [--warm]
+                               [--no-samples] [--tsv FILE] [--warm] [--hands 2]
+                               [--keep DIR] [--extra DIR ...]
+
+``--keep DIR``: each tree's files kept (``DIR/this/``, ``DIR/vs/``, the last run's) and
+compared byte for byte at the end (a speed-up plans the same files); ``--extra DIR``: the
+songs of another folder too (``bench/random_songs.py``'s).
+
+``--hands 2``: ``cli.py play SONG --hands 2 --json``, the two-hand corpus
+(``../shared/corpus2h/`` unless ``--corpus``) and no sample songs; its clock is
+``plan_two_hands``' (after the pair's set-up, every way and the file), and a two-hand
+plan writes its file at the end: no first row (``nan``).
 
 The clock is the planner's own (``plan_song``: from after ``Planner(hand)``, the atlas
 and the timed moves loaded, to the file closed, the self-check's verdict included).
@@ -20,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -31,14 +42,25 @@ ROOT = Path(__file__).resolve().parents[1]
 FIELDS = ("planning_s", "first_row_s", "setup_s")
 
 
-def run(tree: Path, song: Path, out: str) -> dict:
+def run(tree: Path, song: Path, out: str, hands: int = 1) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree)}
     env.pop("PYTHONDONTWRITEBYTECODE", None)
+    two = ["--hands", "2"] if hands == 2 else []
     r = subprocess.run([sys.executable, str(tree / "cli.py"), "play", str(song), "-o", out,
-                        "--json"], capture_output=True, text=True, env=env, check=False)
+                        "--json", *two], capture_output=True, text=True, env=env, check=False)
     if r.returncode not in (0, 1):
         raise SystemExit(f"{tree}: {song.name}: exit {r.returncode}: {r.stderr.strip()[-300:]}")
-    return json.loads(r.stdout)
+    j = json.loads(r.stdout)
+    j.setdefault("first_row_s", math.nan)  # (two hands: the file is written at the end)
+    return j
+
+
+def _out(keep: str | None, tmp: str, tree: str, song: Path) -> str:
+    """Where ``tree``'s run of ``song`` writes: ``keep/tree/SONG.csv``, else a scratch file."""
+    if keep is None:
+        return os.path.join(tmp, f"{tree}.csv")
+    (Path(keep) / tree).mkdir(parents=True, exist_ok=True)
+    return str(Path(keep) / tree / f"{song.stem}.csv")
 
 
 def worker(songs: list[str]) -> int:
@@ -98,10 +120,21 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--no-samples", action="store_true", help="the corpus alone")
     ap.add_argument("--tsv", default=None, help="also write every run here")
     ap.add_argument("--warm", action="store_true", help="one Planner per pass (bench_corpus's)")
+    ap.add_argument("--hands", type=int, choices=(1, 2), default=1,
+                    help="2: play --hands 2 on the two-hand corpus")
+    ap.add_argument("--keep", default=None, help="keep each tree's files here, compared")
+    ap.add_argument("--extra", action="append", default=[], help="another folder of songs")
     a = ap.parse_args(argv)
+    if a.hands == 2:
+        if a.warm:
+            raise SystemExit("--warm plans one hand")
+        a.no_samples = True
+        if a.corpus == str(ROOT.parent / "shared" / "corpus"):
+            a.corpus = str(ROOT.parent / "shared" / "corpus2h")
     trees = {"this": ROOT, "vs": Path(a.vs).resolve()}
     songs = [] if a.no_samples else sorted((ROOT / "songs").glob("*.mid"))
     songs += sorted(Path(a.corpus).glob("*.mid"))
+    songs += [s for d in a.extra for s in sorted(Path(d).glob("*.mid"))]
     songs = [s for s in songs if a.only is None or a.only in s.name]
     if not songs:
         raise SystemExit("no songs")
@@ -117,7 +150,7 @@ def main(argv: list[str]) -> int:
             for r in range(a.repeat):
                 order = ["this", "vs"] if (i + r) % 2 == 0 else ["vs", "this"]
                 for k in order:
-                    j = run(trees[k], song, os.path.join(d, f"{k}.csv"))
+                    j = run(trees[k], song, _out(a.keep, d, k, song), a.hands)
                     got[k].append(j)
                     runs.append((k, song.stem, r, j))
             for k in trees:
@@ -140,6 +173,11 @@ def main(argv: list[str]) -> int:
     print(f"  this / vs, per song: real-time factor x{statistics.median(ratios):.2f} median "
           f"(x{min(ratios):.2f}-x{max(ratios):.2f}); first row x{statistics.median(firsts):.2f} "
           "sooner (median)")
+    if a.keep:
+        same = [s.stem for s in songs if (Path(a.keep) / "this" / f"{s.stem}.csv").read_bytes()
+                == (Path(a.keep) / "vs" / f"{s.stem}.csv").read_bytes()]
+        print(f"  files: {len(same)} of {len(songs)} identical" + "".join(
+            f"\n  DIFFERS: {s.stem}" for s in songs if s.stem not in same))
     if a.tsv:
         with open(a.tsv, "w", encoding="utf-8") as f:
             f.write("tree\tsong\trun\tsong_s\tplanning_s\tfirst_row_s\tsetup_s\n")

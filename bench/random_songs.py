@@ -3,12 +3,19 @@ planner was tuned on. Each generator takes a seed and returns notes; the same se
 the same song.
 
     python bench/random_songs.py OUT_DIR [--seeds N]   # writes OUT_DIR/<kind>_<seed>.mid
+    python bench/random_songs.py OUT_DIR --hands 2 [--seeds N]   # OUT_DIR/pair_<seed>.mid
+
+Two hands (``--hands 2``, for ``play --hands 2``): per seed a right part from one generator
+and a left part from another, an octave lower, each on its own channel
+(``two_hand_notes``; the songs of the two-hand rounds' measurements,
+``docs/history/2026-12-07-two-hands9.md``).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -104,12 +111,37 @@ def write_all(out_dir: Path, seeds: int) -> list[Path]:
     return paths
 
 
+def two_hand_notes(seed: int) -> list[Note]:
+    """A two-hand song: a right part (channel 0) from generator ``seed`` mod 6, seed
+    ``seed``, and a left part (channel 1) from another generator, seed 1000 + ``seed``,
+    an octave lower (no lower than A0, MIDI 21)."""
+    kinds = list(GENERATORS)
+    kr, kl = kinds[seed % 6], kinds[(seed + 1 + seed // 6) % 6]
+    right = [replace(n, channel=0) for n in GENERATORS[kr](np.random.default_rng(seed))]
+    left = [replace(n, pitch=max(21, n.pitch - 12), channel=1)
+            for n in GENERATORS[kl](np.random.default_rng(1000 + seed))]
+    return right + left
+
+
+def write_pairs(out_dir: Path, seeds: int) -> list[Path]:
+    """``two_hand_notes`` of seeds 0 .. ``seeds`` - 1 as ``OUT_DIR/pair_<seed>.mid``."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for seed in range(seeds):
+        p = out_dir / f"pair_{seed}.mid"
+        write_notes_midi(two_hand_notes(seed), p)
+        paths.append(p)
+    return paths
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("out_dir")
     ap.add_argument("--seeds", type=int, default=4)
+    ap.add_argument("--hands", type=int, choices=(1, 2), default=1)
     a = ap.parse_args()
-    for p in write_all(Path(a.out_dir), a.seeds):
+    write = write_pairs if a.hands == 2 else write_all
+    for p in write(Path(a.out_dir), a.seeds):
         print(p)
 
 

@@ -28,3 +28,30 @@ def test_frame_f1_is_the_checks_f1_of_the_file_written(tmp_path) -> None:
     q_left, q_right = plan.rows.q
     still = replace(plan.rows, q=(q_left, np.repeat(q_right[:1], len(q_right), axis=0)))
     assert pair.scorer.frame_f1(still, song, 100.0) < f1 - 0.05  # (0.849 against 0.960)
+
+
+def test_plans_f1_is_the_frame_f1_of_the_plans_on_one_clock(tmp_path) -> None:
+    from planner.play.hands import RIGHT
+    from planner.play.stream import plan_song
+    from planner.play.twoplan import PlanReads, clock_of, one_clock
+
+    pair = PairPlanner(load_hand("default-left"), load_hand("default"))
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    plan = plan_two_hands(song, pair, None)
+    left, right = plan.plans
+    # (another right plan: its part alone, unbounded: another length and way in, so the
+    # clock pads the plans otherwise)
+    sub = replace(song, notes=tuple(song.notes[i] for i in plan.notes_of[1]), part=None)
+    other = plan_song(sub, pair.hands[RIGHT], None, planner=pair.planners[RIGHT])
+    reads = PlanReads()
+    clocks = []
+    for plans in ((left, right), (left, other)):
+        want = pair.scorer.frame_f1(one_clock(plans, 100.0), song, 100.0)
+        assert pair.scorer.plans_f1(plans, song, 100.0, reads) == want
+        assert pair.scorer.plans_f1(plans, song, 100.0, reads) == want  # (its keys kept)
+        rows = tuple(len(reads(p).t_s) for p in plans)
+        clocks.append(clock_of(plans, rows, 100.0).n - min(rows))
+    assert max(clocks) > 0  # (a plan padded on the clock)
+    pair.scorer.clear()
+    assert pair.scorer.plans_f1((left, other), song, 100.0, reads) == pair.scorer.frame_f1(
+        one_clock((left, other), 100.0), song, 100.0)

@@ -38,9 +38,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from planner.check.handgap import GapJudge
-from planner.play.atlas import SPAN_M, STEP_M
 from planner.play.costs import Costs
-from planner.play.handgap import InnerEdge
+from planner.play.handgap import InnerEdge, PoseExtents, pose_extents
 from planner.play.places import Places
 from planner.trajfile import as_written
 
@@ -54,31 +53,19 @@ class PlaceReach:
     towards the other hand over that place's four poses (module docstring), by the atlas
     entry: ``reach_m(finger, pitch, place)``."""
 
-    def __init__(self, places: Places, edge: InnerEdge) -> None:
+    def __init__(self, places: Places, edge: InnerEdge, ext: PoseExtents | None = None
+                 ) -> None:
         self.places = places
-        h = places.hand
-        n = round(SPAN_M / STEP_M)
-        keys, Q = [], []
-        for p, at in enumerate(places.atlases):
-            tucked = places.idle.tuck(at.base)
-            for f in h.fingers:
-                for pc in range(12):
-                    for k in range(-n, n + 1):
-                        e = at.entry_at(f, pc, k)
-                        if e is not None:
-                            keys.append((p, f, pc, k))
-                            Q += [at.full_q(e, pose, 0.0, tucked)
-                                  for pose in ("press", "rise", "hover", "high")]
+        ext = ext or pose_extents(places, edge)  # (``ext``: the hand's, shared with its
+        # ``HandReach``: ``planner.play.handgap.PoseExtents``)
         # (every place that presses a key with a force, with its reach: ``NoteReaches``'
         # arrays, shared by every song and way the pair plans)
         self.presses: dict[tuple[int, float], tuple[np.ndarray, np.ndarray]] = {}
-        if not keys:
+        if not ext.keys:
             self._reach: dict = {}
             return
-        Q = h.apply_couplings(np.array(Q))
-        uniq, inv = np.unique(Q, axis=0, return_inverse=True)  # (each distinct pose once)
-        inner = edge.inner_m(uniq)[np.ravel(inv)].reshape(len(keys), 4).max(axis=1)
-        self._reach = dict(zip(keys, inner.tolist()))
+        inner = ext.inner_m(places.hand.side)[ext.rows].max(axis=1)
+        self._reach = dict(zip(ext.keys, inner.tolist()))
 
     def reach_m(self, finger: str, pitch: int, place: int) -> float:
         """The place's reach towards the other hand (m from its rail); ``math.inf`` for a

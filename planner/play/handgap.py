@@ -34,6 +34,8 @@ from planner.hand.bodies import body_links, collision_bodies, place
 from planner.play.atlas import SPAN_M, STEP_M
 from planner.play.places import Places
 
+POSES = ("press", "rise", "hover", "high")  # an atlas entry's poses (``AtlasEntry``): a
+# place's, as the planner puts the finger over its key
 CLEARANCE_M = HANDS_GAP_M  # every body of one hand this far from every body of the other
 # (10 mm: the check's rule, twice the rig's stop margin; docs/user/two-hands.md)
 
@@ -68,26 +70,78 @@ class HandGap:
         return self.rail_gap_m + self.right.key_lo_m - self.left.key_hi_m
 
 
+def place_poses(places: Places) -> tuple[list[tuple[int, str, int, int]], np.ndarray]:
+    """Every place a finger presses a key from, as its atlas entry's key (posture, finger,
+    pitch class, grid index), and its four poses (``POSES``; ``Atlas.full_q``'s, the idle
+    fingers tucked, the rail at 0, couplings applied), four rows per place in the keys'
+    order: a finger's entries of a posture at once."""
+    h = places.hand
+    n = round(SPAN_M / STEP_M)
+    keys, blocks = [], []
+    for p, at in enumerate(places.atlases):
+        tucked = places.idle.tuck(at.base)
+        for f in h.fingers:
+            got = [(pc, k, at.entry_at(f, pc, k)) for pc in range(12) for k in range(-n, n + 1)]
+            got = [g for g in got if g[2] is not None]
+            if not got:
+                continue
+            B = np.repeat(tucked[None, :], len(POSES) * len(got), axis=0)
+            if at.rail is not None:
+                B[:, at.rail] = 0.0
+            B[:, h.joint_slice(f)] = [getattr(e, pose) for _, _, e in got for pose in POSES]
+            blocks.append(h.apply_couplings(B))
+            keys += [(p, f, pc, k) for pc, k, _ in got]
+    return keys, (np.concatenate(blocks) if blocks else np.zeros((0, len(h.joint_names))))
+
+
 def hand_poses(places: Places) -> np.ndarray:
     """Every pose the play planner puts the hand in while it plays, the rail at 0: per
     posture the natural hand with its idle fingers tucked, and every atlas entry's four
     poses (press, rise, hover, high) so (couplings applied). (At rest the idle fingers
     are natural; they tuck while the carriage runs from its end of the rail to its first
     place, where it arrives with them tucked: ``planner.play.rest``.)"""
+    return pose_set(places)[0]
+
+
+def pose_set(places: Places) -> tuple[np.ndarray, list[tuple[int, str, int, int]]]:
+    """``hand_poses`` (the tucked natural hands first, then ``place_poses``' rows) and the
+    places' keys (``place_poses``): place ``j``'s four poses are rows ``B + 4 j`` to
+    ``B + 4 j + 3``, ``B`` the postures' count."""
     h = places.hand
-    Q = []
-    n = round(SPAN_M / STEP_M)
-    for at in places.atlases:
-        tucked = places.idle.tuck(at.base)
-        Q.append(tucked)
-        for f in h.fingers:
-            for pc in range(12):
-                for k in range(-n, n + 1):
-                    e = at.entry_at(f, pc, k)
-                    if e is not None:
-                        Q += [at.full_q(e, pose, 0.0, tucked)
-                              for pose in ("press", "rise", "hover", "high")]
-    return h.apply_couplings(np.array(Q))
+    keys, Q = place_poses(places)
+    tucked = [places.idle.tuck(at.base) for at in places.atlases]
+    return h.apply_couplings(np.concatenate([np.array(tucked).reshape(len(tucked), -1), Q])
+                             if len(tucked) else Q), keys
+
+
+@dataclass(frozen=True)
+class PoseExtents:
+    """A hand's ``hand_poses`` measured once, shared by its ``HandReach`` (``hand_reach``)
+    and its places' own reach (``planner.play.handclear.PlaceReach``): per distinct pose
+    its bodies' lowest and highest x (``InnerEdge.extents_m``, the rail at 0: each row is
+    measured alone, so a pose's numbers are the same in any set), ``places``' keys
+    (``place_poses``) and per place its four poses' rows in the distinct poses
+    (``rows``, shape (places, 4))."""
+
+    lo_m: np.ndarray
+    hi_m: np.ndarray
+    keys: tuple[tuple[int, str, int, int], ...]
+    rows: np.ndarray
+
+    def inner_m(self, side: str) -> np.ndarray:
+        """Per distinct pose, its bodies' farthest reach towards the other hand
+        (``InnerEdge.inner_m``'s: below the rail for a right hand, above for a left one)."""
+        return -self.lo_m if side == "right" else self.hi_m
+
+
+def pose_extents(places: Places, edge: InnerEdge | None = None) -> PoseExtents:
+    """``places``' ``PoseExtents`` (``edge``: the hand's ``InnerEdge``, built when None)."""
+    Q, keys = pose_set(places)
+    uniq, inv = np.unique(Q, axis=0, return_inverse=True)  # (the same poses once: 2798
+    # of 16091 rows on the default hand)
+    lo, hi = (edge or InnerEdge(places.hand)).extents_m(uniq)
+    b = len(Q) - len(POSES) * len(keys)  # (the tucked natural hands first)
+    return PoseExtents(lo, hi, tuple(keys), np.ravel(inv)[b:].reshape(len(keys), len(POSES)))
 
 
 class InnerEdge:
@@ -132,22 +186,24 @@ class InnerEdge:
         return np.concatenate(out) if out else np.zeros(0)
 
 
-def hand_reach(places: Places) -> HandReach:
+def hand_reach(places: Places, ext: PoseExtents | None = None) -> HandReach:
     """The hand's ``HandReach`` over ``hand_poses`` (``InnerEdge``'s bodies; the rail at
-    0, so a point's x is its distance from the rail)."""
+    0, so a point's x is its distance from the rail); ``ext``: its ``pose_extents``
+    (found when None)."""
     h = places.hand
-    Q = np.unique(hand_poses(places), axis=0)  # (the same poses once: 2798 of 16091 rows
-    # on the default hand; the extent is the most over the set)
-    lo, hi = InnerEdge(h).extents_m(Q)
+    ext = ext or pose_extents(places)
     n = round(SPAN_M / STEP_M)
     dx = [places.natural_dx[f] + k * STEP_M for at in places.atlases for f in h.fingers
           for pc in range(12) for k in range(-n, n + 1) if at.entry_at(f, pc, k) is not None]
     if not dx:
         raise ValueError(f"{h.name}: no finger presses any key")
-    inner = -float(lo.min()) if h.side == "right" else float(hi.max())
+    inner = -float(ext.lo_m.min()) if h.side == "right" else float(ext.hi_m.max())
     return HandReach(h.side, inner, min(dx), max(dx))
 
 
-def hand_gap(left: Places, right: Places, clearance_m: float = CLEARANCE_M) -> HandGap:
-    """The pair's ``HandGap``: the left hand's reach, the right hand's."""
-    return HandGap(hand_reach(left), hand_reach(right), clearance_m)
+def hand_gap(left: Places, right: Places, clearance_m: float = CLEARANCE_M,
+             extents: tuple[PoseExtents, PoseExtents] | None = None) -> HandGap:
+    """The pair's ``HandGap``: the left hand's reach, the right hand's (``extents``: each
+    hand's ``pose_extents``, found when None)."""
+    el, er = extents or (None, None)
+    return HandGap(hand_reach(left, el), hand_reach(right, er), clearance_m)

@@ -35,7 +35,7 @@ from planner.hand.model import HandModel
 from planner.music.midi import Song
 from planner.play.costs import Costs, SkipReason
 from planner.play.handclear import MAX_ROUNDS, NoteReaches, PlaceReach, collided_notes, loose_bound
-from planner.play.handgap import HandGap, HandReach, InnerEdge, hand_gap
+from planner.play.handgap import HandGap, HandReach, InnerEdge, hand_gap, pose_extents
 from planner.play.hands import LEFT, RIGHT, SIDES, HandAssignment, assign_hands, other_side
 from planner.play.stream import Planner, PlayPlan, plan_song
 from planner.play.twobounds import (
@@ -70,10 +70,13 @@ class PairPlanner:
                          RIGHT: Planner(right, rest_rail_m=float(right.plan_upper[rr]))}
         for pl in self.planners.values():  # (the idle fingers tucked in: the hands nearer)
             pl.places.idle.narrow()
-        self.gap: HandGap = hand_gap(self.planners[LEFT].places, self.planners[RIGHT].places)
         self.edges = {s: InnerEdge(h) for s, h in self.hands.items()}
-        # (each place's own reach towards the other hand: the second hand's loosened rule)
-        self.place_reach = {s: PlaceReach(self.planners[s].places, self.edges[s])
+        # (every pose each hand plays in, measured once: the pair's gap and each place's
+        # own reach towards the other hand, the second hand's loosened rule)
+        ext = {s: pose_extents(self.planners[s].places, self.edges[s]) for s in SIDES}
+        self.gap: HandGap = hand_gap(self.planners[LEFT].places, self.planners[RIGHT].places,
+                                     extents=(ext[LEFT], ext[RIGHT]))
+        self.place_reach = {s: PlaceReach(self.planners[s].places, self.edges[s], ext[s])
                             for s in SIDES}
         # (each plan's rows read once while a pair is planned: ``plan_two_hands`` lets
         # them go when it is done)
@@ -212,7 +215,9 @@ def settled_room(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rat
 
 
 def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
-              song_name: str = "", settled: bool = False) -> PairPass:
+              song_name: str = "", settled: bool = False,
+              room: tuple[list[tuple[float, float]], frozenset[int]] | None = None
+              ) -> PairPass:
     """Plan both hands by ``a``: the hand ``first`` leaving the other room for its notes
     (``room_bounds``), then the other within the first one's rows (``clear_bounds``,
     settled: ``settled_bounds``), its notes and every note the first one left out (the
@@ -220,7 +225,8 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     play is left out again, one it plays instead of its own costs it fewer frames).
     ``settled``: the first hand's room settled too (``twobounds.room_settled``: where a
     note of its own has no place within its room, it stands where it was until its next
-    note, and leaves the other hand its room, and is charged for it, all that time)."""
+    note, and leaves the other hand its room, and is charged for it, all that time).
+    ``room``: that room (``settled_room``'s bounds and notes out) when found already."""
     notes = song.notes
     idx = {s: a.notes_of(s) for s in SIDES}
     subs = {s: _sub_song(song, idx[s]) for s in SIDES}
@@ -228,8 +234,8 @@ def plan_pass(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_h
     plans: dict[str, PlayPlan] = {}
     # (the first hand's bound leaves the other room; it keeps no clearance itself, the
     # second hand's bound does: its windows are its notes' own, none taken out)
-    bounds, out = room_settled(song, pp, first, idx[first], idx[second], subs[first], rate_hz,
-                               settled)
+    bounds, out = room or room_settled(song, pp, first, idx[first], idx[second], subs[first],
+                                       rate_hz, settled)
     # (and pays, in frames, for the room it takes from the other hand's notes and from
     # those it hands over: ``planner.play.roomcost``; a hand planned alone is planned as
     # one hand plays the file, the way that bounds a pair's loss against one hand)
@@ -318,10 +324,12 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
     pp.reads.clear()
+    pp.scorer.clear()
     try:
         return _plan_two_hands(song, pp, out_path, rate_hz, song_name, t_start)
     finally:
         pp.reads.clear()
+        pp.scorer.clear()
 
 
 def _both_rooms(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate_hz: float,
@@ -333,8 +341,11 @@ def _both_rooms(song: Song, pp: PairPlanner, a: HandAssignment, first: str, rate
     cost of the first hand's notes near them (random two-hand songs and the two-hand
     corpus: ``docs/history/2026-12-07-two-hands9.md``)."""
     got = [plan_pass(song, pp, a, first, rate_hz, song_name)]
-    if a.notes_of(other_side(first)) and settled_room(song, pp, a, first, rate_hz)[1]:
-        got.append(plan_pass(song, pp, a, first, rate_hz, song_name, settled=True))
+    if a.notes_of(other_side(first)):
+        room = settled_room(song, pp, a, first, rate_hz)
+        if room[1]:
+            got.append(plan_pass(song, pp, a, first, rate_hz, song_name, settled=True,
+                                 room=room))
     return got
 
 
@@ -346,12 +357,10 @@ def by_check(song: Song, pp: PairPlanner, finals: list[PairPass], rate_hz: float
     earlier. One way: no replay."""
     if len(finals) == 1:
         return finals[0], one_clock(finals[0].plans, rate_hz, pp.reads)
-    got = []
-    for k, p in enumerate(finals):
-        rows = one_clock(p.plans, rate_hz, pp.reads)
-        got.append(((pp.scorer.frame_f1(rows, song, rate_hz), p.played_frames, -k), p, rows))
-    _, best, rows = max(got, key=lambda g: g[0])
-    return best, rows
+    got = [((pp.scorer.plans_f1(p.plans, song, rate_hz, pp.reads), p.played_frames, -k), p)
+           for k, p in enumerate(finals)]
+    best = max(got, key=lambda g: g[0])[1]
+    return best, one_clock(best.plans, rate_hz, pp.reads)
 
 
 def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: float,

@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -171,16 +171,34 @@ class PlanReads:
         return len(self._got)
 
 
+class Clock(NamedTuple):
+    """Two plans on one clock (module docstring): the common ``song_start_s``, the rows of
+    rest each plan waits first (``lead``) and the rows of both (``n``)."""
+
+    song_start_s: float
+    lead: tuple[int, int]
+    n: int
+
+    def pad(self, k: int, a: np.ndarray) -> np.ndarray:
+        """Plan ``k``'s per-row array ``a`` on the clock: its first row repeated ``lead[k]``
+        times before it, its last repeated to ``n`` rows."""
+        a = np.concatenate([np.repeat(a[:1], self.lead[k], axis=0), a])
+        return np.concatenate([a, np.repeat(a[-1:], self.n - len(a), axis=0)])
+
+
+def clock_of(plans: tuple[PlayPlan, PlayPlan], rows: tuple[int, int], rate_hz: float
+             ) -> Clock:
+    """``plans``' ``Clock``, each plan ``rows[k]`` rows long."""
+    start = max(p.song_start_s for p in plans)
+    lead = tuple(round((start - p.song_start_s) * rate_hz) for p in plans)
+    return Clock(start, (lead[0], lead[1]), max(r + k for r, k in zip(rows, lead)))
+
+
 def one_clock(plans: tuple[PlayPlan, PlayPlan], rate_hz: float,
               read: Callable[[PlayPlan], Trajectory] | None = None) -> PairRows:
     """Both plans' rows on one clock (module docstring); ``read``: a plan's rows
     (``PlanReads``; None: ``plan.trajectory``)."""
     trs = tuple(p.trajectory if read is None else read(p) for p in plans)
-    start = max(p.song_start_s for p in plans)
-    lead = [round((start - p.song_start_s) * rate_hz) for p in plans]
-    n = max(len(tr.t_s) + k for tr, k in zip(trs, lead))
-    qs = []
-    for tr, k in zip(trs, lead):
-        q = np.concatenate([np.repeat(tr.q[:1], k, axis=0), tr.q])
-        qs.append(np.concatenate([q, np.repeat(q[-1:], n - len(q), axis=0)]))
-    return PairRows(np.arange(n) / rate_hz, (qs[0], qs[1]), start)
+    c = clock_of(plans, (len(trs[0].t_s), len(trs[1].t_s)), rate_hz)
+    return PairRows(np.arange(c.n) / rate_hz, (c.pad(0, trs[0].q), c.pad(1, trs[1].q)),
+                    c.song_start_s)
