@@ -17,11 +17,6 @@ import numpy as np
 
 from planner.hand.model import HandModel
 
-SOLVER_PARTS = frozenset({"robot", "solver", "_names", "_v_off", "_q_off", "_nq", "_gears",
-                          "_nonlinear", "posture", "stay", "_arm", "arm_task", "_tasks",
-                          "_half"})  # what ``PlacoHand.build`` makes (placo's objects and
-# what is read from them)
-
 
 class PlacoHand:
     """A placo kinematics solver for one hand, built once, on first use (``build``), and
@@ -38,9 +33,12 @@ class PlacoHand:
         self.lower, self.upper = (hand.lower, hand.upper) if limits is None else limits
 
     def __getattr__(self, name: str) -> Any:
-        """A part of the solver (``SOLVER_PARTS``) asked for before it is built: built now
-        (once; the same objects in the same order as when built at once)."""
-        if name in SOLVER_PARTS and "hand" in self.__dict__ and "robot" not in self.__dict__:
+        """A name not set yet (but a special one) before the solver is built: whatever
+        ``build`` sets is a part of the solver, so the solver is built now (once; the same
+        objects in the same order as when built at once) and the name asked again; a name
+        the built solver lacks is no attribute."""
+        d = self.__dict__
+        if not name.startswith("__") and "hand" in d and "robot" not in d:
             self.build()
             return getattr(self, name)
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")

@@ -11,16 +11,25 @@ entries and the arm's moves between postures at every step of the rail), which t
 planner would otherwise find by forward kinematics when it first needs them. Run from
 the repository root after changing a hand, the IK, the atlas or the moves:
 
-    python scripts/make_atlas.py [--hand NAME] [--moves-only]
+    python scripts/make_atlas.py [--hand NAME] [--only PART,...]
 
-(``--moves-only``: keep the shipped atlas, write the move table of its entries.) Last it
-writes the hand's follow table (``planner.play.followtable``: the follow test's answers on
-the rail's grid, for a hand with a rail and the atlas's body rule; ``--follows-only``:
-keep the shipped atlas and move tables, write only it). ``--proofs-only``: keep the
-shipped atlas and move tables, write into each move table only the tendon proof's gains
-of each finger's box of high poses (``planner.play.tendonproof``; ``make_table`` writes
-them too). ``--repeats-only``: likewise, only each entry's repeat (``Moves.repeat_found``;
-``make_table`` writes them too).
+It makes its parts in this order (``PARTS``), each by one function whether it is made
+with the rest or alone; ``--only`` names the parts to make (default: all), the others
+are read as shipped:
+
+* ``atlas``: every play posture's atlas, solved afresh (else the shipped one is read);
+* ``moves``: each posture's move table of its atlas's entries (``movetable.make_table``;
+  a fresh table holds no proofs nor repeats: these two parts are made with it);
+* ``proofs``: into each move table, the tendon proof's gains of each finger's box of high
+  poses (``planner.play.tendonproof``; posture 0's: also the cells over every posture's;
+  ``movetable.add_proofs``);
+* ``repeats``: into each move table, each entry's repeat (``Moves.repeat_found``;
+  ``movetable.add_repeats``, the table's own crossings read back);
+* ``follows``: the hand's follow table (``planner.play.followtable``: the follow test's
+  answers on the rail's grid, for a hand with a rail and the atlas's body rule), of the
+  atlas and move tables as shipped by then.
+
+A name not among them: one line on stderr, exit 2.
 """
 
 import argparse
@@ -39,17 +48,31 @@ from planner.play.movetable import MoveTable, add_proofs, add_repeats, make_tabl
 from planner.play.movetable import table_path as moves_path
 from planner.play.places import RAIL_STEP_M, Places
 
+PARTS = ("atlas", "moves", "proofs", "repeats", "follows")  # (in the order they are made)
 
-def make(hand, posture: int, moves_only: bool) -> Atlas:
-    """The atlas of one play posture of ``hand`` (solved in full, written unless
-    ``moves_only``)."""
+
+def parts_named(text: str) -> tuple[str, ...]:
+    """The parts ``--only`` names (comma-separated), in ``PARTS``' order, with the proofs
+    and repeats of a fresh move table; ValueError for a name not among ``PARTS``."""
+    named = {n.strip() for n in text.split(",")}
+    unknown = sorted(named - set(PARTS))
+    if unknown:
+        raise ValueError(f"--only: unknown part {unknown[0]!r} (parts: {','.join(PARTS)})")
+    if "moves" in named:
+        named |= {"proofs", "repeats"}
+    return tuple(n for n in PARTS if n in named)
+
+
+def make(hand, posture: int, fresh: bool) -> Atlas:
+    """The atlas of one play posture of ``hand``, solved in full: afresh and written when
+    ``fresh``, else the shipped one."""
     path = table_path(hand.urdf_sha256, posture)
     atlas = Atlas(hand, posture=posture)
     t0 = time.perf_counter()
-    if not moves_only:
+    if fresh:
         atlas.forget()  # (solved afresh, not read back from an older table)
     n = atlas.solve_all()
-    if not moves_only:
+    if fresh:
         path.parent.mkdir(parents=True, exist_ok=True)
         atlas.save(path)
         print(f"{path}: {n} entries of {atlas.asked()} samples, {atlas.solves} IK "
@@ -87,36 +110,31 @@ def _arm_s(places: Places, posture: int, other: int) -> tuple[int, list[float]]:
                       for s in steps]
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hand", default="default")
-    ap.add_argument("--moves-only", action="store_true",
-                    help="keep the shipped atlas; write the move table of its entries")
-    ap.add_argument("--follows-only", action="store_true",
-                    help="keep the shipped atlas and move tables; write the follow table")
-    ap.add_argument("--proofs-only", action="store_true",
-                    help="keep the shipped atlas and move tables; write the tendon proof's "
-                         "gains into the move tables")
-    ap.add_argument("--repeats-only", action="store_true",
-                    help="keep the shipped atlas and move tables; write each entry's repeat "
-                         "into the move tables")
-    a = ap.parse_args()
+    ap.add_argument("--only", default=",".join(PARTS),
+                    help="the parts to make, comma-separated (default: all, "
+                         f"{','.join(PARTS)}); the others are read as shipped")
+    a = ap.parse_args(argv)
+    try:
+        parts = parts_named(a.only)
+    except ValueError as err:
+        print(err, file=sys.stderr)
+        return 2
     hand = load_hand(a.hand)
-    if a.repeats_only:
-        for i in range(posture_count(hand)):
-            make_repeats(hand, make(hand, i, True))
-        return 0
-    if a.proofs_only:
-        atlases = [make(hand, i, True) for i in range(posture_count(hand))]
-        for i in range(len(atlases)):
-            make_proofs(hand, atlases, i)
-        return 0
-    if not a.follows_only:
-        atlases = [make(hand, i, a.moves_only) for i in range(posture_count(hand))]
+    atlases = [] if parts == ("follows",) else [
+        make(hand, i, "atlas" in parts) for i in range(posture_count(hand))]
+    if "moves" in parts:
         places = Places(hand) if len(atlases) > 1 and atlases[0].rail is not None else None
         for i in range(len(atlases)):
             make_moves(hand, atlases, i, places)
-    make_follows(hand)
+    for i in range(len(atlases) if "proofs" in parts else 0):
+        make_proofs(hand, atlases, i)
+    for atlas in atlases if "repeats" in parts else ():
+        make_repeats(hand, atlas)
+    if "follows" in parts:
+        make_follows(hand)
     return 0
 
 

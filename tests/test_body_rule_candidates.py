@@ -11,28 +11,18 @@ from planner.check.criteria import DOWN_DEPTH_M
 from planner.check.kinematics import Kinematics
 from planner.hand.bodies import body_links, collision_bodies, place
 from planner.music import keybodies as kbod
-from planner.music.keybodies import column_depths, footprints, swept_lowest_z
+from planner.music.keybodies import column_depths, footprints, keep_deepest, swept_lowest_z
 from planner.trajfile import read_trajectory
 
 
 def straight_collect(depth, which, fp, z_cut, bounds, index, lowest) -> None:
-    """``_collect`` as first written: every (row, shape, rectangle) tested at once."""
+    """``_collect`` as first written: every (row, shape, rectangle) tested at once (the
+    deepest of them kept as ``_collect`` keeps them: ``keep_deepest``)."""
     xlo, xhi, ylo, yhi, zlo = bounds
-    t, s, k = np.nonzero((xlo[..., None] <= fp.hi[:, 0]) & (xhi[..., None] >= fp.lo[:, 0])
-                         & (ylo[..., None] <= fp.hi[:, 1]) & (yhi[..., None] >= fp.lo[:, 1])
-                         & (zlo[..., None] <= z_cut))
-    if len(t) == 0:
-        return
-    d = fp.top_m[k] - lowest(t, s, k)
-    key = fp.key[k]
-    order = np.lexsort((d, key, t))
-    t, key, d, s = t[order], key[order], d[order], s[order]
-    last = np.ones(len(t), dtype=bool)
-    last[:-1] = (t[1:] != t[:-1]) | (key[1:] != key[:-1])
-    t, key, d, s = t[last], key[last], d[last], s[last]
-    better = d > depth[t, key]
-    depth[t[better], key[better]] = d[better]
-    which[t[better], key[better]] = np.asarray(index)[s[better]]
+    candidates = np.nonzero((xlo[..., None] <= fp.hi[:, 0]) & (xhi[..., None] >= fp.lo[:, 0])
+                            & (ylo[..., None] <= fp.hi[:, 1]) & (yhi[..., None] >= fp.lo[:, 1])
+                            & (zlo[..., None] <= z_cut))
+    keep_deepest(depth, which, fp, candidates, index, lowest)  # (``_collect``'s own end)
 
 
 @pytest.fixture(scope="module")

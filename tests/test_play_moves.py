@@ -12,7 +12,7 @@ from planner.hand.chain import FrameChain
 from planner.hand.model import load_hand
 from planner.play.atlas import Atlas
 from planner.play.moves import REPEAT_PARAMS, Moves
-from planner.play.movetable import MoveTable, make_table, table_path
+from planner.play.movetable import MoveTable, add_proofs, add_repeats, make_table, table_path
 
 
 @pytest.fixture(scope="module")
@@ -111,6 +111,8 @@ def test_a_table_of_other_parameters_is_not_used(moves, tmp_path):
     small.table = MoveTable(hand.fingers, small.atlas.natural_dx)
     path = tmp_path / "moves.npz"
     assert make_table(small, path, small.params()) == len(keep)
+    # (the tendon proof's gains and the repeats go in after, as make_atlas adds them)
+    assert add_proofs(small, path) and add_repeats(small, path) == len(keep)
     other = MoveTable(hand.fingers, small.atlas.natural_dx)
     other.load(path, small.params().replace("cross_tol", "tol"))
     assert other.crossings == {}
@@ -119,7 +121,7 @@ def test_a_table_of_other_parameters_is_not_used(moves, tmp_path):
     assert len(same.crossings) == len(keep)
     e = next(iter(keep.values()))
     assert same.crossing(e, 0) == moves.descend(e, "high").cross_s
-    # (the tendon proof's bound of the finger's box written with the rest, read by the
+    # (the tendon proof's bound of the finger's box written into it, read by the
     # table made with the same parameters only)
     lo, hi = small.high_boxes()["index"]
     proof = small.tendons.proof

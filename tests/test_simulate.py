@@ -46,14 +46,21 @@ def _write(path, tr, q, hand, end=None, t=None):
     return path
 
 
-def test_scene_pad_points_are_the_urdf_pad_points(hand):
-    scene = build_scene(hand, hand.T_world_root, keyboard=True)
+def _random_kinematics(hand, scene, seed: int, n: int):
+    """``n`` random configurations of ``hand`` (couplings applied) set in ``scene``, each
+    with MuJoCo's kinematics done: (q, data)."""
     data = mujoco.MjData(scene.model)
-    rng = np.random.default_rng(1)
-    for _ in range(5):
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
         q = hand.apply_couplings(rng.uniform(hand.lower, hand.upper))
         data.qpos[scene.hand_qpos] = q
         mujoco.mj_kinematics(scene.model, data)
+        yield q, data
+
+
+def test_scene_pad_points_are_the_urdf_pad_points(hand):
+    scene = build_scene(hand, hand.T_world_root, keyboard=True)
+    for q, data in _random_kinematics(hand, scene, seed=1, n=5):
         assert np.allclose(data.site_xpos[scene.tip_sites], hand.tip_positions(q), atol=1e-9)
     assert scene.model.nu == hand.n_motor and scene.model.neq == len(hand.couplings)
     assert len(scene.key_qpos) == 88
@@ -312,12 +319,7 @@ def test_scene_palm_centre_and_palm_box(hand):
     """The palm site is the URDF's palm_center (it was on the mount: an empty body is a
     falsy Element); the palm and forearm collide as their boxes, not as capsules."""
     scene = build_scene(hand, hand.T_world_root)
-    data = mujoco.MjData(scene.model)
-    rng = np.random.default_rng(2)
-    for _ in range(3):
-        q = hand.apply_couplings(rng.uniform(hand.lower, hand.upper))
-        data.qpos[scene.hand_qpos] = q
-        mujoco.mj_kinematics(scene.model, data)
+    for q, data in _random_kinematics(hand, scene, seed=2, n=3):
         T = hand.palm_pose(q)
         assert np.allclose(data.site_xpos[scene.palm_site], T[:3, 3], atol=1e-9)
         assert np.allclose(data.site_xmat[scene.palm_site].reshape(3, 3), T[:3, :3], atol=1e-9)

@@ -219,7 +219,14 @@ def _collect(depth, which, fp: Footprints, z_cut, bounds, index, lowest) -> None
     p, k = np.nonzero((xlo[:, None] <= fp.hi[:, 0]) & (xhi[:, None] >= fp.lo[:, 0])
                       & (ylo[:, None] <= fp.hi[:, 1]) & (yhi[:, None] >= fp.lo[:, 1])
                       & (zlo[:, None] <= z_cut))
-    t, s = t[p], s[p]
+    keep_deepest(depth, which, fp, (t[p], s[p], k), index, lowest)
+
+
+def keep_deepest(depth, which, fp: Footprints, candidates, index, lowest) -> None:
+    """Of the ``candidates`` (row, shape, rectangle index arrays), their exact lowest
+    points (``lowest``), below each rectangle's top: the deepest per row and key kept in
+    ``depth`` (and its shape's ``index`` in ``which``) where deeper than it holds."""
+    t, s, k = candidates
     if len(t) == 0:
         return
     d = fp.top_m[k] - lowest(t, s, k)

@@ -25,7 +25,7 @@ tables' parameters of every posture, the follow test's constants, and a digest o
 posture's base configuration and its entries' press poses). A question outside it
 (another rail, another pair) is answered by forward kinematics, as without a table.
 
-    python scripts/make_atlas.py --follows-only   (or with the atlas and its move tables)
+    python scripts/make_atlas.py --only follows   (or with the atlas and its move tables)
 """
 
 from __future__ import annotations

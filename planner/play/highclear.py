@@ -134,8 +134,8 @@ class HighClear:
         self.moves = moves
         self._path: dict[tuple, float] = {}
         self._room: dict[int, tuple[AtlasEntry, float]] = {}  # (``front_room_m``)
-        self._lift_front: dict[tuple, tuple[AtlasEntry, bool]] = {}  # (``lift_front``)
-        self._descent_front: dict[tuple, tuple[AtlasEntry, bool]] = {}  # (``descent_front``)
+        # (``lift_front`` and ``descent_front``, by entry, move and which: ``_front``)
+        self._fronts: dict[tuple, tuple[AtlasEntry, bool]] = {}
         self._params = params()
 
     def rise_clear_s(self, e: AtlasEntry, move: Move, front: bool = True) -> float:
@@ -239,19 +239,7 @@ class HighClear:
         above the black tops (the later of its ways up: from the press, from hover)."""
         if front_rules(reach_from_m, reach_to_m)[0]:
             return True
-        if e is None:
-            return False
-        key = (id(e), reach_to_m - reach_from_m)
-        got = self._lift_front.get(key)
-        if got is not None:
-            return got[1]
-        m = self.moves[e.posture] if self.moves is not None else None
-        gap = math.inf if m is None else max(
-            self.rise_clear_s(e, up, False) - self.rise_clear_s(e, up)
-            for up in (m.lift(e, "high").move, m.rise(e).move))
-        ok = self.front_room_m(e) >= min(key[1], self.reach_bound_m(gap))
-        self._lift_front[key] = (e, ok)  # (memoised by entry and move: the entry kept)
-        return ok
+        return e is not None and self._front(e, reach_to_m - reach_from_m, True)
 
     def descent_front(self, e: AtlasEntry | None, reach_from_m: float,
                       reach_to_m: float) -> bool:
@@ -271,18 +259,38 @@ class HighClear:
             return True
         if e is None or reach_to_m > reach_from_m:
             return False
-        key = (id(e), reach_to_m - reach_from_m)
-        got = self._descent_front.get(key)
-        if got is not None:
-            return got[1]
+        return self._front(e, reach_to_m - reach_from_m, False)
+
+    def _front(self, e: AtlasEntry, move_m: float, lifting: bool) -> bool:
+        """``lift_front`` (``lifting``) or ``descent_front`` of entry ``e`` past the rules
+        that need no search, the arm's move ``move_m`` long (into the keyboard > 0):
+        memoised by entry, move and which (the entry kept)."""
+        key = (id(e), move_m, lifting)
+        got = self._fronts.get(key)
+        if got is None:
+            found = self._lift_found if lifting else self._descent_found
+            got = self._fronts[key] = (e, found(e, move_m))
+        return got[1]
+
+    def _lift_found(self, e: AtlasEntry, move_m: float) -> bool:
+        """``lift_front``'s search: the entry's front room against the move and the arm's
+        reach from the lift's front moment to its black one."""
+        m = self.moves[e.posture] if self.moves is not None else None
+        gap = math.inf if m is None else max(
+            self.rise_clear_s(e, up, False) - self.rise_clear_s(e, up)
+            for up in (m.lift(e, "high").move, m.rise(e).move))
+        return self.front_room_m(e) >= min(move_m, self.reach_bound_m(gap))
+
+    def _descent_found(self, e: AtlasEntry, move_m: float) -> bool:
+        """``descent_front``'s search (a move out of the keyboard, ``move_m`` <= 0): the
+        entry's front room against the move and the arm's travel to rest over the
+        descent's black-to-front time at the motors' slowest."""
         m = self.moves[e.posture] if self.moves is not None else None
         gap = math.inf
         if m is not None:
             d = m.descend(e, "high").move
             gap = self.descent_clear_s(e, d) - self.descent_clear_s(e, d, False)
-        ok = self.front_room_m(e) >= min(-key[1], self.reach_bound_m(MAX_SCALE * gap))
-        self._descent_front[key] = (e, ok)  # (memoised by entry and move: the entry kept)
-        return ok
+        return self.front_room_m(e) >= min(-move_m, self.reach_bound_m(MAX_SCALE * gap))
 
     def _shipped(self, e: AtlasEntry, move: Move, rising: bool, front: bool) -> float | None:
         """The move table's moment when ``move`` is one of the entry's own

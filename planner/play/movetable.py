@@ -305,7 +305,8 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
     durations step by step, ``Places.arm_time_s``; or None), for the pairs across
     postures; ``high``: a ``HighClear`` that searches every moment (none shipped), and
     its parameters (``highclear.params``), or None. Returns the number of
-    entries."""
+    entries. The tendon proof's gains and the entries' repeats go into the table after
+    (``add_proofs``, ``add_repeats``)."""
     atlas, hand = moves.atlas, moves.hand
     order, entries = table_entries(atlas)
     arrays: dict[str, np.ndarray] = {
@@ -316,13 +317,12 @@ def make_table(moves, path: Path, params: str, others=(), high=None) -> int:
                             ).reshape(-1, 6),
         "tendon_scale": np.array([[moves.entry_scale(e, c) for c in range(4)]
                                   for e in entries]).reshape(-1, 4),
-        "params": np.array(params), **repeat_arrays(moves, entries)}
+        "params": np.array(params)}
     if high is not None:  # (``HighClear``'s moments of every entry, and its parameters)
         high, clear_params = high
         rows = [high.clear_row(e, moves) for e in entries]
         arrays["clear_s"] = np.array(rows).reshape(len(rows), len(rows[0]) if rows else 0)
         arrays["clear_params"] = np.array(clear_params)
-    arrays.update(proof_arrays(moves, [a for a, _ in others] if atlas.posture_index == 0 else ()))
     for f in hand.fingers:
         mine = [e for e in entries if e.finger == f]
         arrays[f"across_{f}"] = np.packbits(_across_matrix(moves, f, mine))
