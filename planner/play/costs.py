@@ -137,11 +137,13 @@ class Prev:
     (the programme weighs hundreds of transitions from each state)."""
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
-                 "lift_end_black", "lifts", "lifts_black", "lifts_to", "older", "on_key", "recent",
-                 "release", "rode_of", "state", "steps")
+                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_to", "older",
+                 "on_key", "posture", "recent", "release", "riders_at", "rode_of", "state",
+                 "steps", "up_parts")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
+        self.posture = costs.places.posture_of(state.place)
         # (a held note let go at this event: its key comes up when the new notes' go down)
         self.cut_up = cut_up = key_up_s(t, costs.dt)
         pitch, t_up, t_down = costs.pitch, costs._t_up, costs._t_down
@@ -176,6 +178,13 @@ class Prev:
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None
             for down in (t_down[m] + late.get(m, 0.0),)]
         self.release: dict[tuple, tuple] = {}  # by place and new notes (``_release_of``)
+        self.up_parts: dict[int, tuple] = {}  # by note: what its key's up cut for a move
+        # of the arm works out whatever the cut (``ArmCosts._cut_up_s``)
+        self.lift_parts: dict[tuple, tuple] = {}  # by (note, finger, ``Costs._times``
+        # column): its lift's time, its entry, the key-up no cut goes before
+        # (``ArmCosts._cut_lifts``)
+        self.riders_at: dict[int, dict] = {}  # by place, by finger: a note sounding's
+        # terms as a rider of a move there, or None (``ArmCosts._rider``)
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
         self.steps: dict[tuple, tuple] = {}  # a transition's loss and its late notes, by
         # (notes, rail, kept)
@@ -187,8 +196,8 @@ class CostMemo:
     by keys, forces, fingers and rail positions (bounded), kept across the songs of one
     hand (``planner.play.Planner`` holds one)."""
 
-    __slots__ = ("cand_rails", "cands", "entry", "follows", "gaps", "keep_to", "paths",
-                 "rails", "rails_to", "shortest", "timing")
+    __slots__ = ("afters", "cand_rails", "cands", "entry", "follows", "gaps", "keep_to",
+                 "paths", "rails", "rails_to", "shortest", "timing")
 
     def __init__(self) -> None:
         for name in self.__slots__:
@@ -214,6 +223,8 @@ class Costs(ArmCosts):
         self._rails: dict[tuple[str, int, float], frozenset[int]] = m.rails
         self._entry: dict = m.entry
         self._timing: dict = m.timing
+        self._afters: dict = m.afters  # (``ArmCosts._afters_of``' answers, by the posture
+        # moved from and the place moved to)
         self._gaps: dict = m.gaps
         self._follows: dict = m.follows
         self._paths: dict = m.paths  # (``_follow_path``'s answers)
