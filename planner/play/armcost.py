@@ -42,7 +42,6 @@ class ArmCosts:
         move is not made (inf). ``lates``: gets (note, seconds) of each note struck late
         (``State.late``); ``rode``: gets (note, finger, the move's end) of each note
         riding along (its finger's place is ``place`` after: ``layers.rode_to``)."""
-        here = prev.state.place
         afters = self._afters_of(prev, place, new)  # (each new note's descent after the move)
         t_down = self._t_down
         arrive = min([t_down[n] - a for n, a in zip(new, afters)])  # (the new notes' wish)
@@ -68,7 +67,7 @@ class ArmCosts:
         by_finger, by_key, lifted = around
         t_up, dt, pitch = self._t_up, self.dt, self.pitch
         gaps = self._gaps  # (``_move_gap_s``' memo)
-        loss = TIE_RAIL_PER_M * self.places.distance_m(place, here) + cut_loss
+        loss = self._to_place(prev, place)[5] + cut_loss
         for (n, f), after_s in zip(new.items(), afters):
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
@@ -137,14 +136,10 @@ class ArmCosts:
         keys let up early for the arm to start on time (``arrive``: the latest the arm may
         arrive for each new key to go down on time after its descent) and those keys' ups
         (``_cut_lifts``; none where a note may ride along)."""
-        T = self.places.arm_time_s(ctx.state.place, place)
-        lifts, lift_end, lift_col = self._lifts(ctx, place)
+        T, lifts, lift_end, lift_col, at, _ = self._to_place(ctx, place)
         cands = []  # (note, finger, the move's latest end, its time, its press done)
         if ctx.follows:
             strikers = set(new.values())
-            at = ctx.riders_at.get(place)
-            if at is None:
-                at = ctx.riders_at[place] = {}
             for follow in ctx.follows:
                 f = follow[1]
                 if f in strikers:  # (it strikes next: it does not ride along)
@@ -163,13 +158,26 @@ class ArmCosts:
             return release + T, _NONE, loss, ups
         return self._riders(ctx, lifts, cands, T, arrive, lift_col)
 
+    def _to_place(self, ctx: Prev, place: int) -> tuple:
+        """What every move of the arm from ``ctx``'s state to ``place`` shares (memoised
+        per state before and place, ``Prev.to_place``): the arm's time, ``_lifts``' three
+        answers, a dict of ``_rider``'s answers by finger (filled as asked) and the move's
+        tie-break (``TIE_RAIL_PER_M`` frames a metre)."""
+        got = ctx.to_place.get(place)
+        if got is None:
+            here = ctx.state.place
+            got = ctx.to_place[place] = (
+                self.places.arm_time_s(here, place), *self._lifts(ctx, place), {},
+                TIE_RAIL_PER_M * self.places.distance_m(place, here))
+        return got
+
     def _rider(self, ctx: Prev, place: int, m: int, f: str, a, window_s: float,
                press_s: float, down_s: float) -> tuple | None:
         """Note ``m`` sounding in ``ctx``'s state (finger ``f``, entry ``a``; its key's
         window, press and down: ``Prev.follows``) as a rider of a move to ``place``, if
         its finger strikes no new note: ((note, finger), the move's latest end, the
         move's time carrying it, when its press is done); None where it cannot ride
-        (memoised per state before, place and finger: ``Prev.riders_at``)."""
+        (memoised per state before, place and finger: ``_to_place``)."""
         # (an entry serves every key of its pitch class at its place: the key is the
         # entry and the rail's step, never the rail's index, which names another
         # entry for each of those keys)

@@ -138,8 +138,8 @@ class Prev:
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
                  "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_to", "older",
-                 "on_key", "posture", "recent", "release", "riders_at", "rode_of", "state",
-                 "steps", "up_parts")
+                 "on_key", "posture", "recent", "release", "rode_of", "state", "steps",
+                 "to_place", "up_parts")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -183,8 +183,8 @@ class Prev:
         self.lift_parts: dict[tuple, tuple] = {}  # by (note, finger, ``Costs._times``
         # column): its lift's time, its entry, the key-up no cut goes before
         # (``ArmCosts._cut_lifts``)
-        self.riders_at: dict[int, dict] = {}  # by place, by finger: a note sounding's
-        # terms as a rider of a move there, or None (``ArmCosts._rider``)
+        self.to_place: dict[int, tuple] = {}  # by place: what every move of the arm
+        # there shares (``ArmCosts._to_place``)
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
         self.steps: dict[tuple, tuple] = {}  # a transition's loss and its late notes, by
         # (notes, rail, kept)
@@ -196,8 +196,8 @@ class CostMemo:
     by keys, forces, fingers and rail positions (bounded), kept across the songs of one
     hand (``planner.play.Planner`` holds one)."""
 
-    __slots__ = ("afters", "cand_rails", "cands", "entry", "follows", "gaps", "keep_to",
-                 "paths", "rails", "rails_to", "shortest", "timing")
+    __slots__ = ("afters", "cand_rails", "cands", "entry", "follows", "gaps", "keep_cands",
+                 "keep_to", "paths", "rails", "rails_to", "shortest", "timing")
 
     def __init__(self) -> None:
         for name in self.__slots__:
@@ -232,6 +232,8 @@ class Costs(ArmCosts):
         self._cand_rails: dict = m.cand_rails  # (``_cands``' rails, and its best, by key)
         self._rails_to: dict = m.rails_to
         self._keep_to: dict = m.keep_to  # (``Layers._keeping``'s answers)
+        self._keep_cands: dict = m.keep_cands  # (``Layers._keeping``'s candidates and
+        # their index, by the new notes' and the riders' keys, forces and fingers)
         self._shortest: dict[tuple[int, float], float] = m.shortest
         self._ctx: dict[float, dict[State, Prev]] = {}  # (the song's: by event time)
         self.pitch = [n.pitch for n in notes]
