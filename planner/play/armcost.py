@@ -270,10 +270,16 @@ class ArmCosts:
         rule's (0) where the move keeps the play posture, moves the hand out of the
         keyboard, or in no further than the entry's bodies stay in front of the black
         keys, the black rule's (2) otherwise (``HighClear.lift_front``, which answers the
-        move that keeps the posture too; ``_lifts`` does not ask it)."""
+        move that keeps the posture too; ``_lifts`` does not ask it; memoised by key,
+        finger, place pressed from and the postures moved between: the rule depends on
+        the entry and the reaches alone)."""
         po, reach = self.places.posture_of, self.places.reach_m
-        return 0 if self.places.high.lift_front(self.entry(m, f, r), reach(po(here)),
-                                                reach(po(place))) else 2
+        key = (self.pitch[m], f, r, po(here), po(place))
+        got = self._lift_cols.get(key)
+        if got is None:
+            got = self._lift_cols[key] = 0 if self.places.high.lift_front(
+                self.entry(m, f, r), reach(key[3]), reach(key[4])) else 2
+        return got
 
     def _lifts(self, ctx: Prev, place: int) -> tuple[list, float, dict | None]:
         """When each finger of ``ctx``'s state is clear above every key before a move of

@@ -197,7 +197,7 @@ class CostMemo:
     hand (``planner.play.Planner`` holds one)."""
 
     __slots__ = ("afters", "cand_rails", "cands", "entry", "follows", "gaps", "keep_cands",
-                 "keep_to", "paths", "rails", "rails_to", "shortest", "timing")
+                 "keep_to", "lift_cols", "paths", "rails", "rails_to", "shortest", "timing")
 
     def __init__(self) -> None:
         for name in self.__slots__:
@@ -232,6 +232,7 @@ class Costs(ArmCosts):
         self._cand_rails: dict = m.cand_rails  # (``_cands``' rails, and its best, by key)
         self._rails_to: dict = m.rails_to
         self._keep_to: dict = m.keep_to  # (``Layers._keeping``'s answers)
+        self._lift_cols: dict = m.lift_cols  # (``ArmCosts._lift_col``'s answers)
         self._keep_cands: dict = m.keep_cands  # (``Layers._keeping``'s candidates and
         # their index, by the new notes' and the riders' keys, forces and fingers)
         self._shortest: dict[tuple[int, float], float] = m.shortest
