@@ -26,7 +26,91 @@ if TYPE_CHECKING:
 TIE_RAIL_PER_M = 5.0  # frames per metre of rail moved: a tie-break, not a cost
 
 
-class ArmCosts:
+class ArmTimes:
+    """The finger timings around a move of the arm that ``ArmCosts`` reads (its base; it
+    reads ``Costs``' memos): the columns of ``Costs._times`` by the move's rule, each
+    finger's lift before the move, a held key's follow path."""
+
+    def _afters_of(self, prev: Prev, place: int, new: dict[int, str]) -> list[float]:
+        """Each of ``new``'s notes' finger's descent's part after a move of the arm from
+        ``prev``'s place to ``place`` is over (``Costs._times``, its ``_descent_column``;
+        memoised by the posture moved from, the place and the key and finger: the column
+        depends on the postures and the entry alone)."""
+        col = self._afters.get((prev.posture, place))
+        if col is None:
+            col = self._afters[prev.posture, place] = {}
+        pitch, out = self.pitch, []
+        for n, f in new.items():
+            a = col.get((pitch[n], f))
+            if a is None:
+                a = col[pitch[n], f] = self._times(n, f, place)[
+                    self._descent_column(prev.state.place, place, n, f)]
+            out.append(a)
+        return out
+
+    def _descent_column(self, here: int, place: int, n: int, f: str) -> int:
+        """``Costs._times``' column of the descent's part of note ``n``'s finger ``f``
+        after a move of the arm from place ``here`` to ``place``: the front rule's (1)
+        where the move keeps the play posture, or takes the hand out of the keyboard and
+        the entry's bodies stayed in front of the black keys
+        (``HighClear.descent_front``), the black rule's (3) otherwise (the motion's
+        ``Motion.descent_front``)."""
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return 1
+        a, b = self.places.reach_m(po(here)), self.places.reach_m(po(place))
+        return 1 if self.places.high.descent_front(self.entry(n, f, place), a, b) else 3
+
+    def _lift_col(self, here: int, place: int, m: int, f: str, r: int) -> int:
+        """``Costs._times``' column of the lift of note ``m``'s finger ``f`` (pressed from
+        place ``r``) before a move of the arm from place ``here`` to ``place``: the front
+        rule's (0) where the move keeps the play posture, moves the hand out of the
+        keyboard, or in no further than the entry's bodies stay in front of the black
+        keys, the black rule's (2) otherwise (``HighClear.lift_front``, which answers the
+        move that keeps the posture too; ``_lifts`` does not ask it; memoised by key,
+        finger, place pressed from and the postures moved between: the rule depends on
+        the entry and the reaches alone)."""
+        po, reach = self.places.posture_of, self.places.reach_m
+        key = (self.pitch[m], f, r, po(here), po(place))
+        got = self._lift_cols.get(key)
+        if got is None:
+            got = self._lift_cols[key] = 0 if self.places.high.lift_front(
+                self.entry(m, f, r), reach(key[3]), reach(key[4])) else 2
+        return got
+
+    def _lifts(self, ctx: Prev, place: int) -> tuple[list, float, dict | None]:
+        """When each finger of ``ctx``'s state is clear above every key before a move of
+        the arm to ``place`` (latest first), the latest, and each one's ``Costs._times``
+        column by note and finger (None: all the front rule's): ``Prev.lifts``, or each
+        finger's by its entry's rule (``_lift_col``; memoised per posture moved to)."""
+        here = ctx.state.place
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return ctx.lifts, ctx.lift_end, None
+        got = ctx.lifts_to.get(po(place))
+        if got is None:
+            black = {(m, f): v for v, m, f in ctx.lifts_black}
+            cols = {(m, f): self._lift_col(here, place, m, f, r)
+                    for m, f, r in ctx.state.last_notes}
+            lifts = sorted(((v if cols[m, f] == 0 else black[m, f], m, f)
+                            for v, m, f in ctx.lifts), key=lambda x: -x[0])
+            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
+                                             cols)
+        return got
+
+    def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
+        """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
+        to ``place``, the rails the motion moves (memoised by key and places)."""
+        key = (self.pitch[m], f, here, place)
+        got = self._paths.get(key)
+        if got is None:
+            got = self._paths[key] = self.places.follow_path_clear(
+                self.entry(m, f, here), self.entry(m, f, place), self.pitch[m],
+                self.places.rail_m(here), self.places.rail_m(place))
+        return got
+
+
+class ArmCosts(ArmTimes):
     """The arm's moves in ``planner.play.costs.Costs`` (its base: it reads the song's
     times, the memos and the finger timings that ``Costs`` keeps)."""
 
@@ -233,84 +317,6 @@ class ArmCosts:
             ups[m] = up
             release = max(release, up + lift_s)
         return release, loss, ups
-
-    def _afters_of(self, prev: Prev, place: int, new: dict[int, str]) -> list[float]:
-        """Each of ``new``'s notes' finger's descent's part after a move of the arm from
-        ``prev``'s place to ``place`` is over (``Costs._times``, its ``_descent_column``;
-        memoised by the posture moved from, the place and the key and finger: the column
-        depends on the postures and the entry alone)."""
-        col = self._afters.get((prev.posture, place))
-        if col is None:
-            col = self._afters[prev.posture, place] = {}
-        pitch, out = self.pitch, []
-        for n, f in new.items():
-            a = col.get((pitch[n], f))
-            if a is None:
-                a = col[pitch[n], f] = self._times(n, f, place)[
-                    self._descent_column(prev.state.place, place, n, f)]
-            out.append(a)
-        return out
-
-    def _descent_column(self, here: int, place: int, n: int, f: str) -> int:
-        """``Costs._times``' column of the descent's part of note ``n``'s finger ``f``
-        after a move of the arm from place ``here`` to ``place``: the front rule's (1)
-        where the move keeps the play posture, or takes the hand out of the keyboard and
-        the entry's bodies stayed in front of the black keys
-        (``HighClear.descent_front``), the black rule's (3) otherwise (the motion's
-        ``Motion.descent_front``)."""
-        po = self.places.posture_of
-        if po(here) == po(place):
-            return 1
-        a, b = self.places.reach_m(po(here)), self.places.reach_m(po(place))
-        return 1 if self.places.high.descent_front(self.entry(n, f, place), a, b) else 3
-
-    def _lift_col(self, here: int, place: int, m: int, f: str, r: int) -> int:
-        """``Costs._times``' column of the lift of note ``m``'s finger ``f`` (pressed from
-        place ``r``) before a move of the arm from place ``here`` to ``place``: the front
-        rule's (0) where the move keeps the play posture, moves the hand out of the
-        keyboard, or in no further than the entry's bodies stay in front of the black
-        keys, the black rule's (2) otherwise (``HighClear.lift_front``, which answers the
-        move that keeps the posture too; ``_lifts`` does not ask it; memoised by key,
-        finger, place pressed from and the postures moved between: the rule depends on
-        the entry and the reaches alone)."""
-        po, reach = self.places.posture_of, self.places.reach_m
-        key = (self.pitch[m], f, r, po(here), po(place))
-        got = self._lift_cols.get(key)
-        if got is None:
-            got = self._lift_cols[key] = 0 if self.places.high.lift_front(
-                self.entry(m, f, r), reach(key[3]), reach(key[4])) else 2
-        return got
-
-    def _lifts(self, ctx: Prev, place: int) -> tuple[list, float, dict | None]:
-        """When each finger of ``ctx``'s state is clear above every key before a move of
-        the arm to ``place`` (latest first), the latest, and each one's ``Costs._times``
-        column by note and finger (None: all the front rule's): ``Prev.lifts``, or each
-        finger's by its entry's rule (``_lift_col``; memoised per posture moved to)."""
-        here = ctx.state.place
-        po = self.places.posture_of
-        if po(here) == po(place):
-            return ctx.lifts, ctx.lift_end, None
-        got = ctx.lifts_to.get(po(place))
-        if got is None:
-            black = {(m, f): v for v, m, f in ctx.lifts_black}
-            cols = {(m, f): self._lift_col(here, place, m, f, r)
-                    for m, f, r in ctx.state.last_notes}
-            lifts = sorted(((v if cols[m, f] == 0 else black[m, f], m, f)
-                            for v, m, f in ctx.lifts), key=lambda x: -x[0])
-            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
-                                             cols)
-        return got
-
-    def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
-        """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
-        to ``place``, the rails the motion moves (memoised by key and places)."""
-        key = (self.pitch[m], f, here, place)
-        got = self._paths.get(key)
-        if got is None:
-            got = self._paths[key] = self.places.follow_path_clear(
-                self.entry(m, f, here), self.entry(m, f, place), self.pitch[m],
-                self.places.rail_m(here), self.places.rail_m(place))
-        return got
 
     def _riders(self, ctx: Prev, lifts: list, cands: list, T: float, arrive: float,
                 lift_col: dict | None) -> tuple[float, frozenset, float, dict]:
