@@ -1,7 +1,7 @@
 """What the programme keeps of a move of the arm (planner/play/armcost.py): the parts kept
-per state before and place (``ArmCosts._to_place``, ``_rider``, ``Prev.up_parts``,
-``Prev.lift_parts``) and per posture and place (``_afters_of``) give the answer worked out
-afresh, to the bit, on real songs' transitions."""
+per state before (``Prev.up_parts``, ``Prev.lift_parts``: a cut key's) and per posture
+and place (``ArmTimes._afters_of``) give the answer worked out afresh, to the bit, on
+real songs' transitions."""
 
 from __future__ import annotations
 
@@ -31,13 +31,11 @@ class _Checked(FingeringProblem):
     def __init__(self, *args) -> None:
         super().__init__(*args)
         self.checked = 0
-        self.reused = 0  # (moves whose state before had answered a move to that place)
         self.parts = 0  # (moves whose state before had kept a cut key's parts)
         self.cut = 0  # (moves that let a key up early for the arm)
         self.rode = 0  # (moves a note rode along on)
 
     def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None):
-        self.reused += place in prev.to_place
         self.parts += bool(prev.up_parts or prev.lift_parts)
         got_lates, got_rode = [], []
         loss = super()._rail_loss(prev, new, place, kept, got_lates, got_rode)
@@ -68,10 +66,9 @@ def _event_of(costs, prev) -> float:
 def test_what_is_kept_per_state_before_and_place_is_the_fresh_answer(places, name):
     p = _Checked(list(load_song(SONGS / name).notes), places, 100.0)
     assert p.solve().assignments
-    # (the memos were read, not only filled: moves find their place answered, and a cut
-    # key's parts kept; keys cut occur, and notes riding along (on ``fast.mid``: 543 of
-    # 9,820 moves))
-    assert p.checked > 200 and p.reused > 0 and p.parts > 0
+    # (the memos were read, not only filled: a cut key's parts kept; keys cut occur, and
+    # notes riding along (on ``fast.mid``: 543 of 9,820 moves))
+    assert p.checked > 200 and p.parts > 0
     assert p.cut > 0
     if name == "fast.mid":
         assert p.rode > 0

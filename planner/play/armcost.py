@@ -151,7 +151,7 @@ class ArmCosts(ArmTimes):
         by_finger, by_key, lifted = around
         t_up, dt, pitch = self._t_up, self.dt, self.pitch
         gaps = self._gaps  # (``_move_gap_s``' memo)
-        loss = self._to_place(prev, place)[5] + cut_loss
+        loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place) + cut_loss
         for (n, f), after_s in zip(new.items(), afters):
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
@@ -220,19 +220,16 @@ class ArmCosts(ArmTimes):
         keys let up early for the arm to start on time (``arrive``: the latest the arm may
         arrive for each new key to go down on time after its descent) and those keys' ups
         (``_cut_lifts``; none where a note may ride along)."""
-        T, lifts, lift_end, lift_col, at, _ = self._to_place(ctx, place)
+        T = self.places.arm_time_s(ctx.state.place, place)
+        lifts, lift_end, lift_col = self._lifts(ctx, place)
         cands = []  # (note, finger, the move's latest end, its time, its press done)
         if ctx.follows:
             strikers = set(new.values())
             for follow in ctx.follows:
-                f = follow[1]
-                if f in strikers:  # (it strikes next: it does not ride along)
-                    continue
-                c = at.get(f, False)
-                if c is False:
-                    c = at[f] = self._rider(ctx, place, *follow)
-                if c is not None:
-                    cands.append(c)
+                if follow[1] not in strikers:  # (one that strikes next does not ride)
+                    c = self._rider(ctx, place, *follow)
+                    if c is not None:
+                        cands.append(c)
         if not cands:  # (no note sounding that could ride along, ``_riders``' answer when
             # none rides: the last lift, or the lifts cut for the arm to start on time;
             # the move)
@@ -242,26 +239,12 @@ class ArmCosts(ArmTimes):
             return release + T, _NONE, loss, ups
         return self._riders(ctx, lifts, cands, T, arrive, lift_col)
 
-    def _to_place(self, ctx: Prev, place: int) -> tuple:
-        """What every move of the arm from ``ctx``'s state to ``place`` shares (memoised
-        per state before and place, ``Prev.to_place``): the arm's time, ``_lifts``' three
-        answers, a dict of ``_rider``'s answers by finger (filled as asked) and the move's
-        tie-break (``TIE_RAIL_PER_M`` frames a metre)."""
-        got = ctx.to_place.get(place)
-        if got is None:
-            here = ctx.state.place
-            got = ctx.to_place[place] = (
-                self.places.arm_time_s(here, place), *self._lifts(ctx, place), {},
-                TIE_RAIL_PER_M * self.places.distance_m(place, here))
-        return got
-
     def _rider(self, ctx: Prev, place: int, m: int, f: str, a, window_s: float,
                press_s: float, down_s: float) -> tuple | None:
         """Note ``m`` sounding in ``ctx``'s state (finger ``f``, entry ``a``; its key's
         window, press and down: ``Prev.follows``) as a rider of a move to ``place``, if
         its finger strikes no new note: ((note, finger), the move's latest end, the
-        move's time carrying it, when its press is done); None where it cannot ride
-        (memoised per state before, place and finger: ``_to_place``)."""
+        move's time carrying it, when its press is done); None where it cannot ride."""
         # (an entry serves every key of its pitch class at its place: the key is the
         # entry and the rail's step, never the rail's index, which names another
         # entry for each of those keys)

@@ -139,7 +139,7 @@ class Prev:
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
                  "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_to", "older",
                  "on_key", "posture", "recent", "release", "rode_of", "state", "steps",
-                 "to_place", "up_parts")
+                 "up_parts")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -183,8 +183,6 @@ class Prev:
         self.lift_parts: dict[tuple, tuple] = {}  # by (note, finger, ``Costs._times``
         # column): its lift's time, its entry, the key-up no cut goes before
         # (``ArmCosts._cut_lifts``)
-        self.to_place: dict[int, tuple] = {}  # by place: what every move of the arm
-        # there shares (``ArmCosts._to_place``)
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
         self.steps: dict[tuple, tuple] = {}  # a transition's loss and its late notes, by
         # (notes, rail, kept)
