@@ -31,6 +31,21 @@ class ArmTimes:
     reads ``Costs``' memos): the columns of ``Costs._times`` by the move's rule, each
     finger's lift before the move, a held key's follow path."""
 
+    def _times(self, note: int, finger: str, place: int
+               ) -> tuple[float, float, float, float]:
+        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry by the front
+        rule (a move of the arm that keeps the play posture), then the same by the black
+        rule (one that changes it): around a move of the arm, key up to the lifting
+        finger clear above every key, and the descent's part after the arm is still
+        (memoised: the programme reads them for every transition)."""
+        key = (self.pitch[note], finger, place)
+        got = self._timing.get(key)
+        if got is None:
+            e, p = self.entry(note, finger, place), self.places
+            got = self._timing[key] = (p.rail_lift_s(e), p.rail_descent_s(e),
+                                       p.rail_lift_s(e, False), p.rail_descent_s(e, False))
+        return got
+
     def _afters_of(self, prev: Prev, place: int, new: dict[int, str]) -> list[float]:
         """Each of ``new``'s notes' finger's descent's part after a move of the arm from
         ``prev``'s place to ``place`` is over (``Costs._times``, its ``_descent_column``;

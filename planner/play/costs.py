@@ -394,21 +394,6 @@ class Costs(ArmCosts):
             e = self._entry[key] = self.places.entry(finger, key[0], place)
         return e
 
-    def _times(self, note: int, finger: str, place: int
-               ) -> tuple[float, float, float, float]:
-        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry by the front
-        rule (a move of the arm that keeps the play posture), then the same by the black
-        rule (one that changes it): around a move of the arm, key up to the lifting
-        finger clear above every key, and the descent's part after the arm is still
-        (memoised: the programme reads them for every transition)."""
-        key = (self.pitch[note], finger, place)
-        got = self._timing.get(key)
-        if got is None:
-            e, p = self.entry(note, finger, place), self.places
-            got = self._timing[key] = (p.rail_lift_s(e), p.rail_descent_s(e),
-                                       p.rail_lift_s(e, False), p.rail_descent_s(e, False))
-        return got
-
     def before_rail_s(self, note: int, finger: str, place: int) -> float:
         """Key up to the end of the lift to crossing height (``Moves.before_rail_s``)."""
         return self.places.before_rail_s(self.entry(note, finger, place))

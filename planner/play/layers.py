@@ -210,8 +210,7 @@ class Layers(Costs):
                 rode: list = []
                 step = self._same_rail_loss(ctx, new, lates) if place == here \
                     else self._rail_loss(ctx, new, place, kept, lates, rode)
-                got = steps[key] = (step, tuple(sorted(lates)) if lates else (),
-                                    tuple(sorted(rode)) if rode else ())
+                got = steps[key] = (step, tuple(sorted(lates)), tuple(sorted(rode)))
             step = got[0]
             total = cost + step + tie
             if self.room is not None:
