@@ -4,6 +4,7 @@ in the physics: the servo-driven hand lags its rows into a key and leaves it ear
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,9 +14,12 @@ from planner.hand.model import load_hand
 from planner.play.keytimes import (
     DRIVE_LAG_S,
     LATE_MIN_S,
+    NOTE_HIT_FRACTION,
     ROW_MARGIN_S,
     down_rows,
     first_row,
+    held_enough_at,
+    held_enough_parts,
     held_enough_s,
     key_down_s,
     key_up_s,
@@ -111,3 +115,39 @@ def test_a_cut_note_is_held_until_the_physics_sounds_it():
     kept = held_enough_s(on, off, down, 0.41, up, dt)
     assert kept == pytest.approx(0.36 + 5 * dt + DRIVE_LAG_S + ROW_MARGIN_S)
     assert held_enough_s(on, off, down, 0.43, up, dt) == 0.43  # (enough already)
+
+
+def _held_enough_plain(onset_s, offset_s, down_s, cut_s, up_s, dt_s):
+    """``held_enough_s`` as one expression (before its parts were kept apart)."""
+    if cut_s >= up_s:
+        return cut_s
+    k0, k1 = first_row(onset_s, dt_s), first_row(offset_s, dt_s)
+    need = math.ceil(NOTE_HIT_FRACTION * (k1 - k0) - 1e-9)
+    if max(0, min(k1, first_row(cut_s, dt_s)) - max(k0, first_row(down_s, dt_s))) < need:
+        return cut_s
+    first = max(k0, first_row(down_s + DRIVE_LAG_S, dt_s))
+    return min(up_s, max(cut_s, (first + need - 1) * dt_s + DRIVE_LAG_S + ROW_MARGIN_S))
+
+
+@pytest.mark.parametrize("rate_hz", [100.0, 120.0])
+def test_the_parts_of_a_held_key_give_the_same_float(rate_hz):
+    """``held_enough_at`` of a note's ``held_enough_parts`` (what the programme keeps per
+    state before and note: ``ArmCosts._cut_up_s``) is the one expression's float, for
+    ``fast.mid``'s notes, keys down on time and late, cut across each note; held, lost
+    anyway and uncut all occur."""
+    from planner.music.midi import load_song
+
+    dt = 1.0 / rate_hz
+    song = load_song(Path(planner.__file__).resolve().parents[1] / "songs" / "fast.mid")
+    kinds = set()
+    for n in song.notes[:40]:
+        down, up = key_down_s(n.onset_s, dt), key_up_s(n.offset_s, dt)
+        for late in (0.0, 0.013):
+            parts = held_enough_parts(n.onset_s, n.offset_s, down + late, up, dt)
+            for i in range(37):
+                cut = down + (up - down + 0.02) * i / 32
+                want = _held_enough_plain(n.onset_s, n.offset_s, down + late, cut, up, dt)
+                assert held_enough_at(parts, cut) == want
+                assert held_enough_s(n.onset_s, n.offset_s, down + late, cut, up, dt) == want
+                kinds.add("uncut" if cut >= up else "lost" if want == cut else "held")
+    assert kinds == {"uncut", "lost", "held"}

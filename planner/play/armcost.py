@@ -14,7 +14,8 @@ from typing import TYPE_CHECKING
 from planner.play.follow import HOLD_PAST_S
 from planner.play.keytimes import (  # (LATE_MIN_S: a key later, ``costs.State.late``)
     LATE_MIN_S,
-    held_enough_s,
+    held_enough_at,
+    held_enough_parts,
     late_frames,
     struck_s,
 )
@@ -25,7 +26,106 @@ if TYPE_CHECKING:
 TIE_RAIL_PER_M = 5.0  # frames per metre of rail moved: a tie-break, not a cost
 
 
-class ArmCosts:
+class ArmTimes:
+    """The finger timings around a move of the arm that ``ArmCosts`` reads (its base; it
+    reads ``Costs``' memos): the columns of ``Costs._times`` by the move's rule, each
+    finger's lift before the move, a held key's follow path."""
+
+    def _times(self, note: int, finger: str, place: int
+               ) -> tuple[float, float, float, float]:
+        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry by the front
+        rule (a move of the arm that keeps the play posture), then the same by the black
+        rule (one that changes it): around a move of the arm, key up to the lifting
+        finger clear above every key, and the descent's part after the arm is still
+        (memoised: the programme reads them for every transition)."""
+        key = (self.pitch[note], finger, place)
+        got = self._timing.get(key)
+        if got is None:
+            e, p = self.entry(note, finger, place), self.places
+            got = self._timing[key] = (p.rail_lift_s(e), p.rail_descent_s(e),
+                                       p.rail_lift_s(e, False), p.rail_descent_s(e, False))
+        return got
+
+    def _afters_of(self, prev: Prev, place: int, new: dict[int, str]) -> list[float]:
+        """Each of ``new``'s notes' finger's descent's part after a move of the arm from
+        ``prev``'s place to ``place`` is over (``Costs._times``, its ``_descent_column``;
+        memoised by the posture moved from, the place and the key and finger: the column
+        depends on the postures and the entry alone)."""
+        col = self._afters.get((prev.posture, place))
+        if col is None:
+            col = self._afters[prev.posture, place] = {}
+        pitch, out = self.pitch, []
+        for n, f in new.items():
+            a = col.get((pitch[n], f))
+            if a is None:
+                a = col[pitch[n], f] = self._times(n, f, place)[
+                    self._descent_column(prev.state.place, place, n, f)]
+            out.append(a)
+        return out
+
+    def _descent_column(self, here: int, place: int, n: int, f: str) -> int:
+        """``Costs._times``' column of the descent's part of note ``n``'s finger ``f``
+        after a move of the arm from place ``here`` to ``place``: the front rule's (1)
+        where the move keeps the play posture, or takes the hand out of the keyboard and
+        the entry's bodies stayed in front of the black keys
+        (``HighClear.descent_front``), the black rule's (3) otherwise (the motion's
+        ``Motion.descent_front``)."""
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return 1
+        a, b = self.places.reach_m(po(here)), self.places.reach_m(po(place))
+        return 1 if self.places.high.descent_front(self.entry(n, f, place), a, b) else 3
+
+    def _lift_col(self, here: int, place: int, m: int, f: str, r: int) -> int:
+        """``Costs._times``' column of the lift of note ``m``'s finger ``f`` (pressed from
+        place ``r``) before a move of the arm from place ``here`` to ``place``: the front
+        rule's (0) where the move keeps the play posture, moves the hand out of the
+        keyboard, or in no further than the entry's bodies stay in front of the black
+        keys, the black rule's (2) otherwise (``HighClear.lift_front``, which answers the
+        move that keeps the posture too; ``_lifts`` does not ask it; memoised by key,
+        finger, place pressed from and the postures moved between: the rule depends on
+        the entry and the reaches alone)."""
+        po, reach = self.places.posture_of, self.places.reach_m
+        key = (self.pitch[m], f, r, po(here), po(place))
+        got = self._lift_cols.get(key)
+        if got is None:
+            got = self._lift_cols[key] = 0 if self.places.high.lift_front(
+                self.entry(m, f, r), reach(key[3]), reach(key[4])) else 2
+        return got
+
+    def _lifts(self, ctx: Prev, place: int) -> tuple[list, float, dict | None]:
+        """When each finger of ``ctx``'s state is clear above every key before a move of
+        the arm to ``place`` (latest first), the latest, and each one's ``Costs._times``
+        column by note and finger (None: all the front rule's): ``Prev.lifts``, or each
+        finger's by its entry's rule (``_lift_col``; memoised per posture moved to)."""
+        here = ctx.state.place
+        po = self.places.posture_of
+        if po(here) == po(place):
+            return ctx.lifts, ctx.lift_end, None
+        got = ctx.lifts_to.get(po(place))
+        if got is None:
+            black = {(m, f): v for v, m, f in ctx.lifts_black}
+            cols = {(m, f): self._lift_col(here, place, m, f, r)
+                    for m, f, r in ctx.state.last_notes}
+            lifts = sorted(((v if cols[m, f] == 0 else black[m, f], m, f)
+                            for v, m, f in ctx.lifts), key=lambda x: -x[0])
+            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
+                                             cols)
+        return got
+
+    def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
+        """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
+        to ``place``, the rails the motion moves (memoised by key and places)."""
+        key = (self.pitch[m], f, here, place)
+        got = self._paths.get(key)
+        if got is None:
+            got = self._paths[key] = self.places.follow_path_clear(
+                self.entry(m, f, here), self.entry(m, f, place), self.pitch[m],
+                self.places.rail_m(here), self.places.rail_m(place))
+        return got
+
+
+class ArmCosts(ArmTimes):
     """The arm's moves in ``planner.play.costs.Costs`` (its base: it reads the song's
     times, the memos and the finger timings that ``Costs`` keeps)."""
 
@@ -41,18 +141,19 @@ class ArmCosts:
         move is not made (inf). ``lates``: gets (note, seconds) of each note struck late
         (``State.late``); ``rode``: gets (note, finger, the move's end) of each note
         riding along (its finger's place is ``place`` after: ``layers.rode_to``)."""
+        afters = self._afters_of(prev, place, new)  # (each new note's descent after the move)
+        t_down = self._t_down
+        arrive = min([t_down[n] - a for n, a in zip(new, afters)])  # (the new notes' wish)
         key = (place, tuple(new.items()))
         got = prev.release.get(key)
         if got is None:
-            got = prev.release[key] = self._release_of(prev, place, new)
+            got = prev.release[key] = self._release_of(prev, place, new, arrive)
         release_t, followers, cut_loss, cut_ups = got
         if kept and not followers.issuperset(kept):
             return math.inf
         if rode is not None and followers:  # (the move ends as late as lets the new keys
             # go down on time, the motion's: ``ArmMotion._move_rail``)
-            here = prev.state.place
-            by_s = min([self._t_down[n] - self._after_s(n, f, here, place)
-                        for n, f in new.items()]
+            by_s = min([arrive]
                        + [self._t_up[m] - self.places.lift(self.entry(m, f, place), "high").cross_s
                           - HOLD_PAST_S for m, f in followers])
             end_s = max(release_t, by_s)  # (early for a rider whose key comes up before)
@@ -63,13 +164,10 @@ class ArmCosts:
                 {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
                 {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
         by_finger, by_key, lifted = around
-        t_down, t_up, dt, pitch = self._t_down, self._t_up, self.dt, self.pitch
-        timing, gaps = self._timing, self._gaps  # (the memos of ``_times``, ``_move_gap_s``)
+        t_up, dt, pitch = self._t_up, self.dt, self.pitch
+        gaps = self._gaps  # (``_move_gap_s``' memo)
         loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place) + cut_loss
-        here = prev.state.place
-        for n, f in new.items():
-            times = timing.get((pitch[n], f, place))
-            after_s = (times or self._times(n, f, place))[self._descent_column(here, place, n, f)]
+        for (n, f), after_s in zip(new.items(), afters):
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
             came = prev.older.get(f) if m is None else (m, place)  # (its last key and
@@ -111,67 +209,77 @@ class ArmCosts:
         ``cut_s``: the motion's rule, ``keytimes.held_enough_s`` (from when its key went
         down: a note struck late, ``State.late``, that much later), and not before its
         lift can start: a note that rode along on the arm's move into ``prev``'s state
-        (``State.rode``) once that move is over (``Motion._to_high``)."""
-        late = prev.late_of.get(m, 0.0)
-        n = self.notes[m]
-        up = held_enough_s(n.onset_s, n.offset_s, self._t_down[m] + late, cut_s,
-                           self._t_up[m], self.dt)
-        free = prev.rode_of.get(m)
-        if free is not None:
-            up = max(up, free + self.places.lift(e, "high").cross_s)
+        (``State.rode``) once that move is over (``Motion._to_high``). What does not
+        depend on the cut is kept per state before and note (``Prev.up_parts``)."""
+        got = prev.up_parts.get(m)
+        if got is None:
+            n = self.notes[m]
+            free = prev.rode_of.get(m)
+            got = prev.up_parts[m] = (
+                held_enough_parts(n.onset_s, n.offset_s,
+                                  self._t_down[m] + prev.late_of.get(m, 0.0),
+                                  self._t_up[m], self.dt),
+                None if free is None else free + self.places.lift(e, "high").cross_s)
+        up = held_enough_at(got[0], cut_s)
+        if got[1] is not None:
+            up = max(up, got[1])
         return up
 
-    def _release_of(self, ctx: Prev, place: int, new: dict[int, str]
+    def _release_of(self, ctx: Prev, place: int, new: dict[int, str], arrive: float
                     ) -> tuple[float, frozenset, float, dict]:
         """When the arm arrives at ``place`` after ``ctx``'s state (the lifters' key up,
         a held note's at this event, their lift, and the move), and which notes ride
         along: those whose finger strikes none of the ``new`` notes, whose path is clear
         (``Places.follow_clear``) and whose key stays down ``HOLD_PAST_S`` past the move's
-        end (``_riders``), as the motion holds them; then the frames lost by keys let up
-        early for the arm to start on time and those keys' ups (``_cut_lifts``; none
-        where a note may ride along)."""
+        end (``_rider``, ``_riders``), as the motion holds them; then the frames lost by
+        keys let up early for the arm to start on time (``arrive``: the latest the arm may
+        arrive for each new key to go down on time after its descent) and those keys' ups
+        (``_cut_lifts``; none where a note may ride along)."""
         T = self.places.arm_time_s(ctx.state.place, place)
-        here = ctx.state.place
         lifts, lift_end, lift_col = self._lifts(ctx, place)
-        if not ctx.follows:  # (no note sounding that could ride along: the last lift, or
-            # the lifts cut for the arm to start on time)
-            arrive = min((self._t_down[n] - self._after_s(n, f, here, place)
-                          for n, f in new.items()), default=math.inf)
-            if lift_end + T <= arrive:
-                return lift_end + T, _NONE, 0.0, _NO_CUT
-            release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, lift_col)
-            return release + T, _NONE, loss, ups
-        strikers = set(new.values())
-        cands = []  # (note, finger, the move's latest end, its time)
-        for m, f, a, window_s, press_s, down_s in ctx.follows:
-            # (an entry serves every key of its pitch class at its place: the key is the
-            # entry and the rail's step, never the rail's index, which names another
-            # entry for each of those keys)
-            b = self.entry(m, f, place)
-            if b is None or f in strikers:  # (it cannot press the key from there, or
-                continue  # strikes next: it does not ride along)
-            key = (a, place - ctx.state.place)
-            got = self._follows.get(key)  # (its time, whether its path is clear, its
-            if got is None:  # lift's key crossing: found only when a note's time fits)
-                got = self._follows[key] = [self.places.follow_s(a, b), None, None]
-            # (the move fits inside the note, after its press and before its lift)
-            if window_s >= got[0] + press_s:
-                if got[1] is None:
-                    got[1] = self.places.follow_clear(a, b)
-                    got[2] = self.places.lift(b, "high").cross_s
-                if got[1] and self._follow_path(m, f, ctx.state.place, place):  # (its press done: the descent's end, ``press_min_s`` less the
-                    # lift to its key crossing)
-                    done = down_s + press_s - self.places.lift(a, "high").cross_s
-                    cands.append(((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done))
-        arrive = min((self._t_down[n] - self._after_s(n, f, here, place)
-                      for n, f in new.items()), default=math.inf)
-        if not cands:  # (``_riders``' answer when none rides along: the last lift, or the
-            # lifts cut for the arm to start on time; the move)
+        cands = []  # (note, finger, the move's latest end, its time, its press done)
+        if ctx.follows:
+            strikers = set(new.values())
+            for follow in ctx.follows:
+                if follow[1] not in strikers:  # (one that strikes next does not ride)
+                    c = self._rider(ctx, place, *follow)
+                    if c is not None:
+                        cands.append(c)
+        if not cands:  # (no note sounding that could ride along, ``_riders``' answer when
+            # none rides: the last lift, or the lifts cut for the arm to start on time;
+            # the move)
             if lift_end + T <= arrive:
                 return lift_end + T, _NONE, 0.0, _NO_CUT
             release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, lift_col)
             return release + T, _NONE, loss, ups
         return self._riders(ctx, lifts, cands, T, arrive, lift_col)
+
+    def _rider(self, ctx: Prev, place: int, m: int, f: str, a, window_s: float,
+               press_s: float, down_s: float) -> tuple | None:
+        """Note ``m`` sounding in ``ctx``'s state (finger ``f``, entry ``a``; its key's
+        window, press and down: ``Prev.follows``) as a rider of a move to ``place``, if
+        its finger strikes no new note: ((note, finger), the move's latest end, the
+        move's time carrying it, when its press is done); None where it cannot ride."""
+        # (an entry serves every key of its pitch class at its place: the key is the
+        # entry and the rail's step, never the rail's index, which names another
+        # entry for each of those keys)
+        b = self.entry(m, f, place)
+        if b is None:  # (it cannot press the key from there)
+            return None
+        key = (a, place - ctx.state.place)
+        got = self._follows.get(key)  # (its time, whether its path is clear, its
+        if got is None:  # lift's key crossing: found only when a note's time fits)
+            got = self._follows[key] = [self.places.follow_s(a, b), None, None]
+        # (the move fits inside the note, after its press and before its lift)
+        if window_s >= got[0] + press_s:
+            if got[1] is None:
+                got[1] = self.places.follow_clear(a, b)
+                got[2] = self.places.lift(b, "high").cross_s
+            if got[1] and self._follow_path(m, f, ctx.state.place, place):  # (its press
+                # done: the descent's end, ``press_min_s`` less the lift to its key crossing)
+                done = down_s + press_s - self.places.lift(a, "high").cross_s
+                return ((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done)
+        return None
 
     def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: dict | None
                    ) -> tuple[float, float, dict]:
@@ -186,83 +294,27 @@ class ArmCosts:
         every finger is clear, the frames the early keys-up lose, and their new key-ups
         by note."""
         release, loss, ups = -math.inf, 0.0, {}
-        late = ctx.late_of
+        parts = ctx.lift_parts
         for clear, m, f in lifts:  # (latest first: once one is clear in time, all are)
             if clear <= start_s:
                 release = max(release, clear)
                 break
-            r = ctx.last[f][1]
-            lift_s = (self._timing.get((self.pitch[m], f, r)) or self._times(m, f, r))[
-                0 if lift_col is None else lift_col[m, f]]
-            e = self.entry(m, f, r)
+            col = 0 if lift_col is None else lift_col[m, f]
+            got = parts.get((m, f, col))
+            if got is None:  # (its lift's time, its entry, the key-up no cut goes before)
+                r = ctx.last[f][1]
+                e = self.entry(m, f, r)
+                got = parts[m, f, col] = (
+                    self._times(m, f, r)[col], e,
+                    self._t_down[m] + ctx.late_of.get(m, 0.0) + self.places.press_min_s(e))
+            lift_s, e, floor = got
             due = clear - lift_s  # (its key's up: its own, or this event's for a held note)
             up = min(due, self._cut_up_s(ctx, m, start_s - lift_s, e))
-            up = max(up, min(due, self._t_down[m] + late.get(m, 0.0)
-                             + self.places.press_min_s(e)))
+            up = max(up, min(due, floor))
             loss += (due - up) / self.dt
             ups[m] = up
             release = max(release, up + lift_s)
         return release, loss, ups
-
-    def _after_s(self, n: int, f: str, here: int, place: int) -> float:
-        """Note ``n``'s finger ``f``'s descent's part after a move of the arm from place
-        ``here`` to ``place`` is over (``Costs._times``, its ``_descent_column``)."""
-        return self._times(n, f, place)[self._descent_column(here, place, n, f)]
-
-    def _descent_column(self, here: int, place: int, n: int, f: str) -> int:
-        """``Costs._times``' column of the descent's part of note ``n``'s finger ``f``
-        after a move of the arm from place ``here`` to ``place``: the front rule's (1)
-        where the move keeps the play posture, or takes the hand out of the keyboard and
-        the entry's bodies stayed in front of the black keys
-        (``HighClear.descent_front``), the black rule's (3) otherwise (the motion's
-        ``Motion.descent_front``)."""
-        po = self.places.posture_of
-        if po(here) == po(place):
-            return 1
-        a, b = self.places.reach_m(po(here)), self.places.reach_m(po(place))
-        return 1 if self.places.high.descent_front(self.entry(n, f, place), a, b) else 3
-
-    def _lift_col(self, here: int, place: int, m: int, f: str, r: int) -> int:
-        """``Costs._times``' column of the lift of note ``m``'s finger ``f`` (pressed from
-        place ``r``) before a move of the arm from place ``here`` to ``place``: the front
-        rule's (0) where the move keeps the play posture, moves the hand out of the
-        keyboard, or in no further than the entry's bodies stay in front of the black
-        keys, the black rule's (2) otherwise (``HighClear.lift_front``, which answers the
-        move that keeps the posture too; ``_lifts`` does not ask it)."""
-        po, reach = self.places.posture_of, self.places.reach_m
-        return 0 if self.places.high.lift_front(self.entry(m, f, r), reach(po(here)),
-                                                reach(po(place))) else 2
-
-    def _lifts(self, ctx: Prev, place: int) -> tuple[list, float, dict | None]:
-        """When each finger of ``ctx``'s state is clear above every key before a move of
-        the arm to ``place`` (latest first), the latest, and each one's ``Costs._times``
-        column by note and finger (None: all the front rule's): ``Prev.lifts``, or each
-        finger's by its entry's rule (``_lift_col``; memoised per posture moved to)."""
-        here = ctx.state.place
-        po = self.places.posture_of
-        if po(here) == po(place):
-            return ctx.lifts, ctx.lift_end, None
-        got = ctx.lifts_to.get(po(place))
-        if got is None:
-            black = {(m, f): v for v, m, f in ctx.lifts_black}
-            cols = {(m, f): self._lift_col(here, place, m, f, r)
-                    for m, f, r in ctx.state.last_notes}
-            lifts = sorted(((v if cols[m, f] == 0 else black[m, f], m, f)
-                            for v, m, f in ctx.lifts), key=lambda x: -x[0])
-            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
-                                             cols)
-        return got
-
-    def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
-        """``Places.follow_path_clear`` of finger ``f`` holding ``m``'s key from ``here``
-        to ``place``, the rails the motion moves (memoised by key and places)."""
-        key = (self.pitch[m], f, here, place)
-        got = self._paths.get(key)
-        if got is None:
-            got = self._paths[key] = self.places.follow_path_clear(
-                self.entry(m, f, here), self.entry(m, f, place), self.pitch[m],
-                self.places.rail_m(here), self.places.rail_m(place))
-        return got
 
     def _riders(self, ctx: Prev, lifts: list, cands: list, T: float, arrive: float,
                 lift_col: dict | None) -> tuple[float, frozenset, float, dict]:

@@ -137,11 +137,13 @@ class Prev:
     (the programme weighs hundreds of transitions from each state)."""
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
-                 "lift_end_black", "lifts", "lifts_black", "lifts_to", "older", "on_key", "recent",
-                 "release", "rode_of", "state", "steps")
+                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_to", "older",
+                 "on_key", "posture", "recent", "release", "rode_of", "state", "steps",
+                 "up_parts")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
+        self.posture = costs.places.posture_of(state.place)
         # (a held note let go at this event: its key comes up when the new notes' go down)
         self.cut_up = cut_up = key_up_s(t, costs.dt)
         pitch, t_up, t_down = costs.pitch, costs._t_up, costs._t_down
@@ -176,6 +178,11 @@ class Prev:
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None
             for down in (t_down[m] + late.get(m, 0.0),)]
         self.release: dict[tuple, tuple] = {}  # by place and new notes (``_release_of``)
+        self.up_parts: dict[int, tuple] = {}  # by note: what its key's up cut for a move
+        # of the arm works out whatever the cut (``ArmCosts._cut_up_s``)
+        self.lift_parts: dict[tuple, tuple] = {}  # by (note, finger, ``Costs._times``
+        # column): its lift's time, its entry, the key-up no cut goes before
+        # (``ArmCosts._cut_lifts``)
         self.around: dict[frozenset, tuple] = {}  # by the notes riding along
         self.steps: dict[tuple, tuple] = {}  # a transition's loss and its late notes, by
         # (notes, rail, kept)
@@ -187,8 +194,8 @@ class CostMemo:
     by keys, forces, fingers and rail positions (bounded), kept across the songs of one
     hand (``planner.play.Planner`` holds one)."""
 
-    __slots__ = ("cand_rails", "cands", "entry", "follows", "gaps", "keep_to", "paths",
-                 "rails", "rails_to", "shortest", "timing")
+    __slots__ = ("afters", "cand_rails", "cands", "entry", "follows", "gaps", "keep_cands",
+                 "keep_to", "lift_cols", "paths", "rails", "rails_to", "shortest", "timing")
 
     def __init__(self) -> None:
         for name in self.__slots__:
@@ -214,6 +221,8 @@ class Costs(ArmCosts):
         self._rails: dict[tuple[str, int, float], frozenset[int]] = m.rails
         self._entry: dict = m.entry
         self._timing: dict = m.timing
+        self._afters: dict = m.afters  # (``ArmCosts._afters_of``' answers, by the posture
+        # moved from and the place moved to)
         self._gaps: dict = m.gaps
         self._follows: dict = m.follows
         self._paths: dict = m.paths  # (``_follow_path``'s answers)
@@ -221,6 +230,9 @@ class Costs(ArmCosts):
         self._cand_rails: dict = m.cand_rails  # (``_cands``' rails, and its best, by key)
         self._rails_to: dict = m.rails_to
         self._keep_to: dict = m.keep_to  # (``Layers._keeping``'s answers)
+        self._lift_cols: dict = m.lift_cols  # (``ArmCosts._lift_col``'s answers)
+        self._keep_cands: dict = m.keep_cands  # (``Layers._keeping``'s candidates and
+        # their index, by the new notes' and the riders' keys, forces and fingers)
         self._shortest: dict[tuple[int, float], float] = m.shortest
         self._ctx: dict[float, dict[State, Prev]] = {}  # (the song's: by event time)
         self.pitch = [n.pitch for n in notes]
@@ -381,21 +393,6 @@ class Costs(ArmCosts):
         if e is False:
             e = self._entry[key] = self.places.entry(finger, key[0], place)
         return e
-
-    def _times(self, note: int, finger: str, place: int
-               ) -> tuple[float, float, float, float]:
-        """(``Places.rail_lift_s``, ``Places.rail_descent_s``) of the entry by the front
-        rule (a move of the arm that keeps the play posture), then the same by the black
-        rule (one that changes it): around a move of the arm, key up to the lifting
-        finger clear above every key, and the descent's part after the arm is still
-        (memoised: the programme reads them for every transition)."""
-        key = (self.pitch[note], finger, place)
-        got = self._timing.get(key)
-        if got is None:
-            e, p = self.entry(note, finger, place), self.places
-            got = self._timing[key] = (p.rail_lift_s(e), p.rail_descent_s(e),
-                                       p.rail_lift_s(e, False), p.rail_descent_s(e, False))
-        return got
 
     def before_rail_s(self, note: int, finger: str, place: int) -> float:
         """Key up to the end of the lift to crossing height (``Moves.before_rail_s``)."""

@@ -107,16 +107,32 @@ def held_enough_s(onset_s: float, offset_s: float, down_s: float, cut_s: float,
     anyway is left as it is (the replay names it missed). The motion's rule
     (``Motion._to_high``, ``Motion.place``) and the programme's estimate of it
     (``ArmCosts._rail_loss``: a finger that lifts early for a move of the arm to strike
-    again on time)."""
-    if cut_s >= up_s:
-        return cut_s
+    again on time): ``held_enough_at`` of ``held_enough_parts``."""
+    return held_enough_at(held_enough_parts(onset_s, offset_s, down_s, up_s, dt_s), cut_s)
+
+
+def held_enough_parts(onset_s: float, offset_s: float, down_s: float, up_s: float,
+                      dt_s: float) -> tuple:
+    """What ``held_enough_s`` works out of a note and its key's down and up whatever the
+    cut (the programme cuts one note many times: ``ArmCosts._cut_lifts``): its key-up,
+    its last row, its first row the key is down at, the rows to hit it, the key-up that
+    hits it, the rows' spacing."""
     k0, k1 = first_row(onset_s, dt_s), first_row(offset_s, dt_s)
     need = math.ceil(NOTE_HIT_FRACTION * (k1 - k0) - 1e-9)  # the note's rows to hit it
-    # (its rows k with down_s <= k dt < cut_s: a hit by the rows, or lost anyway)
-    if max(0, min(k1, first_row(cut_s, dt_s)) - max(k0, first_row(down_s, dt_s))) < need:
-        return cut_s
     first = max(k0, first_row(down_s + DRIVE_LAG_S, dt_s))
-    return min(up_s, max(cut_s, (first + need - 1) * dt_s + DRIVE_LAG_S + ROW_MARGIN_S))
+    return (up_s, k1, max(k0, first_row(down_s, dt_s)), need,
+            (first + need - 1) * dt_s + DRIVE_LAG_S + ROW_MARGIN_S, dt_s)
+
+
+def held_enough_at(parts: tuple, cut_s: float) -> float:
+    """``held_enough_s`` of a note's ``held_enough_parts``, cut to ``cut_s``."""
+    up_s, k1, start, need, hit_s, dt_s = parts
+    if cut_s >= up_s:
+        return cut_s
+    # (its rows k with down_s <= k dt < cut_s: a hit by the rows, or lost anyway)
+    if max(0, min(k1, first_row(cut_s, dt_s)) - start) < need:
+        return cut_s
+    return min(up_s, max(cut_s, hit_s))
 
 
 def late_frames(late_s: float, dt_s: float) -> float:

@@ -270,22 +270,30 @@ class Layers(Costs):
         never cheaper; it is where it lets a key sounding stay down to its end (or past
         the event, held) instead of coming up before the move."""
         pitch, force = self.pitch, self.force
-        riders = tuple((m, f) for m, f in p.fingers if f not in strike.busy)
+        riders = tuple([(m, f) for m, f in p.fingers if f not in strike.busy])
         if not riders:
             return rails
-        key = (strike.press_key, p.place, tuple((pitch[m], force[m], f) for m, f in riders))
+        sig = tuple([(pitch[m], force[m], f) for m, f in riders])
+        key = (strike.press_key, p.place, sig)
         got = self._keep_to.get(key)
         if got is None:
             got = list(rails)
-            cands = self._candidates(new, strike.press_key)
-            groups = [riders] + ([(r,) for r in riders] if len(riders) > 1 else [])
-            for group in groups:
-                ok = None
-                for m, f in group:
-                    r = self.rails(f, m)
-                    ok = r if ok is None else ok & r
-                got += [c for c in _nearest_and_best(
-                    self.places, [c for c in cands if c[0] in ok], p.place) if c not in got]
+            groups = [(riders, sig)] + ([((r,), (s,)) for r, s in zip(riders, sig)]
+                                        if len(riders) > 1 else [])
+            for group, group_sig in groups:
+                # (the candidates where the group's notes have their keys too, and their
+                # index: by the new notes' and the group's keys, forces and fingers)
+                gkey = (strike.press_key, group_sig)
+                sub = self._keep_cands.get(gkey)
+                if sub is None:
+                    ok = None
+                    for m, f in group:
+                        r = self.rails(f, m)
+                        ok = r if ok is None else ok & r
+                    sub = [c for c in self._candidates(new, strike.press_key) if c[0] in ok]
+                    sub = self._keep_cands[gkey] = (sub, _index(self.places, sub))
+                got += [c for c in _nearest_and_best(self.places, sub[0], p.place, sub[1])
+                        if c not in got]
             self._keep_to[key] = got
         return got
 
@@ -305,12 +313,7 @@ class Layers(Costs):
                           for n, f in new.items()) * TIE_DX_PER_M
                 out.append((place, tie))
             self._cands[key] = out
-            bests: dict[int, tuple[int, float]] = {}  # (each posture's best, by posture)
-            for c in out:
-                q = self.places.posture_of(c[0])
-                if q not in bests or c[1] < bests[q][1]:
-                    bests[q] = c
-            self._cand_rails[key] = ([r for r, _ in out], bests)
+            self._cand_rails[key] = _index(self.places, out)
         return out
 
     def _press_key(self, new: dict[int, str]) -> tuple:
@@ -361,14 +364,7 @@ def _nearest_and_best(places: Places, cands: list[tuple[int, float]], here: int,
     ``here``'s rail index, the nearest below and above it (found by bisection), and the
     one of least tie-break (the fingers nearest their natural places). ``index``: the
     candidates' places and each posture's best, when made already (``_candidates``)."""
-    if index is None:
-        bests: dict[int, tuple[int, float]] = {}
-        for c in cands:
-            q = places.posture_of(c[0])
-            if q not in bests or c[1] < bests[q][1]:
-                bests[q] = c
-        index = ([c[0] for c in cands], bests)
-    rails, bests = index
+    rails, bests = _index(places, cands) if index is None else index
     out: list[tuple[int, float]] = []
     for q in sorted(bests, key=lambda q: q != places.posture_of(here)):
         at = places.place(q, places.rail_i(here))
@@ -379,6 +375,17 @@ def _nearest_and_best(places: Places, cands: list[tuple[int, float]], here: int,
         if bests[q] not in out:
             out.append(bests[q])
     return out
+
+
+def _index(places: Places, cands: list[tuple[int, float]]) -> tuple[list[int], dict]:
+    """``_nearest_and_best``'s index of ``cands`` ((place, tie-break), by place): their
+    places, and each posture's best (least tie-break, the first of equals), by posture."""
+    bests: dict[int, tuple[int, float]] = {}
+    for c in cands:
+        q = places.posture_of(c[0])
+        if q not in bests or c[1] < bests[q][1]:
+            bests[q] = c
+    return [c[0] for c in cands], bests
 
 
 def _prune(layer):

@@ -1,0 +1,74 @@
+"""What the programme keeps of a move of the arm (planner/play/armcost.py): the parts kept
+per state before (``Prev.up_parts``, ``Prev.lift_parts``: a cut key's) and per posture
+and place (``ArmTimes._afters_of``) give the answer worked out afresh, to the bit, on
+real songs' transitions."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from planner.music.midi import load_song
+from planner.play.costs import Prev
+from planner.play.fingering import FingeringProblem
+from planner.play.places import Places
+
+SONGS = Path(__file__).resolve().parents[1] / "songs"
+
+
+@pytest.fixture(scope="module")
+def places(hand) -> Places:
+    return Places(hand)
+
+
+class _Checked(FingeringProblem):
+    """The programme, every move of the arm costed twice: by the state before it weighs
+    (its memos filled by the transitions before) and by a fresh ``Prev`` of the same
+    state (its memos empty); every new note's descent after the move also worked out
+    plainly (``Costs._times``' column by ``_descent_column``)."""
+
+    def __init__(self, *args) -> None:
+        super().__init__(*args)
+        self.checked = 0
+        self.parts = 0  # (moves whose state before had kept a cut key's parts)
+        self.cut = 0  # (moves that let a key up early for the arm)
+        self.rode = 0  # (moves a note rode along on)
+
+    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None):
+        self.parts += bool(prev.up_parts or prev.lift_parts)
+        got_lates, got_rode = [], []
+        loss = super()._rail_loss(prev, new, place, kept, got_lates, got_rode)
+        fresh = Prev(self, prev.state, _event_of(self, prev))
+        plain_lates, plain_rode = [], []
+        plain = super()._rail_loss(fresh, new, place, kept, plain_lates, plain_rode)
+        assert (loss, got_lates, got_rode) == (plain, plain_lates, plain_rode)
+        here = prev.state.place
+        assert self._afters_of(prev, place, new) == [
+            self._times(n, f, place)[self._descent_column(here, place, n, f)]
+            for n, f in new.items()]
+        self.checked += 1
+        self.cut += bool(fresh.release[place, tuple(new.items())][2])
+        self.rode += bool(plain_rode)
+        if lates is not None:
+            lates.extend(got_lates)
+        if rode is not None:
+            rode.extend(got_rode)
+        return loss
+
+
+def _event_of(costs, prev) -> float:
+    """The event time ``prev`` was made for (``Costs.prev``' memo holds it)."""
+    return next(t for t, at in costs._ctx.items() if at.get(prev.state) is prev)
+
+
+@pytest.mark.parametrize("name", ["fast.mid", "leaps.mid", "chords.mid"])
+def test_what_is_kept_per_state_before_and_place_is_the_fresh_answer(places, name):
+    p = _Checked(list(load_song(SONGS / name).notes), places, 100.0)
+    assert p.solve().assignments
+    # (the memos were read, not only filled: a cut key's parts kept; keys cut occur, and
+    # notes riding along (on ``fast.mid``: 543 of 9,820 moves))
+    assert p.checked > 200 and p.parts > 0
+    assert p.cut > 0
+    if name == "fast.mid":
+        assert p.rode > 0
