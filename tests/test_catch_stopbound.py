@@ -14,9 +14,10 @@ from planner.catch.plan.stopbound import (
     solve_program,
     stop_program,
 )
+from planner.check.ballroll import ROLL_ROOM_M
 from planner.check.ballstop import PAD_GIVE_M, PALM_MU
 
-COARSE = BoundGrid(dt_s=0.005, pre_s=0.15, post_s=0.25)  # a small programme for the tests
+COARSE = BoundGrid()  # 5 ms steps (at 10 ms the pad cannot stop the ball within a step)
 
 
 def _intercept(pl, angle_deg, dist_m, height_m=0.0):
@@ -64,7 +65,8 @@ def test_the_bound_is_below_every_sampled_stop(pl, steep):
 
 def test_the_bounds_stop_keeps_the_rules(pl, steep):
     """The bound's motion integrated anew (the arm and the ball apart): both at rest at the
-    end, the ball on the pad within its give from its touch on, the force in the cone's
+    end, the ball on the pad within its give, the palm's half width and the roll room from
+    its touch on, the force in the cone's
     pyramid, every joint within its speed and acceleration limits."""
     ball = get_ball("tennis")
     _, q, v = steep
@@ -79,8 +81,9 @@ def test_the_bounds_stop_keeps_the_rules(pl, steep):
     for s, f in enumerate(b.force_n):
         a = f / ball.mass_kg + np.array([0.0, 0.0, -9.81])
         x, u = x + u * dt + 0.5 * a * dt * dt, u + a * dt
-        give = T.n @ (T.J_target @ pos[V.pre + s + 1] - x)
-        assert -1e-7 <= give <= PAD_GIVE_M + 1e-7
+        off = x - T.J_target @ pos[V.pre + s + 1]  # the ball from the palm's target
+        assert -1e-7 <= -T.n @ off <= PAD_GIVE_M + 1e-7
+        assert abs(T.x @ off) <= T.half_width_m + 1e-7 and T.y @ off <= ROLL_ROOM_M + 1e-7
     assert np.abs(u).max() < 1e-6 and np.abs(vel[-1]).max() < 1e-6
     fn = b.force_n @ T.n
     assert (fn >= -1e-7).all()
@@ -94,7 +97,7 @@ def test_the_bounds_stop_keeps_the_rules(pl, steep):
 def test_the_steep_fast_throw_is_not_beyond_the_hand(pl, steep):
     """0 m / 75 deg / 3.0 m: the planner's stops need 3.03 N m of the wrist flexion's
     2.00, yet a stop within every arm motor's capacity is not excluded: the hand's own
-    inertia about the flexion takes the ball's push (measured: 0.20 of the capacity at 2 ms
+    inertia about the flexion takes the ball's push (measured: 0.21 of the capacity at 5 ms
     steps); the arm alone (rig's reach held) needs more."""
     ball = get_ball("tennis")
     p, q, v = steep
@@ -103,3 +106,29 @@ def test_the_steep_fast_throw_is_not_beyond_the_hand(pl, steep):
     assert b.share < 0.5
     arm = least_stop_load(pl.dyn, q, v, ball.mass_kg, ball.radius_m, COARSE)
     assert arm.share > b.share
+
+
+def test_the_too_fast_reason_is_judged_by_the_bound(pl, steep):
+    """``bounded_reasons``: the tennis ball on 0 m / 75 deg / 3.0 m is the planner's
+    shortfall (no stop found), the bound's share of the most loaded motor in the reason;
+    a ball 30 times as heavy at the same speed is too fast to stop (a hard limit), the
+    least torque any stop needs in the reason, above the motor's capacity."""
+    import re
+
+    from planner.catch.plan.reasons import HARD_LIMITS, CatchReason, Reason
+    from planner.catch.plan.stopbound import bounded_reasons
+
+    ball = get_ball("tennis")
+    _, q, v = steep
+    fast = Reason(CatchReason.TOO_FAST_TO_STOP, "too fast to stop (the planner's stops)")
+    other = Reason(CatchReason.ROLL, "rolls")
+    light = bounded_reasons((other, fast), pl.rig_dyn, q, v, ball.mass_kg, ball.radius_m)
+    assert light[0] is other and light[1].kind is CatchReason.NO_STOP
+    assert light[1].kind not in HARD_LIMITS
+    m = re.search(r"the stop bound: motor\.(\w+) at ([\d.]+) of its ([\d.]+) N m", light[1].detail)
+    assert m and float(m.group(2)) <= 1.0 and "the planner's stops" in light[1].detail
+    heavy = bounded_reasons((fast,), pl.rig_dyn, q, v, 30 * ball.mass_kg, ball.radius_m)
+    assert heavy[0].kind is CatchReason.TOO_FAST_TO_STOP
+    m = re.search(r"any stop of the arm needs motor\.(\w+) at ([\d.]+) N m or more > its "
+                  r"([\d.]+) N m", heavy[0].detail)
+    assert m and float(m.group(2)) > float(m.group(3)) == 2.0, heavy[0].detail

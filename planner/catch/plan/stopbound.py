@@ -15,8 +15,10 @@ ball within these rules:
   where along them the hand is) within their travel's length wherever the intercept is;
 * the ball, from its touch on, stays on the pad: its centre at most the pad's give
   (``PAD_GIVE_M``) into the palm along the palm's normal (a ball that leaves the palm is
-  dropped by the check's rule); the palm's force on it anywhere in the pyramid around the
-  friction cone (``PALM_MU``), any profile in time (a spring pad gives one of them);
+  dropped by the check's rule), across the palm within its half width (the palm link's
+  box) and towards the wrist within the check's roll room (``ROLL_ROOM_M``); the palm's
+  force on it anywhere in the pyramid around the friction cone (``PALM_MU``), any profile
+  in time (a spring pad gives one of them);
 * the motors' torques: the arm's joint torques (its mass matrix at the intercept pose,
   gravity, the pad's force through the palm centre's Jacobian) through the motor map.
 
@@ -39,7 +41,9 @@ from scipy import sparse
 from scipy.optimize import linprog
 
 from planner.catch.plan.arm import palm_target
+from planner.catch.plan.reasons import CatchReason, Reason
 from planner.catch.plan.stopping import StopDynamics
+from planner.check.ballroll import ROLL_ROOM_M
 from planner.check.ballstop import PAD_GIVE_M, PALM_MU
 from planner.check.motormap import motor_torque_matrix
 
@@ -53,9 +57,11 @@ class BoundGrid:
     at rest at its start), ``post_s`` after it (the arm and the ball at rest at its end),
     steps of ``dt_s``."""
 
-    dt_s: float = 0.001
-    pre_s: float = 0.25
-    post_s: float = 0.35
+    dt_s: float = 0.005  # (0 m / 75 deg / 3.0 m: 0.207; without the ball's place across
+    # the palm bounded, 0.1995 at 1 and at 2 ms steps, where the programme takes 3-25 s of
+    # CPU against 0.3 s here)
+    pre_s: float = 0.15
+    post_s: float = 0.25
 
 
 @dataclass(frozen=True)
@@ -78,14 +84,18 @@ class StopBound:
 class PoseTerms:
     """What the programme reads of the intercept pose: the arm's mass matrix ``H`` and
     gravity torques ``g``, the palm centre's and the palm target's Jacobians over the arm
-    (3 x k, catch frame), the palm's normal ``n``, the arm motors' map ``Mm`` (motors x k)
-    with their names and capacities."""
+    (3 x k, catch frame), the palm's normal ``n``, its axes across (``x``) and towards the
+    wrist (``y``) and its half width (m), the arm motors' map ``Mm`` (motors x k) with their
+    names and capacities."""
 
     H: np.ndarray
     g: np.ndarray
     J_centre: np.ndarray
     J_target: np.ndarray
     n: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    half_width_m: float
     Mm: np.ndarray
     motors: tuple[str, ...]
     cap: np.ndarray
@@ -111,12 +121,14 @@ def pose_terms(dyn: StopDynamics, q: np.ndarray, radius_m: float) -> PoseTerms:
         dq[i] += _FD
         J_c[:, c] = (palm_target(hand, dq, 0.0) - c0) / _FD
         J_t[:, c] = (palm_target(hand, dq, radius_m) - t0) / _FD
-    n = hand.palm_pose(q)[:3, 2]
+    P = hand.palm_pose(q)
+    palm = next(link for link in hand.spec.links if link.name == "palm")
     M_all = motor_torque_matrix(hand, q)[:, arm]
     rows = np.flatnonzero(np.abs(M_all).sum(axis=1) > 1e-12)  # the arm's motors
     cap = dyn.cap[rows]
     names = tuple(hand.motor_names[r] for r in rows)
-    return PoseTerms(H, g, J_c, J_t, n, M_all[rows], names, cap)
+    return PoseTerms(H, g, J_c, J_t, P[:3, 2], P[:3, 0], P[:3, 1], 0.5 * palm.size_m[0],
+                     M_all[rows], names, cap)
 
 
 class Layout:
@@ -209,14 +221,19 @@ def cone_tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _contact(ub: _Rows, V: Layout, T: PoseTerms) -> None:
-    """The ball on the pad (0 <= n . (target - ball) <= the pad's give at every knot after
-    the touch) and the force in the pyramid around the cone (|f . t_i| <= mu f . n)."""
+    """The ball on the pad (0 <= n . (target - ball) <= the pad's give, |x . (ball -
+    target)| <= the palm's half width, y . (ball - target) <= the roll room, at every knot
+    after the touch) and the force in the pyramid around the cone (|f . t_i| <= mu f . n)."""
     k, n = V.k, T.n
     for s in range(1, V.P + 1):
-        cols = [(V.p + (V.pre + s) * k + j, float(n @ T.J_target[:, j])) for j in range(k)]
-        cols += [(V.b + s * 3 + x, -float(n[x])) for x in range(3)]
-        ub.add(cols, PAD_GIVE_M)
-        ub.add([(c, -v) for c, v in cols], 0.0)
+        for axis, lo, hi in ((n, 0.0, PAD_GIVE_M), (-T.x, -T.half_width_m, T.half_width_m),
+                             (-T.y, None, ROLL_ROOM_M)):
+            cols = [(V.p + (V.pre + s) * k + j, float(axis @ T.J_target[:, j]))
+                    for j in range(k)]
+            cols += [(V.b + s * 3 + x, -float(axis[x])) for x in range(3)]
+            ub.add(cols, hi)
+            if lo is not None:
+                ub.add([(c, -v) for c, v in cols], -lo)
     tangents = cone_tangents(n)
     for s in range(V.P):
         fc = [V.f + s * 3 + x for x in range(3)]
@@ -320,3 +337,33 @@ def motor_loads(T: PoseTerms, acc: np.ndarray, force_n: np.ndarray, n_pre: int
     tau = acc @ T.H.T + T.g
     tau[n_pre:] += force_n @ T.J_centre
     return tau @ T.Mm.T
+
+
+def bounded_reasons(reasons: tuple[Reason, ...], dyn: StopDynamics, q: np.ndarray,
+                    v_ball: np.ndarray, mass_kg: float, radius_m: float
+                    ) -> tuple[Reason, ...]:
+    """``reasons`` with its "too fast to stop" judged by the stop bound at the intercept
+    pose ``q`` (ball arriving with ``v_ball``): a hard limit, its number the bound's, where
+    every stop needs more than a motor's capacity; else the planner's shortfall
+    (``CatchReason.NO_STOP``), the bound's number beside the planner's."""
+    out = []
+    for r in reasons:
+        if r.kind is not CatchReason.TOO_FAST_TO_STOP:
+            out.append(r)
+            continue
+        b = least_stop_load(dyn, q, v_ball, mass_kg, radius_m)
+        if math.isinf(b.share):
+            out.append(Reason(r.kind, (
+                f"{r.detail}; no stop of the arm within its joints' speed, acceleration and "
+                "travel keeps the ball on the pad (the stop bound)")))
+        elif b.share > 1.0:
+            out.append(Reason(r.kind, (
+                f"{r.detail}; any stop of the arm needs motor.{b.motor} at {b.torque_nm:.2f} "
+                f"N m or more > its {b.capacity_nm:.2f} N m (the stop bound)")))
+        else:
+            out.append(Reason(CatchReason.NO_STOP, (
+                f"no stop found, not a hard limit: {r.detail}; a stop of the arm within "
+                f"every motor's capacity is not excluded (the stop bound: motor.{b.motor} at "
+                f"{b.share:.2f} of its {b.capacity_nm:.2f} N m, the hand's inertia about the "
+                "wrist taking the ball's push)")))
+    return tuple(out)
