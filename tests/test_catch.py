@@ -228,8 +228,9 @@ def test_grid(hand_kind, thumb110):
             assert p.timing.grasp_t is not None and p.timing.grasp_t <= p.intercept.t_s + GRASP_WINDOW_S
             if not p.feasible:  # only a ball faster than the joints can stop, or its roll
                 assert p.reason_kinds in ((CatchReason.TOO_FAST_TO_STOP,),
+                                          (CatchReason.NO_STOP,),
                                           (CatchReason.ROLL,)), (a, d, p.reasons)
-                assert p.reason_kinds == (CatchReason.TOO_FAST_TO_STOP,) or a == 20, (a, d)
+                assert p.reason_kinds != (CatchReason.ROLL,) or a == 20, (a, d)
                 continue
             n_ok += 1
             assert p.forces.stop.headroom >= 0 and len(p.forces.stop.motor_headroom) == len(p.hand.motor_names)
@@ -241,7 +242,8 @@ def test_grid(hand_kind, thumb110):
     assert soft.forces.stop.force_n < hard.forces.stop.force_n
     assert soft.forces.stop.headroom >= 0.2  # issue 15's target
     far = plan_throw(15, 4.0, 0.0, planner=pl)
-    assert not far.feasible and CatchReason.TOO_FAST_TO_STOP in far.reason_kinds
+    assert not far.feasible and CatchReason.NO_STOP in far.reason_kinds  # (the stop
+    # bound: not a hard limit, ``planner.catch.plan.stopbound``)
 
 
 def test_catch_plan_is_frozen(seed_plan):
@@ -477,6 +479,7 @@ def test_independent_check_confirms_grid(tmp_path):
             write_plan(p, str(path))
             rep = check.check_trajectory(str(path))
             assert p.feasible or set(p.reason_kinds) <= {CatchReason.TOO_FAST_TO_STOP,
+                                                         CatchReason.NO_STOP,
                                                          CatchReason.ROLL}, p.reasons
             rejected += not rep.ok
             infeasible += not p.feasible

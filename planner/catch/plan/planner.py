@@ -222,6 +222,15 @@ class CatchPlanner:
 
             plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, stops=stops, **kw), plan,
                                     self.wrist, self.rig.i_reach is not None)
+        if soft and CatchReason.TOO_FAST_TO_STOP in plan.reason_kinds and len(plan.rows.t):
+            from planner.catch.plan.stopbound import bounded_reasons  # (the limit judged
+            # by the bound over every stop: only where the planner's stops all failed)
+
+            k = int(np.argmin(np.abs(plan.rows.t - plan.intercept.t_s)))
+            b = flight.ball
+            plan = replace(plan, reasons=bounded_reasons(
+                plan.reasons, self.rig_dyn, plan.rows.q[k], plan.intercept.arrival_velocity,
+                b.mass_kg, b.radius_m))
         return replace(plan, planning_s=time.perf_counter() - t0)
 
     def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP,

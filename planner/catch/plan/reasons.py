@@ -10,7 +10,8 @@ from enum import Enum
 
 class CatchReason(Enum):
     """Why a catch is infeasible. Only the first three are limits no motion of the hand
-    overcomes; the others are this plan's shortfalls."""
+    overcomes (too fast to stop: where the stop bound says so too); the others are this
+    plan's shortfalls."""
 
     OUT_OF_REACH = "out of reach"  # no wrist/rail pose puts the palm on the ball's path
     TOO_SOON = "too soon"  # the ball arrives before the hand can open
@@ -23,6 +24,8 @@ class CatchReason(Enum):
     MISS = "miss"  # the rows put the palm elsewhere
     ROLL = "roll"  # the ball rolls off the palm's wrist side before the wrist's turn levels
     # the palm (``planner.check.ballroll``)
+    NO_STOP = "no stop found"  # the planner's stops keep no motor within its capacity, and
+    # the stop bound (``planner.catch.plan.stopbound``) does not exclude one that does
 
 
 HARD_LIMITS = frozenset({CatchReason.OUT_OF_REACH, CatchReason.TOO_SOON,
