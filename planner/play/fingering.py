@@ -107,7 +107,8 @@ class FingeringProblem(Layers):
     def chunks(self):
         """The programme over a receding window: the best path over the next ``WINDOW``
         events (``FIRST_WINDOW`` at the start) decides its first ones (all but
-        ``LOOKAHEAD``), which are yielded (``FingeringChunk``, with the notes no state can
+        ``LOOKAHEAD``; the first window fewer as soon as their path is certain:
+        ``_certain``), which are yielded (``FingeringChunk``, with the notes no state can
         play that start before the next event) and fixed; the next window goes on from the
         look-ahead's states that lead back to the last state decided (``_descendants``:
         every event is weighed once). Events are read as the windows need them, so the motion and the
@@ -238,7 +239,7 @@ def _certain(layers, most: int) -> int:
     state too (a later layer is built from the last one's states alone), so the first
     ``k`` layers' path is the one the whole window would choose (exact). 0: none yet."""
     states = layers[-1][1].keys()
-    for i in range(len(layers) - 1, 0, -1):  # (``states``: layer ``i``'s ancestors of the last's)
+    for i in range(len(layers) - 1, 0, -1):  # (then ``states``: layer ``i - 1``'s ancestors)
         states = {layers[i][1][s][1] for s in states}
         if len(states) == 1 and i <= most:
             return i
