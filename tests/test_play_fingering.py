@@ -112,7 +112,10 @@ def test_the_programme_runs_over_a_receding_window(hand_parts):
     struck = [a.note for c in chunks for a in c.assignments]
     left = [s.note for c in chunks for s in c.skipped]
     assert sorted(struck + left) == list(range(150))
-    assert len(chunks[0].assignments) + len(chunks[0].skipped) == FIRST_WINDOW - FIRST_LOOKAHEAD
+    # (the first chunk decides the window less its look-ahead, or fewer events once
+    # their path is certain: ``_certain``)
+    assert 1 <= len(chunks[0].assignments) + len(chunks[0].skipped) <= \
+        FIRST_WINDOW - FIRST_LOOKAHEAD
     seen: set[int] = set()
     for c in chunks:
         seen |= {a.note for a in c.assignments}
@@ -213,14 +216,15 @@ def test_a_layer_holds_one_state_per_hand_shape_cheapest_first(hand_parts):
 
 def test_the_first_window_stops_once_its_decision_is_made(hand_parts):
     """The first window stops weighing its look-ahead once every state of a layer
-    descends from one state of its last decided event (``_converged``): its first chunk
-    is the one the whole window gives (the window's own layers and path, worked out
-    here), and on these songs some first windows stop early."""
+    descends from one state of an event (``_certain``): its first chunk decides the
+    events up to that one (at most the window less its look-ahead) and is the path the
+    whole window gives for them (the window's own layers and path, worked out here); on
+    these songs some first windows stop early, and some first chunks are shorter."""
     from planner.music.midi import load_song
     from planner.play.fingering import FIRST_LOOKAHEAD, FIRST_WINDOW, FingeringProblem
 
     songs = Path(__file__).resolve().parents[1] / "songs"
-    early = 0
+    early = shorter = 0
     for name in ("fast.mid", "fur_elise.mid", "ode_to_joy.mid"):
         notes = list(load_song(songs / name).notes)
 
@@ -236,16 +240,37 @@ def test_the_first_window_stops_once_its_decision_is_made(hand_parts):
         early += Counted.layers < FIRST_WINDOW
         whole = FingeringProblem(notes, hand_parts, 100.0)
         evs = [(t, new) for t, new, _ in whole._events() if new][:FIRST_WINDOW]
+        k = sum(t < first.until_s for t, _ in evs)  # (the events the first chunk decides)
+        assert 1 <= k <= FIRST_WINDOW - FIRST_LOOKAHEAD
+        shorter += k < FIRST_WINDOW - FIRST_LOOKAHEAD
         layers, prev = [], {}
         for t, new in evs:
             prev = whole._layer(prev, t, new)
             layers.append((t, prev, new))
-        k = FIRST_WINDOW - FIRST_LOOKAHEAD
         ch = whole._chunk(layers[:k], whole._path(layers)[:k], None)
         assert (first.assignments, first.cuts, first.loss_frames) == \
             (ch.assignments, ch.cuts, ch.loss_frames)
         assert first.skipped == ch.skipped
-    assert early >= 1
+    assert early >= 1 and shorter >= 1
+
+
+def test_a_certain_path_is_found_in_made_up_layers():
+    """``_certain`` on layers made up by hand (each {state: (cost, state before)}): the
+    events whose path every state of the last layer goes back through, at most ``most``,
+    never the whole window; 0 while two paths stay open from the first event."""
+    from planner.play.fingering import _certain
+
+    a0, b0 = "a0", "b0"
+    l0 = (0.0, {a0: (1.0, None), b0: (2.0, None)}, [0])
+    l1 = (1.0, {"a1": (2.0, a0), "b1": (3.0, b0)}, [1])  # (two paths open)
+    l2 = (2.0, {"a2": (3.0, "a1"), "b2": (4.0, "a1")}, [2])  # (both back through a1)
+    l3 = (3.0, {"a3": (5.0, "a2"), "b3": (4.5, "b2")}, [3])
+    assert _certain([l0, l1], 8) == 0
+    assert _certain([l0, l1, l2], 8) == 2  # (events 0 and 1: a0, a1)
+    assert _certain([l0, l1, l2, l3], 8) == 2
+    assert _certain([l0, l1, l2, l3], 1) == 1
+    assert _certain([l0, l1, l2], 1) == 1
+    assert _certain([l0], 8) == 0
 
 
 def test_a_note_only_a_body_refused_pose_could_press_is_left_out_for_its_body(hand_parts,

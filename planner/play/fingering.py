@@ -107,7 +107,8 @@ class FingeringProblem(Layers):
     def chunks(self):
         """The programme over a receding window: the best path over the next ``WINDOW``
         events (``FIRST_WINDOW`` at the start) decides its first ones (all but
-        ``LOOKAHEAD``), which are yielded (``FingeringChunk``, with the notes no state can
+        ``LOOKAHEAD``; the first window fewer as soon as their path is certain:
+        ``_certain``), which are yielded (``FingeringChunk``, with the notes no state can
         play that start before the next event) and fixed; the next window goes on from the
         look-ahead's states that lead back to the last state decided (``_descendants``:
         every event is weighed once). Events are read as the windows need them, so the motion and the
@@ -145,9 +146,11 @@ class FingeringProblem(Layers):
             for t, new in ahead_evs[len(layers):window]:
                 prev = self._layer(prev, t, new)
                 layers.append((t, prev, new))
-                if first and k < len(layers) < n and _converged(layers, k):
-                    break  # (the first window's decision is made: its look-ahead is
-                    # weighed again from the state decided anyway; the rows start sooner)
+                if first and len(layers) < n and (sure := _certain(layers, k)):
+                    k = sure  # (the first events' path is certain: decided now, as the
+                    # whole window would; the rest is weighed again from the state
+                    # decided, with the longer window; the rows start sooner)
+                    break
             path = self._path(layers)
             until = ahead_evs[k][0] if k < len(ahead_evs) else math.inf
             mine = tuple(s for t, s in skips if t < until)
@@ -229,14 +232,18 @@ class FingeringProblem(Layers):
         return Skip(n, SkipReason.CHORD, f"{len(new)} notes at t={t:.3f} s: the hand holds "
                     f"{sum(m in here for m in new)} of them from one position")
 
-def _converged(layers, k: int) -> bool:
-    """Whether every state of the last layer descends from one state of layer ``k - 1``:
-    then the best path through any later layers goes through it too, and the first
-    ``k`` layers' path is decided (exact: the same path as the whole window's)."""
+def _certain(layers, most: int) -> int:
+    """How many of the first layers (at most ``most``, fewer than all) have a certain
+    path: the largest ``k`` such that every state of the last layer descends from one
+    state of layer ``k - 1``. The best path through any later layers goes through that
+    state too (a later layer is built from the last one's states alone), so the first
+    ``k`` layers' path is the one the whole window would choose (exact). 0: none yet."""
     states = layers[-1][1].keys()
-    for _, layer, _ in reversed(layers[k:]):
-        states = {layer[s][1] for s in states}
-    return len(states) == 1
+    for i in range(len(layers) - 1, 0, -1):  # (then ``states``: layer ``i - 1``'s ancestors)
+        states = {layers[i][1][s][1] for s in states}
+        if len(states) == 1 and i <= most:
+            return i
+    return 0
 
 
 def _descendants(layers, before: State):
