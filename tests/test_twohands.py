@@ -250,3 +250,29 @@ def test_by_check_keeps_the_way_the_check_scores_higher_where_frames_tie(pair,
               way=best.way)
     write_two_hands(kept, song, pair, str(out), 100.0, "")
     assert check_trajectory(str(out), song).play.f1 == pytest.approx(f1[1], abs=2e-3)
+
+
+def test_the_notes_pressed_softer_are_named_per_hand(pair, tmp_path) -> None:
+    """A forte right part (velocity 127: 3 N, which only the index holds at any press) over
+    a mezzo-forte left one: the summary's ``softer:`` line and ``--json``'s ``softer`` name
+    the right part's notes pressed with less (``summary.softer_notes`` on each hand's own
+    plan), none of the left's."""
+    from planner.play.force import press_force_n
+    from planner.play.twosummary import format_two_summary, softer_of, two_plan_dict
+
+    line = (68, 63, 68, 61, 68, 63, 70, 66, 68, 61)
+    notes = [Note(p, 0.5 + 0.25 * k, 0.75 + 0.25 * k, 127, 0) for k, p in enumerate(line)]
+    notes += [Note(p, 0.5 + 0.5 * k, 0.9 + 0.5 * k, 64, 1) for k, p in enumerate((48, 52, 55))]
+    write_notes_midi(notes, tmp_path / "forte.mid")
+    song = load_song(tmp_path / "forte.mid", every_part=True)
+    plan = plan_two_hands(song, pair, str(tmp_path / "forte.csv"))
+    places_of = {s: p.places for s, p in pair.planners.items()}
+    soft = softer_of(song.notes, plan, places_of)
+    assert soft and {side for _, side, _ in soft} == {RIGHT}
+    assert all(f < press_force_n(song.notes[n].velocity) == 3.0 for n, _, f in soft)
+    assert all(song.notes[n].velocity == 127 for n, _, _ in soft)
+    text = format_two_summary("forte", song.notes, plan, "forte.csv", places_of=places_of)
+    assert f"softer: {len(soft)} notes pressed with" in text
+    d = two_plan_dict("forte", song.notes, plan, "forte.csv", 0.0, places_of)
+    assert [(x["note"], x["hand"], x["force_n"]) for x in d["softer"]] == soft
+    assert "softer" not in format_two_summary("forte", song.notes, plan, "forte.csv")

@@ -31,10 +31,13 @@ def run_two(a: argparse.Namespace, names: tuple[str, str]) -> int:
     pp = PairPlanner(left, right)
     setup_s = time.perf_counter() - t0
     plan = plan_two_hands(song, pp, out, a.rate, song_name=name)
+    places_of = {s: p.places for s, p in pp.planners.items()}
     if a.json:
-        sys.stdout.write(json.dumps(two_plan_dict(name, song.notes, plan, out, setup_s)) + "\n")
+        sys.stdout.write(json.dumps(two_plan_dict(name, song.notes, plan, out, setup_s,
+                                                  places_of)) + "\n")
     else:
-        sys.stderr.write(format_two_summary(name, song.notes, plan, out, setup_s) + "\n")
+        sys.stderr.write(format_two_summary(name, song.notes, plan, out, setup_s, places_of)
+                         + "\n")
     if a.report or a.html:  # (each hand's pictures: ``planner.report.pair``)
         from planner.report.pair import draw_pair_reports, side_path
 

@@ -45,7 +45,12 @@ def softer_notes(notes, plan: PlayPlan, places) -> list[tuple[int, float]]:
 def softer_line(notes, plan: PlayPlan, places) -> list[str]:
     """The summary's line on the notes pressed softer than asked (none when there are
     none)."""
-    soft = softer_notes(notes, plan, places)
+    return softer_words(notes, softer_notes(notes, plan, places))
+
+
+def softer_words(notes, soft: list[tuple[int, float]]) -> list[str]:
+    """The line on the notes ``soft`` ((note, force N), ``softer_notes``) pressed softer
+    than their velocity asks; none when there are none."""
     if not soft:
         return []
     asked = max(press_force_n(notes[n].velocity) for n, _ in soft)

@@ -7,7 +7,9 @@ import math
 from collections import Counter
 
 from planner.music.keyboard import pitch_name
+from planner.play.force import press_force_n
 from planner.play.hands import SIDES
+from planner.play.summary import softer_notes, softer_words
 from planner.play.twoplan import TwoHandPlan
 
 
@@ -30,10 +32,22 @@ def hand_facts(plan: TwoHandPlan) -> list[dict]:
     return out
 
 
+def softer_of(notes, plan: TwoHandPlan, places_of: dict) -> list[tuple[int, str, float]]:
+    """(song index, hand, force N) of the notes pressed with less force than their
+    velocity asks (``summary.softer_notes`` on each hand's plan of its own notes, with
+    that hand's places, ``places_of[side]``), by note."""
+    out = []
+    for side, idx, p in zip(SIDES, plan.planned_of or plan.notes_of, plan.plans):
+        sub = [notes[i] for i in idx]
+        out.extend((idx[n], side, f) for n, f in softer_notes(sub, p, places_of[side]))
+    return sorted(out)
+
+
 def format_two_summary(song_name: str, notes, plan: TwoHandPlan, out: str,
-                       setup_s: float | None = None) -> str:
+                       setup_s: float | None = None, places_of: dict | None = None) -> str:
     """The summary: counts and the file, timing, each hand's share and replay, the rail
-    gap kept, then every note not played (its hand and reason)."""
+    gap kept, the notes pressed softer than asked (with each hand's places,
+    ``places_of``), then every note not played (its hand and reason)."""
     left_out = plan.left_out()
     song_s = _song_s(notes)
     rtf = song_s / plan.planning_s if plan.planning_s > 0 else math.inf
@@ -54,6 +68,9 @@ def format_two_summary(song_name: str, notes, plan: TwoHandPlan, out: str,
                      f"{f['frame_f1']:.4f}" for f in hand_facts(plan))
          + f"; {len(plan.assignment.moved)} notes played by the other hand than their part's"),
     ]
+    if places_of is not None:
+        lines.extend(softer_words(notes, [(n, f) for n, _, f in
+                                          softer_of(notes, plan, places_of)]))
     for i, s in left_out:
         n = notes[i]
         lines.append(f"  left out: t={n.onset_s:.3f} s {pitch_name(n.pitch)} (MIDI {n.pitch}, "
@@ -63,11 +80,16 @@ def format_two_summary(song_name: str, notes, plan: TwoHandPlan, out: str,
     return "\n".join(lines)
 
 
-def two_plan_dict(song_name: str, notes, plan: TwoHandPlan, out: str, setup_s: float) -> dict:
+def two_plan_dict(song_name: str, notes, plan: TwoHandPlan, out: str, setup_s: float,
+                  places_of: dict | None = None) -> dict:
     """``play --hands 2 --json``: the summary's facts, one JSON object (a note is its
-    index in the song, by onset then pitch, as in the end marker)."""
+    index in the song, by onset then pitch, as in the end marker); ``softer``, the notes
+    pressed with less force than asked, with each hand's places (else None)."""
     song_s = _song_s(notes)
     left_out = plan.left_out()
+    softer = None if places_of is None else [
+        {"note": n, "hand": side, "force_n": f, "asked_n": press_force_n(notes[n].velocity)}
+        for n, side, f in softer_of(notes, plan, places_of)]
     return {
         "command": "play", "hands_planned": 2, "song": song_name, "notes": len(notes),
         "played": len(notes) - len(left_out),
@@ -81,7 +103,7 @@ def two_plan_dict(song_name: str, notes, plan: TwoHandPlan, out: str, setup_s: f
                   for m in plan.assignment.moved],
         "hint": plan.assignment.source.value,
         "rail_gap_m": plan.gap.rail_gap_m, "least_rail_gap_m": plan.least_rail_gap_m,
-        "first_hand": plan.first, "way": plan.way,
+        "first_hand": plan.first, "way": plan.way, "softer": softer,
         "tried": [{"way": w, "played_frames": fr} for w, fr in plan.tried],
         "rows": len(plan.rows.t_s), "trajectory": out, "song_s": song_s,
         "planning_s": plan.planning_s, "setup_s": setup_s,
