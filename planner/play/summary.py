@@ -11,7 +11,6 @@ import math
 
 from planner.music.keyboard import pitch_name
 from planner.play.force import press_force_n, pressed_force_n
-from planner.play.places import RAIL_STEP_M
 from planner.play.stream import PlayPlan
 
 
@@ -35,8 +34,8 @@ def softer_notes(notes, plan: PlayPlan, places) -> list[tuple[int, float]]:
     out = []
     for a in plan.fingering.assignments:
         asked = press_force_n(notes[a.note].velocity)
-        rail_i = round(a.rail_m / RAIL_STEP_M)
-        e = places.entry(a.finger, notes[a.note].pitch, places.place(a.posture, rail_i))
+        e = places.atlases[a.posture].entry(a.finger, notes[a.note].pitch, a.rail_m)  # (as
+        # the motion reads it: ``Motion.entry``)
         if e is not None and pressed_force_n(asked, e.max_force_n) < asked:
             out.append((a.note, pressed_force_n(asked, e.max_force_n)))
     return out
