@@ -110,11 +110,11 @@ class Kinematics:
         new, of = distinct_rows(Q)
         QP = np.zeros((int(np.count_nonzero(new)), self.model.nq))
         QP[:, self.idx] = Q[new]
-        m, d, idx = self.model, self.data, self.idx
-        out = np.empty((len(QP), self.hand.n))
-        for k in range(len(QP)):
-            out[k] = pin.computeGeneralizedGravity(m, d, QP[k])[idx]
-        return out[of]
+        m, d, g = self.model, self.data, pin.computeGeneralizedGravity
+        # (each row's vector kept whole, our joints picked from them all at once: the
+        # same numbers)
+        raw = [g(m, d, qp) for qp in QP]  # (fresh arrays: Pinocchio returns copies)
+        return (np.array(raw)[:, self.idx] if raw else np.empty((0, self.hand.n)))[of]
 
     def moving(self, Q: np.ndarray, V: np.ndarray, A: np.ndarray, still: np.ndarray
                ) -> np.ndarray:
@@ -127,10 +127,11 @@ class Kinematics:
         QP = np.zeros((len(Q), m.nq))
         VP, AP = np.zeros((len(Q), m.nv)), np.zeros((len(Q), m.nv))
         QP[:, idx], VP[:, idx], AP[:, idx] = Q, V, A
-        out = np.empty((len(Q), self.hand.n))
-        for k in range(len(Q)):
-            out[k] = pin.rnea(m, d, QP[k], VP[k], AP[k])[idx] - still[k]
-        return out
+        rnea = pin.rnea
+        raw = [rnea(m, d, qp, vp, ap) for qp, vp, ap in zip(QP, VP, AP)]
+        if not raw:
+            return np.empty((0, self.hand.n))
+        return np.array(raw)[:, idx] - still
 
     def inertial(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """Joint torques that move the hand at speeds ``v`` and accelerations ``a`` (our
