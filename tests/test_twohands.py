@@ -278,7 +278,7 @@ def test_the_notes_pressed_softer_are_named_per_hand(pair, tmp_path) -> None:
     assert "softer" not in format_two_summary("forte", song.notes, plan, "forte.csv")
 
 
-def test_second_plans_give_back_the_plan_made_from_the_same_and_the_same_file(
+def test_second_plans_give_back_the_plan_made_from_the_same(
         pair, tmp_path) -> None:
     """``SecondPlans``: the meeting song's right-first pass planned twice within one pair's
     planning, its first hand's plan the same rows (a new object), the second hand's plan
