@@ -297,10 +297,11 @@ def test_second_plans_give_back_the_plan_made_from_the_same(
     q = plan_pass(song, pair, a, RIGHT, 100.0)
     assert q.plans[1] is not p.plans[1] and same_plan(q.plans[1], p.plans[1])
     assert q.plans[0] is p.plans[0] and len(pair.seconds) == 1  # (given back)
-    key = (LEFT, p.planned_of[0], 100.0, "")
+    key = (LEFT, p.planned_of[0], 100.0, "", song.notes)
     assert pair.seconds.get(key, q.plans[1]) is p.plans[0]
     assert pair.seconds.get((RIGHT,) + key[1:], q.plans[1]) is None
-    assert pair.seconds.get((LEFT, p.planned_of[0][1:], 100.0, ""), q.plans[1]) is None
+    assert pair.seconds.get((LEFT, p.planned_of[0][1:]) + key[2:], q.plans[1]) is None
+    assert pair.seconds.get(key[:4] + (song.notes[1:],), q.plans[1]) is None  # (another song)
     assert pair.seconds.get(key, p.plans[0]) is None  # (another first plan)
 
     class Anew(SecondPlans):  # (every second plan made anew; the hits counted)

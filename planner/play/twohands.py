@@ -153,7 +153,7 @@ def _plan_second(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], s
     (``planner.play.handclear``); the plan playing more frames kept (the first of equals).
     Planned once for the same inputs while a pair is planned (``PairPlanner.seconds``:
     ``SecondPlans``; ``edge`` is ``first``'s rows')."""
-    key = (side, idx, rate_hz, song_name)
+    key = (side, idx, rate_hz, song_name, song.notes)
     made = pp.seconds.get(key, first)
     if made is None:
         made = _plan_second_anew(song, pp, side, idx, sub, first, edge, rate_hz, song_name)

@@ -183,7 +183,7 @@ class SecondPlans:
     """The plans of the hand planned second made while a pair is planned
     (``twohands._plan_second``), by what each is planned from: its side, its notes (song
     indices), the first hand's plan (``same_plan``: its rows and the notes it left out),
-    the rate and the song's name. A way's first hand planned with its room settled often
+    the rate, the song's name and its notes. A way's first hand planned with its room settled often
     comes out as with the windows' room, and a way's hand-back is planned from the second
     plan it shares with that way's twin: asked again for the same, the plan made is
     given back (planning is deterministic: the same input, the same bytes), not planned
@@ -194,8 +194,8 @@ class SecondPlans:
         self._got: list[tuple[tuple, PlayPlan, PlayPlan]] = []
 
     def get(self, key: tuple, first: PlayPlan) -> PlayPlan | None:
-        """The plan made for ``key`` (side, notes, rate, name) and ``first`` (or its
-        like), None when none was."""
+        """The plan made for ``key`` (side, its notes, rate, name, the song's notes) and
+        ``first`` (or its like), None when none was."""
         for k, f, plan in self._got:
             if k == key and same_plan(f, first):
                 return plan
