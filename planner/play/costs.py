@@ -138,7 +138,7 @@ class Prev:
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
                  "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_to", "older",
-                 "on_key", "posture", "recent", "release", "rode_of", "state", "steps",
+                 "on_key", "posture", "recent", "rode_of", "state", "steps",
                  "up_parts")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
@@ -177,7 +177,6 @@ class Prev:
             (m, f, a, t_up[m] - down, costs.places.press_min_s(a), down)
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None
             for down in (t_down[m] + late.get(m, 0.0),)]
-        self.release: dict[tuple, tuple] = {}  # by place and new notes (``_release_of``)
         self.up_parts: dict[int, tuple] = {}  # by note: what its key's up cut for a move
         # of the arm works out whatever the cut (``ArmCosts._cut_up_s``)
         self.lift_parts: dict[tuple, tuple] = {}  # by (note, finger, ``Costs._times``

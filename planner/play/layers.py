@@ -208,8 +208,14 @@ class Layers(Costs):
                 # those that ride along on the arm's move, ``ArmCosts._rail_loss``)
                 lates: list = []
                 rode: list = []
-                step = self._same_rail_loss(ctx, new, lates) if place == here \
-                    else self._rail_loss(ctx, new, place, kept, lates, rode)
+                if place == here:
+                    step = self._same_rail_loss(ctx, new, lates)
+                else:  # (no use above the bound or its shape's best: not worked out
+                    # where the arm's floor is there already, ``ArmCosts._arm_floor``)
+                    step = self._rail_loss(ctx, new, place, kept, lates, rode, (
+                        bound if old is None else min(bound, old[0])) - (cost + tie))
+                    if step is None:
+                        continue
                 got = steps[key] = (step, tuple(sorted(lates)), tuple(sorted(rode)))
             step = got[0]
             total = cost + step + tie
