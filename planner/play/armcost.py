@@ -151,13 +151,8 @@ class ArmCosts(ArmTimes):
         riding along (its finger's place is ``place`` after: ``layers.rode_to``).
         ``limit``: the loss above which the move is of no use (the programme's bound):
         None, without working out the lifts, where ``_arm_floor`` is above it already."""
-        afters = self._afters_of(prev, place, new)  # (each new note's descent after the move)
-        t_down = self._t_down
-        arrive = min([t_down[n] - a for n, a in zip(new, afters)])  # (the new notes' wish)
-        T = self.places.arm_time_s(prev.state.place, place)
-        lifts = self._lifts(prev, place)
+        afters, arrive, T, lifts, cands = self._arm_setup(prev, new, place)
         tie_rail = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
-        cands = self._ride_cands(prev, place, new) if prev.follows else []
         if limit < math.inf and tie_rail + self._arm_floor(
                 prev, lifts, cands, T, arrive) - FLOOR_SLACK > limit:
             return None
@@ -178,7 +173,7 @@ class ArmCosts(ArmTimes):
                 {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
                 {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
         by_finger, by_key, lifted = around
-        t_up, dt, pitch = self._t_up, self.dt, self.pitch
+        t_up, t_down, dt, pitch = self._t_up, self._t_down, self.dt, self.pitch
         gaps = self._gaps  # (``_move_gap_s``' memo)
         loss = tie_rail + cut_loss
         for (n, f), after_s in zip(new.items(), afters):
@@ -245,6 +240,25 @@ class ArmCosts(ArmTimes):
                                   self._t_up[m], self.dt),
                 None if free is None else free + self.places.lift(e, "high").cross_s)
         return got
+
+    def _arm_setup(self, prev: Prev, new: dict[int, str], place: int) -> tuple:
+        """What a move of the arm to ``place`` after ``prev`` starts from: each new note's
+        descent after the move (``_afters_of``), the new notes' wish (the latest the arm
+        may arrive for each key to go down on time), the arm's time, ``_lifts``' answer
+        and the notes that could ride along (``_ride_cands``)."""
+        afters = self._afters_of(prev, place, new)
+        t_down = self._t_down
+        arrive = min([t_down[n] - a for n, a in zip(new, afters)])
+        return (afters, arrive, self.places.arm_time_s(prev.state.place, place),
+                self._lifts(prev, place),
+                self._ride_cands(prev, place, new) if prev.follows else [])
+
+    def _release(self, prev: Prev, new: dict[int, str], place: int) -> tuple:
+        """``_release_of``'s answer for a move of the arm to ``place`` after ``prev``
+        striking ``new``: the arm's arrival, the notes riding along, the frames lost by
+        keys let up early for it and those keys' ups."""
+        _, arrive, T, lifts, cands = self._arm_setup(prev, new, place)
+        return self._release_of(prev, arrive, T, lifts, cands)
 
     def _arm_floor(self, ctx: Prev, lifts: tuple, cands: list, T: float,
                    arrive: float) -> float:
