@@ -37,7 +37,8 @@ class _Checked(FingeringProblem):
         self.cut = 0  # (moves that let a key up early for the arm)
         self.rode = 0  # (moves a note rode along on)
 
-    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None, limit=math.inf):
+    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None, limit=math.inf,
+                   tie_rail=None):
         # (every move costed in full, whatever its floor: ``limit`` not passed on)
         self.parts += bool(prev.up_parts or prev.lift_parts)
         got_lates, got_rode = [], []
@@ -91,7 +92,8 @@ class _Floored(FingeringProblem):
         self.ruled_out = 0
         self.least_margin = math.inf  # (frames: the loss less the floor, least of all)
 
-    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None, limit=math.inf):
+    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None, limit=math.inf,
+                   tie_rail=None):
         full = super()._rail_loss(prev, new, place, kept)
         _, arrive, T, lifts, cands = self._arm_setup(prev, new, place)
         floor = (TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
@@ -103,7 +105,7 @@ class _Floored(FingeringProblem):
         self.least_margin = min(self.least_margin, full - floor)
         if not self.floored:
             limit = math.inf
-        got = super()._rail_loss(prev, new, place, kept, lates, rode, limit)
+        got = super()._rail_loss(prev, new, place, kept, lates, rode, limit, tie_rail)
         if got is None:  # (ruled out: it could not have been kept)
             self.ruled_out += 1
             assert full > limit

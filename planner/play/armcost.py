@@ -138,7 +138,7 @@ class ArmCosts(ArmTimes):
 
     def _rail_loss(self, prev: Prev, new: dict[int, str], place: int, kept=(),
                    lates: list | None = None, rode: list | None = None,
-                   limit: float = math.inf) -> float | None:
+                   limit: float = math.inf, tie_rail: float | None = None) -> float | None:
         """Frames lost to a move of the rail to ``place`` after ``prev``: a finger of
         ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
         other lifts after its key comes up; then the rail moves (as slow as its slowest
@@ -150,9 +150,11 @@ class ArmCosts(ArmTimes):
         (``State.late``); ``rode``: gets (note, finger, the move's end) of each note
         riding along (its finger's place is ``place`` after: ``layers.rode_to``).
         ``limit``: the loss above which the move is of no use (the programme's bound):
-        None, without working out the lifts, where ``_arm_floor`` is above it already."""
+        None, without working out the lifts, where ``_arm_floor`` is above it already.
+        ``tie_rail``: the rail's tie-break, when its caller has it."""
         afters, arrive, T, lifts, cands = self._arm_setup(prev, new, place)
-        tie_rail = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
+        if tie_rail is None:
+            tie_rail = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
         if limit < math.inf and tie_rail + self._arm_floor(
                 prev, lifts, cands, T, arrive) - FLOOR_SLACK > limit:
             return None
@@ -284,7 +286,7 @@ class ArmCosts(ArmTimes):
             return 0.0
         riding = {c[0] for c in cands} if cands else None
         cut, first, first_clear = 0.0, -math.inf, None
-        cols = lifts[2]
+        cols, parts = lifts[2], ctx.lift_parts
         for v, m, f in order:  # (latest first)
             if v <= start:
                 break
@@ -292,8 +294,11 @@ class ArmCosts(ArmTimes):
                 continue
             if first_clear is None:
                 first_clear = v
-            lift_s, _, _, hold, first_m = self._lift_part(
-                ctx, m, f, 0 if cols is None else cols[m, f])
+            col = 0 if cols is None else cols[m, f]
+            got = parts.get((m, f, col))
+            if got is None:
+                got = self._lift_part(ctx, m, f, col)
+            lift_s, _, _, hold, first_m = got
             due = v - lift_s
             cut += max(0.0, min(v - start, due - hold) - FLOOR_SLACK_S)
             first = max(first, min(v, first_m + lift_s))

@@ -190,7 +190,8 @@ class Layers(Costs):
             # (the pruning keeps one state per shape, the cheapest: a transition that
             # cannot cost less than the cheapest state of its shape so far is not weighed,
             # nor one that cannot cost less than the beam's last state)
-            low = cost + tie + TIE_RAIL_PER_M * self.places.distance_m(place, here)
+            tie_rail = TIE_RAIL_PER_M * self.places.distance_m(place, here)
+            low = cost + tie + tie_rail
             shape = (place, sounding_t)
             old = layer.get(shape)
             if low > bound or old is not None and low > old[0]:
@@ -213,7 +214,8 @@ class Layers(Costs):
                 else:  # (no use above the bound or its shape's best: not worked out
                     # where the arm's floor is there already, ``ArmCosts._arm_floor``)
                     step = self._rail_loss(ctx, new, place, kept, lates, rode, (
-                        bound if old is None else min(bound, old[0])) - (cost + tie))
+                        bound if old is None else min(bound, old[0])) - (cost + tie),
+                        tie_rail)
                     if step is None:
                         continue
                 got = steps[key] = (step, tuple(sorted(lates)), tuple(sorted(rode)))
