@@ -105,19 +105,18 @@ class ArmTimes:
         the arm to ``place`` (latest first), the latest, and each one's ``Costs._times``
         column by note and finger (None: all the front rule's): ``Prev.lifts``, or each
         finger's by its entry's rule (``_lift_col``; memoised per posture moved to)."""
-        here = ctx.state.place
-        po = self.places.posture_of
-        if po(here) == po(place):
-            return ctx.lifts, ctx.lift_end, None
-        got = ctx.lifts_to.get(po(place))
+        q = self.places.posture_of(place)
+        if q == ctx.posture:
+            return ctx.lifts_same
+        got = ctx.lifts_to.get(q)
         if got is None:
+            here = ctx.state.place
             black = {(m, f): v for v, m, f in ctx.lifts_black}
             cols = {(m, f): self._lift_col(here, place, m, f, r)
                     for m, f, r in ctx.state.last_notes}
             lifts = sorted(((v if cols[m, f] == 0 else black[m, f], m, f)
                             for v, m, f in ctx.lifts), key=lambda x: -x[0])
-            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
-                                             cols)
+            got = ctx.lifts_to[q] = (lifts, lifts[0][0] if lifts else -math.inf, cols)
         return got
 
     def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:

@@ -137,7 +137,7 @@ class Prev:
     (the programme weighs hundreds of transitions from each state)."""
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
-                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_to", "older",
+                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_same", "lifts_to", "older",
                  "on_key", "posture", "recent", "rode_of", "state", "steps",
                  "up_parts")
 
@@ -164,6 +164,8 @@ class Prev:
                                   key=lambda x: -x[0])
         self.lift_end = self.lifts[0][0] if self.lifts else -math.inf  # (the latest)
         self.lift_end_black = self.lifts_black[0][0] if self.lifts_black else -math.inf
+        self.lifts_same = (self.lifts, self.lift_end, None)  # (``ArmCosts._lifts``' answer
+        # for a move that keeps the posture)
         self.lifts_to: dict[int, tuple] = {}  # (each finger's rule, by posture moved to:
         # ``ArmCosts._lifts``)
         # (the notes sounding that might ride along: their entry, the time their key is
