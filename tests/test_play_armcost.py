@@ -80,7 +80,7 @@ def test_what_is_kept_per_state_before_and_place_is_the_fresh_answer(places, nam
 
 class _Floored(FingeringProblem):
     """The programme, every move of the arm it weighs also costed in full: the floor
-    (``ArmCosts._arm_floor``, with the rail's tie-break, as ``_rail_loss`` weighs it)
+    (``ArmFloor._arm_floor``, with the rail's tie-break, as ``_rail_loss`` weighs it)
     against the loss, and every move the floor rules out against the ``limit`` it was
     ruled out for. ``floored``: False plans with no floor at all (``limit`` dropped)."""
 

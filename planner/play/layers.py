@@ -205,20 +205,12 @@ class Layers(Costs):
                     continue
             key = (sounding_t, place, kept)
             got = steps.get(key)
-            if got is None:  # (its loss, the notes it strikes late, ``State.late``, and
-                # those that ride along on the arm's move, ``ArmCosts._rail_loss``)
-                lates: list = []
-                rode: list = []
-                if place == here:
-                    step = self._same_rail_loss(ctx, new, lates)
-                else:  # (no use above the bound or its shape's best: not worked out
-                    # where the arm's floor is there already, ``ArmCosts._arm_floor``)
-                    step = self._rail_loss(ctx, new, place, kept, lates, rode, (
-                        bound if old is None else min(bound, old[0])) - (cost + tie),
-                        tie_rail)
-                    if step is None:
-                        continue
-                got = steps[key] = (step, tuple(sorted(lates)), tuple(sorted(rode)))
+            if got is None:  # (``ArmCosts._step``; None: ruled out, ``ArmFloor._arm_floor``)
+                got = self._step(ctx, new, place, kept, (
+                    bound if old is None else min(bound, old[0])) - (cost + tie), tie_rail)
+                if got is None:
+                    continue
+                steps[key] = got
             step = got[0]
             total = cost + step + tie
             if self.room is not None:
