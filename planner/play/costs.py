@@ -137,9 +137,9 @@ class Prev:
     (the programme weighs hundreds of transitions from each state)."""
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
-                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_same", "lifts_to", "older",
-                 "on_key", "posture", "recent", "rode_of", "state", "steps",
-                 "up_parts")
+                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_same",
+                 "lifts_to", "older", "on_key", "posture", "recent", "rode_of", "state",
+                 "steps", "up_parts")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state

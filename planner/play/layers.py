@@ -9,7 +9,8 @@ in the hand's order, and every rail worth a move (``Layers._moves_to``, and
 costed by ``planner.play.costs``. A layer keeps, of each hand shape (the rail and the
 fingers on the notes sounding), the cheapest state, and of those the ``BEAM`` cheapest
 (``_prune``). A transition that cannot beat its shape's best or the beam's last state
-(its state before's cost and its tie-breaks: no loss is negative) is not costed.
+(its state before's cost and its tie-breaks: no loss is negative) is not costed, nor
+is a move of the arm whose loss's floor cannot (``ArmFloor._arm_floor``).
 """
 
 from __future__ import annotations
