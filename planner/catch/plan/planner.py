@@ -231,6 +231,10 @@ class CatchPlanner:
             plan = replace(plan, reasons=bounded_reasons(
                 plan.reasons, self.rig_dyn, plan.rows.q[k], plan.intercept.arrival_velocity,
                 b.mass_kg, b.radius_m))
+            if CatchReason.NO_STOP in plan.reason_kinds:
+                from planner.catch.plan.stoprows import optimised_stop_plan
+
+                plan = optimised_stop_plan(self, plan)  # the stop optimised on the rows
         return replace(plan, planning_s=time.perf_counter() - t0)
 
     def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP,
