@@ -1,11 +1,13 @@
 """The stop optimised on the plan's rows (``planner.catch.plan.stoprows``): a linear programme
-of the check's stopping rule, the planner's last stage for "no stop found"."""
+of the check's stopping rule, the planner's last stage for "no stop found"
+(``planner.catch.plan.planner.optimised_stop_plan``)."""
 
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from planner.catch.plan import planner as catch_planner
 from planner.catch.plan import stoprows
 from planner.catch.plan.api import plan_throw, write_plan
 from planner.catch.plan.reasons import CatchReason, Reason
@@ -20,7 +22,7 @@ def before(pl):
     """The throw's plan as the planner makes it without the optimised stop (the stage
     replaced by the identity): infeasible, "no stop found" its only reason."""
     mp = pytest.MonkeyPatch()
-    mp.setattr(stoprows, "optimised_stop_plan", lambda _pl, plan: plan)
+    mp.setattr(catch_planner, "optimised_stop_plan", lambda _pl, plan: plan)
     try:
         p = plan_throw(*THROW, planner=pl)
     finally:
@@ -90,7 +92,7 @@ def test_where_the_rows_cannot_be_caught_the_plan_keeps_its_stop(pl, before):
     reason; a programme with too few rows after the touch fails and says so."""
     other = Reason(CatchReason.ROLL, "the ball rolls off (added)")
     p = replace(before, reasons=before.reasons + (other,))
-    out = stoprows.optimised_stop_plan(pl, p)
+    out = catch_planner.optimised_stop_plan(pl, p)
     assert not out.feasible and out.rows is p.rows
     assert out.reasons[1] is other
     r = out.reasons[0]
