@@ -559,8 +559,9 @@ def optimised_stop_plan(pl: CatchPlanner, plan: CatchPlan) -> CatchPlan:
     rs = optimise_stop(model, t, Q)
     st = rs.stop
     said = (f"the stop optimised on the rows (the check's rule, linearised, at the plan's "
-            f"rate): motor.{st.motor} at {1.0 - st.headroom:.2f} of its "
-            f"{st.capacity_nm:.2f} N m" + (f" ({rs.failure})" if rs.failure else ""))
+            f"rate): motor.{st.motor} at {abs(st.torque_nm):.2f} N m of its "
+            f"{st.capacity_nm:.2f} ({1.0 - st.headroom:.2f} of it)"
+            + (f"; {rs.failure}" if rs.failure else ""))
     only = set(plan.reason_kinds) == {CatchReason.NO_STOP}
     if rs.Q is not None and st.headroom >= 0.0 and only:
         r = float(flight.ball.radius_m)

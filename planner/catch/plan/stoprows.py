@@ -51,6 +51,8 @@ STOP_POST_S = 0.25  # rows after it: the planner's stops bring the arm to rest w
 SMOOTH_WEIGHT = 1e-3  # share of capacity per (jerk bound x row) of the offset's third
 # differences: a tie-break of equal loads, 0.001 of a motor's share for a full jerk bound
 ROUNDS = 4  # re-linearisations (the second usually lands within 1 % of the check's torque)
+SETTLED = 1e-3  # a round whose share moved less than this from the last ends them (0.1 %
+# of a motor: below the check's 1 % tolerance)
 TRUST_RAD = 0.05  # largest offset of a revolute joint per round (rad): the linearisation's
 TRUST_M = 0.02  # and of a prismatic one (m): the mass matrix changes little over these
 _FD = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
@@ -71,20 +73,22 @@ class RowStop:
 @dataclass(frozen=True)
 class Instant:
     """One instant the check judges, linearised: the row ``row`` whose second difference
-    carries its acceleration, the motors' torques ``tau`` (signed, N m) and their change per
-    arm acceleration ``S`` (motors x arm), the ball's force ``F`` and its change per arm
-    acceleration ``SF`` (3 x arm), the palm's normal ``n``, whether the cone is judged
-    (``cone``) and the palm target's acceleration ``acc`` (m/s^2)."""
+    carries its acceleration, the motors' torques ``tau`` (signed, N m), their change per
+    arm acceleration ``S`` (motors x arm) and per force on the palm ``SJ`` (motors x 3), the
+    ball's force ``F``, the palm's normal ``n``, whether the cone is judged (``cone``), the
+    palm target's acceleration ``acc`` (m/s^2) and its Jacobians over the arm at the rows
+    ``row`` - 1, ``row``, ``row`` + 1 (``Jt3``, 3 x 3 x arm: the target's second difference
+    is their rows' offsets' through them)."""
 
     row: int
     tau: np.ndarray
     S: np.ndarray
+    SJ: np.ndarray
     F: np.ndarray
-    SF: np.ndarray
     n: np.ndarray
     cone: bool
     acc: np.ndarray
-    Jt: np.ndarray
+    Jt3: np.ndarray
 
 
 def row_rates(t: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -116,27 +120,31 @@ class RowStopModel:
         _, P = self.kin.frames(q[None, :])
         return P[0, :3, 3] + self.ball["radius"] * P[0, :3, 2], P[0, :3, 2]
 
+    def target_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """The palm target's Jacobian over the arm joints at ``q`` (3 x arm)."""
+        c0 = self.target(q)[0]
+        Jt = np.empty((3, len(self.arm)))
+        for c, j in enumerate(self.arm):
+            dq = q.copy()
+            dq[j] += _FD
+            Jt[:, c] = (self.target(dq)[0] - c0) / _FD
+        return Jt
+
     def instant(self, row: int, q: np.ndarray, v: np.ndarray, a: np.ndarray,
-                F: np.ndarray, acc: np.ndarray, cone: bool) -> Instant:
+                F: np.ndarray, acc: np.ndarray, cone: bool, Jt3: np.ndarray) -> Instant:
         """The instant at pose ``q`` (joint speeds ``v``, accelerations ``a``, the ball's force
         ``F``, the palm target's acceleration ``acc``), linearised in the arm's accelerations."""
-        kin, m = self.kin, float(self.ball["mass"])
+        kin = self.kin
         (J,) = kin.point_jacobians(q, [kin.palm_id])
         Mm = motor_torque_matrix(kin.hand, q)
         base = kin.inertial(q, v, a)
         tau = Mm @ (kin.gravity(q) + J.T @ F + base)
-        c0, n = self.target(q)
-        Jt = np.empty((3, len(self.arm)))
         H = np.empty((len(q), len(self.arm)))
         for c, j in enumerate(self.arm):
-            dq, da = q.copy(), a.copy()
-            dq[j] += _FD
+            da = a.copy()
             da[j] += 1.0
-            Jt[:, c] = (self.target(dq)[0] - c0) / _FD
             H[:, c] = kin.inertial(q, v, da) - base
-        SF = m * Jt
-        S = Mm @ (H + J.T @ SF)
-        return Instant(row, tau, S, F, SF, n, cone, acc, Jt)
+        return Instant(row, tau, Mm @ H, Mm @ J.T, F, self.target(q)[1], cone, acc, Jt3)
 
     def instants(self, t: np.ndarray, Q: np.ndarray, last: int) -> list[Instant]:
         """Every instant the check judges on the rows (``ball_load_instants``' own) up to row
@@ -158,25 +166,31 @@ class RowStopModel:
         k0 = int(np.clip(np.searchsorted(t, ti, side="right") - 1, 0, len(t) - 2))
         kn = k0 if ti - t[k0] <= t[k0 + 1] - ti else k0 + 1
         v_i = np.where(self.fingers, 0.0, (Q[k0 + 1] - Q[k0]) / (t[k0 + 1] - t[k0]))
+        Jt = {k: self.target_jacobian(Q[k]) for k in range(kn - 1, last + 2)}
         out = [self.instant(kn, qa[1], v_i, A[kn], pad_force_n(m, v_rel, CA[kn], PAD_GIVE_M),
-                            CA[kn], ti < self.held)]
+                            CA[kn], ti < self.held, np.stack([Jt[kn + i] for i in (-1, 0, 1)]))]
         for k in np.flatnonzero((t > ti) & (np.arange(len(t)) <= last)):
             pad = t[k] < ti + t_pad
             F = pad_force_n(m, v_rel, CA[k], PAD_GIVE_M) if pad else ride_force_n(m, CA[k])
             slows = pad or float(np.linalg.norm(CA[k])) > G
             out.append(self.instant(int(k), Q[k], V[k], A[k], F, CA[k],
-                                    slows and t[k] < self.held))
+                                    slows and t[k] < self.held,
+                                    np.stack([Jt[k + i] for i in (-1, 0, 1)])))
         return out
 
 
 class Window:
     """The rows the offset may move (``first`` .. ``last``, both kept inside the rows' ends)
-    and those it keeps (``frozen``: the two about the intercept), ``k`` arm joints."""
+    and those it keeps (``frozen``: the two about the intercept), ``k`` arm joints; the
+    programme's columns of the offset in units of ``unit``."""
 
     def __init__(self, t: np.ndarray, t_i: float, k: int) -> None:
         dt = float(t[1] - t[0])
         k0 = int(np.clip(np.searchsorted(t, t_i, side="right") - 1, 0, len(t) - 2))
         self.dt, self.k, self.k0 = dt, k, k0
+        self.unit = dt * dt  # the offset's columns in units of dt^2 (rad or m): its second
+        # differences then have weight 1 (at 1 ms steps, third differences 1e9 in rad
+        # left HiGHS without a solution)
         self.first = max(4, k0 - max(1, round(STOP_PRE_S / dt)))
         self.last = min(len(t) - 4, k0 + 1 + max(1, round(STOP_POST_S / dt)))
         self.frozen = {k0, k0 + 1}
@@ -195,7 +209,7 @@ class Window:
         for i, w in enumerate(weights):
             col = self.col(start + i, c)
             if col is not None and (start + i) not in self.frozen:
-                out.append((col, w))
+                out.append((col, w * self.unit))
         return out
 
     def acc(self, row: int, c: int) -> list:
@@ -236,14 +250,44 @@ def _combine(per_joint: list[list], coef: np.ndarray) -> list:
     return list(out.items())
 
 
-def _instant_rows(ub: _Lin, W: Window, inst: list[Instant], cap: np.ndarray) -> None:
+def _target_acc(W: Window, x: Instant) -> list[list]:
+    """The palm target's second difference at ``x.row`` (each of its 3 axes: columns and
+    weights) through the rows' own Jacobians (``x.Jt3``)."""
+    d2 = W.dt * W.dt
+    out = []
+    for axis in range(3):
+        cols: dict[int, float] = {}
+        for i, w in enumerate((1.0 / d2, -2.0 / d2, 1.0 / d2)):
+            for c in range(W.k):
+                for col, u in W.diff(x.row - 1 + i, c, (w * float(x.Jt3[i, axis, c]),),
+                                     x.row - 1 + i):
+                    cols[col] = cols.get(col, 0.0) + u
+        out.append(list(cols.items()))
+    return out
+
+
+def _merge(*parts: tuple[float, list]) -> list:
+    """sum of coef x columns over ``parts`` ((coef, columns) pairs) as one row's columns."""
+    out: dict[int, float] = {}
+    for coef, cols in parts:
+        if coef != 0.0:
+            for col, w in cols:
+                out[col] = out.get(col, 0.0) + coef * w
+    return list(out.items())
+
+
+def _instant_rows(ub: _Lin, W: Window, inst: list[Instant], cap: np.ndarray, m: float
+                  ) -> None:
     """The motors within ``s`` of their capacity and the ball's force in the cone (or the
-    palm target slower than g where the rows' force leaves the cone unjudged)."""
+    palm target slower than g where the rows' force leaves the cone unjudged); ``m``: the
+    ball's mass (kg)."""
     mu = PALM_MU / math.sqrt(2.0)  # the pyramid inscribed in the cone
     for x in inst:
         acc = [W.acc(x.row, c) for c in range(W.k)]
+        ta = _target_acc(W, x)
         for r in range(len(cap)):
-            cols = _combine(acc, x.S[r])
+            cols = _merge((1.0, _combine(acc, x.S[r])),
+                          *((m * float(x.SJ[r, d]), ta[d]) for d in range(3)))
             ub.add(cols + [(W.s, -float(cap[r]))], -float(x.tau[r]))
             ub.add([(c, -v) for c, v in cols] + [(W.s, -float(cap[r]))], float(x.tau[r]))
         fn = float(x.F @ x.n)
@@ -252,13 +296,19 @@ def _instant_rows(ub: _Lin, W: Window, inst: list[Instant], cap: np.ndarray) -> 
             for tg in cone_tangents(x.n):
                 for sg in (1.0, -1.0):
                     d = sg * tg - mu * x.n
-                    ub.add(_combine(acc, d @ x.SF), -float(d @ x.F))
+                    ub.add(_merge(*((m * float(d[e]), ta[e]) for e in range(3))),
+                           -float(d @ x.F))
             continue
-        u = x.acc / max(float(np.linalg.norm(x.acc)), 1e-12)
+        a_n = float(np.linalg.norm(x.acc))
+        if a_n < 0.5 * G:  # each axis within 0.57 g (sqrt 3 x 0.57 < 1: within g)
+            for e in range(3):
+                ub.both(ta[e], float(x.acc[e]), 0.57 * G)
+            continue
+        u = x.acc / a_n
         w1, w2 = cone_tangents(u)
-        ub.add(_combine(acc, u @ x.Jt), 0.95 * G - float(u @ x.acc))
+        ub.add(_merge(*((float(u[e]), ta[e]) for e in range(3))), 0.95 * G - float(u @ x.acc))
         for w in (w1, w2):  # (0.95^2 + 2 x 0.15^2 < 1: within g)
-            ub.both(_combine(acc, w @ x.Jt), 0.0, 0.15 * G)
+            ub.both(_merge(*((float(w[e]), ta[e]) for e in range(3))), 0.0, 0.15 * G)
 
 
 def _limit_rows(ub: _Lin, W: Window, hand, arm: list[int], Q: np.ndarray) -> list:
@@ -273,7 +323,8 @@ def _limit_rows(ub: _Lin, W: Window, hand, arm: list[int], Q: np.ndarray) -> lis
         for row in range(W.first, W.last + 1):
             lo = max(-trust, float(hand.plan_lower[j] - Q[row, j]))
             hi = min(trust, float(hand.plan_upper[j] - Q[row, j]))
-            bounds[W.col(row, c)] = (0.0, 0.0) if row in W.frozen else (min(lo, 0.0), max(hi, 0.0))
+            bounds[W.col(row, c)] = (0.0, 0.0) if row in W.frozen else (
+                min(lo, 0.0) / W.unit, max(hi, 0.0) / W.unit)
         vel, acc, jerk = (float(x[j]) for x in (hand.velocity, hand.acceleration, hand.jerk))
         for row in range(W.first - 1, W.last + 2):
             v_seg = float(Q[row + 1, j] - Q[row, j]) / dt  # (the last guard's speed: rows'
@@ -307,7 +358,7 @@ def solve_offset(model: RowStopModel, t: np.ndarray, Q: np.ndarray
     inst = model.instants(t, Q, W.last + 1)
     cap = model.cap
     ub = _Lin()
-    _instant_rows(ub, W, inst, cap)
+    _instant_rows(ub, W, inst, cap, float(model.ball["mass"]))
     bounds = _limit_rows(ub, W, model.kin.hand, model.arm, Q)
     c = np.zeros(W.total)
     c[W.s] = 1.0
@@ -317,7 +368,7 @@ def solve_offset(model: RowStopModel, t: np.ndarray, Q: np.ndarray
     if res.status != 0:
         return None, math.inf, f"the programme: {res.message}"
     dq = np.zeros_like(Q)
-    dq[W.first:W.last + 1, model.arm] = res.x[:W.s].reshape(W.n, W.k)
+    dq[W.first:W.last + 1, model.arm] = W.unit * res.x[:W.s].reshape(W.n, W.k)
     return dq, float(res.x[W.s]), ""
 
 
@@ -331,8 +382,8 @@ def check_stop(model: RowStopModel, t: np.ndarray, Q: np.ndarray):
 
 
 def optimise_stop(model: RowStopModel, t: np.ndarray, Q: np.ndarray) -> RowStop:
-    """``ROUNDS`` rounds of ``solve_offset`` from the rows ``Q``, each judged by the check's
-    rule; the rows of the best (the least worst share, its cone kept) that improves on
+    """``ROUNDS`` rounds of ``solve_offset`` from the rows ``Q`` (fewer once its share has
+    settled, ``SETTLED``), each judged by the check's rule; the rows of the best (the least worst share, its cone kept) that improves on
     ``Q``'s."""
     best_stop = check_stop(model, t, Q)
     best_Q, share, failure = None, math.inf, ""
@@ -342,12 +393,15 @@ def optimise_stop(model: RowStopModel, t: np.ndarray, Q: np.ndarray) -> RowStop:
         if dq is None:
             failure = why
             break
+        settled = abs(share_r - share) < SETTLED
         share = share_r
         cur = cur + dq
         stop = check_stop(model, t, cur)
         cone_ok = stop.cone_margin_n is None or stop.cone_margin_n >= 0
         if cone_ok and stop.headroom > best_stop.headroom:
             best_Q, best_stop = cur, stop
+        if settled:
+            break
     return RowStop(best_Q, best_stop, share, failure)
 
 
