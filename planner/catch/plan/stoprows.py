@@ -352,6 +352,8 @@ def solve_offset(model: RowStopModel, t: np.ndarray, Q: np.ndarray
     """One round: the offset (rows x joints, zero outside the arm's window) that least loads
     the most loaded motor in the linearised rule, the programme's share, and why it failed
     ('' when it solved)."""
+    if len(t) < 8:
+        return None, math.inf, "too few rows after the touch"
     W = Window(t, model.t_i, len(model.arm))
     if W.last <= W.k0 + 2:
         return None, math.inf, "too few rows after the touch"
@@ -364,6 +366,8 @@ def solve_offset(model: RowStopModel, t: np.ndarray, Q: np.ndarray
     c[W.s] = 1.0
     c[W.e:] = SMOOTH_WEIGHT
     A = sparse.csr_matrix((ub.v, (ub.r, ub.c)), shape=(len(ub.b), W.total))
+    if not (np.isfinite(A.data).all() and np.isfinite(ub.b).all()):
+        return None, math.inf, "the rows' linearisation is not finite"
     res = linprog(c, A_ub=A, b_ub=np.array(ub.b), bounds=bounds, method="highs")
     if res.status != 0:
         return None, math.inf, f"the programme: {res.message}"
