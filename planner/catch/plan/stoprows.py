@@ -16,7 +16,8 @@ check's own rule (``planner.check.ball.ball_load_instants``) on the rows, at the
   the grasp); where the rows' force is outside it but not judged (the palm slower than g),
   the palm target's acceleration kept below g (inside a box within g's sphere);
 * every joint's row speed, acceleration and third difference (jerk) within the hand file's
-  limits (no worse than the rows' own where they are already beyond), positions within range;
+  limits times ``LIMIT_MARGIN`` (the planner's 98 %; no worse than the rows' own where they
+  are already beyond), positions within the planned range;
 * the rows that carry the touch (the two about the intercept) unchanged: the palm meets the
   ball where and as fast as the plan's; the rows outside the window (``STOP_PRE_S`` before the
   touch, ``STOP_POST_S`` after) unchanged: the move-in, the closing and the hold turn as
@@ -44,6 +45,7 @@ from planner.check.ballstop import PAD_GIVE_M, PALM_MU, pad_force_n, pad_time_s,
 from planner.check.kinematics import G, Kinematics
 from planner.check.motormap import motor_torque_matrix
 from planner.hand.tendon import actuator_capacity
+from planner.trajectory import LIMIT_MARGIN
 
 STOP_PRE_S = 0.03  # rows before the touch the offset may move: 3 rows at 100 Hz (the touch's
 # own acceleration is the row before or after it)
@@ -313,7 +315,7 @@ def _instant_rows(ub: _Lin, W: Window, inst: list[Instant], cap: np.ndarray, m: 
 
 def _limit_rows(ub: _Lin, W: Window, hand, arm: list[int], Q: np.ndarray) -> list:
     """Each arm joint's row speed, acceleration and third difference within the hand file's
-    limits (or no worse than the rows' own), the slacks of the third differences, and the
+    limits times ``LIMIT_MARGIN`` (or no worse than the rows' own), the slacks of the third differences, and the
     bounds: positions within the planned range and the trust region, the frozen rows."""
     dt = W.dt
     _, A = row_rates(np.arange(len(Q)) * dt, Q)
@@ -325,7 +327,8 @@ def _limit_rows(ub: _Lin, W: Window, hand, arm: list[int], Q: np.ndarray) -> lis
             hi = min(trust, float(hand.plan_upper[j] - Q[row, j]))
             bounds[W.col(row, c)] = (0.0, 0.0) if row in W.frozen else (
                 min(lo, 0.0) / W.unit, max(hi, 0.0) / W.unit)
-        vel, acc, jerk = (float(x[j]) for x in (hand.velocity, hand.acceleration, hand.jerk))
+        vel, acc, jerk = (LIMIT_MARGIN * float(x[j])
+                          for x in (hand.velocity, hand.acceleration, hand.jerk))
         for row in range(W.first - 1, W.last + 2):
             v_seg = float(Q[row + 1, j] - Q[row, j]) / dt  # (the last guard's speed: rows'
             # first differences, ``planner.guard``; the check's central ones lie between)
