@@ -36,10 +36,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import sparse
 from scipy.optimize import linprog
 
-from planner.catch.plan.stopbound import cone_tangents
+from planner.catch.plan.stopbound import SparseRows, cone_tangents
 from planner.check.ball import STOP_DIFF_S, ball_load_instants, ball_positions, phase_loads
 from planner.check.ballstop import PAD_GIVE_M, PALM_MU, pad_force_n, pad_time_s, ride_force_n
 from planner.check.kinematics import G, Kinematics
@@ -220,28 +219,6 @@ class Window:
         return self.diff(row, c, (1.0 / d2, -2.0 / d2, 1.0 / d2), row - 1)
 
 
-class _Lin:
-    """Sparse rows ``A x <= b``."""
-
-    def __init__(self) -> None:
-        self.r: list[int] = []
-        self.c: list[int] = []
-        self.v: list[float] = []
-        self.b: list[float] = []
-
-    def add(self, cols: list, rhs: float) -> None:
-        for c, v in cols:
-            self.r.append(len(self.b))
-            self.c.append(c)
-            self.v.append(v)
-        self.b.append(rhs)
-
-    def both(self, cols: list, base: float, bound: float) -> None:
-        """|base + cols . x| <= bound."""
-        self.add(cols, bound - base)
-        self.add([(c, -v) for c, v in cols], bound + base)
-
-
 def _combine(per_joint: list[list], coef: np.ndarray) -> list:
     """sum_c coef[c] * (the offset's difference of joint c) as one row's columns."""
     out: dict[int, float] = {}
@@ -278,7 +255,7 @@ def _merge(*parts: tuple[float, list]) -> list:
     return list(out.items())
 
 
-def _instant_rows(ub: _Lin, W: Window, inst: list[Instant], cap: np.ndarray, m: float
+def _instant_rows(ub: SparseRows, W: Window, inst: list[Instant], cap: np.ndarray, m: float
                   ) -> None:
     """The motors within ``s`` of their capacity and the ball's force in the cone (or the
     palm target slower than g where the rows' force leaves the cone unjudged); ``m``: the
@@ -313,7 +290,7 @@ def _instant_rows(ub: _Lin, W: Window, inst: list[Instant], cap: np.ndarray, m: 
             ub.both(_merge(*((float(w[e]), ta[e]) for e in range(3))), 0.0, 0.15 * G)
 
 
-def _limit_rows(ub: _Lin, W: Window, hand, arm: list[int], Q: np.ndarray) -> list:
+def _limit_rows(ub: SparseRows, W: Window, hand, arm: list[int], Q: np.ndarray) -> list:
     """Each arm joint's row speed, acceleration and third difference within the hand file's
     limits times ``LIMIT_MARGIN`` (or no worse than the rows' own), the slacks of the third differences, and the
     bounds: positions within the planned range and the trust region, the frozen rows."""
@@ -362,16 +339,16 @@ def solve_offset(model: RowStopModel, t: np.ndarray, Q: np.ndarray
         return None, math.inf, "too few rows after the touch"
     inst = model.instants(t, Q, W.last + 1)
     cap = model.cap
-    ub = _Lin()
+    ub = SparseRows()
     _instant_rows(ub, W, inst, cap, float(model.ball["mass"]))
     bounds = _limit_rows(ub, W, model.kin.hand, model.arm, Q)
     c = np.zeros(W.total)
     c[W.s] = 1.0
     c[W.e:] = SMOOTH_WEIGHT
-    A = sparse.csr_matrix((ub.v, (ub.r, ub.c)), shape=(len(ub.b), W.total))
-    if not (np.isfinite(A.data).all() and np.isfinite(ub.b).all()):
+    A = ub.matrix(W.total)
+    if not (np.isfinite(A.data).all() and np.isfinite(ub.rhs).all()):
         return None, math.inf, "the rows' linearisation is not finite"
-    res = linprog(c, A_ub=A, b_ub=np.array(ub.b), bounds=bounds, method="highs")
+    res = linprog(c, A_ub=A, b_ub=np.array(ub.rhs), bounds=bounds, method="highs")
     if res.status != 0:
         return None, math.inf, f"the programme: {res.message}"
     dq = np.zeros_like(Q)
