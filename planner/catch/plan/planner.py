@@ -552,6 +552,7 @@ def optimised_stop_plan(pl: CatchPlanner, plan: CatchPlan) -> CatchPlan:
     found" reason."""
     # (a planned catch's last stage: not imported at a live session's start)
     from planner.catch.plan.stoprows import RowStopModel, ball_of, optimise_stop
+    from planner.trajfile import as_written
 
     t, Q, flight = plan.rows.t, plan.rows.q, plan.flight
     t_i, grasp_t = float(plan.intercept.t_s), plan.timing.grasp_t
@@ -569,12 +570,14 @@ def optimised_stop_plan(pl: CatchPlanner, plan: CatchPlan) -> CatchPlan:
                         plan.intercept.arrival_velocity, plan.intercept.misalignment_deg,
                         plan.ik_iterations)
         Qn = rs.Q
-        fv = pl.forces(flight, pose, t, Qn, r, grasp_t, plan.forces.soft)
+        Qw = as_written(Qn)  # (judged at the file's 6 decimals, as the check reads them: at
+        # 1 ms rows their second differences move a light riding ball's force by 0.07 N)
+        fv = pl.forces(flight, pose, t, Qw, r, grasp_t, plan.forces.soft)
         moving = np.flatnonzero(np.any(np.diff(Qn, axis=0) != 0.0, axis=1))
         t_static = float(t[moving[-1] + 1]) if moving.size else float(t[0])
-        verdict = pl.rows.check(flight, plan.catch_point, r, t, Qn, t_i, t_static,
+        verdict = pl.rows.check(flight, plan.catch_point, r, t, Qw, t_i, t_static,
                                 plan.rate_hz, False)
-        rolled = roll_reasons(pl.turn, flight, t, Qn, t_i)
+        rolled = roll_reasons(pl.turn, flight, t, Qw, t_i)
         reasons = list(fv.reasons) + list(verdict.reasons) + rolled
         if not reasons:
             return replace(

@@ -12,7 +12,8 @@ check's own rule (``planner.check.ball.ball_load_instants``) on the rows, at the
   linear in the offset's second differences (the row's mass matrix ``H``, the palm target's
   Jacobian carrying the ball's force ``F = m (a_target - g)``);
 * the ball's force inside the friction cone (its inscribed pyramid, ``PALM_MU / sqrt 2`` on
-  two tangents) where the rule judges it (the pad, a palm decelerating faster than g, before
+  two tangents, ``CONE_MARGIN_N`` within its faces or as far as the rows are) where the rule
+  judges it (the pad, a palm decelerating faster than g, before
   the grasp); where the rows' force is outside it but not judged (the palm slower than g),
   the palm target's acceleration kept below g (inside a box within g's sphere);
 * every joint's row speed, acceleration and third difference (jerk) within the hand file's
@@ -56,6 +57,10 @@ SETTLED = 1e-3  # a round whose share moved less than this from the last ends th
 # of a motor: below the check's 1 % tolerance)
 TRUST_RAD = 0.05  # largest offset of a revolute joint per round (rad): the linearisation's
 TRUST_M = 0.02  # and of a prismatic one (m): the mass matrix changes little over these
+CONE_MARGIN_N = 0.3  # the ball's force kept this far inside the cone's pyramid (or as far
+# as the rows keep it, where less): with none,
+# -0.3 m / 15 deg / 4.0 m planned at 1000 Hz sat on its face and the written rows (6
+# decimals) left the cone by 0.06 N in the check; five times that
 _FD = 1e-6  # finite-difference step of the palm target's Jacobian (rad or m)
 
 
@@ -275,8 +280,10 @@ def _instant_rows(ub: SparseRows, W: Window, inst: list[Instant], cap: np.ndarra
             for tg in cone_tangents(x.n):
                 for sg in (1.0, -1.0):
                     d = sg * tg - mu * x.n
+                    f0 = float(d @ x.F)  # (<= 0 inside the face; kept at least
+                    # CONE_MARGIN_N inside, or as far inside as the rows are)
                     ub.add(_merge(*((m * float(d[e]), ta[e]) for e in range(3))),
-                           -float(d @ x.F))
+                           -f0 - min(CONE_MARGIN_N, max(-f0, 0.0)))
             continue
         a_n = float(np.linalg.norm(x.acc))
         if a_n < 0.5 * G:  # each axis within 0.57 g (sqrt 3 x 0.57 < 1: within g)
