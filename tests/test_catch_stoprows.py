@@ -40,7 +40,7 @@ def _model(pl, p):
 def test_a_no_stop_throw_is_caught_and_the_check_confirms_it(pl, tmp_path):
     """The grid's -0.3 m / 15 deg / 4.0 m, "no stop found" on main: feasible with the stop
     optimised on its rows, noted, its stop within every motor (measured: the most loaded at
-    0.47 of its capacity), and the independent check passes the written file."""
+    0.48 of its capacity), and the independent check passes the written file."""
     p = plan_throw(*THROW, planner=pl)
     assert p.feasible, p.reasons
     assert any(n.startswith("the stop optimised on the rows") for n in p.notes)
