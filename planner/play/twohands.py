@@ -59,6 +59,10 @@ from planner.play.twoplan import (
 )
 from planner.play.twoscore import PairScorer
 
+MAX_BACKS = 4  # hand-backs of one way at most, the hands in turn (each plans one hand
+# again: a bound on the plans; measured on the two-hand corpus, the 2026-12-07
+# two-hands-recall history page)
+
 
 class PairPlanner:
     """The per-pair part of the two-hand planner, built once: each hand's ``Planner``
@@ -119,15 +123,27 @@ class PairPass:
     alone: bool = False
     back: bool = False  # the first hand planned again with what the second left out
     settled: bool = False  # the first hand's room settled (``plan_pass``)
+    returns: int = 0  # hand-backs after the first (``hand_back``: each plans again the
+    # hand the last one did not, with what the last one left out)
 
     @property
     def way(self) -> str:
         """How it was planned: ``right first``, ``left first``, or ``right alone`` (the
         other hand given only the notes the first one left out); `` settled``: the first
         hand's room settled (``plan_pass``); `` back``: then the first hand planned again
-        with the notes the second left out (``hand_back``)."""
+        with the notes the second left out (``hand_back``), once more for each further
+        hand-back (``returns``: the hands in turn)."""
         return (f"{self.first} {'alone' if self.alone else 'first'}"
-                f"{' settled' if self.settled else ''}{' back' if self.back else ''}")
+                f"{' settled' if self.settled else ''}"
+                f"{' back' * (self.returns + 1) if self.back else ''}")
+
+    @property
+    def receiver(self) -> str:
+        """The hand the next ``hand_back`` plans again: the first hand, then the hands in
+        turn (the one the last hand-back did not plan)."""
+        if not self.back:
+            return self.first
+        return other_side(self.first) if self.returns % 2 == 0 else self.first
 
     def skipped_for(self, reason: SkipReason) -> list[tuple[int, object]]:
         """(song index, ``Skip``) of every note a plan left out for ``reason`` (the notes
@@ -285,8 +301,10 @@ def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
     hand planned again, its notes but those the second plays and with those, within the
     second one's rows as they are (``_plan_second``: the same rule the second kept from
     the first one's rows, so the pair keeps its clearance; the second's plan is
-    unchanged). None when the second hand left nothing out."""
-    first, second = p.first, other_side(p.first)
+    unchanged). A hand-back of a hand-back hands the notes the hand planned last left out
+    to the other (``PairPass.receiver``), planned again within its rows. None when the
+    hand whose notes are handed left nothing out."""
+    first, second = p.receiver, other_side(p.receiver)
     f, s = SIDES.index(first), SIDES.index(second)
     gone = {p.planned_of[s][k.note] for k in p.plans[s].verdict.skipped}
     if not gone:
@@ -301,14 +319,39 @@ def hand_back(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
     a = p.assignment.hand_over({i: _why(p, i) for i in idx if p.assignment.hand[i] != first},
                                first)
     played = sum(_played_frames(plans[x], planned[x], song.notes, rate_hz) for x in SIDES)
-    return PairPass(a, first, (plans[LEFT], plans[RIGHT]), (a.notes_of(LEFT), a.notes_of(RIGHT)),
-                    float(played), (planned[LEFT], planned[RIGHT]), p.alone, True, p.settled)
+    return PairPass(a, p.first, (plans[LEFT], plans[RIGHT]),
+                    (a.notes_of(LEFT), a.notes_of(RIGHT)), float(played),
+                    (planned[LEFT], planned[RIGHT]), p.alone, True, p.settled,
+                    p.returns + 1 if p.back else 0)
+
+
+def hand_backs(song: Song, pp: PairPlanner, p: PairPass, rate_hz: float,
+               song_name: str = "") -> list[PairPass]:
+    """``p``'s hand-back (``hand_back``), then the hand-backs of the hand-back, the hands
+    in turn, while each plays more frames of music than the pass it came from and could
+    play more still (``back_ceiling``); at most ``MAX_BACKS``. Each hand-back plans one
+    hand again within the other's rows as they are: the notes one hand leaves out to play
+    those handed to it, the other may play, planned where it is free."""
+    out: list[PairPass] = []
+    last = p
+    while len(out) < MAX_BACKS:
+        if out and (last.played_frames <= (out[-2] if len(out) > 1 else p).played_frames
+                    or back_ceiling(song, last, rate_hz) <= last.played_frames):
+            break
+        back = hand_back(song, pp, last, rate_hz, song_name)
+        if back is None:
+            break
+        out.append(back)
+        last = back
+    return out
 
 
 def back_ceiling(song: Song, p: PairPass, rate_hz: float) -> float:
-    """The most frames ``hand_back`` of ``p`` could play: the second hand's played notes
-    (its plan unchanged) and every note the first is planned with again, all played."""
-    f, s = SIDES.index(p.first), 1 - SIDES.index(p.first)
+    """The most frames ``hand_back`` of ``p`` could play: the played notes of the hand
+    whose notes are handed (its plan unchanged) and every note the other is planned with
+    again, all played."""
+    f = SIDES.index(p.receiver)
+    s = 1 - f
     gone = {p.planned_of[s][k.note] for k in p.plans[s].verdict.skipped}
     plays = set(p.planned_of[s]) - gone
     again = (set(p.planned_of[f]) - plays) | gone
@@ -417,11 +460,11 @@ def _plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None, rate_hz: 
     for top in tops + rest:
         if all(top is not t for t in tops) and back_ceiling(song, top, rate_hz) <= bar:
             continue
-        back = hand_back(song, pp, top, rate_hz, song_name)
-        if back is not None:
-            tried.append(back)
-            finals += [back] + ([] if any(top is f for f in finals) else [top])
-            bar = max(bar, back.played_frames)
+        chain = hand_backs(song, pp, top, rate_hz, song_name)
+        if chain:
+            tried += chain
+            finals += chain + ([] if any(top is f for f in finals) else [top])
+            bar = max(bar, *(b.played_frames for b in chain))
     best, rows = by_check(song, pp, finals, rate_hz)
     least = float((rows.q[1][:, pp.hands[RIGHT].index["rail"]]
                    - rows.q[0][:, pp.hands[LEFT].index["rail"]]).min())
