@@ -66,9 +66,15 @@ def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     # every way whose hand-back could play more than the most frames yet (``back_ceiling``),
     # with the notes its second hand left out handed back to the first, each at most once;
     # the final ways compared by the check's frame F1, ``by_check``)
+    # (and each hand-back's own hand-backs, the hands in turn, at most ``MAX_BACKS``: a
+    # way's k-th hand-back comes after its (k-1)-th)
+    from planner.play.twohands import MAX_BACKS
     backs = [w for w, _ in plan.tried[len(ways):]]
-    assert all(w.endswith(" back") and w.removesuffix(" back") in ways for w in backs)
-    assert len(set(backs)) == len(backs) <= len(ways)
+    assert all(w.endswith(" back") and w.split(" back")[0] in ways for w in backs)
+    assert all(w.removesuffix(" back") in backs[:k] for k, w in enumerate(backs)
+               if w.endswith(" back back"))
+    assert all(w.count(" back") <= MAX_BACKS for w in backs)
+    assert len(set(backs)) == len(backs) <= len(ways) * MAX_BACKS
     assert max(fr for _, fr in plan.tried) == dict(plan.tried)[plan.way]
     assert plan.way.startswith(first)
     rep = check_trajectory(str(out), song)
@@ -189,6 +195,49 @@ def test_hand_back_plans_the_first_hand_again_with_what_the_second_left_out(pair
               - {b.planned_of[k][x.note] for x in b.plans[k].verdict.skipped} for k in (0, 1)]
     assert not played[0] & played[1]
     assert all(b.assignment.hand[i] == RIGHT for i in b.planned_of[f])
+
+
+def test_hand_backs_hand_in_turn_what_the_hand_planned_again_left_out(pair,
+                                                                       tmp_path) -> None:
+    """The meeting song, right hand first: its hand-back plans the right hand again with
+    what the left left out (500 -> 560 frames); the next hand-back plans the left hand
+    again with what the right one left out then, within the right one's new rows (560: no
+    more), and the chain stops. Each keeps the pair clear, every note one hand's."""
+    from planner.play.hands import assign_hands
+    from planner.play.twohands import MAX_BACKS, by_check, hand_back, hand_backs, plan_pass
+    from planner.play.twoplan import write_two_hands
+
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    a = assign_hands(song.notes, pair.gap, {s: pair.planners[s].places for s in (LEFT, RIGHT)})
+    p = plan_pass(song, pair, a, RIGHT, 100.0)
+    chain = hand_backs(song, pair, p, 100.0)
+    assert [b.way for b in chain] == ["right first back", "right first back back"]
+    assert [b.receiver for b in (p, *chain)] == [RIGHT, LEFT, RIGHT]
+    assert (p.played_frames, *(b.played_frames for b in chain)) == (500, 560, 560)
+    one = hand_back(song, pair, p, 100.0)  # (the first of the chain is the hand-back)
+    assert one.planned_of == chain[0].planned_of and one.plans[1].text == chain[0].plans[1].text
+    b0, b1 = chain
+    assert b1.plans[1] is b0.plans[1] and b1.planned_of[1] == b0.planned_of[1]  # (kept)
+    gone = {b0.planned_of[1][k.note] for k in b0.plans[1].verdict.skipped}
+    assert gone  # (the right hand, planned again, left notes out: handed to the left)
+    assert set(b1.planned_of[0]) == (set(b0.planned_of[0]) - (set(b0.planned_of[1]) - gone)
+                                     ) | gone
+    assert len(chain) <= MAX_BACKS
+    for b in chain:
+        assert sorted(b.notes_of[0] + b.notes_of[1]) == list(range(len(song.notes)))
+        played = [set(b.planned_of[k]) - {b.planned_of[k][x.note]
+                                          for x in b.plans[k].verdict.skipped} for k in (0, 1)]
+        assert not played[0] & played[1]
+    # (the hands kept clear: the check of the file written of the last)
+    best, rows = by_check(song, pair, [b1], 100.0)
+    plan = plan_two_hands(song, pair)
+    out = tmp_path / "meet.csv"
+    kept = replace(plan, plans=best.plans, notes_of=best.notes_of, rows=rows,
+                   planned_of=best.planned_of, assignment=best.assignment, first=best.first,
+                   way=best.way)
+    write_two_hands(kept, song, pair, str(out), 100.0, "")
+    rep = check_trajectory(str(out), song)
+    assert rep.gap.collision_rows == 0 and rep.ok, rep.problems
 
 
 def test_plan_reads_give_each_plan_its_own_rows_and_plan_two_hands_lets_them_go(pair,
