@@ -7,7 +7,7 @@ collisions between the hands (check's bodies, physics' contacts), notes per hand
 left out (and, after the table, every note left out by its hand and reason), the way
 kept (``way``: ``R``/``L`` the right or left hand first (``Rs``/``Ls``: its room settled), ``RA`` the right hand alone, the
 left one given what it leaves out; ``+``: then the first hand planned again with what the
-second left out), the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
+second left out, ``++`` and more: then the hands in turn again), the planning's real-time factor (after set-up; one ``Planner`` / ``PairPlanner``
 for every piece, as ``batch`` plans).
 
     python bench/two_hands.py [--corpus DIR] [--only S] [--no-physics]
@@ -35,8 +35,9 @@ WAY_CODES = {"right first": "R", "left first": "L", "right alone": "RA",
 
 
 def way_code(way: str) -> str:
-    """The kept way's short name (the module docstring)."""
-    return WAY_CODES.get(way.removesuffix(" back"), way) + ("+" if way.endswith(" back") else "")
+    """The kept way's short name (the module docstring): one ``+`` per hand-back."""
+    base = way.split(" back")[0]
+    return WAY_CODES.get(base, base) + "+" * way.count(" back")
 
 
 def set_up():

@@ -18,7 +18,9 @@ rows by the check's judge (``planner.play.handclear``). Which hand goes first, o
 one hand plays alone (the other taking only what it leaves out), is decided by the
 frames of music each way plays (``plan_two_hands``; each order also with the first
 hand's room settled: ``plan_pass``); the best ways are then planned once more with the
-notes their second hand left out handed back to the first (``hand_back``).
+notes their second hand left out handed back to the first (``hand_back``), and then the
+hands in turn, each with what the other, planned last, left out, while that plays more
+(``hand_backs``).
 
 The bounds: ``planner.play.twobounds``; the rows on one clock and the file:
 ``planner.play.twoplan``.
@@ -382,8 +384,8 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
     it leaves out. Every way hands the notes its first hand leaves out to the other.
     Each order is planned with its first hand's room settled too, where that takes a
     note out (``_both_rooms``). The best of the three ways and the best of all are each
-    handed back (``hand_back``); the pass playing the most frames of music is kept (the
-    earlier of equals, the three ways first). (A hand with no notes plans nothing the
+    handed back (``hand_backs``: the hands in turn while it plays more); the way the
+    check scores highest is kept (``by_check``). (A hand with no notes plans nothing the
     order could change.)"""
     if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 10000.0):
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
