@@ -42,6 +42,22 @@ def meeting_song(path: Path) -> Path:
     return path
 
 
+def write_way(song, pair: PairPlanner, way, tmp_path: Path) -> str:
+    """The two-hand file of one way (``PairPass``) of ``song``, its rows as ``by_check``
+    gives them, written as ``plan_two_hands`` writes the way it keeps; its path."""
+    from planner.play.twohands import by_check
+    from planner.play.twoplan import write_two_hands
+
+    best, rows = by_check(song, pair, [way], 100.0)
+    plan = plan_two_hands(song, pair)
+    out = tmp_path / "way.csv"
+    kept = replace(plan, plans=best.plans, notes_of=best.notes_of, rows=rows,
+                   planned_of=best.planned_of, assignment=best.assignment, first=best.first,
+                   way=best.way)
+    write_two_hands(kept, song, pair, str(out), 100.0, "")
+    return str(out)
+
+
 def test_hands_meet_and_never_collide(pair, tmp_path) -> None:
     song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
     out = tmp_path / "meet.csv"
@@ -204,8 +220,7 @@ def test_hand_backs_hand_in_turn_what_the_hand_planned_again_left_out(pair,
     again with what the right one left out then, within the right one's new rows (560: no
     more), and the chain stops. Each keeps the pair clear, every note one hand's."""
     from planner.play.hands import assign_hands
-    from planner.play.twohands import MAX_BACKS, by_check, hand_back, hand_backs, plan_pass
-    from planner.play.twoplan import write_two_hands
+    from planner.play.twohands import MAX_BACKS, hand_back, hand_backs, plan_pass
 
     song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
     a = assign_hands(song.notes, pair.gap, {s: pair.planners[s].places for s in (LEFT, RIGHT)})
@@ -229,14 +244,7 @@ def test_hand_backs_hand_in_turn_what_the_hand_planned_again_left_out(pair,
                                           for x in b.plans[k].verdict.skipped} for k in (0, 1)]
         assert not played[0] & played[1]
     # (the hands kept clear: the check of the file written of the last)
-    best, rows = by_check(song, pair, [b1], 100.0)
-    plan = plan_two_hands(song, pair)
-    out = tmp_path / "meet.csv"
-    kept = replace(plan, plans=best.plans, notes_of=best.notes_of, rows=rows,
-                   planned_of=best.planned_of, assignment=best.assignment, first=best.first,
-                   way=best.way)
-    write_two_hands(kept, song, pair, str(out), 100.0, "")
-    rep = check_trajectory(str(out), song)
+    rep = check_trajectory(write_way(song, pair, b1, tmp_path), song)
     assert rep.gap.collision_rows == 0 and rep.ok, rep.problems
 
 
@@ -278,7 +286,6 @@ def test_by_check_keeps_the_way_the_check_scores_higher_where_frames_tie(pair,
     written of the way kept."""
     from planner.play.hands import assign_hands
     from planner.play.twohands import by_check, hand_back, plan_pass
-    from planner.play.twoplan import write_two_hands
 
     song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
     a = assign_hands(song.notes, pair.gap, {s: pair.planners[s].places for s in (LEFT, RIGHT)})
@@ -289,16 +296,11 @@ def test_by_check_keeps_the_way_the_check_scores_higher_where_frames_tie(pair,
     f1 = [pair.scorer.frame_f1(by_check(song, pair, [b], 100.0)[1], song, 100.0)
           for b in backs]
     assert f1[0] == pytest.approx(0.9460, abs=1e-4) and f1[1] == pytest.approx(0.9484, abs=1e-4)
-    best, rows = by_check(song, pair, backs, 100.0)
+    best = by_check(song, pair, backs, 100.0)[0]
     assert best is backs[1]
     # (the same score as the check's, of the file written)
-    plan = plan_two_hands(song, pair)
-    out = tmp_path / "meet.csv"
-    kept = replace(plan, plans=best.plans, notes_of=best.notes_of, rows=rows,
-              planned_of=best.planned_of, assignment=best.assignment, first=best.first,
-              way=best.way)
-    write_two_hands(kept, song, pair, str(out), 100.0, "")
-    assert check_trajectory(str(out), song).play.f1 == pytest.approx(f1[1], abs=2e-3)
+    assert check_trajectory(write_way(song, pair, best, tmp_path), song).play.f1 == (
+        pytest.approx(f1[1], abs=2e-3))
 
 
 def test_the_notes_pressed_softer_are_named_per_hand(pair, tmp_path) -> None:
