@@ -62,8 +62,8 @@ from planner.play.twoplan import (
 from planner.play.twoscore import PairScorer
 
 MAX_BACKS = 4  # hand-backs of one way at most, the hands in turn (each plans one hand
-# again: a bound on the plans; measured on the two-hand corpus, the 2026-12-07
-# two-hands-recall history page)
+# again: a bound on the plans; the longest chains measured, 3 on the two-hand corpus and 4
+# on random two-hand songs, stopped gaining before it: history, two-hands-recall)
 
 
 class PairPlanner:
