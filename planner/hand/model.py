@@ -101,6 +101,18 @@ class HandModel:
         other.pin_data = other.pin_model.createData()
         return other
 
+    def within_margins(self) -> HandModel:
+        """The same hand whose limits are its planner's (``plan_lower``, ``plan_upper``:
+        the hard stops less each joint's stop margin), its margins then 0: a planner that
+        keeps its rows within ``lower``/``upper`` of this hand keeps every joint its stop
+        margin inside its hard stops (the catch planner). Shares the spec, URDF, Pinocchio
+        model and data."""
+        other = copy.copy(self)
+        other.lower, other.upper = self.plan_lower.copy(), self.plan_upper.copy()
+        other.plan_lower, other.plan_upper = other.lower, other.upper
+        other.stop_margin = np.zeros_like(self.stop_margin)
+        return other
+
     # ------------------------------------------------------------ joints
     def joint_slice(self, finger: str) -> np.ndarray:
         """Indices of a finger's joints (thumb: cmc_abd, cmc_flex, ip; others: abd, mcp, pip, dip)."""

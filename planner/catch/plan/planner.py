@@ -139,7 +139,8 @@ class CatchPlanner:
         self.base_hand = hand
         self.mount = mount
         self.T_ref = mount.T_ref()
-        self.hand = hand.mounted(self.T_ref)
+        self.hand = hand.mounted(self.T_ref).within_margins()  # (every row a stop margin
+        # inside the hard stops: ``check``'s ``joint_stop_margin``)
         self.joints = catch_joints(self.hand)
         self.ik = HandIK(self.hand)
         self.q_zero = zero_pose(self.hand)
