@@ -144,7 +144,7 @@ class LiveStopper:
         # the joints' limits alone; ``LiveMotion.reaim`` then keeps the motors within theirs)
         q_now = m.seg.state1(t_b)[0] if q_now is None else q_now
         return t_b + phase_duration(q_pre[arm] - q_now, m.hand.velocity[arm],
-                                    m.hand.acceleration[arm], 0.0)
+                                    m.hand.acceleration[arm], 0.0, m.hand.jerk[arm])
 
     def for_estimate(self, pose, t_b: float, fix_s: float) -> SoftStop | None:
         """The table's stopping motion for the estimate (``StopTable``) through ``pose``;
