@@ -75,7 +75,9 @@ def test_closed_fingers_bodies_clear_of_the_ball():
     """The closed pose keeps every finger's body (the replay's capsules and pad spheres)
     ``BODY_CLEAR_M`` outside the ball on the palm and still grasps it (thumb + 2 tips within
     radius + ``GRASP_TOL_M``); the fingertips' closing (``bodies=False``, the fallback)
-    has its tips ``TIP_GAP_M`` out but the middle and ring pad spheres inside the ball."""
+    has its tips ``TIP_GAP_M`` out (the index's 4.4 mm further: its abduction and MCP
+    flexion at their planning limits, 2 deg inside the hard stops; 1.9 mm further with the
+    hard stops as its limits) but the middle and ring pad spheres inside the ball."""
     pl = get_planner("default")
     r = BALL.radius_m
     centre = pl.wrist.pc0 + r * pl.wrist.n0
@@ -85,7 +87,10 @@ def test_closed_fingers_bodies_clear_of_the_ball():
     assert cl.u_grasp is not None and "thumb" in cl.grasp_fingers
     assert np.sum(cl.tip_dist_m <= r + GRASP_TOL_M) >= GRASP_MIN_TIPS
     tips_only = make_closing(pl.hand, pl.ik, pl.joints, pl.wrist, r, bodies=False)
-    assert np.allclose(tips_only.tip_dist_m[:4], r + TIP_GAP_M, atol=0.002)
+    assert np.allclose(tips_only.tip_dist_m[[0, 2, 3]], r + TIP_GAP_M, atol=0.002)
+    assert r + TIP_GAP_M < tips_only.tip_dist_m[1] < r + TIP_GAP_M + 0.005
+    i = [pl.hand.index[n] for n in ("index_mcp_abd", "index_mcp_flex")]
+    assert np.allclose(tips_only.q_closed[i], pl.hand.upper[i])  # (the planner's limits)
     fingers = pl.hand.fingers
     inside = body_gaps_m(pl.hand, tips_only.q_closed, centre, r)
     assert inside[fingers.index("middle")] < -0.003 and inside[fingers.index("ring")] < -0.003
