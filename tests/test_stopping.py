@@ -247,7 +247,16 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     confirms the catch. 30 deg from 1.5 m, whose turn from the grasp keeps the roll within
     ``ROLL_ROOM_M``, has the same rows as before the rule. (20 deg from 1.0 m, which this
     test planned before the roll was a feasibility rule, rolls 104 mm with the least rolling
-    turn: infeasible, ``tests/test_roll_rule.py``.)"""
+    turn: infeasible, ``tests/test_roll_rule.py``.)
+
+    Re-pinned when the catch kept the joints' stop margins: the arm's motors before the ball
+    0.855 of their capacity (was 0.771, bound 0.85 -> 0.86) and the stop's headroom 0.098
+    (was >= 0.2 -> 0.09). The cost is the wrist deviation's 2 deg margin (its hard stop
+    given back to the deviation alone: 5.3 rad/s, 0.801, 0.256, a file ``check`` refuses for
+    the margin; the move in's jerk bound alone changes neither). The turn's choice cannot
+    win it back: of the turns under way whose roll fits, the faster ones load less (0.6 of
+    the stop's speed: 4.7 rad/s, 0.778, 0.124; 0.8: 6.3 rad/s, 0.784, 0.174; 0.9 and 1.0
+    infeasible), none reaches 0.2 (docs/history/2026-12-07-catch-limits.md)."""
     from planner.catch.plan.api import write_plan
     from planner.catch.plan.reasons import CatchReason
     from planner.catch.plan.turnahead import TurnMode
@@ -276,7 +285,8 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
     assert (plan.poses.q_open[i] - plan.rows.q[k, i]) * (level - plan.rows.q[k, i]) < 0  # pre-catch: behind
     assert plan.intercept.error_m < 0.002
     # before the ball the arm's motors stay within their capacity with the whole hand's
-    # inverse dynamics on the rows (speeds and the closing fingers included; measured 0.771)
+    # inverse dynamics on the rows (speeds and the closing fingers included; measured 0.855,
+    # 0.771 before the catch kept the wrist deviation's stop margin: see the docstring's end)
     import pinocchio as pin
 
     from planner.catch.grasp import motor_torque_matrix
@@ -289,12 +299,12 @@ def test_the_roll_rule_turns_the_wrist_before_a_steep_landing(pl, tmp_path):
         a[dyn._idx] = (plan.rows.q[j + 1] - 2 * plan.rows.q[j] + plan.rows.q[j - 1]) / dt ** 2
         tau = pin.rnea(m, data, dyn._pq(plan.rows.q[j]), v, a)[dyn._idx]
         ratio = np.abs(motor_torque_matrix(pl.hand, plan.rows.q[j]) @ tau) / dyn.cap
-        assert np.all(ratio[pl.turn._arm_motors] <= 0.85), (plan.rows.t[j], ratio.max())
+        assert np.all(ratio[pl.turn._arm_motors] <= 0.86), (plan.rows.t[j], ratio.max())
     path = tmp_path / "c.csv"
     write_plan(plan, str(path))
     rep = check_trajectory(str(path))
     assert rep.ok, rep.problems
-    assert rep.catch.loads[0].headroom >= 0.2
+    assert rep.catch.loads[0].headroom >= 0.09  # (measured 0.098: the docstring's end)
     near = plan_throw(30.0, 1.5, 0.0, planner=pl)
     assert not near.notes and np.array_equal(near.rows.q, early(near).rows.q)
 
