@@ -126,3 +126,30 @@ def test_body_table_is_the_per_configuration_one():
                 a, g = a + n, g + 1
         assert g == cl.bodies_pc.shape[1]
     assert worst <= 1e-15
+
+
+@pytest.mark.parametrize("name", ["agh", "default"])
+def test_the_open_hand_is_straight_within_the_margins(name):
+    """The open hand (``open_from``) keeps every joint within the planner's limits (the
+    stop margins inside the hard stops) and each finger's flexions sum to 0 where its first
+    flexion joint's range allows: the AGH's end joints, held 2 deg off their stop at
+    straight, lean back by their base joints (-2 deg), so a finger points along the palm
+    normal as with every flexion at 0 (leaning 2 deg in, its 140 mm end element put the
+    tip 4.9 mm into the ball's way: 30 deg / 1.5 m refused, fingers in the way); the
+    default hand's MCPs take back the PIP's and DIP's margins. The thumb's first flexion
+    joint (CMC) is itself at its margin: it stays there."""
+    from planner.catch.plan.arm import open_from, zero_pose
+
+    pl = get_planner(name)
+    h = pl.hand
+    q0 = zero_pose(h)
+    q = open_from(h, pl.joints, q0, pl.closing(BALL.radius_m).q_closed)
+    assert np.all(q >= h.lower - 1e-12) and np.all(q <= h.upper + 1e-12)
+    flexion = {int(i) for i in pl.joints.flexion_idx}
+    for f in h.fingers:
+        chain = [h.index[n] for n in h.spec.joints_of(f) if h.index[n] in flexion]
+        if f == "thumb" and name == "default":
+            assert q[chain[0]] == pytest.approx(h.lower[chain[0]], abs=1e-12)
+            continue
+        assert q[chain[1:]].sum() > 0.01  # (the margins hold the later joints flexed)
+        assert q[chain].sum() == pytest.approx(0.0, abs=1e-12)

@@ -87,7 +87,7 @@ def straight(hand: HandModel, joints: CatchJoints, q: np.ndarray) -> np.ndarray:
     element then leaned its tip 4.9 mm into the ball's way between the pairs) is taken
     back by the first one, so the finger's last segment points as with every flexion at 0
     (the fingers' flexions turn about parallel axes)."""
-    flexion = set(int(i) for i in joints.flexion_idx)
+    flexion = {int(i) for i in joints.flexion_idx}
     q = q.copy()
     for f in hand.fingers:
         chain = [hand.index[n] for n in hand.spec.joints_of(f) if hand.index[n] in flexion]
