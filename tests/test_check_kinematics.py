@@ -127,3 +127,35 @@ def test_inertials_given_the_gravity_are_each_inertial(name):
         want = [kin.inertial(q, v, a) for v, a in moves]
         for got in (kin.inertials(q, moves), kin.inertials(q, moves, kin.gravity(q))):
             assert all(np.array_equal(g, w) for g, w in zip(got, want))
+
+
+def _plain_tips_pushed(kin, Q, pressing, force, tau):
+    """``tips_pushed`` as it read before its products were stacked (the reference): per
+    pressing row its Jacobians, per tip ``R @ J`` and ``tau[k] -= J.T @ force``."""
+    m, d, idx = kin.model, kin.data, kin.idx
+    world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    for k in np.flatnonzero(pressing.any(axis=1)):
+        pin.computeJointJacobians(m, d, kin.pin_q(Q[k]))
+        for f in np.flatnonzero(pressing[k]):
+            J = kin.R @ pin.getFrameJacobian(m, d, kin.tip_ids[f], world)[:3, idx]
+            tau[k] -= J.T @ force
+
+
+@pytest.mark.parametrize("name", HANDS)
+def test_tips_pushed_stacked_is_each_rows_own_to_the_bit(name):
+    """The keys' push of every pressing tip, the products stacked: each row's torques the
+    per-row computation's to the bit (zeros' signs too: the bytes), up to five tips a row
+    subtracted in order, rows pressing nothing untouched, no tip pressing anywhere."""
+    hand = load_hand(name)
+    kin = Kinematics(hand, hand.T_world_root)
+    rng = np.random.default_rng(10)
+    Q = _poses(hand, 400, 11)
+    pressing = rng.random((len(Q), len(kin.tip_ids))) < 0.4
+    pressing[:7] = True
+    force = np.array([0.0, 0.0, KEY_FORCE_N])
+    for P in (pressing, np.zeros_like(pressing)):
+        tau0 = rng.standard_normal((len(Q), hand.n))
+        got, want = tau0.copy(), tau0.copy()
+        kin.tips_pushed(Q, P, force, got)
+        _plain_tips_pushed(kin, Q, P, force, want)
+        assert got.tobytes() == want.tobytes()

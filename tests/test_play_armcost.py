@@ -5,11 +5,13 @@ real songs' transitions."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
 
 from planner.music.midi import load_song
+from planner.play.armcost import FLOOR_SLACK, TIE_RAIL_PER_M
 from planner.play.costs import Prev
 from planner.play.fingering import FingeringProblem
 from planner.play.places import Places
@@ -35,7 +37,9 @@ class _Checked(FingeringProblem):
         self.cut = 0  # (moves that let a key up early for the arm)
         self.rode = 0  # (moves a note rode along on)
 
-    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None):
+    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None, limit=math.inf,
+                   tie_rail=None):
+        # (every move costed in full, whatever its floor: ``limit`` not passed on)
         self.parts += bool(prev.up_parts or prev.lift_parts)
         got_lates, got_rode = [], []
         loss = super()._rail_loss(prev, new, place, kept, got_lates, got_rode)
@@ -48,7 +52,7 @@ class _Checked(FingeringProblem):
             self._times(n, f, place)[self._descent_column(here, place, n, f)]
             for n, f in new.items()]
         self.checked += 1
-        self.cut += bool(fresh.release[place, tuple(new.items())][2])
+        self.cut += bool(self._release(fresh, new, place)[2])
         self.rode += bool(plain_rode)
         if lates is not None:
             lates.extend(got_lates)
@@ -72,3 +76,59 @@ def test_what_is_kept_per_state_before_and_place_is_the_fresh_answer(places, nam
     assert p.cut > 0
     if name == "fast.mid":
         assert p.rode > 0
+
+
+class _Floored(FingeringProblem):
+    """The programme, every move of the arm it weighs also costed in full: the floor
+    (``ArmFloor._arm_floor``, with the rail's tie-break, as ``_rail_loss`` weighs it)
+    against the loss, and every move the floor rules out against the ``limit`` it was
+    ruled out for. ``floored``: False plans with no floor at all (``limit`` dropped)."""
+
+    def __init__(self, *args, floored: bool = True) -> None:
+        super().__init__(*args)
+        self.floored = floored
+        self.moves = 0
+        self.above_zero = 0  # (moves whose floor is above the rail's tie-break)
+        self.ruled_out = 0
+        self.least_margin = math.inf  # (frames: the loss less the floor, least of all)
+
+    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None, limit=math.inf,
+                   tie_rail=None):
+        full = super()._rail_loss(prev, new, place, kept)
+        _, arrive, T, lifts, cands = self._arm_setup(prev, new, place)
+        floor = (TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
+                 + self._arm_floor(prev, lifts, cands, T, arrive))
+        assert floor - FLOOR_SLACK <= full
+        self.moves += 1
+        self.above_zero += floor > TIE_RAIL_PER_M * self.places.distance_m(
+            place, prev.state.place)
+        self.least_margin = min(self.least_margin, full - floor)
+        if not self.floored:
+            limit = math.inf
+        got = super()._rail_loss(prev, new, place, kept, lates, rode, limit, tie_rail)
+        if got is None:  # (ruled out: it could not have been kept)
+            self.ruled_out += 1
+            assert full > limit
+        else:
+            assert got == full
+        return got
+
+
+@pytest.mark.parametrize("name", ["fast.mid", "leaps.mid", "fur_elise.mid"])
+def test_the_arm_floor_is_never_above_the_loss_and_rules_out_no_move_kept(places, name):
+    """Every move of the arm the programme weighs on a real song: the floor it is ruled
+    out by is at or below its loss, and a move ruled out costs more than the limit it was
+    ruled out for (its shape's best or the beam's bound, less its state before's cost):
+    it could not have been kept. The plan is the one made with no floor, to the bit."""
+    notes = list(load_song(SONGS / name).notes)
+    p = _Floored(notes, places, 100.0)
+    got = p.solve()
+    plain = _Floored(notes, places, 100.0, floored=False)
+    want = plain.solve()
+    assert (got.assignments, got.skipped, got.expected_loss_frames) == (
+        want.assignments, want.skipped, want.expected_loss_frames)
+    # (the floor is worth its cost: it rules moves out, and it is above the tie-break
+    # on many; none is ruled out with no floor; the floor is tight on some move)
+    assert p.ruled_out > 0 and plain.ruled_out == 0
+    assert p.above_zero > p.moves // 10
+    assert 0.0 <= p.least_margin < 1.0

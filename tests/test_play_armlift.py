@@ -37,7 +37,7 @@ def _case(places, start_s: float, pitch: int, posture: int, finger: str, start: 
     prev = costs.prev(state, notes[1].onset_s)
     lates: list = []
     loss = costs._rail_loss(prev, {1: finger}, there, (), lates, [])
-    _, _, cut_loss, ups = prev.release[(there, ((1, finger),))]
+    _, _, cut_loss, ups = costs._release(prev, {1: finger}, there)
     planned_down = costs.t_down(1) + dict(lates).get(1, 0.0)
     planned_up = ups.get(0, costs.t_up(0))
 
@@ -227,7 +227,7 @@ def test_a_rider_keeps_its_key_and_the_others_are_cut(places, pitch, finger, her
     lates: list = []
     rode: list = []
     costs._rail_loss(prev, {2: finger}, there, (), lates, rode)
-    _, riders, _, ups = prev.release[(there, ((2, finger),))]
+    _, riders, _, ups = costs._release(prev, {2: finger}, there)
     assert riders == {(1, "middle")} and set(ups) == {0}
     assert ups[0] < costs.t_up(0) - 0.1
     motion = Motion(notes, places, 100.0, places.rail_m(here))

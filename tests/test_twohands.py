@@ -276,3 +276,50 @@ def test_the_notes_pressed_softer_are_named_per_hand(pair, tmp_path) -> None:
     d = two_plan_dict("forte", song.notes, plan, "forte.csv", 0.0, places_of)
     assert [(x["note"], x["hand"], x["force_n"]) for x in d["softer"]] == soft
     assert "softer" not in format_two_summary("forte", song.notes, plan, "forte.csv")
+
+
+def test_second_plans_give_back_the_plan_made_from_the_same(
+        pair, tmp_path) -> None:
+    """``SecondPlans``: the meeting song's right-first pass planned twice within one pair's
+    planning, its first hand's plan the same rows (a new object), the second hand's plan
+    is the one made the first time, not planned again; its notes or side otherwise, none
+    is given; made anew, it is the same plan. ``plan_two_hands`` lets them go when it is
+    done. (The same files on the two-hand corpus: the history page.)"""
+    from planner.play.hands import assign_hands
+    from planner.play.twohands import plan_pass
+    from planner.play.twoplan import SecondPlans, same_plan
+
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    a = assign_hands(song.notes, pair.gap, {s: pair.planners[s].places for s in (LEFT, RIGHT)})
+    pair.seconds.clear()
+    p = plan_pass(song, pair, a, RIGHT, 100.0)
+    assert len(pair.seconds) == 1
+    q = plan_pass(song, pair, a, RIGHT, 100.0)
+    assert q.plans[1] is not p.plans[1] and same_plan(q.plans[1], p.plans[1])
+    assert q.plans[0] is p.plans[0] and len(pair.seconds) == 1  # (given back)
+    key = (LEFT, p.planned_of[0], 100.0, "", song.notes)
+    assert pair.seconds.get(key, q.plans[1]) is p.plans[0]
+    assert pair.seconds.get((RIGHT,) + key[1:], q.plans[1]) is None
+    assert pair.seconds.get((LEFT, p.planned_of[0][1:]) + key[2:], q.plans[1]) is None
+    assert pair.seconds.get(key[:4] + (song.notes[1:],), q.plans[1]) is None  # (another song)
+    assert pair.seconds.get(key, p.plans[0]) is None  # (another first plan)
+
+    class Anew(SecondPlans):  # (every second plan made anew; the hits counted)
+        hits = 0
+
+        def get(self, key, first) -> None:
+            Anew.hits += super().get(key, first) is not None
+
+    kept = pair.seconds
+    try:
+        pair.seconds = Anew()
+        r = plan_pass(song, pair, a, RIGHT, 100.0)
+        s = plan_pass(song, pair, a, RIGHT, 100.0)
+    finally:
+        pair.seconds = kept
+    assert Anew.hits == 1 and s.plans[0] is not r.plans[0]
+    # (the plan given back is the plan made anew: the same rows, notes and frames)
+    assert same_plan(s.plans[0], p.plans[0]) and s.played_frames == p.played_frames
+    assert s.assignment == p.assignment and s.planned_of == p.planned_of
+    plan_two_hands(song, pair)
+    assert len(pair.seconds) == 0

@@ -110,11 +110,11 @@ class Kinematics:
         new, of = distinct_rows(Q)
         QP = np.zeros((int(np.count_nonzero(new)), self.model.nq))
         QP[:, self.idx] = Q[new]
-        m, d, idx = self.model, self.data, self.idx
-        out = np.empty((len(QP), self.hand.n))
-        for k in range(len(QP)):
-            out[k] = pin.computeGeneralizedGravity(m, d, QP[k])[idx]
-        return out[of]
+        m, d, g = self.model, self.data, pin.computeGeneralizedGravity
+        # (each row's vector kept whole, our joints picked from them all at once: the
+        # same numbers)
+        raw = [g(m, d, qp) for qp in QP]  # (fresh arrays: Pinocchio returns copies)
+        return (np.array(raw)[:, self.idx] if raw else np.empty((0, self.hand.n)))[of]
 
     def moving(self, Q: np.ndarray, V: np.ndarray, A: np.ndarray, still: np.ndarray
                ) -> np.ndarray:
@@ -127,10 +127,11 @@ class Kinematics:
         QP = np.zeros((len(Q), m.nq))
         VP, AP = np.zeros((len(Q), m.nv)), np.zeros((len(Q), m.nv))
         QP[:, idx], VP[:, idx], AP[:, idx] = Q, V, A
-        out = np.empty((len(Q), self.hand.n))
-        for k in range(len(Q)):
-            out[k] = pin.rnea(m, d, QP[k], VP[k], AP[k])[idx] - still[k]
-        return out
+        rnea = pin.rnea
+        raw = [rnea(m, d, qp, vp, ap) for qp, vp, ap in zip(QP, VP, AP)]
+        if not raw:
+            return np.empty((0, self.hand.n))
+        return np.array(raw)[:, idx] - still
 
     def inertial(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """Joint torques that move the hand at speeds ``v`` and accelerations ``a`` (our
@@ -162,15 +163,28 @@ class Kinematics:
         (``pressing`` (T, 5)), ``J`` its ``point_jacobians``, tip by tip in order (the
         same numbers as a call of ``point_jacobians`` per row)."""
         m, d, idx, R, tip_ids = self.model, self.data, self.idx, self.R, self.tip_ids
-        rows = np.flatnonzero(pressing.any(axis=1))
-        QP = np.zeros((len(rows), m.nq))
-        QP[:, idx] = Q[rows]
+        row, tip = np.nonzero(pressing)  # (each row's pressing tips in order)
+        if len(row) == 0:
+            return
+        starts = np.flatnonzero(np.diff(row, prepend=-1))  # (each pressing row's first)
+        QP = np.zeros((len(starts), m.nq))
+        QP[:, idx] = Q[row[starts]]
         world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        for i, k in enumerate(rows.tolist()):
+        ends = np.append(starts[1:], len(row)).tolist()
+        jac = pin.getFrameJacobian
+        raw = []  # (the tips' Jacobians' position rows, in the pairs' order)
+        for i, (a, b) in enumerate(zip(starts.tolist(), ends)):
             pin.computeJointJacobians(m, d, QP[i])
-            for f in np.flatnonzero(pressing[k]).tolist():
-                J = R @ pin.getFrameJacobian(m, d, tip_ids[f], world)[:3, idx]
-                tau[k] -= J.T @ force
+            raw += [jac(m, d, tip_ids[f], world)[:3] for f in tip[a:b].tolist()]
+        # (the products of every pair at once, each pair's the same numbers as its own
+        # ``R @ J`` and ``J.T @ force``: numpy's matmul takes a stack slice by slice; a
+        # test holds them to the bit), then subtracted in each row's tip order
+        J = R @ np.stack(raw)[:, :, idx]
+        push = np.swapaxes(J, 1, 2) @ force
+        rank = np.arange(len(row)) - np.repeat(starts, np.diff(np.append(starts, len(row))))
+        for r in range(int(rank.max()) + 1):
+            on = rank == r
+            tau[row[on]] -= push[on]
 
     def point_jacobians(self, q: np.ndarray, frame_ids: list[int]) -> list[np.ndarray]:
         """World position Jacobians (3, n) of frames, our joint order."""

@@ -24,6 +24,13 @@ if TYPE_CHECKING:
     from planner.play.costs import Prev
 
 TIE_RAIL_PER_M = 5.0  # frames per metre of rail moved: a tie-break, not a cost
+# What ``ArmFloor._arm_floor`` gives away, in frames: far above the float rounding of the
+# losses and the times it is worked from (a song's cost in frames, thousands at most,
+# rounds at 1e-12), far below any tie-break (``TIE_RAIL_PER_M`` on a 1 mm step: 0.005):
+# a move whose loss ties with the best is never ruled out by the floor.
+FLOOR_SLACK = 1e-7
+FLOOR_SLACK_S = 1e-9  # the same in the times it is worked from (a song's times, seconds
+# to hours, round at 1e-12 and less)
 
 
 class ArmTimes:
@@ -98,19 +105,18 @@ class ArmTimes:
         the arm to ``place`` (latest first), the latest, and each one's ``Costs._times``
         column by note and finger (None: all the front rule's): ``Prev.lifts``, or each
         finger's by its entry's rule (``_lift_col``; memoised per posture moved to)."""
-        here = ctx.state.place
-        po = self.places.posture_of
-        if po(here) == po(place):
-            return ctx.lifts, ctx.lift_end, None
-        got = ctx.lifts_to.get(po(place))
+        q = self.places.posture_of(place)
+        if q == ctx.posture:
+            return ctx.lifts_same
+        got = ctx.lifts_to.get(q)
         if got is None:
+            here = ctx.state.place
             black = {(m, f): v for v, m, f in ctx.lifts_black}
             cols = {(m, f): self._lift_col(here, place, m, f, r)
                     for m, f, r in ctx.state.last_notes}
             lifts = sorted(((v if cols[m, f] == 0 else black[m, f], m, f)
                             for v, m, f in ctx.lifts), key=lambda x: -x[0])
-            got = ctx.lifts_to[po(place)] = (lifts, lifts[0][0] if lifts else -math.inf,
-                                             cols)
+            got = ctx.lifts_to[q] = (lifts, lifts[0][0] if lifts else -math.inf, cols)
         return got
 
     def _follow_path(self, m: int, f: str, here: int, place: int) -> bool:
@@ -125,12 +131,156 @@ class ArmTimes:
         return got
 
 
-class ArmCosts(ArmTimes):
+class ArmFloor(ArmTimes):
+    """What a move of the arm starts from (``_arm_setup``: the new notes' wish, the arm's
+    time, the lifts, the notes that could ride along) and a floor of its loss
+    (``_arm_floor``) that ``ArmCosts._rail_loss`` rules a move out by before its keys are
+    cut for the arm (its base; it reads ``Costs``' memos)."""
+
+    def _arm_setup(self, prev: Prev, new: dict[int, str], place: int) -> tuple:
+        """What a move of the arm to ``place`` after ``prev`` starts from: each new note's
+        descent after the move (``_afters_of``), the new notes' wish (the latest the arm
+        may arrive for each key to go down on time), the arm's time, ``_lifts``' answer
+        and the notes that could ride along (``_ride_cands``)."""
+        afters = self._afters_of(prev, place, new)
+        t_down = self._t_down
+        arrive = min([t_down[n] - a for n, a in zip(new, afters)])
+        return (afters, arrive, self.places.arm_time_s(prev.state.place, place),
+                self._lifts(prev, place),
+                self._ride_cands(prev, place, new) if prev.follows else [])
+
+    def _arm_floor(self, ctx: Prev, lifts: tuple, cands: list, T: float,
+                   arrive: float) -> float:
+        """A floor of the frames a move of the arm (its time ``T``; ``lifts``:
+        ``_lifts``' answer) after ``ctx``'s state loses for the new notes (``arrive``:
+        their wish), without the cut keys' ups worked out (``ArmCosts._cut_up_s``) nor
+        the riders weighed (``ArmCosts._riders``). Of the fingers that cannot ride along
+        (not in ``cands``, ``_ride_cands``' answer), each one clear after the arm must
+        start (``arrive - T``) is cut by ``ArmCosts._cut_lifts`` no later than its cut
+        (``start - lift``) or what holds its key (``_lift_part``'s ``hold``): it loses at
+        least the frames from there to its key's due up; and the arm starts no sooner
+        than the latest of their lifts from the earliest their keys come up
+        (``_lift_part``'s ``first``), or the arm's start itself with no rider (the latest
+        lift's cut is that), so the new note that wishes the arm earliest is that late at
+        least (``late_frames``). Or, whatever is cut: a key ``x`` seconds early loses
+        ``x``'s frames and brings the arm no more than ``x`` sooner, so the latest of
+        those lifts costs its time past the start in keys cut or the note late
+        (``late_frames`` less ``LATE_MIN_S``'s). ``FLOOR_SLACK_S`` off each time against
+        the floats' rounding."""
+        order, clear = lifts[0], lifts[1]
+        start = arrive - T
+        if clear <= start:  # (the arm leaves in time: nothing cut, nothing late)
+            return 0.0
+        riding = {c[0] for c in cands} if cands else None
+        cut, first, first_clear = 0.0, -math.inf, None
+        cols, parts = lifts[2], ctx.lift_parts
+        for v, m, f in order:  # (latest first)
+            if v <= start:
+                break
+            if riding and (m, f) in riding:
+                continue
+            if first_clear is None:
+                first_clear = v
+            col = 0 if cols is None else cols[m, f]
+            got = parts.get((m, f, col))
+            if got is None:
+                got = self._lift_part(ctx, m, f, col)
+            lift_s, _, _, hold, first_m = got
+            due = v - lift_s
+            cut += max(0.0, min(v - start, due - hold) - FLOOR_SLACK_S)
+            first = max(first, min(v, first_m + lift_s))
+        if first_clear is None:
+            return 0.0
+        if not riding:  # (the latest lift, cut, is clear no sooner than the arm's start)
+            first = max(first, start)
+        late = first + T - arrive - FLOOR_SLACK_S
+        over = first_clear - start - LATE_MIN_S - FLOOR_SLACK_S
+        return max(over / self.dt, cut / self.dt + late_frames(late, self.dt))
+
+    def _lift_part(self, ctx: Prev, m: int, f: str, col: int) -> tuple:
+        """What a cut of note ``m``'s key (finger ``f``, ``Costs._times`` column ``col``)
+        for a move of the arm after ``ctx``'s state works out whatever the cut
+        (``Prev.lift_parts``, memoised; ``ArmCosts._cut_lifts``): its lift's time, its
+        entry, the key-up no cut goes before (its shortest press, ``Moves.press_min_s``),
+        the latest key-up any cut keeps (``hold``: the key-up no cut goes before, the
+        note's hit, ``ArmCosts._cut_up_s``, a rider's busy finger) and the earliest
+        (``first``: those but the hit, which a cut that loses the note anyway does not
+        keep)."""
+        got = ctx.lift_parts.get((m, f, col))
+        if got is None:
+            r = ctx.last[f][1]
+            e = self.entry(m, f, r)
+            floor = self._t_down[m] + ctx.late_of.get(m, 0.0) + self.places.press_min_s(e)
+            (_, _, _, _, hit_s, _), free = self._up_parts(ctx, m, e)
+            busy = floor if free is None else max(floor, free)
+            got = ctx.lift_parts[m, f, col] = (self._times(m, f, r)[col], e, floor,
+                                               max(busy, hit_s), busy)
+        return got
+
+    def _up_parts(self, prev: Prev, m: int, e) -> tuple:
+        """``_cut_up_s``' parts of note ``m``'s key (its entry ``e``) whatever the cut:
+        ``held_enough_parts``, and when a finger that rode along is free (None: it did
+        not ride; ``Prev.up_parts``, memoised)."""
+        got = prev.up_parts.get(m)
+        if got is None:
+            n = self.notes[m]
+            free = prev.rode_of.get(m)
+            got = prev.up_parts[m] = (
+                held_enough_parts(n.onset_s, n.offset_s,
+                                  self._t_down[m] + prev.late_of.get(m, 0.0),
+                                  self._t_up[m], self.dt),
+                None if free is None else free + self.places.lift(e, "high").cross_s)
+        return got
+
+    def _ride_cands(self, ctx: Prev, place: int, new: dict[int, str]) -> list:
+        """The notes sounding in ``ctx``'s state that could ride along on a move of the
+        arm to ``place`` (``_rider``'s answers): those whose finger strikes none of the
+        ``new`` notes, whose path is clear (``Places.follow_clear``) and whose key's
+        window holds the move."""
+        cands = []  # (note, finger, the move's latest end, its time, its press done)
+        strikers = new.values()
+        for follow in ctx.follows:
+            if follow[1] not in strikers:  # (one that strikes next does not ride)
+                c = self._rider(ctx, place, *follow)
+                if c is not None:
+                    cands.append(c)
+        return cands
+
+    def _rider(self, ctx: Prev, place: int, m: int, f: str, a, window_s: float,
+               press_s: float, down_s: float) -> tuple | None:
+        """Note ``m`` sounding in ``ctx``'s state (finger ``f``, entry ``a``; its key's
+        window, press and down: ``Prev.follows``) as a rider of a move to ``place``, if
+        its finger strikes no new note: ((note, finger), the move's latest end, the
+        move's time carrying it, when its press is done); None where it cannot ride."""
+        # (an entry serves every key of its pitch class at its place: the key is the
+        # entry and the rail's step, never the rail's index, which names another
+        # entry for each of those keys)
+        b = self.entry(m, f, place)
+        if b is None:  # (it cannot press the key from there)
+            return None
+        key = (a, place - ctx.state.place)
+        got = self._follows.get(key)  # (its time, whether its path is clear, its
+        if got is None:  # lift's key crossing: found only when a note's time fits)
+            got = self._follows[key] = [self.places.follow_s(a, b), None, None]
+        # (the move fits inside the note, after its press and before its lift)
+        if window_s >= got[0] + press_s:
+            if got[1] is None:
+                got[1] = self.places.follow_clear(a, b)
+                got[2] = self.places.lift(b, "high").cross_s
+            if got[1] and self._follow_path(m, f, ctx.state.place, place):  # (its press
+                # done: the descent's end, ``press_min_s`` less the lift to its key crossing)
+                done = down_s + press_s - self.places.lift(a, "high").cross_s
+                return ((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done)
+        return None
+
+
+class ArmCosts(ArmFloor):
     """The arm's moves in ``planner.play.costs.Costs`` (its base: it reads the song's
     times, the memos and the finger timings that ``Costs`` keeps)."""
 
     def _rail_loss(self, prev: Prev, new: dict[int, str], place: int, kept=(),
-                   lates: list | None = None, rode: list | None = None) -> float:
+                   lates: list | None = None, rode: list | None = None,
+                   limit: float = math.inf, tie_rail: float | None = None) -> float | None:
         """Frames lost to a move of the rail to ``place`` after ``prev``: a finger of
         ``prev`` holding a key it can follow (``Moves.follow``) rides along on it; every
         other lifts after its key comes up; then the rail moves (as slow as its slowest
@@ -140,15 +290,18 @@ class ArmCosts(ArmTimes):
         leaving its key. A ``kept`` note (sounding past the event) must follow, or the
         move is not made (inf). ``lates``: gets (note, seconds) of each note struck late
         (``State.late``); ``rode``: gets (note, finger, the move's end) of each note
-        riding along (its finger's place is ``place`` after: ``layers.rode_to``)."""
-        afters = self._afters_of(prev, place, new)  # (each new note's descent after the move)
-        t_down = self._t_down
-        arrive = min([t_down[n] - a for n, a in zip(new, afters)])  # (the new notes' wish)
-        key = (place, tuple(new.items()))
-        got = prev.release.get(key)
-        if got is None:
-            got = prev.release[key] = self._release_of(prev, place, new, arrive)
-        release_t, followers, cut_loss, cut_ups = got
+        riding along (its finger's place is ``place`` after: ``layers.rode_to``).
+        ``limit``: the loss above which the move is of no use (the programme's bound):
+        None, without working out the lifts, where ``_arm_floor`` is above it already.
+        ``tie_rail``: the rail's tie-break, when its caller has it."""
+        afters, arrive, T, lifts, cands = self._arm_setup(prev, new, place)
+        if tie_rail is None:
+            tie_rail = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place)
+        if limit < math.inf and tie_rail + self._arm_floor(
+                prev, lifts, cands, T, arrive) - FLOOR_SLACK > limit:
+            return None
+        release_t, followers, cut_loss, cut_ups = self._release_of(
+            prev, arrive, T, lifts, cands)
         if kept and not followers.issuperset(kept):
             return math.inf
         if rode is not None and followers:  # (the move ends as late as lets the new keys
@@ -164,9 +317,9 @@ class ArmCosts(ArmTimes):
                 {f: m for m, f in followers}, {self.pitch[m]: (m, f) for m, f in followers},
                 {f: (m, r) for m, f, r in prev.state.last_notes if (m, f) not in followers})
         by_finger, by_key, lifted = around
-        t_up, dt, pitch = self._t_up, self.dt, self.pitch
+        t_up, t_down, dt, pitch = self._t_up, self._t_down, self.dt, self.pitch
         gaps = self._gaps  # (``_move_gap_s``' memo)
-        loss = TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place) + cut_loss
+        loss = tie_rail + cut_loss
         for (n, f), after_s in zip(new.items(), afters):
             late = release_t + after_s - t_down[n]
             m = by_finger.get(f)
@@ -204,6 +357,23 @@ class ArmCosts(ArmTimes):
                               - t_down[n]))
         return loss
 
+    def _step(self, ctx: Prev, new: dict[int, str], place: int, kept, limit: float,
+              tie_rail: float) -> tuple | None:
+        """A transition's loss after ``ctx`` striking ``new`` from ``place`` and keeping
+        ``kept`` held (``Costs._same_rail_loss``, or ``_rail_loss`` for a move of the arm),
+        the notes it strikes late (``State.late``) and those that ride along on the arm's
+        move: (loss, lates, rode); None where the move's floor is above ``limit``
+        (``_rail_loss``; ``tie_rail``: its rail's tie-break)."""
+        lates: list = []
+        rode: list = []
+        if place == ctx.state.place:
+            step = self._same_rail_loss(ctx, new, lates)
+        else:
+            step = self._rail_loss(ctx, new, place, kept, lates, rode, limit, tie_rail)
+            if step is None:
+                return None
+        return step, tuple(sorted(lates)), tuple(sorted(rode))
+
     def _cut_up_s(self, prev: Prev, m: int, cut_s: float, e) -> float:
         """When note ``m``'s key (its entry ``e``) comes up when its finger is wanted by
         ``cut_s``: the motion's rule, ``keytimes.held_enough_s`` (from when its key went
@@ -211,40 +381,31 @@ class ArmCosts(ArmTimes):
         lift can start: a note that rode along on the arm's move into ``prev``'s state
         (``State.rode``) once that move is over (``Motion._to_high``). What does not
         depend on the cut is kept per state before and note (``Prev.up_parts``)."""
-        got = prev.up_parts.get(m)
-        if got is None:
-            n = self.notes[m]
-            free = prev.rode_of.get(m)
-            got = prev.up_parts[m] = (
-                held_enough_parts(n.onset_s, n.offset_s,
-                                  self._t_down[m] + prev.late_of.get(m, 0.0),
-                                  self._t_up[m], self.dt),
-                None if free is None else free + self.places.lift(e, "high").cross_s)
+        got = self._up_parts(prev, m, e)
         up = held_enough_at(got[0], cut_s)
         if got[1] is not None:
             up = max(up, got[1])
         return up
 
-    def _release_of(self, ctx: Prev, place: int, new: dict[int, str], arrive: float
+    def _release(self, prev: Prev, new: dict[int, str], place: int) -> tuple:
+        """``_release_of``'s answer for a move of the arm to ``place`` after ``prev``
+        striking ``new``: the arm's arrival, the notes riding along, the frames lost by
+        keys let up early for it and those keys' ups."""
+        _, arrive, T, lifts, cands = self._arm_setup(prev, new, place)
+        return self._release_of(prev, arrive, T, lifts, cands)
+
+    def _release_of(self, ctx: Prev, arrive: float, T: float, lifted: tuple, cands: list
                     ) -> tuple[float, frozenset, float, dict]:
-        """When the arm arrives at ``place`` after ``ctx``'s state (the lifters' key up,
+        """When the arm arrives at its place after ``ctx``'s state (the lifters' key up,
         a held note's at this event, their lift, and the move), and which notes ride
-        along: those whose finger strikes none of the ``new`` notes, whose path is clear
-        (``Places.follow_clear``) and whose key stays down ``HOLD_PAST_S`` past the move's
-        end (``_rider``, ``_riders``), as the motion holds them; then the frames lost by
+        along: of ``cands`` (``_ride_cands``), those whose key stays down
+        ``HOLD_PAST_S`` past the move's end (``_riders``), as the motion holds them;
+        then the frames lost by
         keys let up early for the arm to start on time (``arrive``: the latest the arm may
         arrive for each new key to go down on time after its descent) and those keys' ups
-        (``_cut_lifts``; none where a note may ride along)."""
-        T = self.places.arm_time_s(ctx.state.place, place)
-        lifts, lift_end, lift_col = self._lifts(ctx, place)
-        cands = []  # (note, finger, the move's latest end, its time, its press done)
-        if ctx.follows:
-            strikers = set(new.values())
-            for follow in ctx.follows:
-                if follow[1] not in strikers:  # (one that strikes next does not ride)
-                    c = self._rider(ctx, place, *follow)
-                    if c is not None:
-                        cands.append(c)
+        (``_cut_lifts``; none where a note may ride along). ``T``: the arm's move's time;
+        ``lifted``: ``_lifts``' answer."""
+        lifts, lift_end, lift_col = lifted
         if not cands:  # (no note sounding that could ride along, ``_riders``' answer when
             # none rides: the last lift, or the lifts cut for the arm to start on time;
             # the move)
@@ -253,33 +414,6 @@ class ArmCosts(ArmTimes):
             release, loss, ups = self._cut_lifts(ctx, lifts, arrive - T, lift_col)
             return release + T, _NONE, loss, ups
         return self._riders(ctx, lifts, cands, T, arrive, lift_col)
-
-    def _rider(self, ctx: Prev, place: int, m: int, f: str, a, window_s: float,
-               press_s: float, down_s: float) -> tuple | None:
-        """Note ``m`` sounding in ``ctx``'s state (finger ``f``, entry ``a``; its key's
-        window, press and down: ``Prev.follows``) as a rider of a move to ``place``, if
-        its finger strikes no new note: ((note, finger), the move's latest end, the
-        move's time carrying it, when its press is done); None where it cannot ride."""
-        # (an entry serves every key of its pitch class at its place: the key is the
-        # entry and the rail's step, never the rail's index, which names another
-        # entry for each of those keys)
-        b = self.entry(m, f, place)
-        if b is None:  # (it cannot press the key from there)
-            return None
-        key = (a, place - ctx.state.place)
-        got = self._follows.get(key)  # (its time, whether its path is clear, its
-        if got is None:  # lift's key crossing: found only when a note's time fits)
-            got = self._follows[key] = [self.places.follow_s(a, b), None, None]
-        # (the move fits inside the note, after its press and before its lift)
-        if window_s >= got[0] + press_s:
-            if got[1] is None:
-                got[1] = self.places.follow_clear(a, b)
-                got[2] = self.places.lift(b, "high").cross_s
-            if got[1] and self._follow_path(m, f, ctx.state.place, place):  # (its press
-                # done: the descent's end, ``press_min_s`` less the lift to its key crossing)
-                done = down_s + press_s - self.places.lift(a, "high").cross_s
-                return ((m, f), self._t_up[m] - got[2] - HOLD_PAST_S, got[0], done)
-        return None
 
     def _cut_lifts(self, ctx: Prev, lifts: list, start_s: float, lift_col: dict | None
                    ) -> tuple[float, float, dict]:
@@ -302,12 +436,8 @@ class ArmCosts(ArmTimes):
             col = 0 if lift_col is None else lift_col[m, f]
             got = parts.get((m, f, col))
             if got is None:  # (its lift's time, its entry, the key-up no cut goes before)
-                r = ctx.last[f][1]
-                e = self.entry(m, f, r)
-                got = parts[m, f, col] = (
-                    self._times(m, f, r)[col], e,
-                    self._t_down[m] + ctx.late_of.get(m, 0.0) + self.places.press_min_s(e))
-            lift_s, e, floor = got
+                got = self._lift_part(ctx, m, f, col)
+            lift_s, e, floor = got[0], got[1], got[2]
             due = clear - lift_s  # (its key's up: its own, or this event's for a held note)
             up = min(due, self._cut_up_s(ctx, m, start_s - lift_s, e))
             up = max(up, min(due, floor))

@@ -137,9 +137,9 @@ class Prev:
     (the programme weighs hundreds of transitions from each state)."""
 
     __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
-                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_to", "older",
-                 "on_key", "posture", "recent", "release", "rode_of", "state", "steps",
-                 "up_parts")
+                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_same",
+                 "lifts_to", "older", "on_key", "posture", "recent", "rode_of", "state",
+                 "steps", "up_parts")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -164,6 +164,8 @@ class Prev:
                                   key=lambda x: -x[0])
         self.lift_end = self.lifts[0][0] if self.lifts else -math.inf  # (the latest)
         self.lift_end_black = self.lifts_black[0][0] if self.lifts_black else -math.inf
+        self.lifts_same = (self.lifts, self.lift_end, None)  # (``ArmCosts._lifts``' answer
+        # for a move that keeps the posture)
         self.lifts_to: dict[int, tuple] = {}  # (each finger's rule, by posture moved to:
         # ``ArmCosts._lifts``)
         # (the notes sounding that might ride along: their entry, the time their key is
@@ -177,7 +179,6 @@ class Prev:
             (m, f, a, t_up[m] - down, costs.places.press_min_s(a), down)
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None
             for down in (t_down[m] + late.get(m, 0.0),)]
-        self.release: dict[tuple, tuple] = {}  # by place and new notes (``_release_of``)
         self.up_parts: dict[int, tuple] = {}  # by note: what its key's up cut for a move
         # of the arm works out whatever the cut (``ArmCosts._cut_up_s``)
         self.lift_parts: dict[tuple, tuple] = {}  # by (note, finger, ``Costs._times``

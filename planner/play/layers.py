@@ -9,7 +9,8 @@ in the hand's order, and every rail worth a move (``Layers._moves_to``, and
 costed by ``planner.play.costs``. A layer keeps, of each hand shape (the rail and the
 fingers on the notes sounding), the cheapest state, and of those the ``BEAM`` cheapest
 (``_prune``). A transition that cannot beat its shape's best or the beam's last state
-(its state before's cost and its tie-breaks: no loss is negative) is not costed.
+(its state before's cost and its tie-breaks: no loss is negative) is not costed, nor
+is a move of the arm whose loss's floor cannot (``ArmFloor._arm_floor``).
 """
 
 from __future__ import annotations
@@ -190,7 +191,8 @@ class Layers(Costs):
             # (the pruning keeps one state per shape, the cheapest: a transition that
             # cannot cost less than the cheapest state of its shape so far is not weighed,
             # nor one that cannot cost less than the beam's last state)
-            low = cost + tie + TIE_RAIL_PER_M * self.places.distance_m(place, here)
+            tie_rail = TIE_RAIL_PER_M * self.places.distance_m(place, here)
+            low = cost + tie + tie_rail
             shape = (place, sounding_t)
             old = layer.get(shape)
             if low > bound or old is not None and low > old[0]:
@@ -204,13 +206,12 @@ class Layers(Costs):
                     continue
             key = (sounding_t, place, kept)
             got = steps.get(key)
-            if got is None:  # (its loss, the notes it strikes late, ``State.late``, and
-                # those that ride along on the arm's move, ``ArmCosts._rail_loss``)
-                lates: list = []
-                rode: list = []
-                step = self._same_rail_loss(ctx, new, lates) if place == here \
-                    else self._rail_loss(ctx, new, place, kept, lates, rode)
-                got = steps[key] = (step, tuple(sorted(lates)), tuple(sorted(rode)))
+            if got is None:  # (``ArmCosts._step``; None: ruled out, ``ArmFloor._arm_floor``)
+                got = self._step(ctx, new, place, kept, (
+                    bound if old is None else min(bound, old[0])) - (cost + tie), tie_rail)
+                if got is None:
+                    continue
+                steps[key] = got
             step = got[0]
             total = cost + step + tie
             if self.room is not None:

@@ -49,7 +49,14 @@ from planner.play.twobounds import (
     settled_bounds,
     windows,
 )
-from planner.play.twoplan import PairRows, PlanReads, TwoHandPlan, one_clock, write_two_hands
+from planner.play.twoplan import (
+    PairRows,
+    PlanReads,
+    SecondPlans,
+    TwoHandPlan,
+    one_clock,
+    write_two_hands,
+)
 from planner.play.twoscore import PairScorer
 
 
@@ -81,6 +88,7 @@ class PairPlanner:
         # (each plan's rows read once while a pair is planned: ``plan_two_hands`` lets
         # them go when it is done)
         self.reads = PlanReads()
+        self.seconds = SecondPlans()  # (the second hands' plans, by what they are planned from)
         self.scorer = PairScorer(left, right)  # (the check's frame F1 of a way's rows)
 
     def reach(self, side: str) -> HandReach:
@@ -142,7 +150,21 @@ def _plan_second(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], s
     one's rows: by the farthest-reach rule (``clear_bounds``, settled); where that leaves
     a note out for the other hand, again with each note's bound loosened to the reach of
     the places that press it, confirmed on both hands' rows by the check's judge
-    (``planner.play.handclear``); the plan playing more frames kept (the first of equals)."""
+    (``planner.play.handclear``); the plan playing more frames kept (the first of equals).
+    Planned once for the same inputs while a pair is planned (``PairPlanner.seconds``:
+    ``SecondPlans``; ``edge`` is ``first``'s rows')."""
+    key = (side, idx, rate_hz, song_name, song.notes)
+    made = pp.seconds.get(key, first)
+    if made is None:
+        made = _plan_second_anew(song, pp, side, idx, sub, first, edge, rate_hz, song_name)
+        pp.seconds.put(key, first, made)
+    return made
+
+
+def _plan_second_anew(song: Song, pp: PairPlanner, side: str, idx: tuple[int, ...], sub: Song,
+                      first: PlayPlan, edge: FirstEdge, rate_hz: float, song_name: str
+                      ) -> PlayPlan:
+    """``_plan_second``'s plan, planned."""
     notes, pl, dt = song.notes, pp.planners[side], 1.0 / rate_hz
     reach_m = pp.reach(side).inner_extent_m + pp.gap.clearance_m
     bounds = settled_bounds(
@@ -324,11 +346,13 @@ def plan_two_hands(song: Song, pp: PairPlanner, out_path: str | None = None,
         raise InputError(f"--rate must be between 1 and 10000 Hz, got {rate_hz}")
     t_start = time.perf_counter()
     pp.reads.clear()
+    pp.seconds.clear()
     pp.scorer.clear()
     try:
         return _plan_two_hands(song, pp, out_path, rate_hz, song_name, t_start)
     finally:
         pp.reads.clear()
+        pp.seconds.clear()
         pp.scorer.clear()
 
 

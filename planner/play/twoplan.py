@@ -171,6 +171,50 @@ class PlanReads:
         return len(self._got)
 
 
+def same_plan(a: PlayPlan, b: PlayPlan) -> bool:
+    """Whether two one-hand plans are the same for what a pair reads of them: their rows
+    (the file's text), the notes they left out and why, and the song's start."""
+    return a is b or (a.text is not None and b.text is not None and len(a.text) == len(b.text)
+                      and a.song_start_s == b.song_start_s
+                      and a.verdict.skipped == b.verdict.skipped and a.text == b.text)
+
+
+class SecondPlans:
+    """The plans of the hand planned second made while a pair is planned
+    (``twohands._plan_second``), by what each is planned from: its side, its notes (song
+    indices), the first hand's plan (``same_plan``: its rows and the notes it left out),
+    the rate, the song's name and its notes. A way's first hand planned with its room settled often
+    comes out as with the windows' room, and a way's hand-back is planned from the second
+    plan it shares with that way's twin: asked again for the same, the plan made is
+    given back (planning is deterministic: the same input, the same bytes), not planned
+    again. ``plan_two_hands`` lets them go when it is done; past ``READS_HELD`` it starts
+    afresh."""
+
+    def __init__(self) -> None:
+        self._got: list[tuple[tuple, PlayPlan, PlayPlan]] = []
+
+    def get(self, key: tuple, first: PlayPlan) -> PlayPlan | None:
+        """The plan made for ``key`` (side, its notes, rate, name, the song's notes) and
+        ``first`` (or its like), None when none was."""
+        for k, f, plan in self._got:
+            if k == key and same_plan(f, first):
+                return plan
+        return None
+
+    def put(self, key: tuple, first: PlayPlan, plan: PlayPlan) -> None:
+        """``plan``, made for ``key`` and ``first``."""
+        if len(self._got) >= READS_HELD:
+            self._got.clear()
+        self._got.append((key, first, plan))
+
+    def clear(self) -> None:
+        """Let every plan held go."""
+        self._got.clear()
+
+    def __len__(self) -> int:
+        return len(self._got)
+
+
 class Clock(NamedTuple):
     """Two plans on one clock (module docstring): the common ``song_start_s``, the rows of
     rest each plan waits first (``lead``) and the rows of both (``n``)."""

@@ -155,10 +155,18 @@ class LiveStopper:
             return self.stop_for(pose, t_b if self.motion.moving else -math.inf)
         self.stop = self.nominal
         stop = self.shifted(pose)
-        if (self.motion.moving and moves(stop) and fix_s < stop.start_s
-                and self.ready(t_b) > stop.start_s + LATE_TOL_S):
+        if self.motion.moving and moves(stop) and (self.ramp_passed(t_b) or (
+                fix_s < stop.start_s and self.ready(t_b) > stop.start_s + LATE_TOL_S)):
             stop = self.slower(pose, t_b)[0]
         return stop
+
+    def ramp_passed(self, t_b: float) -> bool:
+        """Whether the stopping motion's ramp starts before ``t_b``, the first time the
+        re-plan acts from (the rows up to it written, or being written, without the ramp):
+        fixed, it would add the ramp's travel so far to the next row at once, against the
+        joints' speed limits (a first fit of a few noisy observations may put the intercept,
+        hence the ramp, in the past); such a stop is made slower, or the palm waits at rest."""
+        return moves(self.stop) and self.stop.start_s < t_b
 
     def shifted(self, pose) -> SoftStop | None:
         """The moving hand's stopping motion (chosen when it started to move: its speeds
@@ -215,8 +223,9 @@ class LiveStopper:
         if self.stop is None:
             return
         m = self.motion
-        if moves(self.stop) and not self.adds_within_limits():
-            # the arm's move (a re-aim that could not reach the pre-catch pose in time) would
+        if moves(self.stop) and (self.ramp_passed(t_b) or not self.adds_within_limits()):
+            # the ramp started before the rows it could change (``ramp_passed``), or the
+            # arm's move (a re-aim that could not reach the pre-catch pose in time) would
             # still run when the ramp starts: the rows would add the two beyond the joints'
             # limits; the palm waits at rest at the intercept pose instead (the live catch
             # before the soft stop), its re-aims going on

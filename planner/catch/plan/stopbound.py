@@ -148,8 +148,9 @@ class Layout:
         self.total = self.s + 1
 
 
-class _Rows:
-    """Sparse rows of the programme, one kind (equalities or upper bounds)."""
+class SparseRows:
+    """Sparse rows of a programme, one kind (equalities or upper bounds; also the stop
+    optimised on the rows', ``planner.catch.plan.stoprows``)."""
 
     def __init__(self) -> None:
         self.r: list[int] = []
@@ -164,6 +165,11 @@ class _Rows:
             self.c.append(c)
             self.v.append(v)
         self.rhs.append(rhs)
+
+    def both(self, cols_vals: list[tuple[int, float]], base: float, bound: float) -> None:
+        """|base + cols_vals . x| <= bound (two upper-bound rows)."""
+        self.add(cols_vals, bound - base)
+        self.add([(c, -v) for c, v in cols_vals], bound + base)
 
     def matrix(self, n_cols: int) -> sparse.csr_matrix:
         return sparse.csr_matrix((self.v, (self.r, self.c)), shape=(len(self.rhs), n_cols))
@@ -186,7 +192,7 @@ class StopProgram:
     grid: BoundGrid
 
 
-def _integrators(eq: _Rows, V: Layout, dt: float, v_ball: np.ndarray, mass_kg: float) -> None:
+def _integrators(eq: SparseRows, V: Layout, dt: float, v_ball: np.ndarray, mass_kg: float) -> None:
     """The arm (a double integrator per joint: at rest at both ends, at the intercept pose
     at the touch, knot ``V.pre``) and the ball after its touch (the palm's force and
     gravity: it arrives at the target with ``v_ball`` and ends at rest)."""
@@ -220,7 +226,7 @@ def cone_tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return t1, np.cross(n, t1)
 
 
-def _contact(ub: _Rows, V: Layout, T: PoseTerms) -> None:
+def _contact(ub: SparseRows, V: Layout, T: PoseTerms) -> None:
     """The ball on the pad (0 <= n . (target - ball) <= the pad's give, |x . (ball -
     target)| <= the palm's half width, y . (ball - target) <= the roll room, at every knot
     after the touch) and the force in the pyramid around the cone (|f . t_i| <= mu f . n)."""
@@ -243,7 +249,7 @@ def _contact(ub: _Rows, V: Layout, T: PoseTerms) -> None:
                 ub.add([(fc[x], float(sg * t[x] - PALM_MU * n[x])) for x in range(3)], 0.0)
 
 
-def _motors(ub: _Rows, V: Layout, T: PoseTerms) -> None:
+def _motors(ub: SparseRows, V: Layout, T: PoseTerms) -> None:
     """|Mm (H a + g + J_c^T f)| <= s cap at every step (the force from the touch on)."""
     k = V.k
     MH, MJ, Mg = T.Mm @ T.H, T.Mm @ T.J_centre.T, T.Mm @ T.g
@@ -257,7 +263,7 @@ def _motors(ub: _Rows, V: Layout, T: PoseTerms) -> None:
             ub.add([(c, -v) for c, v in cols] + [(V.s, -float(T.cap[r]))], float(Mg[r]))
 
 
-def _limits(ub: _Rows, V: Layout, dyn: StopDynamics, q: np.ndarray) -> list:
+def _limits(ub: SparseRows, V: Layout, dyn: StopDynamics, q: np.ndarray) -> list:
     """The joints' speed and acceleration limits (bounds), the wrist's range about the pose
     (bounds) and the prismatic axes' travel's length (rows); the bounds' list."""
     hand, arm, k = dyn.hand, list(dyn.arm), V.k
@@ -285,7 +291,7 @@ def stop_program(dyn: StopDynamics, q: np.ndarray, v_ball: np.ndarray, mass_kg: 
     T = pose_terms(dyn, q, radius_m)
     dt = grid.dt_s
     V = Layout(round(grid.pre_s / dt), round(grid.post_s / dt), len(dyn.arm))
-    eq, ub = _Rows(), _Rows()
+    eq, ub = SparseRows(), SparseRows()
     _integrators(eq, V, dt, np.asarray(v_ball, dtype=float), mass_kg)
     _contact(ub, V, T)
     _motors(ub, V, T)
