@@ -321,11 +321,11 @@ def test_grasp_stop(closed):
     q_i = _rows_at(p.rows.t, p.rows.q, p.intercept.t_s)
     P = hand.palm_pose(q_i)
     c = P[:3, 3] + r * P[:3, 2]
-    F = gq.stop_force(p.flight.ball.mass_kg, 0.5 * p.intercept.arrival_velocity)
+    F = gq.stop_force(p.flight.ball.mass_kg, 0.5 * p.intercept.arrival_velocity, hand.pad_give_m)
     v = np.linalg.norm(0.5 * p.intercept.arrival_velocity)
     # m v^2 / (2 d) against the velocity, plus the weight
     assert np.linalg.norm(F + 0.057 * np.array([0, 0, -9.81])) == pytest.approx(
-        0.057 * v * v / (2 * gq.STOP_DISTANCE_M))
+        0.057 * v * v / (2 * hand.pad_give_m))
     res = gq.grasp_forces(hand, q_i, c, r, F, case="stop", tip_tol_m=0.001,
                           moment_balance=False)
     assert [ct.name for ct in res.problem.contacts] == ["palm"]

@@ -62,7 +62,7 @@ def test_close_start_is_the_earliest_clear_candidate(angle, dist, height):
         p = s.pose
         for ready in (s.motion.fingers_open_s if s.motion.moving else k / 100 + 0.2,
                       p.t_i - 0.3, p.t_i - 0.05):
-            args = (pl.hand, s.flight, s.C, p.q_open, cl, p.t_i, ready, gq.stop_time(p.v_i),
+            args = (pl.hand, s.flight, s.C, p.q_open, cl, p.t_i, ready, gq.stop_time(p.v_i, pl.hand.pad_give_m),
                     BALL.radius_m)
             assert close_start(*args) == _all_at_once(*args)
             n += 1

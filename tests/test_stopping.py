@@ -12,7 +12,7 @@ from planner.catch.plan.api import plan_catch, plan_throw
 from planner.catch.plan.reasons import CatchReason
 from planner.catch.plan.softstop import ramp_integral
 from planner.check import check_trajectory
-from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
+from planner.check.ballstop import cone_margin_n, pad_force_n, pad_time_s
 from planner.trajfile import read_trajectory
 
 
@@ -24,11 +24,12 @@ def far(pl):
 
 def test_pad_rule():
     v = np.array([-4.0, 0.0, -3.0])  # 5 m/s
-    assert pad_time_s(v) == pytest.approx(2 * PAD_GIVE_M / 5.0)
-    F = pad_force_n(0.1, v)
-    # m v^2 / (2 d) against v, plus the weight
-    assert np.allclose(F, 0.1 * (25.0 / (2 * PAD_GIVE_M) * np.array([0.8, 0.0, 0.6])
-                                 + np.array([0.0, 0.0, 9.81])))
+    for give in (0.02, 0.01):  # (the default hand's pad, and half of it)
+        assert pad_time_s(v, give) == pytest.approx(2 * give / 5.0)
+        F = pad_force_n(0.1, v, None, give)
+        # m v^2 / (2 d) against v, plus the weight
+        assert np.allclose(F, 0.1 * (25.0 / (2 * give) * np.array([0.8, 0.0, 0.6])
+                                     + np.array([0.0, 0.0, 9.81])))
     n = np.array([0.8, 0.0, 0.6])
     assert cone_margin_n(F, n) > 0
     tang = np.array([0.6, 0.0, -0.8])

@@ -23,6 +23,7 @@ from planner.errors import InputError
 from planner.hand.builders import load_hand_spec
 from planner.hand.couplings import CouplingLaw, CouplingMap
 from planner.hand.motormap import MotorMap
+from planner.hand.pad import pad_give_m
 from planner.hand.spec import PALM_FRAME, HandSpec
 from planner.hand.urdf import urdf_sha256, urdf_text
 
@@ -69,6 +70,10 @@ class HandModel:
         # they play, the lowest first: a right hand's thumb is on its bass side, a left
         # hand's (its mirror image) on its treble side
         self.side = spec.side
+        # the palm's pad: the give (m) the catch planner and ``check`` stop a ball over,
+        # and the pad the replay's palm-ball contact is made of (``planner.hand.pad``)
+        self.palm_pad = spec.palm_pad
+        self.pad_give_m = pad_give_m(spec.palm_pad)
         self.fingers_low_to_high: tuple[str, ...] = (
             self.fingers if self.side == "right" else self.fingers[::-1])
         self._tip_ids = [self.pin_model.getFrameId(f) for f in self.tip_frames]

@@ -93,7 +93,9 @@ class LiveStopper:
     def pad_s(self, pose) -> float:
         """How long the pad takes to stop the ball: at the stopping motion's contact
         speed, or on a palm at rest (no soft stop)."""
-        return self.stop.pad_s if moves(self.stop) else gq.stop_time(pose.v_i)
+        if moves(self.stop):
+            return self.stop.pad_s
+        return gq.stop_time(pose.v_i, self.pl.hand.pad_give_m)
 
     def start_early(self, t_s: float) -> None:
         """The soft stop's hand moves from the first observation's ``t_s`` on, to the table's

@@ -115,7 +115,7 @@ def move_in(h: HandModel, dyn: StopDynamics, flight: Flight, C: np.ndarray, r: f
                           f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
                           f"(t = {pose.t_i:.3f} s)")
     s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
-                      pad_time_s(soft_stop.v_rel), r)
+                      pad_time_s(soft_stop.v_rel, h.pad_give_m), r)
     if too_soon is None:
         move_s = calm_move_time(dyn, q_rest, q_pre, t_react, min(s_c, due))
     return MoveIn(q_pre, move_s, s_c, too_soon)
