@@ -64,7 +64,8 @@ def test_the_planner_and_the_check_stop_the_ball_over_the_hand_files_pad(tmp_pat
     assert check_trajectory(str(f20)).ok
     hand10 = HandModel(replace(load_hand_spec("default"), palm_pad=PalmPad(0.01, 8.0)))
     rep = check_trajectory(str(f20), hand_override=hand10)  # (its URDF the default's)
-    assert any("the hand's pad gives 10 mm" in s for s in rep.problems), rep.problems
+    assert any("the plan stops the ball over 20 mm; the hand's pad gives 10 mm" in s
+               for s in rep.problems), rep.problems
 
 
 def _deepest_mm(hand: HandModel, speed_m_s: float) -> float:

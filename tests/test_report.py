@@ -20,6 +20,7 @@ from planner.report import write_check_report, write_html
 from planner.report.html import _frame_rows
 from tests.trajbuild import (
     BALL_R,
+    PAD10_HAND,
     RATE,
     SONG,
     SPEED,
@@ -75,7 +76,7 @@ def tilted_catch_file(path, hand, tilt_deg=120.0):
                                       [q_open, q_open, q_grasp, q_grasp], t))
     m = meta(hand, "catch", ball={"p0": [0.0, 0.0, 0.0], "v0": v0.tolist(), "radius": BALL_R,
                                   "mass": 0.2, "drag": 0.0}, intercept_t=T_I,
-             catch={"stop_distance_m": STOP_M})
+             catch={"stop_distance_m": STOP_M}, hand=PAD10_HAND)
     m["T_world_root"] = T.tolist()
     return write_traj(path, hand, t, q, metadata=m)
 

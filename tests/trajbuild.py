@@ -11,6 +11,7 @@ thumb, index and middle close around it.
 from __future__ import annotations
 
 from functools import cache, lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -254,6 +255,9 @@ def grasp_posture():
 
 STOP_M = 0.10  # this test ball (0.2 kg at 6 m/s) stopped over 10 cm: 36 N, within the
 # wrist flexion motor's 2 N m (over the catch planner's 2 cm it would need 180 N)
+# the hand those catches name: the default hand with a pad of STOP_M (``check`` judges a
+# plan's stop distance no longer than its hand's pad), its URDF the default's
+PAD10_HAND = str(Path(__file__).parent / "data" / "pad10.toml")
 
 
 def catch_file(path, hand, offset=(0.0, 0.0, 0.0), close_from=T_I - 0.12, close_s=0.25,
@@ -275,5 +279,5 @@ def catch_file(path, hand, offset=(0.0, 0.0, 0.0), close_from=T_I - 0.12, close_
     q = hand.apply_couplings(min_jerk(times, frames, t))
     m = meta(hand, "catch", ball={"p0": p0.tolist(), "v0": v0.tolist(), "radius": BALL_R,
                                   "mass": 0.2, "drag": 0.0}, intercept_t=T_I,
-             catch={"stop_distance_m": STOP_M})
+             catch={"stop_distance_m": STOP_M}, hand=PAD10_HAND)
     return write_traj(path, hand, t, q, metadata=m)

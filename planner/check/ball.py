@@ -137,15 +137,19 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
     if rolled is not None:
         problems.append(rolled)
     loads: tuple[BallLoad, ...] = ()
-    stop_m, pad_m = _stop_distance(meta, path), kin.hand.pad_give_m  # (the hand file's pad)
+    # the plan's stopping distance, judged as it states it, is no more than its hand's pad
+    # gives (the hand file's ``[palm] pad_give_m``: a plan stopped over less is judged by
+    # its own, harder stop)
+    stop_m, pad_m = _stop_distance(meta, path), kin.hand.pad_give_m
     if stop_m is None:
         problems.append("the plan states no stopping distance (catch.stop_distance_m): the "
                         "force of stopping the ball cannot be judged")
-    elif abs(stop_m - pad_m) > PAD_TOL_M:
-        problems.append(f"the plan stops the ball over {stop_m * 1000:g} mm; the hand's pad "
-                        f"gives {pad_m * 1000:g} mm (its file's [palm] pad_give_m)")
-    if stop_m is not None and err is not None:
-        loads = ball_loads(tr.t_s, tr.q, kin, palm, ball, ti, pad_m, g_time)
+    else:
+        if stop_m > pad_m + PAD_TOL_M:
+            problems.append(f"the plan stops the ball over {stop_m * 1000:g} mm; the hand's "
+                            f"pad gives {pad_m * 1000:g} mm (its file's [palm] pad_give_m)")
+        if err is not None:
+            loads = ball_loads(tr.t_s, tr.q, kin, palm, ball, ti, stop_m, g_time)
         for ld in loads:
             what = "stopping" if ld.phase == "stop" else "holding"
             if ld.headroom < -RATE_TOL:
