@@ -27,8 +27,10 @@ def _cols(line: str) -> list[float]:
 def test_a_held_throw_rows_start_at_the_landing_where_replay_and_model_agree(pl, tmp_path):
     """30 deg / 1.5 m (held in the replay, its ball barely leaves the palm: 1.0 mm): one
     table row per file row from the landing on; on the first row after the landing the
-    replay's ball and the model's are within 2 mm of each other (measured 0.3 mm), and the
-    fingertips are listed by name."""
+    replay's ball and the model's are within 2 mm of each other in the palm's plane
+    (measured 0.3 mm) and the replay's ball is in the palm's pad, within its give (the
+    model has no pad: measured 2.2 mm deep; on the rigid palm before the pad, 0.3 mm in
+    all three), and the fingertips are listed by name."""
     pytest.importorskip("mujoco")
     p = plan_throw(30.0, 1.5, 0.0, planner=pl)
     assert p.feasible, p.reasons
@@ -41,7 +43,8 @@ def test_a_held_throw_rows_start_at_the_landing_where_replay_and_model_agree(pl,
     assert 0.0 < first[0] - t_land <= 0.01 + 1e-9
     t_s = read_trajectory(str(out)).t_s
     assert len(rows) == int((t_s > t_land).sum())
-    assert max(abs(a - b) for a, b in zip(first[1:4], first[4:7])) <= 2.0
+    assert max(abs(a - b) for a, b in zip(first[1:3], first[4:6])) <= 2.0
+    assert 0.0 < -first[3] <= 1000 * pl.hand.pad_give_m and abs(first[6]) <= 2.0
     assert sum(ln.lstrip().startswith("thumb") for ln in lines) == 2
 
 
