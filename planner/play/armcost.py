@@ -170,6 +170,31 @@ class ArmFloor(ArmTimes):
                 return v
         return None
 
+    def _gap_floor(self, ctx: Prev, new: dict[int, str], place: int) -> float:
+        """A floor of the frames the new notes' own fingers lose on a move of the arm to
+        ``place`` after ``ctx``'s state, whatever the arm does (``ArmCosts._rail_loss``'
+        loop): a striking finger never rides, so it lifts from its last key (``m``, up at
+        ``up``: its own or this event's, ``Prev.lifts``), crosses (``_move_gap_s``'s
+        gap) and strikes; a key ``x`` early loses ``x``'s frames and brings the note no
+        more than ``x`` sooner, so it loses at least ``up + gap`` past its key's down in
+        keys cut or the note late (less ``LATE_MIN_S``; ``FLOOR_SLACK_S`` off), each
+        finger its own key and note. Only the gaps found already are read (a gap not
+        asked yet counts nothing: the hand's answers are asked as on main); inf where
+        no move gets there."""
+        total, gaps, pitch, t_down = 0.0, self._gaps, self.pitch, self._t_down
+        for n, f in new.items():
+            last = ctx.last.get(f)
+            if last is None:
+                continue
+            m, r = last
+            gap = gaps.get((pitch[m], f, r, pitch[n], place), False)
+            if gap is None:
+                return math.inf
+            if gap is not False:
+                up = min(self._t_up[m], ctx.cut_up)
+                total += max(0.0, self._over_frames(up + gap, t_down[n]))
+        return total
+
     def _over_frames(self, clear: float, start: float) -> float:
         """``_arm_floor``'s floor whatever is cut: a lift clear at ``clear`` after the arm
         must start (``start``) costs its time past the start in keys cut or a note late,
@@ -191,6 +216,9 @@ class ArmFloor(ArmTimes):
             if clear is not None and tie_rail + self._over_frames(
                     clear, arrive - T) - FLOOR_SLACK > limit:
                 return None
+        if limit < math.inf and tie_rail + self._gap_floor(
+                prev, new, place) - FLOOR_SLACK > limit:
+            return None
         cands = self._ride_cands(prev, place, new) if prev.follows else []
         if limit < math.inf and tie_rail + self._arm_floor(
                 prev, lifts, cands, T, arrive) - FLOOR_SLACK > limit:
