@@ -132,3 +132,57 @@ def test_the_arm_floor_is_never_above_the_loss_and_rules_out_no_move_kept(places
     assert p.ruled_out > 0 and plain.ruled_out == 0
     assert p.above_zero > p.moves // 10
     assert 0.0 <= p.least_margin < 1.0
+
+
+class _Overed(FingeringProblem):
+    """The programme, every move of the arm it weighs also asked plainly: the latest lift
+    of a finger that cannot ride along (``ArmFloor._first_clear``, which asks ``_rider``
+    of the lifts down to the first that cannot) against the one read from every rider
+    candidate (``_ride_cands``), the floor's part whatever is cut (``_over_frames``)
+    against the whole floor (``_arm_floor``), and the striking fingers' floor
+    (``_gap_floor``, with the rail's tie-break) against the move's loss costed in full."""
+
+    def __init__(self, *args) -> None:
+        super().__init__(*args)
+        self.moves = 0
+        self.skipped_riders = 0  # (moves whose latest lift is of a rider candidate)
+        self.above = 0  # (moves whose part of the floor is above nothing)
+        self.gap_above = 0  # (moves whose striking fingers' floor is above nothing)
+
+    def _rail_loss(self, prev, new, place, kept=(), lates=None, rode=None, limit=math.inf,
+                   tie_rail=None):
+        _, arrive, T, lifts, cands = self._arm_setup(prev, new, place)
+        start = arrive - T
+        riding = {c[0] for c in cands}
+        plain = next((v for v, m, f in lifts[0] if (m, f) not in riding), None)
+        if plain is not None and plain <= start:
+            plain = None
+        got = self._first_clear(prev, lifts[0], place, new, start)
+        assert got == plain
+        if got is not None:
+            part = self._over_frames(got, start)
+            assert part <= self._arm_floor(prev, lifts, cands, T, arrive)
+            self.above += part > 0.0
+            self.skipped_riders += got != lifts[0][0][0]
+        self.moves += 1
+        full = super()._rail_loss(prev, new, place, kept)
+        gap = self._gap_floor(prev, new, place)
+        assert TIE_RAIL_PER_M * self.places.distance_m(place, prev.state.place) + gap \
+            - FLOOR_SLACK <= full
+        self.gap_above += gap > 0.0
+        return super()._rail_loss(prev, new, place, kept, lates, rode, limit, tie_rail)
+
+
+@pytest.mark.parametrize("name", ["fast.mid", "chords.mid"])
+def test_the_floors_first_part_is_the_one_read_from_every_rider(places, name):
+    """On a real song, every move of the arm the programme weighs: the lift the floor's
+    first part is worked from is the latest clear after the arm's start of the fingers
+    no rider candidate holds (so what it rules out, the whole floor rules out: it is at
+    or below it); the part is above nothing on many moves, and a note that rides is
+    passed over on some. The striking fingers' floor is at or below the move's loss, and
+    above nothing on some moves."""
+    p = _Overed(list(load_song(SONGS / name).notes), places, 100.0)
+    assert p.solve().assignments
+    assert p.moves > 200 and p.above > p.moves // 10 and p.gap_above > 0
+    if name == "chords.mid":  # (3 of its 998 moves; none on ``fast.mid``)
+        assert p.skipped_riders > 0

@@ -136,10 +136,10 @@ class Prev:
     """What a state of the event before tells every transition from it, worked out once
     (the programme weighs hundreds of transitions from each state)."""
 
-    __slots__ = ("around", "cut_up", "follows", "fresh", "held", "last", "late_of", "lift_end",
-                 "lift_end_black", "lift_parts", "lifts", "lifts_black", "lifts_same",
-                 "lifts_to", "older", "on_key", "posture", "recent", "rode_of", "state",
-                 "steps", "up_parts")
+    __slots__ = ("around", "cut_up", "follow_of", "follows", "fresh", "held", "last",
+                 "late_of", "lift_end", "lift_end_black", "lift_parts", "lifts", "lifts_black",
+                 "lifts_same", "lifts_to", "older", "on_key", "posture", "recent", "rode_of",
+                 "state", "steps", "up_parts")
 
     def __init__(self, costs: Costs, state: State, t: float) -> None:
         self.state = state
@@ -179,6 +179,8 @@ class Prev:
             (m, f, a, t_up[m] - down, costs.places.press_min_s(a), down)
             for m, f in state.fingers if (a := costs.entry(m, f, state.place)) is not None
             for down in (t_down[m] + late.get(m, 0.0),)]
+        self.follow_of = {(x[0], x[1]): x for x in self.follows}  # (by note and finger:
+        # ``ArmFloor._first_clear``)
         self.up_parts: dict[int, tuple] = {}  # by note: what its key's up cut for a move
         # of the arm works out whatever the cut (``ArmCosts._cut_up_s``)
         self.lift_parts: dict[tuple, tuple] = {}  # by (note, finger, ``Costs._times``
