@@ -33,9 +33,6 @@ WINDOW = 48  # events the programme looks over at once ...
 LOOKAHEAD = 16  # ... the last of which it decides only in the next window
 FIRST_WINDOW, FIRST_LOOKAHEAD = 16, 8  # the first window is short: the rows start sooner
 # (shorter ones were tried: docs/history/play-second-design.md, "Speed ... session 21", item 3)
-FIRST_SURE = 6  # layers after which the first window decides its first event, certain or
-# not (the first row waits for them: 5-20 ms a layer cold; the first event's path is
-# certain after 4-16 layers, median 8-9: docs/history/2026-12-07-play-first-row2.md)
 
 
 @dataclass(frozen=True)
@@ -111,7 +108,7 @@ class FingeringProblem(Layers):
         """The programme over a receding window: the best path over the next ``WINDOW``
         events (``FIRST_WINDOW`` at the start) decides its first ones (all but
         ``LOOKAHEAD``; the first window fewer as soon as their path is certain:
-        ``_certain``, and its first event alone after ``FIRST_SURE`` layers), which are yielded (``FingeringChunk``, with the notes no state can
+        ``_certain``), which are yielded (``FingeringChunk``, with the notes no state can
         play that start before the next event) and fixed; the next window goes on from the
         look-ahead's states that lead back to the last state decided (``_descendants``:
         every event is weighed once). Events are read as the windows need them, so the motion and the
@@ -149,12 +146,10 @@ class FingeringProblem(Layers):
             for t, new in ahead_evs[len(layers):window]:
                 prev = self._layer(prev, t, new)
                 layers.append((t, prev, new))
-                if first and len(layers) < n and ((sure := _certain(layers, k))
-                                                  or len(layers) >= FIRST_SURE):
-                    k = sure or 1  # (the first events' path is certain: decided now, as
-                    # the whole window would; else, after ``FIRST_SURE`` layers, the first
-                    # event on the best path so far; the rest is weighed again from the
-                    # state decided, with the longer window; the rows start sooner)
+                if first and len(layers) < n and (sure := _certain(layers, k)):
+                    k = sure  # (the first events' path is certain: decided now, as the
+                    # whole window would; the rest is weighed again from the state
+                    # decided, with the longer window; the rows start sooner)
                     break
             path = self._path(layers)
             until = ahead_evs[k][0] if k < len(ahead_evs) else math.inf
