@@ -272,3 +272,75 @@ def test_the_cells_bound_holds_on_moves_across_postures():
                     assert scale == 1.0
                     proved += 1
     assert proved > 100
+
+
+def test_the_box_bound_is_at_least_each_moves_own(default_moves):
+    """Forty random moves across of each finger (posture 0: its own box is the first
+    that holds its moves): the box's bound (``BoxBound.bound_nm``) at or above the move's
+    own (``TendonProof.bound_nm``) on every motor, so a move the box proves the move's
+    own bound proves; most moves proved by the box."""
+    hand, atlas, moves = default_moves
+    proof = moves.tendons.proof
+    rng = np.random.default_rng(17)
+    proved = 0
+    for finger, (_, _, _, by_id) in moves._boxed.items():
+        box = proof.box_bound(finger, *moves._boxed[finger][:3])
+        entries = list(by_id.values())
+        for _ in range(40):
+            a, b = (entries[i] for i in rng.integers(len(entries), size=2))
+            move, q_a, dq = _move(hand, finger, atlas.base, a.high, b.high)
+            A, V = move.peak_acceleration, move.peak_speed
+            own = proof.bound_nm(q_a, dq, A, V)
+            tangent = hand.apply_couplings(dq) - hand.apply_couplings(np.zeros(hand.n))
+            # (the same sums in another order: equal but for their last bits)
+            assert np.all(box.bound_nm(tangent, A, V) >= own * (1.0 - 1e-12)), finger
+            if proof.box_proves(box, dq, A, V):
+                proved += 1
+                assert proof.proves(q_a, dq, A, V)
+    assert proved >= 150  # (of 160)
+
+
+def test_the_box_bound_proves_nothing_of_a_weakened_tendon(default_moves):
+    """The weakened middle knuckle of ``test_a_weakened_tendon_is_not_proved``: the box
+    proves none of the middle finger's moves across; a move of two fingers proves
+    nothing either."""
+    hand, atlas, moves = default_moves
+    spec = load_hand_spec("default")
+    weak = HandModel(dataclasses.replace(spec, actuators=tuple(
+        dataclasses.replace(a, tendon_force_n=9.0)
+        if a.name == "middle_mcp" else a for a in spec.actuators)))
+    tl = TendonLoad(weak)
+    lo, hi, reach, by_id = moves._boxed["middle"]
+    tl.proof.add_box("middle", lo, hi)
+    box = tl.proof.box_bound("middle", lo, hi, reach)
+    entries = list(by_id.values())
+    rng = np.random.default_rng(3)
+    for _ in range(30):
+        a, b = (entries[i] for i in rng.integers(len(entries), size=2))
+        move, _, dq = _move(weak, "middle", atlas.base, a.high, b.high)
+        assert not tl.proof.box_proves(box, dq, move.peak_acceleration, move.peak_speed)
+    strong = moves.tendons.proof.box_bound("middle", lo, hi, reach)
+    a, b = entries[0], entries[1]
+    move, _, dq = _move(hand, "middle", atlas.base, a.high, b.high)
+    dq[hand.joint_slice("index")[0]] = 1e-3
+    assert not moves.tendons.proof.box_proves(strong, dq, move.peak_acceleration,
+                                              move.peak_speed)
+
+
+def test_a_move_across_is_timed_as_the_full_bound_times_it(default_moves):
+    """``Moves.across`` (the box's proof first) against ``finger_scale`` on each of
+    sixty random moves across, and on the same moves from a copy of the entry (not one
+    of the box's: ``finger_scale`` itself): the same scale, the same move."""
+    _, atlas, moves = default_moves
+    rng = np.random.default_rng(23)
+    entries = [e for e in atlas.solved().values() if e.finger in ("index", "ring")]
+    for _ in range(60):
+        a, b = (entries[i] for i in rng.integers(len(entries), size=2))
+        if a.finger != b.finger:
+            continue
+        for start in (a, dataclasses.replace(a)):
+            move = moves._move(a.finger, start.high, b.high)
+            full = moves.finger_scale(a.finger, start.high, b.high, move)
+            assert moves._across_scale(start, b, move) == full
+            got = moves.across(start, b)
+            assert got is not None and got.duration_s == move.duration_s * full

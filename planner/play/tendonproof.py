@@ -174,6 +174,48 @@ def box_gain(hand: HandModel, kin, chain: FingerChain, M: np.ndarray, lo: np.nda
                    pairs)
 
 
+@dataclass(frozen=True)
+class BoxBound:
+    """``TendonProof.bound_nm`` of every move of one finger between two poses of a box
+    at once but for the move's own tangent ``t`` and profile (``A``, ``V``): the central
+    differences' rounding (``e``, ``e2``) bounded over the box (``TendonProof.box_bound``),
+    its terms summed ahead: ``static + (|mass t| + mass_radius |t|) A + e_mass A +
+    (|speed p| + speed_radius |p| + spread |t| + e_speed) V^2``, ``p`` the pairs'
+    products ``t_k t_l``; each term at least the move's own in ``bound_nm``."""
+
+    finger: str
+    cols: np.ndarray
+    mass: np.ndarray
+    mass_radius: np.ndarray
+    speed: np.ndarray
+    speed_radius: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
+    e_mass: np.ndarray  # (|mass| + mass_radius) e per motor
+    spread: np.ndarray  # (motors, joints): speed_all's slack |t_k| e_l + e_k |t_l| by joint
+    e_speed: np.ndarray  # (|mass| + mass_radius) e2 + speed_all (e_k e_l) per motor
+    static_nm: np.ndarray
+    limit_nm: np.ndarray  # every motor's share less ``PROOF_MARGIN``
+
+    def bound_nm(self, tangent: np.ndarray, peak_acceleration: float, peak_speed: float
+                 ) -> np.ndarray:
+        """Each motor's bound on the move of whole-hand tangent ``tangent`` (couplings
+        applied) and profile ``A``, ``V``, its ends in the box."""
+        t = tangent[self.cols]
+        at = np.abs(t)
+        prod = t[self.K] * t[self.L]
+        mass = (np.abs(self.mass @ t) + self.mass_radius @ at + self.e_mass) * peak_acceleration
+        speed = (np.abs(self.speed @ prod) + self.speed_radius @ np.abs(prod)
+                 + self.spread @ at + self.e_speed)
+        return self.static_nm + mass + speed * (peak_speed * peak_speed)
+
+    def proves(self, tangent: np.ndarray, peak_acceleration: float, peak_speed: float
+               ) -> bool:
+        """Whether ``bound_nm`` keeps every motor within ``limit_nm``."""
+        return bool(np.all(self.bound_nm(tangent, peak_acceleration, peak_speed)
+                           <= self.limit_nm))
+
+
 def _terms_at(model, data, q: np.ndarray, pairs
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """At configuration ``q`` of a chain's own ``model`` (its joints alone, in order):
@@ -383,6 +425,43 @@ class TendonProof:
                 BoxGain(*(np.array([getattr(g, k) for g in gains])
                           for k in ("mass", "mass_radius", "speed", "speed_radius")),
                         gains[0].pairs))
+
+    def box_bound(self, finger: str, lo: np.ndarray, hi: np.ndarray,
+                  reach: np.ndarray) -> BoxBound | None:
+        """``BoxBound`` of the finger's moves between poses of the box ``lo``-``hi`` (its
+        chain's joints, couplings applied; widened by ``BOX_ROOM_RAD``) whose joints'
+        own differences are at most ``reach``, over the gain of the first box holding it
+        (``gain``); None where there is none."""
+        chain = self.chains[finger]
+        if chain is None or not np.all(lo <= hi):
+            return None
+        lo, hi = _roomed(lo, hi)
+        gain = self.gain(finger, np.stack((lo, hi)))
+        if gain is None:
+            return None
+        # (``bound_nm``'s rounding bound, its largest over the box: ``np.spacing`` grows
+        # with its argument)
+        ulp = ROUNDING_FACTOR * np.spacing(np.maximum(np.abs(lo), np.abs(hi)) + reach + 1.0)
+        e, e2 = ulp / self.step, ulp / (self.step * self.step)
+        _, mass_all, speed_all, K, L = self._derived(gain)
+        spread = np.zeros((len(self.M), len(chain.cols)))
+        for p, (k, l) in enumerate(gain.pairs):
+            spread[:, k] += speed_all[:, p] * e[l]
+            spread[:, l] += speed_all[:, p] * e[k]
+        return BoxBound(finger, chain.cols, gain.mass, gain.mass_radius, gain.speed, gain.speed_radius,
+                        K, L, mass_all @ e, spread, mass_all @ e2 + speed_all @ (e[K] * e[L]),
+                        self.static_nm, self.capacity_nm * (1.0 - PROOF_MARGIN))
+
+    def box_proves(self, box: BoxBound, dq: np.ndarray, peak_acceleration: float,
+                   peak_speed: float) -> bool:
+        """``proves`` of a move by whole-hand ``dq`` of ``box``'s finger alone, its ends
+        in the box (the caller's word), by ``BoxBound.proves``: a move ``proves`` passes
+        or not, by a bound at least its own (false where a coupling carries it out of the
+        finger, as ``bound_nm``)."""
+        tangent = self.hand.apply_couplings(dq) - self._coupled_zero
+        if np.any(tangent[self._outside[box.finger]] != 0.0):
+            return False
+        return box.proves(tangent, peak_acceleration, peak_speed)
 
     def _derived(self, gain: BoxGain) -> tuple:
         """What ``bound_nm`` reads of a gain besides its terms, once per gain: ``|mass|``,
