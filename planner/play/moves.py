@@ -423,10 +423,8 @@ class Moves(FollowMoves, RepeatMoves):
             if box is False:
                 box = self._box_bounds[a.finger] = self.tendons.proof.box_bound(
                     a.finger, *boxed[:3])
-            dq = np.zeros(self.hand.n)
-            dq[self.js[a.finger]] = move.dq
-            if box is not None and self.tendons.proof.box_proves(
-                    box, dq, move.peak_acceleration, move.peak_speed):
+            if box is not None and box.proves(move.dq, move.peak_acceleration,
+                                              move.peak_speed):
                 return 1.0
         return self.finger_scale(a.finger, a.high, b.high, move)
 

@@ -179,12 +179,15 @@ class BoxBound:
     """``TendonProof.bound_nm`` of every move of one finger between two poses of a box
     at once but for the move's own tangent ``t`` and profile (``A``, ``V``): the central
     differences' rounding (``e``, ``e2``) bounded over the box (``TendonProof.box_bound``),
-    its terms summed ahead: ``static + (|mass t| + mass_radius |t|) A + e_mass A +
+    its terms summed ahead: ``static + (|mass t| + mass_radius |t| + e_mass) A +
     (|speed p| + speed_radius |p| + spread |t| + e_speed) V^2``, ``p`` the pairs'
-    products ``t_k t_l``; each term at least the move's own in ``bound_nm``."""
+    products ``t_k t_l``; each term at least the move's own in ``bound_nm``. The tangent
+    is ``bound_nm``'s to the bit: each coupled joint's ``(ratio dq + offset) - offset``."""
 
-    finger: str
-    cols: np.ndarray
+    dep: np.ndarray  # (the finger's coupled joints, their sources, ratios and offsets)
+    src: np.ndarray
+    ratio: np.ndarray
+    offset: np.ndarray
     mass: np.ndarray
     mass_radius: np.ndarray
     speed: np.ndarray
@@ -197,11 +200,12 @@ class BoxBound:
     static_nm: np.ndarray
     limit_nm: np.ndarray  # every motor's share less ``PROOF_MARGIN``
 
-    def bound_nm(self, tangent: np.ndarray, peak_acceleration: float, peak_speed: float
+    def bound_nm(self, dq: np.ndarray, peak_acceleration: float, peak_speed: float
                  ) -> np.ndarray:
-        """Each motor's bound on the move of whole-hand tangent ``tangent`` (couplings
-        applied) and profile ``A``, ``V``, its ends in the box."""
-        t = tangent[self.cols]
+        """Each motor's bound on the move by ``dq`` (the finger's joints, before the
+        couplings) of profile ``A``, ``V``, its ends in the box."""
+        t = np.array(dq, dtype=float)
+        t[self.dep] = (self.ratio * t[self.src] + self.offset) - self.offset
         at = np.abs(t)
         prod = t[self.K] * t[self.L]
         mass = (np.abs(self.mass @ t) + self.mass_radius @ at + self.e_mass) * peak_acceleration
@@ -209,11 +213,10 @@ class BoxBound:
                  + self.spread @ at + self.e_speed)
         return self.static_nm + mass + speed * (peak_speed * peak_speed)
 
-    def proves(self, tangent: np.ndarray, peak_acceleration: float, peak_speed: float
-               ) -> bool:
-        """Whether ``bound_nm`` keeps every motor within ``limit_nm``."""
-        return bool(np.all(self.bound_nm(tangent, peak_acceleration, peak_speed)
-                           <= self.limit_nm))
+    def proves(self, dq: np.ndarray, peak_acceleration: float, peak_speed: float) -> bool:
+        """Whether ``bound_nm`` keeps every motor within ``limit_nm``: then so does the
+        move's own bound (``TendonProof.proves``) and ``TendonLoad.time_scale`` is 1."""
+        return bool((self.bound_nm(dq, peak_acceleration, peak_speed) <= self.limit_nm).all())
 
 
 def _terms_at(model, data, q: np.ndarray, pairs
@@ -431,9 +434,16 @@ class TendonProof:
         """``BoxBound`` of the finger's moves between poses of the box ``lo``-``hi`` (its
         chain's joints, couplings applied; widened by ``BOX_ROOM_RAD``) whose joints'
         own differences are at most ``reach``, over the gain of the first box holding it
-        (``gain``); None where there is none."""
+        (``gain``); None where there is none, or where a coupling joins the finger's
+        joints to another's (``bound_nm``: such a move proves nothing)."""
         chain = self.chains[finger]
         if chain is None or not np.all(lo <= hi):
+            return None
+        c = chain.cols.tolist()
+        laws = [w for w in self.hand.couplings if w.dep in c or w.src in c]
+        deps = {w.dep for w in self.hand.couplings}
+        if any(w.kind != "linear" or w.dep not in c or w.src not in c or w.src in deps
+               for w in laws):
             return None
         lo, hi = _roomed(lo, hi)
         gain = self.gain(finger, np.stack((lo, hi)))
@@ -444,24 +454,17 @@ class TendonProof:
         ulp = ROUNDING_FACTOR * np.spacing(np.maximum(np.abs(lo), np.abs(hi)) + reach + 1.0)
         e, e2 = ulp / self.step, ulp / (self.step * self.step)
         _, mass_all, speed_all, K, L = self._derived(gain)
-        spread = np.zeros((len(self.M), len(chain.cols)))
+        spread = np.zeros((len(self.M), len(c)))
         for p, (k, l) in enumerate(gain.pairs):
             spread[:, k] += speed_all[:, p] * e[l]
             spread[:, l] += speed_all[:, p] * e[k]
-        return BoxBound(finger, chain.cols, gain.mass, gain.mass_radius, gain.speed, gain.speed_radius,
+        at = (np.array([c.index(w.dep) for w in laws], dtype=int),
+              np.array([c.index(w.src) for w in laws], dtype=int),
+              np.array([w.ratio for w in laws], dtype=float),
+              np.array([w.offset for w in laws], dtype=float))
+        return BoxBound(*at, gain.mass, gain.mass_radius, gain.speed, gain.speed_radius,
                         K, L, mass_all @ e, spread, mass_all @ e2 + speed_all @ (e[K] * e[L]),
                         self.static_nm, self.capacity_nm * (1.0 - PROOF_MARGIN))
-
-    def box_proves(self, box: BoxBound, dq: np.ndarray, peak_acceleration: float,
-                   peak_speed: float) -> bool:
-        """``proves`` of a move by whole-hand ``dq`` of ``box``'s finger alone, its ends
-        in the box (the caller's word), by ``BoxBound.proves``: a move ``proves`` passes
-        or not, by a bound at least its own (false where a coupling carries it out of the
-        finger, as ``bound_nm``)."""
-        tangent = self.hand.apply_couplings(dq) - self._coupled_zero
-        if np.any(tangent[self._outside[box.finger]] != 0.0):
-            return False
-        return box.proves(tangent, peak_acceleration, peak_speed)
 
     def _derived(self, gain: BoxGain) -> tuple:
         """What ``bound_nm`` reads of a gain besides its terms, once per gain: ``|mass|``,
