@@ -123,6 +123,14 @@ def test_a_move_outside_the_boxes_or_of_two_fingers_is_not_proved(default_moves)
     assert tl.proof.bound_nm(q_a, dq2, move.peak_acceleration, move.peak_speed) is None
 
 
+def _weak_hand() -> HandModel:
+    """The default hand with its middle finger's knuckle tendon at 9 N of its 40 N."""
+    spec = load_hand_spec("default")
+    return HandModel(dataclasses.replace(spec, actuators=tuple(
+        dataclasses.replace(a, tendon_force_n=9.0)
+        if a.name == "middle_mcp" else a for a in spec.actuators)))
+
+
 def test_a_weakened_tendon_is_not_proved(default_moves):
     """The default hand with its middle finger's knuckle tendon at 9 N of its 40 N (its
     capacity between the finger's load held still and its load moving) and the default
@@ -131,10 +139,7 @@ def test_a_weakened_tendon_is_not_proved(default_moves):
     not slow (the test asks every tendon motor's static bound within its share, the middle
     finger's too: on the safe side)."""
     _, atlas, moves = default_moves
-    spec = load_hand_spec("default")
-    weak = HandModel(dataclasses.replace(spec, actuators=tuple(
-        dataclasses.replace(a, tendon_force_n=9.0)
-        if a.name == "middle_mcp" else a for a in spec.actuators)))
+    weak = _weak_hand()
     tl = TendonLoad(weak)
     for finger, boxes in moves.tendons.proof.boxes.items():
         tl.proof.boxes[finger].extend(boxes)
@@ -305,10 +310,7 @@ def test_the_box_bound_proves_nothing_of_a_weakened_tendon(default_moves):
     """The weakened middle knuckle of ``test_a_weakened_tendon_is_not_proved``: the box
     proves none of the middle finger's moves across."""
     _, atlas, moves = default_moves
-    spec = load_hand_spec("default")
-    weak = HandModel(dataclasses.replace(spec, actuators=tuple(
-        dataclasses.replace(a, tendon_force_n=9.0)
-        if a.name == "middle_mcp" else a for a in spec.actuators)))
+    weak = _weak_hand()
     tl = TendonLoad(weak)
     lo, hi, reach, by_id = moves._boxed["middle"]
     tl.proof.add_box("middle", lo, hi)
