@@ -290,9 +290,9 @@ def test_the_box_bound_is_at_least_each_moves_own(default_moves):
     proof = moves.tendons.proof
     rng = np.random.default_rng(17)
     proved = 0
-    for finger, (_, _, _, by_id) in moves._boxed.items():
-        box = proof.box_bound(finger, *moves._boxed[finger][:3])
-        entries = list(by_id.values())
+    for finger, fb in moves.across_proof.boxes.items():
+        box = proof.box_bound(finger, fb.lo, fb.hi, fb.most - fb.least)
+        entries = list(fb.by_id.values())
         for _ in range(40):
             a, b = (entries[i] for i in rng.integers(len(entries), size=2))
             move, q_a, dq = _move(hand, finger, atlas.base, a.high, b.high)
@@ -312,10 +312,10 @@ def test_the_box_bound_proves_nothing_of_a_weakened_tendon(default_moves):
     _, atlas, moves = default_moves
     weak = _weak_hand()
     tl = TendonLoad(weak)
-    lo, hi, reach, by_id = moves._boxed["middle"]
-    tl.proof.add_box("middle", lo, hi)
-    box = tl.proof.box_bound("middle", lo, hi, reach)
-    entries = list(by_id.values())
+    fb = moves.across_proof.boxes["middle"]
+    tl.proof.add_box("middle", fb.lo, fb.hi)
+    box = tl.proof.box_bound("middle", fb.lo, fb.hi, fb.most - fb.least)
+    entries = list(fb.by_id.values())
     rng = np.random.default_rng(3)
     for _ in range(30):
         a, b = (entries[i] for i in rng.integers(len(entries), size=2))
@@ -332,7 +332,8 @@ def test_a_coupling_out_of_the_finger_gives_no_box_bound(default_moves):
     tl = TendonLoad(hand)
     tied = CouplingLaw(dep=int(js_i[0]), src=int(js_m[0]), kind="linear", ratio=0.5)
     for finger in ("middle", "index"):
-        lo, hi, reach, _ = moves._boxed[finger]
+        fb = moves.across_proof.boxes[finger]
+        lo, hi, reach = fb.lo, fb.hi, fb.most - fb.least
         tl.proof.add_box(finger, lo, hi)
         assert tl.proof.box_bound(finger, lo, hi, reach) is not None
         tl.proof.hand = SimpleNamespace(couplings=(*hand.couplings, tied))
@@ -357,3 +358,39 @@ def test_a_move_across_is_timed_as_the_full_bound_times_it(default_moves):
             assert moves._across_scale(start, b, move) == full
             got = moves.across(start, b)
             assert got is not None and got.duration_s == move.duration_s * full
+
+
+def test_the_stretched_box_bound_holds_on_moves_across_postures():
+    """Moves across from another posture's entry into this posture's box, twenty of each
+    finger and pair of postures, those of them that no box holds both ends of: the bound over the box
+    stretched to the first entry's high pose (``AcrossProof``, the cells it meets) at or
+    above the move's own (the cells' that the move's ends' box meets) on every motor but
+    for the sums' rounding; where it proves a move, the full computation's scale is 1."""
+    hand = load_hand("default")
+    atlases = [Atlas(hand, posture=p) for p in range(posture_count(hand))]
+    moves = [Moves(hand, a) for a in atlases]
+    proof = moves[0].tendons.proof
+    rng = np.random.default_rng(4)
+    proved = tried = 0
+    for p, q in ((0, 1), (1, 0), (0, 2), (2, 1)):
+        across = moves[q].across_proof
+        for f in ("index", "middle", "ring", "pinky"):
+            mine = [e for e in atlases[p].solved().values() if e.finger == f]
+            theirs = list(across.boxes[f].by_id.values())
+            for _ in range(20):
+                a, b = mine[rng.integers(len(mine))], theirs[rng.integers(len(theirs))]
+                move, q_a, dq = _move(hand, f, atlases[q].base, a.high, b.high)
+                A, V = move.peak_acceleration, move.peak_speed
+                points = hand.apply_couplings(np.stack((q_a, q_a + dq)))[:, hand.joint_slice(f)]
+                if proof.gain(f, points) is not None:
+                    continue  # (both ends in one posture's box: the first test's)
+                box = across._stretched(a, across.boxes[f])
+                assert box is not None
+                assert np.all(box.bound_nm(move.dq, A, V)
+                              >= proof.bound_nm(q_a, dq, A, V) * (1.0 - 1e-12)), (f, p, q)
+                tried += 1
+                if across.proves(a, b, move):
+                    assert _full(moves[q].tendons, move, q_a, dq)[1] == 1.0
+                    proved += 1
+    assert tried > 100
+    assert proved > tried // 2

@@ -30,6 +30,7 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
+from planner.play.acrossproof import AcrossProof
 from planner.play.atlas import (
     PATH_SAMPLES,
     Atlas,
@@ -241,20 +242,13 @@ class Moves(FollowMoves, RepeatMoves):
         self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
         self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
         proof = self.tendons.proof
-        # (each finger's box of high poses, the reach of its moves across in its joints
-        # and its entries by id, its ``BoxBound`` when first asked: ``_across_scale``)
-        self._boxed: dict[str, tuple] = {}
-        self._box_bounds: dict = {}
+        self.across_proof: AcrossProof | None = None  # (its moves across at once)
         if proof is not None:  # (each finger's high poses' box, for its moves across, with
             # its gain as the move table ships it: ``planner.play.tendonproof``)
-            highs: dict[str, list[AtlasEntry]] = {}
-            for e in atlas.solved().values():
-                highs.setdefault(e.finger, []).append(e)
-            for f, (lo, hi) in self.high_boxes().items():
+            boxes = self.high_boxes()
+            for f, (lo, hi) in boxes.items():
                 proof.add_box(f, lo, hi, self.table.proof_gain(f, lo, hi, proof.params()))
-                H = np.array([e.high for e in highs[f]])
-                self._boxed[f] = (lo, hi, H.max(axis=0) - H.min(axis=0),
-                                  {id(e): e for e in highs[f]})
+            self.across_proof = AcrossProof(hand, atlas, proof, boxes)
             if self.table.proof_params == proof.params():  # (the cells over every
                 for f, cells in self.table.proof_cells.items():  # posture: shipped only)
                     proof.add_cells(f, *cells)
@@ -411,21 +405,11 @@ class Moves(FollowMoves, RepeatMoves):
         return self._lat[key]
 
     def _across_scale(self, a: AtlasEntry, b: AtlasEntry, move: Move) -> float:
-        """``finger_scale`` of the move across from ``a`` to ``b``: 1 at once where both
-        entries are in their finger's box of high poses (``_boxed``) and its bound proves
-        the move (``TendonProof.box_bound``: at least the move's own bound, so that
-        ``finger_scale`` also proves it, or, on another box's gain, a bound as sound: its
-        1 either way); else ``finger_scale``."""
-        boxed = self._boxed.get(a.finger)
-        if (boxed is not None and move.duration_s > 0.0 and boxed[3].get(id(a)) is a
-                and boxed[3].get(id(b)) is b):
-            box = self._box_bounds.get(a.finger, False)
-            if box is False:
-                box = self._box_bounds[a.finger] = self.tendons.proof.box_bound(
-                    a.finger, *boxed[:3])
-            if box is not None and box.proves(move.dq, move.peak_acceleration,
-                                              move.peak_speed):
-                return 1.0
+        """``finger_scale`` of the move across from ``a`` to ``b``: 1 at once where the
+        box bound proves it (``AcrossProof``: a bound at least the move's own, so that
+        ``finger_scale`` would find 1); else ``finger_scale``."""
+        if self.across_proof is not None and self.across_proof.proves(a, b, move):
+            return 1.0
         return self.finger_scale(a.finger, a.high, b.high, move)
 
     def across_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:

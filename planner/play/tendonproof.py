@@ -434,8 +434,9 @@ class TendonProof:
         """``BoxBound`` of the finger's moves between poses of the box ``lo``-``hi`` (its
         chain's joints, couplings applied; widened by ``BOX_ROOM_RAD``) whose joints'
         own differences are at most ``reach``, over the gain of the first box holding it
-        (``gain``); None where there is none, or where a coupling joins the finger's
-        joints to another's (``bound_nm``: such a move proves nothing)."""
+        (``gain``), else over the cells it meets (``cells_gain``); None where neither
+        holds it, or where a coupling joins the finger's joints to another's
+        (``bound_nm``: such a move proves nothing)."""
         chain = self.chains[finger]
         if chain is None or not np.all(lo <= hi):
             return None
@@ -447,6 +448,8 @@ class TendonProof:
             return None
         lo, hi = _roomed(lo, hi)
         gain = self.gain(finger, np.stack((lo, hi)))
+        if gain is None:
+            gain = self.cells_gain(finger, lo, hi)
         if gain is None:
             return None
         # (``bound_nm``'s rounding bound, its largest over the box: ``np.spacing`` grows
@@ -465,6 +468,24 @@ class TendonProof:
         return BoxBound(*at, gain.mass, gain.mass_radius, gain.speed, gain.speed_radius,
                         K, L, mass_all @ e, spread, mass_all @ e2 + speed_all @ (e[K] * e[L]),
                         self.static_nm, self.capacity_nm * (1.0 - PROOF_MARGIN))
+
+    def cells_gain(self, finger: str, lo: np.ndarray, hi: np.ndarray) -> BoxGain | None:
+        """One gain over every cell of the finger's grid (``add_cells``) that meets the box
+        ``lo``-``hi``: each term's interval the hull of theirs (so each cell's bound on a
+        move is at most its own); None when the grid does not hold the box."""
+        cells = self.cells.get(finger)
+        if cells is None:
+            return None
+        c_lo, c_hi, terms = cells
+        if not (np.all(lo >= c_lo.min(axis=0)) and np.all(hi <= c_hi.max(axis=0))):
+            return None
+        meet = np.all(c_lo <= hi, axis=1) & np.all(c_hi >= lo, axis=1)
+        out = []
+        for centre, radius in ((terms[0][meet], terms[1][meet]), (terms[2][meet], terms[3][meet])):
+            low, top = np.min(centre - radius, axis=0), np.max(centre + radius, axis=0)
+            mid = 0.5 * (low + top)
+            out += [mid, np.maximum(top - mid, mid - low)]
+        return BoxGain(*out, tuple(zip(terms[7].tolist(), terms[8].tolist())))
 
     def _derived(self, gain: BoxGain) -> tuple:
         """What ``bound_nm`` reads of a gain besides its terms, once per gain: ``|mass|``,
