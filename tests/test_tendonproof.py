@@ -341,25 +341,6 @@ def test_a_coupling_out_of_the_finger_gives_no_box_bound(default_moves):
         tl.proof.hand = hand
 
 
-def test_a_move_across_is_timed_as_the_full_bound_times_it(default_moves):
-    """``Moves.across`` (the box's proof first) against ``finger_scale`` on each of
-    sixty random moves across, and on the same moves from a copy of the entry (not one
-    of the box's: ``finger_scale`` itself): the same scale, the same move."""
-    _, atlas, moves = default_moves
-    rng = np.random.default_rng(23)
-    entries = [e for e in atlas.solved().values() if e.finger in ("index", "ring")]
-    for _ in range(60):
-        a, b = (entries[i] for i in rng.integers(len(entries), size=2))
-        if a.finger != b.finger:
-            continue
-        for start in (a, dataclasses.replace(a)):
-            move = moves._move(a.finger, start.high, b.high)
-            full = moves.finger_scale(a.finger, start.high, b.high, move)
-            assert moves._across_scale(start, b, move) == full
-            got = moves.across(start, b)
-            assert got is not None and got.duration_s == move.duration_s * full
-
-
 def test_the_stretched_box_bound_holds_on_moves_across_postures():
     """Moves across from another posture's entry into this posture's box, twenty of each
     finger and pair of postures, those of them that no box holds both ends of: the bound over the box
