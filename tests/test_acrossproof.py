@@ -7,26 +7,20 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-import pytest
 
 from planner.hand.model import load_hand
 from planner.play.atlas import Atlas
 from planner.play.moves import Moves
 
 
-@pytest.fixture(scope="module")
-def default_moves():
-    hand = load_hand("default")
-    atlas = Atlas(hand)
-    return hand, atlas, Moves(hand, atlas)
-
-
-def test_a_move_across_is_timed_as_the_full_bound_times_it(default_moves):
+def test_a_move_across_is_timed_as_the_full_bound_times_it():
     """``Moves.across`` (the box's proof first) against ``finger_scale`` on each of
     sixty random moves across, and on the same moves from a copy of the entry (not one
     of the box's: the box stretched to it): the same scale, the same move; the box
     proves most of them."""
-    _, atlas, moves = default_moves
+    hand = load_hand("default")
+    atlas = Atlas(hand)
+    moves = Moves(hand, atlas)
     rng = np.random.default_rng(23)
     entries = [e for e in atlas.solved().values() if e.finger in ("index", "ring")]
     proved = tried = 0
