@@ -8,11 +8,13 @@ with a weakened tendon is not proved where its moves need the tendon."""
 from __future__ import annotations
 
 import dataclasses
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from planner.hand.builders import load_hand_spec
+from planner.hand.couplings import CouplingLaw
 from planner.hand.model import HandModel, load_hand
 from planner.play.atlas import Atlas, posture_count
 from planner.play.moves import Moves
@@ -121,6 +123,14 @@ def test_a_move_outside_the_boxes_or_of_two_fingers_is_not_proved(default_moves)
     assert tl.proof.bound_nm(q_a, dq2, move.peak_acceleration, move.peak_speed) is None
 
 
+def _weak_hand() -> HandModel:
+    """The default hand with its middle finger's knuckle tendon at 9 N of its 40 N."""
+    spec = load_hand_spec("default")
+    return HandModel(dataclasses.replace(spec, actuators=tuple(
+        dataclasses.replace(a, tendon_force_n=9.0)
+        if a.name == "middle_mcp" else a for a in spec.actuators)))
+
+
 def test_a_weakened_tendon_is_not_proved(default_moves):
     """The default hand with its middle finger's knuckle tendon at 9 N of its 40 N (its
     capacity between the finger's load held still and its load moving) and the default
@@ -129,10 +139,7 @@ def test_a_weakened_tendon_is_not_proved(default_moves):
     not slow (the test asks every tendon motor's static bound within its share, the middle
     finger's too: on the safe side)."""
     _, atlas, moves = default_moves
-    spec = load_hand_spec("default")
-    weak = HandModel(dataclasses.replace(spec, actuators=tuple(
-        dataclasses.replace(a, tendon_force_n=9.0)
-        if a.name == "middle_mcp" else a for a in spec.actuators)))
+    weak = _weak_hand()
     tl = TendonLoad(weak)
     for finger, boxes in moves.tendons.proof.boxes.items():
         tl.proof.boxes[finger].extend(boxes)
@@ -272,3 +279,99 @@ def test_the_cells_bound_holds_on_moves_across_postures():
                     assert scale == 1.0
                     proved += 1
     assert proved > 100
+
+
+def test_the_box_bound_is_at_least_each_moves_own(default_moves):
+    """Forty random moves across of each finger (posture 0: its own box is the first
+    that holds its moves): the box's bound (``BoxBound.bound_nm``) at or above the move's
+    own (``TendonProof.bound_nm``) on every motor, so a move the box proves the move's
+    own bound proves; most moves proved by the box."""
+    hand, atlas, moves = default_moves
+    proof = moves.tendons.proof
+    rng = np.random.default_rng(17)
+    proved = 0
+    for finger, fb in moves.across_proof.boxes.items():
+        box = proof.box_bound(finger, fb.lo, fb.hi, fb.most - fb.least)
+        entries = list(fb.by_id.values())
+        for _ in range(40):
+            a, b = (entries[i] for i in rng.integers(len(entries), size=2))
+            move, q_a, dq = _move(hand, finger, atlas.base, a.high, b.high)
+            A, V = move.peak_acceleration, move.peak_speed
+            own = proof.bound_nm(q_a, dq, A, V)
+            # (the same sums in another order: equal but for their last bits)
+            assert np.all(box.bound_nm(move.dq, A, V) >= own * (1.0 - 1e-12)), finger
+            if box.proves(move.dq, A, V):
+                proved += 1
+                assert proof.proves(q_a, dq, A, V)
+    assert proved >= 150  # (of 160)
+
+
+def test_the_box_bound_proves_nothing_of_a_weakened_tendon(default_moves):
+    """The weakened middle knuckle of ``test_a_weakened_tendon_is_not_proved``: the box
+    proves none of the middle finger's moves across."""
+    _, atlas, moves = default_moves
+    weak = _weak_hand()
+    tl = TendonLoad(weak)
+    fb = moves.across_proof.boxes["middle"]
+    tl.proof.add_box("middle", fb.lo, fb.hi)
+    box = tl.proof.box_bound("middle", fb.lo, fb.hi, fb.most - fb.least)
+    entries = list(fb.by_id.values())
+    rng = np.random.default_rng(3)
+    for _ in range(30):
+        a, b = (entries[i] for i in rng.integers(len(entries), size=2))
+        move, _, _ = _move(weak, "middle", atlas.base, a.high, b.high)
+        assert not box.proves(move.dq, move.peak_acceleration, move.peak_speed)
+
+
+def test_a_coupling_out_of_the_finger_gives_no_box_bound(default_moves):
+    """The default hand's proof with one more coupling, the index finger's first joint
+    driven by the middle finger's (a move of the one moves the other: ``bound_nm``
+    proves none of their moves): no ``BoxBound`` for either finger; without it, one."""
+    hand, _, moves = default_moves
+    js_m, js_i = hand.joint_slice("middle"), hand.joint_slice("index")
+    tl = TendonLoad(hand)
+    tied = CouplingLaw(dep=int(js_i[0]), src=int(js_m[0]), kind="linear", ratio=0.5)
+    for finger in ("middle", "index"):
+        fb = moves.across_proof.boxes[finger]
+        lo, hi, reach = fb.lo, fb.hi, fb.most - fb.least
+        tl.proof.add_box(finger, lo, hi)
+        assert tl.proof.box_bound(finger, lo, hi, reach) is not None
+        tl.proof.hand = SimpleNamespace(couplings=(*hand.couplings, tied))
+        assert tl.proof.box_bound(finger, lo, hi, reach) is None
+        tl.proof.hand = hand
+
+
+def test_the_stretched_box_bound_holds_on_moves_across_postures():
+    """Moves across from another posture's entry into this posture's box, twenty of each
+    finger and pair of postures, those of them that no box holds both ends of: the bound over the box
+    stretched to the first entry's high pose (``AcrossProof``, the cells it meets) at or
+    above the move's own (the cells' that the move's ends' box meets) on every motor but
+    for the sums' rounding; where it proves a move, the full computation's scale is 1."""
+    hand = load_hand("default")
+    atlases = [Atlas(hand, posture=p) for p in range(posture_count(hand))]
+    moves = [Moves(hand, a) for a in atlases]
+    proof = moves[0].tendons.proof
+    rng = np.random.default_rng(4)
+    proved = tried = 0
+    for p, q in ((0, 1), (1, 0), (0, 2), (2, 1)):
+        across = moves[q].across_proof
+        for f in ("index", "middle", "ring", "pinky"):
+            mine = [e for e in atlases[p].solved().values() if e.finger == f]
+            theirs = list(across.boxes[f].by_id.values())
+            for _ in range(20):
+                a, b = mine[rng.integers(len(mine))], theirs[rng.integers(len(theirs))]
+                move, q_a, dq = _move(hand, f, atlases[q].base, a.high, b.high)
+                A, V = move.peak_acceleration, move.peak_speed
+                points = hand.apply_couplings(np.stack((q_a, q_a + dq)))[:, hand.joint_slice(f)]
+                if proof.gain(f, points) is not None:
+                    continue  # (both ends in one posture's box: the first test's)
+                box = across._stretched(a, across.boxes[f])
+                assert box is not None
+                assert np.all(box.bound_nm(move.dq, A, V)
+                              >= proof.bound_nm(q_a, dq, A, V) * (1.0 - 1e-12)), (f, p, q)
+                tried += 1
+                if across.proves(a, b, move):
+                    assert _full(moves[q].tendons, move, q_a, dq)[1] == 1.0
+                    proved += 1
+    assert tried > 100
+    assert proved > tried // 2

@@ -30,6 +30,7 @@ import numpy as np
 
 from planner.hand.model import HandModel
 from planner.music import keyboard as kb
+from planner.play.acrossproof import AcrossProof
 from planner.play.atlas import (
     PATH_SAMPLES,
     Atlas,
@@ -241,10 +242,13 @@ class Moves(FollowMoves, RepeatMoves):
         self.table = MoveTable(hand.fingers, atlas.natural_dx, atlas.posture_index)
         self.table.load(table_path(hand.urdf_sha256, atlas.posture_index), self.params())
         proof = self.tendons.proof
+        self.across_proof: AcrossProof | None = None  # (its moves across at once)
         if proof is not None:  # (each finger's high poses' box, for its moves across, with
             # its gain as the move table ships it: ``planner.play.tendonproof``)
-            for f, (lo, hi) in self.high_boxes().items():
+            boxes = self.high_boxes()
+            for f, (lo, hi) in boxes.items():
                 proof.add_box(f, lo, hi, self.table.proof_gain(f, lo, hi, proof.params()))
+            self.across_proof = AcrossProof(hand, atlas, proof, boxes)
             if self.table.proof_params == proof.params():  # (the cells over every
                 for f, cells in self.table.proof_cells.items():  # posture: shipped only)
                     proof.add_cells(f, *cells)
@@ -394,11 +398,19 @@ class Moves(FollowMoves, RepeatMoves):
             move = None
             if self.across_s(a, b) is not None:
                 move = self._move(a.finger, a.high, b.high)
-                move = slowed(move, self.finger_scale(a.finger, a.high, b.high, move))
+                move = slowed(move, self._across_scale(a, b, move))
                 # (the programme's duration is this move's from now on)
                 self._across_s[(id(a), id(b))] = move.duration_s
             self._lat[key] = move
         return self._lat[key]
+
+    def _across_scale(self, a: AtlasEntry, b: AtlasEntry, move: Move) -> float:
+        """``finger_scale`` of the move across from ``a`` to ``b``: 1 at once where the
+        box bound proves it (``AcrossProof``: a bound at least the move's own, so that
+        ``finger_scale`` would find 1); else ``finger_scale``."""
+        if self.across_proof is not None and self.across_proof.proves(a, b, move):
+            return 1.0
+        return self.finger_scale(a.finger, a.high, b.high, move)
 
     def across_s(self, a: AtlasEntry, b: AtlasEntry) -> float | None:
         """``across(a, b)``'s duration (None: not clear), without making the move (the

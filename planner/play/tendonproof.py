@@ -174,6 +174,51 @@ def box_gain(hand: HandModel, kin, chain: FingerChain, M: np.ndarray, lo: np.nda
                    pairs)
 
 
+@dataclass(frozen=True)
+class BoxBound:
+    """``TendonProof.bound_nm`` of every move of one finger between two poses of a box
+    at once but for the move's own tangent ``t`` and profile (``A``, ``V``): the central
+    differences' rounding (``e``, ``e2``) bounded over the box (``TendonProof.box_bound``),
+    its terms summed ahead: ``static + (|mass t| + mass_radius |t| + e_mass) A +
+    (|speed p| + speed_radius |p| + spread |t| + e_speed) V^2``, ``p`` the pairs'
+    products ``t_k t_l``; each term at least the move's own in ``bound_nm``. The tangent
+    is ``bound_nm``'s to the bit: each coupled joint's ``(ratio dq + offset) - offset``."""
+
+    dep: np.ndarray  # (the finger's coupled joints, their sources, ratios and offsets)
+    src: np.ndarray
+    ratio: np.ndarray
+    offset: np.ndarray
+    mass: np.ndarray
+    mass_radius: np.ndarray
+    speed: np.ndarray
+    speed_radius: np.ndarray
+    K: np.ndarray
+    L: np.ndarray
+    e_mass: np.ndarray  # (|mass| + mass_radius) e per motor
+    spread: np.ndarray  # (motors, joints): speed_all's slack |t_k| e_l + e_k |t_l| by joint
+    e_speed: np.ndarray  # (|mass| + mass_radius) e2 + speed_all (e_k e_l) per motor
+    static_nm: np.ndarray
+    limit_nm: np.ndarray  # every motor's share less ``PROOF_MARGIN``
+
+    def bound_nm(self, dq: np.ndarray, peak_acceleration: float, peak_speed: float
+                 ) -> np.ndarray:
+        """Each motor's bound on the move by ``dq`` (the finger's joints, before the
+        couplings) of profile ``A``, ``V``, its ends in the box."""
+        t = np.array(dq, dtype=float)
+        t[self.dep] = (self.ratio * t[self.src] + self.offset) - self.offset
+        at = np.abs(t)
+        prod = t[self.K] * t[self.L]
+        mass = (np.abs(self.mass @ t) + self.mass_radius @ at + self.e_mass) * peak_acceleration
+        speed = (np.abs(self.speed @ prod) + self.speed_radius @ np.abs(prod)
+                 + self.spread @ at + self.e_speed)
+        return self.static_nm + mass + speed * (peak_speed * peak_speed)
+
+    def proves(self, dq: np.ndarray, peak_acceleration: float, peak_speed: float) -> bool:
+        """Whether ``bound_nm`` keeps every motor within ``limit_nm``: then so does the
+        move's own bound (``TendonProof.proves``) and ``TendonLoad.time_scale`` is 1."""
+        return bool((self.bound_nm(dq, peak_acceleration, peak_speed) <= self.limit_nm).all())
+
+
 def _terms_at(model, data, q: np.ndarray, pairs
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """At configuration ``q`` of a chain's own ``model`` (its joints alone, in order):
@@ -383,6 +428,64 @@ class TendonProof:
                 BoxGain(*(np.array([getattr(g, k) for g in gains])
                           for k in ("mass", "mass_radius", "speed", "speed_radius")),
                         gains[0].pairs))
+
+    def box_bound(self, finger: str, lo: np.ndarray, hi: np.ndarray,
+                  reach: np.ndarray) -> BoxBound | None:
+        """``BoxBound`` of the finger's moves between poses of the box ``lo``-``hi`` (its
+        chain's joints, couplings applied; widened by ``BOX_ROOM_RAD``) whose joints'
+        own differences are at most ``reach``, over the gain of the first box holding it
+        (``gain``), else over the cells it meets (``cells_gain``); None where neither
+        holds it, or where a coupling joins the finger's joints to another's
+        (``bound_nm``: such a move proves nothing)."""
+        chain = self.chains[finger]
+        if chain is None or not np.all(lo <= hi):
+            return None
+        c = chain.cols.tolist()
+        laws = [w for w in self.hand.couplings if w.dep in c or w.src in c]
+        deps = {w.dep for w in self.hand.couplings}
+        if any(w.kind != "linear" or w.dep not in c or w.src not in c or w.src in deps
+               for w in laws):
+            return None
+        lo, hi = _roomed(lo, hi)
+        gain = self.gain(finger, np.stack((lo, hi)))
+        if gain is None:
+            gain = self.cells_gain(finger, lo, hi)
+        if gain is None:
+            return None
+        # (``bound_nm``'s rounding bound, its largest over the box: ``np.spacing`` grows
+        # with its argument)
+        ulp = ROUNDING_FACTOR * np.spacing(np.maximum(np.abs(lo), np.abs(hi)) + reach + 1.0)
+        e, e2 = ulp / self.step, ulp / (self.step * self.step)
+        _, mass_all, speed_all, K, L = self._derived(gain)
+        spread = np.zeros((len(self.M), len(c)))
+        for p, (k, l) in enumerate(gain.pairs):
+            spread[:, k] += speed_all[:, p] * e[l]
+            spread[:, l] += speed_all[:, p] * e[k]
+        at = (np.array([c.index(w.dep) for w in laws], dtype=int),
+              np.array([c.index(w.src) for w in laws], dtype=int),
+              np.array([w.ratio for w in laws], dtype=float),
+              np.array([w.offset for w in laws], dtype=float))
+        return BoxBound(*at, gain.mass, gain.mass_radius, gain.speed, gain.speed_radius,
+                        K, L, mass_all @ e, spread, mass_all @ e2 + speed_all @ (e[K] * e[L]),
+                        self.static_nm, self.capacity_nm * (1.0 - PROOF_MARGIN))
+
+    def cells_gain(self, finger: str, lo: np.ndarray, hi: np.ndarray) -> BoxGain | None:
+        """One gain over every cell of the finger's grid (``add_cells``) that meets the box
+        ``lo``-``hi``: each term's interval the hull of theirs (so each cell's bound on a
+        move is at most its own); None when the grid does not hold the box."""
+        cells = self.cells.get(finger)
+        if cells is None:
+            return None
+        c_lo, c_hi, terms = cells
+        if not (np.all(lo >= c_lo.min(axis=0)) and np.all(hi <= c_hi.max(axis=0))):
+            return None
+        meet = np.all(c_lo <= hi, axis=1) & np.all(c_hi >= lo, axis=1)
+        out = []
+        for centre, radius in ((terms[0][meet], terms[1][meet]), (terms[2][meet], terms[3][meet])):
+            low, top = np.min(centre - radius, axis=0), np.max(centre + radius, axis=0)
+            mid = 0.5 * (low + top)
+            out += [mid, np.maximum(top - mid, mid - low)]
+        return BoxGain(*out, tuple(zip(terms[7].tolist(), terms[8].tolist())))
 
     def _derived(self, gain: BoxGain) -> tuple:
         """What ``bound_nm`` reads of a gain besides its terms, once per gain: ``|mass|``,
