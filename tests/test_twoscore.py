@@ -55,3 +55,39 @@ def test_plans_f1_is_the_frame_f1_of_the_plans_on_one_clock(tmp_path) -> None:
     pair.scorer.clear()
     assert pair.scorer.plans_f1((left, other), song, 100.0, reads) == pair.scorer.frame_f1(
         one_clock((left, other), 100.0), song, 100.0)
+
+
+def test_a_plan_made_again_to_the_same_text_shares_its_twins_rows_and_keys(tmp_path,
+                                                                            monkeypatch
+                                                                            ) -> None:
+    from planner.play import twoscore
+    from planner.play.twoplan import PlanReads, held_twin, one_clock
+
+    pair = PairPlanner(load_hand("default-left"), load_hand("default"))
+    song = load_song(meeting_song(tmp_path / "meet.mid"), every_part=True)
+    plan = plan_two_hands(song, pair, None)
+    left, right = plan.plans
+    # (the right hand planned again to the same rows: another plan, the same text; and a
+    # plan of other rows: the left's)
+    twin = replace(right, planning_s=right.planning_s + 1.0)
+    assert twin is not right and twin.text == right.text
+    reads = PlanReads()
+    tr = reads(right)
+    assert reads(twin) is tr and len(reads) == 2  # (read once for both)
+    assert reads(left) is not tr
+    assert held_twin({id(left): (left, 0)}, twin) is None
+    assert held_twin({id(right): (right, 1)}, twin) == (right, 1)
+    found = []
+    keys = twoscore.body_keys
+    monkeypatch.setattr(twoscore, "body_keys", lambda *a: found.append(1) or keys(*a))
+    f1 = pair.scorer.plans_f1((left, right), song, 100.0, reads)
+    assert len(found) == 2  # (each hand's keys found on its rows)
+    assert pair.scorer.plans_f1((left, twin), song, 100.0, reads) == f1
+    assert len(found) == 2  # (the twin's keys are its text's: found once)
+    found.clear()
+    assert f1 == pair.scorer.frame_f1(one_clock((left, twin), 100.0), song, 100.0)
+    assert len(found) == 2  # (the same number found anew on both hands' rows)
+    found.clear()
+    other = replace(right, text=left.text)  # (the right hand with other rows: found anew)
+    pair.scorer.plans_f1((left, other), song, 100.0, reads)
+    assert len(found) == 1

@@ -149,18 +149,21 @@ class PlanReads:
     """Each one-hand plan's rows read back from its text once (``KeptText.trajectory``
     parses the whole text at every call; a plan is read by ``first_edge``, by each
     loosened round's ``one_clock`` and by the kept way's): by the plan's identity, the
-    plan held with its rows so that identity is never reused while it is held."""
+    plan held with its rows so that identity is never reused while it is held. A plan
+    made again with the same text (a hand planned again to the same rows) shares the rows
+    read of its twin (``held_twin``: the rows are the text's alone)."""
 
     def __init__(self) -> None:
         self._got: dict[int, tuple[PlayPlan, Trajectory]] = {}
 
     def __call__(self, plan: PlayPlan) -> Trajectory:
-        """``plan.trajectory``, parsed at the first call for ``plan``."""
+        """``plan.trajectory``, parsed at the first call for ``plan`` (or its text)."""
         got = self._got.get(id(plan))
         if got is None:
+            twin = held_twin(self._got, plan)
             if len(self._got) >= READS_HELD:
                 self._got.clear()
-            got = self._got[id(plan)] = (plan, plan.trajectory)
+            got = self._got[id(plan)] = (plan, plan.trajectory if twin is None else twin[1])
         return got[1]
 
     def clear(self) -> None:
@@ -169,6 +172,17 @@ class PlanReads:
 
     def __len__(self) -> int:
         return len(self._got)
+
+
+def held_twin(held: dict, plan: PlayPlan) -> tuple | None:
+    """The entry of ``held`` (by a plan's identity: (plan, what was found from its rows))
+    whose plan has ``plan``'s text, None when none has (or ``plan`` has no text)."""
+    if plan.text is None:
+        return None
+    for got in held.values():
+        if got[0].text == plan.text:
+            return got
+    return None
 
 
 def same_plan(a: PlayPlan, b: PlayPlan) -> bool:

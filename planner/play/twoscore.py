@@ -20,7 +20,7 @@ from planner.check.kinematics import Kinematics
 from planner.hand.bodies import collision_bodies
 from planner.hand.model import HandModel
 from planner.music.midi import Song
-from planner.play.twoplan import READS_HELD, PairRows, clock_of
+from planner.play.twoplan import READS_HELD, PairRows, clock_of, held_twin
 
 if TYPE_CHECKING:
     from planner.play.stream import PlayPlan
@@ -30,13 +30,14 @@ if TYPE_CHECKING:
 class PairScorer:
     """The pair's rows scored by the check's rules, built once per pair: each hand's
     kinematics and bodies as the check builds them (``planner.check.pair``). ``plans_f1``
-    keeps each plan's keys (by identity, the plan held with them) until ``clear``."""
+    keeps each plan's keys (by identity, the plan held with them; a plan of the same text
+    shares them) until ``clear``."""
 
     def __init__(self, left: HandModel, right: HandModel) -> None:
         self._kins = tuple(Kinematics(h, h.T_world_root) for h in (left, right))
         self._bodies = tuple(collision_bodies(h.spec) for h in (left, right))
         self._names = tuple(body_names(b)[0] for b in self._bodies)
-        self._downs: dict[tuple[int, int], tuple[PlayPlan, np.ndarray]] = {}
+        self._downs: tuple[dict[int, tuple[PlayPlan, np.ndarray]], ...] = ({}, {})
 
     def frame_f1(self, rows: PairRows, song: Song, rate_hz: float) -> float:
         """The check's frame F1 of ``rows`` (both hands on one clock) against ``song``."""
@@ -60,16 +61,20 @@ class PairScorer:
 
     def clear(self) -> None:
         """Let every plan's keys go."""
-        self._downs.clear()
+        for held in self._downs:
+            held.clear()
 
     def _down(self, k: int, plan: PlayPlan, q: np.ndarray) -> np.ndarray:
-        """Hand ``k``'s keys down per row of ``plan`` (its rows ``q``), found once."""
-        got = self._downs.get((k, id(plan)))
+        """Hand ``k``'s keys down per row of ``plan`` (its rows ``q``), found once for a
+        plan's text (its keys are its rows', and its rows its text's: ``held_twin``)."""
+        held = self._downs[k]
+        got = held.get(id(plan))
         if got is None:
-            if len(self._downs) >= READS_HELD:
-                self._downs.clear()
-            got = self._downs[(k, id(plan))] = (
-                plan, body_keys(self._kins[k], q, self._bodies[k]).down)
+            twin = held_twin(held, plan)
+            if len(held) >= READS_HELD:
+                held.clear()
+            got = held[id(plan)] = (plan, body_keys(self._kins[k], q, self._bodies[k]).down
+                                    if twin is None else twin[1])
         return got[1]
 
     def _f1(self, t_s: np.ndarray, down: np.ndarray, song_start_s: float, song: Song,
