@@ -60,7 +60,8 @@ def palm_up_grids(wrist: Wrist) -> tuple[StopGrid, ...]:
 
 
 def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wrist,
-                     reach: bool) -> CatchPlan:
+                     reach: bool, stop_stages: Callable[[CatchPlan], CatchPlan] | None = None
+                     ) -> CatchPlan:
     """``plan`` (infeasible, the roll among its reasons) planned again with the palm turned
     up past facing the ball (``palm_up_grids``): on the rig's reach axis where the hand has
     one (``reach``; the arm alone places the ball on a palm tilted this far at few tilts:
@@ -69,16 +70,31 @@ def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wr
     what failed facing the ball; else ``plan`` with each tilt's first reason in a note."""
     if CatchReason.ROLL not in plan.reason_kinds:
         return plan
-    tried = []
+    tried, stopped = [], []
     for grid in palm_up_grids(wrist):
         tilt = abs(grid.tilts_deg[0])
         other = plans(rig=reach, grid=grid)
         if other.feasible:
-            return replace(other, notes=other.notes + (
-                f"the palm meets the ball turned up {tilt:g} deg past facing it"
-                f"{' (the reach axis placing it)' if reach else ''}: facing the ball "
-                + reasons_text(plan.reasons),))
+            return palm_up_found(other, plan, tilt, reach)
         tried.append(f"{tilt:g} deg: " + reasons_text(other.reasons[:1]))
+        if set(other.reason_kinds) == {CatchReason.TOO_FAST_TO_STOP}:
+            stopped.append((tilt, other))
+    for tilt, other in stopped if stop_stages is not None else ():
+        # the palm up with the stop optimised on its rows (the roll kept, the stop not found)
+        other = stop_stages(other)
+        if other.feasible:
+            return palm_up_found(other, plan, tilt, reach)
+        tried.append(f"{tilt:g} deg, the stop optimised on its rows: "
+                     + reasons_text(other.reasons[:1]))
     return replace(plan, notes=plan.notes + (
         "the palm turned up past facing the ball: " + "; ".join(tried),))
+
+
+def palm_up_found(other: CatchPlan, plan: CatchPlan, tilt: float, reach: bool) -> CatchPlan:
+    """``other`` (feasible, the palm turned up ``tilt`` deg) noted with what failed facing
+    the ball (``plan``'s reasons)."""
+    return replace(other, notes=other.notes + (
+        f"the palm meets the ball turned up {tilt:g} deg past facing it"
+        f"{' (the reach axis placing it)' if reach else ''}: facing the ball "
+        + reasons_text(plan.reasons),))
 

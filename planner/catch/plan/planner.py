@@ -222,19 +222,30 @@ class CatchPlanner:
             from planner.catch.plan.palmup import palm_up_fallback
 
             plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, stops=stops, **kw), plan,
-                                    self.wrist, self.rig.i_reach is not None)
-        if soft and CatchReason.TOO_FAST_TO_STOP in plan.reason_kinds and len(plan.rows.t):
-            from planner.catch.plan.stopbound import bounded_reasons  # (the limit judged
-            # by the bound over every stop: only where the planner's stops all failed)
-
-            k = int(np.argmin(np.abs(plan.rows.t - plan.intercept.t_s)))
-            b = flight.ball
-            plan = replace(plan, reasons=bounded_reasons(
-                plan.reasons, self.rig_dyn, plan.rows.q[k], plan.intercept.arrival_velocity,
-                b.mass_kg, b.radius_m))
-            if CatchReason.NO_STOP in plan.reason_kinds:
-                plan = optimised_stop_plan(self, plan)  # the stop optimised on the rows
+                                    self.wrist, self.rig.i_reach is not None,
+                                    lambda p: self.stop_stages(p))
+        if soft:
+            plan = self.stop_stages(plan)
         return replace(plan, planning_s=time.perf_counter() - t0)
+
+    def stop_stages(self, plan: CatchPlan) -> CatchPlan:
+        """``plan`` (infeasible) with its "too fast to stop" judged by the bound over every
+        stop (``stopbound.bounded_reasons``: a hard limit, or "no stop found") and, where
+        the bound leaves a stop, the stop optimised on its rows (``optimised_stop_plan``);
+        ``plan`` itself where it is not too fast to stop."""
+        if CatchReason.TOO_FAST_TO_STOP not in plan.reason_kinds or not len(plan.rows.t):
+            return plan
+        from planner.catch.plan.stopbound import bounded_reasons  # (the limit judged
+        # by the bound over every stop: only where the planner's stops all failed)
+
+        k = int(np.argmin(np.abs(plan.rows.t - plan.intercept.t_s)))
+        b = plan.flight.ball
+        plan = replace(plan, reasons=bounded_reasons(
+            plan.reasons, self.rig_dyn, plan.rows.q[k], plan.intercept.arrival_velocity,
+            b.mass_kg, b.radius_m))
+        if CatchReason.NO_STOP in plan.reason_kinds:
+            plan = optimised_stop_plan(self, plan)  # the stop optimised on the rows
+        return plan
 
     def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP,
                     stops: dict | None = None) -> CatchPlan:
