@@ -115,3 +115,82 @@ def test_the_palm_up_catch_is_held_in_physics(caught, tmp_path):
     write_plan(caught, str(out))
     c = simulate_trajectory(str(out)).catch
     assert c is not None and c.held and c.end_distance_m < 0.0335 + 0.010
+
+
+def test_the_tilts_too_fast_to_stop_get_the_stop_stages_least_first(pl):
+    """The tilts whose plans fail only as too fast to stop are given ``stop_stages`` after
+    every tilt was planned, the least tilt first: the first feasible is kept with its tilt's
+    note; where none is, the least tilt left with only "no stop found" is the answer (the
+    palm up keeps the ball on the palm: the stop is the shortfall, not the roll), the facing
+    plan's reasons in its note; a tilt failing for anything else is never given them, and
+    without ``stop_stages`` the facing plan is kept as before."""
+    rolled = _Plan(False, (Reason(CatchReason.ROLL, "rolls"),))
+
+    def plans(**kw):
+        tilt = -kw["grid"].tilts_deg[0]
+        kind = CatchReason.FRICTION if tilt == 20.0 else CatchReason.TOO_FAST_TO_STOP
+        return _Plan(False, (Reason(kind, f"at {tilt:g}"),))
+
+    staged = []
+
+    def stop_stages(p):
+        staged.append(p.reasons[0].detail)
+        tilt = float(p.reasons[0].detail.split()[1])
+        return _Plan(tilt == 35.0, (Reason(CatchReason.NO_STOP, f"no stop at {tilt:g}"),))
+
+    out = palm_up_fallback(plans, rolled, pl.wrist, True, stop_stages)
+    assert staged == ["at 25", "at 30", "at 35"]
+    assert out.feasible and out.notes[-1].startswith(
+        "the palm meets the ball turned up 35 deg past facing it")
+    staged.clear()
+
+    def never(p):
+        staged.append(p.reasons[0].detail)
+        return _Plan(False, (Reason(CatchReason.NO_STOP, "no stop " + p.reasons[0].detail),))
+
+    left = palm_up_fallback(plans, rolled, pl.wrist, True, never)
+    assert staged == ["at 25", "at 30", "at 35", "at 40"]
+    assert not left.feasible and left.reasons == (Reason(CatchReason.NO_STOP, "no stop at 25"),)
+    assert left.notes[-1].startswith("the palm turned up 25 deg past facing the ball keeps it "
+                                     "on the palm, its stop not found: facing the ball rolls")
+    assert palm_up_fallback(plans, rolled, pl.wrist, True).reasons == rolled.reasons
+
+
+@pytest.fixture(scope="module")
+def steep(pl):
+    """0 m / 75 deg / 3.0 m: facing the ball it rolls 279 mm towards the wrist and no stop
+    is found (measured on main: the stop optimised on its rows 0.78 of the flexion, its roll
+    kept); turned up 20 deg the ball stays on the palm and only the stop is not found (the
+    planner's 4.45 N m of the flexion's 2.00), which the stop optimised on its rows finds."""
+    return plan_throw(75.0, 3.0, 0.0, planner=pl)
+
+
+def test_a_steep_long_throw_is_caught_palm_up_with_the_stop_optimised(pl, steep, tmp_path):
+    """The plan is feasible palm up 20 deg on the reach axis with the stop optimised on its
+    rows (both noted), the roll within the room and the stop within every motor by the
+    check's rule; ``check`` confirms the written plan."""
+    p = steep
+    assert p.feasible, p.reasons
+    assert p.notes[-1].startswith("the palm meets the ball turned up 20 deg past facing it "
+                                  "(the reach axis placing it): facing the ball the ball "
+                                  "rolls off")
+    assert p.notes[-2].startswith("the stop optimised on the rows")
+    assert p.intercept.misalignment_deg == pytest.approx(20.0, abs=1.5)
+    assert pl.turn.rolled(p.rows.t, p.rows.q, p.intercept.t_s, p.flight) <= ROLL_ROOM_M
+    out = tmp_path / "c.csv"
+    write_plan(p, str(out))
+    rep = check_trajectory(str(out))
+    assert rep.ok, rep.problems
+    assert rep.catch.roll_m <= ROLL_ROOM_M
+
+
+def test_the_steep_long_catch_is_held_in_physics(steep, tmp_path):
+    """The same catch replayed in MuJoCo (full contact): held (measured: 44 mm from the palm
+    centre at the end)."""
+    pytest.importorskip("mujoco")
+    from planner.simulate import simulate_trajectory
+
+    out = tmp_path / "c.csv"
+    write_plan(steep, str(out))
+    c = simulate_trajectory(str(out)).catch
+    assert c is not None and c.held and c.end_distance_m < 0.044 + 0.010

@@ -67,7 +67,12 @@ def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wr
     one (``reach``; the arm alone places the ball on a palm tilted this far at few tilts:
     0 m / 25 deg / 1.0 m at none of 20-50 deg), else by the arm alone; ``plans(rig=, grid=)``:
     ``CatchPlanner._plans`` of the throw. The first feasible, with a note naming the tilt and
-    what failed facing the ball; else ``plan`` with each tilt's first reason in a note."""
+    what failed facing the ball. The tilts failing only as too fast to stop are then given
+    ``stop_stages`` (``CatchPlanner.stop_stages``: the stop bound and the stop optimised on
+    their rows), the least first: the first feasible, noted; else the least tilt left with
+    only "no stop found" (the palm up keeps the ball on the palm: the stop, not the roll, is
+    the shortfall), noted with the facing plan's reasons; else ``plan`` with each tilt's
+    first reason in a note."""
     if CatchReason.ROLL not in plan.reason_kinds:
         return plan
     tried, stopped = [], []
@@ -79,6 +84,7 @@ def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wr
         tried.append(f"{tilt:g} deg: " + reasons_text(other.reasons[:1]))
         if set(other.reason_kinds) == {CatchReason.TOO_FAST_TO_STOP}:
             stopped.append((tilt, other))
+    kept = None  # the least tilt that keeps the ball on the palm, only its stop not found
     for tilt, other in stopped if stop_stages is not None else ():
         # the palm up with the stop optimised on its rows (the roll kept, the stop not found)
         other = stop_stages(other)
@@ -86,6 +92,16 @@ def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wr
             return palm_up_found(other, plan, tilt, reach)
         tried.append(f"{tilt:g} deg, the stop optimised on its rows: "
                      + reasons_text(other.reasons[:1]))
+        if kept is None and set(other.reason_kinds) == {CatchReason.NO_STOP}:
+            kept = (tilt, other)
+    if kept is not None:
+        # the roll is not what stops the catch: the palm up keeps the ball on the palm, and
+        # only its stop is not found (a shortfall the stop bound does not make a limit)
+        tilt, other = kept
+        return replace(other, notes=other.notes + (
+            f"the palm turned up {tilt:g} deg past facing the ball keeps it on the palm, "
+            "its stop not found: facing the ball " + reasons_text(plan.reasons)
+            + "; the palm turned up past facing it: " + "; ".join(tried),))
     return replace(plan, notes=plan.notes + (
         "the palm turned up past facing the ball: " + "; ".join(tried),))
 
