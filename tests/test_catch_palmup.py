@@ -3,6 +3,7 @@ it to the roll rule, the palm meets it turned up past facing it. No wall-clock a
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -194,3 +195,26 @@ def test_the_steep_long_catch_is_held_in_physics(steep, tmp_path):
     write_plan(steep, str(out))
     c = simulate_trajectory(str(out)).catch
     assert c is not None and c.held and c.end_distance_m < 0.044 + 0.010
+
+
+def test_a_flat_fast_throw_names_the_stop_not_the_roll(pl):
+    """+0.3 m / 15 deg / 3.0 m (9.4 m/s): facing the ball it rolls 491 mm towards the wrist
+    and no stop is found (measured on main); palm up 20-40 deg every plan keeps the ball on
+    the palm and fails only as too fast to stop, and the stop optimised on the least such
+    tilt's rows is still over the wrist flexion (measured: 1.04 of its 2.00 N m). The plan is
+    that palm-up plan: "no stop found" (not a hard limit: the stop bound's share at most 1),
+    its only reason, no roll; the note names the tilt and the facing plan's roll."""
+    p = plan_throw(15.0, 3.0, 0.3, planner=pl)
+    assert not p.feasible
+    assert p.reason_kinds == (CatchReason.NO_STOP,)
+    b = re.search(r"the stop bound: motor\.\w+ at ([\d.]+) of its", p.reasons[0].detail)
+    o = re.search(r"the stop optimised on the rows \(the check's rule, linearised, at the "
+                  r"plan's rate\): motor\.wrist_flex at [\d.]+ N m of its 2\.00 \(([\d.]+) of "
+                  r"it\)", p.reasons[0].detail)
+    assert b and float(b.group(1)) <= 1.0
+    assert o and float(o.group(1)) > 1.0
+    note = p.notes[-1]
+    assert re.match(r"the palm turned up (20|25|30|35|40) deg past facing the ball keeps it on "
+                    r"the palm, its stop not found: facing the ball ", note)
+    assert "the ball rolls off the palm's wrist side" in note
+    assert p.intercept.misalignment_deg >= 19.0
