@@ -395,10 +395,12 @@ def test_cli_exit_codes(tmp_path, capsys):
         assert s in err
     assert out.exists()
     out.unlink()
-    # a throw the planner cannot catch (75 deg from 3 m: the roll, no stop found): written,
-    # exit 1 under --strict (15 deg from 4 m, this test's throw before, is caught now:
-    # docs/history/2026-12-07-catch-stoprows.md)
-    assert cli_main(["catch", "--angle", "75", "--dist", "3", "-o", str(out), "--strict"]) == 1
+    # a throw the planner cannot catch (15 deg from 3 m to +0.3 m: no stop found, palm up):
+    # written, exit 1 under --strict (15 deg from 4 m and 75 deg from 3 m, this test's throws
+    # before, are caught now: docs/history/2026-12-07-catch-stoprows.md,
+    # docs/history/2026-12-07-catch-roll2.md)
+    assert cli_main(["catch", "--angle", "15", "--dist", "3", "--height", "0.3", "-o",
+                     str(out), "--strict"]) == 1
     assert "feasible: NO" in capsys.readouterr().err
     assert out.exists()
 
