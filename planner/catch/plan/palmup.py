@@ -68,7 +68,7 @@ def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wr
     0 m / 25 deg / 1.0 m at none of 20-50 deg), else by the arm alone; ``plans(rig=, grid=)``:
     ``CatchPlanner._plans`` of the throw. The first feasible, with a note naming the tilt and
     what failed facing the ball. The tilts failing only as too fast to stop are then given
-    ``stop_stages`` (``CatchPlanner.stop_stages``: the stop bound and the stop optimised on
+    ``stop_stages`` (``planner.stop_stages``: the stop bound and the stop optimised on
     their rows), the least first: the first feasible, noted; else the least tilt left with
     only "no stop found" (the palm up keeps the ball on the palm: the stop, not the roll, is
     the shortfall), noted with the facing plan's reasons; else ``plan`` with each tilt's
