@@ -16,7 +16,10 @@ arm alone places the ball on a tilted palm at few tilts); the soft stop, the tur
 self-check and the roll rule are the planner's as for any plan. The tilt is bounded by the
 palm's friction cone: the pad's stopping force must stay within it, and the larger the tilt
 the larger the ball's speed along the palm it must take out (measured, 0 m / 25 deg /
-1.0 m: the stop leaves the cone from 50 deg).
+1.0 m: the stop leaves the cone from 50 deg). A tilt that keeps the ball on the palm but is
+too fast to stop for the planner's stops is given the stop bound and the stop optimised on
+its rows (``planner.stop_stages``; ``docs/history/2026-12-07-catch-roll2.md``: the steep
+and flat long throws, facing the ball both rolled off and too fast to stop).
 """
 
 from __future__ import annotations
