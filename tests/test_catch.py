@@ -241,11 +241,17 @@ def test_grid(hand_kind, thumb110):
     soft = plan_throw(30, 3.0, 0.0, planner=pl)
     assert soft.forces.stop.force_n < hard.forces.stop.force_n
     assert soft.forces.stop.headroom >= 0.2  # issue 15's target
-    far = plan_throw(15, 4.0, 0.0, planner=pl)  # (main: "no stop found", the planner's
-    # stops over the flexion's 2.00 N m; the stop optimised on its rows catches it,
-    # ``planner.catch.plan.stoprows``: docs/history/2026-12-07-catch-stoprows.md)
+    # (before the stop on the rows: "no stop found", the planner's stops over the flexion's
+    # 2.00 N m; the stop optimised on its rows catches it, ``planner.catch.plan.stoprows``:
+    # docs/history/2026-12-07-catch-stoprows.md). Within the joints' stop margins the grid's
+    # 0 m / 15 deg / 4.0 m, caught so before, rolls 176 mm towards the wrist (the wrist's
+    # turn within its margin; docs/history/2026-12-07-catch-pad.md): the same stop shown on
+    # its -0.3 m neighbour, the one ``tests/test_catch_stoprows.py`` measures
+    far = plan_throw(15, 4.0, -0.3, planner=pl)
     assert far.feasible and far.forces.stop.headroom >= 0, far.reasons
     assert any(n.startswith("the stop optimised on the rows") for n in far.notes)
+    level = plan_throw(15, 4.0, 0.0, planner=pl)
+    assert CatchReason.ROLL in level.reason_kinds, level.reasons
 
 
 def test_catch_plan_is_frozen(seed_plan):
@@ -321,11 +327,11 @@ def test_grasp_stop(closed):
     q_i = _rows_at(p.rows.t, p.rows.q, p.intercept.t_s)
     P = hand.palm_pose(q_i)
     c = P[:3, 3] + r * P[:3, 2]
-    F = gq.stop_force(p.flight.ball.mass_kg, 0.5 * p.intercept.arrival_velocity)
+    F = gq.stop_force(p.flight.ball.mass_kg, 0.5 * p.intercept.arrival_velocity, hand.pad_give_m)
     v = np.linalg.norm(0.5 * p.intercept.arrival_velocity)
     # m v^2 / (2 d) against the velocity, plus the weight
     assert np.linalg.norm(F + 0.057 * np.array([0, 0, -9.81])) == pytest.approx(
-        0.057 * v * v / (2 * gq.STOP_DISTANCE_M))
+        0.057 * v * v / (2 * hand.pad_give_m))
     res = gq.grasp_forces(hand, q_i, c, r, F, case="stop", tip_tol_m=0.001,
                           moment_balance=False)
     assert [ct.name for ct in res.problem.contacts] == ["palm"]

@@ -114,9 +114,8 @@ def test_too_fast_to_stop_names_the_speeds_behind_its_force():
 
     from planner.catch.plan.api import get_planner, plan_throw
     from planner.catch.plan.reasons import CatchReason
-    from planner.check.ballstop import PAD_GIVE_M
-
-    p = plan_throw(15.0, 3.0, 0.3, planner=get_planner("default"))  # (15 deg from 4 m and
+    pl = get_planner("default")
+    p = plan_throw(15.0, 3.0, 0.3, planner=pl)  # (15 deg from 4 m and
     # 75 deg from 3 m, this test's throws before, are caught now:
     # docs/history/2026-12-07-catch-stoprows.md, docs/history/2026-12-07-catch-roll2.md)
     assert not p.feasible
@@ -127,7 +126,7 @@ def test_too_fast_to_stop_names_the_speeds_behind_its_force():
     v_rel, v_flight, force_n, _, torque_nm, cap_nm = (
         float(x) if i != 3 else x for i, x in enumerate(m.groups()))
     mass = p.flight.ball.mass_kg
-    assert abs(force_n - mass * v_rel ** 2 / (2 * PAD_GIVE_M)) < mass * 9.81 * 3
+    assert abs(force_n - mass * v_rel ** 2 / (2 * pl.hand.pad_give_m)) < mass * 9.81 * 3
     assert v_rel < v_flight and torque_nm > cap_nm
 
 

@@ -14,7 +14,6 @@ from planner.catch import CatchSession, plan_throw
 from planner.catch.flight.dragfit import KNOWN_REL_SIGMA, estimate_drag
 from planner.catch.flight.observe import fit_observations
 from planner.catch.flight.path import Flight, get_ball, predict_throw
-from planner.check.ballstop import PAD_GIVE_M
 from planner.trajfile import parse_trajectory
 
 BALL = get_ball("tennis")
@@ -28,7 +27,7 @@ def test_impact_and_riding_are_named_apart(pl, capsys, tmp_path):
     c = p.forces.contact
     v = c.impact.speed_m_s
     assert c.impact.time_s == pytest.approx(p.intercept.t_s)
-    assert c.impact.force_n == pytest.approx(BALL.mass_kg * v * v / (2 * PAD_GIVE_M), rel=0.1)
+    assert c.impact.force_n == pytest.approx(BALL.mass_kg * v * v / (2 * pl.hand.pad_give_m), rel=0.1)
     assert c.impact.force_n > 10.0 and c.riding.force_n < 3.0 and c.riding.speed_m_s == 0.0
     assert c.riding.time_s > c.impact.time_s
     n = len(pl.hand.motor_names)

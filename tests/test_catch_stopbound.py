@@ -15,7 +15,7 @@ from planner.catch.plan.stopbound import (
     stop_program,
 )
 from planner.check.ballroll import ROLL_ROOM_M
-from planner.check.ballstop import PAD_GIVE_M, PALM_MU
+from planner.check.ballstop import PALM_MU
 
 COARSE = BoundGrid()  # 5 ms steps (at 10 ms the pad cannot stop the ball within a step)
 
@@ -83,7 +83,7 @@ def test_the_bounds_stop_keeps_the_rules(pl, steep):
         a = f / ball.mass_kg + np.array([0.0, 0.0, -9.81])
         x, u = x + u * dt + 0.5 * a * dt * dt, u + a * dt
         off = x - T.J_target @ pos[V.pre + s + 1]  # the ball from the palm's target
-        assert -1e-7 <= -T.n @ off <= PAD_GIVE_M + 1e-7
+        assert -1e-7 <= -T.n @ off <= pl.hand.pad_give_m + 1e-7
         assert abs(T.x @ off) <= T.half_width_m + 1e-7 and T.y @ off <= ROLL_ROOM_M + 1e-7
     assert np.abs(u).max() < 1e-6 and np.abs(vel[-1]).max() < 1e-6
     fn = b.force_n @ T.n

@@ -171,3 +171,83 @@ def test_catch_plan_edited_to_stop_over_2_mm_rejected(tmp_path):
     assert rep.catch.loads[0].force_n > 9 * good.catch.loads[0].force_n
     assert rep.problems == tuple(p for p in rep.problems if p.startswith("stopping the ball")) \
         + ("the end marker claims the catch held; the rows above say otherwise",)
+
+
+# ---------------------------------------------------------------- every limit of the hand
+
+PLAY_CATEGORIES = ("joint_position", "joint_stop_margin", "joint_velocity", "motor_velocity",
+                   "joint_acceleration", "motor_consistency", "coupling", "joint_jerk",
+                   "motor_torque", "tendon_tension")
+
+
+@pytest.fixture(scope="module")
+def fresh_catch(tmp_path_factory):
+    """A fresh plan of the catch planner (30 deg from 1.5 m): its file's path."""
+    from planner.catch.plan.api import plan_catch
+
+    path = tmp_path_factory.mktemp("fresh") / "c.csv"
+    assert plan_catch(30.0, 1.5, 0.0, "default", str(path)).feasible
+    return path
+
+
+def _limit(r, category):
+    return next(lc for lc in r.limits if lc.category == category)
+
+
+def _end_info(tr) -> dict:
+    return {k: v for k, v in tr.end.items() if k not in ("end", "rows")}
+
+
+def test_catch_judged_by_every_limit_of_the_hand(fresh_catch):
+    """A catch file's rows are judged by every limit category a play's are (the jerk
+    bounds and the stop margins of the hand file's [drive] too), in the same order, in
+    the report and in its JSON; the planner's fresh plan is within every one."""
+    r = check_trajectory(str(fresh_catch))
+    assert r.ok, r.summary()
+    assert tuple(lc.category for lc in r.limits) == PLAY_CATEGORIES
+    d = json.loads(json.dumps(r.to_dict()))
+    assert tuple(lc["category"] for lc in d["limits"]) == PLAY_CATEGORIES
+    assert all(lc["ok"] for lc in d["limits"])
+    assert "joint_jerk" in r.summary() and "joint_stop_margin" in r.summary()
+
+
+def test_catch_row_beyond_a_jerk_bound_fails(tmp_path, hand, fresh_catch):
+    """The fresh plan with one row of index_mcp_abd moved by half its jerk bound x dt^3
+    (towards the middle of its range, after the grasp: the hand holding the ball): two third differences at 1.5 x the
+    bound (as a play's, ``test_check.test_jerky_row_flagged``), its acceleration within
+    its limit: the check fails on the jerk alone."""
+    tr = read_trajectory(str(fresh_catch))
+    j = hand.index["index_mcp_abd"]
+    dt = 1.0 / tr.metadata["rate_hz"]
+    k = len(tr.t_s) - 20
+    q = tr.q.copy()
+    off = 0.5 * hand.jerk[j] * dt ** 3
+    q[k, j] += off * np.sign(0.5 * (hand.lower[j] + hand.upper[j]) - q[k, j])  # (away from
+    # its stop: the closed hand's abduction may be at its margin)
+    r = check_trajectory(write_traj(tmp_path / "j.csv", hand, tr.t_s, q, metadata=tr.metadata,
+                                    end_info=_end_info(tr)))
+    lc = _limit(r, "joint_jerk")
+    assert (lc.name, lc.count, lc.limit) == ("index_mcp_abd", 2, hand.jerk[j])
+    assert lc.worst == pytest.approx(3 * off / dt ** 3, rel=1e-3)
+    assert [c.category for c in r.limits if not c.ok] == ["joint_jerk"]
+    assert not r.ok and any("joint jerk violations" in p for p in r.problems)
+
+
+def test_catch_rows_inside_a_stop_margin_fail(tmp_path, hand, fresh_catch):
+    """The fresh plan's open hand with index_pip on its hard stop (0 rad, the open pose
+    before the stop margins) until the closing: within the joint's range, inside its 2 deg
+    margin; the check counts those rows."""
+    tr = read_trajectory(str(fresh_catch))
+    j = hand.index["index_pip"]
+    q = tr.q.copy()
+    near = q[:, j] < hand.plan_lower[j] + 1e-6  # the open hand's rows (at the margin,
+    # to the file's 6 decimals)
+    assert near.sum() >= 5
+    q[near, j] = 0.0
+    q = hand.apply_couplings(q)
+    r = check_trajectory(write_traj(tmp_path / "m.csv", hand, tr.t_s, q, metadata=tr.metadata,
+                                    end_info=_end_info(tr)))
+    lc = _limit(r, "joint_stop_margin")
+    assert lc.count == int(near.sum()) and lc.name == "index_pip" and lc.worst == 0.0
+    assert _limit(r, "joint_position").ok
+    assert not r.ok and any("joint stop margin violations" in p for p in r.problems)

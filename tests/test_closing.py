@@ -62,7 +62,7 @@ def test_close_start_is_the_earliest_clear_candidate(angle, dist, height):
         p = s.pose
         for ready in (s.motion.fingers_open_s if s.motion.moving else k / 100 + 0.2,
                       p.t_i - 0.3, p.t_i - 0.05):
-            args = (pl.hand, s.flight, s.C, p.q_open, cl, p.t_i, ready, gq.stop_time(p.v_i),
+            args = (pl.hand, s.flight, s.C, p.q_open, cl, p.t_i, ready, gq.stop_time(p.v_i, pl.hand.pad_give_m),
                     BALL.radius_m)
             assert close_start(*args) == _all_at_once(*args)
             n += 1
@@ -75,7 +75,9 @@ def test_closed_fingers_bodies_clear_of_the_ball():
     """The closed pose keeps every finger's body (the replay's capsules and pad spheres)
     ``BODY_CLEAR_M`` outside the ball on the palm and still grasps it (thumb + 2 tips within
     radius + ``GRASP_TOL_M``); the fingertips' closing (``bodies=False``, the fallback)
-    has its tips ``TIP_GAP_M`` out but the middle and ring pad spheres inside the ball."""
+    has its tips ``TIP_GAP_M`` out (the index's 4.4 mm further: its abduction and MCP
+    flexion at their planning limits, 2 deg inside the hard stops; 1.9 mm further with the
+    hard stops as its limits) but the middle and ring pad spheres inside the ball."""
     pl = get_planner("default")
     r = BALL.radius_m
     centre = pl.wrist.pc0 + r * pl.wrist.n0
@@ -85,7 +87,10 @@ def test_closed_fingers_bodies_clear_of_the_ball():
     assert cl.u_grasp is not None and "thumb" in cl.grasp_fingers
     assert np.sum(cl.tip_dist_m <= r + GRASP_TOL_M) >= GRASP_MIN_TIPS
     tips_only = make_closing(pl.hand, pl.ik, pl.joints, pl.wrist, r, bodies=False)
-    assert np.allclose(tips_only.tip_dist_m[:4], r + TIP_GAP_M, atol=0.002)
+    assert np.allclose(tips_only.tip_dist_m[[0, 2, 3]], r + TIP_GAP_M, atol=0.002)
+    assert r + TIP_GAP_M < tips_only.tip_dist_m[1] < r + TIP_GAP_M + 0.005
+    i = [pl.hand.index[n] for n in ("index_mcp_abd", "index_mcp_flex")]
+    assert np.allclose(tips_only.q_closed[i], pl.hand.upper[i])  # (the planner's limits)
     fingers = pl.hand.fingers
     inside = body_gaps_m(pl.hand, tips_only.q_closed, centre, r)
     assert inside[fingers.index("middle")] < -0.003 and inside[fingers.index("ring")] < -0.003
@@ -121,3 +126,30 @@ def test_body_table_is_the_per_configuration_one():
                 a, g = a + n, g + 1
         assert g == cl.bodies_pc.shape[1]
     assert worst <= 1e-15
+
+
+@pytest.mark.parametrize("name", ["agh", "default"])
+def test_the_open_hand_is_straight_within_the_margins(name):
+    """The open hand (``open_from``) keeps every joint within the planner's limits (the
+    stop margins inside the hard stops) and each finger's flexions sum to 0 where its first
+    flexion joint's range allows: the AGH's end joints, held 2 deg off their stop at
+    straight, lean back by their base joints (-2 deg), so a finger points along the palm
+    normal as with every flexion at 0 (leaning 2 deg in, its 140 mm end element put the
+    tip 4.9 mm into the ball's way: 30 deg / 1.5 m refused, fingers in the way); the
+    default hand's MCPs take back the PIP's and DIP's margins. The thumb's first flexion
+    joint (CMC) is itself at its margin: it stays there."""
+    from planner.catch.plan.arm import open_from, zero_pose
+
+    pl = get_planner(name)
+    h = pl.hand
+    q0 = zero_pose(h)
+    q = open_from(h, pl.joints, q0, pl.closing(BALL.radius_m).q_closed)
+    assert np.all(q >= h.lower - 1e-12) and np.all(q <= h.upper + 1e-12)
+    flexion = {int(i) for i in pl.joints.flexion_idx}
+    for f in h.fingers:
+        chain = [h.index[n] for n in h.spec.joints_of(f) if h.index[n] in flexion]
+        if f == "thumb" and name == "default":
+            assert q[chain[0]] == pytest.approx(h.lower[chain[0]], abs=1e-12)
+            continue
+        assert q[chain[1:]].sum() > 0.01  # (the margins hold the later joints flexed)
+        assert q[chain].sum() == pytest.approx(0.0, abs=1e-12)

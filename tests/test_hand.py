@@ -247,6 +247,23 @@ def test_mounted_keeps_hash_and_moves_tips(hand) -> None:
     assert np.allclose(hand.pin_model.gravity.linear, [0.0, 0.0, -9.81])
 
 
+def test_within_margins_limits_are_the_planners(hand) -> None:
+    """``within_margins``: the hand whose limits are the hard stops less each joint's stop
+    margin (index_pip 0..100 deg: 2..98 deg), its margins then 0; the hand itself untouched,
+    the same URDF and hash."""
+    other = hand.within_margins()
+    j = hand.index["index_pip"]
+    assert other.lower[j] == pytest.approx(math.radians(2.0)) and hand.lower[j] == 0.0
+    assert other.upper[j] == pytest.approx(hand.upper[j] - math.radians(2.0))
+    assert np.array_equal(other.lower, hand.plan_lower)
+    assert np.array_equal(other.upper, hand.plan_upper)
+    assert np.array_equal(other.plan_lower, other.lower) and not np.any(other.stop_margin)
+    assert hand.stop_margin[j] == pytest.approx(math.radians(2.0))
+    assert other.urdf_sha256 == hand.urdf_sha256
+    q = other.apply_couplings(np.clip(np.zeros(hand.n), other.lower, other.upper))
+    assert hand.within_plan_limits(q) and not hand.within_plan_limits(hand.q_neutral)
+
+
 # =========================================================================== couplings
 def test_apply_couplings_default_ratio(hand) -> None:
     rng = np.random.default_rng(2)

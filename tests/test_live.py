@@ -127,6 +127,35 @@ def test_session_catches_the_true_ball(live_run):
     assert rep.catch.intercept_error_m < 0.015 and rep.ok, rep.problems
 
 
+def test_session_rows_within_every_limit_of_the_hand(live_run, tmp_path):
+    """The live session's file judged by every limit a play's is, the jerk bounds and the
+    stop margins of the hand file's [drive] too: within each; the same rows with one row
+    of a finger's abduction moved by half its jerk bound x dt^3 (after the grasp) fail on
+    the jerk (1.5 x the bound), nothing else."""
+    from planner.hand.model import load_hand
+    from planner.trajfile import end_line, format_rows, header_line, metadata_line
+
+    _, s, _ = live_run
+    tr = parse_trajectory(s.text)
+    rep = check_trajectory(tr)
+    by = {lc.category: lc for lc in rep.limits}
+    assert {"joint_jerk", "joint_stop_margin"} <= set(by) and all(lc.ok for lc in rep.limits)
+    hand = load_hand("default")
+    j, dt = hand.index["middle_mcp_abd"], 1.0 / tr.metadata["rate_hz"]
+    q = tr.q.copy()
+    k = len(q) - 10
+    q[k, j] += 0.5 * hand.jerk[j] * dt ** 3 * np.sign(-q[k, j] or 1.0)
+    rows = format_rows(tr.t_s, q, hand.motor_angles(q))
+    path = tmp_path / "jerk.csv"
+    path.write_text(metadata_line(tr.metadata) + header_line(hand.joint_names, hand.motor_names)
+                    + rows.text + end_line(len(rows.t_s), {k: v for k, v in tr.end.items()
+                                                           if k not in ("end", "rows")}))
+    bad = check_trajectory(str(path))
+    assert [lc.category for lc in bad.limits if not lc.ok] == ["joint_jerk"]
+    lc = next(lc for lc in bad.limits if lc.category == "joint_jerk")
+    assert lc.name == "middle_mcp_abd" and lc.count == 2 and not bad.ok
+
+
 def test_session_first_plan_starts_from_the_first_look(live_run):
     """The observation before the first drag fit iterates the drag chord on the
     observations so far (``LiveFit.first_look``) and searches that flight's whole path;

@@ -20,6 +20,7 @@ from planner.report import write_check_report, write_html
 from planner.report.html import _frame_rows
 from tests.trajbuild import (
     BALL_R,
+    PAD10_HAND,
     RATE,
     SONG,
     SPEED,
@@ -28,6 +29,7 @@ from tests.trajbuild import (
     grasp_posture,
     meta,
     min_jerk,
+    open_posture,
     play_trajectory,
     song_file,
     write_traj,
@@ -69,12 +71,12 @@ def tilted_catch_file(path, hand, tilt_deg=120.0):
     T[:3, 3] = -p0
     T = T @ hand.T_world_root
     t = np.arange(round((T_I + 0.4) * RATE) + 1) / RATE
-    q_open = hand.q_neutral.copy()
+    q_open = open_posture(hand)
     q = hand.apply_couplings(min_jerk([0.0, T_I - 0.12, T_I + 0.13, T_I + 2.0],
                                       [q_open, q_open, q_grasp, q_grasp], t))
     m = meta(hand, "catch", ball={"p0": [0.0, 0.0, 0.0], "v0": v0.tolist(), "radius": BALL_R,
                                   "mass": 0.2, "drag": 0.0}, intercept_t=T_I,
-             catch={"stop_distance_m": STOP_M})
+             catch={"stop_distance_m": STOP_M}, hand=PAD10_HAND)
     m["T_world_root"] = T.tolist()
     return write_traj(path, hand, t, q, metadata=m)
 

@@ -11,6 +11,7 @@ thumb, index and middle close around it.
 from __future__ import annotations
 
 from functools import cache, lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -216,10 +217,19 @@ SPEED = 6.0  # m/s, its speed there
 
 
 @lru_cache(maxsize=1)
+def open_posture(hand):
+    """The neutral hand with every joint its stop margin off its stops
+    (``HandModel.plan_lower``, ``plan_upper``), as a plan's rows keep them: a catch's
+    open hand."""
+    return hand.apply_couplings(np.clip(hand.q_neutral, hand.plan_lower, hand.plan_upper))
+
+
 def grasp_posture():
-    """Thumb, index and middle tips 4 mm off a ball resting on the palm."""
+    """Thumb, index and middle tips 4 mm off a ball resting on the palm, every joint its
+    stop margin off its stops (``HandModel.plan_lower``, ``plan_upper``), as a plan's rows
+    keep them."""
     hand = load_hand("default")
-    q = hand.q_neutral.copy()
+    q = hand.apply_couplings(np.clip(hand.q_neutral, hand.plan_lower, hand.plan_upper))
     q[_idx(hand, "thumb_cmc_abd", "thumb_cmc_flex", "thumb_ip")] = np.radians([30, 60, 40])
     P = hand.palm_pose(q)
     C = P[:3, 3] + BALL_R * P[:3, 2]
@@ -236,8 +246,8 @@ def grasp_posture():
             e = C + (BALL_R + 0.004) * d / np.linalg.norm(d) - tips[fi]
             Ja = Js[fi][:, [indep.index(a) for a in act]]
             dq = Ja.T @ np.linalg.solve(Ja @ Ja.T + 1e-4 * np.eye(3), e)
-            q[act] += dq * min(1.0, 0.05 / np.max(np.abs(dq)))
-        q = hand.apply_couplings(np.clip(q, hand.lower, hand.upper))
+            q[act] += dq * min(1.0, 0.05 / max(float(np.max(np.abs(dq))), 1e-12))
+        q = hand.apply_couplings(np.clip(q, hand.plan_lower, hand.plan_upper))
     dist = np.linalg.norm(hand.tip_positions(q) - C, axis=1)[:3] - BALL_R
     assert np.all(np.abs(dist - 0.004) < 1e-4), dist
     return q, C, P[:3, 2]
@@ -245,6 +255,9 @@ def grasp_posture():
 
 STOP_M = 0.10  # this test ball (0.2 kg at 6 m/s) stopped over 10 cm: 36 N, within the
 # wrist flexion motor's 2 N m (over the catch planner's 2 cm it would need 180 N)
+# the hand those catches name: the default hand with a pad of STOP_M (``check`` judges a
+# plan's stop distance no longer than its hand's pad), its URDF the default's
+PAD10_HAND = str(Path(__file__).parent / "data" / "pad10.toml")
 
 
 def catch_file(path, hand, offset=(0.0, 0.0, 0.0), close_from=T_I - 0.12, close_s=0.25,
@@ -252,7 +265,7 @@ def catch_file(path, hand, offset=(0.0, 0.0, 0.0), close_from=T_I - 0.12, close_
     """A catch: the ball arrives along -normal at SPEED onto the palm (plus
     ``offset``); the fingers close by min-jerk over [close_from, close_from + close_s]."""
     q_grasp, C, n = grasp_posture()
-    q_open = hand.q_neutral.copy()
+    q_open = open_posture(hand)
     v_i = -SPEED * n
     g = np.array([0, 0, -9.81])
     v0 = v_i - g * T_I
@@ -266,5 +279,5 @@ def catch_file(path, hand, offset=(0.0, 0.0, 0.0), close_from=T_I - 0.12, close_
     q = hand.apply_couplings(min_jerk(times, frames, t))
     m = meta(hand, "catch", ball={"p0": p0.tolist(), "v0": v0.tolist(), "radius": BALL_R,
                                   "mass": 0.2, "drag": 0.0}, intercept_t=T_I,
-             catch={"stop_distance_m": STOP_M})
+             catch={"stop_distance_m": STOP_M}, hand=PAD10_HAND)
     return write_traj(path, hand, t, q, metadata=m)

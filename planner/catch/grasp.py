@@ -29,7 +29,7 @@ contact c pushes on the ball with a force ``f_c`` (N, world frame). The QP:
 Required force (``stop_force`` / ``hold_force``):
 
 * stopping: the ball arrives at speed v and the padded palm gives
-  ``STOP_DISTANCE_M`` (2 cm); a constant deceleration over that distance is
+  the hand's pad (``HandModel.pad_give_m``, the hand file's ``[palm]``); a constant deceleration over that distance is
   a = v^2 / (2 d) against the arrival velocity, so
   ``F_req = m a (-v/|v|) - m g`` (``g`` the gravity vector). The impact is
   brief, so the ball may spin: no moment balance.
@@ -64,7 +64,6 @@ from planner.hand.tendon import actuator_capacity
 
 MU_RUBBER = 0.8  # seed (David): rubber pads
 FACETS = 8
-STOP_DISTANCE_M = 0.02  # give of the padded palm while the ball stops
 HOLD_SAFETY = 1.5  # seed (David): safety factor on the grip
 REG = 1e-2
 _EPS = 1e-6  # OSQP absolute/relative tolerances (N)
@@ -137,7 +136,7 @@ class GraspResult:
 
 
 def stop_force(mass_kg: float, v_arrival: np.ndarray,
-               stop_distance_m: float = STOP_DISTANCE_M) -> np.ndarray:
+               stop_distance_m: float) -> np.ndarray:
     """Total contact force (N) that stops a ball arriving at ``v_arrival`` over
     ``stop_distance_m`` at constant deceleration, against gravity as well."""
     v = np.asarray(v_arrival, dtype=float)
@@ -153,7 +152,7 @@ def hold_force(mass_kg: float, safety: float = HOLD_SAFETY) -> np.ndarray:
     return -safety * mass_kg * GRAVITY_WORLD
 
 
-def stop_time(v_arrival: np.ndarray, stop_distance_m: float = STOP_DISTANCE_M) -> float:
+def stop_time(v_arrival: np.ndarray, stop_distance_m: float) -> float:
     """Duration (s) of the constant deceleration: 2 d / v."""
     speed = float(np.linalg.norm(v_arrival))
     return 2.0 * stop_distance_m / speed if speed > 0 else 0.0

@@ -31,6 +31,7 @@ BODY_TOL_M = 1e-5  # the fingers' bodies' tolerance on a file's rows (their 1e-6
 # rounding moves a body ~0.3 um at the arm's 0.3 m)
 CONE_TOL_N = 1e-3  # the cone margin's tolerance (N): the file's rounding of the rows
 STILL_M_S = 1e-3  # the palm target slower than this (1 mm/s) has brought the ball to rest
+PAD_TOL_M = 1e-9  # a plan's stated pad against its hand's (m): the same number (a file keeps a float's digits)
 STOP_DIFF_S = 1e-4  # central differences of the ball and the palm at the intercept (s): the
 # ball's speed changes by g h = 1 mm/s over it, the palm's rows are piecewise linear
 
@@ -136,12 +137,19 @@ def catch_audit(tr: Trajectory, kin: Kinematics, tips: np.ndarray, palm: np.ndar
     if rolled is not None:
         problems.append(rolled)
     loads: tuple[BallLoad, ...] = ()
-    stop_m = _stop_distance(meta, path)
+    # the plan's stopping distance, judged as it states it, is no more than its hand's pad
+    # gives (the hand file's ``[palm] pad_give_m``: a plan stopped over less is judged by
+    # its own, harder stop)
+    stop_m, pad_m = _stop_distance(meta, path), kin.hand.pad_give_m
     if stop_m is None:
         problems.append("the plan states no stopping distance (catch.stop_distance_m): the "
                         "force of stopping the ball cannot be judged")
-    elif err is not None:
-        loads = ball_loads(tr.t_s, tr.q, kin, palm, ball, ti, stop_m, g_time)
+    else:
+        if stop_m > pad_m + PAD_TOL_M:
+            problems.append(f"the plan stops the ball over {stop_m * 1000:g} mm; the hand's "
+                            f"pad gives {pad_m * 1000:g} mm (its file's [palm] pad_give_m)")
+        if err is not None:
+            loads = ball_loads(tr.t_s, tr.q, kin, palm, ball, ti, stop_m, g_time)
         for ld in loads:
             what = "stopping" if ld.phase == "stop" else "holding"
             if ld.headroom < -RATE_TOL:

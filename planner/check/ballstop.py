@@ -4,7 +4,8 @@ self-check) alike.
 
 * The pad. The ball meets the palm with a velocity ``v_rel`` relative to the palm target
   (palm_center + radius * normal: where the ball's centre rides). The padded palm gives
-  ``PAD_GIVE_M`` (2 cm) and takes that relative velocity to zero at a constant
+  the hand's pad give d (``HandModel.pad_give_m``: the hand file's ``[palm] pad_give_m``,
+  ``planner.hand.pad``) and takes that relative velocity to zero at a constant
   deceleration: it lasts ``pad_time_s`` = 2 d / |v_rel| and the force of the hand on the
   ball meanwhile is ``pad_force_n`` = m (a_palm - |v_rel| v_rel / (2 d) - g), a_palm the
   palm target's own acceleration then. A palm that moves along the ball's path when they
@@ -24,19 +25,18 @@ import numpy as np
 
 from planner.hand.model import GRAVITY_WORLD
 
-PAD_GIVE_M = 0.02  # give of the padded palm while the ball stops on it (the hand's pad)
 PALM_MU = 0.8  # seed (David): friction coefficient of the rubber pads
 
 
-def pad_time_s(v_rel: np.ndarray, give_m: float = PAD_GIVE_M) -> float:
+def pad_time_s(v_rel: np.ndarray, give_m: float) -> float:
     """How long the pad takes to stop the relative velocity ``v_rel``: 2 d / |v_rel| (0 for
     a ball at rest on the palm)."""
     speed = float(np.linalg.norm(v_rel))
     return 2.0 * give_m / speed if speed > 0 else 0.0
 
 
-def pad_force_n(mass_kg: float, v_rel: np.ndarray, a_palm: np.ndarray | None = None,
-                give_m: float = PAD_GIVE_M) -> np.ndarray:
+def pad_force_n(mass_kg: float, v_rel: np.ndarray, a_palm: np.ndarray | None,
+                give_m: float) -> np.ndarray:
     """The hand's force on the ball (N) while the pad stops ``v_rel`` over ``give_m``:
     m (a_palm - |v_rel| v_rel / (2 d) - g)."""
     v = np.asarray(v_rel, dtype=float)

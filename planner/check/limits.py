@@ -3,9 +3,10 @@ being written is audited as it streams, ``limit_audit`` audits rows held whole a
 block, with the same result to the bit): joint positions, speeds, accelerations, motor speeds,
 motor columns against the joints, couplings, static motor torque and the tendons'
 tensions (planner.hand.tendon: tension at the spool = motor torque / spool radius,
-bounded by the cable's design force); of a play's rows also the joints' jerks (third
-differences) and the rows closer to a hard stop than the joint's stop margin
-(planner.hand.drive: rows a controller can run)."""
+bounded by the cable's design force), the joints' jerks (third differences) and the rows
+closer to a hard stop than the joint's stop margin (planner.hand.drive: rows a controller
+can run): every category the hand file bounds, of every file (play, planned or live
+catch) alike; of a play's rows the motor torques also move the hand (its inertia)."""
 
 from __future__ import annotations
 
@@ -111,19 +112,16 @@ class LimitAudit:
         if self._tail is not None:  # the last row: no row after it, no inertia
             self._torques(self._tail, self._rows - len(self._tail[0]), len(self._tail[0]),
                           False)
-        names = ["joint_position", "joint_velocity", "motor_velocity", "joint_acceleration",
-                 "motor_consistency", "coupling", "motor_torque", "tendon_tension"]
-        if self._inertia:
-            names[1:1] = ["joint_stop_margin"]
-            names[-2:-2] = ["joint_jerk"]
+        names = ["joint_position", "joint_stop_margin", "joint_velocity", "motor_velocity",
+                 "joint_acceleration", "motor_consistency", "coupling", "joint_jerk",
+                 "motor_torque", "tendon_tension"]
         return [self._worst[n].result() for n in names], self._tendons.loads()
 
     def _row_rules(self, t: np.ndarray, Q: np.ndarray, QM: np.ndarray) -> None:
         """The rules of a row alone: position, stop margin, motor columns, couplings."""
         hand, w = self._hand, self._worst
         _position_rule(hand, t, Q, w["joint_position"])
-        if self._inertia:
-            _stop_margin_rule(hand, t, Q, w["joint_stop_margin"])
+        _stop_margin_rule(hand, t, Q, w["joint_stop_margin"])
         QMc = hand.motor_angles(Q)
         sens = hand.motor_sensitivity(Q)
         err = np.abs(QM - QMc)
@@ -137,8 +135,8 @@ class LimitAudit:
             w["coupling"].offer_values(ce / tol, ce, tol, 0.0, names, t)
 
     def _differences(self, t: np.ndarray, Q: np.ndarray, QM: np.ndarray, c: int) -> None:
-        """Speeds (row differences), accelerations (second differences) and, of a play,
-        jerks (third) of rows ``t, Q, QM`` whose first ``c`` were judged before: each
+        """Speeds (row differences), accelerations (second differences) and jerks
+        (third) of rows ``t, Q, QM`` whose first ``c`` were judged before: each
         sample whose last row is new, with the file's rounding in its tolerance."""
         hand, w, m = self._hand, self._worst, len(t)
         jn = hand.joint_names
@@ -162,7 +160,7 @@ class LimitAudit:
         tol = RATE_TOL * hand.acceleration + 2 * FILE_QUANTUM / (dt[1:] * dt[:-1])[:, None]
         w["joint_acceleration"].offer_values(np.abs(A[s]) / hand.acceleration, np.abs(A[s]),
                                              hand.acceleration, tol[s], jn, t[1:-1][s])
-        if m < 4 or not self._inertia:
+        if m < 4:
             return
         J = np.diff(A, axis=0) / np.diff(t[1:-1])[:, None]  # between t[1:-2] and t[2:-1]
         s = slice(max(c - 3, 0), None)

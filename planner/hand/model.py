@@ -23,6 +23,7 @@ from planner.errors import InputError
 from planner.hand.builders import load_hand_spec
 from planner.hand.couplings import CouplingLaw, CouplingMap
 from planner.hand.motormap import MotorMap
+from planner.hand.pad import pad_give_m
 from planner.hand.spec import PALM_FRAME, HandSpec
 from planner.hand.urdf import urdf_sha256, urdf_text
 
@@ -69,6 +70,10 @@ class HandModel:
         # they play, the lowest first: a right hand's thumb is on its bass side, a left
         # hand's (its mirror image) on its treble side
         self.side = spec.side
+        # the palm's pad: the give (m) the catch planner and ``check`` stop a ball over,
+        # and the pad the replay's palm-ball contact is made of (``planner.hand.pad``)
+        self.palm_pad = spec.palm_pad
+        self.pad_give_m = pad_give_m(spec.palm_pad)
         self.fingers_low_to_high: tuple[str, ...] = (
             self.fingers if self.side == "right" else self.fingers[::-1])
         self._tip_ids = [self.pin_model.getFrameId(f) for f in self.tip_frames]
@@ -99,6 +104,18 @@ class HandModel:
         other.pin_model = self.pin_model.copy()
         other.pin_model.gravity.linear = other.T_world_root[:3, :3].T @ GRAVITY_WORLD
         other.pin_data = other.pin_model.createData()
+        return other
+
+    def within_margins(self) -> HandModel:
+        """The same hand whose limits are its planner's (``plan_lower``, ``plan_upper``:
+        the hard stops less each joint's stop margin), its margins then 0: a planner that
+        keeps its rows within ``lower``/``upper`` of this hand keeps every joint its stop
+        margin inside its hard stops (the catch planner). Shares the spec, URDF, Pinocchio
+        model and data."""
+        other = copy.copy(self)
+        other.lower, other.upper = self.plan_lower.copy(), self.plan_upper.copy()
+        other.plan_lower, other.plan_upper = other.lower, other.upper
+        other.stop_margin = np.zeros_like(self.stop_margin)
         return other
 
     # ------------------------------------------------------------ joints

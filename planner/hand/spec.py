@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.hand.pad import PalmPad
+
 INCH_M = 0.0254
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
 TIP_FRAMES = tuple(f"{f}_tip" for f in FINGERS)
@@ -150,6 +152,9 @@ class HandSpec:
     play_posture: PlayPosture | None = None
     # which hand: "right" (as built) or "left" (its mirror image, ``planner.hand.mirror``)
     side: str = "right"
+    # the palm's pad (the hand file's ``[palm] pad_give_m``, ``planner.hand.pad``): None
+    # where the file names none
+    palm_pad: PalmPad | None = None
 
     @property
     def movable_joints(self) -> tuple[Joint, ...]:

@@ -25,6 +25,7 @@ from planner.simulate import actuators as act
 from planner.simulate.hand_mjcf import (
     HAND_CONAFFINITY,
     HAND_CONTYPE,
+    PAD_FRICTION,
     hand_bodies,
     matrix_quat,
     mjcf_vec,
@@ -40,6 +41,10 @@ COUPLING_POLY_DEGREE = 4  # MuJoCo's joint equality: a quartic (a nonlinear law 
 # push; impedance 0.999 at the smallest stable time constant (2 steps) leaves 2e-5 rad.
 HARD_SOLREF = (2 * TIMESTEP_S, 1.0)
 HARD_SOLIMP = (0.99, 0.999, 0.001)
+# the palm pad's pair with the ball: the friction the automatic contact had (MuJoCo takes
+# the larger of two geoms': the palm box's rubber and the ball's, both 0.8), in a pair's
+# five numbers (sliding twice, torsional, rolling twice)
+PAD_PAIR_FRICTION = f"{PAD_FRICTION:g} {PAD_FRICTION:g} 0.005 0.0001 0.0001"
 KEY_FRICTION = 0.5  # pad on a key top (the pad's 0.8 applies: MuJoCo takes the larger)
 # Keys at rest sleep (MuJoCo's sleeping islands, 3.4+: a tree slower than the tolerance
 # for 10 steps leaves the pipeline -- its limit row, its dynamics -- until a hand geom
@@ -137,6 +142,25 @@ def _ball(world: ET.Element, ball: Ball) -> None:
                   contype=str(WORLD_CONTYPE),
                   conaffinity=str(WORLD_CONAFFINITY), friction="0.8 0.005 0.0001",
                   rgba="0.8 0.9 0.2 1")
+
+
+def _palm_pads(root: ET.Element, parts: tuple[ScenePart, ...]) -> None:
+    """The ball on a hand's padded palm (the hand file's ``[palm] pad_give_m``,
+    ``planner.hand.pad``): the palm box's contact with the ball alone as an explicit pair
+    whose time constant gives the pad's give at its rated speed, critically damped (the
+    automatic palm-ball contact excluded). A hand without a pad keeps the hard contact; no
+    other contact changes (a play's scene has no ball)."""
+    pads = [p for p in parts if p.hand.palm_pad is not None]
+    if not pads:
+        return
+    el = ET.SubElement(root, "contact")
+    for part in pads:
+        pre = part.prefix
+        ET.SubElement(el, "exclude", body1=f"{pre}palm", body2="ball")
+        ET.SubElement(el, "pair", name=f"{pre}palm_pad", geom1=f"{pre}palm_box", geom2="ball",
+                      condim="3", friction=PAD_PAIR_FRICTION,
+                      solref=mjcf_vec((part.hand.palm_pad.contact_time_s(), 1.0)),
+                      solimp=mjcf_vec(HARD_SOLIMP))
 
 
 def _couplings(eq: ET.Element, hand: HandModel, joints, pre: str = "") -> None:
@@ -240,6 +264,8 @@ def parts_xml(name: str, parts: tuple[ScenePart, ...], keyboard: bool, ball: Bal
         _keyboard(world)
     if ball is not None:
         _ball(world, ball)
+        if contact == "full":
+            _palm_pads(root, parts)
     eq = ET.SubElement(root, "equality")
     for part, js in zip(parts, joints):
         _couplings(eq, part.hand, js, part.prefix)

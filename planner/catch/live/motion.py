@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.catch.plan.arm import move_time as move_in_time
 from planner.catch.plan.stopping import StopDynamics
 from planner.hand.model import HandModel
 from planner.trajectory import min_jerk, phase_duration
@@ -312,8 +313,9 @@ class LiveMotion:
     def move_time(self, q_from: np.ndarray, q_to: np.ndarray) -> float:
         """The first move's duration (min-jerk, from rest): the planner's
         (``StopDynamics.move_time``), the arm's accelerations alone within the motors' room
-        too, as every re-aim's (``_ends``), so that a re-aim can start from it."""
-        return self.dyn.move_time(q_from, q_to, arm_alone=True)
+        too, as every re-aim's (``_ends``), so that a re-aim can start from it; within
+        the joints' jerk bounds (``arm.move_time``)."""
+        return move_in_time(self.dyn, q_from, q_to, arm_alone=True)
 
     def row1(self, t_s: float, q_arm: np.ndarray) -> np.ndarray:
         """``rows`` at one time whose arm joints are at ``q_arm`` (the newest move's

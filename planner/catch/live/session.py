@@ -55,7 +55,6 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from planner.catch import grasp as gq
 from planner.catch.flight.livefit import LiveFit
 from planner.catch.flight.path import Ball, Flight, finite_float, get_ball
 from planner.catch.live.ending import LiveEnding
@@ -277,7 +276,7 @@ class CatchSession:
         meta = catch_metadata(self.pl.base_hand, self._T_root, self.rate_hz, self.flight,
                               self.t_i, {"live": True, "throw": self.throw_info().to_dict(),
                                          "catch_point": [float(x) for x in self.C],
-                                         "stop_distance_m": gq.STOP_DISTANCE_M,
+                                         "stop_distance_m": self.pl.base_hand.pad_give_m,
                                          "observations": self.fit.n})
         h = self.pl.base_hand
         self.writer = TrajectoryWriter(self.out_path, meta, h)

@@ -29,6 +29,7 @@ import numpy as np
 from planner.catch.flight.path import Ball, Flight, predict_throw
 from planner.catch.live import stopcache
 from planner.catch.live.search import NEAR_S
+from planner.catch.plan.arm import move_time
 from planner.catch.plan.contactqp import ROLL_WEIGHT, contact_qp
 from planner.catch.plan.stopping import (
     SoftStop,
@@ -243,7 +244,7 @@ class StopTable:
         angles, tilts, stops, pres = [], [], [], []
 
         def ready_by(q: np.ndarray) -> float:  # (the planned catch's, from t = 0)
-            return SIGNAL_S + PLAN_BUDGET_S + dyn.move_time(pl.q_rest, q)
+            return SIGNAL_S + PLAN_BUDGET_S + move_time(dyn, pl.q_rest, q)
 
         for a in TABLE_ANGLES_DEG:
             try:

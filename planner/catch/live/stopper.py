@@ -93,7 +93,9 @@ class LiveStopper:
     def pad_s(self, pose) -> float:
         """How long the pad takes to stop the ball: at the stopping motion's contact
         speed, or on a palm at rest (no soft stop)."""
-        return self.stop.pad_s if moves(self.stop) else gq.stop_time(pose.v_i)
+        if moves(self.stop):
+            return self.stop.pad_s
+        return gq.stop_time(pose.v_i, self.pl.hand.pad_give_m)
 
     def start_early(self, t_s: float) -> None:
         """The soft stop's hand moves from the first observation's ``t_s`` on, to the table's
@@ -144,7 +146,7 @@ class LiveStopper:
         # the joints' limits alone; ``LiveMotion.reaim`` then keeps the motors within theirs)
         q_now = m.seg.state1(t_b)[0] if q_now is None else q_now
         return t_b + phase_duration(q_pre[arm] - q_now, m.hand.velocity[arm],
-                                    m.hand.acceleration[arm], 0.0)
+                                    m.hand.acceleration[arm], 0.0, m.hand.jerk[arm])
 
     def for_estimate(self, pose, t_b: float, fix_s: float) -> SoftStop | None:
         """The table's stopping motion for the estimate (``StopTable``) through ``pose``;

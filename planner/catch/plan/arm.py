@@ -13,6 +13,7 @@ import numpy as np
 
 from planner.errors import PlannerError
 from planner.hand.model import HandModel
+from planner.trajectory import jerk_duration
 
 REST_CURL = 0.3  # rest pose: flexion joints at this fraction of their upper limit
 WRIST = ("wrist_flex", "wrist_dev")
@@ -70,11 +71,31 @@ def rest_pose(hand: HandModel, joints: CatchJoints) -> np.ndarray:
 
 def open_from(hand: HandModel, joints: CatchJoints, q_arm: np.ndarray,
               q_closed: np.ndarray) -> np.ndarray:
-    """Open hand: the arm joints of ``q_arm``, abduction as in ``q_closed``, flexion 0."""
+    """Open hand: the arm joints of ``q_arm``, abduction as in ``q_closed``, flexion 0
+    (``straight``: where a joint's limit holds it flexed, the finger's first joint takes it
+    back)."""
     q = zero_pose(hand)
     q[list(joints.arm)] = q_arm[list(joints.arm)]
     q[joints.abd_idx] = q_closed[joints.abd_idx]
-    return hand.apply_couplings(np.clip(q, hand.lower, hand.upper))
+    return straight(hand, joints, hand.apply_couplings(np.clip(q, hand.lower, hand.upper)))
+
+
+def straight(hand: HandModel, joints: CatchJoints, q: np.ndarray) -> np.ndarray:
+    """``q`` with each finger's flexion joints summing to 0 where its first flexion joint's
+    limits allow: the flexion its later joints keep (a limit above 0, as the stop margin
+    of a joint whose hard stop is straight: 2 deg on the AGH's end joints, whose 140 mm
+    element then leaned its tip 4.9 mm into the ball's way between the pairs) is taken
+    back by the first one, so the finger's last segment points as with every flexion at 0
+    (the fingers' flexions turn about parallel axes)."""
+    flexion = {int(i) for i in joints.flexion_idx}
+    q = q.copy()
+    for f in hand.fingers:
+        chain = [hand.index[n] for n in hand.spec.joints_of(f) if hand.index[n] in flexion]
+        if len(chain) < 2:
+            continue
+        first, rest = chain[0], float(q[chain[1:]].sum())
+        q[first] = np.clip(-rest, hand.lower[first], hand.upper[first])
+    return hand.apply_couplings(q)
 
 
 def palm_target(hand: HandModel, q: np.ndarray, r: float) -> np.ndarray:
@@ -86,3 +107,18 @@ def palm_target(hand: HandModel, q: np.ndarray, r: float) -> np.ndarray:
 def palm_target_of(P: np.ndarray, r: float) -> np.ndarray:
     """``palm_target`` from the palm's pose ``P`` (4x4) already at hand."""
     return P[:3, 3] + r * P[:3, 2]
+
+
+def move_time(dyn, q_from: np.ndarray, q_to: np.ndarray, arm_alone: bool = False) -> float:
+    """The move in from rest (min-jerk): ``StopDynamics.move_time`` (``dyn``), no shorter
+    than the joints' jerk bounds allow (``jerk_duration``: short moves of the abduction
+    joints, whose bound is the lowest, measured 1.1-1.6 x their bounds at 1000 Hz rows
+    otherwise)."""
+    return max(dyn.move_time(q_from, q_to, arm_alone), jerk_duration(q_to - q_from, dyn.hand.jerk))
+
+
+def calm_move_time(dyn, q_from: np.ndarray, q_to: np.ndarray, t_start: float,
+                   due: float) -> float:
+    """``StopDynamics.calm_move_time`` within the joints' jerk bounds (``move_time``)."""
+    return max(dyn.calm_move_time(q_from, q_to, t_start, due),
+               jerk_duration(q_to - q_from, dyn.hand.jerk))

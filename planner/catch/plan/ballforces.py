@@ -16,7 +16,6 @@ from planner.catch.plan.geometry import interp_row
 from planner.catch.plan.reasons import CatchReason, Reason
 from planner.catch.plan.results import Forces, ForcesVerdict
 from planner.catch.plan.softstop import SoftStop
-from planner.check.ballstop import PAD_GIVE_M
 from planner.check.criteria import GRASP_TOL_M
 from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
@@ -51,7 +50,7 @@ class BallForces:
             # (the pad's force grows with the square of the ball's speed relative to the
             # palm: beside the flight's own speed it shows what the arm's recoil took off)
             reasons.append(Reason(CatchReason.TOO_FAST_TO_STOP, (
-                f"too fast to stop (over the palm's {100 * PAD_GIVE_M:g} cm and the arm's "
+                f"too fast to stop (over the palm's {100 * h.pad_give_m:g} cm and the arm's "
                 f"stopping motion): the ball meets the palm at {stop.speed_m_s:.2f} m/s "
                 f"(its flight {float(np.linalg.norm(pose.v_i)):.2f} m/s), "
                 f"{stop.force_n:.1f} N needs motor.{stop.motor} at "
@@ -86,6 +85,6 @@ class BallForces:
                 "drag": float(b["drag"])}
         _, palm = self.kin.frames(Q[k0:])
         inst = ball_load_instants(t[k0:], Q[k0:], self.kin, palm, ball, float(pose.t_i),
-                                  PAD_GIVE_M, grasp_t)
+                                  self.hand.pad_give_m, grasp_t)
         stop = phase_loads(inst, t[-1], self.kin, Q[-1], palm[-1], ball["mass"])[0]
         return stop, contact_loads(inst)

@@ -119,7 +119,7 @@ def closing_from(hand: HandModel, joints: CatchJoints, wrist: Wrist, r: float,
                   f"{1000 * (GRASP_TOL_M - GRASP_MARGIN_M):.0f} mm of the ball centre "
                   f"on the palm (closest fingertip-to-surface: {', '.join(near)})")
     fingers = tuple(f for k, f in enumerate(h.fingers) if within[-1, k])
-    T_c = phase_duration(q_closed - q_open, h.velocity, h.acceleration)
+    T_c = phase_duration(q_closed - q_open, h.velocity, h.acceleration, j_max=h.jerk)
     return Closing(r, q_closed, T_c, u_g, dist, fingers, u, tips_pc, reason,
                    float(d_tab.max()), (d_tab - r).min(axis=0), *bodies)
 

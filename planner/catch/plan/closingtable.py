@@ -29,8 +29,9 @@ from planner.catch.plan.intercept import Wrist
 from planner.hand.model import HandModel
 
 TABLE_DIR = Path(__file__).parents[2] / "tables"  # (beside the play atlas's tables)
-VERSION = 1  # the closed pose's algorithm (``closing.closed_pose``, ``HandIK.solve``): one
-# up when it changes, so that no table made by the older one is read
+VERSION = 2  # the closed pose's algorithm (``closing.closed_pose``, ``HandIK.solve``): one
+# up when it changes, so that no table made by the older one is read (2: solved within the
+# planner's limits, ``HandModel.within_margins``)
 RADIUS_DIGITS = 9  # a ball's radius keyed to 1 nm (``CatchPlanner.closing``'s own key)
 
 
@@ -45,12 +46,13 @@ def _rounded(x) -> list[float]:
 
 def params(hand: HandModel, joints: CatchJoints, wrist: Wrist) -> str:
     """What a closed pose depends on besides the ball: the hand (its URDF and its hand
-    file, couplings and limits included), the arm's and fingers' roles, the reference
+    file, couplings and limits included; the limits the planner keeps), the arm's and fingers' roles, the reference
     wrist, the closing's constants and the algorithm's version."""
     spec = hashlib.sha256(repr(hand.spec).encode()).hexdigest()
     return json.dumps({
         "version": VERSION, "urdf_sha256": hand.urdf_sha256, "spec_sha256": spec,
-        "q0": _rounded(zero_pose(hand)), "pc0": _rounded(wrist.pc0), "n0": _rounded(wrist.n0),
+        "q0": _rounded(zero_pose(hand)), "lower": _rounded(hand.lower),
+        "upper": _rounded(hand.upper), "pc0": _rounded(wrist.pc0), "n0": _rounded(wrist.n0),
         "b0": _rounded(wrist.b0), "arm": [int(i) for i in joints.arm],
         "flexion": [int(i) for i in joints.flexion_idx], "locked": list(joints.locked),
         "constants": list(closed_pose_constants())}, sort_keys=True)

@@ -15,7 +15,9 @@ import numpy as np
 from planner.catch.flight.observe import FitResult, predict_intercept
 from planner.catch.flight.path import Flight
 from planner.catch.plan.arm import (
+    calm_move_time,
     catch_joints,
+    move_time,
     open_from,
     palm_target_of,
     rest_pose,
@@ -103,7 +105,7 @@ def move_in(h: HandModel, dyn: StopDynamics, flight: Flight, C: np.ndarray, r: f
     as long as it is still there before the ramp and the closing's start."""
     q_pre = pose.q_open.copy()
     q_pre[list(soft_stop.arm)] += soft_stop.first_offset
-    move_s = dyn.move_time(q_rest, q_pre)
+    move_s = move_time(dyn, q_rest, q_pre)
     ready = t_react + move_s
     due = min(pose.t_i, soft_stop.start_s if np.any(soft_stop.qd) else pose.t_i)
     too_soon = None
@@ -113,10 +115,11 @@ def move_in(h: HandModel, dyn: StopDynamics, flight: Flight, C: np.ndarray, r: f
                           f"{1000 * (ready - pose.t_i):.0f} ms after the ball "
                           f"(t = {pose.t_i:.3f} s)")
     s_c = close_start(h, flight, C, pose.q_open, closing, pose.t_i, ready,
-                      pad_time_s(soft_stop.v_rel), r)
+                      pad_time_s(soft_stop.v_rel, h.pad_give_m), r)
     if too_soon is None:
-        move_s = dyn.calm_move_time(q_rest, q_pre, t_react, min(s_c, due))
+        move_s = calm_move_time(dyn, q_rest, q_pre, t_react, min(s_c, due))
     return MoveIn(q_pre, move_s, s_c, too_soon)
+
 
 
 def tip_reach_m(h: HandModel, q0: np.ndarray) -> float:
@@ -140,7 +143,8 @@ class CatchPlanner:
         self.base_hand = hand
         self.mount = mount
         self.T_ref = mount.T_ref()
-        self.hand = hand.mounted(self.T_ref)
+        self.hand = hand.mounted(self.T_ref).within_margins()  # (every row a stop margin
+        # inside the hard stops: ``check``'s ``joint_stop_margin``)
         self.joints = catch_joints(self.hand)
         self.ik = HandIK(self.hand)
         self.q_zero = zero_pose(self.hand)
@@ -300,7 +304,7 @@ class CatchPlanner:
         t_react = max(0.0, t_info) + SIGNAL_S + PLAN_BUDGET_S
 
         def ready_by(q_pre: np.ndarray) -> float:
-            return t_react + dyn.move_time(self.q_rest, q_pre)
+            return t_react + move_time(dyn, self.q_rest, q_pre)
 
         rw = ROLL_WEIGHT if turn_mode else 1.0
         ic, _, soft_stop = stop_of(stops, (rig, soft, bodies, rw, grid), lambda: plan_stop(

@@ -13,7 +13,6 @@ from planner.catch import grasp as gq
 from planner.catch.flight.path import Flight
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.rowcheck import RowVerdict
-from planner.check.ballstop import PAD_GIVE_M
 from planner.check.criteria import GRASP_WINDOW_S
 from planner.hand.model import HandModel
 from planner.trajfile import KeptText
@@ -191,7 +190,7 @@ class CatchPlan:
                               self.flight, self.intercept.t_s, {
             "throw": {} if self.throw is None else self.throw.to_dict(),
             "catch_point": [float(x) for x in self.catch_point],
-            "stop_distance_m": PAD_GIVE_M,
+            "stop_distance_m": self.base_hand.pad_give_m,
             "close_start": float(tm.close_start_s),
             "grasp_t": None if tm.grasp_t is None else float(tm.grasp_t),
             "feasible": bool(self.feasible),

@@ -14,7 +14,7 @@ ball within these rules:
   intercept pose and the rig's prismatic axes (rail, reach: the dynamics do not depend on
   where along them the hand is) within their travel's length wherever the intercept is;
 * the ball, from its touch on, stays on the pad: its centre at most the pad's give
-  (``PAD_GIVE_M``) into the palm along the palm's normal (a ball that leaves the palm is
+  (the hand's pad, ``HandModel.pad_give_m``) into the palm along the palm's normal (a ball that leaves the palm is
   dropped by the check's rule), across the palm within its half width (the palm link's
   box) and towards the wrist within the check's roll room (``ROLL_ROOM_M``); the palm's
   force on it anywhere in the pyramid around the friction cone (``PALM_MU``), any profile
@@ -44,7 +44,7 @@ from planner.catch.plan.arm import palm_target
 from planner.catch.plan.reasons import CatchReason, Reason
 from planner.catch.plan.stopping import StopDynamics
 from planner.check.ballroll import ROLL_ROOM_M
-from planner.check.ballstop import PAD_GIVE_M, PALM_MU
+from planner.check.ballstop import PALM_MU
 from planner.check.motormap import motor_torque_matrix
 
 GRAVITY_M_S2 = np.array([0.0, 0.0, -9.81])  # the catch frame's z is up (spec section 5)
@@ -99,6 +99,7 @@ class PoseTerms:
     Mm: np.ndarray
     motors: tuple[str, ...]
     cap: np.ndarray
+    pad_give_m: float  # the palm pad's give (``HandModel.pad_give_m``)
 
 
 def pose_terms(dyn: StopDynamics, q: np.ndarray, radius_m: float) -> PoseTerms:
@@ -128,7 +129,7 @@ def pose_terms(dyn: StopDynamics, q: np.ndarray, radius_m: float) -> PoseTerms:
     cap = dyn.cap[rows]
     names = tuple(hand.motor_names[r] for r in rows)
     return PoseTerms(H, g, J_c, J_t, P[:3, 2], P[:3, 0], P[:3, 1], 0.5 * palm.size_m[0],
-                     M_all[rows], names, cap)
+                     M_all[rows], names, cap, hand.pad_give_m)
 
 
 class Layout:
@@ -232,7 +233,7 @@ def _contact(ub: SparseRows, V: Layout, T: PoseTerms) -> None:
     after the touch) and the force in the pyramid around the cone (|f . t_i| <= mu f . n)."""
     k, n = V.k, T.n
     for s in range(1, V.P + 1):
-        for axis, lo, hi in ((n, 0.0, PAD_GIVE_M), (-T.x, -T.half_width_m, T.half_width_m),
+        for axis, lo, hi in ((n, 0.0, T.pad_give_m), (-T.x, -T.half_width_m, T.half_width_m),
                              (-T.y, None, ROLL_ROOM_M)):
             cols = [(V.p + (V.pre + s) * k + j, float(axis @ T.J_target[:, j]))
                     for j in range(k)]

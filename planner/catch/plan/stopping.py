@@ -49,7 +49,7 @@ from planner.catch.plan.intercept import Intercept, Wrist, find_intercept, find_
 from planner.catch.plan.ramps import JointRamps, recoil_shares, with_joint_ramps
 from planner.catch.plan.results import Closing
 from planner.catch.plan.softstop import SoftStop
-from planner.check.ballstop import PAD_GIVE_M, cone_margin_n, pad_force_n, pad_time_s
+from planner.check.ballstop import cone_margin_n, pad_force_n, pad_time_s
 from planner.check.kinematics import Kinematics
 from planner.hand.model import HandModel
 from planner.hand.tendon import actuator_capacity
@@ -260,14 +260,14 @@ class StopDynamics:
         # (first used by the ending of a live session: not imported at its start)
         from planner.check.ball import ball_loads
 
-        ld = ball_loads(t, Q, self.kin, palm, ball, stop.t_i, PAD_GIVE_M)[0]
+        ld = ball_loads(t, Q, self.kin, palm, ball, stop.t_i, self.hand.pad_give_m)[0]
         return ld.cone_margin_n is None or ld.cone_margin_n >= 0, float(ld.headroom)
 
     def pad_load(self, q: np.ndarray, qd: np.ndarray, v_rel: np.ndarray, mass: float,
                  normal: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         """The pad's force on the ball, every motor's |torque| / capacity while it acts (the
         hand at speed ``qd``, not accelerating), and its friction-cone margin."""
-        F = pad_force_n(mass, v_rel)
+        F = pad_force_n(mass, v_rel, None, self.hand.pad_give_m)
         M, _, J_palm = self.at_pose(q)
         tau = self.joint_torques(q, qd, np.zeros(qd.shape)) + J_palm.T @ F
         return F, np.abs(M @ tau) / self.cap, cone_margin_n(F, normal)
@@ -521,7 +521,7 @@ def stop_profile(dyn: StopDynamics, v_ball: np.ndarray, mass: float, r: float,
         moving = bool(qd_c.any())
         v_rel = v_ball - J @ qd_c
         F, ratio, cone = dyn.pad_load(q_open, qd_c, v_rel, mass, normal)
-        t_pad = pad_time_s(v_rel)
+        t_pad = pad_time_s(v_rel, dyn.hand.pad_give_m)
         qd = qd_c / share
         recoil = max(t_pad, row_s) if moving and share < 1.0 else 0.0
         shares = None

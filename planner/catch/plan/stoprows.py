@@ -41,7 +41,7 @@ from scipy.optimize import linprog
 
 from planner.catch.plan.stopbound import SparseRows, cone_tangents
 from planner.check.ball import STOP_DIFF_S, ball_load_instants, ball_positions, phase_loads
-from planner.check.ballstop import PAD_GIVE_M, PALM_MU, pad_force_n, pad_time_s, ride_force_n
+from planner.check.ballstop import PALM_MU, pad_force_n, pad_time_s, ride_force_n
 from planner.check.kinematics import G, Kinematics
 from planner.check.motormap import motor_torque_matrix
 from planner.hand.tendon import actuator_capacity
@@ -162,7 +162,8 @@ class RowStopModel:
                        for j in range(Q.shape[1])]).reshape(3, -1)
         ca = [self.target(q)[0] for q in qa]
         v_rel = (bp[1] - bp[0] - (ca[2] - ca[0])) / (2 * h)
-        t_pad = pad_time_s(v_rel, PAD_GIVE_M)
+        give = self.kin.hand.pad_give_m  # the palm's pad (the hand file's)
+        t_pad = pad_time_s(v_rel, give)
         V, A = row_rates(t, Q)
         V[:, self.fingers] = 0.0
         A[:, self.fingers] = 0.0
@@ -173,11 +174,11 @@ class RowStopModel:
         kn = k0 if ti - t[k0] <= t[k0 + 1] - ti else k0 + 1
         v_i = np.where(self.fingers, 0.0, (Q[k0 + 1] - Q[k0]) / (t[k0 + 1] - t[k0]))
         Jt = {k: self.target_jacobian(Q[k]) for k in range(kn - 1, last + 2)}
-        out = [self.instant(kn, qa[1], v_i, A[kn], pad_force_n(m, v_rel, CA[kn], PAD_GIVE_M),
+        out = [self.instant(kn, qa[1], v_i, A[kn], pad_force_n(m, v_rel, CA[kn], give),
                             CA[kn], ti < self.held, np.stack([Jt[kn + i] for i in (-1, 0, 1)]))]
         for k in np.flatnonzero((t > ti) & (np.arange(len(t)) <= last)):
             pad = t[k] < ti + t_pad
-            F = pad_force_n(m, v_rel, CA[k], PAD_GIVE_M) if pad else ride_force_n(m, CA[k])
+            F = pad_force_n(m, v_rel, CA[k], give) if pad else ride_force_n(m, CA[k])
             slows = pad or float(np.linalg.norm(CA[k])) > G
             out.append(self.instant(int(k), Q[k], V[k], A[k], F, CA[k],
                                     slows and t[k] < self.held,
@@ -367,7 +368,7 @@ def check_stop(model: RowStopModel, t: np.ndarray, Q: np.ndarray):
     """The check's own worst stopping instant on the rows (``ball_load_instants``)."""
     kin, b = model.kin, model.ball
     _, palm = kin.frames(Q)
-    inst = ball_load_instants(t, Q, kin, palm, b, model.t_i, PAD_GIVE_M,
+    inst = ball_load_instants(t, Q, kin, palm, b, model.t_i, kin.hand.pad_give_m,
                               None if math.isinf(model.held) else model.held)
     return phase_loads(inst, t[-1], kin, Q[-1], palm[-1], b["mass"])[0]
 

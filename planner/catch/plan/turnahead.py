@@ -36,6 +36,7 @@ import numpy as np
 
 from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix
+from planner.catch.plan.arm import calm_move_time, move_time
 from planner.catch.plan.holdturn import TURN_SHARE, hold_turn
 from planner.catch.plan.results import Closing
 from planner.catch.plan.softstop import SoftStop
@@ -239,12 +240,12 @@ class HoldTurn:
             start = min(p.start_s for p in prof)
             if not h.lower[i] + pad <= pre[i] <= h.upper[i] - pad:
                 continue
-            T_pre = self.dyn.move_time(self.q_rest, pre)
+            T_pre = move_time(self.dyn, self.q_rest, pre)
             due = stop.start_s if np.any(stop.qd) else pose.t_i
             if rows_args.t_react + T_pre > due:
                 continue
-            T_pre = self.dyn.calm_move_time(self.q_rest, pre, rows_args.t_react,
-                                            min(due, rows_args.s_c))
+            T_pre = calm_move_time(self.dyn, self.q_rest, pre, rows_args.t_react,
+                                   min(due, rows_args.s_c))
             turn = Turn(turn0.delta, max(p.end_s for p in prof) - start, start, prof)
             args = replace(rows_args, T_m=T_pre)
             if not self._motors_within(turn, args):  # (before the rows: their fall, where

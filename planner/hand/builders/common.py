@@ -19,6 +19,7 @@ from planner.hand.builders.values import (
     rotor_inertia,
 )
 from planner.hand.drive import apply_drive
+from planner.hand.pad import palm_pad
 from planner.hand.spec import (
     FINGERS,
     Actuator,
@@ -173,6 +174,7 @@ def assemble_spec(data: dict[str, Any], parts: HandParts) -> HandSpec:
         sources=sources,
         finger_joints=tuple(finger_joints),
         play_posture=play_posture(data, parts),
+        palm_pad=palm_pad(data),
     )
 
 
