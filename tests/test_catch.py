@@ -246,12 +246,15 @@ def test_grid(hand_kind, thumb110):
     # docs/history/2026-12-07-catch-stoprows.md). Within the joints' stop margins the grid's
     # 0 m / 15 deg / 4.0 m, caught so before, rolls 176 mm towards the wrist (the wrist's
     # turn within its margin; docs/history/2026-12-07-catch-pad.md): the same stop shown on
-    # its -0.3 m neighbour, the one ``tests/test_catch_stoprows.py`` measures
+    # its -0.3 m neighbour, the one ``tests/test_catch_stoprows.py`` measures. Turned up
+    # 20 deg the palm keeps the 0 m throw's ball (docs/history/2026-12-07-catch-roll2.md):
+    # the roll is not its reason; its stop, optimised on those rows, is not found within the
+    # margins (the programme infeasible), or it is caught
     far = plan_throw(15, 4.0, -0.3, planner=pl)
     assert far.feasible and far.forces.stop.headroom >= 0, far.reasons
     assert any(n.startswith("the stop optimised on the rows") for n in far.notes)
     level = plan_throw(15, 4.0, 0.0, planner=pl)
-    assert CatchReason.ROLL in level.reason_kinds, level.reasons
+    assert level.feasible or level.reason_kinds == (CatchReason.NO_STOP,), level.reasons
 
 
 def test_catch_plan_is_frozen(seed_plan):
