@@ -249,12 +249,14 @@ def test_grid(hand_kind, thumb110):
     # its -0.3 m neighbour, the one ``tests/test_catch_stoprows.py`` measures. Turned up
     # 20 deg the palm keeps the 0 m throw's ball (docs/history/2026-12-07-catch-roll2.md):
     # the roll is not its reason; its stop, optimised on those rows, is not found within the
-    # margins (the programme infeasible), or it is caught
+    # margins (the programme infeasible at the least tilt)
     far = plan_throw(15, 4.0, -0.3, planner=pl)
     assert far.feasible and far.forces.stop.headroom >= 0, far.reasons
     assert any(n.startswith("the stop optimised on the rows") for n in far.notes)
     level = plan_throw(15, 4.0, 0.0, planner=pl)
-    assert level.feasible or level.reason_kinds == (CatchReason.NO_STOP,), level.reasons
+    assert level.reason_kinds == (CatchReason.NO_STOP,), level.reasons
+    assert any(n.startswith("the palm turned up 20 deg past facing the ball keeps it on the palm")
+               for n in level.notes), level.notes
 
 
 def test_catch_plan_is_frozen(seed_plan):
