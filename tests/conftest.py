@@ -36,6 +36,25 @@ def pl():
 
 
 @pytest.fixture(scope="module")
+def facing(pl):
+    """``plan_throw`` on the default planner with the palm-up stage replaced by the identity:
+    the plan facing the ball after every other stage (the throws the palm-up catch now
+    catches, as they were planned before it: their facing plans' numbers)."""
+    from planner.catch.plan import palmup
+    from planner.catch.plan.api import plan_throw
+
+    def plan(angle_deg: float, dist_m: float, height_m: float = 0.0):
+        mp = pytest.MonkeyPatch()
+        mp.setattr(palmup, "palm_up_fallback", lambda plans, plan, *a, **kw: plan)
+        try:
+            return plan_throw(angle_deg, dist_m, height_m, planner=pl)
+        finally:
+            mp.undo()
+
+    return plan
+
+
+@pytest.fixture(scope="module")
 def planned(tmp_path_factory) -> Path:
     """A real planned trajectory: ``cli.py play songs/scale.mid -o X`` (the hardening
     tests' undamaged file; test_play_stream.py has a ``planned`` of its own)."""

@@ -102,9 +102,9 @@ def test_steep_short_throw_held_at_the_phase_whose_last_sample_flickers(tmp_path
 
 
 def test_too_fast_to_stop_names_the_speeds_behind_its_force():
-    """A throw too fast to stop for the planner's stops (75 deg from 3 m: the wrist
-    flexion's motor; 15 deg through 4 m, caught now by the stop optimised on its rows,
-    ``planner.catch.plan.stoprows``) names the
+    """A throw too fast to stop for the planner's stops (15 deg from 3 m to +0.3 m, palm up:
+    the wrist flexion's motor; 15 deg through 4 m, caught now by the stop optimised on its
+    rows, ``planner.catch.plan.stoprows``, and 75 deg from 3 m, palm up with it) names the
     ball's speed relative to the palm beside its flight's: the pad's force it names is the
     pad's rule for that speed (m v^2 / (2 d), within the ball's weight and the palm's own
     acceleration), and the palm recedes (the relative speed is below the flight's). The
@@ -115,8 +115,9 @@ def test_too_fast_to_stop_names_the_speeds_behind_its_force():
     from planner.catch.plan.api import get_planner, plan_throw
     from planner.catch.plan.reasons import CatchReason
     pl = get_planner("default")
-    p = plan_throw(75.0, 3.0, 0.0, planner=pl)  # (15 deg from 4 m,
-    # this test's throw before, is caught now: docs/history/2026-12-07-catch-stoprows.md)
+    p = plan_throw(15.0, 3.0, 0.3, planner=pl)  # (15 deg from 4 m and
+    # 75 deg from 3 m, this test's throws before, are caught now:
+    # docs/history/2026-12-07-catch-stoprows.md, docs/history/2026-12-07-catch-roll2.md)
     assert not p.feasible
     r = next(r for r in p.reasons if r.kind is CatchReason.NO_STOP)
     m = re.search(r"meets the palm at ([\d.]+) m/s \(its flight ([\d.]+) m/s\), ([\d.]+) N "

@@ -4,7 +4,7 @@ throw, a linear programme over the arm's motions."""
 import numpy as np
 import pytest
 
-from planner.catch.plan.api import get_ball, plan_throw
+from planner.catch.plan.api import get_ball
 from planner.catch.plan.stopbound import (
     BoundGrid,
     cone_tangents,
@@ -20,17 +20,18 @@ from planner.check.ballstop import PALM_MU
 COARSE = BoundGrid()  # 5 ms steps (at 10 ms the pad cannot stop the ball within a step)
 
 
-def _intercept(pl, angle_deg, dist_m, height_m=0.0):
-    """The hand's pose at the plan's intercept row and the ball's arrival velocity."""
-    p = plan_throw(angle_deg, dist_m, height_m, planner=pl)
+def _intercept(p):
+    """The plan ``p``, the hand's pose at its intercept row and the ball's arrival velocity."""
     k = int(np.argmin(np.abs(p.rows.t - p.intercept.t_s)))
     return p, p.rows.q[k].copy(), np.asarray(p.intercept.arrival_velocity, dtype=float)
 
 
 @pytest.fixture(scope="module")
-def steep(pl):
-    """0 m / 75 deg / 3.0 m (7.7 m/s): too fast to stop for the planner's stops."""
-    return _intercept(pl, 75.0, 3.0)
+def steep(facing):
+    """0 m / 75 deg / 3.0 m (7.7 m/s): too fast to stop for the planner's stops facing the
+    ball (the plan before the palm-up stage: palm up 20 deg it is caught with the stop
+    optimised on its rows, docs/history/2026-12-07-catch-roll2.md)."""
+    return _intercept(facing(75.0, 3.0))
 
 
 def _share(P, x):

@@ -85,8 +85,9 @@ def test_issue_targets(pl, far):
 
 
 def test_too_fast_is_named(pl):
-    p = plan_throw(75.0, 3.0, 0.0, planner=pl)  # 7.7 m/s at the palm (15 deg from 4 m, 8.8
-    # m/s, this test's throw before, is caught now: docs/history/2026-12-07-catch-stoprows.md)
+    p = plan_throw(15.0, 3.0, 0.3, planner=pl)  # 9.4 m/s at the palm, palm up (15 deg from
+    # 4 m and 75 deg from 3 m, this test's throws before, are caught now:
+    # docs/history/2026-12-07-catch-stoprows.md, docs/history/2026-12-07-catch-roll2.md)
     assert not p.feasible
     # the planner's stops need more of the wrist flexion than it gives; the stop bound
     # does not exclude a stop within every motor: the planner's shortfall, named with both

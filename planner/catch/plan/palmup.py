@@ -16,7 +16,10 @@ arm alone places the ball on a tilted palm at few tilts); the soft stop, the tur
 self-check and the roll rule are the planner's as for any plan. The tilt is bounded by the
 palm's friction cone: the pad's stopping force must stay within it, and the larger the tilt
 the larger the ball's speed along the palm it must take out (measured, 0 m / 25 deg /
-1.0 m: the stop leaves the cone from 50 deg).
+1.0 m: the stop leaves the cone from 50 deg). A tilt that keeps the ball on the palm but is
+too fast to stop for the planner's stops is given the stop bound and the stop optimised on
+its rows (``planner.stop_stages``; ``docs/history/2026-12-07-catch-roll2.md``: the steep
+and flat long throws, facing the ball both rolled off and too fast to stop).
 """
 
 from __future__ import annotations
@@ -60,25 +63,57 @@ def palm_up_grids(wrist: Wrist) -> tuple[StopGrid, ...]:
 
 
 def palm_up_fallback(plans: Callable[..., CatchPlan], plan: CatchPlan, wrist: Wrist,
-                     reach: bool) -> CatchPlan:
+                     reach: bool, stop_stages: Callable[[CatchPlan], CatchPlan] | None = None
+                     ) -> CatchPlan:
     """``plan`` (infeasible, the roll among its reasons) planned again with the palm turned
     up past facing the ball (``palm_up_grids``): on the rig's reach axis where the hand has
     one (``reach``; the arm alone places the ball on a palm tilted this far at few tilts:
     0 m / 25 deg / 1.0 m at none of 20-50 deg), else by the arm alone; ``plans(rig=, grid=)``:
     ``CatchPlanner._plans`` of the throw. The first feasible, with a note naming the tilt and
-    what failed facing the ball; else ``plan`` with each tilt's first reason in a note."""
+    what failed facing the ball. The tilts failing only as too fast to stop are then given
+    ``stop_stages`` (``planner.stop_stages``: the stop bound and the stop optimised on
+    their rows), the least first: the first feasible, noted; else the least tilt left with
+    only "no stop found" (the palm up keeps the ball on the palm: the stop, not the roll, is
+    the shortfall), noted with the facing plan's reasons; else ``plan`` with each tilt's
+    first reason in a note."""
     if CatchReason.ROLL not in plan.reason_kinds:
         return plan
-    tried = []
+    tried, stopped = [], []
     for grid in palm_up_grids(wrist):
         tilt = abs(grid.tilts_deg[0])
         other = plans(rig=reach, grid=grid)
         if other.feasible:
-            return replace(other, notes=other.notes + (
-                f"the palm meets the ball turned up {tilt:g} deg past facing it"
-                f"{' (the reach axis placing it)' if reach else ''}: facing the ball "
-                + reasons_text(plan.reasons),))
+            return palm_up_found(other, plan, tilt, reach)
         tried.append(f"{tilt:g} deg: " + reasons_text(other.reasons[:1]))
+        if set(other.reason_kinds) == {CatchReason.TOO_FAST_TO_STOP}:
+            stopped.append((tilt, other))
+    kept = None  # the least tilt that keeps the ball on the palm, only its stop not found
+    for tilt, other in stopped if stop_stages is not None else ():
+        # the palm up with the stop optimised on its rows (the roll kept, the stop not found)
+        other = stop_stages(other)
+        if other.feasible:
+            return palm_up_found(other, plan, tilt, reach)
+        tried.append(f"{tilt:g} deg, the stop optimised on its rows: "
+                     + reasons_text(other.reasons[:1]))
+        if kept is None and set(other.reason_kinds) == {CatchReason.NO_STOP}:
+            kept = (tilt, other)
+    if kept is not None:
+        # the roll is not what stops the catch: the palm up keeps the ball on the palm, and
+        # only its stop is not found (a shortfall the stop bound does not make a limit)
+        tilt, other = kept
+        return replace(other, notes=other.notes + (
+            f"the palm turned up {tilt:g} deg past facing the ball keeps it on the palm, "
+            "its stop not found: facing the ball " + reasons_text(plan.reasons)
+            + "; the palm turned up past facing it: " + "; ".join(tried),))
     return replace(plan, notes=plan.notes + (
         "the palm turned up past facing the ball: " + "; ".join(tried),))
+
+
+def palm_up_found(other: CatchPlan, plan: CatchPlan, tilt: float, reach: bool) -> CatchPlan:
+    """``other`` (feasible, the palm turned up ``tilt`` deg) noted with what failed facing
+    the ball (``plan``'s reasons)."""
+    return replace(other, notes=other.notes + (
+        f"the palm meets the ball turned up {tilt:g} deg past facing it"
+        f"{' (the reach axis placing it)' if reach else ''}: facing the ball "
+        + reasons_text(plan.reasons),))
 

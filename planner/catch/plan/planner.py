@@ -226,18 +226,10 @@ class CatchPlanner:
             from planner.catch.plan.palmup import palm_up_fallback
 
             plan = palm_up_fallback(lambda **kw: self._plans(args, soft, True, stops=stops, **kw), plan,
-                                    self.wrist, self.rig.i_reach is not None)
-        if soft and CatchReason.TOO_FAST_TO_STOP in plan.reason_kinds and len(plan.rows.t):
-            from planner.catch.plan.stopbound import bounded_reasons  # (the limit judged
-            # by the bound over every stop: only where the planner's stops all failed)
-
-            k = int(np.argmin(np.abs(plan.rows.t - plan.intercept.t_s)))
-            b = flight.ball
-            plan = replace(plan, reasons=bounded_reasons(
-                plan.reasons, self.rig_dyn, plan.rows.q[k], plan.intercept.arrival_velocity,
-                b.mass_kg, b.radius_m))
-            if CatchReason.NO_STOP in plan.reason_kinds:
-                plan = optimised_stop_plan(self, plan)  # the stop optimised on the rows
+                                    self.wrist, self.rig.i_reach is not None,
+                                    lambda p: stop_stages(self, p))
+        if soft:
+            plan = stop_stages(self, plan)
         return replace(plan, planning_s=time.perf_counter() - t0)
 
     def _on_the_rig(self, args: tuple, soft: bool, grid: StopGrid = COARSE_STOP,
@@ -543,6 +535,19 @@ def uncertainty(fit: FitResult, x_plane: float) -> dict[str, float] | None:
     return {"x_plane_m": x_plane, "t_s": t, "sigma_t_s": sig_t,
             "sigma_y_m": float(math.sqrt(max(cov[1, 1], 0.0))),
             "sigma_z_m": float(math.sqrt(max(cov[2, 2], 0.0)))}
+
+
+def stop_stages(pl: CatchPlanner, plan: CatchPlan) -> CatchPlan:
+    """``plan``'s "too fast to stop" judged by the bound over every stop (a hard limit, or
+    "no stop found"), then the stop optimised on its rows where the bound leaves one."""
+    if CatchReason.TOO_FAST_TO_STOP not in plan.reason_kinds or not len(plan.rows.t):
+        return plan
+    from planner.catch.plan.stopbound import bounded_reasons  # (where the stops all failed)
+
+    k, b = int(np.argmin(np.abs(plan.rows.t - plan.intercept.t_s))), plan.flight.ball
+    plan = replace(plan, reasons=bounded_reasons(plan.reasons, pl.rig_dyn, plan.rows.q[k],
+                   plan.intercept.arrival_velocity, b.mass_kg, b.radius_m))
+    return optimised_stop_plan(pl, plan) if CatchReason.NO_STOP in plan.reason_kinds else plan
 
 
 def optimised_stop_plan(pl: CatchPlanner, plan: CatchPlan) -> CatchPlan:
