@@ -29,7 +29,7 @@ import numpy as np
 from planner.catch.live.stop import arm_offset, moves
 from planner.catch.live.turn import HeldTurn, LiveTurn, live_turn
 from planner.catch.plan.closing import close_start
-from planner.catch.plan.planner import HOLD_AFTER_S, roll_reasons
+from planner.catch.plan.planner import HOLD_AFTER_S
 from planner.catch.plan.reasons import CatchReason, Reason, reasons_text
 from planner.catch.plan.results import GIVEN_UP, HELD, CatchPlan, make_catch_plan
 from planner.errors import InfeasibleError
@@ -157,7 +157,7 @@ class LiveEnding:
                    else []) + list(verdict.reasons)
         if pose.ic.reason:
             reasons.append(Reason(CatchReason.OUT_OF_REACH, pose.ic.reason))
-        reasons += roll_reasons(pl.turn, fl, t, Q, pose.t_i)
+        reasons += pl.turn.roll_reasons(fl, t, Q, pose.t_i)
         stop = s.stopper.stop
         if self.turn is not None or moves(stop):  # the ball is held where the rows end
             pose = replace(pose, q_closed=Q[-1].copy())

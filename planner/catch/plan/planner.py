@@ -121,7 +121,6 @@ def move_in(h: HandModel, dyn: StopDynamics, flight: Flight, C: np.ndarray, r: f
     return MoveIn(q_pre, move_s, s_c, too_soon)
 
 
-
 def tip_reach_m(h: HandModel, q0: np.ndarray) -> float:
     """Bound on any fingertip's distance from palm_center over the joint box (m): the sum
     of each finger's segment lengths from the palm centre at ``q0`` (triangle inequality),
@@ -322,7 +321,7 @@ class CatchPlanner:
             self.rows, flight, C, hold, turn0, turn_mode, RowsArgs(pose, q_pre, soft_stop, closing, t_react, T_m,
                                                   s_c, rate_hz, float(flight.ball.inertia_ratio) if fall else None))
         reasons += verdict.reasons
-        reasons += roll_reasons(hold, flight, t, Q, pose.t_i)
+        reasons += hold.roll_reasons(flight, t, Q, pose.t_i)
         ahead = turn.profiles is not None  # the roll rule's turn under way at the intercept: the
         if ahead:  # pre-catch pose short of the intercept pose by the turn's travel before it
             q_pre = q_pre + ahead_shift(turn.profiles, pose.t_i, h.n)
@@ -505,19 +504,6 @@ def stop_of(stops: dict | None, key: tuple, make: Callable[[], tuple]) -> tuple:
     return stops[key]
 
 
-def roll_reasons(turn: HoldTurn, flight: Flight, t: np.ndarray, Q: np.ndarray,
-                 t_i: float) -> list[Reason]:
-    """The roll rule's reason on these rows (``planner.check.ballroll``: the ball landing at
-    ``t_i``, ``HoldTurn.rolled``; on a hand the rule judges), if any."""
-    # (first used by the ending of a live session: not imported at its start)
-    from planner.check.ballroll import roll_judged, roll_problem
-
-    if not roll_judged(turn.hand.name):
-        return []
-    rolled = roll_problem(turn.rolled(t, Q, t_i, flight))
-    return [] if rolled is None else [Reason(CatchReason.ROLL, rolled)]
-
-
 def _turn_note(turn: Turn, t_i: float) -> tuple[str, ...]:
     """The plan's note on a turn under way at the intercept (the roll rule's), else none."""
     if turn.profiles is None:
@@ -586,7 +572,7 @@ def optimised_stop_plan(pl: CatchPlanner, plan: CatchPlan) -> CatchPlan:
         t_static = float(t[moving[-1] + 1]) if moving.size else float(t[0])
         verdict = pl.rows.check(flight, plan.catch_point, r, t, Qw, t_i, t_static,
                                 plan.rate_hz, False)
-        rolled = roll_reasons(pl.turn, flight, t, Qw, t_i)
+        rolled = pl.turn.roll_reasons(flight, t, Qw, t_i)
         reasons = list(fv.reasons) + list(verdict.reasons) + rolled
         if not reasons:
             return replace(

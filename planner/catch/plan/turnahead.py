@@ -38,6 +38,7 @@ from planner.catch.flight.path import Flight
 from planner.catch.grasp import motor_torque_matrix
 from planner.catch.plan.arm import calm_move_time, move_time
 from planner.catch.plan.holdturn import TURN_SHARE, hold_turn
+from planner.catch.plan.reasons import CatchReason, Reason
 from planner.catch.plan.results import Closing
 from planner.catch.plan.softstop import SoftStop
 from planner.catch.plan.stopping import StopDynamics
@@ -269,6 +270,18 @@ class HoldTurn:
         _, palm = self.kin.frames(Q)
         return rolled_m(t, palm, float(flight.ball.radius_m), t_i, flight.velocity(t_i),
                         flight.ball.inertia_ratio)
+
+    def roll_reasons(self, flight: Flight, t: np.ndarray, Q: np.ndarray,
+                     t_i: float) -> list[Reason]:
+        """The roll rule's reason on these rows (``planner.check.ballroll``: the ball landing
+        at ``t_i``, ``rolled``; on a hand the rule judges), if any."""
+        # (first used by the ending of a live session: not imported at its start)
+        from planner.check.ballroll import roll_judged, roll_problem
+
+        if not roll_judged(self.hand.name):
+            return []
+        rolled = roll_problem(self.rolled(t, Q, t_i, flight))
+        return [] if rolled is None else [Reason(CatchReason.ROLL, rolled)]
 
     def _motors_within(self, turn: Turn, rows_args: RowsArgs) -> bool:
         """From the turn's start to the intercept (where the check's rule takes over) the
